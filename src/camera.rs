@@ -1,0 +1,205 @@
+//! The area-array structured-light camera: its pinhole model and the
+//! paper's "plane point cloud density" (section 3.1 and 3.2).
+//!
+//! The paper describes the camera by its resolution and one field of view
+//! (Table 1: 1920 x 1200 px, 700 x 440 mm at 1000 mm). From those follow the
+//! focal lengths in pixels, so the same numbers give both the paper's
+//! density formula (Eq. 4) and an exact pinhole model that the simulator and
+//! the tilt-aware criteria use.
+
+/// The camera model. Build it with [`CameraModel::new`] so the derived
+/// focal lengths are always consistent with the field of view.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CameraModel {
+    /// Sensor width in pixels (Table 1: 1920).
+    pub width_px: u32,
+    /// Sensor height in pixels (Table 1: 1200).
+    pub height_px: u32,
+    /// Field-of-view width `w1` at distance `l1`, mm (Table 1: 700).
+    pub fov_width_mm: f64,
+    /// Field-of-view height `h1` at distance `l1`, mm (Table 1: 440).
+    pub fov_height_mm: f64,
+    /// Distance `l1` at which the field of view is given, mm (Table 1: 1000).
+    pub fov_distance_mm: f64,
+    /// Camera-to-projector baseline along the camera x axis, mm (Table 1: 150).
+    pub baseline_mm: f64,
+    /// Nominal depth accuracy at `fov_distance_mm`, mm (Table 1: 0.1).
+    pub nominal_accuracy_mm: f64,
+}
+
+impl Default for CameraModel {
+    /// The paper's camera, Table 1.
+    fn default() -> Self {
+        CameraModel {
+            width_px: 1920,
+            height_px: 1200,
+            fov_width_mm: 700.0,
+            fov_height_mm: 440.0,
+            fov_distance_mm: 1000.0,
+            baseline_mm: 150.0,
+            nominal_accuracy_mm: 0.1,
+        }
+    }
+}
+
+impl CameraModel {
+    /// Focal length along x, in pixels: `W px` spread over `w1` mm at `l1`.
+    pub fn fx(&self) -> f64 {
+        self.width_px as f64 * self.fov_distance_mm / self.fov_width_mm
+    }
+
+    /// Focal length along y, in pixels.
+    pub fn fy(&self) -> f64 {
+        self.height_px as f64 * self.fov_distance_mm / self.fov_height_mm
+    }
+
+    /// Principal point x, pixels (the sensor centre).
+    pub fn cx(&self) -> f64 {
+        (self.width_px as f64 - 1.0) / 2.0
+    }
+
+    /// Principal point y, pixels.
+    pub fn cy(&self) -> f64 {
+        (self.height_px as f64 - 1.0) / 2.0
+    }
+
+    /// Resolution `F` in pixels.
+    pub fn resolution(&self) -> f64 {
+        self.width_px as f64 * self.height_px as f64
+    }
+
+    /// Plane point cloud density at distance `L`, points per mm², for a
+    /// plane square to the optical axis (Eq. 4): `D = F l1² / (w1 h1 L²)`.
+    pub fn density(&self, distance_mm: f64) -> f64 {
+        self.resolution() * self.fov_distance_mm * self.fov_distance_mm
+            / (self.fov_width_mm * self.fov_height_mm * distance_mm * distance_mm)
+    }
+
+    /// Theoretical neighbour count within radius `R` (Eq. 6): `N = π R² D`.
+    pub fn theoretical_neighbours(&self, radius_mm: f64, distance_mm: f64) -> f64 {
+        std::f64::consts::PI * radius_mm * radius_mm * self.density(distance_mm)
+    }
+
+    /// The neighbour count corrected for a radius measurement error `e`
+    /// (Eq. 12): `N' = π (R + e)² D`. Eq. 13's bounds are `e = ∓ accuracy`.
+    pub fn corrected_neighbours(&self, radius_mm: f64, error_mm: f64, distance_mm: f64) -> f64 {
+        let r = radius_mm + error_mm;
+        std::f64::consts::PI * r * r * self.density(distance_mm)
+    }
+
+    /// `N'min` of Eq. 13, the paper's plane point threshold (Eq. 14).
+    pub fn min_plane_neighbours(&self, radius_mm: f64, distance_mm: f64) -> f64 {
+        self.corrected_neighbours(radius_mm, -self.nominal_accuracy_mm, distance_mm)
+    }
+
+    /// Density of points on a plane through `p` with unit normal `n`, as a
+    /// pinhole sensor samples it. The pixel footprint on the plane grows
+    /// with `z³ / |n·p|`, so `D = fx fy |n·p| / z³`; for a frontal plane
+    /// (`n = z`) this is exactly Eq. 4, and a plate tilted by θ shows
+    /// about `cos θ` of it, the foreshortening Eq. 4 leaves out.
+    pub fn plane_density_at(&self, p: [f64; 3], n: [f64; 3]) -> f64 {
+        let n_dot_p = (n[0] * p[0] + n[1] * p[1] + n[2] * p[2]).abs();
+        self.fx() * self.fy() * n_dot_p / (p[2] * p[2] * p[2])
+    }
+
+    /// The largest pixel offset, along each image axis, at which a point
+    /// within `radius_mm` of `p` can appear. A ball of radius R at depth z
+    /// projects within `f R sqrt(1 + t²) / (z - R)` pixels, where `t` is the
+    /// tangent of the ray's angle off the axis, so scanning that window
+    /// finds every 3D neighbour: it is exact, not an approximation.
+    pub fn neighbour_window(&self, p: [f32; 3], radius_mm: f64) -> (usize, usize) {
+        let z = p[2] as f64;
+        if z <= radius_mm * 1.001 {
+            // Closer than R to the optical centre: every pixel may hold a
+            // neighbour. Never happens inside a camera's working range.
+            return (self.width_px as usize, self.height_px as usize);
+        }
+        let tx = p[0] as f64 / z;
+        let ty = p[1] as f64 / z;
+        let reach = radius_mm / (z - radius_mm);
+        let wx = self.fx() * reach * (1.0 + tx * tx).sqrt();
+        let wy = self.fy() * reach * (1.0 + ty * ty).sqrt();
+        (wx.ceil() as usize, wy.ceil() as usize)
+    }
+
+    /// Projects a camera-frame point to pixel coordinates `(u, v)`.
+    pub fn project(&self, p: [f64; 3]) -> Option<(f64, f64)> {
+        (p[2] > 0.0).then(|| {
+            (
+                self.fx() * p[0] / p[2] + self.cx(),
+                self.fy() * p[1] / p[2] + self.cy(),
+            )
+        })
+    }
+
+    /// The ray through pixel `(u, v)`, scaled so its z component is 1.
+    pub fn ray(&self, u: f64, v: f64) -> [f64; 3] {
+        [
+            (u - self.cx()) / self.fx(),
+            (v - self.cy()) / self.fy(),
+            1.0,
+        ]
+    }
+
+    /// Depth noise (one sigma, along the ray) at depth `z`: structured
+    /// light triangulation error grows with z², anchored at the nominal
+    /// accuracy at `fov_distance_mm`.
+    pub fn depth_sigma(&self, z_mm: f64) -> f64 {
+        let s = z_mm / self.fov_distance_mm;
+        self.nominal_accuracy_mm * s * s
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn density_matches_the_papers_equation_5() {
+        let cam = CameraModel::default();
+        // Eq. 5: D = 2.304e9 / (308 L²)
+        for l in [500.0, 750.0, 1000.0] {
+            let expected = 2.304e9 / (308.0 * l * l);
+            assert!((cam.density(l) - expected).abs() < 1e-9 * expected);
+        }
+    }
+
+    #[test]
+    fn neighbour_bounds_follow_equation_13() {
+        let cam = CameraModel::default();
+        let d = cam.density(500.0);
+        let pi = std::f64::consts::PI;
+        assert!((cam.min_plane_neighbours(1.0, 500.0) - pi * 0.81 * d).abs() < 1e-9);
+        assert!((cam.corrected_neighbours(1.0, 0.1, 500.0) - pi * 1.21 * d).abs() < 1e-9);
+        // E2 of Eq. 11 at L = 500, |e| = 0.1: the paper prints 19.74.
+        let e2 = cam.corrected_neighbours(1.0, 0.1, 500.0) - cam.theoretical_neighbours(1.0, 500.0);
+        assert!((e2 - 19.74).abs() < 0.01, "E2 = {e2}");
+    }
+
+    #[test]
+    fn tilted_plane_density_is_foreshortened() {
+        let cam = CameraModel::default();
+        let frontal = cam.plane_density_at([0.0, 0.0, 800.0], [0.0, 0.0, 1.0]);
+        let fx_fy = cam.fx() * cam.fy();
+        assert!((frontal - fx_fy / (800.0 * 800.0)).abs() < 1e-9);
+        let t = 30f64.to_radians();
+        let tilted = cam.plane_density_at([0.0, 0.0, 800.0], [t.sin(), 0.0, t.cos()]);
+        assert!((tilted / frontal - t.cos()).abs() < 1e-12);
+    }
+
+    #[test]
+    fn projection_inverts_the_ray() {
+        let cam = CameraModel::default();
+        let r = cam.ray(100.0, 900.0);
+        let (u, v) = cam.project([r[0] * 700.0, r[1] * 700.0, 700.0]).unwrap();
+        assert!((u - 100.0).abs() < 1e-9 && (v - 900.0).abs() < 1e-9);
+    }
+
+    #[test]
+    fn window_covers_the_ball() {
+        let cam = CameraModel::default();
+        let (wx, wy) = cam.neighbour_window([0.0, 0.0, 500.0], 1.0);
+        // About 13 x 13 pixels at 500 mm, as a ball of 1 mm projects.
+        assert!((5..=7).contains(&wx) && (5..=7).contains(&wy), "{wx} {wy}");
+    }
+}

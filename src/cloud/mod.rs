@@ -1,0 +1,198 @@
+//! Point clouds in the camera frame, in millimetres, and the file formats
+//! they arrive in.
+//!
+//! A cloud is either *organized* (one point per camera pixel, row-major,
+//! `width x height`) or *unorganized* (a bag of points, `height == 1`).
+//! Invalid pixels are stored as NaN whatever the source used (NaN, or
+//! `0, 0, 0` as some cameras send), so every later stage has one test for
+//! validity. The organized structure is kept whenever the source has it:
+//! the neighbour search, clustering and boundary refinement use the pixel
+//! grid as their fast, exact path.
+
+pub mod pcd;
+pub mod ply;
+
+use std::path::PathBuf;
+
+/// One point, camera frame, millimetres. NaN coordinates mean "no return".
+pub type Point = [f32; 3];
+
+/// The marker stored for a pixel that has no valid return.
+pub const INVALID_POINT: Point = [f32::NAN, f32::NAN, f32::NAN];
+
+/// A point cloud in the camera frame, millimetres.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PointCloud {
+    points: Vec<Point>,
+    width: usize,
+    height: usize,
+    organized: bool,
+}
+
+/// Returns true when `p` is a real return: finite and not the `0, 0, 0`
+/// marker some cameras use for "no data" (a real surface is never at the
+/// optical centre).
+#[inline]
+pub fn is_valid_point(p: &Point) -> bool {
+    p[0].is_finite()
+        && p[1].is_finite()
+        && p[2].is_finite()
+        && !(p[0] == 0.0 && p[1] == 0.0 && p[2] == 0.0)
+}
+
+impl PointCloud {
+    /// An organized cloud of `width x height` pixels, row-major. Invalid
+    /// markers are normalised to NaN.
+    ///
+    /// Returns `None` when `points.len() != width * height`.
+    pub fn organized(width: usize, height: usize, mut points: Vec<Point>) -> Option<Self> {
+        if width.checked_mul(height)? != points.len() {
+            return None;
+        }
+        normalise_invalid(&mut points);
+        Some(PointCloud {
+            points,
+            width,
+            height,
+            organized: height > 1,
+        })
+    }
+
+    /// An unorganized cloud. Invalid points are dropped, since without a
+    /// pixel grid their position carries no information.
+    pub fn unorganized(mut points: Vec<Point>) -> Self {
+        points.retain(is_valid_point);
+        let width = points.len();
+        PointCloud {
+            points,
+            width,
+            height: 1,
+            organized: false,
+        }
+    }
+
+    /// All points, row-major for organized clouds. Invalid ones are NaN.
+    pub fn points(&self) -> &[Point] {
+        &self.points
+    }
+
+    /// Consumes the cloud and returns its point buffer (for reuse).
+    pub fn into_points(self) -> Vec<Point> {
+        self.points
+    }
+
+    pub fn width(&self) -> usize {
+        self.width
+    }
+
+    pub fn height(&self) -> usize {
+        self.height
+    }
+
+    /// True when the points form a pixel grid (`height > 1`).
+    pub fn is_organized(&self) -> bool {
+        self.organized
+    }
+
+    pub fn len(&self) -> usize {
+        self.points.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.points.is_empty()
+    }
+
+    /// Number of points with a valid return.
+    pub fn valid_count(&self) -> usize {
+        self.points.iter().filter(|p| p[0].is_finite()).count()
+    }
+
+    /// The point at pixel `(col, row)` of an organized cloud, if valid.
+    #[inline]
+    pub fn at(&self, col: usize, row: usize) -> Option<&Point> {
+        let p = &self.points[row * self.width + col];
+        p[0].is_finite().then_some(p)
+    }
+}
+
+fn normalise_invalid(points: &mut [Point]) {
+    for p in points.iter_mut() {
+        if !is_valid_point(p) {
+            *p = INVALID_POINT;
+        }
+    }
+}
+
+/// Why a point-cloud file could not be read. Every variant names the file.
+#[derive(Debug, thiserror::Error)]
+pub enum LoadError {
+    /// The file could not be opened or read.
+    #[error("cannot read {path}: {source}")]
+    Io {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    /// The file's extension is neither `.pcd` nor `.ply`.
+    #[error("{path}: unknown point cloud format (expected a .pcd or .ply file)")]
+    UnknownFormat { path: PathBuf },
+    /// The header is malformed: `line` is 1-based.
+    #[error("{path}: header line {line}: {message}")]
+    Header {
+        path: PathBuf,
+        line: usize,
+        message: String,
+    },
+    /// The data section is malformed or shorter than the header promises.
+    #[error("{path}: data at {location}: {message}")]
+    Data {
+        path: PathBuf,
+        location: String,
+        message: String,
+    },
+}
+
+/// Reads a PCD or PLY file, choosing the parser by extension.
+pub fn load(path: &std::path::Path) -> Result<PointCloud, LoadError> {
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
+    let bytes = std::fs::read(path).map_err(|source| LoadError::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    match ext.as_deref() {
+        Some("pcd") => pcd::parse(&bytes, path),
+        Some("ply") => ply::parse(&bytes, path),
+        _ => Err(LoadError::UnknownFormat {
+            path: path.to_path_buf(),
+        }),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn zero_points_become_invalid_in_organized_clouds() {
+        let cloud = PointCloud::organized(2, 1, vec![[0.0, 0.0, 0.0], [1.0, 2.0, 3.0]]).unwrap();
+        assert!(cloud.points()[0][0].is_nan());
+        assert_eq!(cloud.valid_count(), 1);
+        assert!(!cloud.is_organized(), "a single row is not a grid");
+    }
+
+    #[test]
+    fn unorganized_clouds_drop_invalid_points() {
+        let cloud =
+            PointCloud::unorganized(vec![[f32::NAN, 0.0, 1.0], [1.0, 2.0, 3.0], [0.0, 0.0, 0.0]]);
+        assert_eq!(cloud.len(), 1);
+    }
+
+    #[test]
+    fn organized_rejects_wrong_length() {
+        assert!(PointCloud::organized(3, 2, vec![[1.0, 1.0, 1.0]; 5]).is_none());
+        assert!(PointCloud::organized(usize::MAX, 2, vec![]).is_none());
+    }
+}

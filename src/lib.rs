@@ -1,0 +1,13 @@
+//! weldseam: teach-free plane weld trajectory planning from the point
+//! clouds of an eye-in-hand structured-light camera.
+//!
+//! The library turns a camera-frame point cloud and the robot pose at
+//! capture into base-frame welding waypoints for plane V-butt, I-butt and
+//! lap joints, after the method of "A point cloud-based welding trajectory
+//! planning method for plane welds", made robust where the method as
+//! written breaks. See docs/ARCHITECTURE.md for the code map.
+
+pub mod camera;
+pub mod cloud;
+pub mod geometry;
+pub mod joint;

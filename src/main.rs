@@ -1,0 +1,3 @@
+//! The `weldseam` command line.
+
+fn main() {}

@@ -124,21 +124,12 @@ impl CameraModel {
 
     /// Projects a camera-frame point to pixel coordinates `(u, v)`.
     pub fn project(&self, p: [f64; 3]) -> Option<(f64, f64)> {
-        (p[2] > 0.0).then(|| {
-            (
-                self.fx() * p[0] / p[2] + self.cx(),
-                self.fy() * p[1] / p[2] + self.cy(),
-            )
-        })
+        (p[2] > 0.0).then(|| (self.fx() * p[0] / p[2] + self.cx(), self.fy() * p[1] / p[2] + self.cy()))
     }
 
     /// The ray through pixel `(u, v)`, scaled so its z component is 1.
     pub fn ray(&self, u: f64, v: f64) -> [f64; 3] {
-        [
-            (u - self.cx()) / self.fx(),
-            (v - self.cy()) / self.fy(),
-            1.0,
-        ]
+        [(u - self.cx()) / self.fx(), (v - self.cy()) / self.fy(), 1.0]
     }
 
     /// Depth noise (one sigma, along the ray) at depth `z`: structured

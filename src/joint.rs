@@ -43,11 +43,7 @@ impl FromStr for JointType {
 
     /// Accepts `v-butt`, `v_butt`, `vbutt` and the like, any case.
     fn from_str(s: &str) -> Result<Self, Self::Err> {
-        let key: String = s
-            .chars()
-            .filter(|c| !matches!(c, '-' | '_' | ' '))
-            .collect::<String>()
-            .to_ascii_lowercase();
+        let key: String = s.chars().filter(|c| !matches!(c, '-' | '_' | ' ')).collect::<String>().to_ascii_lowercase();
         match key.as_str() {
             "vbutt" | "v" => Ok(JointType::VButt),
             "ibutt" | "i" => Ok(JointType::IButt),

@@ -9,5 +9,7 @@
 
 pub mod camera;
 pub mod cloud;
+pub mod config;
 pub mod geometry;
 pub mod joint;
+pub mod pipeline;

@@ -34,10 +34,7 @@ pub struct PointCloud {
 /// optical centre).
 #[inline]
 pub fn is_valid_point(p: &Point) -> bool {
-    p[0].is_finite()
-        && p[1].is_finite()
-        && p[2].is_finite()
-        && !(p[0] == 0.0 && p[1] == 0.0 && p[2] == 0.0)
+    p[0].is_finite() && p[1].is_finite() && p[2].is_finite() && !(p[0] == 0.0 && p[1] == 0.0 && p[2] == 0.0)
 }
 
 impl PointCloud {
@@ -50,12 +47,7 @@ impl PointCloud {
             return None;
         }
         normalise_invalid(&mut points);
-        Some(PointCloud {
-            points,
-            width,
-            height,
-            organized: height > 1,
-        })
+        Some(PointCloud { points, width, height, organized: height > 1 })
     }
 
     /// An unorganized cloud. Invalid points are dropped, since without a
@@ -63,12 +55,7 @@ impl PointCloud {
     pub fn unorganized(mut points: Vec<Point>) -> Self {
         points.retain(is_valid_point);
         let width = points.len();
-        PointCloud {
-            points,
-            width,
-            height: 1,
-            organized: false,
-        }
+        PointCloud { points, width, height: 1, organized: false }
     }
 
     /// All points, row-major for organized clouds. Invalid ones are NaN.
@@ -138,36 +125,20 @@ pub enum LoadError {
     UnknownFormat { path: PathBuf },
     /// The header is malformed: `line` is 1-based.
     #[error("{path}: header line {line}: {message}")]
-    Header {
-        path: PathBuf,
-        line: usize,
-        message: String,
-    },
+    Header { path: PathBuf, line: usize, message: String },
     /// The data section is malformed or shorter than the header promises.
     #[error("{path}: data at {location}: {message}")]
-    Data {
-        path: PathBuf,
-        location: String,
-        message: String,
-    },
+    Data { path: PathBuf, location: String, message: String },
 }
 
 /// Reads a PCD or PLY file, choosing the parser by extension.
 pub fn load(path: &std::path::Path) -> Result<PointCloud, LoadError> {
-    let ext = path
-        .extension()
-        .and_then(|e| e.to_str())
-        .map(str::to_ascii_lowercase);
-    let bytes = std::fs::read(path).map_err(|source| LoadError::Io {
-        path: path.to_path_buf(),
-        source,
-    })?;
+    let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
+    let bytes = std::fs::read(path).map_err(|source| LoadError::Io { path: path.to_path_buf(), source })?;
     match ext.as_deref() {
         Some("pcd") => pcd::parse(&bytes, path),
         Some("ply") => ply::parse(&bytes, path),
-        _ => Err(LoadError::UnknownFormat {
-            path: path.to_path_buf(),
-        }),
+        _ => Err(LoadError::UnknownFormat { path: path.to_path_buf() }),
     }
 }
 
@@ -185,8 +156,7 @@ mod tests {
 
     #[test]
     fn unorganized_clouds_drop_invalid_points() {
-        let cloud =
-            PointCloud::unorganized(vec![[f32::NAN, 0.0, 1.0], [1.0, 2.0, 3.0], [0.0, 0.0, 0.0]]);
+        let cloud = PointCloud::unorganized(vec![[f32::NAN, 0.0, 1.0], [1.0, 2.0, 3.0], [0.0, 0.0, 0.0]]);
         assert_eq!(cloud.len(), 1);
     }
 

@@ -8,9 +8,7 @@ use super::{LoadError, PointCloud};
 
 /// Parses a PCD file's bytes; `path` is only used in error messages.
 pub fn parse(_bytes: &[u8], path: &Path) -> Result<PointCloud, LoadError> {
-    Err(LoadError::UnknownFormat {
-        path: path.to_path_buf(),
-    })
+    Err(LoadError::UnknownFormat { path: path.to_path_buf() })
 }
 
 /// Writes `cloud` as a binary PCD (fields x y z, f32 little endian),

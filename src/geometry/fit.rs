@@ -23,14 +23,7 @@ impl Plane {
     /// The plane with its normal pointing away from the camera (`n·z > 0`),
     /// so "along the normal" always means "into the workpiece" (Eq. 34).
     pub fn facing_away_from_camera(self) -> Plane {
-        if self.normal.z < 0.0 {
-            Plane {
-                normal: -self.normal,
-                offset: -self.offset,
-            }
-        } else {
-            self
-        }
+        if self.normal.z < 0.0 { Plane { normal: -self.normal, offset: -self.offset } } else { self }
     }
 
     /// Projects `p` onto the plane.
@@ -97,13 +90,7 @@ impl Moments {
         }
         let normal = vectors[0].normalize();
         let centroid = self.centroid()?;
-        Some(
-            Plane {
-                normal,
-                offset: normal.dot(&centroid),
-            }
-            .facing_away_from_camera(),
-        )
+        Some(Plane { normal, offset: normal.dot(&centroid) }.facing_away_from_camera())
     }
 
     /// The least-squares line as (point on it, unit direction).
@@ -139,14 +126,10 @@ mod tests {
     #[test]
     fn plane_fit_recovers_a_tilted_plane_far_from_the_origin() {
         let n = Vec3::new(0.3, -0.2, 1.0).normalize();
-        let (u, v) = (
-            n.cross(&Vec3::x()).normalize(),
-            n.cross(&n.cross(&Vec3::x())).normalize(),
-        );
+        let (u, v) = (n.cross(&Vec3::x()).normalize(), n.cross(&n.cross(&Vec3::x())).normalize());
         let origin = Vec3::new(120.0, -40.0, 950.0);
-        let pts: Vec<Vec3> = (0..400)
-            .map(|i| origin + u * ((i % 20) as f64 * 3.0) + v * ((i / 20) as f64 * 2.0))
-            .collect();
+        let pts: Vec<Vec3> =
+            (0..400).map(|i| origin + u * ((i % 20) as f64 * 3.0) + v * ((i / 20) as f64 * 2.0)).collect();
         let plane = pts.iter().collect::<Moments>().plane().unwrap();
         assert!((plane.normal - n).norm() < 1e-9);
         assert!(plane.signed_distance(&origin).abs() < 1e-9);
@@ -156,9 +139,7 @@ mod tests {
     #[test]
     fn line_fit_recovers_direction() {
         let d = Vec3::new(1.0, 0.1, -0.2).normalize();
-        let pts: Vec<Vec3> = (0..50)
-            .map(|i| Vec3::new(5.0, 6.0, 700.0) + d * i as f64)
-            .collect();
+        let pts: Vec<Vec3> = (0..50).map(|i| Vec3::new(5.0, 6.0, 700.0) + d * i as f64).collect();
         let (c, dir) = pts.iter().collect::<Moments>().line().unwrap();
         assert!(dir.cross(&d).norm() < 1e-9);
         assert!((c - Vec3::new(5.0, 6.0, 700.0) - d * 24.5).norm() < 1e-9);

@@ -31,9 +31,6 @@ pub fn distance_to_polyline(p: &Vec3, polyline: &[Vec3]) -> f64 {
     match polyline {
         [] => f64::INFINITY,
         [only] => (p - only).norm(),
-        _ => polyline
-            .windows(2)
-            .map(|w| distance_to_segment(p, &w[0], &w[1]))
-            .fold(f64::INFINITY, f64::min),
+        _ => polyline.windows(2).map(|w| distance_to_segment(p, &w[0], &w[1])).fold(f64::INFINITY, f64::min),
     }
 }

@@ -66,11 +66,7 @@ impl EulerConvention {
                 // m22 = cos a cos b, m01 = -cos b sin c, m00 = cos b cos c.
                 let b = m[(0, 2)].clamp(-1.0, 1.0).asin();
                 if m[(0, 2)].abs() < 1.0 - 1e-12 {
-                    [
-                        (-m[(1, 2)]).atan2(m[(2, 2)]),
-                        b,
-                        (-m[(0, 1)]).atan2(m[(0, 0)]),
-                    ]
+                    [(-m[(1, 2)]).atan2(m[(2, 2)]), b, (-m[(0, 1)]).atan2(m[(0, 0)])]
                 } else {
                     // Gimbal lock: only a ± c is defined; put it all in a.
                     [m[(2, 1)].atan2(m[(1, 1)]), b, 0.0]
@@ -106,18 +102,12 @@ impl RobotPose {
     /// The pose that gives `iso` under `convention`.
     pub fn from_isometry(iso: &Isometry3<f64>, convention: EulerConvention) -> Self {
         let t = iso.translation.vector;
-        RobotPose {
-            xyz_mm: [t.x, t.y, t.z],
-            angles_deg: convention.angles(&iso.rotation.to_rotation_matrix()),
-        }
+        RobotPose { xyz_mm: [t.x, t.y, t.z], angles_deg: convention.angles(&iso.rotation.to_rotation_matrix()) }
     }
 
     /// True when all six numbers are finite.
     pub fn is_finite(&self) -> bool {
-        self.xyz_mm
-            .iter()
-            .chain(self.angles_deg.iter())
-            .all(|v| v.is_finite())
+        self.xyz_mm.iter().chain(self.angles_deg.iter()).all(|v| v.is_finite())
     }
 }
 
@@ -136,16 +126,9 @@ pub enum HandEyeError {
         "the hand-eye rotation is not orthonormal: RᵀR differs from the identity by {deviation:.4} \
          at ({row}, {col}) (tolerance {tolerance}); check the coefficients for a typo"
     )]
-    NotOrthonormal {
-        deviation: f64,
-        row: usize,
-        col: usize,
-        tolerance: f64,
-    },
+    NotOrthonormal { deviation: f64, row: usize, col: usize, tolerance: f64 },
     /// `det R < 0`: a reflection, not a rotation.
-    #[error(
-        "the hand-eye rotation is a reflection (determinant {det:.4}); a camera frame must be right-handed"
-    )]
+    #[error("the hand-eye rotation is a reflection (determinant {det:.4}); a camera frame must be right-handed")]
     Reflection { det: f64 },
 }
 
@@ -159,10 +142,7 @@ pub const ORTHONORMAL_TOLERANCE: f64 = 2e-3;
 pub fn hand_eye_from_rows(m: &[f64; 16]) -> Result<Isometry3<f64>, HandEyeError> {
     for (i, v) in m.iter().enumerate() {
         if !v.is_finite() {
-            return Err(HandEyeError::NotFinite {
-                row: i / 4,
-                col: i % 4,
-            });
+            return Err(HandEyeError::NotFinite { row: i / 4, col: i % 4 });
         }
     }
     let last = [m[12], m[13], m[14], m[15]];
@@ -204,10 +184,7 @@ pub fn hand_eye_from_rows(m: &[f64; 16]) -> Result<Isometry3<f64>, HandEyeError>
         });
     };
     let rot = Rotation3::from_matrix_unchecked(u * v_t);
-    Ok(Isometry3::from_parts(
-        Translation3::new(m[3], m[7], m[11]),
-        UnitQuaternion::from_rotation_matrix(&rot),
-    ))
+    Ok(Isometry3::from_parts(Translation3::new(m[3], m[7], m[11]), UnitQuaternion::from_rotation_matrix(&rot)))
 }
 
 /// The paper's `End_T_Camera` (Eq. 41) with its one typo corrected: the
@@ -243,22 +220,11 @@ mod tests {
 
     #[test]
     fn angles_invert_rotation_for_every_convention() {
-        for conv in [
-            EulerConvention::Zyx,
-            EulerConvention::Xyz,
-            EulerConvention::RotationVector,
-        ] {
-            for angles in [
-                [178.28, 1.04, 107.12],
-                [-176.89, 6.33, 105.7],
-                [10.0, -40.0, 5.0],
-            ] {
+        for conv in [EulerConvention::Zyx, EulerConvention::Xyz, EulerConvention::RotationVector] {
+            for angles in [[178.28, 1.04, 107.12], [-176.89, 6.33, 105.7], [10.0, -40.0, 5.0]] {
                 let r = conv.rotation(angles);
                 let back = conv.rotation(conv.angles(&r));
-                assert!(
-                    (r.matrix() - back.matrix()).norm() < 1e-9,
-                    "{conv:?} {angles:?}"
-                );
+                assert!((r.matrix() - back.matrix()).norm() < 1e-9, "{conv:?} {angles:?}");
             }
         }
         assert!(close(
@@ -272,10 +238,7 @@ mod tests {
     fn paper_matrix_typo_is_refused_and_the_fix_accepted() {
         let mut typo = PAPER_HAND_EYE;
         typo[4] = -0.353;
-        assert!(matches!(
-            hand_eye_from_rows(&typo),
-            Err(HandEyeError::NotOrthonormal { .. })
-        ));
+        assert!(matches!(hand_eye_from_rows(&typo), Err(HandEyeError::NotOrthonormal { .. })));
         let iso = hand_eye_from_rows(&PAPER_HAND_EYE).unwrap();
         assert!((iso.translation.vector - Vector3::new(76.0178, -84.3385, 100.392)).norm() < 1e-9);
     }
@@ -284,33 +247,21 @@ mod tests {
     fn bad_matrices_name_the_problem() {
         let mut m = PAPER_HAND_EYE;
         m[5] = f64::NAN;
-        assert_eq!(
-            hand_eye_from_rows(&m),
-            Err(HandEyeError::NotFinite { row: 1, col: 1 })
-        );
+        assert_eq!(hand_eye_from_rows(&m), Err(HandEyeError::NotFinite { row: 1, col: 1 }));
         let mut m = PAPER_HAND_EYE;
         m[15] = 2.0;
-        assert!(matches!(
-            hand_eye_from_rows(&m),
-            Err(HandEyeError::BadLastRow { .. })
-        ));
+        assert!(matches!(hand_eye_from_rows(&m), Err(HandEyeError::BadLastRow { .. })));
         let mut m = [0.0; 16];
         m[0] = -1.0;
         m[5] = 1.0;
         m[10] = 1.0;
         m[15] = 1.0;
-        assert!(matches!(
-            hand_eye_from_rows(&m),
-            Err(HandEyeError::Reflection { .. })
-        ));
+        assert!(matches!(hand_eye_from_rows(&m), Err(HandEyeError::Reflection { .. })));
     }
 
     #[test]
     fn pose_round_trips_through_isometry() {
-        let pose = RobotPose {
-            xyz_mm: [-613.5, -284.81, 296.28],
-            angles_deg: [178.28, 1.04, 107.12],
-        };
+        let pose = RobotPose { xyz_mm: [-613.5, -284.81, 296.28], angles_deg: [178.28, 1.04, 107.12] };
         let iso = pose.to_isometry(EulerConvention::Zyx);
         let back = RobotPose::from_isometry(&iso, EulerConvention::Zyx);
         assert!(close(back.xyz_mm, pose.xyz_mm, 1e-9));

@@ -1,0 +1,396 @@
+//! Configuration: parsed once from TOML, validated once, then carried as a
+//! built [`Config`] whose values are known to be usable. Every error names
+//! the key at fault.
+//!
+//! Defaults are the paper's camera (Table 1) and parameters wherever the
+//! paper gives one (R = 1 mm, μ = 0.5, 2 mm clustering, 1 mm RANSAC), and
+//! measured values for the robust method's own settings.
+
+mod file;
+
+use std::path::Path;
+
+use nalgebra::Isometry3;
+
+use crate::camera::CameraModel;
+use crate::geometry::pose::{EulerConvention, HandEyeError, hand_eye_from_rows};
+
+pub use file::ConfigFile;
+
+/// Which variant of the pipeline runs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Method {
+    /// The paper's method made robust (the default).
+    #[default]
+    Robust,
+    /// The paper's method exactly as written, for comparison.
+    Paper,
+}
+
+impl Method {
+    pub fn name(self) -> &'static str {
+        match self {
+            Method::Robust => "robust",
+            Method::Paper => "paper",
+        }
+    }
+
+    pub fn from_name(name: &str) -> Option<Self> {
+        match name {
+            "robust" => Some(Method::Robust),
+            "paper" => Some(Method::Paper),
+            _ => None,
+        }
+    }
+}
+
+/// Parameters of the seam pipeline's stages.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PipelineParams {
+    pub method: Method,
+    /// Neighbour search radius R, mm (paper: 1).
+    pub neighbour_radius_mm: f64,
+    /// Robust plane criterion: the least fraction of the neighbours a full
+    /// plane would give at this point, tilt and pixel grid included.
+    pub plane_min_neighbour_ratio: f64,
+    /// Robust plane criterion: the largest angle between a point's local
+    /// normal and the workpiece's dominant normal; rejects bevel and side
+    /// faces, which the neighbour count cannot tell from plates.
+    pub plane_max_normal_angle_deg: f64,
+    /// Euclidean clustering tolerance, mm, for clouds without a pixel grid
+    /// (organized clouds are clustered on the grid, which keeps sub-mm gaps).
+    pub cluster_tolerance_mm: f64,
+    /// Clusters smaller than this are noise, not planes.
+    pub min_plane_area_mm2: f64,
+    /// Two butt plates are coplanar when their planes' offsets differ by
+    /// less than this.
+    pub coplanar_tolerance_mm: f64,
+    /// The range of plate thicknesses a lap step may have.
+    pub lap_step_min_mm: f64,
+    pub lap_step_max_mm: f64,
+    /// Robust edge criterion: a plane point is an edge point when it has at
+    /// most this fraction of its full-plane neighbour count (paper: 0.5).
+    pub edge_max_neighbour_ratio: f64,
+    /// RANSAC inlier distance, mm (paper: 1).
+    pub ransac_distance_mm: f64,
+    pub ransac_iterations: u32,
+    /// A line needs at least this many inliers to count as an edge.
+    pub ransac_min_line_points: u32,
+    /// Stop segmenting when fewer edge points remain (section 3.4.2).
+    pub ransac_min_remaining_points: u32,
+    pub ransac_max_lines: u32,
+    /// Seed of the RANSAC random generator, so results are reproducible.
+    pub ransac_seed: u64,
+    /// The two weld edges must be parallel within this angle.
+    pub max_edge_angle_deg: f64,
+    /// Half-width of the band around a coarse weld edge searched for the
+    /// plate's true boundary, mm.
+    pub boundary_band_mm: f64,
+    /// A point lies on a plate's plane when within this distance of it.
+    pub on_plane_tolerance_mm: f64,
+    /// Degree n of the least-squares polynomial (Eq. 17); 1 for straight seams.
+    pub fit_degree: u32,
+    /// Boundary samples further than this many sigmas from the fit are
+    /// dropped and the fit repeated.
+    pub fit_trim_sigma: f64,
+}
+
+impl Default for PipelineParams {
+    fn default() -> Self {
+        PipelineParams {
+            method: Method::Robust,
+            neighbour_radius_mm: 1.0,
+            plane_min_neighbour_ratio: 0.8,
+            plane_max_normal_angle_deg: 20.0,
+            cluster_tolerance_mm: 1.0,
+            min_plane_area_mm2: 400.0,
+            coplanar_tolerance_mm: 3.0,
+            lap_step_min_mm: 1.0,
+            lap_step_max_mm: 30.0,
+            edge_max_neighbour_ratio: 0.75,
+            ransac_distance_mm: 1.0,
+            ransac_iterations: 400,
+            ransac_min_line_points: 40,
+            ransac_min_remaining_points: 40,
+            ransac_max_lines: 12,
+            ransac_seed: 42,
+            max_edge_angle_deg: 10.0,
+            boundary_band_mm: 3.0,
+            on_plane_tolerance_mm: 0.4,
+            fit_degree: 1,
+            fit_trim_sigma: 3.0,
+        }
+    }
+}
+
+/// The paper's own numbers where they differ from the robust method's.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PaperParams {
+    /// μ of the plane edge criterion (Eq. 15).
+    pub edge_ratio: f64,
+    /// Euclidean clustering threshold (section 3.3).
+    pub cluster_tolerance_mm: f64,
+}
+
+impl Default for PaperParams {
+    fn default() -> Self {
+        PaperParams { edge_ratio: 0.5, cluster_tolerance_mm: 2.0 }
+    }
+}
+
+/// Sampling and torch orientation of the trajectory.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TrajectoryParams {
+    /// Distance between waypoints along the seam, mm.
+    pub step_mm: f64,
+    /// Torch tilt about the travel direction, degrees.
+    pub work_angle_deg: f64,
+    /// Torch tilt about the axis across the seam (push positive), degrees.
+    pub travel_angle_deg: f64,
+}
+
+impl Default for TrajectoryParams {
+    fn default() -> Self {
+        TrajectoryParams { step_mm: 5.0, work_angle_deg: 0.0, travel_angle_deg: 0.0 }
+    }
+}
+
+/// The validated configuration.
+#[derive(Debug, Clone)]
+pub struct Config {
+    pub camera: CameraModel,
+    pub euler: EulerConvention,
+    /// `End_T_Camera`, validated rigid.
+    pub hand_eye: Isometry3<f64>,
+    pub pipeline: PipelineParams,
+    pub paper: PaperParams,
+    pub trajectory: TrajectoryParams,
+}
+
+impl Default for Config {
+    fn default() -> Self {
+        Config::from_file(ConfigFile::default()).expect("the built-in defaults are valid")
+    }
+}
+
+/// Why a configuration was refused. Every variant names the key.
+#[derive(Debug, thiserror::Error)]
+pub enum ConfigError {
+    /// The file could not be read.
+    #[error("cannot read config {path}: {source}")]
+    Io {
+        path: String,
+        #[source]
+        source: std::io::Error,
+    },
+    /// The TOML is malformed, has an unknown key or a value of the wrong type.
+    #[error("config {path}: {message}")]
+    Parse { path: String, message: String },
+    /// A value is out of its allowed range.
+    #[error("config key `{key}`: {message}")]
+    Invalid { key: &'static str, message: String },
+    /// The hand-eye matrix is not a rigid transform.
+    #[error("config key `robot.hand_eye`: {0}")]
+    HandEye(#[from] HandEyeError),
+}
+
+fn check(key: &'static str, ok: bool, message: impl FnOnce() -> String) -> Result<(), ConfigError> {
+    if ok { Ok(()) } else { Err(ConfigError::Invalid { key, message: message() }) }
+}
+
+fn positive(key: &'static str, v: f64) -> Result<(), ConfigError> {
+    check(key, v.is_finite() && v > 0.0, || format!("must be a positive number, got {v}"))
+}
+
+fn in_range(key: &'static str, v: f64, lo: f64, hi: f64) -> Result<(), ConfigError> {
+    check(key, v.is_finite() && (lo..=hi).contains(&v), || format!("must lie in [{lo}, {hi}], got {v}"))
+}
+
+impl Config {
+    /// Reads and validates a TOML config file.
+    pub fn load(path: &Path) -> Result<Config, ConfigError> {
+        let shown = path.display().to_string();
+        let text = std::fs::read_to_string(path).map_err(|source| ConfigError::Io { path: shown.clone(), source })?;
+        Config::parse(&text, &shown)
+    }
+
+    /// Parses and validates TOML text; `origin` names it in errors.
+    pub fn parse(text: &str, origin: &str) -> Result<Config, ConfigError> {
+        let file: ConfigFile = toml::from_str(text)
+            .map_err(|e| ConfigError::Parse { path: origin.to_string(), message: e.to_string() })?;
+        Config::from_file(file)
+    }
+
+    /// Validates the schema's values into a built config.
+    pub fn from_file(f: ConfigFile) -> Result<Config, ConfigError> {
+        let c = &f.camera;
+        check("camera.width_px", c.width_px > 0, || "must be at least 1".into())?;
+        check("camera.height_px", c.height_px > 0, || "must be at least 1".into())?;
+        positive("camera.fov_width_mm", c.fov_width_mm)?;
+        positive("camera.fov_height_mm", c.fov_height_mm)?;
+        positive("camera.fov_distance_mm", c.fov_distance_mm)?;
+        in_range("camera.baseline_mm", c.baseline_mm, 0.0, 10_000.0)?;
+        positive("camera.nominal_accuracy_mm", c.nominal_accuracy_mm)?;
+        let camera = CameraModel {
+            width_px: c.width_px,
+            height_px: c.height_px,
+            fov_width_mm: c.fov_width_mm,
+            fov_height_mm: c.fov_height_mm,
+            fov_distance_mm: c.fov_distance_mm,
+            baseline_mm: c.baseline_mm,
+            nominal_accuracy_mm: c.nominal_accuracy_mm,
+        };
+
+        let euler = EulerConvention::from_name(&f.robot.euler_convention).ok_or_else(|| ConfigError::Invalid {
+            key: "robot.euler_convention",
+            message: format!(
+                "unknown convention {:?}; expected one of {:?}",
+                f.robot.euler_convention,
+                EulerConvention::NAMES
+            ),
+        })?;
+        let rows: [f64; 16] = f.robot.hand_eye.as_slice().try_into().map_err(|_| ConfigError::Invalid {
+            key: "robot.hand_eye",
+            message: format!("needs 16 numbers (row-major 4x4), got {}", f.robot.hand_eye.len()),
+        })?;
+        let hand_eye = hand_eye_from_rows(&rows)?;
+
+        let p = &f.pipeline;
+        let method = Method::from_name(&p.method).ok_or_else(|| ConfigError::Invalid {
+            key: "pipeline.method",
+            message: format!("unknown method {:?}; expected \"robust\" or \"paper\"", p.method),
+        })?;
+        positive("pipeline.neighbour_radius_mm", p.neighbour_radius_mm)?;
+        check("pipeline.neighbour_radius_mm", p.neighbour_radius_mm <= 10.0, || {
+            format!(
+                "{} mm would make every neighbour search scan thousands of pixels; use at most 10",
+                p.neighbour_radius_mm
+            )
+        })?;
+        in_range("pipeline.plane_min_neighbour_ratio", p.plane_min_neighbour_ratio, 0.05, 1.0)?;
+        in_range("pipeline.plane_max_normal_angle_deg", p.plane_max_normal_angle_deg, 1.0, 89.0)?;
+        positive("pipeline.cluster_tolerance_mm", p.cluster_tolerance_mm)?;
+        in_range("pipeline.min_plane_area_mm2", p.min_plane_area_mm2, 0.0, 1e7)?;
+        positive("pipeline.coplanar_tolerance_mm", p.coplanar_tolerance_mm)?;
+        positive("pipeline.lap_step_min_mm", p.lap_step_min_mm)?;
+        check("pipeline.lap_step_max_mm", p.lap_step_max_mm > p.lap_step_min_mm, || {
+            format!("must exceed lap_step_min_mm ({}), got {}", p.lap_step_min_mm, p.lap_step_max_mm)
+        })?;
+        in_range("pipeline.edge_max_neighbour_ratio", p.edge_max_neighbour_ratio, 0.05, 0.99)?;
+        check("pipeline.edge_max_neighbour_ratio", p.edge_max_neighbour_ratio < p.plane_min_neighbour_ratio, || {
+            format!(
+                "must be below plane_min_neighbour_ratio ({}), or every plane point is an edge point",
+                p.plane_min_neighbour_ratio
+            )
+        })?;
+        positive("pipeline.ransac_distance_mm", p.ransac_distance_mm)?;
+        check("pipeline.ransac_iterations", p.ransac_iterations >= 1, || "must be at least 1".into())?;
+        check("pipeline.ransac_min_line_points", p.ransac_min_line_points >= 2, || "must be at least 2".into())?;
+        check("pipeline.ransac_max_lines", p.ransac_max_lines >= 1, || "must be at least 1".into())?;
+        in_range("pipeline.max_edge_angle_deg", p.max_edge_angle_deg, 0.1, 45.0)?;
+        positive("pipeline.boundary_band_mm", p.boundary_band_mm)?;
+        positive("pipeline.on_plane_tolerance_mm", p.on_plane_tolerance_mm)?;
+        check("pipeline.fit_degree", (1..=5).contains(&p.fit_degree), || {
+            format!("must be 1 (straight seams) to 5, got {}", p.fit_degree)
+        })?;
+        in_range("pipeline.fit_trim_sigma", p.fit_trim_sigma, 1.0, 100.0)?;
+
+        in_range("paper.edge_ratio", f.paper.edge_ratio, 0.01, 1.0)?;
+        positive("paper.cluster_tolerance_mm", f.paper.cluster_tolerance_mm)?;
+
+        let t = &f.trajectory;
+        check("trajectory.step_mm", t.step_mm.is_finite() && t.step_mm >= 0.1, || {
+            format!("must be at least 0.1 mm, got {}", t.step_mm)
+        })?;
+        in_range("trajectory.work_angle_deg", t.work_angle_deg, -80.0, 80.0)?;
+        in_range("trajectory.travel_angle_deg", t.travel_angle_deg, -80.0, 80.0)?;
+
+        Ok(Config {
+            camera,
+            euler,
+            hand_eye,
+            pipeline: PipelineParams {
+                method,
+                neighbour_radius_mm: p.neighbour_radius_mm,
+                plane_min_neighbour_ratio: p.plane_min_neighbour_ratio,
+                plane_max_normal_angle_deg: p.plane_max_normal_angle_deg,
+                cluster_tolerance_mm: p.cluster_tolerance_mm,
+                min_plane_area_mm2: p.min_plane_area_mm2,
+                coplanar_tolerance_mm: p.coplanar_tolerance_mm,
+                lap_step_min_mm: p.lap_step_min_mm,
+                lap_step_max_mm: p.lap_step_max_mm,
+                edge_max_neighbour_ratio: p.edge_max_neighbour_ratio,
+                ransac_distance_mm: p.ransac_distance_mm,
+                ransac_iterations: p.ransac_iterations,
+                ransac_min_line_points: p.ransac_min_line_points,
+                ransac_min_remaining_points: p.ransac_min_remaining_points,
+                ransac_max_lines: p.ransac_max_lines,
+                ransac_seed: p.ransac_seed,
+                max_edge_angle_deg: p.max_edge_angle_deg,
+                boundary_band_mm: p.boundary_band_mm,
+                on_plane_tolerance_mm: p.on_plane_tolerance_mm,
+                fit_degree: p.fit_degree,
+                fit_trim_sigma: p.fit_trim_sigma,
+            },
+            paper: PaperParams { edge_ratio: f.paper.edge_ratio, cluster_tolerance_mm: f.paper.cluster_tolerance_mm },
+            trajectory: TrajectoryParams {
+                step_mm: t.step_mm,
+                work_angle_deg: t.work_angle_deg,
+                travel_angle_deg: t.travel_angle_deg,
+            },
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn empty_file_gives_the_defaults() {
+        let c = Config::parse("", "empty").unwrap();
+        assert_eq!(c.pipeline, PipelineParams::default());
+        assert_eq!(c.camera, CameraModel::default());
+        assert_eq!(c.euler, EulerConvention::Zyx);
+    }
+
+    #[test]
+    fn unknown_keys_are_refused_with_their_name() {
+        let e = Config::parse("[pipeline]\nneighbour_radius = 1.0\n", "x.toml").unwrap_err().to_string();
+        assert!(e.contains("neighbour_radius") && e.contains("x.toml"), "{e}");
+    }
+
+    #[test]
+    fn bad_values_name_their_key() {
+        let cases = [
+            ("[pipeline]\nneighbour_radius_mm = -1.0\n", "pipeline.neighbour_radius_mm"),
+            ("[pipeline]\nmethod = \"fast\"\n", "pipeline.method"),
+            ("[trajectory]\nstep_mm = 0.0\n", "trajectory.step_mm"),
+            ("[robot]\neuler_convention = \"zxz\"\n", "robot.euler_convention"),
+            ("[robot]\nhand_eye = [1.0, 0.0]\n", "robot.hand_eye"),
+            ("[pipeline]\nedge_max_neighbour_ratio = 0.9\n", "pipeline.edge_max_neighbour_ratio"),
+        ];
+        for (text, key) in cases {
+            let e = Config::parse(text, "c.toml").unwrap_err().to_string();
+            assert!(e.contains(key), "{text:?} gave {e}");
+        }
+    }
+
+    #[test]
+    fn the_papers_printed_hand_eye_typo_is_refused() {
+        let mut rows = crate::geometry::pose::PAPER_HAND_EYE;
+        rows[4] = -0.353;
+        let text = format!("[robot]\nhand_eye = {rows:?}\n");
+        let e = Config::parse(&text, "c.toml").unwrap_err().to_string();
+        assert!(e.contains("robot.hand_eye") && e.contains("orthonormal"), "{e}");
+    }
+
+    #[test]
+    fn shipped_config_file_is_valid_and_equals_the_defaults() {
+        let text = include_str!("../../config/weldseam.toml");
+        let c = Config::parse(text, "config/weldseam.toml").unwrap();
+        assert_eq!(c.pipeline, PipelineParams::default());
+        assert_eq!(c.trajectory, TrajectoryParams::default());
+        assert_eq!(c.camera, CameraModel::default());
+    }
+}

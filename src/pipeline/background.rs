@@ -1,0 +1,242 @@
+//! Background removal (section 3.3): which plane clusters are the two
+//! workpiece plates and which are the table or other background.
+//!
+//! The paper deletes the cluster with the largest xy bounding box. That
+//! fails when the plates run off the image (the table splits and a table
+//! piece is kept as a plate) and when the plates fill the view (a plate is
+//! deleted). The robust rule uses what a cell guarantees instead: the
+//! plates are parallel planes nearer the camera than whatever they rest
+//! on. Butt plates are the nearest layer holding two coplanar clusters; a
+//! lap is the nearest pair of layers one plate thickness apart.
+
+use crate::cloud::PointCloud;
+use crate::geometry::fit::{Moments, Plane};
+use crate::geometry::{Vec3, vec3};
+use crate::joint::JointType;
+
+/// A cluster of plane points with its fitted plane.
+#[derive(Debug, Clone)]
+pub struct PlaneCluster {
+    pub members: Vec<u32>,
+    pub plane: Plane,
+    pub centroid: Vec3,
+    /// The area the points cover on their plane, mm².
+    pub area_mm2: f64,
+}
+
+/// The two workpiece plates. For a lap joint `plates[0]` is the upper
+/// plate and `plates[1]` the lower one (robust method; the paper's method
+/// sorts them later by the depth of their edges).
+#[derive(Debug, Clone)]
+pub struct Workpiece {
+    pub plates: [PlaneCluster; 2],
+}
+
+/// Why no workpiece could be found among the plane clusters.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum BackgroundError {
+    /// Fewer than two candidate planes remain.
+    #[error("found {found} workpiece plane(s), need 2")]
+    TooFewPlanes { found: usize },
+    /// No two clusters lie in one plane nearer the camera than the rest.
+    #[error(
+        "found {found} planes but no two coplanar ones (offsets {offsets_mm:?} mm along the normal) for a butt joint"
+    )]
+    NoCoplanarPair { found: usize, offsets_mm: Vec<f64> },
+    /// No two layers are one plate thickness apart.
+    #[error(
+        "found {found} planes but no two layers {min_mm} to {max_mm} mm apart (offsets {offsets_mm:?} mm) for a lap joint"
+    )]
+    NoLapStep { found: usize, offsets_mm: Vec<f64>, min_mm: f64, max_mm: f64 },
+}
+
+/// Fits a plane to each cluster and estimates its area from the sampling
+/// density the camera gives on that plane.
+pub fn describe(
+    cloud: &PointCloud,
+    members: Vec<Vec<u32>>,
+    area_per_point: impl Fn(&Vec3, &Vec3) -> f64,
+) -> Vec<PlaneCluster> {
+    let points = cloud.points();
+    members
+        .into_iter()
+        .filter_map(|m| {
+            // A fixed stride keeps the fit cheap on million-point plates.
+            let stride = (m.len() / 50_000).max(1);
+            let moments: Moments =
+                m.iter().step_by(stride).map(|&i| vec3(&points[i as usize])).collect::<Vec<_>>().iter().collect();
+            let plane = moments.plane()?;
+            let centroid = moments.centroid()?;
+            let area_mm2 = m.len() as f64 * area_per_point(&centroid, &plane.normal);
+            Some(PlaneCluster { members: m, plane, centroid, area_mm2 })
+        })
+        .collect()
+}
+
+/// The paper's rule: delete the cluster with the largest xy bounding box,
+/// keep the two largest of the rest.
+pub fn paper_select(cloud: &PointCloud, mut planes: Vec<PlaneCluster>) -> Result<Workpiece, BackgroundError> {
+    let points = cloud.points();
+    let bbox_area = |c: &PlaneCluster| {
+        let (mut lo, mut hi) = ([f32::MAX; 2], [f32::MIN; 2]);
+        for &i in &c.members {
+            let p = points[i as usize];
+            lo = [lo[0].min(p[0]), lo[1].min(p[1])];
+            hi = [hi[0].max(p[0]), hi[1].max(p[1])];
+        }
+        ((hi[0] - lo[0]) * (hi[1] - lo[1])) as f64
+    };
+    if let Some(background) = (0..planes.len()).max_by(|&a, &b| bbox_area(&planes[a]).total_cmp(&bbox_area(&planes[b])))
+    {
+        planes.remove(background);
+    }
+    planes.sort_by_key(|c| std::cmp::Reverse(c.members.len()));
+    take_two(planes)
+}
+
+fn take_two(planes: Vec<PlaneCluster>) -> Result<Workpiece, BackgroundError> {
+    let found = planes.len();
+    let mut it = planes.into_iter();
+    match (it.next(), it.next()) {
+        (Some(a), Some(b)) => Ok(Workpiece { plates: [a, b] }),
+        _ => Err(BackgroundError::TooFewPlanes { found }),
+    }
+}
+
+/// Settings of the robust selection.
+#[derive(Debug, Clone, Copy)]
+pub struct Selection {
+    pub joint: JointType,
+    /// The workpiece's dominant normal, away from the camera.
+    pub normal: Vec3,
+    pub coplanar_tolerance_mm: f64,
+    pub lap_step_min_mm: f64,
+    pub lap_step_max_mm: f64,
+    /// Clusters whose normal is further than this from `normal` are not
+    /// workpiece planes.
+    pub max_tilt_deg: f64,
+}
+
+/// The robust rule: plates are the nearest parallel layers that fit the
+/// joint type.
+pub fn robust_select(planes: Vec<PlaneCluster>, s: &Selection) -> Result<Workpiece, BackgroundError> {
+    let cos_tilt = s.max_tilt_deg.to_radians().cos();
+    let mut planes: Vec<PlaneCluster> =
+        planes.into_iter().filter(|c| c.plane.normal.dot(&s.normal) >= cos_tilt).collect();
+    let found = planes.len();
+    if found < 2 {
+        return Err(BackgroundError::TooFewPlanes { found });
+    }
+    let offset = |c: &PlaneCluster| s.normal.dot(&c.centroid);
+    planes.sort_by(|a, b| offset(a).total_cmp(&offset(b)));
+    let offsets_mm: Vec<f64> = planes.iter().map(|c| (offset(c) * 10.0).round() / 10.0).collect();
+
+    // Layers: runs of clusters whose offsets agree, nearest the camera first.
+    let mut layers: Vec<Vec<PlaneCluster>> = Vec::new();
+    for c in planes {
+        match layers.last_mut() {
+            Some(layer) if offset(&c) - offset(&layer[0]) <= s.coplanar_tolerance_mm => layer.push(c),
+            _ => layers.push(vec![c]),
+        }
+    }
+    for layer in &mut layers {
+        layer.sort_by(|a, b| b.area_mm2.total_cmp(&a.area_mm2));
+    }
+
+    match s.joint {
+        JointType::VButt | JointType::IButt => {
+            let Some(pos) = layers.iter().position(|l| l.len() >= 2) else {
+                return Err(BackgroundError::NoCoplanarPair { found, offsets_mm });
+            };
+            let mut layer = layers.swap_remove(pos).into_iter();
+            match (layer.next(), layer.next()) {
+                (Some(a), Some(b)) => Ok(Workpiece { plates: [a, b] }),
+                _ => Err(BackgroundError::NoCoplanarPair { found, offsets_mm }),
+            }
+        }
+        JointType::Lap => {
+            for upper in 0..layers.len() {
+                for lower in upper + 1..layers.len() {
+                    let step = offset(&layers[lower][0]) - offset(&layers[upper][0]);
+                    if step > s.lap_step_max_mm {
+                        break;
+                    }
+                    if step >= s.lap_step_min_mm {
+                        let low = layers.swap_remove(lower).swap_remove(0);
+                        let up = layers.swap_remove(upper).swap_remove(0);
+                        return Ok(Workpiece { plates: [up, low] });
+                    }
+                }
+            }
+            Err(BackgroundError::NoLapStep { found, offsets_mm, min_mm: s.lap_step_min_mm, max_mm: s.lap_step_max_mm })
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn cluster(offset: f64, area: f64, centre_x: f64) -> PlaneCluster {
+        PlaneCluster {
+            members: vec![0; area as usize],
+            plane: Plane { normal: Vec3::z(), offset },
+            centroid: Vec3::new(centre_x, 0.0, offset),
+            area_mm2: area,
+        }
+    }
+
+    fn selection(joint: JointType) -> Selection {
+        Selection {
+            joint,
+            normal: Vec3::z(),
+            coplanar_tolerance_mm: 3.0,
+            lap_step_min_mm: 1.0,
+            lap_step_max_mm: 30.0,
+            max_tilt_deg: 10.0,
+        }
+    }
+
+    #[test]
+    fn a_split_table_is_not_taken_for_a_plate() {
+        // Two table pieces, larger than the plates, 40 mm further away.
+        let planes = vec![
+            cluster(740.0, 90_000.0, -300.0),
+            cluster(700.0, 20_000.0, -50.0),
+            cluster(740.0, 80_000.0, 300.0),
+            cluster(700.5, 25_000.0, 50.0),
+        ];
+        let w = robust_select(planes, &selection(JointType::IButt)).unwrap();
+        assert!(w.plates.iter().all(|p| p.plane.offset < 701.0));
+    }
+
+    #[test]
+    fn plates_filling_the_view_are_both_kept() {
+        let planes = vec![cluster(700.0, 70_000.0, -100.0), cluster(700.2, 60_000.0, 100.0)];
+        assert!(robust_select(planes, &selection(JointType::VButt)).is_ok());
+    }
+
+    #[test]
+    fn lap_takes_the_nearest_layers_one_thickness_apart_upper_first() {
+        let planes =
+            vec![cluster(760.0, 90_000.0, 0.0), cluster(706.0, 20_000.0, 50.0), cluster(700.0, 25_000.0, -50.0)];
+        let w = robust_select(planes, &selection(JointType::Lap)).unwrap();
+        assert_eq!(w.plates[0].plane.offset, 700.0);
+        assert_eq!(w.plates[1].plane.offset, 706.0);
+    }
+
+    #[test]
+    fn failures_say_what_was_found() {
+        let one = vec![cluster(700.0, 1000.0, 0.0)];
+        assert_eq!(
+            robust_select(one, &selection(JointType::IButt)).unwrap_err().to_string(),
+            "found 1 workpiece plane(s), need 2"
+        );
+        let apart = vec![cluster(700.0, 1000.0, 0.0), cluster(760.0, 1000.0, 0.0)];
+        assert!(matches!(
+            robust_select(apart.clone(), &selection(JointType::IButt)),
+            Err(BackgroundError::NoCoplanarPair { .. })
+        ));
+        assert!(matches!(robust_select(apart, &selection(JointType::Lap)), Err(BackgroundError::NoLapStep { .. })));
+    }
+}

@@ -1,0 +1,281 @@
+//! Boundary sampling: where exactly a plate ends beside the weld.
+//!
+//! Edge points from the edge criterion lie up to R inside the true edge,
+//! because the plane criterion has already trimmed the outermost points.
+//! On a pixel grid the true boundary can be read directly: walk each scan
+//! line outward across the coarse weld edge while the pixels stay on the
+//! plate's plane; the plate ends between the last such pixel and the next,
+//! so the boundary sample is half a pixel step beyond the last one. The
+//! walk also runs past the ends of the coarse edge, so the samples reach
+//! the plate's corners and give the seam's true extent.
+
+use crate::cloud::PointCloud;
+use crate::geometry::fit::Plane;
+use crate::geometry::{Vec3, vec3};
+
+/// One sample of a plate's boundary: a point on the plate's plane and its
+/// coordinate along the coarse edge.
+#[derive(Debug, Clone, Copy)]
+pub struct BoundarySample {
+    pub position: Vec3,
+    pub along: f64,
+}
+
+/// The coarse edge to refine and the plate it belongs to.
+#[derive(Debug, Clone, Copy)]
+pub struct CoarseEdge {
+    pub point: Vec3,
+    /// Unit direction along the edge.
+    pub direction: Vec3,
+    /// Unit vector in the plate's plane, across the edge, pointing out of
+    /// the plate (towards the weld).
+    pub outward: Vec3,
+}
+
+/// Settings of the walk.
+#[derive(Debug, Clone, Copy)]
+pub struct BoundaryParams {
+    /// Half-width of the band around the coarse edge searched, mm.
+    pub band_mm: f64,
+    /// A pixel is on the plate when within this distance of its plane.
+    pub on_plane_mm: f64,
+}
+
+struct Walker<'a> {
+    cloud: &'a PointCloud,
+    plane: &'a Plane,
+    edge: &'a CoarseEdge,
+    params: &'a BoundaryParams,
+    /// Walk along columns (true) or rows, and in which sense.
+    along_cols: bool,
+    sense: isize,
+}
+
+impl Walker<'_> {
+    fn index(&self, scanline: usize, k: isize) -> Option<usize> {
+        let (w, h) = (self.cloud.width() as isize, self.cloud.height() as isize);
+        let (col, row) = if self.along_cols { (k, scanline as isize) } else { (scanline as isize, k) };
+        (col >= 0 && row >= 0 && col < w && row < h).then(|| (row * w + col) as usize)
+    }
+
+    fn outward_of(&self, p: &Vec3) -> f64 {
+        (p - self.edge.point).dot(&self.edge.outward)
+    }
+
+    fn on_plate(&self, i: usize) -> Option<Vec3> {
+        let p = self.cloud.points()[i];
+        if !p[0].is_finite() {
+            return None;
+        }
+        let v = vec3(&p);
+        (self.plane.signed_distance(&v).abs() <= self.params.on_plane_mm
+            && self.outward_of(&v).abs() <= self.params.band_mm)
+            .then_some(v)
+    }
+
+    /// Walks outward from position `k` on `scanline` and returns the
+    /// boundary sample, or `None` when the walk leaves the image or the
+    /// band before the plate ends (no boundary there).
+    fn walk(&self, scanline: usize, mut k: isize, mean_step: f64) -> Option<BoundarySample> {
+        let mut last = self.on_plate(self.index(scanline, k)?)?;
+        let mut previous: Option<Vec3> = self.index(scanline, k - self.sense).and_then(|i| self.on_plate(i));
+        loop {
+            let next_k = k + self.sense;
+            let next = self.index(scanline, next_k)?;
+            match self.on_plate(next) {
+                Some(v) => {
+                    previous = Some(last);
+                    last = v;
+                    k = next_k;
+                }
+                None => {
+                    let p = self.cloud.points()[next];
+                    // Still on the plane but outside the band: no edge here.
+                    if p[0].is_finite() && self.plane.signed_distance(&vec3(&p)).abs() <= self.params.on_plane_mm {
+                        return None;
+                    }
+                    break;
+                }
+            }
+        }
+        let step =
+            previous.map(|p| self.outward_of(&last) - self.outward_of(&p)).filter(|s| *s > 0.0).unwrap_or(mean_step);
+        let position = self.plane.project(&last) + self.edge.outward * (step / 2.0);
+        Some(BoundarySample { position, along: (position - self.edge.point).dot(&self.edge.direction) })
+    }
+}
+
+/// Samples the boundary of the plate whose member pixels are `members`
+/// beside `edge`. Organized clouds only.
+pub fn sample_boundary(
+    cloud: &PointCloud,
+    members: &[u32],
+    plane: &Plane,
+    edge: &CoarseEdge,
+    params: &BoundaryParams,
+) -> Vec<BoundarySample> {
+    let points = cloud.points();
+    let w = cloud.width();
+    let near: Vec<usize> = members
+        .iter()
+        .map(|&i| i as usize)
+        .filter(|&i| (vec3(&points[i]) - edge.point).dot(&edge.outward).abs() <= params.band_mm)
+        .collect();
+    if near.is_empty() {
+        return Vec::new();
+    }
+    // Walk along the image axis that crosses the edge most directly.
+    let mean_axis_step = |dc: usize, dr: usize| -> f64 {
+        let mut sum = 0.0;
+        let mut n = 0usize;
+        for &i in near.iter().step_by((near.len() / 500).max(1)) {
+            let (col, row) = (i % w + dc, i / w + dr);
+            if col < w && row < cloud.height() {
+                let q = points[row * w + col];
+                if q[0].is_finite() {
+                    sum += (vec3(&q) - vec3(&points[i])).dot(&edge.outward);
+                    n += 1;
+                }
+            }
+        }
+        if n == 0 { 0.0 } else { sum / n as f64 }
+    };
+    let (col_step, row_step) = (mean_axis_step(1, 0), mean_axis_step(0, 1));
+    let along_cols = col_step.abs() >= row_step.abs();
+    let axis_step = if along_cols { col_step } else { row_step };
+    if axis_step == 0.0 {
+        return Vec::new();
+    }
+    let walker = Walker { cloud, plane, edge, params, along_cols, sense: if axis_step > 0.0 { 1 } else { -1 } };
+    let mean_step = axis_step.abs();
+
+    // The outermost member on each scan line starts that line's walk.
+    let split = |i: usize| {
+        if along_cols { (i / w, (i % w) as isize) } else { (i % w, (i / w) as isize) }
+    };
+    let mut start: std::collections::BTreeMap<usize, isize> = std::collections::BTreeMap::new();
+    for &i in &near {
+        let (line, k) = split(i);
+        let entry = start.entry(line).or_insert(k);
+        if (k - *entry) * walker.sense > 0 {
+            *entry = k;
+        }
+    }
+    let mut found: Vec<(usize, isize, BoundarySample)> = Vec::new();
+    for (&line, &k) in &start {
+        if let Some(s) = walker.walk(line, k, mean_step) {
+            found.push((line, k, s));
+        }
+    }
+    extend_past_ends(&walker, &mut found, mean_step);
+    found.into_iter().map(|(_, _, s)| s).collect()
+}
+
+/// Continues sampling on the scan lines beyond the first and last sampled
+/// ones, starting a few pixels inside the predicted boundary, for as long
+/// as the plate is there. The plane criterion trims about R off a plate's
+/// corners, so without this the seam would stop short of the plate ends.
+fn extend_past_ends(walker: &Walker, found: &mut Vec<(usize, isize, BoundarySample)>, mean_step: f64) {
+    if found.len() < 4 {
+        return;
+    }
+    found.sort_by_key(|(line, _, _)| *line);
+    // Boundary position on the scan line as a linear function of the line.
+    let fit = |pts: &[(usize, isize, BoundarySample)]| -> (f64, f64) {
+        let n = pts.len() as f64;
+        let (sx, sy) = pts.iter().fold((0.0, 0.0), |(a, b), (l, k, _)| (a + *l as f64, b + *k as f64));
+        let (mx, my) = (sx / n, sy / n);
+        let (sxx, sxy) = pts.iter().fold((0.0, 0.0), |(a, b), (l, k, _)| {
+            let dx = *l as f64 - mx;
+            (a + dx * dx, b + dx * (*k as f64 - my))
+        });
+        let slope = if sxx > 0.0 { sxy / sxx } else { 0.0 };
+        (my - slope * mx, slope)
+    };
+    let (intercept, slope) = fit(found);
+    let lines = if walker.along_cols { walker.cloud.height() } else { walker.cloud.width() };
+    const MAX_EXTENSION_LINES: usize = 40;
+    for direction in [-1isize, 1] {
+        let mut line = if direction < 0 { found[0].0 as isize } else { found[found.len() - 1].0 as isize };
+        for _ in 0..MAX_EXTENSION_LINES {
+            line += direction;
+            if line < 0 || line as usize >= lines {
+                break;
+            }
+            let predicted = (intercept + slope * line as f64).round() as isize;
+            let sample =
+                (2..6).find_map(|inset| walker.walk(line as usize, predicted - inset * walker.sense, mean_step));
+            match sample {
+                Some(s) => found.push((line as usize, predicted, s)),
+                None => break,
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::camera::CameraModel;
+
+    /// Slope of the test edge: slanted so the rows see every sub-pixel phase.
+    const SLOPE: f64 = 0.1;
+
+    /// A frontal plate at 700 mm whose edge is the line x = `edge_x` + SLOPE y,
+    /// ending at y = `end_y`; beyond it the table 40 mm further away.
+    fn frame(edge_x: f64, end_y: f64) -> (PointCloud, Vec<u32>) {
+        let camera = CameraModel::default();
+        let (w, h) = (80, 80);
+        let mut pts = Vec::new();
+        let mut members = Vec::new();
+        for row in 0..h {
+            for col in 0..w {
+                let r = camera.ray(camera.cx() - 40.0 + col as f64, camera.cy() - 40.0 + row as f64);
+                let (x, y) = (r[0] * 700.0, r[1] * 700.0);
+                let on_plate = x < edge_x + SLOPE * y && y < end_y;
+                let z = if on_plate { 700.0 } else { 740.0 };
+                // Members are the plate minus an eroded 1 mm band, as the plane criterion leaves it.
+                if on_plate && x < edge_x + SLOPE * y - 1.0 && y < end_y - 1.0 {
+                    members.push((row * w + col) as u32);
+                }
+                pts.push([(r[0] * z) as f32, (r[1] * z) as f32, z as f32]);
+            }
+        }
+        (PointCloud::organized(w, h, pts).unwrap(), members)
+    }
+
+    #[test]
+    fn samples_lie_on_the_true_edge_within_a_quarter_pixel() {
+        let edge_x = 3.1;
+        let (cloud, members) = frame(edge_x, 1e9);
+        let plane = Plane { normal: Vec3::z(), offset: 700.0 };
+        let direction = Vec3::new(SLOPE, 1.0, 0.0).normalize();
+        let outward = Vec3::new(1.0, -SLOPE, 0.0).normalize();
+        let edge = CoarseEdge { point: Vec3::new(edge_x - 1.2, 0.0, 700.0), direction, outward };
+        let params = BoundaryParams { band_mm: 3.0, on_plane_mm: 0.4 };
+        let samples = sample_boundary(&cloud, &members, &plane, &edge, &params);
+        assert_eq!(samples.len(), 80);
+        let pixel = 700.0 / CameraModel::default().fx();
+        // Signed distance of each sample from the true edge line, across it.
+        let offset = |p: &Vec3| (p.x - edge_x - SLOPE * p.y) * outward.x;
+        let mean = samples.iter().map(|s| offset(&s.position)).sum::<f64>() / samples.len() as f64;
+        let worst = samples.iter().map(|s| offset(&s.position).abs()).fold(0.0, f64::max);
+        assert!(mean.abs() < 0.1 * pixel, "mean offset {mean} mm");
+        assert!(worst < 0.6 * pixel, "worst offset {worst} mm");
+    }
+
+    #[test]
+    fn samples_reach_the_plate_corner() {
+        let end_y = 2.0;
+        let (cloud, members) = frame(3.1, end_y);
+        let plane = Plane { normal: Vec3::z(), offset: 700.0 };
+        let direction = Vec3::new(SLOPE, 1.0, 0.0).normalize();
+        let outward = Vec3::new(1.0, -SLOPE, 0.0).normalize();
+        let edge = CoarseEdge { point: Vec3::new(2.0, 0.0, 700.0), direction, outward };
+        let params = BoundaryParams { band_mm: 3.0, on_plane_mm: 0.4 };
+        let samples = sample_boundary(&cloud, &members, &plane, &edge, &params);
+        let last = samples.iter().map(|s| s.position.y).fold(f64::MIN, f64::max);
+        let pixel = 700.0 / CameraModel::default().fy();
+        assert!(last > end_y - 1.01 * pixel && last < end_y, "last sample at y = {last}, plate ends at {end_y}");
+    }
+}

@@ -1,0 +1,556 @@
+//! The seam pipeline: from a camera-frame point cloud and the robot pose
+//! at capture to base-frame welding waypoints. One stage per module, run
+//! in the paper's order (sections 3 to 5):
+//!
+//! 1. [`orientation`]: the workpiece's dominant normal (robust method only).
+//! 2. [`plane_points`]: the plane point criterion (Eq. 14).
+//! 3. [`clustering`]: Euclidean clustering (3.3).
+//! 4. [`background`]: background removal, the two workpiece plates (3.3).
+//! 5. [`edge_points`]: the plane edge criterion (Eq. 15).
+//! 6. [`ransac`]: iterative RANSAC line segmentation (3.4.2).
+//! 7. [`weld_edges`]: weld edges by centroid positioning (Eq. 16).
+//! 8. [`boundary`] and [`refit`]: the edges' least-squares refit (4.2).
+//! 9. [`weld_equation`]: the weld per joint type (Eq. 32 to 38).
+//! 10. [`trajectory`]: sampling and the base frame (Eq. 42).
+//!
+//! The pipeline does no I/O. Its loops run on the current rayon pool, so
+//! the caller chooses the threads (the daemon installs a dedicated pool).
+
+pub mod background;
+pub mod boundary;
+pub mod clustering;
+pub mod edge_points;
+pub mod neighbours;
+pub mod orientation;
+pub mod plane_points;
+pub mod ransac;
+pub mod refit;
+pub mod trajectory;
+pub mod weld_edges;
+pub mod weld_equation;
+
+use std::fmt;
+use std::time::Instant;
+
+use nalgebra::Isometry3;
+
+use crate::cloud::PointCloud;
+use crate::config::{Config, Method};
+use crate::geometry::pose::RobotPose;
+use crate::geometry::{Vec3, vec3};
+use crate::joint::JointType;
+
+use background::{PlaneCluster, Workpiece};
+use boundary::{BoundaryParams, CoarseEdge};
+use clustering::UNCLUSTERED;
+use edge_points::{EdgeCriterion, FullCount};
+use neighbours::NeighbourSearch;
+use ransac::{EdgeLine, RansacParams};
+use refit::{CurveFit, Frame, SeamCurve};
+pub use trajectory::Waypoint;
+
+/// What the controller asks for.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PlanRequest {
+    pub joint: JointType,
+    /// Groove depth d of a V-butt joint, mm (Eq. 32). Required for V-butt.
+    pub groove_depth_mm: Option<f64>,
+    /// The robot flange pose when the frame was captured.
+    pub pose: RobotPose,
+    /// `End_T_Camera`, if not the configured one.
+    pub hand_eye: Option<Isometry3<f64>>,
+    pub step_mm: Option<f64>,
+    pub work_angle_deg: Option<f64>,
+    pub travel_angle_deg: Option<f64>,
+}
+
+impl PlanRequest {
+    /// A request with the configured defaults for everything optional.
+    pub fn new(joint: JointType, groove_depth_mm: Option<f64>, pose: RobotPose) -> Self {
+        PlanRequest {
+            joint,
+            groove_depth_mm,
+            pose,
+            hand_eye: None,
+            step_mm: None,
+            work_angle_deg: None,
+            travel_angle_deg: None,
+        }
+    }
+}
+
+/// A pipeline stage, for timings and error messages.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Stage {
+    Request,
+    Orientation,
+    PlanePoints,
+    Clustering,
+    Background,
+    EdgePoints,
+    Ransac,
+    WeldEdges,
+    Refit,
+    WeldEquation,
+    Trajectory,
+}
+
+impl Stage {
+    pub fn name(self) -> &'static str {
+        match self {
+            Stage::Request => "request",
+            Stage::Orientation => "orientation",
+            Stage::PlanePoints => "plane_points",
+            Stage::Clustering => "clustering",
+            Stage::Background => "background",
+            Stage::EdgePoints => "edge_points",
+            Stage::Ransac => "ransac",
+            Stage::WeldEdges => "weld_edges",
+            Stage::Refit => "refit",
+            Stage::WeldEquation => "weld_equation",
+            Stage::Trajectory => "trajectory",
+        }
+    }
+}
+
+impl fmt::Display for Stage {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// Why no trajectory could be planned: the stage that failed and why.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("{stage} stage failed: {reason}")]
+pub struct PlanError {
+    pub stage: Stage,
+    pub reason: String,
+}
+
+impl PlanError {
+    fn at(stage: Stage, reason: impl fmt::Display) -> Self {
+        PlanError { stage, reason: reason.to_string() }
+    }
+}
+
+/// Wall time per stage, in run order.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct StageTimings {
+    pub stages: Vec<(Stage, f64)>,
+}
+
+impl StageTimings {
+    pub fn total_ms(&self) -> f64 {
+        self.stages.iter().map(|(_, ms)| ms).sum()
+    }
+
+    pub fn get(&self, stage: Stage) -> Option<f64> {
+        self.stages.iter().find(|(s, _)| *s == stage).map(|(_, ms)| *ms)
+    }
+}
+
+struct Clock {
+    timings: StageTimings,
+    last: Instant,
+}
+
+impl Clock {
+    fn start() -> Self {
+        Clock { timings: StageTimings::default(), last: Instant::now() }
+    }
+
+    fn lap(&mut self, stage: Stage) {
+        let now = Instant::now();
+        self.timings.stages.push((stage, (now - self.last).as_secs_f64() * 1e3));
+        self.last = now;
+    }
+}
+
+/// Point counts through the pipeline, for logs and quality checks.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct PlanStats {
+    pub valid_points: usize,
+    pub plane_points: usize,
+    pub clusters: usize,
+    pub plate_points: [usize; 2],
+    pub edge_points: [usize; 2],
+    pub edge_lines: usize,
+}
+
+/// One planned seam.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Seam {
+    pub joint: JointType,
+    /// Base frame, ordered along the seam.
+    pub waypoints: Vec<Waypoint>,
+    /// The seam's ends in the camera frame.
+    pub start_camera: Vec3,
+    pub end_camera: Vec3,
+    /// Plate normal in the camera frame, into the workpiece.
+    pub normal_camera: Vec3,
+    pub length_mm: f64,
+    /// RMS residual of each weld edge's least-squares fit, mm.
+    pub edge_fit_rms_mm: [f64; 2],
+    /// Samples used by each edge's fit, and how many the trimming dropped.
+    pub edge_samples: [usize; 2],
+    pub edge_samples_dropped: [usize; 2],
+}
+
+/// The result of planning one frame.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Plan {
+    pub method: Method,
+    pub seams: Vec<Seam>,
+    pub stats: PlanStats,
+    pub timings: StageTimings,
+}
+
+/// Plans trajectories with one configuration.
+#[derive(Debug, Clone)]
+pub struct Planner {
+    config: Config,
+}
+
+impl Planner {
+    pub fn new(config: Config) -> Self {
+        Planner { config }
+    }
+
+    pub fn config(&self) -> &Config {
+        &self.config
+    }
+
+    /// Runs the pipeline on `cloud` (camera frame, mm).
+    pub fn plan(&self, cloud: &PointCloud, request: &PlanRequest) -> Result<Plan, PlanError> {
+        Run::new(&self.config, cloud, request)?.execute()
+    }
+}
+
+/// One pipeline run: the inputs and what the stages have found so far.
+struct Run<'a> {
+    config: &'a Config,
+    cloud: &'a PointCloud,
+    request: &'a PlanRequest,
+    method: Method,
+    clock: Clock,
+    stats: PlanStats,
+}
+
+impl<'a> Run<'a> {
+    fn new(config: &'a Config, cloud: &'a PointCloud, request: &'a PlanRequest) -> Result<Self, PlanError> {
+        validate(request)?;
+        Ok(Run {
+            config,
+            cloud,
+            request,
+            method: config.pipeline.method,
+            clock: Clock::start(),
+            stats: PlanStats::default(),
+        })
+    }
+
+    fn execute(mut self) -> Result<Plan, PlanError> {
+        let cfg = &self.config.pipeline;
+        let camera = &self.config.camera;
+        let cloud = self.cloud;
+        self.stats.valid_points = cloud.valid_count();
+        if self.stats.valid_points == 0 {
+            return Err(PlanError::at(Stage::PlanePoints, "the frame has no valid point"));
+        }
+        let search = NeighbourSearch::new(cloud, camera, cfg.neighbour_radius_mm);
+        let robust = self.method == Method::Robust;
+
+        let dominant = if robust {
+            let n = orientation::dominant_normal(cloud, &search, camera.fx(), 5.0)
+                .ok_or_else(|| PlanError::at(Stage::Orientation, "no surface normal could be estimated"))?;
+            self.clock.lap(Stage::Orientation);
+            Some(n)
+        } else {
+            None
+        };
+
+        let mask = match dominant {
+            Some(normal) => plane_points::robust_criterion(
+                cloud,
+                camera,
+                &search,
+                &plane_points::RobustPlaneCriterion {
+                    normal,
+                    min_ratio: cfg.plane_min_neighbour_ratio,
+                    max_angle_deg: cfg.plane_max_normal_angle_deg,
+                },
+            ),
+            None => plane_points::paper_criterion(cloud, camera, &search),
+        };
+        self.stats.plane_points = mask.iter().filter(|&&b| b).count();
+        self.clock.lap(Stage::PlanePoints);
+        if self.stats.plane_points == 0 {
+            return Err(PlanError::at(Stage::PlanePoints, "no point passed the plane point criterion"));
+        }
+
+        // Clusters below a few dozen points cannot reach the area limit.
+        const MIN_CLUSTER_POINTS: usize = 30;
+        let clusters = if robust && cloud.is_organized() {
+            clustering::grid(cloud, &mask, cfg.cluster_tolerance_mm, MIN_CLUSTER_POINTS)
+        } else {
+            let tol = if robust { cfg.cluster_tolerance_mm } else { self.config.paper.cluster_tolerance_mm };
+            clustering::euclidean(cloud, &mask, tol, MIN_CLUSTER_POINTS)
+        };
+        drop(mask);
+        self.clock.lap(Stage::Clustering);
+
+        let area_per_point = |c: &Vec3, n: &Vec3| -> f64 {
+            if robust {
+                1.0 / camera.plane_density_at([c.x, c.y, c.z], [n.x, n.y, n.z])
+            } else {
+                1.0 / camera.density(c.z)
+            }
+        };
+        let planes: Vec<PlaneCluster> = background::describe(cloud, clusters.members, area_per_point)
+            .into_iter()
+            .filter(|c| c.area_mm2 >= cfg.min_plane_area_mm2)
+            .collect();
+        self.stats.clusters = planes.len();
+        let workpiece = match dominant {
+            Some(normal) => background::robust_select(
+                planes,
+                &background::Selection {
+                    joint: self.request.joint,
+                    normal,
+                    coplanar_tolerance_mm: cfg.coplanar_tolerance_mm,
+                    lap_step_min_mm: cfg.lap_step_min_mm,
+                    lap_step_max_mm: cfg.lap_step_max_mm,
+                    max_tilt_deg: cfg.plane_max_normal_angle_deg,
+                },
+            ),
+            None => background::paper_select(cloud, planes),
+        }
+        .map_err(|e| PlanError::at(Stage::Background, e))?;
+        self.stats.plate_points = workpiece.plates.each_ref().map(|p| p.members.len());
+        self.clock.lap(Stage::Background);
+
+        let mut labels = vec![UNCLUSTERED; cloud.len()];
+        for (k, plate) in workpiece.plates.iter().enumerate() {
+            for &i in &plate.members {
+                labels[i as usize] = k as u32;
+            }
+        }
+        let radius = cfg.neighbour_radius_mm;
+        let criterion = match dominant {
+            // Config validation keeps the edge ratio below the plane ratio.
+            Some(n) => {
+                EdgeCriterion { full: FullCount::Plane(n), ratio: cfg.edge_max_neighbour_ratio, safe_interior: true }
+            }
+            None => {
+                // Eq. 13's N'min is (1 - e/R)² of Eq. 6's N.
+                let margin = 1.0 - camera.nominal_accuracy_mm / radius;
+                let ratio = self.config.paper.edge_ratio;
+                EdgeCriterion { full: FullCount::Frontal, ratio, safe_interior: ratio < margin * margin }
+            }
+        };
+        let edges: [Vec<u32>; 2] = std::array::from_fn(|k| {
+            let members = &workpiece.plates[k].members;
+            edge_points::edge_points(cloud, camera, &search, &labels, k as u32, members, &criterion)
+        });
+        self.stats.edge_points = [edges[0].len(), edges[1].len()];
+        self.clock.lap(Stage::EdgePoints);
+
+        let seam = if robust {
+            self.robust_seam(&workpiece, &edges, dominant.unwrap_or_else(Vec3::z))?
+        } else {
+            self.paper_seam(&workpiece, &edges)?
+        };
+        Ok(Plan { method: self.method, seams: vec![seam], stats: self.stats, timings: self.clock.timings })
+    }
+
+    fn ransac_params(&self, seed_offset: u64) -> RansacParams {
+        let cfg = &self.config.pipeline;
+        RansacParams {
+            distance_mm: cfg.ransac_distance_mm,
+            iterations: cfg.ransac_iterations,
+            min_line_points: cfg.ransac_min_line_points as usize,
+            min_remaining_points: cfg.ransac_min_remaining_points as usize,
+            max_lines: cfg.ransac_max_lines as usize,
+            seed: cfg.ransac_seed.wrapping_add(seed_offset),
+        }
+    }
+
+    fn points_of(&self, indices: &[u32]) -> Vec<Vec3> {
+        indices.iter().map(|&i| vec3(&self.cloud.points()[i as usize])).collect()
+    }
+
+    /// Stages 6 to 10 as the paper has them.
+    fn paper_seam(&mut self, workpiece: &Workpiece, edges: &[Vec<u32>; 2]) -> Result<Seam, PlanError> {
+        let cfg = &self.config.pipeline;
+        let mut all: Vec<Vec3> = self.points_of(&edges[0]);
+        let split = all.len();
+        all.extend(self.points_of(&edges[1]));
+        let lines = ransac::segment_lines(&all, &self.ransac_params(0));
+        self.stats.edge_lines = lines.len();
+        self.clock.lap(Stage::Ransac);
+
+        let centroids = workpiece.plates.each_ref().map(|p| p.centroid);
+        let owner = |l: &EdgeLine| (l.inliers.iter().filter(|&&i| i >= split).count() * 2 > l.inliers.len()) as usize;
+        let pick =
+            weld_edges::paper_select(&lines, centroids, owner).map_err(|e| PlanError::at(Stage::WeldEdges, e))?;
+        self.clock.lap(Stage::WeldEdges);
+
+        let inliers: [Vec<Vec3>; 2] = pick.map(|k| lines[k].inliers.iter().map(|&i| all[i]).collect());
+        let union: Vec<Vec3> = inliers.iter().flatten().copied().collect();
+        let frame = Frame::paper(&union);
+        let degree = cfg.fit_degree as usize;
+        let fits: [CurveFit; 2] = [0, 1]
+            .map(|k| refit::fit(&inliers[k], &frame, degree))
+            .into_iter()
+            .collect::<Option<Vec<_>>>()
+            .and_then(|v| v.try_into().ok())
+            .ok_or_else(|| PlanError::at(Stage::Refit, "a weld edge has too few points for a least-squares fit"))?;
+        self.clock.lap(Stage::Refit);
+
+        let (e1, e2) = (&fits[0].curve, &fits[1].curve);
+        let normal = weld_equation::paper_normal(e1, e2)
+            .ok_or_else(|| PlanError::at(Stage::WeldEquation, "the weld edges are collinear; no plate normal"))?;
+        let weld = match self.request.joint {
+            JointType::VButt => weld_equation::v_butt(e1, e2, self.request.groove_depth_mm.unwrap_or(0.0), &normal),
+            JointType::IButt => weld_equation::i_butt(e1, e2),
+            JointType::Lap => Some(weld_equation::lap_paper(e1, e2)),
+        }
+        .ok_or_else(|| PlanError::at(Stage::WeldEquation, "the weld edges were fitted in different frames"))?;
+        let (s0, s1) = (weld.s_min, weld.s_max);
+        self.clock.lap(Stage::WeldEquation);
+        self.finish(weld, s0, s1, normal, &fits)
+    }
+
+    /// Stages 6 to 10 made robust.
+    fn robust_seam(&mut self, workpiece: &Workpiece, edges: &[Vec<u32>; 2], normal: Vec3) -> Result<Seam, PlanError> {
+        let cfg = &self.config.pipeline;
+        let edge_points: [Vec<Vec3>; 2] = [self.points_of(&edges[0]), self.points_of(&edges[1])];
+        let lines: [Vec<EdgeLine>; 2] =
+            [0u64, 1].map(|k| ransac::segment_lines(&edge_points[k as usize], &self.ransac_params(k)));
+        self.stats.edge_lines = lines[0].len() + lines[1].len();
+        self.clock.lap(Stage::Ransac);
+
+        let plates = &workpiece.plates;
+        let centroids = plates.each_ref().map(|p| p.centroid);
+        let pick = weld_edges::robust_select(
+            [&lines[0], &lines[1]],
+            [&edge_points[0], &edge_points[1]],
+            centroids,
+            &normal,
+            cfg.max_edge_angle_deg,
+        )
+        .map_err(|e| PlanError::at(Stage::WeldEdges, e))?;
+        self.clock.lap(Stage::WeldEdges);
+
+        let samples: [Vec<Vec3>; 2] = std::array::from_fn(|k| {
+            let line = &lines[k][pick[k]];
+            let plane = &plates[k].plane;
+            if !self.cloud.is_organized() {
+                return line.inliers.iter().map(|&i| plane.project(&edge_points[k][i])).collect();
+            }
+            let direction = (line.direction - plane.normal * line.direction.dot(&plane.normal)).normalize();
+            let mut outward = plane.normal.cross(&direction);
+            if outward.dot(&(centroids[1 - k] - line.point)) < 0.0 {
+                outward = -outward;
+            }
+            let edge = CoarseEdge { point: plane.project(&line.point), direction, outward };
+            let params = BoundaryParams { band_mm: cfg.boundary_band_mm, on_plane_mm: cfg.on_plane_tolerance_mm };
+            boundary::sample_boundary(self.cloud, &plates[k].members, plane, &edge, &params)
+                .into_iter()
+                .map(|s| s.position)
+                .collect()
+        });
+        let union: Vec<Vec3> = samples.iter().flatten().copied().collect();
+        let frame = Frame::principal(&union, &normal)
+            .ok_or_else(|| PlanError::at(Stage::Refit, "the weld edge samples do not spread along a line"))?;
+        let degree = cfg.fit_degree as usize;
+        let fit_edge = |k: usize| {
+            refit::fit_trimmed(&samples[k], &frame, degree, cfg.fit_trim_sigma).ok_or_else(|| {
+                PlanError::at(
+                    Stage::Refit,
+                    format!("weld edge {} has {} boundary samples, too few to fit", k + 1, samples[k].len()),
+                )
+            })
+        };
+        let fits = [fit_edge(0)?, fit_edge(1)?];
+        self.clock.lap(Stage::Refit);
+
+        let (e1, e2) = (&fits[0].curve, &fits[1].curve);
+        let weld = match self.request.joint {
+            JointType::VButt => weld_equation::v_butt(e1, e2, self.request.groove_depth_mm.unwrap_or(0.0), &normal),
+            JointType::IButt => weld_equation::i_butt(e1, e2),
+            JointType::Lap => {
+                let step = plates[1].plane.offset - plates[0].plane.offset;
+                Some(weld_equation::lap_root(e1, step, &normal))
+            }
+        }
+        .ok_or_else(|| PlanError::at(Stage::WeldEquation, "the weld edges were fitted in different frames"))?;
+        // The seam runs where both plates exist along it.
+        let (s0, s1) = (e1.s_min.max(e2.s_min), e1.s_max.min(e2.s_max));
+        if s1 - s0 <= 0.0 {
+            return Err(PlanError::at(Stage::WeldEquation, "the two weld edges do not overlap along the seam"));
+        }
+        self.clock.lap(Stage::WeldEquation);
+        self.finish(weld, s0, s1, normal, &fits)
+    }
+
+    fn finish(
+        &mut self,
+        weld: SeamCurve,
+        s0: f64,
+        s1: f64,
+        normal: Vec3,
+        fits: &[CurveFit; 2],
+    ) -> Result<Seam, PlanError> {
+        let hand_eye = self.request.hand_eye.unwrap_or(self.config.hand_eye);
+        let base_from_camera = self.request.pose.to_isometry(self.config.euler) * hand_eye;
+        let t = &self.config.trajectory;
+        let params = trajectory::TrajectoryParams {
+            step_mm: self.request.step_mm.unwrap_or(t.step_mm),
+            work_angle_deg: self.request.work_angle_deg.unwrap_or(t.work_angle_deg),
+            travel_angle_deg: self.request.travel_angle_deg.unwrap_or(t.travel_angle_deg),
+        };
+        let (start, end) = trajectory::travel_order(&weld, s0, s1);
+        let waypoints = trajectory::waypoints(&weld, start, end, &normal, &base_from_camera, &params);
+        let length_mm = waypoints.windows(2).map(|w| (w[1].position - w[0].position).norm()).sum();
+        self.clock.lap(Stage::Trajectory);
+        Ok(Seam {
+            joint: self.request.joint,
+            start_camera: weld.at(start),
+            end_camera: weld.at(end),
+            normal_camera: normal,
+            length_mm,
+            waypoints,
+            edge_fit_rms_mm: [fits[0].rms_mm, fits[1].rms_mm],
+            edge_samples: [fits[0].points_used, fits[1].points_used],
+            edge_samples_dropped: [fits[0].points_dropped, fits[1].points_dropped],
+        })
+    }
+}
+
+fn validate(r: &PlanRequest) -> Result<(), PlanError> {
+    let bad = |reason: String| Err(PlanError::at(Stage::Request, reason));
+    if !r.pose.is_finite() {
+        return bad(format!("the robot pose has a non-finite value: {:?} {:?}", r.pose.xyz_mm, r.pose.angles_deg));
+    }
+    match (r.joint, r.groove_depth_mm) {
+        (JointType::VButt, None) => return bad("a V-butt joint needs its groove depth".into()),
+        (_, Some(d)) if !(d.is_finite() && (0.0..=200.0).contains(&d)) => {
+            return bad(format!("groove depth {d} mm is outside 0 to 200 mm"));
+        }
+        _ => {}
+    }
+    if let Some(step) = r.step_mm
+        && !(step.is_finite() && step >= 0.1)
+    {
+        return bad(format!("step {step} mm must be at least 0.1 mm"));
+    }
+    for (name, v) in [("work angle", r.work_angle_deg), ("travel angle", r.travel_angle_deg)] {
+        if let Some(a) = v
+            && !(a.is_finite() && (-80.0..=80.0).contains(&a))
+        {
+            return bad(format!("{name} {a}° is outside -80° to 80°"));
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,164 @@
+//! Local surface normals and the workpiece's dominant orientation.
+//!
+//! Plane welds join plates that lie parallel to each other and, in a cell,
+//! to the table under them, so one normal describes every plane the
+//! pipeline looks for. The robust plane criterion needs it twice: to
+//! predict the neighbour count of a tilted plane (the foreshortening Eq. 6
+//! leaves out), and to reject bevel and side faces, whose neighbour counts
+//! can pass for a plate's when the camera looks at them squarely.
+
+use crate::cloud::PointCloud;
+use crate::geometry::Vec3;
+use crate::geometry::fit::Moments;
+
+use super::neighbours::NeighbourSearch;
+
+/// Estimates the unit normal of the surface at point `i`, oriented away
+/// from the camera. On a pixel grid it is the cross product of central
+/// differences `step` pixels apart along each image axis (one-sided where a
+/// neighbour is missing); elsewhere, the principal axes of the neighbours.
+pub fn local_normal(cloud: &PointCloud, search: &NeighbourSearch, i: usize, step: usize) -> Option<Vec3> {
+    let n = if cloud.is_organized() { grid_normal(cloud, i, step)? } else { scatter_normal(cloud, search, i)? };
+    let p = vec_at(cloud, i)?;
+    Some(if n.dot(&p) < 0.0 { -n } else { n })
+}
+
+/// The pixel step whose 3D length is about `radius_mm` at depth `z`: long
+/// enough to average the depth noise, short enough to stay on one face.
+pub fn normal_step(fx: f64, z: f64, radius_mm: f64) -> usize {
+    ((radius_mm * fx / z).round() as usize).clamp(1, 8)
+}
+
+#[inline]
+fn vec_at(cloud: &PointCloud, i: usize) -> Option<Vec3> {
+    let p = cloud.points().get(i)?;
+    p[0].is_finite().then(|| Vec3::new(p[0] as f64, p[1] as f64, p[2] as f64))
+}
+
+fn grid_normal(cloud: &PointCloud, i: usize, step: usize) -> Option<Vec3> {
+    let (w, h) = (cloud.width(), cloud.height());
+    let (col, row) = (i % w, i / w);
+    let centre = vec_at(cloud, i)?;
+    let at = |c: usize, r: usize| vec_at(cloud, r * w + c);
+    let difference = |before: Option<Vec3>, after: Option<Vec3>| match (before, after) {
+        (Some(b), Some(a)) => Some(a - b),
+        (None, Some(a)) => Some(a - centre),
+        (Some(b), None) => Some(centre - b),
+        (None, None) => None,
+    };
+    let left = col.checked_sub(step).and_then(|c| at(c, row));
+    let right = (col + step < w).then(|| at(col + step, row)).flatten();
+    let up = row.checked_sub(step).and_then(|r| at(col, r));
+    let down = (row + step < h).then(|| at(col, row + step)).flatten();
+    let du = difference(left, right)?;
+    let dv = difference(up, down)?;
+    let n = du.cross(&dv);
+    let norm = n.norm();
+    (norm > 1e-12).then(|| n / norm)
+}
+
+fn scatter_normal(cloud: &PointCloud, search: &NeighbourSearch, i: usize) -> Option<Vec3> {
+    let mut m = Moments::default();
+    search.for_each(i, |j| {
+        if let Some(q) = vec_at(cloud, j) {
+            m.add(&q);
+        }
+    });
+    m.plane().map(|plane| plane.normal)
+}
+
+/// The workpiece's dominant normal: the most common local normal over a
+/// sparse, evenly spread sample of the frame, refined by averaging the
+/// normals that agree with it within `agree_deg`.
+pub fn dominant_normal(cloud: &PointCloud, search: &NeighbourSearch, fx: f64, agree_deg: f64) -> Option<Vec3> {
+    let valid: Vec<usize> = (0..cloud.len()).filter(|&i| cloud.points()[i][0].is_finite()).collect();
+    if valid.is_empty() {
+        return None;
+    }
+    const SAMPLES: usize = 6000;
+    const CANDIDATES: usize = 240;
+    let stride = (valid.len() / SAMPLES).max(1);
+    let normals: Vec<Vec3> = valid
+        .iter()
+        .step_by(stride)
+        .filter_map(|&i| {
+            let z = cloud.points()[i][2] as f64;
+            local_normal(cloud, search, i, normal_step(fx, z, search.radius_mm() * 2.0))
+        })
+        .collect();
+    if normals.is_empty() {
+        return None;
+    }
+    let cos_agree = agree_deg.to_radians().cos();
+    let support = |n: &Vec3| normals.iter().filter(|m| m.dot(n) >= cos_agree).count();
+    let cand_stride = (normals.len() / CANDIDATES).max(1);
+    let best = normals.iter().step_by(cand_stride).max_by_key(|n| support(n))?;
+    let mut mean = *best;
+    for _ in 0..3 {
+        let sum: Vec3 = normals.iter().filter(|m| m.dot(&mean) >= cos_agree).sum();
+        let norm = sum.norm();
+        if norm < 1e-12 {
+            break;
+        }
+        mean = sum / norm;
+    }
+    Some(mean)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::camera::CameraModel;
+
+    fn tilted_grid(n: Vec3) -> PointCloud {
+        let camera = CameraModel::default();
+        let (w, h) = (60, 40);
+        let anchor = Vec3::new(0.0, 0.0, 700.0);
+        let mut pts = Vec::new();
+        for row in 0..h {
+            for col in 0..w {
+                let r = camera.ray(900.0 + col as f64, 580.0 + row as f64);
+                let r = Vec3::new(r[0], r[1], r[2]);
+                // A bevel-like strip on the right third, at 50° to the plate.
+                let q = if col < 40 {
+                    r * (n.dot(&anchor) / n.dot(&r))
+                } else {
+                    let m = Vec3::new(50f64.to_radians().sin(), 0.0, 50f64.to_radians().cos());
+                    r * (m.dot(&anchor) / m.dot(&r))
+                };
+                pts.push([q.x as f32, q.y as f32, q.z as f32]);
+            }
+        }
+        PointCloud::organized(w, h, pts).unwrap()
+    }
+
+    #[test]
+    fn local_normal_recovers_the_plane_and_faces_away() {
+        let n = Vec3::new(0.2, -0.3, 1.0).normalize();
+        let cloud = tilted_grid(n);
+        let camera = CameraModel::default();
+        let search = NeighbourSearch::new(&cloud, &camera, 1.0);
+        let got = local_normal(&cloud, &search, 20 * 60 + 10, 3).unwrap();
+        assert!(got.dot(&n) > 0.9999, "{got:?}");
+    }
+
+    #[test]
+    fn dominant_normal_ignores_a_minority_face() {
+        let n = Vec3::new(0.25, 0.1, 1.0).normalize();
+        let cloud = tilted_grid(n);
+        let camera = CameraModel::default();
+        let search = NeighbourSearch::new(&cloud, &camera, 1.0);
+        let got = dominant_normal(&cloud, &search, camera.fx(), 5.0).unwrap();
+        assert!(got.dot(&n) > 0.9999, "{got:?}");
+    }
+
+    #[test]
+    fn isolated_point_has_no_normal() {
+        let mut pts = vec![[f32::NAN; 3]; 9];
+        pts[4] = [0.0, 0.0, 500.0];
+        let cloud = PointCloud::organized(3, 3, pts).unwrap();
+        let camera = CameraModel::default();
+        let search = NeighbourSearch::new(&cloud, &camera, 1.0);
+        assert!(local_normal(&cloud, &search, 4, 1).is_none());
+    }
+}

@@ -1,0 +1,160 @@
+//! The welding trajectory (section 5.1): waypoints sampled along the weld
+//! at a fixed step, carried into the robot base frame by Eq. 42,
+//! `Base_p = Base_T_End · End_T_Camera · Camera_p`, each with a torch
+//! orientation.
+//!
+//! The torch frame: tool z along the plate normal into the workpiece, tool
+//! x along the travel direction, tool y completing a right-handed frame;
+//! then tilted by the work angle about tool x and the travel angle about
+//! tool y. Travel runs left to right in the image when the seam spreads
+//! more across the image than down it, else top to bottom, so the order is
+//! stable from shot to shot.
+
+use nalgebra::{Isometry3, Matrix3, Point3, Rotation3, Unit};
+
+use crate::geometry::Vec3;
+
+use super::refit::SeamCurve;
+
+/// One waypoint in the robot base frame.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Waypoint {
+    pub position: Vec3,
+    /// `Base_R_Tool`.
+    pub orientation: Rotation3<f64>,
+}
+
+/// Settings of the trajectory.
+#[derive(Debug, Clone, Copy)]
+pub struct TrajectoryParams {
+    pub step_mm: f64,
+    pub work_angle_deg: f64,
+    pub travel_angle_deg: f64,
+}
+
+/// Feature values along `curve` from `s0` to `s1` at arc-length spacing of
+/// at most `step`, both ends included (the spacing is evened out so the
+/// last waypoint lands on the seam's end).
+pub fn sample_features(curve: &SeamCurve, s0: f64, s1: f64, step: f64) -> Vec<f64> {
+    // Dense polyline for arc length; straight seams need few points but
+    // higher degrees deserve a fine one.
+    const DENSE: usize = 512;
+    let ss: Vec<f64> = (0..=DENSE).map(|k| s0 + (s1 - s0) * k as f64 / DENSE as f64).collect();
+    let mut arc = vec![0.0; ss.len()];
+    for k in 1..ss.len() {
+        arc[k] = arc[k - 1] + (curve.at(ss[k]) - curve.at(ss[k - 1])).norm();
+    }
+    let total = arc[DENSE];
+    let segments = ((total / step).ceil() as usize).max(1);
+    let mut out = Vec::with_capacity(segments + 1);
+    let mut k = 0;
+    for j in 0..=segments {
+        let target = total * j as f64 / segments as f64;
+        while k + 1 < DENSE && arc[k + 1] < target {
+            k += 1;
+        }
+        let span = arc[k + 1] - arc[k];
+        let f = if span > 0.0 { ((target - arc[k]) / span).clamp(0.0, 1.0) } else { 0.0 };
+        out.push(ss[k] + (ss[k + 1] - ss[k]) * f);
+    }
+    out
+}
+
+/// Orders `s0 < s1` so travel runs left to right (or top to bottom) in
+/// the image.
+pub fn travel_order(curve: &SeamCurve, s0: f64, s1: f64) -> (f64, f64) {
+    let d = curve.at(s1) - curve.at(s0);
+    let forward = if d.x.abs() >= d.y.abs() { d.x >= 0.0 } else { d.y >= 0.0 };
+    if forward { (s0, s1) } else { (s1, s0) }
+}
+
+/// The torch orientation for travel direction `travel` and plate normal
+/// `into` (both in one frame), with work and travel angles in degrees.
+pub fn torch_orientation(travel: &Vec3, into: &Vec3, work_deg: f64, travel_deg: f64) -> Rotation3<f64> {
+    let z = into.normalize();
+    let x = (travel - z * travel.dot(&z)).normalize();
+    let y = z.cross(&x);
+    let base = Rotation3::from_matrix_unchecked(Matrix3::from_columns(&[x, y, z]));
+    let work = Rotation3::from_axis_angle(&Unit::new_normalize(Vec3::x()), work_deg.to_radians());
+    let push = Rotation3::from_axis_angle(&Unit::new_normalize(Vec3::y()), travel_deg.to_radians());
+    base * work * push
+}
+
+/// Samples the weld from `s_start` to `s_end` (in travel order) and
+/// returns base-frame waypoints (Eq. 42). `normal` is the plate normal in
+/// the camera frame, pointing into the workpiece.
+pub fn waypoints(
+    curve: &SeamCurve,
+    s_start: f64,
+    s_end: f64,
+    normal: &Vec3,
+    base_from_camera: &Isometry3<f64>,
+    params: &TrajectoryParams,
+) -> Vec<Waypoint> {
+    let normal_base = base_from_camera.rotation * normal;
+    sample_features(curve, s_start, s_end, params.step_mm)
+        .into_iter()
+        .map(|s| {
+            let p = curve.at(s);
+            let mut travel = curve.tangent(s);
+            if (s_end - s_start) < 0.0 {
+                travel = -travel;
+            }
+            let position = (base_from_camera * Point3::from(p)).coords;
+            let travel_base = base_from_camera.rotation * travel;
+            let orientation =
+                torch_orientation(&travel_base, &normal_base, params.work_angle_deg, params.travel_angle_deg);
+            Waypoint { position, orientation }
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::pipeline::refit::Frame;
+    use nalgebra::{Translation3, UnitQuaternion};
+
+    fn line() -> SeamCurve {
+        SeamCurve {
+            frame: Frame { origin: Vec3::new(0.0, 0.0, 700.0), e: Vec3::y(), a: Vec3::x(), b: Vec3::z() },
+            coef_a: vec![2.0, 0.0],
+            coef_b: vec![0.0, 0.0],
+            s_min: -50.0,
+            s_max: 50.0,
+        }
+    }
+
+    #[test]
+    fn sampling_covers_both_ends_at_most_one_step_apart() {
+        let s = sample_features(&line(), -50.0, 51.0, 5.0);
+        assert_eq!(s.len(), 22);
+        assert!((s[0] + 50.0).abs() < 1e-12 && (s[21] - 51.0).abs() < 1e-9);
+        assert!(s.windows(2).all(|w| (w[1] - w[0] - 101.0 / 21.0).abs() < 1e-6));
+    }
+
+    #[test]
+    fn torch_z_points_into_the_plate_and_x_along_travel() {
+        let r = torch_orientation(&Vec3::new(1.0, 0.0, 0.1), &Vec3::z(), 0.0, 0.0);
+        assert!((r * Vec3::z() - Vec3::z()).norm() < 1e-12);
+        assert!((r * Vec3::x() - Vec3::x()).norm() < 1e-12);
+        let tilted = torch_orientation(&Vec3::x(), &Vec3::z(), 30.0, 0.0);
+        assert!(((tilted * Vec3::z()).dot(&Vec3::z()) - 30f64.to_radians().cos()).abs() < 1e-12);
+    }
+
+    #[test]
+    fn waypoints_are_transformed_into_the_base_frame() {
+        let base_from_camera = Isometry3::from_parts(
+            Translation3::new(100.0, -200.0, 300.0),
+            UnitQuaternion::from_axis_angle(&Vec3::x_axis(), std::f64::consts::PI),
+        );
+        let params = TrajectoryParams { step_mm: 10.0, work_angle_deg: 0.0, travel_angle_deg: 0.0 };
+        let (s0, s1) = travel_order(&line(), 50.0, -50.0);
+        assert_eq!((s0, s1), (-50.0, 50.0), "top to bottom in the image");
+        let w = waypoints(&line(), s0, s1, &Vec3::z(), &base_from_camera, &params);
+        assert_eq!(w.len(), 11);
+        // Camera (2, -50, 700) → rotate 180° about x → (2, 50, -700) → translate.
+        assert!((w[0].position - Vec3::new(102.0, -150.0, -400.0)).norm() < 1e-9);
+        assert!((w[0].orientation * Vec3::z() - Vec3::new(0.0, 0.0, -1.0)).norm() < 1e-9);
+    }
+}

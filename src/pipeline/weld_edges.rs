@@ -1,0 +1,132 @@
+//! Weld edge lines by centroid positioning (section 4.1, Eq. 16): the two
+//! plate edges beside the weld are the lines that have the two plates'
+//! centroids on opposite sides, `f_edge(C1) · f_edge(C2) < 0`.
+//!
+//! The paper tests the sign in the xoy projection over all lines. The
+//! robust variant tests it in the plate's own plane (exact at any tilt),
+//! takes one line from each plate, requires the two to be parallel, and
+//! among the candidates keeps the pair facing each other most closely, so
+//! a stray line through a hole or along the image border is not chosen.
+
+use crate::geometry::Vec3;
+
+use super::ransac::EdgeLine;
+
+/// Eq. 16's edge function in the xoy projection: the signed area of the
+/// projected line and the point.
+fn xoy_side(line: &EdgeLine, c: &Vec3) -> f64 {
+    let d = line.direction;
+    (c.x - line.point.x) * d.y - (c.y - line.point.y) * d.x
+}
+
+/// Eq. 16's edge function measured in the plane with normal `n`.
+fn in_plane_side(line: &EdgeLine, n: &Vec3, c: &Vec3) -> f64 {
+    (c - line.point).cross(&line.direction).dot(n)
+}
+
+/// Why the weld edges could not be chosen.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum WeldEdgeError {
+    /// Fewer than two lines separate the centroids.
+    #[error("{found} of {lines} edge lines separate the two plates' centroids, need 2")]
+    TooFewSeparating { found: usize, lines: usize },
+    /// Separating lines exist but no pair of them is parallel.
+    #[error("no separating edge line of one plate is within {max_angle_deg}° of one of the other plate")]
+    NotParallel { max_angle_deg: f64 },
+}
+
+/// The paper's selection: of all lines, the two with the most inliers that
+/// separate the centroids in the xoy plane. `owner(line)` tells which
+/// plate (0 or 1) most of a line's inliers belong to; the result is
+/// ordered by owner.
+pub fn paper_select(
+    lines: &[EdgeLine],
+    centroids: [Vec3; 2],
+    owner: impl Fn(&EdgeLine) -> usize,
+) -> Result<[usize; 2], WeldEdgeError> {
+    let mut separating: Vec<usize> = (0..lines.len())
+        .filter(|&k| xoy_side(&lines[k], &centroids[0]) * xoy_side(&lines[k], &centroids[1]) < 0.0)
+        .collect();
+    if separating.len() < 2 {
+        return Err(WeldEdgeError::TooFewSeparating { found: separating.len(), lines: lines.len() });
+    }
+    separating.sort_by(|&a, &b| lines[b].inliers.len().cmp(&lines[a].inliers.len()));
+    let (a, b) = (separating[0], separating[1]);
+    Ok(if owner(&lines[a]) <= owner(&lines[b]) { [a, b] } else { [b, a] })
+}
+
+/// The robust selection over each plate's own lines. Returns the index of
+/// the chosen line in each plate's list.
+pub fn robust_select(
+    lines: [&[EdgeLine]; 2],
+    points: [&[Vec3]; 2],
+    centroids: [Vec3; 2],
+    normal: &Vec3,
+    max_angle_deg: f64,
+) -> Result<[usize; 2], WeldEdgeError> {
+    let separating = |plate: usize| -> Vec<usize> {
+        (0..lines[plate].len())
+            .filter(|&k| {
+                let l = &lines[plate][k];
+                in_plane_side(l, normal, &centroids[0]) * in_plane_side(l, normal, &centroids[1]) < 0.0
+            })
+            .collect()
+    };
+    let (sep_a, sep_b) = (separating(0), separating(1));
+    let found = sep_a.len() + sep_b.len();
+    if sep_a.is_empty() || sep_b.is_empty() {
+        return Err(WeldEdgeError::TooFewSeparating { found, lines: lines[0].len() + lines[1].len() });
+    }
+    let cos_max = max_angle_deg.to_radians().cos();
+    let mid = |plate: usize, k: usize| -> Vec3 {
+        let l = &lines[plate][k];
+        let sum: Vec3 = l.inliers.iter().map(|&i| points[plate][i]).sum();
+        sum / l.inliers.len().max(1) as f64
+    };
+    let mut best: Option<(f64, [usize; 2])> = None;
+    for &a in &sep_a {
+        for &b in &sep_b {
+            let (la, lb) = (&lines[0][a], &lines[1][b]);
+            if la.direction.dot(&lb.direction).abs() < cos_max {
+                continue;
+            }
+            // How far apart the two edges run: the facing pair is closest.
+            let gap = la.distance(&mid(1, b)) + lb.distance(&mid(0, a));
+            if best.as_ref().is_none_or(|(g, _)| gap < *g) {
+                best = Some((gap, [a, b]));
+            }
+        }
+    }
+    best.map(|(_, pair)| pair).ok_or(WeldEdgeError::NotParallel { max_angle_deg })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn line(x: f64, along_y: bool, n: usize) -> EdgeLine {
+        let direction = if along_y { Vec3::y() } else { Vec3::x() };
+        EdgeLine { point: Vec3::new(x, 0.0, 600.0), direction, inliers: (0..n).collect() }
+    }
+
+    #[test]
+    fn centroid_test_picks_the_facing_edges() {
+        // Plate A spans x in [-100, -1], plate B x in [1, 100]; edges along y.
+        let a_lines = vec![line(-100.0, true, 50), line(-1.0, true, 40), line(-50.0, false, 60)];
+        let b_lines = vec![line(100.0, true, 50), line(1.0, true, 40)];
+        let pts: Vec<Vec3> = (0..60).map(|i| Vec3::new(0.0, i as f64, 600.0)).collect();
+        let a_pts: Vec<Vec3> = pts.iter().map(|p| p + Vec3::new(-1.0, 0.0, 0.0)).collect();
+        let b_pts: Vec<Vec3> = pts.iter().map(|p| p + Vec3::new(1.0, 0.0, 0.0)).collect();
+        let centroids = [Vec3::new(-50.0, 30.0, 600.0), Vec3::new(50.0, 30.0, 600.0)];
+        let pick = robust_select([&a_lines, &b_lines], [&a_pts, &b_pts], centroids, &Vec3::z(), 10.0).unwrap();
+        assert_eq!(pick, [1, 1]);
+    }
+
+    #[test]
+    fn paper_selection_needs_two_separating_lines() {
+        let lines = vec![line(-100.0, true, 50), line(0.0, true, 40)];
+        let centroids = [Vec3::new(-50.0, 30.0, 600.0), Vec3::new(50.0, 30.0, 600.0)];
+        let err = paper_select(&lines, centroids, |_| 0).unwrap_err();
+        assert_eq!(err, WeldEdgeError::TooFewSeparating { found: 1, lines: 2 });
+    }
+}

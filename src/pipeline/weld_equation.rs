@@ -1,0 +1,91 @@
+//! The weld equation per joint type (section 4.3), from the two fitted
+//! weld edges `f_E1` and `f_E2`.
+//!
+//! - V-butt: the midline shifted by the groove depth along the plate
+//!   normal, `f_V = (f_E1 + f_E2) / 2 + d n_V` (Eq. 32).
+//! - I-butt: the midline, `f_I = (f_E1 + f_E2) / 2` (Eq. 36).
+//! - Lap, as the paper has it: the lower plate's edge, `f_D = f_E1`
+//!   (Eq. 38). But the lower plate's visible edge is not the weld root:
+//!   the upper plate hides, or the projector shadows, a strip beside it.
+//!   The root is where the upper plate's side face meets the lower plate's
+//!   top surface, which for a cut plate lies straight below the upper
+//!   plate's top edge: the upper edge shifted by the plate step along the
+//!   normal.
+
+use crate::geometry::Vec3;
+
+use super::refit::SeamCurve;
+
+/// The plate normal of Eq. 33 and 34: from two points of `f_E1` and one of
+/// `f_E2`, `n_1 = AB × BC / |AB × BC|`, turned to point away from the
+/// camera (`n_1 · z_cam >= 0`).
+pub fn paper_normal(e1: &SeamCurve, e2: &SeamCurve) -> Option<Vec3> {
+    let a = e1.at(e1.s_min);
+    let b = e1.at(e1.s_max);
+    let c = e2.at(e2.s_min);
+    let n1 = (b - a).cross(&(c - b)).try_normalize(1e-12)?;
+    Some(if n1.z >= 0.0 { n1 } else { -n1 })
+}
+
+/// Eq. 32: the V-butt weld at groove depth `d` below the midline.
+pub fn v_butt(e1: &SeamCurve, e2: &SeamCurve, groove_depth_mm: f64, n_v: &Vec3) -> Option<SeamCurve> {
+    Some(e1.midline(e2)?.shifted(&(n_v * groove_depth_mm)))
+}
+
+/// Eq. 36: the I-butt weld, the midline of the two edges.
+pub fn i_butt(e1: &SeamCurve, e2: &SeamCurve) -> Option<SeamCurve> {
+    e1.midline(e2)
+}
+
+/// Eq. 38 as the paper applies it: of the two edges, the lower plate's is
+/// the one further from the camera (larger z) at the same feature value.
+pub fn lap_paper(e1: &SeamCurve, e2: &SeamCurve) -> SeamCurve {
+    let s = (e1.s_min.max(e2.s_min) + e1.s_max.min(e2.s_max)) / 2.0;
+    if e1.at(s).z >= e2.at(s).z { e1.clone() } else { e2.clone() }
+}
+
+/// The lap root: the upper plate's edge moved down the plate step.
+/// `step_mm` is the distance between the two plates' top surfaces and `n`
+/// the plate normal pointing away from the camera.
+pub fn lap_root(upper_edge: &SeamCurve, step_mm: f64, n: &Vec3) -> SeamCurve {
+    upper_edge.shifted(&(n * step_mm))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::pipeline::refit::Frame;
+
+    fn edge(y0: f64, z0: f64) -> SeamCurve {
+        SeamCurve {
+            frame: Frame { origin: Vec3::zeros(), e: Vec3::x(), a: Vec3::y(), b: Vec3::z() },
+            coef_a: vec![y0, 0.0],
+            coef_b: vec![z0, 0.0],
+            s_min: -50.0,
+            s_max: 50.0,
+        }
+    }
+
+    #[test]
+    fn v_butt_is_the_midline_shifted_by_the_groove_depth() {
+        let w = v_butt(&edge(-3.0, 700.0), &edge(7.0, 700.0), 5.0, &Vec3::z()).unwrap();
+        assert!((w.at(10.0) - Vec3::new(10.0, 2.0, 705.0)).norm() < 1e-12);
+    }
+
+    #[test]
+    fn paper_normal_faces_away_from_the_camera() {
+        let n = paper_normal(&edge(-3.0, 700.0), &edge(7.0, 700.0)).unwrap();
+        assert!((n - Vec3::z()).norm() < 1e-12);
+        let n = paper_normal(&edge(7.0, 700.0), &edge(-3.0, 700.0)).unwrap();
+        assert!((n - Vec3::z()).norm() < 1e-12);
+    }
+
+    #[test]
+    fn lap_paper_takes_the_deeper_edge_and_the_root_sits_below_the_upper_edge() {
+        let upper = edge(0.0, 694.0);
+        let lower = edge(4.0, 700.0);
+        assert_eq!(lap_paper(&upper, &lower), lower);
+        let root = lap_root(&upper, 6.0, &Vec3::z());
+        assert!((root.at(0.0) - Vec3::new(0.0, 0.0, 700.0)).norm() < 1e-12);
+    }
+}

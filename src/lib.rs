@@ -13,3 +13,4 @@ pub mod config;
 pub mod geometry;
 pub mod joint;
 pub mod pipeline;
+pub mod report;

@@ -1,3 +1,8 @@
-//! The wire protocol between the weldseam daemon, 3D cameras and robot
-//! controllers. Filled in by the cell daemon work; empty until then so the
-//! workspace layout is fixed from the start.
+//! The weldseam wire protocol and report schema: the only serializable
+//! types of the workspace. Domain types live in the `weldseam` library and
+//! are converted to and from these at the boundary.
+//!
+//! - [`plan`]: a planned trajectory as the controller receives it and as
+//!   `weldseam plan --json` prints it.
+
+pub mod plan;

@@ -95,6 +95,7 @@ impl<'a> Lines<'a> {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(super) enum Endian {
     Little,
+    Big,
 }
 
 /// A numeric type a file can store a value as.
@@ -134,6 +135,7 @@ impl Scalar {
             ($ty:ty) => {
                 take(bytes, offset).map(|raw| match endian {
                     Endian::Little => <$ty>::from_le_bytes(raw) as f64,
+                    Endian::Big => <$ty>::from_be_bytes(raw) as f64,
                 })
             };
         }
@@ -197,8 +199,12 @@ mod tests {
     }
 
     #[test]
-    fn scalars_decode_and_stay_in_bounds() {
+    fn scalars_decode_both_byte_orders() {
         let bytes = [0x01, 0x02, 0x03, 0x04];
+        assert_eq!(
+            Scalar::U16.read(&bytes, 1, Endian::Big),
+            Some(f64::from(0x0203u16))
+        );
         assert_eq!(
             Scalar::U16.read(&bytes, 1, Endian::Little),
             Some(f64::from(0x0302u16))

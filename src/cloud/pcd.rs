@@ -923,4 +923,24 @@ mod tests {
             );
         }
     }
+
+    #[test]
+    fn damaged_bytes_never_panic() {
+        let grid = sample_grid();
+        let mut binary = Vec::new();
+        write_binary(&grid, &mut binary).unwrap();
+        let mut ascii = Vec::new();
+        write_ascii(&grid, &mut ascii).unwrap();
+        let mixed = format!("{MIXED_HEADER}DATA ascii\n7 1 2 3 0 0 1 4\n8 4 5 6 0 1 0 0\n");
+        for file in [binary, ascii, mixed.into_bytes()] {
+            assert!(parse(&file, path()).is_ok());
+            for at in 0..file.len() {
+                for byte in [0, b'\n', b' ', b'9', b'x', 0xff] {
+                    let mut damaged = file.clone();
+                    damaged[at] = byte;
+                    let _ = parse(&damaged, path());
+                }
+            }
+        }
+    }
 }

@@ -920,4 +920,23 @@ mod tests {
             assert_eq!(result.is_ok(), cut >= vertices_end, "prefix of {cut} bytes");
         }
     }
+
+    #[test]
+    fn damaged_bytes_never_panic() {
+        let mut ascii = Vec::new();
+        write_ascii(&sample_cloud(), &mut ascii).unwrap();
+        let walked = "ply\nformat binary_big_endian 1.0\nelement face 1\nproperty list uchar int i\n\
+            element vertex 1\nproperty double x\nproperty list short uint8 l\nproperty float y\n\
+            property float z\nend_header\n\x01\0\0\0\x05\0\0\0\0\0\0\0\0\0\x02\x01\x02\0\0\0\0\0\0\0\0";
+        for file in [faces_first_file(), ascii, walked.as_bytes().to_vec()] {
+            assert!(parse_bytes(&file).is_ok());
+            for at in 0..file.len() {
+                for byte in [0, b'\n', b' ', b'9', b'x', 0xff] {
+                    let mut damaged = file.clone();
+                    damaged[at] = byte;
+                    let _ = parse_bytes(&damaged);
+                }
+            }
+        }
+    }
 }

@@ -11,3 +11,4 @@ pub mod camera;
 pub mod cloud;
 pub mod geometry;
 pub mod joint;
+pub mod sim;

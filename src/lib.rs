@@ -14,3 +14,4 @@ pub mod geometry;
 pub mod joint;
 pub mod pipeline;
 pub mod report;
+pub mod sim;

@@ -10,6 +10,7 @@
 pub mod camera;
 pub mod cloud;
 pub mod config;
+pub mod eval;
 pub mod geometry;
 pub mod joint;
 pub mod pipeline;

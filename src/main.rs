@@ -21,12 +21,14 @@ struct Cli {
 enum Command {
     /// Plan the welding trajectory of one point-cloud file.
     Plan(cli::plan::PlanArgs),
+    /// Plan the seeded suite of simulated scenes and print the accuracy table.
+    Eval(cli::eval::EvalArgs),
 }
 
 fn main() -> std::process::ExitCode {
     let cli = Cli::parse();
     let level = match cli.command {
-        Command::Plan(_) => "warn",
+        Command::Plan(_) | Command::Eval(_) => "warn",
     };
     if let Err(e) = logging::init(cli.log_format, level) {
         eprintln!("error: {e:#}");
@@ -34,6 +36,7 @@ fn main() -> std::process::ExitCode {
     }
     let result = match &cli.command {
         Command::Plan(args) => cli::plan::run(args),
+        Command::Eval(args) => cli::eval::run(args),
     };
     match result {
         Ok(()) => std::process::ExitCode::SUCCESS,

@@ -3,5 +3,6 @@
 //! everything else lives in the library.
 
 pub mod args;
+pub mod eval;
 pub mod logging;
 pub mod plan;

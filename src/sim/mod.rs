@@ -432,6 +432,37 @@ mod tests {
     }
 
     #[test]
+    fn the_rendered_seam_is_where_the_truth_says() {
+        let cam = small_camera();
+        for joint in JointType::ALL {
+            let mut spec = demo_scene(joint);
+            spec.noise = NoiseSpec::none();
+            let sim = simulate(&spec, &cam);
+            let t = &sim.truth;
+            let points: Vec<Vec3> = sim
+                .cloud
+                .points()
+                .iter()
+                .filter(|p| p[0].is_finite())
+                .map(vec3)
+                .collect();
+            // Along the whole seam, returns lie next to the true root line
+            // (the gap or groove is a pixel or two wide at this resolution).
+            for k in 0..=20 {
+                let on_seam = t.start_camera + (t.end_camera - t.start_camera) * (k as f64 / 20.0);
+                let nearest = points
+                    .iter()
+                    .map(|p| (p - on_seam).norm())
+                    .fold(f64::INFINITY, f64::min);
+                assert!(
+                    nearest < 2.5,
+                    "{joint}: nothing within {nearest} mm of {on_seam:?}"
+                );
+            }
+        }
+    }
+
+    #[test]
     fn the_same_seed_gives_the_same_frame_on_any_thread_count() {
         let cam = small_camera();
         let spec = demo_scene(JointType::VButt);

@@ -25,8 +25,15 @@ const MIN_BLOCKED_FRACTION: f64 = 1e-7;
 /// Pixel-space bounds `[u_min, u_max, v_min, v_max]` of a solid.
 type PixelRect = [f64; 4];
 
-/// Camera-frame axis-aligned bounds `[min, max]`.
-type Bounds = [Vec3; 2];
+/// A solid as the projector sees it: the bounds of its vertices' view
+/// directions `[x/z min, x/z max, y/z min, y/z max]` from the projector,
+/// and its nearest depth. A shadow ray from a point is one direction, so
+/// these reject almost every solid with four comparisons.
+#[derive(Debug, Clone, Copy)]
+struct ProjectorFootprint {
+    slopes: [f64; 4],
+    min_depth: f64,
+}
 
 /// A visible, lit return at a pixel.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -49,7 +56,7 @@ pub struct CameraView {
     camera: CameraModel,
     solids: Vec<ConvexSolid>,
     pixel_rects: Vec<Option<PixelRect>>,
-    bounds: Vec<Bounds>,
+    projector_footprints: Vec<Option<ProjectorFootprint>>,
     projector: Vec3,
     min_cos_incidence: f64,
 }
@@ -59,13 +66,18 @@ impl CameraView {
     /// `max_incidence_deg` to the camera or the projector are dropped.
     pub fn new(scene: Scene, camera: &CameraModel, max_incidence_deg: f64) -> Self {
         let pixel_rects = scene.solids.iter().map(|s| pixel_rect(s, camera)).collect();
-        let bounds = scene.solids.iter().map(camera_bounds).collect();
+        let projector = Vec3::new(camera.baseline_mm, 0.0, 0.0);
+        let projector_footprints = scene
+            .solids
+            .iter()
+            .map(|s| projector_footprint(s, &projector))
+            .collect();
         CameraView {
             camera: *camera,
             solids: scene.solids,
             pixel_rects,
-            bounds,
-            projector: Vec3::new(camera.baseline_mm, 0.0, 0.0),
+            projector_footprints,
+            projector,
             min_cos_incidence: max_incidence_deg.to_radians().cos(),
         }
     }
@@ -142,10 +154,18 @@ impl CameraView {
     /// The lit solid itself cannot: it is convex and its face at `point`
     /// faces the projector.
     fn shadowed(&self, point: &Vec3, to_projector: &Vec3, lit_solid: usize) -> bool {
-        let segment = segment_bounds(point, &(point + to_projector));
+        let slope = [-to_projector.x / point.z, point.y / point.z];
+        let may_block = |footprint: &Option<ProjectorFootprint>| match footprint {
+            Some(f) => {
+                f.min_depth < point.z
+                    && (f.slopes[0]..=f.slopes[1]).contains(&slope[0])
+                    && (f.slopes[2]..=f.slopes[3]).contains(&slope[1])
+            }
+            None => true,
+        };
         (0..self.solids.len()).any(|i| {
             i != lit_solid
-                && overlaps(&segment, &self.bounds[i])
+                && may_block(&self.projector_footprints[i])
                 && self.solids[i]
                     .clip(point, to_projector, 0.0, 1.0)
                     .is_some_and(|s| s.exit - s.enter > MIN_BLOCKED_FRACTION)
@@ -197,19 +217,41 @@ fn pixel_rect(solid: &ConvexSolid, camera: &CameraModel) -> Option<PixelRect> {
     Some([rect[0] - 1.0, rect[1] + 1.0, rect[2] - 1.0, rect[3] + 1.0])
 }
 
-fn camera_bounds(solid: &ConvexSolid) -> Bounds {
-    solid.vertices().iter().fold(
-        [Vec3::repeat(f64::INFINITY), Vec3::repeat(f64::NEG_INFINITY)],
-        |[lo, hi], v| [lo.inf(v), hi.sup(v)],
-    )
-}
-
-fn segment_bounds(a: &Vec3, b: &Vec3) -> Bounds {
-    [a.inf(b), a.sup(b)]
-}
-
-fn overlaps(a: &Bounds, b: &Bounds) -> bool {
-    (0..3).all(|k| a[0][k] <= b[1][k] && b[0][k] <= a[1][k])
+/// None when the solid reaches the projector's plane, where directions
+/// are unbounded.
+fn projector_footprint(solid: &ConvexSolid, projector: &Vec3) -> Option<ProjectorFootprint> {
+    let mut slopes = [
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+    ];
+    let mut min_depth = f64::INFINITY;
+    for v in solid.vertices() {
+        let d = v - projector;
+        if d.z < MIN_BOUNDED_DEPTH_MM {
+            return None;
+        }
+        let (sx, sy) = (d.x / d.z, d.y / d.z);
+        slopes = [
+            slopes[0].min(sx),
+            slopes[1].max(sx),
+            slopes[2].min(sy),
+            slopes[3].max(sy),
+        ];
+        min_depth = min_depth.min(d.z);
+    }
+    // Widen by a hair so rounding never rejects a grazing blocker.
+    let pad = 1e-9 * (1.0 + slopes.iter().fold(0.0f64, |m, s| m.max(s.abs())));
+    Some(ProjectorFootprint {
+        slopes: [
+            slopes[0] - pad,
+            slopes[1] + pad,
+            slopes[2] - pad,
+            slopes[3] + pad,
+        ],
+        min_depth,
+    })
 }
 
 /// Turns per-pixel depths into the organized cloud, each point on its

@@ -2,6 +2,8 @@
 
 mod cli;
 
+use std::process::ExitCode;
+
 use clap::{Parser, Subcommand};
 
 #[derive(Debug, Parser)]
@@ -21,8 +23,17 @@ enum Command {
     Simulate(cli::simulate::SimulateArgs),
 }
 
-fn main() -> anyhow::Result<()> {
-    match Cli::parse().command {
+fn main() -> ExitCode {
+    let result = match Cli::parse().command {
         Command::Simulate(args) => cli::simulate::run(&args),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(err) => {
+            // One line with the whole cause chain, as users of a command
+            // expect, rather than a debug dump.
+            eprintln!("error: {err:#}");
+            ExitCode::FAILURE
+        }
     }
 }

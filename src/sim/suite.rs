@@ -428,10 +428,7 @@ mod tests {
     fn the_suite_is_stratified_fair_and_fixed() {
         let suite = eval_suite();
         assert_eq!(suite.len(), 3 * SCENES_PER_JOINT);
-        assert_eq!(
-            suite.iter().map(|(n, _)| n.clone()).collect::<Vec<_>>(),
-            eval_suite().into_iter().map(|(n, _)| n).collect::<Vec<_>>()
-        );
+        assert_eq!(suite, eval_suite(), "the suite is the same on every call");
         let names: std::collections::HashSet<_> = suite.iter().map(|(n, _)| n).collect();
         assert_eq!(names.len(), suite.len(), "scene names are unique");
         let cam = CameraModel::default();

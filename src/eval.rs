@@ -78,10 +78,10 @@ impl SceneOutcome {
 pub fn evaluate_simulation(planner: &Planner, name: &str, spec: &SceneSpec, sim: &Simulation) -> SceneOutcome {
     let request = PlanRequest::new(spec.joint.joint_type(), spec.joint.groove_depth_mm(), sim.pose);
     let result = planner.plan(&sim.cloud, &request).and_then(|plan| {
-        let seam = plan.seams.first().ok_or_else(|| PlanError {
-            stage: crate::pipeline::Stage::Trajectory,
-            reason: "no seam".into(),
-        })?;
+        let seam = plan
+            .seams
+            .first()
+            .ok_or_else(|| PlanError { stage: crate::pipeline::Stage::Trajectory, reason: "no seam".into() })?;
         let err = seam_error(&sim.truth, seam).ok_or_else(|| PlanError {
             stage: crate::pipeline::Stage::Trajectory,
             reason: "the trajectory has no waypoint".into(),
@@ -104,8 +104,7 @@ pub fn run_suite(
     let mut out: Vec<Vec<SceneOutcome>> = vec![Vec::new(); planners.len()];
     for (k, (name, spec)) in scenes.iter().enumerate() {
         let sim = simulate(spec, camera);
-        let outcomes: Vec<SceneOutcome> =
-            planners.iter().map(|p| evaluate_simulation(p, name, spec, &sim)).collect();
+        let outcomes: Vec<SceneOutcome> = planners.iter().map(|p| evaluate_simulation(p, name, spec, &sim)).collect();
         progress(k, &outcomes);
         for (list, o) in out.iter_mut().zip(outcomes) {
             list.push(o);

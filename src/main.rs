@@ -23,12 +23,14 @@ enum Command {
     Plan(cli::plan::PlanArgs),
     /// Plan the seeded suite of simulated scenes and print the accuracy table.
     Eval(cli::eval::EvalArgs),
+    /// Render a simulated camera frame (organized PCD) and its ground truth (JSON).
+    Simulate(cli::simulate::SimulateArgs),
 }
 
 fn main() -> std::process::ExitCode {
     let cli = Cli::parse();
     let level = match cli.command {
-        Command::Plan(_) | Command::Eval(_) => "warn",
+        Command::Plan(_) | Command::Eval(_) | Command::Simulate(_) => "warn",
     };
     if let Err(e) = logging::init(cli.log_format, level) {
         eprintln!("error: {e:#}");
@@ -37,6 +39,7 @@ fn main() -> std::process::ExitCode {
     let result = match &cli.command {
         Command::Plan(args) => cli::plan::run(args),
         Command::Eval(args) => cli::eval::run(args),
+        Command::Simulate(args) => cli::simulate::run(args),
     };
     match result {
         Ok(()) => std::process::ExitCode::SUCCESS,

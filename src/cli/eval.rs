@@ -92,7 +92,11 @@ pub fn run(args: &EvalArgs) -> anyhow::Result<()> {
         stage_names.join(" / "),
         if args.robust_only { "" } else { " paper: max mm | mean mm | start mm | end mm | result |" }
     )?;
-    writeln!(out, "|---|---:|---:|---:|---:|---:|---:|---|---:|---|{}", if args.robust_only { "" } else { "---:|---:|---:|---:|---|" })?;
+    writeln!(
+        out,
+        "|---|---:|---:|---:|---:|---:|---:|---|---:|---|{}",
+        if args.robust_only { "" } else { "---:|---:|---:|---:|---|" }
+    )?;
     let results = run_suite(&scenes, &robust.camera, &configs, |_, outcomes| {
         let mut line = format!("| {} | {} | {} |", describe(&outcomes[0]), cell(&outcomes[0]), timings(&outcomes[0]));
         if let Some(p) = outcomes.get(1) {
@@ -103,7 +107,10 @@ pub fn run(args: &EvalArgs) -> anyhow::Result<()> {
     });
 
     writeln!(out)?;
-    writeln!(out, "| method | joint | scenes | seam found | within 1 mm and ends within 2 mm | worst max mm | mean of max mm | worst end mm | median total ms |")?;
+    writeln!(
+        out,
+        "| method | joint | scenes | seam found | within 1 mm and ends within 2 mm | worst max mm | mean of max mm | worst end mm | median total ms |"
+    )?;
     writeln!(out, "|---|---|---:|---:|---:|---:|---:|---:|---:|")?;
     for (config, outcomes) in configs.iter().zip(&results) {
         let groups: Vec<(String, Vec<&SceneOutcome>)> = JointType::ALL

@@ -6,3 +6,4 @@ pub mod args;
 pub mod eval;
 pub mod logging;
 pub mod plan;
+pub mod simulate;

@@ -33,21 +33,12 @@ pub enum JointGeometry {
     /// Two bevelled plates; `groove_angle_deg` is the full opening angle,
     /// `groove_depth_mm` the bevel's depth from the top (at most the
     /// thickness), `root_gap_mm` the gap between the root faces.
-    VButt {
-        thickness_mm: f64,
-        groove_angle_deg: f64,
-        groove_depth_mm: f64,
-        root_gap_mm: f64,
-    },
+    VButt { thickness_mm: f64, groove_angle_deg: f64, groove_depth_mm: f64, root_gap_mm: f64 },
     /// Two square-edged plates with a gap between them.
     IButt { thickness_mm: f64, gap_mm: f64 },
     /// The upper plate lies on the lower one; `overlap_mm` is how far the
     /// lower plate reaches under the upper one from the seam.
-    Lap {
-        lower_thickness_mm: f64,
-        upper_thickness_mm: f64,
-        overlap_mm: f64,
-    },
+    Lap { lower_thickness_mm: f64, upper_thickness_mm: f64, overlap_mm: f64 },
 }
 
 impl JointGeometry {
@@ -62,9 +53,7 @@ impl JointGeometry {
     /// The groove depth the planner is told for a V-butt joint.
     pub fn groove_depth_mm(&self) -> Option<f64> {
         match *self {
-            JointGeometry::VButt {
-                groove_depth_mm, ..
-            } => Some(groove_depth_mm),
+            JointGeometry::VButt { groove_depth_mm, .. } => Some(groove_depth_mm),
             _ => None,
         }
     }
@@ -102,10 +91,7 @@ pub struct CameraPlacement {
 impl CameraPlacement {
     /// The camera's pose in the workpiece frame for a target point.
     pub fn workpiece_from_camera(&self, target: &Vec3) -> Isometry3<f64> {
-        let (tilt, azimuth) = (
-            self.tilt_deg.to_radians(),
-            self.tilt_azimuth_deg.to_radians(),
-        );
+        let (tilt, azimuth) = (self.tilt_deg.to_radians(), self.tilt_azimuth_deg.to_radians());
         // Straight down: image u along +x, image v along -y, axis along -z.
         let looking_down = Rotation3::from_matrix_unchecked(nalgebra::Matrix3::new(
             1.0, 0.0, 0.0, //
@@ -117,14 +103,10 @@ impl CameraPlacement {
         let lean_axis = Unit::new_normalize(Vec3::new(-azimuth.sin(), azimuth.cos(), 0.0));
         let lean = Rotation3::from_axis_angle(&lean_axis, tilt);
         let axis = lean * Vec3::new(0.0, 0.0, -1.0);
-        let roll =
-            Rotation3::from_axis_angle(&Unit::new_normalize(axis), self.roll_deg.to_radians());
+        let roll = Rotation3::from_axis_angle(&Unit::new_normalize(axis), self.roll_deg.to_radians());
         let rotation = roll * lean * looking_down;
         let position = target - axis * self.distance_mm;
-        Isometry3::from_parts(
-            Translation3::from(position),
-            UnitQuaternion::from_rotation_matrix(&rotation),
-        )
+        Isometry3::from_parts(Translation3::from(position), UnitQuaternion::from_rotation_matrix(&rotation))
     }
 }
 
@@ -156,10 +138,7 @@ impl SceneSpec {
     /// The y range where both plates exist: the seam's physical extent.
     pub fn seam_range(&self) -> [f64; 2] {
         let (a, b) = (&self.plate_a, &self.plate_b);
-        [
-            a.offset_mm.max(b.offset_mm),
-            (a.offset_mm + a.length_mm).min(b.offset_mm + b.length_mm),
-        ]
+        [a.offset_mm.max(b.offset_mm), (a.offset_mm + a.length_mm).min(b.offset_mm + b.length_mm)]
     }
 
     /// The point the camera looks at: on the top surface, offset from the
@@ -183,12 +162,7 @@ impl SceneSpec {
     pub fn validate(&self) -> Result<(), InvalidScene> {
         let fail = |what: &str| Err(InvalidScene(what.to_string()));
         match self.joint {
-            JointGeometry::VButt {
-                thickness_mm: t,
-                groove_angle_deg: a,
-                groove_depth_mm: d,
-                root_gap_mm: r,
-            } => {
+            JointGeometry::VButt { thickness_mm: t, groove_angle_deg: a, groove_depth_mm: d, root_gap_mm: r } => {
                 if !(t > 0.0 && t.is_finite()) {
                     return fail("the thickness must be positive");
                 }
@@ -202,10 +176,7 @@ impl SceneSpec {
                     return fail("the root gap must be zero or positive");
                 }
             }
-            JointGeometry::IButt {
-                thickness_mm: t,
-                gap_mm: g,
-            } => {
+            JointGeometry::IButt { thickness_mm: t, gap_mm: g } => {
                 if !(t > 0.0 && t.is_finite()) {
                     return fail("the thickness must be positive");
                 }
@@ -213,11 +184,7 @@ impl SceneSpec {
                     return fail("the gap must be zero or positive");
                 }
             }
-            JointGeometry::Lap {
-                lower_thickness_mm: t1,
-                upper_thickness_mm: t2,
-                overlap_mm: o,
-            } => {
+            JointGeometry::Lap { lower_thickness_mm: t1, upper_thickness_mm: t2, overlap_mm: o } => {
                 if !(t1 > 0.0 && t2 > 0.0 && t1.is_finite() && t2.is_finite()) {
                     return fail("both lap plate thicknesses must be positive");
                 }
@@ -252,11 +219,7 @@ impl SceneSpec {
             return fail("the tilt must be between 0 and 80 degrees");
         }
         let angles = [p.tilt_azimuth_deg, p.roll_deg];
-        if !angles
-            .iter()
-            .chain(&p.target_offset_mm)
-            .all(|v| v.is_finite())
-        {
+        if !angles.iter().chain(&p.target_offset_mm).all(|v| v.is_finite()) {
             return fail("the camera placement must be finite");
         }
         self.noise.validate()
@@ -286,54 +249,31 @@ pub fn simulate(spec: &SceneSpec, camera: &CameraModel) -> Simulation {
     let truth = truth::ground_truth(spec, camera);
     let base_from_camera = spec.base_from_workpiece * workpiece_from_camera;
     let base_from_end = base_from_camera * spec.hand_eye.inverse();
-    Simulation {
-        cloud,
-        truth,
-        pose: RobotPose::from_isometry(&base_from_end, spec.euler),
-        base_from_camera,
-    }
+    Simulation { cloud, truth, pose: RobotPose::from_isometry(&base_from_end, spec.euler), base_from_camera }
 }
 
 /// The paper's hand-eye matrix as a transform.
 pub fn paper_hand_eye() -> Isometry3<f64> {
-    hand_eye_from_rows(&PAPER_HAND_EYE)
-        .expect("the paper's corrected hand-eye matrix is a rotation")
+    hand_eye_from_rows(&PAPER_HAND_EYE).expect("the paper's corrected hand-eye matrix is a rotation")
 }
 
 /// A plausible place for the workpiece in front of the robot: on a table
 /// below the base, turned about the vertical.
 pub fn default_base_from_workpiece() -> Isometry3<f64> {
-    Isometry3::new(
-        Vec3::new(850.0, -150.0, -250.0),
-        Vec3::new(0.0, 0.0, 25f64.to_radians()),
-    )
+    Isometry3::new(Vec3::new(850.0, -150.0, -250.0), Vec3::new(0.0, 0.0, 25f64.to_radians()))
 }
 
 /// A clean, typical capture of `joint`: the camera at 700 mm, tilted 10
 /// degrees, with both plates and the whole seam in view.
 pub fn demo_scene(joint: JointType) -> SceneSpec {
     let geometry = match joint {
-        JointType::VButt => JointGeometry::VButt {
-            thickness_mm: 10.0,
-            groove_angle_deg: 60.0,
-            groove_depth_mm: 6.0,
-            root_gap_mm: 1.0,
-        },
-        JointType::IButt => JointGeometry::IButt {
-            thickness_mm: 6.0,
-            gap_mm: 1.5,
-        },
-        JointType::Lap => JointGeometry::Lap {
-            lower_thickness_mm: 6.0,
-            upper_thickness_mm: 5.0,
-            overlap_mm: 40.0,
-        },
+        JointType::VButt => {
+            JointGeometry::VButt { thickness_mm: 10.0, groove_angle_deg: 60.0, groove_depth_mm: 6.0, root_gap_mm: 1.0 }
+        }
+        JointType::IButt => JointGeometry::IButt { thickness_mm: 6.0, gap_mm: 1.5 },
+        JointType::Lap => JointGeometry::Lap { lower_thickness_mm: 6.0, upper_thickness_mm: 5.0, overlap_mm: 40.0 },
     };
-    let plate = PlateExtent {
-        width_mm: 150.0,
-        length_mm: 240.0,
-        offset_mm: 0.0,
-    };
+    let plate = PlateExtent { width_mm: 150.0, length_mm: 240.0, offset_mm: 0.0 };
     SceneSpec {
         joint: geometry,
         plate_a: plate,
@@ -360,19 +300,12 @@ mod tests {
     use crate::geometry::vec3;
 
     fn small_camera() -> CameraModel {
-        CameraModel {
-            width_px: 480,
-            height_px: 300,
-            ..CameraModel::default()
-        }
+        CameraModel { width_px: 480, height_px: 300, ..CameraModel::default() }
     }
 
     fn frontal_i_butt() -> SceneSpec {
         let mut spec = demo_scene(JointType::IButt);
-        spec.joint = JointGeometry::IButt {
-            thickness_mm: 6.0,
-            gap_mm: 3.0,
-        };
+        spec.joint = JointGeometry::IButt { thickness_mm: 6.0, gap_mm: 3.0 };
         spec.placement = CameraPlacement {
             distance_mm: 600.0,
             tilt_deg: 0.0,
@@ -393,17 +326,12 @@ mod tests {
         let scene = scene::build_scene(&spec);
         let (mut on_top, mut in_gap) = (0, 0);
         for p in sim.cloud.points().iter().filter(|p| p[0].is_finite()) {
-            let w = workpiece_from_camera
-                .transform_point(&vec3(p).into())
-                .coords;
+            let w = workpiece_from_camera.transform_point(&vec3(p).into()).coords;
             let gap = scene.surface_gap(&w);
             assert!(gap < 1e-3, "{w:?} is {gap} mm off every surface");
             if w.z > 6.0 - 1e-3 {
                 on_top += 1;
-                assert!(
-                    w.x.abs() >= 1.5 - 1e-3,
-                    "a top-surface return in the gap: {w:?}"
-                );
+                assert!(w.x.abs() >= 1.5 - 1e-3, "a top-surface return in the gap: {w:?}");
             }
             if w.x.abs() < 1.5 - 1e-3 {
                 in_gap += 1;
@@ -432,32 +360,38 @@ mod tests {
     }
 
     #[test]
+    fn the_rendered_seam_is_where_the_truth_says() {
+        let cam = small_camera();
+        for joint in JointType::ALL {
+            let mut spec = demo_scene(joint);
+            spec.noise = NoiseSpec::none();
+            let sim = simulate(&spec, &cam);
+            let t = &sim.truth;
+            let points: Vec<Vec3> = sim.cloud.points().iter().filter(|p| p[0].is_finite()).map(vec3).collect();
+            // Along the whole seam, returns lie next to the true root line
+            // (the gap or groove is a pixel or two wide at this resolution).
+            for k in 0..=20 {
+                let on_seam = t.start_camera + (t.end_camera - t.start_camera) * (k as f64 / 20.0);
+                let nearest = points.iter().map(|p| (p - on_seam).norm()).fold(f64::INFINITY, f64::min);
+                assert!(nearest < 2.5, "{joint}: nothing within {nearest} mm of {on_seam:?}");
+            }
+        }
+    }
+
+    #[test]
     fn the_same_seed_gives_the_same_frame_on_any_thread_count() {
         let cam = small_camera();
         let spec = demo_scene(JointType::VButt);
         let run = |threads: usize, spec: &SceneSpec| {
-            rayon::ThreadPoolBuilder::new()
-                .num_threads(threads)
-                .build()
-                .unwrap()
-                .install(|| simulate(spec, &cam))
+            rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap().install(|| simulate(spec, &cam))
         };
-        let bits = |s: &Simulation| -> Vec<u32> {
-            s.cloud
-                .points()
-                .iter()
-                .flat_map(|p| p.map(f32::to_bits))
-                .collect()
-        };
+        let bits = |s: &Simulation| -> Vec<u32> { s.cloud.points().iter().flat_map(|p| p.map(f32::to_bits)).collect() };
         let one = run(1, &spec);
         let two = run(2, &spec);
         assert_eq!(bits(&one), bits(&two));
         let again = run(2, &spec);
         assert_eq!(bits(&two), bits(&again));
-        let other_seed = SceneSpec {
-            seed: 2,
-            ..spec.clone()
-        };
+        let other_seed = SceneSpec { seed: 2, ..spec.clone() };
         assert_ne!(bits(&run(2, &other_seed)), bits(&one));
         assert_eq!(one.truth, two.truth);
     }
@@ -465,22 +399,13 @@ mod tests {
     #[test]
     fn the_reported_pose_and_hand_eye_give_the_camera_pose() {
         let spec = demo_scene(JointType::Lap);
-        let sim = simulate(
-            &spec,
-            &CameraModel {
-                width_px: 32,
-                height_px: 20,
-                ..CameraModel::default()
-            },
-        );
+        let sim = simulate(&spec, &CameraModel { width_px: 32, height_px: 20, ..CameraModel::default() });
         let recovered = sim.pose.to_isometry(spec.euler) * spec.hand_eye;
         let diff = recovered.inverse() * sim.base_from_camera;
         assert!(diff.translation.vector.norm() < 1e-9);
         assert!(diff.rotation.angle() < 1e-12);
         // The camera looks at the target from the set distance.
-        let target = spec
-            .base_from_workpiece
-            .transform_point(&spec.target_point().into());
+        let target = spec.base_from_workpiece.transform_point(&spec.target_point().into());
         let in_camera = sim.base_from_camera.inverse_transform_point(&target);
         assert!((in_camera.coords - Vec3::new(0.0, 0.0, 700.0)).norm() < 1e-9);
     }
@@ -513,31 +438,19 @@ mod tests {
             assert!((truth.length_mm - 240.0).abs() < 1e-9);
             assert_eq!(truth.joint, joint);
             let f = framing(&spec, &cam);
-            assert!(
-                f.background_visible && !f.plate_runs_off_across,
-                "{joint}: {f:?}"
-            );
+            assert!(f.background_visible && !f.plate_runs_off_across, "{joint}: {f:?}");
         }
     }
 
     #[test]
     fn invalid_scenes_are_refused_with_the_reason() {
         let mut spec = demo_scene(JointType::VButt);
-        spec.joint = JointGeometry::VButt {
-            thickness_mm: 6.0,
-            groove_angle_deg: 60.0,
-            groove_depth_mm: 7.0,
-            root_gap_mm: 0.0,
-        };
+        spec.joint =
+            JointGeometry::VButt { thickness_mm: 6.0, groove_angle_deg: 60.0, groove_depth_mm: 7.0, root_gap_mm: 0.0 };
         let err = spec.validate().unwrap_err();
         assert!(err.to_string().contains("groove depth"), "{err}");
         let mut spec = demo_scene(JointType::Lap);
         spec.plate_b.offset_mm = 500.0;
-        assert!(
-            spec.validate()
-                .unwrap_err()
-                .to_string()
-                .contains("overlap along the seam")
-        );
+        assert!(spec.validate().unwrap_err().to_string().contains("overlap along the seam"));
     }
 }

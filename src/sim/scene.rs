@@ -61,18 +61,10 @@ impl ConvexSolid {
             return None;
         }
         let n = profile_xz.len() as f64;
-        let centre = profile_xz
-            .iter()
-            .fold([0.0, 0.0], |c, p| [c[0] + p[0] / n, c[1] + p[1] / n]);
+        let centre = profile_xz.iter().fold([0.0, 0.0], |c, p| [c[0] + p[0] / n, c[1] + p[1] / n]);
         let mut planes = vec![
-            HalfSpace {
-                normal: Vec3::new(0.0, -1.0, 0.0),
-                offset: -y0,
-            },
-            HalfSpace {
-                normal: Vec3::new(0.0, 1.0, 0.0),
-                offset: y1,
-            },
+            HalfSpace { normal: Vec3::new(0.0, -1.0, 0.0), offset: -y0 },
+            HalfSpace { normal: Vec3::new(0.0, 1.0, 0.0), offset: y1 },
         ];
         for (i, p) in profile_xz.iter().enumerate() {
             let q = profile_xz[(i + 1) % profile_xz.len()];
@@ -94,25 +86,13 @@ impl ConvexSolid {
         if planes.len() < 5 {
             return None;
         }
-        let vertices = profile_xz
-            .iter()
-            .flat_map(|p| [Vec3::new(p[0], y0, p[1]), Vec3::new(p[0], y1, p[1])])
-            .collect();
-        Some(ConvexSolid {
-            kind,
-            planes,
-            vertices,
-        })
+        let vertices = profile_xz.iter().flat_map(|p| [Vec3::new(p[0], y0, p[1]), Vec3::new(p[0], y1, p[1])]).collect();
+        Some(ConvexSolid { kind, planes, vertices })
     }
 
     /// An axis-aligned box.
     pub fn cuboid(kind: SurfaceKind, min: Vec3, max: Vec3) -> Option<Self> {
-        let profile = [
-            [min.x, min.z],
-            [max.x, min.z],
-            [max.x, max.z],
-            [min.x, max.z],
-        ];
+        let profile = [[min.x, min.z], [max.x, min.z], [max.x, max.z], [min.x, max.z]];
         if max.x - min.x <= MIN_EDGE_MM || max.z - min.z <= MIN_EDGE_MM {
             return None;
         }
@@ -127,22 +107,11 @@ impl ConvexSolid {
             .iter()
             .map(|h| {
                 let normal = to_frame.rotation * h.normal;
-                HalfSpace {
-                    normal,
-                    offset: h.offset + normal.dot(&to_frame.translation.vector),
-                }
+                HalfSpace { normal, offset: h.offset + normal.dot(&to_frame.translation.vector) }
             })
             .collect();
-        let vertices = self
-            .vertices
-            .iter()
-            .map(|v| to_frame.transform_point(&(*v).into()).coords)
-            .collect();
-        ConvexSolid {
-            kind: self.kind,
-            planes,
-            vertices,
-        }
+        let vertices = self.vertices.iter().map(|v| to_frame.transform_point(&(*v).into()).coords).collect();
+        ConvexSolid { kind: self.kind, planes, vertices }
     }
 
     pub fn vertices(&self) -> &[Vec3] {
@@ -182,21 +151,14 @@ impl ConvexSolid {
                 return None;
             }
         }
-        Some(Span {
-            enter,
-            exit,
-            normal,
-        })
+        Some(Span { enter, exit, normal })
     }
 
     /// How far `p` lies outside the worst of the half-spaces: negative
     /// inside, zero exactly on the surface, and a lower bound of the
     /// distance to the solid outside.
     pub fn excess(&self, p: &Vec3) -> f64 {
-        self.planes
-            .iter()
-            .map(|h| h.normal.dot(p) - h.offset)
-            .fold(f64::NEG_INFINITY, f64::max)
+        self.planes.iter().map(|h| h.normal.dot(p) - h.offset).fold(f64::NEG_INFINITY, f64::max)
     }
 }
 
@@ -209,22 +171,13 @@ pub struct Scene {
 impl Scene {
     /// The scene in another frame (see [`ConvexSolid::transformed`]).
     pub fn transformed(&self, to_frame: &Isometry3<f64>) -> Scene {
-        Scene {
-            solids: self
-                .solids
-                .iter()
-                .map(|s| s.transformed(to_frame))
-                .collect(),
-        }
+        Scene { solids: self.solids.iter().map(|s| s.transformed(to_frame)).collect() }
     }
 
     /// Distance-like measure of `p` from the nearest surface: zero for a
     /// point exactly on some solid's boundary.
     pub fn surface_gap(&self, p: &Vec3) -> f64 {
-        self.solids
-            .iter()
-            .map(|s| s.excess(p).abs())
-            .fold(f64::INFINITY, f64::min)
+        self.solids.iter().map(|s| s.excess(p).abs()).fold(f64::INFINITY, f64::min)
     }
 }
 
@@ -250,18 +203,11 @@ pub struct PlateShape {
 
 impl PlateShape {
     fn x_range(&self) -> [f64; 2] {
-        self.profile_xz
-            .iter()
-            .fold([f64::INFINITY, f64::NEG_INFINITY], |r, p| {
-                [r[0].min(p[0]), r[1].max(p[0])]
-            })
+        self.profile_xz.iter().fold([f64::INFINITY, f64::NEG_INFINITY], |r, p| [r[0].min(p[0]), r[1].max(p[0])])
     }
 
     fn bottom_z(&self) -> f64 {
-        self.profile_xz
-            .iter()
-            .map(|p| p[1])
-            .fold(f64::INFINITY, f64::min)
+        self.profile_xz.iter().map(|p| p[1]).fold(f64::INFINITY, f64::min)
     }
 }
 
@@ -274,22 +220,11 @@ impl JointGeometry {
     /// plate B (x > 0; the lower plate of a lap).
     pub fn plate_shapes(&self, plate_a: &PlateExtent, plate_b: &PlateExtent) -> [PlateShape; 2] {
         let (a, b) = match *self {
-            JointGeometry::IButt {
-                thickness_mm: t,
-                gap_mm,
-            } => {
+            JointGeometry::IButt { thickness_mm: t, gap_mm } => {
                 let h = gap_mm / 2.0;
-                (
-                    rectangle(-plate_a.width_mm, -h, 0.0, t),
-                    rectangle(h, plate_b.width_mm, 0.0, t),
-                )
+                (rectangle(-plate_a.width_mm, -h, 0.0, t), rectangle(h, plate_b.width_mm, 0.0, t))
             }
-            JointGeometry::VButt {
-                thickness_mm: t,
-                groove_depth_mm: d,
-                root_gap_mm: r,
-                ..
-            } => {
+            JointGeometry::VButt { thickness_mm: t, groove_depth_mm: d, root_gap_mm: r, .. } => {
                 let bevel_x = self.seam_edge_half_width();
                 let profile = |width: f64, side: f64| {
                     vec![
@@ -300,29 +235,15 @@ impl JointGeometry {
                         [side * width, t],
                     ]
                 };
-                (
-                    profile(plate_a.width_mm, -1.0),
-                    profile(plate_b.width_mm, 1.0),
-                )
+                (profile(plate_a.width_mm, -1.0), profile(plate_b.width_mm, 1.0))
             }
-            JointGeometry::Lap {
-                lower_thickness_mm: t1,
-                upper_thickness_mm: t2,
-                overlap_mm,
-            } => (
-                rectangle(-plate_a.width_mm, 0.0, t1, t1 + t2),
-                rectangle(-overlap_mm, plate_b.width_mm, 0.0, t1),
-            ),
+            JointGeometry::Lap { lower_thickness_mm: t1, upper_thickness_mm: t2, overlap_mm } => {
+                (rectangle(-plate_a.width_mm, 0.0, t1, t1 + t2), rectangle(-overlap_mm, plate_b.width_mm, 0.0, t1))
+            }
         };
         [
-            PlateShape {
-                profile_xz: a,
-                y_range: y_range(plate_a),
-            },
-            PlateShape {
-                profile_xz: b,
-                y_range: y_range(plate_b),
-            },
+            PlateShape { profile_xz: a, y_range: y_range(plate_a) },
+            PlateShape { profile_xz: b, y_range: y_range(plate_b) },
         ]
     }
 
@@ -331,12 +252,9 @@ impl JointGeometry {
     pub fn seam_edge_half_width(&self) -> f64 {
         match *self {
             JointGeometry::IButt { gap_mm, .. } => gap_mm / 2.0,
-            JointGeometry::VButt {
-                groove_angle_deg,
-                groove_depth_mm,
-                root_gap_mm,
-                ..
-            } => root_gap_mm / 2.0 + groove_depth_mm * (groove_angle_deg / 2.0).to_radians().tan(),
+            JointGeometry::VButt { groove_angle_deg, groove_depth_mm, root_gap_mm, .. } => {
+                root_gap_mm / 2.0 + groove_depth_mm * (groove_angle_deg / 2.0).to_radians().tan()
+            }
             JointGeometry::Lap { .. } => 0.0,
         }
     }
@@ -346,11 +264,7 @@ impl JointGeometry {
     /// joint; the upper plate's top edge and the root line for a lap.
     pub fn seam_edges_xz(&self) -> [[f64; 2]; 2] {
         match *self {
-            JointGeometry::Lap {
-                lower_thickness_mm: t1,
-                upper_thickness_mm: t2,
-                ..
-            } => [[0.0, t1 + t2], [0.0, t1]],
+            JointGeometry::Lap { lower_thickness_mm: t1, upper_thickness_mm: t2, .. } => [[0.0, t1 + t2], [0.0, t1]],
             _ => {
                 let x = self.seam_edge_half_width();
                 let t = self.top_z(0.0);
@@ -363,14 +277,8 @@ impl JointGeometry {
     pub fn seam_z(&self) -> f64 {
         match *self {
             JointGeometry::IButt { thickness_mm, .. } => thickness_mm,
-            JointGeometry::VButt {
-                thickness_mm,
-                groove_depth_mm,
-                ..
-            } => thickness_mm - groove_depth_mm,
-            JointGeometry::Lap {
-                lower_thickness_mm, ..
-            } => lower_thickness_mm,
+            JointGeometry::VButt { thickness_mm, groove_depth_mm, .. } => thickness_mm - groove_depth_mm,
+            JointGeometry::Lap { lower_thickness_mm, .. } => lower_thickness_mm,
         }
     }
 
@@ -378,13 +286,8 @@ impl JointGeometry {
     /// upper plate's top on its side (x < 0) and the lower one's beyond.
     pub fn top_z(&self, x: f64) -> f64 {
         match *self {
-            JointGeometry::IButt { thickness_mm, .. }
-            | JointGeometry::VButt { thickness_mm, .. } => thickness_mm,
-            JointGeometry::Lap {
-                lower_thickness_mm,
-                upper_thickness_mm,
-                ..
-            } => {
+            JointGeometry::IButt { thickness_mm, .. } | JointGeometry::VButt { thickness_mm, .. } => thickness_mm,
+            JointGeometry::Lap { lower_thickness_mm, upper_thickness_mm, .. } => {
                 if x < 0.0 {
                     lower_thickness_mm + upper_thickness_mm
                 } else {
@@ -403,10 +306,8 @@ fn rectangle(x0: f64, x1: f64, z0: f64, z1: f64) -> Vec<[f64; 2]> {
 pub fn build_scene(spec: &SceneSpec) -> Scene {
     let shapes = spec.joint.plate_shapes(&spec.plate_a, &spec.plate_b);
     let table_top = -spec.spacer_height_mm;
-    let mut solids: Vec<ConvexSolid> = shapes
-        .iter()
-        .filter_map(|s| ConvexSolid::extruded(SurfaceKind::Plate, &s.profile_xz, s.y_range))
-        .collect();
+    let mut solids: Vec<ConvexSolid> =
+        shapes.iter().filter_map(|s| ConvexSolid::extruded(SurfaceKind::Plate, &s.profile_xz, s.y_range)).collect();
     let [a, b] = &shapes;
     solids.extend(spacers_under(b, b.x_range(), table_top));
     if let JointGeometry::Lap { overlap_mm, .. } = spec.joint {
@@ -420,11 +321,7 @@ pub fn build_scene(spec: &SceneSpec) -> Scene {
     }
     solids.extend(ConvexSolid::cuboid(
         SurfaceKind::Table,
-        Vec3::new(
-            -TABLE_HALF_SIDE_MM,
-            -TABLE_HALF_SIDE_MM,
-            table_top - TABLE_THICKNESS_MM,
-        ),
+        Vec3::new(-TABLE_HALF_SIDE_MM, -TABLE_HALF_SIDE_MM, table_top - TABLE_THICKNESS_MM),
         Vec3::new(TABLE_HALF_SIDE_MM, TABLE_HALF_SIDE_MM, table_top),
     ));
     Scene { solids }
@@ -441,19 +338,12 @@ fn spacers_under(shape: &PlateShape, x_range: [f64; 2], table_top: f64) -> Vec<C
     if bx1 - bx0 < 1.0 || length < 1.0 || top <= table_top {
         return Vec::new();
     }
-    [
-        [y0 + SPACER_INSET_MM, y0 + SPACER_INSET_MM + length],
-        [y1 - SPACER_INSET_MM - length, y1 - SPACER_INSET_MM],
-    ]
-    .iter()
-    .filter_map(|&[ya, yb]| {
-        ConvexSolid::cuboid(
-            SurfaceKind::Spacer,
-            Vec3::new(bx0, ya, table_top),
-            Vec3::new(bx1, yb, top),
-        )
-    })
-    .collect()
+    [[y0 + SPACER_INSET_MM, y0 + SPACER_INSET_MM + length], [y1 - SPACER_INSET_MM - length, y1 - SPACER_INSET_MM]]
+        .iter()
+        .filter_map(|&[ya, yb]| {
+            ConvexSolid::cuboid(SurfaceKind::Spacer, Vec3::new(bx0, ya, table_top), Vec3::new(bx1, yb, top))
+        })
+        .collect()
 }
 
 #[cfg(test)]
@@ -461,36 +351,17 @@ mod tests {
     use super::*;
 
     fn unit_box() -> ConvexSolid {
-        ConvexSolid::cuboid(
-            SurfaceKind::Plate,
-            Vec3::new(-1.0, -2.0, -3.0),
-            Vec3::new(1.0, 2.0, 3.0),
-        )
-        .unwrap()
+        ConvexSolid::cuboid(SurfaceKind::Plate, Vec3::new(-1.0, -2.0, -3.0), Vec3::new(1.0, 2.0, 3.0)).unwrap()
     }
 
     #[test]
     fn a_ray_through_a_box_enters_and_leaves_at_its_faces() {
         let b = unit_box();
-        let span = b
-            .clip(
-                &Vec3::new(0.5, 0.5, 10.0),
-                &Vec3::new(0.0, 0.0, -1.0),
-                0.0,
-                f64::INFINITY,
-            )
-            .unwrap();
+        let span = b.clip(&Vec3::new(0.5, 0.5, 10.0), &Vec3::new(0.0, 0.0, -1.0), 0.0, f64::INFINITY).unwrap();
         assert!((span.enter - 7.0).abs() < 1e-12 && (span.exit - 13.0).abs() < 1e-12);
         assert_eq!(span.normal, Some(Vec3::new(0.0, 0.0, 1.0)));
         // Oblique, entering through the +x face.
-        let span = b
-            .clip(
-                &Vec3::new(5.0, 0.0, 0.0),
-                &Vec3::new(-1.0, 0.0, 0.1),
-                0.0,
-                f64::INFINITY,
-            )
-            .unwrap();
+        let span = b.clip(&Vec3::new(5.0, 0.0, 0.0), &Vec3::new(-1.0, 0.0, 0.1), 0.0, f64::INFINITY).unwrap();
         assert!((span.enter - 4.0).abs() < 1e-12);
         assert_eq!(span.normal, Some(Vec3::new(1.0, 0.0, 0.0)));
     }
@@ -499,24 +370,12 @@ mod tests {
     fn rays_that_miss_or_stop_short_do_not_hit() {
         let b = unit_box();
         let down = Vec3::new(0.0, 0.0, -1.0);
-        assert!(
-            b.clip(&Vec3::new(1.5, 0.0, 10.0), &down, 0.0, 100.0)
-                .is_none()
-        );
-        assert!(
-            b.clip(&Vec3::new(0.0, 0.0, 10.0), &down, 0.0, 6.0)
-                .is_none()
-        );
+        assert!(b.clip(&Vec3::new(1.5, 0.0, 10.0), &down, 0.0, 100.0).is_none());
+        assert!(b.clip(&Vec3::new(0.0, 0.0, 10.0), &down, 0.0, 6.0).is_none());
         // Pointing away: the box is behind the origin.
-        assert!(
-            b.clip(&Vec3::new(0.0, 0.0, 10.0), &-down, 0.0, 100.0)
-                .is_none()
-        );
+        assert!(b.clip(&Vec3::new(0.0, 0.0, 10.0), &-down, 0.0, 100.0).is_none());
         // Parallel to a face, outside it.
-        assert!(
-            b.clip(&Vec3::new(0.0, 2.5, 10.0), &down, 0.0, 100.0)
-                .is_none()
-        );
+        assert!(b.clip(&Vec3::new(0.0, 2.5, 10.0), &down, 0.0, 100.0).is_none());
     }
 
     #[test]
@@ -527,14 +386,7 @@ mod tests {
         let origin = Vec3::new(0.2, 0.3, 10.0);
         let dir = Vec3::new(0.05, -0.02, -1.0);
         let here = b.clip(&origin, &dir, 0.0, 1e9).unwrap();
-        let there = moved
-            .clip(
-                &iso.transform_point(&origin.into()).coords,
-                &(iso.rotation * dir),
-                0.0,
-                1e9,
-            )
-            .unwrap();
+        let there = moved.clip(&iso.transform_point(&origin.into()).coords, &(iso.rotation * dir), 0.0, 1e9).unwrap();
         assert!((here.enter - there.enter).abs() < 1e-9);
         assert!((here.exit - there.exit).abs() < 1e-9);
         let n = iso.rotation * here.normal.unwrap();
@@ -546,17 +398,9 @@ mod tests {
 
     #[test]
     fn a_full_depth_v_groove_drops_its_root_face() {
-        let joint = JointGeometry::VButt {
-            thickness_mm: 8.0,
-            groove_angle_deg: 60.0,
-            groove_depth_mm: 8.0,
-            root_gap_mm: 0.0,
-        };
-        let extent = PlateExtent {
-            width_mm: 100.0,
-            length_mm: 200.0,
-            offset_mm: 0.0,
-        };
+        let joint =
+            JointGeometry::VButt { thickness_mm: 8.0, groove_angle_deg: 60.0, groove_depth_mm: 8.0, root_gap_mm: 0.0 };
+        let extent = PlateExtent { width_mm: 100.0, length_mm: 200.0, offset_mm: 0.0 };
         let [a, b] = joint.plate_shapes(&extent, &extent);
         let a = ConvexSolid::extruded(SurfaceKind::Plate, &a.profile_xz, a.y_range).unwrap();
         let b = ConvexSolid::extruded(SurfaceKind::Plate, &b.profile_xz, b.y_range).unwrap();

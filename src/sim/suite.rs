@@ -15,8 +15,7 @@ use super::render::CameraView;
 use super::scene::{SurfaceKind, build_scene};
 use super::truth::{observed_seam_range, visible_interval};
 use super::{
-    CameraPlacement, JointGeometry, NoiseSpec, PlateExtent, SceneSpec, default_base_from_workpiece,
-    paper_hand_eye,
+    CameraPlacement, JointGeometry, NoiseSpec, PlateExtent, SceneSpec, default_base_from_workpiece, paper_hand_eye,
 };
 use crate::camera::CameraModel;
 use crate::geometry::Vec3;
@@ -99,12 +98,8 @@ fn plates_in_view(spec: &SceneSpec, camera: &CameraModel, y: f64) -> [f64; 2] {
     let edges = spec.joint.seam_edges_xz();
     let top_widths = plate_top_widths(spec);
     let mut widths = [0.0; 2];
-    for (side, (([x, z], outward), top_width)) in
-        edges.iter().zip([-1.0, 1.0]).zip(top_widths).enumerate()
-    {
-        let origin = camera_from_workpiece
-            .transform_point(&Vec3::new(*x, y, *z).into())
-            .coords;
+    for (side, (([x, z], outward), top_width)) in edges.iter().zip([-1.0, 1.0]).zip(top_widths).enumerate() {
+        let origin = camera_from_workpiece.transform_point(&Vec3::new(*x, y, *z).into()).coords;
         let along = camera_from_workpiece.rotation * Vec3::new(outward, 0.0, 0.0);
         widths[side] = match visible_interval(camera, &origin, &along) {
             Some([lo, hi]) if lo <= 0.0 && hi >= 0.0 => hi.min(top_width),
@@ -125,10 +120,7 @@ fn background_visible(spec: &SceneSpec, camera: &CameraModel) -> bool {
     let (w, h) = (camera.width_px as f64 - 1.0, camera.height_px as f64 - 1.0);
     (0..nv).any(|j| {
         (0..nu).any(|i| {
-            let (u, v) = (
-                w * i as f64 / (nu - 1) as f64,
-                h * j as f64 / (nv - 1) as f64,
-            );
+            let (u, v) = (w * i as f64 / (nu - 1) as f64, h * j as f64 / (nv - 1) as f64);
             let Some(hit) = view.first_surface(u, v) else {
                 return true;
             };
@@ -185,10 +177,8 @@ impl Goal {
     }
 
     fn met_by(self, f: &Framing) -> bool {
-        let common = f.observed_seam_mm >= MIN_OBSERVED_SEAM_MM
-            && f.plate_in_view_mm
-                .iter()
-                .all(|w| *w >= MIN_PLATE_IN_VIEW_MM);
+        let common =
+            f.observed_seam_mm >= MIN_OBSERVED_SEAM_MM && f.plate_in_view_mm.iter().all(|w| *w >= MIN_PLATE_IN_VIEW_MM);
         common
             && match self {
                 Goal::FillView => !f.background_visible,
@@ -236,8 +226,7 @@ impl ScenePlan {
         ScenePlan {
             joint,
             index: k,
-            distance_mm: MIN_DISTANCE_MM
-                + (MAX_DISTANCE_MM - MIN_DISTANCE_MM) * distance_step as f64 / steps,
+            distance_mm: MIN_DISTANCE_MM + (MAX_DISTANCE_MM - MIN_DISTANCE_MM) * distance_step as f64 / steps,
             tilt_deg: MAX_TILT_DEG * tilt_step as f64 / steps,
             goal,
             lap_side: (joint == JointType::Lap).then_some(if k.is_multiple_of(2) {
@@ -261,13 +250,7 @@ impl ScenePlan {
             Some(LapSide::Lower) => "-lower-side",
             None => "",
         };
-        format!(
-            "{joint}-{:02}-d{:.0}-t{:.0}{}{side}",
-            self.index,
-            self.distance_mm,
-            self.tilt_deg,
-            self.goal.tag()
-        )
+        format!("{joint}-{:02}-d{:.0}-t{:.0}{}{side}", self.index, self.distance_mm, self.tilt_deg, self.goal.tag())
     }
 
     fn draw_joint(&self, rng: &mut ChaCha8Rng) -> JointGeometry {
@@ -283,11 +266,7 @@ impl ScenePlan {
             }
             JointType::IButt => JointGeometry::IButt {
                 thickness_mm: uniform(rng, 3.0, 12.0),
-                gap_mm: if self.narrow_gap {
-                    uniform(rng, 0.5, 0.8)
-                } else {
-                    uniform(rng, 0.8, 3.0)
-                },
+                gap_mm: if self.narrow_gap { uniform(rng, 0.5, 0.8) } else { uniform(rng, 0.8, 3.0) },
             },
             JointType::Lap => JointGeometry::Lap {
                 lower_thickness_mm: uniform(rng, 3.0, 10.0),
@@ -313,22 +292,14 @@ impl ScenePlan {
             offset_mm: 0.0,
         };
         let b = if self.staggered {
-            let shift = uniform(rng, 10.0, 60.0)
-                * if rng.next_u32().is_multiple_of(2) {
-                    1.0
-                } else {
-                    -1.0
-                };
+            let shift = uniform(rng, 10.0, 60.0) * if rng.next_u32().is_multiple_of(2) { 1.0 } else { -1.0 };
             PlateExtent {
                 width_mm: uniform(rng, width_range.0, width_range.1),
                 length_mm: uniform(rng, length_range.0, length_range.1),
                 offset_mm: shift,
             }
         } else {
-            PlateExtent {
-                width_mm: uniform(rng, width_range.0, width_range.1),
-                ..a
-            }
+            PlateExtent { width_mm: uniform(rng, width_range.0, width_range.1), ..a }
         };
         [a, b]
     }
@@ -337,25 +308,16 @@ impl ScenePlan {
         let (azimuth, across) = match self.lap_side {
             Some(LapSide::Upper) => (uniform(rng, 120.0, 240.0), uniform(rng, -60.0, -5.0)),
             Some(LapSide::Lower) => (uniform(rng, -60.0, 60.0), uniform(rng, 5.0, 60.0)),
-            None if self.goal == Goal::FillView => {
-                (uniform(rng, 0.0, 360.0), uniform(rng, -20.0, 20.0))
-            }
+            None if self.goal == Goal::FillView => (uniform(rng, 0.0, 360.0), uniform(rng, -20.0, 20.0)),
             None => (uniform(rng, 0.0, 360.0), uniform(rng, -60.0, 60.0)),
         };
-        let along_reach = if self.goal == Goal::SeamOffImage {
-            0.45
-        } else {
-            0.25
-        };
+        let along_reach = if self.goal == Goal::SeamOffImage { 0.45 } else { 0.25 };
         CameraPlacement {
             distance_mm: self.distance_mm,
             tilt_deg: self.tilt_deg,
             tilt_azimuth_deg: azimuth,
             roll_deg: uniform(rng, 0.0, 360.0),
-            target_offset_mm: [
-                across,
-                uniform(rng, -along_reach, along_reach) * seam_length,
-            ],
+            target_offset_mm: [across, uniform(rng, -along_reach, along_reach) * seam_length],
         }
     }
 
@@ -428,10 +390,7 @@ mod tests {
     fn the_suite_is_stratified_fair_and_fixed() {
         let suite = eval_suite();
         assert_eq!(suite.len(), 3 * SCENES_PER_JOINT);
-        assert_eq!(
-            suite.iter().map(|(n, _)| n.clone()).collect::<Vec<_>>(),
-            eval_suite().into_iter().map(|(n, _)| n).collect::<Vec<_>>()
-        );
+        assert_eq!(suite, eval_suite(), "the suite is the same on every call");
         let names: std::collections::HashSet<_> = suite.iter().map(|(n, _)| n).collect();
         assert_eq!(names.len(), suite.len(), "scene names are unique");
         let cam = CameraModel::default();
@@ -440,25 +399,17 @@ mod tests {
         let mut off_across = 0;
         let mut staggered = 0;
         for joint in JointType::ALL {
-            let scenes: Vec<_> = suite
-                .iter()
-                .filter(|(_, s)| s.joint.joint_type() == joint)
-                .collect();
+            let scenes: Vec<_> = suite.iter().filter(|(_, s)| s.joint.joint_type() == joint).collect();
             assert_eq!(scenes.len(), SCENES_PER_JOINT);
-            let distances: Vec<f64> = scenes
-                .iter()
-                .map(|(_, s)| s.placement.distance_mm)
-                .collect();
+            let distances: Vec<f64> = scenes.iter().map(|(_, s)| s.placement.distance_mm).collect();
             let tilts: Vec<f64> = scenes.iter().map(|(_, s)| s.placement.tilt_deg).collect();
             for ends in [[500.0, 1000.0], [0.0, 30.0]] {
                 let values = if ends[0] == 500.0 { &distances } else { &tilts };
                 assert!(values.contains(&ends[0]) && values.contains(&ends[1]));
                 assert!(values.iter().all(|v| (ends[0]..=ends[1]).contains(v)));
                 // Stratified: every twenty-first of the range once.
-                let mut steps: Vec<i64> = values
-                    .iter()
-                    .map(|v| ((v - ends[0]) / (ends[1] - ends[0]) * 21.0).round() as i64)
-                    .collect();
+                let mut steps: Vec<i64> =
+                    values.iter().map(|v| ((v - ends[0]) / (ends[1] - ends[0]) * 21.0).round() as i64).collect();
                 steps.sort();
                 assert_eq!(steps, (0..22).collect::<Vec<_>>());
             }
@@ -469,12 +420,7 @@ mod tests {
             assert_eq!(spec.validate(), Ok(()), "{name}");
             let f = framing(spec, &cam);
             assert!(f.observed_seam_mm >= MIN_OBSERVED_SEAM_MM, "{name}: {f:?}");
-            assert!(
-                f.plate_in_view_mm
-                    .iter()
-                    .all(|w| *w >= MIN_PLATE_IN_VIEW_MM),
-                "{name}: {f:?}"
-            );
+            assert!(f.plate_in_view_mm.iter().all(|w| *w >= MIN_PLATE_IN_VIEW_MM), "{name}: {f:?}");
             fill += usize::from(!f.background_visible);
             clipped += usize::from(f.seam_clipped);
             off_across += usize::from(f.plate_runs_off_across);
@@ -489,20 +435,11 @@ mod tests {
                     assert!((0.5..=3.0).contains(&gap_mm));
                     narrow_gaps += usize::from(gap_mm <= 0.8);
                 }
-                JointGeometry::VButt {
-                    thickness_mm: t,
-                    groove_angle_deg: a,
-                    groove_depth_mm: d,
-                    root_gap_mm: r,
-                } => {
+                JointGeometry::VButt { thickness_mm: t, groove_angle_deg: a, groove_depth_mm: d, root_gap_mm: r } => {
                     assert!((6.0..=12.0).contains(&t) && (40.0..=70.0).contains(&a));
                     assert!((3.0..=t - 1.0).contains(&d) && (0.0..=2.0).contains(&r));
                 }
-                JointGeometry::Lap {
-                    lower_thickness_mm: t1,
-                    upper_thickness_mm: t2,
-                    overlap_mm: o,
-                } => {
+                JointGeometry::Lap { lower_thickness_mm: t1, upper_thickness_mm: t2, overlap_mm: o } => {
                     assert!((3.0..=10.0).contains(&t1) && (3.0..=10.0).contains(&t2));
                     assert!((20.0..=60.0).contains(&o));
                     let on_upper_side = spec.placement.target_offset_mm[0] < 0.0;
@@ -518,10 +455,7 @@ mod tests {
         assert!(narrow_gaps >= 6, "{narrow_gaps} narrow gaps");
         assert_eq!((upper, lower), (11, 11));
         assert!(fill >= 4, "{fill} scenes fill the view");
-        assert!(
-            clipped >= 6 && off_across >= 6,
-            "{clipped} clipped, {off_across} wide"
-        );
+        assert!(clipped >= 6 && off_across >= 6, "{clipped} clipped, {off_across} wide");
         assert!(staggered >= 10, "{staggered} staggered");
     }
 }

@@ -70,10 +70,7 @@ pub fn visible_interval(camera: &CameraModel, origin: &Vec3, along: &Vec3) -> Op
     ];
     let in_front = (origin.z - MIN_DEPTH_MM, along.z);
     let mut range = [f64::NEG_INFINITY, f64::INFINITY];
-    let constraints = borders
-        .iter()
-        .map(|w| (w.dot(origin), w.dot(along)))
-        .chain(std::iter::once(in_front));
+    let constraints = borders.iter().map(|w| (w.dot(origin), w.dot(along))).chain(std::iter::once(in_front));
     for (a, b) in constraints {
         // a + b s >= 0
         if b > 0.0 {
@@ -94,9 +91,7 @@ pub fn observed_seam_range(spec: &SceneSpec, camera: &CameraModel) -> Option<[f6
     let along = camera_from_workpiece.rotation * Vec3::y();
     let mut range = spec.seam_range();
     for [x, z] in spec.joint.seam_edges_xz() {
-        let origin = camera_from_workpiece
-            .transform_point(&Vec3::new(x, 0.0, z).into())
-            .coords;
+        let origin = camera_from_workpiece.transform_point(&Vec3::new(x, 0.0, z).into()).coords;
         let [lo, hi] = visible_interval(camera, &origin, &along)?;
         range = [range[0].max(lo), range[1].min(hi)];
     }
@@ -142,16 +137,8 @@ mod tests {
 
     fn frontal_i_butt() -> SceneSpec {
         let mut spec = demo_scene(JointType::IButt);
-        spec.plate_a = PlateExtent {
-            width_mm: 120.0,
-            length_mm: 200.0,
-            offset_mm: 0.0,
-        };
-        spec.plate_b = PlateExtent {
-            width_mm: 100.0,
-            length_mm: 220.0,
-            offset_mm: 30.0,
-        };
+        spec.plate_a = PlateExtent { width_mm: 120.0, length_mm: 200.0, offset_mm: 0.0 };
+        spec.plate_b = PlateExtent { width_mm: 100.0, length_mm: 220.0, offset_mm: 30.0 };
         spec.placement = CameraPlacement {
             distance_mm: 800.0,
             tilt_deg: 0.0,
@@ -186,11 +173,7 @@ mod tests {
     fn a_seam_longer_than_the_view_is_clipped_at_the_image_border() {
         let mut spec = frontal_i_butt();
         spec.plate_a.length_mm = 400.0;
-        spec.plate_b = PlateExtent {
-            length_mm: 400.0,
-            offset_mm: 0.0,
-            ..spec.plate_b
-        };
+        spec.plate_b = PlateExtent { length_mm: 400.0, offset_mm: 0.0, ..spec.plate_b };
         spec.placement.distance_mm = 500.0;
         let cam = CameraModel::default();
         let truth = ground_truth(&spec, &cam);
@@ -201,16 +184,9 @@ mod tests {
         let [_, _, v0, v1] = image_rect(&cam);
         let v_of = |p: &Vec3| cam.project([p.x, p.y, p.z]).unwrap().1;
         let (va, vb) = (v_of(&truth.start_camera), v_of(&truth.end_camera));
-        assert!(
-            ((va - v1).abs() < 1e-6 && (vb - v0).abs() < 1e-6),
-            "{va} {vb}"
-        );
+        assert!(((va - v1).abs() < 1e-6 && (vb - v0).abs() < 1e-6), "{va} {vb}");
         let expected = (v1 - v0) / cam.fy() * (500.0 - 6.0 + 6.0);
-        assert!(
-            (truth.length_mm - expected).abs() < 1e-6,
-            "{}",
-            truth.length_mm
-        );
+        assert!((truth.length_mm - expected).abs() < 1e-6, "{}", truth.length_mm);
     }
 
     #[test]

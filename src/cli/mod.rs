@@ -3,6 +3,7 @@
 //! everything else lives in the library.
 
 pub mod args;
+pub mod demo;
 pub mod eval;
 pub mod logging;
 pub mod plan;

@@ -3,6 +3,8 @@
 
 use std::path::PathBuf;
 
+use std::io::Write;
+
 use anyhow::{Context, bail};
 use weldseam::config::{Config, Method};
 use weldseam::geometry::pose::{RobotPose, hand_eye_from_rows};
@@ -57,6 +59,7 @@ pub fn load_config(path: Option<&PathBuf>, method: Option<&str>) -> anyhow::Resu
 }
 
 pub fn run(args: &PlanArgs) -> anyhow::Result<()> {
+    let mut out = std::io::stdout().lock();
     let config = load_config(args.config.as_ref(), args.method.as_deref())?;
     let hand_eye = args
         .hand_eye
@@ -80,11 +83,12 @@ pub fn run(args: &PlanArgs) -> anyhow::Result<()> {
     let mut report = plan_result(&plan, planner.config().euler);
     report.timing_ms.insert("load".into(), load_ms);
     if args.json {
-        println!("{}", serde_json::to_string(&report)?);
+        writeln!(out, "{}", serde_json::to_string(&report)?)?;
         return Ok(());
     }
     let Some(seam) = report.seams.first() else { bail!("no seam found in {}", args.cloud.display()) };
-    println!(
+    writeln!(
+        out,
         "{} seam, {:.1} mm, {} waypoints every {} mm (base frame, {} angles), planned in {:.0} ms ({} method)",
         args.joint,
         seam.length_mm,
@@ -93,17 +97,19 @@ pub fn run(args: &PlanArgs) -> anyhow::Result<()> {
         report.euler_convention,
         plan.timings.total_ms(),
         report.method
-    );
-    println!(
+    )?;
+    writeln!(
+        out,
         "edge fits: rms {:.3} / {:.3} mm over {} / {} samples",
         seam.edge_fit_rms_mm[0], seam.edge_fit_rms_mm[1], seam.edge_samples[0], seam.edge_samples[1]
-    );
-    println!("{:>4}  {:>10} {:>10} {:>10}  {:>9} {:>9} {:>9}", "#", "x mm", "y mm", "z mm", "rx°", "ry°", "rz°");
+    )?;
+    writeln!(out, "{:>4}  {:>10} {:>10} {:>10}  {:>9} {:>9} {:>9}", "#", "x mm", "y mm", "z mm", "rx°", "ry°", "rz°")?;
     for (k, w) in seam.waypoints.iter().enumerate() {
-        println!(
+        writeln!(
+            out,
             "{:>4}  {:>10.3} {:>10.3} {:>10.3}  {:>9.3} {:>9.3} {:>9.3}",
             k, w.xyz[0], w.xyz[1], w.xyz[2], w.rpy_deg[0], w.rpy_deg[1], w.rpy_deg[2]
-        );
+        )?;
     }
     Ok(())
 }

@@ -10,7 +10,9 @@
 pub mod camera;
 pub mod cloud;
 pub mod config;
+pub mod eval;
 pub mod geometry;
 pub mod joint;
 pub mod pipeline;
 pub mod report;
+pub mod sim;

@@ -1,3 +1,51 @@
-//! The `weldseam` command line.
+//! The `weldseam` command line: plan a weld from a file, simulate a scan,
+//! evaluate accuracy, run the demo.
 
-fn main() {}
+mod cli;
+
+use clap::{Parser, Subcommand};
+
+use cli::logging::{self, LogFormat};
+
+#[derive(Debug, Parser)]
+#[command(name = "weldseam", version, about = "Teach-free plane weld trajectory planning from 3D camera point clouds")]
+struct Cli {
+    /// Log line format on stderr.
+    #[arg(long, global = true, value_enum, default_value_t = LogFormat::Text)]
+    log_format: LogFormat,
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Debug, Subcommand)]
+enum Command {
+    /// Plan the welding trajectory of one point-cloud file.
+    Plan(cli::plan::PlanArgs),
+    /// Plan the seeded suite of simulated scenes and print the accuracy table.
+    Eval(cli::eval::EvalArgs),
+    /// Render a simulated camera frame (organized PCD) and its ground truth (JSON).
+    Simulate(cli::simulate::SimulateArgs),
+}
+
+fn main() -> std::process::ExitCode {
+    let cli = Cli::parse();
+    let level = match cli.command {
+        Command::Plan(_) | Command::Eval(_) | Command::Simulate(_) => "warn",
+    };
+    if let Err(e) = logging::init(cli.log_format, level) {
+        eprintln!("error: {e:#}");
+        return std::process::ExitCode::FAILURE;
+    }
+    let result = match &cli.command {
+        Command::Plan(args) => cli::plan::run(args),
+        Command::Eval(args) => cli::eval::run(args),
+        Command::Simulate(args) => cli::simulate::run(args),
+    };
+    match result {
+        Ok(()) => std::process::ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            std::process::ExitCode::FAILURE
+        }
+    }
+}

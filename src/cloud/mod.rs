@@ -11,6 +11,7 @@
 
 pub mod pcd;
 pub mod ply;
+mod reader;
 
 use std::path::PathBuf;
 

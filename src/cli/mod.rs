@@ -1,0 +1,9 @@
+//! The subcommands of the `weldseam` binary. This is the program's edge:
+//! it reads files and flags, prints, and reports errors with anyhow context;
+//! everything else lives in the library.
+
+pub mod args;
+pub mod eval;
+pub mod logging;
+pub mod plan;
+pub mod simulate;

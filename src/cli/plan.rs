@@ -1,0 +1,109 @@
+//! `weldseam plan`: plans the weld of one point-cloud file and prints the
+//! base-frame trajectory, as a summary or as one JSON object on stdout.
+
+use std::path::PathBuf;
+
+use anyhow::{Context, bail};
+use weldseam::config::{Config, Method};
+use weldseam::geometry::pose::{RobotPose, hand_eye_from_rows};
+use weldseam::joint::JointType;
+use weldseam::pipeline::{PlanRequest, Planner};
+use weldseam::report::plan_result;
+
+use super::args;
+
+#[derive(Debug, clap::Args)]
+pub struct PlanArgs {
+    /// Point cloud in the camera frame, mm: .pcd or .ply.
+    #[arg(long)]
+    pub cloud: PathBuf,
+    /// Joint type: v-butt, i-butt or lap (underscores work too).
+    #[arg(long)]
+    pub joint: JointType,
+    /// Groove depth of a V-butt joint, mm.
+    #[arg(long)]
+    pub groove_depth: Option<f64>,
+    /// Robot pose at capture: x,y,z,rx,ry,rz (mm, degrees).
+    #[arg(long, allow_hyphen_values = true, value_parser = args::pose)]
+    pub pose: RobotPose,
+    /// End_T_Camera as 16 comma-separated numbers, row-major, mm.
+    #[arg(long, allow_hyphen_values = true, value_parser = args::matrix)]
+    pub hand_eye: Option<[f64; 16]>,
+    /// Waypoint spacing, mm (default from the config: 5).
+    #[arg(long)]
+    pub step: Option<f64>,
+    /// Configuration file (TOML); built-in defaults otherwise.
+    #[arg(long)]
+    pub config: Option<PathBuf>,
+    /// Pipeline variant, overriding the config: robust or paper.
+    #[arg(long, value_parser = ["robust", "paper"])]
+    pub method: Option<String>,
+    /// Print one JSON object on stdout instead of a summary.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// Loads the config file if given, else the defaults, and applies a
+/// `--method` override.
+pub fn load_config(path: Option<&PathBuf>, method: Option<&str>) -> anyhow::Result<Config> {
+    let mut config = match path {
+        Some(p) => Config::load(p)?,
+        None => Config::default(),
+    };
+    if let Some(m) = method.and_then(Method::from_name) {
+        config.pipeline.method = m;
+    }
+    Ok(config)
+}
+
+pub fn run(args: &PlanArgs) -> anyhow::Result<()> {
+    let config = load_config(args.config.as_ref(), args.method.as_deref())?;
+    let hand_eye = args
+        .hand_eye
+        .map(|rows| hand_eye_from_rows(&rows).map_err(|e| anyhow::anyhow!("--hand-eye: {e}")))
+        .transpose()?;
+    let load_start = std::time::Instant::now();
+    let cloud = weldseam::cloud::load(&args.cloud)?;
+    let load_ms = load_start.elapsed().as_secs_f64() * 1e3;
+    tracing::info!(
+        file = %args.cloud.display(),
+        width = cloud.width(),
+        height = cloud.height(),
+        valid = cloud.valid_count(),
+        load_ms = format!("{load_ms:.1}"),
+        "loaded point cloud"
+    );
+    let request =
+        PlanRequest { hand_eye, step_mm: args.step, ..PlanRequest::new(args.joint, args.groove_depth, args.pose) };
+    let planner = Planner::new(config);
+    let plan = planner.plan(&cloud, &request).with_context(|| format!("no seam found in {}", args.cloud.display()))?;
+    let mut report = plan_result(&plan, planner.config().euler);
+    report.timing_ms.insert("load".into(), load_ms);
+    if args.json {
+        println!("{}", serde_json::to_string(&report)?);
+        return Ok(());
+    }
+    let Some(seam) = report.seams.first() else { bail!("no seam found in {}", args.cloud.display()) };
+    println!(
+        "{} seam, {:.1} mm, {} waypoints every {} mm (base frame, {} angles), planned in {:.0} ms ({} method)",
+        args.joint,
+        seam.length_mm,
+        seam.waypoints.len(),
+        request.step_mm.unwrap_or(planner.config().trajectory.step_mm),
+        report.euler_convention,
+        plan.timings.total_ms(),
+        report.method
+    );
+    println!(
+        "edge fits: rms {:.3} / {:.3} mm over {} / {} samples",
+        seam.edge_fit_rms_mm[0], seam.edge_fit_rms_mm[1], seam.edge_samples[0], seam.edge_samples[1]
+    );
+    println!("{:>4}  {:>10} {:>10} {:>10}  {:>9} {:>9} {:>9}", "#", "x mm", "y mm", "z mm", "rx°", "ry°", "rz°");
+    for (k, w) in seam.waypoints.iter().enumerate() {
+        println!(
+            "{:>4}  {:>10.3} {:>10.3} {:>10.3}  {:>9.3} {:>9.3} {:>9.3}",
+            k, w.xyz[0], w.xyz[1], w.xyz[2], w.rpy_deg[0], w.rpy_deg[1], w.rpy_deg[2]
+        );
+    }
+    Ok(())
+}

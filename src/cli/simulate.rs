@@ -1,0 +1,339 @@
+//! `weldseam simulate`: renders a simulated capture to an organized PCD
+//! file and writes its ground truth, pose and scene as JSON, with the
+//! arguments that run the planner on it.
+
+use std::fs::File;
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use anyhow::{Context, Result, bail};
+use nalgebra::Isometry3;
+use serde_json::{Value, json};
+
+use weldseam::camera::CameraModel;
+use weldseam::cloud::pcd;
+use weldseam::geometry::Vec3;
+use weldseam::joint::JointType;
+use weldseam::sim::{JointGeometry, NoiseSpec, PlateExtent, SceneSpec, Simulation, demo_scene, eval_suite, simulate};
+
+#[derive(Debug, Clone, clap::Args)]
+pub struct SimulateArgs {
+    /// Joint type: v-butt, i-butt or lap. Optional with --suite-scene.
+    #[arg(long)]
+    pub joint: Option<JointType>,
+    /// Camera standoff along the optical axis to the target, mm.
+    #[arg(long, value_name = "MM")]
+    pub distance: Option<f64>,
+    /// Angle between the optical axis and the plate normal, degrees.
+    #[arg(long, value_name = "DEG", allow_negative_numbers = true)]
+    pub tilt: Option<f64>,
+    /// Direction the camera leans towards, about the plate normal, degrees.
+    #[arg(long, value_name = "DEG", allow_negative_numbers = true)]
+    pub azimuth: Option<f64>,
+    /// Rotation of the camera about its optical axis, degrees.
+    #[arg(long, value_name = "DEG", allow_negative_numbers = true)]
+    pub roll: Option<f64>,
+    /// Seed of the sensor noise.
+    #[arg(long, value_name = "N")]
+    pub seed: Option<u64>,
+    /// Start from a scene of the evaluation suite, by name or index.
+    #[arg(long, value_name = "NAME_OR_INDEX")]
+    pub suite_scene: Option<String>,
+    /// Render an exact frame: no depth noise, dropouts, mixed pixels or
+    /// outliers.
+    #[arg(long)]
+    pub no_noise: bool,
+    /// The organized binary PCD file to write.
+    #[arg(long, value_name = "FILE.pcd")]
+    pub out: PathBuf,
+    /// The ground-truth JSON file to write.
+    #[arg(long, value_name = "FILE.json")]
+    pub truth: Option<PathBuf>,
+}
+
+pub fn run(args: &SimulateArgs) -> Result<()> {
+    let (name, spec) = scene_from_args(args)?;
+    let camera = CameraModel::default();
+    let started = Instant::now();
+    let sim = simulate(&spec, &camera);
+    let elapsed = started.elapsed();
+    write_cloud(&sim, &args.out)?;
+    if let Some(path) = &args.truth {
+        write_truth(&truth_json(name.as_deref(), &spec, &camera, &sim), path)?;
+    }
+    println!(
+        "{}: {} of {} pixels valid, {:.1} mm of seam in view{}; rendered in {:.0} ms",
+        name.as_deref().unwrap_or(spec.joint.joint_type().name()),
+        sim.cloud.valid_count(),
+        sim.cloud.len(),
+        sim.truth.length_mm,
+        if sim.truth.clipped_start || sim.truth.clipped_end { " (clipped)" } else { "" },
+        elapsed.as_secs_f64() * 1e3,
+    );
+    Ok(())
+}
+
+/// The scene the arguments ask for, and its suite name if it has one.
+fn scene_from_args(args: &SimulateArgs) -> Result<(Option<String>, SceneSpec)> {
+    let (name, mut spec) = match (&args.suite_scene, args.joint) {
+        (Some(key), joint) => {
+            let (name, spec) = find_suite_scene(key)?;
+            if let Some(joint) = joint
+                && joint != spec.joint.joint_type()
+            {
+                bail!(
+                    "suite scene {name} is a {} joint, not {}",
+                    cli_joint_name(spec.joint.joint_type()),
+                    cli_joint_name(joint)
+                );
+            }
+            (Some(name), spec)
+        }
+        (None, Some(joint)) => (None, demo_scene(joint)),
+        (None, None) => bail!("give --joint (v-butt, i-butt or lap) or --suite-scene"),
+    };
+    let placement = &mut spec.placement;
+    let overrides = [
+        (args.distance, &mut placement.distance_mm),
+        (args.tilt, &mut placement.tilt_deg),
+        (args.azimuth, &mut placement.tilt_azimuth_deg),
+        (args.roll, &mut placement.roll_deg),
+    ];
+    for (value, field) in overrides {
+        if let Some(v) = value {
+            *field = v;
+        }
+    }
+    if let Some(seed) = args.seed {
+        spec.seed = seed;
+    }
+    if args.no_noise {
+        spec.noise = NoiseSpec::none();
+    }
+    spec.validate()?;
+    Ok((name, spec))
+}
+
+fn find_suite_scene(key: &str) -> Result<(String, SceneSpec)> {
+    let mut suite = eval_suite();
+    let count = suite.len();
+    let position = match key.parse::<usize>() {
+        Ok(index) => (index < count).then_some(index),
+        Err(_) => suite.iter().position(|(name, _)| name == key),
+    };
+    match position {
+        Some(i) => Ok(suite.swap_remove(i)),
+        None => bail!(
+            "no suite scene {key:?}: give an index below {count} or a name such as {}",
+            suite.first().map_or("", |(name, _)| name.as_str())
+        ),
+    }
+}
+
+/// The joint's name as the command line spells it.
+fn cli_joint_name(joint: JointType) -> &'static str {
+    match joint {
+        JointType::VButt => "v-butt",
+        JointType::IButt => "i-butt",
+        JointType::Lap => "lap",
+    }
+}
+
+fn write_cloud(sim: &Simulation, path: &Path) -> Result<()> {
+    let file = File::create(path).with_context(|| format!("cannot create {}", path.display()))?;
+    pcd::write_binary(&sim.cloud, BufWriter::new(file))
+        .with_context(|| format!("cannot write the point cloud to {}", path.display()))
+}
+
+fn write_truth(truth: &Value, path: &Path) -> Result<()> {
+    let write = || -> std::io::Result<()> {
+        let mut out = BufWriter::new(File::create(path)?);
+        serde_json::to_writer_pretty(&mut out, truth)?;
+        writeln!(out)?;
+        out.flush()
+    };
+    write().with_context(|| format!("cannot write the ground truth to {}", path.display()))
+}
+
+/// Everything needed to score a planner's output on the frame and to run
+/// the planner on it.
+fn truth_json(name: Option<&str>, spec: &SceneSpec, camera: &CameraModel, sim: &Simulation) -> Value {
+    let t = &sim.truth;
+    let pose: Vec<f64> = sim.pose.xyz_mm.iter().chain(&sim.pose.angles_deg).copied().collect();
+    json!({
+        "scene": name,
+        "joint": t.joint.name(),
+        "parameters": scene_json(spec, camera),
+        "pose": pose,
+        "euler": spec.euler.name(),
+        "hand_eye": rows(&spec.hand_eye),
+        "base_from_camera": rows(&sim.base_from_camera),
+        "truth": {
+            "groove_depth_mm": t.groove_depth_mm,
+            "start_camera": xyz(&t.start_camera),
+            "end_camera": xyz(&t.end_camera),
+            "start_base": xyz(&t.start_base),
+            "end_base": xyz(&t.end_base),
+            "plate_normal_camera": xyz(&t.plate_normal_camera),
+            "plate_normal_base": xyz(&t.plate_normal_base),
+            "clipped_start": t.clipped_start,
+            "clipped_end": t.clipped_end,
+            "length_mm": t.length_mm,
+        },
+        "plan_args": plan_args(spec, &pose),
+    })
+}
+
+fn scene_json(spec: &SceneSpec, camera: &CameraModel) -> Value {
+    let geometry = match spec.joint {
+        JointGeometry::VButt { thickness_mm, groove_angle_deg, groove_depth_mm, root_gap_mm } => json!({
+            "thickness_mm": thickness_mm,
+            "groove_angle_deg": groove_angle_deg,
+            "groove_depth_mm": groove_depth_mm,
+            "root_gap_mm": root_gap_mm,
+        }),
+        JointGeometry::IButt { thickness_mm, gap_mm } => json!({ "thickness_mm": thickness_mm, "gap_mm": gap_mm }),
+        JointGeometry::Lap { lower_thickness_mm, upper_thickness_mm, overlap_mm } => json!({
+            "lower_thickness_mm": lower_thickness_mm,
+            "upper_thickness_mm": upper_thickness_mm,
+            "overlap_mm": overlap_mm,
+        }),
+    };
+    let plate = |p: &PlateExtent| json!({ "width_mm": p.width_mm, "length_mm": p.length_mm, "offset_mm": p.offset_mm });
+    let placement = &spec.placement;
+    let noise = &spec.noise;
+    json!({
+        "geometry": geometry,
+        "plate_a": plate(&spec.plate_a),
+        "plate_b": plate(&spec.plate_b),
+        "spacer_height_mm": spec.spacer_height_mm,
+        "placement": {
+            "distance_mm": placement.distance_mm,
+            "tilt_deg": placement.tilt_deg,
+            "tilt_azimuth_deg": placement.tilt_azimuth_deg,
+            "roll_deg": placement.roll_deg,
+            "target_offset_mm": placement.target_offset_mm,
+        },
+        "noise": {
+            "depth_noise": noise.depth_noise,
+            "dropout_rate": noise.dropout_rate,
+            "mixed_pixel_probability": noise.mixed_pixel_probability,
+            "mixed_pixel_jump_mm": noise.mixed_pixel_jump_mm,
+            "outlier_rate": noise.outlier_rate,
+            "outlier_range_mm": noise.outlier_range_mm,
+            "max_incidence_deg": noise.max_incidence_deg,
+        },
+        "seed": spec.seed,
+        "base_from_workpiece": rows(&spec.base_from_workpiece),
+        "camera": {
+            "width_px": camera.width_px,
+            "height_px": camera.height_px,
+            "fov_width_mm": camera.fov_width_mm,
+            "fov_height_mm": camera.fov_height_mm,
+            "fov_distance_mm": camera.fov_distance_mm,
+            "baseline_mm": camera.baseline_mm,
+        },
+    })
+}
+
+/// The planner's arguments for this capture.
+fn plan_args(spec: &SceneSpec, pose: &[f64]) -> String {
+    let mut args = format!("--joint {}", cli_joint_name(spec.joint.joint_type()));
+    if let Some(depth) = spec.joint.groove_depth_mm() {
+        args.push_str(&format!(" --groove-depth {}", short(depth)));
+    }
+    let pose: Vec<String> = pose.iter().map(|v| short(*v)).collect();
+    args.push_str(&format!(" --pose={}", pose.join(",")));
+    args
+}
+
+/// A number to 1e-6 without trailing zeros.
+fn short(v: f64) -> String {
+    let s = format!("{v:.6}");
+    let s = s.trim_end_matches('0').trim_end_matches('.');
+    if s == "-0" { "0".into() } else { s.into() }
+}
+
+fn xyz(v: &Vec3) -> [f64; 3] {
+    [v.x, v.y, v.z]
+}
+
+/// A rigid transform as four rows of its homogeneous matrix.
+fn rows(iso: &Isometry3<f64>) -> [[f64; 4]; 4] {
+    let m = iso.to_homogeneous();
+    std::array::from_fn(|r| std::array::from_fn(|c| m[(r, c)]))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn args(out: PathBuf, truth: Option<PathBuf>) -> SimulateArgs {
+        SimulateArgs {
+            joint: Some(JointType::VButt),
+            distance: Some(650.0),
+            tilt: None,
+            azimuth: None,
+            roll: Some(-20.0),
+            seed: Some(9),
+            suite_scene: None,
+            no_noise: false,
+            out,
+            truth,
+        }
+    }
+
+    #[test]
+    fn writes_the_cloud_and_a_truth_that_runs_the_planner() {
+        let dir = tempfile::tempdir().unwrap();
+        let (out, truth) = (dir.path().join("frame.pcd"), dir.path().join("truth.json"));
+        run(&args(out.clone(), Some(truth.clone()))).unwrap();
+        let bytes = std::fs::read(&out).unwrap();
+        assert!(bytes.starts_with(b"# .PCD"));
+        let header_end = bytes.windows(12).position(|w| w == b"DATA binary\n").unwrap() + 12;
+        assert_eq!(bytes.len() - header_end, 1920 * 1200 * 12);
+        let json: Value = serde_json::from_slice(&std::fs::read(&truth).unwrap()).unwrap();
+        assert_eq!(json["joint"], "v_butt");
+        assert_eq!(json["parameters"]["placement"]["distance_mm"], 650.0);
+        assert_eq!(json["parameters"]["placement"]["roll_deg"], -20.0);
+        assert_eq!(json["pose"].as_array().unwrap().len(), 6);
+        assert_eq!(json["hand_eye"][3], json!([0.0, 0.0, 0.0, 1.0]));
+        let plan = json["plan_args"].as_str().unwrap();
+        assert!(plan.starts_with("--joint v-butt --groove-depth 6 --pose="), "{plan}");
+        assert!(json["truth"]["length_mm"].as_f64().unwrap() > 200.0);
+    }
+
+    #[test]
+    fn suite_scenes_are_found_by_index_or_name() {
+        let (by_index, spec) = find_suite_scene("30").unwrap();
+        let (by_name, again) = find_suite_scene(&by_index).unwrap();
+        assert_eq!((by_index, spec), (by_name, again));
+        let err = find_suite_scene("9999").unwrap_err().to_string();
+        assert!(err.contains("below 66"), "{err}");
+        let mut a = args(PathBuf::from("x.pcd"), None);
+        a.suite_scene = Some("0".into());
+        a.joint = Some(JointType::Lap);
+        assert!(scene_from_args(&a).unwrap_err().to_string().contains("not lap"));
+    }
+
+    #[test]
+    fn errors_name_the_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("missing").join("frame.pcd");
+        let mut a = args(out, None);
+        a.distance = Some(400.0);
+        let err = format!("{:#}", run(&a).unwrap_err());
+        assert!(err.contains("missing/frame.pcd"), "{err}");
+        a.tilt = Some(95.0);
+        let err = run(&a).unwrap_err().to_string();
+        assert!(err.contains("tilt"), "{err}");
+    }
+
+    #[test]
+    fn numbers_are_short() {
+        assert_eq!(short(5.0), "5");
+        assert_eq!(short(-0.0000001), "0");
+        assert_eq!(short(178.2800004), "178.28");
+    }
+}

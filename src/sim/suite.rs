@@ -1,0 +1,461 @@
+//! The evaluation suite: a fixed, seeded set of scenes spread over the
+//! camera's working range, and the framing measures that keep every scene
+//! a fair test (enough seam and enough of both plates in view).
+//!
+//! Distances and tilts are stratified: each joint's scenes take every step
+//! of 500..1000 mm and 0..30 degrees once, ends included. Everything else
+//! is drawn at random, and a draw is kept only when the framing it asks
+//! for (plates filling the view, the seam running off the image, plates
+//! running off across the seam) is met.
+
+use rand_chacha::ChaCha8Rng;
+use rand_core::{Rng, SeedableRng};
+
+use super::render::CameraView;
+use super::scene::{SurfaceKind, build_scene};
+use super::truth::{observed_seam_range, visible_interval};
+use super::{
+    CameraPlacement, JointGeometry, NoiseSpec, PlateExtent, SceneSpec, default_base_from_workpiece, paper_hand_eye,
+};
+use crate::camera::CameraModel;
+use crate::geometry::Vec3;
+use crate::geometry::pose::EulerConvention;
+use crate::joint::JointType;
+
+/// Scenes per joint type.
+pub const SCENES_PER_JOINT: usize = 22;
+/// The shortest observed seam a suite scene may have.
+pub const MIN_OBSERVED_SEAM_MM: f64 = 80.0;
+/// How much of each plate's top must be in view beside the seam.
+pub const MIN_PLATE_IN_VIEW_MM: f64 = 40.0;
+
+const SUITE_SEED: u64 = 0x5eed_2024;
+const MAX_DRAWS: usize = 4000;
+const MIN_DISTANCE_MM: f64 = 500.0;
+const MAX_DISTANCE_MM: f64 = 1000.0;
+const MAX_TILT_DEG: f64 = 30.0;
+/// Pixel stride of the coarse ray grid that looks for the table.
+const TABLE_PROBE_GRID: (usize, usize) = (48, 30);
+
+/// How a scene sits in the image, as the suite's requirements need it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Framing {
+    /// Length of the seam in view (both seam-side edges in the image).
+    pub observed_seam_mm: f64,
+    /// How much of each plate's top surface (A, B) is in view beside the
+    /// seam, measured across it at the middle of the observed seam.
+    pub plate_in_view_mm: [f64; 2],
+    /// A plate's outer edge lies outside the image there.
+    pub plate_runs_off_across: bool,
+    /// The seam continues beyond the image at one end or both.
+    pub seam_clipped: bool,
+    /// Some of the table or a spacer is in line of sight, other than
+    /// through the joint's gap.
+    pub background_visible: bool,
+}
+
+/// Measures how `spec` is framed by `camera`.
+pub fn framing(spec: &SceneSpec, camera: &CameraModel) -> Framing {
+    framing_with(spec, camera, true)
+}
+
+/// [`framing`], skipping the ray casting for the background when
+/// `probe_background` is false (it then reports the background visible).
+fn framing_with(spec: &SceneSpec, camera: &CameraModel, probe_background: bool) -> Framing {
+    let background = || !probe_background || background_visible(spec, camera);
+    let physical = spec.seam_range();
+    let Some([y0, y1]) = observed_seam_range(spec, camera) else {
+        return Framing {
+            observed_seam_mm: 0.0,
+            plate_in_view_mm: [0.0, 0.0],
+            plate_runs_off_across: true,
+            seam_clipped: true,
+            background_visible: background(),
+        };
+    };
+    let middle = (y0 + y1) / 2.0;
+    let in_view = plates_in_view(spec, camera, middle);
+    let top_widths = plate_top_widths(spec);
+    Framing {
+        observed_seam_mm: y1 - y0,
+        plate_in_view_mm: in_view,
+        plate_runs_off_across: in_view[0] < top_widths[0] || in_view[1] < top_widths[1],
+        seam_clipped: y0 > physical[0] || y1 < physical[1],
+        background_visible: background(),
+    }
+}
+
+/// Widths of the plates' top surfaces, from the seam-side edge outward.
+fn plate_top_widths(spec: &SceneSpec) -> [f64; 2] {
+    let edge = spec.joint.seam_edge_half_width();
+    [spec.plate_a.width_mm - edge, spec.plate_b.width_mm - edge]
+}
+
+/// How far each plate's top is in view outward from its seam-side edge at
+/// seam parameter `y`, up to the plate's outer edge.
+fn plates_in_view(spec: &SceneSpec, camera: &CameraModel, y: f64) -> [f64; 2] {
+    let camera_from_workpiece = spec.workpiece_from_camera().inverse();
+    let edges = spec.joint.seam_edges_xz();
+    let top_widths = plate_top_widths(spec);
+    let mut widths = [0.0; 2];
+    for (side, (([x, z], outward), top_width)) in edges.iter().zip([-1.0, 1.0]).zip(top_widths).enumerate() {
+        let origin = camera_from_workpiece.transform_point(&Vec3::new(*x, y, *z).into()).coords;
+        let along = camera_from_workpiece.rotation * Vec3::new(outward, 0.0, 0.0);
+        widths[side] = match visible_interval(camera, &origin, &along) {
+            Some([lo, hi]) if lo <= 0.0 && hi >= 0.0 => hi.min(top_width),
+            _ => 0.0,
+        };
+    }
+    widths
+}
+
+/// Casts a coarse grid of rays and reports whether any reaches the table
+/// or a spacer without passing through the joint's gap.
+fn background_visible(spec: &SceneSpec, camera: &CameraModel) -> bool {
+    let workpiece_from_camera = spec.workpiece_from_camera();
+    let scene = build_scene(spec).transformed(&workpiece_from_camera.inverse());
+    let view = CameraView::new(scene, camera, 90.0);
+    let through_gap = gap_half_width(&spec.joint) + 1.0;
+    let (nu, nv) = TABLE_PROBE_GRID;
+    let (w, h) = (camera.width_px as f64 - 1.0, camera.height_px as f64 - 1.0);
+    (0..nv).any(|j| {
+        (0..nu).any(|i| {
+            let (u, v) = (w * i as f64 / (nu - 1) as f64, h * j as f64 / (nv - 1) as f64);
+            let Some(hit) = view.first_surface(u, v) else {
+                return true;
+            };
+            if view.solids()[hit.solid].kind == SurfaceKind::Plate {
+                return false;
+            }
+            let ray = workpiece_from_camera.rotation * Vec3::from(camera.ray(u, v));
+            let origin = workpiece_from_camera.translation.vector;
+            let at_plate_bottom = origin + ray * (-origin.z / ray.z);
+            at_plate_bottom.x.abs() > through_gap
+        })
+    })
+}
+
+/// Half the width of the opening through the plates, if any.
+fn gap_half_width(joint: &JointGeometry) -> f64 {
+    match *joint {
+        JointGeometry::IButt { gap_mm, .. } => gap_mm / 2.0,
+        JointGeometry::VButt { root_gap_mm, .. } => root_gap_mm / 2.0,
+        JointGeometry::Lap { .. } => 0.0,
+    }
+}
+
+/// What a suite scene must show beyond the common requirements.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Goal {
+    /// Plates fill the whole view: no table in sight.
+    FillView,
+    /// The seam runs off the image, so the truth is clipped.
+    SeamOffImage,
+    /// A plate runs off the image across the seam.
+    PlateOffAcross,
+    /// No constraint beyond the common ones.
+    Free,
+}
+
+impl Goal {
+    fn for_index(k: usize) -> Goal {
+        match k {
+            0..=3 => Goal::FillView,
+            4..=8 => Goal::SeamOffImage,
+            9..=13 => Goal::PlateOffAcross,
+            _ => Goal::Free,
+        }
+    }
+
+    fn tag(self) -> &'static str {
+        match self {
+            Goal::FillView => "-fill",
+            Goal::SeamOffImage => "-clipped",
+            Goal::PlateOffAcross => "-wide",
+            Goal::Free => "",
+        }
+    }
+
+    fn met_by(self, f: &Framing) -> bool {
+        let common =
+            f.observed_seam_mm >= MIN_OBSERVED_SEAM_MM && f.plate_in_view_mm.iter().all(|w| *w >= MIN_PLATE_IN_VIEW_MM);
+        common
+            && match self {
+                Goal::FillView => !f.background_visible,
+                Goal::SeamOffImage => f.seam_clipped,
+                Goal::PlateOffAcross => f.plate_runs_off_across,
+                Goal::Free => true,
+            }
+    }
+}
+
+/// For lap joints: which plate the camera looks from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum LapSide {
+    Upper,
+    Lower,
+}
+
+/// The fixed part of one suite scene; the rest is drawn.
+#[derive(Debug, Clone, Copy)]
+struct ScenePlan {
+    joint: JointType,
+    index: usize,
+    distance_mm: f64,
+    tilt_deg: f64,
+    goal: Goal,
+    lap_side: Option<LapSide>,
+    narrow_gap: bool,
+    staggered: bool,
+}
+
+impl ScenePlan {
+    fn new(joint: JointType, joint_index: usize, k: usize) -> ScenePlan {
+        let steps = (SCENES_PER_JOINT - 1) as f64;
+        let goal = Goal::for_index(k);
+        // The plates can only fill the view from close by, so those scenes
+        // take the nearest distances; the others are permuted over the rest.
+        let fill_count = 4;
+        let distance_step = if goal == Goal::FillView {
+            k
+        } else {
+            let rest = SCENES_PER_JOINT - fill_count;
+            fill_count + ((k - fill_count) * 7 + joint_index * 3) % rest
+        };
+        let tilt_step = (k * 5 + joint_index * 7) % SCENES_PER_JOINT;
+        ScenePlan {
+            joint,
+            index: k,
+            distance_mm: MIN_DISTANCE_MM + (MAX_DISTANCE_MM - MIN_DISTANCE_MM) * distance_step as f64 / steps,
+            tilt_deg: MAX_TILT_DEG * tilt_step as f64 / steps,
+            goal,
+            lap_side: (joint == JointType::Lap).then_some(if k.is_multiple_of(2) {
+                LapSide::Upper
+            } else {
+                LapSide::Lower
+            }),
+            narrow_gap: joint == JointType::IButt && k.is_multiple_of(3),
+            staggered: k % 3 == 1,
+        }
+    }
+
+    fn name(&self) -> String {
+        let joint = match self.joint {
+            JointType::VButt => "v-butt",
+            JointType::IButt => "i-butt",
+            JointType::Lap => "lap",
+        };
+        let side = match self.lap_side {
+            Some(LapSide::Upper) => "-upper-side",
+            Some(LapSide::Lower) => "-lower-side",
+            None => "",
+        };
+        format!("{joint}-{:02}-d{:.0}-t{:.0}{}{side}", self.index, self.distance_mm, self.tilt_deg, self.goal.tag())
+    }
+
+    fn draw_joint(&self, rng: &mut ChaCha8Rng) -> JointGeometry {
+        match self.joint {
+            JointType::VButt => {
+                let t = uniform(rng, 6.0, 12.0);
+                JointGeometry::VButt {
+                    thickness_mm: t,
+                    groove_angle_deg: uniform(rng, 40.0, 70.0),
+                    groove_depth_mm: uniform(rng, 3.0, t - 1.0),
+                    root_gap_mm: uniform(rng, 0.0, 2.0),
+                }
+            }
+            JointType::IButt => JointGeometry::IButt {
+                thickness_mm: uniform(rng, 3.0, 12.0),
+                gap_mm: if self.narrow_gap { uniform(rng, 0.5, 0.8) } else { uniform(rng, 0.8, 3.0) },
+            },
+            JointType::Lap => JointGeometry::Lap {
+                lower_thickness_mm: uniform(rng, 3.0, 10.0),
+                upper_thickness_mm: uniform(rng, 3.0, 10.0),
+                overlap_mm: uniform(rng, 20.0, 60.0),
+            },
+        }
+    }
+
+    fn draw_plates(&self, rng: &mut ChaCha8Rng) -> [PlateExtent; 2] {
+        let width_range = match self.goal {
+            Goal::FillView => (200.0, 250.0),
+            Goal::PlateOffAcross => (150.0, 250.0),
+            _ => (60.0, 250.0),
+        };
+        let length_range = match self.goal {
+            Goal::FillView | Goal::SeamOffImage => (300.0, 400.0),
+            _ => (120.0, 400.0),
+        };
+        let a = PlateExtent {
+            width_mm: uniform(rng, width_range.0, width_range.1),
+            length_mm: uniform(rng, length_range.0, length_range.1),
+            offset_mm: 0.0,
+        };
+        let b = if self.staggered {
+            let shift = uniform(rng, 10.0, 60.0) * if rng.next_u32().is_multiple_of(2) { 1.0 } else { -1.0 };
+            PlateExtent {
+                width_mm: uniform(rng, width_range.0, width_range.1),
+                length_mm: uniform(rng, length_range.0, length_range.1),
+                offset_mm: shift,
+            }
+        } else {
+            PlateExtent { width_mm: uniform(rng, width_range.0, width_range.1), ..a }
+        };
+        [a, b]
+    }
+
+    fn draw_placement(&self, seam_length: f64, rng: &mut ChaCha8Rng) -> CameraPlacement {
+        let (azimuth, across) = match self.lap_side {
+            Some(LapSide::Upper) => (uniform(rng, 120.0, 240.0), uniform(rng, -60.0, -5.0)),
+            Some(LapSide::Lower) => (uniform(rng, -60.0, 60.0), uniform(rng, 5.0, 60.0)),
+            None if self.goal == Goal::FillView => (uniform(rng, 0.0, 360.0), uniform(rng, -20.0, 20.0)),
+            None => (uniform(rng, 0.0, 360.0), uniform(rng, -60.0, 60.0)),
+        };
+        let along_reach = if self.goal == Goal::SeamOffImage { 0.45 } else { 0.25 };
+        CameraPlacement {
+            distance_mm: self.distance_mm,
+            tilt_deg: self.tilt_deg,
+            tilt_azimuth_deg: azimuth,
+            roll_deg: uniform(rng, 0.0, 360.0),
+            target_offset_mm: [across, uniform(rng, -along_reach, along_reach) * seam_length],
+        }
+    }
+
+    fn draw(&self, seed: u64, rng: &mut ChaCha8Rng) -> SceneSpec {
+        let joint = self.draw_joint(rng);
+        let [plate_a, plate_b] = self.draw_plates(rng);
+        let spacer_height_mm = uniform(rng, 20.0, 60.0);
+        let mut spec = SceneSpec {
+            joint,
+            plate_a,
+            plate_b,
+            spacer_height_mm,
+            placement: CameraPlacement {
+                distance_mm: self.distance_mm,
+                tilt_deg: self.tilt_deg,
+                tilt_azimuth_deg: 0.0,
+                roll_deg: 0.0,
+                target_offset_mm: [0.0, 0.0],
+            },
+            noise: NoiseSpec::default(),
+            base_from_workpiece: default_base_from_workpiece(),
+            hand_eye: paper_hand_eye(),
+            euler: EulerConvention::Zyx,
+            seed,
+        };
+        let [y0, y1] = spec.seam_range();
+        spec.placement = self.draw_placement(y1 - y0, rng);
+        spec
+    }
+}
+
+fn uniform(rng: &mut ChaCha8Rng, lo: f64, hi: f64) -> f64 {
+    let unit = (rng.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64);
+    lo + (hi - lo) * unit
+}
+
+/// The evaluation scenes, named like `lap-07-d612-t18-lower-side`: joint,
+/// index, distance, tilt, the framing asked for and, for laps, the side
+/// the camera looks from. The same list on every call.
+pub fn eval_suite() -> Vec<(String, SceneSpec)> {
+    let camera = CameraModel::default();
+    let mut suite = Vec::with_capacity(3 * SCENES_PER_JOINT);
+    for (j, joint) in JointType::ALL.into_iter().enumerate() {
+        for k in 0..SCENES_PER_JOINT {
+            let plan = ScenePlan::new(joint, j, k);
+            let stream = (j * SCENES_PER_JOINT + k) as u64;
+            let mut rng = ChaCha8Rng::seed_from_u64(SUITE_SEED);
+            rng.set_stream(stream);
+            let seed = SUITE_SEED + stream;
+            let mut spec = plan.draw(seed, &mut rng);
+            for _ in 1..MAX_DRAWS {
+                let probe_background = plan.goal == Goal::FillView;
+                let framed = framing_with(&spec, &camera, probe_background);
+                if spec.validate().is_ok() && plan.goal.met_by(&framed) {
+                    break;
+                }
+                spec = plan.draw(seed, &mut rng);
+            }
+            suite.push((plan.name(), spec));
+        }
+    }
+    suite
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_suite_is_stratified_fair_and_fixed() {
+        let suite = eval_suite();
+        assert_eq!(suite.len(), 3 * SCENES_PER_JOINT);
+        assert_eq!(suite, eval_suite(), "the suite is the same on every call");
+        let names: std::collections::HashSet<_> = suite.iter().map(|(n, _)| n).collect();
+        assert_eq!(names.len(), suite.len(), "scene names are unique");
+        let cam = CameraModel::default();
+        let mut fill = 0;
+        let mut clipped = 0;
+        let mut off_across = 0;
+        let mut staggered = 0;
+        for joint in JointType::ALL {
+            let scenes: Vec<_> = suite.iter().filter(|(_, s)| s.joint.joint_type() == joint).collect();
+            assert_eq!(scenes.len(), SCENES_PER_JOINT);
+            let distances: Vec<f64> = scenes.iter().map(|(_, s)| s.placement.distance_mm).collect();
+            let tilts: Vec<f64> = scenes.iter().map(|(_, s)| s.placement.tilt_deg).collect();
+            for ends in [[500.0, 1000.0], [0.0, 30.0]] {
+                let values = if ends[0] == 500.0 { &distances } else { &tilts };
+                assert!(values.contains(&ends[0]) && values.contains(&ends[1]));
+                assert!(values.iter().all(|v| (ends[0]..=ends[1]).contains(v)));
+                // Stratified: every twenty-first of the range once.
+                let mut steps: Vec<i64> =
+                    values.iter().map(|v| ((v - ends[0]) / (ends[1] - ends[0]) * 21.0).round() as i64).collect();
+                steps.sort();
+                assert_eq!(steps, (0..22).collect::<Vec<_>>());
+            }
+        }
+        let mut narrow_gaps = 0;
+        let (mut upper, mut lower) = (0, 0);
+        for (name, spec) in &suite {
+            assert_eq!(spec.validate(), Ok(()), "{name}");
+            let f = framing(spec, &cam);
+            assert!(f.observed_seam_mm >= MIN_OBSERVED_SEAM_MM, "{name}: {f:?}");
+            assert!(f.plate_in_view_mm.iter().all(|w| *w >= MIN_PLATE_IN_VIEW_MM), "{name}: {f:?}");
+            fill += usize::from(!f.background_visible);
+            clipped += usize::from(f.seam_clipped);
+            off_across += usize::from(f.plate_runs_off_across);
+            staggered += usize::from(spec.plate_a.offset_mm != spec.plate_b.offset_mm);
+            assert!((20.0..=60.0).contains(&spec.spacer_height_mm));
+            for p in [&spec.plate_a, &spec.plate_b] {
+                assert!((60.0..=250.0).contains(&p.width_mm), "{name}");
+                assert!((120.0..=400.0).contains(&p.length_mm), "{name}");
+            }
+            match spec.joint {
+                JointGeometry::IButt { gap_mm, .. } => {
+                    assert!((0.5..=3.0).contains(&gap_mm));
+                    narrow_gaps += usize::from(gap_mm <= 0.8);
+                }
+                JointGeometry::VButt { thickness_mm: t, groove_angle_deg: a, groove_depth_mm: d, root_gap_mm: r } => {
+                    assert!((6.0..=12.0).contains(&t) && (40.0..=70.0).contains(&a));
+                    assert!((3.0..=t - 1.0).contains(&d) && (0.0..=2.0).contains(&r));
+                }
+                JointGeometry::Lap { lower_thickness_mm: t1, upper_thickness_mm: t2, overlap_mm: o } => {
+                    assert!((3.0..=10.0).contains(&t1) && (3.0..=10.0).contains(&t2));
+                    assert!((20.0..=60.0).contains(&o));
+                    let on_upper_side = spec.placement.target_offset_mm[0] < 0.0;
+                    assert_eq!(on_upper_side, name.ends_with("-upper-side"), "{name}");
+                    if on_upper_side {
+                        upper += 1;
+                    } else {
+                        lower += 1;
+                    }
+                }
+            }
+        }
+        assert!(narrow_gaps >= 6, "{narrow_gaps} narrow gaps");
+        assert_eq!((upper, lower), (11, 11));
+        assert!(fill >= 4, "{fill} scenes fill the view");
+        assert!(clipped >= 6 && off_across >= 6, "{clipped} clipped, {off_across} wide");
+        assert!(staggered >= 10, "{staggered} staggered");
+    }
+}

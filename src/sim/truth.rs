@@ -1,0 +1,205 @@
+//! The exact seam a simulated frame shows, for scoring the planner.
+//!
+//! The seam physically runs where both plates exist along it. A planner can
+//! only be asked for the part the camera sees, so the truth is clipped to
+//! the seam parameters at which both seam-side top edges (for a lap, the
+//! upper plate's edge and the root line) project inside the image. Each
+//! image border is a linear inequality along a 3D line, so the clipping is
+//! exact, not sampled.
+
+use super::SceneSpec;
+use crate::camera::CameraModel;
+use crate::geometry::Vec3;
+use crate::joint::JointType;
+
+/// The seam a frame shows, in the camera and robot base frames.
+#[derive(Debug, Clone, PartialEq)]
+pub struct GroundTruth {
+    pub joint: JointType,
+    pub groove_depth_mm: Option<f64>,
+    /// The observed seam's ends: `start` at the smaller workpiece y.
+    pub start_camera: Vec3,
+    pub end_camera: Vec3,
+    pub start_base: Vec3,
+    pub end_base: Vec3,
+    /// Unit normal of the top surface, pointing into the workpiece (away
+    /// from the camera).
+    pub plate_normal_camera: Vec3,
+    pub plate_normal_base: Vec3,
+    /// The seam continues beyond the image at its start.
+    pub clipped_start: bool,
+    /// The seam continues beyond the image at its end.
+    pub clipped_end: bool,
+    pub length_mm: f64,
+}
+
+/// Margin from the sensor's outer pixel centres within which a point
+/// counts as in the image: half a pixel inside the outermost centres.
+const IMAGE_MARGIN_PX: f64 = 0.5;
+/// Points closer to the camera plane than this count as not imaged.
+const MIN_DEPTH_MM: f64 = 1.0;
+
+/// The pixel rectangle `[u_min, u_max, v_min, v_max]` a point must project
+/// into to count as seen.
+pub fn image_rect(camera: &CameraModel) -> [f64; 4] {
+    [
+        IMAGE_MARGIN_PX,
+        camera.width_px as f64 - 1.0 - IMAGE_MARGIN_PX,
+        IMAGE_MARGIN_PX,
+        camera.height_px as f64 - 1.0 - IMAGE_MARGIN_PX,
+    ]
+}
+
+/// True when a camera-frame point projects inside [`image_rect`].
+pub fn in_image(camera: &CameraModel, p: &Vec3) -> bool {
+    visible_interval(camera, p, &Vec3::zeros()).is_some()
+}
+
+/// The parameters `s` for which `origin + s along` (camera frame) is in
+/// front of the camera and projects inside [`image_rect`]; `None` if none.
+/// Bounds may be infinite.
+pub fn visible_interval(camera: &CameraModel, origin: &Vec3, along: &Vec3) -> Option<[f64; 2]> {
+    let [u0, u1, v0, v1] = image_rect(camera);
+    let (fx, fy, cx, cy) = (camera.fx(), camera.fy(), camera.cx(), camera.cy());
+    // u >= u0  <=>  fx X + (cx - u0) Z >= 0 for Z > 0; likewise the others.
+    let borders = [
+        Vec3::new(fx, 0.0, cx - u0),
+        Vec3::new(-fx, 0.0, u1 - cx),
+        Vec3::new(0.0, fy, cy - v0),
+        Vec3::new(0.0, -fy, v1 - cy),
+    ];
+    let in_front = (origin.z - MIN_DEPTH_MM, along.z);
+    let mut range = [f64::NEG_INFINITY, f64::INFINITY];
+    let constraints = borders.iter().map(|w| (w.dot(origin), w.dot(along))).chain(std::iter::once(in_front));
+    for (a, b) in constraints {
+        // a + b s >= 0
+        if b > 0.0 {
+            range[0] = range[0].max(-a / b);
+        } else if b < 0.0 {
+            range[1] = range[1].min(-a / b);
+        } else if a < 0.0 {
+            return None;
+        }
+    }
+    (range[0] <= range[1]).then_some(range)
+}
+
+/// The y range of the seam (workpiece frame) whose edges are all in view,
+/// or `None` when the camera sees no part of it.
+pub fn observed_seam_range(spec: &SceneSpec, camera: &CameraModel) -> Option<[f64; 2]> {
+    let camera_from_workpiece = spec.workpiece_from_camera().inverse();
+    let along = camera_from_workpiece.rotation * Vec3::y();
+    let mut range = spec.seam_range();
+    for [x, z] in spec.joint.seam_edges_xz() {
+        let origin = camera_from_workpiece.transform_point(&Vec3::new(x, 0.0, z).into()).coords;
+        let [lo, hi] = visible_interval(camera, &origin, &along)?;
+        range = [range[0].max(lo), range[1].min(hi)];
+    }
+    (range[0] <= range[1]).then_some(range)
+}
+
+/// The ground truth of `spec` as `camera` sees it.
+pub fn ground_truth(spec: &SceneSpec, camera: &CameraModel) -> GroundTruth {
+    let workpiece_from_camera = spec.workpiece_from_camera();
+    let camera_from_workpiece = workpiece_from_camera.inverse();
+    let base_from_workpiece = spec.base_from_workpiece;
+    let physical = spec.seam_range();
+    let observed = observed_seam_range(spec, camera);
+    let [y0, y1] = observed.unwrap_or_else(|| {
+        let middle = (physical[0] + physical[1]) / 2.0;
+        [middle, middle]
+    });
+    let seam_z = spec.joint.seam_z();
+    let start = Vec3::new(0.0, y0, seam_z);
+    let end = Vec3::new(0.0, y1, seam_z);
+    let in_camera = |p: &Vec3| camera_from_workpiece.transform_point(&(*p).into()).coords;
+    let in_base = |p: &Vec3| base_from_workpiece.transform_point(&(*p).into()).coords;
+    let into_workpiece = -Vec3::z();
+    GroundTruth {
+        joint: spec.joint.joint_type(),
+        groove_depth_mm: spec.joint.groove_depth_mm(),
+        start_camera: in_camera(&start),
+        end_camera: in_camera(&end),
+        start_base: in_base(&start),
+        end_base: in_base(&end),
+        plate_normal_camera: camera_from_workpiece.rotation * into_workpiece,
+        plate_normal_base: base_from_workpiece.rotation * into_workpiece,
+        clipped_start: observed.is_none() || y0 > physical[0],
+        clipped_end: observed.is_none() || y1 < physical[1],
+        length_mm: y1 - y0,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sim::{CameraPlacement, NoiseSpec, PlateExtent, demo_scene};
+
+    fn frontal_i_butt() -> SceneSpec {
+        let mut spec = demo_scene(JointType::IButt);
+        spec.plate_a = PlateExtent { width_mm: 120.0, length_mm: 200.0, offset_mm: 0.0 };
+        spec.plate_b = PlateExtent { width_mm: 100.0, length_mm: 220.0, offset_mm: 30.0 };
+        spec.placement = CameraPlacement {
+            distance_mm: 800.0,
+            tilt_deg: 0.0,
+            tilt_azimuth_deg: 0.0,
+            roll_deg: 0.0,
+            target_offset_mm: [0.0, 0.0],
+        };
+        spec.noise = NoiseSpec::none();
+        spec
+    }
+
+    #[test]
+    fn a_fully_visible_seam_is_where_both_plates_exist() {
+        let spec = frontal_i_butt();
+        let truth = ground_truth(&spec, &CameraModel::default());
+        assert!(!truth.clipped_start && !truth.clipped_end);
+        assert!((truth.length_mm - 170.0).abs() < 1e-9);
+        let t = 6.0;
+        let b = spec.base_from_workpiece;
+        let start = b.transform_point(&Vec3::new(0.0, 30.0, t).into()).coords;
+        let end = b.transform_point(&Vec3::new(0.0, 200.0, t).into()).coords;
+        assert!((truth.start_base - start).norm() < 1e-9);
+        assert!((truth.end_base - end).norm() < 1e-9);
+        // Frontal: the seam is straight ahead at 800 mm, normal along +z.
+        let mid = (truth.start_camera + truth.end_camera) / 2.0;
+        assert!((mid - Vec3::new(0.0, 0.0, 800.0)).norm() < 1e-9);
+        assert!((truth.plate_normal_camera - Vec3::z()).norm() < 1e-12);
+        assert!((truth.plate_normal_base - b.rotation * -Vec3::z()).norm() < 1e-12);
+    }
+
+    #[test]
+    fn a_seam_longer_than_the_view_is_clipped_at_the_image_border() {
+        let mut spec = frontal_i_butt();
+        spec.plate_a.length_mm = 400.0;
+        spec.plate_b = PlateExtent { length_mm: 400.0, offset_mm: 0.0, ..spec.plate_b };
+        spec.placement.distance_mm = 500.0;
+        let cam = CameraModel::default();
+        let truth = ground_truth(&spec, &cam);
+        assert!(truth.clipped_start && truth.clipped_end);
+        // The seam runs along the image's v axis: its ends sit on the
+        // clipping rows, and it is the view's height long, 220 mm at
+        // 500 mm less the margins.
+        let [_, _, v0, v1] = image_rect(&cam);
+        let v_of = |p: &Vec3| cam.project([p.x, p.y, p.z]).unwrap().1;
+        let (va, vb) = (v_of(&truth.start_camera), v_of(&truth.end_camera));
+        assert!(((va - v1).abs() < 1e-6 && (vb - v0).abs() < 1e-6), "{va} {vb}");
+        let expected = (v1 - v0) / cam.fy() * (500.0 - 6.0 + 6.0);
+        assert!((truth.length_mm - expected).abs() < 1e-6, "{}", truth.length_mm);
+    }
+
+    #[test]
+    fn the_interval_matches_point_tests() {
+        let cam = CameraModel::default();
+        let origin = Vec3::new(-100.0, 20.0, 600.0);
+        let along = Vec3::new(0.6, 0.3, 0.2).normalize();
+        let [lo, hi] = visible_interval(&cam, &origin, &along).unwrap();
+        for s in [lo + 1e-6, (lo + hi) / 2.0, hi - 1e-6] {
+            assert!(in_image(&cam, &(origin + along * s)));
+        }
+        for s in [lo - 1e-3, hi + 1e-3] {
+            assert!(!in_image(&cam, &(origin + along * s)));
+        }
+    }
+}

@@ -1,0 +1,5 @@
+//! The integration-test binary: every suite is a module here so the crate
+//! is linked once for all of them.
+
+mod parsers;
+mod util;

@@ -15,4 +15,5 @@ pub mod geometry;
 pub mod joint;
 pub mod pipeline;
 pub mod report;
+pub mod server;
 pub mod sim;

@@ -6,7 +6,7 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use tokio::sync::Mutex;
-use tracing::{info, warn};
+use tracing::{Instrument, info, warn};
 use weldseam_proto::message::{HelloAck, Role, Trigger};
 use weldseam_proto::{ErrorCode, Message, PROTOCOL_VERSION};
 
@@ -67,18 +67,21 @@ pub async fn serve(mut conn: Connection, state: Arc<ServerState>, mut shutdown: 
     // Triggers go out from their own task so a frame being received is
     // never interrupted.
     let trigger_writer = Arc::clone(&writer);
-    let forwarder = tokio::spawn(async move {
-        while let Some(trigger_id) = triggers.recv().await {
-            let sent = trigger_writer.lock().await.send(&Message::Trigger(Trigger { trigger_id })).await;
-            match sent {
-                Ok(()) => info!(trigger_id, "trigger sent"),
-                Err(e) => {
-                    warn!(trigger_id, "cannot send a trigger: {e}");
-                    break;
+    let forwarder = tokio::spawn(
+        async move {
+            while let Some(trigger_id) = triggers.recv().await {
+                let sent = trigger_writer.lock().await.send(&Message::Trigger(Trigger { trigger_id })).await;
+                match sent {
+                    Ok(()) => info!(trigger_id, "trigger sent"),
+                    Err(e) => {
+                        warn!(trigger_id, "cannot send a trigger: {e}");
+                        break;
+                    }
                 }
             }
         }
-    });
+        .in_current_span(),
+    );
 
     loop {
         let read = tokio::select! {
@@ -146,7 +149,7 @@ fn on_message(received: Received, state: &ServerState) -> Option<Message> {
         height = meta.height,
         valid_points = valid,
         bytes,
-        receive_ms = received.elapsed.as_secs_f64() * 1e3,
+        receive_ms = received.elapsed.as_millis() as u64,
         "frame received"
     );
     state.count_frame();

@@ -100,9 +100,10 @@ impl<R: AsyncRead + Unpin> MessageReader<R> {
         MessageReader { stream, stall, max_frame_bytes, buffer: Vec::new() }
     }
 
-    /// Reads until `buf` is full; each read must progress within the stall
-    /// timeout.
+    /// Reads into `range` of the buffer (grown to fit) until it is full;
+    /// each read must progress within the stall timeout.
     async fn fill(&mut self, range: std::ops::Range<usize>) -> Result<(), ReadError> {
+        self.grow(range.end);
         let mut at = range.start;
         while at < range.end {
             let read = self.stream.read(&mut self.buffer[at..range.end]);

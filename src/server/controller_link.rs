@@ -92,6 +92,7 @@ pub async fn serve(mut conn: Connection, state: Arc<ServerState>, mut shutdown: 
             break;
         }
     }
+    while plans.try_join_next().is_some() {}
     if !plans.is_empty() {
         info!(plans = plans.len(), "waiting for plans in flight");
     }
@@ -171,7 +172,7 @@ async fn plan(
                     frame_id = frame.frame_id,
                     seams = result.seams.len(),
                     waypoints = result.seams.iter().map(|s| s.waypoints.len()).sum::<usize>(),
-                    latency_ms = arrived.elapsed().as_secs_f64() * 1e3,
+                    latency_ms = arrived.elapsed().as_millis() as u64,
                     "plan answered"
                 );
                 Message::PlanReply(PlanReply { request_id, frame_id: frame.frame_id, result })

@@ -1,5 +1,6 @@
 //! The integration-test binary: every suite is a module here so the crate
 //! is linked once for all of them.
 
+mod daemon;
 mod parsers;
 mod util;

@@ -105,6 +105,25 @@ impl Walker<'_> {
     }
 }
 
+/// The boundary samples of one edge.
+#[derive(Debug, Clone, Default)]
+pub struct Boundary {
+    pub samples: Vec<BoundarySample>,
+    /// Distance along the edge between neighbouring scan lines, mm. The
+    /// plate ends on average half of it beyond the outermost samples.
+    pub line_spacing_mm: f64,
+}
+
+impl Boundary {
+    /// The range of `along` the samples cover, widened by half a scan line
+    /// at each end. Samples that the fit later trims (a walk cut short by
+    /// a mixed pixel) still prove the plate is there, so all count.
+    pub fn extent(&self, along: impl Fn(&BoundarySample) -> f64) -> Option<(f64, f64)> {
+        let (lo, hi) = self.samples.iter().map(along).fold((f64::MAX, f64::MIN), |(l, h), v| (l.min(v), h.max(v)));
+        (lo <= hi).then(|| (lo - self.line_spacing_mm / 2.0, hi + self.line_spacing_mm / 2.0))
+    }
+}
+
 /// Samples the boundary of the plate whose member pixels are `members`
 /// beside `edge`. Organized clouds only.
 pub fn sample_boundary(
@@ -113,7 +132,7 @@ pub fn sample_boundary(
     plane: &Plane,
     edge: &CoarseEdge,
     params: &BoundaryParams,
-) -> Vec<BoundarySample> {
+) -> Boundary {
     let points = cloud.points();
     let w = cloud.width();
     let near: Vec<usize> = members
@@ -122,7 +141,7 @@ pub fn sample_boundary(
         .filter(|&i| (vec3(&points[i]) - edge.point).dot(&edge.outward).abs() <= params.band_mm)
         .collect();
     if near.is_empty() {
-        return Vec::new();
+        return Boundary::default();
     }
     // Walk along the image axis that crosses the edge most directly.
     let mean_axis_step = |dc: usize, dr: usize| -> f64 {
@@ -144,7 +163,7 @@ pub fn sample_boundary(
     let along_cols = col_step.abs() >= row_step.abs();
     let axis_step = if along_cols { col_step } else { row_step };
     if axis_step == 0.0 {
-        return Vec::new();
+        return Boundary::default();
     }
     let walker = Walker { cloud, plane, edge, params, along_cols, sense: if axis_step > 0.0 { 1 } else { -1 } };
     let mean_step = axis_step.abs();
@@ -168,7 +187,24 @@ pub fn sample_boundary(
         }
     }
     extend_past_ends(&walker, &mut found, mean_step);
-    found.into_iter().map(|(_, _, s)| s).collect()
+    found.sort_by_key(|(line, _, _)| *line);
+    let line_spacing_mm = median_line_spacing(&found);
+    Boundary { samples: found.into_iter().map(|(_, _, s)| s).collect(), line_spacing_mm }
+}
+
+/// The median distance along the edge from one scan line's sample to the
+/// next line's, per line. `found` is sorted by line.
+fn median_line_spacing(found: &[(usize, isize, BoundarySample)]) -> f64 {
+    let mut steps: Vec<f64> = found
+        .windows(2)
+        .filter(|w| w[1].0 > w[0].0)
+        .map(|w| (w[1].2.along - w[0].2.along).abs() / (w[1].0 - w[0].0) as f64)
+        .collect();
+    if steps.is_empty() {
+        return 0.0;
+    }
+    let mid = steps.len() / 2;
+    *steps.select_nth_unstable_by(mid, f64::total_cmp).1
 }
 
 /// Continues sampling on the scan lines beyond the first and last sampled
@@ -195,8 +231,9 @@ fn extend_past_ends(walker: &Walker, found: &mut Vec<(usize, isize, BoundarySamp
     let (intercept, slope) = fit(found);
     let lines = if walker.along_cols { walker.cloud.height() } else { walker.cloud.width() };
     const MAX_EXTENSION_LINES: usize = 40;
-    for direction in [-1isize, 1] {
-        let mut line = if direction < 0 { found[0].0 as isize } else { found[found.len() - 1].0 as isize };
+    // Both ends are fixed before extending: extension appends to `found`.
+    let ends = [(-1isize, found[0].0 as isize), (1, found[found.len() - 1].0 as isize)];
+    for (direction, mut line) in ends {
         for _ in 0..MAX_EXTENSION_LINES {
             line += direction;
             if line < 0 || line as usize >= lines {
@@ -253,7 +290,7 @@ mod tests {
         let outward = Vec3::new(1.0, -SLOPE, 0.0).normalize();
         let edge = CoarseEdge { point: Vec3::new(edge_x - 1.2, 0.0, 700.0), direction, outward };
         let params = BoundaryParams { band_mm: 3.0, on_plane_mm: 0.4 };
-        let samples = sample_boundary(&cloud, &members, &plane, &edge, &params);
+        let samples = sample_boundary(&cloud, &members, &plane, &edge, &params).samples;
         assert_eq!(samples.len(), 80);
         let pixel = 700.0 / CameraModel::default().fx();
         // Signed distance of each sample from the true edge line, across it.
@@ -273,9 +310,12 @@ mod tests {
         let outward = Vec3::new(1.0, -SLOPE, 0.0).normalize();
         let edge = CoarseEdge { point: Vec3::new(2.0, 0.0, 700.0), direction, outward };
         let params = BoundaryParams { band_mm: 3.0, on_plane_mm: 0.4 };
-        let samples = sample_boundary(&cloud, &members, &plane, &edge, &params);
-        let last = samples.iter().map(|s| s.position.y).fold(f64::MIN, f64::max);
+        let boundary = sample_boundary(&cloud, &members, &plane, &edge, &params);
+        let last = boundary.samples.iter().map(|s| s.position.y).fold(f64::MIN, f64::max);
         let pixel = 700.0 / CameraModel::default().fy();
         assert!(last > end_y - 1.01 * pixel && last < end_y, "last sample at y = {last}, plate ends at {end_y}");
+        // Half a scan line beyond the last sample is the unbiased end.
+        let (_, end) = boundary.extent(|s| s.position.y).unwrap();
+        assert!((end - end_y).abs() < 0.55 * pixel, "extent ends at {end}, plate at {end_y}");
     }
 }

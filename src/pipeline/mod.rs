@@ -41,7 +41,7 @@ use crate::geometry::{Vec3, vec3};
 use crate::joint::JointType;
 
 use background::{PlaneCluster, Workpiece};
-use boundary::{BoundaryParams, CoarseEdge};
+use boundary::{Boundary, BoundaryParams, BoundarySample, CoarseEdge};
 use clustering::UNCLUSTERED;
 use edge_points::{EdgeCriterion, FullCount};
 use neighbours::NeighbourSearch;
@@ -448,11 +448,20 @@ impl<'a> Run<'a> {
         .map_err(|e| PlanError::at(Stage::WeldEdges, e))?;
         self.clock.lap(Stage::WeldEdges);
 
-        let samples: [Vec<Vec3>; 2] = std::array::from_fn(|k| {
+        let boundaries: [Boundary; 2] = std::array::from_fn(|k| {
             let line = &lines[k][pick[k]];
             let plane = &plates[k].plane;
             if !self.cloud.is_organized() {
-                return line.inliers.iter().map(|&i| plane.project(&edge_points[k][i])).collect();
+                // Without a pixel grid the RANSAC inliers are the best samples.
+                let samples = line
+                    .inliers
+                    .iter()
+                    .map(|&i| {
+                        let position = plane.project(&edge_points[k][i]);
+                        BoundarySample { position, along: position.dot(&line.direction) }
+                    })
+                    .collect();
+                return Boundary { samples, line_spacing_mm: 0.0 };
             }
             let direction = (line.direction - plane.normal * line.direction.dot(&plane.normal)).normalize();
             let mut outward = plane.normal.cross(&direction);
@@ -462,10 +471,8 @@ impl<'a> Run<'a> {
             let edge = CoarseEdge { point: plane.project(&line.point), direction, outward };
             let params = BoundaryParams { band_mm: cfg.boundary_band_mm, on_plane_mm: cfg.on_plane_tolerance_mm };
             boundary::sample_boundary(self.cloud, &plates[k].members, plane, &edge, &params)
-                .into_iter()
-                .map(|s| s.position)
-                .collect()
         });
+        let samples: [Vec<Vec3>; 2] = boundaries.each_ref().map(|b| b.samples.iter().map(|s| s.position).collect());
         let union: Vec<Vec3> = samples.iter().flatten().copied().collect();
         let frame = Frame::principal(&union, &normal)
             .ok_or_else(|| PlanError::at(Stage::Refit, "the weld edge samples do not spread along a line"))?;
@@ -479,6 +486,17 @@ impl<'a> Run<'a> {
             })
         };
         let fits = [fit_edge(0)?, fit_edge(1)?];
+        for (k, f) in fits.iter().enumerate() {
+            tracing::debug!(
+                edge = k + 1,
+                samples = samples[k].len(),
+                dropped = f.points_dropped,
+                rms_mm = f.rms_mm,
+                from_mm = f.curve.s_min,
+                to_mm = f.curve.s_max,
+                "weld edge refitted"
+            );
+        }
         self.clock.lap(Stage::Refit);
 
         let (e1, e2) = (&fits[0].curve, &fits[1].curve);
@@ -492,7 +510,13 @@ impl<'a> Run<'a> {
         }
         .ok_or_else(|| PlanError::at(Stage::WeldEquation, "the weld edges were fitted in different frames"))?;
         // The seam runs where both plates exist along it.
-        let (s0, s1) = (e1.s_min.max(e2.s_min), e1.s_max.min(e2.s_max));
+        let extent = |k: usize| {
+            boundaries[k].extent(|s| frame.feature(&s.position)).ok_or_else(|| {
+                PlanError::at(Stage::WeldEquation, format!("weld edge {} has no boundary sample", k + 1))
+            })
+        };
+        let ((a0, a1), (b0, b1)) = (extent(0)?, extent(1)?);
+        let (s0, s1) = (a0.max(b0), a1.min(b1));
         if s1 - s0 <= 0.0 {
             return Err(PlanError::at(Stage::WeldEquation, "the two weld edges do not overlap along the seam"));
         }

@@ -52,6 +52,11 @@ impl Frame {
         Some(Frame { origin: centroid, e, a, b })
     }
 
+    /// The feature coordinate `s` of `p`.
+    pub fn feature(&self, p: &Vec3) -> f64 {
+        (p - self.origin).dot(&self.e)
+    }
+
     fn coordinates(&self, p: &Vec3) -> (f64, f64, f64) {
         let d = p - self.origin;
         (d.dot(&self.e), d.dot(&self.a), d.dot(&self.b))

@@ -238,6 +238,13 @@ async fn free_run_next_frame_ping_during_plan_and_shutdown_with_plan_in_flight()
         tokio::time::sleep(Duration::from_millis(5)).await;
     }
     assert!(seen_busy_queue, "no ping saw the plan in the queue");
+    // Keep the camera until the frame after the request has arrived.
+    for _ in 0..400 {
+        if pinger.ping(WAIT).await.unwrap().frames_received > before {
+            break;
+        }
+        tokio::time::sleep(Duration::from_millis(10)).await;
+    }
     let _ = stop_cam.send(());
     cam.await.unwrap();
     // Shutdown while the plan is in flight: it completes, then the server stops.

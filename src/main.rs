@@ -20,6 +20,8 @@ struct Cli {
 
 #[derive(Debug, Subcommand)]
 enum Command {
+    /// Simulate a scene of each joint type, plan it, print the waypoints and the error against the truth.
+    Demo(cli::demo::DemoArgs),
     /// Plan the welding trajectory of one point-cloud file.
     Plan(cli::plan::PlanArgs),
     /// Plan the seeded suite of simulated scenes and print the accuracy table.
@@ -37,7 +39,9 @@ enum Command {
 fn main() -> std::process::ExitCode {
     let cli = Cli::parse();
     let level = match cli.command {
-        Command::Plan(_) | Command::Eval(_) | Command::Simulate(_) | Command::Controller(_) => "warn",
+        Command::Demo(_) | Command::Plan(_) | Command::Eval(_) | Command::Simulate(_) | Command::Controller(_) => {
+            "warn"
+        }
         Command::Serve(_) | Command::Camera(_) => "info",
     };
     if let Err(e) = logging::init(cli.log_format, level) {
@@ -45,6 +49,7 @@ fn main() -> std::process::ExitCode {
         return std::process::ExitCode::FAILURE;
     }
     let result = match &cli.command {
+        Command::Demo(args) => cli::demo::run(args),
         Command::Plan(args) => cli::plan::run(args),
         Command::Eval(args) => cli::eval::run(args),
         Command::Simulate(args) => cli::simulate::run(args),

@@ -1,6 +1,8 @@
 //! The integration-test binary: every suite is a module here so the crate
 //! is linked once for all of them.
 
+mod cli;
 mod daemon;
 mod parsers;
+mod pipeline;
 mod util;

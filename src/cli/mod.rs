@@ -5,6 +5,7 @@
 pub mod args;
 pub mod camera;
 pub mod controller;
+pub mod demo;
 pub mod eval;
 pub mod logging;
 pub mod plan;

@@ -76,7 +76,7 @@ impl Walker<'_> {
     /// Walks outward from position `k` on `scanline` and returns the
     /// boundary sample, or `None` when the walk leaves the image or the
     /// band before the plate ends (no boundary there).
-    fn walk(&self, scanline: usize, mut k: isize, mean_step: f64) -> Option<BoundarySample> {
+    fn walk(&self, scanline: usize, mut k: isize, mean_step: f64) -> Option<(isize, BoundarySample)> {
         let mut last = self.on_plate(self.index(scanline, k)?)?;
         let mut previous: Option<Vec3> = self.index(scanline, k - self.sense).and_then(|i| self.on_plate(i));
         loop {
@@ -101,7 +101,7 @@ impl Walker<'_> {
         let step =
             previous.map(|p| self.outward_of(&last) - self.outward_of(&p)).filter(|s| *s > 0.0).unwrap_or(mean_step);
         let position = self.plane.project(&last) + self.edge.outward * (step / 2.0);
-        Some(BoundarySample { position, along: (position - self.edge.point).dot(&self.edge.direction) })
+        Some((k, BoundarySample { position, along: (position - self.edge.point).dot(&self.edge.direction) }))
     }
 }
 
@@ -182,8 +182,8 @@ pub fn sample_boundary(
     }
     let mut found: Vec<(usize, isize, BoundarySample)> = Vec::new();
     for (&line, &k) in &start {
-        if let Some(s) = walker.walk(line, k, mean_step) {
-            found.push((line, k, s));
+        if let Some((end, s)) = walker.walk(line, k, mean_step) {
+            found.push((line, end, s));
         }
     }
     extend_past_ends(&walker, &mut found, mean_step);
@@ -208,42 +208,34 @@ fn median_line_spacing(found: &[(usize, isize, BoundarySample)]) -> f64 {
 }
 
 /// Continues sampling on the scan lines beyond the first and last sampled
-/// ones, starting a few pixels inside the predicted boundary, for as long
-/// as the plate is there. The plane criterion trims about R off a plate's
-/// corners, so without this the seam would stop short of the plate ends.
+/// ones, each walk starting a few pixels inside the previous line's
+/// boundary pixel, for as long as the plate is there. The plane criterion
+/// trims about R off a plate's corners, so without this the seam would
+/// stop short of the plate ends. `found` holds (line, boundary pixel,
+/// sample).
 fn extend_past_ends(walker: &Walker, found: &mut Vec<(usize, isize, BoundarySample)>, mean_step: f64) {
-    if found.len() < 4 {
+    if found.is_empty() {
         return;
     }
     found.sort_by_key(|(line, _, _)| *line);
-    // Boundary position on the scan line as a linear function of the line.
-    let fit = |pts: &[(usize, isize, BoundarySample)]| -> (f64, f64) {
-        let n = pts.len() as f64;
-        let (sx, sy) = pts.iter().fold((0.0, 0.0), |(a, b), (l, k, _)| (a + *l as f64, b + *k as f64));
-        let (mx, my) = (sx / n, sy / n);
-        let (sxx, sxy) = pts.iter().fold((0.0, 0.0), |(a, b), (l, k, _)| {
-            let dx = *l as f64 - mx;
-            (a + dx * dx, b + dx * (*k as f64 - my))
-        });
-        let slope = if sxx > 0.0 { sxy / sxx } else { 0.0 };
-        (my - slope * mx, slope)
-    };
-    let (intercept, slope) = fit(found);
     let lines = if walker.along_cols { walker.cloud.height() } else { walker.cloud.width() };
-    const MAX_EXTENSION_LINES: usize = 40;
     // Both ends are fixed before extending: extension appends to `found`.
-    let ends = [(-1isize, found[0].0 as isize), (1, found[found.len() - 1].0 as isize)];
-    for (direction, mut line) in ends {
+    let ends =
+        [(-1isize, found[0].0 as isize, found[0].1), (1, found[found.len() - 1].0 as isize, found[found.len() - 1].1)];
+    const MAX_EXTENSION_LINES: usize = 40;
+    for (direction, mut line, mut boundary) in ends {
         for _ in 0..MAX_EXTENSION_LINES {
             line += direction;
             if line < 0 || line as usize >= lines {
                 break;
             }
-            let predicted = (intercept + slope * line as f64).round() as isize;
-            let sample =
-                (2..6).find_map(|inset| walker.walk(line as usize, predicted - inset * walker.sense, mean_step));
-            match sample {
-                Some(s) => found.push((line as usize, predicted, s)),
+            let walked =
+                (1..8).find_map(|inset| walker.walk(line as usize, boundary - inset * walker.sense, mean_step));
+            match walked {
+                Some((end, s)) => {
+                    found.push((line as usize, end, s));
+                    boundary = end;
+                }
                 None => break,
             }
         }

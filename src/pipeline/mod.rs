@@ -516,12 +516,42 @@ impl<'a> Run<'a> {
             })
         };
         let ((a0, a1), (b0, b1)) = (extent(0)?, extent(1)?);
-        let (s0, s1) = (a0.max(b0), a1.min(b1));
+        let (mut s0, mut s1) = (a0.max(b0), a1.min(b1));
+        if self.request.joint == JointType::Lap {
+            // The root lies a plate thickness below the edges the samples
+            // saw; never plan a stretch of it the camera did not see.
+            (s0, s1) = self.clip_to_view(&weld, s0, s1);
+        }
         if s1 - s0 <= 0.0 {
             return Err(PlanError::at(Stage::WeldEquation, "the two weld edges do not overlap along the seam"));
         }
         self.clock.lap(Stage::WeldEquation);
         self.finish(weld, s0, s1, normal, &fits)
+    }
+
+    /// Narrows `[s0, s1]` to where `curve` projects inside the image, when
+    /// the frame is the configured camera's pixel grid.
+    fn clip_to_view(&self, curve: &SeamCurve, s0: f64, s1: f64) -> (f64, f64) {
+        let camera = &self.config.camera;
+        let grid = (camera.width_px as usize, camera.height_px as usize);
+        if !self.cloud.is_organized() || (self.cloud.width(), self.cloud.height()) != grid {
+            return (s0, s1);
+        }
+        // Half a pixel inside the outermost pixel centres.
+        let (u_max, v_max) = (grid.0 as f64 - 1.5, grid.1 as f64 - 1.5);
+        let inside = |s: f64| {
+            let p = curve.at(s);
+            camera
+                .project([p.x, p.y, p.z])
+                .is_some_and(|(u, v)| (0.5..=u_max).contains(&u) && (0.5..=v_max).contains(&v))
+        };
+        const STEP_MM: f64 = 0.02;
+        let steps = ((s1 - s0) / STEP_MM).ceil().max(1.0) as usize;
+        let ss: Vec<f64> = (0..=steps).map(|k| s0 + (s1 - s0) * k as f64 / steps as f64).collect();
+        match (ss.iter().position(|&s| inside(s)), ss.iter().rposition(|&s| inside(s))) {
+            (Some(first), Some(last)) => (ss[first], ss[last]),
+            _ => (s0, s0),
+        }
     }
 
     fn finish(

@@ -176,6 +176,18 @@ impl Raw {
     }
 }
 
+/// Waits until the daemon reports a connected camera, so a trigger
+/// request does not race the camera's connection.
+async fn wait_for_camera(ctl: &mut ControllerClient) {
+    for _ in 0..500 {
+        if ctl.ping(WAIT).await.unwrap().camera_connected {
+            return;
+        }
+        tokio::time::sleep(Duration::from_millis(10)).await;
+    }
+    panic!("the mock camera did not connect");
+}
+
 fn frame_message(frame_id: u64, trigger_id: u64, cloud: &PointCloud) -> Message {
     let meta = FrameMeta {
         frame_id,
@@ -196,6 +208,7 @@ async fn each_joint_end_to_end_in_trigger_mode() {
     let (stop_cam, cam) =
         cell.camera(sims.iter().map(|s| Arc::new(s.cloud.clone())).collect(), CameraOptions::default());
     let mut ctl = cell.controller().await;
+    wait_for_camera(&mut ctl).await;
     for (k, (joint, sim)) in joints.iter().zip(&sims).enumerate() {
         let id = 10 + k as u64;
         let reply = ctl.plan(sim_request(id, *joint, sim, FrameSelect::Trigger), WAIT).await.unwrap();
@@ -427,12 +440,7 @@ async fn two_controllers_at_once_and_one_dropping_mid_plan() {
     let cell = Cell::start(config()).await;
     let (stop_cam, cam) = cell.camera(vec![Arc::new(small_cloud())], CameraOptions::default());
     let mut a = cell.controller().await;
-    for _ in 0..200 {
-        if a.ping(WAIT).await.unwrap().camera_connected {
-            break;
-        }
-        tokio::time::sleep(Duration::from_millis(10)).await;
-    }
+    wait_for_camera(&mut a).await;
     let mut b = cell.controller().await;
     let (ra, rb) =
         tokio::join!(a.plan(request(1, FrameSelect::Trigger), WAIT), b.plan(request(2, FrameSelect::Trigger), WAIT));

@@ -13,6 +13,8 @@ pub mod config;
 pub mod eval;
 pub mod geometry;
 pub mod joint;
+pub mod mock;
 pub mod pipeline;
 pub mod report;
+pub mod server;
 pub mod sim;

@@ -1,4 +1,5 @@
 //! The `weldseam` command line: plan a weld from a file, simulate a scan,
+//! run the cell daemon and its mock camera and controller,
 //! evaluate accuracy, run the demo.
 
 mod cli;
@@ -27,12 +28,21 @@ enum Command {
     Eval(cli::eval::EvalArgs),
     /// Render a simulated camera frame (organized PCD) and its ground truth (JSON).
     Simulate(cli::simulate::SimulateArgs),
+    /// Run the cell daemon: camera and controller links over TCP.
+    Serve(cli::serve::ServeArgs),
+    /// A mock camera: send point-cloud files or simulated scenes to the daemon.
+    Camera(cli::camera::CameraArgs),
+    /// A mock robot controller: request one trajectory (or ping) and print the reply.
+    Controller(cli::controller::ControllerArgs),
 }
 
 fn main() -> std::process::ExitCode {
     let cli = Cli::parse();
     let level = match cli.command {
-        Command::Demo(_) | Command::Plan(_) | Command::Eval(_) | Command::Simulate(_) => "warn",
+        Command::Demo(_) | Command::Plan(_) | Command::Eval(_) | Command::Simulate(_) | Command::Controller(_) => {
+            "warn"
+        }
+        Command::Serve(_) | Command::Camera(_) => "info",
     };
     if let Err(e) = logging::init(cli.log_format, level) {
         eprintln!("error: {e:#}");
@@ -43,6 +53,9 @@ fn main() -> std::process::ExitCode {
         Command::Plan(args) => cli::plan::run(args),
         Command::Eval(args) => cli::eval::run(args),
         Command::Simulate(args) => cli::simulate::run(args),
+        Command::Serve(args) => cli::serve::run(args),
+        Command::Camera(args) => cli::camera::run(args),
+        Command::Controller(args) => cli::controller::run(args),
     };
     match result {
         Ok(()) => std::process::ExitCode::SUCCESS,

@@ -2,6 +2,7 @@
 //! is linked once for all of them.
 
 mod cli;
+mod daemon;
 mod parsers;
 mod pipeline;
 mod util;

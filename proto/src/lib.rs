@@ -4,5 +4,14 @@
 //!
 //! - [`plan`]: a planned trajectory as the controller receives it and as
 //!   `weldseam plan --json` prints it.
+//! - [`message`]: the messages of the camera and controller links, their
+//!   tags and error codes.
+//! - [`frame`]: the message header, the bincode configuration and the
+//!   encoding of bodies; see PROTOCOL.md for every byte.
 
+pub mod frame;
+pub mod message;
 pub mod plan;
+
+pub use frame::{MAX_CONTROL_MESSAGE_BYTES, PROTOCOL_VERSION};
+pub use message::{ErrorCode, Message};

@@ -3,8 +3,11 @@
 //! everything else lives in the library.
 
 pub mod args;
+pub mod camera;
+pub mod controller;
 pub mod demo;
 pub mod eval;
 pub mod logging;
 pub mod plan;
+pub mod serve;
 pub mod simulate;

@@ -15,6 +15,7 @@ pub struct ConfigFile {
     pub pipeline: PipelineSection,
     pub paper: PaperSection,
     pub trajectory: TrajectorySection,
+    pub server: ServerSection,
 }
 
 #[derive(Debug, Clone, Deserialize)]
@@ -138,5 +139,45 @@ impl Default for TrajectorySection {
     fn default() -> Self {
         let t = super::TrajectoryParams::default();
         TrajectorySection { step_mm: t.step_mm, work_angle_deg: t.work_angle_deg, travel_angle_deg: t.travel_angle_deg }
+    }
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ServerSection {
+    pub camera_listen: String,
+    pub controller_listen: String,
+    pub camera_allow: Vec<String>,
+    pub controller_allow: Vec<String>,
+    pub max_camera_connections: u32,
+    pub max_controller_connections: u32,
+    pub stall_timeout_ms: u64,
+    pub max_frame_bytes: u64,
+    pub plan_queue_depth: u32,
+    pub pipeline_threads: u32,
+    pub fresh_frame_timeout_ms: u64,
+    pub shutdown_grace_ms: u64,
+    pub frame_history: u32,
+}
+
+impl Default for ServerSection {
+    fn default() -> Self {
+        let s = super::ServerConfig::default();
+        let ms = |d: std::time::Duration| d.as_millis() as u64;
+        ServerSection {
+            camera_listen: s.camera_listen.to_string(),
+            controller_listen: s.controller_listen.to_string(),
+            camera_allow: Vec::new(),
+            controller_allow: Vec::new(),
+            max_camera_connections: s.max_camera_connections as u32,
+            max_controller_connections: s.max_controller_connections as u32,
+            stall_timeout_ms: ms(s.stall_timeout),
+            max_frame_bytes: s.max_frame_bytes,
+            plan_queue_depth: s.plan_queue_depth as u32,
+            pipeline_threads: s.pipeline_threads as u32,
+            fresh_frame_timeout_ms: ms(s.fresh_frame_timeout),
+            shutdown_grace_ms: ms(s.shutdown_grace),
+            frame_history: s.frame_history as u32,
+        }
     }
 }

@@ -8,7 +8,9 @@
 
 mod file;
 
+use std::net::{IpAddr, SocketAddr};
 use std::path::Path;
+use std::time::Duration;
 
 use nalgebra::Isometry3;
 
@@ -155,6 +157,56 @@ impl Default for TrajectoryParams {
     }
 }
 
+/// The cell daemon's network and scheduling settings.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ServerConfig {
+    /// Where the camera (or its bridge) connects.
+    pub camera_listen: SocketAddr,
+    /// Where the robot controller connects.
+    pub controller_listen: SocketAddr,
+    /// Peers allowed on each link; empty allows any.
+    pub camera_allow: Vec<IpAddr>,
+    pub controller_allow: Vec<IpAddr>,
+    /// Connections served at once per link; more wait to be accepted.
+    pub max_camera_connections: usize,
+    pub max_controller_connections: usize,
+    /// A peer that sends nothing for this long in the middle of a message
+    /// is dropped.
+    pub stall_timeout: Duration,
+    /// The largest frame payload accepted, bytes.
+    pub max_frame_bytes: u64,
+    /// Plan jobs queued or running at once; a request beyond gets Busy.
+    pub plan_queue_depth: usize,
+    /// Threads of the pipeline's pool; 0 uses every core.
+    pub pipeline_threads: usize,
+    /// How long a request waits for a fresh frame unless it says otherwise.
+    pub fresh_frame_timeout: Duration,
+    /// How long shutdown waits for plans in flight.
+    pub shutdown_grace: Duration,
+    /// Recent frames kept for requests that name a frame id.
+    pub frame_history: usize,
+}
+
+impl Default for ServerConfig {
+    fn default() -> Self {
+        ServerConfig {
+            camera_listen: SocketAddr::from(([127, 0, 0, 1], 7301)),
+            controller_listen: SocketAddr::from(([127, 0, 0, 1], 7302)),
+            camera_allow: Vec::new(),
+            controller_allow: Vec::new(),
+            max_camera_connections: 2,
+            max_controller_connections: 8,
+            stall_timeout: Duration::from_millis(5_000),
+            max_frame_bytes: weldseam_proto::frame::DEFAULT_MAX_FRAME_BYTES,
+            plan_queue_depth: 4,
+            pipeline_threads: 0,
+            fresh_frame_timeout: Duration::from_millis(5_000),
+            shutdown_grace: Duration::from_millis(10_000),
+            frame_history: 8,
+        }
+    }
+}
+
 /// The validated configuration.
 #[derive(Debug, Clone)]
 pub struct Config {
@@ -165,6 +217,7 @@ pub struct Config {
     pub pipeline: PipelineParams,
     pub paper: PaperParams,
     pub trajectory: TrajectoryParams,
+    pub server: ServerConfig,
 }
 
 impl Default for Config {
@@ -305,7 +358,10 @@ impl Config {
         in_range("trajectory.work_angle_deg", t.work_angle_deg, -80.0, 80.0)?;
         in_range("trajectory.travel_angle_deg", t.travel_angle_deg, -80.0, 80.0)?;
 
+        let server = server_config(&f.server)?;
+
         Ok(Config {
+            server,
             camera,
             euler,
             hand_eye,
@@ -342,6 +398,72 @@ impl Config {
     }
 }
 
+fn socket_addr(key: &'static str, text: &str) -> Result<SocketAddr, ConfigError> {
+    text.parse().map_err(|_| ConfigError::Invalid {
+        key,
+        message: format!("{text:?} is not an address with a port, such as \"127.0.0.1:7301\""),
+    })
+}
+
+fn ip_list(key: &'static str, list: &[String]) -> Result<Vec<IpAddr>, ConfigError> {
+    list.iter()
+        .map(|t| {
+            t.parse().map_err(|_| ConfigError::Invalid {
+                key,
+                message: format!("{t:?} is not an IP address, such as \"192.168.0.10\""),
+            })
+        })
+        .collect()
+}
+
+fn server_config(s: &file::ServerSection) -> Result<ServerConfig, ConfigError> {
+    const MAX_CONNECTIONS: u32 = 1024;
+    check("server.max_camera_connections", (1..=MAX_CONNECTIONS).contains(&s.max_camera_connections), || {
+        format!("must lie in [1, {MAX_CONNECTIONS}], got {}", s.max_camera_connections)
+    })?;
+    check("server.max_controller_connections", (1..=MAX_CONNECTIONS).contains(&s.max_controller_connections), || {
+        format!("must lie in [1, {MAX_CONNECTIONS}], got {}", s.max_controller_connections)
+    })?;
+    check("server.stall_timeout_ms", (10..=3_600_000).contains(&s.stall_timeout_ms), || {
+        format!("must lie in [10, 3600000] ms, got {}", s.stall_timeout_ms)
+    })?;
+    const MIN_FRAME: u64 = 1 << 10;
+    const MAX_FRAME: u64 = 4 << 30;
+    check("server.max_frame_bytes", (MIN_FRAME..=MAX_FRAME).contains(&s.max_frame_bytes), || {
+        format!("must lie in [{MIN_FRAME}, {MAX_FRAME}] bytes, got {}", s.max_frame_bytes)
+    })?;
+    check("server.plan_queue_depth", (1..=1024).contains(&s.plan_queue_depth), || {
+        format!("must lie in [1, 1024], got {}", s.plan_queue_depth)
+    })?;
+    check("server.pipeline_threads", s.pipeline_threads <= 1024, || {
+        format!("must be 0 (every core) to 1024, got {}", s.pipeline_threads)
+    })?;
+    check("server.fresh_frame_timeout_ms", (1..=600_000).contains(&s.fresh_frame_timeout_ms), || {
+        format!("must lie in [1, 600000] ms, got {}", s.fresh_frame_timeout_ms)
+    })?;
+    check("server.shutdown_grace_ms", s.shutdown_grace_ms <= 3_600_000, || {
+        format!("must be at most 3600000 ms, got {}", s.shutdown_grace_ms)
+    })?;
+    check("server.frame_history", (1..=1024).contains(&s.frame_history), || {
+        format!("must lie in [1, 1024] frames, got {}", s.frame_history)
+    })?;
+    Ok(ServerConfig {
+        camera_listen: socket_addr("server.camera_listen", &s.camera_listen)?,
+        controller_listen: socket_addr("server.controller_listen", &s.controller_listen)?,
+        camera_allow: ip_list("server.camera_allow", &s.camera_allow)?,
+        controller_allow: ip_list("server.controller_allow", &s.controller_allow)?,
+        max_camera_connections: s.max_camera_connections as usize,
+        max_controller_connections: s.max_controller_connections as usize,
+        stall_timeout: Duration::from_millis(s.stall_timeout_ms),
+        max_frame_bytes: s.max_frame_bytes,
+        plan_queue_depth: s.plan_queue_depth as usize,
+        pipeline_threads: s.pipeline_threads as usize,
+        fresh_frame_timeout: Duration::from_millis(s.fresh_frame_timeout_ms),
+        shutdown_grace: Duration::from_millis(s.shutdown_grace_ms),
+        frame_history: s.frame_history as usize,
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -369,6 +491,11 @@ mod tests {
             ("[robot]\neuler_convention = \"zxz\"\n", "robot.euler_convention"),
             ("[robot]\nhand_eye = [1.0, 0.0]\n", "robot.hand_eye"),
             ("[pipeline]\nedge_max_neighbour_ratio = 0.9\n", "pipeline.edge_max_neighbour_ratio"),
+            ("[server]\ncamera_listen = \"localhost\"\n", "server.camera_listen"),
+            ("[server]\ncontroller_allow = [\"10.0.0.x\"]\n", "server.controller_allow"),
+            ("[server]\nplan_queue_depth = 0\n", "server.plan_queue_depth"),
+            ("[server]\nmax_frame_bytes = 12\n", "server.max_frame_bytes"),
+            ("[server]\nstall_timeout_ms = 0\n", "server.stall_timeout_ms"),
         ];
         for (text, key) in cases {
             let e = Config::parse(text, "c.toml").unwrap_err().to_string();
@@ -392,5 +519,6 @@ mod tests {
         assert_eq!(c.pipeline, PipelineParams::default());
         assert_eq!(c.trajectory, TrajectoryParams::default());
         assert_eq!(c.camera, CameraModel::default());
+        assert_eq!(c.server, ServerConfig::default());
     }
 }

@@ -77,6 +77,12 @@ impl PlanRequest {
             travel_angle_deg: None,
         }
     }
+
+    /// Checks the request's own values (finite pose, groove depth, step,
+    /// angles) before any frame is fetched for it.
+    pub fn validate(&self) -> Result<(), PlanError> {
+        validate(self)
+    }
 }
 
 /// A pipeline stage, for timings and error messages.

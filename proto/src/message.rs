@@ -1,0 +1,419 @@
+//! The messages of the camera and controller links, their numeric tags and
+//! the error codes. Field order in each struct is the order on the wire
+//! (see PROTOCOL.md); append fields only with a protocol version bump.
+
+use serde::{Deserialize, Serialize};
+
+use crate::plan::{Joint, PlanResult};
+
+/// A point of a frame: camera frame, x, y, z. NaN (or `0, 0, 0`) marks a
+/// pixel without a return.
+pub type Point = [f32; 3];
+
+/// The numeric tag in every message header, naming the message type.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[repr(u16)]
+pub enum Tag {
+    Hello = 1,
+    HelloAck = 2,
+    Error = 3,
+    Ping = 4,
+    Status = 5,
+    Frame = 16,
+    Trigger = 17,
+    PlanRequest = 32,
+    PlanReply = 33,
+}
+
+impl Tag {
+    pub const ALL: [Tag; 9] = [
+        Tag::Hello,
+        Tag::HelloAck,
+        Tag::Error,
+        Tag::Ping,
+        Tag::Status,
+        Tag::Frame,
+        Tag::Trigger,
+        Tag::PlanRequest,
+        Tag::PlanReply,
+    ];
+
+    /// The tag for a header's number, if it is one this version knows.
+    pub fn from_u16(n: u16) -> Option<Tag> {
+        Tag::ALL.into_iter().find(|t| *t as u16 == n)
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Tag::Hello => "Hello",
+            Tag::HelloAck => "HelloAck",
+            Tag::Error => "Error",
+            Tag::Ping => "Ping",
+            Tag::Status => "Status",
+            Tag::Frame => "Frame",
+            Tag::Trigger => "Trigger",
+            Tag::PlanRequest => "PlanRequest",
+            Tag::PlanReply => "PlanReply",
+        }
+    }
+}
+
+/// Which link a peer means to be.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Role {
+    /// Wire value 0: a camera or a bridge in front of one; pushes frames.
+    Camera,
+    /// Wire value 1: a robot controller; asks for trajectories.
+    Controller,
+}
+
+impl Role {
+    pub fn name(self) -> &'static str {
+        match self {
+            Role::Camera => "camera",
+            Role::Controller => "controller",
+        }
+    }
+}
+
+/// The first message on every connection, from the connecting peer.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Hello {
+    pub protocol_version: u16,
+    pub role: Role,
+    /// A free-form name for logs, e.g. the camera's serial number.
+    pub name: String,
+}
+
+/// The daemon's answer to an accepted [`Hello`].
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct HelloAck {
+    pub protocol_version: u16,
+    /// The daemon's name and version, for logs.
+    pub server: String,
+}
+
+/// The unit of a frame's coordinates.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[repr(u32)]
+pub enum Units {
+    Millimetres = 0,
+    Metres = 1,
+}
+
+impl Units {
+    pub fn from_u32(n: u32) -> Option<Units> {
+        match n {
+            0 => Some(Units::Millimetres),
+            1 => Some(Units::Metres),
+            _ => None,
+        }
+    }
+
+    /// The factor that turns a coordinate in these units into millimetres.
+    pub fn to_mm(self) -> f32 {
+        match self {
+            Units::Millimetres => 1.0,
+            Units::Metres => 1000.0,
+        }
+    }
+}
+
+/// The fixed-size part of a frame message, before the points.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub struct FrameMeta {
+    /// The camera's id of this frame; a controller may name it in a request.
+    pub frame_id: u64,
+    /// The id of the [`Trigger`] this frame answers, or 0 for a free-running
+    /// frame (trigger ids start at 1).
+    pub trigger_id: u64,
+    /// Capture time, microseconds since the Unix epoch (camera clock).
+    pub capture_time_us: u64,
+    pub width: u32,
+    pub height: u32,
+    /// A [`Units`] value.
+    pub units: u32,
+}
+
+/// Bytes of an encoded [`FrameMeta`].
+pub const FRAME_META_BYTES: usize = 36;
+
+/// Bytes of one point on the wire: three little-endian f32.
+pub const POINT_BYTES: usize = 12;
+
+/// An organized point cloud frame: `width x height` points, row-major.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Frame {
+    pub meta: FrameMeta,
+    pub points: Vec<Point>,
+}
+
+/// The daemon asks the camera for a capture; the answering frame carries
+/// this id in [`FrameMeta::trigger_id`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Trigger {
+    pub trigger_id: u64,
+}
+
+/// Which frame a plan request is computed from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+pub enum FrameSelect {
+    /// Wire value 0: trigger a fresh capture and use the frame answering it.
+    #[default]
+    Trigger,
+    /// Wire value 1: the first frame that arrives after the request.
+    NextFrame,
+    /// Wire value 2 then a u64: this frame, if the daemon still holds it.
+    FrameId(u64),
+}
+
+/// Wire numbers of the joint types in a [`PlanRequest`].
+pub mod joint_code {
+    pub const V_BUTT: u32 = 0;
+    pub const I_BUTT: u32 = 1;
+    pub const LAP: u32 = 2;
+}
+
+/// A controller's request for a trajectory.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct PlanRequest {
+    /// Echoed in the reply or error.
+    pub request_id: u64,
+    /// A [`joint_code`] value; kept numeric so an unknown joint gets its
+    /// own error rather than a decoding failure.
+    pub joint: u32,
+    /// Groove depth of a V-butt joint, mm; required for V-butt.
+    pub groove_depth_mm: Option<f64>,
+    /// Flange pose at capture: x, y, z in mm, rx, ry, rz in degrees, in the
+    /// daemon's configured Euler convention.
+    pub pose: [f64; 6],
+    /// Waypoint spacing, mm; the configured one when absent.
+    pub step_mm: Option<f64>,
+    pub work_angle_deg: Option<f64>,
+    pub travel_angle_deg: Option<f64>,
+    pub frame: FrameSelect,
+    /// How long to wait for a fresh frame, ms; 0 = the daemon's default.
+    pub timeout_ms: u32,
+}
+
+impl PlanRequest {
+    /// The joint type, if [`PlanRequest::joint`] is a known code.
+    pub fn joint_type(&self) -> Option<Joint> {
+        match self.joint {
+            joint_code::V_BUTT => Some(Joint::VButt),
+            joint_code::I_BUTT => Some(Joint::IButt),
+            joint_code::LAP => Some(Joint::Lap),
+            _ => None,
+        }
+    }
+
+    pub fn joint_code(joint: Joint) -> u32 {
+        match joint {
+            Joint::VButt => joint_code::V_BUTT,
+            Joint::IButt => joint_code::I_BUTT,
+            Joint::Lap => joint_code::LAP,
+        }
+    }
+}
+
+/// A planned trajectory, answering the request with the same id.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct PlanReply {
+    pub request_id: u64,
+    /// The frame the plan was computed from.
+    pub frame_id: u64,
+    pub result: PlanResult,
+}
+
+/// The daemon's state, answering a ping.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Status {
+    pub uptime_ms: u64,
+    pub frames_received: u64,
+    pub plans_done: u64,
+    /// Plan jobs waiting or running.
+    pub queue_length: u32,
+    pub camera_connected: bool,
+}
+
+/// What went wrong, as a stable number a PLC program can switch on.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(from = "u16", into = "u16")]
+pub enum ErrorCode {
+    /// 1: the header does not start with the magic bytes; the connection closes.
+    BadMagic,
+    /// 2: the protocol version is not this daemon's; the connection closes.
+    UnsupportedVersion,
+    /// 3: the header's tag names no message type.
+    UnknownMessage,
+    /// 4: the message body could not be decoded (truncated, trailing or
+    /// invalid bytes).
+    Malformed,
+    /// 5: the payload length exceeds the limit; the connection closes.
+    TooLarge,
+    /// 6: the message is not allowed here: not a hello first, a hello with
+    /// the wrong role, or a message of the other link.
+    UnexpectedMessage,
+    /// 20: width x height does not match the frame's point payload.
+    FrameSizeMismatch,
+    /// 21: the frame has no valid point.
+    EmptyFrame,
+    /// 22: the frame's units code is unknown.
+    UnknownUnits,
+    /// 40: a request field is out of range (NaN pose, missing groove depth...).
+    BadRequest,
+    /// 41: the joint code is unknown.
+    UnknownJoint,
+    /// 42: the named frame id is not (or no longer) held by the daemon.
+    UnknownFrame,
+    /// 43: no camera is connected, so no fresh frame can be had.
+    NoCamera,
+    /// 44: no fresh frame arrived within the request's timeout.
+    FrameTimeout,
+    /// 45: the plan queue is full; retry later.
+    Busy,
+    /// 46: the pipeline found no seam in the frame.
+    PlanFailed,
+    /// 47: the daemon is shutting down.
+    ShuttingDown,
+    /// 48: an internal fault; the daemon's log has the cause.
+    Internal,
+    /// Any other number, from a newer peer.
+    Other(u16),
+}
+
+impl ErrorCode {
+    pub const ALL: [ErrorCode; 18] = [
+        ErrorCode::BadMagic,
+        ErrorCode::UnsupportedVersion,
+        ErrorCode::UnknownMessage,
+        ErrorCode::Malformed,
+        ErrorCode::TooLarge,
+        ErrorCode::UnexpectedMessage,
+        ErrorCode::FrameSizeMismatch,
+        ErrorCode::EmptyFrame,
+        ErrorCode::UnknownUnits,
+        ErrorCode::BadRequest,
+        ErrorCode::UnknownJoint,
+        ErrorCode::UnknownFrame,
+        ErrorCode::NoCamera,
+        ErrorCode::FrameTimeout,
+        ErrorCode::Busy,
+        ErrorCode::PlanFailed,
+        ErrorCode::ShuttingDown,
+        ErrorCode::Internal,
+    ];
+
+    pub fn code(self) -> u16 {
+        match self {
+            ErrorCode::BadMagic => 1,
+            ErrorCode::UnsupportedVersion => 2,
+            ErrorCode::UnknownMessage => 3,
+            ErrorCode::Malformed => 4,
+            ErrorCode::TooLarge => 5,
+            ErrorCode::UnexpectedMessage => 6,
+            ErrorCode::FrameSizeMismatch => 20,
+            ErrorCode::EmptyFrame => 21,
+            ErrorCode::UnknownUnits => 22,
+            ErrorCode::BadRequest => 40,
+            ErrorCode::UnknownJoint => 41,
+            ErrorCode::UnknownFrame => 42,
+            ErrorCode::NoCamera => 43,
+            ErrorCode::FrameTimeout => 44,
+            ErrorCode::Busy => 45,
+            ErrorCode::PlanFailed => 46,
+            ErrorCode::ShuttingDown => 47,
+            ErrorCode::Internal => 48,
+            ErrorCode::Other(n) => n,
+        }
+    }
+
+    /// A snake_case name for logs and JSON.
+    pub fn name(self) -> &'static str {
+        match self {
+            ErrorCode::BadMagic => "bad_magic",
+            ErrorCode::UnsupportedVersion => "unsupported_version",
+            ErrorCode::UnknownMessage => "unknown_message",
+            ErrorCode::Malformed => "malformed",
+            ErrorCode::TooLarge => "too_large",
+            ErrorCode::UnexpectedMessage => "unexpected_message",
+            ErrorCode::FrameSizeMismatch => "frame_size_mismatch",
+            ErrorCode::EmptyFrame => "empty_frame",
+            ErrorCode::UnknownUnits => "unknown_units",
+            ErrorCode::BadRequest => "bad_request",
+            ErrorCode::UnknownJoint => "unknown_joint",
+            ErrorCode::UnknownFrame => "unknown_frame",
+            ErrorCode::NoCamera => "no_camera",
+            ErrorCode::FrameTimeout => "frame_timeout",
+            ErrorCode::Busy => "busy",
+            ErrorCode::PlanFailed => "plan_failed",
+            ErrorCode::ShuttingDown => "shutting_down",
+            ErrorCode::Internal => "internal",
+            ErrorCode::Other(_) => "other",
+        }
+    }
+}
+
+impl From<u16> for ErrorCode {
+    fn from(n: u16) -> Self {
+        ErrorCode::ALL.into_iter().find(|c| c.code() == n).unwrap_or(ErrorCode::Other(n))
+    }
+}
+
+impl From<ErrorCode> for u16 {
+    fn from(c: ErrorCode) -> u16 {
+        c.code()
+    }
+}
+
+impl std::fmt::Display for ErrorCode {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{} ({})", self.code(), self.name())
+    }
+}
+
+/// A typed error reply.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ErrorReply {
+    pub code: ErrorCode,
+    /// The request this error answers, when it answers one.
+    pub request_id: Option<u64>,
+    /// One sentence a person understands.
+    pub message: String,
+}
+
+/// Every message of the protocol.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Message {
+    Hello(Hello),
+    HelloAck(HelloAck),
+    Error(ErrorReply),
+    /// Empty body.
+    Ping,
+    Status(Status),
+    Frame(Frame),
+    Trigger(Trigger),
+    PlanRequest(PlanRequest),
+    PlanReply(PlanReply),
+}
+
+impl Message {
+    pub fn tag(&self) -> Tag {
+        match self {
+            Message::Hello(_) => Tag::Hello,
+            Message::HelloAck(_) => Tag::HelloAck,
+            Message::Error(_) => Tag::Error,
+            Message::Ping => Tag::Ping,
+            Message::Status(_) => Tag::Status,
+            Message::Frame(_) => Tag::Frame,
+            Message::Trigger(_) => Tag::Trigger,
+            Message::PlanRequest(_) => Tag::PlanRequest,
+            Message::PlanReply(_) => Tag::PlanReply,
+        }
+    }
+
+    /// A typed error reply.
+    pub fn error(code: ErrorCode, request_id: Option<u64>, message: impl Into<String>) -> Message {
+        Message::Error(ErrorReply { code, request_id, message: message.into() })
+    }
+}

@@ -1,0 +1,59 @@
+//! PROTOCOL.md's hex examples are the encodings this crate produces: the
+//! document cannot drift from the code.
+
+use weldseam_proto::frame::encode;
+use weldseam_proto::message::{ErrorCode, Frame, FrameMeta, Hello, Message, Role};
+
+fn hex_dump(bytes: &[u8]) -> String {
+    bytes
+        .chunks(16)
+        .enumerate()
+        .map(|(i, row)| {
+            let hex: Vec<String> = row.iter().map(|b| format!("{b:02x}")).collect();
+            format!("{:04x}  {}\n", i * 16, hex.join(" "))
+        })
+        .collect()
+}
+
+fn examples() -> Vec<(&'static str, Message)> {
+    vec![
+        ("hello", Message::Hello(Hello { protocol_version: 1, role: Role::Camera, name: "cam-1".into() })),
+        (
+            "frame",
+            Message::Frame(Frame {
+                meta: FrameMeta {
+                    frame_id: 7,
+                    trigger_id: 3,
+                    capture_time_us: 1_700_000_000_000_000,
+                    width: 2,
+                    height: 1,
+                    units: 0,
+                },
+                points: vec![[1.0, -2.0, 700.0], [f32::NAN, f32::NAN, f32::NAN]],
+            }),
+        ),
+        ("ping", Message::Ping),
+        ("error", Message::error(ErrorCode::Busy, Some(5), "busy")),
+    ]
+}
+
+/// The text of the ```text block that follows `<!-- hex:NAME -->`.
+fn block<'a>(doc: &'a str, name: &str) -> Option<&'a str> {
+    let marker = format!("<!-- hex:{name} -->");
+    let after = &doc[doc.find(&marker)? + marker.len()..];
+    let body = &after[after.find("```text\n")? + "```text\n".len()..];
+    Some(&body[..body.find("```")?])
+}
+
+#[test]
+fn protocol_md_hex_examples_match_the_encoder() {
+    let doc = include_str!("../PROTOCOL.md");
+    let mut wrong = String::new();
+    for (name, message) in examples() {
+        let dump = hex_dump(&encode(&message).unwrap());
+        if block(doc, name) != Some(dump.as_str()) {
+            wrong.push_str(&format!("<!-- hex:{name} -->\n```text\n{dump}```\n"));
+        }
+    }
+    assert!(wrong.is_empty(), "PROTOCOL.md is out of date; the examples should read:\n{wrong}");
+}

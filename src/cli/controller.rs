@@ -1,0 +1,159 @@
+//! `weldseam controller`: a mock robot controller. Sends one plan request
+//! (or a ping) and prints the reply as a table or JSON; an error reply
+//! exits non-zero with its code and message.
+
+use std::time::Duration;
+
+use anyhow::Context;
+use weldseam::geometry::pose::RobotPose;
+use weldseam::joint::JointType;
+use weldseam::mock::ClientError;
+use weldseam::mock::controller::ControllerClient;
+use weldseam::report::joint_to_proto;
+use weldseam_proto::message::{FrameSelect, PlanRequest};
+
+use super::args;
+
+#[derive(Debug, clap::Args)]
+pub struct ControllerArgs {
+    /// The daemon's controller link, host:port.
+    #[arg(long, default_value = "127.0.0.1:7302")]
+    pub connect: String,
+    /// Joint type: v-butt, i-butt or lap.
+    #[arg(long, required_unless_present = "ping")]
+    pub joint: Option<JointType>,
+    /// Groove depth of a V-butt joint, mm.
+    #[arg(long)]
+    pub groove_depth: Option<f64>,
+    /// Robot pose at capture: x,y,z,rx,ry,rz (mm, degrees).
+    #[arg(long, allow_hyphen_values = true, value_parser = args::pose, required_unless_present = "ping")]
+    pub pose: Option<RobotPose>,
+    /// Waypoint spacing, mm.
+    #[arg(long)]
+    pub step: Option<f64>,
+    /// Torch work angle, degrees.
+    #[arg(long, allow_hyphen_values = true)]
+    pub work_angle: Option<f64>,
+    /// Torch travel angle, degrees.
+    #[arg(long, allow_hyphen_values = true)]
+    pub travel_angle: Option<f64>,
+    /// Which frame: trigger (a fresh capture), next (the next frame to
+    /// arrive) or a frame id.
+    #[arg(long, default_value = "trigger", value_parser = frame_select)]
+    pub frame: FrameSelect,
+    /// How long the daemon may wait for a fresh frame, ms (0: its default).
+    #[arg(long, default_value_t = 0)]
+    pub timeout_ms: u32,
+    /// The request id echoed in the reply.
+    #[arg(long, default_value_t = 1)]
+    pub request_id: u64,
+    /// Print one JSON object instead of a table.
+    #[arg(long)]
+    pub json: bool,
+    /// Only ping the daemon and print its status.
+    #[arg(long)]
+    pub ping: bool,
+}
+
+fn frame_select(text: &str) -> Result<FrameSelect, String> {
+    match text {
+        "trigger" => Ok(FrameSelect::Trigger),
+        "next" => Ok(FrameSelect::NextFrame),
+        id => id
+            .parse()
+            .map(FrameSelect::FrameId)
+            .map_err(|_| format!("expected trigger, next or a frame id, got {id:?}")),
+    }
+}
+
+pub fn run(args: &ControllerArgs) -> anyhow::Result<()> {
+    let runtime = tokio::runtime::Builder::new_current_thread().enable_all().build().context("cannot start")?;
+    runtime.block_on(exchange(args))
+}
+
+async fn exchange(args: &ControllerArgs) -> anyhow::Result<()> {
+    let mut client = ControllerClient::connect(&args.connect, "weldseam-controller").await.map_err(explain)?;
+    if args.ping {
+        let s = client.ping(Duration::from_secs(10)).await.map_err(explain)?;
+        if args.json {
+            println!(
+                "{}",
+                serde_json::json!({
+                    "server": client.server, "uptime_ms": s.uptime_ms, "frames_received": s.frames_received,
+                    "plans_done": s.plans_done, "queue_length": s.queue_length, "camera_connected": s.camera_connected,
+                })
+            );
+        } else {
+            println!("server            {}", client.server);
+            println!("uptime            {:.1} s", s.uptime_ms as f64 / 1e3);
+            println!("frames received   {}", s.frames_received);
+            println!("plans done        {}", s.plans_done);
+            println!("queue length      {}", s.queue_length);
+            println!("camera connected  {}", if s.camera_connected { "yes" } else { "no" });
+        }
+        return Ok(());
+    }
+    let (Some(joint), Some(pose)) = (args.joint, args.pose) else {
+        anyhow::bail!("--joint and --pose are required for a plan request");
+    };
+    let [x, y, z] = pose.xyz_mm;
+    let [rx, ry, rz] = pose.angles_deg;
+    let request = PlanRequest {
+        request_id: args.request_id,
+        joint: PlanRequest::joint_code(joint_to_proto(joint)),
+        groove_depth_mm: args.groove_depth,
+        pose: [x, y, z, rx, ry, rz],
+        step_mm: args.step,
+        work_angle_deg: args.work_angle,
+        travel_angle_deg: args.travel_angle,
+        frame: args.frame,
+        timeout_ms: args.timeout_ms,
+    };
+    // The daemon bounds the frame wait; allow for it and a slow plan.
+    let wait = Duration::from_millis(u64::from(args.timeout_ms).max(10_000)) + Duration::from_secs(120);
+    let reply = client.plan(request, wait).await.map_err(explain)?;
+    if args.json {
+        let out = serde_json::json!({
+            "request_id": reply.request_id,
+            "frame_id": reply.frame_id,
+            "result": reply.result,
+        });
+        println!("{}", serde_json::to_string_pretty(&out)?);
+        return Ok(());
+    }
+    let r = &reply.result;
+    println!(
+        "request {}  frame {}  method {}  euler {}",
+        reply.request_id, reply.frame_id, r.method, r.euler_convention
+    );
+    for (k, seam) in r.seams.iter().enumerate() {
+        println!(
+            "seam {}: {:?}, {:.1} mm, {} waypoints, edge fit rms {:.3} / {:.3} mm",
+            k + 1,
+            seam.joint,
+            seam.length_mm,
+            seam.waypoints.len(),
+            seam.edge_fit_rms_mm[0],
+            seam.edge_fit_rms_mm[1]
+        );
+        println!("  {:>4}  {:>10} {:>10} {:>10}  {:>9} {:>9} {:>9}", "#", "x mm", "y mm", "z mm", "rx°", "ry°", "rz°");
+        for (i, w) in seam.waypoints.iter().enumerate() {
+            println!(
+                "  {:>4}  {:>10.3} {:>10.3} {:>10.3}  {:>9.3} {:>9.3} {:>9.3}",
+                i, w.xyz[0], w.xyz[1], w.xyz[2], w.rpy_deg[0], w.rpy_deg[1], w.rpy_deg[2]
+            );
+        }
+    }
+    if let Some(total) = r.timing_ms.get("total") {
+        println!("pipeline {total:.0} ms");
+    }
+    Ok(())
+}
+
+/// Error replies become "error CODE (name): message" for the exit report.
+fn explain(e: ClientError) -> anyhow::Error {
+    match e {
+        ClientError::Refused(r) => anyhow::anyhow!("error {}: {}", r.code, r.message),
+        other => other.into(),
+    }
+}

@@ -1,0 +1,83 @@
+//! `weldseam serve`: the cell daemon. Binds both links, tells systemd it
+//! is ready, serves until SIGINT or SIGTERM, then lets plans in flight
+//! finish within the configured grace and exits.
+
+use std::net::SocketAddr;
+use std::path::PathBuf;
+
+use anyhow::Context;
+use tokio::net::TcpListener;
+use tracing::{info, warn};
+use weldseam::server::{self, ServerState, Stopped};
+
+use super::plan::load_config;
+
+#[derive(Debug, clap::Args)]
+pub struct ServeArgs {
+    /// Configuration file (TOML); built-in defaults otherwise.
+    #[arg(long)]
+    pub config: Option<PathBuf>,
+    /// Camera link address, overriding server.camera_listen.
+    #[arg(long)]
+    pub camera_listen: Option<SocketAddr>,
+    /// Controller link address, overriding server.controller_listen.
+    #[arg(long)]
+    pub controller_listen: Option<SocketAddr>,
+}
+
+/// Completes on SIGINT or SIGTERM.
+async fn termination() -> anyhow::Result<()> {
+    let mut term = tokio::signal::unix::signal(tokio::signal::unix::SignalKind::terminate())
+        .context("cannot listen for SIGTERM")?;
+    tokio::select! {
+        r = tokio::signal::ctrl_c() => { r.context("cannot listen for SIGINT")?; info!("SIGINT received"); }
+        _ = term.recv() => info!("SIGTERM received"),
+    }
+    Ok(())
+}
+
+pub fn run(args: &ServeArgs) -> anyhow::Result<()> {
+    let mut config = load_config(args.config.as_ref(), None)?;
+    if let Some(a) = args.camera_listen {
+        config.server.camera_listen = a;
+    }
+    if let Some(a) = args.controller_listen {
+        config.server.controller_listen = a;
+    }
+    let runtime = tokio::runtime::Builder::new_multi_thread()
+        .enable_all()
+        .thread_name("net")
+        .build()
+        .context("cannot start the network runtime")?;
+    runtime.block_on(serve(config))
+}
+
+async fn serve(config: weldseam::config::Config) -> anyhow::Result<()> {
+    let s = &config.server;
+    let camera = TcpListener::bind(s.camera_listen)
+        .await
+        .with_context(|| format!("cannot listen on {} (server.camera_listen)", s.camera_listen))?;
+    let controller = TcpListener::bind(s.controller_listen)
+        .await
+        .with_context(|| format!("cannot listen on {} (server.controller_listen)", s.controller_listen))?;
+    info!(
+        camera = %camera.local_addr()?,
+        controller = %controller.local_addr()?,
+        pipeline_threads = s.pipeline_threads,
+        plan_queue_depth = s.plan_queue_depth,
+        "listening"
+    );
+    let state = ServerState::new(config)?;
+    if let Err(e) = sd_notify::notify(&[sd_notify::NotifyState::Ready]) {
+        warn!("cannot notify systemd of readiness: {e}");
+    }
+    let shutdown = async {
+        if let Err(e) = termination().await {
+            warn!("{e:#}; stopping");
+        }
+        let _ = sd_notify::notify(&[sd_notify::NotifyState::Stopping]);
+    };
+    match server::run(camera, controller, shutdown, state).await? {
+        Stopped::Clean | Stopped::GraceExpired => Ok(()),
+    }
+}

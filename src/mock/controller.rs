@@ -1,0 +1,89 @@
+//! A mock robot controller: connects to the controller link, says hello,
+//! sends plan requests and pings and reads the replies.
+
+use std::time::Duration;
+
+use tokio::net::TcpStream;
+use weldseam_proto::frame::DEFAULT_MAX_FRAME_BYTES;
+use weldseam_proto::message::{Hello, PlanReply, PlanRequest, Role, Status};
+use weldseam_proto::{Message, PROTOCOL_VERSION};
+
+use super::ClientError;
+use crate::server::connection::Connection;
+
+/// How long any one message may take to arrive once begun.
+const STALL: Duration = Duration::from_secs(30);
+
+/// A connected controller.
+#[derive(Debug)]
+pub struct ControllerClient {
+    conn: Connection,
+    /// The daemon's name from its hello ack.
+    pub server: String,
+}
+
+impl ControllerClient {
+    /// Connects and completes the hello.
+    pub async fn connect(addr: &str, name: &str) -> Result<Self, ClientError> {
+        let stream =
+            TcpStream::connect(addr).await.map_err(|source| ClientError::Connect { addr: addr.to_string(), source })?;
+        let peer = stream.peer_addr().map_err(|source| ClientError::Connect { addr: addr.to_string(), source })?;
+        let mut conn = Connection::new(stream, peer, STALL, DEFAULT_MAX_FRAME_BYTES);
+        let hello = Hello { protocol_version: PROTOCOL_VERSION, role: Role::Controller, name: name.to_string() };
+        conn.writer.send(&Message::Hello(hello)).await?;
+        match conn.reader.read().await? {
+            Some(r) => match r.message {
+                Message::HelloAck(ack) => Ok(ControllerClient { conn, server: ack.server }),
+                Message::Error(e) => Err(ClientError::Refused(e)),
+                other => Err(ClientError::Unexpected(other.tag().name())),
+            },
+            None => Err(ClientError::Closed),
+        }
+    }
+
+    /// Sends any message.
+    pub async fn send(&mut self, message: &Message) -> Result<(), ClientError> {
+        Ok(self.conn.writer.send(message).await?)
+    }
+
+    /// Reads the next message.
+    pub async fn recv(&mut self) -> Result<Message, ClientError> {
+        Ok(self.conn.reader.read().await?.ok_or(ClientError::Closed)?.message)
+    }
+
+    /// Sends a plan request and waits (at most `wait`) for its reply.
+    pub async fn plan(&mut self, request: PlanRequest, wait: Duration) -> Result<PlanReply, ClientError> {
+        let id = request.request_id;
+        self.send(&Message::PlanRequest(request)).await?;
+        let answer = async {
+            loop {
+                match self.recv().await? {
+                    Message::PlanReply(reply) if reply.request_id == id => return Ok(reply),
+                    Message::Error(e) if e.request_id.is_none() || e.request_id == Some(id) => {
+                        return Err(ClientError::Refused(e));
+                    }
+                    // Replies to other requests on this connection.
+                    Message::PlanReply(_) | Message::Error(_) | Message::Status(_) => continue,
+                    other => return Err(ClientError::Unexpected(other.tag().name())),
+                }
+            }
+        };
+        tokio::time::timeout(wait, answer).await.map_err(|_| ClientError::Timeout(wait.as_millis()))?
+    }
+
+    /// Pings and returns the daemon's status.
+    pub async fn ping(&mut self, wait: Duration) -> Result<Status, ClientError> {
+        self.send(&Message::Ping).await?;
+        let answer = async {
+            loop {
+                match self.recv().await? {
+                    Message::Status(s) => return Ok(s),
+                    Message::Error(e) if e.request_id.is_none() => return Err(ClientError::Refused(e)),
+                    Message::PlanReply(_) | Message::Error(_) => continue,
+                    other => return Err(ClientError::Unexpected(other.tag().name())),
+                }
+            }
+        };
+        tokio::time::timeout(wait, answer).await.map_err(|_| ClientError::Timeout(wait.as_millis()))?
+    }
+}

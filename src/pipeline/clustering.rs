@@ -59,13 +59,21 @@ impl DisjointSets {
 }
 
 /// Turns a union-find over `n` slots into labelled clusters of the slots
-/// that are in `members`, keeping clusters of at least `min_points`.
+/// that are in the set, keeping clusters of at least `min_points`.
 fn collect(sets: &mut DisjointSets, n: usize, in_set: impl Fn(usize) -> bool, min_points: usize) -> Clusters {
-    let mut by_root: HashMap<u32, Vec<u32>> = HashMap::new();
+    // Roots to dense indices through one array: a map would hash every point.
+    let mut dense = vec![UNCLUSTERED; n];
+    let mut members: Vec<Vec<u32>> = Vec::new();
     for i in (0..n).filter(|&i| in_set(i)) {
-        by_root.entry(sets.find(i as u32)).or_default().push(i as u32);
+        let root = sets.find(i as u32) as usize;
+        if dense[root] == UNCLUSTERED {
+            dense[root] = members.len() as u32;
+            members.push(Vec::new());
+        }
+        members[dense[root] as usize].push(i as u32);
     }
-    let mut members: Vec<Vec<u32>> = by_root.into_values().filter(|m| m.len() >= min_points).collect();
+    drop(dense);
+    let mut members: Vec<Vec<u32>> = members.into_iter().filter(|m| m.len() >= min_points).collect();
     members.sort_by(|a, b| b.len().cmp(&a.len()).then(a[0].cmp(&b[0])));
     let mut labels = vec![UNCLUSTERED; n];
     for (label, m) in members.iter().enumerate() {

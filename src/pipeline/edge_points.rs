@@ -11,19 +11,19 @@
 
 use rayon::prelude::*;
 
-use crate::camera::CameraModel;
 use crate::cloud::PointCloud;
-use crate::geometry::Vec3;
 
 use super::neighbours::NeighbourSearch;
+use super::plane_points::PlanePoints;
 
 /// How the full count `N` of Eq. 15 is obtained.
 #[derive(Debug, Clone, Copy)]
 pub enum FullCount {
     /// Eq. 6 at the point's depth: the paper.
     Frontal,
-    /// The lattice count of a plane with this normal through the point.
-    Plane(Vec3),
+    /// The full-plane lattice count the plane criterion measured the point
+    /// against ([`PlanePoints::full`]).
+    Plane,
 }
 
 /// The edge criterion's settings.
@@ -32,49 +32,70 @@ pub struct EdgeCriterion {
     pub full: FullCount,
     /// A point is an edge point when `N_r <= ratio · N`.
     pub ratio: f64,
-    /// True when `ratio · N` lies below the plane criterion's threshold, so
-    /// a member whose whole search window holds only members of its plate
-    /// cannot be an edge point and may be skipped (see [`edge_points`]).
-    pub safe_interior: bool,
 }
 
-/// Returns the members of plate `label` (`plate` lists its indices in the
-/// cloud, all with `labels[i] == label`) that are edge points.
+/// One plate: the cloud's plate labels, this plate's label and members.
+#[derive(Debug, Clone, Copy)]
+pub struct Plate<'a> {
+    pub labels: &'a [u32],
+    pub label: u32,
+    /// Indices into the cloud, all with `labels[i] == label`.
+    pub members: &'a [u32],
+}
+
+/// Returns the members of `plate` that are edge points (Eq. 15).
 ///
-/// On a pixel grid, when the criterion allows it, members whose window
-/// holds no non-member are skipped with a summed-area table instead of
-/// counted: their count equals the plane criterion's, which passed.
-pub fn edge_points(
-    cloud: &PointCloud,
-    camera: &CameraModel,
-    search: &NeighbourSearch,
-    labels: &[u32],
-    label: u32,
-    plate: &[u32],
-    criterion: &EdgeCriterion,
-) -> Vec<u32> {
-    let EdgeCriterion { full, ratio, safe_interior } = *criterion;
+/// On a pixel grid most members are settled without counting: the plane
+/// criterion's count is a lower bound of a point's neighbours, and at most
+/// the window's non-members (a summed-area table lookup) are not of its
+/// plate, so when that bound exceeds `ratio · N` the point is no edge. Only
+/// the rest are counted, exactly.
+pub fn edge_points(search: &NeighbourSearch, plane: &PlanePoints, plate: Plate, criterion: &EdgeCriterion) -> Vec<u32> {
+    let cloud = search.cloud();
+    let camera = search.camera();
     let points = cloud.points();
     let radius = search.radius_mm();
-    let outside = (safe_interior && cloud.is_organized()).then(|| OutsideCounts::new(cloud, labels, label));
-    plate
+    let Plate { labels, label, members } = plate;
+    let outside = cloud.is_organized().then(|| OutsideCounts::new(cloud, labels, label));
+    members
         .par_iter()
         .copied()
         .filter(|&i| {
             let i = i as usize;
             let p = points[i];
+            let n = match criterion.full {
+                FullCount::Frontal => camera.theoretical_neighbours(radius, p[2] as f64),
+                FullCount::Plane => plane.full[i] as f64,
+            };
+            let limit = criterion.ratio * n;
             if let Some(outside) = &outside {
                 let (wx, wy) = camera.neighbour_window(p, radius);
-                if outside.in_window(i, wx, wy) == 0 {
+                let lower_bound = plane.counts[i] as i64 - outside.in_window(i, wx, wy) as i64;
+                if lower_bound as f64 > limit {
                     return false;
                 }
             }
-            let n = match full {
-                FullCount::Frontal => camera.theoretical_neighbours(radius, p[2] as f64),
-                FullCount::Plane(normal) => search.full_plane_count(i, &normal),
+            search.count(i, |j| labels[j] == label) as f64 <= limit
+        })
+        .collect()
+}
+
+/// The straightforward form: every member counted. Kept as the reference.
+pub fn reference(search: &NeighbourSearch, plane: &PlanePoints, plate: Plate, criterion: &EdgeCriterion) -> Vec<u32> {
+    let camera = search.camera();
+    let points = search.cloud().points();
+    let radius = search.radius_mm();
+    plate
+        .members
+        .iter()
+        .copied()
+        .filter(|&i| {
+            let i = i as usize;
+            let n = match criterion.full {
+                FullCount::Frontal => camera.theoretical_neighbours(radius, points[i][2] as f64),
+                FullCount::Plane => plane.full[i] as f64,
             };
-            let nr = search.count(i, |j| labels[j] == label);
-            nr as f64 <= ratio * n
+            search.count(i, |j| plate.labels[j] == plate.label) as f64 <= criterion.ratio * n
         })
         .collect()
 }
@@ -115,84 +136,72 @@ impl OutsideCounts {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::camera::CameraModel;
+    use crate::cloud::PointCloud;
+    use crate::geometry::Vec3;
+    use crate::pipeline::plane_points::{RobustPlaneCriterion, robust_criterion};
 
-    /// A frontal plate at 600 mm covering columns below `cut` of a 50 x 30 grid.
-    fn plate() -> (PointCloud, Vec<u32>, Vec<u32>) {
+    /// A frontal plate at 600 mm covering columns below `cut` of a 50 x 30
+    /// grid, with a few dropouts inside.
+    fn plate() -> PointCloud {
         let camera = CameraModel::default();
         let (w, h, cut) = (50, 30, 30);
         let mut pts = Vec::new();
-        let mut labels = Vec::new();
         for row in 0..h {
             for col in 0..w {
                 let r = camera.ray(camera.cx() - 25.0 + col as f64, camera.cy() - 15.0 + row as f64);
-                if col < cut {
-                    pts.push([(r[0] * 600.0) as f32, (r[1] * 600.0) as f32, 600.0]);
-                    labels.push(0);
+                let dropout = (row * 50 + col) % 97 == 5;
+                pts.push(if col < cut && !dropout {
+                    [(r[0] * 600.0) as f32, (r[1] * 600.0) as f32, 600.0]
                 } else {
-                    pts.push([f32::NAN; 3]);
-                    labels.push(super::super::clustering::UNCLUSTERED);
-                }
+                    [f32::NAN; 3]
+                });
             }
         }
-        let members = (0..(w * h) as u32).filter(|&i| labels[i as usize] == 0).collect();
-        (PointCloud::organized(w, h, pts).unwrap(), labels, members)
+        PointCloud::organized(w, h, pts).unwrap()
+    }
+
+    fn setup(cloud: &PointCloud, search: &NeighbourSearch) -> (PlanePoints, Vec<u32>, Vec<u32>) {
+        let plane =
+            robust_criterion(search, &RobustPlaneCriterion { normal: Vec3::z(), min_ratio: 0.8, max_angle_deg: 20.0 });
+        let labels: Vec<u32> = plane.mask.iter().map(|&m| if m { 0 } else { u32::MAX }).collect();
+        let members = (0..cloud.len() as u32).filter(|&i| plane.mask[i as usize]).collect();
+        (plane, labels, members)
     }
 
     #[test]
     fn robust_threshold_finds_the_straight_edge_that_half_misses() {
         let camera = CameraModel::default();
-        let (cloud, labels, members) = plate();
+        let cloud = plate();
         let search = NeighbourSearch::new(&cloud, &camera, 1.0);
-        let on_edge_row = |pts: &[u32]| pts.iter().filter(|&&i| i / 50 == 15).map(|&i| i % 50).collect::<Vec<_>>();
-        let robust = edge_points(
-            &cloud,
-            &camera,
-            &search,
-            &labels,
-            0,
-            &members,
-            &EdgeCriterion { full: FullCount::Plane(Vec3::z()), ratio: 0.75, safe_interior: true },
-        );
-        let cols = on_edge_row(&robust);
-        assert!(cols.contains(&29), "the last column is an edge: {cols:?}");
-        // Columns 0 and 1 touch the grid's border, which is an edge too.
-        assert!(cols.iter().all(|&c| c <= 1 || c >= 27), "interior points are not edges: {cols:?}");
-        let paper = edge_points(
-            &cloud,
-            &camera,
-            &search,
-            &labels,
-            0,
-            &members,
-            &EdgeCriterion { full: FullCount::Frontal, ratio: 0.5, safe_interior: true },
-        );
-        assert!(on_edge_row(&paper).len() < cols.len());
+        let (plane, labels, members) = setup(&cloud, &search);
+        let plate = Plate { labels: &labels, label: 0, members: &members };
+        let on_row = |pts: &[u32]| pts.iter().filter(|&&i| i / 50 == 15).map(|&i| i % 50).collect::<Vec<_>>();
+        let robust = edge_points(&search, &plane, plate, &EdgeCriterion { full: FullCount::Plane, ratio: 0.75 });
+        let cols = on_row(&robust);
+        let last = *on_row(&members).iter().max().unwrap();
+        assert!(cols.contains(&last), "the outermost plane point is an edge: {cols:?}");
+        // Columns near 0 touch the grid's border, which is an edge too.
+        assert!(cols.iter().all(|&c| c <= 3 || c + 3 >= last), "interior points are not edges: {cols:?}");
+        let paper = edge_points(&search, &plane, plate, &EdgeCriterion { full: FullCount::Frontal, ratio: 0.5 });
+        assert!(on_row(&paper).len() < cols.len());
     }
 
     #[test]
-    fn summed_area_shortcut_changes_nothing() {
+    fn skipping_by_lower_bound_changes_nothing() {
         let camera = CameraModel::default();
-        let (cloud, labels, members) = plate();
+        let cloud = plate();
         let search = NeighbourSearch::new(&cloud, &camera, 1.0);
-        let full = FullCount::Plane(Vec3::z());
-        let fast = edge_points(
-            &cloud,
-            &camera,
-            &search,
-            &labels,
-            0,
-            &members,
-            &EdgeCriterion { full, ratio: 0.75, safe_interior: true },
-        );
-        let slow = edge_points(
-            &cloud,
-            &camera,
-            &search,
-            &labels,
-            0,
-            &members,
-            &EdgeCriterion { full, ratio: 0.75, safe_interior: false },
-        );
-        assert_eq!(fast, slow);
+        let tree = NeighbourSearch::kdtree(&cloud, &camera, 1.0);
+        let (plane, labels, members) = setup(&cloud, &search);
+        let plate = Plate { labels: &labels, label: 0, members: &members };
+        for criterion in [
+            EdgeCriterion { full: FullCount::Plane, ratio: 0.75 },
+            EdgeCriterion { full: FullCount::Frontal, ratio: 0.5 },
+        ] {
+            let mut fast = edge_points(&search, &plane, plate, &criterion);
+            fast.sort();
+            assert_eq!(fast, reference(&tree, &plane, plate, &criterion));
+        }
     }
 }

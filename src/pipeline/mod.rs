@@ -20,6 +20,7 @@ pub mod background;
 pub mod boundary;
 pub mod clustering;
 pub mod edge_points;
+pub mod grid_search;
 pub mod neighbours;
 pub mod orientation;
 pub mod plane_points;
@@ -275,10 +276,8 @@ impl<'a> Run<'a> {
             None
         };
 
-        let mask = match dominant {
+        let plane = match dominant {
             Some(normal) => plane_points::robust_criterion(
-                cloud,
-                camera,
                 &search,
                 &plane_points::RobustPlaneCriterion {
                     normal,
@@ -288,7 +287,7 @@ impl<'a> Run<'a> {
             ),
             None => plane_points::paper_criterion(cloud, camera, &search),
         };
-        self.stats.plane_points = mask.iter().filter(|&&b| b).count();
+        self.stats.plane_points = plane.len();
         self.clock.lap(Stage::PlanePoints);
         if self.stats.plane_points == 0 {
             return Err(PlanError::at(Stage::PlanePoints, "no point passed the plane point criterion"));
@@ -297,12 +296,11 @@ impl<'a> Run<'a> {
         // Clusters below a few dozen points cannot reach the area limit.
         const MIN_CLUSTER_POINTS: usize = 30;
         let clusters = if robust && cloud.is_organized() {
-            clustering::grid(cloud, &mask, cfg.cluster_tolerance_mm, MIN_CLUSTER_POINTS)
+            clustering::grid(cloud, &plane.mask, cfg.cluster_tolerance_mm, MIN_CLUSTER_POINTS)
         } else {
             let tol = if robust { cfg.cluster_tolerance_mm } else { self.config.paper.cluster_tolerance_mm };
-            clustering::euclidean(cloud, &mask, tol, MIN_CLUSTER_POINTS)
+            clustering::euclidean(cloud, &plane.mask, tol, MIN_CLUSTER_POINTS)
         };
-        drop(mask);
         self.clock.lap(Stage::Clustering);
 
         let area_per_point = |c: &Vec3, n: &Vec3| -> f64 {
@@ -341,22 +339,13 @@ impl<'a> Run<'a> {
                 labels[i as usize] = k as u32;
             }
         }
-        let radius = cfg.neighbour_radius_mm;
         let criterion = match dominant {
-            // Config validation keeps the edge ratio below the plane ratio.
-            Some(n) => {
-                EdgeCriterion { full: FullCount::Plane(n), ratio: cfg.edge_max_neighbour_ratio, safe_interior: true }
-            }
-            None => {
-                // Eq. 13's N'min is (1 - e/R)² of Eq. 6's N.
-                let margin = 1.0 - camera.nominal_accuracy_mm / radius;
-                let ratio = self.config.paper.edge_ratio;
-                EdgeCriterion { full: FullCount::Frontal, ratio, safe_interior: ratio < margin * margin }
-            }
+            Some(_) => EdgeCriterion { full: FullCount::Plane, ratio: cfg.edge_max_neighbour_ratio },
+            None => EdgeCriterion { full: FullCount::Frontal, ratio: self.config.paper.edge_ratio },
         };
         let edges: [Vec<u32>; 2] = std::array::from_fn(|k| {
-            let members = &workpiece.plates[k].members;
-            edge_points::edge_points(cloud, camera, &search, &labels, k as u32, members, &criterion)
+            let plate = edge_points::Plate { labels: &labels, label: k as u32, members: &workpiece.plates[k].members };
+            edge_points::edge_points(&search, &plane, plate, &criterion)
         });
         self.stats.edge_points = [edges[0].len(), edges[1].len()];
         self.clock.lap(Stage::EdgePoints);

@@ -14,6 +14,8 @@ use crate::camera::CameraModel;
 use crate::cloud::{Point, PointCloud};
 use crate::geometry::Vec3;
 
+use super::grid_search::Span;
+
 /// Finds the neighbours of cloud points within a fixed radius.
 pub struct NeighbourSearch<'a> {
     cloud: &'a PointCloud,
@@ -46,6 +48,21 @@ impl<'a> NeighbourSearch<'a> {
         let radius = radius_mm as f32;
         let tree = (!cloud.is_organized()).then(|| build_tree(cloud.points()));
         NeighbourSearch { cloud, camera, radius, radius_sq: radius * radius, tree }
+    }
+
+    /// A search that always queries a KD-tree, even on a pixel grid: the
+    /// straightforward reference the grid paths are tested against.
+    pub fn kdtree(cloud: &'a PointCloud, camera: &'a CameraModel, radius_mm: f64) -> Self {
+        let radius = radius_mm as f32;
+        NeighbourSearch { cloud, camera, radius, radius_sq: radius * radius, tree: Some(build_tree(cloud.points())) }
+    }
+
+    pub fn cloud(&self) -> &PointCloud {
+        self.cloud
+    }
+
+    pub fn camera(&self) -> &CameraModel {
+        self.camera
     }
 
     pub fn radius_mm(&self) -> f64 {
@@ -102,15 +119,86 @@ impl<'a> NeighbourSearch<'a> {
     /// complete plane with unit normal `n` through it, as sampled by this
     /// camera: the theoretical count of Eq. 6, corrected for the plane's
     /// tilt and, on a pixel grid, for the grid itself.
+    ///
+    /// On a grid it is the lattice count of the plane's ellipse at the
+    /// centre of the point's 32 x 32 pixel tile (binned by its viewing
+    /// direction) and at its depth rounded to 0.5 mm. Across a tile and half a millimetre the ellipse changes by
+    /// about a thousandth, so this is the pixel's own lattice count give or
+    /// take one lattice point; in exchange it is computed once per tile and
+    /// depth step instead of once per pixel.
     pub fn full_plane_count(&self, i: usize, n: &Vec3) -> f64 {
         let p = self.cloud.points()[i];
-        let pv = Vec3::new(p[0] as f64, p[1] as f64, p[2] as f64);
         let r = self.radius as f64;
-        if self.tree.is_some() {
-            return std::f64::consts::PI * r * r * self.camera.plane_density_at([pv.x, pv.y, pv.z], [n.x, n.y, n.z]);
+        if !self.cloud.is_organized() {
+            let density = self.camera.plane_density_at([p[0] as f64, p[1] as f64, p[2] as f64], [n.x, n.y, n.z]);
+            return std::f64::consts::PI * r * r * density;
         }
-        lattice_count_in_ellipse(self.camera, &pv, n, r)
+        // The tile from the point's own viewing direction, so a cropped
+        // frame gets the same counts as the full one.
+        let (fx, fy) = (self.camera.fx(), self.camera.fy());
+        let tile = FULL_COUNT_TILE_PX as f64;
+        let z = p[2] as f64;
+        let (tile_col, tile_row) = ((p[0] as f64 / z * fx / tile).floor(), (p[1] as f64 / z * fy / tile).floor());
+        let depth_step = (z / FULL_COUNT_DEPTH_STEP_MM).round();
+        let key = FullCountKey {
+            tile: ((tile_row as i32 as u32 as u64) << 32) | tile_col as i32 as u32 as u64,
+            depth_step: depth_step as i64,
+            plane: [
+                n.x.to_bits(),
+                n.y.to_bits(),
+                n.z.to_bits(),
+                r.to_bits(),
+                self.camera.fx().to_bits(),
+                self.camera.fy().to_bits(),
+            ],
+        };
+        FULL_COUNTS.with(|cache| {
+            let mut cache = cache.borrow_mut();
+            let slot = key.slot();
+            if let Some((k, v)) = &cache[slot]
+                && *k == key
+            {
+                return *v;
+            }
+            let ray = Vec3::new((tile_col + 0.5) * tile / fx, (tile_row + 0.5) * tile / fy, 1.0);
+            let value = lattice_count_in_ellipse(self.camera, &(ray * (depth_step * FULL_COUNT_DEPTH_STEP_MM)), n, r);
+            cache[slot] = Some((key, value));
+            value
+        })
     }
+}
+
+/// Side of the image tiles over which the full-plane count is shared.
+pub const FULL_COUNT_TILE_PX: usize = 32;
+/// Depth step over which the full-plane count is shared, mm.
+pub const FULL_COUNT_DEPTH_STEP_MM: f64 = 0.5;
+const FULL_COUNT_SLOTS: usize = 4096;
+
+/// What a memoised full-plane count depends on: the tile, the depth step,
+/// and the plane normal, radius and focal lengths as exact bit patterns.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+struct FullCountKey {
+    tile: u64,
+    depth_step: i64,
+    plane: [u64; 6],
+}
+
+impl FullCountKey {
+    fn slot(&self) -> usize {
+        let mut h = self.tile.wrapping_mul(0x9e37_79b9_7f4a_7c15)
+            ^ (self.depth_step as u64).wrapping_mul(0xc2b2_ae3d_27d4_eb4f);
+        for v in self.plane {
+            h = (h ^ v).wrapping_mul(0x1656_67b1_9e37_79f9);
+        }
+        (h >> 40) as usize % FULL_COUNT_SLOTS
+    }
+}
+
+thread_local! {
+    /// Per-thread memo of full-plane counts: lock-free, and a collision
+    /// only costs a recomputation.
+    static FULL_COUNTS: std::cell::RefCell<Vec<Option<(FullCountKey, f64)>>> =
+        std::cell::RefCell::new(vec![None; FULL_COUNT_SLOTS]);
 }
 
 fn build_tree(points: &[Point]) -> KdIndex {
@@ -129,45 +217,103 @@ fn build_tree(points: &[Point]) -> KdIndex {
     KdIndex { tree, point_of_item }
 }
 
-/// Counts the pixel offsets `(du, dv)` whose rays meet the plane through
-/// `p` with normal `n` within `radius` of `p`.
-///
-/// Near `p` the plane maps pixel offsets linearly to 3D displacements,
-/// `d ≈ J (du, dv)`, so the offsets within the radius are the lattice points
-/// inside the ellipse `(du, dv)ᵀ JᵀJ (du, dv) <= R²`, counted row by row.
-/// This is what a pixel grid really gives; `π R² D` can be 15 % off it.
-pub fn lattice_count_in_ellipse(camera: &CameraModel, p: &Vec3, n: &Vec3, radius: f64) -> f64 {
-    let z = p.z;
-    let ray = Vec3::new(p.x / z, p.y / z, 1.0);
-    let n_dot_ray = n.dot(&ray);
-    if n_dot_ray.abs() < 1e-6 {
-        return 0.0;
+/// The image, in pixel offsets, of the disc of radius R around a point on
+/// a plane: near `p` the plane maps pixel offsets linearly to 3D
+/// displacements, `d ≈ J (du, dv)`, so the offsets within the radius are
+/// the lattice points inside the ellipse `(du, dv)ᵀ JᵀJ (du, dv) <= R²`.
+#[derive(Debug, Clone, Copy)]
+pub struct PixelEllipse {
+    a: f64,
+    b: f64,
+    c: f64,
+    det: f64,
+    radius_sq: f64,
+}
+
+impl PixelEllipse {
+    /// The ellipse of the plane through `p` with unit normal `n`; `None`
+    /// when the plane is seen edge-on.
+    pub fn new(camera: &CameraModel, p: &Vec3, n: &Vec3, radius: f64) -> Option<PixelEllipse> {
+        let z = p.z;
+        let ray = Vec3::new(p.x / z, p.y / z, 1.0);
+        let n_dot_ray = n.dot(&ray);
+        if n_dot_ray.abs() < 1e-6 {
+            return None;
+        }
+        // ∂q/∂u and ∂q/∂v of q(u, v) = (n·p)/(n·r(u, v)) r(u, v) at p.
+        let eu = Vec3::new(1.0 / camera.fx(), 0.0, 0.0);
+        let ev = Vec3::new(0.0, 1.0 / camera.fy(), 0.0);
+        let ju = (eu - ray * (n.dot(&eu) / n_dot_ray)) * z;
+        let jv = (ev - ray * (n.dot(&ev) / n_dot_ray)) * z;
+        let (a, b, c) = (ju.dot(&ju), ju.dot(&jv), jv.dot(&jv));
+        let det = a * c - b * b;
+        (det > 0.0).then_some(PixelEllipse { a, b, c, det, radius_sq: radius * radius })
     }
-    // ∂q/∂u and ∂q/∂v of q(u, v) = (n·p)/(n·r(u, v)) r(u, v) at p.
-    let eu = Vec3::new(1.0 / camera.fx(), 0.0, 0.0);
-    let ev = Vec3::new(0.0, 1.0 / camera.fy(), 0.0);
-    let ju = (eu - ray * (n.dot(&eu) / n_dot_ray)) * z;
-    let jv = (ev - ray * (n.dot(&ev) / n_dot_ray)) * z;
-    let (a, b, c) = (ju.dot(&ju), ju.dot(&jv), jv.dot(&jv));
-    let det = a * c - b * b;
-    if det <= 0.0 {
-        return 0.0;
+
+    fn dv_max(&self) -> i64 {
+        (self.radius_sq * self.a / self.det).sqrt().floor() as i64
     }
-    let r2 = radius * radius;
-    let dv_max = (r2 * a / det).sqrt().floor() as i64;
-    let mut count = 0i64;
-    for dv in -dv_max..=dv_max {
+
+    /// The real `du` interval of row `dv` inside the ellipse.
+    fn row(&self, dv: i64) -> Option<(f64, f64)> {
         let dv = dv as f64;
-        let disc = b * b * dv * dv - a * (c * dv * dv - r2);
+        let disc = self.b * self.b * dv * dv - self.a * (self.c * dv * dv - self.radius_sq);
         if disc < 0.0 {
-            continue;
+            return None;
         }
         let s = disc.sqrt();
-        let lo = ((-b * dv - s) / a).ceil() as i64;
-        let hi = ((-b * dv + s) / a).floor() as i64;
-        count += (hi - lo + 1).max(0);
+        Some(((-self.b * dv - s) / self.a, (-self.b * dv + s) / self.a))
     }
-    count as f64
+
+    /// The number of pixel offsets inside the ellipse: what a pixel grid
+    /// really gives, where `π R² D` can be 15 % off.
+    pub fn lattice_count(&self) -> f64 {
+        // The ellipse is centred: row -dv holds the mirror image of row dv,
+        // so the same number of lattice points.
+        let dv_max = self.dv_max();
+        let mut count = 0i64;
+        for dv in 0..=dv_max {
+            if let Some((lo, hi)) = self.row(dv) {
+                let row = (floor(hi) - ceil(lo) + 1).max(0);
+                count += if dv == 0 { row } else { 2 * row };
+            }
+        }
+        count as f64
+    }
+
+    /// Fills `out` with row spans covering the ellipse widened by `margin`
+    /// pixels all round: where a plane point's neighbours lie, noise
+    /// included.
+    pub fn spans_into(&self, margin: isize, out: &mut Vec<Span>) {
+        out.clear();
+        let dv_max = self.dv_max() as isize + margin;
+        for dv in -dv_max..=dv_max {
+            let nearest = if dv > 0 { (dv - margin).max(0) } else { (dv + margin).min(0) };
+            if let Some((lo, hi)) = self.row(nearest as i64) {
+                out.push(Span { dv, du_lo: floor(lo) as isize - margin, du_hi: ceil(hi) as isize + margin });
+            }
+        }
+    }
+}
+
+// Floor and ceiling for the small values of pixel offsets. Without SSE4.1
+// the standard ones are library calls, and they ran on every pixel.
+#[inline(always)]
+fn floor(x: f64) -> i64 {
+    let t = x as i64;
+    t - ((t as f64) > x) as i64
+}
+
+#[inline(always)]
+fn ceil(x: f64) -> i64 {
+    let t = x as i64;
+    t + ((t as f64) < x) as i64
+}
+
+/// The lattice count of a complete plane with normal `n` through `p`
+/// within `radius` (see [`PixelEllipse`]); 0 for a plane seen edge-on.
+pub fn lattice_count_in_ellipse(camera: &CameraModel, p: &Vec3, n: &Vec3, radius: f64) -> f64 {
+    PixelEllipse::new(camera, p, n, radius).map_or(0.0, |e| e.lattice_count())
 }
 
 #[cfg(test)]
@@ -219,9 +365,15 @@ mod tests {
             let search = NeighbourSearch::new(&cloud, &camera, 1.0);
             let centre = 20 * 41 + 20;
             let actual = search.count(centre, |_| true) as f64;
-            let expected = search.full_plane_count(centre, &n);
+            let expected = lattice_count_in_ellipse(&camera, &vec3(&cloud.points()[centre]), &n, 1.0);
             assert!((actual - expected).abs() <= 1.0, "z {z}: actual {actual}, lattice {expected}");
+            let shared = search.full_plane_count(centre, &n);
+            assert!((shared - expected).abs() <= 1.0, "z {z}: tile count {shared}, pixel's own {expected}");
         }
+    }
+
+    fn vec3(p: &Point) -> Vec3 {
+        Vec3::new(p[0] as f64, p[1] as f64, p[2] as f64)
     }
 
     #[test]
@@ -232,6 +384,14 @@ mod tests {
         let edge = 20 * 41 + 20;
         let ratio = search.count(edge, |_| true) as f64 / search.full_plane_count(edge, &Vec3::z());
         assert!((0.45..0.65).contains(&ratio), "{ratio}");
+    }
+
+    #[test]
+    fn floor_and_ceil_match_the_standard_ones() {
+        for x in [-3.5, -3.0, -2.9999, -0.5, -0.0, 0.0, 0.2, 1.0, 1.0001, 7.9999, 8.0] {
+            assert_eq!(floor(x), x.floor() as i64, "{x}");
+            assert_eq!(ceil(x), x.ceil() as i64, "{x}");
+        }
     }
 
     #[test]

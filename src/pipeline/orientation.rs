@@ -36,23 +36,33 @@ fn vec_at(cloud: &PointCloud, i: usize) -> Option<Vec3> {
 }
 
 fn grid_normal(cloud: &PointCloud, i: usize, step: usize) -> Option<Vec3> {
+    // Runs on every pixel: plain f32 arithmetic on the stored points.
     let (w, h) = (cloud.width(), cloud.height());
+    let points = cloud.points();
     let (col, row) = (i % w, i / w);
-    let centre = vec_at(cloud, i)?;
-    let at = |c: usize, r: usize| vec_at(cloud, r * w + c);
-    let difference = |before: Option<Vec3>, after: Option<Vec3>| match (before, after) {
-        (Some(b), Some(a)) => Some(a - b),
-        (None, Some(a)) => Some(a - centre),
-        (Some(b), None) => Some(centre - b),
+    let centre = points[i];
+    if !centre[0].is_finite() {
+        return None;
+    }
+    let valid = |j: usize| points[j][0].is_finite().then_some(points[j]);
+    let sub = |a: [f32; 3], b: [f32; 3]| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
+    let difference = |before: Option<[f32; 3]>, after: Option<[f32; 3]>| match (before, after) {
+        (Some(b), Some(a)) => Some(sub(a, b)),
+        (None, Some(a)) => Some(sub(a, centre)),
+        (Some(b), None) => Some(sub(centre, b)),
         (None, None) => None,
     };
-    let left = col.checked_sub(step).and_then(|c| at(c, row));
-    let right = (col + step < w).then(|| at(col + step, row)).flatten();
-    let up = row.checked_sub(step).and_then(|r| at(col, r));
-    let down = (row + step < h).then(|| at(col, row + step)).flatten();
+    let left = if col >= step { valid(i - step) } else { None };
+    let right = if col + step < w { valid(i + step) } else { None };
+    let up = if row >= step { valid(i - step * w) } else { None };
+    let down = if row + step < h { valid(i + step * w) } else { None };
     let du = difference(left, right)?;
     let dv = difference(up, down)?;
-    let n = du.cross(&dv);
+    let n = Vec3::new(
+        (du[1] * dv[2] - du[2] * dv[1]) as f64,
+        (du[2] * dv[0] - du[0] * dv[2]) as f64,
+        (du[0] * dv[1] - du[1] * dv[0]) as f64,
+    );
     let norm = n.norm();
     (norm > 1e-12).then(|| n / norm)
 }

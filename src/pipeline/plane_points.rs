@@ -9,32 +9,70 @@
 //! criterion compares the count with what a complete plane of the
 //! workpiece's orientation gives at that very pixel, and also requires the
 //! local normal to agree with the workpiece's, which no count can check.
+//!
+//! On a pixel grid the counts run eight pixels at a time over the full
+//! plane's ellipse; a point whose count there already reaches its
+//! threshold is a plane point (the exact count can only be larger), and
+//! only the others are counted over the whole exact window. The result is
+//! the reference's, point for point.
 
 use rayon::prelude::*;
 
 use crate::camera::CameraModel;
 use crate::cloud::PointCloud;
-use crate::geometry::Vec3;
+use crate::geometry::{Vec3, vec3};
 
-use super::neighbours::NeighbourSearch;
+use super::grid_search::{Grid, LANES, Span};
+use super::neighbours::{NeighbourSearch, PixelEllipse};
 use super::orientation::{local_normal, normal_step};
 
-/// Eq. 14: `P` is a plane point when `N_r >= N'min(L)`, with `L` the
-/// point's depth z (Eq. 13).
-pub fn paper_criterion(cloud: &PointCloud, camera: &CameraModel, search: &NeighbourSearch) -> Vec<bool> {
-    let radius = search.radius_mm();
-    let points = cloud.points();
-    (0..points.len())
-        .into_par_iter()
-        .map(|i| {
-            let p = &points[i];
-            if !p[0].is_finite() {
-                return false;
-            }
-            let threshold = camera.min_plane_neighbours(radius, p[2] as f64);
-            search.count(i, |_| true) as f64 >= threshold
-        })
-        .collect()
+/// The plane points and, for each, a lower bound of its neighbour count
+/// and the full-plane count it was measured against (the edge criterion
+/// reuses both to skip points that cannot be edges).
+#[derive(Debug, Clone, PartialEq)]
+pub struct PlanePoints {
+    pub mask: Vec<bool>,
+    pub counts: Vec<u16>,
+    /// The full-plane count of the robust criterion; 0 for the paper's.
+    pub full: Vec<u16>,
+}
+
+impl PlanePoints {
+    pub fn len(&self) -> usize {
+        self.mask.iter().filter(|&&b| b).count()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        !self.mask.iter().any(|&b| b)
+    }
+}
+
+/// What decides a point: the neighbour count it needs, or `None` when it
+/// is rejected before counting.
+trait Threshold: Sync {
+    /// The count point `i` needs, and the full count it derives from (0
+    /// when the criterion has none).
+    fn needed(&self, i: usize) -> Option<(f64, f64)>;
+    /// The plane orientation whose ellipse the counts scan first.
+    fn scan_normal(&self) -> Vec3;
+}
+
+/// Eq. 14: `N_r >= N'min(L)` with `L` the point's depth (Eq. 13).
+struct PaperThreshold<'a> {
+    cloud: &'a PointCloud,
+    camera: &'a CameraModel,
+    radius: f64,
+}
+
+impl Threshold for PaperThreshold<'_> {
+    fn needed(&self, i: usize) -> Option<(f64, f64)> {
+        let p = self.cloud.points()[i];
+        p[0].is_finite().then(|| (self.camera.min_plane_neighbours(self.radius, p[2] as f64), 0.0))
+    }
+
+    fn scan_normal(&self) -> Vec3 {
+        Vec3::z()
+    }
 }
 
 /// Settings of the robust criterion.
@@ -48,34 +86,140 @@ pub struct RobustPlaneCriterion {
     pub max_angle_deg: f64,
 }
 
-/// The robust plane criterion: `N_r >= ratio · N_plane(p)` where
-/// `N_plane` is the lattice count of a complete plane with the dominant
-/// normal through `p`, and the local normal within the angle limit.
-pub fn robust_criterion(
-    cloud: &PointCloud,
-    camera: &CameraModel,
-    search: &NeighbourSearch,
-    criterion: &RobustPlaneCriterion,
-) -> Vec<bool> {
-    let points = cloud.points();
+struct RobustThreshold<'a> {
+    search: &'a NeighbourSearch<'a>,
+    criterion: RobustPlaneCriterion,
+    cos_limit: f64,
+}
+
+impl Threshold for RobustThreshold<'_> {
+    fn needed(&self, i: usize) -> Option<(f64, f64)> {
+        let cloud = self.search.cloud();
+        let p = cloud.points()[i];
+        if !p[0].is_finite() {
+            return None;
+        }
+        let step = normal_step(self.search.camera().fx(), p[2] as f64, self.search.radius_mm());
+        let n = local_normal(cloud, self.search, i, step)?;
+        if n.dot(&self.criterion.normal) < self.cos_limit {
+            return None;
+        }
+        let full = self.search.full_plane_count(i, &self.criterion.normal);
+        (full > 0.0).then_some((self.criterion.min_ratio * full, full))
+    }
+
+    fn scan_normal(&self) -> Vec3 {
+        self.criterion.normal
+    }
+}
+
+/// Eq. 14, the paper's criterion.
+pub fn paper_criterion(cloud: &PointCloud, camera: &CameraModel, search: &NeighbourSearch) -> PlanePoints {
+    classify(search, &PaperThreshold { cloud, camera, radius: search.radius_mm() })
+}
+
+/// The robust criterion: `N_r >= ratio · N_plane(p)`, where `N_plane` is
+/// the lattice count of a complete plane with the dominant normal through
+/// `p`, and the local normal within the angle limit.
+pub fn robust_criterion(search: &NeighbourSearch, criterion: &RobustPlaneCriterion) -> PlanePoints {
     let cos_limit = criterion.max_angle_deg.to_radians().cos();
-    let radius = search.radius_mm();
-    (0..points.len())
+    classify(search, &RobustThreshold { search, criterion: *criterion, cos_limit })
+}
+
+/// The straightforward form of either criterion: one radius count per
+/// point through `search` (a KD-tree in the tests). Kept as the reference.
+pub fn reference(search: &NeighbourSearch, paper: bool, criterion: &RobustPlaneCriterion) -> Vec<bool> {
+    let cloud = search.cloud();
+    let paper_t = PaperThreshold { cloud, camera: search.camera(), radius: search.radius_mm() };
+    let cos_limit = criterion.max_angle_deg.to_radians().cos();
+    let robust_t = RobustThreshold { search, criterion: *criterion, cos_limit };
+    let threshold: &dyn Threshold = if paper { &paper_t } else { &robust_t };
+    (0..cloud.len())
         .into_par_iter()
-        .map(|i| {
-            let p = &points[i];
-            if !p[0].is_finite() {
-                return false;
-            }
-            let step = normal_step(camera.fx(), p[2] as f64, radius);
-            let facing = local_normal(cloud, search, i, step).is_some_and(|n| n.dot(&criterion.normal) >= cos_limit);
-            if !facing {
-                return false;
-            }
-            let full = search.full_plane_count(i, &criterion.normal);
-            full > 0.0 && search.count(i, |_| true) as f64 >= criterion.min_ratio * full
-        })
+        .map(|i| threshold.needed(i).is_some_and(|(t, _)| search.count(i, |_| true) as f64 >= t))
         .collect()
+}
+
+fn classify(search: &NeighbourSearch, threshold: &dyn Threshold) -> PlanePoints {
+    let cloud = search.cloud();
+    let n = cloud.len();
+    let mut mask = vec![false; n];
+    let mut counts = vec![0u16; n];
+    let mut full = vec![0u16; n];
+    let saturate = |v: f64| v.clamp(0.0, u16::MAX as f64) as u16;
+    if !cloud.is_organized() {
+        mask.par_iter_mut().zip(counts.par_iter_mut()).zip(full.par_iter_mut()).enumerate().for_each(
+            |(i, ((m, c), f))| {
+                if let Some((t, full_count)) = threshold.needed(i) {
+                    let count = search.count(i, |_| true);
+                    *m = count as f64 >= t;
+                    *c = if *m { saturate(count as f64) } else { 0 };
+                    *f = saturate(full_count);
+                }
+            },
+        );
+        return PlanePoints { mask, counts, full };
+    }
+    let grid = Grid::new(cloud);
+    let w = cloud.width();
+    mask.par_chunks_mut(w).zip(counts.par_chunks_mut(w)).zip(full.par_chunks_mut(w)).enumerate().for_each(
+        |(row, ((mask_row, count_row), full_row))| {
+            let mut spans = Vec::new();
+            for col in (0..w).step_by(LANES) {
+                let out =
+                    BlockOut { mask: &mut mask_row[col..], counts: &mut count_row[col..], full: &mut full_row[col..] };
+                classify_block(search, &grid, threshold, row, col, &mut spans, out);
+            }
+        },
+    );
+    PlanePoints { mask, counts, full }
+}
+
+/// Where a block's results go: slices starting at the block's first pixel.
+struct BlockOut<'a> {
+    mask: &'a mut [bool],
+    counts: &'a mut [u16],
+    full: &'a mut [u16],
+}
+
+/// Classifies up to `LANES` pixels of one row starting at `col`. `spans`
+/// is scratch space reused across blocks.
+fn classify_block(
+    search: &NeighbourSearch,
+    grid: &Grid,
+    threshold: &dyn Threshold,
+    row: usize,
+    col: usize,
+    spans: &mut Vec<Span>,
+    out: BlockOut,
+) {
+    let w = grid.width();
+    let lanes = LANES.min(w - col);
+    let first = row * w + col;
+    let needed: [Option<(f64, f64)>; LANES] =
+        std::array::from_fn(|l| if l < lanes { threshold.needed(first + l) } else { None });
+    let Some(anchor) = (0..lanes).find(|&l| needed[l].is_some()) else { return };
+    // The block's partial counts over the ellipse of its first candidate,
+    // one pixel wider for noise; they are lower bounds for every lane.
+    let mut partial = [0u32; LANES];
+    if lanes == LANES {
+        let p = vec3(&search.cloud().points()[first + anchor]);
+        if let Some(ellipse) = PixelEllipse::new(search.camera(), &p, &threshold.scan_normal(), search.radius_mm()) {
+            ellipse.spans_into(1, spans);
+            if grid.spans_fit(col, row, spans) {
+                partial = grid.count_block(col, row, spans, (search.radius_mm() * search.radius_mm()) as f32);
+            }
+        }
+    }
+    for l in 0..lanes {
+        let Some((t, full)) = needed[l] else { continue };
+        let count = if partial[l] as f64 >= t { partial[l] } else { search.count(first + l, |_| true) };
+        out.full[l] = full.clamp(0.0, u16::MAX as f64) as u16;
+        if count as f64 >= t {
+            out.mask[l] = true;
+            out.counts[l] = count.min(u16::MAX as u32) as u16;
+        }
+    }
 }
 
 #[cfg(test)]
@@ -111,9 +255,9 @@ mod tests {
         let search = NeighbourSearch::new(&cloud, &camera, 1.0);
         let centre = 20 * 60 + 30;
         let paper = paper_criterion(&cloud, &camera, &search);
-        assert!(!paper[centre], "foreshortening drops the paper's count below N'min");
+        assert!(!paper.mask[centre], "foreshortening drops the paper's count below N'min");
         let robust = RobustPlaneCriterion { normal: n, min_ratio: 0.8, max_angle_deg: 20.0 };
-        assert!(robust_criterion(&cloud, &camera, &search, &robust)[centre]);
+        assert!(robust_criterion(&search, &robust).mask[centre]);
     }
 
     #[test]
@@ -122,7 +266,7 @@ mod tests {
         let (cloud, n) = scene(600.0, 10.0, 30);
         let search = NeighbourSearch::new(&cloud, &camera, 1.0);
         let robust = RobustPlaneCriterion { normal: n, min_ratio: 0.8, max_angle_deg: 20.0 };
-        let mask = robust_criterion(&cloud, &camera, &search, &robust);
+        let mask = robust_criterion(&search, &robust).mask;
         assert!(mask[20 * 60 + 10], "plate interior");
         assert!(!mask[20 * 60 + 50], "bevel interior");
     }
@@ -132,6 +276,19 @@ mod tests {
         let camera = CameraModel::default();
         let cloud = PointCloud::organized(3, 3, vec![[f32::NAN; 3]; 9]).unwrap();
         let search = NeighbourSearch::new(&cloud, &camera, 1.0);
-        assert!(paper_criterion(&cloud, &camera, &search).iter().all(|&b| !b));
+        assert!(paper_criterion(&cloud, &camera, &search).is_empty());
+    }
+
+    #[test]
+    fn grid_fast_path_classifies_exactly_as_the_kdtree_reference() {
+        let camera = CameraModel::default();
+        for (z, tilt, cols) in [(520.0, 0.0, 33), (800.0, 25.0, 41), (980.0, 12.0, 60)] {
+            let (cloud, n) = scene(z, tilt, cols);
+            let grid = NeighbourSearch::new(&cloud, &camera, 1.0);
+            let tree = NeighbourSearch::kdtree(&cloud, &camera, 1.0);
+            let c = RobustPlaneCriterion { normal: n, min_ratio: 0.8, max_angle_deg: 20.0 };
+            assert_eq!(robust_criterion(&grid, &c).mask, reference(&tree, false, &c), "robust at {z} mm");
+            assert_eq!(paper_criterion(&cloud, &camera, &grid).mask, reference(&tree, true, &c), "paper at {z} mm");
+        }
     }
 }

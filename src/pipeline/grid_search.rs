@@ -1,0 +1,289 @@
+//! The fast path of the radius counts on a pixel grid: coordinates stored
+//! as separate x, y, z planes, and eight horizontally adjacent pixels
+//! counted together, one per SIMD lane. For a given window offset the
+//! eight neighbours are eight consecutive pixels, so every step is a
+//! contiguous load and the loop vectorises without gathers.
+//!
+//! The counts use the same predicate as [`super::neighbours`], term for
+//! term in the same order (no fused multiply-add), so a pixel counted here
+//! is counted there: a count over part of the window is a lower bound of
+//! the exact count, never more.
+
+use crate::cloud::PointCloud;
+
+/// Pixels counted together.
+pub const LANES: usize = 8;
+
+/// One row of window offsets: `dv` and the inclusive `du` range.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Span {
+    pub dv: isize,
+    pub du_lo: isize,
+    pub du_hi: isize,
+}
+
+/// An organized cloud's coordinates as three planes.
+pub struct Grid {
+    width: usize,
+    height: usize,
+    xs: Vec<f32>,
+    ys: Vec<f32>,
+    zs: Vec<f32>,
+}
+
+impl Grid {
+    /// Splits an organized cloud into coordinate planes.
+    pub fn new(cloud: &PointCloud) -> Grid {
+        let n = cloud.len();
+        let (mut xs, mut ys, mut zs) = (Vec::with_capacity(n), Vec::with_capacity(n), Vec::with_capacity(n));
+        for p in cloud.points() {
+            xs.push(p[0]);
+            ys.push(p[1]);
+            zs.push(p[2]);
+        }
+        Grid { width: cloud.width(), height: cloud.height(), xs, ys, zs }
+    }
+
+    pub fn width(&self) -> usize {
+        self.width
+    }
+
+    pub fn height(&self) -> usize {
+        self.height
+    }
+
+    /// True when every offset of `spans` stays inside the image for all
+    /// lanes of the block whose first pixel is `(col, row)`.
+    pub fn spans_fit(&self, col: usize, row: usize, spans: &[Span]) -> bool {
+        spans.iter().all(|s| {
+            let r = row as isize + s.dv;
+            let c0 = col as isize + s.du_lo;
+            let c1 = col as isize + s.du_hi + LANES as isize - 1;
+            r >= 0 && (r as usize) < self.height && c0 >= 0 && (c1 as usize) < self.width
+        })
+    }
+
+    /// For the `LANES` pixels starting at `(col, row)`, counts the valid
+    /// pixels at the offsets `spans` within `radius_sq` of each. The caller
+    /// checks [`Grid::spans_fit`] first; `member` (when given) restricts the
+    /// count to pixels whose label equals `label`.
+    pub fn count_block(&self, col: usize, row: usize, spans: &[Span], radius_sq: f32) -> [u32; LANES] {
+        #[cfg(target_arch = "x86_64")]
+        {
+            if std::arch::is_x86_feature_detected!("avx2") {
+                // SAFETY: the CPU supports AVX2, checked just above.
+                return unsafe { self.count_block_avx2(col, row, spans, radius_sq) };
+            }
+            // SAFETY: SSE2 is part of the x86_64 baseline.
+            unsafe { self.count_block_sse2(col, row, spans, radius_sq) }
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        self.count_block_portable(col, row, spans, radius_sq)
+    }
+
+    /// The offsets of `spans` as index ranges of the first lane's
+    /// neighbour, for the block starting at `(col, row)`.
+    fn span_ranges<'s>(&self, col: usize, row: usize, spans: &'s [Span]) -> impl Iterator<Item = (usize, usize)> + 's {
+        let width = self.width;
+        spans.iter().map(move |s| {
+            let base = ((row as isize + s.dv) as usize * width + col) as isize;
+            ((base + s.du_lo) as usize, (base + s.du_hi) as usize + 1)
+        })
+    }
+
+    /// Eight lanes in one AVX2 register. Separate multiply and add in the
+    /// scalar predicate's order and an ordered compare (NaN is false) give
+    /// bit-identical decisions.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    unsafe fn count_block_avx2(&self, col: usize, row: usize, spans: &[Span], radius_sq: f32) -> [u32; LANES] {
+        use std::arch::x86_64::*;
+        let first = row * self.width + col;
+        // Slicing checks the bounds once per span; the loads inside stay in
+        // those slices.
+        let block = |v: &[f32]| -> __m256 {
+            let lanes = &v[first..first + LANES];
+            // SAFETY: `lanes` holds exactly LANES floats; loadu needs no alignment.
+            unsafe { _mm256_loadu_ps(lanes.as_ptr()) }
+        };
+        let (px, py, pz) = (block(&self.xs), block(&self.ys), block(&self.zs));
+        let r2 = _mm256_set1_ps(radius_sq);
+        let mut counts = _mm256_setzero_si256();
+        for (start, end) in self.span_ranges(col, row, spans) {
+            let reach = end + LANES - 1;
+            let (xs, ys, zs) = (&self.xs[start..reach], &self.ys[start..reach], &self.zs[start..reach]);
+            for k in 0..end - start {
+                // SAFETY: k + LANES <= reach - start, the length of each slice.
+                let (qx, qy, qz) = unsafe {
+                    (
+                        _mm256_loadu_ps(xs.as_ptr().add(k)),
+                        _mm256_loadu_ps(ys.as_ptr().add(k)),
+                        _mm256_loadu_ps(zs.as_ptr().add(k)),
+                    )
+                };
+                let (dx, dy, dz) = (_mm256_sub_ps(qx, px), _mm256_sub_ps(qy, py), _mm256_sub_ps(qz, pz));
+                let d2 =
+                    _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(dx, dx), _mm256_mul_ps(dy, dy)), _mm256_mul_ps(dz, dz));
+                let near = _mm256_castps_si256(_mm256_cmp_ps::<_CMP_LE_OQ>(d2, r2));
+                // A true lane is all ones, -1: subtracting counts it.
+                counts = _mm256_sub_epi32(counts, near);
+            }
+        }
+        let mut out = [0u32; LANES];
+        // SAFETY: `out` holds exactly eight u32, one 256-bit store.
+        unsafe { _mm256_storeu_si256(out.as_mut_ptr().cast(), counts) };
+        out
+    }
+
+    /// Two SSE2 registers of four lanes: the x86_64 baseline.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "sse2")]
+    unsafe fn count_block_sse2(&self, col: usize, row: usize, spans: &[Span], radius_sq: f32) -> [u32; LANES] {
+        use std::arch::x86_64::*;
+        let first = row * self.width + col;
+        let r2 = _mm_set1_ps(radius_sq);
+        let mut out = [0u32; LANES];
+        for half in [0, 4] {
+            let quad = |v: &[f32]| -> __m128 {
+                let lanes = &v[first + half..first + half + 4];
+                // SAFETY: `lanes` holds exactly four floats.
+                unsafe { _mm_loadu_ps(lanes.as_ptr()) }
+            };
+            let (px, py, pz) = (quad(&self.xs), quad(&self.ys), quad(&self.zs));
+            let mut counts = _mm_setzero_si128();
+            for (start, end) in self.span_ranges(col, row, spans) {
+                let (lo, reach) = (start + half, end + half + 3);
+                let (xs, ys, zs) = (&self.xs[lo..reach], &self.ys[lo..reach], &self.zs[lo..reach]);
+                for k in 0..end - start {
+                    // SAFETY: k + 4 <= reach - lo, the length of each slice.
+                    let (qx, qy, qz) = unsafe {
+                        (
+                            _mm_loadu_ps(xs.as_ptr().add(k)),
+                            _mm_loadu_ps(ys.as_ptr().add(k)),
+                            _mm_loadu_ps(zs.as_ptr().add(k)),
+                        )
+                    };
+                    let (dx, dy, dz) = (_mm_sub_ps(qx, px), _mm_sub_ps(qy, py), _mm_sub_ps(qz, pz));
+                    let d2 = _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, dx), _mm_mul_ps(dy, dy)), _mm_mul_ps(dz, dz));
+                    counts = _mm_sub_epi32(counts, _mm_castps_si128(_mm_cmple_ps(d2, r2)));
+                }
+            }
+            // SAFETY: the destination holds exactly four u32.
+            unsafe { _mm_storeu_si128(out[half..half + 4].as_mut_ptr().cast(), counts) };
+        }
+        out
+    }
+
+    /// The reference form of the block count, and the path on other CPUs.
+    #[cfg_attr(target_arch = "x86_64", allow(dead_code))]
+    fn count_block_portable(&self, col: usize, row: usize, spans: &[Span], radius_sq: f32) -> [u32; LANES] {
+        let first = row * self.width + col;
+        let mut counts = [0u32; LANES];
+        for (start, end) in self.span_ranges(col, row, spans) {
+            for at in start..end {
+                for (l, count) in counts.iter_mut().enumerate() {
+                    let dx = self.xs[at + l] - self.xs[first + l];
+                    let dy = self.ys[at + l] - self.ys[first + l];
+                    let dz = self.zs[at + l] - self.zs[first + l];
+                    // NaN compares false: invalid pixels never count.
+                    *count += (dx * dx + dy * dy + dz * dz <= radius_sq) as u32;
+                }
+            }
+        }
+        counts
+    }
+
+    /// Like [`Grid::count_block`], counting only pixels whose `labels`
+    /// entry equals `label`.
+    pub fn count_block_members(
+        &self,
+        col: usize,
+        row: usize,
+        spans: &[Span],
+        radius_sq: f32,
+        labels: &[u32],
+        label: u32,
+    ) -> [u32; LANES] {
+        let first = row * self.width + col;
+        let px: [f32; LANES] = std::array::from_fn(|l| self.xs[first + l]);
+        let py: [f32; LANES] = std::array::from_fn(|l| self.ys[first + l]);
+        let pz: [f32; LANES] = std::array::from_fn(|l| self.zs[first + l]);
+        let mut counts = [0u32; LANES];
+        for s in spans {
+            let base = ((row as isize + s.dv) as usize) * self.width;
+            for du in s.du_lo..=s.du_hi {
+                let at = (base as isize + col as isize + du) as usize;
+                let (qx, qy, qz) = (&self.xs[at..at + LANES], &self.ys[at..at + LANES], &self.zs[at..at + LANES]);
+                let ql = &labels[at..at + LANES];
+                for l in 0..LANES {
+                    let dx = qx[l] - px[l];
+                    let dy = qy[l] - py[l];
+                    let dz = qz[l] - pz[l];
+                    let near = dx * dx + dy * dy + dz * dz <= radius_sq;
+                    counts[l] += (near & (ql[l] == label)) as u32;
+                }
+            }
+        }
+        counts
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::camera::CameraModel;
+    use crate::pipeline::neighbours::NeighbourSearch;
+
+    #[test]
+    fn block_counts_equal_the_reference_over_the_same_offsets() {
+        let camera = CameraModel::default();
+        let (w, h) = (48usize, 32usize);
+        let mut pts = Vec::new();
+        for row in 0..h {
+            for col in 0..w {
+                let r = camera.ray(900.0 + col as f64, 580.0 + row as f64);
+                let wobble = ((row * 7 + col * 13) % 5) as f64 * 0.05;
+                let z = 520.0 + col as f64 * 0.05 + wobble;
+                let invalid = (row * 31 + col * 17) % 23 == 0;
+                pts.push(if invalid { [f32::NAN; 3] } else { [(r[0] * z) as f32, (r[1] * z) as f32, z as f32] });
+            }
+        }
+        let cloud = PointCloud::organized(w, h, pts).unwrap();
+        let grid = Grid::new(&cloud);
+        let search = NeighbourSearch::new(&cloud, &camera, 1.0);
+        let (wx, wy) = (8isize, 8isize);
+        let full: Vec<Span> = (-wy..=wy).map(|dv| Span { dv, du_lo: -wx, du_hi: wx }).collect();
+        let (col, row) = (12, 14);
+        assert!(grid.spans_fit(col, row, &full));
+        let counts = grid.count_block(col, row, &full, 1.0);
+        assert_eq!(counts, grid.count_block_portable(col, row, &full, 1.0), "SIMD and portable agree");
+        #[cfg(target_arch = "x86_64")]
+        // SAFETY: SSE2 is part of the x86_64 baseline.
+        assert_eq!(counts, unsafe { grid.count_block_sse2(col, row, &full, 1.0) });
+        for (l, &got) in counts.iter().enumerate() {
+            let i = row * w + col + l;
+            if cloud.points()[i][0].is_finite() {
+                assert_eq!(got, search.count(i, |_| true), "lane {l}");
+            }
+        }
+        let labels: Vec<u32> = (0..w * h).map(|i| (i % 3 == 0) as u32).collect();
+        let members = grid.count_block_members(col, row, &full, 1.0, &labels, 1);
+        for (l, &got) in members.iter().enumerate() {
+            let i = row * w + col + l;
+            if cloud.points()[i][0].is_finite() {
+                assert_eq!(got, search.count(i, |j| labels[j] == 1), "lane {l}");
+            }
+        }
+    }
+
+    #[test]
+    fn spans_that_leave_the_image_do_not_fit() {
+        let cloud = PointCloud::organized(20, 10, vec![[0.0, 0.0, 500.0]; 200]).unwrap();
+        let grid = Grid::new(&cloud);
+        let spans = [Span { dv: -1, du_lo: -2, du_hi: 2 }];
+        assert!(grid.spans_fit(2, 1, &spans));
+        assert!(!grid.spans_fit(1, 1, &spans));
+        assert!(!grid.spans_fit(2, 0, &spans));
+        assert!(!grid.spans_fit(11, 1, &spans), "the last lane would read past the row");
+    }
+}

@@ -40,12 +40,18 @@ impl SeamError {
 /// Compares a planned seam with the truth, both in the robot base frame.
 pub fn seam_error(truth: &GroundTruth, seam: &Seam) -> Option<SeamError> {
     let path: Vec<Vec3> = seam.waypoints.iter().map(|w| w.position).collect();
+    path_error(truth, &path)
+}
+
+/// Compares a trajectory (base-frame waypoint positions, in order) with
+/// the truth.
+pub fn path_error(truth: &GroundTruth, path: &[Vec3]) -> Option<SeamError> {
     let (first, last) = (path.first()?, path.last()?);
     let distances: Vec<f64> = (0..REFERENCE_POINTS)
         .map(|k| {
             let t = k as f64 / (REFERENCE_POINTS - 1) as f64;
             let p = truth.start_base + (truth.end_base - truth.start_base) * t;
-            distance_to_polyline(&p, &path)
+            distance_to_polyline(&p, path)
         })
         .collect();
     let direct = ((first - truth.start_base).norm(), (last - truth.end_base).norm());

@@ -20,7 +20,7 @@ struct Cli {
 
 #[derive(Debug, Subcommand)]
 enum Command {
-    /// Simulate a scene of each joint type, plan it, print the waypoints and the error against the truth.
+    /// Run the whole cell over loopback: daemon, mock camera and mock controller plan a simulated scene of each joint.
     Demo(cli::demo::DemoArgs),
     /// Plan the welding trajectory of one point-cloud file.
     Plan(cli::plan::PlanArgs),

@@ -1,16 +1,27 @@
-//! `weldseam demo`: the main job on built-in simulated scenes. For each
-//! joint type it simulates a camera frame, plans the weld, prints the
-//! base-frame waypoints and measures them against the simulator's truth.
+//! `weldseam demo`: the whole cell in one process over loopback. The
+//! daemon listens on two ephemeral ports; the mock camera connects and
+//! serves a simulated frame of each joint type when triggered; the mock
+//! controller asks for each plan as a robot would. It prints the
+//! base-frame waypoints, the error against the simulator's truth and the
+//! latency of each request.
 
 use std::io::Write;
+use std::sync::Arc;
+use std::time::{Duration, Instant};
 
-use weldseam::camera::CameraModel;
+use anyhow::{Context, bail};
+use tokio::net::TcpListener;
+use tokio::sync::oneshot;
 use weldseam::config::Config;
-use weldseam::eval::seam_error;
+use weldseam::eval::path_error;
+use weldseam::geometry::Vec3;
 use weldseam::joint::JointType;
-use weldseam::pipeline::{PlanRequest, Planner};
-use weldseam::report::plan_result;
-use weldseam::sim::{demo_scene, simulate};
+use weldseam::mock::camera::{CameraOptions, MockCamera};
+use weldseam::mock::controller::ControllerClient;
+use weldseam::report::joint_to_proto;
+use weldseam::server::{self, ServerState};
+use weldseam::sim::{Simulation, demo_scene, simulate};
+use weldseam_proto::message::{FrameSelect, PlanReply, PlanRequest};
 
 #[derive(Debug, clap::Args)]
 pub struct DemoArgs {
@@ -19,84 +30,147 @@ pub struct DemoArgs {
     pub brief: bool,
 }
 
+/// How long the demo waits for any one step before calling it failed.
+const STEP_TIMEOUT: Duration = Duration::from_secs(120);
+
 pub fn run(args: &DemoArgs) -> anyhow::Result<()> {
+    let runtime = tokio::runtime::Builder::new_multi_thread()
+        .worker_threads(2)
+        .enable_all()
+        .build()
+        .context("cannot start the async runtime")?;
+    runtime.block_on(cell(args))
+}
+
+async fn cell(args: &DemoArgs) -> anyhow::Result<()> {
     let mut out = std::io::stdout().lock();
     let config = Config::default();
-    let camera: CameraModel = config.camera;
-    let planner = Planner::new(config);
+    let scenes: Vec<(JointType, Simulation)> = JointType::ALL
+        .into_iter()
+        .map(|joint| {
+            let spec = demo_scene(joint);
+            (joint, simulate(&spec, &config.camera))
+        })
+        .collect();
+
+    let camera_listener = TcpListener::bind("127.0.0.1:0").await.context("cannot bind the camera port")?;
+    let controller_listener = TcpListener::bind("127.0.0.1:0").await.context("cannot bind the controller port")?;
+    let camera_addr = camera_listener.local_addr()?.to_string();
+    let controller_addr = controller_listener.local_addr()?.to_string();
+    let state = ServerState::new(config).context("cannot start the pipeline pool")?;
+    let (stop_server, server_stopped) = oneshot::channel::<()>();
+    let daemon = tokio::spawn(server::run(camera_listener, controller_listener, server_stopped, state));
+    writeln!(out, "daemon listening: camera link {camera_addr}, controller link {controller_addr}")?;
+
+    // The camera answers trigger n with frame n: the scenes in order.
+    let frames = scenes.iter().map(|(_, sim)| Arc::new(sim.cloud.clone())).collect();
+    let (stop_camera, camera_stopped) = oneshot::channel::<()>();
+    let options = CameraOptions { name: "demo-camera".into(), ..CameraOptions::default() };
+    let camera = tokio::spawn(MockCamera::new(camera_addr, frames, options).run(camera_stopped));
+
+    let mut controller = ControllerClient::connect(&controller_addr, "demo-controller").await?;
+    wait_for_camera(&mut controller).await?;
+    writeln!(out, "mock camera connected; mock controller requesting one plan per joint type\n")?;
+
     let mut failures = Vec::new();
-    for joint in JointType::ALL {
-        let spec = demo_scene(joint);
-        let sim = simulate(&spec, &camera);
-        let p = &spec.placement;
+    for (k, (joint, sim)) in scenes.iter().enumerate() {
+        let p = sim.pose;
+        let request = PlanRequest {
+            request_id: k as u64 + 1,
+            joint: PlanRequest::joint_code(joint_to_proto(*joint)),
+            groove_depth_mm: sim.truth.groove_depth_mm,
+            pose: [p.xyz_mm[0], p.xyz_mm[1], p.xyz_mm[2], p.angles_deg[0], p.angles_deg[1], p.angles_deg[2]],
+            step_mm: None,
+            work_angle_deg: None,
+            travel_angle_deg: None,
+            frame: FrameSelect::Trigger,
+            timeout_ms: 0,
+        };
         writeln!(
             out,
-            "== {joint}: simulated {}x{} frame, {} valid points, camera at {:.0} mm tilted {:.0}°",
-            sim.cloud.width(),
-            sim.cloud.height(),
-            sim.cloud.valid_count(),
-            p.distance_mm,
-            p.tilt_deg
+            "== {joint}: pose {:.3}, {:.3}, {:.3} mm; {:.3}, {:.3}, {:.3}°",
+            p.xyz_mm[0], p.xyz_mm[1], p.xyz_mm[2], p.angles_deg[0], p.angles_deg[1], p.angles_deg[2]
         )?;
-        let pose = sim.pose;
-        writeln!(
-            out,
-            "   robot pose at capture: {:.3}, {:.3}, {:.3} mm; {:.3}, {:.3}, {:.3}° ({})",
-            pose.xyz_mm[0],
-            pose.xyz_mm[1],
-            pose.xyz_mm[2],
-            pose.angles_deg[0],
-            pose.angles_deg[1],
-            pose.angles_deg[2],
-            planner.config().euler.name()
-        )?;
-        let request = PlanRequest::new(joint, spec.joint.groove_depth_mm(), pose);
-        let plan = match planner.plan(&sim.cloud, &request) {
-            Ok(plan) => plan,
+        let sent = Instant::now();
+        let reply = match controller.plan(request, STEP_TIMEOUT).await {
+            Ok(reply) => reply,
             Err(e) => {
-                writeln!(out, "   no seam: {e}")?;
+                writeln!(out, "   no plan: {e}")?;
                 failures.push(format!("{joint}: {e}"));
                 continue;
             }
         };
-        let report = plan_result(&plan, planner.config().euler);
-        let seam = &report.seams[0];
-        writeln!(
-            out,
-            "   planned in {:.0} ms: {:.1} mm of seam, {} waypoints (base frame, mm and degrees)",
-            plan.timings.total_ms(),
-            seam.length_mm,
-            seam.waypoints.len()
-        )?;
-        let last = seam.waypoints.len().saturating_sub(1);
-        for (k, w) in seam.waypoints.iter().enumerate() {
-            if args.brief && k != 0 && k != last {
-                continue;
-            }
-            writeln!(
-                out,
-                "   {k:>3}  xyz {:>9.3} {:>9.3} {:>9.3}   rpy {:>8.3} {:>8.3} {:>8.3}",
-                w.xyz[0], w.xyz[1], w.xyz[2], w.rpy_deg[0], w.rpy_deg[1], w.rpy_deg[2]
-            )?;
-        }
-        match seam_error(&sim.truth, &plan.seams[0]) {
-            Some(e) => {
-                writeln!(
-                    out,
-                    "   error against the truth: max {:.3} mm, mean {:.3} mm over 12 points; ends {:.2} and {:.2} mm -> {}",
-                    e.max_mm,
-                    e.mean_mm,
-                    e.start_mm,
-                    e.end_mm,
-                    if e.passes() { "within the 1 mm bar" } else { "MISSES the 1 mm bar" }
-                )?;
-                if !e.passes() {
-                    failures.push(format!("{joint}: max error {:.3} mm", e.max_mm));
-                }
-            }
-            None => failures.push(format!("{joint}: empty trajectory")),
+        let latency_ms = sent.elapsed().as_secs_f64() * 1e3;
+        if let Err(e) = report(&mut out, args, *joint, sim, &reply, latency_ms) {
+            failures.push(e.to_string());
         }
     }
-    anyhow::ensure!(failures.is_empty(), "demo failed: {}", failures.join("; "));
+
+    let _ = stop_camera.send(());
+    let _ = stop_server.send(());
+    let _ = tokio::time::timeout(STEP_TIMEOUT, camera).await;
+    tokio::time::timeout(STEP_TIMEOUT, daemon).await.context("the daemon did not stop")???;
+    if !failures.is_empty() {
+        bail!("demo failed: {}", failures.join("; "));
+    }
+    Ok(())
+}
+
+async fn wait_for_camera(controller: &mut ControllerClient) -> anyhow::Result<()> {
+    let deadline = Instant::now() + STEP_TIMEOUT;
+    while Instant::now() < deadline {
+        if controller.ping(STEP_TIMEOUT).await?.camera_connected {
+            return Ok(());
+        }
+        tokio::time::sleep(Duration::from_millis(20)).await;
+    }
+    bail!("the mock camera did not connect to the daemon")
+}
+
+/// Prints one reply and checks it against the truth.
+fn report(
+    out: &mut impl Write,
+    args: &DemoArgs,
+    joint: JointType,
+    sim: &Simulation,
+    reply: &PlanReply,
+    latency_ms: f64,
+) -> anyhow::Result<()> {
+    let Some(seam) = reply.result.seams.first() else { bail!("{joint}: the reply has no seam") };
+    let pipeline_ms = reply.result.timing_ms.get("total").copied().unwrap_or(f64::NAN);
+    writeln!(
+        out,
+        "   frame {} planned: {:.1} mm of seam, {} waypoints; pipeline {:.0} ms, request to reply {:.0} ms",
+        reply.frame_id,
+        seam.length_mm,
+        seam.waypoints.len(),
+        pipeline_ms,
+        latency_ms
+    )?;
+    let last = seam.waypoints.len().saturating_sub(1);
+    for (k, w) in seam.waypoints.iter().enumerate() {
+        if args.brief && k != 0 && k != last {
+            continue;
+        }
+        writeln!(
+            out,
+            "   {k:>3}  xyz {:>9.3} {:>9.3} {:>9.3}   rpy {:>8.3} {:>8.3} {:>8.3}",
+            w.xyz[0], w.xyz[1], w.xyz[2], w.rpy_deg[0], w.rpy_deg[1], w.rpy_deg[2]
+        )?;
+    }
+    let path: Vec<Vec3> = seam.waypoints.iter().map(|w| Vec3::from(w.xyz)).collect();
+    let Some(e) = path_error(&sim.truth, &path) else { bail!("{joint}: empty trajectory") };
+    writeln!(
+        out,
+        "   error against the truth: max {:.3} mm, mean {:.3} mm over 12 points; ends {:.2} and {:.2} mm -> {}\n",
+        e.max_mm,
+        e.mean_mm,
+        e.start_mm,
+        e.end_mm,
+        if e.passes() { "within the 1 mm bar" } else { "MISSES the 1 mm bar" }
+    )?;
+    if !e.passes() {
+        bail!("{joint}: max error {:.3} mm", e.max_mm);
+    }
     Ok(())
 }

@@ -15,6 +15,8 @@
 
 use std::collections::HashMap;
 
+use rayon::prelude::*;
+
 use crate::cloud::PointCloud;
 
 /// Marks a point that belongs to no cluster.
@@ -28,34 +30,45 @@ pub struct Clusters {
     pub members: Vec<Vec<u32>>,
 }
 
-struct DisjointSets {
-    parent: Vec<u32>,
+/// Union-find over a slice of slots whose ids start at `offset`, so
+/// disjoint parts of one parent array can be worked on in parallel.
+struct DisjointSets<'a> {
+    parent: &'a mut [u32],
+    offset: u32,
 }
 
-impl DisjointSets {
-    fn new(n: usize) -> Self {
-        DisjointSets { parent: (0..n as u32).collect() }
-    }
-
+impl DisjointSets<'_> {
     fn find(&mut self, mut x: u32) -> u32 {
-        while self.parent[x as usize] != x {
-            let grand = self.parent[self.parent[x as usize] as usize];
-            self.parent[x as usize] = grand;
+        let o = self.offset;
+        while self.parent[(x - o) as usize] != x {
+            let grand = self.parent[(self.parent[(x - o) as usize] - o) as usize];
+            self.parent[(x - o) as usize] = grand;
             x = grand;
         }
         x
     }
 
-    fn union(&mut self, a: u32, b: u32) -> bool {
-        let (ra, rb) = (self.find(a), self.find(b));
-        if ra == rb {
-            return false;
-        }
-        // Smaller root index wins, so labels do not depend on visit order.
-        let (lo, hi) = if ra < rb { (ra, rb) } else { (rb, ra) };
-        self.parent[hi as usize] = lo;
-        true
+    fn union(&mut self, a: u32, b: u32) {
+        let ra = self.find(a);
+        self.union_root(ra, b);
     }
+
+    /// Joins the set of `b` to the set whose root is `ra`; returns the
+    /// joint root. Callers joining one point to several keep its root.
+    fn union_root(&mut self, ra: u32, b: u32) -> u32 {
+        let rb = self.find(b);
+        if ra == rb {
+            return ra;
+        }
+        // Smaller root wins, so roots do not depend on visit order.
+        let (lo, hi) = if ra < rb { (ra, rb) } else { (rb, ra) };
+        self.parent[(hi - self.offset) as usize] = lo;
+        lo
+    }
+}
+
+fn identity(n: usize) -> Vec<u32> {
+    (0..n as u32).collect()
 }
 
 /// Turns a union-find over `n` slots into labelled clusters of the slots
@@ -92,32 +105,67 @@ fn close(a: &[f32; 3], b: &[f32; 3], tol_sq: f32) -> bool {
 
 /// Clusters the points of an organized frame selected by `mask`, joining
 /// 8-adjacent pixels whose points are within `tolerance_mm`.
+///
+/// Horizontal strips are labelled in parallel, each in its own part of
+/// the parent array, then joined across the rows where strips meet.
 pub fn grid(cloud: &PointCloud, mask: &[bool], tolerance_mm: f64, min_points: usize) -> Clusters {
     let (w, h) = (cloud.width(), cloud.height());
     let points = cloud.points();
     let tol_sq = (tolerance_mm * tolerance_mm) as f32;
-    let mut sets = DisjointSets::new(points.len());
-    for row in 0..h {
-        for col in 0..w {
-            let i = row * w + col;
-            if !mask[i] {
-                continue;
-            }
-            // Half of the 8-neighbourhood: the rest is visited from the other side.
-            let forward = [(1isize, 0isize), (-1, 1), (0, 1), (1, 1)];
-            for (dc, dr) in forward {
-                let (c, r) = (col as isize + dc, row as isize + dr);
-                if c < 0 || c >= w as isize || r >= h as isize {
-                    continue;
-                }
-                let j = r as usize * w + c as usize;
-                if mask[j] && close(&points[i], &points[j], tol_sq) {
-                    sets.union(i as u32, j as u32);
-                }
+    let mut parent = identity(points.len());
+    let strip_rows = h.div_ceil(rayon::current_num_threads().max(1)).max(1);
+    parent.par_chunks_mut(strip_rows * w).enumerate().for_each(|(k, chunk)| {
+        let first_row = k * strip_rows;
+        let last_row = (first_row + strip_rows).min(h) - 1;
+        let mut sets = DisjointSets { parent: chunk, offset: (first_row * w) as u32 };
+        for row in first_row..=last_row {
+            link_row(&mut sets, points, mask, w, row, tol_sq, row < last_row);
+        }
+    });
+    let mut sets = DisjointSets { parent: &mut parent, offset: 0 };
+    for seam_row in (strip_rows..h).step_by(strip_rows) {
+        link_down(&mut sets, points, mask, w, seam_row - 1, tol_sq);
+    }
+    collect(&mut sets, points.len(), |i| mask[i], min_points)
+}
+
+/// Joins each selected pixel of `row` to its right neighbour and, when
+/// `below` is set, to its three neighbours in the next row: half of the
+/// 8-neighbourhood, the rest is visited from the other side.
+fn link_row(sets: &mut DisjointSets, points: &[[f32; 3]], mask: &[bool], w: usize, row: usize, tol_sq: f32, below: bool) {
+    let base = row * w;
+    for col in 0..w {
+        let i = base + col;
+        if !mask[i] {
+            continue;
+        }
+        if col + 1 < w && mask[i + 1] && close(&points[i], &points[i + 1], tol_sq) {
+            sets.union(i as u32, (i + 1) as u32);
+        }
+    }
+    if below {
+        link_down(sets, points, mask, w, row, tol_sq);
+    }
+}
+
+/// Joins each selected pixel of `row` to its three neighbours below.
+fn link_down(sets: &mut DisjointSets, points: &[[f32; 3]], mask: &[bool], w: usize, row: usize, tol_sq: f32) {
+    let base = row * w;
+    for col in 0..w {
+        let i = base + col;
+        if !mask[i] {
+            continue;
+        }
+        let below = i + w;
+        let (lo, hi) = (below - (col > 0) as usize, below + (col + 1 < w) as usize);
+        let mut root = None;
+        for j in lo..=hi {
+            if mask[j] && close(&points[i], &points[j], tol_sq) {
+                let ri = *root.get_or_insert_with(|| sets.find(i as u32));
+                root = Some(sets.union_root(ri, j as u32));
             }
         }
     }
-    collect(&mut sets, points.len(), |i| mask[i], min_points)
 }
 
 /// Exact Euclidean clustering of the points selected by `mask`.
@@ -145,7 +193,8 @@ pub fn euclidean(cloud: &PointCloud, mask: &[bool], tolerance_mm: f64, min_point
         start = end;
     }
 
-    let mut sets = DisjointSets::new(points.len());
+    let mut parent = identity(points.len());
+    let mut sets = DisjointSets { parent: &mut parent, offset: 0 };
     for &(s, e) in voxels.values() {
         for k in s + 1..e {
             sets.union(order[s], order[k]);
@@ -237,7 +286,8 @@ mod tests {
         let cloud = PointCloud::unorganized(pts.clone());
         let mask = vec![true; pts.len()];
         let got = euclidean(&cloud, &mask, 1.2, 1);
-        let mut sets = DisjointSets::new(pts.len());
+        let mut parent = identity(pts.len());
+        let mut sets = DisjointSets { parent: &mut parent, offset: 0 };
         for a in 0..pts.len() {
             for b in a + 1..pts.len() {
                 if close(&pts[a], &pts[b], 1.44) {
@@ -251,6 +301,30 @@ mod tests {
         g.sort();
         e.sort();
         assert_eq!(g, e);
+    }
+
+    #[test]
+    fn strips_join_into_the_same_clusters_as_one_pass() {
+        // A diagonal band and a block, on a grid tall enough for many strips.
+        let (w, h) = (40usize, 97usize);
+        let mut pts = Vec::new();
+        for row in 0..h {
+            for col in 0..w {
+                let on_band = row < 60 && (col as isize - (row as isize) / 3).abs() < 3;
+                let on_block = col > 30 && row % 40 < 30;
+                pts.push(if on_band || on_block { [col as f32 * 0.3, row as f32 * 0.3, 600.0] } else { [f32::NAN; 3] });
+            }
+        }
+        let cloud = PointCloud::organized(w, h, pts).unwrap();
+        let mask: Vec<bool> = cloud.points().iter().map(|p| p[0].is_finite()).collect();
+        let sizes = |threads: usize| {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            pool.install(|| grid(&cloud, &mask, 0.5, 1)).members.iter().map(Vec::len).collect::<Vec<_>>()
+        };
+        let one = sizes(1);
+        assert_eq!(one, sizes(3));
+        assert_eq!(one, sizes(7));
+        assert_eq!(one.len(), 4, "the band and three blocks");
     }
 
     #[test]

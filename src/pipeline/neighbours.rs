@@ -118,53 +118,9 @@ impl<'a> NeighbourSearch<'a> {
     /// The number of neighbours point `i` would have if the surface were a
     /// complete plane with unit normal `n` through it, as sampled by this
     /// camera: the theoretical count of Eq. 6, corrected for the plane's
-    /// tilt and, on a pixel grid, for the grid itself.
-    ///
-    /// On a grid it is the lattice count of the plane's ellipse at the
-    /// centre of the point's 32 x 32 pixel tile (binned by its viewing
-    /// direction) and at its depth rounded to 0.5 mm. Across a tile and half a millimetre the ellipse changes by
-    /// about a thousandth, so this is the pixel's own lattice count give or
-    /// take one lattice point; in exchange it is computed once per tile and
-    /// depth step instead of once per pixel.
+    /// tilt and, on a pixel grid, for the grid itself (see [`FullCounts`]).
     pub fn full_plane_count(&self, i: usize, n: &Vec3) -> f64 {
-        let p = self.cloud.points()[i];
-        let r = self.radius as f64;
-        if !self.cloud.is_organized() {
-            let density = self.camera.plane_density_at([p[0] as f64, p[1] as f64, p[2] as f64], [n.x, n.y, n.z]);
-            return std::f64::consts::PI * r * r * density;
-        }
-        // The tile from the point's own viewing direction, so a cropped
-        // frame gets the same counts as the full one.
-        let (fx, fy) = (self.camera.fx(), self.camera.fy());
-        let tile = FULL_COUNT_TILE_PX as f64;
-        let z = p[2] as f64;
-        let (tile_col, tile_row) = ((p[0] as f64 / z * fx / tile).floor(), (p[1] as f64 / z * fy / tile).floor());
-        let depth_step = (z / FULL_COUNT_DEPTH_STEP_MM).round();
-        let key = FullCountKey {
-            tile: ((tile_row as i32 as u32 as u64) << 32) | tile_col as i32 as u32 as u64,
-            depth_step: depth_step as i64,
-            plane: [
-                n.x.to_bits(),
-                n.y.to_bits(),
-                n.z.to_bits(),
-                r.to_bits(),
-                self.camera.fx().to_bits(),
-                self.camera.fy().to_bits(),
-            ],
-        };
-        FULL_COUNTS.with(|cache| {
-            let mut cache = cache.borrow_mut();
-            let slot = key.slot();
-            if let Some((k, v)) = &cache[slot]
-                && *k == key
-            {
-                return *v;
-            }
-            let ray = Vec3::new((tile_col + 0.5) * tile / fx, (tile_row + 0.5) * tile / fy, 1.0);
-            let value = lattice_count_in_ellipse(self.camera, &(ray * (depth_step * FULL_COUNT_DEPTH_STEP_MM)), n, r);
-            cache[slot] = Some((key, value));
-            value
-        })
+        FullCounts::new(self, n).get(i, &mut FullCountCache::default())
     }
 }
 
@@ -172,33 +128,73 @@ impl<'a> NeighbourSearch<'a> {
 pub const FULL_COUNT_TILE_PX: usize = 32;
 /// Depth step over which the full-plane count is shared, mm.
 pub const FULL_COUNT_DEPTH_STEP_MM: f64 = 0.5;
-const FULL_COUNT_SLOTS: usize = 4096;
 
-/// What a memoised full-plane count depends on: the tile, the depth step,
-/// and the plane normal, radius and focal lengths as exact bit patterns.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-struct FullCountKey {
-    tile: u64,
-    depth_step: i64,
-    plane: [u64; 6],
+/// Full-plane counts for one plane orientation.
+///
+/// On a grid the count for a point is the lattice count of the plane's
+/// ellipse at the centre of the point's 32 x 32 pixel tile (binned by its
+/// viewing direction, so a cropped frame gets the counts of the full one)
+/// and at its depth rounded to 0.5 mm. Across a tile and half a millimetre
+/// the ellipse changes by about a thousandth, so this is the pixel's own
+/// lattice count give or take one lattice point; in exchange it is computed
+/// once per tile and depth step instead of once per pixel. Without a grid
+/// it is `π R² D` with the exact pinhole density.
+pub struct FullCounts<'a> {
+    cloud: &'a PointCloud,
+    camera: &'a CameraModel,
+    normal: Vec3,
+    radius: f64,
+    fx: f64,
+    fy: f64,
 }
 
-impl FullCountKey {
-    fn slot(&self) -> usize {
-        let mut h = self.tile.wrapping_mul(0x9e37_79b9_7f4a_7c15)
-            ^ (self.depth_step as u64).wrapping_mul(0xc2b2_ae3d_27d4_eb4f);
-        for v in self.plane {
-            h = (h ^ v).wrapping_mul(0x1656_67b1_9e37_79f9);
-        }
-        (h >> 40) as usize % FULL_COUNT_SLOTS
+/// A small per-thread memo of full-plane counts, keyed by tile and depth
+/// step; a collision only costs a recomputation.
+pub struct FullCountCache {
+    slots: [(u64, f64); 64],
+}
+
+impl Default for FullCountCache {
+    fn default() -> Self {
+        FullCountCache { slots: [(u64::MAX, 0.0); 64] }
     }
 }
 
-thread_local! {
-    /// Per-thread memo of full-plane counts: lock-free, and a collision
-    /// only costs a recomputation.
-    static FULL_COUNTS: std::cell::RefCell<Vec<Option<(FullCountKey, f64)>>> =
-        std::cell::RefCell::new(vec![None; FULL_COUNT_SLOTS]);
+impl<'a> FullCounts<'a> {
+    pub fn new(search: &NeighbourSearch<'a>, normal: &Vec3) -> Self {
+        FullCounts {
+            cloud: search.cloud,
+            camera: search.camera,
+            normal: *normal,
+            radius: search.radius as f64,
+            fx: search.camera.fx(),
+            fy: search.camera.fy(),
+        }
+    }
+
+    /// The full-plane count of point `i`.
+    pub fn get(&self, i: usize, cache: &mut FullCountCache) -> f64 {
+        let p = self.cloud.points()[i];
+        let r = self.radius;
+        let n = &self.normal;
+        if !self.cloud.is_organized() {
+            let density = self.camera.plane_density_at([p[0] as f64, p[1] as f64, p[2] as f64], [n.x, n.y, n.z]);
+            return std::f64::consts::PI * r * r * density;
+        }
+        let tile = FULL_COUNT_TILE_PX as f64;
+        let z = p[2] as f64;
+        let (tile_col, tile_row) = ((p[0] as f64 / z * self.fx / tile).floor(), (p[1] as f64 / z * self.fy / tile).floor());
+        let depth_step = (z / FULL_COUNT_DEPTH_STEP_MM).round();
+        let key = ((tile_row as i16 as u16 as u64) << 48) | ((tile_col as i16 as u16 as u64) << 32) | (depth_step as i32 as u32 as u64);
+        let slot = (key.wrapping_mul(0x9e37_79b9_7f4a_7c15) >> 58) as usize;
+        if cache.slots[slot].0 == key {
+            return cache.slots[slot].1;
+        }
+        let ray = Vec3::new((tile_col + 0.5) * tile / self.fx, (tile_row + 0.5) * tile / self.fy, 1.0);
+        let value = lattice_count_in_ellipse(self.camera, &(ray * (depth_step * FULL_COUNT_DEPTH_STEP_MM)), n, r);
+        cache.slots[slot] = (key, value);
+        value
+    }
 }
 
 fn build_tree(points: &[Point]) -> KdIndex {

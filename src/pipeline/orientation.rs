@@ -81,19 +81,19 @@ fn scatter_normal(cloud: &PointCloud, search: &NeighbourSearch, i: usize) -> Opt
 /// sparse, evenly spread sample of the frame, refined by averaging the
 /// normals that agree with it within `agree_deg`.
 pub fn dominant_normal(cloud: &PointCloud, search: &NeighbourSearch, fx: f64, agree_deg: f64) -> Option<Vec3> {
-    let valid: Vec<usize> = (0..cloud.len()).filter(|&i| cloud.points()[i][0].is_finite()).collect();
-    if valid.is_empty() {
-        return None;
-    }
     const SAMPLES: usize = 6000;
     const CANDIDATES: usize = 240;
-    let stride = (valid.len() / SAMPLES).max(1);
-    let normals: Vec<Vec3> = valid
-        .iter()
+    // An even stride over all pixels; invalid ones simply give no normal.
+    // The stride is odd so it does not run down one image column.
+    let stride = ((cloud.len() / SAMPLES).max(1)) | 1;
+    let normals: Vec<Vec3> = (0..cloud.len())
         .step_by(stride)
-        .filter_map(|&i| {
-            let z = cloud.points()[i][2] as f64;
-            local_normal(cloud, search, i, normal_step(fx, z, search.radius_mm() * 2.0))
+        .filter_map(|i| {
+            let p = cloud.points()[i];
+            if !p[0].is_finite() {
+                return None;
+            }
+            local_normal(cloud, search, i, normal_step(fx, p[2] as f64, search.radius_mm() * 2.0))
         })
         .collect();
     if normals.is_empty() {

@@ -23,7 +23,7 @@ use crate::cloud::PointCloud;
 use crate::geometry::{Vec3, vec3};
 
 use super::grid_search::{Grid, LANES, Span};
-use super::neighbours::{NeighbourSearch, PixelEllipse};
+use super::neighbours::{FullCountCache, FullCounts, NeighbourSearch, PixelEllipse};
 use super::orientation::{local_normal, normal_step};
 
 /// The plane points and, for each, a lower bound of its neighbour count
@@ -52,7 +52,7 @@ impl PlanePoints {
 trait Threshold: Sync {
     /// The count point `i` needs, and the full count it derives from (0
     /// when the criterion has none).
-    fn needed(&self, i: usize) -> Option<(f64, f64)>;
+    fn needed(&self, i: usize, cache: &mut FullCountCache) -> Option<(f64, f64)>;
     /// The plane orientation whose ellipse the counts scan first.
     fn scan_normal(&self) -> Vec3;
 }
@@ -65,7 +65,7 @@ struct PaperThreshold<'a> {
 }
 
 impl Threshold for PaperThreshold<'_> {
-    fn needed(&self, i: usize) -> Option<(f64, f64)> {
+    fn needed(&self, i: usize, _: &mut FullCountCache) -> Option<(f64, f64)> {
         let p = self.cloud.points()[i];
         p[0].is_finite().then(|| (self.camera.min_plane_neighbours(self.radius, p[2] as f64), 0.0))
     }
@@ -88,12 +88,13 @@ pub struct RobustPlaneCriterion {
 
 struct RobustThreshold<'a> {
     search: &'a NeighbourSearch<'a>,
+    full_counts: FullCounts<'a>,
     criterion: RobustPlaneCriterion,
     cos_limit: f64,
 }
 
 impl Threshold for RobustThreshold<'_> {
-    fn needed(&self, i: usize) -> Option<(f64, f64)> {
+    fn needed(&self, i: usize, cache: &mut FullCountCache) -> Option<(f64, f64)> {
         let cloud = self.search.cloud();
         let p = cloud.points()[i];
         if !p[0].is_finite() {
@@ -104,7 +105,7 @@ impl Threshold for RobustThreshold<'_> {
         if n.dot(&self.criterion.normal) < self.cos_limit {
             return None;
         }
-        let full = self.search.full_plane_count(i, &self.criterion.normal);
+        let full = self.full_counts.get(i, cache);
         (full > 0.0).then_some((self.criterion.min_ratio * full, full))
     }
 
@@ -123,7 +124,8 @@ pub fn paper_criterion(cloud: &PointCloud, camera: &CameraModel, search: &Neighb
 /// `p`, and the local normal within the angle limit.
 pub fn robust_criterion(search: &NeighbourSearch, criterion: &RobustPlaneCriterion) -> PlanePoints {
     let cos_limit = criterion.max_angle_deg.to_radians().cos();
-    classify(search, &RobustThreshold { search, criterion: *criterion, cos_limit })
+    let full_counts = FullCounts::new(search, &criterion.normal);
+    classify(search, &RobustThreshold { search, full_counts, criterion: *criterion, cos_limit })
 }
 
 /// The straightforward form of either criterion: one radius count per
@@ -132,11 +134,14 @@ pub fn reference(search: &NeighbourSearch, paper: bool, criterion: &RobustPlaneC
     let cloud = search.cloud();
     let paper_t = PaperThreshold { cloud, camera: search.camera(), radius: search.radius_mm() };
     let cos_limit = criterion.max_angle_deg.to_radians().cos();
-    let robust_t = RobustThreshold { search, criterion: *criterion, cos_limit };
+    let full_counts = FullCounts::new(search, &criterion.normal);
+    let robust_t = RobustThreshold { search, full_counts, criterion: *criterion, cos_limit };
     let threshold: &dyn Threshold = if paper { &paper_t } else { &robust_t };
     (0..cloud.len())
         .into_par_iter()
-        .map(|i| threshold.needed(i).is_some_and(|(t, _)| search.count(i, |_| true) as f64 >= t))
+        .map_init(FullCountCache::default, |cache, i| {
+            threshold.needed(i, cache).is_some_and(|(t, _)| search.count(i, |_| true) as f64 >= t)
+        })
         .collect()
 }
 
@@ -148,9 +153,10 @@ fn classify(search: &NeighbourSearch, threshold: &dyn Threshold) -> PlanePoints 
     let mut full = vec![0u16; n];
     let saturate = |v: f64| v.clamp(0.0, u16::MAX as f64) as u16;
     if !cloud.is_organized() {
-        mask.par_iter_mut().zip(counts.par_iter_mut()).zip(full.par_iter_mut()).enumerate().for_each(
-            |(i, ((m, c), f))| {
-                if let Some((t, full_count)) = threshold.needed(i) {
+        mask.par_iter_mut().zip(counts.par_iter_mut()).zip(full.par_iter_mut()).enumerate().for_each_init(
+            FullCountCache::default,
+            |cache, (i, ((m, c), f))| {
+                if let Some((t, full_count)) = threshold.needed(i, cache) {
                     let count = search.count(i, |_| true);
                     *m = count as f64 >= t;
                     *c = if *m { saturate(count as f64) } else { 0 };
@@ -164,15 +170,36 @@ fn classify(search: &NeighbourSearch, threshold: &dyn Threshold) -> PlanePoints 
     let w = cloud.width();
     mask.par_chunks_mut(w).zip(counts.par_chunks_mut(w)).zip(full.par_chunks_mut(w)).enumerate().for_each(
         |(row, ((mask_row, count_row), full_row))| {
-            let mut spans = Vec::new();
+            let mut scratch = Scratch::new();
             for col in (0..w).step_by(LANES) {
                 let out =
                     BlockOut { mask: &mut mask_row[col..], counts: &mut count_row[col..], full: &mut full_row[col..] };
-                classify_block(search, &grid, threshold, row, col, &mut spans, out);
+                classify_block(search, &grid, threshold, row, col, &mut scratch, out);
             }
         },
     );
     PlanePoints { mask, counts, full }
+}
+
+/// Scratch space reused across the blocks of a row.
+struct Scratch {
+    spans: Vec<Span>,
+    /// Depth and column of the point the spans were made for.
+    spans_for: Option<(f32, usize)>,
+    cache: FullCountCache,
+}
+
+impl Scratch {
+    fn new() -> Self {
+        Scratch { spans: Vec::new(), spans_for: None, cache: FullCountCache::default() }
+    }
+
+    /// True when the spans were made for a point close enough to `(z, col)`
+    /// to serve it: the spans only choose where counting starts, so a
+    /// slightly different ellipse costs at most a fallback count.
+    fn spans_serve(&self, z: f32, col: usize) -> bool {
+        self.spans_for.is_some_and(|(z0, c0)| (z - z0).abs() <= 0.005 * z0 && col < c0 + 64)
+    }
 }
 
 /// Where a block's results go: slices starting at the block's first pixel.
@@ -182,33 +209,38 @@ struct BlockOut<'a> {
     full: &'a mut [u16],
 }
 
-/// Classifies up to `LANES` pixels of one row starting at `col`. `spans`
-/// is scratch space reused across blocks.
+/// Classifies up to `LANES` pixels of one row starting at `col`.
 fn classify_block(
     search: &NeighbourSearch,
     grid: &Grid,
     threshold: &dyn Threshold,
     row: usize,
     col: usize,
-    spans: &mut Vec<Span>,
+    scratch: &mut Scratch,
     out: BlockOut,
 ) {
     let w = grid.width();
     let lanes = LANES.min(w - col);
     let first = row * w + col;
     let needed: [Option<(f64, f64)>; LANES] =
-        std::array::from_fn(|l| if l < lanes { threshold.needed(first + l) } else { None });
+        std::array::from_fn(|l| if l < lanes { threshold.needed(first + l, &mut scratch.cache) } else { None });
     let Some(anchor) = (0..lanes).find(|&l| needed[l].is_some()) else { return };
     // The block's partial counts over the ellipse of its first candidate,
     // one pixel wider for noise; they are lower bounds for every lane.
     let mut partial = [0u32; LANES];
     if lanes == LANES {
-        let p = vec3(&search.cloud().points()[first + anchor]);
-        if let Some(ellipse) = PixelEllipse::new(search.camera(), &p, &threshold.scan_normal(), search.radius_mm()) {
-            ellipse.spans_into(1, spans);
-            if grid.spans_fit(col, row, spans) {
-                partial = grid.count_block(col, row, spans, (search.radius_mm() * search.radius_mm()) as f32);
+        let point = search.cloud().points()[first + anchor];
+        if !scratch.spans_serve(point[2], col) {
+            let ellipse = PixelEllipse::new(search.camera(), &vec3(&point), &threshold.scan_normal(), search.radius_mm());
+            match ellipse {
+                Some(e) => e.spans_into(1, &mut scratch.spans),
+                None => scratch.spans.clear(),
             }
+            scratch.spans_for = Some((point[2], col));
+        }
+        if !scratch.spans.is_empty() && grid.spans_fit(col, row, &scratch.spans) {
+            let radius_sq = (search.radius_mm() * search.radius_mm()) as f32;
+            partial = grid.count_block(col, row, &scratch.spans, radius_sq);
         }
     }
     for l in 0..lanes {

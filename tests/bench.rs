@@ -41,7 +41,7 @@ fn the_stage_and_scaling_tables_have_every_row() {
         let row = table.row(stage.name()).unwrap_or_else(|| panic!("no {stage} row in\n{}", table.to_text()));
         assert_ne!(row[1], "-", "{stage}");
     }
-    for name in ["total", "valid points", "Mpoints/s"] {
+    for name in ["total", "cpu time, all threads", "valid points", "Mpoints/s"] {
         assert!(table.row(name).is_some_and(|r| r[1] != "-"), "no {name} row in\n{}", table.to_text());
     }
     let markdown = table.to_markdown();

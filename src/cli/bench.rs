@@ -97,6 +97,11 @@ pub fn machine_description() -> Vec<String> {
             kernel.map(|k| format!(", kernel {k}")).unwrap_or_default()
         ),
     ];
+    if let Some(load) = load_average() {
+        lines.push(format!(
+            "load average at start (1, 5, 15 min): {load}; other work on the machine slows every figure"
+        ));
+    }
     if cfg!(debug_assertions) {
         lines.push("build: debug (unoptimised; use --release for figures worth reporting)".into());
     } else {
@@ -138,6 +143,13 @@ fn measure_child(args: &[String]) -> anyhow::Result<()> {
     let mut out = std::io::stdout().lock();
     writeln!(out, "{}", child.peak_rss_bytes)?;
     Ok(())
+}
+
+/// The first three fields of /proc/loadavg.
+fn load_average() -> Option<String> {
+    let text = std::fs::read_to_string("/proc/loadavg").ok()?;
+    let fields: Vec<&str> = text.split_whitespace().take(3).collect();
+    (fields.len() == 3).then(|| fields.join(" "))
 }
 
 pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
@@ -275,5 +287,8 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
         "median (min-max) of {runs} requests after a discarded warm-up; daemon, camera and controller in one process"
     ));
     printer.table(&daemon)?;
+    if let Some(load) = load_average() {
+        printer.line(&format!("load average at the end (1, 5, 15 min): {load}"))?;
+    }
     Ok(())
 }

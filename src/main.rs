@@ -34,14 +34,19 @@ enum Command {
     Camera(cli::camera::CameraArgs),
     /// A mock robot controller: request one trajectory (or ping) and print the reply.
     Controller(cli::controller::ControllerArgs),
+    /// Measure the planner on simulated frames and print the performance tables.
+    Bench(cli::bench::BenchArgs),
 }
 
 fn main() -> std::process::ExitCode {
     let cli = Cli::parse();
     let level = match cli.command {
-        Command::Demo(_) | Command::Plan(_) | Command::Eval(_) | Command::Simulate(_) | Command::Controller(_) => {
-            "warn"
-        }
+        Command::Demo(_)
+        | Command::Plan(_)
+        | Command::Eval(_)
+        | Command::Simulate(_)
+        | Command::Controller(_)
+        | Command::Bench(_) => "warn",
         Command::Serve(_) | Command::Camera(_) => "info",
     };
     if let Err(e) = logging::init(cli.log_format, level) {
@@ -56,6 +61,7 @@ fn main() -> std::process::ExitCode {
         Command::Serve(args) => cli::serve::run(args),
         Command::Camera(args) => cli::camera::run(args),
         Command::Controller(args) => cli::controller::run(args),
+        Command::Bench(args) => cli::bench::run(args),
     };
     match result {
         Ok(()) => std::process::ExitCode::SUCCESS,

@@ -1,6 +1,7 @@
 //! The integration-test binary: every suite is a module here so the crate
 //! is linked once for all of them.
 
+mod bench;
 mod cli;
 mod daemon;
 mod parsers;

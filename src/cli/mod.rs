@@ -3,6 +3,7 @@
 //! everything else lives in the library.
 
 pub mod args;
+pub mod bench;
 pub mod camera;
 pub mod controller;
 pub mod demo;

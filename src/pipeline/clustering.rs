@@ -132,7 +132,15 @@ pub fn grid(cloud: &PointCloud, mask: &[bool], tolerance_mm: f64, min_points: us
 /// Joins each selected pixel of `row` to its right neighbour and, when
 /// `below` is set, to its three neighbours in the next row: half of the
 /// 8-neighbourhood, the rest is visited from the other side.
-fn link_row(sets: &mut DisjointSets, points: &[[f32; 3]], mask: &[bool], w: usize, row: usize, tol_sq: f32, below: bool) {
+fn link_row(
+    sets: &mut DisjointSets,
+    points: &[[f32; 3]],
+    mask: &[bool],
+    w: usize,
+    row: usize,
+    tol_sq: f32,
+    below: bool,
+) {
     let base = row * w;
     for col in 0..w {
         let i = base + col;

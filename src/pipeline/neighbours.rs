@@ -183,9 +183,12 @@ impl<'a> FullCounts<'a> {
         }
         let tile = FULL_COUNT_TILE_PX as f64;
         let z = p[2] as f64;
-        let (tile_col, tile_row) = ((p[0] as f64 / z * self.fx / tile).floor(), (p[1] as f64 / z * self.fy / tile).floor());
+        let (tile_col, tile_row) =
+            ((p[0] as f64 / z * self.fx / tile).floor(), (p[1] as f64 / z * self.fy / tile).floor());
         let depth_step = (z / FULL_COUNT_DEPTH_STEP_MM).round();
-        let key = ((tile_row as i16 as u16 as u64) << 48) | ((tile_col as i16 as u16 as u64) << 32) | (depth_step as i32 as u32 as u64);
+        let key = ((tile_row as i16 as u16 as u64) << 48)
+            | ((tile_col as i16 as u16 as u64) << 32)
+            | (depth_step as i32 as u32 as u64);
         let slot = (key.wrapping_mul(0x9e37_79b9_7f4a_7c15) >> 58) as usize;
         if cache.slots[slot].0 == key {
             return cache.slots[slot].1;

@@ -231,7 +231,8 @@ fn classify_block(
     if lanes == LANES {
         let point = search.cloud().points()[first + anchor];
         if !scratch.spans_serve(point[2], col) {
-            let ellipse = PixelEllipse::new(search.camera(), &vec3(&point), &threshold.scan_normal(), search.radius_mm());
+            let ellipse =
+                PixelEllipse::new(search.camera(), &vec3(&point), &threshold.scan_normal(), search.radius_mm());
             match ellipse {
                 Some(e) => e.spans_into(1, &mut scratch.spans),
                 None => scratch.spans.clear(),

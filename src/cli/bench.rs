@@ -1,0 +1,294 @@
+//! `weldseam bench`: measures the planner on simulated frames and prints
+//! the tables of docs/PERFORMANCE.md: per stage at three standoffs, the
+//! scaling with frame size, loading and decoding a frame, the peak memory
+//! of `weldseam plan`, and the daemon's trigger-to-reply latency.
+
+use std::fs::File;
+use std::io::{BufWriter, Write};
+use std::path::PathBuf;
+use std::process::{Command, Stdio};
+
+use anyhow::{Context, bail};
+use weldseam::bench::{
+    self, DISTANCES_MM, FRAME_SIZES, PlanTimings, Scenario, Summary, Table, camera_with_size, megapixels,
+    raw_frame_bytes,
+};
+use weldseam::camera::CameraModel;
+use weldseam::cloud::pcd;
+use weldseam::joint::JointType;
+
+#[derive(Debug, clap::Args)]
+pub struct BenchArgs {
+    /// A short smoke run: 2 timed runs, 500 mm only, the 2.3 MP frame only.
+    #[arg(long)]
+    pub quick: bool,
+    /// Timed runs per measurement, each after one discarded warm-up
+    /// (default 7, or 2 with --quick).
+    #[arg(long, value_name = "N")]
+    pub runs: Option<usize>,
+    /// Print the tables as Markdown.
+    #[arg(long)]
+    pub markdown: bool,
+    /// Internal: run this program with the arguments after `--`, print
+    /// the child's peak resident bytes and nothing else.
+    #[arg(long, hide = true)]
+    pub peak_rss_of_child: bool,
+    /// The child's arguments, after `--`.
+    #[arg(last = true, hide = true)]
+    pub child_args: Vec<String>,
+}
+
+/// The joint of the single-scene measurements (scaling, load, memory, daemon).
+const JOINT: JointType = JointType::IButt;
+/// The standoff of the single-scene measurements: the densest case.
+const NEAR_MM: f64 = 500.0;
+
+/// A temporary file removed when dropped.
+struct TempFile(PathBuf);
+
+impl Drop for TempFile {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_file(&self.0);
+    }
+}
+
+struct Printer {
+    markdown: bool,
+    out: std::io::Stdout,
+}
+
+impl Printer {
+    fn table(&mut self, table: &Table) -> anyhow::Result<()> {
+        let text = if self.markdown { table.to_markdown() } else { table.to_text() };
+        let mut out = self.out.lock();
+        writeln!(out, "{text}")?;
+        out.flush()?;
+        Ok(())
+    }
+
+    fn line(&mut self, line: &str) -> anyhow::Result<()> {
+        let mut out = self.out.lock();
+        writeln!(out, "{line}")?;
+        out.flush()?;
+        Ok(())
+    }
+}
+
+fn progress(what: &str) {
+    eprintln!("measuring {what}...");
+}
+
+/// The CPU model, core count and system, as one Markdown-friendly line each.
+pub fn machine_description() -> Vec<String> {
+    let cpuinfo = std::fs::read_to_string("/proc/cpuinfo").unwrap_or_default();
+    let model = cpuinfo
+        .lines()
+        .find_map(|l| l.strip_prefix("model name").and_then(|r| r.split_once(':')).map(|(_, m)| m.trim().to_string()))
+        .unwrap_or_else(|| "unknown".into());
+    let cores = std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1);
+    let kernel = std::fs::read_to_string("/proc/sys/kernel/osrelease").map(|s| s.trim().to_string()).ok();
+    let mut lines = vec![
+        format!("CPU: {model}"),
+        format!("cores available: {cores} (pipeline threads: {})", rayon::current_num_threads()),
+        format!(
+            "system: {} {}{}",
+            std::env::consts::OS,
+            std::env::consts::ARCH,
+            kernel.map(|k| format!(", kernel {k}")).unwrap_or_default()
+        ),
+    ];
+    if let Some(load) = load_average() {
+        lines.push(format!(
+            "load average at start (1, 5, 15 min): {load}; other work on the machine slows every figure"
+        ));
+    }
+    if cfg!(debug_assertions) {
+        lines.push("build: debug (unoptimised; use --release for figures worth reporting)".into());
+    } else {
+        lines.push("build: release".into());
+    }
+    lines
+}
+
+/// Runs this program with `args`, outputs discarded, and returns its peak
+/// resident bytes. The kernel's figure for a child is at least the
+/// spawning process's own peak at the spawn (the child starts as a view of
+/// its memory), so a benchmark that holds several frames cannot spawn the
+/// measured child itself: a fresh, small copy of this program does it.
+fn peak_rss_of(args: &[String]) -> anyhow::Result<u64> {
+    let exe = std::env::current_exe().context("cannot find this program's path")?;
+    let output = Command::new(exe)
+        .args(["bench", "--peak-rss-of-child", "--"])
+        .args(args)
+        .stdin(Stdio::null())
+        .stderr(Stdio::inherit())
+        .output()
+        .context("cannot start the measuring process")?;
+    if !output.status.success() {
+        bail!("the measured `weldseam {}` failed: {}", args.first().map(String::as_str).unwrap_or(""), output.status);
+    }
+    let text = String::from_utf8_lossy(&output.stdout);
+    text.trim().parse().with_context(|| format!("the measuring process printed {text:?}, not a byte count"))
+}
+
+/// The small measuring process: runs the child and prints its peak bytes.
+fn measure_child(args: &[String]) -> anyhow::Result<()> {
+    let exe = std::env::current_exe().context("cannot find this program's path")?;
+    let mut command = Command::new(exe);
+    command.args(args).stdin(Stdio::null()).stdout(Stdio::null()).stderr(Stdio::null());
+    let child = bench::run_measuring_peak_rss(&mut command).context("cannot run the measured command")?;
+    if !child.status.success() {
+        bail!("the measured command failed: {}", child.status);
+    }
+    let mut out = std::io::stdout().lock();
+    writeln!(out, "{}", child.peak_rss_bytes)?;
+    Ok(())
+}
+
+/// The first three fields of /proc/loadavg.
+fn load_average() -> Option<String> {
+    let text = std::fs::read_to_string("/proc/loadavg").ok()?;
+    let fields: Vec<&str> = text.split_whitespace().take(3).collect();
+    (fields.len() == 3).then(|| fields.join(" "))
+}
+
+pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
+    if args.peak_rss_of_child {
+        return measure_child(&args.child_args);
+    }
+    let runs = args.runs.unwrap_or(if args.quick { 2 } else { 7 }).max(1);
+    let mut printer = Printer { markdown: args.markdown, out: std::io::stdout() };
+    let machine = machine_description();
+    if args.markdown {
+        for line in &machine {
+            printer.line(&format!("- {line}"))?;
+        }
+    } else {
+        for line in &machine {
+            printer.line(line)?;
+        }
+    }
+    printer.line("")?;
+
+    let camera = CameraModel::default();
+    let distances: &[f64] = if args.quick { &DISTANCES_MM[..1] } else { &DISTANCES_MM };
+    let mut near_timings: Option<PlanTimings> = None;
+    for &distance in distances {
+        progress(&format!("every stage at {distance:.0} mm"));
+        let timings = bench::bench_all(&bench::joint_scenarios(distance, camera), runs);
+        let title = format!(
+            "Per stage at {distance:.0} mm, {} x {} ({:.1} MP), tilt {:.0}°",
+            camera.width_px,
+            camera.height_px,
+            megapixels(&camera),
+            bench::TILT_DEG
+        );
+        printer.table(&bench::stage_table(title, &timings))?;
+        if distance == NEAR_MM {
+            near_timings = timings.into_iter().find(|t| t.scenario.joint == JOINT);
+        }
+    }
+
+    progress("scaling with frame size");
+    let mut scaling = Vec::new();
+    for (w, h) in FRAME_SIZES {
+        let cam = camera_with_size(w, h);
+        if args.quick && cam != camera {
+            continue;
+        }
+        match near_timings.as_ref().filter(|t| t.scenario.camera == cam) {
+            Some(t) => scaling.push(t.clone()),
+            None => scaling.push(bench::bench_scenario(&Scenario::new(JOINT, NEAR_MM, cam), runs)),
+        }
+    }
+    let title = format!("Scaling with frame size: {JOINT} at {NEAR_MM:.0} mm, tilt {:.0}°", bench::TILT_DEG);
+    printer.table(&bench::scaling_table(title, &scaling))?;
+
+    let scenario = Scenario::new(JOINT, NEAR_MM, camera);
+    let sim = scenario.simulate();
+    let raw = raw_frame_bytes(&camera);
+
+    progress("loading and decoding a frame");
+    let pcd_path = std::env::temp_dir().join(format!("weldseam-bench-{}.pcd", std::process::id()));
+    let pcd_file = TempFile(pcd_path.clone());
+    {
+        let file = File::create(&pcd_path).with_context(|| format!("cannot create {}", pcd_path.display()))?;
+        let mut out = BufWriter::new(file);
+        pcd::write_binary(&sim.cloud, &mut out)?;
+        out.flush()?;
+    }
+    let pcd_bytes = std::fs::metadata(&pcd_path)?.len();
+    let load = bench::time_load(&pcd_path, runs)?;
+    let message = bench::frame_message(&sim.cloud, 1, 0)?;
+    let decode = bench::time_frame_decode(&message, runs)?;
+    let mut io_table = Table::new(
+        format!("Loading and decoding a {} x {} frame", camera.width_px, camera.height_px),
+        &["operation", "bytes", "ms"],
+    );
+    let mb = |b: u64| format!("{:.1} MB", b as f64 / 1e6);
+    let ms = |s: &[f64]| Summary::of(s).map(|s| s.cell(1)).unwrap_or_else(|| "-".into());
+    io_table.push(vec!["load binary PCD (cloud::load)".into(), mb(pcd_bytes), ms(&load)]);
+    io_table.push(vec!["decode Frame, camera link reader".into(), mb(message.len() as u64), ms(&decode.link_reader)]);
+    io_table.push(vec![
+        "decode Frame, link reader to organized cloud".into(),
+        mb(message.len() as u64),
+        ms(&decode.link_to_cloud),
+    ]);
+    io_table.push(vec!["decode Frame, in-memory decoder".into(), mb(message.len() as u64), ms(&decode.in_memory)]);
+    io_table
+        .notes
+        .push(format!("median (min-max) of {runs} runs after a discarded warm-up; the PCD file is in the page cache"));
+    printer.table(&io_table)?;
+
+    progress("peak memory of `weldseam plan`");
+    let p = sim.pose;
+    let plan_args: Vec<String> = vec![
+        "plan".into(),
+        "--cloud".into(),
+        pcd_path.to_string_lossy().into_owned(),
+        "--joint".into(),
+        JOINT.name().into(),
+        format!(
+            "--pose={},{},{},{},{},{}",
+            p.xyz_mm[0], p.xyz_mm[1], p.xyz_mm[2], p.angles_deg[0], p.angles_deg[1], p.angles_deg[2]
+        ),
+        "--json".into(),
+    ];
+    let started = std::time::Instant::now();
+    let peak = peak_rss_of(&plan_args)?;
+    let wall = started.elapsed();
+    drop(pcd_file);
+    let mut memory = Table::new(
+        format!("Peak memory of `weldseam plan --json` on the {JOINT} frame at {NEAR_MM:.0} mm"),
+        &["process", "peak RSS", "x raw frame", "wall ms"],
+    );
+    memory.push(vec![
+        "weldseam plan".into(),
+        mb(peak),
+        format!("{:.2}", peak as f64 / raw as f64),
+        format!("{:.0}", wall.as_secs_f64() * 1e3),
+    ]);
+    memory.notes.push(format!(
+        "raw frame: {} x {} x 12 bytes = {}; one run (load, plan, JSON); wall time includes starting two processes",
+        camera.width_px,
+        camera.height_px,
+        mb(raw)
+    ));
+    printer.table(&memory)?;
+
+    progress("the daemon, trigger to reply");
+    let latency = bench::daemon_latency(&scenario, &sim, runs)?;
+    let mut daemon = Table::new(
+        format!("The daemon: {JOINT} at {NEAR_MM:.0} mm in trigger mode over loopback TCP"),
+        &["interval", "ms"],
+    );
+    daemon.push(vec!["frame's last byte written to reply's last byte read".into(), ms(&latency)]);
+    daemon.notes.push(format!(
+        "median (min-max) of {runs} requests after a discarded warm-up; daemon, camera and controller in one process"
+    ));
+    printer.table(&daemon)?;
+    if let Some(load) = load_average() {
+        printer.line(&format!("load average at the end (1, 5, 15 min): {load}"))?;
+    }
+    Ok(())
+}

@@ -119,7 +119,7 @@ impl CameraModel {
         let reach = radius_mm / (z - radius_mm);
         let wx = self.fx() * reach * (1.0 + tx * tx).sqrt();
         let wy = self.fy() * reach * (1.0 + ty * ty).sqrt();
-        (wx.ceil() as usize, wy.ceil() as usize)
+        (crate::geometry::ceil_i64(wx).max(0) as usize, crate::geometry::ceil_i64(wy).max(0) as usize)
     }
 
     /// Projects a camera-frame point to pixel coordinates `(u, v)`.

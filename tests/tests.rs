@@ -4,6 +4,7 @@
 mod bench;
 mod cli;
 mod daemon;
+mod exactness;
 mod parsers;
 mod pipeline;
 mod util;

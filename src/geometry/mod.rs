@@ -15,6 +15,30 @@ pub fn vec3(p: &[f32; 3]) -> Vec3 {
     Vec3::new(p[0] as f64, p[1] as f64, p[2] as f64)
 }
 
+// Floor, ceiling and rounding for the small magnitudes of pixel offsets
+// and depth steps. Without SSE4.1 the standard ones are library calls, and
+// these run on every pixel of a frame.
+
+/// `x.floor()` as an integer, for |x| < 2^52.
+#[inline(always)]
+pub fn floor_i64(x: f64) -> i64 {
+    let t = x as i64;
+    t - ((t as f64) > x) as i64
+}
+
+/// `x.ceil()` as an integer, for |x| < 2^52.
+#[inline(always)]
+pub fn ceil_i64(x: f64) -> i64 {
+    let t = x as i64;
+    t + ((t as f64) < x) as i64
+}
+
+/// `x.round()` (half away from zero) as an integer, for |x| < 2^52.
+#[inline(always)]
+pub fn round_i64(x: f64) -> i64 {
+    if x >= 0.0 { floor_i64(x + 0.5) } else { -floor_i64(-x + 0.5) }
+}
+
 /// Distance from `p` to the segment `a..b`.
 pub fn distance_to_segment(p: &Vec3, a: &Vec3, b: &Vec3) -> f64 {
     let ab = b - a;
@@ -32,5 +56,19 @@ pub fn distance_to_polyline(p: &Vec3, polyline: &[Vec3]) -> f64 {
         [] => f64::INFINITY,
         [only] => (p - only).norm(),
         _ => polyline.windows(2).map(|w| distance_to_segment(p, &w[0], &w[1])).fold(f64::INFINITY, f64::min),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn fast_rounding_matches_the_standard_functions() {
+        for x in [-3.5, -3.0, -2.9999, -2.5, -0.5, -0.4, -0.0, 0.0, 0.2, 0.5, 1.0, 1.0001, 2.5, 7.9999, 8.0, 1999.75] {
+            assert_eq!(floor_i64(x), x.floor() as i64, "floor {x}");
+            assert_eq!(ceil_i64(x), x.ceil() as i64, "ceil {x}");
+            assert_eq!(round_i64(x), x.round() as i64, "round {x}");
+        }
     }
 }

@@ -26,7 +26,23 @@ pub fn local_normal(cloud: &PointCloud, search: &NeighbourSearch, i: usize, step
 /// The pixel step whose 3D length is about `radius_mm` at depth `z`: long
 /// enough to average the depth noise, short enough to stay on one face.
 pub fn normal_step(fx: f64, z: f64, radius_mm: f64) -> usize {
-    ((radius_mm * fx / z).round() as usize).clamp(1, 8)
+    crate::geometry::round_i64(radius_mm * fx / z).clamp(1, 8) as usize
+}
+
+/// True when the grid normal at point `i` (see [`local_normal`]) is within
+/// the angle whose cosine is `cos_limit` of the unit normal `reference`.
+/// The same test as `local_normal(..).dot(reference) >= cos_limit`, in
+/// single precision without a square root: it runs on every pixel.
+pub fn grid_normal_agrees(cloud: &PointCloud, i: usize, step: usize, reference: &Vec3, cos_limit: f64) -> bool {
+    let Some(n) = grid_cross(cloud, i, step) else { return false };
+    let p = cloud.points()[i];
+    // Orient away from the camera, as local_normal does.
+    let towards = n[0] * p[0] + n[1] * p[1] + n[2] * p[2];
+    let sign = if towards < 0.0 { -1.0 } else { 1.0 };
+    let dot = sign * (n[0] as f64 * reference.x + n[1] as f64 * reference.y + n[2] as f64 * reference.z);
+    let norm_sq = (n[0] as f64).powi(2) + (n[1] as f64).powi(2) + (n[2] as f64).powi(2);
+    // dot / |n| >= c, with c > 0 here, is dot >= 0 and dot² >= c² |n|².
+    norm_sq > 1e-24 && dot >= 0.0 && dot * dot >= cos_limit * cos_limit * norm_sq
 }
 
 #[inline]
@@ -36,7 +52,15 @@ fn vec_at(cloud: &PointCloud, i: usize) -> Option<Vec3> {
 }
 
 fn grid_normal(cloud: &PointCloud, i: usize, step: usize) -> Option<Vec3> {
-    // Runs on every pixel: plain f32 arithmetic on the stored points.
+    let n = grid_cross(cloud, i, step)?;
+    let n = Vec3::new(n[0] as f64, n[1] as f64, n[2] as f64);
+    let norm = n.norm();
+    (norm > 1e-12).then(|| n / norm)
+}
+
+/// The unnormalised cross product of the central differences at pixel `i`.
+#[inline]
+fn grid_cross(cloud: &PointCloud, i: usize, step: usize) -> Option<[f32; 3]> {
     let (w, h) = (cloud.width(), cloud.height());
     let points = cloud.points();
     let (col, row) = (i % w, i / w);
@@ -58,13 +82,7 @@ fn grid_normal(cloud: &PointCloud, i: usize, step: usize) -> Option<Vec3> {
     let down = if row + step < h { valid(i + step * w) } else { None };
     let du = difference(left, right)?;
     let dv = difference(up, down)?;
-    let n = Vec3::new(
-        (du[1] * dv[2] - du[2] * dv[1]) as f64,
-        (du[2] * dv[0] - du[0] * dv[2]) as f64,
-        (du[0] * dv[1] - du[1] * dv[0]) as f64,
-    );
-    let norm = n.norm();
-    (norm > 1e-12).then(|| n / norm)
+    Some([du[1] * dv[2] - du[2] * dv[1], du[2] * dv[0] - du[0] * dv[2], du[0] * dv[1] - du[1] * dv[0]])
 }
 
 fn scatter_normal(cloud: &PointCloud, search: &NeighbourSearch, i: usize) -> Option<Vec3> {
@@ -160,6 +178,21 @@ mod tests {
         let search = NeighbourSearch::new(&cloud, &camera, 1.0);
         let got = dominant_normal(&cloud, &search, camera.fx(), 5.0).unwrap();
         assert!(got.dot(&n) > 0.9999, "{got:?}");
+    }
+
+    #[test]
+    fn the_fast_agreement_test_matches_the_normal() {
+        let n = Vec3::new(0.2, -0.3, 1.0).normalize();
+        let cloud = tilted_grid(n);
+        let camera = CameraModel::default();
+        let search = NeighbourSearch::new(&cloud, &camera, 1.0);
+        for i in (0..cloud.len()).step_by(7) {
+            for (reference, limit) in [(n, 20f64), (Vec3::z(), 15.0), (Vec3::new(0.9, 0.0, 0.44).normalize(), 30.0)] {
+                let cos = limit.to_radians().cos();
+                let slow = local_normal(&cloud, &search, i, 3).is_some_and(|m| m.dot(&reference) >= cos);
+                assert_eq!(grid_normal_agrees(&cloud, i, 3, &reference, cos), slow, "pixel {i}");
+            }
+        }
     }
 
     #[test]

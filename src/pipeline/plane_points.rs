@@ -24,7 +24,7 @@ use crate::geometry::{Vec3, vec3};
 
 use super::grid_search::{Grid, LANES, Span};
 use super::neighbours::{FullCountCache, FullCounts, NeighbourSearch, PixelEllipse};
-use super::orientation::{local_normal, normal_step};
+use super::orientation::{grid_normal_agrees, local_normal, normal_step};
 
 /// The plane points and, for each, a lower bound of its neighbour count
 /// and the full-plane count it was measured against (the edge criterion
@@ -101,8 +101,12 @@ impl Threshold for RobustThreshold<'_> {
             return None;
         }
         let step = normal_step(self.search.camera().fx(), p[2] as f64, self.search.radius_mm());
-        let n = local_normal(cloud, self.search, i, step)?;
-        if n.dot(&self.criterion.normal) < self.cos_limit {
+        let facing = if cloud.is_organized() {
+            grid_normal_agrees(cloud, i, step, &self.criterion.normal, self.cos_limit)
+        } else {
+            local_normal(cloud, self.search, i, step).is_some_and(|n| n.dot(&self.criterion.normal) >= self.cos_limit)
+        };
+        if !facing {
             return None;
         }
         let full = self.full_counts.get(i, cache);
@@ -145,7 +149,7 @@ pub fn reference(search: &NeighbourSearch, paper: bool, criterion: &RobustPlaneC
         .collect()
 }
 
-fn classify(search: &NeighbourSearch, threshold: &dyn Threshold) -> PlanePoints {
+fn classify<T: Threshold>(search: &NeighbourSearch, threshold: &T) -> PlanePoints {
     let cloud = search.cloud();
     let n = cloud.len();
     let mut mask = vec![false; n];
@@ -184,6 +188,8 @@ fn classify(search: &NeighbourSearch, threshold: &dyn Threshold) -> PlanePoints 
 /// Scratch space reused across the blocks of a row.
 struct Scratch {
     spans: Vec<Span>,
+    /// The union of a block's exact windows.
+    window: Vec<Span>,
     /// Depth and column of the point the spans were made for.
     spans_for: Option<(f32, usize)>,
     cache: FullCountCache,
@@ -191,7 +197,7 @@ struct Scratch {
 
 impl Scratch {
     fn new() -> Self {
-        Scratch { spans: Vec::new(), spans_for: None, cache: FullCountCache::default() }
+        Scratch { spans: Vec::new(), window: Vec::new(), spans_for: None, cache: FullCountCache::default() }
     }
 
     /// True when the spans were made for a point close enough to `(z, col)`
@@ -210,10 +216,10 @@ struct BlockOut<'a> {
 }
 
 /// Classifies up to `LANES` pixels of one row starting at `col`.
-fn classify_block(
+fn classify_block<T: Threshold>(
     search: &NeighbourSearch,
     grid: &Grid,
-    threshold: &dyn Threshold,
+    threshold: &T,
     row: usize,
     col: usize,
     scratch: &mut Scratch,
@@ -244,9 +250,32 @@ fn classify_block(
             partial = grid.count_block(col, row, &scratch.spans, radius_sq);
         }
     }
+    // A lane short of its threshold on the ellipse is counted again over
+    // its whole exact window; the whole block at once when it can be.
+    let short = (0..lanes).any(|l| needed[l].is_some_and(|(t, _)| (partial[l] as f64) < t));
+    let mut exact: Option<[u32; LANES]> = None;
+    if short && lanes == LANES {
+        let windows = (0..lanes)
+            .filter(|&l| needed[l].is_some())
+            .map(|l| search.camera().neighbour_window(search.cloud().points()[first + l], search.radius_mm()));
+        let (wx, wy) = windows.fold((0, 0), |(a, b), (x, y)| (a.max(x), b.max(y)));
+        let (wx, wy) = (wx as isize, wy as isize);
+        // The union of the lanes' exact windows: counting over more pixels
+        // than a lane's window still gives its exact count.
+        scratch.window.clear();
+        scratch.window.extend((-wy..=wy).map(|dv| Span { dv, du_lo: -wx, du_hi: wx }));
+        if grid.spans_fit(col, row, &scratch.window) {
+            let radius_sq = (search.radius_mm() * search.radius_mm()) as f32;
+            exact = Some(grid.count_block(col, row, &scratch.window, radius_sq));
+        }
+    }
     for l in 0..lanes {
         let Some((t, full)) = needed[l] else { continue };
-        let count = if partial[l] as f64 >= t { partial[l] } else { search.count(first + l, |_| true) };
+        let count = match exact {
+            _ if partial[l] as f64 >= t => partial[l],
+            Some(counts) => counts[l],
+            None => search.count(first + l, |_| true),
+        };
         out.full[l] = full.clamp(0.0, u16::MAX as f64) as u16;
         if count as f64 >= t {
             out.mask[l] = true;

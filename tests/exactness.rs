@@ -1,0 +1,62 @@
+//! The fast grid paths classify every point exactly as the straightforward
+//! KD-tree implementations do, on crops of realistic simulated frames
+//! (noise, dropouts, mixed pixels, bevels, shadows), for both methods.
+
+use weldseam::camera::CameraModel;
+use weldseam::cloud::PointCloud;
+use weldseam::geometry::Vec3;
+use weldseam::joint::JointType;
+use weldseam::pipeline::edge_points::{self, EdgeCriterion, FullCount, Plate};
+use weldseam::pipeline::neighbours::NeighbourSearch;
+use weldseam::pipeline::orientation::dominant_normal;
+use weldseam::pipeline::plane_points::{self, RobustPlaneCriterion};
+use weldseam::sim::{demo_scene, simulate};
+
+/// A `w x h` window of a simulated frame centred on the seam's start.
+fn crop(joint: JointType, distance_mm: f64, tilt_deg: f64, w: usize, h: usize) -> PointCloud {
+    let camera = CameraModel::default();
+    let mut spec = demo_scene(joint);
+    spec.placement.distance_mm = distance_mm;
+    spec.placement.tilt_deg = tilt_deg;
+    let sim = simulate(&spec, &camera);
+    let s = sim.truth.start_camera;
+    let (u, v) = camera.project([s.x, s.y, s.z]).expect("the seam start is in front of the camera");
+    let c0 = (u as usize).saturating_sub(w / 2).min(camera.width_px as usize - w);
+    let r0 = (v as usize).saturating_sub(h / 2).min(camera.height_px as usize - h);
+    let full = sim.cloud.points();
+    let points = (r0..r0 + h).flat_map(|r| full[r * sim.cloud.width() + c0..][..w].to_vec()).collect();
+    PointCloud::organized(w, h, points).expect("crop")
+}
+
+#[test]
+fn plane_and_edge_criteria_match_the_kdtree_reference_point_for_point() {
+    let camera = CameraModel::default();
+    for (joint, distance, tilt) in
+        [(JointType::VButt, 500.0, 20.0), (JointType::IButt, 760.0, 5.0), (JointType::Lap, 980.0, 28.0)]
+    {
+        let cloud = crop(joint, distance, tilt, 360, 240);
+        let grid = NeighbourSearch::new(&cloud, &camera, 1.0);
+        let tree = NeighbourSearch::kdtree(&cloud, &camera, 1.0);
+        let normal = dominant_normal(&cloud, &grid, camera.fx(), 5.0).unwrap_or_else(Vec3::z);
+        let criterion = RobustPlaneCriterion { normal, min_ratio: 0.8, max_angle_deg: 20.0 };
+
+        let robust = plane_points::robust_criterion(&grid, &criterion);
+        assert_eq!(robust.mask, plane_points::reference(&tree, false, &criterion), "{joint} robust plane points");
+        let paper = plane_points::paper_criterion(&cloud, &camera, &grid);
+        assert_eq!(paper.mask, plane_points::reference(&tree, true, &criterion), "{joint} paper plane points");
+
+        for (plane, edge) in [
+            (&robust, EdgeCriterion { full: FullCount::Plane, ratio: 0.75 }),
+            (&paper, EdgeCriterion { full: FullCount::Frontal, ratio: 0.5 }),
+        ] {
+            // One plate: the plane points themselves, labelled 0.
+            let labels: Vec<u32> = plane.mask.iter().map(|&m| if m { 0 } else { u32::MAX }).collect();
+            let members: Vec<u32> = (0..cloud.len() as u32).filter(|&i| plane.mask[i as usize]).collect();
+            let plate = Plate { labels: &labels, label: 0, members: &members };
+            let mut fast = edge_points::edge_points(&grid, plane, plate, &edge);
+            fast.sort_unstable();
+            assert_eq!(fast, edge_points::reference(&tree, plane, plate, &edge), "{joint} edge points");
+            assert!(!fast.is_empty(), "{joint}: the crop holds edges");
+        }
+    }
+}

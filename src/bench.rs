@@ -24,7 +24,7 @@ use crate::cloud::{self, PointCloud};
 use crate::config::Config;
 use crate::joint::JointType;
 use crate::mock::ClientError;
-use crate::mock::controller::ControllerClient;
+use crate::mock::controller::{ControllerClient, request_for_simulation};
 use crate::pipeline::{PlanRequest, Planner, Stage};
 use crate::server::connection::{MessageReader, ReadError};
 use crate::server::{self, ServerState};
@@ -611,27 +611,13 @@ async fn daemon_latency_async(
     let result = async {
         let mut controller = ControllerClient::connect(&controller_addr, "bench-controller").await?;
         // A trigger request needs the camera attached first.
-        let ready = Instant::now();
-        while !controller.ping(Duration::from_secs(5)).await?.camera_connected {
-            if ready.elapsed() > Duration::from_secs(10) {
-                return Err(DaemonBenchError::Setup("the camera did not connect within 10 s".into()));
-            }
-            tokio::time::sleep(Duration::from_millis(5)).await;
-        }
-        let p = sim.pose;
+        controller
+            .wait_for_camera(Duration::from_secs(10))
+            .await
+            .map_err(|_| DaemonBenchError::Setup("the camera did not connect within 10 s".into()))?;
         let mut samples = Vec::with_capacity(runs);
         for id in 0..=runs as u64 {
-            let request = weldseam_proto::message::PlanRequest {
-                request_id: id + 1,
-                joint: weldseam_proto::message::PlanRequest::joint_code(crate::report::joint_to_proto(scenario.joint)),
-                groove_depth_mm: sim.truth.groove_depth_mm,
-                pose: [p.xyz_mm[0], p.xyz_mm[1], p.xyz_mm[2], p.angles_deg[0], p.angles_deg[1], p.angles_deg[2]],
-                step_mm: None,
-                work_angle_deg: None,
-                travel_angle_deg: None,
-                frame: FrameSelect::Trigger,
-                timeout_ms: 0,
-            };
+            let request = request_for_simulation(id + 1, scenario.joint, sim, FrameSelect::Trigger);
             controller.plan(request, Duration::from_secs(60)).await?;
             let replied = Instant::now();
             let sent = written

@@ -8,19 +8,6 @@ use weldseam::pipeline::Stage;
 
 use crate::util::write_temp;
 
-const STAGES: [Stage; 10] = [
-    Stage::Orientation,
-    Stage::PlanePoints,
-    Stage::Clustering,
-    Stage::Background,
-    Stage::EdgePoints,
-    Stage::Ransac,
-    Stage::WeldEdges,
-    Stage::Refit,
-    Stage::WeldEquation,
-    Stage::Trajectory,
-];
-
 fn smallest() -> Scenario {
     let (w, h) = FRAME_SIZES[0];
     Scenario::new(JointType::IButt, 500.0, camera_with_size(w, h))
@@ -37,7 +24,7 @@ fn the_stage_and_scaling_tables_have_every_row() {
 
     let table = bench::stage_table("per stage", std::slice::from_ref(&timings));
     assert_eq!(table.headers, ["stage", "i_butt ms"]);
-    for stage in STAGES {
+    for stage in Stage::IN_ORDER {
         let row = table.row(stage.name()).unwrap_or_else(|| panic!("no {stage} row in\n{}", table.to_text()));
         assert_ne!(row[1], "-", "{stage}");
     }
@@ -45,7 +32,7 @@ fn the_stage_and_scaling_tables_have_every_row() {
         assert!(table.row(name).is_some_and(|r| r[1] != "-"), "no {name} row in\n{}", table.to_text());
     }
     let markdown = table.to_markdown();
-    assert!(STAGES.iter().all(|s| markdown.contains(&format!("| {} |", s.name()))), "{markdown}");
+    assert!(Stage::IN_ORDER.iter().all(|s| markdown.contains(&format!("| {} |", s.name()))), "{markdown}");
 
     let scaling = bench::scaling_table("scaling", &[timings]);
     let row = scaling.row("896 x 560").expect("a row for the frame size");

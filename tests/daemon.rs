@@ -99,13 +99,7 @@ fn request(id: u64, frame: FrameSelect) -> PlanRequest {
 }
 
 fn sim_request(id: u64, joint: JointType, sim: &Simulation, frame: FrameSelect) -> PlanRequest {
-    let p = sim.pose;
-    PlanRequest {
-        joint: PlanRequest::joint_code(weldseam::report::joint_to_proto(joint)),
-        groove_depth_mm: sim.truth.groove_depth_mm,
-        pose: [p.xyz_mm[0], p.xyz_mm[1], p.xyz_mm[2], p.angles_deg[0], p.angles_deg[1], p.angles_deg[2]],
-        ..request(id, frame)
-    }
+    weldseam::mock::controller::request_for_simulation(id, joint, sim, frame)
 }
 
 /// The paper's metric: 12 points on the true seam, each within 1 mm of
@@ -179,13 +173,7 @@ impl Raw {
 /// Waits until the daemon reports a connected camera, so a trigger
 /// request does not race the camera's connection.
 async fn wait_for_camera(ctl: &mut ControllerClient) {
-    for _ in 0..500 {
-        if ctl.ping(WAIT).await.unwrap().camera_connected {
-            return;
-        }
-        tokio::time::sleep(Duration::from_millis(10)).await;
-    }
-    panic!("the mock camera did not connect");
+    ctl.wait_for_camera(Duration::from_secs(5)).await.expect("the mock camera connects");
 }
 
 fn frame_message(frame_id: u64, trigger_id: u64, cloud: &PointCloud) -> Message {

@@ -17,11 +17,10 @@ use weldseam::eval::path_error;
 use weldseam::geometry::Vec3;
 use weldseam::joint::JointType;
 use weldseam::mock::camera::{CameraOptions, MockCamera};
-use weldseam::mock::controller::ControllerClient;
-use weldseam::report::joint_to_proto;
+use weldseam::mock::controller::{ControllerClient, request_for_simulation};
 use weldseam::server::{self, ServerState};
 use weldseam::sim::{Simulation, demo_scene, simulate};
-use weldseam_proto::message::{FrameSelect, PlanReply, PlanRequest};
+use weldseam_proto::message::{FrameSelect, PlanReply};
 
 #[derive(Debug, clap::Args)]
 pub struct DemoArgs {
@@ -69,23 +68,13 @@ async fn cell(args: &DemoArgs) -> anyhow::Result<()> {
     let camera = tokio::spawn(MockCamera::new(camera_addr, frames, options).run(camera_stopped));
 
     let mut controller = ControllerClient::connect(&controller_addr, "demo-controller").await?;
-    wait_for_camera(&mut controller).await?;
+    controller.wait_for_camera(STEP_TIMEOUT).await.context("the mock camera did not connect to the daemon")?;
     writeln!(out, "mock camera connected; mock controller requesting one plan per joint type\n")?;
 
     let mut failures = Vec::new();
     for (k, (joint, sim)) in scenes.iter().enumerate() {
         let p = sim.pose;
-        let request = PlanRequest {
-            request_id: k as u64 + 1,
-            joint: PlanRequest::joint_code(joint_to_proto(*joint)),
-            groove_depth_mm: sim.truth.groove_depth_mm,
-            pose: [p.xyz_mm[0], p.xyz_mm[1], p.xyz_mm[2], p.angles_deg[0], p.angles_deg[1], p.angles_deg[2]],
-            step_mm: None,
-            work_angle_deg: None,
-            travel_angle_deg: None,
-            frame: FrameSelect::Trigger,
-            timeout_ms: 0,
-        };
+        let request = request_for_simulation(k as u64 + 1, *joint, sim, FrameSelect::Trigger);
         writeln!(
             out,
             "== {joint}: pose {:.3}, {:.3}, {:.3} mm; {:.3}, {:.3}, {:.3}°",
@@ -114,17 +103,6 @@ async fn cell(args: &DemoArgs) -> anyhow::Result<()> {
         bail!("demo failed: {}", failures.join("; "));
     }
     Ok(())
-}
-
-async fn wait_for_camera(controller: &mut ControllerClient) -> anyhow::Result<()> {
-    let deadline = Instant::now() + STEP_TIMEOUT;
-    while Instant::now() < deadline {
-        if controller.ping(STEP_TIMEOUT).await?.camera_connected {
-            return Ok(());
-        }
-        tokio::time::sleep(Duration::from_millis(20)).await;
-    }
-    bail!("the mock camera did not connect to the daemon")
 }
 
 /// Prints one reply and checks it against the truth.

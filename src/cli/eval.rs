@@ -30,19 +30,6 @@ pub struct EvalArgs {
     pub markdown: bool,
 }
 
-const STAGES: [Stage; 10] = [
-    Stage::Orientation,
-    Stage::PlanePoints,
-    Stage::Clustering,
-    Stage::Background,
-    Stage::EdgePoints,
-    Stage::Ransac,
-    Stage::WeldEdges,
-    Stage::Refit,
-    Stage::WeldEquation,
-    Stage::Trajectory,
-];
-
 fn cell(o: &SceneOutcome) -> String {
     match &o.result {
         Ok((e, _)) => format!(
@@ -60,7 +47,8 @@ fn cell(o: &SceneOutcome) -> String {
 fn timings(o: &SceneOutcome) -> String {
     match &o.result {
         Ok((_, t)) => {
-            let stages: Vec<String> = STAGES.iter().map(|s| format!("{:.0}", t.get(*s).unwrap_or(0.0))).collect();
+            let stages: Vec<String> =
+                Stage::IN_ORDER.iter().map(|s| format!("{:.0}", t.get(*s).unwrap_or(0.0))).collect();
             format!("{:.0} | {}", t.total_ms(), stages.join(" / "))
         }
         Err(_) => "- | -".into(),
@@ -84,7 +72,7 @@ pub fn run(args: &EvalArgs) -> anyhow::Result<()> {
     scenes.truncate(args.limit.unwrap_or(usize::MAX));
     anyhow::ensure!(!scenes.is_empty(), "no scene matches the filter");
 
-    let stage_names: Vec<&str> = STAGES.iter().map(|s| s.name()).collect();
+    let stage_names: Vec<&str> = Stage::IN_ORDER.iter().map(|s| s.name()).collect();
     let mut out = std::io::stdout().lock();
     writeln!(
         out,

@@ -86,4 +86,43 @@ impl ControllerClient {
         };
         tokio::time::timeout(wait, answer).await.map_err(|_| ClientError::Timeout(wait.as_millis()))?
     }
+
+    /// Pings until the daemon reports a camera connected, for at most
+    /// `wait`: commissioning and tests start the camera and the controller
+    /// together and need the camera in place before the first trigger.
+    pub async fn wait_for_camera(&mut self, wait: Duration) -> Result<(), ClientError> {
+        let deadline = tokio::time::Instant::now() + wait;
+        loop {
+            let left = deadline.saturating_duration_since(tokio::time::Instant::now());
+            if self.ping(left.max(Duration::from_millis(1))).await?.camera_connected {
+                return Ok(());
+            }
+            if tokio::time::Instant::now() >= deadline {
+                return Err(ClientError::Timeout(wait.as_millis()));
+            }
+            tokio::time::sleep(Duration::from_millis(10)).await;
+        }
+    }
+}
+
+/// The plan request a robot would send for a simulated scene: its joint,
+/// groove depth and the flange pose at capture.
+pub fn request_for_simulation(
+    request_id: u64,
+    joint: crate::joint::JointType,
+    sim: &crate::sim::Simulation,
+    frame: weldseam_proto::message::FrameSelect,
+) -> PlanRequest {
+    let p = sim.pose;
+    PlanRequest {
+        request_id,
+        joint: PlanRequest::joint_code(crate::report::joint_to_proto(joint)),
+        groove_depth_mm: sim.truth.groove_depth_mm,
+        pose: [p.xyz_mm[0], p.xyz_mm[1], p.xyz_mm[2], p.angles_deg[0], p.angles_deg[1], p.angles_deg[2]],
+        step_mm: None,
+        work_angle_deg: None,
+        travel_angle_deg: None,
+        frame,
+        timeout_ms: 0,
+    }
 }

@@ -103,6 +103,21 @@ pub enum Stage {
 }
 
 impl Stage {
+    /// The stages that do the pipeline's work, in run order (the request
+    /// check takes no measurable time and is not timed).
+    pub const IN_ORDER: [Stage; 10] = [
+        Stage::Orientation,
+        Stage::PlanePoints,
+        Stage::Clustering,
+        Stage::Background,
+        Stage::EdgePoints,
+        Stage::Ransac,
+        Stage::WeldEdges,
+        Stage::Refit,
+        Stage::WeldEquation,
+        Stage::Trajectory,
+    ];
+
     pub fn name(self) -> &'static str {
         match self {
             Stage::Request => "request",

@@ -56,26 +56,45 @@ pub fn edge_points(search: &NeighbourSearch, plane: &PlanePoints, plate: Plate, 
     let points = cloud.points();
     let radius = search.radius_mm();
     let Plate { labels, label, members } = plate;
-    let outside = cloud.is_organized().then(|| OutsideCounts::new(cloud, labels, label));
-    members
-        .par_iter()
-        .copied()
-        .filter(|&i| {
-            let i = i as usize;
-            let p = points[i];
-            let n = match criterion.full {
-                FullCount::Frontal => camera.theoretical_neighbours(radius, p[2] as f64),
-                FullCount::Plane => plane.full[i] as f64,
-            };
-            let limit = criterion.ratio * n;
-            if let Some(outside) = &outside {
-                let (wx, wy) = camera.neighbour_window(p, radius);
-                let lower_bound = plane.counts[i] as i64 - outside.in_window(i, wx, wy) as i64;
-                if lower_bound as f64 > limit {
-                    return false;
-                }
-            }
-            search.count(i, |j| labels[j] == label) as f64 <= limit
+    let full = |i: usize| match criterion.full {
+        FullCount::Frontal => camera.theoretical_neighbours(radius, points[i][2] as f64),
+        FullCount::Plane => plane.full[i] as f64,
+    };
+    let is_edge = |i: usize| search.count(i, |j| labels[j] == label) as f64 <= criterion.ratio * full(i);
+    if !cloud.is_organized() {
+        return members.par_iter().copied().filter(|&i| is_edge(i as usize)).collect();
+    }
+    let outside = &OutsideCounts::new(cloud, labels, label);
+    let (is_edge, full) = (&is_edge, &full);
+    let (w, h) = (cloud.width(), cloud.height());
+    // The widest the window of a point at depth z can be anywhere in the
+    // image: a window at least as large as a point's own only weakens the
+    // lower bound below, so one per row serves every member of the row.
+    let corner = |half: f64, f: f64| (1.0 + (half / f) * (half / f)).sqrt();
+    let (kx, ky) = (corner(w as f64, camera.fx()), corner(h as f64, camera.fy()));
+    let row_window = |z_min: f64| -> (usize, usize) {
+        if z_min <= radius * 1.001 {
+            return (w, h);
+        }
+        let reach = radius / (z_min - radius);
+        let span = |f: f64, k: f64| crate::geometry::ceil_i64(f * reach * k).max(0) as usize;
+        (span(camera.fx(), kx), span(camera.fy(), ky))
+    };
+    (0..h)
+        .into_par_iter()
+        .flat_map_iter(|row| {
+            let line = row * w..(row + 1) * w;
+            let z_min =
+                line.clone().filter(|&i| labels[i] == label).map(|i| points[i][2] as f64).fold(f64::MAX, f64::min);
+            let (wx, wy) = if z_min < f64::MAX { row_window(z_min) } else { (0, 0) };
+            line.filter(move |&i| labels[i] == label)
+                .filter(move |&i| {
+                    // At most the window's non-members are not of this plate.
+                    let lower_bound = plane.counts[i] as i64 - outside.in_window(i, wx, wy) as i64;
+                    lower_bound as f64 <= criterion.ratio * full(i) && is_edge(i)
+                })
+                .map(|i| i as u32)
+                .collect::<Vec<u32>>()
         })
         .collect()
 }
@@ -111,11 +130,18 @@ impl OutsideCounts {
     fn new(cloud: &PointCloud, labels: &[u32], label: u32) -> Self {
         let (w, h) = (cloud.width(), cloud.height());
         let mut table = vec![0u32; (w + 1) * (h + 1)];
-        for r in 0..h {
+        // Row prefix sums in parallel, then each row adds the one above.
+        table[w + 1..].par_chunks_mut(w + 1).enumerate().for_each(|(r, out)| {
             let mut row_sum = 0u32;
-            for c in 0..w {
+            for (c, cell) in out[1..].iter_mut().enumerate() {
                 row_sum += (labels[r * w + c] != label) as u32;
-                table[(r + 1) * (w + 1) + c + 1] = table[r * (w + 1) + c + 1] + row_sum;
+                *cell = row_sum;
+            }
+        });
+        for r in 1..h {
+            let (above, rest) = table[r * (w + 1)..].split_at_mut(w + 1);
+            for (cell, up) in rest[..w + 1].iter_mut().zip(above.iter()) {
+                *cell += up;
             }
         }
         OutsideCounts { width: w, height: h, table }

@@ -34,14 +34,10 @@ pub struct Grid {
 impl Grid {
     /// Splits an organized cloud into coordinate planes.
     pub fn new(cloud: &PointCloud) -> Grid {
-        let n = cloud.len();
-        let (mut xs, mut ys, mut zs) = (Vec::with_capacity(n), Vec::with_capacity(n), Vec::with_capacity(n));
-        for p in cloud.points() {
-            xs.push(p[0]);
-            ys.push(p[1]);
-            zs.push(p[2]);
-        }
-        Grid { width: cloud.width(), height: cloud.height(), xs, ys, zs }
+        use rayon::prelude::*;
+        let points = cloud.points();
+        let plane = |axis: usize| -> Vec<f32> { points.par_iter().map(|p| p[axis]).collect() };
+        Grid { width: cloud.width(), height: cloud.height(), xs: plane(0), ys: plane(1), zs: plane(2) }
     }
 
     pub fn width(&self) -> usize {

@@ -435,8 +435,14 @@ impl<'a> Run<'a> {
     fn robust_seam(&mut self, workpiece: &Workpiece, edges: &[Vec<u32>; 2], normal: Vec3) -> Result<Seam, PlanError> {
         let cfg = &self.config.pipeline;
         let edge_points: [Vec<Vec3>; 2] = [self.points_of(&edges[0]), self.points_of(&edges[1])];
-        let lines: [Vec<EdgeLine>; 2] =
-            [0u64, 1].map(|k| ransac::segment_lines(&edge_points[k as usize], &self.ransac_params(k)));
+        // Each plate's lines are independent, and seeded per plate, so the
+        // two run side by side with the same result.
+        let (params_a, params_b) = (self.ransac_params(0), self.ransac_params(1));
+        let (lines_a, lines_b) = rayon::join(
+            || ransac::segment_lines(&edge_points[0], &params_a),
+            || ransac::segment_lines(&edge_points[1], &params_b),
+        );
+        let lines: [Vec<EdgeLine>; 2] = [lines_a, lines_b];
         self.stats.edge_lines = lines[0].len() + lines[1].len();
         self.clock.lap(Stage::Ransac);
 
@@ -452,7 +458,7 @@ impl<'a> Run<'a> {
         .map_err(|e| PlanError::at(Stage::WeldEdges, e))?;
         self.clock.lap(Stage::WeldEdges);
 
-        let boundaries: [Boundary; 2] = std::array::from_fn(|k| {
+        let boundary_of = |k: usize| {
             let line = &lines[k][pick[k]];
             let plane = &plates[k].plane;
             if !self.cloud.is_organized() {
@@ -475,7 +481,9 @@ impl<'a> Run<'a> {
             let edge = CoarseEdge { point: plane.project(&line.point), direction, outward };
             let params = BoundaryParams { band_mm: cfg.boundary_band_mm, on_plane_mm: cfg.on_plane_tolerance_mm };
             boundary::sample_boundary(self.cloud, &plates[k].members, plane, &edge, &params)
-        });
+        };
+        let (boundary_a, boundary_b) = rayon::join(|| boundary_of(0), || boundary_of(1));
+        let boundaries: [Boundary; 2] = [boundary_a, boundary_b];
         let samples: [Vec<Vec3>; 2] = boundaries.each_ref().map(|b| b.samples.iter().map(|s| s.position).collect());
         let union: Vec<Vec3> = samples.iter().flatten().copied().collect();
         let frame = Frame::principal(&union, &normal)

@@ -40,6 +40,18 @@ impl Grid {
         Grid { width: cloud.width(), height: cloud.height(), xs: plane(0), ys: plane(1), zs: plane(2) }
     }
 
+    /// The coordinates of the `LANES` pixels starting at index `at`, as
+    /// three lane arrays.
+    #[inline(always)]
+    pub fn lanes(&self, at: usize) -> [[f32; LANES]; 3] {
+        let take = |v: &[f32]| -> [f32; LANES] {
+            let mut out = [0.0; LANES];
+            out.copy_from_slice(&v[at..at + LANES]);
+            out
+        };
+        [take(&self.xs), take(&self.ys), take(&self.zs)]
+    }
+
     pub fn width(&self) -> usize {
         self.width
     }

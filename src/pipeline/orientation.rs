@@ -35,14 +35,28 @@ pub fn normal_step(fx: f64, z: f64, radius_mm: f64) -> usize {
 /// single precision without a square root: it runs on every pixel.
 pub fn grid_normal_agrees(cloud: &PointCloud, i: usize, step: usize, reference: &Vec3, cos_limit: f64) -> bool {
     let Some(n) = grid_cross(cloud, i, step) else { return false };
-    let p = cloud.points()[i];
-    // Orient away from the camera, as local_normal does.
+    let reference = [reference.x as f32, reference.y as f32, reference.z as f32];
+    cross_agrees(n, cloud.points()[i], reference, (cos_limit * cos_limit) as f32)
+}
+
+/// Whether the unnormalised normal `n` at point `p`, turned away from the
+/// camera, is within the angle whose squared cosine is `cos_sq` of the unit
+/// `reference`: `dot >= 0` and `dot² >= cos² |n|²`. Single precision in a
+/// fixed order, so the eight-lane form in `plane_points` decides the same.
+#[inline(always)]
+pub fn cross_agrees(n: [f32; 3], p: [f32; 3], reference: [f32; 3], cos_sq: f32) -> bool {
     let towards = n[0] * p[0] + n[1] * p[1] + n[2] * p[2];
-    let sign = if towards < 0.0 { -1.0 } else { 1.0 };
-    let dot = sign * (n[0] as f64 * reference.x + n[1] as f64 * reference.y + n[2] as f64 * reference.z);
-    let norm_sq = (n[0] as f64).powi(2) + (n[1] as f64).powi(2) + (n[2] as f64).powi(2);
-    // dot / |n| >= c, with c > 0 here, is dot >= 0 and dot² >= c² |n|².
-    norm_sq > 1e-24 && dot >= 0.0 && dot * dot >= cos_limit * cos_limit * norm_sq
+    let sign = if towards < 0.0 { -1.0f32 } else { 1.0 };
+    let dot = sign * (n[0] * reference[0] + n[1] * reference[1] + n[2] * reference[2]);
+    let norm_sq = n[0] * n[0] + n[1] * n[1] + n[2] * n[2];
+    norm_sq > 1e-24 && dot >= 0.0 && dot * dot >= cos_sq * norm_sq
+}
+
+/// The cross product of central differences `du × dv`, the unnormalised
+/// grid normal, term for term as [`grid_normal_agrees`] computes it.
+#[inline(always)]
+pub fn cross(du: [f32; 3], dv: [f32; 3]) -> [f32; 3] {
+    [du[1] * dv[2] - du[2] * dv[1], du[2] * dv[0] - du[0] * dv[2], du[0] * dv[1] - du[1] * dv[0]]
 }
 
 #[inline]
@@ -82,7 +96,7 @@ fn grid_cross(cloud: &PointCloud, i: usize, step: usize) -> Option<[f32; 3]> {
     let down = if row + step < h { valid(i + step * w) } else { None };
     let du = difference(left, right)?;
     let dv = difference(up, down)?;
-    Some([du[1] * dv[2] - du[2] * dv[1], du[2] * dv[0] - du[0] * dv[2], du[0] * dv[1] - du[1] * dv[0]])
+    Some(cross(du, dv))
 }
 
 fn scatter_normal(cloud: &PointCloud, search: &NeighbourSearch, i: usize) -> Option<Vec3> {

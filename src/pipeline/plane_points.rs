@@ -24,7 +24,7 @@ use crate::geometry::{Vec3, vec3};
 
 use super::grid_search::{Grid, LANES, Span};
 use super::neighbours::{FullCountCache, FullCounts, NeighbourSearch, PixelEllipse};
-use super::orientation::{grid_normal_agrees, local_normal, normal_step};
+use super::orientation::{cross, cross_agrees, grid_normal_agrees, local_normal, normal_step};
 
 /// The plane points and, for each, a lower bound of its neighbour count
 /// and the full-plane count it was measured against (the edge criterion
@@ -53,6 +53,21 @@ trait Threshold: Sync {
     /// The count point `i` needs, and the full count it derives from (0
     /// when the criterion has none).
     fn needed(&self, i: usize, cache: &mut FullCountCache) -> Option<(f64, f64)>;
+
+    /// [`Threshold::needed`] for the `LANES` pixels from `(col, row)`, all
+    /// inside the row.
+    fn needed_block(
+        &self,
+        _grid: &Grid,
+        row: usize,
+        col: usize,
+        cache: &mut FullCountCache,
+    ) -> [Option<(f64, f64)>; LANES] {
+        let first = row * self.width() + col;
+        std::array::from_fn(|l| self.needed(first + l, cache))
+    }
+
+    fn width(&self) -> usize;
     /// The plane orientation whose ellipse the counts scan first.
     fn scan_normal(&self) -> Vec3;
 }
@@ -72,6 +87,10 @@ impl Threshold for PaperThreshold<'_> {
 
     fn scan_normal(&self) -> Vec3 {
         Vec3::z()
+    }
+
+    fn width(&self) -> usize {
+        self.cloud.width()
     }
 }
 
@@ -115,6 +134,60 @@ impl Threshold for RobustThreshold<'_> {
 
     fn scan_normal(&self) -> Vec3 {
         self.criterion.normal
+    }
+
+    fn width(&self) -> usize {
+        self.search.cloud().width()
+    }
+
+    /// The normal test of eight lanes at once on the coordinate planes,
+    /// when all eight use the same step and have all four neighbours; any
+    /// other block is tested lane by lane.
+    fn needed_block(
+        &self,
+        grid: &Grid,
+        row: usize,
+        col: usize,
+        cache: &mut FullCountCache,
+    ) -> [Option<(f64, f64)>; LANES] {
+        let (w, h) = (grid.width(), grid.height());
+        let first = row * w + col;
+        let points = self.search.cloud().points();
+        let fx = self.search.camera().fx();
+        let radius = self.search.radius_mm();
+        let step = normal_step(fx, points[first][2] as f64, radius);
+        let fits = col >= step && col + LANES - 1 + step < w && row >= step && row + step < h;
+        let same_step = (1..LANES).all(|l| normal_step(fx, points[first + l][2] as f64, radius) == step);
+        if !fits || !same_step || !points[first][2].is_finite() {
+            return std::array::from_fn(|l| self.needed(first + l, cache));
+        }
+        let [px, py, pz] = grid.lanes(first);
+        let [lx, ly, lz] = grid.lanes(first - step);
+        let [rx, ry, rz] = grid.lanes(first + step);
+        let [ux, uy, uz] = grid.lanes(first - step * w);
+        let [dx, dy, dz] = grid.lanes(first + step * w);
+        let n = self.criterion.normal;
+        let reference = [n.x as f32, n.y as f32, n.z as f32];
+        let cos_sq = (self.cos_limit * self.cos_limit) as f32;
+        let mut facing = [false; LANES];
+        let mut complete = [false; LANES];
+        for l in 0..LANES {
+            let du = [rx[l] - lx[l], ry[l] - ly[l], rz[l] - lz[l]];
+            let dv = [dx[l] - ux[l], dy[l] - uy[l], dz[l] - uz[l]];
+            complete[l] = (du[0] + du[1] + du[2] + dv[0] + dv[1] + dv[2] + px[l]).is_finite();
+            facing[l] = cross_agrees(cross(du, dv), [px[l], py[l], pz[l]], reference, cos_sq);
+        }
+        std::array::from_fn(|l| {
+            if !complete[l] {
+                // A missing neighbour: the one-sided rule, lane by lane.
+                return self.needed(first + l, cache);
+            }
+            if !facing[l] {
+                return None;
+            }
+            let full = self.full_counts.get(first + l, cache);
+            (full > 0.0).then_some((self.criterion.min_ratio * full, full))
+        })
     }
 }
 
@@ -228,8 +301,11 @@ fn classify_block<T: Threshold>(
     let w = grid.width();
     let lanes = LANES.min(w - col);
     let first = row * w + col;
-    let needed: [Option<(f64, f64)>; LANES] =
-        std::array::from_fn(|l| if l < lanes { threshold.needed(first + l, &mut scratch.cache) } else { None });
+    let needed: [Option<(f64, f64)>; LANES] = if lanes == LANES {
+        threshold.needed_block(grid, row, col, &mut scratch.cache)
+    } else {
+        std::array::from_fn(|l| if l < lanes { threshold.needed(first + l, &mut scratch.cache) } else { None })
+    };
     let Some(anchor) = (0..lanes).find(|&l| needed[l].is_some()) else { return };
     // The block's partial counts over the ellipse of its first candidate,
     // one pixel wider for noise; they are lower bounds for every lane.

@@ -73,25 +73,36 @@ fn identity(n: usize) -> Vec<u32> {
 
 /// Turns a union-find over `n` slots into labelled clusters of the slots
 /// that are in the set, keeping clusters of at least `min_points`.
-fn collect(sets: &mut DisjointSets, n: usize, in_set: impl Fn(usize) -> bool, min_points: usize) -> Clusters {
-    // Roots to dense indices through one array: a map would hash every point.
-    let mut dense = vec![UNCLUSTERED; n];
-    let mut members: Vec<Vec<u32>> = Vec::new();
-    for i in (0..n).filter(|&i| in_set(i)) {
-        let root = sets.find(i as u32) as usize;
-        if dense[root] == UNCLUSTERED {
-            dense[root] = members.len() as u32;
-            members.push(Vec::new());
-        }
-        members[dense[root] as usize].push(i as u32);
+fn collect(sets: &mut DisjointSets, n: usize, in_set: impl Fn(usize) -> bool + Sync, min_points: usize) -> Clusters {
+    // A parent never has a larger index than its child (unions hang the
+    // larger root under the smaller, halving only shortens paths), so one
+    // forward pass leaves every slot pointing straight at its root.
+    let parent = &mut *sets.parent;
+    debug_assert_eq!(sets.offset, 0);
+    for i in 0..n {
+        parent[i] = parent[parent[i] as usize];
     }
-    drop(dense);
-    let mut members: Vec<Vec<u32>> = members.into_iter().filter(|m| m.len() >= min_points).collect();
-    members.sort_by(|a, b| b.len().cmp(&a.len()).then(a[0].cmp(&b[0])));
-    let mut labels = vec![UNCLUSTERED; n];
-    for (label, m) in members.iter().enumerate() {
-        for &i in m {
-            labels[i as usize] = label as u32;
+    let parent = &*parent;
+    let mut sizes = vec![0u32; n];
+    for i in (0..n).filter(|&i| in_set(i)) {
+        sizes[parent[i] as usize] += 1;
+    }
+    let mut roots: Vec<u32> = (0..n as u32).filter(|&r| sizes[r as usize] as usize >= min_points.max(1)).collect();
+    // Largest first; ties by the smallest member, which is the root.
+    roots.sort_by(|&a, &b| sizes[b as usize].cmp(&sizes[a as usize]).then(a.cmp(&b)));
+    let mut label_of_root = vec![UNCLUSTERED; n];
+    for (label, &r) in roots.iter().enumerate() {
+        label_of_root[r as usize] = label as u32;
+    }
+    let mut members: Vec<Vec<u32>> = roots.iter().map(|&r| Vec::with_capacity(sizes[r as usize] as usize)).collect();
+    drop(sizes);
+    let labels: Vec<u32> = (0..n)
+        .into_par_iter()
+        .map(|i| if in_set(i) { label_of_root[parent[i] as usize] } else { UNCLUSTERED })
+        .collect();
+    for (i, &label) in labels.iter().enumerate() {
+        if label != UNCLUSTERED {
+            members[label as usize].push(i as u32);
         }
     }
     Clusters { labels, members }

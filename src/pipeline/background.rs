@@ -17,6 +17,8 @@ use crate::joint::JointType;
 /// A cluster of plane points with its fitted plane.
 #[derive(Debug, Clone)]
 pub struct PlaneCluster {
+    /// The cluster's label in [`super::clustering::Clusters::labels`].
+    pub label: u32,
     pub members: Vec<u32>,
     pub plane: Plane,
     pub centroid: Vec3,
@@ -60,7 +62,8 @@ pub fn describe(
     let points = cloud.points();
     members
         .into_iter()
-        .filter_map(|m| {
+        .enumerate()
+        .filter_map(|(label, m)| {
             // A fixed stride keeps the fit cheap on million-point plates.
             let stride = (m.len() / 50_000).max(1);
             let moments: Moments =
@@ -68,7 +71,7 @@ pub fn describe(
             let plane = moments.plane()?;
             let centroid = moments.centroid()?;
             let area_mm2 = m.len() as f64 * area_per_point(&centroid, &plane.normal);
-            Some(PlaneCluster { members: m, plane, centroid, area_mm2 })
+            Some(PlaneCluster { label: label as u32, members: m, plane, centroid, area_mm2 })
         })
         .collect()
 }
@@ -179,6 +182,7 @@ mod tests {
 
     fn cluster(offset: f64, area: f64, centre_x: f64) -> PlaneCluster {
         PlaneCluster {
+            label: 0,
             members: vec![0; area as usize],
             plane: Plane { normal: Vec3::z(), offset },
             centroid: Vec3::new(centre_x, 0.0, offset),

@@ -90,12 +90,14 @@ fn collect(sets: &mut DisjointSets, n: usize, in_set: impl Fn(usize) -> bool + S
     let mut roots: Vec<u32> = (0..n as u32).filter(|&r| sizes[r as usize] as usize >= min_points.max(1)).collect();
     // Largest first; ties by the smallest member, which is the root.
     roots.sort_by(|&a, &b| sizes[b as usize].cmp(&sizes[a as usize]).then(a.cmp(&b)));
-    let mut label_of_root = vec![UNCLUSTERED; n];
+    let mut members: Vec<Vec<u32>> = roots.iter().map(|&r| Vec::with_capacity(sizes[r as usize] as usize)).collect();
+    // The size table becomes the root-to-label table: a frame-sized array
+    // less to allocate.
+    let mut label_of_root = sizes;
+    label_of_root.fill(UNCLUSTERED);
     for (label, &r) in roots.iter().enumerate() {
         label_of_root[r as usize] = label as u32;
     }
-    let mut members: Vec<Vec<u32>> = roots.iter().map(|&r| Vec::with_capacity(sizes[r as usize] as usize)).collect();
-    drop(sizes);
     let labels: Vec<u32> = (0..n)
         .into_par_iter()
         .map(|i| if in_set(i) { label_of_root[parent[i] as usize] } else { UNCLUSTERED })

@@ -31,6 +31,8 @@ pub mod weld_edges;
 pub mod weld_equation;
 
 use std::fmt;
+
+use rayon::prelude::*;
 use std::time::Instant;
 
 use nalgebra::Isometry3;
@@ -310,7 +312,7 @@ impl<'a> Run<'a> {
 
         // Clusters below a few dozen points cannot reach the area limit.
         const MIN_CLUSTER_POINTS: usize = 30;
-        let clusters = if robust && cloud.is_organized() {
+        let mut clusters = if robust && cloud.is_organized() {
             clustering::grid(cloud, &plane.mask, cfg.cluster_tolerance_mm, MIN_CLUSTER_POINTS)
         } else {
             let tol = if robust { cfg.cluster_tolerance_mm } else { self.config.paper.cluster_tolerance_mm };
@@ -325,10 +327,11 @@ impl<'a> Run<'a> {
                 1.0 / camera.density(c.z)
             }
         };
-        let planes: Vec<PlaneCluster> = background::describe(cloud, clusters.members, area_per_point)
-            .into_iter()
-            .filter(|c| c.area_mm2 >= cfg.min_plane_area_mm2)
-            .collect();
+        let planes: Vec<PlaneCluster> =
+            background::describe(cloud, std::mem::take(&mut clusters.members), area_per_point)
+                .into_iter()
+                .filter(|c| c.area_mm2 >= cfg.min_plane_area_mm2)
+                .collect();
         self.stats.clusters = planes.len();
         let workpiece = match dominant {
             Some(normal) => background::robust_select(
@@ -348,12 +351,15 @@ impl<'a> Run<'a> {
         self.stats.plate_points = workpiece.plates.each_ref().map(|p| p.members.len());
         self.clock.lap(Stage::Background);
 
-        let mut labels = vec![UNCLUSTERED; cloud.len()];
-        for (k, plate) in workpiece.plates.iter().enumerate() {
-            for &i in &plate.members {
-                labels[i as usize] = k as u32;
+        // The cluster labels, renumbered in place: plate k is label k.
+        let mut labels = clusters.labels;
+        let plate_labels = workpiece.plates.each_ref().map(|p| p.label);
+        labels.par_iter_mut().for_each(|l| {
+            *l = match plate_labels.iter().position(|p| p == l) {
+                Some(k) => k as u32,
+                None => UNCLUSTERED,
             }
-        }
+        });
         let criterion = match dominant {
             Some(_) => EdgeCriterion { full: FullCount::Plane, ratio: cfg.edge_max_neighbour_ratio },
             None => EdgeCriterion { full: FullCount::Frontal, ratio: self.config.paper.edge_ratio },

@@ -25,6 +25,11 @@ pub struct CameraModel {
     pub baseline_mm: f64,
     /// Nominal depth accuracy at `fov_distance_mm`, mm (Table 1: 0.1).
     pub nominal_accuracy_mm: f64,
+    /// Nearest depth the camera can measure, mm. Nearer points are noise or
+    /// a corrupt frame; the pipeline treats them as invalid, which also
+    /// bounds every neighbour window (a point near the optical centre would
+    /// otherwise need the whole image searched).
+    pub min_depth_mm: f64,
 }
 
 impl Default for CameraModel {
@@ -38,6 +43,7 @@ impl Default for CameraModel {
             fov_distance_mm: 1000.0,
             baseline_mm: 150.0,
             nominal_accuracy_mm: 0.1,
+            min_depth_mm: 100.0,
         }
     }
 }

@@ -121,3 +121,16 @@ fn bad_requests_are_refused_before_any_work() {
     let e = planner.plan(&empty, &PlanRequest::new(JointType::Lap, None, pose)).unwrap_err();
     assert!(e.reason.contains("no valid point"), "{e}");
 }
+
+#[test]
+fn points_at_the_optical_centre_are_ignored_not_searched_forever() {
+    // A corrupt frame: most pixels report points a fraction of a millimetre
+    // from the camera, where a neighbour window would span the whole image.
+    let (w, h) = (640usize, 400usize);
+    let points =
+        (0..w * h).map(|i| [(i % 7) as f32 * 0.01, (i % 5) as f32 * 0.01, 0.2 + (i % 3) as f32 * 0.1]).collect();
+    let cloud = weldseam::cloud::PointCloud::organized(w, h, points).expect("grid");
+    let pose = weldseam::geometry::pose::RobotPose { xyz_mm: [0.0; 3], angles_deg: [0.0; 3] };
+    let err = Planner::new(Config::default()).plan(&cloud, &PlanRequest::new(JointType::Lap, None, pose)).unwrap_err();
+    assert!(err.reason.contains("no valid point") && err.reason.contains("millimetres"), "{err}");
+}

@@ -28,6 +28,7 @@ pub struct CameraSection {
     pub fov_distance_mm: f64,
     pub baseline_mm: f64,
     pub nominal_accuracy_mm: f64,
+    pub min_depth_mm: f64,
 }
 
 impl Default for CameraSection {
@@ -41,6 +42,7 @@ impl Default for CameraSection {
             fov_distance_mm: c.fov_distance_mm,
             baseline_mm: c.baseline_mm,
             nominal_accuracy_mm: c.nominal_accuracy_mm,
+            min_depth_mm: c.min_depth_mm,
         }
     }
 }

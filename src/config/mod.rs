@@ -284,6 +284,7 @@ impl Config {
         positive("camera.fov_distance_mm", c.fov_distance_mm)?;
         in_range("camera.baseline_mm", c.baseline_mm, 0.0, 10_000.0)?;
         positive("camera.nominal_accuracy_mm", c.nominal_accuracy_mm)?;
+        in_range("camera.min_depth_mm", c.min_depth_mm, 1.0, c.fov_distance_mm)?;
         let camera = CameraModel {
             width_px: c.width_px,
             height_px: c.height_px,
@@ -292,6 +293,7 @@ impl Config {
             fov_distance_mm: c.fov_distance_mm,
             baseline_mm: c.baseline_mm,
             nominal_accuracy_mm: c.nominal_accuracy_mm,
+            min_depth_mm: c.min_depth_mm,
         };
 
         let euler = EulerConvention::from_name(&f.robot.euler_convention).ok_or_else(|| ConfigError::Invalid {
@@ -486,6 +488,7 @@ mod tests {
     fn bad_values_name_their_key() {
         let cases = [
             ("[pipeline]\nneighbour_radius_mm = -1.0\n", "pipeline.neighbour_radius_mm"),
+            ("[camera]\nmin_depth_mm = 0.0\n", "camera.min_depth_mm"),
             ("[pipeline]\nmethod = \"fast\"\n", "pipeline.method"),
             ("[trajectory]\nstep_mm = 0.0\n", "trajectory.step_mm"),
             ("[robot]\neuler_convention = \"zxz\"\n", "robot.euler_convention"),

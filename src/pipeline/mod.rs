@@ -276,8 +276,30 @@ impl<'a> Run<'a> {
     fn execute(mut self) -> Result<Plan, PlanError> {
         let cfg = &self.config.pipeline;
         let camera = &self.config.camera;
-        let cloud = self.cloud;
+        let near = near_points(self.cloud, camera.min_depth_mm);
+        let sanitized;
+        let cloud = if near == 0 {
+            self.cloud
+        } else {
+            tracing::warn!(
+                points = near,
+                min_depth_mm = camera.min_depth_mm,
+                "ignoring points nearer than the camera can measure"
+            );
+            sanitized = without_near_points(self.cloud, camera.min_depth_mm);
+            &sanitized
+        };
         self.stats.valid_points = cloud.valid_count();
+        if self.stats.valid_points == 0 && near > 0 {
+            return Err(PlanError::at(
+                Stage::PlanePoints,
+                format!(
+                    "the frame has no valid point: all {near} points lie nearer than camera.min_depth_mm ({} mm); \
+                     is the cloud in millimetres and in the camera frame?",
+                    camera.min_depth_mm
+                ),
+            ));
+        }
         if self.stats.valid_points == 0 {
             return Err(PlanError::at(Stage::PlanePoints, "the frame has no valid point"));
         }
@@ -603,6 +625,24 @@ impl<'a> Run<'a> {
             edge_samples: [fits[0].points_used, fits[1].points_used],
             edge_samples_dropped: [fits[0].points_dropped, fits[1].points_dropped],
         })
+    }
+}
+
+/// Valid points nearer than `min_depth` (or behind the camera).
+fn near_points(cloud: &PointCloud, min_depth: f64) -> usize {
+    let min = min_depth as f32;
+    cloud.points().par_iter().filter(|p| p[0].is_finite() && p[2] < min).count()
+}
+
+/// A copy of `cloud` with the points nearer than `min_depth` made invalid.
+fn without_near_points(cloud: &PointCloud, min_depth: f64) -> PointCloud {
+    let min = min_depth as f32;
+    let points = cloud.points().iter().map(|p| if p[2] >= min { *p } else { crate::cloud::INVALID_POINT }).collect();
+    if cloud.is_organized() {
+        PointCloud::organized(cloud.width(), cloud.height(), points)
+            .unwrap_or_else(|| PointCloud::unorganized(Vec::new()))
+    } else {
+        PointCloud::unorganized(points)
     }
 }
 

@@ -394,7 +394,12 @@ impl<'a> Run<'a> {
         self.clock.lap(Stage::EdgePoints);
 
         let seam = if robust {
-            self.robust_seam(&workpiece, &edges, dominant.unwrap_or_else(Vec3::z))?
+            // The plates' least-squares planes fix the normal far better
+            // than the sampled dominant one: the groove depth (Eq. 32) and
+            // the lap step are shifted along it.
+            let [a, b] = workpiece.plates.each_ref().map(|p| p.plane.normal);
+            let normal = (a + b).try_normalize(1e-9).or(dominant).unwrap_or_else(Vec3::z);
+            self.robust_seam(&workpiece, &edges, normal)?
         } else {
             self.paper_seam(&workpiece, &edges)?
         };

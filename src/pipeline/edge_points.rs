@@ -13,7 +13,6 @@ use rayon::prelude::*;
 
 use crate::cloud::PointCloud;
 
-use super::grid_search::{LANES, Span};
 use super::neighbours::NeighbourSearch;
 use super::plane_points::PlanePoints;
 
@@ -81,7 +80,6 @@ pub fn edge_points(search: &NeighbourSearch, plane: &PlanePoints, plate: Plate, 
         let span = |f: f64, k: f64| crate::geometry::ceil_i64(f * reach * k).max(0) as usize;
         (span(camera.fx(), kx), span(camera.fy(), ky))
     };
-    let radius_sq = (radius * radius) as f32;
     (0..h)
         .into_par_iter()
         .flat_map_iter(|row| {
@@ -89,45 +87,14 @@ pub fn edge_points(search: &NeighbourSearch, plane: &PlanePoints, plate: Plate, 
             let z_min =
                 line.clone().filter(|&i| labels[i] == label).map(|i| points[i][2] as f64).fold(f64::MAX, f64::min);
             let (wx, wy) = if z_min < f64::MAX { row_window(z_min) } else { (0, 0) };
-            // At most the window's non-members are not of this plate.
-            let candidates: Vec<usize> = line
-                .filter(|&i| labels[i] == label)
-                .filter(|&i| {
+            line.filter(move |&i| labels[i] == label)
+                .filter(move |&i| {
+                    // At most the window's non-members are not of this plate.
                     let lower_bound = plane.counts[i] as i64 - outside.in_window(i, wx, wy) as i64;
-                    lower_bound as f64 <= criterion.ratio * full(i)
+                    lower_bound as f64 <= criterion.ratio * full(i) && is_edge(i)
                 })
-                .collect();
-            // The rest are counted exactly, eight neighbouring pixels at a
-            // time over the row's window (a superset of each one's own).
-            let (wx, wy) = (wx as isize, wy as isize);
-            let window: Vec<Span> = (-wy..=wy).map(|dv| Span { dv, du_lo: -wx, du_hi: wx }).collect();
-            let mut edges = Vec::new();
-            let mut k = 0;
-            while k < candidates.len() {
-                let col = candidates[k] % w;
-                let start = col.min(w.saturating_sub(LANES));
-                let block = search.grid().filter(|g| w >= LANES && g.spans_fit(start, row, &window));
-                match block {
-                    Some(grid) => {
-                        let counts = grid.count_block_members(start, row, &window, radius_sq, labels, label);
-                        while k < candidates.len() && candidates[k] % w < start + LANES {
-                            let i = candidates[k];
-                            if counts[i % w - start] as f64 <= criterion.ratio * full(i) {
-                                edges.push(i as u32);
-                            }
-                            k += 1;
-                        }
-                    }
-                    None => {
-                        let i = candidates[k];
-                        if is_edge(i) {
-                            edges.push(i as u32);
-                        }
-                        k += 1;
-                    }
-                }
-            }
-            edges
+                .map(|i| i as u32)
+                .collect::<Vec<u32>>()
         })
         .collect()
 }

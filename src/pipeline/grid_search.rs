@@ -212,85 +212,23 @@ impl Grid {
         labels: &[u32],
         label: u32,
     ) -> [u32; LANES] {
-        #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx2") {
-            // SAFETY: the CPU supports AVX2, checked just above.
-            return unsafe { self.count_block_members_avx2(col, row, spans, radius_sq, labels, label) };
-        }
-        self.count_block_members_portable(col, row, spans, radius_sq, labels, label)
-    }
-
-    /// The member count in one AVX2 register: the distance test of
-    /// [`Grid::count_block_avx2`] and a lane-wise label comparison.
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2")]
-    unsafe fn count_block_members_avx2(
-        &self,
-        col: usize,
-        row: usize,
-        spans: &[Span],
-        radius_sq: f32,
-        labels: &[u32],
-        label: u32,
-    ) -> [u32; LANES] {
-        use std::arch::x86_64::*;
         let first = row * self.width + col;
-        let block = |v: &[f32]| -> __m256 {
-            let lanes = &v[first..first + LANES];
-            // SAFETY: `lanes` holds exactly LANES floats.
-            unsafe { _mm256_loadu_ps(lanes.as_ptr()) }
-        };
-        let (px, py, pz) = (block(&self.xs), block(&self.ys), block(&self.zs));
-        let r2 = _mm256_set1_ps(radius_sq);
-        let wanted = _mm256_set1_epi32(label as i32);
-        let mut counts = _mm256_setzero_si256();
-        for (start, end) in self.span_ranges(col, row, spans) {
-            let reach = end + LANES - 1;
-            let (xs, ys, zs) = (&self.xs[start..reach], &self.ys[start..reach], &self.zs[start..reach]);
-            let ls = &labels[start..reach];
-            for k in 0..end - start {
-                // SAFETY: k + LANES <= reach - start, the length of each slice.
-                let (qx, qy, qz, ql) = unsafe {
-                    (
-                        _mm256_loadu_ps(xs.as_ptr().add(k)),
-                        _mm256_loadu_ps(ys.as_ptr().add(k)),
-                        _mm256_loadu_ps(zs.as_ptr().add(k)),
-                        _mm256_loadu_si256(ls.as_ptr().add(k).cast()),
-                    )
-                };
-                let (dx, dy, dz) = (_mm256_sub_ps(qx, px), _mm256_sub_ps(qy, py), _mm256_sub_ps(qz, pz));
-                let d2 =
-                    _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(dx, dx), _mm256_mul_ps(dy, dy)), _mm256_mul_ps(dz, dz));
-                let near = _mm256_castps_si256(_mm256_cmp_ps::<_CMP_LE_OQ>(d2, r2));
-                let member = _mm256_cmpeq_epi32(ql, wanted);
-                counts = _mm256_sub_epi32(counts, _mm256_and_si256(near, member));
-            }
-        }
-        let mut out = [0u32; LANES];
-        // SAFETY: `out` holds exactly eight u32, one 256-bit store.
-        unsafe { _mm256_storeu_si256(out.as_mut_ptr().cast(), counts) };
-        out
-    }
-
-    fn count_block_members_portable(
-        &self,
-        col: usize,
-        row: usize,
-        spans: &[Span],
-        radius_sq: f32,
-        labels: &[u32],
-        label: u32,
-    ) -> [u32; LANES] {
-        let first = row * self.width + col;
+        let px: [f32; LANES] = std::array::from_fn(|l| self.xs[first + l]);
+        let py: [f32; LANES] = std::array::from_fn(|l| self.ys[first + l]);
+        let pz: [f32; LANES] = std::array::from_fn(|l| self.zs[first + l]);
         let mut counts = [0u32; LANES];
-        for (start, end) in self.span_ranges(col, row, spans) {
-            for at in start..end {
-                for (l, count) in counts.iter_mut().enumerate() {
-                    let dx = self.xs[at + l] - self.xs[first + l];
-                    let dy = self.ys[at + l] - self.ys[first + l];
-                    let dz = self.zs[at + l] - self.zs[first + l];
+        for s in spans {
+            let base = ((row as isize + s.dv) as usize) * self.width;
+            for du in s.du_lo..=s.du_hi {
+                let at = (base as isize + col as isize + du) as usize;
+                let (qx, qy, qz) = (&self.xs[at..at + LANES], &self.ys[at..at + LANES], &self.zs[at..at + LANES]);
+                let ql = &labels[at..at + LANES];
+                for l in 0..LANES {
+                    let dx = qx[l] - px[l];
+                    let dy = qy[l] - py[l];
+                    let dz = qz[l] - pz[l];
                     let near = dx * dx + dy * dy + dz * dz <= radius_sq;
-                    *count += (near & (labels[at + l] == label)) as u32;
+                    counts[l] += (near & (ql[l] == label)) as u32;
                 }
             }
         }
@@ -338,7 +276,6 @@ mod tests {
         }
         let labels: Vec<u32> = (0..w * h).map(|i| (i % 3 == 0) as u32).collect();
         let members = grid.count_block_members(col, row, &full, 1.0, &labels, 1);
-        assert_eq!(members, grid.count_block_members_portable(col, row, &full, 1.0, &labels, 1));
         for (l, &got) in members.iter().enumerate() {
             let i = row * w + col + l;
             if cloud.points()[i][0].is_finite() {

@@ -14,7 +14,7 @@ use crate::camera::CameraModel;
 use crate::cloud::{Point, PointCloud};
 use crate::geometry::{Vec3, ceil_i64, floor_i64, round_i64};
 
-use super::grid_search::{Grid, Span};
+use super::grid_search::Span;
 
 /// Finds the neighbours of cloud points within a fixed radius.
 pub struct NeighbourSearch<'a> {
@@ -23,8 +23,6 @@ pub struct NeighbourSearch<'a> {
     radius: f32,
     radius_sq: f32,
     tree: Option<KdIndex>,
-    /// The coordinate planes of an organized cloud, for the SIMD paths.
-    grid: Option<Grid>,
 }
 
 struct KdIndex {
@@ -49,21 +47,14 @@ impl<'a> NeighbourSearch<'a> {
     pub fn new(cloud: &'a PointCloud, camera: &'a CameraModel, radius_mm: f64) -> Self {
         let radius = radius_mm as f32;
         let tree = (!cloud.is_organized()).then(|| build_tree(cloud.points()));
-        let grid = cloud.is_organized().then(|| Grid::new(cloud));
-        NeighbourSearch { cloud, camera, radius, radius_sq: radius * radius, tree, grid }
-    }
-
-    /// The coordinate planes of an organized cloud (none for a tree search).
-    pub fn grid(&self) -> Option<&Grid> {
-        self.grid.as_ref()
+        NeighbourSearch { cloud, camera, radius, radius_sq: radius * radius, tree }
     }
 
     /// A search that always queries a KD-tree, even on a pixel grid: the
     /// straightforward reference the grid paths are tested against.
     pub fn kdtree(cloud: &'a PointCloud, camera: &'a CameraModel, radius_mm: f64) -> Self {
         let radius = radius_mm as f32;
-        let tree = Some(build_tree(cloud.points()));
-        NeighbourSearch { cloud, camera, radius, radius_sq: radius * radius, tree, grid: None }
+        NeighbourSearch { cloud, camera, radius, radius_sq: radius * radius, tree: Some(build_tree(cloud.points())) }
     }
 
     pub fn cloud(&self) -> &PointCloud {

@@ -243,15 +243,7 @@ fn classify<T: Threshold>(search: &NeighbourSearch, threshold: &T) -> PlanePoint
         );
         return PlanePoints { mask, counts, full };
     }
-    let owned;
-    let grid = match search.grid() {
-        Some(g) => g,
-        None => {
-            // A KD-tree search over a grid (the reference in tests).
-            owned = Grid::new(cloud);
-            &owned
-        }
-    };
+    let grid = Grid::new(cloud);
     let w = cloud.width();
     mask.par_chunks_mut(w).zip(counts.par_chunks_mut(w)).zip(full.par_chunks_mut(w)).enumerate().for_each(
         |(row, ((mask_row, count_row), full_row))| {
@@ -259,7 +251,7 @@ fn classify<T: Threshold>(search: &NeighbourSearch, threshold: &T) -> PlanePoint
             for col in (0..w).step_by(LANES) {
                 let out =
                     BlockOut { mask: &mut mask_row[col..], counts: &mut count_row[col..], full: &mut full_row[col..] };
-                classify_block(search, grid, threshold, row, col, &mut scratch, out);
+                classify_block(search, &grid, threshold, row, col, &mut scratch, out);
             }
         },
     );

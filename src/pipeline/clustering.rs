@@ -72,17 +72,17 @@ fn identity(n: usize) -> Vec<u32> {
 }
 
 /// Turns a union-find over `n` slots into labelled clusters of the slots
-/// that are in the set, keeping clusters of at least `min_points`.
-fn collect(sets: &mut DisjointSets, n: usize, in_set: impl Fn(usize) -> bool + Sync, min_points: usize) -> Clusters {
+/// that are in the set, keeping clusters of at least `min_points`. The
+/// parent array becomes the label array, so no frame-sized array is added.
+fn collect(parent: Vec<u32>, in_set: impl Fn(usize) -> bool + Sync, min_points: usize) -> Clusters {
+    let n = parent.len();
+    let mut parent = parent;
     // A parent never has a larger index than its child (unions hang the
     // larger root under the smaller, halving only shortens paths), so one
     // forward pass leaves every slot pointing straight at its root.
-    let parent = &mut *sets.parent;
-    debug_assert_eq!(sets.offset, 0);
     for i in 0..n {
         parent[i] = parent[parent[i] as usize];
     }
-    let parent = &*parent;
     let mut sizes = vec![0u32; n];
     for i in (0..n).filter(|&i| in_set(i)) {
         sizes[parent[i] as usize] += 1;
@@ -91,17 +91,17 @@ fn collect(sets: &mut DisjointSets, n: usize, in_set: impl Fn(usize) -> bool + S
     // Largest first; ties by the smallest member, which is the root.
     roots.sort_by(|&a, &b| sizes[b as usize].cmp(&sizes[a as usize]).then(a.cmp(&b)));
     let mut members: Vec<Vec<u32>> = roots.iter().map(|&r| Vec::with_capacity(sizes[r as usize] as usize)).collect();
-    // The size table becomes the root-to-label table: a frame-sized array
-    // less to allocate.
+    // The size table becomes the root-to-label table.
     let mut label_of_root = sizes;
     label_of_root.fill(UNCLUSTERED);
     for (label, &r) in roots.iter().enumerate() {
         label_of_root[r as usize] = label as u32;
     }
-    let labels: Vec<u32> = (0..n)
-        .into_par_iter()
-        .map(|i| if in_set(i) { label_of_root[parent[i] as usize] } else { UNCLUSTERED })
-        .collect();
+    let mut labels = parent;
+    labels.par_iter_mut().enumerate().for_each(|(i, slot)| {
+        *slot = if in_set(i) { label_of_root[*slot as usize] } else { UNCLUSTERED };
+    });
+    drop(label_of_root);
     for (i, &label) in labels.iter().enumerate() {
         if label != UNCLUSTERED {
             members[label as usize].push(i as u32);
@@ -139,7 +139,7 @@ pub fn grid(cloud: &PointCloud, mask: &[bool], tolerance_mm: f64, min_points: us
     for seam_row in (strip_rows..h).step_by(strip_rows) {
         link_down(&mut sets, points, mask, w, seam_row - 1, tol_sq);
     }
-    collect(&mut sets, points.len(), |i| mask[i], min_points)
+    collect(parent, |i| mask[i], min_points)
 }
 
 /// Joins each selected pixel of `row` to its right neighbour and, when
@@ -253,7 +253,7 @@ pub fn euclidean(cloud: &PointCloud, mask: &[bool], tolerance_mm: f64, min_point
             }
         }
     }
-    collect(&mut sets, points.len(), |i| mask[i], min_points)
+    collect(parent, |i| mask[i], min_points)
 }
 
 #[cfg(test)]
@@ -316,7 +316,7 @@ mod tests {
                 }
             }
         }
-        let expected = collect(&mut sets, pts.len(), |_| true, 1);
+        let expected = collect(parent, |_| true, 1);
         let mut g: Vec<usize> = got.members.iter().map(Vec::len).collect();
         let mut e: Vec<usize> = expected.members.iter().map(Vec::len).collect();
         g.sort();

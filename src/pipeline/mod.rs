@@ -334,12 +334,16 @@ impl<'a> Run<'a> {
 
         // Clusters below a few dozen points cannot reach the area limit.
         const MIN_CLUSTER_POINTS: usize = 30;
+        let mut plane = plane;
         let mut clusters = if robust && cloud.is_organized() {
             clustering::grid(cloud, &plane.mask, cfg.cluster_tolerance_mm, MIN_CLUSTER_POINTS)
         } else {
             let tol = if robust { cfg.cluster_tolerance_mm } else { self.config.paper.cluster_tolerance_mm };
             clustering::euclidean(cloud, &plane.mask, tol, MIN_CLUSTER_POINTS)
         };
+        // The edge criterion needs the counts, not the mask: free it early,
+        // as the frame-sized arrays of the coming stages add up.
+        plane.mask = Vec::new();
         self.clock.lap(Stage::Clustering);
 
         let area_per_point = |c: &Vec3, n: &Vec3| -> f64 {

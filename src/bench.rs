@@ -16,7 +16,7 @@ use tokio::io::AsyncWriteExt;
 use tokio::net::{TcpListener, TcpStream};
 use tokio::sync::{mpsc, oneshot};
 use weldseam_proto::frame::{self, DEFAULT_MAX_FRAME_BYTES};
-use weldseam_proto::message::{Frame, FrameMeta, FrameSelect, Hello, Role, Units};
+use weldseam_proto::message::{FrameSelect, Hello, Role};
 use weldseam_proto::{Message, PROTOCOL_VERSION};
 
 use crate::camera::CameraModel;
@@ -424,15 +424,7 @@ pub fn time_load(path: &Path, runs: usize) -> Result<Vec<f64>, cloud::LoadError>
 /// The wire encoding of `cloud` as a camera's Frame message (header and
 /// payload), millimetres.
 pub fn frame_message(cloud: &PointCloud, frame_id: u64, trigger_id: u64) -> Result<Vec<u8>, frame::EncodeError> {
-    let meta = FrameMeta {
-        frame_id,
-        trigger_id,
-        capture_time_us: 0,
-        width: cloud.width() as u32,
-        height: cloud.height() as u32,
-        units: Units::Millimetres as u32,
-    };
-    frame::encode(&Message::Frame(Frame { meta, points: cloud.points().to_vec() }))
+    frame::encode(&Message::Frame(crate::mock::camera::frame_of(cloud, frame_id, trigger_id, 0)))
 }
 
 /// Reads one message from `bytes` as the daemon's camera link does: the

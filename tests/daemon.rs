@@ -21,9 +21,7 @@ use weldseam::mock::controller::ControllerClient;
 use weldseam::server::{self, ServerError, ServerState, Stopped};
 use weldseam::sim::{Simulation, demo_scene, simulate};
 use weldseam_proto::frame::{self, HEADER_BYTES, Header};
-use weldseam_proto::message::{
-    Frame, FrameMeta, FrameSelect, Hello, PlanReply, PlanRequest, Role, Tag, Trigger, joint_code,
-};
+use weldseam_proto::message::{FrameSelect, Hello, PlanReply, PlanRequest, Role, Tag, Trigger, joint_code};
 use weldseam_proto::{ErrorCode, Message, PROTOCOL_VERSION};
 
 const WAIT: Duration = Duration::from_secs(60);
@@ -177,15 +175,7 @@ async fn wait_for_camera(ctl: &mut ControllerClient) {
 }
 
 fn frame_message(frame_id: u64, trigger_id: u64, cloud: &PointCloud) -> Message {
-    let meta = FrameMeta {
-        frame_id,
-        trigger_id,
-        capture_time_us: 0,
-        width: cloud.width() as u32,
-        height: cloud.height() as u32,
-        units: 0,
-    };
-    Message::Frame(Frame { meta, points: cloud.points().to_vec() })
+    Message::Frame(weldseam::mock::camera::frame_of(cloud, frame_id, trigger_id, 0))
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]

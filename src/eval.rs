@@ -7,8 +7,6 @@
 //! simulator's geometry, in the robot base frame, so the figure includes
 //! the hand-eye and pose transform exactly as a robot would follow it.
 
-use rayon::prelude::*;
-
 use crate::camera::CameraModel;
 use crate::config::Config;
 use crate::geometry::{Vec3, distance_to_polyline};
@@ -151,16 +149,4 @@ pub fn summarise<'a>(outcomes: impl IntoIterator<Item = &'a SceneOutcome>) -> Su
     totals.sort_by(f64::total_cmp);
     s.median_total_ms = totals.get(totals.len() / 2).copied().unwrap_or(0.0);
     s
-}
-
-/// Simulates and plans scenes in parallel, one per rayon task: for tests
-/// that check many small cases rather than per-stage timings.
-pub fn evaluate_parallel(planner: &Planner, scenes: &[(String, SceneSpec)], camera: &CameraModel) -> Vec<SceneOutcome> {
-    scenes
-        .par_iter()
-        .map(|(name, spec)| {
-            let sim = simulate(spec, camera);
-            evaluate_simulation(planner, name, spec, &sim)
-        })
-        .collect()
 }

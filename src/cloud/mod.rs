@@ -64,11 +64,6 @@ impl PointCloud {
         &self.points
     }
 
-    /// Consumes the cloud and returns its point buffer (for reuse).
-    pub fn into_points(self) -> Vec<Point> {
-        self.points
-    }
-
     pub fn width(&self) -> usize {
         self.width
     }

@@ -101,12 +101,6 @@ impl Moments {
         }
         Some((self.centroid()?, vectors[2].normalize()))
     }
-
-    /// Root-mean-square distance of the points from the best-fit plane.
-    pub fn plane_rms(&self) -> Option<f64> {
-        let (values, _) = self.principal_axes()?;
-        Some(values[0].max(0.0).sqrt())
-    }
 }
 
 impl<'a> FromIterator<&'a Vec3> for Moments {

@@ -153,9 +153,9 @@ impl OutsideCounts {
         let (c0, c1) = (col.saturating_sub(wx), (col + wx + 1).min(self.width));
         let (r0, r1) = (row.saturating_sub(wy), (row + wy + 1).min(self.height));
         let at = |r: usize, c: usize| self.table[r * (self.width + 1) + c];
-        // A window clipped by the image border counts as touching outside.
-        let clipped = (col < wx || row < wy || col + wx >= self.width || row + wy >= self.height) as u32;
-        at(r1, c1) + at(r0, c0) - at(r0, c1) - at(r1, c0) + clipped
+        // Pixels beyond the border are no neighbours, so the clipped
+        // window's count is what the lower bound needs.
+        at(r1, c1) + at(r0, c0) - at(r0, c1) - at(r1, c0)
     }
 }
 

@@ -58,16 +58,15 @@ trait Threshold: Sync {
     /// inside the row.
     fn needed_block(
         &self,
-        _grid: &Grid,
+        grid: &Grid,
         row: usize,
         col: usize,
         cache: &mut FullCountCache,
     ) -> [Option<(f64, f64)>; LANES] {
-        let first = row * self.width() + col;
+        let first = row * grid.width() + col;
         std::array::from_fn(|l| self.needed(first + l, cache))
     }
 
-    fn width(&self) -> usize;
     /// The plane orientation whose ellipse the counts scan first.
     fn scan_normal(&self) -> Vec3;
 }
@@ -87,10 +86,6 @@ impl Threshold for PaperThreshold<'_> {
 
     fn scan_normal(&self) -> Vec3 {
         Vec3::z()
-    }
-
-    fn width(&self) -> usize {
-        self.cloud.width()
     }
 }
 
@@ -134,10 +129,6 @@ impl Threshold for RobustThreshold<'_> {
 
     fn scan_normal(&self) -> Vec3 {
         self.criterion.normal
-    }
-
-    fn width(&self) -> usize {
-        self.search.cloud().width()
     }
 
     /// The normal test of eight lanes at once on the coordinate planes,

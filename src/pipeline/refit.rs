@@ -92,12 +92,6 @@ impl SeamCurve {
         (self.at(s + h) - self.at(s - h)).normalize()
     }
 
-    /// The curve in `frame`'s coordinates: exact for degree 1 when the
-    /// frames share the plane, used to average two edges (Eq. 36).
-    pub fn feature_of(&self, p: &Vec3) -> f64 {
-        (p - self.frame.origin).dot(&self.frame.e)
-    }
-
     /// Distance from `p` to the curve at the same feature coordinate.
     pub fn residual(&self, p: &Vec3) -> f64 {
         let (s, _, _) = self.frame.coordinates(p);

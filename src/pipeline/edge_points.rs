@@ -26,6 +26,18 @@ pub enum FullCount {
     Plane,
 }
 
+impl FullCount {
+    /// `N` for point `i`.
+    fn of(self, search: &NeighbourSearch, plane: &PlanePoints, i: usize) -> f64 {
+        match self {
+            FullCount::Frontal => {
+                search.camera().theoretical_neighbours(search.radius_mm(), search.cloud().points()[i][2] as f64)
+            }
+            FullCount::Plane => plane.full[i] as f64,
+        }
+    }
+}
+
 /// The edge criterion's settings.
 #[derive(Debug, Clone, Copy)]
 pub struct EdgeCriterion {
@@ -56,10 +68,7 @@ pub fn edge_points(search: &NeighbourSearch, plane: &PlanePoints, plate: Plate, 
     let points = cloud.points();
     let radius = search.radius_mm();
     let Plate { labels, label, members } = plate;
-    let full = |i: usize| match criterion.full {
-        FullCount::Frontal => camera.theoretical_neighbours(radius, points[i][2] as f64),
-        FullCount::Plane => plane.full[i] as f64,
-    };
+    let full = |i: usize| criterion.full.of(search, plane, i);
     let is_edge = |i: usize| search.count(i, |j| labels[j] == label) as f64 <= criterion.ratio * full(i);
     if !cloud.is_organized() {
         return members.par_iter().copied().filter(|&i| is_edge(i as usize)).collect();
@@ -101,19 +110,13 @@ pub fn edge_points(search: &NeighbourSearch, plane: &PlanePoints, plate: Plate, 
 
 /// The straightforward form: every member counted. Kept as the reference.
 pub fn reference(search: &NeighbourSearch, plane: &PlanePoints, plate: Plate, criterion: &EdgeCriterion) -> Vec<u32> {
-    let camera = search.camera();
-    let points = search.cloud().points();
-    let radius = search.radius_mm();
     plate
         .members
         .iter()
         .copied()
         .filter(|&i| {
             let i = i as usize;
-            let n = match criterion.full {
-                FullCount::Frontal => camera.theoretical_neighbours(radius, points[i][2] as f64),
-                FullCount::Plane => plane.full[i] as f64,
-            };
+            let n = criterion.full.of(search, plane, i);
             search.count(i, |j| plate.labels[j] == plate.label) as f64 <= criterion.ratio * n
         })
         .collect()

@@ -276,7 +276,7 @@ impl<'a> Run<'a> {
     fn execute(mut self) -> Result<Plan, PlanError> {
         let cfg = &self.config.pipeline;
         let camera = &self.config.camera;
-        let near = near_points(self.cloud, camera.min_depth_mm);
+        let (valid, near) = count_valid_and_near(self.cloud, camera.min_depth_mm);
         let sanitized;
         let cloud = if near == 0 {
             self.cloud
@@ -289,7 +289,8 @@ impl<'a> Run<'a> {
             sanitized = without_near_points(self.cloud, camera.min_depth_mm);
             &sanitized
         };
-        self.stats.valid_points = cloud.valid_count();
+        // One pass counted both; the near points are no longer valid.
+        self.stats.valid_points = valid - near;
         if self.stats.valid_points == 0 && near > 0 {
             return Err(PlanError::at(
                 Stage::PlanePoints,
@@ -457,12 +458,7 @@ impl<'a> Run<'a> {
         let (e1, e2) = (&fits[0].curve, &fits[1].curve);
         let normal = weld_equation::paper_normal(e1, e2)
             .ok_or_else(|| PlanError::at(Stage::WeldEquation, "the weld edges are collinear; no plate normal"))?;
-        let weld = match self.request.joint {
-            JointType::VButt => weld_equation::v_butt(e1, e2, self.request.groove_depth_mm.unwrap_or(0.0), &normal),
-            JointType::IButt => weld_equation::i_butt(e1, e2),
-            JointType::Lap => Some(weld_equation::lap_paper(e1, e2)),
-        }
-        .ok_or_else(|| PlanError::at(Stage::WeldEquation, "the weld edges were fitted in different frames"))?;
+        let weld = self.weld(e1, e2, &normal, || weld_equation::lap_paper(e1, e2))?;
         let (s0, s1) = (weld.s_min, weld.s_max);
         self.clock.lap(Stage::WeldEquation);
         self.finish(weld, s0, s1, normal, &fits)
@@ -549,15 +545,8 @@ impl<'a> Run<'a> {
         self.clock.lap(Stage::Refit);
 
         let (e1, e2) = (&fits[0].curve, &fits[1].curve);
-        let weld = match self.request.joint {
-            JointType::VButt => weld_equation::v_butt(e1, e2, self.request.groove_depth_mm.unwrap_or(0.0), &normal),
-            JointType::IButt => weld_equation::i_butt(e1, e2),
-            JointType::Lap => {
-                let step = plates[1].plane.offset - plates[0].plane.offset;
-                Some(weld_equation::lap_root(e1, step, &normal))
-            }
-        }
-        .ok_or_else(|| PlanError::at(Stage::WeldEquation, "the weld edges were fitted in different frames"))?;
+        let step = plates[1].plane.offset - plates[0].plane.offset;
+        let weld = self.weld(e1, e2, &normal, || weld_equation::lap_root(e1, step, &normal))?;
         // The seam runs where both plates exist along it.
         let extent = |k: usize| {
             boundaries[k].extent(|s| frame.feature(&s.position)).ok_or_else(|| {
@@ -576,6 +565,23 @@ impl<'a> Run<'a> {
         }
         self.clock.lap(Stage::WeldEquation);
         self.finish(weld, s0, s1, normal, &fits)
+    }
+
+    /// The weld of the requested joint from its two edges (Eq. 32, 36);
+    /// `lap` gives the lap weld, where the methods differ.
+    fn weld(
+        &self,
+        e1: &SeamCurve,
+        e2: &SeamCurve,
+        normal: &Vec3,
+        lap: impl FnOnce() -> SeamCurve,
+    ) -> Result<SeamCurve, PlanError> {
+        match self.request.joint {
+            JointType::VButt => weld_equation::v_butt(e1, e2, self.request.groove_depth_mm.unwrap_or(0.0), normal),
+            JointType::IButt => weld_equation::i_butt(e1, e2),
+            JointType::Lap => Some(lap()),
+        }
+        .ok_or_else(|| PlanError::at(Stage::WeldEquation, "the weld edges were fitted in different frames"))
     }
 
     /// Narrows `[s0, s1]` to where `curve` projects inside the image, when
@@ -637,10 +643,16 @@ impl<'a> Run<'a> {
     }
 }
 
-/// Valid points nearer than `min_depth` (or behind the camera).
-fn near_points(cloud: &PointCloud, min_depth: f64) -> usize {
+/// The valid points, and those of them nearer than `min_depth` (or behind
+/// the camera), in one pass over the frame.
+fn count_valid_and_near(cloud: &PointCloud, min_depth: f64) -> (usize, usize) {
     let min = min_depth as f32;
-    cloud.points().par_iter().filter(|p| p[0].is_finite() && p[2] < min).count()
+    cloud
+        .points()
+        .par_iter()
+        .filter(|p| p[0].is_finite())
+        .map(|p| (1, (p[2] < min) as usize))
+        .reduce(|| (0, 0), |a, b| (a.0 + b.0, a.1 + b.1))
 }
 
 /// A copy of `cloud` with the points nearer than `min_depth` made invalid.

@@ -667,14 +667,9 @@ mod tests {
         assert!(err.to_string().contains("overflows"), "{err}");
     }
 
-    enum Expected {
-        HeaderLine(usize),
-        DataAt(&'static str),
-    }
-
     #[test]
     fn malformed_files_name_the_file_and_the_place() {
-        use Expected::*;
+        use crate::cloud::reader::test_support::{Expected, Expected::*, assert_located_errors};
         let header = xyz_header(2, 1, "binary");
         let ascii = xyz_header(2, 1, "ascii");
         let mut truncated = header.clone().into_bytes();
@@ -705,22 +700,7 @@ mod tests {
             ("empty file", Vec::new(), HeaderLine(1)),
             ("random garbage", garbage, HeaderLine(1)),
         ];
-        for (name, bytes, expected) in cases {
-            let err = parse(&bytes, path()).expect_err(name);
-            let message = err.to_string();
-            assert!(message.contains("scan.pcd"), "{name}: {message}");
-            match (expected, &err) {
-                (HeaderLine(want), LoadError::Header { line, .. }) => {
-                    assert_eq!(*line, want, "{name}: {message}");
-                    assert!(message.contains(&format!("header line {want}:")), "{name}");
-                }
-                (DataAt(want), LoadError::Data { location, .. }) => {
-                    assert_eq!(location, want, "{name}: {message}");
-                    assert!(message.contains(want), "{name}");
-                }
-                _ => panic!("{name}: wrong error kind: {message}"),
-            }
-        }
+        assert_located_errors("scan.pcd", cases, |bytes| parse(bytes, path()));
     }
 
     #[test]

@@ -650,14 +650,9 @@ mod tests {
         assert!(matches!(err, LoadError::Header { line: 3, .. }), "{err}");
     }
 
-    enum Expected {
-        HeaderLine(usize),
-        DataAt(&'static str),
-    }
-
     #[test]
     fn malformed_files_name_the_file_and_the_place() {
-        use Expected::*;
+        use crate::cloud::reader::test_support::{Expected, Expected::*, assert_located_errors};
         let ascii = XYZ_LE_HEADER.replace("binary_little_endian", "ascii");
         let mut truncated = XYZ_LE_HEADER.as_bytes().to_vec();
         truncated.extend(le_f32(&[1.0, 2.0, 3.0, 4.0]));
@@ -693,22 +688,7 @@ mod tests {
             ("empty file", Vec::new(), HeaderLine(1)),
             ("random garbage", garbage, HeaderLine(1)),
         ];
-        for (name, bytes, expected) in cases {
-            let err = parse_bytes(&bytes).expect_err(name);
-            let message = err.to_string();
-            assert!(message.contains("part.ply"), "{name}: {message}");
-            match (expected, &err) {
-                (HeaderLine(want), LoadError::Header { line, .. }) => {
-                    assert_eq!(*line, want, "{name}: {message}");
-                    assert!(message.contains(&format!("header line {want}:")), "{name}");
-                }
-                (DataAt(want), LoadError::Data { location, .. }) => {
-                    assert_eq!(location, want, "{name}: {message}");
-                    assert!(message.contains(want), "{name}");
-                }
-                _ => panic!("{name}: wrong error kind: {message}"),
-            }
-        }
+        assert_located_errors("part.ply", cases, parse_bytes);
     }
 
     #[test]

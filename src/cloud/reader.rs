@@ -165,6 +165,42 @@ pub(super) fn decode_packed_xyz_f32_le(data: &[u8]) -> Vec<Point> {
         .collect()
 }
 
+/// What the malformed-file tests of both parsers expect, and their check.
+#[cfg(test)]
+pub(super) mod test_support {
+    use super::super::{LoadError, PointCloud};
+
+    /// Where a malformed file must be reported broken.
+    pub enum Expected {
+        HeaderLine(usize),
+        DataAt(&'static str),
+    }
+
+    /// Parses every case and checks the error names `file` and the place.
+    pub fn assert_located_errors(
+        file: &str,
+        cases: Vec<(&str, Vec<u8>, Expected)>,
+        parse: impl Fn(&[u8]) -> Result<PointCloud, LoadError>,
+    ) {
+        for (name, bytes, expected) in cases {
+            let err = parse(&bytes).expect_err(name);
+            let message = err.to_string();
+            assert!(message.contains(file), "{name}: {message}");
+            match (expected, &err) {
+                (Expected::HeaderLine(want), LoadError::Header { line, .. }) => {
+                    assert_eq!(*line, want, "{name}: {message}");
+                    assert!(message.contains(&format!("header line {want}:")), "{name}");
+                }
+                (Expected::DataAt(want), LoadError::Data { location, .. }) => {
+                    assert_eq!(location, want, "{name}: {message}");
+                    assert!(message.contains(want), "{name}");
+                }
+                _ => panic!("{name}: wrong error kind: {message}"),
+            }
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -89,6 +89,12 @@ pub struct CameraPlacement {
 }
 
 impl CameraPlacement {
+    /// A camera `distance_mm` from the seam's centre, tilted `tilt_deg`
+    /// towards +x, not rolled.
+    pub fn straight(distance_mm: f64, tilt_deg: f64) -> Self {
+        CameraPlacement { distance_mm, tilt_deg, tilt_azimuth_deg: 0.0, roll_deg: 0.0, target_offset_mm: [0.0, 0.0] }
+    }
+
     /// The camera's pose in the workpiece frame for a target point.
     pub fn workpiece_from_camera(&self, target: &Vec3) -> Isometry3<f64> {
         let (tilt, azimuth) = (self.tilt_deg.to_radians(), self.tilt_azimuth_deg.to_radians());
@@ -306,13 +312,7 @@ mod tests {
     fn frontal_i_butt() -> SceneSpec {
         let mut spec = demo_scene(JointType::IButt);
         spec.joint = JointGeometry::IButt { thickness_mm: 6.0, gap_mm: 3.0 };
-        spec.placement = CameraPlacement {
-            distance_mm: 600.0,
-            tilt_deg: 0.0,
-            tilt_azimuth_deg: 0.0,
-            roll_deg: 0.0,
-            target_offset_mm: [0.0, 0.0],
-        };
+        spec.placement = CameraPlacement::straight(600.0, 0.0);
         spec.noise = NoiseSpec::none();
         spec
     }

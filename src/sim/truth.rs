@@ -139,13 +139,7 @@ mod tests {
         let mut spec = demo_scene(JointType::IButt);
         spec.plate_a = PlateExtent { width_mm: 120.0, length_mm: 200.0, offset_mm: 0.0 };
         spec.plate_b = PlateExtent { width_mm: 100.0, length_mm: 220.0, offset_mm: 30.0 };
-        spec.placement = CameraPlacement {
-            distance_mm: 800.0,
-            tilt_deg: 0.0,
-            tilt_azimuth_deg: 0.0,
-            roll_deg: 0.0,
-            target_offset_mm: [0.0, 0.0],
-        };
+        spec.placement = CameraPlacement::straight(800.0, 0.0);
         spec.noise = NoiseSpec::none();
         spec
     }

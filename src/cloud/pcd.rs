@@ -432,17 +432,23 @@ fn parse_ascii_point(text: &str, header: &Header) -> Result<Point, String> {
     Ok(point)
 }
 
-/// Writes `cloud` as an ascii PCD (fields x y z), keeping its organization;
-/// invalid points are written as `NaN`.
-pub fn write_ascii<W: Write>(cloud: &PointCloud, mut out: W) -> io::Result<()> {
+/// The header of an x y z float PCD of `cloud`'s shape, with `data` as
+/// its DATA kind.
+fn write_header<W: Write>(cloud: &PointCloud, data: &str, out: &mut W) -> io::Result<()> {
     write!(
         out,
         "# .PCD v0.7 - Point Cloud Data file format\nVERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\n\
-         COUNT 1 1 1\nWIDTH {}\nHEIGHT {}\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS {}\nDATA ascii\n",
+         COUNT 1 1 1\nWIDTH {}\nHEIGHT {}\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS {}\nDATA {data}\n",
         cloud.width(),
         cloud.height(),
         cloud.len()
-    )?;
+    )
+}
+
+/// Writes `cloud` as an ascii PCD (fields x y z), keeping its organization;
+/// invalid points are written as `NaN`.
+pub fn write_ascii<W: Write>(cloud: &PointCloud, mut out: W) -> io::Result<()> {
+    write_header(cloud, "ascii", &mut out)?;
     for [x, y, z] in cloud.points() {
         // Display prints the shortest text that reads back to the same f32.
         writeln!(out, "{x} {y} {z}")?;
@@ -453,14 +459,7 @@ pub fn write_ascii<W: Write>(cloud: &PointCloud, mut out: W) -> io::Result<()> {
 /// Writes `cloud` as a binary PCD (fields x y z, f32 little endian),
 /// keeping its organization; invalid points are written as NaN.
 pub fn write_binary<W: Write>(cloud: &PointCloud, mut out: W) -> io::Result<()> {
-    write!(
-        out,
-        "# .PCD v0.7 - Point Cloud Data file format\nVERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\n\
-         COUNT 1 1 1\nWIDTH {}\nHEIGHT {}\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS {}\nDATA binary\n",
-        cloud.width(),
-        cloud.height(),
-        cloud.len()
-    )?;
+    write_header(cloud, "binary", &mut out)?;
     let mut buf = Vec::with_capacity(cloud.len() * 12);
     for p in cloud.points() {
         for c in p {

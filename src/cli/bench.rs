@@ -29,6 +29,9 @@ pub struct BenchArgs {
     /// Print the tables as Markdown.
     #[arg(long)]
     pub markdown: bool,
+    /// Only the per-stage tables: the quick loop while tuning a stage.
+    #[arg(long)]
+    pub stages_only: bool,
     /// Internal: run this program with the arguments after `--`, print
     /// the child's peak resident bytes and nothing else.
     #[arg(long, hide = true)]
@@ -187,6 +190,10 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
         if distance == NEAR_MM {
             near_timings = timings.into_iter().find(|t| t.scenario.joint == JOINT);
         }
+    }
+
+    if args.stages_only {
+        return Ok(());
     }
 
     progress("scaling with frame size");

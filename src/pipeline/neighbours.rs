@@ -148,15 +148,21 @@ pub struct FullCounts<'a> {
     fy: f64,
 }
 
-/// A small per-thread memo of full-plane counts, keyed by tile and depth
-/// step; a collision only costs a recomputation.
+/// Memo slots: a row of a tilted 1920-pixel frame crosses some 60 tiles
+/// and two to four depth steps in each, and the rows of a tile reuse the
+/// same keys, so a few hundred live keys must fit without evicting each
+/// other.
+const CACHE_SLOTS: usize = 1024;
+
+/// A per-thread memo of full-plane counts, keyed by tile and depth step;
+/// a collision only costs a recomputation.
 pub struct FullCountCache {
-    slots: [(u64, f64); 64],
+    slots: Box<[(u64, f64); CACHE_SLOTS]>,
 }
 
 impl Default for FullCountCache {
     fn default() -> Self {
-        FullCountCache { slots: [(u64::MAX, 0.0); 64] }
+        FullCountCache { slots: Box::new([(u64::MAX, 0.0); CACHE_SLOTS]) }
     }
 }
 
@@ -189,7 +195,7 @@ impl<'a> FullCounts<'a> {
         let key = ((tile_row as i16 as u16 as u64) << 48)
             | ((tile_col as i16 as u16 as u64) << 32)
             | (depth_step as i32 as u32 as u64);
-        let slot = (key.wrapping_mul(0x9e37_79b9_7f4a_7c15) >> 58) as usize;
+        let slot = (key.wrapping_mul(0x9e37_79b9_7f4a_7c15) >> (64 - CACHE_SLOTS.trailing_zeros())) as usize;
         if cache.slots[slot].0 == key {
             return cache.slots[slot].1;
         }

@@ -236,13 +236,16 @@ fn classify<T: Threshold>(search: &NeighbourSearch, threshold: &T) -> PlanePoint
     }
     let grid = Grid::new(cloud);
     let w = cloud.width();
-    mask.par_chunks_mut(w).zip(counts.par_chunks_mut(w)).zip(full.par_chunks_mut(w)).enumerate().for_each(
-        |(row, ((mask_row, count_row), full_row))| {
-            let mut scratch = Scratch::new();
+    // One scratch per rayon job, not per row: the full-count memo then
+    // serves the 32 rows of a tile instead of starting cold on each.
+    mask.par_chunks_mut(w).zip(counts.par_chunks_mut(w)).zip(full.par_chunks_mut(w)).enumerate().for_each_init(
+        Scratch::new,
+        |scratch, (row, ((mask_row, count_row), full_row))| {
+            scratch.spans_for = None;
             for col in (0..w).step_by(LANES) {
                 let out =
                     BlockOut { mask: &mut mask_row[col..], counts: &mut count_row[col..], full: &mut full_row[col..] };
-                classify_block(search, &grid, threshold, row, col, &mut scratch, out);
+                classify_block(search, &grid, threshold, row, col, scratch, out);
             }
         },
     );

@@ -12,9 +12,9 @@ use kiddo::{ImmutableKdTree, SquaredEuclidean};
 
 use crate::camera::CameraModel;
 use crate::cloud::{Point, PointCloud};
-use crate::geometry::{Vec3, ceil_i64, floor_i64, round_i64};
+use crate::geometry::{Vec3, ceil_i64, floor_i64};
 
-use super::grid_search::Span;
+use super::grid_search::{LANES, Span};
 
 /// Finds the neighbours of cloud points within a fixed radius.
 pub struct NeighbourSearch<'a> {
@@ -144,8 +144,12 @@ pub struct FullCounts<'a> {
     camera: &'a CameraModel,
     normal: Vec3,
     radius: f64,
-    fx: f64,
-    fy: f64,
+    /// Tiles per unit of `x / z` and of `y / z`.
+    tiles_per_x: f32,
+    tiles_per_y: f32,
+    /// A tile's extent in `x / z` and `y / z`.
+    tile_x: f64,
+    tile_y: f64,
 }
 
 /// Memo slots: a row of a tilted 1920-pixel frame crosses some 60 tiles
@@ -166,43 +170,99 @@ impl Default for FullCountCache {
     }
 }
 
+/// `x.floor()` as an integer for the small values of tile and depth
+/// indices; the baseline x86-64 has no single-instruction floor.
+#[inline(always)]
+fn floor_i32(x: f32) -> i32 {
+    let t = x as i32;
+    t - ((t as f32) > x) as i32
+}
+
 impl<'a> FullCounts<'a> {
     pub fn new(search: &NeighbourSearch<'a>, normal: &Vec3) -> Self {
+        let tile = FULL_COUNT_TILE_PX as f64;
         FullCounts {
             cloud: search.cloud,
             camera: search.camera,
             normal: *normal,
             radius: search.radius as f64,
-            fx: search.camera.fx(),
-            fy: search.camera.fy(),
+            tiles_per_x: (search.camera.fx() / tile) as f32,
+            tiles_per_y: (search.camera.fy() / tile) as f32,
+            tile_x: tile / search.camera.fx(),
+            tile_y: tile / search.camera.fy(),
         }
     }
 
-    /// The full-plane count of point `i`.
-    pub fn get(&self, i: usize, cache: &mut FullCountCache) -> f64 {
-        let p = self.cloud.points()[i];
-        let r = self.radius;
-        let n = &self.normal;
-        if !self.cloud.is_organized() {
-            let density = self.camera.plane_density_at([p[0] as f64, p[1] as f64, p[2] as f64], [n.x, n.y, n.z]);
-            return std::f64::consts::PI * r * r * density;
-        }
-        let tile = FULL_COUNT_TILE_PX as f64;
-        let z = p[2] as f64;
-        let tile_col = floor_i64(p[0] as f64 / z * self.fx / tile) as f64;
-        let tile_row = floor_i64(p[1] as f64 / z * self.fy / tile) as f64;
-        let depth_step = round_i64(z / FULL_COUNT_DEPTH_STEP_MM) as f64;
-        let key = ((tile_row as i16 as u16 as u64) << 48)
-            | ((tile_col as i16 as u16 as u64) << 32)
-            | (depth_step as i32 as u32 as u64);
+    /// The memo key of a valid grid point: its tile and depth step. Single
+    /// precision and no rounding calls, so eight lanes vectorise; every
+    /// path computes the key with this one function.
+    #[inline(always)]
+    fn key(&self, p: &Point) -> u64 {
+        let z = p[2];
+        let tile_col = floor_i32(p[0] / z * self.tiles_per_x);
+        let tile_row = floor_i32(p[1] / z * self.tiles_per_y);
+        // Depths are positive, so rounding is the floor of z / step + ½.
+        let depth_step = floor_i32(z * (1.0 / FULL_COUNT_DEPTH_STEP_MM as f32) + 0.5);
+        ((tile_row as i16 as u16 as u64) << 48) | ((tile_col as i16 as u16 as u64) << 32) | (depth_step as u32 as u64)
+    }
+
+    /// The lattice count for a key, from the memo or computed.
+    #[inline]
+    fn value_of(&self, key: u64, cache: &mut FullCountCache) -> f64 {
         let slot = (key.wrapping_mul(0x9e37_79b9_7f4a_7c15) >> (64 - CACHE_SLOTS.trailing_zeros())) as usize;
         if cache.slots[slot].0 == key {
             return cache.slots[slot].1;
         }
-        let ray = Vec3::new((tile_col + 0.5) * tile / self.fx, (tile_row + 0.5) * tile / self.fy, 1.0);
-        let value = lattice_count_in_ellipse(self.camera, &(ray * (depth_step * FULL_COUNT_DEPTH_STEP_MM)), n, r);
+        let tile_row = (key >> 48) as u16 as i16 as f64;
+        let tile_col = (key >> 32) as u16 as i16 as f64;
+        let depth_step = key as u32 as i32 as f64;
+        let ray = Vec3::new((tile_col + 0.5) * self.tile_x, (tile_row + 0.5) * self.tile_y, 1.0);
+        let value = lattice_count_in_ellipse(
+            self.camera,
+            &(ray * (depth_step * FULL_COUNT_DEPTH_STEP_MM)),
+            &self.normal,
+            self.radius,
+        );
         cache.slots[slot] = (key, value);
         value
+    }
+
+    /// The full-plane count of point `i`, which must be valid.
+    pub fn get(&self, i: usize, cache: &mut FullCountCache) -> f64 {
+        let p = self.cloud.points()[i];
+        if !self.cloud.is_organized() {
+            let n = &self.normal;
+            let density = self.camera.plane_density_at([p[0] as f64, p[1] as f64, p[2] as f64], [n.x, n.y, n.z]);
+            return std::f64::consts::PI * self.radius * self.radius * density;
+        }
+        self.value_of(self.key(&p), cache)
+    }
+
+    /// [`FullCounts::get`] of the `LANES` grid points whose coordinates
+    /// are `xs`, `ys`, `zs`, for the lanes where `wanted` is set (0 for
+    /// the others). Neighbouring pixels mostly share a key, so a lane
+    /// equal to the one before it skips the memo.
+    #[inline]
+    pub fn get_lanes(
+        &self,
+        [xs, ys, zs]: &[[f32; LANES]; 3],
+        wanted: [bool; LANES],
+        cache: &mut FullCountCache,
+    ) -> [f64; LANES] {
+        let keys: [u64; LANES] = std::array::from_fn(|l| self.key(&[xs[l], ys[l], zs[l]]));
+        let mut out = [0.0; LANES];
+        let mut last: Option<(u64, f64)> = None;
+        for l in 0..LANES {
+            if !wanted[l] {
+                continue;
+            }
+            out[l] = match last {
+                Some((key, value)) if key == keys[l] => value,
+                _ => self.value_of(keys[l], cache),
+            };
+            last = Some((keys[l], out[l]));
+        }
+        out
     }
 }
 
@@ -286,16 +346,19 @@ impl PixelEllipse {
         count as f64
     }
 
-    /// Fills `out` with row spans covering the ellipse widened by `margin`
-    /// pixels all round: where a plane point's neighbours lie, noise
-    /// included.
-    pub fn spans_into(&self, margin: isize, out: &mut Vec<Span>) {
+    /// Fills `out` with the row spans of the lattice points inside the
+    /// ellipse: where most of a plane point's neighbours lie. Noise moves a
+    /// few across the rim either way, so a count over the spans is only a
+    /// lower bound of the exact one.
+    pub fn spans_into(&self, out: &mut Vec<Span>) {
         out.clear();
-        let dv_max = self.dv_max() as isize + margin;
+        let dv_max = self.dv_max() as isize;
         for dv in -dv_max..=dv_max {
-            let nearest = if dv > 0 { (dv - margin).max(0) } else { (dv + margin).min(0) };
-            if let Some((lo, hi)) = self.row(nearest as i64) {
-                out.push(Span { dv, du_lo: floor_i64(lo) as isize - margin, du_hi: ceil_i64(hi) as isize + margin });
+            if let Some((lo, hi)) = self.row(dv as i64) {
+                let (du_lo, du_hi) = (ceil_i64(lo) as isize, floor_i64(hi) as isize);
+                if du_lo <= du_hi {
+                    out.push(Span { dv, du_lo, du_hi });
+                }
             }
         }
     }

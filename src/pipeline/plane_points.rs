@@ -143,16 +143,22 @@ impl Threshold for RobustThreshold<'_> {
     ) -> [Option<(f64, f64)>; LANES] {
         let (w, h) = (grid.width(), grid.height());
         let first = row * w + col;
-        let points = self.search.cloud().points();
         let fx = self.search.camera().fx();
         let radius = self.search.radius_mm();
-        let step = normal_step(fx, points[first][2] as f64, radius);
+        let centre = grid.lanes(first);
+        let [px, py, pz] = centre;
+        // The step only falls as depth grows, so equal steps at the
+        // nearest and farthest lane mean one step for every valid lane.
+        let (z_near, z_far) = pz.iter().fold((f32::INFINITY, f32::NEG_INFINITY), |(a, b), &z| (a.min(z), b.max(z)));
+        let step = normal_step(fx, pz[0] as f64, radius);
         let fits = col >= step && col + LANES - 1 + step < w && row >= step && row + step < h;
-        let same_step = (1..LANES).all(|l| normal_step(fx, points[first + l][2] as f64, radius) == step);
-        if !fits || !same_step || !points[first][2].is_finite() {
+        if !fits
+            || !pz[0].is_finite()
+            || normal_step(fx, z_near as f64, radius) != step
+            || normal_step(fx, z_far as f64, radius) != step
+        {
             return std::array::from_fn(|l| self.needed(first + l, cache));
         }
-        let [px, py, pz] = grid.lanes(first);
         let [lx, ly, lz] = grid.lanes(first - step);
         let [rx, ry, rz] = grid.lanes(first + step);
         let [ux, uy, uz] = grid.lanes(first - step * w);
@@ -168,16 +174,14 @@ impl Threshold for RobustThreshold<'_> {
             complete[l] = (du[0] + du[1] + du[2] + dv[0] + dv[1] + dv[2] + px[l]).is_finite();
             facing[l] = cross_agrees(cross(du, dv), [px[l], py[l], pz[l]], reference, cos_sq);
         }
+        let wanted = std::array::from_fn(|l| complete[l] && facing[l]);
+        let full = self.full_counts.get_lanes(&centre, wanted, cache);
         std::array::from_fn(|l| {
             if !complete[l] {
                 // A missing neighbour: the one-sided rule, lane by lane.
                 return self.needed(first + l, cache);
             }
-            if !facing[l] {
-                return None;
-            }
-            let full = self.full_counts.get(first + l, cache);
-            (full > 0.0).then_some((self.criterion.min_ratio * full, full))
+            (facing[l] && full[l] > 0.0).then_some((self.criterion.min_ratio * full[l], full[l]))
         })
     }
 }
@@ -301,8 +305,10 @@ fn classify_block<T: Threshold>(
         std::array::from_fn(|l| if l < lanes { threshold.needed(first + l, &mut scratch.cache) } else { None })
     };
     let Some(anchor) = (0..lanes).find(|&l| needed[l].is_some()) else { return };
-    // The block's partial counts over the ellipse of its first candidate,
-    // one pixel wider for noise; they are lower bounds for every lane.
+    // The block's partial counts over the ellipse of its first candidate:
+    // lower bounds for every lane. An interior point finds nearly all its
+    // neighbours there; widening the ellipse for the few that noise moves
+    // outside it cost a third more distances than the recounts it saved.
     let mut partial = [0u32; LANES];
     if lanes == LANES {
         let point = search.cloud().points()[first + anchor];
@@ -310,7 +316,7 @@ fn classify_block<T: Threshold>(
             let ellipse =
                 PixelEllipse::new(search.camera(), &vec3(&point), &threshold.scan_normal(), search.radius_mm());
             match ellipse {
-                Some(e) => e.spans_into(1, &mut scratch.spans),
+                Some(e) => e.spans_into(&mut scratch.spans),
                 None => scratch.spans.clear(),
             }
             scratch.spans_for = Some((point[2], col));

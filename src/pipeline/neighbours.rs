@@ -170,12 +170,20 @@ impl Default for FullCountCache {
     }
 }
 
-/// `x.floor()` as an integer for the small values of tile and depth
-/// indices; the baseline x86-64 has no single-instruction floor.
+/// `x.floor()` as an integer, for the tile and depth indices of the memo
+/// keys. Values are clamped to ±4·10⁶ (NaN to the low end), far beyond any
+/// index a camera's view gives. No float-to-int conversion: the baseline
+/// x86-64 has no single-instruction floor, and Rust's saturating casts do
+/// not vectorise, while adding 1.5 · 2²³ leaves `round(x)` in the low
+/// mantissa bits of any |x| < 2²².
 #[inline(always)]
 fn floor_i32(x: f32) -> i32 {
-    let t = x as i32;
-    t - ((t as f32) > x) as i32
+    const SHIFT: f32 = 12_582_912.0;
+    // Not `clamp`, which keeps NaN: `max` maps it to the low end.
+    #[allow(clippy::manual_clamp)]
+    let x = x.max(-4.0e6).min(4.0e6);
+    let rounded = (x + SHIFT).to_bits() as i32 - SHIFT.to_bits() as i32;
+    rounded - ((rounded as f32) > x) as i32
 }
 
 impl<'a> FullCounts<'a> {
@@ -238,18 +246,19 @@ impl<'a> FullCounts<'a> {
         self.value_of(self.key(&p), cache)
     }
 
-    /// [`FullCounts::get`] of the `LANES` grid points whose coordinates
-    /// are `xs`, `ys`, `zs`, for the lanes where `wanted` is set (0 for
-    /// the others). Neighbouring pixels mostly share a key, so a lane
-    /// equal to the one before it skips the memo.
+    /// The memo keys of `LANES` valid grid points given as coordinate
+    /// lanes; inlined into the callers' vector code.
+    #[inline(always)]
+    pub fn keys_of_lanes(&self, [xs, ys, zs]: &[[f32; LANES]; 3]) -> [u64; LANES] {
+        std::array::from_fn(|l| self.key(&[xs[l], ys[l], zs[l]]))
+    }
+
+    /// [`FullCounts::get`] of the lanes whose `keys` came from
+    /// [`FullCounts::keys_of_lanes`], for the lanes where `wanted` is set
+    /// (0 for the others). Neighbouring pixels mostly share a key, so a
+    /// lane equal to the one before it skips the memo.
     #[inline]
-    pub fn get_lanes(
-        &self,
-        [xs, ys, zs]: &[[f32; LANES]; 3],
-        wanted: [bool; LANES],
-        cache: &mut FullCountCache,
-    ) -> [f64; LANES] {
-        let keys: [u64; LANES] = std::array::from_fn(|l| self.key(&[xs[l], ys[l], zs[l]]));
+    pub fn get_lanes(&self, keys: &[u64; LANES], wanted: [bool; LANES], cache: &mut FullCountCache) -> [f64; LANES] {
         let mut out = [0.0; LANES];
         let mut last: Option<(u64, f64)> = None;
         for l in 0..LANES {
@@ -373,6 +382,16 @@ pub fn lattice_count_in_ellipse(camera: &CameraModel, p: &Vec3, n: &Vec3, radius
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn floor_i32_floors_and_clamps() {
+        for x in [-3.5f32, -3.0, -2.5, -0.5, -0.0, 0.0, 0.25, 0.5, 1.0, 1.5, 2.5, 2.999_999_8, 1234.5, -1234.5] {
+            assert_eq!(floor_i32(x), x.floor() as i32, "{x}");
+        }
+        assert_eq!(floor_i32(1e9), 4_000_000);
+        assert_eq!(floor_i32(f32::NEG_INFINITY), -4_000_000);
+        assert_eq!(floor_i32(f32::NAN), -4_000_000);
+    }
 
     /// A frontal plane at depth z sampled by the camera, with an optional
     /// hole of invalid pixels for columns >= `cut`.

@@ -145,8 +145,7 @@ impl Threshold for RobustThreshold<'_> {
         let first = row * w + col;
         let fx = self.search.camera().fx();
         let radius = self.search.radius_mm();
-        let centre = grid.lanes(first);
-        let [px, py, pz] = centre;
+        let pz = grid.lanes(first)[2];
         // The step only falls as depth grows, so equal steps at the
         // nearest and farthest lane mean one step for every valid lane.
         let (z_near, z_far) = pz.iter().fold((f32::INFINITY, f32::NEG_INFINITY), |(a, b), &z| (a.min(z), b.max(z)));
@@ -159,6 +158,48 @@ impl Threshold for RobustThreshold<'_> {
         {
             return std::array::from_fn(|l| self.needed(first + l, cache));
         }
+        #[cfg(target_arch = "x86_64")]
+        let facts = if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the CPU supports AVX2, checked just above.
+            unsafe { self.lane_facts_avx2(grid, first, step) }
+        } else {
+            self.lane_facts(grid, first, step)
+        };
+        #[cfg(not(target_arch = "x86_64"))]
+        let facts = self.lane_facts(grid, first, step);
+        let LaneFacts { complete, facing, keys } = facts;
+        let wanted = std::array::from_fn(|l| complete[l] && facing[l]);
+        let full = self.full_counts.get_lanes(&keys, wanted, cache);
+        std::array::from_fn(|l| {
+            if !complete[l] {
+                // A missing neighbour: the one-sided rule, lane by lane.
+                return self.needed(first + l, cache);
+            }
+            (facing[l] && full[l] > 0.0).then_some((self.criterion.min_ratio * full[l], full[l]))
+        })
+    }
+}
+
+/// What a block's lanes need before counting, when all of them use one
+/// normal step and the block's neighbours at that step are in the image.
+struct LaneFacts {
+    /// The lane and its four neighbours are valid.
+    complete: [bool; LANES],
+    /// The grid normal agrees with the workpiece's (meaningful when complete).
+    facing: [bool; LANES],
+    /// The full-count memo keys.
+    keys: [u64; LANES],
+}
+
+impl RobustThreshold<'_> {
+    /// The normal test and memo keys of the eight lanes from pixel
+    /// `first`, term for term as the scalar [`Threshold::needed`] computes
+    /// them, in plain lane loops the compiler vectorises.
+    #[inline(always)]
+    fn lane_facts(&self, grid: &Grid, first: usize, step: usize) -> LaneFacts {
+        let w = grid.width();
+        let centre = grid.lanes(first);
+        let [px, py, pz] = centre;
         let [lx, ly, lz] = grid.lanes(first - step);
         let [rx, ry, rz] = grid.lanes(first + step);
         let [ux, uy, uz] = grid.lanes(first - step * w);
@@ -174,15 +215,15 @@ impl Threshold for RobustThreshold<'_> {
             complete[l] = (du[0] + du[1] + du[2] + dv[0] + dv[1] + dv[2] + px[l]).is_finite();
             facing[l] = cross_agrees(cross(du, dv), [px[l], py[l], pz[l]], reference, cos_sq);
         }
-        let wanted = std::array::from_fn(|l| complete[l] && facing[l]);
-        let full = self.full_counts.get_lanes(&centre, wanted, cache);
-        std::array::from_fn(|l| {
-            if !complete[l] {
-                // A missing neighbour: the one-sided rule, lane by lane.
-                return self.needed(first + l, cache);
-            }
-            (facing[l] && full[l] > 0.0).then_some((self.criterion.min_ratio * full[l], full[l]))
-        })
+        LaneFacts { complete, facing, keys: self.full_counts.keys_of_lanes(&centre) }
+    }
+
+    /// [`RobustThreshold::lane_facts`] compiled for eight-wide registers:
+    /// the same operations in the same order, so the same bits.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    unsafe fn lane_facts_avx2(&self, grid: &Grid, first: usize, step: usize) -> LaneFacts {
+        self.lane_facts(grid, first, step)
     }
 }
 

@@ -58,8 +58,10 @@ pub fn segment_lines(points: &[Vec3], params: &RansacParams) -> Vec<EdgeLine> {
 
 fn best_line(points: &[Vec3], remaining: &[usize], params: &RansacParams, rng: &mut ChaCha8Rng) -> Option<EdgeLine> {
     let n = remaining.len();
-    // Scoring on a fixed subsample keeps a hypothesis cheap on long edges.
+    // Scoring on a fixed subsample keeps a hypothesis cheap on long edges;
+    // gathered once, since every hypothesis reads all of it.
     let sample_stride = (n / 2000).max(1);
+    let sample: Vec<Vec3> = remaining.iter().step_by(sample_stride).map(|&i| points[i]).collect();
     let mut best: Option<(usize, Vec3, Vec3)> = None;
     for _ in 0..params.iterations {
         let a = points[remaining[(rng.next_u64() % n as u64) as usize]];
@@ -71,12 +73,10 @@ fn best_line(points: &[Vec3], remaining: &[usize], params: &RansacParams, rng: &
             continue;
         }
         let dir = d / len;
-        let score = remaining
-            .iter()
-            .step_by(sample_stride)
-            .filter(|&&i| (points[i] - a).cross(&dir).norm_squared() <= params.distance_mm * params.distance_mm)
-            .count();
-        if best.as_ref().is_none_or(|(s, _, _)| score > *s) {
+        // Only a strictly better score replaces the best, as in a plain
+        // scan, so a hypothesis that cannot get there is dropped early.
+        let needed = best.as_ref().map_or(0, |(s, _, _)| s + 1);
+        if let Some(score) = score_reaching(&sample, &a, &dir, params.distance_mm, needed) {
             best = Some((score, a, dir));
         }
     }
@@ -98,6 +98,42 @@ fn best_line(points: &[Vec3], remaining: &[usize], params: &RansacParams, rng: &
         }
     }
     Some(EdgeLine { point, direction, inliers })
+}
+
+/// Points of `sample` within `distance` of the line through `a` along
+/// `dir`, when that count reaches `needed`; `None` as soon as it cannot.
+fn score_reaching(sample: &[Vec3], a: &Vec3, dir: &Vec3, distance: f64, needed: usize) -> Option<usize> {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") {
+        // SAFETY: the CPU supports AVX2, checked just above.
+        return unsafe { score_reaching_avx2(sample, a, dir, distance, needed) };
+    }
+    score_reaching_lanes(sample, a, dir, distance, needed)
+}
+
+/// [`score_reaching`] compiled for four-lane double registers: the same
+/// operations in the same order, so the same inliers.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn score_reaching_avx2(sample: &[Vec3], a: &Vec3, dir: &Vec3, distance: f64, needed: usize) -> Option<usize> {
+    score_reaching_lanes(sample, a, dir, distance, needed)
+}
+
+#[inline(always)]
+fn score_reaching_lanes(sample: &[Vec3], a: &Vec3, dir: &Vec3, distance: f64, needed: usize) -> Option<usize> {
+    // Chunks long enough to vectorise, short enough to give up early.
+    const CHUNK: usize = 128;
+    let limit = distance * distance;
+    let mut score = 0;
+    let mut left = sample.len();
+    for chunk in sample.chunks(CHUNK) {
+        if score + left < needed {
+            return None;
+        }
+        left -= chunk.len();
+        score += chunk.iter().map(|p| ((p - a).cross(dir).norm_squared() <= limit) as usize).sum::<usize>();
+    }
+    (score >= needed).then_some(score)
 }
 
 #[cfg(test)]
@@ -148,6 +184,22 @@ mod tests {
         assert_eq!(a.len(), b.len());
         for (x, y) in a.iter().zip(&b) {
             assert_eq!(x.inliers, y.inliers);
+        }
+    }
+
+    #[test]
+    fn early_scoring_counts_exactly_what_a_plain_scan_counts() {
+        let pts = rectangle();
+        let mut rng = ChaCha8Rng::seed_from_u64(3);
+        for _ in 0..50 {
+            let a = pts[(rng.next_u64() % pts.len() as u64) as usize];
+            let b = pts[(rng.next_u64() % pts.len() as u64) as usize];
+            let Some(dir) = (b - a).try_normalize(1e-9) else { continue };
+            let plain = pts.iter().filter(|p| (*p - a).cross(&dir).norm_squared() <= 1.0).count();
+            assert_eq!(score_reaching(&pts, &a, &dir, 1.0, 0), Some(plain));
+            assert_eq!(score_reaching(&pts, &a, &dir, 1.0, plain), Some(plain));
+            assert_eq!(score_reaching(&pts, &a, &dir, 1.0, plain + 1), None);
+            assert_eq!(score_reaching_lanes(&pts, &a, &dir, 1.0, 0), Some(plain));
         }
     }
 

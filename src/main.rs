@@ -39,6 +39,7 @@ enum Command {
 }
 
 fn main() -> std::process::ExitCode {
+    cli::memory::keep_freed_memory();
     let cli = Cli::parse();
     let level = match cli.command {
         Command::Demo(_)

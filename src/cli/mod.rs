@@ -9,6 +9,7 @@ pub mod controller;
 pub mod demo;
 pub mod eval;
 pub mod logging;
+pub mod memory;
 pub mod plan;
 pub mod serve;
 pub mod simulate;

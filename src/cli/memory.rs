@@ -1,0 +1,23 @@
+//! The process's memory policy. The daemon plans frame after frame, each
+//! needing the same few frame-sized buffers (the cloud, its coordinate
+//! planes, masks and labels): handing them back to the kernel between
+//! frames only makes the next frame fault in and zero the same pages again.
+
+/// Keeps freed memory in the process for reuse: no `mmap` of its own for
+/// any buffer up to twice a 2.3 MP frame, and no trimming of the heap.
+/// `weldseam bench --quick --stages-only --runs 6` (21 plans of 2.3 MP
+/// frames) took 133,000 page faults before and 19,000 after. Only
+/// glibc's allocator has these settings; elsewhere this does nothing.
+pub fn keep_freed_memory() {
+    #[cfg(all(target_os = "linux", target_env = "gnu"))]
+    {
+        // glibc's largest accepted threshold on 64-bit systems.
+        const MMAP_THRESHOLD_BYTES: libc::c_int = 32 << 20;
+        // SAFETY: mallopt only changes allocator parameters; it is called
+        // before any thread starts, as glibc recommends.
+        unsafe {
+            libc::mallopt(libc::M_MMAP_THRESHOLD, MMAP_THRESHOLD_BYTES);
+            libc::mallopt(libc::M_TRIM_THRESHOLD, libc::c_int::MAX);
+        }
+    }
+}

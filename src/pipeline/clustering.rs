@@ -189,6 +189,34 @@ fn link_down(sets: &mut DisjointSets, points: &[[f32; 3]], mask: &[bool], w: usi
     }
 }
 
+/// The straightforward form of [`grid`]: one pass over the frame joining
+/// each selected pixel to its right and three lower neighbours, one pixel
+/// pair at a time. Kept as the reference.
+pub fn reference(cloud: &PointCloud, mask: &[bool], tolerance_mm: f64, min_points: usize) -> Clusters {
+    let (w, h) = (cloud.width(), cloud.height());
+    let points = cloud.points();
+    let tol_sq = (tolerance_mm * tolerance_mm) as f32;
+    let mut parent = identity(points.len());
+    let mut sets = DisjointSets { parent: &mut parent, offset: 0 };
+    for row in 0..h {
+        for col in 0..w {
+            let i = row * w + col;
+            if !mask[i] {
+                continue;
+            }
+            let right = (col + 1 < w).then_some(i + 1);
+            let below =
+                (row + 1 < h).then(|| (col.saturating_sub(1)..=(col + 1).min(w - 1)).map(move |c| i + w - col + c));
+            for j in right.into_iter().chain(below.into_iter().flatten()) {
+                if mask[j] && close(&points[i], &points[j], tol_sq) {
+                    sets.union(i as u32, j as u32);
+                }
+            }
+        }
+    }
+    collect(parent, |i| mask[i], min_points)
+}
+
 /// Exact Euclidean clustering of the points selected by `mask`.
 pub fn euclidean(cloud: &PointCloud, mask: &[bool], tolerance_mm: f64, min_points: usize) -> Clusters {
     let points = cloud.points();
@@ -346,6 +374,126 @@ mod tests {
         assert_eq!(one, sizes(3));
         assert_eq!(one, sizes(7));
         assert_eq!(one.len(), 4, "the band and three blocks");
+    }
+
+    /// A small deterministic generator, so failures reproduce.
+    struct Mix(u64);
+
+    impl Mix {
+        fn next(&mut self) -> u64 {
+            self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
+            let mut z = self.0;
+            z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+            z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+            z ^ (z >> 31)
+        }
+
+        /// Uniform in [0, 1).
+        fn unit(&mut self) -> f32 {
+            (self.next() >> 40) as f32 / (1u64 << 24) as f32
+        }
+
+        fn chance(&mut self, p: f32) -> bool {
+            self.unit() < p
+        }
+    }
+
+    /// A `w x h` frame of a few tilted plates with depth steps, noise,
+    /// dropouts (NaN points, some of them still selected), isolated pixels
+    /// and pixels pushed just past the tolerance. `mask_p` is the chance
+    /// that a valid pixel is selected.
+    fn noisy_frame(seed: u64, w: usize, h: usize, mask_p: f32) -> (PointCloud, Vec<bool>) {
+        let mut rng = Mix(seed);
+        let step = 0.4f32;
+        let mut pts = Vec::with_capacity(w * h);
+        let mut mask = Vec::with_capacity(w * h);
+        for row in 0..h {
+            for col in 0..w {
+                let (x, y) = (col as f32 * step, row as f32 * step);
+                // Plates split by a diagonal, a vertical and a horizontal
+                // step, one of them smaller than the tolerance.
+                let mut z = 600.0 + 0.05 * x;
+                if col + row / 2 > w {
+                    z += 3.0;
+                }
+                if col > w / 3 && row > h / 2 {
+                    z += 0.3;
+                }
+                if row > 2 * h / 3 {
+                    z -= 5.0;
+                }
+                z += (rng.unit() - 0.5) * 0.2;
+                if rng.chance(0.03) {
+                    // Just beyond reach of every neighbour.
+                    z += 1.2;
+                }
+                let valid = !rng.chance(0.04);
+                let p = if valid { [x, y, z] } else { [f32::NAN; 3] };
+                pts.push(p);
+                mask.push(if valid { rng.chance(mask_p) } else { rng.chance(0.1) });
+            }
+        }
+        let cloud = PointCloud::organized(w, h, pts).unwrap();
+        (cloud, mask)
+    }
+
+    fn assert_same(got: &Clusters, expected: &Clusters, what: &str) {
+        if let Some(i) = (0..expected.labels.len()).find(|&i| got.labels.get(i) != expected.labels.get(i)) {
+            panic!("{what}: pixel {i} labelled {:?}, expected {}", got.labels.get(i), expected.labels[i]);
+        }
+        assert_eq!(got.labels.len(), expected.labels.len(), "{what}: labels");
+        assert_eq!(got.members, expected.members, "{what}: members");
+    }
+
+    #[test]
+    fn grid_matches_the_reference_on_noisy_frames() {
+        let pools: Vec<_> =
+            [1, 2, 3, 7].map(|n| (n, rayon::ThreadPoolBuilder::new().num_threads(n).build().unwrap())).into();
+        let mut seed = 1;
+        for (w, h) in [(1, 9), (9, 1), (2, 2), (5, 17), (31, 23), (64, 50), (17, 101)] {
+            for mask_p in [1.0, 0.97, 0.8, 0.5] {
+                for tol in [0.5, 0.62, 1.0] {
+                    seed += 1;
+                    let (cloud, mask) = noisy_frame(seed, w, h, mask_p);
+                    for min_points in [1, 3] {
+                        let expected = reference(&cloud, &mask, tol, min_points);
+                        for (n, pool) in &pools {
+                            let got = pool.install(|| grid(&cloud, &mask, tol, min_points));
+                            let what = format!("{w} x {h}, seed {seed}, {mask_p} selected, {tol} mm, {n} threads");
+                            assert_same(&got, &expected, &what);
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn grid_matches_the_reference_on_patterns() {
+        // Checkerboards join only diagonally, stripes only along their
+        // direction; a lone pixel at each corner; seams cut through all.
+        let (w, h) = (24usize, 40usize);
+        let patterns: [fn(usize, usize) -> bool; 5] = [
+            |r, c| (r + c) % 2 == 0,
+            |r, _| r % 2 == 0,
+            |_, c| c % 3 != 1,
+            |r, c| (r / 3 + c / 3) % 2 == 0,
+            |r, c| (r == 0 || r == 39) && (c == 0 || c == 23) || (r % 5 == 2 && c % 4 == 1),
+        ];
+        for (k, selected) in patterns.iter().enumerate() {
+            let pts = (0..h * w).map(|i| [(i % w) as f32 * 0.3, (i / w) as f32 * 0.3, 600.0]).collect();
+            let cloud = PointCloud::organized(w, h, pts).unwrap();
+            let mask: Vec<bool> = (0..h * w).map(|i| selected(i / w, i % w)).collect();
+            // 0.35 mm reaches straight neighbours only, 0.45 mm diagonals too.
+            for tol in [0.35, 0.45] {
+                let expected = reference(&cloud, &mask, tol, 1);
+                for n in [1, 2, 5] {
+                    let pool = rayon::ThreadPoolBuilder::new().num_threads(n).build().unwrap();
+                    let got = pool.install(|| grid(&cloud, &mask, tol, 1));
+                    assert_same(&got, &expected, &format!("pattern {k}, {tol} mm, {n} threads"));
+                }
+            }
+        }
     }
 
     #[test]

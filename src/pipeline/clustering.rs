@@ -49,17 +49,12 @@ impl DisjointSets<'_> {
     }
 
     fn union(&mut self, a: u32, b: u32) {
-        let ra = self.find(a);
-        self.union_root(ra, b);
+        let (ra, rb) = (self.find(a), self.find(b));
+        self.link(ra, rb);
     }
 
-    /// Joins the set of `b` to the set whose root is `ra`; returns the
-    /// joint root. Callers joining one point to several keep its root.
-    fn union_root(&mut self, ra: u32, b: u32) -> u32 {
-        let rb = self.find(b);
-        if ra == rb {
-            return ra;
-        }
+    /// Joins the sets of roots `ra` and `rb`; returns the joint root.
+    fn link(&mut self, ra: u32, rb: u32) -> u32 {
         // Smaller root wins, so roots do not depend on visit order.
         let (lo, hi) = if ra < rb { (ra, rb) } else { (rb, ra) };
         self.parent[(hi - self.offset) as usize] = lo;
@@ -119,74 +114,131 @@ fn close(a: &[f32; 3], b: &[f32; 3], tol_sq: f32) -> bool {
 /// Clusters the points of an organized frame selected by `mask`, joining
 /// 8-adjacent pixels whose points are within `tolerance_mm`.
 ///
-/// Horizontal strips are labelled in parallel, each in its own part of
-/// the parent array, then joined across the rows where strips meet.
+/// Each row is cut into runs of selected pixels whose horizontal
+/// neighbours are within the tolerance; a run is one union-find node (its
+/// first pixel), and its other pixels point at it. Rows are then joined
+/// run against run: two touching runs need one close pixel pair, and none
+/// when they are already joined, so plates cost a check per run and not
+/// three per pixel. Horizontal strips are labelled in parallel, each in
+/// its own part of the parent array, then joined across the rows where
+/// strips meet.
 pub fn grid(cloud: &PointCloud, mask: &[bool], tolerance_mm: f64, min_points: usize) -> Clusters {
     let (w, h) = (cloud.width(), cloud.height());
     let points = cloud.points();
     let tol_sq = (tolerance_mm * tolerance_mm) as f32;
-    let mut parent = identity(points.len());
+    if w == 0 || h == 0 {
+        return collect(Vec::new(), |_| false, min_points);
+    }
+    // Every slot is written below; zeroed memory costs no pass of its own.
+    let mut parent = vec![0u32; points.len()];
     let strip_rows = h.div_ceil(rayon::current_num_threads().max(1)).max(1);
     parent.par_chunks_mut(strip_rows * w).enumerate().for_each(|(k, chunk)| {
         let first_row = k * strip_rows;
-        let last_row = (first_row + strip_rows).min(h) - 1;
         let mut sets = DisjointSets { parent: chunk, offset: (first_row * w) as u32 };
-        for row in first_row..=last_row {
-            link_row(&mut sets, points, mask, w, row, tol_sq, row < last_row);
+        let (mut above, mut runs) = (Vec::new(), Vec::new());
+        for r in 0..sets.parent.len() / w {
+            let base = (first_row + r) * w;
+            row_runs(&points[base..base + w], &mask[base..base + w], tol_sq, &mut runs);
+            point_at_runs(&mut sets.parent[r * w..(r + 1) * w], base as u32, &runs);
+            if r > 0 {
+                link_rows(&mut sets, points, base - w, w, &above, &runs, tol_sq);
+            }
+            std::mem::swap(&mut above, &mut runs);
         }
     });
     let mut sets = DisjointSets { parent: &mut parent, offset: 0 };
+    let (mut above, mut below) = (Vec::new(), Vec::new());
     for seam_row in (strip_rows..h).step_by(strip_rows) {
-        link_down(&mut sets, points, mask, w, seam_row - 1, tol_sq);
+        let (a, b) = ((seam_row - 1) * w, seam_row * w);
+        row_runs(&points[a..b], &mask[a..b], tol_sq, &mut above);
+        row_runs(&points[b..b + w], &mask[b..b + w], tol_sq, &mut below);
+        link_rows(&mut sets, points, a, w, &above, &below, tol_sq);
     }
     collect(parent, |i| mask[i], min_points)
 }
 
-/// Joins each selected pixel of `row` to its right neighbour and, when
-/// `below` is set, to its three neighbours in the next row: half of the
-/// 8-neighbourhood, the rest is visited from the other side.
-fn link_row(
-    sets: &mut DisjointSets,
-    points: &[[f32; 3]],
-    mask: &[bool],
-    w: usize,
-    row: usize,
-    tol_sq: f32,
-    below: bool,
-) {
-    let base = row * w;
-    for col in 0..w {
-        let i = base + col;
-        if !mask[i] {
+/// Selected pixels of one row, columns `start..=end`, each within the
+/// tolerance of the next.
+#[derive(Debug, Clone, Copy)]
+struct Run {
+    start: u32,
+    end: u32,
+}
+
+/// The runs of one row, left to right.
+fn row_runs(points: &[[f32; 3]], mask: &[bool], tol_sq: f32, runs: &mut Vec<Run>) {
+    runs.clear();
+    let w = mask.len();
+    let mut col = 0;
+    while col < w {
+        if !mask[col] {
+            col += 1;
             continue;
         }
-        if col + 1 < w && mask[i + 1] && close(&points[i], &points[i + 1], tol_sq) {
-            sets.union(i as u32, (i + 1) as u32);
+        let start = col;
+        while col + 1 < w && mask[col + 1] && close(&points[col], &points[col + 1], tol_sq) {
+            col += 1;
         }
-    }
-    if below {
-        link_down(sets, points, mask, w, row, tol_sq);
+        runs.push(Run { start: start as u32, end: col as u32 });
+        col += 1;
     }
 }
 
-/// Joins each selected pixel of `row` to its three neighbours below.
-fn link_down(sets: &mut DisjointSets, points: &[[f32; 3]], mask: &[bool], w: usize, row: usize, tol_sq: f32) {
-    let base = row * w;
-    for col in 0..w {
-        let i = base + col;
-        if !mask[i] {
-            continue;
+/// Points the pixels of each run at its first pixel and leaves the others
+/// as roots of their own; `base` is the row's first pixel index.
+fn point_at_runs(parent_row: &mut [u32], base: u32, runs: &[Run]) {
+    let mut col = 0;
+    for run in runs {
+        let (s, e) = (run.start as usize, run.end as usize);
+        for (c, slot) in parent_row[col..s].iter_mut().enumerate() {
+            *slot = base + (col + c) as u32;
         }
-        let below = i + w;
-        let (lo, hi) = (below - (col > 0) as usize, below + (col + 1 < w) as usize);
-        let mut root = None;
-        for j in lo..=hi {
-            if mask[j] && close(&points[i], &points[j], tol_sq) {
-                let ri = *root.get_or_insert_with(|| sets.find(i as u32));
-                root = Some(sets.union_root(ri, j as u32));
+        parent_row[s..=e].fill(base + run.start);
+        col = e + 1;
+    }
+    for (c, slot) in parent_row[col..].iter_mut().enumerate() {
+        *slot = base + (col + c) as u32;
+    }
+}
+
+/// Joins the runs of the row starting at pixel `base` to the 8-adjacent
+/// runs of the row below.
+fn link_rows(
+    sets: &mut DisjointSets,
+    points: &[[f32; 3]],
+    base: usize,
+    w: usize,
+    above: &[Run],
+    below: &[Run],
+    tol_sq: f32,
+) {
+    let (top, bottom) = (&points[base..base + w], &points[base + w..base + 2 * w]);
+    // Below runs ending left of a run's down-left neighbour cannot touch
+    // it or any run to its right.
+    let mut first = 0;
+    for a in above {
+        while first < below.len() && below[first].end + 1 < a.start {
+            first += 1;
+        }
+        let mut ra = sets.find(base as u32 + a.start);
+        for b in below[first..].iter().take_while(|b| b.start <= a.end + 1) {
+            let rb = sets.find((base + w) as u32 + b.start);
+            if ra != rb && touch(top, bottom, *a, *b, tol_sq) {
+                ra = sets.link(ra, rb);
             }
         }
     }
+}
+
+/// Whether some pixel of run `a` in row `top` is within the tolerance of
+/// an 8-adjacent pixel of run `b` in the row below.
+fn touch(top: &[[f32; 3]], bottom: &[[f32; 3]], a: Run, b: Run, tol_sq: f32) -> bool {
+    let (b0, b1) = (b.start as usize, b.end as usize);
+    let cols = (a.start as usize).max(b0.saturating_sub(1))..=(a.end as usize).min(b1 + 1);
+    cols.into_iter().any(|c| {
+        let p = &top[c];
+        (c.saturating_sub(1).max(b0)..=(c + 1).min(b1)).any(|d| close(p, &bottom[d], tol_sq))
+    })
 }
 
 /// The straightforward form of [`grid`]: one pass over the frame joining

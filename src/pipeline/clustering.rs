@@ -13,7 +13,7 @@
 //!   even when their gap is far below the tolerance (the paper's 2 mm
 //!   merges I-butt plates closer than about 1 mm).
 
-use std::collections::HashMap;
+use std::collections::{BTreeMap, HashMap};
 
 use rayon::prelude::*;
 
@@ -67,42 +67,79 @@ fn identity(n: usize) -> Vec<u32> {
 }
 
 /// Turns a union-find over `n` slots into labelled clusters of the slots
-/// that are in the set, keeping clusters of at least `min_points`. The
-/// parent array becomes the label array, so no frame-sized array is added.
-fn collect(parent: Vec<u32>, in_set: impl Fn(usize) -> bool + Sync, min_points: usize) -> Clusters {
+/// that are in the set, keeping clusters of at least `min_points`. Sets
+/// must hold only such slots. The parent array becomes the label array,
+/// so no frame-sized array is added.
+fn collect(parent: Vec<u32>, in_set: impl Fn(usize) -> bool, min_points: usize) -> Clusters {
     let n = parent.len();
-    let mut parent = parent;
+    let mut ids = parent;
     // A parent never has a larger index than its child (unions hang the
-    // larger root under the smaller, halving only shortens paths), so one
-    // forward pass leaves every slot pointing straight at its root.
-    for i in 0..n {
-        parent[i] = parent[parent[i] as usize];
-    }
-    let mut sizes = vec![0u32; n];
-    for i in (0..n).filter(|&i| in_set(i)) {
-        sizes[parent[i] as usize] += 1;
-    }
-    let mut roots: Vec<u32> = (0..n as u32).filter(|&r| sizes[r as usize] as usize >= min_points.max(1)).collect();
-    // Largest first; ties by the smallest member, which is the root.
-    roots.sort_by(|&a, &b| sizes[b as usize].cmp(&sizes[a as usize]).then(a.cmp(&b)));
-    let mut members: Vec<Vec<u32>> = roots.iter().map(|&r| Vec::with_capacity(sizes[r as usize] as usize)).collect();
-    // The size table becomes the root-to-label table.
-    let mut label_of_root = sizes;
-    label_of_root.fill(UNCLUSTERED);
-    for (label, &r) in roots.iter().enumerate() {
-        label_of_root[r as usize] = label as u32;
-    }
-    let mut labels = parent;
-    labels.par_iter_mut().enumerate().for_each(|(i, slot)| {
-        *slot = if in_set(i) { label_of_root[*slot as usize] } else { UNCLUSTERED };
-    });
-    drop(label_of_root);
-    for (i, &label) in labels.iter().enumerate() {
-        if label != UNCLUSTERED {
-            members[label as usize].push(i as u32);
+    // larger root under the smaller, halving only shortens paths), so in
+    // one forward pass every parent is already numbered when its children
+    // are reached: a root opens the next set number, the others take their
+    // parent's. Sets are thus numbered by their smallest slot. Slots that
+    // share a parent are in one set, and the grid's runs are such slots
+    // side by side, so they are numbered together.
+    let mut sizes: Vec<u32> = Vec::new();
+    let mut i = 0;
+    while i < n {
+        if !in_set(i) {
+            ids[i] = UNCLUSTERED;
+            i += 1;
+            continue;
         }
+        let p = ids[i] as usize;
+        debug_assert!(p <= i, "slot {i} hangs under the later slot {p}");
+        let id = if p == i {
+            sizes.push(0);
+            sizes.len() as u32 - 1
+        } else {
+            ids[p]
+        };
+        let end = i + 1 + leading(&ids[i + 1..], p as u32);
+        ids[i..end].fill(id);
+        sizes[id as usize] += (end - i) as u32;
+        i = end;
+    }
+    let mut kept: Vec<u32> = (0..sizes.len() as u32).filter(|&k| sizes[k as usize] as usize >= min_points).collect();
+    // Largest first; ties by the smallest member, which numbered the set.
+    kept.sort_by(|&a, &b| sizes[b as usize].cmp(&sizes[a as usize]).then(a.cmp(&b)));
+    let mut members: Vec<Vec<u32>> = kept.iter().map(|&k| Vec::with_capacity(sizes[k as usize] as usize)).collect();
+    // The size table becomes the set-to-label table.
+    let mut label_of = sizes;
+    label_of.fill(UNCLUSTERED);
+    for (label, &k) in kept.iter().enumerate() {
+        label_of[k as usize] = label as u32;
+    }
+    let mut labels = ids;
+    let mut i = 0;
+    while i < n {
+        let id = labels[i];
+        let end = i + 1 + leading(&labels[i + 1..], id);
+        if id != UNCLUSTERED {
+            let label = label_of[id as usize];
+            labels[i..end].fill(label);
+            if label != UNCLUSTERED {
+                members[label as usize].extend(i as u32..end as u32);
+            }
+        }
+        i = end;
     }
     Clusters { labels, members }
+}
+
+/// How many slots at the start of `slots` hold `value`.
+fn leading<T: Copy + PartialEq>(slots: &[T], value: T) -> usize {
+    // Whole blocks first, compared without branching so they vectorise.
+    const BLOCK: usize = 16;
+    let mut n = 0;
+    for block in slots.chunks_exact(BLOCK) {
+        if !block.iter().fold(true, |all, &s| all & (s == value)) {
+            break;
+        }
+        n += BLOCK;
+    }
+    n + slots[n..].iter().take_while(|&&s| s == value).count()
 }
 
 #[inline]
@@ -243,7 +280,8 @@ fn touch(top: &[[f32; 3]], bottom: &[[f32; 3]], a: Run, b: Run, tol_sq: f32) -> 
 
 /// The straightforward form of [`grid`]: one pass over the frame joining
 /// each selected pixel to its right and three lower neighbours, one pixel
-/// pair at a time. Kept as the reference.
+/// pair at a time, then members grouped by their root in a map. Kept as
+/// the reference.
 pub fn reference(cloud: &PointCloud, mask: &[bool], tolerance_mm: f64, min_points: usize) -> Clusters {
     let (w, h) = (cloud.width(), cloud.height());
     let points = cloud.points();
@@ -266,7 +304,19 @@ pub fn reference(cloud: &PointCloud, mask: &[bool], tolerance_mm: f64, min_point
             }
         }
     }
-    collect(parent, |i| mask[i], min_points)
+    let mut groups: BTreeMap<u32, Vec<u32>> = BTreeMap::new();
+    for i in (0..points.len()).filter(|&i| mask[i]) {
+        groups.entry(sets.find(i as u32)).or_default().push(i as u32);
+    }
+    let mut members: Vec<Vec<u32>> = groups.into_values().filter(|m| m.len() >= min_points).collect();
+    members.sort_by(|a, b| b.len().cmp(&a.len()).then(a[0].cmp(&b[0])));
+    let mut labels = vec![UNCLUSTERED; points.len()];
+    for (label, m) in members.iter().enumerate() {
+        for &i in m {
+            labels[i as usize] = label as u32;
+        }
+    }
+    Clusters { labels, members }
 }
 
 /// Exact Euclidean clustering of the points selected by `mask`.
@@ -502,7 +552,7 @@ mod tests {
         let pools: Vec<_> =
             [1, 2, 3, 7].map(|n| (n, rayon::ThreadPoolBuilder::new().num_threads(n).build().unwrap())).into();
         let mut seed = 1;
-        for (w, h) in [(1, 9), (9, 1), (2, 2), (5, 17), (31, 23), (64, 50), (17, 101)] {
+        for (w, h) in [(1, 9), (9, 1), (2, 2), (5, 17), (31, 23), (64, 50), (17, 101), (150, 12)] {
             for mask_p in [1.0, 0.97, 0.8, 0.5] {
                 for tol in [0.5, 0.62, 1.0] {
                     seed += 1;

@@ -172,10 +172,10 @@ pub fn grid(cloud: &PointCloud, mask: &[bool], tolerance_mm: f64, min_points: us
     parent.par_chunks_mut(strip_rows * w).enumerate().for_each(|(k, chunk)| {
         let first_row = k * strip_rows;
         let mut sets = DisjointSets { parent: chunk, offset: (first_row * w) as u32 };
-        let (mut above, mut runs) = (Vec::new(), Vec::new());
+        let (mut above, mut runs, mut links) = (Vec::new(), Vec::new(), Vec::new());
         for r in 0..sets.parent.len() / w {
             let base = (first_row + r) * w;
-            row_runs(&points[base..base + w], &mask[base..base + w], tol_sq, &mut runs);
+            row_runs(&points[base..base + w], &mask[base..base + w], tol_sq, &mut links, &mut runs);
             point_at_runs(&mut sets.parent[r * w..(r + 1) * w], base as u32, &runs);
             if r > 0 {
                 link_rows(&mut sets, points, base - w, w, &above, &runs, tol_sq);
@@ -184,11 +184,11 @@ pub fn grid(cloud: &PointCloud, mask: &[bool], tolerance_mm: f64, min_points: us
         }
     });
     let mut sets = DisjointSets { parent: &mut parent, offset: 0 };
-    let (mut above, mut below) = (Vec::new(), Vec::new());
+    let (mut above, mut below, mut links) = (Vec::new(), Vec::new(), Vec::new());
     for seam_row in (strip_rows..h).step_by(strip_rows) {
         let (a, b) = ((seam_row - 1) * w, seam_row * w);
-        row_runs(&points[a..b], &mask[a..b], tol_sq, &mut above);
-        row_runs(&points[b..b + w], &mask[b..b + w], tol_sq, &mut below);
+        row_runs(&points[a..b], &mask[a..b], tol_sq, &mut links, &mut above);
+        row_runs(&points[b..b + w], &mask[b..b + w], tol_sq, &mut links, &mut below);
         link_rows(&mut sets, points, a, w, &above, &below, tol_sq);
     }
     collect(parent, |i| mask[i], min_points)
@@ -202,22 +202,26 @@ struct Run {
     end: u32,
 }
 
-/// The runs of one row, left to right.
-fn row_runs(points: &[[f32; 3]], mask: &[bool], tol_sq: f32, runs: &mut Vec<Run>) {
-    runs.clear();
+/// The runs of one row, left to right; `links` is scratch space.
+fn row_runs(points: &[[f32; 3]], mask: &[bool], tol_sq: f32, links: &mut Vec<bool>, runs: &mut Vec<Run>) {
     let w = mask.len();
+    // Whether each pixel joins its right neighbour, for the whole row at
+    // once: without an exit in the loop it vectorises.
+    links.clear();
+    links.resize(w.saturating_sub(1), false);
+    for (((link, p), q), m) in links.iter_mut().zip(points).zip(&points[1..]).zip(mask.windows(2)) {
+        *link = m[0] & m[1] & close(p, q, tol_sq);
+    }
+    runs.clear();
     let mut col = 0;
     while col < w {
         if !mask[col] {
             col += 1;
             continue;
         }
-        let start = col;
-        while col + 1 < w && mask[col + 1] && close(&points[col], &points[col + 1], tol_sq) {
-            col += 1;
-        }
-        runs.push(Run { start: start as u32, end: col as u32 });
-        col += 1;
+        let end = col + leading(&links[col.min(links.len())..], true);
+        runs.push(Run { start: col as u32, end: end as u32 });
+        col = end + 1;
     }
 }
 

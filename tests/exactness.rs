@@ -1,11 +1,13 @@
 //! The fast grid paths classify every point exactly as the straightforward
 //! KD-tree implementations do, on crops of realistic simulated frames
-//! (noise, dropouts, mixed pixels, bevels, shadows), for both methods.
+//! (noise, dropouts, mixed pixels, bevels, shadows), for both methods, and
+//! cluster the plane points exactly as the per-pixel union-find does.
 
 use weldseam::camera::CameraModel;
 use weldseam::cloud::PointCloud;
 use weldseam::geometry::Vec3;
 use weldseam::joint::JointType;
+use weldseam::pipeline::clustering;
 use weldseam::pipeline::edge_points::{self, EdgeCriterion, FullCount, Plate};
 use weldseam::pipeline::neighbours::NeighbourSearch;
 use weldseam::pipeline::orientation::dominant_normal;
@@ -57,6 +59,31 @@ fn plane_and_edge_criteria_match_the_kdtree_reference_point_for_point() {
             fast.sort_unstable();
             assert_eq!(fast, edge_points::reference(&tree, plane, plate, &edge), "{joint} edge points");
             assert!(!fast.is_empty(), "{joint}: the crop holds edges");
+        }
+    }
+}
+
+#[test]
+fn grid_clustering_matches_the_per_pixel_reference() {
+    let camera = CameraModel::default();
+    let pools: Vec<_> = [1, 3].map(|n| rayon::ThreadPoolBuilder::new().num_threads(n).build().unwrap()).into();
+    for (joint, distance, tilt) in
+        [(JointType::VButt, 620.0, 12.0), (JointType::IButt, 500.0, 10.0), (JointType::Lap, 900.0, 25.0)]
+    {
+        let cloud = crop(joint, distance, tilt, 400, 300);
+        let grid = NeighbourSearch::new(&cloud, &camera, 1.0);
+        let normal = dominant_normal(&cloud, &grid, camera.fx(), 5.0).unwrap_or_else(Vec3::z);
+        let criterion = RobustPlaneCriterion { normal, min_ratio: 0.8, max_angle_deg: 20.0 };
+        let mask = plane_points::robust_criterion(&grid, &criterion).mask;
+        for (tolerance, min_points) in [(1.0, 30), (0.3, 1)] {
+            let expected = clustering::reference(&cloud, &mask, tolerance, min_points);
+            assert!(expected.members.len() >= 2, "{joint}: the crop holds more than one cluster");
+            for pool in &pools {
+                let got = pool.install(|| clustering::grid(&cloud, &mask, tolerance, min_points));
+                let what = format!("{joint}, {tolerance} mm, {} threads", pool.current_num_threads());
+                assert!(got.labels == expected.labels, "{what}: labels differ");
+                assert_eq!(got.members, expected.members, "{what}: members");
+            }
         }
     }
 }

@@ -11,7 +11,9 @@
 //!   pixels join when their points are within the tolerance. A gap between
 //!   plates always leaves a line of non-plane pixels, so plates separate
 //!   even when their gap is far below the tolerance (the paper's 2 mm
-//!   merges I-butt plates closer than about 1 mm).
+//!   merges I-butt plates closer than about 1 mm). It joins whole runs of
+//!   pixels at a time and gives exactly the clusters of [`reference()`],
+//!   which joins pixel by pixel.
 
 use std::collections::{BTreeMap, HashMap};
 

@@ -55,20 +55,60 @@ trait Threshold: Sync {
     fn needed(&self, i: usize, cache: &mut FullCountCache) -> Option<(f64, f64)>;
 
     /// [`Threshold::needed`] for the `LANES` pixels from `(col, row)`, all
-    /// inside the row.
-    fn needed_block(
-        &self,
-        grid: &Grid,
-        row: usize,
-        col: usize,
-        cache: &mut FullCountCache,
-    ) -> [Option<(f64, f64)>; LANES] {
+    /// inside the row, in integers.
+    fn needed_block(&self, grid: &Grid, row: usize, col: usize, cache: &mut FullCountCache) -> BlockNeeds {
         let first = row * grid.width() + col;
-        std::array::from_fn(|l| self.needed(first + l, cache))
+        let mut needs = BlockNeeds::REJECTED;
+        for l in 0..LANES {
+            needs.set(l, self.needed(first + l, cache));
+        }
+        needs
     }
 
     /// The plane orientation whose ellipse the counts scan first.
     fn scan_normal(&self) -> Vec3;
+}
+
+/// What the lanes of a block need, in integers: a count is whole, so
+/// `count >= t` is `count >= ceil(t)`. Plain arrays rather than options
+/// of float pairs: building those lane by lane and reading them back whole
+/// stalled on every lane.
+#[derive(Debug, Clone, Copy)]
+struct BlockNeeds {
+    /// The least neighbour count that makes the lane a plane point, or
+    /// [`BlockNeeds::SKIP`] when it was rejected before counting.
+    count: [u32; LANES],
+    /// The full-plane count, saturated, recorded for the edge stage.
+    full: [u16; LANES],
+}
+
+impl BlockNeeds {
+    /// A lane rejected before counting.
+    const SKIP: u32 = u32::MAX;
+    /// A count no window reaches: the need of a lane whose threshold is
+    /// beyond any count (or not a number).
+    const NEVER: u32 = u32::MAX - 1;
+    const REJECTED: BlockNeeds = BlockNeeds { count: [Self::SKIP; LANES], full: [0; LANES] };
+
+    /// Records [`Threshold::needed`]'s answer for lane `l`.
+    #[inline(always)]
+    fn set(&mut self, l: usize, needed: Option<(f64, f64)>) {
+        if let Some((t, full)) = needed {
+            self.count[l] = if t <= 0.0 {
+                0
+            } else if t < Self::NEVER as f64 {
+                crate::geometry::ceil_i64(t) as u32
+            } else {
+                Self::NEVER
+            };
+            self.full[l] = full.clamp(0.0, u16::MAX as f64) as u16;
+        }
+    }
+
+    #[inline(always)]
+    fn counted(&self, l: usize) -> bool {
+        self.count[l] != Self::SKIP
+    }
 }
 
 /// Eq. 14: `N_r >= N'min(L)` with `L` the point's depth (Eq. 13).
@@ -134,13 +174,7 @@ impl Threshold for RobustThreshold<'_> {
     /// The normal test of eight lanes at once on the coordinate planes,
     /// when all eight use the same step and have all four neighbours; any
     /// other block is tested lane by lane.
-    fn needed_block(
-        &self,
-        grid: &Grid,
-        row: usize,
-        col: usize,
-        cache: &mut FullCountCache,
-    ) -> [Option<(f64, f64)>; LANES] {
+    fn needed_block(&self, grid: &Grid, row: usize, col: usize, cache: &mut FullCountCache) -> BlockNeeds {
         let (w, h) = (grid.width(), grid.height());
         let first = row * w + col;
         let fx = self.search.camera().fx();
@@ -156,7 +190,11 @@ impl Threshold for RobustThreshold<'_> {
             || normal_step(fx, z_near as f64, radius) != step
             || normal_step(fx, z_far as f64, radius) != step
         {
-            return std::array::from_fn(|l| self.needed(first + l, cache));
+            let mut needs = BlockNeeds::REJECTED;
+            for l in 0..LANES {
+                needs.set(l, self.needed(first + l, cache));
+            }
+            return needs;
         }
         #[cfg(target_arch = "x86_64")]
         let facts = if std::arch::is_x86_feature_detected!("avx2") {
@@ -170,13 +208,16 @@ impl Threshold for RobustThreshold<'_> {
         let LaneFacts { complete, facing, keys } = facts;
         let wanted = std::array::from_fn(|l| complete[l] && facing[l]);
         let full = self.full_counts.get_lanes(&keys, wanted, cache);
-        std::array::from_fn(|l| {
+        let mut needs = BlockNeeds::REJECTED;
+        for l in 0..LANES {
             if !complete[l] {
                 // A missing neighbour: the one-sided rule, lane by lane.
-                return self.needed(first + l, cache);
+                needs.set(l, self.needed(first + l, cache));
+            } else if facing[l] && full[l] > 0.0 {
+                needs.set(l, Some((self.criterion.min_ratio * full[l], full[l])));
             }
-            (facing[l] && full[l] > 0.0).then_some((self.criterion.min_ratio * full[l], full[l]))
-        })
+        }
+        needs
     }
 }
 
@@ -340,12 +381,16 @@ fn classify_block<T: Threshold>(
     let w = grid.width();
     let lanes = LANES.min(w - col);
     let first = row * w + col;
-    let needed: [Option<(f64, f64)>; LANES] = if lanes == LANES {
+    let needs = if lanes == LANES {
         threshold.needed_block(grid, row, col, &mut scratch.cache)
     } else {
-        std::array::from_fn(|l| if l < lanes { threshold.needed(first + l, &mut scratch.cache) } else { None })
+        let mut needs = BlockNeeds::REJECTED;
+        for l in 0..lanes {
+            needs.set(l, threshold.needed(first + l, &mut scratch.cache));
+        }
+        needs
     };
-    let Some(anchor) = (0..lanes).find(|&l| needed[l].is_some()) else { return };
+    let Some(anchor) = (0..lanes).find(|&l| needs.counted(l)) else { return };
     // The block's partial counts over the ellipse of its first candidate:
     // lower bounds for every lane. An interior point finds nearly all its
     // neighbours there; widening the ellipse for the few that noise moves
@@ -369,11 +414,11 @@ fn classify_block<T: Threshold>(
     }
     // A lane short of its threshold on the ellipse is counted again over
     // its whole exact window; the whole block at once when it can be.
-    let short = (0..lanes).any(|l| needed[l].is_some_and(|(t, _)| (partial[l] as f64) < t));
+    let short = (0..lanes).any(|l| needs.counted(l) && partial[l] < needs.count[l]);
     let mut exact: Option<[u32; LANES]> = None;
     if short && lanes == LANES {
         let windows = (0..lanes)
-            .filter(|&l| needed[l].is_some())
+            .filter(|&l| needs.counted(l))
             .map(|l| search.camera().neighbour_window(search.cloud().points()[first + l], search.radius_mm()));
         let (wx, wy) = windows.fold((0, 0), |(a, b), (x, y)| (a.max(x), b.max(y)));
         let (wx, wy) = (wx as isize, wy as isize);
@@ -387,14 +432,17 @@ fn classify_block<T: Threshold>(
         }
     }
     for l in 0..lanes {
-        let Some((t, full)) = needed[l] else { continue };
+        if !needs.counted(l) {
+            continue;
+        }
+        let need = needs.count[l];
         let count = match exact {
-            _ if partial[l] as f64 >= t => partial[l],
+            _ if partial[l] >= need => partial[l],
             Some(counts) => counts[l],
             None => search.count(first + l, |_| true),
         };
-        out.full[l] = full.clamp(0.0, u16::MAX as f64) as u16;
-        if count as f64 >= t {
+        out.full[l] = needs.full[l];
+        if count >= need {
             out.mask[l] = true;
             out.counts[l] = count.min(u16::MAX as u32) as u16;
         }

@@ -172,39 +172,40 @@ impl Threshold for RobustThreshold<'_> {
     }
 
     /// The normal test of eight lanes at once on the coordinate planes,
-    /// when all eight use the same step and have all four neighbours; any
-    /// other block is tested lane by lane.
+    /// for the lanes that have all four neighbours at their step (once per
+    /// step when the block straddles a step boundary); any other lane, and
+    /// a block near the image border, is tested lane by lane.
     fn needed_block(&self, grid: &Grid, row: usize, col: usize, cache: &mut FullCountCache) -> BlockNeeds {
         let (w, h) = (grid.width(), grid.height());
         let first = row * w + col;
         let fx = self.search.camera().fx();
         let radius = self.search.radius_mm();
         let pz = grid.lanes(first)[2];
-        // The step only falls as depth grows, so equal steps at the
-        // nearest and farthest lane mean one step for every valid lane.
+        // The step only falls as depth grows, so the nearest and farthest
+        // lanes bound every valid lane's step; at most two steps occur
+        // where a step boundary crosses the block.
         let (z_near, z_far) = pz.iter().fold((f32::INFINITY, f32::NEG_INFINITY), |(a, b), &z| (a.min(z), b.max(z)));
-        let step = normal_step(fx, pz[0] as f64, radius);
-        let fits = col >= step && col + LANES - 1 + step < w && row >= step && row + step < h;
-        if !fits
-            || !pz[0].is_finite()
-            || normal_step(fx, z_near as f64, radius) != step
-            || normal_step(fx, z_far as f64, radius) != step
-        {
+        let (step_near, step_far) = (normal_step(fx, z_near as f64, radius), normal_step(fx, z_far as f64, radius));
+        let fits = col >= step_near && col + LANES - 1 + step_near < w && row >= step_near && row + step_near < h;
+        if !fits || !z_near.is_finite() {
             let mut needs = BlockNeeds::REJECTED;
             for l in 0..LANES {
                 needs.set(l, self.needed(first + l, cache));
             }
             return needs;
         }
-        #[cfg(target_arch = "x86_64")]
-        let facts = if std::arch::is_x86_feature_detected!("avx2") {
-            // SAFETY: the CPU supports AVX2, checked just above.
-            unsafe { self.lane_facts_avx2(grid, first, step) }
-        } else {
-            self.lane_facts(grid, first, step)
-        };
-        #[cfg(not(target_arch = "x86_64"))]
-        let facts = self.lane_facts(grid, first, step);
+        let mut facts = self.lane_facts_dispatch(grid, first, step_far);
+        if step_near != step_far {
+            let near = self.lane_facts_dispatch(grid, first, step_near);
+            for (l, &z) in pz.iter().enumerate() {
+                if normal_step(fx, z as f64, radius) == step_near {
+                    facts.complete[l] = near.complete[l];
+                    facts.facing[l] = near.facing[l];
+                }
+            }
+        }
+        // An invalid lane's step is 1 whatever its neighbours: it reads as
+        // incomplete either way and takes the scalar path below.
         let LaneFacts { complete, facing, keys } = facts;
         let wanted = std::array::from_fn(|l| complete[l] && facing[l]);
         let full = self.full_counts.get_lanes(&keys, wanted, cache);
@@ -221,8 +222,8 @@ impl Threshold for RobustThreshold<'_> {
     }
 }
 
-/// What a block's lanes need before counting, when all of them use one
-/// normal step and the block's neighbours at that step are in the image.
+/// What a block's lanes need before counting, for one normal step whose
+/// neighbours of the block are in the image.
 struct LaneFacts {
     /// The lane and its four neighbours are valid.
     complete: [bool; LANES],
@@ -257,6 +258,17 @@ impl RobustThreshold<'_> {
             facing[l] = cross_agrees(cross(du, dv), [px[l], py[l], pz[l]], reference, cos_sq);
         }
         LaneFacts { complete, facing, keys: self.full_counts.keys_of_lanes(&centre) }
+    }
+
+    /// [`RobustThreshold::lane_facts`], compiled for AVX2 when the CPU has it.
+    #[inline(always)]
+    fn lane_facts_dispatch(&self, grid: &Grid, first: usize, step: usize) -> LaneFacts {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the CPU supports AVX2, checked just above.
+            return unsafe { self.lane_facts_avx2(grid, first, step) };
+        }
+        self.lane_facts(grid, first, step)
     }
 
     /// [`RobustThreshold::lane_facts`] compiled for eight-wide registers:

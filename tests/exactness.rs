@@ -87,3 +87,45 @@ fn grid_clustering_matches_the_per_pixel_reference() {
         }
     }
 }
+
+#[test]
+fn both_plates_in_one_pass_match_the_kdtree_reference_in_order() {
+    let camera = CameraModel::default();
+    let (w, h) = (300, 200);
+    let cloud = crop(JointType::IButt, 560.0, 12.0, w, h);
+    let grid = NeighbourSearch::new(&cloud, &camera, 1.0);
+    let tree = NeighbourSearch::kdtree(&cloud, &camera, 1.0);
+    let normal = dominant_normal(&cloud, &grid, camera.fx(), 5.0).unwrap_or_else(Vec3::z);
+    let plane =
+        plane_points::robust_criterion(&grid, &RobustPlaneCriterion { normal, min_ratio: 0.8, max_angle_deg: 20.0 });
+    // Two plates meeting along a slanted line, with a third label between
+    // them, and small islands of each inside the other: an island's
+    // windows hold mostly the other plate, so mixing up the plates'
+    // member counts would skip its edges.
+    let labels: Vec<u32> = (0..cloud.len())
+        .map(|i| {
+            let (col, row) = (i % w, i / w);
+            let island = col % 25 < 3 && row % 25 < 3;
+            match (plane.mask[i], (col + row / 3) % 160, island) {
+                (false, _, _) => u32::MAX,
+                (true, 75..80, _) => 2,
+                (true, 0..75, false) | (true, 80.., true) => 7,
+                (true, _, _) => 4,
+            }
+        })
+        .collect();
+    let members =
+        |label: u32| -> Vec<u32> { (0..cloud.len() as u32).filter(|&i| labels[i as usize] == label).collect() };
+    let (a, b) = (members(7), members(4));
+    let plates = [Plate { labels: &labels, label: 7, members: &a }, Plate { labels: &labels, label: 4, members: &b }];
+    for criterion in
+        [EdgeCriterion { full: FullCount::Plane, ratio: 0.75 }, EdgeCriterion { full: FullCount::Frontal, ratio: 0.5 }]
+    {
+        let both = edge_points::edge_points_of_plates(&grid, &plane, plates, &criterion);
+        for (k, plate) in plates.into_iter().enumerate() {
+            assert_eq!(both[k], edge_points::reference(&tree, &plane, plate, &criterion), "plate {k}");
+            assert_eq!(both[k], edge_points::edge_points(&grid, &plane, plate, &criterion), "plate {k} alone");
+            assert!(both[k].len() > 50, "plate {k} has edges along the split");
+        }
+    }
+}

@@ -391,10 +391,12 @@ impl<'a> Run<'a> {
             Some(_) => EdgeCriterion { full: FullCount::Plane, ratio: cfg.edge_max_neighbour_ratio },
             None => EdgeCriterion { full: FullCount::Frontal, ratio: self.config.paper.edge_ratio },
         };
-        let edges: [Vec<u32>; 2] = std::array::from_fn(|k| {
-            let plate = edge_points::Plate { labels: &labels, label: k as u32, members: &workpiece.plates[k].members };
-            edge_points::edge_points(&search, &plane, plate, &criterion)
+        let plates = std::array::from_fn(|k| edge_points::Plate {
+            labels: &labels,
+            label: k as u32,
+            members: &workpiece.plates[k].members,
         });
+        let edges = edge_points::edge_points_of_plates(&search, &plane, plates, &criterion);
         self.stats.edge_points = [edges[0].len(), edges[1].len()];
         self.clock.lap(Stage::EdgePoints);
 

@@ -426,6 +426,8 @@ struct GridCount<'a> {
     width: usize,
     height: usize,
     radius_sq: f32,
+    /// Whether the CPU runs AVX2, checked once.
+    avx2: bool,
 }
 
 impl<'a> GridCount<'a> {
@@ -439,6 +441,10 @@ impl<'a> GridCount<'a> {
             width: cloud.width(),
             height: cloud.height(),
             radius_sq: radius * radius,
+            #[cfg(target_arch = "x86_64")]
+            avx2: std::arch::is_x86_feature_detected!("avx2"),
+            #[cfg(not(target_arch = "x86_64"))]
+            avx2: false,
         }
     }
 
@@ -452,7 +458,10 @@ impl<'a> GridCount<'a> {
     /// threshold.
     fn is_edge(&self, i: usize, label: u32, threshold: f64) -> bool {
         #[cfg(target_arch = "x86_64")]
-        {
+        if self.avx2 {
+            // SAFETY: the CPU runs AVX2, checked in `new`.
+            unsafe { avx2::is_edge(self, i, label, threshold) }
+        } else {
             // SAFETY: SSE2 is part of the x86_64 baseline.
             unsafe { sse2::is_edge(self, i, label, threshold) }
         }
@@ -705,6 +714,88 @@ mod sse2 {
     }
 }
 
+/// The exact counts eight pixels at a time, where the CPU runs AVX2.
+#[cfg(target_arch = "x86_64")]
+mod avx2 {
+    use std::arch::x86_64::*;
+
+    use super::sse2::pick;
+    use super::{GridCount, Point, count_scalar, sse2};
+
+    /// [`GridCount::is_edge`], eight pixels at a time on spans that hold
+    /// as many, four on shorter ones.
+    #[target_feature(enable = "avx2")]
+    pub fn is_edge(grid: &GridCount, i: usize, label: u32, threshold: f64) -> bool {
+        grid.is_edge_by(
+            i,
+            label,
+            threshold,
+            #[inline(always)]
+            |p, points, labels, label, radius_sq| match points.len().min(labels.len()) {
+                8.. => count_span(p, points, labels, label, radius_sq),
+                4.. => sse2::count_span(p, points, labels, label, radius_sq),
+                _ => count_scalar(p, points, labels, label, radius_sq),
+            },
+        )
+    }
+
+    /// [`sse2::count_span`] eight pixels at a time, for at least eight
+    /// pixels: each 128-bit half of the registers holds four points laid
+    /// out as the SSE2 form has them, so the same in-lane shuffles regroup
+    /// them.
+    #[target_feature(enable = "avx2")]
+    pub fn count_span(p: &Point, points: &[Point], labels: &[u32], label: u32, radius_sq: f32) -> u32 {
+        let n = points.len().min(labels.len());
+        let (px, py, pz) = (_mm256_set1_ps(p[0]), _mm256_set1_ps(p[1]), _mm256_set1_ps(p[2]));
+        let (r2, wanted) = (_mm256_set1_ps(radius_sq), _mm256_set1_epi32(label as i32));
+        let count_at = |at: usize| -> __m256i {
+            let coords = points[at..at + 8].as_flattened();
+            let labels = &labels[at..at + 8];
+            // SAFETY: `coords` holds 24 floats and `labels` eight u32;
+            // unaligned loads need no alignment.
+            let (a, b, c, l) = unsafe {
+                let half = |k: usize| coords[k..].as_ptr();
+                (
+                    _mm256_loadu2_m128(half(12), half(0)),
+                    _mm256_loadu2_m128(half(16), half(4)),
+                    _mm256_loadu2_m128(half(20), half(8)),
+                    _mm256_loadu_si256(labels.as_ptr().cast()),
+                )
+            };
+            let x = _mm256_shuffle_ps::<{ pick(0, 3, 0, 2) }>(a, _mm256_shuffle_ps::<{ pick(2, 2, 1, 1) }>(b, c));
+            let y = _mm256_shuffle_ps::<{ pick(0, 2, 0, 2) }>(
+                _mm256_shuffle_ps::<{ pick(1, 1, 0, 0) }>(a, b),
+                _mm256_shuffle_ps::<{ pick(3, 3, 2, 2) }>(b, c),
+            );
+            let z = _mm256_shuffle_ps::<{ pick(0, 2, 0, 2) }>(
+                _mm256_shuffle_ps::<{ pick(2, 2, 1, 1) }>(a, b),
+                _mm256_shuffle_ps::<{ pick(0, 0, 3, 3) }>(c, c),
+            );
+            let (dx, dy, dz) = (_mm256_sub_ps(x, px), _mm256_sub_ps(y, py), _mm256_sub_ps(z, pz));
+            let d2 = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(dx, dx), _mm256_mul_ps(dy, dy)), _mm256_mul_ps(dz, dz));
+            let near = _mm256_castps_si256(_mm256_cmp_ps::<_CMP_LE_OQ>(d2, r2));
+            _mm256_and_si256(near, _mm256_cmpeq_epi32(l, wanted))
+        };
+        // A counted lane is all ones, -1: subtracting counts it.
+        let mut counts = _mm256_setzero_si256();
+        for at in (0..n - 7).step_by(8) {
+            counts = _mm256_sub_epi32(counts, count_at(at));
+        }
+        let done = n / 8 * 8;
+        if done < n {
+            // Lanes 0..done + 8 - n of the last eight pixels were counted above.
+            let fresh =
+                _mm256_cmpgt_epi32(_mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7), _mm256_set1_epi32((done + 7 - n) as i32));
+            counts = _mm256_sub_epi32(counts, _mm256_and_si256(fresh, count_at(n - 8)));
+        }
+        let sum = _mm_add_epi32(_mm256_castsi256_si128(counts), _mm256_extracti128_si256::<1>(counts));
+        let mut lanes = [0u32; 4];
+        // SAFETY: `lanes` holds exactly four u32.
+        unsafe { _mm_storeu_si128(lanes.as_mut_ptr().cast(), sum) };
+        lanes.iter().sum()
+    }
+}
+
 /// The pixels of one window row labelled `label` and within the radius of
 /// `p`, by [`super::neighbours`]' predicate term for term.
 fn count_scalar(p: &Point, points: &[Point], labels: &[u32], label: u32, radius_sq: f32) -> u32 {
@@ -830,7 +921,7 @@ mod tests {
     }
 
     #[test]
-    fn four_pixel_counts_equal_the_scalar_predicate() {
+    fn simd_counts_equal_the_scalar_predicate() {
         // Distances on both sides of the radius, exact ties, invalid
         // points and other labels, over every span length to 23 and every
         // start, so that each lane position meets each case.
@@ -857,8 +948,14 @@ mod tests {
                 #[cfg(target_arch = "x86_64")]
                 if len >= 4 {
                     // SAFETY: SSE2 is part of the x86_64 baseline.
-                    let quads = unsafe { sse2::count_span(&p, &points[span.clone()], &labels[span], 1, 1.0) };
+                    let quads = unsafe { sse2::count_span(&p, &points[span.clone()], &labels[span.clone()], 1, 1.0) };
                     assert_eq!(quads, scalar, "{start} + {len}");
+                }
+                #[cfg(target_arch = "x86_64")]
+                if len >= 8 && std::arch::is_x86_feature_detected!("avx2") {
+                    // SAFETY: the CPU runs AVX2, checked just above.
+                    let octets = unsafe { avx2::count_span(&p, &points[span.clone()], &labels[span], 1, 1.0) };
+                    assert_eq!(octets, scalar, "{start} + {len}");
                 }
                 counted += scalar;
             }
@@ -952,5 +1049,32 @@ mod tests {
         for opened in [check([1], 3), check([0, 1], 4), check([1, 0], 5)] {
             assert!((20..600).contains(&opened), "{opened} opened");
         }
+    }
+
+    #[test]
+    fn every_exact_count_path_decides_alike() {
+        let camera = CameraModel::default();
+        let cloud = plate();
+        let search = NeighbourSearch::new(&cloud, &camera, 1.0);
+        let (_, labels, members) = setup(&cloud, &search);
+        let grid = GridCount::new(&search, &labels);
+        let mut edges = 0;
+        for &i in &members {
+            for threshold in [10.0, 20.0, 31.5, 40.0] {
+                let i = i as usize;
+                let scalar = grid.is_edge_by(i, 0, threshold, count_scalar);
+                #[cfg(target_arch = "x86_64")]
+                {
+                    // SAFETY: SSE2 is part of the x86_64 baseline.
+                    assert_eq!(unsafe { sse2::is_edge(&grid, i, 0, threshold) }, scalar, "{i} at {threshold}");
+                    if grid.avx2 {
+                        // SAFETY: the CPU runs AVX2, checked in `new`.
+                        assert_eq!(unsafe { avx2::is_edge(&grid, i, 0, threshold) }, scalar, "{i} at {threshold}");
+                    }
+                }
+                edges += scalar as usize;
+            }
+        }
+        assert!(edges > 100 && edges < 3 * members.len(), "{edges}");
     }
 }

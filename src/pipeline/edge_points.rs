@@ -303,9 +303,7 @@ impl<const N: usize> Band<N> {
         let Some(corner) = members_corner(line, &grid.points[first..first + w], self.plate_labels) else {
             return;
         };
-        // A window as large as the image already reaches every pixel.
-        let (wx, wy) = grid.window(corner);
-        let (wx, wy) = (wx.min(w), wy.min(h));
+        let (wx, wy) = grid.row_window(corner);
         self.move_to(grid.labels, row.saturating_sub(wy)..(row + wy + 1).min(h));
         let mut sum = 0u32;
         for (prefix, &column) in self.prefix[1..].iter_mut().zip(&self.columns) {
@@ -371,10 +369,7 @@ impl<const N: usize> Band<N> {
 
 /// The corner of a row's members: their least depth and largest `|x|` and
 /// `|y|`, NaN skipped; `None` when the row has no member. Its window holds
-/// every member's own ([`CameraModel::neighbour_window`] grows towards the
-/// camera and off axis).
-///
-/// [`CameraModel::neighbour_window`]: crate::camera::CameraModel::neighbour_window
+/// every member's own ([`GridCount::row_window`]).
 fn members_corner<const N: usize>(labels: &[u32], points: &[Point], plate_labels: [u32; N]) -> Option<Point> {
     let n = labels.len().min(points.len());
     #[cfg(target_arch = "x86_64")]
@@ -450,6 +445,21 @@ impl<'a> GridCount<'a> {
 
     fn window(&self, p: Point) -> (usize, usize) {
         self.search.camera().neighbour_window(p, self.search.radius_mm())
+    }
+
+    /// A window holding the own window of every point whose depth is at
+    /// least `corner`'s and whose `|x|` and `|y|` are at most its: the
+    /// corner's own, which grows towards the camera and off axis. Near
+    /// the camera, where that growth has a cut-off, and absurdly far off
+    /// axis, where it could overflow, the whole image.
+    fn row_window(&self, corner: Point) -> (usize, usize) {
+        let [x, y, z] = corner.map(|v| v as f64);
+        if z <= 2.0 * self.search.radius_mm() || x > 1e6 * z || y > 1e6 * z {
+            return (self.width, self.height);
+        }
+        let (wx, wy) = self.window(corner);
+        // A window as large as the image already reaches every pixel.
+        (wx.min(self.width), wy.min(self.height))
     }
 
     /// True when point `i` has at most `threshold` neighbours labelled

@@ -214,9 +214,10 @@ impl<'a> FullCounts<'a> {
         ((tile_row as i16 as u16 as u64) << 48) | ((tile_col as i16 as u16 as u64) << 32) | (depth_step as u32 as u64)
     }
 
-    /// The lattice count for a key, from the memo or computed.
+    /// The full-plane count of the points with memo key `key` (from
+    /// [`FullCounts::keys_of_lanes`]), from the memo or computed.
     #[inline]
-    fn value_of(&self, key: u64, cache: &mut FullCountCache) -> f64 {
+    pub fn value_of(&self, key: u64, cache: &mut FullCountCache) -> f64 {
         let slot = (key.wrapping_mul(0x9e37_79b9_7f4a_7c15) >> (64 - CACHE_SLOTS.trailing_zeros())) as usize;
         if cache.slots[slot].0 == key {
             return cache.slots[slot].1;
@@ -251,27 +252,6 @@ impl<'a> FullCounts<'a> {
     #[inline(always)]
     pub fn keys_of_lanes(&self, [xs, ys, zs]: &[[f32; LANES]; 3]) -> [u64; LANES] {
         std::array::from_fn(|l| self.key(&[xs[l], ys[l], zs[l]]))
-    }
-
-    /// [`FullCounts::get`] of the lanes whose `keys` came from
-    /// [`FullCounts::keys_of_lanes`], for the lanes where `wanted` is set
-    /// (0 for the others). Neighbouring pixels mostly share a key, so a
-    /// lane equal to the one before it skips the memo.
-    #[inline]
-    pub fn get_lanes(&self, keys: &[u64; LANES], wanted: [bool; LANES], cache: &mut FullCountCache) -> [f64; LANES] {
-        let mut out = [0.0; LANES];
-        let mut last: Option<(u64, f64)> = None;
-        for l in 0..LANES {
-            if !wanted[l] {
-                continue;
-            }
-            out[l] = match last {
-                Some((key, value)) if key == keys[l] => value,
-                _ => self.value_of(keys[l], cache),
-            };
-            last = Some((keys[l], out[l]));
-        }
-        out
     }
 }
 

@@ -93,21 +93,41 @@ impl BlockNeeds {
     /// Records [`Threshold::needed`]'s answer for lane `l`.
     #[inline(always)]
     fn set(&mut self, l: usize, needed: Option<(f64, f64)>) {
-        if let Some((t, full)) = needed {
-            self.count[l] = if t <= 0.0 {
-                0
-            } else if t < Self::NEVER as f64 {
-                crate::geometry::ceil_i64(t) as u32
-            } else {
-                Self::NEVER
-            };
-            self.full[l] = full.clamp(0.0, u16::MAX as f64) as u16;
-        }
+        self.set_lane(l, LaneNeed::of(needed));
+    }
+
+    #[inline(always)]
+    fn set_lane(&mut self, l: usize, need: LaneNeed) {
+        self.count[l] = need.count;
+        self.full[l] = need.full;
     }
 
     #[inline(always)]
     fn counted(&self, l: usize) -> bool {
         self.count[l] != Self::SKIP
+    }
+}
+
+/// One lane of [`BlockNeeds`].
+#[derive(Debug, Clone, Copy)]
+struct LaneNeed {
+    count: u32,
+    full: u16,
+}
+
+impl LaneNeed {
+    /// [`Threshold::needed`]'s answer in integers.
+    #[inline(always)]
+    fn of(needed: Option<(f64, f64)>) -> LaneNeed {
+        let Some((t, full)) = needed else { return LaneNeed { count: BlockNeeds::SKIP, full: 0 } };
+        let count = if t <= 0.0 {
+            0
+        } else if t < BlockNeeds::NEVER as f64 {
+            crate::geometry::ceil_i64(t) as u32
+        } else {
+            BlockNeeds::NEVER
+        };
+        LaneNeed { count, full: full.clamp(0.0, u16::MAX as f64) as u16 }
     }
 }
 
@@ -207,16 +227,29 @@ impl Threshold for RobustThreshold<'_> {
         // An invalid lane's step is 1 whatever its neighbours: it reads as
         // incomplete either way and takes the scalar path below.
         let LaneFacts { complete, facing, keys } = facts;
-        let wanted = std::array::from_fn(|l| complete[l] && facing[l]);
-        let full = self.full_counts.get_lanes(&keys, wanted, cache);
         let mut needs = BlockNeeds::REJECTED;
+        // Neighbouring pixels mostly share a memo key, and so what they
+        // need: a lane with the key before it copies that lane's answer.
+        let mut last: Option<(u64, LaneNeed)> = None;
         for l in 0..LANES {
             if !complete[l] {
                 // A missing neighbour: the one-sided rule, lane by lane.
                 needs.set(l, self.needed(first + l, cache));
-            } else if facing[l] && full[l] > 0.0 {
-                needs.set(l, Some((self.criterion.min_ratio * full[l], full[l])));
+                continue;
             }
+            if !facing[l] {
+                continue;
+            }
+            let need = match last {
+                Some((key, need)) if key == keys[l] => need,
+                _ => {
+                    let full = self.full_counts.value_of(keys[l], cache);
+                    let need = LaneNeed::of((full > 0.0).then_some((self.criterion.min_ratio * full, full)));
+                    last = Some((keys[l], need));
+                    need
+                }
+            };
+            needs.set_lane(l, need);
         }
         needs
     }
@@ -369,7 +402,7 @@ impl Scratch {
     /// to serve it: the spans only choose where counting starts, so a
     /// slightly different ellipse costs at most a fallback count.
     fn spans_serve(&self, z: f32, col: usize) -> bool {
-        self.spans_for.is_some_and(|(z0, c0)| (z - z0).abs() <= 0.005 * z0 && col < c0 + 64)
+        self.spans_for.is_some_and(|(z0, c0)| (z - z0).abs() <= 0.005 * z0 && col < c0 + 256)
     }
 }
 

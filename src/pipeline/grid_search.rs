@@ -52,6 +52,12 @@ impl Grid {
         [take(&self.xs), take(&self.ys), take(&self.zs)]
     }
 
+    /// Point `i`, row-major, from the planes.
+    #[inline(always)]
+    pub fn point(&self, i: usize) -> [f32; 3] {
+        [self.xs[i], self.ys[i], self.zs[i]]
+    }
+
     pub fn width(&self) -> usize {
         self.width
     }

@@ -238,7 +238,13 @@ impl<'a> FullCounts<'a> {
 
     /// The full-plane count of point `i`, which must be valid.
     pub fn get(&self, i: usize, cache: &mut FullCountCache) -> f64 {
-        let p = self.cloud.points()[i];
+        self.get_point(&self.cloud.points()[i], cache)
+    }
+
+    /// [`FullCounts::get`] of a valid point of this cloud, given by value.
+    #[inline]
+    pub fn get_point(&self, p: &Point, cache: &mut FullCountCache) -> f64 {
+        let p = *p;
         if !self.cloud.is_organized() {
             let n = &self.normal;
             let density = self.camera.plane_density_at([p[0] as f64, p[1] as f64, p[2] as f64], [n.x, n.y, n.z]);

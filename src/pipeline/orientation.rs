@@ -11,6 +11,7 @@ use crate::cloud::PointCloud;
 use crate::geometry::Vec3;
 use crate::geometry::fit::Moments;
 
+use super::grid_search::Grid;
 use super::neighbours::NeighbourSearch;
 
 /// Estimates the unit normal of the surface at point `i`, oriented away
@@ -29,14 +30,53 @@ pub fn normal_step(fx: f64, z: f64, radius_mm: f64) -> usize {
     crate::geometry::round_i64(radius_mm * fx / z).clamp(1, 8) as usize
 }
 
+/// The points of a pixel grid by index: the cloud itself, or the fast
+/// path's coordinate planes, which are the ones in cache while it runs.
+pub trait GridPoints {
+    fn width(&self) -> usize;
+    fn height(&self) -> usize;
+    /// Point `i`, row-major; invalid points are NaN.
+    fn point(&self, i: usize) -> [f32; 3];
+}
+
+impl GridPoints for PointCloud {
+    fn width(&self) -> usize {
+        PointCloud::width(self)
+    }
+
+    fn height(&self) -> usize {
+        PointCloud::height(self)
+    }
+
+    #[inline(always)]
+    fn point(&self, i: usize) -> [f32; 3] {
+        self.points()[i]
+    }
+}
+
+impl GridPoints for Grid {
+    fn width(&self) -> usize {
+        Grid::width(self)
+    }
+
+    fn height(&self) -> usize {
+        Grid::height(self)
+    }
+
+    #[inline(always)]
+    fn point(&self, i: usize) -> [f32; 3] {
+        Grid::point(self, i)
+    }
+}
+
 /// True when the grid normal at point `i` (see [`local_normal`]) is within
 /// the angle whose cosine is `cos_limit` of the unit normal `reference`.
 /// The same test as `local_normal(..).dot(reference) >= cos_limit`, in
 /// single precision without a square root: it runs on every pixel.
-pub fn grid_normal_agrees(cloud: &PointCloud, i: usize, step: usize, reference: &Vec3, cos_limit: f64) -> bool {
-    let Some(n) = grid_cross(cloud, i, step) else { return false };
+pub fn grid_normal_agrees<G: GridPoints>(grid: &G, i: usize, step: usize, reference: &Vec3, cos_limit: f64) -> bool {
+    let Some(n) = grid_cross(grid, i, step) else { return false };
     let reference = [reference.x as f32, reference.y as f32, reference.z as f32];
-    cross_agrees(n, cloud.points()[i], reference, (cos_limit * cos_limit) as f32)
+    cross_agrees(n, grid.point(i), reference, (cos_limit * cos_limit) as f32)
 }
 
 /// Whether the unnormalised normal `n` at point `p`, turned away from the
@@ -74,15 +114,17 @@ fn grid_normal(cloud: &PointCloud, i: usize, step: usize) -> Option<Vec3> {
 
 /// The unnormalised cross product of the central differences at pixel `i`.
 #[inline]
-fn grid_cross(cloud: &PointCloud, i: usize, step: usize) -> Option<[f32; 3]> {
-    let (w, h) = (cloud.width(), cloud.height());
-    let points = cloud.points();
+fn grid_cross<G: GridPoints>(grid: &G, i: usize, step: usize) -> Option<[f32; 3]> {
+    let (w, h) = (grid.width(), grid.height());
     let (col, row) = (i % w, i / w);
-    let centre = points[i];
+    let centre = grid.point(i);
     if !centre[0].is_finite() {
         return None;
     }
-    let valid = |j: usize| points[j][0].is_finite().then_some(points[j]);
+    let valid = |j: usize| {
+        let p = grid.point(j);
+        p[0].is_finite().then_some(p)
+    };
     let sub = |a: [f32; 3], b: [f32; 3]| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
     let difference = |before: Option<[f32; 3]>, after: Option<[f32; 3]>| match (before, after) {
         (Some(b), Some(a)) => Some(sub(a, b)),

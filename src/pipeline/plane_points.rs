@@ -24,7 +24,7 @@ use crate::geometry::{Vec3, vec3};
 
 use super::grid_search::{Grid, LANES, Span};
 use super::neighbours::{FullCountCache, FullCounts, NeighbourSearch, PixelEllipse};
-use super::orientation::{cross, cross_agrees, grid_normal_agrees, local_normal, normal_step};
+use super::orientation::{GridPoints, cross, cross_agrees, grid_normal_agrees, local_normal, normal_step};
 
 /// The plane points and, for each, a lower bound of its neighbour count
 /// and the full-plane count it was measured against (the edge criterion
@@ -167,19 +167,38 @@ struct RobustThreshold<'a> {
     cos_limit: f64,
 }
 
+impl RobustThreshold<'_> {
+    /// [`Threshold::needed`] of point `i` of an organized cloud, read from
+    /// `grid`: the cloud itself, or its coordinate planes, which the fast
+    /// path has in cache where the cloud's rows above and below are not.
+    #[inline]
+    fn needed_on_grid<G: GridPoints>(&self, grid: &G, i: usize, cache: &mut FullCountCache) -> Option<(f64, f64)> {
+        let p = grid.point(i);
+        if !p[0].is_finite() {
+            return None;
+        }
+        let step = normal_step(self.search.camera().fx(), p[2] as f64, self.search.radius_mm());
+        if !grid_normal_agrees(grid, i, step, &self.criterion.normal, self.cos_limit) {
+            return None;
+        }
+        let full = self.full_counts.get_point(&p, cache);
+        (full > 0.0).then_some((self.criterion.min_ratio * full, full))
+    }
+}
+
 impl Threshold for RobustThreshold<'_> {
     fn needed(&self, i: usize, cache: &mut FullCountCache) -> Option<(f64, f64)> {
         let cloud = self.search.cloud();
+        if cloud.is_organized() {
+            return self.needed_on_grid(cloud, i, cache);
+        }
         let p = cloud.points()[i];
         if !p[0].is_finite() {
             return None;
         }
         let step = normal_step(self.search.camera().fx(), p[2] as f64, self.search.radius_mm());
-        let facing = if cloud.is_organized() {
-            grid_normal_agrees(cloud, i, step, &self.criterion.normal, self.cos_limit)
-        } else {
-            local_normal(cloud, self.search, i, step).is_some_and(|n| n.dot(&self.criterion.normal) >= self.cos_limit)
-        };
+        let facing =
+            local_normal(cloud, self.search, i, step).is_some_and(|n| n.dot(&self.criterion.normal) >= self.cos_limit);
         if !facing {
             return None;
         }
@@ -210,7 +229,7 @@ impl Threshold for RobustThreshold<'_> {
         if !fits || !z_near.is_finite() {
             let mut needs = BlockNeeds::REJECTED;
             for l in 0..LANES {
-                needs.set(l, self.needed(first + l, cache));
+                needs.set(l, self.needed_on_grid(grid, first + l, cache));
             }
             return needs;
         }
@@ -234,7 +253,7 @@ impl Threshold for RobustThreshold<'_> {
         for l in 0..LANES {
             if !complete[l] {
                 // A missing neighbour: the one-sided rule, lane by lane.
-                needs.set(l, self.needed(first + l, cache));
+                needs.set(l, self.needed_on_grid(grid, first + l, cache));
                 continue;
             }
             if !facing[l] {
@@ -469,8 +488,11 @@ fn classify_block<T: Threshold>(
         let (wx, wy) = (wx as isize, wy as isize);
         // The union of the lanes' exact windows: counting over more pixels
         // than a lane's window still gives its exact count.
+        // Rows beyond the top or bottom hold no neighbours, so leaving
+        // them out keeps the count exact along those borders.
+        let rows = (-wy).max(-(row as isize))..=wy.min((grid.height() - 1 - row) as isize);
         scratch.window.clear();
-        scratch.window.extend((-wy..=wy).map(|dv| Span { dv, du_lo: -wx, du_hi: wx }));
+        scratch.window.extend(rows.map(|dv| Span { dv, du_lo: -wx, du_hi: wx }));
         if grid.spans_fit(col, row, &scratch.window) {
             let radius_sq = (search.radius_mm() * search.radius_mm()) as f32;
             exact = Some(grid.count_block(col, row, &scratch.window, radius_sq));

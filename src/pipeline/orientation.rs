@@ -69,6 +69,54 @@ impl GridPoints for Grid {
     }
 }
 
+/// [`normal_step`] for single-precision depths by comparison alone: the
+/// step only falls as depth grows, so it is one plus the number of
+/// breakpoints a depth lies below. The breakpoints are found by bisecting
+/// the bit patterns of positive floats against `normal_step` itself, so
+/// the table answers exactly as the function does.
+#[derive(Debug, Clone, Copy)]
+pub struct StepTable {
+    /// `below[k]`: the least positive depth whose step is at most `k + 1`;
+    /// depths under it take a step of at least `k + 2`.
+    below: [f32; 7],
+    fx: f64,
+    radius_mm: f64,
+}
+
+impl StepTable {
+    pub fn new(fx: f64, radius_mm: f64) -> StepTable {
+        let step = |bits: u32| normal_step(fx, f32::from_bits(bits) as f64, radius_mm);
+        let below = std::array::from_fn(|k| {
+            // Least bit pattern of a positive finite float with step <= k + 1.
+            let (mut lo, mut hi) = (1u32, f32::MAX.to_bits());
+            if step(hi) > k + 1 {
+                return f32::INFINITY;
+            }
+            while lo < hi {
+                let mid = lo + (hi - lo) / 2;
+                if step(mid) <= k + 1 {
+                    hi = mid;
+                } else {
+                    lo = mid + 1;
+                }
+            }
+            f32::from_bits(lo)
+        });
+        StepTable { below, fx, radius_mm }
+    }
+
+    /// `normal_step(fx, z, radius_mm)`.
+    #[inline(always)]
+    pub fn step(&self, z: f32) -> usize {
+        if z > 0.0 {
+            1 + self.below.iter().filter(|&&b| z < b).count()
+        } else {
+            // Zero, negative or NaN: outside the monotone range.
+            normal_step(self.fx, z as f64, self.radius_mm)
+        }
+    }
+}
+
 /// True when the grid normal at point `i` (see [`local_normal`]) is within
 /// the angle whose cosine is `cos_limit` of the unit normal `reference`.
 /// The same test as `local_normal(..).dot(reference) >= cos_limit`, in
@@ -192,6 +240,22 @@ pub fn dominant_normal(cloud: &PointCloud, search: &NeighbourSearch, fx: f64, ag
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn step_table_answers_as_normal_step() {
+        for (fx, radius) in [(2742.857, 1.0), (1371.4, 1.0), (2742.857, 2.0), (5000.0, 0.5)] {
+            let table = StepTable::new(fx, radius);
+            let mut zs: Vec<f32> = (1..4000).map(|k| k as f32 * 0.5).collect();
+            // Every breakpoint and its neighbours, where rounding decides.
+            for b in table.below.iter().filter(|b| b.is_finite()) {
+                zs.extend([f32::from_bits(b.to_bits() - 1), *b, f32::from_bits(b.to_bits() + 1)]);
+            }
+            zs.extend([0.0, -1.0, f32::NAN, f32::INFINITY, f32::MIN_POSITIVE, 1e-30, 1e30]);
+            for z in zs {
+                assert_eq!(table.step(z), normal_step(fx, z as f64, radius), "fx {fx}, R {radius}, z {z}");
+            }
+        }
+    }
     use crate::camera::CameraModel;
 
     fn tilted_grid(n: Vec3) -> PointCloud {

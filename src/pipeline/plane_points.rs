@@ -24,7 +24,7 @@ use crate::geometry::{Vec3, vec3};
 
 use super::grid_search::{Grid, LANES, Span};
 use super::neighbours::{FullCountCache, FullCounts, NeighbourSearch, PixelEllipse};
-use super::orientation::{GridPoints, cross, cross_agrees, grid_normal_agrees, local_normal, normal_step};
+use super::orientation::{GridPoints, StepTable, cross, cross_agrees, grid_normal_agrees, local_normal, normal_step};
 
 /// The plane points and, for each, a lower bound of its neighbour count
 /// and the full-plane count it was measured against (the edge criterion
@@ -55,14 +55,14 @@ trait Threshold: Sync {
     fn needed(&self, i: usize, cache: &mut FullCountCache) -> Option<(f64, f64)>;
 
     /// [`Threshold::needed`] for the `LANES` pixels from `(col, row)`, all
-    /// inside the row, in integers.
-    fn needed_block(&self, grid: &Grid, row: usize, col: usize, cache: &mut FullCountCache) -> BlockNeeds {
+    /// inside the row, in integers, into `needs` (all rejected on entry).
+    /// Filled in place: a block returned by value was copied out whole
+    /// right after its lanes were written one by one, which stalls.
+    fn needed_block(&self, grid: &Grid, row: usize, col: usize, cache: &mut FullCountCache, needs: &mut BlockNeeds) {
         let first = row * grid.width() + col;
-        let mut needs = BlockNeeds::REJECTED;
         for l in 0..LANES {
             needs.set(l, self.needed(first + l, cache));
         }
-        needs
     }
 
     /// The plane orientation whose ellipse the counts scan first.
@@ -165,6 +165,19 @@ struct RobustThreshold<'a> {
     full_counts: FullCounts<'a>,
     criterion: RobustPlaneCriterion,
     cos_limit: f64,
+    steps: StepTable,
+}
+
+impl<'a> RobustThreshold<'a> {
+    fn new(search: &'a NeighbourSearch<'a>, criterion: &RobustPlaneCriterion) -> Self {
+        RobustThreshold {
+            search,
+            full_counts: FullCounts::new(search, &criterion.normal),
+            criterion: *criterion,
+            cos_limit: criterion.max_angle_deg.to_radians().cos(),
+            steps: StepTable::new(search.camera().fx(), search.radius_mm()),
+        }
+    }
 }
 
 impl RobustThreshold<'_> {
@@ -177,7 +190,7 @@ impl RobustThreshold<'_> {
         if !p[0].is_finite() {
             return None;
         }
-        let step = normal_step(self.search.camera().fx(), p[2] as f64, self.search.radius_mm());
+        let step = self.steps.step(p[2]);
         if !grid_normal_agrees(grid, i, step, &self.criterion.normal, self.cos_limit) {
             return None;
         }
@@ -214,30 +227,27 @@ impl Threshold for RobustThreshold<'_> {
     /// for the lanes that have all four neighbours at their step (once per
     /// step when the block straddles a step boundary); any other lane, and
     /// a block near the image border, is tested lane by lane.
-    fn needed_block(&self, grid: &Grid, row: usize, col: usize, cache: &mut FullCountCache) -> BlockNeeds {
+    fn needed_block(&self, grid: &Grid, row: usize, col: usize, cache: &mut FullCountCache, needs: &mut BlockNeeds) {
         let (w, h) = (grid.width(), grid.height());
         let first = row * w + col;
-        let fx = self.search.camera().fx();
-        let radius = self.search.radius_mm();
         let pz = grid.lanes(first)[2];
         // The step only falls as depth grows, so the nearest and farthest
         // lanes bound every valid lane's step; at most two steps occur
         // where a step boundary crosses the block.
         let (z_near, z_far) = pz.iter().fold((f32::INFINITY, f32::NEG_INFINITY), |(a, b), &z| (a.min(z), b.max(z)));
-        let (step_near, step_far) = (normal_step(fx, z_near as f64, radius), normal_step(fx, z_far as f64, radius));
+        let (step_near, step_far) = (self.steps.step(z_near), self.steps.step(z_far));
         let fits = col >= step_near && col + LANES - 1 + step_near < w && row >= step_near && row + step_near < h;
         if !fits || !z_near.is_finite() {
-            let mut needs = BlockNeeds::REJECTED;
             for l in 0..LANES {
                 needs.set(l, self.needed_on_grid(grid, first + l, cache));
             }
-            return needs;
+            return;
         }
         let mut facts = self.lane_facts_dispatch(grid, first, step_far);
         if step_near != step_far {
             let near = self.lane_facts_dispatch(grid, first, step_near);
             for (l, &z) in pz.iter().enumerate() {
-                if normal_step(fx, z as f64, radius) == step_near {
+                if self.steps.step(z) == step_near {
                     facts.complete[l] = near.complete[l];
                     facts.facing[l] = near.facing[l];
                 }
@@ -246,7 +256,6 @@ impl Threshold for RobustThreshold<'_> {
         // An invalid lane's step is 1 whatever its neighbours: it reads as
         // incomplete either way and takes the scalar path below.
         let LaneFacts { complete, facing, keys } = facts;
-        let mut needs = BlockNeeds::REJECTED;
         // Neighbouring pixels mostly share a memo key, and so what they
         // need: a lane with the key before it copies that lane's answer.
         let mut last: Option<(u64, LaneNeed)> = None;
@@ -270,7 +279,6 @@ impl Threshold for RobustThreshold<'_> {
             };
             needs.set_lane(l, need);
         }
-        needs
     }
 }
 
@@ -341,9 +349,7 @@ pub fn paper_criterion(cloud: &PointCloud, camera: &CameraModel, search: &Neighb
 /// the lattice count of a complete plane with the dominant normal through
 /// `p`, and the local normal within the angle limit.
 pub fn robust_criterion(search: &NeighbourSearch, criterion: &RobustPlaneCriterion) -> PlanePoints {
-    let cos_limit = criterion.max_angle_deg.to_radians().cos();
-    let full_counts = FullCounts::new(search, &criterion.normal);
-    classify(search, &RobustThreshold { search, full_counts, criterion: *criterion, cos_limit })
+    classify(search, &RobustThreshold::new(search, criterion))
 }
 
 /// The straightforward form of either criterion: one radius count per
@@ -351,9 +357,7 @@ pub fn robust_criterion(search: &NeighbourSearch, criterion: &RobustPlaneCriteri
 pub fn reference(search: &NeighbourSearch, paper: bool, criterion: &RobustPlaneCriterion) -> Vec<bool> {
     let cloud = search.cloud();
     let paper_t = PaperThreshold { cloud, camera: search.camera(), radius: search.radius_mm() };
-    let cos_limit = criterion.max_angle_deg.to_radians().cos();
-    let full_counts = FullCounts::new(search, &criterion.normal);
-    let robust_t = RobustThreshold { search, full_counts, criterion: *criterion, cos_limit };
+    let robust_t = RobustThreshold::new(search, criterion);
     let threshold: &dyn Threshold = if paper { &paper_t } else { &robust_t };
     (0..cloud.len())
         .into_par_iter()
@@ -410,11 +414,18 @@ struct Scratch {
     /// Depth and column of the point the spans were made for.
     spans_for: Option<(f32, usize)>,
     cache: FullCountCache,
+    needs: BlockNeeds,
 }
 
 impl Scratch {
     fn new() -> Self {
-        Scratch { spans: Vec::new(), window: Vec::new(), spans_for: None, cache: FullCountCache::default() }
+        Scratch {
+            spans: Vec::new(),
+            window: Vec::new(),
+            spans_for: None,
+            cache: FullCountCache::default(),
+            needs: BlockNeeds::REJECTED,
+        }
     }
 
     /// True when the spans were made for a point close enough to `(z, col)`
@@ -445,15 +456,15 @@ fn classify_block<T: Threshold>(
     let w = grid.width();
     let lanes = LANES.min(w - col);
     let first = row * w + col;
-    let needs = if lanes == LANES {
-        threshold.needed_block(grid, row, col, &mut scratch.cache)
+    scratch.needs = BlockNeeds::REJECTED;
+    if lanes == LANES {
+        threshold.needed_block(grid, row, col, &mut scratch.cache, &mut scratch.needs);
     } else {
-        let mut needs = BlockNeeds::REJECTED;
         for l in 0..lanes {
-            needs.set(l, threshold.needed(first + l, &mut scratch.cache));
+            scratch.needs.set(l, threshold.needed(first + l, &mut scratch.cache));
         }
-        needs
-    };
+    }
+    let needs = &scratch.needs;
     let Some(anchor) = (0..lanes).find(|&l| needs.counted(l)) else { return };
     // The block's partial counts over the ellipse of its first candidate:
     // lower bounds for every lane. An interior point finds nearly all its

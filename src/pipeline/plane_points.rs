@@ -22,7 +22,7 @@ use crate::camera::CameraModel;
 use crate::cloud::PointCloud;
 use crate::geometry::{Vec3, vec3};
 
-use super::grid_search::{Grid, LANES, Span};
+use super::grid_search::{Grid, LANES, Span, SpanExtent};
 use super::neighbours::{FullCountCache, FullCounts, NeighbourSearch, PixelEllipse};
 use super::orientation::{GridPoints, StepTable, cross, cross_agrees, grid_normal_agrees, local_normal, normal_step};
 
@@ -409,6 +409,7 @@ fn classify<T: Threshold>(search: &NeighbourSearch, threshold: &T) -> PlanePoint
 /// Scratch space reused across the blocks of a row.
 struct Scratch {
     spans: Vec<Span>,
+    spans_extent: Option<SpanExtent>,
     /// The union of a block's exact windows.
     window: Vec<Span>,
     /// Depth and column of the point the spans were made for.
@@ -421,6 +422,7 @@ impl Scratch {
     fn new() -> Self {
         Scratch {
             spans: Vec::new(),
+            spans_extent: None,
             window: Vec::new(),
             spans_for: None,
             cache: FullCountCache::default(),
@@ -456,6 +458,9 @@ fn classify_block<T: Threshold>(
     let w = grid.width();
     let lanes = LANES.min(w - col);
     let first = row * w + col;
+    // The predicate's radius, squared in single precision as the KD-tree
+    // path squares it.
+    let radius_sq = (search.radius_mm() * search.radius_mm()) as f32;
     scratch.needs = BlockNeeds::REJECTED;
     if lanes == LANES {
         threshold.needed_block(grid, row, col, &mut scratch.cache, &mut scratch.needs);
@@ -480,10 +485,10 @@ fn classify_block<T: Threshold>(
                 Some(e) => e.spans_into(&mut scratch.spans),
                 None => scratch.spans.clear(),
             }
+            scratch.spans_extent = SpanExtent::of(&scratch.spans);
             scratch.spans_for = Some((point[2], col));
         }
-        if !scratch.spans.is_empty() && grid.spans_fit(col, row, &scratch.spans) {
-            let radius_sq = (search.radius_mm() * search.radius_mm()) as f32;
+        if scratch.spans_extent.is_some_and(|e| grid.extent_fits(col, row, &e)) {
             partial = grid.count_block(col, row, &scratch.spans, radius_sq);
         }
     }
@@ -505,7 +510,6 @@ fn classify_block<T: Threshold>(
         scratch.window.clear();
         scratch.window.extend(rows.map(|dv| Span { dv, du_lo: -wx, du_hi: wx }));
         if grid.spans_fit(col, row, &scratch.window) {
-            let radius_sq = (search.radius_mm() * search.radius_mm()) as f32;
             exact = Some(grid.count_block(col, row, &scratch.window, radius_sq));
         }
     }
@@ -517,7 +521,10 @@ fn classify_block<T: Threshold>(
         let count = match exact {
             _ if partial[l] >= need => partial[l],
             Some(counts) => counts[l],
-            None => search.count(first + l, |_| true),
+            None => {
+                let window = search.camera().neighbour_window(search.cloud().points()[first + l], search.radius_mm());
+                grid.count_window(first + l, window, radius_sq)
+            }
         };
         out.full[l] = needs.full[l];
         if count >= need {

@@ -477,7 +477,7 @@ fn classify_block<T: Threshold>(
     // outside it cost a third more distances than the recounts it saved.
     let mut partial = [0u32; LANES];
     if lanes == LANES {
-        let point = search.cloud().points()[first + anchor];
+        let point = grid.point(first + anchor);
         if !scratch.spans_serve(point[2], col) {
             let ellipse =
                 PixelEllipse::new(search.camera(), &vec3(&point), &threshold.scan_normal(), search.radius_mm());
@@ -499,7 +499,7 @@ fn classify_block<T: Threshold>(
     if short && lanes == LANES {
         let windows = (0..lanes)
             .filter(|&l| needs.counted(l))
-            .map(|l| search.camera().neighbour_window(search.cloud().points()[first + l], search.radius_mm()));
+            .map(|l| search.camera().neighbour_window(grid.point(first + l), search.radius_mm()));
         let (wx, wy) = windows.fold((0, 0), |(a, b), (x, y)| (a.max(x), b.max(y)));
         let (wx, wy) = (wx as isize, wy as isize);
         // The union of the lanes' exact windows: counting over more pixels
@@ -522,7 +522,7 @@ fn classify_block<T: Threshold>(
             _ if partial[l] >= need => partial[l],
             Some(counts) => counts[l],
             None => {
-                let window = search.camera().neighbour_window(search.cloud().points()[first + l], search.radius_mm());
+                let window = search.camera().neighbour_window(grid.point(first + l), search.radius_mm());
                 grid.count_window(first + l, window, radius_sq)
             }
         };

@@ -66,11 +66,12 @@ pub struct Plate<'a> {
 /// exactly.
 pub fn edge_points(search: &NeighbourSearch, plane: &PlanePoints, plate: Plate, criterion: &EdgeCriterion) -> Vec<u32> {
     if !search.cloud().is_organized() {
-        let is_edge = |i: usize| {
-            let n = criterion.full.of(search, plane, i);
-            search.count(i, |j| plate.labels[j] == plate.label) as f64 <= criterion.ratio * n
-        };
-        return plate.members.par_iter().copied().filter(|&i| is_edge(i as usize)).collect();
+        return plate
+            .members
+            .par_iter()
+            .copied()
+            .filter(|&i| counted_edge(search, plane, plate, criterion, i))
+            .collect();
     }
     let [edges] = on_grid(search, plane, plate.labels, [plate.label], criterion);
     edges
@@ -93,16 +94,20 @@ pub fn edge_points_of_plates(
 
 /// The straightforward form: every member counted. Kept as the reference.
 pub fn reference(search: &NeighbourSearch, plane: &PlanePoints, plate: Plate, criterion: &EdgeCriterion) -> Vec<u32> {
-    plate
-        .members
-        .iter()
-        .copied()
-        .filter(|&i| {
-            let i = i as usize;
-            let n = criterion.full.of(search, plane, i);
-            search.count(i, |j| plate.labels[j] == plate.label) as f64 <= criterion.ratio * n
-        })
-        .collect()
+    plate.members.iter().copied().filter(|&i| counted_edge(search, plane, plate, criterion, i)).collect()
+}
+
+/// Eq. 15 for member `i` of `plate`, by counting its same-plate neighbours.
+fn counted_edge(
+    search: &NeighbourSearch,
+    plane: &PlanePoints,
+    plate: Plate,
+    criterion: &EdgeCriterion,
+    i: u32,
+) -> bool {
+    let i = i as usize;
+    let n = criterion.full.of(search, plane, i);
+    search.count(i, |j| plate.labels[j] == plate.label) as f64 <= criterion.ratio * n
 }
 
 /// Rows handed to a rayon job at a time: enough to amortise the first

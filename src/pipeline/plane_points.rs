@@ -60,9 +60,7 @@ trait Threshold: Sync {
     /// right after its lanes were written one by one, which stalls.
     fn needed_block(&self, grid: &Grid, row: usize, col: usize, cache: &mut FullCountCache, needs: &mut BlockNeeds) {
         let first = row * grid.width() + col;
-        for l in 0..LANES {
-            needs.set(l, self.needed(first + l, cache));
-        }
+        needs.set_each(LANES, |l| self.needed(first + l, cache));
     }
 
     /// The plane orientation whose ellipse the counts scan first.
@@ -89,6 +87,14 @@ impl BlockNeeds {
     /// beyond any count (or not a number).
     const NEVER: u32 = u32::MAX - 1;
     const REJECTED: BlockNeeds = BlockNeeds { count: [Self::SKIP; LANES], full: [0; LANES] };
+
+    /// Records `needed(l)` for each of the first `lanes` lanes.
+    #[inline(always)]
+    fn set_each(&mut self, lanes: usize, mut needed: impl FnMut(usize) -> Option<(f64, f64)>) {
+        for l in 0..lanes {
+            self.set(l, needed(l));
+        }
+    }
 
     /// Records [`Threshold::needed`]'s answer for lane `l`.
     #[inline(always)]
@@ -194,7 +200,13 @@ impl RobustThreshold<'_> {
         if !grid_normal_agrees(grid, i, step, &self.criterion.normal, self.cos_limit) {
             return None;
         }
-        let full = self.full_counts.get_point(&p, cache);
+        self.need_of_full(self.full_counts.get_point(&p, cache))
+    }
+
+    /// The count a facing point needs given its full-plane count, and
+    /// that count; `None` for a plane seen edge-on.
+    #[inline(always)]
+    fn need_of_full(&self, full: f64) -> Option<(f64, f64)> {
         (full > 0.0).then_some((self.criterion.min_ratio * full, full))
     }
 }
@@ -215,8 +227,7 @@ impl Threshold for RobustThreshold<'_> {
         if !facing {
             return None;
         }
-        let full = self.full_counts.get(i, cache);
-        (full > 0.0).then_some((self.criterion.min_ratio * full, full))
+        self.need_of_full(self.full_counts.get(i, cache))
     }
 
     fn scan_normal(&self) -> Vec3 {
@@ -238,9 +249,7 @@ impl Threshold for RobustThreshold<'_> {
         let (step_near, step_far) = (self.steps.step(z_near), self.steps.step(z_far));
         let fits = col >= step_near && col + LANES - 1 + step_near < w && row >= step_near && row + step_near < h;
         if !fits || !z_near.is_finite() {
-            for l in 0..LANES {
-                needs.set(l, self.needed_on_grid(grid, first + l, cache));
-            }
+            needs.set_each(LANES, |l| self.needed_on_grid(grid, first + l, cache));
             return;
         }
         let mut facts = self.lane_facts_dispatch(grid, first, step_far);
@@ -271,8 +280,7 @@ impl Threshold for RobustThreshold<'_> {
             let need = match last {
                 Some((key, need)) if key == keys[l] => need,
                 _ => {
-                    let full = self.full_counts.value_of(keys[l], cache);
-                    let need = LaneNeed::of((full > 0.0).then_some((self.criterion.min_ratio * full, full)));
+                    let need = LaneNeed::of(self.need_of_full(self.full_counts.value_of(keys[l], cache)));
                     last = Some((keys[l], need));
                     need
                 }
@@ -461,13 +469,14 @@ fn classify_block<T: Threshold>(
     // The predicate's radius, squared in single precision as the KD-tree
     // path squares it.
     let radius_sq = (search.radius_mm() * search.radius_mm()) as f32;
+    // Lane `l`'s exact window, where all its neighbours lie.
+    let window_of = |l: usize| search.camera().neighbour_window(grid.point(first + l), search.radius_mm());
     scratch.needs = BlockNeeds::REJECTED;
     if lanes == LANES {
         threshold.needed_block(grid, row, col, &mut scratch.cache, &mut scratch.needs);
     } else {
-        for l in 0..lanes {
-            scratch.needs.set(l, threshold.needed(first + l, &mut scratch.cache));
-        }
+        let cache = &mut scratch.cache;
+        scratch.needs.set_each(lanes, |l| threshold.needed(first + l, cache));
     }
     let needs = &scratch.needs;
     let Some(anchor) = (0..lanes).find(|&l| needs.counted(l)) else { return };
@@ -497,9 +506,7 @@ fn classify_block<T: Threshold>(
     let short = (0..lanes).any(|l| needs.counted(l) && partial[l] < needs.count[l]);
     let mut exact: Option<[u32; LANES]> = None;
     if short && lanes == LANES {
-        let windows = (0..lanes)
-            .filter(|&l| needs.counted(l))
-            .map(|l| search.camera().neighbour_window(grid.point(first + l), search.radius_mm()));
+        let windows = (0..lanes).filter(|&l| needs.counted(l)).map(window_of);
         let (wx, wy) = windows.fold((0, 0), |(a, b), (x, y)| (a.max(x), b.max(y)));
         let (wx, wy) = (wx as isize, wy as isize);
         // The union of the lanes' exact windows: counting over more pixels
@@ -521,10 +528,7 @@ fn classify_block<T: Threshold>(
         let count = match exact {
             _ if partial[l] >= need => partial[l],
             Some(counts) => counts[l],
-            None => {
-                let window = search.camera().neighbour_window(grid.point(first + l), search.radius_mm());
-                grid.count_window(first + l, window, radius_sq)
-            }
+            None => grid.count_window(first + l, window_of(l), radius_sq),
         };
         out.full[l] = needs.full[l];
         if count >= need {

@@ -75,6 +75,13 @@ impl Grid {
         [take(&self.xs), take(&self.ys), take(&self.zs)]
     }
 
+    /// The `LANES` pixels starting at index `at`, as slices of the three
+    /// planes.
+    #[inline(always)]
+    pub fn lane_slices(&self, at: usize) -> [&[f32]; 3] {
+        [&self.xs[at..at + LANES], &self.ys[at..at + LANES], &self.zs[at..at + LANES]]
+    }
+
     /// Point `i`, row-major, from the planes.
     #[inline(always)]
     pub fn point(&self, i: usize) -> [f32; 3] {

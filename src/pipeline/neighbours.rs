@@ -8,6 +8,9 @@
 //! KD-tree, which also serves as the reference the grid path is tested
 //! against.
 
+#[cfg(target_arch = "x86_64")]
+use std::arch::x86_64::*;
+
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 
 use crate::camera::CameraModel;
@@ -158,17 +161,37 @@ pub struct FullCounts<'a> {
 /// other.
 const CACHE_SLOTS: usize = 1024;
 
-/// A per-thread memo of full-plane counts, keyed by tile and depth step;
-/// a collision only costs a recomputation.
-pub struct FullCountCache {
-    slots: Box<[(u64, f64); CACHE_SLOTS]>,
+/// A per-thread memo of values keyed by full-count memo key (tile and
+/// depth step, see [`FullCounts::keys_of_lanes`]); a collision only costs
+/// a recomputation.
+pub struct KeyMemo<V> {
+    slots: Box<[(u64, V); CACHE_SLOTS]>,
 }
 
-impl Default for FullCountCache {
+impl<V: Copy + Default> Default for KeyMemo<V> {
     fn default() -> Self {
-        FullCountCache { slots: Box::new([(u64::MAX, 0.0); CACHE_SLOTS]) }
+        // No key is all ones: that would take a depth step of -1.
+        KeyMemo { slots: Box::new([(u64::MAX, V::default()); CACHE_SLOTS]) }
     }
 }
+
+impl<V: Copy> KeyMemo<V> {
+    /// The value of `key`, from the memo or from `compute`.
+    #[inline(always)]
+    pub fn get_or_insert_with(&mut self, key: u64, compute: impl FnOnce() -> V) -> V {
+        let slot = (key.wrapping_mul(0x9e37_79b9_7f4a_7c15) >> (64 - CACHE_SLOTS.trailing_zeros())) as usize;
+        let (held, value) = self.slots[slot];
+        if held == key {
+            return value;
+        }
+        let value = compute();
+        self.slots[slot] = (key, value);
+        value
+    }
+}
+
+/// The memo of full-plane counts.
+pub type FullCountCache = KeyMemo<f64>;
 
 /// `x.floor()` as an integer, for the tile and depth indices of the memo
 /// keys. Values are clamped to ±4·10⁶ (NaN to the low end), far beyond any
@@ -184,6 +207,21 @@ fn floor_i32(x: f32) -> i32 {
     let x = x.max(-4.0e6).min(4.0e6);
     let rounded = (x + SHIFT).to_bits() as i32 - SHIFT.to_bits() as i32;
     rounded - ((rounded as f32) > x) as i32
+}
+
+/// [`floor_i32`] of eight lanes: the same operations, so the same integers.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn floor_i32_avx2(x: __m256) -> __m256i {
+    const SHIFT: f32 = 12_582_912.0;
+    // `max` returns its second operand when the first is NaN: the low end,
+    // as `f32::max` gives it in the scalar form.
+    let x = _mm256_min_ps(_mm256_max_ps(x, _mm256_set1_ps(-4.0e6)), _mm256_set1_ps(4.0e6));
+    let shifted = _mm256_castps_si256(_mm256_add_ps(x, _mm256_set1_ps(SHIFT)));
+    let rounded = _mm256_sub_epi32(shifted, _mm256_set1_epi32(SHIFT.to_bits() as i32));
+    // A true comparison is all ones, -1: adding it subtracts one.
+    let above = _mm256_castps_si256(_mm256_cmp_ps::<_CMP_GT_OQ>(_mm256_cvtepi32_ps(rounded), x));
+    _mm256_add_epi32(rounded, above)
 }
 
 impl<'a> FullCounts<'a> {
@@ -218,22 +256,22 @@ impl<'a> FullCounts<'a> {
     /// [`FullCounts::keys_of_lanes`]), from the memo or computed.
     #[inline]
     pub fn value_of(&self, key: u64, cache: &mut FullCountCache) -> f64 {
-        let slot = (key.wrapping_mul(0x9e37_79b9_7f4a_7c15) >> (64 - CACHE_SLOTS.trailing_zeros())) as usize;
-        if cache.slots[slot].0 == key {
-            return cache.slots[slot].1;
-        }
+        cache.get_or_insert_with(key, || self.count_of_key(key))
+    }
+
+    /// The full-plane count of memo key `key`, computed: the lattice count
+    /// at the centre of its tile and depth step.
+    fn count_of_key(&self, key: u64) -> f64 {
         let tile_row = (key >> 48) as u16 as i16 as f64;
         let tile_col = (key >> 32) as u16 as i16 as f64;
         let depth_step = key as u32 as i32 as f64;
         let ray = Vec3::new((tile_col + 0.5) * self.tile_x, (tile_row + 0.5) * self.tile_y, 1.0);
-        let value = lattice_count_in_ellipse(
+        lattice_count_in_ellipse(
             self.camera,
             &(ray * (depth_step * FULL_COUNT_DEPTH_STEP_MM)),
             &self.normal,
             self.radius,
-        );
-        cache.slots[slot] = (key, value);
-        value
+        )
     }
 
     /// The full-plane count of point `i`, which must be valid.
@@ -258,6 +296,36 @@ impl<'a> FullCounts<'a> {
     #[inline(always)]
     pub fn keys_of_lanes(&self, [xs, ys, zs]: &[[f32; LANES]; 3]) -> [u64; LANES] {
         std::array::from_fn(|l| self.key(&[xs[l], ys[l], zs[l]]))
+    }
+
+    /// [`FullCounts::keys_of_lanes`] in AVX2 registers: the operations of
+    /// [`FullCounts::key`] in the same order, so the same keys.
+    ///
+    /// # Safety
+    /// The CPU must support AVX2.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    pub fn keys_of_lanes_avx2(&self, xs: __m256, ys: __m256, zs: __m256) -> [u64; LANES] {
+        let tile_col = floor_i32_avx2(_mm256_mul_ps(_mm256_div_ps(xs, zs), _mm256_set1_ps(self.tiles_per_x)));
+        let tile_row = floor_i32_avx2(_mm256_mul_ps(_mm256_div_ps(ys, zs), _mm256_set1_ps(self.tiles_per_y)));
+        let per_step = _mm256_mul_ps(zs, _mm256_set1_ps(1.0 / FULL_COUNT_DEPTH_STEP_MM as f32));
+        let depth_step = floor_i32_avx2(_mm256_add_ps(per_step, _mm256_set1_ps(0.5)));
+        // A key's high half: the tile row and column as 16-bit fields.
+        let tiles =
+            _mm256_or_si256(_mm256_slli_epi32::<16>(tile_row), _mm256_and_si256(tile_col, _mm256_set1_epi32(0xFFFF)));
+        // Pair each lane's halves into a 64-bit key. Unpacking works within
+        // 128-bit halves, leaving lanes 0, 1, 4, 5 in one register and
+        // 2, 3, 6, 7 in the other; the permutes put them back in order.
+        let (low_pairs, high_pairs) =
+            (_mm256_unpacklo_epi32(depth_step, tiles), _mm256_unpackhi_epi32(depth_step, tiles));
+        let mut keys = [0u64; LANES];
+        let (first, last) = keys.split_at_mut(LANES / 2);
+        // SAFETY: each half of `keys` holds four u64, one 256-bit store.
+        unsafe {
+            _mm256_storeu_si256(first.as_mut_ptr().cast(), _mm256_permute2x128_si256::<0x20>(low_pairs, high_pairs));
+            _mm256_storeu_si256(last.as_mut_ptr().cast(), _mm256_permute2x128_si256::<0x31>(low_pairs, high_pairs));
+        }
+        keys
     }
 }
 
@@ -377,6 +445,55 @@ mod tests {
         assert_eq!(floor_i32(1e9), 4_000_000);
         assert_eq!(floor_i32(f32::NEG_INFINITY), -4_000_000);
         assert_eq!(floor_i32(f32::NAN), -4_000_000);
+    }
+
+    #[test]
+    #[cfg(target_arch = "x86_64")]
+    fn vector_keys_equal_scalar_keys() {
+        if !std::arch::is_x86_feature_detected!("avx2") {
+            return;
+        }
+        let camera = CameraModel::default();
+        let cloud = plane_cloud(&camera, 8, 8, 500.0, Vec3::z(), usize::MAX);
+        let search = NeighbourSearch::new(&cloud, &camera, 1.0);
+        let counts = FullCounts::new(&search, &Vec3::z());
+        // Depths on and around the half-millimetre steps, tile borders in
+        // x / z, and the values the floor clamps.
+        let mut values = vec![f32::NAN, f32::INFINITY, f32::NEG_INFINITY, 0.0, -0.0, 1.0e30, -1.0e30, 1.0e-30];
+        for k in 0..400 {
+            let z = 480.0 + k as f32 * 0.125;
+            values.extend([z, f32::from_bits(z.to_bits() + 1), f32::from_bits(z.to_bits() - 1)]);
+        }
+        let depths: Vec<f32> = values.iter().map(|v| v.abs().max(100.0)).chain(values.iter().copied()).collect();
+        let tile = (FULL_COUNT_TILE_PX as f64 / camera.fx()) as f32;
+        let mut checked = 0;
+        for (chunk, zs) in depths.chunks_exact(LANES).enumerate() {
+            let zs: [f32; LANES] = zs.try_into().unwrap();
+            let xs: [f32; LANES] =
+                std::array::from_fn(|l| (chunk as f32 - 200.0 + l as f32 * 0.3) * tile * zs[l] / 7.0);
+            let ys: [f32; LANES] = std::array::from_fn(|l| values[(chunk * 3 + l) % values.len()]);
+            // SAFETY: the CPU supports AVX2, checked above; the loads read
+            // exactly LANES floats each.
+            let vector = unsafe {
+                counts.keys_of_lanes_avx2(
+                    _mm256_loadu_ps(xs.as_ptr()),
+                    _mm256_loadu_ps(ys.as_ptr()),
+                    _mm256_loadu_ps(zs.as_ptr()),
+                )
+            };
+            for l in 0..LANES {
+                assert_eq!(
+                    vector[l],
+                    counts.key(&[xs[l], ys[l], zs[l]]),
+                    "lane {l} of ({}, {}, {})",
+                    xs[l],
+                    ys[l],
+                    zs[l]
+                );
+                checked += 1;
+            }
+        }
+        assert!(checked > 2000);
     }
 
     /// A frontal plane at depth z sampled by the camera, with an optional

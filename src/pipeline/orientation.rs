@@ -105,6 +105,13 @@ impl StepTable {
         StepTable { below, fx, radius_mm }
     }
 
+    /// The depth under which a positive depth takes a step of `step` or
+    /// more, for `step` from 2 to 8.
+    #[inline(always)]
+    pub fn depth_limit(&self, step: usize) -> f32 {
+        self.below[step - 2]
+    }
+
     /// `normal_step(fx, z, radius_mm)`.
     #[inline(always)]
     pub fn step(&self, z: f32) -> usize {

@@ -23,7 +23,7 @@ use crate::cloud::PointCloud;
 use crate::geometry::{Vec3, vec3};
 
 use super::grid_search::{Grid, LANES, Span, SpanExtent};
-use super::neighbours::{FullCountCache, FullCounts, NeighbourSearch, PixelEllipse};
+use super::neighbours::{FullCountCache, FullCounts, KeyMemo, NeighbourSearch, PixelEllipse};
 use super::orientation::{GridPoints, StepTable, cross, cross_agrees, grid_normal_agrees, local_normal, normal_step};
 
 /// The plane points and, for each, a lower bound of its neighbour count
@@ -58,9 +58,9 @@ trait Threshold: Sync {
     /// inside the row, in integers, into `needs` (all rejected on entry).
     /// Filled in place: a block returned by value was copied out whole
     /// right after its lanes were written one by one, which stalls.
-    fn needed_block(&self, grid: &Grid, row: usize, col: usize, cache: &mut FullCountCache, needs: &mut BlockNeeds) {
+    fn needed_block(&self, grid: &Grid, row: usize, col: usize, memos: &mut Memos, needs: &mut BlockNeeds) {
         let first = row * grid.width() + col;
-        needs.set_each(LANES, |l| self.needed(first + l, cache));
+        needs.set_each(LANES, |l| self.needed(first + l, &mut memos.full));
     }
 
     /// The plane orientation whose ellipse the counts scan first.
@@ -115,7 +115,7 @@ impl BlockNeeds {
 }
 
 /// One lane of [`BlockNeeds`].
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone, Copy, Default)]
 struct LaneNeed {
     count: u32,
     full: u16,
@@ -238,65 +238,86 @@ impl Threshold for RobustThreshold<'_> {
     /// for the lanes that have all four neighbours at their step (once per
     /// step when the block straddles a step boundary); any other lane, and
     /// a block near the image border, is tested lane by lane.
-    fn needed_block(&self, grid: &Grid, row: usize, col: usize, cache: &mut FullCountCache, needs: &mut BlockNeeds) {
+    fn needed_block(&self, grid: &Grid, row: usize, col: usize, memos: &mut Memos, needs: &mut BlockNeeds) {
         let (w, h) = (grid.width(), grid.height());
         let first = row * w + col;
         let pz = grid.lanes(first)[2];
         // The step only falls as depth grows, so the nearest and farthest
         // lanes bound every valid lane's step; at most two steps occur
         // where a step boundary crosses the block.
-        let (z_near, z_far) = pz.iter().fold((f32::INFINITY, f32::NEG_INFINITY), |(a, b), &z| (a.min(z), b.max(z)));
+        let (z_near, z_far) = depth_range(&pz);
         let (step_near, step_far) = (self.steps.step(z_near), self.steps.step(z_far));
         let fits = col >= step_near && col + LANES - 1 + step_near < w && row >= step_near && row + step_near < h;
-        if !fits || !z_near.is_finite() {
-            needs.set_each(LANES, |l| self.needed_on_grid(grid, first + l, cache));
+        // Only positive depths have a step table entry; all-invalid blocks
+        // have no finite nearest depth.
+        let positive = z_near > 0.0 && z_near.is_finite();
+        if !(fits && positive) {
+            needs.set_each(LANES, |l| self.needed_on_grid(grid, first + l, &mut memos.full));
             return;
         }
         let mut facts = self.lane_facts_dispatch(grid, first, step_far);
         if step_near != step_far {
+            // The lanes nearer than the boundary take the near step.
+            let limit = self.steps.depth_limit(step_near);
+            let near_lanes = lane_bits(|l| pz[l] < limit);
             let near = self.lane_facts_dispatch(grid, first, step_near);
-            for (l, &z) in pz.iter().enumerate() {
-                if self.steps.step(z) == step_near {
-                    facts.complete[l] = near.complete[l];
-                    facts.facing[l] = near.facing[l];
-                }
-            }
+            facts.complete = (near.complete & near_lanes) | (facts.complete & !near_lanes);
+            facts.facing = (near.facing & near_lanes) | (facts.facing & !near_lanes);
         }
         // An invalid lane's step is 1 whatever its neighbours: it reads as
         // incomplete either way and takes the scalar path below.
         let LaneFacts { complete, facing, keys } = facts;
+        let mut incomplete = !complete & ((1 << LANES) - 1);
+        while incomplete != 0 {
+            // A missing neighbour: the one-sided rule, lane by lane.
+            let l = incomplete.trailing_zeros() as usize;
+            needs.set(l, self.needed_on_grid(grid, first + l, &mut memos.full));
+            incomplete &= incomplete - 1;
+        }
         // Neighbouring pixels mostly share a memo key, and so what they
-        // need: a lane with the key before it copies that lane's answer.
-        let mut last: Option<(u64, LaneNeed)> = None;
-        for l in 0..LANES {
-            if !complete[l] {
-                // A missing neighbour: the one-sided rule, lane by lane.
-                needs.set(l, self.needed_on_grid(grid, first + l, cache));
-                continue;
-            }
-            if !facing[l] {
-                continue;
-            }
-            let need = match last {
-                Some((key, need)) if key == keys[l] => need,
-                _ => {
-                    let need = LaneNeed::of(self.need_of_full(self.full_counts.value_of(keys[l], cache)));
-                    last = Some((keys[l], need));
-                    need
+        // need: one look-up per distinct key serves every lane that has it.
+        let mut open = complete & facing;
+        while open != 0 {
+            let key = keys[open.trailing_zeros() as usize];
+            let need = memos.need.get_or_insert_with(key, || {
+                LaneNeed::of(self.need_of_full(self.full_counts.value_of(key, &mut memos.full)))
+            });
+            let take = lane_bits(|l| keys[l] == key) & open;
+            for l in 0..LANES {
+                if take >> l & 1 != 0 {
+                    needs.set_lane(l, need);
                 }
-            };
-            needs.set_lane(l, need);
+            }
+            open &= !take;
         }
     }
 }
 
+/// The nearest and farthest valid depth of a block's lanes: `f32::min`
+/// and `max` pass over NaN, so invalid lanes drop out, and a block of
+/// invalid lanes gives NaN or an infinity. Pairwise, so the eight lanes
+/// take three dependent steps rather than eight.
+#[inline(always)]
+fn depth_range(z: &[f32; LANES]) -> (f32, f32) {
+    let halve = |v: [f32; 4], f: fn(f32, f32) -> f32| f(f(v[0], v[2]), f(v[1], v[3]));
+    let pair = |f: fn(f32, f32) -> f32| halve(std::array::from_fn(|i| f(z[i], z[i + 4])), f);
+    (pair(f32::min), pair(f32::max))
+}
+
+/// Bit `l` set where `test(l)` holds, for the lanes of a block.
+#[inline(always)]
+fn lane_bits(test: impl Fn(usize) -> bool) -> u32 {
+    (0..LANES).fold(0, |bits, l| bits | (test(l) as u32) << l)
+}
+
 /// What a block's lanes need before counting, for one normal step whose
 /// neighbours of the block are in the image.
+#[derive(Debug, PartialEq, Eq)]
 struct LaneFacts {
-    /// The lane and its four neighbours are valid.
-    complete: [bool; LANES],
-    /// The grid normal agrees with the workpiece's (meaningful when complete).
-    facing: [bool; LANES],
+    /// Bit `l`: lane `l` and its four neighbours are valid.
+    complete: u32,
+    /// Bit `l`: the grid normal agrees with the workpiece's (meaningful when complete).
+    facing: u32,
     /// The full-count memo keys.
     keys: [u64; LANES],
 }
@@ -304,8 +325,8 @@ struct LaneFacts {
 impl RobustThreshold<'_> {
     /// The normal test and memo keys of the eight lanes from pixel
     /// `first`, term for term as the scalar [`Threshold::needed`] computes
-    /// them, in plain lane loops the compiler vectorises.
-    #[inline(always)]
+    /// them: the reference of the vector form, and the path on other CPUs.
+    #[cfg_attr(target_arch = "x86_64", allow(dead_code))]
     fn lane_facts(&self, grid: &Grid, first: usize, step: usize) -> LaneFacts {
         let w = grid.width();
         let centre = grid.lanes(first);
@@ -317,18 +338,18 @@ impl RobustThreshold<'_> {
         let n = self.criterion.normal;
         let reference = [n.x as f32, n.y as f32, n.z as f32];
         let cos_sq = (self.cos_limit * self.cos_limit) as f32;
-        let mut facing = [false; LANES];
-        let mut complete = [false; LANES];
+        let (mut complete, mut facing) = (0, 0);
         for l in 0..LANES {
             let du = [rx[l] - lx[l], ry[l] - ly[l], rz[l] - lz[l]];
             let dv = [dx[l] - ux[l], dy[l] - uy[l], dz[l] - uz[l]];
-            complete[l] = (du[0] + du[1] + du[2] + dv[0] + dv[1] + dv[2] + px[l]).is_finite();
-            facing[l] = cross_agrees(cross(du, dv), [px[l], py[l], pz[l]], reference, cos_sq);
+            let valid = (du[0] + du[1] + du[2] + dv[0] + dv[1] + dv[2] + px[l]).is_finite();
+            complete |= (valid as u32) << l;
+            facing |= (cross_agrees(cross(du, dv), [px[l], py[l], pz[l]], reference, cos_sq) as u32) << l;
         }
         LaneFacts { complete, facing, keys: self.full_counts.keys_of_lanes(&centre) }
     }
 
-    /// [`RobustThreshold::lane_facts`], compiled for AVX2 when the CPU has it.
+    /// [`RobustThreshold::lane_facts`], in AVX2 registers when the CPU has them.
     #[inline(always)]
     fn lane_facts_dispatch(&self, grid: &Grid, first: usize, step: usize) -> LaneFacts {
         #[cfg(target_arch = "x86_64")]
@@ -339,12 +360,59 @@ impl RobustThreshold<'_> {
         self.lane_facts(grid, first, step)
     }
 
-    /// [`RobustThreshold::lane_facts`] compiled for eight-wide registers:
-    /// the same operations in the same order, so the same bits.
+    /// [`RobustThreshold::lane_facts`] in eight-wide registers: the same
+    /// operations in the same order (no fused multiply-add), so the same
+    /// bits. Written with intrinsics: the compiler split the lane loops
+    /// into four-wide pieces and spilled them.
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
-    unsafe fn lane_facts_avx2(&self, grid: &Grid, first: usize, step: usize) -> LaneFacts {
-        self.lane_facts(grid, first, step)
+    fn lane_facts_avx2(&self, grid: &Grid, first: usize, step: usize) -> LaneFacts {
+        use std::arch::x86_64::*;
+        let w = grid.width();
+        let load = |at: usize| -> [__m256; 3] {
+            // SAFETY: each slice holds exactly LANES floats; loadu needs no alignment.
+            grid.lane_slices(at).map(|v| unsafe { _mm256_loadu_ps(v.as_ptr()) })
+        };
+        let [px, py, pz] = load(first);
+        let [lx, ly, lz] = load(first - step);
+        let [rx, ry, rz] = load(first + step);
+        let [ux, uy, uz] = load(first - step * w);
+        let [dx, dy, dz] = load(first + step * w);
+        let (add, sub, mul) = (_mm256_add_ps, _mm256_sub_ps, _mm256_mul_ps);
+        let du = [sub(rx, lx), sub(ry, ly), sub(rz, lz)];
+        let dv = [sub(dx, ux), sub(dy, uy), sub(dz, uz)];
+        let sum = add(add(add(add(add(add(du[0], du[1]), du[2]), dv[0]), dv[1]), dv[2]), px);
+        // Finite: the magnitude is below infinity (NaN compares false).
+        let magnitude = _mm256_and_ps(sum, _mm256_castsi256_ps(_mm256_set1_epi32(i32::MAX)));
+        let valid = _mm256_cmp_ps::<_CMP_LT_OQ>(magnitude, _mm256_set1_ps(f32::INFINITY));
+        // `cross_agrees(cross(du, dv), p, reference, cos_sq)`, term for term.
+        let n = [
+            sub(mul(du[1], dv[2]), mul(du[2], dv[1])),
+            sub(mul(du[2], dv[0]), mul(du[0], dv[2])),
+            sub(mul(du[0], dv[1]), mul(du[1], dv[0])),
+        ];
+        let dot3 = |a: [__m256; 3], b: [__m256; 3]| add(add(mul(a[0], b[0]), mul(a[1], b[1])), mul(a[2], b[2]));
+        let normal = self.criterion.normal;
+        let reference = [normal.x as f32, normal.y as f32, normal.z as f32].map(|c| _mm256_set1_ps(c));
+        let cos_sq = _mm256_set1_ps((self.cos_limit * self.cos_limit) as f32);
+        let towards = dot3(n, [px, py, pz]);
+        // Multiplying by -1 flips the sign bit; for a NaN the bit differs
+        // but every comparison below is false either way.
+        let away = _mm256_cmp_ps::<_CMP_LT_OQ>(towards, _mm256_setzero_ps());
+        let dot = _mm256_xor_ps(dot3(n, reference), _mm256_and_ps(away, _mm256_set1_ps(-0.0)));
+        let norm_sq = dot3(n, n);
+        let facing = _mm256_and_ps(
+            _mm256_and_ps(
+                _mm256_cmp_ps::<_CMP_GT_OQ>(norm_sq, _mm256_set1_ps(1e-24)),
+                _mm256_cmp_ps::<_CMP_GE_OQ>(dot, _mm256_setzero_ps()),
+            ),
+            _mm256_cmp_ps::<_CMP_GE_OQ>(mul(dot, dot), mul(cos_sq, norm_sq)),
+        );
+        LaneFacts {
+            complete: _mm256_movemask_ps(valid) as u32,
+            facing: _mm256_movemask_ps(facing) as u32,
+            keys: self.full_counts.keys_of_lanes_avx2(px, py, pz),
+        }
     }
 }
 
@@ -422,8 +490,16 @@ struct Scratch {
     window: Vec<Span>,
     /// Depth and column of the point the spans were made for.
     spans_for: Option<(f32, usize)>,
-    cache: FullCountCache,
+    memos: Memos,
     needs: BlockNeeds,
+}
+
+/// The memos of a rayon job: full-plane counts, and what a lane of each
+/// memo key needs, which the block path reads without converting.
+#[derive(Default)]
+struct Memos {
+    full: FullCountCache,
+    need: KeyMemo<LaneNeed>,
 }
 
 impl Scratch {
@@ -433,7 +509,7 @@ impl Scratch {
             spans_extent: None,
             window: Vec::new(),
             spans_for: None,
-            cache: FullCountCache::default(),
+            memos: Memos::default(),
             needs: BlockNeeds::REJECTED,
         }
     }
@@ -473,9 +549,9 @@ fn classify_block<T: Threshold>(
     let window_of = |l: usize| search.camera().neighbour_window(grid.point(first + l), search.radius_mm());
     scratch.needs = BlockNeeds::REJECTED;
     if lanes == LANES {
-        threshold.needed_block(grid, row, col, &mut scratch.cache, &mut scratch.needs);
+        threshold.needed_block(grid, row, col, &mut scratch.memos, &mut scratch.needs);
     } else {
-        let cache = &mut scratch.cache;
+        let cache = &mut scratch.memos.full;
         scratch.needs.set_each(lanes, |l| threshold.needed(first + l, cache));
     }
     let needs = &scratch.needs;
@@ -593,6 +669,48 @@ mod tests {
         let cloud = PointCloud::organized(3, 3, vec![[f32::NAN; 3]; 9]).unwrap();
         let search = NeighbourSearch::new(&cloud, &camera, 1.0);
         assert!(paper_criterion(&cloud, &camera, &search).is_empty());
+    }
+
+    #[test]
+    #[cfg(target_arch = "x86_64")]
+    fn vector_lane_facts_equal_the_scalar_form() {
+        if !std::arch::is_x86_feature_detected!("avx2") {
+            return;
+        }
+        let camera = CameraModel::default();
+        let (clean, n) = scene(530.0, 15.0, 36);
+        // Noise, dropouts, a far point and an infinity, so every test of
+        // the normal meets finite, invalid and extreme inputs.
+        let mut points = clean.points().to_vec();
+        for (i, p) in points.iter_mut().enumerate() {
+            let wobble = ((i * 7919) % 13) as f32 * 0.01;
+            p[2] += wobble;
+            match i % 97 {
+                5 => *p = [f32::NAN; 3],
+                17 => p[2] = 1.0e30,
+                29 => p[0] = f32::INFINITY,
+                _ => {}
+            }
+        }
+        let cloud = PointCloud::organized(clean.width(), clean.height(), points).unwrap();
+        let grid = Grid::new(&cloud);
+        let search = NeighbourSearch::new(&cloud, &camera, 1.0);
+        let c = RobustPlaneCriterion { normal: n, min_ratio: 0.8, max_angle_deg: 20.0 };
+        let threshold = RobustThreshold::new(&search, &c);
+        let (w, h) = (grid.width(), grid.height());
+        let mut blocks = 0;
+        for step in 1..=4 {
+            for row in step..h - step {
+                for col in (step..w - LANES - step).step_by(3) {
+                    let first = row * w + col;
+                    // SAFETY: the CPU supports AVX2, checked above.
+                    let vector = unsafe { threshold.lane_facts_avx2(&grid, first, step) };
+                    assert_eq!(vector, threshold.lane_facts(&grid, first, step), "row {row}, col {col}, step {step}");
+                    blocks += 1;
+                }
+            }
+        }
+        assert!(blocks > 1000);
     }
 
     #[test]

@@ -193,7 +193,9 @@ impl Grid {
                         _mm256_loadu_ps(zs.as_ptr().add(k)),
                     )
                 };
-                let (dx, dy, dz) = (_mm256_sub_ps(qx, px), _mm256_sub_ps(qy, py), _mm256_sub_ps(qz, pz));
+                // p - q, the negation of the predicate's q - p: the same
+                // squares bit for bit, and the load folds into the subtraction.
+                let (dx, dy, dz) = (_mm256_sub_ps(px, qx), _mm256_sub_ps(py, qy), _mm256_sub_ps(pz, qz));
                 let d2 =
                     _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(dx, dx), _mm256_mul_ps(dy, dy)), _mm256_mul_ps(dz, dz));
                 let near = _mm256_castps_si256(_mm256_cmp_ps::<_CMP_LE_OQ>(d2, r2));

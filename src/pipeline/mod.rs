@@ -649,11 +649,17 @@ impl<'a> Run<'a> {
 /// the camera), in one pass over the frame.
 fn count_valid_and_near(cloud: &PointCloud, min_depth: f64) -> (usize, usize) {
     let min = min_depth as f32;
+    // Plain loops over chunks: as a per-point filter, map and reduce the
+    // fold's state went through the stack each point and stalled on it,
+    // 15 ms a frame in some builds instead of under one.
     cloud
         .points()
-        .par_iter()
-        .filter(|p| p[0].is_finite())
-        .map(|p| (1, (p[2] < min) as usize))
+        .par_chunks(1 << 14)
+        .map(|chunk| {
+            let valid = chunk.iter().filter(|p| p[0].is_finite()).count();
+            let near = chunk.iter().filter(|p| p[0].is_finite() && p[2] < min).count();
+            (valid, near)
+        })
         .reduce(|| (0, 0), |a, b| (a.0 + b.0, a.1 + b.1))
 }
 

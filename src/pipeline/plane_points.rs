@@ -239,6 +239,40 @@ impl Threshold for RobustThreshold<'_> {
     /// step when the block straddles a step boundary); any other lane, and
     /// a block near the image border, is tested lane by lane.
     fn needed_block(&self, grid: &Grid, row: usize, col: usize, memos: &mut Memos, needs: &mut BlockNeeds) {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the CPU supports AVX2, checked just above.
+            return unsafe { self.needed_block_avx2(grid, row, col, memos, needs) };
+        }
+        let facts = |first, step| self.lane_facts(grid, first, step);
+        self.needed_block_with(grid, row, col, memos, needs, depth_range, facts);
+    }
+}
+
+impl RobustThreshold<'_> {
+    /// [`Threshold::needed_block`] compiled for AVX2, so the vector normal
+    /// test inlines into it and nothing spills between them.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn needed_block_avx2(&self, grid: &Grid, row: usize, col: usize, memos: &mut Memos, needs: &mut BlockNeeds) {
+        let facts = |first, step| self.lane_facts_avx2(grid, first, step);
+        self.needed_block_with(grid, row, col, memos, needs, |z| depth_range_avx2(z), facts);
+    }
+
+    /// [`Threshold::needed_block`] with the depth range and the normal
+    /// test of a block given: `facts_of(first, step)`.
+    #[inline(always)]
+    #[allow(clippy::too_many_arguments)]
+    fn needed_block_with(
+        &self,
+        grid: &Grid,
+        row: usize,
+        col: usize,
+        memos: &mut Memos,
+        needs: &mut BlockNeeds,
+        depth_range: impl Fn(&[f32; LANES]) -> (f32, f32),
+        facts_of: impl Fn(usize, usize) -> LaneFacts,
+    ) {
         let (w, h) = (grid.width(), grid.height());
         let first = row * w + col;
         let pz = grid.lanes(first)[2];
@@ -255,12 +289,12 @@ impl Threshold for RobustThreshold<'_> {
             needs.set_each(LANES, |l| self.needed_on_grid(grid, first + l, &mut memos.full));
             return;
         }
-        let mut facts = self.lane_facts_dispatch(grid, first, step_far);
+        let mut facts = facts_of(first, step_far);
         if step_near != step_far {
             // The lanes nearer than the boundary take the near step.
             let limit = self.steps.depth_limit(step_near);
             let near_lanes = lane_bits(|l| pz[l] < limit);
-            let near = self.lane_facts_dispatch(grid, first, step_near);
+            let near = facts_of(first, step_near);
             facts.complete = (near.complete & near_lanes) | (facts.complete & !near_lanes);
             facts.facing = (near.facing & near_lanes) | (facts.facing & !near_lanes);
         }
@@ -304,6 +338,26 @@ fn depth_range(z: &[f32; LANES]) -> (f32, f32) {
     (pair(f32::min), pair(f32::max))
 }
 
+/// [`depth_range`] in AVX2 registers. Invalid lanes are set to the
+/// infinity that cannot win, so a block of invalid lanes gives infinities.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn depth_range_avx2(z: &[f32; LANES]) -> (f32, f32) {
+    use std::arch::x86_64::*;
+    // SAFETY: `z` holds exactly LANES floats; loadu needs no alignment.
+    let z = unsafe { _mm256_loadu_ps(z.as_ptr()) };
+    let invalid = _mm256_cmp_ps::<_CMP_UNORD_Q>(z, z);
+    let lows = _mm256_blendv_ps(z, _mm256_set1_ps(f32::INFINITY), invalid);
+    let highs = _mm256_blendv_ps(z, _mm256_set1_ps(f32::NEG_INFINITY), invalid);
+    // Fold the halves, then the pairs, then the neighbours.
+    let fold = |v: __m256, f: fn(__m256, __m256) -> __m256| {
+        let v = f(v, _mm256_permute2f128_ps::<1>(v, v));
+        let v = f(v, _mm256_permute_ps::<0b0100_1110>(v));
+        _mm256_cvtss_f32(f(v, _mm256_permute_ps::<0b1011_0001>(v)))
+    };
+    (fold(lows, |a, b| _mm256_min_ps(a, b)), fold(highs, |a, b| _mm256_max_ps(a, b)))
+}
+
 /// Bit `l` set where `test(l)` holds, for the lanes of a block.
 #[inline(always)]
 fn lane_bits(test: impl Fn(usize) -> bool) -> u32 {
@@ -326,7 +380,6 @@ impl RobustThreshold<'_> {
     /// The normal test and memo keys of the eight lanes from pixel
     /// `first`, term for term as the scalar [`Threshold::needed`] computes
     /// them: the reference of the vector form, and the path on other CPUs.
-    #[cfg_attr(target_arch = "x86_64", allow(dead_code))]
     fn lane_facts(&self, grid: &Grid, first: usize, step: usize) -> LaneFacts {
         let w = grid.width();
         let centre = grid.lanes(first);
@@ -347,17 +400,6 @@ impl RobustThreshold<'_> {
             facing |= (cross_agrees(cross(du, dv), [px[l], py[l], pz[l]], reference, cos_sq) as u32) << l;
         }
         LaneFacts { complete, facing, keys: self.full_counts.keys_of_lanes(&centre) }
-    }
-
-    /// [`RobustThreshold::lane_facts`], in AVX2 registers when the CPU has them.
-    #[inline(always)]
-    fn lane_facts_dispatch(&self, grid: &Grid, first: usize, step: usize) -> LaneFacts {
-        #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx2") {
-            // SAFETY: the CPU supports AVX2, checked just above.
-            return unsafe { self.lane_facts_avx2(grid, first, step) };
-        }
-        self.lane_facts(grid, first, step)
     }
 
     /// [`RobustThreshold::lane_facts`] in eight-wide registers: the same

@@ -7,7 +7,9 @@
 //! The counts use the same predicate as [`super::neighbours`], term for
 //! term in the same order (no fused multiply-add), so a pixel counted here
 //! is counted there: a count over part of the window is a lower bound of
-//! the exact count, never more.
+//! the exact count, never more. The one exception, [`Grid::count_runs`],
+//! fuses the squared distance and lowers the radius by enough that it
+//! too counts no pixel the predicate leaves out.
 
 use crate::cloud::PointCloud;
 
@@ -42,6 +44,36 @@ impl SpanExtent {
             du_min: e.du_min.min(s.du_lo),
             du_max: e.du_max.max(s.du_hi),
         }))
+    }
+}
+
+/// Spans prepared for counting many blocks of one grid: each span as the
+/// index distance from a block's first pixel to the span's first pixel
+/// and its length, so a block checks the spans' extent once instead of
+/// every span's slices.
+#[derive(Debug, Default)]
+pub struct SpanRuns {
+    spans: Vec<Span>,
+    runs: Vec<(isize, usize)>,
+    extent: Option<SpanExtent>,
+    width: usize,
+}
+
+impl SpanRuns {
+    /// Makes the runs of `spans` on a grid `width` pixels wide.
+    pub fn prepare(&mut self, spans: &[Span], width: usize) {
+        self.spans.clear();
+        self.spans.extend_from_slice(spans);
+        self.runs.clear();
+        let row = width as isize;
+        self.runs.extend(spans.iter().map(|s| (s.dv * row + s.du_lo, (s.du_hi - s.du_lo + 1).max(0) as usize)));
+        self.extent = SpanExtent::of(spans);
+        self.width = width;
+    }
+
+    /// No runs at all.
+    pub fn clear(&mut self) {
+        self.prepare(&[], 0);
     }
 }
 
@@ -80,6 +112,17 @@ impl Grid {
     #[inline(always)]
     pub fn lane_slices(&self, at: usize) -> [&[f32]; 3] {
         [&self.xs[at..at + LANES], &self.ys[at..at + LANES], &self.zs[at..at + LANES]]
+    }
+
+    /// The `LANES` pixels starting at index `at` as three AVX registers.
+    ///
+    /// # Safety
+    /// The CPU must support AVX.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx")]
+    pub fn lanes_avx(&self, at: usize) -> [std::arch::x86_64::__m256; 3] {
+        // SAFETY: each slice holds exactly LANES floats; loadu needs no alignment.
+        self.lane_slices(at).map(|v| unsafe { std::arch::x86_64::_mm256_loadu_ps(v.as_ptr()) })
     }
 
     /// Point `i`, row-major, from the planes.
@@ -153,6 +196,74 @@ impl Grid {
         self.count_block_portable(col, row, spans, radius_sq)
     }
 
+    /// A lower bound of [`Grid::count_block`] over prepared runs; `None`
+    /// when they leave the image for some lane of the block (or were made
+    /// for another width), which the caller then counts another way.
+    ///
+    /// Where the CPU fuses multiply and add, the squared distance takes
+    /// two fused steps instead of two multiplies and two adds: it rounds
+    /// differently, so the radius is lowered by a relative 2⁻¹⁹ to keep
+    /// every counted point within the radius by the exact predicate (both
+    /// forms lie within 3 · 2⁻²⁴ of the true sum of squares of the same
+    /// differences, so a fused value under `r² (1 - 2⁻¹⁹)` puts the exact
+    /// one under `r²`). Only points within a millionth of the radius of
+    /// the rim can be left out, and the count stays a lower bound.
+    pub fn count_runs(&self, col: usize, row: usize, runs: &SpanRuns, radius_sq: f32) -> Option<[u32; LANES]> {
+        let extent = runs.extent?;
+        if runs.width != self.width || !self.extent_fits(col, row, &extent) {
+            return None;
+        }
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma") {
+            // Rounding the f64 product to f32 adds at most 2⁻²⁴, which the
+            // 2⁻¹⁹ leaves room for.
+            let inner = (radius_sq as f64 * (1.0 - 2f64.powi(-19))) as f32;
+            // SAFETY: the CPU supports AVX2 and FMA, and the runs' extent
+            // fits the image at this block, checked just above.
+            return Some(unsafe { self.count_runs_fused(col, row, runs, inner) });
+        }
+        Some(self.count_block(col, row, &runs.spans, radius_sq))
+    }
+
+    /// [`Grid::count_block_avx2`] over runs, with one bounds check per
+    /// block rather than three per span, and the squared distance fused
+    /// (see [`Grid::count_runs`] for the radius to give it): two fewer
+    /// additions per offset in a loop that additions bound.
+    ///
+    /// # Safety
+    /// The CPU must support AVX2 and FMA, and `runs` must have been
+    /// prepared for this grid's width with an extent that fits the image
+    /// at the block ([`Grid::extent_fits`]).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma")]
+    unsafe fn count_runs_fused(&self, col: usize, row: usize, runs: &SpanRuns, radius_sq: f32) -> [u32; LANES] {
+        use std::arch::x86_64::*;
+        let first = row * self.width + col;
+        let [px, py, pz] = self.lanes_avx(first);
+        let r2 = _mm256_set1_ps(radius_sq);
+        let mut counts = _mm256_setzero_si256();
+        let (xs, ys, zs) = (self.xs.as_ptr(), self.ys.as_ptr(), self.zs.as_ptr());
+        for &(offset, len) in &runs.runs {
+            // The extent fits: every span's row is inside the image, and
+            // its columns from `du_lo` to `du_hi + LANES - 1` inside that
+            // row, so each load below reads inside the planes.
+            let start = first.wrapping_add_signed(offset);
+            for k in start..start + len {
+                // SAFETY: in bounds by the extent check (see above).
+                let (qx, qy, qz) =
+                    unsafe { (_mm256_loadu_ps(xs.add(k)), _mm256_loadu_ps(ys.add(k)), _mm256_loadu_ps(zs.add(k))) };
+                // p - q, the negation of the predicate's q - p: the same
+                // squares bit for bit, and the load folds into the subtraction.
+                let (dx, dy, dz) = (_mm256_sub_ps(px, qx), _mm256_sub_ps(py, qy), _mm256_sub_ps(pz, qz));
+                let d2 = _mm256_fmadd_ps(dz, dz, _mm256_fmadd_ps(dy, dy, _mm256_mul_ps(dx, dx)));
+                let near = _mm256_castps_si256(_mm256_cmp_ps::<_CMP_LE_OQ>(d2, r2));
+                // A true lane is all ones, -1: subtracting counts it.
+                counts = _mm256_sub_epi32(counts, near);
+            }
+        }
+        counts_of_avx(counts)
+    }
+
     /// The offsets of `spans` as index ranges of the first lane's
     /// neighbour, for the block starting at `(col, row)`.
     fn span_ranges<'s>(&self, col: usize, row: usize, spans: &'s [Span]) -> impl Iterator<Item = (usize, usize)> + 's {
@@ -171,14 +282,9 @@ impl Grid {
     unsafe fn count_block_avx2(&self, col: usize, row: usize, spans: &[Span], radius_sq: f32) -> [u32; LANES] {
         use std::arch::x86_64::*;
         let first = row * self.width + col;
+        let [px, py, pz] = self.lanes_avx(first);
         // Slicing checks the bounds once per span; the loads inside stay in
         // those slices.
-        let block = |v: &[f32]| -> __m256 {
-            let lanes = &v[first..first + LANES];
-            // SAFETY: `lanes` holds exactly LANES floats; loadu needs no alignment.
-            unsafe { _mm256_loadu_ps(lanes.as_ptr()) }
-        };
-        let (px, py, pz) = (block(&self.xs), block(&self.ys), block(&self.zs));
         let r2 = _mm256_set1_ps(radius_sq);
         let mut counts = _mm256_setzero_si256();
         for (start, end) in self.span_ranges(col, row, spans) {
@@ -203,10 +309,7 @@ impl Grid {
                 counts = _mm256_sub_epi32(counts, near);
             }
         }
-        let mut out = [0u32; LANES];
-        // SAFETY: `out` holds exactly eight u32, one 256-bit store.
-        unsafe { _mm256_storeu_si256(out.as_mut_ptr().cast(), counts) };
-        out
+        counts_of_avx(counts)
     }
 
     /// Two SSE2 registers of four lanes: the x86_64 baseline.
@@ -302,6 +405,16 @@ impl Grid {
     }
 }
 
+/// Eight 32-bit lane counts out of an AVX register.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx")]
+fn counts_of_avx(counts: std::arch::x86_64::__m256i) -> [u32; LANES] {
+    let mut out = [0u32; LANES];
+    // SAFETY: `out` holds exactly eight u32, one 256-bit store.
+    unsafe { std::arch::x86_64::_mm256_storeu_si256(out.as_mut_ptr().cast(), counts) };
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -366,6 +479,53 @@ mod tests {
                 assert_eq!(got, search.count(i, |j| labels[j] == 1), "lane {l}");
             }
         }
+    }
+
+    #[test]
+    fn run_counts_never_count_a_point_the_exact_predicate_leaves_out() {
+        // Neighbours strewn across the rim of the ball, within a few
+        // millionths of the radius, where fused and separate rounding can
+        // disagree: the run counts must stay at or under the exact ones.
+        let (w, h) = (40usize, 9usize);
+        let mut seed = 0x9e37_79b9_u64;
+        let mut next = move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let centre = [3.0f64, -2.0, 500.0];
+        let mut pts = vec![[0.0f32; 3]; w * h];
+        for (i, p) in pts.iter_mut().enumerate() {
+            let (theta, phi) = (next() * std::f64::consts::TAU, next() * std::f64::consts::PI);
+            let r = 1.0 + (next() - 0.5) * 8e-6;
+            let d = [phi.sin() * theta.cos(), phi.sin() * theta.sin(), phi.cos()];
+            // The block's own lanes sit at the centre, the rest on the rim.
+            let on_rim = !(i / w == 4 && (16..16 + LANES).contains(&(i % w)));
+            let r = if on_rim { r } else { 0.0 };
+            *p = std::array::from_fn(|k| (centre[k] + r * d[k]) as f32);
+        }
+        let cloud = PointCloud::organized(w, h, pts).unwrap();
+        let grid = Grid::new(&cloud);
+        let spans: Vec<Span> = (-4..=4).map(|dv| Span { dv, du_lo: -16, du_hi: 16 }).collect();
+        let mut runs = SpanRuns::default();
+        runs.prepare(&spans, w);
+        let (mut fewer, mut total) = (0, 0);
+        // Every squared radius within 600 steps of 1: each neighbour's
+        // squared distance falls right at some of them.
+        for step in -600i32..=600 {
+            let radius_sq = f32::from_bits(1.0f32.to_bits().wrapping_add_signed(step));
+            let exact = grid.count_block(16, 4, &spans, radius_sq);
+            let bound = grid.count_runs(16, 4, &runs, radius_sq).expect("the spans fit");
+            for l in 0..LANES {
+                assert!(bound[l] <= exact[l], "lane {l}, r² {radius_sq}: {} > {}", bound[l], exact[l]);
+                fewer += exact[l] - bound[l];
+                total += exact[l];
+            }
+        }
+        assert!(total > 100_000, "the rim holds neighbours: {total}");
+        // A millionth of the radius around the rim holds few of them.
+        assert!(fewer * 10 < total, "{fewer} of {total} left out");
     }
 
     #[test]

@@ -22,7 +22,7 @@ use crate::camera::CameraModel;
 use crate::cloud::PointCloud;
 use crate::geometry::{Vec3, vec3};
 
-use super::grid_search::{Grid, LANES, Span, SpanExtent};
+use super::grid_search::{Grid, LANES, Span, SpanRuns};
 use super::neighbours::{FullCountCache, FullCounts, KeyMemo, NeighbourSearch, PixelEllipse};
 use super::orientation::{GridPoints, StepTable, cross, cross_agrees, grid_normal_agrees, local_normal, normal_step};
 
@@ -244,8 +244,7 @@ impl Threshold for RobustThreshold<'_> {
             // SAFETY: the CPU supports AVX2, checked just above.
             return unsafe { self.needed_block_avx2(grid, row, col, memos, needs) };
         }
-        let facts = |first, step| self.lane_facts(grid, first, step);
-        self.needed_block_with(grid, row, col, memos, needs, depth_range, facts);
+        self.needed_block_with::<false>(grid, row, col, memos, needs);
     }
 }
 
@@ -255,23 +254,41 @@ impl RobustThreshold<'_> {
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
     fn needed_block_avx2(&self, grid: &Grid, row: usize, col: usize, memos: &mut Memos, needs: &mut BlockNeeds) {
-        let facts = |first, step| self.lane_facts_avx2(grid, first, step);
-        self.needed_block_with(grid, row, col, memos, needs, |z| depth_range_avx2(z), facts);
+        self.needed_block_with::<true>(grid, row, col, memos, needs);
     }
 
-    /// [`Threshold::needed_block`] with the depth range and the normal
-    /// test of a block given: `facts_of(first, step)`.
+    /// The block's depth range, in AVX2 registers when `AVX2`.
     #[inline(always)]
-    #[allow(clippy::too_many_arguments)]
-    fn needed_block_with(
+    fn depth_range_of<const AVX2: bool>(z: &[f32; LANES]) -> (f32, f32) {
+        #[cfg(target_arch = "x86_64")]
+        if AVX2 {
+            // SAFETY: `AVX2` is true only in `needed_block_avx2`, which is
+            // called once the CPU was checked.
+            return unsafe { depth_range_avx2(z) };
+        }
+        depth_range(z)
+    }
+
+    /// The normal test of a block, in AVX2 registers when `AVX2`.
+    #[inline(always)]
+    fn facts_of<const AVX2: bool>(&self, grid: &Grid, first: usize, step: usize) -> LaneFacts {
+        #[cfg(target_arch = "x86_64")]
+        if AVX2 {
+            // SAFETY: as in `depth_range_of`.
+            return unsafe { self.lane_facts_avx2(grid, first, step) };
+        }
+        self.lane_facts(grid, first, step)
+    }
+
+    /// [`Threshold::needed_block`], in AVX2 registers when `AVX2`.
+    #[inline(always)]
+    fn needed_block_with<const AVX2: bool>(
         &self,
         grid: &Grid,
         row: usize,
         col: usize,
         memos: &mut Memos,
         needs: &mut BlockNeeds,
-        depth_range: impl Fn(&[f32; LANES]) -> (f32, f32),
-        facts_of: impl Fn(usize, usize) -> LaneFacts,
     ) {
         let (w, h) = (grid.width(), grid.height());
         let first = row * w + col;
@@ -279,7 +296,7 @@ impl RobustThreshold<'_> {
         // The step only falls as depth grows, so the nearest and farthest
         // lanes bound every valid lane's step; at most two steps occur
         // where a step boundary crosses the block.
-        let (z_near, z_far) = depth_range(&pz);
+        let (z_near, z_far) = Self::depth_range_of::<AVX2>(&pz);
         let (step_near, step_far) = (self.steps.step(z_near), self.steps.step(z_far));
         let fits = col >= step_near && col + LANES - 1 + step_near < w && row >= step_near && row + step_near < h;
         // Only positive depths have a step table entry; all-invalid blocks
@@ -289,14 +306,12 @@ impl RobustThreshold<'_> {
             needs.set_each(LANES, |l| self.needed_on_grid(grid, first + l, &mut memos.full));
             return;
         }
-        let mut facts = facts_of(first, step_far);
+        // One call of `facts_of` on the hot path, so that it inlines; a
+        // block across a step boundary is rare and takes a second one.
+        let mut facts = self.facts_of::<AVX2>(grid, first, step_far);
         if step_near != step_far {
-            // The lanes nearer than the boundary take the near step.
-            let limit = self.steps.depth_limit(step_near);
-            let near_lanes = lane_bits(|l| pz[l] < limit);
-            let near = facts_of(first, step_near);
-            facts.complete = (near.complete & near_lanes) | (facts.complete & !near_lanes);
-            facts.facing = (near.facing & near_lanes) | (facts.facing & !near_lanes);
+            let near_lanes = lane_bits(|l| pz[l] < self.steps.depth_limit(step_near));
+            self.straddle::<AVX2>(grid, first, step_near, near_lanes, &mut facts);
         }
         // An invalid lane's step is 1 whatever its neighbours: it reads as
         // incomplete either way and takes the scalar path below.
@@ -402,19 +417,34 @@ impl RobustThreshold<'_> {
         LaneFacts { complete, facing, keys: self.full_counts.keys_of_lanes(&centre) }
     }
 
+    /// Takes the normal test of the lanes in `near_lanes`, those of a block
+    /// nearer than a step boundary, at their step `step_near`.
+    #[cold]
+    #[inline(never)]
+    fn straddle<const AVX2: bool>(
+        &self,
+        grid: &Grid,
+        first: usize,
+        step_near: usize,
+        near_lanes: u32,
+        facts: &mut LaneFacts,
+    ) {
+        let near = self.facts_of::<AVX2>(grid, first, step_near);
+        facts.complete = (near.complete & near_lanes) | (facts.complete & !near_lanes);
+        facts.facing = (near.facing & near_lanes) | (facts.facing & !near_lanes);
+    }
+
     /// [`RobustThreshold::lane_facts`] in eight-wide registers: the same
     /// operations in the same order (no fused multiply-add), so the same
     /// bits. Written with intrinsics: the compiler split the lane loops
     /// into four-wide pieces and spilled them.
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
+    #[inline]
     fn lane_facts_avx2(&self, grid: &Grid, first: usize, step: usize) -> LaneFacts {
         use std::arch::x86_64::*;
         let w = grid.width();
-        let load = |at: usize| -> [__m256; 3] {
-            // SAFETY: each slice holds exactly LANES floats; loadu needs no alignment.
-            grid.lane_slices(at).map(|v| unsafe { _mm256_loadu_ps(v.as_ptr()) })
-        };
+        let load = |at: usize| grid.lanes_avx(at);
         let [px, py, pz] = load(first);
         let [lx, ly, lz] = load(first - step);
         let [rx, ry, rz] = load(first + step);
@@ -526,8 +556,9 @@ fn classify<T: Threshold>(search: &NeighbourSearch, threshold: &T) -> PlanePoint
 
 /// Scratch space reused across the blocks of a row.
 struct Scratch {
+    /// The spans of the ellipse counted first, as runs on the grid.
     spans: Vec<Span>,
-    spans_extent: Option<SpanExtent>,
+    runs: SpanRuns,
     /// The union of a block's exact windows.
     window: Vec<Span>,
     /// Depth and column of the point the spans were made for.
@@ -548,7 +579,7 @@ impl Scratch {
     fn new() -> Self {
         Scratch {
             spans: Vec::new(),
-            spans_extent: None,
+            runs: SpanRuns::default(),
             window: Vec::new(),
             spans_for: None,
             memos: Memos::default(),
@@ -560,7 +591,7 @@ impl Scratch {
     /// to serve it: the spans only choose where counting starts, so a
     /// slightly different ellipse costs at most a fallback count.
     fn spans_serve(&self, z: f32, col: usize) -> bool {
-        self.spans_for.is_some_and(|(z0, c0)| (z - z0).abs() <= 0.005 * z0 && col < c0 + 256)
+        self.spans_for.is_some_and(|(z0, c0)| (z - z0).abs() <= 0.02 * z0 && col < c0 + 512)
     }
 }
 
@@ -612,11 +643,11 @@ fn classify_block<T: Threshold>(
                 Some(e) => e.spans_into(&mut scratch.spans),
                 None => scratch.spans.clear(),
             }
-            scratch.spans_extent = SpanExtent::of(&scratch.spans);
+            scratch.runs.prepare(&scratch.spans, w);
             scratch.spans_for = Some((point[2], col));
         }
-        if scratch.spans_extent.is_some_and(|e| grid.extent_fits(col, row, &e)) {
-            partial = grid.count_block(col, row, &scratch.spans, radius_sq);
+        if let Some(counts) = grid.count_runs(col, row, &scratch.runs, radius_sq) {
+            partial = counts;
         }
     }
     // A lane short of its threshold on the ellipse is counted again over

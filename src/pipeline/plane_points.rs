@@ -323,14 +323,25 @@ impl RobustThreshold<'_> {
             needs.set(l, self.needed_on_grid(grid, first + l, &mut memos.full));
             incomplete &= incomplete - 1;
         }
+        let need_of = |key: u64, memos: &mut Memos| {
+            memos.need.get_or_insert_with(key, || {
+                LaneNeed::of(self.need_of_full(self.full_counts.value_of(key, &mut memos.full)))
+            })
+        };
+        let mut open = complete & facing;
+        if open == (1 << LANES) - 1 {
+            // Inside a plate: a look-up per lane, whose hits are certain
+            // enough to predict, where a loop over distinct keys was not.
+            for (l, &key) in keys.iter().enumerate() {
+                needs.set_lane(l, need_of(key, memos));
+            }
+            return;
+        }
         // Neighbouring pixels mostly share a memo key, and so what they
         // need: one look-up per distinct key serves every lane that has it.
-        let mut open = complete & facing;
         while open != 0 {
             let key = keys[open.trailing_zeros() as usize];
-            let need = memos.need.get_or_insert_with(key, || {
-                LaneNeed::of(self.need_of_full(self.full_counts.value_of(key, &mut memos.full)))
-            });
+            let need = need_of(key, memos);
             let take = lane_bits(|l| keys[l] == key) & open;
             for l in 0..LANES {
                 if take >> l & 1 != 0 {

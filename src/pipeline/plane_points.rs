@@ -249,8 +249,8 @@ impl Threshold for RobustThreshold<'_> {
 }
 
 impl RobustThreshold<'_> {
-    /// [`Threshold::needed_block`] compiled for AVX2, so the vector normal
-    /// test inlines into it and nothing spills between them.
+    /// [`Threshold::needed_block`] compiled for AVX2: the depth range,
+    /// memo keys and bit masks of a block in eight-wide registers.
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
     fn needed_block_avx2(&self, grid: &Grid, row: usize, col: usize, memos: &mut Memos, needs: &mut BlockNeeds) {
@@ -306,8 +306,8 @@ impl RobustThreshold<'_> {
             needs.set_each(LANES, |l| self.needed_on_grid(grid, first + l, &mut memos.full));
             return;
         }
-        // One call of `facts_of` on the hot path, so that it inlines; a
-        // block across a step boundary is rare and takes a second one.
+        // A block across a step boundary is rare: its second normal test
+        // is kept out of line, off the common path.
         let mut facts = self.facts_of::<AVX2>(grid, first, step_far);
         if step_near != step_far {
             let near_lanes = lane_bits(|l| pz[l] < self.steps.depth_limit(step_near));

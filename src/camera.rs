@@ -48,6 +48,10 @@ impl Default for CameraModel {
     }
 }
 
+/// The cap of [`CameraModel::neighbour_window`]'s half-sizes: wider than
+/// any sensor, and far from where pixel arithmetic could overflow.
+const MAX_WINDOW_PX: usize = 1 << 30;
+
 impl CameraModel {
     /// Focal length along x, in pixels: `W px` spread over `w1` mm at `l1`.
     pub fn fx(&self) -> f64 {
@@ -125,7 +129,13 @@ impl CameraModel {
         let reach = radius_mm / (z - radius_mm);
         let wx = self.fx() * reach * (1.0 + tx * tx).sqrt();
         let wy = self.fy() * reach * (1.0 + ty * ty).sqrt();
-        (crate::geometry::ceil_i64(wx).max(0) as usize, crate::geometry::ceil_i64(wy).max(0) as usize)
+        // A point absurdly far off the axis (a corrupt frame's, say) would
+        // need a window past what converts to an integer; capped, it
+        // still covers any image, which every scan clips to.
+        let half = |w: f64| {
+            if w >= MAX_WINDOW_PX as f64 { MAX_WINDOW_PX } else { crate::geometry::ceil_i64(w).max(0) as usize }
+        };
+        (half(wx), half(wy))
     }
 
     /// Projects a camera-frame point to pixel coordinates `(u, v)`.
@@ -190,6 +200,20 @@ mod tests {
         let r = cam.ray(100.0, 900.0);
         let (u, v) = cam.project([r[0] * 700.0, r[1] * 700.0, 700.0]).unwrap();
         assert!((u - 100.0).abs() < 1e-9 && (v - 900.0).abs() < 1e-9);
+    }
+
+    #[test]
+    fn windows_of_absurd_points_are_capped_not_overflowed() {
+        let cam = CameraModel::default();
+        assert_eq!(cam.neighbour_window([1e30, -1e30, 150.0], 1.0), (MAX_WINDOW_PX, MAX_WINDOW_PX));
+        assert_eq!(cam.neighbour_window([f32::MAX, 0.0, 101.5], 1.0).0, MAX_WINDOW_PX);
+        // Such a point in a frame is counted over the whole image, which
+        // holds no neighbour of it, without overflowing on the way.
+        let mut pts = vec![[0.0f32, 0.0, 500.0]; 9];
+        pts[4] = [1e30, 1e30, 150.0];
+        let cloud = crate::cloud::PointCloud::organized(3, 3, pts).unwrap();
+        let search = crate::pipeline::neighbours::NeighbourSearch::new(&cloud, &cam, 1.0);
+        assert_eq!(search.count(4, |_| true), 1, "only itself");
     }
 
     #[test]

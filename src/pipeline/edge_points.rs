@@ -454,12 +454,11 @@ impl<'a> GridCount<'a> {
 
     /// A window holding the own window of every point whose depth is at
     /// least `corner`'s and whose `|x|` and `|y|` are at most its: the
-    /// corner's own, which grows towards the camera and off axis. Near
-    /// the camera, where that growth has a cut-off, and absurdly far off
-    /// axis, where it could overflow, the whole image.
+    /// corner's own, which grows towards the camera and off axis (up to
+    /// its cap, which covers any image). Near the camera, where that
+    /// growth has a cut-off, the whole image.
     fn row_window(&self, corner: Point) -> (usize, usize) {
-        let [x, y, z] = corner.map(|v| v as f64);
-        if z <= 2.0 * self.search.radius_mm() || x > 1e6 * z || y > 1e6 * z {
+        if corner[2] as f64 <= 2.0 * self.search.radius_mm() {
             return (self.width, self.height);
         }
         let (wx, wy) = self.window(corner);

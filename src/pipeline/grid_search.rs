@@ -60,20 +60,17 @@ pub struct SpanRuns {
 }
 
 impl SpanRuns {
-    /// Makes the runs of `spans` on a grid `width` pixels wide.
-    pub fn prepare(&mut self, spans: &[Span], width: usize) {
+    /// Makes the runs of the spans `fill` writes (into an emptied buffer)
+    /// on a grid `width` pixels wide.
+    pub fn prepare(&mut self, width: usize, fill: impl FnOnce(&mut Vec<Span>)) {
         self.spans.clear();
-        self.spans.extend_from_slice(spans);
-        self.runs.clear();
+        fill(&mut self.spans);
         let row = width as isize;
-        self.runs.extend(spans.iter().map(|s| (s.dv * row + s.du_lo, (s.du_hi - s.du_lo + 1).max(0) as usize)));
-        self.extent = SpanExtent::of(spans);
+        let runs = self.spans.iter().map(|s| (s.dv * row + s.du_lo, (s.du_hi - s.du_lo + 1).max(0) as usize));
+        self.runs.clear();
+        self.runs.extend(runs);
+        self.extent = SpanExtent::of(&self.spans);
         self.width = width;
-    }
-
-    /// No runs at all.
-    pub fn clear(&mut self) {
-        self.prepare(&[], 0);
     }
 }
 
@@ -107,13 +104,6 @@ impl Grid {
         [take(&self.xs), take(&self.ys), take(&self.zs)]
     }
 
-    /// The `LANES` pixels starting at index `at`, as slices of the three
-    /// planes.
-    #[inline(always)]
-    pub fn lane_slices(&self, at: usize) -> [&[f32]; 3] {
-        [&self.xs[at..at + LANES], &self.ys[at..at + LANES], &self.zs[at..at + LANES]]
-    }
-
     /// The `LANES` pixels starting at index `at` as three AVX registers.
     ///
     /// # Safety
@@ -121,8 +111,9 @@ impl Grid {
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx")]
     pub fn lanes_avx(&self, at: usize) -> [std::arch::x86_64::__m256; 3] {
+        let planes = [&self.xs[at..at + LANES], &self.ys[at..at + LANES], &self.zs[at..at + LANES]];
         // SAFETY: each slice holds exactly LANES floats; loadu needs no alignment.
-        self.lane_slices(at).map(|v| unsafe { std::arch::x86_64::_mm256_loadu_ps(v.as_ptr()) })
+        planes.map(|v| unsafe { std::arch::x86_64::_mm256_loadu_ps(v.as_ptr()) })
     }
 
     /// Point `i`, row-major, from the planes.
@@ -227,8 +218,8 @@ impl Grid {
 
     /// [`Grid::count_block_avx2`] over runs, with one bounds check per
     /// block rather than three per span, and the squared distance fused
-    /// (see [`Grid::count_runs`] for the radius to give it): two fewer
-    /// additions per offset in a loop that additions bound.
+    /// (see [`Grid::count_runs`] for the radius to give it): two of the
+    /// five additions per offset move to the multipliers.
     ///
     /// # Safety
     /// The CPU must support AVX2 and FMA, and `runs` must have been
@@ -509,7 +500,7 @@ mod tests {
         let grid = Grid::new(&cloud);
         let spans: Vec<Span> = (-4..=4).map(|dv| Span { dv, du_lo: -16, du_hi: 16 }).collect();
         let mut runs = SpanRuns::default();
-        runs.prepare(&spans, w);
+        runs.prepare(w, |out| out.extend_from_slice(&spans));
         let (mut fewer, mut total) = (0, 0);
         // Every squared radius within 600 steps of 1: each neighbour's
         // squared distance falls right at some of them.

@@ -656,8 +656,11 @@ fn count_valid_and_near(cloud: &PointCloud, min_depth: f64) -> (usize, usize) {
         .points()
         .par_chunks(1 << 14)
         .map(|chunk| {
-            let valid = chunk.iter().filter(|p| p[0].is_finite()).count();
-            let near = chunk.iter().filter(|p| p[0].is_finite() && p[2] < min).count();
+            let (mut valid, mut near) = (0, 0);
+            for p in chunk.iter().filter(|p| p[0].is_finite()) {
+                valid += 1;
+                near += (p[2] < min) as usize;
+            }
             (valid, near)
         })
         .reduce(|| (0, 0), |a, b| (a.0 + b.0, a.1 + b.1))

@@ -568,7 +568,6 @@ fn classify<T: Threshold>(search: &NeighbourSearch, threshold: &T) -> PlanePoint
 /// Scratch space reused across the blocks of a row.
 struct Scratch {
     /// The spans of the ellipse counted first, as runs on the grid.
-    spans: Vec<Span>,
     runs: SpanRuns,
     /// The union of a block's exact windows.
     window: Vec<Span>,
@@ -589,7 +588,6 @@ struct Memos {
 impl Scratch {
     fn new() -> Self {
         Scratch {
-            spans: Vec::new(),
             runs: SpanRuns::default(),
             window: Vec::new(),
             spans_for: None,
@@ -650,11 +648,8 @@ fn classify_block<T: Threshold>(
         if !scratch.spans_serve(point[2], col) {
             let ellipse =
                 PixelEllipse::new(search.camera(), &vec3(&point), &threshold.scan_normal(), search.radius_mm());
-            match ellipse {
-                Some(e) => e.spans_into(&mut scratch.spans),
-                None => scratch.spans.clear(),
-            }
-            scratch.runs.prepare(&scratch.spans, w);
+            // No ellipse (a plane seen edge-on): no runs, and no partial count.
+            scratch.runs.prepare(w, |spans| ellipse.iter().for_each(|e| e.spans_into(spans)));
             scratch.spans_for = Some((point[2], col));
         }
         if let Some(counts) = grid.count_runs(col, row, &scratch.runs, radius_sq) {

@@ -7,4 +7,5 @@ mod daemon;
 mod exactness;
 mod parsers;
 mod pipeline;
+mod requests;
 mod util;

@@ -52,11 +52,19 @@ impl Default for CameraSection {
 pub struct RobotSection {
     pub euler_convention: String,
     pub hand_eye: Vec<f64>,
+    pub max_reach_mm: f64,
+    pub max_hand_eye_translation_mm: f64,
 }
 
 impl Default for RobotSection {
     fn default() -> Self {
-        RobotSection { euler_convention: "zyx".into(), hand_eye: PAPER_HAND_EYE.to_vec() }
+        let limits = super::RobotLimits::default();
+        RobotSection {
+            euler_convention: "zyx".into(),
+            hand_eye: PAPER_HAND_EYE.to_vec(),
+            max_reach_mm: limits.max_reach_mm,
+            max_hand_eye_translation_mm: limits.max_hand_eye_translation_mm,
+        }
     }
 }
 

@@ -207,6 +207,40 @@ impl Default for ServerConfig {
     }
 }
 
+/// What a pose or a hand-eye matrix may plausibly be in this cell. A
+/// trajectory is a command to a robot: numbers beyond these are a fault
+/// upstream (a unit mix-up, a corrupt message), never a place to weld.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RobotLimits {
+    /// The farthest a flange pose or a waypoint may be from the base
+    /// frame's origin, mm: the robot's reach (plus any track or gantry).
+    pub max_reach_mm: f64,
+    /// The longest translation of `End_T_Camera`, mm: how far the camera
+    /// can sit from the flange on its bracket.
+    pub max_hand_eye_translation_mm: f64,
+}
+
+impl Default for RobotLimits {
+    fn default() -> Self {
+        RobotLimits { max_reach_mm: 3_500.0, max_hand_eye_translation_mm: 1_000.0 }
+    }
+}
+
+/// The largest magnitude of a pose angle, degrees. Controllers report
+/// angles within one turn (Euler angles within ±180°, a rotation vector
+/// within 180°); a value beyond two turns is a unit or wiring fault.
+pub const MAX_POSE_ANGLE_DEG: f64 = 720.0;
+
+/// The waypoint spacing's range, mm, in the config and in requests: below
+/// 0.1 mm the samples are finer than any camera resolves; above a metre
+/// a seam gets no interior waypoint at all.
+pub const MIN_STEP_MM: f64 = 0.1;
+pub const MAX_STEP_MM: f64 = 1_000.0;
+
+/// The largest work or travel angle, degrees, in the config and in
+/// requests: beyond it the torch would lie nearly flat on the plate.
+pub const MAX_TORCH_ANGLE_DEG: f64 = 80.0;
+
 /// The validated configuration.
 #[derive(Debug, Clone)]
 pub struct Config {
@@ -214,6 +248,7 @@ pub struct Config {
     pub euler: EulerConvention,
     /// `End_T_Camera`, validated rigid.
     pub hand_eye: Isometry3<f64>,
+    pub robot_limits: RobotLimits,
     pub pipeline: PipelineParams,
     pub paper: PaperParams,
     pub trajectory: TrajectoryParams,
@@ -229,41 +264,38 @@ impl Default for Config {
 /// Why a configuration was refused. Every variant names the key.
 #[derive(Debug, thiserror::Error)]
 pub enum ConfigError {
-    /// The file could not be read.
-    #[error("cannot read config {path}: {source}")]
-    Io {
-        path: String,
-        #[source]
-        source: std::io::Error,
-    },
+    /// The file could not be read (the I/O error is part of the message).
+    #[error("cannot read config {path}: {cause}")]
+    Io { path: String, cause: std::io::Error },
     /// The TOML is malformed, has an unknown key or a value of the wrong type.
     #[error("config {path}: {message}")]
     Parse { path: String, message: String },
     /// A value is out of its allowed range.
     #[error("config key `{key}`: {message}")]
     Invalid { key: &'static str, message: String },
-    /// The hand-eye matrix is not a rigid transform.
+    /// The hand-eye matrix is not a rigid transform. The cause is part of
+    /// the message, not a separate source, so it is printed once.
     #[error("config key `robot.hand_eye`: {0}")]
-    HandEye(#[from] HandEyeError),
+    HandEye(HandEyeError),
 }
 
 fn check(key: &'static str, ok: bool, message: impl FnOnce() -> String) -> Result<(), ConfigError> {
     if ok { Ok(()) } else { Err(ConfigError::Invalid { key, message: message() }) }
 }
 
-fn positive(key: &'static str, v: f64) -> Result<(), ConfigError> {
-    check(key, v.is_finite() && v > 0.0, || format!("must be a positive number, got {v}"))
-}
-
 fn in_range(key: &'static str, v: f64, lo: f64, hi: f64) -> Result<(), ConfigError> {
     check(key, v.is_finite() && (lo..=hi).contains(&v), || format!("must lie in [{lo}, {hi}], got {v}"))
+}
+
+fn count_in(key: &'static str, v: u64, lo: u64, hi: u64) -> Result<(), ConfigError> {
+    check(key, (lo..=hi).contains(&v), || format!("must lie in [{lo}, {hi}], got {v}"))
 }
 
 impl Config {
     /// Reads and validates a TOML config file.
     pub fn load(path: &Path) -> Result<Config, ConfigError> {
         let shown = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|source| ConfigError::Io { path: shown.clone(), source })?;
+        let text = std::fs::read_to_string(path).map_err(|cause| ConfigError::Io { path: shown.clone(), cause })?;
         Config::parse(&text, &shown)
     }
 
@@ -276,14 +308,18 @@ impl Config {
 
     /// Validates the schema's values into a built config.
     pub fn from_file(f: ConfigFile) -> Result<Config, ConfigError> {
+        // Every number has a floor and a ceiling: a value outside them is
+        // a typo or a unit mix-up, and an unbounded one (a billion RANSAC
+        // iterations, a tolerance of 1e-30 mm) would hang or silently break
+        // the planner rather than fail at start.
         let c = &f.camera;
-        check("camera.width_px", c.width_px > 0, || "must be at least 1".into())?;
-        check("camera.height_px", c.height_px > 0, || "must be at least 1".into())?;
-        positive("camera.fov_width_mm", c.fov_width_mm)?;
-        positive("camera.fov_height_mm", c.fov_height_mm)?;
-        positive("camera.fov_distance_mm", c.fov_distance_mm)?;
+        count_in("camera.width_px", c.width_px.into(), 2, 20_000)?;
+        count_in("camera.height_px", c.height_px.into(), 2, 20_000)?;
+        in_range("camera.fov_width_mm", c.fov_width_mm, 1.0, 100_000.0)?;
+        in_range("camera.fov_height_mm", c.fov_height_mm, 1.0, 100_000.0)?;
+        in_range("camera.fov_distance_mm", c.fov_distance_mm, 10.0, 100_000.0)?;
         in_range("camera.baseline_mm", c.baseline_mm, 0.0, 10_000.0)?;
-        positive("camera.nominal_accuracy_mm", c.nominal_accuracy_mm)?;
+        in_range("camera.nominal_accuracy_mm", c.nominal_accuracy_mm, 1e-4, 100.0)?;
         in_range("camera.min_depth_mm", c.min_depth_mm, 1.0, c.fov_distance_mm)?;
         let camera = CameraModel {
             width_px: c.width_px,
@@ -296,38 +332,46 @@ impl Config {
             min_depth_mm: c.min_depth_mm,
         };
 
-        let euler = EulerConvention::from_name(&f.robot.euler_convention).ok_or_else(|| ConfigError::Invalid {
+        let r = &f.robot;
+        let euler = EulerConvention::from_name(&r.euler_convention).ok_or_else(|| ConfigError::Invalid {
             key: "robot.euler_convention",
             message: format!(
                 "unknown convention {:?}; expected one of {:?}",
-                f.robot.euler_convention,
+                r.euler_convention,
                 EulerConvention::NAMES
             ),
         })?;
-        let rows: [f64; 16] = f.robot.hand_eye.as_slice().try_into().map_err(|_| ConfigError::Invalid {
+        in_range("robot.max_reach_mm", r.max_reach_mm, 100.0, 100_000.0)?;
+        in_range("robot.max_hand_eye_translation_mm", r.max_hand_eye_translation_mm, 1.0, 10_000.0)?;
+        let robot_limits =
+            RobotLimits { max_reach_mm: r.max_reach_mm, max_hand_eye_translation_mm: r.max_hand_eye_translation_mm };
+        let rows: [f64; 16] = r.hand_eye.as_slice().try_into().map_err(|_| ConfigError::Invalid {
             key: "robot.hand_eye",
-            message: format!("needs 16 numbers (row-major 4x4), got {}", f.robot.hand_eye.len()),
+            message: format!("needs 16 numbers (row-major 4x4), got {}", r.hand_eye.len()),
         })?;
-        let hand_eye = hand_eye_from_rows(&rows)?;
+        let hand_eye = hand_eye_from_rows(&rows).map_err(ConfigError::HandEye)?;
+        let offset = hand_eye.translation.vector.norm();
+        check("robot.hand_eye", offset <= robot_limits.max_hand_eye_translation_mm, || {
+            format!(
+                "its translation is {offset:.1} mm long, beyond robot.max_hand_eye_translation_mm ({} mm); \
+                 is it in millimetres?",
+                robot_limits.max_hand_eye_translation_mm
+            )
+        })?;
 
         let p = &f.pipeline;
         let method = Method::from_name(&p.method).ok_or_else(|| ConfigError::Invalid {
             key: "pipeline.method",
             message: format!("unknown method {:?}; expected \"robust\" or \"paper\"", p.method),
         })?;
-        positive("pipeline.neighbour_radius_mm", p.neighbour_radius_mm)?;
-        check("pipeline.neighbour_radius_mm", p.neighbour_radius_mm <= 10.0, || {
-            format!(
-                "{} mm would make every neighbour search scan thousands of pixels; use at most 10",
-                p.neighbour_radius_mm
-            )
-        })?;
+        in_range("pipeline.neighbour_radius_mm", p.neighbour_radius_mm, 0.05, 10.0)?;
         in_range("pipeline.plane_min_neighbour_ratio", p.plane_min_neighbour_ratio, 0.05, 1.0)?;
         in_range("pipeline.plane_max_normal_angle_deg", p.plane_max_normal_angle_deg, 1.0, 89.0)?;
-        positive("pipeline.cluster_tolerance_mm", p.cluster_tolerance_mm)?;
+        in_range("pipeline.cluster_tolerance_mm", p.cluster_tolerance_mm, 0.05, 20.0)?;
         in_range("pipeline.min_plane_area_mm2", p.min_plane_area_mm2, 0.0, 1e7)?;
-        positive("pipeline.coplanar_tolerance_mm", p.coplanar_tolerance_mm)?;
-        positive("pipeline.lap_step_min_mm", p.lap_step_min_mm)?;
+        in_range("pipeline.coplanar_tolerance_mm", p.coplanar_tolerance_mm, 0.05, 50.0)?;
+        in_range("pipeline.lap_step_min_mm", p.lap_step_min_mm, 0.1, 100.0)?;
+        in_range("pipeline.lap_step_max_mm", p.lap_step_max_mm, 0.1, 200.0)?;
         check("pipeline.lap_step_max_mm", p.lap_step_max_mm > p.lap_step_min_mm, || {
             format!("must exceed lap_step_min_mm ({}), got {}", p.lap_step_min_mm, p.lap_step_max_mm)
         })?;
@@ -338,27 +382,26 @@ impl Config {
                 p.plane_min_neighbour_ratio
             )
         })?;
-        positive("pipeline.ransac_distance_mm", p.ransac_distance_mm)?;
-        check("pipeline.ransac_iterations", p.ransac_iterations >= 1, || "must be at least 1".into())?;
-        check("pipeline.ransac_min_line_points", p.ransac_min_line_points >= 2, || "must be at least 2".into())?;
-        check("pipeline.ransac_max_lines", p.ransac_max_lines >= 1, || "must be at least 1".into())?;
+        in_range("pipeline.ransac_distance_mm", p.ransac_distance_mm, 0.01, 20.0)?;
+        count_in("pipeline.ransac_iterations", p.ransac_iterations.into(), 1, 100_000)?;
+        count_in("pipeline.ransac_min_line_points", p.ransac_min_line_points.into(), 2, 1_000_000)?;
+        count_in("pipeline.ransac_min_remaining_points", p.ransac_min_remaining_points.into(), 2, 1_000_000)?;
+        count_in("pipeline.ransac_max_lines", p.ransac_max_lines.into(), 1, 100)?;
         in_range("pipeline.max_edge_angle_deg", p.max_edge_angle_deg, 0.1, 45.0)?;
-        positive("pipeline.boundary_band_mm", p.boundary_band_mm)?;
-        positive("pipeline.on_plane_tolerance_mm", p.on_plane_tolerance_mm)?;
+        in_range("pipeline.boundary_band_mm", p.boundary_band_mm, 0.1, 50.0)?;
+        in_range("pipeline.on_plane_tolerance_mm", p.on_plane_tolerance_mm, 0.01, 10.0)?;
         check("pipeline.fit_degree", (1..=5).contains(&p.fit_degree), || {
             format!("must be 1 (straight seams) to 5, got {}", p.fit_degree)
         })?;
         in_range("pipeline.fit_trim_sigma", p.fit_trim_sigma, 1.0, 100.0)?;
 
         in_range("paper.edge_ratio", f.paper.edge_ratio, 0.01, 1.0)?;
-        positive("paper.cluster_tolerance_mm", f.paper.cluster_tolerance_mm)?;
+        in_range("paper.cluster_tolerance_mm", f.paper.cluster_tolerance_mm, 0.05, 20.0)?;
 
         let t = &f.trajectory;
-        check("trajectory.step_mm", t.step_mm.is_finite() && t.step_mm >= 0.1, || {
-            format!("must be at least 0.1 mm, got {}", t.step_mm)
-        })?;
-        in_range("trajectory.work_angle_deg", t.work_angle_deg, -80.0, 80.0)?;
-        in_range("trajectory.travel_angle_deg", t.travel_angle_deg, -80.0, 80.0)?;
+        in_range("trajectory.step_mm", t.step_mm, MIN_STEP_MM, MAX_STEP_MM)?;
+        in_range("trajectory.work_angle_deg", t.work_angle_deg, -MAX_TORCH_ANGLE_DEG, MAX_TORCH_ANGLE_DEG)?;
+        in_range("trajectory.travel_angle_deg", t.travel_angle_deg, -MAX_TORCH_ANGLE_DEG, MAX_TORCH_ANGLE_DEG)?;
 
         let server = server_config(&f.server)?;
 
@@ -367,6 +410,7 @@ impl Config {
             camera,
             euler,
             hand_eye,
+            robot_limits,
             pipeline: PipelineParams {
                 method,
                 neighbour_radius_mm: p.neighbour_radius_mm,
@@ -506,6 +550,62 @@ mod tests {
         }
     }
 
+    /// Every numeric key of the shipped file, with its section.
+    fn numeric_keys() -> Vec<(String, String, toml::Value)> {
+        let text = include_str!("../../config/weldseam.toml");
+        let doc: toml::Table = toml::from_str(text).unwrap();
+        let mut keys = Vec::new();
+        for (section, table) in &doc {
+            for (key, value) in table.as_table().unwrap() {
+                if value.is_integer() || value.is_float() {
+                    keys.push((section.clone(), key.clone(), value.clone()));
+                }
+            }
+        }
+        keys
+    }
+
+    #[test]
+    fn every_number_has_a_ceiling_named_in_its_error() {
+        // The seed may be any number; every other value has a limit, so a
+        // unit mix-up or a typo cannot hang or silently break the planner.
+        let keys = numeric_keys();
+        assert!(keys.len() > 40, "found {} numeric keys", keys.len());
+        for (section, key, value) in keys.into_iter().filter(|(_, k, _)| k != "ransac_seed") {
+            // The largest u32 for counts; for 64-bit keys whose ceiling lies
+            // above that (a frame of over 4 GB), the largest TOML integer.
+            let huge: &[&str] = if value.is_integer() { &["4294967295", "9223372036854775807"] } else { &["1e300"] };
+            let refused = huge.iter().find_map(|h| {
+                let text = format!("[{section}]\n{key} = {h}\n");
+                match Config::parse(&text, "c.toml") {
+                    Err(ConfigError::Invalid { key: named, message }) => Some((text, named, message)),
+                    _ => None,
+                }
+            });
+            let (text, named, message) = refused.unwrap_or_else(|| panic!("{section}.{key} has no ceiling"));
+            assert_eq!(named, format!("{section}.{key}"), "{text:?}");
+            assert!(message.contains("must"), "{text:?} gave {message}");
+        }
+    }
+
+    #[test]
+    fn tolerances_of_nothing_are_refused() {
+        for key in ["cluster_tolerance_mm", "coplanar_tolerance_mm", "ransac_distance_mm", "on_plane_tolerance_mm"] {
+            let text = format!("[pipeline]\n{key} = 1e-30\n");
+            let e = Config::parse(&text, "c.toml").unwrap_err().to_string();
+            assert!(e.contains(&format!("pipeline.{key}")) && e.contains("must lie in"), "{e}");
+        }
+    }
+
+    #[test]
+    fn a_hand_eye_with_a_camera_a_kilometre_away_is_refused() {
+        let mut rows = crate::geometry::pose::PAPER_HAND_EYE;
+        rows[3] = 1e6;
+        let text = format!("[robot]\nhand_eye = {rows:?}\n");
+        let e = Config::parse(&text, "c.toml").unwrap_err().to_string();
+        assert!(e.contains("robot.hand_eye") && e.contains("max_hand_eye_translation_mm (1000 mm)"), "{e}");
+    }
+
     #[test]
     fn the_papers_printed_hand_eye_typo_is_refused() {
         let mut rows = crate::geometry::pose::PAPER_HAND_EYE;
@@ -523,5 +623,6 @@ mod tests {
         assert_eq!(c.trajectory, TrajectoryParams::default());
         assert_eq!(c.camera, CameraModel::default());
         assert_eq!(c.server, ServerConfig::default());
+        assert_eq!(c.robot_limits, RobotLimits::default());
     }
 }

@@ -32,6 +32,11 @@ pub struct PlaneCluster {
 #[derive(Debug, Clone)]
 pub struct Workpiece {
     pub plates: [PlaneCluster; 2],
+    /// How far behind the plates (the butt plates' top, or the lower lap
+    /// plate) the next parallel surface lies, mm along the normal: the
+    /// table or fixture they rest on, when the camera sees it. The plates
+    /// are no thicker than this, so neither is a groove (robust method).
+    pub depth_to_support_mm: Option<f64>,
 }
 
 /// Why no workpiece could be found among the plane clusters.
@@ -101,7 +106,7 @@ fn take_two(planes: Vec<PlaneCluster>) -> Result<Workpiece, BackgroundError> {
     let found = planes.len();
     let mut it = planes.into_iter();
     match (it.next(), it.next()) {
-        (Some(a), Some(b)) => Ok(Workpiece { plates: [a, b] }),
+        (Some(a), Some(b)) => Ok(Workpiece { plates: [a, b], depth_to_support_mm: None }),
         _ => Err(BackgroundError::TooFewPlanes { found }),
     }
 }
@@ -151,9 +156,10 @@ pub fn robust_select(planes: Vec<PlaneCluster>, s: &Selection) -> Result<Workpie
             let Some(pos) = layers.iter().position(|l| l.len() >= 2) else {
                 return Err(BackgroundError::NoCoplanarPair { found, offsets_mm });
             };
+            let depth_to_support_mm = layers.get(pos + 1).map(|behind| offset(&behind[0]) - offset(&layers[pos][0]));
             let mut layer = layers.swap_remove(pos).into_iter();
             match (layer.next(), layer.next()) {
-                (Some(a), Some(b)) => Ok(Workpiece { plates: [a, b] }),
+                (Some(a), Some(b)) => Ok(Workpiece { plates: [a, b], depth_to_support_mm }),
                 _ => Err(BackgroundError::NoCoplanarPair { found, offsets_mm }),
             }
         }
@@ -165,9 +171,11 @@ pub fn robust_select(planes: Vec<PlaneCluster>, s: &Selection) -> Result<Workpie
                         break;
                     }
                     if step >= s.lap_step_min_mm {
+                        let depth_to_support_mm =
+                            layers.get(lower + 1).map(|behind| offset(&behind[0]) - offset(&layers[lower][0]));
                         let low = layers.swap_remove(lower).swap_remove(0);
                         let up = layers.swap_remove(upper).swap_remove(0);
-                        return Ok(Workpiece { plates: [up, low] });
+                        return Ok(Workpiece { plates: [up, low], depth_to_support_mm });
                     }
                 }
             }

@@ -80,12 +80,6 @@ impl PlanRequest {
             travel_angle_deg: None,
         }
     }
-
-    /// Checks the request's own values (finite pose, groove depth, step,
-    /// angles) before any frame is fetched for it.
-    pub fn validate(&self) -> Result<(), PlanError> {
-        validate(self)
-    }
 }
 
 /// A pipeline stage, for timings and error messages.
@@ -244,6 +238,13 @@ impl Planner {
         &self.config
     }
 
+    /// Checks a request's own values against the configured limits (pose
+    /// within the robot's reach, sane angles, hand-eye, groove depth,
+    /// step, torch angles) before any frame is fetched for it.
+    pub fn check_request(&self, request: &PlanRequest) -> Result<(), PlanError> {
+        validate(request, &self.config)
+    }
+
     /// Runs the pipeline on `cloud` (camera frame, mm).
     pub fn plan(&self, cloud: &PointCloud, request: &PlanRequest) -> Result<Plan, PlanError> {
         Run::new(&self.config, cloud, request)?.execute()
@@ -262,7 +263,7 @@ struct Run<'a> {
 
 impl<'a> Run<'a> {
     fn new(config: &'a Config, cloud: &'a PointCloud, request: &'a PlanRequest) -> Result<Self, PlanError> {
-        validate(request)?;
+        validate(request, config)?;
         Ok(Run {
             config,
             cloud,
@@ -377,6 +378,7 @@ impl<'a> Run<'a> {
         .map_err(|e| PlanError::at(Stage::Background, e))?;
         self.stats.plate_points = workpiece.plates.each_ref().map(|p| p.members.len());
         self.clock.lap(Stage::Background);
+        self.check_groove_depth(&workpiece)?;
 
         // The cluster labels, renumbered in place: plate k is label k.
         let mut labels = clusters.labels;
@@ -569,6 +571,48 @@ impl<'a> Run<'a> {
         self.finish(weld, s0, s1, normal, &fits)
     }
 
+    /// A groove cannot be deeper than the plates: where the surface they
+    /// rest on is seen, the depth to it bounds the requested groove depth
+    /// (which moves every waypoint along the normal, Eq. 32).
+    fn check_groove_depth(&self, workpiece: &Workpiece) -> Result<(), PlanError> {
+        let (JointType::VButt, Some(depth), Some(support)) =
+            (self.request.joint, self.request.groove_depth_mm, workpiece.depth_to_support_mm)
+        else {
+            return Ok(());
+        };
+        if depth > support + GROOVE_DEPTH_TOLERANCE_MM {
+            return Err(PlanError::at(
+                Stage::Request,
+                format!(
+                    "groove depth {depth} mm is deeper than the plates: their top lies {support:.1} mm above \
+                     the surface they rest on"
+                ),
+            ));
+        }
+        Ok(())
+    }
+
+    /// Every waypoint must be a place the robot can go: finite and within
+    /// its reach. A waypoint beyond it means the pose, the hand-eye matrix
+    /// or the cloud's units are wrong, and no trajectory is safer than one
+    /// built on them.
+    fn check_reach(&self, waypoints: &[Waypoint]) -> Result<(), PlanError> {
+        let reach = self.config.robot_limits.max_reach_mm;
+        let beyond =
+            waypoints.iter().position(|w| !(w.position.iter().all(|c| c.is_finite()) && w.position.norm() <= reach));
+        match beyond {
+            None => Ok(()),
+            Some(k) => Err(PlanError::at(
+                Stage::Trajectory,
+                format!(
+                    "waypoint {k} lies {:.0} mm from the base origin, beyond robot.max_reach_mm ({reach} mm); \
+                     check the pose, robot.hand_eye and the cloud's units",
+                    waypoints[k].position.norm()
+                ),
+            )),
+        }
+    }
+
     /// The weld of the requested joint from its two edges (Eq. 32, 36);
     /// `lap` gives the lap weld, where the methods differ.
     fn weld(
@@ -629,6 +673,7 @@ impl<'a> Run<'a> {
         };
         let (start, end) = trajectory::travel_order(&weld, s0, s1);
         let waypoints = trajectory::waypoints(&weld, start, end, &normal, &base_from_camera, &params);
+        self.check_reach(&waypoints)?;
         let length_mm = waypoints.windows(2).map(|w| (w[1].position - w[0].position).norm()).sum();
         self.clock.lap(Stage::Trajectory);
         Ok(Seam {
@@ -678,28 +723,60 @@ fn without_near_points(cloud: &PointCloud, min_depth: f64) -> PointCloud {
     }
 }
 
-fn validate(r: &PlanRequest) -> Result<(), PlanError> {
+/// The deepest groove a request may name, mm. Plates for single-sided
+/// V-butt welds are rarely thicker than 50 mm; twice that is nonsense.
+pub const MAX_GROOVE_DEPTH_MM: f64 = 100.0;
+
+/// How much deeper than the measured plates a groove may be, mm: plane
+/// offsets are fitted over thousands of points and agree to a tenth of a
+/// millimetre, so this only absorbs fit noise.
+const GROOVE_DEPTH_TOLERANCE_MM: f64 = 0.5;
+
+fn validate(r: &PlanRequest, config: &Config) -> Result<(), PlanError> {
+    use crate::config::{MAX_POSE_ANGLE_DEG, MAX_STEP_MM, MAX_TORCH_ANGLE_DEG, MIN_STEP_MM};
     let bad = |reason: String| Err(PlanError::at(Stage::Request, reason));
+    let limits = &config.robot_limits;
     if !r.pose.is_finite() {
         return bad(format!("the robot pose has a non-finite value: {:?} {:?}", r.pose.xyz_mm, r.pose.angles_deg));
     }
+    let [x, y, z] = r.pose.xyz_mm;
+    let reach = (x * x + y * y + z * z).sqrt();
+    if reach > limits.max_reach_mm {
+        return bad(format!(
+            "the robot pose lies {reach:.0} mm from the base origin, beyond robot.max_reach_mm ({} mm); \
+             is it in millimetres?",
+            limits.max_reach_mm
+        ));
+    }
+    if let Some(a) = r.pose.angles_deg.iter().find(|a| a.abs() > MAX_POSE_ANGLE_DEG) {
+        return bad(format!("the robot pose angle {a}° is beyond ±{MAX_POSE_ANGLE_DEG}°; are the angles in degrees?"));
+    }
+    if let Some(hand_eye) = &r.hand_eye {
+        let offset = hand_eye.translation.vector.norm();
+        if offset > limits.max_hand_eye_translation_mm {
+            return bad(format!(
+                "the hand-eye translation is {offset:.1} mm long, beyond robot.max_hand_eye_translation_mm ({} mm)",
+                limits.max_hand_eye_translation_mm
+            ));
+        }
+    }
     match (r.joint, r.groove_depth_mm) {
         (JointType::VButt, None) => return bad("a V-butt joint needs its groove depth".into()),
-        (_, Some(d)) if !(d.is_finite() && (0.0..=200.0).contains(&d)) => {
-            return bad(format!("groove depth {d} mm is outside 0 to 200 mm"));
+        (_, Some(d)) if !(d.is_finite() && (0.0..=MAX_GROOVE_DEPTH_MM).contains(&d)) => {
+            return bad(format!("groove depth {d} mm is outside 0 to {MAX_GROOVE_DEPTH_MM} mm"));
         }
         _ => {}
     }
     if let Some(step) = r.step_mm
-        && !(step.is_finite() && step >= 0.1)
+        && !(step.is_finite() && (MIN_STEP_MM..=MAX_STEP_MM).contains(&step))
     {
-        return bad(format!("step {step} mm must be at least 0.1 mm"));
+        return bad(format!("step {step} mm is outside {MIN_STEP_MM} to {MAX_STEP_MM} mm"));
     }
     for (name, v) in [("work angle", r.work_angle_deg), ("travel angle", r.travel_angle_deg)] {
         if let Some(a) = v
-            && !(a.is_finite() && (-80.0..=80.0).contains(&a))
+            && !(a.is_finite() && (-MAX_TORCH_ANGLE_DEG..=MAX_TORCH_ANGLE_DEG).contains(&a))
         {
-            return bad(format!("{name} {a}° is outside -80° to 80°"));
+            return bad(format!("{name} {a}° is outside ±{MAX_TORCH_ANGLE_DEG}°"));
         }
     }
     Ok(())

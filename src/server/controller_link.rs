@@ -118,7 +118,7 @@ fn accept(r: &message::PlanRequest, state: &ServerState) -> Result<(PlanRequest,
         work_angle_deg: r.work_angle_deg,
         travel_angle_deg: r.travel_angle_deg,
     };
-    request.validate().map_err(|e| (ErrorCode::BadRequest, e.reason))?;
+    state.jobs.planner().check_request(&request).map_err(|e| (ErrorCode::BadRequest, e.reason))?;
     let slot = state.jobs.reserve().map_err(|e| (ErrorCode::Busy, e.to_string()))?;
     Ok((request, slot))
 }

@@ -69,7 +69,7 @@ fn main() -> std::process::ExitCode {
         // A reader that stops early (`| head`) is not an error of ours.
         Err(e) if is_broken_pipe(&e) => std::process::ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("error: {e:#}");
+            eprintln!("error: {}", cli::errors::render(&e));
             std::process::ExitCode::FAILURE
         }
     }

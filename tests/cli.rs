@@ -139,3 +139,56 @@ fn demo_runs_and_meets_the_bar() {
     assert!(out.status.success(), "{text}\n{}", String::from_utf8_lossy(&out.stderr));
     assert_eq!(text.matches("within the 1 mm bar").count(), 3, "{text}");
 }
+
+#[test]
+fn error_texts_say_each_cause_once_and_name_the_request_not_the_cloud() {
+    let dir = tempfile::tempdir().unwrap();
+    let (pcd, truth) = simulate(dir.path(), "v-butt");
+    let pose = format!("--pose={}", pose_of(&truth));
+    let stderr = |out: &Output| String::from_utf8_lossy(&out.stderr).into_owned();
+
+    let missing = weldseam(&["plan", "--cloud", "no-such.pcd", "--joint", "lap", "--pose=0,0,0,0,0,0"]);
+    let text = stderr(&missing);
+    assert!(!missing.status.success());
+    assert_eq!(text.matches("os error 2").count(), 1, "the cause is printed once: {text}");
+
+    // A negative number is a value, refused by the request's own check,
+    // not taken for a flag or blamed on the cloud.
+    for args in [["--groove-depth", "-1"], ["--step", "-5"]] {
+        let mut argv = vec!["plan", "--cloud", pcd.as_str(), "--joint", "v-butt", pose.as_str()];
+        argv.extend(args);
+        if args[0] == "--step" {
+            argv.extend(["--groove-depth", "6"]);
+        }
+        let out = weldseam(&argv);
+        let text = stderr(&out);
+        assert!(!out.status.success());
+        assert!(text.starts_with("error: invalid request:"), "{args:?}: {text}");
+        assert!(!text.contains("no seam found") && !text.contains("unexpected argument"), "{text}");
+    }
+
+    let config = dir.path().join("bad-hand-eye.toml");
+    let mut rows = weldseam::geometry::pose::PAPER_HAND_EYE;
+    rows[4] = -0.353;
+    std::fs::write(&config, format!("[robot]\nhand_eye = {rows:?}\n")).unwrap();
+    let out = weldseam(&["plan", "--config", config.to_str().unwrap(), "--cloud", &pcd, "--joint", "lap", &pose]);
+    let text = stderr(&out);
+    assert!(!out.status.success());
+    assert_eq!(text.matches("orthonormal").count(), 1, "{text}");
+}
+
+#[test]
+fn log_lines_carry_no_colour_codes_when_stderr_is_not_a_terminal() {
+    let dir = tempfile::tempdir().unwrap();
+    let (pcd, truth) = simulate(dir.path(), "lap");
+    let pose = format!("--pose={}", pose_of(&truth));
+    let out = Command::new(env!("CARGO_BIN_EXE_weldseam"))
+        .args(["plan", "--cloud", &pcd, "--joint", "lap", &pose, "--json"])
+        .env("RUST_LOG", "info")
+        .output()
+        .expect("run weldseam");
+    let text = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{text}");
+    assert!(text.contains("INFO"), "an info line was logged: {text}");
+    assert!(!text.contains('\u{1b}'), "no escape codes in a pipe: {text:?}");
+}

@@ -7,6 +7,7 @@ pub mod bench;
 pub mod camera;
 pub mod controller;
 pub mod demo;
+pub mod errors;
 pub mod eval;
 pub mod logging;
 pub mod memory;

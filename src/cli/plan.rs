@@ -5,11 +5,11 @@ use std::path::PathBuf;
 
 use std::io::Write;
 
-use anyhow::{Context, bail};
+use anyhow::{anyhow, bail};
 use weldseam::config::{Config, Method};
 use weldseam::geometry::pose::{RobotPose, hand_eye_from_rows};
 use weldseam::joint::JointType;
-use weldseam::pipeline::{PlanRequest, Planner};
+use weldseam::pipeline::{PlanRequest, Planner, Stage};
 use weldseam::report::plan_result;
 
 use super::args;
@@ -23,7 +23,7 @@ pub struct PlanArgs {
     #[arg(long)]
     pub joint: JointType,
     /// Groove depth of a V-butt joint, mm.
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub groove_depth: Option<f64>,
     /// Robot pose at capture: x,y,z,rx,ry,rz (mm, degrees).
     #[arg(long, allow_hyphen_values = true, value_parser = args::pose)]
@@ -32,7 +32,7 @@ pub struct PlanArgs {
     #[arg(long, allow_hyphen_values = true, value_parser = args::matrix)]
     pub hand_eye: Option<[f64; 16]>,
     /// Waypoint spacing, mm (default from the config: 5).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub step: Option<f64>,
     /// Configuration file (TOML); built-in defaults otherwise.
     #[arg(long)]
@@ -65,6 +65,12 @@ pub fn run(args: &PlanArgs) -> anyhow::Result<()> {
         .hand_eye
         .map(|rows| hand_eye_from_rows(&rows).map_err(|e| anyhow::anyhow!("--hand-eye: {e}")))
         .transpose()?;
+    let request =
+        PlanRequest { hand_eye, step_mm: args.step, ..PlanRequest::new(args.joint, args.groove_depth, args.pose) };
+    let planner = Planner::new(config);
+    // A bad flag is the caller's mistake, not the cloud's: say so before
+    // reading a possibly large file.
+    planner.check_request(&request).map_err(|e| anyhow!("invalid request: {}", e.reason))?;
     let load_start = std::time::Instant::now();
     let cloud = weldseam::cloud::load(&args.cloud)?;
     let load_ms = load_start.elapsed().as_secs_f64() * 1e3;
@@ -76,10 +82,10 @@ pub fn run(args: &PlanArgs) -> anyhow::Result<()> {
         load_ms = format!("{load_ms:.1}"),
         "loaded point cloud"
     );
-    let request =
-        PlanRequest { hand_eye, step_mm: args.step, ..PlanRequest::new(args.joint, args.groove_depth, args.pose) };
-    let planner = Planner::new(config);
-    let plan = planner.plan(&cloud, &request).with_context(|| format!("no seam found in {}", args.cloud.display()))?;
+    let plan = planner.plan(&cloud, &request).map_err(|e| match e.stage {
+        Stage::Request => anyhow!("the request does not fit {}: {}", args.cloud.display(), e.reason),
+        _ => anyhow!(e).context(format!("no seam found in {}", args.cloud.display())),
+    })?;
     let mut report = plan_result(&plan, planner.config().euler);
     report.timing_ms.insert("load".into(), load_ms);
     if args.json {

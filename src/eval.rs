@@ -8,9 +8,9 @@
 //! the hand-eye and pose transform exactly as a robot would follow it.
 
 use crate::camera::CameraModel;
-use crate::config::Config;
+use crate::config::{Config, Method};
 use crate::geometry::{Vec3, distance_to_polyline};
-use crate::pipeline::{PlanError, PlanRequest, Planner, Seam, StageTimings};
+use crate::pipeline::{Plan, PlanError, PlanRequest, Planner, Seam};
 use crate::sim::{GroundTruth, SceneSpec, Simulation, simulate};
 
 /// The number of reference points on the true seam (the paper's 12).
@@ -67,9 +67,12 @@ pub fn path_error(truth: &GroundTruth, path: &[Vec3]) -> Option<SeamError> {
 #[derive(Debug, Clone)]
 pub struct SceneOutcome {
     pub name: String,
+    /// The method that planned it.
+    pub method: Method,
     pub spec: SceneSpec,
     pub truth: GroundTruth,
-    pub result: Result<(SeamError, StageTimings), PlanError>,
+    /// The error against the truth and the plan it was measured on.
+    pub result: Result<(SeamError, Plan), PlanError>,
 }
 
 impl SceneOutcome {
@@ -90,9 +93,15 @@ pub fn evaluate_simulation(planner: &Planner, name: &str, spec: &SceneSpec, sim:
             stage: crate::pipeline::Stage::Trajectory,
             reason: "the trajectory has no waypoint".into(),
         })?;
-        Ok((err, plan.timings.clone()))
+        Ok((err, plan))
     });
-    SceneOutcome { name: name.to_string(), spec: spec.clone(), truth: sim.truth.clone(), result }
+    SceneOutcome {
+        name: name.to_string(),
+        method: planner.config().pipeline.method,
+        spec: spec.clone(),
+        truth: sim.truth.clone(),
+        result,
+    }
 }
 
 /// Simulates and plans every scene with each of `configs`; returns one
@@ -136,12 +145,12 @@ pub fn summarise<'a>(outcomes: impl IntoIterator<Item = &'a SceneOutcome>) -> Su
     let mut totals = Vec::new();
     for o in outcomes {
         s.scenes += 1;
-        if let Ok((e, t)) = &o.result {
+        if let Ok((e, plan)) = &o.result {
             s.found += 1;
             s.passed += e.passes() as usize;
             maxes.push(e.max_mm);
             s.worst_end_mm = s.worst_end_mm.max(e.start_mm).max(e.end_mm);
-            totals.push(t.total_ms());
+            totals.push(plan.timings.total_ms());
         }
     }
     s.worst_max_mm = maxes.iter().copied().fold(0.0, f64::max);

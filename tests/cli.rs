@@ -192,3 +192,26 @@ fn log_lines_carry_no_colour_codes_when_stderr_is_not_a_terminal() {
     assert!(text.contains("INFO"), "an info line was logged: {text}");
     assert!(!text.contains('\u{1b}'), "no escape codes in a pipe: {text:?}");
 }
+
+#[test]
+fn eval_runs_as_a_process_and_its_plans_file_repeats_digit_for_digit() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = |name: &str| {
+        let path = dir.path().join(name);
+        let out = weldseam(&["eval", "--filter", "i-butt-0", "--limit", "2", "--plans", path.to_str().unwrap()]);
+        let text = String::from_utf8_lossy(&out.stdout).into_owned();
+        assert!(out.status.success(), "{text}\n{}", String::from_utf8_lossy(&out.stderr));
+        assert!(text.contains("| robust | all | 2 | 2 | 2 |"), "{text}");
+        std::fs::read_to_string(path).unwrap()
+    };
+    let first = run("a.jsonl");
+    let lines: Vec<serde_json::Value> = first.lines().map(|l| serde_json::from_str(l).unwrap()).collect();
+    // Two scenes, each planned by the robust and the paper's method.
+    assert_eq!(lines.len(), 4, "{first}");
+    assert_eq!(lines[0]["method"], "robust");
+    assert_eq!(lines[1]["method"], "paper");
+    let waypoints = lines[0]["plan"]["seams"][0]["waypoints"].as_array().expect("the robust plan has waypoints");
+    assert!(waypoints.len() >= 10);
+    assert!(!first.contains("timing"), "no run-to-run timings in the plans file");
+    assert_eq!(first, run("b.jsonl"), "the same suite plans the same, to the last digit");
+}

@@ -3,12 +3,16 @@
 //! accuracy table (docs/ACCURACY.md holds its latest output).
 
 use std::io::Write;
+
+use anyhow::Context;
 use std::path::PathBuf;
 
 use weldseam::config::Method;
 use weldseam::eval::{SceneOutcome, run_suite, summarise};
+use weldseam::geometry::pose::EulerConvention;
 use weldseam::joint::JointType;
 use weldseam::pipeline::Stage;
+use weldseam::report::plan_result;
 use weldseam::sim::eval_suite;
 
 #[derive(Debug, clap::Args)]
@@ -28,6 +32,12 @@ pub struct EvalArgs {
     /// Print Markdown tables (for docs/ACCURACY.md).
     #[arg(long)]
     pub markdown: bool,
+    /// Also write every scene's planned seams, one JSON line per scene and
+    /// method, with every number in full precision and no timings: two
+    /// runs give equal files exactly when every plan is the same, digit for
+    /// digit (`diff before.jsonl after.jsonl`).
+    #[arg(long, value_name = "FILE")]
+    pub plans: Option<PathBuf>,
 }
 
 fn cell(o: &SceneOutcome) -> String {
@@ -46,7 +56,8 @@ fn cell(o: &SceneOutcome) -> String {
 
 fn timings(o: &SceneOutcome) -> String {
     match &o.result {
-        Ok((_, t)) => {
+        Ok((_, plan)) => {
+            let t = &plan.timings;
             let stages: Vec<String> =
                 Stage::IN_ORDER.iter().map(|s| format!("{:.0}", t.get(*s).unwrap_or(0.0))).collect();
             format!("{:.0} | {}", t.total_ms(), stages.join(" / "))
@@ -58,6 +69,16 @@ fn timings(o: &SceneOutcome) -> String {
 fn describe(o: &SceneOutcome) -> String {
     let p = &o.spec.placement;
     format!("{} | {:.0} | {:.1}", o.name, p.distance_mm, p.tilt_deg)
+}
+
+/// One scene's plan as a JSON line: the seams as `plan --json` reports
+/// them, without the timings that differ from run to run.
+fn plan_line(o: &SceneOutcome, euler: EulerConvention) -> serde_json::Value {
+    let outcome = match &o.result {
+        Ok((_, plan)) => serde_json::json!({ "seams": plan_result(plan, euler).seams }),
+        Err(e) => serde_json::json!({ "error": e.to_string() }),
+    };
+    serde_json::json!({ "scene": o.name, "method": o.method.name(), "plan": outcome })
 }
 
 pub fn run(args: &EvalArgs) -> anyhow::Result<()> {
@@ -85,7 +106,19 @@ pub fn run(args: &EvalArgs) -> anyhow::Result<()> {
         "|---|---:|---:|---:|---:|---:|---:|---|---:|---|{}",
         if args.robust_only { "" } else { "---:|---:|---:|---:|---|" }
     )?;
+    let mut plans = match &args.plans {
+        Some(path) => Some(std::io::BufWriter::new(
+            std::fs::File::create(path).with_context(|| format!("cannot create {}", path.display()))?,
+        )),
+        None => None,
+    };
+    let mut plans_written = Ok(());
     let results = run_suite(&scenes, &robust.camera, &configs, |_, outcomes| {
+        if let Some(file) = plans.as_mut()
+            && plans_written.is_ok()
+        {
+            plans_written = outcomes.iter().try_for_each(|o| writeln!(file, "{}", plan_line(o, robust.euler)));
+        }
         let mut line = format!("| {} | {} | {} |", describe(&outcomes[0]), cell(&outcomes[0]), timings(&outcomes[0]));
         if let Some(p) = outcomes.get(1) {
             line.push_str(&format!(" {} |", cell(p)));
@@ -94,6 +127,10 @@ pub fn run(args: &EvalArgs) -> anyhow::Result<()> {
         let _ = writeln!(std::io::stdout().lock(), "{line}");
     });
 
+    plans_written.context("cannot write the plans file")?;
+    if let Some(mut file) = plans {
+        file.flush().context("cannot write the plans file")?;
+    }
     writeln!(out)?;
     writeln!(
         out,

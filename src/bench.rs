@@ -533,6 +533,7 @@ pub enum DaemonBenchError {
 /// ids: after the 16-byte header, the payload starts with them.
 const FRAME_ID_AT: usize = frame::HEADER_BYTES;
 const TRIGGER_ID_AT: usize = frame::HEADER_BYTES + 8;
+const CAPTURE_TIME_AT: usize = frame::HEADER_BYTES + 16;
 
 /// A camera on a raw socket: answers each trigger with `message` (a
 /// pre-encoded frame whose ids it patches) and reports the instant the
@@ -558,13 +559,15 @@ async fn raw_camera(
         };
         let trigger_id = match received.message {
             Message::Trigger(t) => t.trigger_id,
-            Message::HelloAck(_) | Message::Status(_) => continue,
+            Message::HelloAck(_) | Message::Status(_) | Message::FrameAck(_) => continue,
             Message::Error(e) => return Err(DaemonBenchError::Camera(e.message)),
             other => return Err(DaemonBenchError::Camera(format!("unexpected {} message", other.tag().name()))),
         };
         frame_id += 1;
         message[FRAME_ID_AT..FRAME_ID_AT + 8].copy_from_slice(&frame_id.to_le_bytes());
         message[TRIGGER_ID_AT..TRIGGER_ID_AT + 8].copy_from_slice(&trigger_id.to_le_bytes());
+        let captured = crate::server::frames::wall_clock_us();
+        message[CAPTURE_TIME_AT..CAPTURE_TIME_AT + 8].copy_from_slice(&captured.to_le_bytes());
         write.write_all(&message).await?;
         write.flush().await?;
         if written.send(Instant::now()).is_err() {

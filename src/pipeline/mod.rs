@@ -65,6 +65,9 @@ pub struct PlanRequest {
     pub step_mm: Option<f64>,
     pub work_angle_deg: Option<f64>,
     pub travel_angle_deg: Option<f64>,
+    /// The waypoints start at the seam's end nearest this point (robot
+    /// base frame, mm); else by [`trajectory::travel_order`]'s default.
+    pub start_near: Option<Vec3>,
 }
 
 impl PlanRequest {
@@ -78,6 +81,7 @@ impl PlanRequest {
             step_mm: None,
             work_angle_deg: None,
             travel_angle_deg: None,
+            start_near: None,
         }
     }
 
@@ -627,7 +631,7 @@ impl<'a> Run<'a> {
             work_angle_deg: self.request.work_angle_deg.unwrap_or(t.work_angle_deg),
             travel_angle_deg: self.request.travel_angle_deg.unwrap_or(t.travel_angle_deg),
         };
-        let (start, end) = trajectory::travel_order(&weld, s0, s1);
+        let (start, end) = trajectory::travel_order(&weld, s0, s1, &base_from_camera, self.request.start_near);
         let waypoints = trajectory::waypoints(&weld, start, end, &normal, &base_from_camera, &params);
         let length_mm = waypoints.windows(2).map(|w| (w[1].position - w[0].position).norm()).sum();
         self.clock.lap(Stage::Trajectory);

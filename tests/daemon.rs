@@ -768,79 +768,155 @@ async fn version_1_peers_get_a_clear_refusal() {
 
 /// The bounded load test: a camera pushing frames as fast as a cell
 /// would and four controllers planning in a loop for about 20 s
-/// (`WELDSEAM_LOAD_TEST_SECS` changes it). No request may be refused as
-/// busy (no lock-out) and none may wait longer than PROTOCOL.md's bound:
-/// its frame wait plus `plan_queue_depth` plans. The plan time is the
-/// longest pipeline time under this very load (plans run one at a time,
-/// so each reply's own figure is its plan's), with half as much again and
-/// one second for the frame wait, to spare a machine shared with others.
+/// (`WELDSEAM_LOAD_TEST_SECS` changes it). No request may be refused (no
+/// lock-out), plans must be served in the order their frames came, and no
+/// request may wait longer than PROTOCOL.md's bound: its frame wait plus
+/// `plan_queue_depth` plans. The plan time is the longest pipeline time
+/// under this very load (plans run one at a time, so each reply's own
+/// figure is its plan's), with half as much again and one second for the
+/// frame wait, to spare a machine shared with others.
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
-async fn under_load_every_request_is_answered_within_the_documented_bound() {
+async fn under_load_every_request_is_answered_in_order_within_the_documented_bound() {
+    use weldseam::bench::{self, Load, quantile};
     let secs: u64 = std::env::var("WELDSEAM_LOAD_TEST_SECS").ok().and_then(|s| s.parse().ok()).unwrap_or(20);
-    let (w, h) = weldseam::bench::FRAME_SIZES[1];
-    let scenario = weldseam::bench::Scenario::new(JointType::IButt, 500.0, weldseam::bench::camera_with_size(w, h));
-    let sim = Arc::new(scenario.simulate());
-    let mut c = scenario.config();
-    c.server.pipeline_threads = 2;
-    c.server.plan_queue_depth = 4;
-    c.server.fresh_frame_timeout = Duration::from_secs(5);
-    let depth = c.server.plan_queue_depth as f64;
-    let cell = Cell::start(c).await;
-    let options = CameraOptions { free_run_hz: Some(20.0), ..CameraOptions::default() };
-    let (stop_cam, cam) = cell.camera(vec![Arc::new(sim.cloud.clone())], options);
-    let mut probe = cell.controller().await;
-    wait_for_camera(&mut probe).await;
+    let (w, h) = bench::FRAME_SIZES[0];
+    let scenario = bench::Scenario::new(JointType::IButt, 500.0, bench::camera_with_size(w, h));
+    let sim = scenario.simulate();
+    let load = Load { duration: Duration::from_secs(secs), controllers: 4, camera_hz: 20.0, queue_depth: 4 };
+    let figures = bench::daemon_under_load_async(&scenario, &sim, load).await.unwrap();
+    let (waits, plans) = (figures.reply_ms(), figures.plan_ms());
+    assert!(figures.errors.is_empty(), "requests were refused under load: {:?}", figures.errors);
+    assert!(waits.len() >= 8, "only {} requests were answered in {secs} s", waits.len());
+    let worst = quantile(&waits, 1.0).unwrap();
+    let plan = quantile(&plans, 1.0).unwrap();
+    let bound = 1000.0 + 1.5 * load.queue_depth as f64 * plan;
+    let overtaken = figures.overtaken();
+    eprintln!(
+        "{} requests in {secs} s: reply p50 {:.0} ms, p99 {:.0} ms, max {worst:.0} ms; plan p50 {:.0} ms, \
+         max {plan:.0} ms; bound {bound:.0} ms; {overtaken} overtaken",
+        waits.len(),
+        quantile(&waits, 0.5).unwrap(),
+        quantile(&waits, 0.99).unwrap(),
+        quantile(&plans, 0.5).unwrap(),
+    );
+    assert!(worst <= bound, "a request waited {worst:.0} ms, over the bound of {bound:.0} ms");
+    // Reply order is observed by the controllers' tasks, which a busy
+    // machine may delay a little; one in twenty out of order would be a
+    // scheduler that does not serve in order.
+    assert!(overtaken * 20 <= waits.len(), "{overtaken} of {} plans were overtaken by younger ones", waits.len());
+}
 
-    let until = tokio::time::Instant::now() + Duration::from_secs(secs);
-    let mut controllers = Vec::new();
-    for k in 0..4u64 {
-        let mut ctl = cell.controller().await;
-        let sim = Arc::clone(&sim);
-        controllers.push(tokio::spawn(async move {
-            let mut samples = Vec::new();
-            let mut id = k * 1_000_000;
-            while tokio::time::Instant::now() < until {
-                id += 1;
-                let select = if id % 2 == 0 { FrameSelect::Trigger } else { FrameSelect::NextFrame };
-                let started = std::time::Instant::now();
-                let reply = ctl.plan(sim_request(id, JointType::IButt, &sim, select), WAIT).await;
-                let waited_ms = started.elapsed().as_secs_f64() * 1e3;
-                samples.push((waited_ms, reply.map(|r| r.result.timing_ms["total"])));
-            }
-            samples
-        }));
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn before_the_hello_every_error_closes_and_frames_on_the_controller_link_are_bounded() {
+    let cell = Cell::start(config()).await;
+    // An unknown tag as the first message: its error, then closed.
+    let mut raw = Raw::connect(&cell.controller).await;
+    raw.write(&Header { version: PROTOCOL_VERSION, tag: 900, length: 0 }.to_bytes()).await;
+    raw.expect_error(ErrorCode::UnknownMessage).await;
+    raw.expect_closed().await;
+    // A Hello that does not decode: its error, then closed.
+    let mut raw = Raw::connect(&cell.camera).await;
+    raw.write(&Header::new(Tag::Hello, 3).to_bytes()).await;
+    raw.write(&[2, 0, 9]).await;
+    raw.expect_error(ErrorCode::Malformed).await;
+    raw.expect_closed().await;
+    // A ping before the Hello.
+    let mut raw = Raw::connect(&cell.controller).await;
+    raw.send(&Message::Ping).await;
+    raw.expect_error(ErrorCode::UnexpectedMessage).await;
+    raw.expect_closed().await;
+    // After the Hello, a small frame on the controller link is the other
+    // link's message; one over 4 MiB cannot be read there and closes.
+    let mut ctl = Raw::hello(&cell.controller, Role::Controller).await;
+    ctl.send(&frame_message(1, 0, &small_cloud())).await;
+    ctl.expect_error(ErrorCode::UnexpectedMessage).await;
+    ctl.ping().await;
+    ctl.write(&Header::new(Tag::Frame, 5 << 20).to_bytes()).await;
+    ctl.expect_error(ErrorCode::TooLarge).await;
+    ctl.expect_closed().await;
+    cell.shutdown().await;
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn cameras_are_chosen_by_name_and_frames_are_acknowledged() {
+    let cell = Cell::start(config()).await;
+    let hello = |name: &str| {
+        Message::Hello(Hello { protocol_version: PROTOCOL_VERSION, role: Role::Camera, name: name.into() })
+    };
+    let mut left = Raw::connect(&cell.camera).await;
+    left.send(&hello("left")).await;
+    assert!(matches!(left.recv().await, Some(Message::HelloAck(_))));
+    let mut right = Raw::connect(&cell.camera).await;
+    right.send(&hello("right")).await;
+    assert!(matches!(right.recv().await, Some(Message::HelloAck(_))));
+    let mut ctl = cell.controller().await;
+    let small = small_cloud();
+
+    // Named: only that camera is triggered, and its answer is planned.
+    let named = PlanRequest { camera: Some("right".into()), ..request(1, FrameSelect::Trigger) };
+    ctl.send(&Message::PlanRequest(named)).await.unwrap();
+    let trigger = right.expect_trigger().await;
+    right.send(&frame_message(30, trigger, &small)).await;
+    let ack = right.expect_ack(30, 0).await;
+    assert_eq!(ack.requests, 1, "the frame went to the waiting request");
+    let (code, message) = refused(wait_reply(&mut ctl, 1).await);
+    assert_eq!(code, ErrorCode::PlanFailed, "{message}");
+    assert!(message.contains("frame 30"), "{message}");
+    left.ping().await; // no trigger reached the left camera before this Status
+
+    // An unknown name is refused with the names that are connected.
+    let unknown = PlanRequest { camera: Some("top".into()), ..request(2, FrameSelect::Trigger) };
+    let (code, message) = refused(ctl.plan(unknown, WAIT).await);
+    assert_eq!(code, ErrorCode::NoCamera);
+    assert!(message.contains("top") && message.contains("left") && message.contains("right"), "{message}");
+
+    // The daemon reports the newest frame it holds.
+    let status = ctl.ping(WAIT).await.unwrap();
+    assert_eq!((status.cameras, status.latest_frame_id), (2, Some(30)));
+    assert!(status.latest_capture_time_us.is_some_and(|t| t > 0));
+
+    // A frame that qualified for no waiting request says why.
+    ctl.send(&Message::PlanRequest(request(3, FrameSelect::NextFrame))).await.unwrap();
+    ctl.ping(WAIT).await.unwrap();
+    tokio::time::sleep(Duration::from_millis(50)).await;
+    left.send(&frame_stamped(31, 0, &small, now_us(-60_000))).await;
+    let ack = left.expect_ack(31, 0).await;
+    assert_eq!(ack.requests, 0);
+    assert!(ack.message.contains("before the request"), "{}", ack.message);
+    drop(ctl);
+    cell.shutdown().await;
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_request_may_carry_its_hand_eye_and_the_end_to_start_from() {
+    let sim = simulate(&demo_scene(JointType::Lap), &CameraModel::default());
+    let cell = Cell::start(config()).await;
+    let (stop_cam, cam) = cell.camera(vec![Arc::new(sim.cloud.clone())], CameraOptions::default());
+    let mut ctl = cell.controller().await;
+    wait_for_camera(&mut ctl).await;
+    let (a, b) = (sim.truth.start_base, sim.truth.end_base);
+    for (id, near) in [(1, b), (2, a)] {
+        let mut r = sim_request(id, JointType::Lap, &sim, FrameSelect::Trigger);
+        r.start_near = Some([near.x, near.y, near.z]);
+        r.hand_eye = Some(weldseam::geometry::pose::PAPER_HAND_EYE);
+        let reply = ctl.plan(r, WAIT).await.unwrap();
+        assert_matches_truth(&reply, &sim);
+        let first = Vec3::from(reply.result.seams[0].waypoints[0].xyz);
+        assert!(
+            (first - near).norm() < 5.0,
+            "request {id} starts {:.1} mm from the end asked for",
+            (first - near).norm()
+        );
     }
-    let mut waits = Vec::new();
-    let mut plan_ms = Vec::new();
-    for c in controllers {
-        for (waited, outcome) in c.await.unwrap() {
-            match outcome {
-                Ok(total) => plan_ms.push(total),
-                Err(e) => panic!("a request under load failed: {e}"),
-            }
-            waits.push(waited);
-        }
-    }
+    // A hand-eye matrix that is not rigid is a bad request.
+    let mut r = sim_request(3, JointType::Lap, &sim, FrameSelect::Trigger);
+    let mut rows = weldseam::geometry::pose::PAPER_HAND_EYE;
+    rows[0] = 3.0;
+    r.hand_eye = Some(rows);
+    let (code, message) = refused(ctl.plan(r, WAIT).await);
+    assert_eq!(code, ErrorCode::BadRequest);
+    assert!(message.contains("hand_eye"), "{message}");
     let _ = stop_cam.send(());
     cam.await.unwrap();
     cell.shutdown().await;
-
-    let sorted = |mut v: Vec<f64>| {
-        v.sort_by(f64::total_cmp);
-        v
-    };
-    let (waits, plan_ms) = (sorted(waits), sorted(plan_ms));
-    let plan = *plan_ms.last().unwrap();
-    let worst = *waits.last().unwrap();
-    let bound = 1000.0 + 1.5 * depth * plan;
-    eprintln!(
-        "{} requests in {secs} s: reply p50 {:.0} ms, p99 {:.0} ms, max {worst:.0} ms; \
-         plan p50 {:.0} ms, max {plan:.0} ms; bound {bound:.0} ms",
-        waits.len(),
-        waits[waits.len() / 2],
-        waits[(waits.len() * 99 / 100).min(waits.len() - 1)],
-        plan_ms[plan_ms.len() / 2],
-    );
-    assert!(waits.len() >= 8, "only {} requests were answered in {secs} s", waits.len());
-    assert!(worst <= bound, "a request waited {worst:.0} ms, over the bound of {bound:.0} ms");
 }

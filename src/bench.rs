@@ -715,7 +715,6 @@ pub async fn daemon_under_load_async(
     sim: &Simulation,
     load: Load,
 ) -> Result<LoadFigures, DaemonBenchError> {
-    use crate::mock::camera::{CameraOptions, MockCamera};
     use std::sync::{Arc, Mutex};
 
     let camera_listener = TcpListener::bind("127.0.0.1:0").await?;
@@ -728,11 +727,8 @@ pub async fn daemon_under_load_async(
     let state = ServerState::new(config).map_err(|e| DaemonBenchError::Setup(e.to_string()))?;
     let (stop, stopped) = oneshot::channel::<()>();
     let daemon = tokio::spawn(server::run(camera_listener, controller_listener, stopped, state));
-    let options =
-        CameraOptions { name: "bench-camera".into(), free_run_hz: Some(load.camera_hz), ..CameraOptions::default() };
-    let (stop_camera, camera_stopped) = oneshot::channel::<()>();
-    let camera = MockCamera::new(camera_addr, vec![Arc::new(sim.cloud.clone())], options);
-    let camera = tokio::spawn(async move { camera.run(camera_stopped).await });
+    let message = frame_message(&sim.cloud, 0, 0).map_err(|e| DaemonBenchError::Setup(e.to_string()))?;
+    let camera = tokio::spawn(streaming_camera(camera_addr, message, load.camera_hz));
 
     let result = async {
         let mut probe = ControllerClient::connect(&controller_addr, "bench-probe").await?;
@@ -779,10 +775,59 @@ pub async fn daemon_under_load_async(
     }
     .await;
 
-    let _ = stop_camera.send(());
-    let _ = camera.await;
+    camera.abort();
     let _ = stop.send(());
     let _ = daemon.await;
+    result
+}
+
+/// A camera on a raw socket streaming `message` (a pre-encoded frame whose
+/// ids and capture time it patches) at up to `hz`, answering triggers
+/// first, as a camera with its own encoder would: the bench's process
+/// spends no time building frames, only sending them.
+async fn streaming_camera(addr: String, mut message: Vec<u8>, hz: f64) -> Result<(), DaemonBenchError> {
+    let stream = TcpStream::connect(&addr).await?;
+    stream.set_nodelay(true)?;
+    let (read, mut write) = stream.into_split();
+    let hello = Hello { protocol_version: PROTOCOL_VERSION, role: Role::Camera, name: "bench-camera".into() };
+    let hello = frame::encode(&Message::Hello(hello)).map_err(|e| DaemonBenchError::Camera(e.to_string()))?;
+    write.write_all(&hello).await?;
+    let (trigger_tx, mut triggers) = mpsc::unbounded_channel();
+    let reader = tokio::spawn(async move {
+        let mut reader = MessageReader::new(read, Duration::from_secs(30), DEFAULT_MAX_FRAME_BYTES);
+        while let Ok(Some(received)) = reader.read().await {
+            if let Message::Trigger(t) = received.message
+                && trigger_tx.send(t.trigger_id).is_err()
+            {
+                break;
+            }
+        }
+    });
+    let mut ticker = tokio::time::interval(Duration::from_secs_f64(1.0 / hz.clamp(0.1, 1000.0)));
+    ticker.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
+    let mut frame_id = 0u64;
+    let result = loop {
+        let trigger_id = match triggers.try_recv() {
+            Ok(id) => id,
+            Err(mpsc::error::TryRecvError::Disconnected) => break Ok(()),
+            Err(mpsc::error::TryRecvError::Empty) => tokio::select! {
+                id = triggers.recv() => match id {
+                    Some(id) => id,
+                    None => break Ok(()),
+                },
+                _ = ticker.tick() => 0,
+            },
+        };
+        frame_id += 1;
+        message[FRAME_ID_AT..FRAME_ID_AT + 8].copy_from_slice(&frame_id.to_le_bytes());
+        message[TRIGGER_ID_AT..TRIGGER_ID_AT + 8].copy_from_slice(&trigger_id.to_le_bytes());
+        let captured = crate::server::frames::wall_clock_us();
+        message[CAPTURE_TIME_AT..CAPTURE_TIME_AT + 8].copy_from_slice(&captured.to_le_bytes());
+        if let Err(e) = write.write_all(&message).await {
+            break Err(e.into());
+        }
+    };
+    reader.abort();
     result
 }
 

@@ -5,6 +5,7 @@
 //! happened for `server.idle_trim_ms`, the allocator is asked to return
 //! its free memory to the system.
 
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
@@ -17,12 +18,19 @@ pub struct IdleTrim {
     idle: Duration,
     /// The last activity, and whether a timer task is running.
     state: Mutex<(Instant, bool)>,
+    /// Idle spells that ended in a trim.
+    trims: AtomicU64,
 }
 
 impl IdleTrim {
     /// Trims after `idle` without activity; zero never trims.
     pub fn new(idle: Duration) -> Arc<Self> {
-        Arc::new(IdleTrim { idle, state: Mutex::new((Instant::now(), false)) })
+        Arc::new(IdleTrim { idle, state: Mutex::new((Instant::now(), false)), trims: AtomicU64::new(0) })
+    }
+
+    /// Idle spells that ended in a trim so far.
+    pub fn trims(&self) -> u64 {
+        self.trims.load(Ordering::Relaxed)
     }
 
     /// Records activity (a frame, a plan). Arms the timer if it is not
@@ -53,6 +61,7 @@ impl IdleTrim {
                 state.1 = false;
                 drop(state);
                 let released = trim();
+                self.trims.fetch_add(1, Ordering::Relaxed);
                 debug!(released, "idle: freed memory handed back to the system");
                 return;
             }
@@ -71,5 +80,35 @@ pub fn trim() -> bool {
     #[cfg(not(all(target_os = "linux", target_env = "gnu")))]
     {
         false
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[tokio::test]
+    async fn trims_once_per_idle_spell_and_never_while_busy() {
+        let busy = IdleTrim::new(Duration::from_secs(10));
+        for _ in 0..5 {
+            busy.touch();
+            tokio::time::sleep(Duration::from_millis(10)).await;
+        }
+        assert_eq!(busy.trims(), 0, "never within the idle time of the last activity");
+
+        let idle = IdleTrim::new(Duration::from_millis(50));
+        idle.touch();
+        tokio::time::sleep(Duration::from_millis(500)).await;
+        assert_eq!(idle.trims(), 1);
+        tokio::time::sleep(Duration::from_millis(300)).await;
+        assert_eq!(idle.trims(), 1, "one trim per idle spell");
+        idle.touch();
+        tokio::time::sleep(Duration::from_millis(500)).await;
+        assert_eq!(idle.trims(), 2);
+
+        let never = IdleTrim::new(Duration::ZERO);
+        never.touch();
+        tokio::time::sleep(Duration::from_millis(100)).await;
+        assert_eq!(never.trims(), 0);
     }
 }

@@ -1,6 +1,8 @@
 //! Measuring the planner: per-stage timings on simulated frames, loading
-//! and decoding a frame, the peak memory of a planning process, and the
-//! daemon's latency from a triggered frame to its reply.
+//! and decoding a frame, the peak memory of a planning process, the
+//! daemon's latency from a triggered frame to its reply, and its reply
+//! times and service order under load (a camera streaming, several
+//! controllers planning in a loop).
 //!
 //! Everything here measures and summarises; it prints nothing. The
 //! `weldseam bench` subcommand prepares the inputs (temporary files, the
@@ -533,6 +535,7 @@ pub enum DaemonBenchError {
 /// ids: after the 16-byte header, the payload starts with them.
 const FRAME_ID_AT: usize = frame::HEADER_BYTES;
 const TRIGGER_ID_AT: usize = frame::HEADER_BYTES + 8;
+const CAPTURE_TIME_AT: usize = frame::HEADER_BYTES + 16;
 
 /// A camera on a raw socket: answers each trigger with `message` (a
 /// pre-encoded frame whose ids it patches) and reports the instant the
@@ -558,13 +561,15 @@ async fn raw_camera(
         };
         let trigger_id = match received.message {
             Message::Trigger(t) => t.trigger_id,
-            Message::HelloAck(_) | Message::Status(_) => continue,
+            Message::HelloAck(_) | Message::Status(_) | Message::FrameAck(_) => continue,
             Message::Error(e) => return Err(DaemonBenchError::Camera(e.message)),
             other => return Err(DaemonBenchError::Camera(format!("unexpected {} message", other.tag().name()))),
         };
         frame_id += 1;
         message[FRAME_ID_AT..FRAME_ID_AT + 8].copy_from_slice(&frame_id.to_le_bytes());
         message[TRIGGER_ID_AT..TRIGGER_ID_AT + 8].copy_from_slice(&trigger_id.to_le_bytes());
+        let captured = crate::server::frames::wall_clock_us();
+        message[CAPTURE_TIME_AT..CAPTURE_TIME_AT + 8].copy_from_slice(&captured.to_le_bytes());
         write.write_all(&message).await?;
         write.flush().await?;
         if written.send(Instant::now()).is_err() {
@@ -629,6 +634,203 @@ async fn daemon_latency_async(
     result
 }
 
+/// How the daemon was loaded.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Load {
+    /// How long the controllers keep asking.
+    pub duration: Duration,
+    /// Controllers planning in a loop, one request in flight each,
+    /// alternating Trigger and NextFrame requests.
+    pub controllers: usize,
+    /// The camera's free-running rate (it answers triggers as well).
+    pub camera_hz: f64,
+    /// `server.plan_queue_depth` of the daemon.
+    pub queue_depth: usize,
+}
+
+/// What the daemon did under a [`Load`].
+#[derive(Debug, Clone, Default)]
+pub struct LoadFigures {
+    /// Each answered request, in the order the replies arrived: the frame
+    /// it was planned from, the reply time (request written to reply read)
+    /// and the pipeline's own time, ms.
+    pub replies: Vec<LoadReply>,
+    /// Requests answered with an error, by the error's name.
+    pub errors: std::collections::BTreeMap<String, usize>,
+}
+
+/// One answered request under load.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LoadReply {
+    pub frame_id: u64,
+    pub reply_ms: f64,
+    pub plan_ms: f64,
+}
+
+impl LoadFigures {
+    pub fn reply_ms(&self) -> Vec<f64> {
+        self.replies.iter().map(|r| r.reply_ms).collect()
+    }
+
+    pub fn plan_ms(&self) -> Vec<f64> {
+        self.replies.iter().map(|r| r.plan_ms).collect()
+    }
+
+    /// Replies that came after a reply planned from a later frame: plans
+    /// overtaken by plans whose frames became ready after theirs. The
+    /// camera's ids increase in the order its frames reach the daemon, so
+    /// in first-in-first-out order this is 0.
+    pub fn overtaken(&self) -> usize {
+        let mut newest = 0;
+        let mut overtaken = 0;
+        for r in &self.replies {
+            if r.frame_id < newest {
+                overtaken += 1;
+            }
+            newest = newest.max(r.frame_id);
+        }
+        overtaken
+    }
+}
+
+/// The `q` quantile (0 to 1) of `samples`, by the nearest rank.
+pub fn quantile(samples: &[f64], q: f64) -> Option<f64> {
+    let mut sorted = samples.to_vec();
+    sorted.sort_by(f64::total_cmp);
+    let rank = ((q * sorted.len() as f64).ceil() as usize).clamp(1, sorted.len().max(1));
+    sorted.get(rank - 1).copied()
+}
+
+/// Runs an in-process daemon on loopback ports with a mock camera pushing
+/// `sim`'s frame at `load.camera_hz` and `load.controllers` controllers
+/// planning it in a loop for `load.duration`, and collects every reply.
+pub fn daemon_under_load(scenario: &Scenario, sim: &Simulation, load: Load) -> Result<LoadFigures, DaemonBenchError> {
+    let rt = tokio::runtime::Builder::new_multi_thread().enable_all().build()?;
+    rt.block_on(daemon_under_load_async(scenario, sim, load))
+}
+
+/// [`daemon_under_load`] inside a runtime the caller owns.
+pub async fn daemon_under_load_async(
+    scenario: &Scenario,
+    sim: &Simulation,
+    load: Load,
+) -> Result<LoadFigures, DaemonBenchError> {
+    use std::sync::{Arc, Mutex};
+
+    let camera_listener = TcpListener::bind("127.0.0.1:0").await?;
+    let controller_listener = TcpListener::bind("127.0.0.1:0").await?;
+    let camera_addr = camera_listener.local_addr()?.to_string();
+    let controller_addr = controller_listener.local_addr()?.to_string();
+    let mut config = scenario.config();
+    config.server.plan_queue_depth = load.queue_depth.max(1);
+    config.server.max_requests_per_connection = config.server.max_requests_per_connection.min(load.queue_depth.max(1));
+    let state = ServerState::new(config).map_err(|e| DaemonBenchError::Setup(e.to_string()))?;
+    let (stop, stopped) = oneshot::channel::<()>();
+    let daemon = tokio::spawn(server::run(camera_listener, controller_listener, stopped, state));
+    let message = frame_message(&sim.cloud, 0, 0).map_err(|e| DaemonBenchError::Setup(e.to_string()))?;
+    let camera = tokio::spawn(streaming_camera(camera_addr, message, load.camera_hz));
+
+    let result = async {
+        let mut probe = ControllerClient::connect(&controller_addr, "bench-probe").await?;
+        probe
+            .wait_for_camera(Duration::from_secs(10))
+            .await
+            .map_err(|_| DaemonBenchError::Setup("the camera did not connect within 10 s".into()))?;
+        let figures = Arc::new(Mutex::new(LoadFigures::default()));
+        let until = tokio::time::Instant::now() + load.duration;
+        let mut tasks = Vec::new();
+        for k in 0..load.controllers as u64 {
+            let mut client = ControllerClient::connect(&controller_addr, &format!("bench-controller-{k}")).await?;
+            let figures = Arc::clone(&figures);
+            let sim = sim.clone();
+            let joint = scenario.joint;
+            tasks.push(tokio::spawn(async move {
+                let mut id = k << 32;
+                while tokio::time::Instant::now() < until {
+                    id += 1;
+                    let select = if id % 2 == 0 { FrameSelect::Trigger } else { FrameSelect::NextFrame };
+                    let started = Instant::now();
+                    let reply =
+                        client.plan(request_for_simulation(id, joint, &sim, select), Duration::from_secs(120)).await;
+                    let reply_ms = started.elapsed().as_secs_f64() * 1e3;
+                    let mut f = figures.lock().unwrap_or_else(|p| p.into_inner());
+                    match reply {
+                        Ok(r) => f.replies.push(LoadReply {
+                            frame_id: r.frame_id,
+                            reply_ms,
+                            plan_ms: r.result.timing_ms.get("total").copied().unwrap_or(f64::NAN),
+                        }),
+                        Err(ClientError::Refused(e)) => *f.errors.entry(e.code.name().to_string()).or_default() += 1,
+                        Err(e) => return Err(DaemonBenchError::Client(e)),
+                    }
+                }
+                Ok(())
+            }));
+        }
+        for t in tasks {
+            t.await.map_err(|e| DaemonBenchError::Setup(e.to_string()))??;
+        }
+        let figures = figures.lock().unwrap_or_else(|p| p.into_inner()).clone();
+        Ok(figures)
+    }
+    .await;
+
+    camera.abort();
+    let _ = stop.send(());
+    let _ = daemon.await;
+    result
+}
+
+/// A camera on a raw socket streaming `message` (a pre-encoded frame whose
+/// ids and capture time it patches) at up to `hz`, answering triggers
+/// first, as a camera with its own encoder would: the bench's process
+/// spends no time building frames, only sending them.
+async fn streaming_camera(addr: String, mut message: Vec<u8>, hz: f64) -> Result<(), DaemonBenchError> {
+    let stream = TcpStream::connect(&addr).await?;
+    stream.set_nodelay(true)?;
+    let (read, mut write) = stream.into_split();
+    let hello = Hello { protocol_version: PROTOCOL_VERSION, role: Role::Camera, name: "bench-camera".into() };
+    let hello = frame::encode(&Message::Hello(hello)).map_err(|e| DaemonBenchError::Camera(e.to_string()))?;
+    write.write_all(&hello).await?;
+    let (trigger_tx, mut triggers) = mpsc::unbounded_channel();
+    let reader = tokio::spawn(async move {
+        let mut reader = MessageReader::new(read, Duration::from_secs(30), DEFAULT_MAX_FRAME_BYTES);
+        while let Ok(Some(received)) = reader.read().await {
+            if let Message::Trigger(t) = received.message
+                && trigger_tx.send(t.trigger_id).is_err()
+            {
+                break;
+            }
+        }
+    });
+    let mut ticker = tokio::time::interval(Duration::from_secs_f64(1.0 / hz.clamp(0.1, 1000.0)));
+    ticker.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
+    let mut frame_id = 0u64;
+    let result = loop {
+        let trigger_id = match triggers.try_recv() {
+            Ok(id) => id,
+            Err(mpsc::error::TryRecvError::Disconnected) => break Ok(()),
+            Err(mpsc::error::TryRecvError::Empty) => tokio::select! {
+                id = triggers.recv() => match id {
+                    Some(id) => id,
+                    None => break Ok(()),
+                },
+                _ = ticker.tick() => 0,
+            },
+        };
+        frame_id += 1;
+        message[FRAME_ID_AT..FRAME_ID_AT + 8].copy_from_slice(&frame_id.to_le_bytes());
+        message[TRIGGER_ID_AT..TRIGGER_ID_AT + 8].copy_from_slice(&trigger_id.to_le_bytes());
+        let captured = crate::server::frames::wall_clock_us();
+        message[CAPTURE_TIME_AT..CAPTURE_TIME_AT + 8].copy_from_slice(&captured.to_le_bytes());
+        if let Err(e) = write.write_all(&message).await {
+            break Err(e.into());
+        }
+    };
+    reader.abort();
+    result
+}
+
 /// The per-stage scenarios: one scene per joint type at `distance_mm`,
 /// with `camera`.
 pub fn joint_scenarios(distance_mm: f64, camera: CameraModel) -> Vec<Scenario> {
@@ -667,6 +869,21 @@ mod tests {
         assert!(md.contains("| a\\|b | 1.0 |"), "{md}");
         assert!(md.contains("| --- | ---: |"), "{md}");
         assert_eq!(t.row("longer").map(|r| r[1].as_str()), Some("12.5"));
+    }
+
+    #[test]
+    fn overtaken_plans_and_quantiles_are_counted() {
+        let reply = |frame_id| LoadReply { frame_id, reply_ms: 1.0, plan_ms: 1.0 };
+        let fifo = LoadFigures { replies: [1, 2, 2, 5].map(reply).to_vec(), ..LoadFigures::default() };
+        assert_eq!(fifo.overtaken(), 0);
+        let unfair = LoadFigures { replies: [1, 4, 2, 5, 3].map(reply).to_vec(), ..LoadFigures::default() };
+        assert_eq!(unfair.overtaken(), 2);
+        let samples: Vec<f64> = (1..=100).map(f64::from).collect();
+        assert_eq!(
+            (quantile(&samples, 0.5), quantile(&samples, 0.99), quantile(&samples, 1.0)),
+            (Some(50.0), Some(99.0), Some(100.0))
+        );
+        assert_eq!(quantile(&[], 0.5), None);
     }
 
     #[test]

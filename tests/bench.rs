@@ -62,3 +62,14 @@ fn loading_decoding_and_the_daemon_give_one_figure_each() {
     assert_eq!(latency.len(), 1);
     assert!(latency[0] > 0.0);
 }
+
+#[test]
+fn the_load_measurement_answers_requests_in_order() {
+    let scenario = smallest();
+    let sim = scenario.simulate();
+    let load =
+        bench::Load { duration: std::time::Duration::from_secs(2), controllers: 2, camera_hz: 10.0, queue_depth: 2 };
+    let figures = bench::daemon_under_load(&scenario, &sim, load).unwrap();
+    assert!(!figures.replies.is_empty(), "no request was answered: {:?}", figures.errors);
+    assert!(figures.replies.iter().all(|r| r.reply_ms > 0.0 && r.plan_ms > 0.0));
+}

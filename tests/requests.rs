@@ -33,6 +33,10 @@ fn poses_beyond_the_robots_reach_or_with_absurd_angles_are_refused() {
     assert!(far.reason.contains("robot.max_reach_mm (3500 mm)"), "{far}");
     let just_beyond = refused(&PlanRequest::new(JointType::Lap, None, pose([3000.0, 2000.0, 0.0], [0.0; 3])));
     assert!(just_beyond.reason.contains("3606 mm from the base origin"), "{just_beyond}");
+    let mut aimed = PlanRequest::new(JointType::Lap, None, pose([800.0, 0.0, 300.0], [0.0; 3]));
+    aimed.start_near = Some(Vector3::new(0.0, 1e9, 0.0));
+    let e = refused(&aimed);
+    assert!(e.reason.contains("start_near") && e.reason.contains("robot.max_reach_mm"), "{e}");
     let spun = refused(&PlanRequest::new(JointType::Lap, None, pose([800.0, 0.0, 300.0], [1e300, 0.0, 0.0])));
     assert!(spun.reason.contains("±720°"), "{spun}");
     let planner = Planner::new(Config::default());

@@ -10,15 +10,17 @@
 use bincode::config::{Configuration, Fixint, Limit, LittleEndian};
 
 use crate::message::{
-    ErrorReply, FRAME_META_BYTES, Frame, FrameMeta, Hello, HelloAck, Message, POINT_BYTES, PlanReply, PlanRequest,
-    Point, Status, Tag, Trigger, Units,
+    ErrorReply, FRAME_META_BYTES, Frame, FrameAck, FrameMeta, Hello, HelloAck, Message, POINT_BYTES, PlanReply,
+    PlanRequest, Point, Status, Tag, Trigger, Units,
 };
 
 /// The first four bytes of every message.
 pub const MAGIC: [u8; 4] = *b"WSEM";
 
 /// The protocol version this crate speaks, in every header and hello.
-pub const PROTOCOL_VERSION: u16 = 1;
+/// Version 2 changed PlanRequest and Status and added FrameAck; see
+/// PROTOCOL.md, "Changes from version 1".
+pub const PROTOCOL_VERSION: u16 = 2;
 
 /// Bytes of a message header.
 pub const HEADER_BYTES: usize = 16;
@@ -104,7 +106,10 @@ pub enum FramingError {
     #[error("the message does not start with the magic bytes \"WSEM\" (got {0:02x?})")]
     BadMagic([u8; 4]),
     /// The header's version is not [`PROTOCOL_VERSION`].
-    #[error("protocol version {0} is not supported; this daemon speaks version {PROTOCOL_VERSION}")]
+    #[error(
+        "protocol version {0} is not supported; this daemon speaks version {PROTOCOL_VERSION} \
+         (see \"Changes from version 1\" in PROTOCOL.md)"
+    )]
     UnsupportedVersion(u16),
     /// The payload length is over the limit for the tag.
     #[error("a message of tag {tag} announces {length} payload bytes, over the limit of {limit}")]
@@ -123,10 +128,10 @@ pub enum DecodeError {
     Malformed { tag: &'static str, reason: String },
     /// width x height x 12 plus the 36-byte frame header is not the payload length.
     #[error("frame {frame_id} is {width} x {height} points, which needs {expected} payload bytes, but {actual} came")]
-    FrameSize { frame_id: u64, width: u32, height: u32, expected: u64, actual: u64 },
+    FrameSize { frame_id: u64, trigger_id: u64, width: u32, height: u32, expected: u64, actual: u64 },
     /// The frame's units code is neither 0 (mm) nor 1 (m).
     #[error("frame {frame_id} has units code {units}; expected 0 (millimetres) or 1 (metres)")]
-    UnknownUnits { frame_id: u64, units: u32 },
+    UnknownUnits { frame_id: u64, trigger_id: u64, units: u32 },
 }
 
 /// A message could not be encoded (never happens for well-formed values).
@@ -204,14 +209,18 @@ pub fn check_frame_meta(meta: &FrameMeta, payload_len: u64) -> Result<(u64, Unit
     if expected != Some(payload_len) {
         return Err(DecodeError::FrameSize {
             frame_id: meta.frame_id,
+            trigger_id: meta.trigger_id,
             width: meta.width,
             height: meta.height,
             expected: expected.unwrap_or(u64::MAX),
             actual: payload_len,
         });
     }
-    let units =
-        Units::from_u32(meta.units).ok_or(DecodeError::UnknownUnits { frame_id: meta.frame_id, units: meta.units })?;
+    let units = Units::from_u32(meta.units).ok_or(DecodeError::UnknownUnits {
+        frame_id: meta.frame_id,
+        trigger_id: meta.trigger_id,
+        units: meta.units,
+    })?;
     Ok((payload_len - FRAME_META_BYTES as u64, units))
 }
 
@@ -230,6 +239,7 @@ pub fn encode_body(msg: &Message) -> Result<Vec<u8>, EncodeError> {
             points_to_le(&f.points, &mut out);
         }
         Message::Trigger(m) => encode_struct(tag, m, &mut out)?,
+        Message::FrameAck(m) => encode_struct(tag, m, &mut out)?,
         Message::PlanRequest(m) => encode_struct(tag, m, &mut out)?,
         Message::PlanReply(m) => encode_struct(tag, m, &mut out)?,
     }
@@ -269,6 +279,7 @@ pub fn decode_body(tag: u16, payload: &[u8]) -> Result<Message, DecodeError> {
             Message::Frame(Frame { meta, points })
         }
         Tag::Trigger => Message::Trigger(decode_struct::<Trigger>(t, payload)?),
+        Tag::FrameAck => Message::FrameAck(decode_struct::<FrameAck>(t, payload)?),
         Tag::PlanRequest => Message::PlanRequest(decode_struct::<PlanRequest>(t, payload)?),
         Tag::PlanReply => Message::PlanReply(decode_struct::<PlanReply>(t, payload)?),
     })
@@ -313,6 +324,16 @@ impl FramingError {
 }
 
 impl DecodeError {
+    /// The frame and trigger ids of a refused frame whose header was read,
+    /// so the camera's acknowledgement can name it.
+    pub fn frame_ids(&self) -> Option<(u64, u64)> {
+        match *self {
+            DecodeError::FrameSize { frame_id, trigger_id, .. }
+            | DecodeError::UnknownUnits { frame_id, trigger_id, .. } => Some((frame_id, trigger_id)),
+            DecodeError::UnknownTag(_) | DecodeError::Malformed { .. } => None,
+        }
+    }
+
     pub fn code(&self) -> crate::message::ErrorCode {
         use crate::message::ErrorCode;
         match self {
@@ -346,10 +367,20 @@ mod tests {
             plans_done: 1,
             queue_length: 0,
             camera_connected: true,
+            cameras: 1,
+            latest_frame_id: Some(3),
+            latest_capture_time_us: Some(1_700_000_000_000_000),
         }));
         let meta = FrameMeta { frame_id: 3, trigger_id: 0, capture_time_us: 9, width: 2, height: 1, units: 0 };
         round_trip(Message::Frame(Frame { meta, points: vec![[1.0, 2.0, 3.0], [4.0, 5.0, 6.0]] }));
         round_trip(Message::Trigger(Trigger { trigger_id: 4 }));
+        round_trip(Message::FrameAck(FrameAck {
+            frame_id: 3,
+            trigger_id: 4,
+            code: 0,
+            requests: 1,
+            message: String::new(),
+        }));
         round_trip(Message::PlanRequest(PlanRequest {
             request_id: 1,
             joint: 2,
@@ -360,6 +391,9 @@ mod tests {
             travel_angle_deg: None,
             frame: FrameSelect::FrameId(12),
             timeout_ms: 0,
+            camera: Some("left".into()),
+            hand_eye: Some([1.0, 0.0, 0.0, 10.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0]),
+            start_near: Some([1.0, 2.0, 3.0]),
         }));
     }
 
@@ -387,6 +421,9 @@ mod tests {
         let mut bytes = encode(&Message::Ping).unwrap();
         bytes[4] = 9;
         assert!(matches!(decode(&bytes, 100), Err(WireError::Framing(FramingError::UnsupportedVersion(9)))));
+        bytes[4] = 1;
+        let refusal = decode(&bytes, 100).unwrap_err().to_string();
+        assert!(refusal.contains("version 1 is not supported") && refusal.contains("version 2"), "{refusal}");
         let big = Header::new(Tag::Frame, 101).to_bytes();
         assert!(matches!(decode(&big, 100), Err(WireError::Framing(FramingError::TooLarge { .. }))));
         let hello = encode(&Message::Hello(Hello { protocol_version: 1, role: Role::Camera, name: "x".into() }));
@@ -394,7 +431,7 @@ mod tests {
         hello.pop();
         hello[8] -= 1;
         assert!(matches!(decode(&hello, 100), Err(WireError::Decode(DecodeError::Malformed { .. }))));
-        let unknown = Header { version: 1, tag: 999, length: 0 }.to_bytes();
+        let unknown = Header { version: PROTOCOL_VERSION, tag: 999, length: 0 }.to_bytes();
         assert_eq!(decode(&unknown, 100), Err(WireError::Decode(DecodeError::UnknownTag(999))));
     }
 

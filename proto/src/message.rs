@@ -21,12 +21,13 @@ pub enum Tag {
     Status = 5,
     Frame = 16,
     Trigger = 17,
+    FrameAck = 18,
     PlanRequest = 32,
     PlanReply = 33,
 }
 
 impl Tag {
-    pub const ALL: [Tag; 9] = [
+    pub const ALL: [Tag; 10] = [
         Tag::Hello,
         Tag::HelloAck,
         Tag::Error,
@@ -34,6 +35,7 @@ impl Tag {
         Tag::Status,
         Tag::Frame,
         Tag::Trigger,
+        Tag::FrameAck,
         Tag::PlanRequest,
         Tag::PlanReply,
     ];
@@ -52,6 +54,7 @@ impl Tag {
             Tag::Status => "Status",
             Tag::Frame => "Frame",
             Tag::Trigger => "Trigger",
+            Tag::FrameAck => "FrameAck",
             Tag::PlanRequest => "PlanRequest",
             Tag::PlanReply => "PlanReply",
         }
@@ -81,7 +84,8 @@ impl Role {
 pub struct Hello {
     pub protocol_version: u16,
     pub role: Role,
-    /// A free-form name for logs, e.g. the camera's serial number.
+    /// The peer's name. A camera's name is how a plan request names it
+    /// (see [`PlanRequest::camera`]); a controller's is for logs.
     pub name: String,
 }
 
@@ -155,6 +159,30 @@ pub struct Trigger {
     pub trigger_id: u64,
 }
 
+/// The daemon's answer to every frame whose header it could read: held
+/// (code 0) or refused with an error code, and how many waiting requests
+/// it was handed to.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct FrameAck {
+    pub frame_id: u64,
+    pub trigger_id: u64,
+    /// 0 when the frame is held; else the [`ErrorCode`] that refused it.
+    pub code: u16,
+    /// Waiting plan requests this frame was handed to (0 when refused, or
+    /// when it qualified for none; it stays held for requests naming it).
+    pub requests: u32,
+    /// Why it was refused, or why it qualified for no waiting request;
+    /// empty otherwise.
+    pub message: String,
+}
+
+impl FrameAck {
+    /// The refusal's code, or None when the frame is held.
+    pub fn refusal(&self) -> Option<ErrorCode> {
+        (self.code != 0).then(|| ErrorCode::from(self.code))
+    }
+}
+
 /// Which frame a plan request is computed from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
 pub enum FrameSelect {
@@ -193,7 +221,17 @@ pub struct PlanRequest {
     pub travel_angle_deg: Option<f64>,
     pub frame: FrameSelect,
     /// How long to wait for a fresh frame, ms; 0 = the daemon's default.
+    /// Over the daemon's `server.max_request_timeout_ms` is refused.
     pub timeout_ms: u32,
+    /// The camera (its Hello name) to trigger or take the frame from; any
+    /// connected camera when absent.
+    pub camera: Option<String>,
+    /// `End_T_Camera` for this request, row-major 4x4 (mm), instead of the
+    /// daemon's `robot.hand_eye`.
+    pub hand_eye: Option<[f64; 16]>,
+    /// The waypoints start at the seam's end nearest this point (robot
+    /// base frame, mm); else at the documented default end.
+    pub start_near: Option<[f64; 3]>,
 }
 
 impl PlanRequest {
@@ -234,6 +272,12 @@ pub struct Status {
     /// Plan jobs waiting or running.
     pub queue_length: u32,
     pub camera_connected: bool,
+    /// Cameras connected now.
+    pub cameras: u32,
+    /// The id of the newest frame held, and its capture time (camera
+    /// clock, microseconds since the Unix epoch).
+    pub latest_frame_id: Option<u64>,
+    pub latest_capture_time_us: Option<u64>,
 }
 
 /// What went wrong, as a stable number a PLC program can switch on.
@@ -260,6 +304,9 @@ pub enum ErrorCode {
     EmptyFrame,
     /// 22: the frame's units code is unknown.
     UnknownUnits,
+    /// 23: the frame's capture time is ahead of the daemon's clock by
+    /// more than the tolerance; a camera clock that cannot be trusted.
+    BadCaptureTime,
     /// 40: a request field is out of range (NaN pose, missing groove depth...).
     BadRequest,
     /// 41: the joint code is unknown.
@@ -278,12 +325,15 @@ pub enum ErrorCode {
     ShuttingDown,
     /// 48: an internal fault; the daemon's log has the cause.
     Internal,
+    /// 49: the frame answering the request's trigger was not captured
+    /// within the fresh window (before the request, or clock skew).
+    StaleFrame,
     /// Any other number, from a newer peer.
     Other(u16),
 }
 
 impl ErrorCode {
-    pub const ALL: [ErrorCode; 18] = [
+    pub const ALL: [ErrorCode; 20] = [
         ErrorCode::BadMagic,
         ErrorCode::UnsupportedVersion,
         ErrorCode::UnknownMessage,
@@ -293,6 +343,7 @@ impl ErrorCode {
         ErrorCode::FrameSizeMismatch,
         ErrorCode::EmptyFrame,
         ErrorCode::UnknownUnits,
+        ErrorCode::BadCaptureTime,
         ErrorCode::BadRequest,
         ErrorCode::UnknownJoint,
         ErrorCode::UnknownFrame,
@@ -302,6 +353,7 @@ impl ErrorCode {
         ErrorCode::PlanFailed,
         ErrorCode::ShuttingDown,
         ErrorCode::Internal,
+        ErrorCode::StaleFrame,
     ];
 
     pub fn code(self) -> u16 {
@@ -315,6 +367,7 @@ impl ErrorCode {
             ErrorCode::FrameSizeMismatch => 20,
             ErrorCode::EmptyFrame => 21,
             ErrorCode::UnknownUnits => 22,
+            ErrorCode::BadCaptureTime => 23,
             ErrorCode::BadRequest => 40,
             ErrorCode::UnknownJoint => 41,
             ErrorCode::UnknownFrame => 42,
@@ -324,6 +377,7 @@ impl ErrorCode {
             ErrorCode::PlanFailed => 46,
             ErrorCode::ShuttingDown => 47,
             ErrorCode::Internal => 48,
+            ErrorCode::StaleFrame => 49,
             ErrorCode::Other(n) => n,
         }
     }
@@ -340,6 +394,7 @@ impl ErrorCode {
             ErrorCode::FrameSizeMismatch => "frame_size_mismatch",
             ErrorCode::EmptyFrame => "empty_frame",
             ErrorCode::UnknownUnits => "unknown_units",
+            ErrorCode::BadCaptureTime => "bad_capture_time",
             ErrorCode::BadRequest => "bad_request",
             ErrorCode::UnknownJoint => "unknown_joint",
             ErrorCode::UnknownFrame => "unknown_frame",
@@ -349,6 +404,7 @@ impl ErrorCode {
             ErrorCode::PlanFailed => "plan_failed",
             ErrorCode::ShuttingDown => "shutting_down",
             ErrorCode::Internal => "internal",
+            ErrorCode::StaleFrame => "stale_frame",
             ErrorCode::Other(_) => "other",
         }
     }
@@ -393,6 +449,7 @@ pub enum Message {
     Status(Status),
     Frame(Frame),
     Trigger(Trigger),
+    FrameAck(FrameAck),
     PlanRequest(PlanRequest),
     PlanReply(PlanReply),
 }
@@ -407,6 +464,7 @@ impl Message {
             Message::Status(_) => Tag::Status,
             Message::Frame(_) => Tag::Frame,
             Message::Trigger(_) => Tag::Trigger,
+            Message::FrameAck(_) => Tag::FrameAck,
             Message::PlanRequest(_) => Tag::PlanRequest,
             Message::PlanReply(_) => Tag::PlanReply,
         }

@@ -2,7 +2,9 @@
 //! document cannot drift from the code.
 
 use weldseam_proto::frame::encode;
-use weldseam_proto::message::{ErrorCode, Frame, FrameMeta, Hello, Message, Role};
+use weldseam_proto::message::{
+    ErrorCode, Frame, FrameAck, FrameMeta, FrameSelect, Hello, Message, PlanRequest, Role, Status, Trigger, joint_code,
+};
 
 fn hex_dump(bytes: &[u8]) -> String {
     bytes
@@ -17,7 +19,7 @@ fn hex_dump(bytes: &[u8]) -> String {
 
 fn examples() -> Vec<(&'static str, Message)> {
     vec![
-        ("hello", Message::Hello(Hello { protocol_version: 1, role: Role::Camera, name: "cam-1".into() })),
+        ("hello", Message::Hello(Hello { protocol_version: 2, role: Role::Camera, name: "cam-1".into() })),
         (
             "frame",
             Message::Frame(Frame {
@@ -32,7 +34,42 @@ fn examples() -> Vec<(&'static str, Message)> {
                 points: vec![[1.0, -2.0, 700.0], [f32::NAN, f32::NAN, f32::NAN]],
             }),
         ),
+        (
+            "frame_ack",
+            Message::FrameAck(FrameAck { frame_id: 7, trigger_id: 3, code: 0, requests: 1, message: String::new() }),
+        ),
+        ("trigger", Message::Trigger(Trigger { trigger_id: 3 })),
         ("ping", Message::Ping),
+        (
+            "status",
+            Message::Status(Status {
+                uptime_ms: 60_000,
+                frames_received: 12,
+                plans_done: 4,
+                queue_length: 1,
+                camera_connected: true,
+                cameras: 1,
+                latest_frame_id: Some(7),
+                latest_capture_time_us: Some(1_700_000_000_000_000),
+            }),
+        ),
+        (
+            "plan_request",
+            Message::PlanRequest(PlanRequest {
+                request_id: 5,
+                joint: joint_code::LAP,
+                groove_depth_mm: None,
+                pose: [800.0, 0.0, 500.0, 180.0, 0.0, 0.0],
+                step_mm: Some(2.0),
+                work_angle_deg: None,
+                travel_angle_deg: None,
+                frame: FrameSelect::Trigger,
+                timeout_ms: 0,
+                camera: Some("cam-1".into()),
+                hand_eye: None,
+                start_near: Some([700.0, -100.0, 0.0]),
+            }),
+        ),
         ("error", Message::error(ErrorCode::Busy, Some(5), "busy")),
     ]
 }

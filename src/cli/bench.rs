@@ -1,7 +1,8 @@
 //! `weldseam bench`: measures the planner on simulated frames and prints
 //! the tables of docs/PERFORMANCE.md: per stage at three standoffs, the
 //! scaling with frame size, loading and decoding a frame, the peak memory
-//! of `weldseam plan`, and the daemon's trigger-to-reply latency.
+//! of `weldseam plan`, the daemon's trigger-to-reply latency, and its
+//! reply times and service order under load.
 
 use std::fs::File;
 use std::io::{BufWriter, Write};
@@ -29,6 +30,10 @@ pub struct BenchArgs {
     /// Print the tables as Markdown.
     #[arg(long)]
     pub markdown: bool,
+    /// How long the load measurement runs, seconds (default 20, or 5
+    /// with --quick).
+    #[arg(long, value_name = "SECONDS")]
+    pub load_seconds: Option<u64>,
     /// Only the per-stage tables: the quick loop while tuning a stage.
     #[arg(long)]
     pub stages_only: bool,
@@ -146,6 +151,42 @@ fn measure_child(args: &[String]) -> anyhow::Result<()> {
     let mut out = std::io::stdout().lock();
     writeln!(out, "{}", child.peak_rss_bytes)?;
     Ok(())
+}
+
+/// The reply times and service order of [`bench::daemon_under_load`].
+fn load_table(figures: &bench::LoadFigures, load: &bench::Load) -> Table {
+    let (replies, plans) = (figures.reply_ms(), figures.plan_ms());
+    let q = |v: &[f64], p: f64| bench::quantile(v, p).map(|x| format!("{x:.0}")).unwrap_or_else(|| "-".into());
+    let mut t = Table::new(
+        format!(
+            "The daemon under load: {JOINT} at {NEAR_MM:.0} mm, camera streaming, {} controllers planning in a loop",
+            load.controllers
+        ),
+        &["figure", "value"],
+    );
+    let seconds = load.duration.as_secs_f64();
+    t.push(vec!["requests answered with a plan".into(), replies.len().to_string()]);
+    let errors: Vec<String> = figures.errors.iter().map(|(name, n)| format!("{n} {name}")).collect();
+    t.push(vec!["requests refused".into(), if errors.is_empty() { "0".into() } else { errors.join(", ") }]);
+    t.push(vec!["plans per second".into(), format!("{:.2}", replies.len() as f64 / seconds)]);
+    t.push(vec![
+        "reply time p50 / p99 / max, ms".into(),
+        format!("{} / {} / {}", q(&replies, 0.5), q(&replies, 0.99), q(&replies, 1.0)),
+    ]);
+    t.push(vec!["plan time p50 / max, ms".into(), format!("{} / {}", q(&plans, 0.5), q(&plans, 1.0))]);
+    let bound = bench::quantile(&plans, 1.0).map(|p| p * load.queue_depth as f64);
+    t.push(vec![
+        format!("queue depth x longest plan, ms (bound less the frame wait)"),
+        bound.map(|b| format!("{b:.0}")).unwrap_or_else(|| "-".into()),
+    ]);
+    t.push(vec!["plans overtaken by a plan of a later frame".into(), figures.overtaken().to_string()]);
+    t.notes.push(format!(
+        "{seconds:.0} s; camera free-running at up to {:.0} Hz and answering triggers; each controller keeps one \
+         request in flight, alternating Trigger and NextFrame; server.plan_queue_depth {}; reply time from the \
+         request written to the reply read",
+        load.camera_hz, load.queue_depth
+    ));
+    t
 }
 
 /// The first three fields of /proc/loadavg.
@@ -294,6 +335,17 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
         "median (min-max) of {runs} requests after a discarded warm-up; daemon, camera and controller in one process"
     ));
     printer.table(&daemon)?;
+
+    let seconds = args.load_seconds.unwrap_or(if args.quick { 5 } else { 20 }).clamp(1, 3600);
+    progress(&format!("the daemon under load for {seconds} s"));
+    let load = bench::Load {
+        duration: std::time::Duration::from_secs(seconds),
+        controllers: 4,
+        camera_hz: 30.0,
+        queue_depth: weldseam::config::ServerConfig::default().plan_queue_depth,
+    };
+    let figures = bench::daemon_under_load(&scenario, &sim, load)?;
+    printer.table(&load_table(&figures, &load))?;
     if let Some(load) = load_average() {
         printer.line(&format!("load average at the end (1, 5, 15 min): {load}"))?;
     }

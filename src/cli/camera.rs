@@ -29,7 +29,7 @@ pub struct CameraArgs {
     /// Stop after this many frames.
     #[arg(long)]
     pub frames: Option<u64>,
-    /// The camera's name in its hello.
+    /// The camera's name in its hello; plan requests choose a camera by it.
     #[arg(long, default_value = "mock-camera")]
     pub name: String,
 }
@@ -73,6 +73,12 @@ pub fn run(args: &CameraArgs) -> anyhow::Result<()> {
     let summary = runtime.block_on(MockCamera::new(args.connect.clone(), frames, options).run(async {
         let _ = tokio::signal::ctrl_c().await;
     }))?;
-    info!(frames = summary.frames_sent, triggers = summary.triggers_answered, "camera stopped");
+    info!(
+        frames = summary.frames_sent,
+        triggers = summary.triggers_answered,
+        held = summary.frames_held,
+        refused = summary.frames_refused,
+        "camera stopped"
+    );
     Ok(())
 }

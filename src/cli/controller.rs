@@ -23,13 +23,13 @@ pub struct ControllerArgs {
     #[arg(long, required_unless_present = "ping")]
     pub joint: Option<JointType>,
     /// Groove depth of a V-butt joint, mm.
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub groove_depth: Option<f64>,
     /// Robot pose at capture: x,y,z,rx,ry,rz (mm, degrees).
     #[arg(long, allow_hyphen_values = true, value_parser = args::pose, required_unless_present = "ping")]
     pub pose: Option<RobotPose>,
     /// Waypoint spacing, mm.
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub step: Option<f64>,
     /// Torch work angle, degrees.
     #[arg(long, allow_hyphen_values = true)]
@@ -44,6 +44,18 @@ pub struct ControllerArgs {
     /// How long the daemon may wait for a fresh frame, ms (0: its default).
     #[arg(long, default_value_t = 0)]
     pub timeout_ms: u32,
+    /// The camera (its Hello name) to trigger or take the frame from; any
+    /// connected camera when absent.
+    #[arg(long)]
+    pub camera: Option<String>,
+    /// Start the waypoints at the seam's end nearest this base-frame
+    /// point: x,y,z (mm).
+    #[arg(long, allow_hyphen_values = true, value_parser = point)]
+    pub start_near: Option<[f64; 3]>,
+    /// End_T_Camera for this request instead of the daemon's
+    /// robot.hand_eye: 16 numbers, row-major 4x4 (mm).
+    #[arg(long, allow_hyphen_values = true, value_parser = matrix)]
+    pub hand_eye: Option<[f64; 16]>,
     /// The request id echoed in the reply.
     #[arg(long, default_value_t = 1)]
     pub request_id: u64,
@@ -53,6 +65,23 @@ pub struct ControllerArgs {
     /// Only ping the daemon and print its status.
     #[arg(long)]
     pub ping: bool,
+}
+
+/// `N` comma-separated numbers.
+fn numbers<const N: usize>(text: &str) -> Result<[f64; N], String> {
+    let values: Vec<f64> = text
+        .split(',')
+        .map(|v| v.trim().parse::<f64>().map_err(|_| format!("{v:?} is not a number")))
+        .collect::<Result<_, _>>()?;
+    values.try_into().map_err(|v: Vec<f64>| format!("expected {N} comma-separated numbers, got {}", v.len()))
+}
+
+fn point(text: &str) -> Result<[f64; 3], String> {
+    numbers::<3>(text)
+}
+
+fn matrix(text: &str) -> Result<[f64; 16], String> {
+    numbers::<16>(text)
 }
 
 fn frame_select(text: &str) -> Result<FrameSelect, String> {
@@ -81,6 +110,8 @@ async fn exchange(args: &ControllerArgs) -> anyhow::Result<()> {
                 serde_json::json!({
                     "server": client.server, "uptime_ms": s.uptime_ms, "frames_received": s.frames_received,
                     "plans_done": s.plans_done, "queue_length": s.queue_length, "camera_connected": s.camera_connected,
+                    "cameras": s.cameras, "latest_frame_id": s.latest_frame_id,
+                    "latest_capture_time_us": s.latest_capture_time_us,
                 })
             );
         } else {
@@ -89,7 +120,11 @@ async fn exchange(args: &ControllerArgs) -> anyhow::Result<()> {
             println!("frames received   {}", s.frames_received);
             println!("plans done        {}", s.plans_done);
             println!("queue length      {}", s.queue_length);
-            println!("camera connected  {}", if s.camera_connected { "yes" } else { "no" });
+            println!("cameras connected {}", s.cameras);
+            match (s.latest_frame_id, s.latest_capture_time_us) {
+                (Some(id), Some(t)) => println!("latest frame      {id}, captured at {t} µs"),
+                _ => println!("latest frame      none held"),
+            }
         }
         return Ok(());
     }
@@ -108,6 +143,9 @@ async fn exchange(args: &ControllerArgs) -> anyhow::Result<()> {
         travel_angle_deg: args.travel_angle,
         frame: args.frame,
         timeout_ms: args.timeout_ms,
+        camera: args.camera.clone(),
+        hand_eye: args.hand_eye,
+        start_near: args.start_near,
     };
     // The daemon bounds the frame wait; allow for it and a slow plan.
     let wait = Duration::from_millis(u64::from(args.timeout_ms).max(10_000)) + Duration::from_secs(120);

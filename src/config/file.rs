@@ -168,6 +168,11 @@ pub struct ServerSection {
     pub fresh_frame_timeout_ms: u64,
     pub shutdown_grace_ms: u64,
     pub frame_history: u32,
+    pub frame_history_bytes: u64,
+    pub capture_time_tolerance_ms: u64,
+    pub max_request_timeout_ms: u64,
+    pub max_requests_per_connection: u32,
+    pub idle_trim_ms: u64,
 }
 
 impl Default for ServerSection {
@@ -188,6 +193,11 @@ impl Default for ServerSection {
             fresh_frame_timeout_ms: ms(s.fresh_frame_timeout),
             shutdown_grace_ms: ms(s.shutdown_grace),
             frame_history: s.frame_history as u32,
+            frame_history_bytes: s.frame_history_bytes,
+            capture_time_tolerance_ms: ms(s.capture_time_tolerance),
+            max_request_timeout_ms: ms(s.max_request_timeout),
+            max_requests_per_connection: s.max_requests_per_connection as u32,
+            idle_trim_ms: ms(s.idle_trim),
         }
     }
 }

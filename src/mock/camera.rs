@@ -1,7 +1,9 @@
 //! A mock camera: connects to the camera link, says hello, and sends
 //! frames from a list in turn, either answering each trigger (the frame
-//! carries the trigger's id) or free-running at a rate. When the daemon
-//! goes away it reconnects with a growing pause, a bounded number of times.
+//! carries the trigger's id) or free-running at a rate, each stamped with
+//! this machine's clock as its capture time. It counts the daemon's frame
+//! acknowledgements. When the daemon goes away it reconnects with a
+//! growing pause, a bounded number of times.
 
 use std::future::Future;
 use std::sync::Arc;
@@ -53,6 +55,9 @@ impl Default for CameraOptions {
 pub struct CameraSummary {
     pub frames_sent: u64,
     pub triggers_answered: u64,
+    /// Frames the daemon acknowledged as held, and as refused.
+    pub frames_held: u64,
+    pub frames_refused: u64,
     pub connections: u32,
 }
 
@@ -163,6 +168,16 @@ impl MockCamera {
                 msg = incoming.recv() => match msg {
                     Some(Ok(Some(r))) => match r.message {
                         Message::Trigger(t) => t.trigger_id,
+                        Message::FrameAck(ack) => {
+                            match ack.refusal() {
+                                None => summary.frames_held += 1,
+                                Some(code) => {
+                                    summary.frames_refused += 1;
+                                    warn!(frame_id = ack.frame_id, code = %code, "frame refused: {}", ack.message);
+                                }
+                            }
+                            continue;
+                        }
                         Message::Error(e) => {
                             warn!(code = %e.code, "the daemon reported: {}", e.message);
                             continue;

@@ -124,5 +124,8 @@ pub fn request_for_simulation(
         travel_angle_deg: None,
         frame,
         timeout_ms: 0,
+        camera: None,
+        hand_eye: None,
+        start_near: None,
     }
 }

@@ -65,6 +65,9 @@ pub struct PlanRequest {
     pub step_mm: Option<f64>,
     pub work_angle_deg: Option<f64>,
     pub travel_angle_deg: Option<f64>,
+    /// The waypoints start at the seam's end nearest this point (robot
+    /// base frame, mm); else by [`trajectory::travel_order`]'s default.
+    pub start_near: Option<Vec3>,
 }
 
 impl PlanRequest {
@@ -78,6 +81,7 @@ impl PlanRequest {
             step_mm: None,
             work_angle_deg: None,
             travel_angle_deg: None,
+            start_near: None,
         }
     }
 }
@@ -671,7 +675,7 @@ impl<'a> Run<'a> {
             work_angle_deg: self.request.work_angle_deg.unwrap_or(t.work_angle_deg),
             travel_angle_deg: self.request.travel_angle_deg.unwrap_or(t.travel_angle_deg),
         };
-        let (start, end) = trajectory::travel_order(&weld, s0, s1);
+        let (start, end) = trajectory::travel_order(&weld, s0, s1, &base_from_camera, self.request.start_near);
         let waypoints = trajectory::waypoints(&weld, start, end, &normal, &base_from_camera, &params);
         self.check_reach(&waypoints)?;
         let length_mm = waypoints.windows(2).map(|w| (w[1].position - w[0].position).norm()).sum();
@@ -759,6 +763,14 @@ fn validate(r: &PlanRequest, config: &Config) -> Result<(), PlanError> {
                 limits.max_hand_eye_translation_mm
             ));
         }
+    }
+    if let Some(p) = &r.start_near
+        && !(p.iter().all(|c| c.is_finite()) && p.norm() <= limits.max_reach_mm)
+    {
+        return bad(format!(
+            "start_near ({:.0}, {:.0}, {:.0}) mm lies beyond robot.max_reach_mm ({} mm)",
+            p.x, p.y, p.z, limits.max_reach_mm
+        ));
     }
     match (r.joint, r.groove_depth_mm) {
         (JointType::VButt, None) => return bad("a V-butt joint needs its groove depth".into()),

@@ -6,9 +6,14 @@
 //! The torch frame: tool z along the plate normal into the workpiece, tool
 //! x along the travel direction, tool y completing a right-handed frame;
 //! then tilted by the work angle about tool x and the travel angle about
-//! tool y. Travel runs left to right in the image when the seam spreads
-//! more across the image than down it, else top to bottom, so the order is
-//! stable from shot to shot.
+//! tool y.
+//!
+//! Which end the waypoints start from is a rule a robot programmer can
+//! rely on, stated in the robot base frame (the camera's view of the seam
+//! changes with the pose; the base frame does not): the end nearest the
+//! request's `start_near` point when it gives one; else, when the seam
+//! runs more along base x than along base y, the end with the smaller
+//! base x, otherwise the end with the smaller base y.
 
 use nalgebra::{Isometry3, Matrix3, Point3, Rotation3, Unit};
 
@@ -60,11 +65,26 @@ pub fn sample_features(curve: &SeamCurve, s0: f64, s1: f64, step: f64) -> Vec<f6
     out
 }
 
-/// Orders `s0 < s1` so travel runs left to right (or top to bottom) in
-/// the image.
-pub fn travel_order(curve: &SeamCurve, s0: f64, s1: f64) -> (f64, f64) {
-    let d = curve.at(s1) - curve.at(s0);
-    let forward = if d.x.abs() >= d.y.abs() { d.x >= 0.0 } else { d.y >= 0.0 };
+/// Orders the seam's ends `s0`, `s1` into (start, end): the start is the
+/// end nearest `start_near` (base frame) when given; else the end with the
+/// smaller base-frame x when the seam runs at least as much along x as
+/// along y, otherwise the one with the smaller base-frame y.
+pub fn travel_order(
+    curve: &SeamCurve,
+    s0: f64,
+    s1: f64,
+    base_from_camera: &Isometry3<f64>,
+    start_near: Option<Vec3>,
+) -> (f64, f64) {
+    let a = (base_from_camera * Point3::from(curve.at(s0))).coords;
+    let b = (base_from_camera * Point3::from(curve.at(s1))).coords;
+    let forward = match start_near {
+        Some(p) => (a - p).norm() <= (b - p).norm(),
+        None => {
+            let d = b - a;
+            if d.x.abs() >= d.y.abs() { d.x >= 0.0 } else { d.y >= 0.0 }
+        }
+    };
     if forward { (s0, s1) } else { (s1, s0) }
 }
 
@@ -149,8 +169,13 @@ mod tests {
             UnitQuaternion::from_axis_angle(&Vec3::x_axis(), std::f64::consts::PI),
         );
         let params = TrajectoryParams { step_mm: 10.0, work_angle_deg: 0.0, travel_angle_deg: 0.0 };
-        let (s0, s1) = travel_order(&line(), 50.0, -50.0);
-        assert_eq!((s0, s1), (-50.0, 50.0), "top to bottom in the image");
+        // The seam runs along camera y, which this pose turns into base -y:
+        // the default starts at the smaller base y, camera y = +50.
+        let (s0, s1) = travel_order(&line(), -50.0, 50.0, &base_from_camera, None);
+        assert_eq!((s0, s1), (50.0, -50.0), "from the smaller base-frame y");
+        let near_other_end = Some(Vec3::new(102.0, 250.0, -400.0));
+        assert_eq!(travel_order(&line(), -50.0, 50.0, &base_from_camera, near_other_end), (-50.0, 50.0));
+        let (s0, s1) = (-50.0, 50.0);
         let w = waypoints(&line(), s0, s1, &Vec3::z(), &base_from_camera, &params);
         assert_eq!(w.len(), 11);
         // Camera (2, -50, 700) → rotate 180° about x → (2, 50, -700) → translate.

@@ -1,18 +1,20 @@
 //! The camera link's handler: the hello, then frames in and triggers out.
-//! Each frame is checked (size, at least one valid point), stored in the
-//! history and handed to the requests waiting for it.
+//! Each frame is checked (size, at least one valid point, a capture time
+//! the daemon's clock can believe), stored in the history, handed to the
+//! requests waiting for it, and acknowledged to the camera with a
+//! FrameAck: held, or refused with its error code.
 
 use std::sync::Arc;
 use std::time::Instant;
 
 use tokio::sync::Mutex;
 use tracing::{Instrument, info, warn};
-use weldseam_proto::message::{HelloAck, Role, Trigger};
+use weldseam_proto::message::{FrameAck, Hello, HelloAck, Role, Trigger};
 use weldseam_proto::{ErrorCode, Message, PROTOCOL_VERSION};
 
 use super::ServerState;
-use super::connection::{Connection, HandshakeError, MessageWriter, Received};
-use super::frames::StoredFrame;
+use super::connection::{Connection, HandshakeError, MessageWriter, ReadError, Received};
+use super::frames::{CameraRegistration, StoredFrame, wall_clock_us};
 use super::shutdown::Shutdown;
 use crate::cloud::PointCloud;
 
@@ -23,46 +25,48 @@ pub(crate) fn server_name() -> String {
     format!("weldseam {}", env!("CARGO_PKG_VERSION"))
 }
 
-/// Answers a handshake: an ack, or the typed refusal. Returns false when
-/// the connection should close.
-pub(crate) async fn handshake(conn: &mut Connection, role: Role, state: &ServerState) -> bool {
+/// Answers a handshake: an ack, or the typed refusal. Returns the peer's
+/// Hello, or None when the connection should close. Before the Hello
+/// every error closes the connection: a peer that cannot say Hello is not
+/// speaking this protocol, and must not keep a connection slot.
+pub(crate) async fn handshake(conn: &mut Connection, role: Role, state: &ServerState) -> Option<Hello> {
     match conn.expect_hello(role, state.config.server.stall_timeout).await {
         Ok(hello) => {
             info!(name = %hello.name, "{} connected", role.name());
             let ack = Message::HelloAck(HelloAck { protocol_version: PROTOCOL_VERSION, server: server_name() });
-            conn.writer.send(&ack).await.is_ok()
+            conn.writer.send(&ack).await.is_ok().then_some(hello)
         }
         Err(HandshakeError::Closed) => {
             info!("closed before its hello");
-            false
+            None
         }
         Err(HandshakeError::Read(e)) => {
             warn!("bad hello: {e}");
             if let Some(code) = e.reply_code() {
                 let _ = conn.writer.send(&Message::error(code, None, e.to_string())).await;
             }
-            false
+            None
         }
         Err(e @ HandshakeError::Refused { code, .. }) => {
             warn!("refused: {e}");
             let _ = conn.writer.send(&Message::error(code, None, e.to_string())).await;
-            false
+            None
         }
         Err(e @ HandshakeError::Timeout(_)) => {
             warn!("dropped: {e}");
-            false
+            None
         }
     }
 }
 
 /// Serves one camera connection until it closes or the server stops.
 pub async fn serve(mut conn: Connection, state: Arc<ServerState>, mut shutdown: Shutdown) {
-    if !handshake(&mut conn, Role::Camera, &state).await {
+    let Some(hello) = handshake(&mut conn, Role::Camera, &state).await else {
         return;
-    }
+    };
     let Connection { mut reader, writer, .. } = conn;
     let writer: Writer = Arc::new(Mutex::new(writer));
-    let (registration, mut triggers) = state.frames.attach_camera();
+    let (registration, mut triggers) = state.frames.attach_camera(&hello.name);
 
     // Triggers go out from their own task so a frame being received is
     // never interrupted.
@@ -88,28 +92,36 @@ pub async fn serve(mut conn: Connection, state: Arc<ServerState>, mut shutdown: 
             r = reader.read() => r,
             _ = shutdown.recv() => break,
         };
-        match read {
-            Ok(Some(received)) => {
-                if let Some(reply) = on_message(received, &state)
-                    && let Err(e) = writer.lock().await.send(&reply).await
-                {
-                    warn!("cannot reply: {e}");
-                    break;
-                }
-            }
+        let reply = match read {
+            Ok(Some(received)) => on_message(received, &registration, &state),
             Ok(None) => {
                 info!("camera disconnected");
                 break;
             }
+            Err(ReadError::Decode(e)) if e.frame_ids().is_some() => {
+                // A frame whose header was read but whose size or units
+                // are wrong: acknowledged as refused, by its ids.
+                let (frame_id, trigger_id) = e.frame_ids().unwrap_or_default();
+                warn!(frame_id, trigger_id, "{e}");
+                Some(refusal(frame_id, trigger_id, e.code(), e.to_string()))
+            }
             Err(e) => {
                 warn!("{e}");
-                if let Some(code) = e.reply_code() {
-                    let _ = writer.lock().await.send(&Message::error(code, None, e.to_string())).await;
-                }
+                let reply = e.reply_code().map(|code| Message::error(code, None, e.to_string()));
                 if !e.framing_intact() {
+                    if let Some(reply) = reply {
+                        let _ = writer.lock().await.send(&reply).await;
+                    }
                     break;
                 }
+                reply
             }
+        };
+        if let Some(reply) = reply
+            && let Err(e) = writer.lock().await.send(&reply).await
+        {
+            warn!("cannot reply: {e}");
+            break;
         }
     }
     drop(registration);
@@ -117,9 +129,17 @@ pub async fn serve(mut conn: Connection, state: Arc<ServerState>, mut shutdown: 
     writer.lock().await.shutdown().await;
 }
 
+fn refusal(frame_id: u64, trigger_id: u64, code: ErrorCode, message: String) -> Message {
+    Message::FrameAck(FrameAck { frame_id, trigger_id, code: code.code(), requests: 0, message })
+}
+
 /// Handles one message; returns the reply, if any.
-fn on_message(received: Received, state: &ServerState) -> Option<Message> {
+fn on_message(received: Received, camera: &CameraRegistration, state: &ServerState) -> Option<Message> {
     let bytes = received.bytes;
+    // The reader measures from the message's first byte: the upload began
+    // that long before now, on both of the daemon's clocks.
+    let upload_started = Instant::now().checked_sub(received.elapsed).unwrap_or_else(Instant::now);
+    let upload_started_us = wall_clock_us().saturating_sub(received.elapsed.as_micros() as u64);
     let frame = match received.message {
         Message::Frame(frame) => frame,
         Message::Ping => return Some(Message::Status(state.status())),
@@ -129,36 +149,59 @@ fn on_message(received: Received, state: &ServerState) -> Option<Message> {
             return Some(Message::error(ErrorCode::UnexpectedMessage, None, text));
         }
     };
+    state.idle.touch();
     let meta = frame.meta;
+    let (frame_id, trigger_id) = (meta.frame_id, meta.trigger_id);
     // The reader has checked width x height against the payload already.
     let Some(cloud) = PointCloud::organized(meta.width as usize, meta.height as usize, frame.points) else {
-        let text = format!("frame {} does not have width x height points", meta.frame_id);
+        let text = format!("frame {frame_id} does not have width x height points");
         warn!("{text}");
-        return Some(Message::error(ErrorCode::FrameSizeMismatch, None, text));
+        return Some(refusal(frame_id, trigger_id, ErrorCode::FrameSizeMismatch, text));
     };
     let valid = cloud.valid_count();
     if valid == 0 {
-        let text = format!("frame {} has no valid point; it was discarded", meta.frame_id);
+        let text = format!("frame {frame_id} has no valid point; it was discarded");
         warn!("{text}");
-        return Some(Message::error(ErrorCode::EmptyFrame, None, text));
+        return Some(refusal(frame_id, trigger_id, ErrorCode::EmptyFrame, text));
     }
+    if let Some(problem) = state.frames.capture_time_problem(meta.capture_time_us, upload_started_us) {
+        let text = format!("frame {frame_id} was discarded: {problem}");
+        warn!(frame_id, trigger_id, capture_time_us = meta.capture_time_us, "{text}");
+        state.frames.refused_answer(camera.id(), trigger_id, &text);
+        return Some(refusal(frame_id, trigger_id, ErrorCode::BadCaptureTime, text));
+    }
+    state.count_frame();
+    let delivery = state.frames.insert(
+        camera.id(),
+        StoredFrame {
+            frame_id,
+            trigger_id,
+            capture_time_us: meta.capture_time_us,
+            camera: Arc::clone(camera.name()),
+            cloud: Arc::new(cloud),
+            upload_started,
+            upload_started_us,
+            arrived: Instant::now(),
+        },
+    );
+    let (held_frames, held_bytes) = state.frames.held();
     info!(
-        frame_id = meta.frame_id,
-        trigger_id = meta.trigger_id,
+        frame_id,
+        trigger_id,
+        capture_time_us = meta.capture_time_us,
         width = meta.width,
         height = meta.height,
         valid_points = valid,
         bytes,
         receive_ms = received.elapsed.as_millis() as u64,
+        requests = delivery.requests,
+        held_frames,
+        held_bytes,
         "frame received"
     );
-    state.count_frame();
-    state.frames.insert(StoredFrame {
-        frame_id: meta.frame_id,
-        trigger_id: meta.trigger_id,
-        capture_time_us: meta.capture_time_us,
-        cloud: Arc::new(cloud),
-        arrived: Instant::now(),
-    });
-    None
+    let message = match (delivery.requests, delivery.skipped) {
+        (0, Some(reason)) => format!("held, but no waiting request could use it: {reason}"),
+        _ => String::new(),
+    };
+    Some(Message::FrameAck(FrameAck { frame_id, trigger_id, code: 0, requests: delivery.requests, message }))
 }

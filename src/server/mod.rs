@@ -13,6 +13,7 @@ pub mod camera_link;
 pub mod connection;
 pub mod controller_link;
 pub mod frames;
+pub mod idle;
 pub mod jobs;
 pub mod shutdown;
 
@@ -29,7 +30,8 @@ use weldseam_proto::message::{Role, Status};
 
 use crate::config::Config;
 use crate::pipeline::Planner;
-use frames::FrameStore;
+use frames::{FrameLimits, FrameStore};
+use idle::IdleTrim;
 use jobs::{Jobs, PoolError};
 use shutdown::{Shutdown, ShutdownController};
 
@@ -39,6 +41,8 @@ pub struct ServerState {
     pub config: Config,
     pub frames: Arc<FrameStore>,
     pub jobs: Jobs,
+    /// Hands freed memory back once the cell is idle.
+    pub idle: Arc<IdleTrim>,
     started: Instant,
     frames_received: AtomicU64,
     plans_done: AtomicU64,
@@ -50,8 +54,13 @@ impl ServerState {
         let s = &config.server;
         let jobs = Jobs::new(Planner::new(config.clone()), s.plan_queue_depth, s.pipeline_threads)?;
         Ok(Arc::new(ServerState {
-            frames: FrameStore::new(s.frame_history),
+            frames: FrameStore::new(FrameLimits {
+                count: s.frame_history,
+                bytes: s.frame_history_bytes,
+                tolerance: s.capture_time_tolerance,
+            }),
             jobs,
+            idle: IdleTrim::new(s.idle_trim),
             started: Instant::now(),
             frames_received: AtomicU64::new(0),
             plans_done: AtomicU64::new(0),
@@ -61,12 +70,17 @@ impl ServerState {
 
     /// The figures a ping answers with.
     pub fn status(&self) -> Status {
+        let cameras = self.frames.cameras() as u32;
+        let latest = self.frames.latest();
         Status {
             uptime_ms: self.started.elapsed().as_millis() as u64,
             frames_received: self.frames_received.load(Ordering::Relaxed),
             plans_done: self.plans_done.load(Ordering::Relaxed),
             queue_length: self.jobs.len() as u32,
-            camera_connected: self.frames.camera_connected(),
+            camera_connected: cameras > 0,
+            cameras,
+            latest_frame_id: latest.map(|l| l.0),
+            latest_capture_time_us: latest.map(|l| l.1),
         }
     }
 

@@ -30,6 +30,22 @@ pub struct CameraModel {
     /// bounds every neighbour window (a point near the optical centre would
     /// otherwise need the whole image searched).
     pub min_depth_mm: f64,
+    /// Farthest depth the camera can measure, mm. Farther points are a
+    /// corrupt frame's (a shifted byte makes a depth of 1e30 as easily as
+    /// one of 600) and are treated as invalid.
+    pub max_depth_mm: f64,
+    /// Widest angle off the optical axis, along either image axis, at
+    /// which the camera can see a point, degrees. It holds for any cloud
+    /// in the camera frame, whatever camera took it, so it is set wider
+    /// than any structured-light camera's field of view: it only bounds
+    /// coordinates, which with the depth range bounds every point's
+    /// neighbour window.
+    pub max_off_axis_deg: f64,
+    /// How far outside the sensor, in pixels, a point of an organized
+    /// frame of this camera's size may project (lens distortion and
+    /// calibration move points a little off the pinhole's rays). Frames
+    /// of any other size (crops, other cameras) are not held to it.
+    pub fov_margin_px: f64,
 }
 
 impl Default for CameraModel {
@@ -44,6 +60,9 @@ impl Default for CameraModel {
             baseline_mm: 150.0,
             nominal_accuracy_mm: 0.1,
             min_depth_mm: 100.0,
+            max_depth_mm: 3000.0,
+            max_off_axis_deg: 80.0,
+            fov_margin_px: 200.0,
         }
     }
 }
@@ -138,6 +157,34 @@ impl CameraModel {
         (half(wx), half(wy))
     }
 
+    /// The region of camera-frame space this camera can measure, for
+    /// testing points of a `width x height` cloud (organized or not).
+    pub fn measurable_volume(&self, width: usize, height: usize, organized: bool) -> MeasurableVolume {
+        let off_axis = self.max_off_axis_deg.to_radians().tan();
+        let mut tangents = [-off_axis, off_axis, -off_axis, off_axis];
+        let own_grid = organized && (width, height) == (self.width_px as usize, self.height_px as usize);
+        if own_grid {
+            // The pixel grid is this camera's: every point lies on the ray
+            // of a pixel of the sensor, give or take the margin.
+            let m = self.fov_margin_px;
+            let (u_max, v_max) = (self.width_px as f64 - 1.0 + m, self.height_px as f64 - 1.0 + m);
+            let view = [(-m - self.cx()) / self.fx(), (u_max - self.cx()) / self.fx()];
+            let view_v = [(-m - self.cy()) / self.fy(), (v_max - self.cy()) / self.fy()];
+            tangents = [
+                tangents[0].max(view[0]),
+                tangents[1].min(view[1]),
+                tangents[2].max(view_v[0]),
+                tangents[3].min(view_v[1]),
+            ];
+        }
+        MeasurableVolume {
+            min_depth: self.min_depth_mm as f32,
+            max_depth: self.max_depth_mm as f32,
+            tangents: tangents.map(|t| t as f32),
+            fov_applies: own_grid,
+        }
+    }
+
     /// Projects a camera-frame point to pixel coordinates `(u, v)`.
     pub fn project(&self, p: [f64; 3]) -> Option<(f64, f64)> {
         (p[2] > 0.0).then(|| (self.fx() * p[0] / p[2] + self.cx(), self.fy() * p[1] / p[2] + self.cy()))
@@ -154,6 +201,60 @@ impl CameraModel {
     pub fn depth_sigma(&self, z_mm: f64) -> f64 {
         let s = z_mm / self.fov_distance_mm;
         self.nominal_accuracy_mm * s * s
+    }
+}
+
+/// What a camera can measure: a depth range and a pyramid of view
+/// directions, as single-precision bounds tested on every point of a frame.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MeasurableVolume {
+    min_depth: f32,
+    max_depth: f32,
+    /// The least and greatest `x / z`, then `y / z`.
+    tangents: [f32; 4],
+    /// True when the field of view of the camera's own pixel grid narrows
+    /// the directions, false when only the off-axis limit does.
+    fov_applies: bool,
+}
+
+/// Why a point lies outside what the camera can measure.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Unmeasurable {
+    /// Nearer than `camera.min_depth_mm`, or behind the camera.
+    Near,
+    /// Farther than `camera.max_depth_mm`.
+    Far,
+    /// Outside the field of view, or farther off the axis than
+    /// `camera.max_off_axis_deg`.
+    OffView,
+}
+
+impl MeasurableVolume {
+    /// `None` for a point the camera can measure (or an invalid one, NaN),
+    /// else why not. Multiplications rather than divisions, and every
+    /// comparison false on NaN, so a point of any magnitude is tested in
+    /// a few instructions.
+    #[inline]
+    pub fn reject(&self, p: &[f32; 3]) -> Option<Unmeasurable> {
+        let [x, y, z] = *p;
+        if z.is_nan() {
+            return None;
+        }
+        if z < self.min_depth {
+            return Some(Unmeasurable::Near);
+        }
+        if z > self.max_depth {
+            return Some(Unmeasurable::Far);
+        }
+        let [u_lo, u_hi, v_lo, v_hi] = self.tangents;
+        let inside = x >= u_lo * z && x <= u_hi * z && y >= v_lo * z && y <= v_hi * z;
+        (!inside).then_some(Unmeasurable::OffView)
+    }
+
+    /// True when the frame's directions are held to the camera's own
+    /// field of view (an organized frame of its size).
+    pub fn fov_applies(&self) -> bool {
+        self.fov_applies
     }
 }
 
@@ -214,6 +315,37 @@ mod tests {
         let cloud = crate::cloud::PointCloud::organized(3, 3, pts).unwrap();
         let search = crate::pipeline::neighbours::NeighbourSearch::new(&cloud, &cam, 1.0);
         assert_eq!(search.count(4, |_| true), 1, "only itself");
+    }
+
+    #[test]
+    fn the_measurable_volume_bounds_depth_and_direction() {
+        let cam = CameraModel::default();
+        let any = cam.measurable_volume(160, 140, true);
+        assert!(!any.fov_applies());
+        assert_eq!(any.reject(&[0.0, 0.0, 600.0]), None);
+        assert_eq!(any.reject(&[f32::NAN, f32::NAN, f32::NAN]), None, "invalid points are not counted twice");
+        assert_eq!(any.reject(&[0.0, 0.0, 99.0]), Some(Unmeasurable::Near));
+        assert_eq!(any.reject(&[0.0, 0.0, -600.0]), Some(Unmeasurable::Near));
+        assert_eq!(any.reject(&[0.0, 0.0, 1e30]), Some(Unmeasurable::Far));
+        assert_eq!(any.reject(&[0.0, 0.0, f32::INFINITY]), Some(Unmeasurable::Far));
+        assert_eq!(any.reject(&[-1e20, -1e20, 817.0]), Some(Unmeasurable::OffView));
+        assert_eq!(any.reject(&[1.0, f32::INFINITY, 600.0]), Some(Unmeasurable::OffView));
+        // 60° off the axis is outside this camera's view but inside any
+        // camera's limit, so only a frame of the camera's own grid refuses it.
+        let wide = [600.0 * 60f32.to_radians().tan(), 0.0, 600.0];
+        assert_eq!(any.reject(&wide), None);
+        let own = cam.measurable_volume(1920, 1200, true);
+        assert!(own.fov_applies());
+        assert_eq!(own.reject(&wide), Some(Unmeasurable::OffView));
+        assert!(!cam.measurable_volume(1920, 1200, false).fov_applies(), "unorganized clouds have no grid");
+        // Every pixel's ray, at any depth in range, is inside the view.
+        for (u, v) in [(0.0, 0.0), (1919.0, 1199.0), (0.0, 1199.0), (1919.0, 0.0), (960.0, 600.0)] {
+            let r = cam.ray(u, v);
+            for z in [100.0, 1000.0, 3000.0] {
+                let p = [(r[0] * z) as f32, (r[1] * z) as f32, z as f32];
+                assert_eq!(own.reject(&p), None, "pixel ({u}, {v}) at {z} mm");
+            }
+        }
     }
 
     #[test]

@@ -103,3 +103,126 @@ fn full_frame_binary_pcd_parse_time() {
     }
     println!("1920x1200 binary PCD ({} bytes): fastest parse {:.2} ms", bytes.len(), fastest * 1e3);
 }
+
+/// Arbitrary and damaged files: neither parser panics, and what a parse
+/// returns is bounded by the bytes given, so no header can make it
+/// allocate for points the file does not hold. A few thousand cases by
+/// default; set PROPTEST_CASES for more.
+mod damaged_files {
+    use super::*;
+    use proptest::prelude::*;
+    use proptest::test_runner::Config;
+
+    fn config() -> Config {
+        let cases = std::env::var("PROPTEST_CASES").ok().and_then(|v| v.parse().ok()).unwrap_or(3000);
+        Config { cases, failure_persistence: None, ..Config::default() }
+    }
+
+    /// Valid files of every kind the parsers read, to damage.
+    fn originals() -> Vec<(&'static str, Vec<u8>)> {
+        let cloud = grid(6, 4);
+        let mixed_pcd = "VERSION 0.7\nFIELDS intensity x y z normal\nSIZE 1 8 8 8 4\nTYPE U F F F F\n\
+                         COUNT 1 1 1 1 3\nWIDTH 2\nHEIGHT 1\nPOINTS 2\nDATA ascii\n7 1 2 3 0 0 1\n8 4 5 6 0 1 0\n";
+        let mesh_ply = "ply\nformat ascii 1.0\nelement face 1\nproperty list uchar int vertex_indices\n\
+                        element vertex 3\nproperty double x\nproperty float y\nproperty float z\n\
+                        property uchar red\nend_header\n3 0 1 2\n1 2 3 9\n4 5 6 9\n7 8 9 9\n";
+        vec![
+            ("frame.pcd", encoded(|out| pcd::write_binary(&cloud, out))),
+            ("frame.pcd", encoded(|out| pcd::write_ascii(&cloud, out))),
+            ("mixed.pcd", mixed_pcd.as_bytes().to_vec()),
+            ("part.ply", encoded(|out| ply::write_binary_le(&cloud, out))),
+            ("part.ply", encoded(|out| ply::write_ascii(&cloud, out))),
+            ("mesh.ply", mesh_ply.as_bytes().to_vec()),
+        ]
+    }
+
+    /// Parses `bytes` as `name`'s format and checks the bound.
+    fn parse_checked(name: &str, bytes: &[u8]) -> Result<(), TestCaseError> {
+        let path = Path::new(name);
+        let parsed = if name.ends_with(".pcd") { pcd::parse(bytes, path) } else { ply::parse(bytes, path) };
+        if let Ok(cloud) = parsed {
+            // Every point takes at least five bytes ("1 2 3" in ascii, 12
+            // bytes in binary), so a cloud is never larger than that.
+            prop_assert!(cloud.len() * 5 <= bytes.len(), "{} points from {} bytes of {name}", cloud.len(), bytes.len());
+        }
+        Ok(())
+    }
+
+    /// One edit of a file: the offset as a fraction of its length.
+    #[derive(Debug, Clone)]
+    enum Edit {
+        Replace(f64, u8),
+        Insert(f64, Vec<u8>),
+        Delete(f64, usize),
+        Truncate(f64),
+        /// A number in the header replaced by one of the extremes a
+        /// corrupt header carries.
+        Number(f64, &'static str),
+    }
+
+    fn edit() -> impl Strategy<Value = Edit> {
+        let at = 0.0..1.0f64;
+        let extreme = prop::sample::select(vec!["0", "-1", "4294967296", "18446744073709551615", "1e309", "nan"]);
+        prop_oneof![
+            (at.clone(), any::<u8>()).prop_map(|(a, b)| Edit::Replace(a, b)),
+            (at.clone(), prop::collection::vec(any::<u8>(), 1..8)).prop_map(|(a, b)| Edit::Insert(a, b)),
+            (at.clone(), 1..16usize).prop_map(|(a, n)| Edit::Delete(a, n)),
+            at.clone().prop_map(Edit::Truncate),
+            (at, extreme).prop_map(|(a, n)| Edit::Number(a, n)),
+        ]
+    }
+
+    fn apply(bytes: &mut Vec<u8>, edit: &Edit) {
+        let at = |f: f64, len: usize| ((f * len as f64) as usize).min(len);
+        match edit {
+            Edit::Replace(f, b) => {
+                if !bytes.is_empty() {
+                    let i = at(*f, bytes.len() - 1);
+                    bytes[i] = *b;
+                }
+            }
+            Edit::Insert(f, new) => {
+                let i = at(*f, bytes.len());
+                bytes.splice(i..i, new.iter().copied());
+            }
+            Edit::Delete(f, n) => {
+                let i = at(*f, bytes.len());
+                bytes.drain(i..(i + n).min(bytes.len()));
+            }
+            Edit::Truncate(f) => bytes.truncate(at(*f, bytes.len())),
+            Edit::Number(f, text) => {
+                // The first run of digits at or after the offset.
+                let from = at(*f, bytes.len());
+                if let Some(start) = bytes[from..].iter().position(u8::is_ascii_digit).map(|p| p + from) {
+                    let end = start + bytes[start..].iter().take_while(|b| b.is_ascii_digit()).count();
+                    bytes.splice(start..end, text.bytes());
+                }
+            }
+        }
+    }
+
+    proptest! {
+        #![proptest_config(config())]
+
+        #[test]
+        fn arbitrary_bytes_never_panic(bytes in prop::collection::vec(any::<u8>(), 0..1024), ply_magic in any::<bool>()) {
+            // Half the cases start like a file, so the parsers get past the
+            // first line.
+            let mut file = if ply_magic { b"ply\nformat ascii 1.0\n".to_vec() } else { b"VERSION 0.7\nFIELDS x y z\n".to_vec() };
+            file.extend(&bytes);
+            for name in ["any.pcd", "any.ply"] {
+                parse_checked(name, &bytes)?;
+                parse_checked(name, &file)?;
+            }
+        }
+
+        #[test]
+        fn damaged_files_never_panic(original in 0..6usize, edits in prop::collection::vec(edit(), 1..6)) {
+            let (name, mut bytes) = originals().swap_remove(original);
+            for e in &edits {
+                apply(&mut bytes, e);
+            }
+            parse_checked(name, &bytes)?;
+        }
+    }
+}

@@ -5,6 +5,7 @@ mod bench;
 mod cli;
 mod daemon;
 mod exactness;
+mod hostile_clouds;
 mod parsers;
 mod pipeline;
 mod requests;

@@ -116,6 +116,10 @@ pub enum LoadError {
         #[source]
         source: std::io::Error,
     },
+    /// The path names a device, pipe, socket or directory: only regular
+    /// files have a size that bounds what is read.
+    #[error("{path} is {kind}, not a regular file")]
+    NotAFile { path: PathBuf, kind: &'static str },
     /// The file's extension is neither `.pcd` nor `.ply`.
     #[error("{path}: unknown point cloud format (expected a .pcd or .ply file)")]
     UnknownFormat { path: PathBuf },
@@ -133,6 +137,12 @@ pub enum LoadError {
 const MAP_FROM_BYTES: u64 = 1 << 20;
 
 /// Reads a PCD or PLY file, choosing the parser by extension.
+///
+/// Only regular files are read (symlinks to them are followed): a device,
+/// pipe or directory has no size to bound the read by, and `/dev/zero`
+/// would be read until memory ran out. What is read is bounded by the
+/// size the file had when opened, so a file growing meanwhile is cut
+/// there; the parser then reads no further than its header promises.
 pub fn load(path: &std::path::Path) -> Result<PointCloud, LoadError> {
     use std::io::Read;
     let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
@@ -142,8 +152,12 @@ pub fn load(path: &std::path::Path) -> Result<PointCloud, LoadError> {
         Some("ply") => ply::parse(bytes, path),
         _ => Err(LoadError::UnknownFormat { path: path.to_path_buf() }),
     };
-    let mut file = std::fs::File::open(path).map_err(io)?;
-    let len = file.metadata().map_err(io)?.len();
+    let file = std::fs::File::open(path).map_err(io)?;
+    let metadata = file.metadata().map_err(io)?;
+    if !metadata.is_file() {
+        return Err(LoadError::NotAFile { path: path.to_path_buf(), kind: file_kind(&metadata.file_type()) });
+    }
+    let len = metadata.len();
     if len >= MAP_FROM_BYTES {
         // SAFETY: the map is only read, and only while parsing. Were another
         // process to rewrite the file meanwhile, the parser would see other
@@ -153,9 +167,28 @@ pub fn load(path: &std::path::Path) -> Result<PointCloud, LoadError> {
         let map = unsafe { memmap2::MmapOptions::new().map(&file) }.map_err(io)?;
         return parse(&map);
     }
+    // Below MAP_FROM_BYTES, so the capacity is small whatever the file says.
     let mut bytes = Vec::with_capacity(len as usize);
-    file.read_to_end(&mut bytes).map_err(io)?;
+    file.take(len).read_to_end(&mut bytes).map_err(io)?;
     parse(&bytes)
+}
+
+/// What a path that is not a regular file is, for the error message.
+fn file_kind(file_type: &std::fs::FileType) -> &'static str {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::FileTypeExt;
+        if file_type.is_char_device() {
+            return "a character device";
+        } else if file_type.is_block_device() {
+            return "a block device";
+        } else if file_type.is_fifo() {
+            return "a pipe";
+        } else if file_type.is_socket() {
+            return "a socket";
+        }
+    }
+    if file_type.is_dir() { "a directory" } else { "not a file" }
 }
 
 #[cfg(test)]
@@ -192,6 +225,21 @@ mod tests {
         std::fs::write(&path, &bytes[..bytes.len() - 5000]).unwrap();
         let err = load(&path).unwrap_err();
         assert!(matches!(err, LoadError::Data { .. }), "{err}");
+    }
+
+    #[test]
+    #[cfg(unix)]
+    fn devices_and_directories_are_refused_unread() {
+        let dir = tempfile::tempdir().unwrap();
+        let zero = dir.path().join("zero.pcd");
+        std::os::unix::fs::symlink("/dev/zero", &zero).unwrap();
+        let folder = dir.path().join("folder.ply");
+        std::fs::create_dir(&folder).unwrap();
+        for (path, kind) in [(zero, "a character device"), (folder, "a directory")] {
+            let err = load(&path).unwrap_err();
+            assert!(matches!(err, LoadError::NotAFile { .. }), "{err}");
+            assert_eq!(err.to_string(), format!("{} is {kind}, not a regular file", path.display()));
+        }
     }
 
     #[test]

@@ -29,6 +29,9 @@ pub struct CameraSection {
     pub baseline_mm: f64,
     pub nominal_accuracy_mm: f64,
     pub min_depth_mm: f64,
+    pub max_depth_mm: f64,
+    pub max_off_axis_deg: f64,
+    pub fov_margin_px: f64,
 }
 
 impl Default for CameraSection {
@@ -43,6 +46,9 @@ impl Default for CameraSection {
             baseline_mm: c.baseline_mm,
             nominal_accuracy_mm: c.nominal_accuracy_mm,
             min_depth_mm: c.min_depth_mm,
+            max_depth_mm: c.max_depth_mm,
+            max_off_axis_deg: c.max_off_axis_deg,
+            fov_margin_px: c.fov_margin_px,
         }
     }
 }

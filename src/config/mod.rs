@@ -298,6 +298,14 @@ pub enum ConfigError {
     HandEye(HandEyeError),
 }
 
+/// The widest sensor side a camera may have, pixels.
+const MAX_SENSOR_PX: u32 = 32_768;
+/// The shortest field-of-view size or distance, mm.
+const MIN_LENGTH_MM: f64 = 1e-3;
+/// The longest camera length (field of view, its distance, depth), mm:
+/// 100 m, far beyond what a cell's camera sees.
+const MAX_CAMERA_MM: f64 = 100_000.0;
+
 fn check(key: &'static str, ok: bool, message: impl FnOnce() -> String) -> Result<(), ConfigError> {
     if ok { Ok(()) } else { Err(ConfigError::Invalid { key, message: message() }) }
 }
@@ -332,14 +340,22 @@ impl Config {
         // iterations, a tolerance of 1e-30 mm) would hang or silently break
         // the planner rather than fail at start.
         let c = &f.camera;
-        count_in("camera.width_px", c.width_px.into(), 2, 20_000)?;
-        count_in("camera.height_px", c.height_px.into(), 2, 20_000)?;
-        in_range("camera.fov_width_mm", c.fov_width_mm, 1.0, 100_000.0)?;
-        in_range("camera.fov_height_mm", c.fov_height_mm, 1.0, 100_000.0)?;
-        in_range("camera.fov_distance_mm", c.fov_distance_mm, 10.0, 100_000.0)?;
+        // A sensor of 32768 pixels a side is beyond any camera; the tile
+        // keys of the full-plane counts hold 16-bit tile indices.
+        for (key, px) in [("camera.width_px", c.width_px), ("camera.height_px", c.height_px)] {
+            check(key, (1..=MAX_SENSOR_PX).contains(&px), || format!("must lie in [1, {MAX_SENSOR_PX}], got {px}"))?;
+        }
+        in_range("camera.fov_width_mm", c.fov_width_mm, MIN_LENGTH_MM, MAX_CAMERA_MM)?;
+        in_range("camera.fov_height_mm", c.fov_height_mm, MIN_LENGTH_MM, MAX_CAMERA_MM)?;
+        in_range("camera.fov_distance_mm", c.fov_distance_mm, MIN_LENGTH_MM, MAX_CAMERA_MM)?;
         in_range("camera.baseline_mm", c.baseline_mm, 0.0, 10_000.0)?;
-        in_range("camera.nominal_accuracy_mm", c.nominal_accuracy_mm, 1e-4, 100.0)?;
+        in_range("camera.nominal_accuracy_mm", c.nominal_accuracy_mm, 1e-6, 100.0)?;
         in_range("camera.min_depth_mm", c.min_depth_mm, 1.0, c.fov_distance_mm)?;
+        in_range("camera.max_depth_mm", c.max_depth_mm, c.fov_distance_mm, MAX_CAMERA_MM)?;
+        // Up to 89°: the off-axis limit bounds every coordinate by a
+        // multiple of the depth, which a limit of 90° would not.
+        in_range("camera.max_off_axis_deg", c.max_off_axis_deg, 1.0, 89.0)?;
+        in_range("camera.fov_margin_px", c.fov_margin_px, 0.0, f64::from(MAX_SENSOR_PX))?;
         let camera = CameraModel {
             width_px: c.width_px,
             height_px: c.height_px,
@@ -349,6 +365,9 @@ impl Config {
             baseline_mm: c.baseline_mm,
             nominal_accuracy_mm: c.nominal_accuracy_mm,
             min_depth_mm: c.min_depth_mm,
+            max_depth_mm: c.max_depth_mm,
+            max_off_axis_deg: c.max_off_axis_deg,
+            fov_margin_px: c.fov_margin_px,
         };
 
         let r = &f.robot;
@@ -674,6 +693,27 @@ mod tests {
         let text = format!("[robot]\nhand_eye = {rows:?}\n");
         let e = Config::parse(&text, "c.toml").unwrap_err().to_string();
         assert!(e.contains("robot.hand_eye") && e.contains("max_hand_eye_translation_mm (1000 mm)"), "{e}");
+    }
+
+    #[test]
+    fn camera_values_out_of_range_name_their_key_and_limit() {
+        let cases = [
+            ("width_px = 0", "camera.width_px", "[1, 32768]"),
+            ("height_px = 100000", "camera.height_px", "[1, 32768]"),
+            ("fov_width_mm = 1e300", "camera.fov_width_mm", "100000"),
+            ("nominal_accuracy_mm = 0.0", "camera.nominal_accuracy_mm", "[0.000001, 100]"),
+            ("max_depth_mm = 500.0", "camera.max_depth_mm", "[1000, 100000]"),
+            ("max_depth_mm = inf", "camera.max_depth_mm", "[1000, 100000]"),
+            ("max_off_axis_deg = 90.0", "camera.max_off_axis_deg", "[1, 89]"),
+            ("fov_margin_px = -1.0", "camera.fov_margin_px", "[0, 32768]"),
+            ("fov_margin_px = nan", "camera.fov_margin_px", "[0, 32768]"),
+        ];
+        for (line, key, limit) in cases {
+            let e = Config::parse(&format!("[camera]\n{line}\n"), "c.toml").unwrap_err().to_string();
+            assert!(e.contains(key) && e.contains(limit), "{line:?} gave {e}");
+        }
+        let c = Config::parse("[camera]\nmax_depth_mm = 2000.0\nfov_margin_px = 0.0\n", "c.toml").unwrap();
+        assert_eq!((c.camera.max_depth_mm, c.camera.fov_margin_px), (2000.0, 0.0));
     }
 
     #[test]

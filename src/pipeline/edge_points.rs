@@ -70,7 +70,7 @@ pub fn edge_points(search: &NeighbourSearch, plane: &PlanePoints, plate: Plate, 
             .members
             .par_iter()
             .copied()
-            .filter(|&i| counted_edge(search, plane, plate, criterion, i))
+            .filter(|&i| counted_edge_up_to_threshold(search, plane, plate, criterion, i))
             .collect();
     }
     let [edges] = on_grid(search, plane, plate.labels, [plate.label], criterion);
@@ -108,6 +108,31 @@ fn counted_edge(
     let i = i as usize;
     let n = criterion.full.of(search, plane, i);
     search.count(i, |j| plate.labels[j] == plate.label) as f64 <= criterion.ratio * n
+}
+
+/// [`counted_edge`], counting only until the count passes `ratio · N`:
+/// the same answer, and no more neighbours than that however dense the
+/// cloud.
+fn counted_edge_up_to_threshold(
+    search: &NeighbourSearch,
+    plane: &PlanePoints,
+    plate: Plate,
+    criterion: &EdgeCriterion,
+    i: u32,
+) -> bool {
+    let i = i as usize;
+    let limit = criterion.ratio * criterion.full.of(search, plane, i);
+    if limit.is_nan() || limit < 0.0 {
+        return false;
+    }
+    if limit >= u32::MAX as f64 {
+        // No cloud holds that many points: every count is at most it.
+        return true;
+    }
+    // A whole count is at most `limit` exactly when it is below
+    // floor(limit) + 1; the first count to reach that decides "no edge".
+    let cap = (limit.floor() + 1.0).min(u32::MAX as f64) as u32;
+    search.count_up_to(i, |j| plate.labels[j] == plate.label, cap) < cap
 }
 
 /// Rows handed to a rayon job at a time: enough to amortise the first

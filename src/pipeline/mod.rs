@@ -30,6 +30,7 @@ pub mod trajectory;
 pub mod weld_edges;
 pub mod weld_equation;
 
+use std::borrow::Cow;
 use std::fmt;
 
 use rayon::prelude::*;
@@ -37,6 +38,7 @@ use std::time::Instant;
 
 use nalgebra::Isometry3;
 
+use crate::camera::{MeasurableVolume, Unmeasurable};
 use crate::cloud::PointCloud;
 use crate::config::{Config, Method};
 use crate::geometry::pose::RobotPose;
@@ -258,7 +260,9 @@ impl Planner {
 /// One pipeline run: the inputs and what the stages have found so far.
 struct Run<'a> {
     config: &'a Config,
-    cloud: &'a PointCloud,
+    /// The frame, once [`Run::execute`] has begun without the points the
+    /// camera cannot measure.
+    cloud: Cow<'a, PointCloud>,
     request: &'a PlanRequest,
     method: Method,
     clock: Clock,
@@ -270,7 +274,7 @@ impl<'a> Run<'a> {
         validate(request, config)?;
         Ok(Run {
             config,
-            cloud,
+            cloud: Cow::Borrowed(cloud),
             request,
             method: config.pipeline.method,
             clock: Clock::start(),
@@ -281,34 +285,58 @@ impl<'a> Run<'a> {
     fn execute(mut self) -> Result<Plan, PlanError> {
         let cfg = &self.config.pipeline;
         let camera = &self.config.camera;
-        let (valid, near) = count_valid_and_near(self.cloud, camera.min_depth_mm);
-        let sanitized;
-        let cloud = if near == 0 {
-            self.cloud
-        } else {
+        // A point outside what the camera can measure is a corrupt frame's
+        // or noise, and one such point far off the axis would widen every
+        // window it is part of: it becomes invalid before any stage runs.
+        let volume = camera.measurable_volume(self.cloud.width(), self.cloud.height(), self.cloud.is_organized());
+        let counts = count_measurable(&self.cloud, &volume);
+        if counts.unmeasurable() > 0 {
             tracing::warn!(
-                points = near,
+                near = counts.near,
+                far = counts.far,
+                off_view = counts.off_view,
                 min_depth_mm = camera.min_depth_mm,
-                "ignoring points nearer than the camera can measure"
+                max_depth_mm = camera.max_depth_mm,
+                max_off_axis_deg = camera.max_off_axis_deg,
+                camera_field_of_view = volume.fov_applies(),
+                "ignoring {} invalid points the camera cannot measure",
+                counts.unmeasurable()
             );
-            sanitized = without_near_points(self.cloud, camera.min_depth_mm);
-            &sanitized
-        };
-        // One pass counted both; the near points are no longer valid.
-        self.stats.valid_points = valid - near;
-        if self.stats.valid_points == 0 && near > 0 {
+            self.cloud = Cow::Owned(without_unmeasurable(&self.cloud, &volume));
+        }
+        self.stats.valid_points = counts.valid - counts.unmeasurable();
+        if self.stats.valid_points == 0 && counts.near > 0 && counts.near == counts.valid {
             return Err(PlanError::at(
                 Stage::PlanePoints,
                 format!(
-                    "the frame has no valid point: all {near} points lie nearer than camera.min_depth_mm ({} mm); \
+                    "the frame has no valid point: all {} points lie nearer than camera.min_depth_mm ({} mm); \
                      is the cloud in millimetres and in the camera frame?",
-                    camera.min_depth_mm
+                    counts.near, camera.min_depth_mm
+                ),
+            ));
+        }
+        if self.stats.valid_points == 0 && counts.unmeasurable() > 0 {
+            return Err(PlanError::at(
+                Stage::PlanePoints,
+                format!(
+                    "the frame has no valid point: of its {} points {} lie nearer than camera.min_depth_mm \
+                     ({} mm), {} farther than camera.max_depth_mm ({} mm) and {} outside the view \
+                     (camera.max_off_axis_deg {}°{}); is the cloud in millimetres and in the camera frame?",
+                    counts.valid,
+                    counts.near,
+                    camera.min_depth_mm,
+                    counts.far,
+                    camera.max_depth_mm,
+                    counts.off_view,
+                    camera.max_off_axis_deg,
+                    if volume.fov_applies() { ", or the camera's field of view" } else { "" }
                 ),
             ));
         }
         if self.stats.valid_points == 0 {
             return Err(PlanError::at(Stage::PlanePoints, "the frame has no valid point"));
         }
+        let cloud: &PointCloud = &self.cloud;
         let search = NeighbourSearch::new(cloud, camera, cfg.neighbour_radius_mm);
         let robust = self.method == Method::Robust;
 
@@ -521,7 +549,7 @@ impl<'a> Run<'a> {
             }
             let edge = CoarseEdge { point: plane.project(&line.point), direction, outward };
             let params = BoundaryParams { band_mm: cfg.boundary_band_mm, on_plane_mm: cfg.on_plane_tolerance_mm };
-            boundary::sample_boundary(self.cloud, &plates[k].members, plane, &edge, &params)
+            boundary::sample_boundary(&self.cloud, &plates[k].members, plane, &edge, &params)
         };
         let (boundary_a, boundary_b) = rayon::join(|| boundary_of(0), || boundary_of(1));
         let boundaries: [Boundary; 2] = [boundary_a, boundary_b];
@@ -694,10 +722,33 @@ impl<'a> Run<'a> {
     }
 }
 
-/// The valid points, and those of them nearer than `min_depth` (or behind
-/// the camera), in one pass over the frame.
-fn count_valid_and_near(cloud: &PointCloud, min_depth: f64) -> (usize, usize) {
-    let min = min_depth as f32;
+/// The valid points of a frame and, among them, those the camera cannot
+/// measure, by reason.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+struct MeasurableCounts {
+    valid: usize,
+    near: usize,
+    far: usize,
+    off_view: usize,
+}
+
+impl MeasurableCounts {
+    fn unmeasurable(&self) -> usize {
+        self.near + self.far + self.off_view
+    }
+
+    fn add(self, other: MeasurableCounts) -> MeasurableCounts {
+        MeasurableCounts {
+            valid: self.valid + other.valid,
+            near: self.near + other.near,
+            far: self.far + other.far,
+            off_view: self.off_view + other.off_view,
+        }
+    }
+}
+
+/// Counts the valid points and those outside `volume`, in one pass.
+fn count_measurable(cloud: &PointCloud, volume: &MeasurableVolume) -> MeasurableCounts {
     // Plain loops over chunks: as a per-point filter, map and reduce the
     // fold's state went through the stack each point and stalled on it,
     // 15 ms a frame in some builds instead of under one.
@@ -705,20 +756,28 @@ fn count_valid_and_near(cloud: &PointCloud, min_depth: f64) -> (usize, usize) {
         .points()
         .par_chunks(1 << 14)
         .map(|chunk| {
-            let (mut valid, mut near) = (0, 0);
+            let mut counts = MeasurableCounts::default();
             for p in chunk.iter().filter(|p| p[0].is_finite()) {
-                valid += 1;
-                near += (p[2] < min) as usize;
+                counts.valid += 1;
+                match volume.reject(p) {
+                    None => {}
+                    Some(Unmeasurable::Near) => counts.near += 1,
+                    Some(Unmeasurable::Far) => counts.far += 1,
+                    Some(Unmeasurable::OffView) => counts.off_view += 1,
+                }
             }
-            (valid, near)
+            counts
         })
-        .reduce(|| (0, 0), |a, b| (a.0 + b.0, a.1 + b.1))
+        .reduce(MeasurableCounts::default, MeasurableCounts::add)
 }
 
-/// A copy of `cloud` with the points nearer than `min_depth` made invalid.
-fn without_near_points(cloud: &PointCloud, min_depth: f64) -> PointCloud {
-    let min = min_depth as f32;
-    let points = cloud.points().iter().map(|p| if p[2] >= min { *p } else { crate::cloud::INVALID_POINT }).collect();
+/// A copy of `cloud` with the points outside `volume` made invalid.
+fn without_unmeasurable(cloud: &PointCloud, volume: &MeasurableVolume) -> PointCloud {
+    let points = cloud
+        .points()
+        .par_iter()
+        .map(|p| if volume.reject(p).is_none() { *p } else { crate::cloud::INVALID_POINT })
+        .collect();
     if cloud.is_organized() {
         PointCloud::organized(cloud.width(), cloud.height(), points)
             .unwrap_or_else(|| PointCloud::unorganized(Vec::new()))

@@ -4,12 +4,17 @@
 //! Organized frames are searched on the pixel grid: every 3D neighbour
 //! within R of a pixel's point lies inside a small image window around the
 //! pixel ([`CameraModel::neighbour_window`]), so scanning that window gives
-//! exactly the count a KD-tree query would. Unorganized clouds use a kiddo
-//! KD-tree, which also serves as the reference the grid path is tested
-//! against.
+//! exactly the count a KD-tree query would. Unorganized clouds use a tree
+//! whose queries stop as soon as the caller has what it needs (a count up
+//! to its threshold, a bounded sample for a normal), so no density makes a
+//! point cost more than that. A kiddo KD-tree that reads every neighbour
+//! serves as the reference both paths are tested against.
+
+mod point_tree;
 
 #[cfg(target_arch = "x86_64")]
 use std::arch::x86_64::*;
+use std::ops::ControlFlow;
 
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 
@@ -18,6 +23,12 @@ use crate::cloud::{Point, PointCloud};
 use crate::geometry::{Vec3, ceil_i64, floor_i64};
 
 use super::grid_search::{LANES, Span};
+use point_tree::PointTree;
+
+/// The most neighbours of one point a sampled visit reads: more than any
+/// frame of the paper's camera gives within its field of view at its
+/// nearest depth, far less than a cloud a thousand times denser.
+pub const MAX_SAMPLED_NEIGHBOURS: usize = 4096;
 
 /// Finds the neighbours of cloud points within a fixed radius.
 pub struct NeighbourSearch<'a> {
@@ -25,7 +36,17 @@ pub struct NeighbourSearch<'a> {
     camera: &'a CameraModel,
     radius: f32,
     radius_sq: f32,
-    tree: Option<KdIndex>,
+    index: Index,
+}
+
+/// How the neighbours of a point are found.
+enum Index {
+    /// An organized cloud: its pixel window.
+    Grid,
+    /// An unorganized cloud: a tree whose queries stop early.
+    Tree(PointTree),
+    /// The kiddo KD-tree of the reference search.
+    KdTree(KdIndex),
 }
 
 struct KdIndex {
@@ -45,19 +66,21 @@ fn within(p: &Point, q: &Point, radius_sq: f32) -> bool {
 }
 
 impl<'a> NeighbourSearch<'a> {
-    /// Prepares a search with radius `radius_mm`. Builds a KD-tree only for
-    /// unorganized clouds.
+    /// Prepares a search with radius `radius_mm`: the pixel grid of an
+    /// organized cloud, else a tree of its points.
     pub fn new(cloud: &'a PointCloud, camera: &'a CameraModel, radius_mm: f64) -> Self {
         let radius = radius_mm as f32;
-        let tree = (!cloud.is_organized()).then(|| build_tree(cloud.points()));
-        NeighbourSearch { cloud, camera, radius, radius_sq: radius * radius, tree }
+        let index = if cloud.is_organized() { Index::Grid } else { Index::Tree(PointTree::new(cloud.points())) };
+        NeighbourSearch { cloud, camera, radius, radius_sq: radius * radius, index }
     }
 
-    /// A search that always queries a KD-tree, even on a pixel grid: the
-    /// straightforward reference the grid paths are tested against.
+    /// A search that always queries a kiddo KD-tree for every neighbour,
+    /// even on a pixel grid: the straightforward reference the grid and
+    /// tree paths are tested against.
     pub fn kdtree(cloud: &'a PointCloud, camera: &'a CameraModel, radius_mm: f64) -> Self {
         let radius = radius_mm as f32;
-        NeighbourSearch { cloud, camera, radius, radius_sq: radius * radius, tree: Some(build_tree(cloud.points())) }
+        let index = Index::KdTree(build_tree(cloud.points()));
+        NeighbourSearch { cloud, camera, radius, radius_sq: radius * radius, index }
     }
 
     pub fn cloud(&self) -> &PointCloud {
@@ -76,33 +99,50 @@ impl<'a> NeighbourSearch<'a> {
     /// point `i` (including `i` itself). `i` must be valid.
     #[inline]
     pub fn for_each(&self, i: usize, mut visit: impl FnMut(usize)) {
+        self.visit_until(i, |j| {
+            visit(j);
+            ControlFlow::Continue(())
+        });
+    }
+
+    /// [`NeighbourSearch::for_each`] until `visit` breaks. On a pixel grid
+    /// the window bounds the work; in a tree the break does, which is what
+    /// keeps a cloud far denser than any camera's from costing the whole
+    /// cloud per point.
+    #[inline]
+    pub fn visit_until(&self, i: usize, mut visit: impl FnMut(usize) -> ControlFlow<()>) {
         let points = self.cloud.points();
         let p = &points[i];
-        match &self.tree {
-            None => {
+        match &self.index {
+            Index::Grid => {
                 let w = self.cloud.width();
                 let (col, row) = (i % w, i / w);
                 let (wx, wy) = self.camera.neighbour_window(*p, self.radius as f64);
-                let (c0, c1) = (col.saturating_sub(wx), (col + wx).min(w - 1));
-                let (r0, r1) = (row.saturating_sub(wy), (row + wy).min(self.cloud.height() - 1));
+                let (c0, c1) = (col.saturating_sub(wx), col.saturating_add(wx).min(w - 1));
+                let (r0, r1) = (row.saturating_sub(wy), row.saturating_add(wy).min(self.cloud.height() - 1));
                 for r in r0..=r1 {
                     let line = &points[r * w..(r + 1) * w];
                     for (c, q) in line.iter().enumerate().take(c1 + 1).skip(c0) {
                         // NaN compares false, so invalid pixels never count.
-                        if within(p, q, self.radius_sq) {
-                            visit(r * w + c);
+                        if within(p, q, self.radius_sq) && visit(r * w + c).is_break() {
+                            return;
                         }
                     }
                 }
             }
-            Some(index) => {
+            Index::Tree(tree) => {
                 // The tree gives candidates; the shared predicate decides.
+                tree.visit_near(p, self.radius_sq * (1.0 + 1e-5), |j, q| {
+                    if within(p, q, self.radius_sq) { visit(j) } else { ControlFlow::Continue(()) }
+                });
+            }
+            Index::KdTree(index) => {
                 let reach = self.radius_sq * (1.0 + 1e-5);
                 let found = index.tree.query(p).within::<SquaredEuclidean<f32>>(reach).unsorted().execute();
                 for hit in found {
                     let j = index.point_of_item[hit.item as usize] as usize;
-                    if within(p, &points[j], self.radius_sq) {
-                        visit(j);
+                    if within(p, &points[j], self.radius_sq) && visit(j).is_break() {
+                        return;
                     }
                 }
             }
@@ -116,6 +156,47 @@ impl<'a> NeighbourSearch<'a> {
         let mut n = 0;
         self.for_each(i, |j| n += member(j) as u32);
         n
+    }
+
+    /// [`NeighbourSearch::count`] when it is below `cap`, else `cap`: a
+    /// criterion comparing the count with a threshold needs no more, and
+    /// stops there.
+    #[inline]
+    pub fn count_up_to(&self, i: usize, member: impl Fn(usize) -> bool, cap: u32) -> u32 {
+        let mut n = 0;
+        if cap == 0 {
+            return 0;
+        }
+        self.visit_until(i, |j| {
+            n += member(j) as u32;
+            if n >= cap { ControlFlow::Break(()) } else { ControlFlow::Continue(()) }
+        });
+        n
+    }
+
+    /// The most neighbours point `p` can have in a frame of the configured
+    /// camera: one per pixel of its window, which holds every pixel whose
+    /// ray passes within the radius of `p`. A denser cloud is not this
+    /// camera's frame; its neighbourhoods are sampled rather than read
+    /// whole (see [`NeighbourSearch::for_each_sampled`]).
+    pub fn frame_neighbours_at_most(&self, p: &Point) -> usize {
+        let (wx, wy) = self.camera.neighbour_window(*p, self.radius as f64);
+        let side = |w: usize| w.saturating_mul(2).saturating_add(1);
+        side(wx).saturating_mul(side(wy)).min(MAX_SAMPLED_NEIGHBOURS)
+    }
+
+    /// Calls `visit(j)` for the neighbours of point `i`, up to
+    /// [`NeighbourSearch::frame_neighbours_at_most`] of them: all of them
+    /// in any frame of the configured camera, a bounded sample of the
+    /// neighbours of a point denser than that.
+    pub fn for_each_sampled(&self, i: usize, mut visit: impl FnMut(usize)) {
+        let cap = self.frame_neighbours_at_most(&self.cloud.points()[i]);
+        let mut n = 0;
+        self.visit_until(i, |j| {
+            visit(j);
+            n += 1;
+            if n >= cap { ControlFlow::Break(()) } else { ControlFlow::Continue(()) }
+        });
     }
 
     /// The number of neighbours point `i` would have if the surface were a
@@ -345,6 +426,12 @@ fn build_tree(points: &[Point]) -> KdIndex {
     KdIndex { tree, point_of_item }
 }
 
+/// The most rows either side of its centre an ellipse is counted over
+/// lattice point by lattice point: some three hundred times the rows a
+/// 1 mm disc covers at 100 mm with the paper's camera, and more than a
+/// sensor has.
+pub const MAX_LATTICE_ROWS: i64 = 1 << 13;
+
 /// The image, in pixel offsets, of the disc of radius R around a point on
 /// a plane: near `p` the plane maps pixel offsets linearly to 3D
 /// displacements, `d ≈ J (du, dv)`, so the offsets within the radius are
@@ -378,8 +465,24 @@ impl PixelEllipse {
         (det > 0.0).then_some(PixelEllipse { a, b, c, det, radius_sq: radius * radius })
     }
 
+    /// The largest row offset inside the ellipse. Huge (saturated) for a
+    /// plane seen nearly edge-on, where the ellipse is a needle.
     fn dv_max(&self) -> i64 {
         (self.radius_sq * self.a / self.det).sqrt().floor() as i64
+    }
+
+    /// The largest column offset inside the ellipse.
+    fn du_max(&self) -> i64 {
+        (self.radius_sq * self.c / self.det).sqrt().floor() as i64
+    }
+
+    /// True when the ellipse's offsets stay within `width x height`
+    /// pixels of its centre, so some pixel of such a grid could have all
+    /// of them in the image: spans of a larger ellipse could never be
+    /// counted on it.
+    pub fn fits_grid(&self, width: usize, height: usize) -> bool {
+        let below = |extent: i64, size: usize| extent >= 0 && (extent as u64) < size as u64;
+        below(self.dv_max(), height) && below(self.du_max(), width)
     }
 
     /// The real `du` interval of row `dv` inside the ellipse.
@@ -395,10 +498,19 @@ impl PixelEllipse {
 
     /// The number of pixel offsets inside the ellipse: what a pixel grid
     /// really gives, where `π R² D` can be 15 % off.
+    ///
+    /// An ellipse taller than [`MAX_LATTICE_ROWS`] (a plane seen within a
+    /// fraction of a degree of edge-on, or a point far outside any field
+    /// of view) is counted by its area, `π R² / sqrt(det)`, instead: no
+    /// camera's frame holds such an ellipse, and counting it row by row
+    /// would take time in proportion to its length, which has no bound.
     pub fn lattice_count(&self) -> f64 {
         // The ellipse is centred: row -dv holds the mirror image of row dv,
         // so the same number of lattice points.
         let dv_max = self.dv_max();
+        if !(0..=MAX_LATTICE_ROWS).contains(&dv_max) {
+            return std::f64::consts::PI * self.radius_sq / self.det.sqrt();
+        }
         let mut count = 0i64;
         for dv in 0..=dv_max {
             if let Some((lo, hi)) = self.row(dv) {

@@ -196,9 +196,13 @@ fn grid_cross<G: GridPoints>(grid: &G, i: usize, step: usize) -> Option<[f32; 3]
     Some(cross(du, dv))
 }
 
+/// The normal of the neighbours' principal axes: all of them in a frame of
+/// the configured camera, a bounded sample where the cloud is denser than
+/// any such frame (a plane fit needs no more, and reading them all would
+/// cost the whole cloud per point in a dense clump).
 fn scatter_normal(cloud: &PointCloud, search: &NeighbourSearch, i: usize) -> Option<Vec3> {
     let mut m = Moments::default();
-    search.for_each(i, |j| {
+    search.for_each_sampled(i, |j| {
         if let Some(q) = vec_at(cloud, j) {
             m.add(&q);
         }

@@ -538,7 +538,10 @@ fn classify<T: Threshold>(search: &NeighbourSearch, threshold: &T) -> PlanePoint
             FullCountCache::default,
             |cache, (i, ((m, c), f))| {
                 if let Some((t, full_count)) = threshold.needed(i, cache) {
-                    let count = search.count(i, |_| true);
+                    // Counting stops at the threshold: however dense the
+                    // cloud, a point costs at most that many neighbours,
+                    // and the count kept is a lower bound, as on the grid.
+                    let count = search.count_up_to(i, |_| true, LaneNeed::of(Some((t, 0.0))).count);
                     *m = count as f64 >= t;
                     *c = if *m { saturate(count as f64) } else { 0 };
                     *f = saturate(full_count);
@@ -646,9 +649,15 @@ fn classify_block<T: Threshold>(
     if lanes == LANES {
         let point = grid.point(first + anchor);
         if !scratch.spans_serve(point[2], col) {
+            // An ellipse wider or taller than the image (a point far off
+            // the axis, or a plane seen nearly edge-on) could never be
+            // counted in it: its spans would only cost time and memory in
+            // proportion to its size, which one corrupt point makes
+            // unbounded. It gets no runs, as one seen edge-on gets none,
+            // and so no partial count: the lanes are counted exactly.
             let ellipse =
-                PixelEllipse::new(search.camera(), &vec3(&point), &threshold.scan_normal(), search.radius_mm());
-            // No ellipse (a plane seen edge-on): no runs, and no partial count.
+                PixelEllipse::new(search.camera(), &vec3(&point), &threshold.scan_normal(), search.radius_mm())
+                    .filter(|e| e.fits_grid(w, grid.height()));
             scratch.runs.prepare(w, |spans| ellipse.iter().for_each(|e| e.spans_into(spans)));
             scratch.spans_for = Some((point[2], col));
         }

@@ -152,10 +152,20 @@ pub fn load(path: &std::path::Path) -> Result<PointCloud, LoadError> {
         Some("ply") => ply::parse(bytes, path),
         _ => Err(LoadError::UnknownFormat { path: path.to_path_buf() }),
     };
+    let not_a_file = |metadata: &std::fs::Metadata| LoadError::NotAFile {
+        path: path.to_path_buf(),
+        kind: file_kind(&metadata.file_type()),
+    };
+    // Looked at before opening too: opening a pipe blocks until something
+    // writes to it, so a pipe given as a cloud would hang the caller.
+    let before = std::fs::metadata(path).map_err(io)?;
+    if !before.is_file() {
+        return Err(not_a_file(&before));
+    }
     let file = std::fs::File::open(path).map_err(io)?;
     let metadata = file.metadata().map_err(io)?;
     if !metadata.is_file() {
-        return Err(LoadError::NotAFile { path: path.to_path_buf(), kind: file_kind(&metadata.file_type()) });
+        return Err(not_a_file(&metadata));
     }
     let len = metadata.len();
     if len >= MAP_FROM_BYTES {
@@ -235,8 +245,18 @@ mod tests {
         std::os::unix::fs::symlink("/dev/zero", &zero).unwrap();
         let folder = dir.path().join("folder.ply");
         std::fs::create_dir(&folder).unwrap();
-        for (path, kind) in [(zero, "a character device"), (folder, "a directory")] {
-            let err = load(&path).unwrap_err();
+        let pipe = dir.path().join("pipe.pcd");
+        let name = std::ffi::CString::new(pipe.as_os_str().as_encoded_bytes()).unwrap();
+        // SAFETY: a valid NUL-terminated path; mkfifo only creates the node.
+        assert_eq!(unsafe { libc::mkfifo(name.as_ptr(), 0o600) }, 0, "mkfifo");
+        for (path, kind) in [(zero, "a character device"), (folder, "a directory"), (pipe, "a pipe")] {
+            // Opening a pipe without a writer blocks: load must refuse it
+            // unopened, so a hang here is a failure, not a wait.
+            let (tx, rx) = std::sync::mpsc::channel();
+            let target = path.clone();
+            std::thread::spawn(move || tx.send(load(&target).map(|_| ())));
+            let outcome = rx.recv_timeout(std::time::Duration::from_secs(10));
+            let err = outcome.unwrap_or_else(|_| panic!("{kind}: load did not return")).unwrap_err();
             assert!(matches!(err, LoadError::NotAFile { .. }), "{err}");
             assert_eq!(err.to_string(), format!("{} is {kind}, not a regular file", path.display()));
         }

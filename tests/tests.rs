@@ -6,5 +6,6 @@ mod cli;
 mod daemon;
 mod exactness;
 mod parsers;
+mod peers;
 mod pipeline;
 mod util;

@@ -58,6 +58,7 @@ pub async fn serve(mut conn: Connection, state: Arc<ServerState>, mut shutdown: 
                             None
                         }
                         Err((code, text)) => {
+                            state.metrics.request_refused(code);
                             warn!(request_id = request.request_id, code = code.name(), "request refused: {text}");
                             Some(Message::error(code, Some(request.request_id), text))
                         }
@@ -188,6 +189,7 @@ async fn plan(
             }
         },
     };
+    state.metrics.plan_answered(&reply, arrived.elapsed());
     if let Err(e) = writer.lock().await.send(&reply).await {
         warn!(request_id, "cannot send the reply: {e}");
     }

@@ -186,3 +186,94 @@ async fn a_flood_of_silent_connections_does_not_keep_a_controller_out() {
     drop(flood);
     assert_eq!(cell.shutdown().await, Stopped::Clean);
 }
+
+/// Fetches `path` from the metrics endpoint with a bare HTTP/1.1 request.
+async fn http_get(addr: &str, path: &str) -> String {
+    let mut stream = TcpStream::connect(addr).await.unwrap();
+    let request = format!("GET {path} HTTP/1.1\r\nHost: weldseam\r\nConnection: close\r\n\r\n");
+    stream.write_all(request.as_bytes()).await.unwrap();
+    let mut response = String::new();
+    tokio::time::timeout(WAIT, stream.read_to_string(&mut response)).await.unwrap().unwrap();
+    response
+}
+
+/// The metrics endpoint serves, in the Prometheus text format, what the
+/// links did: plan outcomes and their latency, frames and bytes in,
+/// connections per link and refused peers.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn the_metrics_endpoint_counts_plans_frames_connections_and_refusals() {
+    let mut c = config();
+    c.server.hello_timeout = Duration::from_millis(200);
+    c.server.fresh_frame_timeout = Duration::from_millis(200);
+    let camera = TcpListener::bind("127.0.0.1:0").await.unwrap();
+    let controller = TcpListener::bind("127.0.0.1:0").await.unwrap();
+    let metrics = TcpListener::bind("127.0.0.1:0").await.unwrap();
+    let (camera_addr, controller_addr, metrics_addr) = (
+        camera.local_addr().unwrap().to_string(),
+        controller.local_addr().unwrap().to_string(),
+        metrics.local_addr().unwrap().to_string(),
+    );
+    let state = ServerState::new(c).unwrap();
+    let scrape = tokio::spawn(server::metrics::serve(metrics, std::sync::Arc::clone(&state)));
+    let (stop, stopped) = oneshot::channel::<()>();
+    let server = tokio::spawn(server::run(camera, controller, stopped, state));
+
+    // A camera sends one frame; a controller asks for a frame by an id
+    // that does not exist; a silent connection runs out of time.
+    let mut cam = handshake(&camera_addr, Role::Camera).await.unwrap();
+    cam.write_all(&small_frame()).await.unwrap();
+    let mut ctl = ControllerClient::connect(&controller_addr, "cell-1").await.unwrap();
+    let mut status = ctl.ping(WAIT).await.unwrap();
+    for _ in 0..200 {
+        if status.frames_received == 1 {
+            break;
+        }
+        tokio::time::sleep(Duration::from_millis(10)).await;
+        status = ctl.ping(WAIT).await.unwrap();
+    }
+    let mut request = weldseam::mock::controller::request_for_simulation(
+        1,
+        weldseam::joint::JointType::Lap,
+        &weldseam::sim::simulate(
+            &weldseam::sim::demo_scene(weldseam::joint::JointType::Lap),
+            &weldseam::camera::CameraModel::default(),
+        ),
+        weldseam_proto::message::FrameSelect::FrameId(99),
+    );
+    assert!(ctl.plan(request.clone(), WAIT).await.is_err(), "frame 99 does not exist");
+    request.request_id = 2;
+    request.frame = weldseam_proto::message::FrameSelect::FrameId(1);
+    assert!(ctl.plan(request, WAIT).await.is_err(), "the small frame has no seam");
+    let mut silent = TcpStream::connect(&controller_addr).await.unwrap();
+    let mut sink = [0u8; 1];
+    let closed = tokio::time::timeout(WAIT, silent.read(&mut sink)).await.unwrap();
+    assert!(matches!(closed, Ok(0) | Err(_)), "the silent connection was closed");
+
+    let response = http_get(&metrics_addr, "/metrics").await;
+    assert!(response.starts_with("HTTP/1.1 200"), "{response}");
+    for line in [
+        "weldseam_plans_total{outcome=\"unknown_frame\"} 1",
+        "weldseam_plans_total{outcome=\"plan_failed\"} 1",
+        // Both were answered after a frame lookup, so both have a latency.
+        "weldseam_reply_seconds_count 2",
+        "weldseam_frames_total 1",
+        "weldseam_connections{link=\"camera\"} 1",
+        "weldseam_connections{link=\"controller\"} 1",
+        "weldseam_refused_peers_total{link=\"controller\",reason=\"hello_timeout\"} 1",
+        "weldseam_queue_depth 0",
+    ] {
+        assert!(response.lines().any(|l| l == line), "no line {line:?} in\n{response}");
+    }
+    let received = response
+        .lines()
+        .find_map(|l| l.strip_prefix("weldseam_received_bytes_total{link=\"camera\"} "))
+        .and_then(|v| v.parse::<u64>().ok())
+        .expect("bytes received on the camera link");
+    assert!(received > small_frame().len() as u64, "{received} bytes counted on the camera link");
+    assert!(http_get(&metrics_addr, "/other").await.starts_with("HTTP/1.1 404"));
+
+    drop((cam, ctl));
+    let _ = stop.send(());
+    tokio::time::timeout(WAIT, server).await.unwrap().unwrap().unwrap();
+    scrape.abort();
+}

@@ -143,6 +143,14 @@ impl Metrics {
         registry.register("connections", "Connections past their Hello, by link", m.connections.clone());
         registry.register("pending_connections", "Connections yet to say Hello, by link", m.pending.clone());
         registry.register("refused_peers", "Connections closed unserved, by link and reason", m.refused.clone());
+        // Both links show from the start, at zero, so a dashboard has a
+        // series before the first connection.
+        for role in [Role::Camera, Role::Controller] {
+            let link = LinkLabels { link: role.name() };
+            drop(m.bytes_received.get_or_create(&link));
+            drop(m.connections.get_or_create(&link));
+            drop(m.pending.get_or_create(&link));
+        }
         Metrics { registry, ..m }
     }
 

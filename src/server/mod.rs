@@ -463,3 +463,41 @@ async fn handle(role: Role, conn: Connection, state: Arc<ServerState>, shutdown:
         Role::Controller => controller_link::serve(conn, state, shutdown).await,
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn peer(ip: [u8; 4], port: u16) -> SocketAddr {
+        SocketAddr::from((ip, port))
+    }
+
+    #[test]
+    fn a_flooding_address_displaces_only_its_own_pending_connections() {
+        let pending = Pending::new(4, 2);
+        let (_a1, none) = pending.register(peer([10, 0, 0, 1], 1));
+        assert!(none.is_empty());
+        let (_b1, _) = pending.register(peer([10, 0, 0, 2], 1));
+        let (_b2, _) = pending.register(peer([10, 0, 0, 2], 2));
+        // B is at its cap of 2: its oldest goes.
+        let (_b3, evicted) = pending.register(peer([10, 0, 0, 2], 3));
+        assert_eq!(evicted, vec![peer([10, 0, 0, 2], 1)]);
+        let (_c1, none) = pending.register(peer([10, 0, 0, 3], 1));
+        assert!(none.is_empty());
+        // The link is full (4): the address holding most (B) gives way.
+        let (_d1, evicted) = pending.register(peer([10, 0, 0, 4], 1));
+        assert_eq!(evicted, vec![peer([10, 0, 0, 2], 2)]);
+    }
+
+    #[test]
+    fn an_evicted_connection_is_told_and_an_admitted_one_is_not() {
+        let pending = Pending::new(8, 1);
+        let (mut first, _) = pending.register(peer([10, 0, 0, 1], 1));
+        let (mut second, _) = pending.register(peer([10, 0, 0, 1], 2));
+        assert_eq!(first.evicted.try_recv(), Ok(()));
+        // Admission gives the place up: the receiver sees the sender go.
+        assert!(pending.remove(second.ip, second.id));
+        assert!(matches!(second.evicted.try_recv(), Err(oneshot::error::TryRecvError::Closed)));
+        assert!(!pending.remove(first.ip, first.id), "an evicted connection has no place left");
+    }
+}

@@ -5,6 +5,7 @@ mod bench;
 mod cli;
 mod daemon;
 mod exactness;
+mod fuzz;
 mod parsers;
 mod peers;
 mod pipeline;

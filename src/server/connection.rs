@@ -47,7 +47,10 @@ impl MessageDeadline {
     /// The time allowed for a message of `bytes` bytes (header included).
     pub fn allowance(&self, bytes: u64) -> Duration {
         let rate = self.min_bytes_per_s.max(1);
-        let transfer = Duration::from_secs(bytes / rate) + Duration::from_nanos((bytes % rate) * 1_000_000_000 / rate);
+        // Below one second per rate's worth of bytes: nanoseconds, in u128
+        // so no rate can overflow it.
+        let nanos = (u128::from(bytes % rate) * 1_000_000_000 / u128::from(rate)) as u64;
+        let transfer = Duration::from_secs(bytes / rate).saturating_add(Duration::from_nanos(nanos));
         self.base.saturating_add(transfer)
     }
 }
@@ -134,9 +137,8 @@ pub struct MessageReader<R> {
     /// The whole-message bound; None bounds only the silences (for clients
     /// reading a daemon they trust).
     deadline: Option<MessageDeadline>,
-    /// When the message being read must be complete, and what it is
-    /// allowed (for the error).
-    due: Option<(Instant, u64, Duration)>,
+    /// When the message being read must be complete, and its length.
+    due: Option<(Instant, u64)>,
     /// Counts every byte received, for the metrics.
     bytes_in: Option<Counter>,
     /// Receive buffer for control bodies and frame chunks; reused.
@@ -168,35 +170,32 @@ impl<R: AsyncRead + Unpin> MessageReader<R> {
 
     /// Starts the deadline of a message of `bytes` bytes begun at `started`.
     fn set_due(&mut self, started: Instant, bytes: u64) {
-        self.due = self.deadline.map(|d| {
-            let allowed = d.allowance(bytes);
-            (started.checked_add(allowed).unwrap_or(started + Duration::from_secs(86_400 * 365)), bytes, allowed)
-        });
+        // An allowance past the clock's range is no bound at all.
+        self.due = self.deadline.and_then(|d| Some((started.checked_add(d.allowance(bytes))?, bytes)));
     }
 
     /// One read into `buffer[at..end]`, within the stall timeout and the
-    /// message's deadline.
+    /// message's deadline, whichever comes first.
     async fn read_some(&mut self, at: usize, end: usize) -> Result<usize, ReadError> {
         let stall_until = Instant::now() + self.stall;
-        let (until, too_slow) = match self.due {
-            Some((due, bytes, allowed)) if due < stall_until => {
-                let base = self.deadline.map(|d| d.base).unwrap_or_default();
-                let min_bytes_per_s = self.deadline.map(|d| d.min_bytes_per_s).unwrap_or_default();
-                (due, Some(ReadError::TooSlow { bytes, allowed, base, min_bytes_per_s }))
-            }
-            _ => (stall_until, None),
+        let (until, late) = match (self.due, self.deadline) {
+            (Some((due, bytes)), Some(d)) if due < stall_until => (
+                due,
+                ReadError::TooSlow {
+                    bytes,
+                    allowed: d.allowance(bytes),
+                    base: d.base,
+                    min_bytes_per_s: d.min_bytes_per_s,
+                },
+            ),
+            _ => (stall_until, ReadError::Stalled(self.stall)),
         };
         let read = self.stream.read(&mut self.buffer[at..end]);
-        match tokio::time::timeout_at(until.into(), read).await {
-            Ok(n) => {
-                let n = n?;
-                if let Some(c) = &self.bytes_in {
-                    c.inc_by(n as u64);
-                }
-                Ok(n)
-            }
-            Err(_) => Err(too_slow.unwrap_or(ReadError::Stalled(self.stall))),
+        let n = tokio::time::timeout_at(until.into(), read).await.map_err(|_| late)??;
+        if let Some(c) = &self.bytes_in {
+            c.inc_by(n as u64);
         }
+        Ok(n)
     }
 
     /// Reads into `range` of the buffer until it is full, growing the
@@ -466,5 +465,47 @@ impl Connection {
             admit().map_err(|message| HandshakeError::Refused { code: ErrorCode::Busy, message })?;
         }
         Ok(hello)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_allowance_is_the_base_plus_the_length_at_the_minimum_rate() {
+        let d = MessageDeadline { base: Duration::from_secs(10), min_bytes_per_s: 1 << 20 };
+        assert_eq!(d.allowance(0), Duration::from_secs(10));
+        assert_eq!(d.allowance(3 << 20), Duration::from_secs(13));
+        assert_eq!(d.allowance(1 << 19), Duration::from_millis(10_500));
+        let slowest = MessageDeadline { base: Duration::from_secs(10), min_bytes_per_s: 1 };
+        assert_eq!(slowest.allowance(u64::MAX), Duration::MAX, "saturates rather than overflowing");
+        let fastest = MessageDeadline { base: Duration::ZERO, min_bytes_per_s: u64::MAX };
+        assert_eq!(fastest.allowance(u64::MAX - 1), Duration::from_nanos(999_999_999));
+    }
+
+    #[tokio::test]
+    async fn a_message_trickled_without_pauses_is_cut_off_at_its_deadline() {
+        let (mut peer, ours) = tokio::io::duplex(64);
+        let deadline = MessageDeadline { base: Duration::from_millis(300), min_bytes_per_s: 1 << 20 };
+        // Each byte comes well within the stall timeout.
+        let mut reader = MessageReader::new(ours, Duration::from_secs(5), 1 << 20).with_deadline(deadline);
+        let ping = frame::encode(&Message::Ping).unwrap();
+        let trickle = tokio::spawn(async move {
+            for b in ping {
+                if peer.write_all(&[b]).await.is_err() {
+                    break;
+                }
+                tokio::time::sleep(Duration::from_millis(50)).await;
+            }
+            peer
+        });
+        let started = Instant::now();
+        let e = reader.read().await.unwrap_err();
+        assert!(matches!(e, ReadError::TooSlow { bytes: 16, .. }), "{e}");
+        assert!(started.elapsed() < Duration::from_secs(5), "cut off by the deadline, not the stall timeout");
+        assert!(e.to_string().contains("300 ms"), "{e}");
+        drop(reader);
+        trickle.await.unwrap();
     }
 }

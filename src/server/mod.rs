@@ -9,7 +9,7 @@
 //! link's slots (a semaphore) only from its valid Hello on; a Hello when
 //! every slot is taken is answered with a busy error. Before its Hello it
 //! holds a pending place, for at most the hello timeout and bounded per
-//! address and per link (see [`Pending`] for the rule), so silent
+//! address and per link (the rule is at `Pending`), so silent
 //! connections cannot keep a real peer out. Bad input ends at most its own
 //! connection, never the server; [`metrics`] counts what happened.
 
@@ -154,7 +154,7 @@ struct Acceptor {
     pending: Arc<Pending>,
     state: Arc<ServerState>,
     /// Keeps a flood of refusals from flooding the log as well.
-    refusal_log: Throttle,
+    refusal_log: Arc<Throttle>,
 }
 
 fn allowed(allow: &[IpAddr], peer: &SocketAddr) -> bool {
@@ -176,7 +176,7 @@ impl Acceptor {
             slots: Arc::new(Semaphore::new(slots)),
             pending: Arc::new(Pending::new(s.max_pending_connections, s.max_pending_per_address)),
             state: Arc::clone(state),
-            refusal_log: Throttle::default(),
+            refusal_log: Arc::default(),
         }
     }
 
@@ -212,6 +212,7 @@ impl Acceptor {
                 pending: Arc::clone(&self.pending),
                 slots: Arc::clone(&self.slots),
                 state: Arc::clone(&self.state),
+                refusal_log: Arc::clone(&self.refusal_log),
                 shutdown: control.handle(),
             };
             tokio::spawn(task.serve(stream).instrument(span));
@@ -221,10 +222,7 @@ impl Acceptor {
     /// Counts a refused connection and logs it, at most once a second per
     /// link with the number left out since.
     fn refuse(&self, peer: &SocketAddr, why: Refusal, message: impl FnOnce() -> String) {
-        self.state.metrics.peer_refused(self.role, why);
-        if let Some(unlogged) = self.refusal_log.admit() {
-            warn!(%peer, link = self.role.name(), reason = why.name(), unlogged, "{}", message());
-        }
+        refuse(&self.state, &self.refusal_log, self.role, peer, why, message);
     }
 
     /// Accepts the next connection, retrying transient errors (such as
@@ -244,6 +242,23 @@ impl Acceptor {
                 }
             }
         }
+    }
+}
+
+/// Counts a connection closed unserved and logs it, at most one line a
+/// second per link (with the number held back since), so a flood of
+/// connections does not become a flood of log lines.
+fn refuse(
+    state: &ServerState,
+    log: &Throttle,
+    role: Role,
+    peer: &SocketAddr,
+    why: Refusal,
+    message: impl FnOnce() -> String,
+) {
+    state.metrics.peer_refused(role, why);
+    if let Some(unlogged) = log.admit() {
+        warn!(%peer, link = role.name(), reason = why.name(), unlogged, "{}", message());
     }
 }
 
@@ -366,6 +381,7 @@ struct Connected {
     pending: Arc<Pending>,
     slots: Arc<Semaphore>,
     state: Arc<ServerState>,
+    refusal_log: Arc<Throttle>,
     shutdown: Shutdown,
 }
 
@@ -377,7 +393,7 @@ struct Admitted {
 
 impl Connected {
     async fn serve(self, stream: TcpStream) {
-        let Connected { role, peer, ticket, pending, slots, state, shutdown } = self;
+        let Connected { role, peer, ticket, pending, slots, state, refusal_log, shutdown } = self;
         let Ticket { ip, id, mut evicted } = ticket;
         let s = &state.config.server;
         let hello_deadline = tokio::time::sleep(s.hello_timeout);
@@ -420,16 +436,15 @@ impl Connected {
             () = &mut served => false,
             // An error means the place was given up by the admission.
             closed = &mut evicted => {
-                if closed.is_ok() {
-                    info!("closed before its Hello, to make room for a newer connection");
-                }
+                // The acceptor has counted and logged the eviction.
                 closed.is_err()
             }
             () = &mut hello_deadline => {
                 let late = admitted.get().is_none();
                 if late && pending.remove(ip, id) {
-                    state.metrics.peer_refused(role, Refusal::HelloTimeout);
-                    info!(hello_timeout_ms = hello_timeout.as_millis() as u64, "closed: no Hello in time");
+                    refuse(&state, &refusal_log, role, &peer, Refusal::HelloTimeout, || {
+                        format!("closed a connection with no Hello within {} ms (server.hello_timeout_ms)", hello_timeout.as_millis())
+                    });
                 }
                 !late
             }

@@ -308,7 +308,8 @@ proptest! {
             }
             let _ = frame::decode_frame_meta(&bytes);
         });
-        prop_assert!(peak <= allocation_bound(bytes.len()), "{peak} bytes allocated for {} bytes of input", bytes.len());
+        let n = bytes.len();
+        prop_assert!(peak <= allocation_bound(n), "{peak} bytes allocated for {n} bytes of input");
     }
 
     #[test]
@@ -322,6 +323,7 @@ proptest! {
             largest_buffer <= receive_buffer_bound(bytes.len()),
             "a {largest_buffer}-byte receive buffer for {} bytes of input", bytes.len()
         );
-        prop_assert!(peak <= allocation_bound(bytes.len()), "{peak} bytes allocated for {} bytes of input", bytes.len());
+        let n = bytes.len();
+        prop_assert!(peak <= allocation_bound(n), "{peak} bytes allocated for {n} bytes of input");
     }
 }

@@ -407,18 +407,12 @@ impl Connected {
             Admission::new(move || {
                 let Ok(slot) = slots.try_acquire_owned() else {
                     state.metrics.peer_refused(role, Refusal::LinkFull);
-                    let max = match role {
-                        Role::Camera => ("server.max_camera_connections", state.config.server.max_camera_connections),
-                        Role::Controller => {
-                            ("server.max_controller_connections", state.config.server.max_controller_connections)
-                        }
+                    let s = &state.config.server;
+                    let (key, max) = match role {
+                        Role::Camera => ("server.max_camera_connections", s.max_camera_connections),
+                        Role::Controller => ("server.max_controller_connections", s.max_controller_connections),
                     };
-                    return Err(format!(
-                        "all {} {} connections are in use ({}); try again later",
-                        max.1,
-                        role.name(),
-                        max.0
-                    ));
+                    return Err(format!("all {max} {} connections are in use ({key}); try again later", role.name()));
                 };
                 if !pending.remove(ip, id) {
                     return Err("the connection was closed to make room for newer ones".into());
@@ -442,8 +436,9 @@ impl Connected {
             () = &mut hello_deadline => {
                 let late = admitted.get().is_none();
                 if late && pending.remove(ip, id) {
+                    let ms = hello_timeout.as_millis();
                     refuse(&state, &refusal_log, role, &peer, Refusal::HelloTimeout, || {
-                        format!("closed a connection with no Hello within {} ms (server.hello_timeout_ms)", hello_timeout.as_millis())
+                        format!("closed a connection with no Hello within {ms} ms (server.hello_timeout_ms)")
                     });
                 }
                 !late

@@ -1,9 +1,11 @@
-//! `weldseam serve`: the cell daemon. Binds both links, tells systemd it
-//! is ready, serves until SIGINT or SIGTERM, then lets plans in flight
-//! finish within the configured grace and exits.
+//! `weldseam serve`: the cell daemon. Binds both links (and the metrics
+//! endpoint when configured), tells systemd it is ready, serves until
+//! SIGINT or SIGTERM, then lets plans in flight finish within the
+//! configured grace and exits.
 
 use std::net::SocketAddr;
 use std::path::PathBuf;
+use std::sync::Arc;
 
 use anyhow::Context;
 use tokio::net::TcpListener;
@@ -60,6 +62,14 @@ async fn serve(config: weldseam::config::Config) -> anyhow::Result<()> {
     let controller = TcpListener::bind(s.controller_listen)
         .await
         .with_context(|| format!("cannot listen on {} (server.controller_listen)", s.controller_listen))?;
+    let metrics = match s.metrics_listen {
+        Some(addr) => Some(
+            TcpListener::bind(addr)
+                .await
+                .with_context(|| format!("cannot listen on {addr} (server.metrics_listen)"))?,
+        ),
+        None => None,
+    };
     info!(
         camera = %camera.local_addr()?,
         controller = %controller.local_addr()?,
@@ -77,7 +87,13 @@ async fn serve(config: weldseam::config::Config) -> anyhow::Result<()> {
         }
         let _ = sd_notify::notify(&[sd_notify::NotifyState::Stopping]);
     };
-    match server::run(camera, controller, shutdown, state).await? {
+    // The metrics endpoint lives until the links have stopped.
+    let metrics = metrics.map(|listener| tokio::spawn(server::metrics::serve(listener, Arc::clone(&state))));
+    let stopped = server::run(camera, controller, shutdown, state).await;
+    if let Some(task) = metrics {
+        task.abort();
+    }
+    match stopped? {
         Stopped::Clean | Stopped::GraceExpired => Ok(()),
     }
 }

@@ -173,6 +173,22 @@ pub struct ServerConfig {
     /// A peer that sends nothing for this long in the middle of a message
     /// is dropped.
     pub stall_timeout: Duration,
+    /// A connection must complete its Hello this soon after it is accepted.
+    pub hello_timeout: Duration,
+    /// Every message must arrive whole within this time from its first
+    /// byte, plus its length at [`Self::min_transfer_bytes_per_s`]; a peer
+    /// that trickles bytes is dropped even though it is never silent.
+    pub message_timeout: Duration,
+    /// The slowest transfer rate a large message (a frame) is allowed.
+    pub min_transfer_bytes_per_s: u64,
+    /// Connections per link that have not yet said Hello; a further one
+    /// closes the oldest of the address that holds the most.
+    pub max_pending_connections: usize,
+    /// Connections from one address per link that have not yet said Hello;
+    /// a further one closes that address's oldest.
+    pub max_pending_per_address: usize,
+    /// Where the Prometheus metrics are served over HTTP; None is off.
+    pub metrics_listen: Option<SocketAddr>,
     /// The largest frame payload accepted, bytes.
     pub max_frame_bytes: u64,
     /// Plan jobs queued or running at once; a request beyond gets Busy.
@@ -211,6 +227,12 @@ impl Default for ServerConfig {
             max_camera_connections: 2,
             max_controller_connections: 8,
             stall_timeout: Duration::from_millis(5_000),
+            hello_timeout: Duration::from_millis(2_000),
+            message_timeout: Duration::from_millis(10_000),
+            min_transfer_bytes_per_s: 1 << 20,
+            max_pending_connections: 64,
+            max_pending_per_address: 4,
+            metrics_listen: None,
             max_frame_bytes: weldseam_proto::frame::DEFAULT_MAX_FRAME_BYTES,
             plan_queue_depth: 4,
             pipeline_threads: 0,
@@ -511,6 +533,35 @@ fn server_config(s: &file::ServerSection) -> Result<ServerConfig, ConfigError> {
     check("server.stall_timeout_ms", (10..=3_600_000).contains(&s.stall_timeout_ms), || {
         format!("must lie in [10, 3600000] ms, got {}", s.stall_timeout_ms)
     })?;
+    check("server.hello_timeout_ms", (10..=60_000).contains(&s.hello_timeout_ms), || {
+        format!("must lie in [10, 60000] ms, got {}", s.hello_timeout_ms)
+    })?;
+    check("server.message_timeout_ms", (10..=3_600_000).contains(&s.message_timeout_ms), || {
+        format!("must lie in [10, 3600000] ms, got {}", s.message_timeout_ms)
+    })?;
+    const MIN_RATE: u64 = 1 << 10;
+    const MAX_RATE: u64 = 1 << 30;
+    check("server.min_transfer_bytes_per_s", (MIN_RATE..=MAX_RATE).contains(&s.min_transfer_bytes_per_s), || {
+        format!("must lie in [{MIN_RATE}, {MAX_RATE}] bytes per second, got {}", s.min_transfer_bytes_per_s)
+    })?;
+    const MAX_PENDING: u32 = 4096;
+    check("server.max_pending_connections", (1..=MAX_PENDING).contains(&s.max_pending_connections), || {
+        format!("must lie in [1, {MAX_PENDING}], got {}", s.max_pending_connections)
+    })?;
+    check(
+        "server.max_pending_per_address",
+        (1..=s.max_pending_connections).contains(&s.max_pending_per_address),
+        || {
+            format!(
+                "must lie in [1, server.max_pending_connections = {}], got {}",
+                s.max_pending_connections, s.max_pending_per_address
+            )
+        },
+    )?;
+    let metrics_listen = match s.metrics_listen.as_str() {
+        "" => None,
+        text => Some(socket_addr("server.metrics_listen", text)?),
+    };
     const MIN_FRAME: u64 = 1 << 10;
     const MAX_FRAME: u64 = 4 << 30;
     check("server.max_frame_bytes", (MIN_FRAME..=MAX_FRAME).contains(&s.max_frame_bytes), || {
@@ -575,6 +626,12 @@ fn server_config(s: &file::ServerSection) -> Result<ServerConfig, ConfigError> {
         max_camera_connections: s.max_camera_connections as usize,
         max_controller_connections: s.max_controller_connections as usize,
         stall_timeout: Duration::from_millis(s.stall_timeout_ms),
+        hello_timeout: Duration::from_millis(s.hello_timeout_ms),
+        message_timeout: Duration::from_millis(s.message_timeout_ms),
+        min_transfer_bytes_per_s: s.min_transfer_bytes_per_s,
+        max_pending_connections: s.max_pending_connections as usize,
+        max_pending_per_address: s.max_pending_per_address as usize,
+        metrics_listen,
         max_frame_bytes: s.max_frame_bytes,
         plan_queue_depth: s.plan_queue_depth as usize,
         pipeline_threads: s.pipeline_threads as usize,
@@ -628,6 +685,14 @@ mod tests {
             ("[server]\nmax_request_timeout_ms = 100\n", "server.fresh_frame_timeout_ms"),
             ("[server]\nmax_requests_per_connection = 5\n", "server.max_requests_per_connection"),
             ("[server]\nidle_trim_ms = 100000000\n", "server.idle_trim_ms"),
+            ("[server]\nhello_timeout_ms = 0\n", "server.hello_timeout_ms"),
+            ("[server]\nhello_timeout_ms = 3600000\n", "server.hello_timeout_ms"),
+            ("[server]\nmessage_timeout_ms = 4000000\n", "server.message_timeout_ms"),
+            ("[server]\nmin_transfer_bytes_per_s = 10\n", "server.min_transfer_bytes_per_s"),
+            ("[server]\nmax_pending_connections = 0\n", "server.max_pending_connections"),
+            ("[server]\nmax_pending_connections = 100000\n", "server.max_pending_connections"),
+            ("[server]\nmax_pending_per_address = 65\n", "server.max_pending_per_address"),
+            ("[server]\nmetrics_listen = \"9100\"\n", "server.metrics_listen"),
         ];
         for (text, key) in cases {
             let e = Config::parse(text, "c.toml").unwrap_err().to_string();

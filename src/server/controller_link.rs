@@ -67,6 +67,7 @@ pub async fn serve(mut conn: Connection, state: Arc<ServerState>, mut shutdown: 
                             None
                         }
                         Err((code, text)) => {
+                            state.metrics.request_refused(code);
                             warn!(
                                 request_id = request.request_id,
                                 code = code.name(),
@@ -275,6 +276,7 @@ async fn plan(
     };
     log.latency = arrived.elapsed();
     log.emit();
+    state.metrics.plan_answered(&reply, arrived.elapsed());
     if let Err(e) = writer.lock().await.send(&reply).await {
         warn!(request_id, "cannot send the reply: {e}");
     }

@@ -4,10 +4,14 @@
 //!
 //! [`run`] takes bound listeners and a shutdown future, so tests serve on
 //! ephemeral loopback ports. Each accepted connection gets its own task
-//! and tracing span carrying the peer address; a per-link semaphore caps
-//! the connections; a peer outside the link's allowlist is logged and
-//! disconnected. Bad input ends at most its own connection, never the
-//! server.
+//! and tracing span carrying the peer address; a peer outside the link's
+//! allowlist is logged and disconnected. A connection holds one of the
+//! link's slots (a semaphore) only from its valid Hello on; a Hello when
+//! every slot is taken is answered with a busy error. Before its Hello it
+//! holds a pending place, for at most the hello timeout and bounded per
+//! address and per link (the rule is at `Pending`), so silent
+//! connections cannot keep a real peer out. Bad input ends at most its own
+//! connection, never the server; [`metrics`] counts what happened.
 
 pub mod camera_link;
 pub mod connection;
@@ -15,24 +19,28 @@ pub mod controller_link;
 pub mod frames;
 pub mod idle;
 pub mod jobs;
+pub mod metrics;
 pub mod shutdown;
 
+use std::collections::{HashMap, VecDeque};
 use std::future::Future;
 use std::net::{IpAddr, SocketAddr};
-use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::{Arc, Mutex, OnceLock};
 use std::time::{Duration, Instant};
 
 use tokio::net::{TcpListener, TcpStream};
-use tokio::sync::Semaphore;
+use tokio::sync::{OwnedSemaphorePermit, Semaphore, oneshot};
 use tracing::{Instrument, error, info, warn};
 use weldseam_proto::message::{Role, Status};
 
 use crate::config::Config;
 use crate::pipeline::Planner;
+use connection::{Admission, Connection, MessageDeadline};
 use frames::{FrameLimits, FrameStore};
 use idle::IdleTrim;
 use jobs::{Jobs, PoolError};
+use metrics::{Metrics, Refusal};
 use shutdown::{Shutdown, ShutdownController};
 
 /// Everything the handlers share.
@@ -43,6 +51,7 @@ pub struct ServerState {
     pub jobs: Jobs,
     /// Hands freed memory back once the cell is idle.
     pub idle: Arc<IdleTrim>,
+    pub metrics: Metrics,
     started: Instant,
     frames_received: AtomicU64,
     plans_done: AtomicU64,
@@ -61,6 +70,7 @@ impl ServerState {
             }),
             jobs,
             idle: IdleTrim::new(s.idle_trim),
+            metrics: Metrics::new(),
             started: Instant::now(),
             frames_received: AtomicU64::new(0),
             plans_done: AtomicU64::new(0),
@@ -85,6 +95,7 @@ impl ServerState {
     }
 
     pub(crate) fn count_frame(&self) {
+        self.metrics.frame_received();
         self.frames_received.fetch_add(1, Ordering::Relaxed);
     }
 
@@ -124,21 +135,8 @@ pub async fn run(
     state: Arc<ServerState>,
 ) -> Result<Stopped, ServerError> {
     let control = ShutdownController::new();
-    let s = &state.config.server;
-    let cameras = Acceptor {
-        listener: camera,
-        role: Role::Camera,
-        allow: s.camera_allow.clone(),
-        slots: Arc::new(Semaphore::new(s.max_camera_connections)),
-        state: Arc::clone(&state),
-    };
-    let controllers = Acceptor {
-        listener: controller,
-        role: Role::Controller,
-        allow: s.controller_allow.clone(),
-        slots: Arc::new(Semaphore::new(s.max_controller_connections)),
-        state: Arc::clone(&state),
-    };
+    let cameras = Acceptor::new(camera, Role::Camera, &state);
+    let controllers = Acceptor::new(controller, Role::Controller, &state);
     let outcome = tokio::select! {
         r = cameras.run(&control) => r,
         r = controllers.run(&control) => r,
@@ -165,8 +163,12 @@ struct Acceptor {
     listener: TcpListener,
     role: Role,
     allow: Vec<IpAddr>,
+    /// Connections past their Hello; taken when a valid Hello arrives.
     slots: Arc<Semaphore>,
+    pending: Arc<Pending>,
     state: Arc<ServerState>,
+    /// Keeps a flood of refusals from flooding the log as well.
+    refusal_log: Arc<Throttle>,
 }
 
 fn allowed(allow: &[IpAddr], peer: &SocketAddr) -> bool {
@@ -175,32 +177,66 @@ fn allowed(allow: &[IpAddr], peer: &SocketAddr) -> bool {
 }
 
 impl Acceptor {
+    fn new(listener: TcpListener, role: Role, state: &Arc<ServerState>) -> Self {
+        let s = &state.config.server;
+        let (allow, slots) = match role {
+            Role::Camera => (s.camera_allow.clone(), s.max_camera_connections),
+            Role::Controller => (s.controller_allow.clone(), s.max_controller_connections),
+        };
+        Acceptor {
+            listener,
+            role,
+            allow,
+            slots: Arc::new(Semaphore::new(slots)),
+            pending: Arc::new(Pending::new(s.max_pending_connections, s.max_pending_per_address)),
+            state: Arc::clone(state),
+            refusal_log: Arc::default(),
+        }
+    }
+
+    /// Accepts connections until the listener fails for good. A connection
+    /// holds no slot until its Hello: before, it holds a pending place,
+    /// bounded per address and per link, for at most the hello timeout.
     async fn run(&self, control: &ShutdownController) -> Result<(), ServerError> {
         let link = self.role.name();
         loop {
-            // Waiting for a free slot before accepting leaves further peers
-            // in the listen backlog rather than holding sockets open.
-            let Ok(permit) = Arc::clone(&self.slots).acquire_owned().await else {
-                return Ok(());
-            };
             let (stream, peer) = self.accept().await?;
             if !allowed(&self.allow, &peer) {
-                warn!(%peer, link, "refused a connection from a peer not in server.{link}_allow");
+                self.refuse(&peer, Refusal::NotAllowed, || {
+                    format!("refused a connection from a peer not in server.{link}_allow")
+                });
                 drop(stream);
                 continue;
             }
-            let state = Arc::clone(&self.state);
-            let shutdown = control.handle();
-            let role = self.role;
+            let (ticket, evicted) = self.pending.register(peer);
+            for victim in &evicted {
+                self.refuse(victim, Refusal::Evicted, || {
+                    format!(
+                        "closed a connection from {victim} that had not said Hello, to make room (at most {} per \
+                         address, server.max_pending_per_address; {} per link, server.max_pending_connections)",
+                        self.pending.max_per_address, self.pending.max_total
+                    )
+                });
+            }
             let span = tracing::info_span!("conn", link, %peer);
-            tokio::spawn(
-                async move {
-                    handle(role, stream, peer, state, shutdown).await;
-                    drop(permit);
-                }
-                .instrument(span),
-            );
+            let task = Connected {
+                role: self.role,
+                peer,
+                ticket,
+                pending: Arc::clone(&self.pending),
+                slots: Arc::clone(&self.slots),
+                state: Arc::clone(&self.state),
+                refusal_log: Arc::clone(&self.refusal_log),
+                shutdown: control.handle(),
+            };
+            tokio::spawn(task.serve(stream).instrument(span));
         }
+    }
+
+    /// Counts a refused connection and logs it, at most once a second per
+    /// link with the number left out since.
+    fn refuse(&self, peer: &SocketAddr, why: Refusal, message: impl FnOnce() -> String) {
+        refuse(&self.state, &self.refusal_log, self.role, peer, why, message);
     }
 
     /// Accepts the next connection, retrying transient errors (such as
@@ -223,21 +259,269 @@ impl Acceptor {
     }
 }
 
-async fn handle(role: Role, stream: TcpStream, peer: SocketAddr, state: Arc<ServerState>, shutdown: Shutdown) {
+/// Counts a connection closed unserved and logs it, at most one line a
+/// second per link (with the number held back since), so a flood of
+/// connections does not become a flood of log lines.
+fn refuse(
+    state: &ServerState,
+    log: &Throttle,
+    role: Role,
+    peer: &SocketAddr,
+    why: Refusal,
+    message: impl FnOnce() -> String,
+) {
+    state.metrics.peer_refused(role, why);
+    if let Some(unlogged) = log.admit() {
+        warn!(%peer, link = role.name(), reason = why.name(), unlogged, "{}", message());
+    }
+}
+
+/// Lets one log line through per second and counts the ones held back.
+#[derive(Debug, Default)]
+struct Throttle {
+    last: Mutex<Option<Instant>>,
+    held_back: AtomicU64,
+}
+
+impl Throttle {
+    /// Some(lines held back since the last one) when a line may be logged.
+    fn admit(&self) -> Option<u64> {
+        let mut last = self.last.lock().unwrap_or_else(|e| e.into_inner());
+        let now = Instant::now();
+        if last.is_some_and(|t| now.duration_since(t) < Duration::from_secs(1)) {
+            self.held_back.fetch_add(1, Ordering::Relaxed);
+            return None;
+        }
+        *last = Some(now);
+        Some(self.held_back.swap(0, Ordering::Relaxed))
+    }
+}
+
+/// The connections of one link that have not yet said Hello.
+///
+/// The rule: each address has at most `max_per_address` of them and the
+/// link at most `max_total`. A new connection always gets a place; when
+/// its address is at its cap, that address's oldest pending connection is
+/// closed, and when the link is full, the oldest of the address holding
+/// the most is. A flood from one address therefore only ever closes its
+/// own connections (or those of an address flooding as hard), a peer that
+/// says Hello at once is never held up by it, and a connection past its
+/// Hello is never closed to make room.
+#[derive(Debug)]
+struct Pending {
+    max_total: usize,
+    max_per_address: usize,
+    places: Mutex<Places>,
+}
+
+#[derive(Debug, Default)]
+struct Places {
+    next_ticket: u64,
+    total: usize,
+    /// Oldest first; the sender closes the connection when sent to.
+    by_address: HashMap<IpAddr, VecDeque<(u64, SocketAddr, oneshot::Sender<()>)>>,
+}
+
+/// A pending connection's place; its receiver fires when it is evicted.
+struct Ticket {
+    ip: IpAddr,
+    id: u64,
+    evicted: oneshot::Receiver<()>,
+}
+
+impl Pending {
+    fn new(max_total: usize, max_per_address: usize) -> Self {
+        Pending { max_total, max_per_address, places: Mutex::new(Places::default()) }
+    }
+
+    fn lock(&self) -> std::sync::MutexGuard<'_, Places> {
+        self.places.lock().unwrap_or_else(|e| e.into_inner())
+    }
+
+    /// Gives a new connection a place and closes the pending connections
+    /// it displaces; returns their addresses.
+    fn register(&self, peer: SocketAddr) -> (Ticket, Vec<SocketAddr>) {
+        let ip = peer.ip().to_canonical();
+        let mut places = self.lock();
+        let own = places.by_address.get(&ip).map_or(0, VecDeque::len);
+        let victim = if own >= self.max_per_address {
+            Some(ip)
+        } else if places.total >= self.max_total {
+            places.by_address.iter().max_by_key(|(_, queue)| queue.len()).map(|(address, _)| *address)
+        } else {
+            None
+        };
+        let mut evicted = Vec::new();
+        if let Some(victim) = victim
+            && let Some(queue) = places.by_address.get_mut(&victim)
+            && let Some((_, address, close)) = queue.pop_front()
+        {
+            if queue.is_empty() {
+                places.by_address.remove(&victim);
+            }
+            places.total -= 1;
+            // The receiver may be gone already if its task just ended.
+            let _ = close.send(());
+            evicted.push(address);
+        }
+        let id = places.next_ticket;
+        places.next_ticket += 1;
+        let (close, closed) = oneshot::channel();
+        places.by_address.entry(ip).or_default().push_back((id, peer, close));
+        places.total += 1;
+        (Ticket { ip, id, evicted: closed }, evicted)
+    }
+
+    /// Removes a connection's place; false when it had none left (evicted).
+    fn remove(&self, ip: IpAddr, id: u64) -> bool {
+        let mut places = self.lock();
+        let Some(queue) = places.by_address.get_mut(&ip) else { return false };
+        let Some(at) = queue.iter().position(|(t, _, _)| *t == id) else { return false };
+        queue.remove(at);
+        if queue.is_empty() {
+            places.by_address.remove(&ip);
+        }
+        places.total -= 1;
+        true
+    }
+}
+
+/// One accepted connection's task: the pending phase under the hello
+/// deadline and eviction, then the link's handler.
+struct Connected {
+    role: Role,
+    peer: SocketAddr,
+    ticket: Ticket,
+    pending: Arc<Pending>,
+    slots: Arc<Semaphore>,
+    state: Arc<ServerState>,
+    refusal_log: Arc<Throttle>,
+    shutdown: Shutdown,
+}
+
+/// What a connection holds once admitted: its slot, counted in the metrics.
+struct Admitted {
+    _slot: OwnedSemaphorePermit,
+    _counted: metrics::GaugeGuard,
+}
+
+impl Connected {
+    async fn serve(self, stream: TcpStream) {
+        let Connected { role, peer, ticket, pending, slots, state, refusal_log, shutdown } = self;
+        let Ticket { ip, id, mut evicted } = ticket;
+        let s = &state.config.server;
+        let hello_deadline = tokio::time::sleep(s.hello_timeout);
+        let hello_timeout = s.hello_timeout;
+        let pending_counted = state.metrics.pending_opened(role);
+        // Filled by the admission when the Hello is valid; lives as long
+        // as this task.
+        let admitted: Arc<OnceLock<Admitted>> = Arc::new(OnceLock::new());
+        let admission = {
+            let (pending, admitted, state) = (Arc::clone(&pending), Arc::clone(&admitted), Arc::clone(&state));
+            Admission::new(move || {
+                let Ok(slot) = slots.try_acquire_owned() else {
+                    state.metrics.peer_refused(role, Refusal::LinkFull);
+                    let s = &state.config.server;
+                    let (key, max) = match role {
+                        Role::Camera => ("server.max_camera_connections", s.max_camera_connections),
+                        Role::Controller => ("server.max_controller_connections", s.max_controller_connections),
+                    };
+                    return Err(format!("all {max} {} connections are in use ({key}); try again later", role.name()));
+                };
+                if !pending.remove(ip, id) {
+                    return Err("the connection was closed to make room for newer ones".into());
+                }
+                let _ = admitted.set(Admitted { _slot: slot, _counted: state.metrics.connection_opened(role) });
+                Ok(())
+            })
+        };
+        let conn = make_connection(role, stream, peer, &state).with_admission(admission);
+        let served = handle(role, conn, Arc::clone(&state), shutdown);
+        tokio::pin!(served, hello_deadline);
+        // The admission runs inside `served`, on this task, so `admitted`
+        // cannot change while a branch below is deciding.
+        let admitted_in_time = tokio::select! {
+            () = &mut served => false,
+            // An error means the place was given up by the admission.
+            closed = &mut evicted => {
+                // The acceptor has counted and logged the eviction.
+                closed.is_err()
+            }
+            () = &mut hello_deadline => {
+                let late = admitted.get().is_none();
+                if late && pending.remove(ip, id) {
+                    let ms = hello_timeout.as_millis();
+                    refuse(&state, &refusal_log, role, &peer, Refusal::HelloTimeout, || {
+                        format!("closed a connection with no Hello within {ms} ms (server.hello_timeout_ms)")
+                    });
+                }
+                !late
+            }
+        };
+        drop(pending_counted);
+        if admitted_in_time {
+            served.await;
+        } else {
+            // Ended, evicted or late: the place goes, the socket closes.
+            pending.remove(ip, id);
+        }
+    }
+}
+
+/// The connection of `role` with the link's limits.
+fn make_connection(role: Role, stream: TcpStream, peer: SocketAddr, state: &ServerState) -> Connection {
     let s = &state.config.server;
+    let max_frame_bytes = match role {
+        Role::Camera => s.max_frame_bytes,
+        Role::Controller => weldseam_proto::MAX_CONTROL_MESSAGE_BYTES as u64,
+    };
+    let deadline = MessageDeadline { base: s.message_timeout, min_bytes_per_s: s.min_transfer_bytes_per_s };
+    Connection::new(stream, peer, s.stall_timeout, max_frame_bytes)
+        .with_deadline(deadline)
+        .with_byte_counter(state.metrics.bytes_counter(role))
+}
+
+async fn handle(role: Role, conn: Connection, state: Arc<ServerState>, shutdown: Shutdown) {
     match role {
-        Role::Camera => {
-            let conn = connection::Connection::new(stream, peer, s.stall_timeout, s.max_frame_bytes);
-            camera_link::serve(conn, Arc::clone(&state), shutdown).await
-        }
-        Role::Controller => {
-            let conn = connection::Connection::new(
-                stream,
-                peer,
-                s.stall_timeout,
-                weldseam_proto::MAX_CONTROL_MESSAGE_BYTES as u64,
-            );
-            controller_link::serve(conn, Arc::clone(&state), shutdown).await
-        }
+        Role::Camera => camera_link::serve(conn, state, shutdown).await,
+        Role::Controller => controller_link::serve(conn, state, shutdown).await,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn peer(ip: [u8; 4], port: u16) -> SocketAddr {
+        SocketAddr::from((ip, port))
+    }
+
+    #[test]
+    fn a_flooding_address_displaces_only_its_own_pending_connections() {
+        let pending = Pending::new(4, 2);
+        let (_a1, none) = pending.register(peer([10, 0, 0, 1], 1));
+        assert!(none.is_empty());
+        let (_b1, _) = pending.register(peer([10, 0, 0, 2], 1));
+        let (_b2, _) = pending.register(peer([10, 0, 0, 2], 2));
+        // B is at its cap of 2: its oldest goes.
+        let (_b3, evicted) = pending.register(peer([10, 0, 0, 2], 3));
+        assert_eq!(evicted, vec![peer([10, 0, 0, 2], 1)]);
+        let (_c1, none) = pending.register(peer([10, 0, 0, 3], 1));
+        assert!(none.is_empty());
+        // The link is full (4): the address holding most (B) gives way.
+        let (_d1, evicted) = pending.register(peer([10, 0, 0, 4], 1));
+        assert_eq!(evicted, vec![peer([10, 0, 0, 2], 2)]);
+    }
+
+    #[test]
+    fn an_evicted_connection_is_told_and_an_admitted_one_is_not() {
+        let pending = Pending::new(8, 1);
+        let (mut first, _) = pending.register(peer([10, 0, 0, 1], 1));
+        let (mut second, _) = pending.register(peer([10, 0, 0, 1], 2));
+        assert_eq!(first.evicted.try_recv(), Ok(()));
+        // Admission gives the place up: the receiver sees the sender go.
+        assert!(pending.remove(second.ip, second.id));
+        assert!(matches!(second.evicted.try_recv(), Err(oneshot::error::TryRecvError::Closed)));
+        assert!(!pending.remove(first.ip, first.id), "an evicted connection has no place left");
     }
 }

@@ -1,0 +1,302 @@
+//! The daemon's figures for a plant's monitoring: counters, gauges and a
+//! histogram that the links update as they go, and an HTTP endpoint that
+//! serves them in the OpenMetrics text format, which Prometheus scrapes,
+//! when `server.metrics_listen` is set (it is off by default).
+//!
+//! The endpoint is outside input like the links, so it is bounded the same
+//! way: a few connections at once (more are closed at accept), one request
+//! per connection, every connection closed after a fixed time, and only
+//! `GET /metrics` answered.
+
+use std::convert::Infallible;
+use std::sync::Arc;
+use std::time::Duration;
+
+use bytes::Bytes;
+use http_body_util::Full;
+use hyper::body::Incoming;
+use hyper::{Method, Request, Response, StatusCode};
+use hyper_util::rt::{TokioIo, TokioTimer};
+use prometheus_client::encoding::EncodeLabelSet;
+use prometheus_client::metrics::counter::Counter;
+use prometheus_client::metrics::family::Family;
+use prometheus_client::metrics::gauge::Gauge;
+use prometheus_client::metrics::histogram::{Histogram, exponential_buckets};
+use prometheus_client::registry::Registry;
+use tokio::net::TcpListener;
+use tokio::sync::Semaphore;
+use tracing::{Instrument, debug, info, warn};
+use weldseam_proto::message::Role;
+use weldseam_proto::{ErrorCode, Message};
+
+use super::ServerState;
+
+/// Scrapes served at once; a further connection is closed at accept.
+const MAX_SCRAPERS: usize = 4;
+
+/// The longest a scrape connection may stay open, request and answer.
+const SCRAPE_TIMEOUT: Duration = Duration::from_secs(10);
+
+/// The content type of the OpenMetrics text format.
+const CONTENT_TYPE: &str = "application/openmetrics-text; version=1.0.0; charset=utf-8";
+
+#[derive(Debug, Clone, Hash, PartialEq, Eq, EncodeLabelSet)]
+struct OutcomeLabels {
+    /// "planned", or the name of the error code answered.
+    outcome: &'static str,
+}
+
+#[derive(Debug, Clone, Hash, PartialEq, Eq, EncodeLabelSet)]
+struct LinkLabels {
+    link: &'static str,
+}
+
+#[derive(Debug, Clone, Hash, PartialEq, Eq, EncodeLabelSet)]
+struct RefusedLabels {
+    link: &'static str,
+    reason: &'static str,
+}
+
+/// Why the acceptor closed a connection it did not serve.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Refusal {
+    /// The peer's address is not in the link's allowlist.
+    NotAllowed,
+    /// No complete Hello within `server.hello_timeout_ms`.
+    HelloTimeout,
+    /// Closed before its Hello to make room for a newer connection.
+    Evicted,
+    /// A valid Hello, but every slot of the link was in use.
+    LinkFull,
+}
+
+impl Refusal {
+    pub fn name(self) -> &'static str {
+        match self {
+            Refusal::NotAllowed => "not_allowed",
+            Refusal::HelloTimeout => "hello_timeout",
+            Refusal::Evicted => "evicted",
+            Refusal::LinkFull => "link_full",
+        }
+    }
+}
+
+/// Every figure the daemon exports.
+pub struct Metrics {
+    registry: Registry,
+    plans: Family<OutcomeLabels, Counter>,
+    reply_seconds: Histogram,
+    frames: Counter,
+    bytes_received: Family<LinkLabels, Counter>,
+    queue_depth: Gauge,
+    connections: Family<LinkLabels, Gauge>,
+    pending: Family<LinkLabels, Gauge>,
+    refused: Family<RefusedLabels, Counter>,
+}
+
+impl std::fmt::Debug for Metrics {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Metrics").finish_non_exhaustive()
+    }
+}
+
+impl Default for Metrics {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+/// Decrements its gauge when dropped: a connection counted while it lives.
+#[derive(Debug)]
+pub struct GaugeGuard(Gauge);
+
+impl Drop for GaugeGuard {
+    fn drop(&mut self) {
+        self.0.dec();
+    }
+}
+
+impl Metrics {
+    pub fn new() -> Self {
+        let m = Metrics {
+            registry: Registry::with_prefix("weldseam"),
+            plans: Family::default(),
+            // 5 ms to about 80 s: a plan, a wait for a fresh frame, a queue.
+            reply_seconds: Histogram::new(exponential_buckets(0.005, 2.0, 15)),
+            frames: Counter::default(),
+            bytes_received: Family::default(),
+            queue_depth: Gauge::default(),
+            connections: Family::default(),
+            pending: Family::default(),
+            refused: Family::default(),
+        };
+        let mut registry = Registry::with_prefix("weldseam");
+        registry.register("plans", "Plan requests answered, by outcome (planned or the error code)", m.plans.clone());
+        registry.register(
+            "reply_seconds",
+            "Time from a plan request's arrival to its reply (plan or error), seconds",
+            m.reply_seconds.clone(),
+        );
+        registry.register("frames", "Frames received and stored", m.frames.clone());
+        registry.register("received_bytes", "Bytes received, by link", m.bytes_received.clone());
+        registry.register("queue_depth", "Plan jobs queued or running", m.queue_depth.clone());
+        registry.register("connections", "Connections past their Hello, by link", m.connections.clone());
+        registry.register("pending_connections", "Connections yet to say Hello, by link", m.pending.clone());
+        registry.register("refused_peers", "Connections closed unserved, by link and reason", m.refused.clone());
+        // Both links show from the start, at zero, so a dashboard has a
+        // series before the first connection.
+        for role in [Role::Camera, Role::Controller] {
+            let link = LinkLabels { link: role.name() };
+            drop(m.bytes_received.get_or_create(&link));
+            drop(m.connections.get_or_create(&link));
+            drop(m.pending.get_or_create(&link));
+        }
+        Metrics { registry, ..m }
+    }
+
+    /// Counts a plan request's answer (a plan or an error reply) and the
+    /// time since the request arrived.
+    pub fn plan_answered(&self, reply: &Message, since_request: Duration) {
+        let outcome = match reply {
+            Message::PlanReply(_) => "planned",
+            Message::Error(e) => e.code.name(),
+            _ => "other",
+        };
+        self.plans.get_or_create(&OutcomeLabels { outcome }).inc();
+        self.reply_seconds.observe(since_request.as_secs_f64());
+    }
+
+    /// Counts a plan request refused before it was queued (invalid, busy).
+    pub fn request_refused(&self, code: ErrorCode) {
+        self.plans.get_or_create(&OutcomeLabels { outcome: code.name() }).inc();
+    }
+
+    /// Counts a frame stored.
+    pub fn frame_received(&self) {
+        self.frames.inc();
+    }
+
+    /// The counter of bytes received on `role`'s link.
+    pub fn bytes_counter(&self, role: Role) -> Counter {
+        self.bytes_received.get_or_create_owned(&LinkLabels { link: role.name() })
+    }
+
+    /// Counts a connection past its Hello until the guard is dropped.
+    pub fn connection_opened(&self, role: Role) -> GaugeGuard {
+        let gauge = self.connections.get_or_create_owned(&LinkLabels { link: role.name() });
+        gauge.inc();
+        GaugeGuard(gauge)
+    }
+
+    /// Counts a connection yet to say Hello until the guard is dropped.
+    pub fn pending_opened(&self, role: Role) -> GaugeGuard {
+        let gauge = self.pending.get_or_create_owned(&LinkLabels { link: role.name() });
+        gauge.inc();
+        GaugeGuard(gauge)
+    }
+
+    /// Counts a connection closed unserved.
+    pub fn peer_refused(&self, role: Role, why: Refusal) {
+        self.refused.get_or_create(&RefusedLabels { link: role.name(), reason: why.name() }).inc();
+    }
+
+    /// The exposition: every figure, in the OpenMetrics text format.
+    pub fn encode(&self, queue_depth: usize) -> String {
+        self.queue_depth.set(queue_depth.try_into().unwrap_or(i64::MAX));
+        let mut text = String::new();
+        // Writing into a String cannot fail.
+        let _ = prometheus_client::encoding::text::encode(&mut text, &self.registry);
+        text
+    }
+}
+
+/// Serves `GET /metrics` on `listener` until the future is dropped.
+pub async fn serve(listener: TcpListener, state: Arc<ServerState>) {
+    if let Ok(addr) = listener.local_addr() {
+        info!(%addr, "serving metrics at /metrics");
+    }
+    let scrapers = Arc::new(Semaphore::new(MAX_SCRAPERS));
+    loop {
+        let (stream, peer) = match listener.accept().await {
+            Ok(accepted) => accepted,
+            Err(e) => {
+                warn!("metrics: accept failed: {e}");
+                tokio::time::sleep(Duration::from_millis(100)).await;
+                continue;
+            }
+        };
+        let Ok(permit) = Arc::clone(&scrapers).try_acquire_owned() else {
+            debug!(%peer, "metrics: {MAX_SCRAPERS} scrapes in progress; closed");
+            continue;
+        };
+        let state = Arc::clone(&state);
+        let span = tracing::debug_span!("metrics", %peer);
+        tokio::spawn(
+            async move {
+                let service = hyper::service::service_fn(move |request: Request<Incoming>| {
+                    let response = respond(&request, &state);
+                    async move { Ok::<_, Infallible>(response) }
+                });
+                let connection = hyper::server::conn::http1::Builder::new()
+                    .keep_alive(false)
+                    .timer(TokioTimer::new())
+                    .header_read_timeout(SCRAPE_TIMEOUT)
+                    .serve_connection(TokioIo::new(stream), service);
+                match tokio::time::timeout(SCRAPE_TIMEOUT, connection).await {
+                    Ok(Ok(())) => {}
+                    Ok(Err(e)) => debug!("metrics: {e}"),
+                    Err(_) => debug!("metrics: closed after {} s", SCRAPE_TIMEOUT.as_secs()),
+                }
+                drop(permit);
+            }
+            .instrument(span),
+        );
+    }
+}
+
+fn respond(request: &Request<Incoming>, state: &ServerState) -> Response<Full<Bytes>> {
+    let (status, content_type, body) = match (request.method(), request.uri().path()) {
+        (&Method::GET, "/metrics") => (StatusCode::OK, CONTENT_TYPE, state.metrics.encode(state.jobs.len())),
+        (_, "/metrics") => (StatusCode::METHOD_NOT_ALLOWED, "text/plain", "only GET is served\n".into()),
+        _ => (StatusCode::NOT_FOUND, "text/plain", "the metrics are at /metrics\n".into()),
+    };
+    let mut response = Response::new(Full::new(Bytes::from(body)));
+    *response.status_mut() = status;
+    if let Ok(value) = content_type.parse() {
+        response.headers_mut().insert(hyper::header::CONTENT_TYPE, value);
+    }
+    response
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_exposition_names_every_figure() {
+        let m = Metrics::new();
+        m.plan_answered(&Message::error(ErrorCode::PlanFailed, Some(1), "no seam"), Duration::from_millis(40));
+        m.request_refused(ErrorCode::Busy);
+        m.frame_received();
+        m.bytes_counter(Role::Camera).inc_by(100);
+        let _open = m.connection_opened(Role::Controller);
+        {
+            let _gone = m.pending_opened(Role::Controller);
+        }
+        m.peer_refused(Role::Controller, Refusal::Evicted);
+        let text = m.encode(3);
+        for line in [
+            "weldseam_plans_total{outcome=\"plan_failed\"} 1",
+            "weldseam_plans_total{outcome=\"busy\"} 1",
+            "weldseam_reply_seconds_count 1",
+            "weldseam_frames_total 1",
+            "weldseam_received_bytes_total{link=\"camera\"} 100",
+            "weldseam_queue_depth 3",
+            "weldseam_connections{link=\"controller\"} 1",
+            "weldseam_pending_connections{link=\"controller\"} 0",
+            "weldseam_refused_peers_total{link=\"controller\",reason=\"evicted\"} 1",
+        ] {
+            assert!(text.lines().any(|l| l == line), "no line {line:?} in\n{text}");
+        }
+    }
+}

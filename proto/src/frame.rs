@@ -255,6 +255,23 @@ pub fn encode(msg: &Message) -> Result<Vec<u8>, EncodeError> {
     Ok(out)
 }
 
+/// The oldest version whose Error message this crate can write: the
+/// Error body (code, request id, sentence) is laid out the same in every
+/// version so far.
+pub const OLDEST_ERROR_VERSION: u16 = 1;
+
+/// An Error refusing a peer that speaks `peer_version`, in a header of
+/// that version when it is one whose Error layout this crate knows, so an
+/// old peer's own decoder can read why it was refused instead of failing
+/// on the header. Other versions get this crate's header.
+pub fn encode_version_refusal(peer_version: u16, message: &Message) -> Result<Vec<u8>, EncodeError> {
+    let mut bytes = encode(message)?;
+    if matches!(message, Message::Error(_)) && (OLDEST_ERROR_VERSION..PROTOCOL_VERSION).contains(&peer_version) {
+        bytes[4..6].copy_from_slice(&peer_version.to_le_bytes());
+    }
+    Ok(bytes)
+}
+
 /// Decodes a payload whose header carried `tag`. Frames are converted to
 /// millimetres.
 pub fn decode_body(tag: u16, payload: &[u8]) -> Result<Message, DecodeError> {
@@ -452,5 +469,18 @@ mod tests {
             assert_eq!(ErrorCode::from(c.code()), c);
         }
         assert_eq!(ErrorCode::from(999), ErrorCode::Other(999));
+    }
+
+    #[test]
+    fn version_refusals_speak_the_old_peers_header_only_when_they_can() {
+        let refusal = Message::error(ErrorCode::UnsupportedVersion, None, "speak version 2");
+        let version_of = |bytes: &[u8]| u16::from_le_bytes([bytes[4], bytes[5]]);
+        let old = encode_version_refusal(1, &refusal).unwrap();
+        assert_eq!(version_of(&old), 1);
+        assert_eq!(&old[6..], &encode(&refusal).unwrap()[6..], "the same tag, length and body");
+        // A version this crate does not know, or a message that is not an
+        // Error, keeps this crate's header.
+        assert_eq!(version_of(&encode_version_refusal(9, &refusal).unwrap()), PROTOCOL_VERSION);
+        assert_eq!(version_of(&encode_version_refusal(1, &Message::Ping).unwrap()), PROTOCOL_VERSION);
     }
 }

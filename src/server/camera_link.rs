@@ -9,6 +9,7 @@ use std::time::Instant;
 
 use tokio::sync::Mutex;
 use tracing::{Instrument, info, warn};
+use weldseam_proto::frame::{self, FramingError};
 use weldseam_proto::message::{FrameAck, Hello, HelloAck, Role, Trigger};
 use weldseam_proto::{ErrorCode, Message, PROTOCOL_VERSION};
 
@@ -43,7 +44,17 @@ pub(crate) async fn handshake(conn: &mut Connection, role: Role, state: &ServerS
         Err(HandshakeError::Read(e)) => {
             warn!("bad hello: {e}");
             if let Some(code) = e.reply_code() {
-                let _ = conn.writer.send(&Message::error(code, None, e.to_string())).await;
+                let refusal = Message::error(code, None, e.to_string());
+                // An old peer is told why in a header it can read.
+                let bytes = match &e {
+                    ReadError::Framing(FramingError::UnsupportedVersion(v)) => {
+                        frame::encode_version_refusal(*v, &refusal)
+                    }
+                    _ => frame::encode(&refusal),
+                };
+                if let Ok(bytes) = bytes {
+                    let _ = conn.writer.send_encoded(&bytes).await;
+                }
             }
             None
         }

@@ -328,6 +328,12 @@ impl<W: AsyncWrite + Unpin> MessageWriter<W> {
     /// per chunk the socket takes, and all of it within the deadline.
     pub async fn send(&mut self, message: &Message) -> Result<(), WriteError> {
         let bytes = frame::encode(message)?;
+        self.send_encoded(&bytes).await
+    }
+
+    /// Sends a message already encoded, under the same bounds as
+    /// [`MessageWriter::send`].
+    pub async fn send_encoded(&mut self, bytes: &[u8]) -> Result<(), WriteError> {
         let total = bytes.len() as u64;
         let allowed = self.deadline.map(|d| d.allowance(total));
         let due = allowed.and_then(|a| Instant::now().checked_add(a));

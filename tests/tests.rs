@@ -11,4 +11,5 @@ mod parsers;
 mod peers;
 mod pipeline;
 mod requests;
+mod unorganized;
 mod util;

@@ -6,6 +6,7 @@ mod cli;
 mod daemon;
 mod exactness;
 mod fuzz;
+mod golden;
 mod hostile_clouds;
 mod parsers;
 mod peers;

@@ -367,6 +367,12 @@ impl Config {
         Config::parse(&text, &shown)
     }
 
+    /// Reads and validates the config file at `path`, or gives the
+    /// built-in defaults when there is none.
+    pub fn load_or_default(path: Option<&Path>) -> Result<Config, ConfigError> {
+        path.map_or_else(|| Ok(Config::default()), Config::load)
+    }
+
     /// Parses and validates TOML text; `origin` names it in errors.
     pub fn parse(text: &str, origin: &str) -> Result<Config, ConfigError> {
         let file: ConfigFile = toml::from_str(text)

@@ -9,7 +9,8 @@
 
 /// The camera model. Build it with [`CameraModel::new`] so the derived
 /// focal lengths are always consistent with the field of view.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Deserialize)]
+#[serde(deny_unknown_fields, default)]
 pub struct CameraModel {
     /// Sensor width in pixels (Table 1: 1920).
     pub width_px: u32,

@@ -38,19 +38,26 @@ enum Command {
     Bench(cli::bench::BenchArgs),
 }
 
+impl Command {
+    /// The long-running services log what they do; one-shot commands only
+    /// what goes wrong.
+    fn log_level(&self) -> &'static str {
+        match self {
+            Command::Demo(_)
+            | Command::Plan(_)
+            | Command::Eval(_)
+            | Command::Simulate(_)
+            | Command::Controller(_)
+            | Command::Bench(_) => "warn",
+            Command::Serve(_) | Command::Camera(_) => "info",
+        }
+    }
+}
+
 fn main() -> std::process::ExitCode {
     cli::memory::keep_freed_memory();
     let cli = Cli::parse();
-    let level = match cli.command {
-        Command::Demo(_)
-        | Command::Plan(_)
-        | Command::Eval(_)
-        | Command::Simulate(_)
-        | Command::Controller(_)
-        | Command::Bench(_) => "warn",
-        Command::Serve(_) | Command::Camera(_) => "info",
-    };
-    if let Err(e) = logging::init(cli.log_format, level) {
+    if let Err(e) = logging::init(cli.log_format, cli.command.log_level()) {
         eprintln!("error: {e:#}");
         return std::process::ExitCode::FAILURE;
     }
@@ -77,4 +84,64 @@ fn main() -> std::process::ExitCode {
 
 fn is_broken_pipe(e: &anyhow::Error) -> bool {
     e.chain().any(|c| c.downcast_ref::<std::io::Error>().is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe))
+}
+
+#[cfg(test)]
+mod tests {
+    use clap::Parser;
+    use clap::error::ErrorKind;
+    use weldseam::config::Method;
+
+    use super::{Cli, Command};
+
+    const POSE: &str = "--pose=-613.5,-284.8,296.3,178.3,1.0,-107.1";
+
+    fn parse(args: &[&str]) -> Result<Command, clap::Error> {
+        Cli::try_parse_from(std::iter::once("weldseam").chain(args.iter().copied())).map(|c| c.command)
+    }
+
+    #[test]
+    fn an_unknown_method_is_refused_by_every_subcommand_that_takes_one() {
+        for args in [
+            &["plan", "--cloud", "a.pcd", "--joint", "lap", POSE, "--method", "fast"][..],
+            &["serve", "--method", "fast"][..],
+        ] {
+            let e = parse(args).unwrap_err();
+            assert_eq!(e.kind(), ErrorKind::InvalidValue, "{args:?}: {e}");
+            assert!(e.to_string().contains("robust") && e.to_string().contains("paper"), "{e}");
+        }
+    }
+
+    #[test]
+    fn the_method_flag_overrides_the_config_in_plan_and_serve() {
+        let Command::Serve(serve) = parse(&["serve", "--method", "paper"]).unwrap() else { panic!("not serve") };
+        assert_eq!(serve.config.load().unwrap().pipeline.method, Method::Paper);
+        let plan = ["plan", "--cloud", "a.pcd", "--joint", "lap", POSE, "--method", "paper"];
+        let Command::Plan(plan) = parse(&plan).unwrap() else { panic!("not plan") };
+        assert_eq!(plan.config.load().unwrap().pipeline.method, Method::Paper);
+        let Command::Serve(serve) = parse(&["serve"]).unwrap() else { panic!("not serve") };
+        assert_eq!(serve.config.load().unwrap().pipeline.method, Method::Robust);
+    }
+
+    #[test]
+    fn plan_and_controller_take_the_same_request_flags() {
+        let flags = ["--step", "2.5", "--work-angle", "-10", "--travel-angle", "15", "--groove-depth", "3"];
+        let plan: Vec<&str> =
+            ["plan", "--cloud", "a.pcd", "--joint", "v-butt", POSE].into_iter().chain(flags).collect();
+        let controller: Vec<&str> = ["controller", "--joint", "v-butt", POSE].into_iter().chain(flags).collect();
+        let Command::Plan(plan) = parse(&plan).unwrap() else { panic!("not plan") };
+        let Command::Controller(controller) = parse(&controller).unwrap() else { panic!("not controller") };
+        for r in [&plan.request, &controller.request] {
+            assert_eq!(
+                (r.step, r.work_angle, r.travel_angle, r.groove_depth),
+                (Some(2.5), Some(-10.0), Some(15.0), Some(3.0))
+            );
+        }
+        // One parser for the hand-eye in both: it counts the numbers.
+        for sub in [&["plan", "--cloud", "a.pcd", "--joint", "lap", POSE][..], &["controller", "--ping"][..]] {
+            let args: Vec<&str> = sub.iter().copied().chain(["--hand-eye", "1,0,0"]).collect();
+            let e = parse(&args).unwrap_err().to_string();
+            assert!(e.contains("needs 16"), "{sub:?}: {e}");
+        }
+    }
 }

@@ -215,3 +215,12 @@ fn eval_runs_as_a_process_and_its_plans_file_repeats_digit_for_digit() {
     assert!(!first.contains("timing"), "no run-to-run timings in the plans file");
     assert_eq!(first, run("b.jsonl"), "the same suite plans the same, to the last digit");
 }
+
+#[test]
+fn an_unknown_method_is_refused_before_anything_runs() {
+    // `serve` would otherwise bind its ports; clap stops it first.
+    let out = weldseam(&["serve", "--method", "fast"]);
+    assert!(!out.status.success());
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(stderr.contains("'fast'") && stderr.contains("possible values: robust, paper"), "{stderr}");
+}

@@ -1,6 +1,72 @@
-//! Parsers for the comma-separated numeric flags shared by subcommands.
+//! The arguments shared by subcommands, each group declared once and
+//! flattened into the subcommands that take it, and the parsers of the
+//! comma-separated numeric flags.
 
+use std::path::PathBuf;
+
+use weldseam::config::{Config, Method};
 use weldseam::geometry::pose::RobotPose;
+
+/// Which configuration to plan with: `--config` and `--method`.
+#[derive(Debug, Clone, clap::Args)]
+pub struct ConfigArgs {
+    /// Configuration file (TOML); built-in defaults otherwise.
+    #[arg(long)]
+    pub config: Option<PathBuf>,
+    /// Pipeline variant, overriding pipeline.method of the config.
+    #[arg(long, value_enum)]
+    pub method: Option<MethodArg>,
+}
+
+impl ConfigArgs {
+    /// The config file (or the defaults) with the flags' overrides.
+    pub fn load(&self) -> anyhow::Result<Config> {
+        let mut config = Config::load_or_default(self.config.as_deref())?;
+        if let Some(method) = self.method {
+            config.pipeline.method = method.into();
+        }
+        Ok(config)
+    }
+}
+
+/// `--method`: clap refuses any other name.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum MethodArg {
+    /// The paper's method made robust.
+    Robust,
+    /// The paper's method exactly as written.
+    Paper,
+}
+
+impl From<MethodArg> for Method {
+    fn from(m: MethodArg) -> Self {
+        match m {
+            MethodArg::Robust => Method::Robust,
+            MethodArg::Paper => Method::Paper,
+        }
+    }
+}
+
+/// A plan request's optional settings, the same in `plan` and `controller`.
+#[derive(Debug, Clone, clap::Args)]
+pub struct RequestArgs {
+    /// Groove depth of a V-butt joint, mm.
+    #[arg(long, allow_negative_numbers = true)]
+    pub groove_depth: Option<f64>,
+    /// Waypoint spacing, mm (default: trajectory.step_mm of the config).
+    #[arg(long, allow_negative_numbers = true)]
+    pub step: Option<f64>,
+    /// Torch work angle, degrees (default: trajectory.work_angle_deg).
+    #[arg(long, allow_hyphen_values = true)]
+    pub work_angle: Option<f64>,
+    /// Torch travel angle, degrees (default: trajectory.travel_angle_deg).
+    #[arg(long, allow_hyphen_values = true)]
+    pub travel_angle: Option<f64>,
+    /// End_T_Camera for this request instead of robot.hand_eye of the
+    /// config: 16 comma-separated numbers, row-major 4x4, mm.
+    #[arg(long, allow_hyphen_values = true, value_parser = matrix)]
+    pub hand_eye: Option<[f64; 16]>,
+}
 
 /// Parses exactly `N` comma-separated numbers, naming the flag in errors.
 pub fn numbers<const N: usize>(flag: &str, text: &str) -> Result<[f64; N], String> {
@@ -28,6 +94,11 @@ pub fn pose(text: &str) -> Result<RobotPose, String> {
 /// Sixteen numbers, a row-major 4x4 matrix.
 pub fn matrix(text: &str) -> Result<[f64; 16], String> {
     numbers::<16>("--hand-eye", text)
+}
+
+/// `x,y,z` in mm.
+pub fn point(text: &str) -> Result<[f64; 3], String> {
+    numbers::<3>("--start-near", text)
 }
 
 #[cfg(test)]

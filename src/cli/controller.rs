@@ -22,21 +22,11 @@ pub struct ControllerArgs {
     /// Joint type: v-butt, i-butt or lap.
     #[arg(long, required_unless_present = "ping")]
     pub joint: Option<JointType>,
-    /// Groove depth of a V-butt joint, mm.
-    #[arg(long, allow_negative_numbers = true)]
-    pub groove_depth: Option<f64>,
     /// Robot pose at capture: x,y,z,rx,ry,rz (mm, degrees).
     #[arg(long, allow_hyphen_values = true, value_parser = args::pose, required_unless_present = "ping")]
     pub pose: Option<RobotPose>,
-    /// Waypoint spacing, mm.
-    #[arg(long, allow_negative_numbers = true)]
-    pub step: Option<f64>,
-    /// Torch work angle, degrees.
-    #[arg(long, allow_hyphen_values = true)]
-    pub work_angle: Option<f64>,
-    /// Torch travel angle, degrees.
-    #[arg(long, allow_hyphen_values = true)]
-    pub travel_angle: Option<f64>,
+    #[command(flatten)]
+    pub request: args::RequestArgs,
     /// Which frame: trigger (a fresh capture), next (the next frame to
     /// arrive) or a frame id.
     #[arg(long, default_value = "trigger", value_parser = frame_select)]
@@ -50,12 +40,8 @@ pub struct ControllerArgs {
     pub camera: Option<String>,
     /// Start the waypoints at the seam's end nearest this base-frame
     /// point: x,y,z (mm).
-    #[arg(long, allow_hyphen_values = true, value_parser = point)]
+    #[arg(long, allow_hyphen_values = true, value_parser = args::point)]
     pub start_near: Option<[f64; 3]>,
-    /// End_T_Camera for this request instead of the daemon's
-    /// robot.hand_eye: 16 numbers, row-major 4x4 (mm).
-    #[arg(long, allow_hyphen_values = true, value_parser = matrix)]
-    pub hand_eye: Option<[f64; 16]>,
     /// The request id echoed in the reply.
     #[arg(long, default_value_t = 1)]
     pub request_id: u64,
@@ -65,23 +51,6 @@ pub struct ControllerArgs {
     /// Only ping the daemon and print its status.
     #[arg(long)]
     pub ping: bool,
-}
-
-/// `N` comma-separated numbers.
-fn numbers<const N: usize>(text: &str) -> Result<[f64; N], String> {
-    let values: Vec<f64> = text
-        .split(',')
-        .map(|v| v.trim().parse::<f64>().map_err(|_| format!("{v:?} is not a number")))
-        .collect::<Result<_, _>>()?;
-    values.try_into().map_err(|v: Vec<f64>| format!("expected {N} comma-separated numbers, got {}", v.len()))
-}
-
-fn point(text: &str) -> Result<[f64; 3], String> {
-    numbers::<3>(text)
-}
-
-fn matrix(text: &str) -> Result<[f64; 16], String> {
-    numbers::<16>(text)
 }
 
 fn frame_select(text: &str) -> Result<FrameSelect, String> {
@@ -136,15 +105,15 @@ async fn exchange(args: &ControllerArgs) -> anyhow::Result<()> {
     let request = PlanRequest {
         request_id: args.request_id,
         joint: PlanRequest::joint_code(joint_to_proto(joint)),
-        groove_depth_mm: args.groove_depth,
+        groove_depth_mm: args.request.groove_depth,
         pose: [x, y, z, rx, ry, rz],
-        step_mm: args.step,
-        work_angle_deg: args.work_angle,
-        travel_angle_deg: args.travel_angle,
+        step_mm: args.request.step,
+        work_angle_deg: args.request.work_angle,
+        travel_angle_deg: args.request.travel_angle,
         frame: args.frame,
         timeout_ms: args.timeout_ms,
         camera: args.camera.clone(),
-        hand_eye: args.hand_eye,
+        hand_eye: args.request.hand_eye,
         start_near: args.start_near,
     };
     // The daemon bounds the frame wait; allow for it and a slow plan.

@@ -7,7 +7,7 @@ use std::io::Write;
 use anyhow::Context;
 use std::path::PathBuf;
 
-use weldseam::config::Method;
+use weldseam::config::{Config, Method};
 use weldseam::eval::{SceneOutcome, run_suite, summarise};
 use weldseam::geometry::pose::EulerConvention;
 use weldseam::joint::JointType;
@@ -82,7 +82,8 @@ fn plan_line(o: &SceneOutcome, euler: EulerConvention) -> serde_json::Value {
 }
 
 pub fn run(args: &EvalArgs) -> anyhow::Result<()> {
-    let robust = super::plan::load_config(args.config.as_ref(), Some("robust"))?;
+    let mut robust = Config::load_or_default(args.config.as_deref())?;
+    robust.pipeline.method = Method::Robust;
     let mut paper = robust.clone();
     paper.pipeline.method = Method::Paper;
     let configs = if args.robust_only { vec![robust.clone()] } else { vec![robust.clone(), paper] };

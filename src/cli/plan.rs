@@ -6,7 +6,6 @@ use std::path::PathBuf;
 use std::io::Write;
 
 use anyhow::{anyhow, bail};
-use weldseam::config::{Config, Method};
 use weldseam::geometry::pose::{RobotPose, hand_eye_from_rows};
 use weldseam::joint::JointType;
 use weldseam::pipeline::{PlanRequest, Planner, Stage};
@@ -22,51 +21,33 @@ pub struct PlanArgs {
     /// Joint type: v-butt, i-butt or lap (underscores work too).
     #[arg(long)]
     pub joint: JointType,
-    /// Groove depth of a V-butt joint, mm.
-    #[arg(long, allow_negative_numbers = true)]
-    pub groove_depth: Option<f64>,
     /// Robot pose at capture: x,y,z,rx,ry,rz (mm, degrees).
     #[arg(long, allow_hyphen_values = true, value_parser = args::pose)]
     pub pose: RobotPose,
-    /// End_T_Camera as 16 comma-separated numbers, row-major, mm.
-    #[arg(long, allow_hyphen_values = true, value_parser = args::matrix)]
-    pub hand_eye: Option<[f64; 16]>,
-    /// Waypoint spacing, mm (default from the config: 5).
-    #[arg(long, allow_negative_numbers = true)]
-    pub step: Option<f64>,
-    /// Configuration file (TOML); built-in defaults otherwise.
-    #[arg(long)]
-    pub config: Option<PathBuf>,
-    /// Pipeline variant, overriding the config: robust or paper.
-    #[arg(long, value_parser = ["robust", "paper"])]
-    pub method: Option<String>,
+    #[command(flatten)]
+    pub request: args::RequestArgs,
+    #[command(flatten)]
+    pub config: args::ConfigArgs,
     /// Print one JSON object on stdout instead of a summary.
     #[arg(long)]
     pub json: bool,
 }
 
-/// Loads the config file if given, else the defaults, and applies a
-/// `--method` override.
-pub fn load_config(path: Option<&PathBuf>, method: Option<&str>) -> anyhow::Result<Config> {
-    let mut config = match path {
-        Some(p) => Config::load(p)?,
-        None => Config::default(),
-    };
-    if let Some(m) = method.and_then(Method::from_name) {
-        config.pipeline.method = m;
-    }
-    Ok(config)
-}
-
 pub fn run(args: &PlanArgs) -> anyhow::Result<()> {
     let mut out = std::io::stdout().lock();
-    let config = load_config(args.config.as_ref(), args.method.as_deref())?;
+    let config = args.config.load()?;
     let hand_eye = args
+        .request
         .hand_eye
         .map(|rows| hand_eye_from_rows(&rows).map_err(|e| anyhow::anyhow!("--hand-eye: {e}")))
         .transpose()?;
-    let request =
-        PlanRequest { hand_eye, step_mm: args.step, ..PlanRequest::new(args.joint, args.groove_depth, args.pose) };
+    let request = PlanRequest {
+        hand_eye,
+        step_mm: args.request.step,
+        work_angle_deg: args.request.work_angle,
+        travel_angle_deg: args.request.travel_angle,
+        ..PlanRequest::new(args.joint, args.request.groove_depth, args.pose)
+    };
     let planner = Planner::new(config);
     // A bad flag is the caller's mistake, not the cloud's: say so before
     // reading a possibly large file.

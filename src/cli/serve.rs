@@ -4,7 +4,6 @@
 //! configured grace and exits.
 
 use std::net::SocketAddr;
-use std::path::PathBuf;
 use std::sync::Arc;
 
 use anyhow::Context;
@@ -12,13 +11,12 @@ use tokio::net::TcpListener;
 use tracing::{info, warn};
 use weldseam::server::{self, ServerState, Stopped};
 
-use super::plan::load_config;
+use super::args::ConfigArgs;
 
 #[derive(Debug, clap::Args)]
 pub struct ServeArgs {
-    /// Configuration file (TOML); built-in defaults otherwise.
-    #[arg(long)]
-    pub config: Option<PathBuf>,
+    #[command(flatten)]
+    pub config: ConfigArgs,
     /// Camera link address, overriding server.camera_listen.
     #[arg(long)]
     pub camera_listen: Option<SocketAddr>,
@@ -39,7 +37,7 @@ async fn termination() -> anyhow::Result<()> {
 }
 
 pub fn run(args: &ServeArgs) -> anyhow::Result<()> {
-    let mut config = load_config(args.config.as_ref(), None)?;
+    let mut config = args.config.load()?;
     if let Some(a) = args.camera_listen {
         config.server.camera_listen = a;
     }

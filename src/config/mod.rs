@@ -13,6 +13,7 @@ use std::path::Path;
 use std::time::Duration;
 
 use nalgebra::Isometry3;
+use serde::{Deserialize, Deserializer};
 
 use crate::camera::CameraModel;
 use crate::geometry::pose::{EulerConvention, HandEyeError, hand_eye_from_rows};
@@ -46,9 +47,22 @@ impl Method {
     }
 }
 
-/// Parameters of the seam pipeline's stages.
-#[derive(Debug, Clone, PartialEq)]
+/// Reads `pipeline.method` by name; the error names the key, as the
+/// range checks' do.
+fn method_by_name<'de, D: Deserializer<'de>>(deserializer: D) -> Result<Method, D::Error> {
+    let name = String::deserialize(deserializer)?;
+    Method::from_name(&name).ok_or_else(|| {
+        serde::de::Error::custom(format!(
+            "config key `pipeline.method`: unknown method {name:?}; expected \"robust\" or \"paper\""
+        ))
+    })
+}
+
+/// Parameters of the seam pipeline's stages: the [pipeline] section.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
 pub struct PipelineParams {
+    #[serde(deserialize_with = "method_by_name")]
     pub method: Method,
     /// Neighbour search radius R, mm (paper: 1).
     pub neighbour_radius_mm: f64,
@@ -125,8 +139,10 @@ impl Default for PipelineParams {
     }
 }
 
-/// The paper's own numbers where they differ from the robust method's.
-#[derive(Debug, Clone, PartialEq)]
+/// The paper's own numbers where they differ from the robust method's:
+/// the [paper] section.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
 pub struct PaperParams {
     /// μ of the plane edge criterion (Eq. 15).
     pub edge_ratio: f64,
@@ -140,14 +156,17 @@ impl Default for PaperParams {
     }
 }
 
-/// Sampling and torch orientation of the trajectory.
-#[derive(Debug, Clone, PartialEq)]
+/// Sampling and torch orientation of the trajectory: the [trajectory]
+/// section, and what a request's own step and angles override.
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
 pub struct TrajectoryParams {
     /// Distance between waypoints along the seam, mm.
     pub step_mm: f64,
-    /// Torch tilt about the travel direction, degrees.
+    /// Torch tilt about tool x, the travel direction, degrees.
     pub work_angle_deg: f64,
-    /// Torch tilt about the axis across the seam (push positive), degrees.
+    /// Torch tilt about tool y, across the seam in the plate's plane
+    /// (push positive), degrees.
     pub travel_angle_deg: f64,
 }
 
@@ -348,6 +367,12 @@ impl Config {
         Config::parse(&text, &shown)
     }
 
+    /// Reads and validates the config file at `path`, or gives the
+    /// built-in defaults when there is none.
+    pub fn load_or_default(path: Option<&Path>) -> Result<Config, ConfigError> {
+        path.map_or_else(|| Ok(Config::default()), Config::load)
+    }
+
     /// Parses and validates TOML text; `origin` names it in errors.
     pub fn parse(text: &str, origin: &str) -> Result<Config, ConfigError> {
         let file: ConfigFile = toml::from_str(text)
@@ -357,11 +382,34 @@ impl Config {
 
     /// Validates the schema's values into a built config.
     pub fn from_file(f: ConfigFile) -> Result<Config, ConfigError> {
-        // Every number has a floor and a ceiling: a value outside them is
-        // a typo or a unit mix-up, and an unbounded one (a billion RANSAC
-        // iterations, a tolerance of 1e-30 mm) would hang or silently break
-        // the planner rather than fail at start.
-        let c = &f.camera;
+        f.camera.validate()?;
+        let (euler, hand_eye, robot_limits) = f.robot.validate()?;
+        f.pipeline.validate()?;
+        f.paper.validate()?;
+        f.trajectory.validate()?;
+        let server = f.server.validate()?;
+        Ok(Config {
+            camera: f.camera,
+            euler,
+            hand_eye,
+            robot_limits,
+            pipeline: f.pipeline,
+            paper: f.paper,
+            trajectory: f.trajectory,
+            server,
+        })
+    }
+}
+
+// Every number has a floor and a ceiling: a value outside them is a typo
+// or a unit mix-up, and an unbounded one (a billion RANSAC iterations, a
+// tolerance of 1e-30 mm) would hang or silently break the planner rather
+// than fail at start.
+
+impl CameraModel {
+    /// Checks the [camera] section.
+    pub fn validate(&self) -> Result<(), ConfigError> {
+        let c = self;
         // A sensor of 32768 pixels a side is beyond any camera; the tile
         // keys of the full-plane counts hold 16-bit tile indices.
         for (key, px) in [("camera.width_px", c.width_px), ("camera.height_px", c.height_px)] {
@@ -377,22 +425,14 @@ impl Config {
         // Up to 89°: the off-axis limit bounds every coordinate by a
         // multiple of the depth, which a limit of 90° would not.
         in_range("camera.max_off_axis_deg", c.max_off_axis_deg, 1.0, 89.0)?;
-        in_range("camera.fov_margin_px", c.fov_margin_px, 0.0, f64::from(MAX_SENSOR_PX))?;
-        let camera = CameraModel {
-            width_px: c.width_px,
-            height_px: c.height_px,
-            fov_width_mm: c.fov_width_mm,
-            fov_height_mm: c.fov_height_mm,
-            fov_distance_mm: c.fov_distance_mm,
-            baseline_mm: c.baseline_mm,
-            nominal_accuracy_mm: c.nominal_accuracy_mm,
-            min_depth_mm: c.min_depth_mm,
-            max_depth_mm: c.max_depth_mm,
-            max_off_axis_deg: c.max_off_axis_deg,
-            fov_margin_px: c.fov_margin_px,
-        };
+        in_range("camera.fov_margin_px", c.fov_margin_px, 0.0, f64::from(MAX_SENSOR_PX))
+    }
+}
 
-        let r = &f.robot;
+impl file::RobotSection {
+    /// Checks the [robot] section and builds its typed values.
+    pub fn validate(&self) -> Result<(EulerConvention, Isometry3<f64>, RobotLimits), ConfigError> {
+        let r = self;
         let euler = EulerConvention::from_name(&r.euler_convention).ok_or_else(|| ConfigError::Invalid {
             key: "robot.euler_convention",
             message: format!(
@@ -418,12 +458,14 @@ impl Config {
                 robot_limits.max_hand_eye_translation_mm
             )
         })?;
+        Ok((euler, hand_eye, robot_limits))
+    }
+}
 
-        let p = &f.pipeline;
-        let method = Method::from_name(&p.method).ok_or_else(|| ConfigError::Invalid {
-            key: "pipeline.method",
-            message: format!("unknown method {:?}; expected \"robust\" or \"paper\"", p.method),
-        })?;
+impl PipelineParams {
+    /// Checks the [pipeline] section.
+    pub fn validate(&self) -> Result<(), ConfigError> {
+        let p = self;
         in_range("pipeline.neighbour_radius_mm", p.neighbour_radius_mm, 0.05, 10.0)?;
         in_range("pipeline.plane_min_neighbour_ratio", p.plane_min_neighbour_ratio, 0.05, 1.0)?;
         in_range("pipeline.plane_max_normal_angle_deg", p.plane_max_normal_angle_deg, 1.0, 89.0)?;
@@ -453,54 +495,25 @@ impl Config {
         check("pipeline.fit_degree", (1..=5).contains(&p.fit_degree), || {
             format!("must be 1 (straight seams) to 5, got {}", p.fit_degree)
         })?;
-        in_range("pipeline.fit_trim_sigma", p.fit_trim_sigma, 1.0, 100.0)?;
+        in_range("pipeline.fit_trim_sigma", p.fit_trim_sigma, 1.0, 100.0)
+    }
+}
 
-        in_range("paper.edge_ratio", f.paper.edge_ratio, 0.01, 1.0)?;
-        in_range("paper.cluster_tolerance_mm", f.paper.cluster_tolerance_mm, 0.05, 20.0)?;
+impl PaperParams {
+    /// Checks the [paper] section.
+    pub fn validate(&self) -> Result<(), ConfigError> {
+        in_range("paper.edge_ratio", self.edge_ratio, 0.01, 1.0)?;
+        in_range("paper.cluster_tolerance_mm", self.cluster_tolerance_mm, 0.05, 20.0)
+    }
+}
 
-        let t = &f.trajectory;
-        in_range("trajectory.step_mm", t.step_mm, MIN_STEP_MM, MAX_STEP_MM)?;
-        in_range("trajectory.work_angle_deg", t.work_angle_deg, -MAX_TORCH_ANGLE_DEG, MAX_TORCH_ANGLE_DEG)?;
-        in_range("trajectory.travel_angle_deg", t.travel_angle_deg, -MAX_TORCH_ANGLE_DEG, MAX_TORCH_ANGLE_DEG)?;
-
-        let server = server_config(&f.server)?;
-
-        Ok(Config {
-            server,
-            camera,
-            euler,
-            hand_eye,
-            robot_limits,
-            pipeline: PipelineParams {
-                method,
-                neighbour_radius_mm: p.neighbour_radius_mm,
-                plane_min_neighbour_ratio: p.plane_min_neighbour_ratio,
-                plane_max_normal_angle_deg: p.plane_max_normal_angle_deg,
-                cluster_tolerance_mm: p.cluster_tolerance_mm,
-                min_plane_area_mm2: p.min_plane_area_mm2,
-                coplanar_tolerance_mm: p.coplanar_tolerance_mm,
-                lap_step_min_mm: p.lap_step_min_mm,
-                lap_step_max_mm: p.lap_step_max_mm,
-                edge_max_neighbour_ratio: p.edge_max_neighbour_ratio,
-                ransac_distance_mm: p.ransac_distance_mm,
-                ransac_iterations: p.ransac_iterations,
-                ransac_min_line_points: p.ransac_min_line_points,
-                ransac_min_remaining_points: p.ransac_min_remaining_points,
-                ransac_max_lines: p.ransac_max_lines,
-                ransac_seed: p.ransac_seed,
-                max_edge_angle_deg: p.max_edge_angle_deg,
-                boundary_band_mm: p.boundary_band_mm,
-                on_plane_tolerance_mm: p.on_plane_tolerance_mm,
-                fit_degree: p.fit_degree,
-                fit_trim_sigma: p.fit_trim_sigma,
-            },
-            paper: PaperParams { edge_ratio: f.paper.edge_ratio, cluster_tolerance_mm: f.paper.cluster_tolerance_mm },
-            trajectory: TrajectoryParams {
-                step_mm: t.step_mm,
-                work_angle_deg: t.work_angle_deg,
-                travel_angle_deg: t.travel_angle_deg,
-            },
-        })
+impl TrajectoryParams {
+    /// Checks the [trajectory] section, against the same limits a
+    /// request's own step and angles are held to.
+    pub fn validate(&self) -> Result<(), ConfigError> {
+        in_range("trajectory.step_mm", self.step_mm, MIN_STEP_MM, MAX_STEP_MM)?;
+        in_range("trajectory.work_angle_deg", self.work_angle_deg, -MAX_TORCH_ANGLE_DEG, MAX_TORCH_ANGLE_DEG)?;
+        in_range("trajectory.travel_angle_deg", self.travel_angle_deg, -MAX_TORCH_ANGLE_DEG, MAX_TORCH_ANGLE_DEG)
     }
 }
 
@@ -522,128 +535,134 @@ fn ip_list(key: &'static str, list: &[String]) -> Result<Vec<IpAddr>, ConfigErro
         .collect()
 }
 
-fn server_config(s: &file::ServerSection) -> Result<ServerConfig, ConfigError> {
-    const MAX_CONNECTIONS: u32 = 1024;
-    check("server.max_camera_connections", (1..=MAX_CONNECTIONS).contains(&s.max_camera_connections), || {
-        format!("must lie in [1, {MAX_CONNECTIONS}], got {}", s.max_camera_connections)
-    })?;
-    check("server.max_controller_connections", (1..=MAX_CONNECTIONS).contains(&s.max_controller_connections), || {
-        format!("must lie in [1, {MAX_CONNECTIONS}], got {}", s.max_controller_connections)
-    })?;
-    check("server.stall_timeout_ms", (10..=3_600_000).contains(&s.stall_timeout_ms), || {
-        format!("must lie in [10, 3600000] ms, got {}", s.stall_timeout_ms)
-    })?;
-    check("server.hello_timeout_ms", (10..=60_000).contains(&s.hello_timeout_ms), || {
-        format!("must lie in [10, 60000] ms, got {}", s.hello_timeout_ms)
-    })?;
-    check("server.message_timeout_ms", (10..=3_600_000).contains(&s.message_timeout_ms), || {
-        format!("must lie in [10, 3600000] ms, got {}", s.message_timeout_ms)
-    })?;
-    const MIN_RATE: u64 = 1 << 10;
-    const MAX_RATE: u64 = 1 << 30;
-    check("server.min_transfer_bytes_per_s", (MIN_RATE..=MAX_RATE).contains(&s.min_transfer_bytes_per_s), || {
-        format!("must lie in [{MIN_RATE}, {MAX_RATE}] bytes per second, got {}", s.min_transfer_bytes_per_s)
-    })?;
-    const MAX_PENDING: u32 = 4096;
-    check("server.max_pending_connections", (1..=MAX_PENDING).contains(&s.max_pending_connections), || {
-        format!("must lie in [1, {MAX_PENDING}], got {}", s.max_pending_connections)
-    })?;
-    check(
-        "server.max_pending_per_address",
-        (1..=s.max_pending_connections).contains(&s.max_pending_per_address),
-        || {
+impl file::ServerSection {
+    /// Checks the [server] section and builds its typed values.
+    pub fn validate(&self) -> Result<ServerConfig, ConfigError> {
+        let s = self;
+        const MAX_CONNECTIONS: u32 = 1024;
+        check("server.max_camera_connections", (1..=MAX_CONNECTIONS).contains(&s.max_camera_connections), || {
+            format!("must lie in [1, {MAX_CONNECTIONS}], got {}", s.max_camera_connections)
+        })?;
+        check(
+            "server.max_controller_connections",
+            (1..=MAX_CONNECTIONS).contains(&s.max_controller_connections),
+            || format!("must lie in [1, {MAX_CONNECTIONS}], got {}", s.max_controller_connections),
+        )?;
+        check("server.stall_timeout_ms", (10..=3_600_000).contains(&s.stall_timeout_ms), || {
+            format!("must lie in [10, 3600000] ms, got {}", s.stall_timeout_ms)
+        })?;
+        check("server.hello_timeout_ms", (10..=60_000).contains(&s.hello_timeout_ms), || {
+            format!("must lie in [10, 60000] ms, got {}", s.hello_timeout_ms)
+        })?;
+        check("server.message_timeout_ms", (10..=3_600_000).contains(&s.message_timeout_ms), || {
+            format!("must lie in [10, 3600000] ms, got {}", s.message_timeout_ms)
+        })?;
+        const MIN_RATE: u64 = 1 << 10;
+        const MAX_RATE: u64 = 1 << 30;
+        check("server.min_transfer_bytes_per_s", (MIN_RATE..=MAX_RATE).contains(&s.min_transfer_bytes_per_s), || {
+            format!("must lie in [{MIN_RATE}, {MAX_RATE}] bytes per second, got {}", s.min_transfer_bytes_per_s)
+        })?;
+        const MAX_PENDING: u32 = 4096;
+        check("server.max_pending_connections", (1..=MAX_PENDING).contains(&s.max_pending_connections), || {
+            format!("must lie in [1, {MAX_PENDING}], got {}", s.max_pending_connections)
+        })?;
+        check(
+            "server.max_pending_per_address",
+            (1..=s.max_pending_connections).contains(&s.max_pending_per_address),
+            || {
+                format!(
+                    "must lie in [1, server.max_pending_connections = {}], got {}",
+                    s.max_pending_connections, s.max_pending_per_address
+                )
+            },
+        )?;
+        let metrics_listen = match s.metrics_listen.as_str() {
+            "" => None,
+            text => Some(socket_addr("server.metrics_listen", text)?),
+        };
+        const MIN_FRAME: u64 = 1 << 10;
+        const MAX_FRAME: u64 = 4 << 30;
+        check("server.max_frame_bytes", (MIN_FRAME..=MAX_FRAME).contains(&s.max_frame_bytes), || {
+            format!("must lie in [{MIN_FRAME}, {MAX_FRAME}] bytes, got {}", s.max_frame_bytes)
+        })?;
+        check("server.plan_queue_depth", (1..=1024).contains(&s.plan_queue_depth), || {
+            format!("must lie in [1, 1024], got {}", s.plan_queue_depth)
+        })?;
+        check("server.pipeline_threads", s.pipeline_threads <= 1024, || {
+            format!("must be 0 (every core) to 1024, got {}", s.pipeline_threads)
+        })?;
+        check("server.fresh_frame_timeout_ms", (1..=600_000).contains(&s.fresh_frame_timeout_ms), || {
+            format!("must lie in [1, 600000] ms, got {}", s.fresh_frame_timeout_ms)
+        })?;
+        check("server.shutdown_grace_ms", s.shutdown_grace_ms <= 3_600_000, || {
+            format!("must be at most 3600000 ms, got {}", s.shutdown_grace_ms)
+        })?;
+        check("server.frame_history", (1..=1024).contains(&s.frame_history), || {
+            format!("must lie in [1, 1024] frames, got {}", s.frame_history)
+        })?;
+        const MAX_HISTORY_BYTES: u64 = 64 << 30;
+        check(
+            "server.frame_history_bytes",
+            (s.max_frame_bytes..=MAX_HISTORY_BYTES).contains(&s.frame_history_bytes),
+            || {
+                format!(
+                    "must lie in [server.max_frame_bytes = {}, {MAX_HISTORY_BYTES}] bytes, so the newest frame always fits, got {}",
+                    s.max_frame_bytes, s.frame_history_bytes
+                )
+            },
+        )?;
+        check("server.capture_time_tolerance_ms", s.capture_time_tolerance_ms <= 5_000, || {
+            format!("must lie in [0, 5000] ms, got {}", s.capture_time_tolerance_ms)
+        })?;
+        check("server.max_request_timeout_ms", (1..=600_000).contains(&s.max_request_timeout_ms), || {
+            format!("must lie in [1, 600000] ms, got {}", s.max_request_timeout_ms)
+        })?;
+        check("server.fresh_frame_timeout_ms", s.fresh_frame_timeout_ms <= s.max_request_timeout_ms, || {
             format!(
-                "must lie in [1, server.max_pending_connections = {}], got {}",
-                s.max_pending_connections, s.max_pending_per_address
+                "must not exceed server.max_request_timeout_ms ({}), got {}",
+                s.max_request_timeout_ms, s.fresh_frame_timeout_ms
             )
-        },
-    )?;
-    let metrics_listen = match s.metrics_listen.as_str() {
-        "" => None,
-        text => Some(socket_addr("server.metrics_listen", text)?),
-    };
-    const MIN_FRAME: u64 = 1 << 10;
-    const MAX_FRAME: u64 = 4 << 30;
-    check("server.max_frame_bytes", (MIN_FRAME..=MAX_FRAME).contains(&s.max_frame_bytes), || {
-        format!("must lie in [{MIN_FRAME}, {MAX_FRAME}] bytes, got {}", s.max_frame_bytes)
-    })?;
-    check("server.plan_queue_depth", (1..=1024).contains(&s.plan_queue_depth), || {
-        format!("must lie in [1, 1024], got {}", s.plan_queue_depth)
-    })?;
-    check("server.pipeline_threads", s.pipeline_threads <= 1024, || {
-        format!("must be 0 (every core) to 1024, got {}", s.pipeline_threads)
-    })?;
-    check("server.fresh_frame_timeout_ms", (1..=600_000).contains(&s.fresh_frame_timeout_ms), || {
-        format!("must lie in [1, 600000] ms, got {}", s.fresh_frame_timeout_ms)
-    })?;
-    check("server.shutdown_grace_ms", s.shutdown_grace_ms <= 3_600_000, || {
-        format!("must be at most 3600000 ms, got {}", s.shutdown_grace_ms)
-    })?;
-    check("server.frame_history", (1..=1024).contains(&s.frame_history), || {
-        format!("must lie in [1, 1024] frames, got {}", s.frame_history)
-    })?;
-    const MAX_HISTORY_BYTES: u64 = 64 << 30;
-    check(
-        "server.frame_history_bytes",
-        (s.max_frame_bytes..=MAX_HISTORY_BYTES).contains(&s.frame_history_bytes),
-        || {
-            format!(
-                "must lie in [server.max_frame_bytes = {}, {MAX_HISTORY_BYTES}] bytes, so the newest frame always fits, got {}",
-                s.max_frame_bytes, s.frame_history_bytes
-            )
-        },
-    )?;
-    check("server.capture_time_tolerance_ms", s.capture_time_tolerance_ms <= 5_000, || {
-        format!("must lie in [0, 5000] ms, got {}", s.capture_time_tolerance_ms)
-    })?;
-    check("server.max_request_timeout_ms", (1..=600_000).contains(&s.max_request_timeout_ms), || {
-        format!("must lie in [1, 600000] ms, got {}", s.max_request_timeout_ms)
-    })?;
-    check("server.fresh_frame_timeout_ms", s.fresh_frame_timeout_ms <= s.max_request_timeout_ms, || {
-        format!(
-            "must not exceed server.max_request_timeout_ms ({}), got {}",
-            s.max_request_timeout_ms, s.fresh_frame_timeout_ms
-        )
-    })?;
-    check(
-        "server.max_requests_per_connection",
-        (1..=s.plan_queue_depth).contains(&s.max_requests_per_connection),
-        || {
-            format!(
-                "must lie in [1, server.plan_queue_depth = {}], got {}",
-                s.plan_queue_depth, s.max_requests_per_connection
-            )
-        },
-    )?;
-    check("server.idle_trim_ms", s.idle_trim_ms <= 86_400_000, || {
-        format!("must lie in [0 (never), 86400000] ms, got {}", s.idle_trim_ms)
-    })?;
-    Ok(ServerConfig {
-        camera_listen: socket_addr("server.camera_listen", &s.camera_listen)?,
-        controller_listen: socket_addr("server.controller_listen", &s.controller_listen)?,
-        camera_allow: ip_list("server.camera_allow", &s.camera_allow)?,
-        controller_allow: ip_list("server.controller_allow", &s.controller_allow)?,
-        max_camera_connections: s.max_camera_connections as usize,
-        max_controller_connections: s.max_controller_connections as usize,
-        stall_timeout: Duration::from_millis(s.stall_timeout_ms),
-        hello_timeout: Duration::from_millis(s.hello_timeout_ms),
-        message_timeout: Duration::from_millis(s.message_timeout_ms),
-        min_transfer_bytes_per_s: s.min_transfer_bytes_per_s,
-        max_pending_connections: s.max_pending_connections as usize,
-        max_pending_per_address: s.max_pending_per_address as usize,
-        metrics_listen,
-        max_frame_bytes: s.max_frame_bytes,
-        plan_queue_depth: s.plan_queue_depth as usize,
-        pipeline_threads: s.pipeline_threads as usize,
-        fresh_frame_timeout: Duration::from_millis(s.fresh_frame_timeout_ms),
-        shutdown_grace: Duration::from_millis(s.shutdown_grace_ms),
-        frame_history: s.frame_history as usize,
-        frame_history_bytes: s.frame_history_bytes,
-        capture_time_tolerance: Duration::from_millis(s.capture_time_tolerance_ms),
-        max_request_timeout: Duration::from_millis(s.max_request_timeout_ms),
-        max_requests_per_connection: s.max_requests_per_connection as usize,
-        idle_trim: Duration::from_millis(s.idle_trim_ms),
-    })
+        })?;
+        check(
+            "server.max_requests_per_connection",
+            (1..=s.plan_queue_depth).contains(&s.max_requests_per_connection),
+            || {
+                format!(
+                    "must lie in [1, server.plan_queue_depth = {}], got {}",
+                    s.plan_queue_depth, s.max_requests_per_connection
+                )
+            },
+        )?;
+        check("server.idle_trim_ms", s.idle_trim_ms <= 86_400_000, || {
+            format!("must lie in [0 (never), 86400000] ms, got {}", s.idle_trim_ms)
+        })?;
+        Ok(ServerConfig {
+            camera_listen: socket_addr("server.camera_listen", &s.camera_listen)?,
+            controller_listen: socket_addr("server.controller_listen", &s.controller_listen)?,
+            camera_allow: ip_list("server.camera_allow", &s.camera_allow)?,
+            controller_allow: ip_list("server.controller_allow", &s.controller_allow)?,
+            max_camera_connections: s.max_camera_connections as usize,
+            max_controller_connections: s.max_controller_connections as usize,
+            stall_timeout: Duration::from_millis(s.stall_timeout_ms),
+            hello_timeout: Duration::from_millis(s.hello_timeout_ms),
+            message_timeout: Duration::from_millis(s.message_timeout_ms),
+            min_transfer_bytes_per_s: s.min_transfer_bytes_per_s,
+            max_pending_connections: s.max_pending_connections as usize,
+            max_pending_per_address: s.max_pending_per_address as usize,
+            metrics_listen,
+            max_frame_bytes: s.max_frame_bytes,
+            plan_queue_depth: s.plan_queue_depth as usize,
+            pipeline_threads: s.pipeline_threads as usize,
+            fresh_frame_timeout: Duration::from_millis(s.fresh_frame_timeout_ms),
+            shutdown_grace: Duration::from_millis(s.shutdown_grace_ms),
+            frame_history: s.frame_history as usize,
+            frame_history_bytes: s.frame_history_bytes,
+            capture_time_tolerance: Duration::from_millis(s.capture_time_tolerance_ms),
+            max_request_timeout: Duration::from_millis(s.max_request_timeout_ms),
+            max_requests_per_connection: s.max_requests_per_connection as usize,
+            idle_trim: Duration::from_millis(s.idle_trim_ms),
+        })
+    }
 }
 
 #[cfg(test)]
@@ -793,11 +812,36 @@ mod tests {
     #[test]
     fn shipped_config_file_is_valid_and_equals_the_defaults() {
         let text = include_str!("../../config/weldseam.toml");
-        let c = Config::parse(text, "config/weldseam.toml").unwrap();
-        assert_eq!(c.pipeline, PipelineParams::default());
-        assert_eq!(c.trajectory, TrajectoryParams::default());
-        assert_eq!(c.camera, CameraModel::default());
-        assert_eq!(c.server, ServerConfig::default());
-        assert_eq!(c.robot_limits, RobotLimits::default());
+        Config::parse(text, "config/weldseam.toml").unwrap();
+        // The whole file, section by section: [robot]'s convention and
+        // hand-eye and [paper] included, not only what a built config holds.
+        let file: ConfigFile = toml::from_str(text).unwrap();
+        assert_eq!(file, ConfigFile::default());
+    }
+
+    #[test]
+    fn a_request_and_the_config_share_the_step_and_angle_limits() {
+        use crate::geometry::pose::RobotPose;
+        use crate::joint::JointType;
+        use crate::pipeline::{PlanRequest, Planner};
+        let planner = Planner::new(Config::default());
+        let pose = RobotPose { xyz_mm: [500.0, 0.0, 500.0], angles_deg: [180.0, 0.0, 0.0] };
+        let request = |step: f64, angle: f64| PlanRequest {
+            step_mm: Some(step),
+            travel_angle_deg: Some(angle),
+            ..PlanRequest::new(JointType::IButt, None, pose)
+        };
+        let config = |step: f64, angle: f64| {
+            Config::parse(&format!("[trajectory]\nstep_mm = {step}\ntravel_angle_deg = {angle}\n"), "c.toml")
+        };
+        // At the limits both accept; just beyond, both refuse.
+        for (step, angle) in [(MIN_STEP_MM, -MAX_TORCH_ANGLE_DEG), (MAX_STEP_MM, MAX_TORCH_ANGLE_DEG)] {
+            assert!(planner.check_request(&request(step, angle)).is_ok(), "request {step} {angle}");
+            assert!(config(step, angle).is_ok(), "config {step} {angle}");
+        }
+        for (step, angle) in [(MIN_STEP_MM * 0.99, 0.0), (MAX_STEP_MM * 1.01, 0.0), (5.0, MAX_TORCH_ANGLE_DEG + 0.1)] {
+            assert!(planner.check_request(&request(step, angle)).is_err(), "request {step} {angle}");
+            assert!(config(step, angle).is_err(), "config {step} {angle}");
+        }
     }
 }

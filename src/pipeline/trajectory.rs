@@ -29,13 +29,8 @@ pub struct Waypoint {
     pub orientation: Rotation3<f64>,
 }
 
-/// Settings of the trajectory.
-#[derive(Debug, Clone, Copy)]
-pub struct TrajectoryParams {
-    pub step_mm: f64,
-    pub work_angle_deg: f64,
-    pub travel_angle_deg: f64,
-}
+/// Settings of the trajectory: the config's, with a request's overrides.
+pub use crate::config::TrajectoryParams;
 
 /// Feature values along `curve` from `s0` to `s1` at arc-length spacing of
 /// at most `step`, both ends included (the spacing is evened out so the

@@ -13,10 +13,10 @@
 //! 9. [`weld_equation`]: the weld per joint type (Eq. 32 to 38).
 //! 10. [`trajectory`]: sampling and the base frame (Eq. 42).
 //!
-//! Two methods run these stages: [`paper`] as the paper writes them and
-//! [`robust`] with the rules that hold in real cells, each one plan read
-//! top to bottom over a shared [`context`] (the sanitised frame, the
-//! clock, the counts). [`Planner::plan`] checks the request and picks the
+//! Two methods run these stages: `paper.rs` as the paper writes them and
+//! `robust.rs` with the rules that hold in real cells, each one plan read
+//! top to bottom over a shared context (`context.rs`: the sanitised frame,
+//! the clock, the counts). [`Planner::plan`] checks the request and picks the
 //! method once.
 //!
 //! The pipeline does no I/O. Its loops run on the current rayon pool, so
@@ -243,8 +243,9 @@ impl Planner {
     }
 
     /// Runs the pipeline on `cloud` (camera frame, mm).
-    /// The method is chosen here, once: [`paper`] and [`robust`] each run
-    /// the whole way through.
+    ///
+    /// The method is chosen here, once: `paper.rs` and `robust.rs` each
+    /// run the whole way through.
     pub fn plan(&self, cloud: &PointCloud, request: &PlanRequest) -> Result<Plan, PlanError> {
         validate(request, &self.config)?;
         let ctx = Context::sanitise(&self.config, cloud, request)?;

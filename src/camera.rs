@@ -7,8 +7,12 @@
 //! density formula (Eq. 4) and an exact pinhole model that the simulator and
 //! the tilt-aware criteria use.
 
-/// The camera model. Build it with [`CameraModel::new`] so the derived
-/// focal lengths are always consistent with the field of view.
+use crate::geometry::Vec3;
+
+/// The camera model, and the schema of the config's `[camera]` section.
+/// The focal lengths are derived from the resolution and the field of view
+/// (see [`CameraModel::fx`]), never stored, so they are always consistent
+/// with them.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct CameraModel {
@@ -127,9 +131,11 @@ impl CameraModel {
     /// with `z³ / |n·p|`, so `D = fx fy |n·p| / z³`; for a frontal plane
     /// (`n = z`) this is exactly Eq. 4, and a plate tilted by θ shows
     /// about `cos θ` of it, the foreshortening Eq. 4 leaves out.
-    pub fn plane_density_at(&self, p: [f64; 3], n: [f64; 3]) -> f64 {
-        let n_dot_p = (n[0] * p[0] + n[1] * p[1] + n[2] * p[2]).abs();
-        self.fx() * self.fy() * n_dot_p / (p[2] * p[2] * p[2])
+    pub fn plane_density_at(&self, p: &Vec3, n: &Vec3) -> f64 {
+        // Summed in this order on purpose: plans are compared digit for
+        // digit, and a dot product may add the terms in another.
+        let n_dot_p = (n.x * p.x + n.y * p.y + n.z * p.z).abs();
+        self.fx() * self.fy() * n_dot_p / (p.z * p.z * p.z)
     }
 
     /// The largest pixel offset, along each image axis, at which a point
@@ -187,8 +193,8 @@ impl CameraModel {
     }
 
     /// Projects a camera-frame point to pixel coordinates `(u, v)`.
-    pub fn project(&self, p: [f64; 3]) -> Option<(f64, f64)> {
-        (p[2] > 0.0).then(|| (self.fx() * p[0] / p[2] + self.cx(), self.fy() * p[1] / p[2] + self.cy()))
+    pub fn project(&self, p: &Vec3) -> Option<(f64, f64)> {
+        (p.z > 0.0).then(|| (self.fx() * p.x / p.z + self.cx(), self.fy() * p.y / p.z + self.cy()))
     }
 
     /// The ray through pixel `(u, v)`, scaled so its z component is 1.
@@ -288,11 +294,11 @@ mod tests {
     #[test]
     fn tilted_plane_density_is_foreshortened() {
         let cam = CameraModel::default();
-        let frontal = cam.plane_density_at([0.0, 0.0, 800.0], [0.0, 0.0, 1.0]);
+        let frontal = cam.plane_density_at(&Vec3::new(0.0, 0.0, 800.0), &Vec3::z());
         let fx_fy = cam.fx() * cam.fy();
         assert!((frontal - fx_fy / (800.0 * 800.0)).abs() < 1e-9);
         let t = 30f64.to_radians();
-        let tilted = cam.plane_density_at([0.0, 0.0, 800.0], [t.sin(), 0.0, t.cos()]);
+        let tilted = cam.plane_density_at(&Vec3::new(0.0, 0.0, 800.0), &Vec3::new(t.sin(), 0.0, t.cos()));
         assert!((tilted / frontal - t.cos()).abs() < 1e-12);
     }
 
@@ -300,7 +306,7 @@ mod tests {
     fn projection_inverts_the_ray() {
         let cam = CameraModel::default();
         let r = cam.ray(100.0, 900.0);
-        let (u, v) = cam.project([r[0] * 700.0, r[1] * 700.0, 700.0]).unwrap();
+        let (u, v) = cam.project(&Vec3::new(r[0] * 700.0, r[1] * 700.0, 700.0)).unwrap();
         assert!((u - 100.0).abs() < 1e-9 && (v - 900.0).abs() < 1e-9);
     }
 

@@ -22,7 +22,7 @@ fn crop(joint: JointType, distance_mm: f64, tilt_deg: f64, w: usize, h: usize) -
     spec.placement.tilt_deg = tilt_deg;
     let sim = simulate(&spec, &camera);
     let s = sim.truth.start_camera;
-    let (u, v) = camera.project([s.x, s.y, s.z]).expect("the seam start is in front of the camera");
+    let (u, v) = camera.project(&s).expect("the seam start is in front of the camera");
     let c0 = (u as usize).saturating_sub(w / 2).min(camera.width_px as usize - w);
     let r0 = (v as usize).saturating_sub(h / 2).min(camera.height_px as usize - h);
     let full = sim.cloud.points();

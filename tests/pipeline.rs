@@ -70,19 +70,37 @@ fn lap_is_planned_at_the_root_from_either_side() {
 
 #[test]
 fn the_papers_method_stays_reachable_and_plans_a_frontal_scene() {
+    // The demo I-butt scene is frontal enough for the paper's rules as
+    // written: its method must find the seam, report itself, and land
+    // within a few millimetres of the truth.
     let mut config = Config::default();
     config.pipeline.method = Method::Paper;
     let spec = demo_scene(JointType::IButt);
     let sim = simulate(&spec, &config.camera);
     let request = PlanRequest::new(JointType::IButt, None, sim.pose);
-    match Planner::new(config).plan(&sim.cloud, &request) {
-        // Where it finds a seam, it is the paper's: within a few mm.
-        Ok(plan) => {
-            let err = seam_error(&sim.truth, &plan.seams[0]).expect("waypoints");
-            assert!(err.mean_mm < 5.0, "paper method mean error {:.2} mm", err.mean_mm);
-        }
-        // Where it fails, it says which stage and why.
-        Err(e) => assert_ne!(e.stage, Stage::Request, "{e}"),
+    let plan = Planner::new(config).plan(&sim.cloud, &request).unwrap_or_else(|e| panic!("paper method: {e}"));
+    assert_eq!(plan.method, Method::Paper);
+    assert_eq!(plan.seams.len(), 1);
+    let err = seam_error(&sim.truth, &plan.seams[0]).expect("waypoints");
+    assert!(err.mean_mm < 5.0, "paper method mean error {:.2} mm", err.mean_mm);
+}
+
+#[test]
+fn each_method_times_the_same_stages_in_the_same_order() {
+    // The neighbour index and the input check are stages of their own, so
+    // a stage's time does not depend on which method ran before it.
+    let spec = demo_scene(JointType::IButt);
+    for method in [Method::Robust, Method::Paper] {
+        let mut config = Config::default();
+        config.pipeline.method = method;
+        let sim = simulate(&spec, &config.camera);
+        let request = PlanRequest::new(JointType::IButt, None, sim.pose);
+        let plan = Planner::new(config).plan(&sim.cloud, &request).unwrap_or_else(|e| panic!("{method:?}: {e}"));
+        let timed: Vec<Stage> = plan.timings.stages.iter().map(|(s, _)| *s).collect();
+        let expected: Vec<Stage> =
+            Stage::IN_ORDER.into_iter().filter(|s| method == Method::Robust || *s != Stage::Orientation).collect();
+        assert_eq!(timed, expected, "{method:?}");
+        assert_eq!(timed[..2], [Stage::Input, Stage::NeighbourIndex], "{method:?}");
     }
 }
 
@@ -120,6 +138,7 @@ fn bad_requests_are_refused_before_any_work() {
     let empty = weldseam::cloud::PointCloud::organized(2, 2, vec![[f32::NAN; 3]; 4]).expect("grid");
     let e = planner.plan(&empty, &PlanRequest::new(JointType::Lap, None, pose)).unwrap_err();
     assert!(e.reason.contains("no valid point"), "{e}");
+    assert_eq!(e.stage, Stage::Input, "{e}");
 }
 
 #[test]
@@ -133,4 +152,5 @@ fn points_at_the_optical_centre_are_ignored_not_searched_forever() {
     let pose = weldseam::geometry::pose::RobotPose { xyz_mm: [0.0; 3], angles_deg: [0.0; 3] };
     let err = Planner::new(Config::default()).plan(&cloud, &PlanRequest::new(JointType::Lap, None, pose)).unwrap_err();
     assert!(err.reason.contains("no valid point") && err.reason.contains("millimetres"), "{err}");
+    assert_eq!(err.stage, Stage::Input, "{err}");
 }

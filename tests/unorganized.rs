@@ -15,7 +15,7 @@ use weldseam::sim::{demo_scene, simulate};
 /// The valid points of a window of `cloud` around the true seam, `margin`
 /// pixels beyond the seam's ends on every side, as a bag of points.
 fn unorganized_window(cloud: &PointCloud, camera: &CameraModel, ends: [&nalgebra::Vector3<f64>; 2]) -> PointCloud {
-    let [a, b] = ends.map(|p| camera.project([p.x, p.y, p.z]).expect("the seam is in front of the camera"));
+    let [a, b] = ends.map(|p| camera.project(p).expect("the seam is in front of the camera"));
     let margin = 60.0;
     let (u0, u1) = ((a.0.min(b.0) - margin).max(0.0) as usize, (a.0.max(b.0) + margin) as usize);
     let (v0, v1) = ((a.1.min(b.1) - margin).max(0.0) as usize, (a.1.max(b.1) + margin) as usize);

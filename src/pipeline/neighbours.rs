@@ -366,7 +366,7 @@ impl<'a> FullCounts<'a> {
         let p = *p;
         if !self.cloud.is_organized() {
             let n = &self.normal;
-            let density = self.camera.plane_density_at([p[0] as f64, p[1] as f64, p[2] as f64], [n.x, n.y, n.z]);
+            let density = self.camera.plane_density_at(&Vec3::new(p[0] as f64, p[1] as f64, p[2] as f64), n);
             return std::f64::consts::PI * self.radius * self.radius * density;
         }
         self.value_of(self.key(&p), cache)

@@ -4,9 +4,9 @@
 //! and `b`: `p(s) = o + s e + h_a(s) a + h_b(s) b`, with `h_a`, `h_b`
 //! polynomials of degree n (Eq. 17). The paper picks `e` as camera x or y,
 //! whichever the points spread over more, with `a`, `b` the other two
-//! camera axes; that is [`Frame::paper`]. The robust method uses the points'
+//! camera axes; that is [`SeamAxes::paper`]. The robust method uses the points'
 //! principal direction for `e` and the plate normal for `b`
-//! ([`Frame::principal`]), which never degenerates and makes `h_b` the
+//! ([`SeamAxes::principal`]), which never degenerates and makes `h_b` the
 //! height above the plate.
 //!
 //! Eq. 25 solves the normal equations `t = (XᵀX)⁻¹ XᵀY`; the same least
@@ -18,9 +18,11 @@ use nalgebra::{DMatrix, DVector};
 use crate::geometry::Vec3;
 use crate::geometry::fit::Moments;
 
-/// Feature and observation axes of a curve fit.
+/// The axes a weld edge is fitted on: the feature axis `e` the
+/// polynomials run along and the observation axes `a` and `b` (Eq. 17),
+/// from an origin, all in the camera frame.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Frame {
+pub struct SeamAxes {
     pub origin: Vec3,
     /// Feature axis (the polynomial's variable runs along it).
     pub e: Vec3,
@@ -28,28 +30,28 @@ pub struct Frame {
     pub b: Vec3,
 }
 
-impl Frame {
+impl SeamAxes {
     /// The paper's choice: x is the feature if the points spread more in x
     /// than in y, else y; the observations are the remaining camera axes.
-    pub fn paper(points: &[Vec3]) -> Frame {
+    pub fn paper(points: &[Vec3]) -> SeamAxes {
         let range = |f: fn(&Vec3) -> f64| {
             let (lo, hi) = points.iter().map(f).fold((f64::MAX, f64::MIN), |(l, h), v| (l.min(v), h.max(v)));
             hi - lo
         };
         if range(|p| p.x) >= range(|p| p.y) {
-            Frame { origin: Vec3::zeros(), e: Vec3::x(), a: Vec3::y(), b: Vec3::z() }
+            SeamAxes { origin: Vec3::zeros(), e: Vec3::x(), a: Vec3::y(), b: Vec3::z() }
         } else {
-            Frame { origin: Vec3::zeros(), e: Vec3::y(), a: Vec3::x(), b: Vec3::z() }
+            SeamAxes { origin: Vec3::zeros(), e: Vec3::y(), a: Vec3::x(), b: Vec3::z() }
         }
     }
 
     /// Feature along the points' principal direction, `b` along `normal`.
-    pub fn principal(points: &[Vec3], normal: &Vec3) -> Option<Frame> {
+    pub fn principal(points: &[Vec3], normal: &Vec3) -> Option<SeamAxes> {
         let (centroid, dir) = points.iter().collect::<Moments>().line()?;
         let e = (dir - normal * dir.dot(normal)).try_normalize(1e-9)?;
         let b = *normal;
         let a = b.cross(&e);
-        Some(Frame { origin: centroid, e, a, b })
+        Some(SeamAxes { origin: centroid, e, a, b })
     }
 
     /// The feature coordinate `s` of `p`.
@@ -66,7 +68,7 @@ impl Frame {
 /// A fitted curve over the feature interval `[s_min, s_max]`.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SeamCurve {
-    pub frame: Frame,
+    pub axes: SeamAxes,
     /// Coefficients `t_0 .. t_n` of `h_a` and `h_b` (Eq. 20), in the
     /// feature coordinate `s` in mm.
     pub coef_a: Vec<f64>,
@@ -82,7 +84,7 @@ fn horner(coef: &[f64], s: f64) -> f64 {
 impl SeamCurve {
     /// The point at feature coordinate `s`.
     pub fn at(&self, s: f64) -> Vec3 {
-        let f = &self.frame;
+        let f = &self.axes;
         f.origin + f.e * s + f.a * horner(&self.coef_a, s) + f.b * horner(&self.coef_b, s)
     }
 
@@ -94,26 +96,26 @@ impl SeamCurve {
 
     /// Distance from `p` to the curve at the same feature coordinate.
     pub fn residual(&self, p: &Vec3) -> f64 {
-        let (s, _, _) = self.frame.coordinates(p);
+        let (s, _, _) = self.axes.coordinates(p);
         (self.at(s) - p).norm()
     }
 
     /// Shifts the curve by `offset` (Eq. 32's `d · n_V`).
     pub fn shifted(&self, offset: &Vec3) -> SeamCurve {
         let mut c = self.clone();
-        c.frame.origin += offset;
+        c.axes.origin += offset;
         c
     }
 
-    /// The mean of two curves fitted in the same frame: `(f1 + f2) / 2`
+    /// The mean of two curves fitted on the same axes: `(f1 + f2) / 2`
     /// (Eq. 32 and 36), over the feature range both cover.
     pub fn midline(&self, other: &SeamCurve) -> Option<SeamCurve> {
-        if self.frame != other.frame || self.coef_a.len() != other.coef_a.len() {
+        if self.axes != other.axes || self.coef_a.len() != other.coef_a.len() {
             return None;
         }
         let avg = |x: &[f64], y: &[f64]| x.iter().zip(y).map(|(a, b)| (a + b) / 2.0).collect();
         Some(SeamCurve {
-            frame: self.frame,
+            axes: self.axes,
             coef_a: avg(&self.coef_a, &other.coef_a),
             coef_b: avg(&self.coef_b, &other.coef_b),
             s_min: self.s_min.max(other.s_min),
@@ -153,12 +155,12 @@ fn polyfit(features: &[f64], values: &[f64], degree: usize, centre: f64, scale: 
     Some(coef)
 }
 
-/// Fits a degree-n curve to `points` in `frame` (Eq. 17 to 25).
-pub fn fit(points: &[Vec3], frame: &Frame, degree: usize) -> Option<CurveFit> {
+/// Fits a degree-n curve to `points` on `axes` (Eq. 17 to 25).
+pub fn fit(points: &[Vec3], axes: &SeamAxes, degree: usize) -> Option<CurveFit> {
     if points.len() < degree + 2 {
         return None;
     }
-    let coords: Vec<(f64, f64, f64)> = points.iter().map(|p| frame.coordinates(p)).collect();
+    let coords: Vec<(f64, f64, f64)> = points.iter().map(|p| axes.coordinates(p)).collect();
     let s: Vec<f64> = coords.iter().map(|c| c.0).collect();
     let (lo, hi) = s.iter().fold((f64::MAX, f64::MIN), |(l, h), &v| (l.min(v), h.max(v)));
     if hi - lo <= 0.0 {
@@ -168,7 +170,7 @@ pub fn fit(points: &[Vec3], frame: &Frame, degree: usize) -> Option<CurveFit> {
     let a: Vec<f64> = coords.iter().map(|c| c.1).collect();
     let b: Vec<f64> = coords.iter().map(|c| c.2).collect();
     let curve = SeamCurve {
-        frame: *frame,
+        axes: *axes,
         coef_a: polyfit(&s, &a, degree, centre, scale)?,
         coef_b: polyfit(&s, &b, degree, centre, scale)?,
         s_min: lo,
@@ -181,9 +183,9 @@ pub fn fit(points: &[Vec3], frame: &Frame, degree: usize) -> Option<CurveFit> {
 /// Fits, drops the points further than `trim_sigma` RMS from the curve
 /// (samples cut short by a dropout, outliers), and fits again, up to three
 /// rounds.
-pub fn fit_trimmed(points: &[Vec3], frame: &Frame, degree: usize, trim_sigma: f64) -> Option<CurveFit> {
+pub fn fit_trimmed(points: &[Vec3], axes: &SeamAxes, degree: usize, trim_sigma: f64) -> Option<CurveFit> {
     let mut kept: Vec<Vec3> = points.to_vec();
-    let mut result = fit(&kept, frame, degree)?;
+    let mut result = fit(&kept, axes, degree)?;
     for _ in 0..3 {
         // A floor keeps a near-perfect fit from trimming honest samples.
         let limit = (trim_sigma * result.rms_mm).max(0.05);
@@ -192,7 +194,7 @@ pub fn fit_trimmed(points: &[Vec3], frame: &Frame, degree: usize, trim_sigma: f6
         if kept.len() == before {
             break;
         }
-        result = fit(&kept, frame, degree)?;
+        result = fit(&kept, axes, degree)?;
     }
     result.points_dropped = points.len() - kept.len();
     Some(result)
@@ -203,13 +205,13 @@ mod tests {
     use super::*;
 
     #[test]
-    fn straight_line_is_recovered_in_the_papers_frame() {
+    fn straight_line_is_recovered_on_the_papers_axes() {
         // Eq. 26's first edge: y = -2.994 - 0.008626 x, z = 771.948 - 0.127735 x.
         let pts: Vec<Vec3> = (0..100)
             .map(|i| i as f64 * 2.0 - 100.0)
             .map(|x| Vec3::new(x, -2.994 - 0.008626 * x, 771.948 - 0.127735 * x))
             .collect();
-        let f = fit(&pts, &Frame::paper(&pts), 1).unwrap();
+        let f = fit(&pts, &SeamAxes::paper(&pts), 1).unwrap();
         assert!((f.curve.coef_a[0] + 2.994).abs() < 1e-9 && (f.curve.coef_a[1] + 0.008626).abs() < 1e-12);
         assert!((f.curve.coef_b[0] - 771.948).abs() < 1e-9 && (f.curve.coef_b[1] + 0.127735).abs() < 1e-12);
         assert!(f.rms_mm < 1e-9);
@@ -219,10 +221,10 @@ mod tests {
     fn midline_of_the_papers_i_butt_edges_is_equation_37() {
         let e28 = |x: f64| Vec3::new(x, -4.229 - 0.037304 * x, 595.635 - 0.213728 * x);
         let e29 = |x: f64| Vec3::new(x, -12.092 - 0.028561 * x, 596.189 - 0.214517 * x);
-        let frame = Frame { origin: Vec3::zeros(), e: Vec3::x(), a: Vec3::y(), b: Vec3::z() };
+        let axes = SeamAxes { origin: Vec3::zeros(), e: Vec3::x(), a: Vec3::y(), b: Vec3::z() };
         let xs: Vec<f64> = (0..50).map(|i| i as f64 * 4.0 - 100.0).collect();
-        let f1 = fit(&xs.iter().map(|&x| e28(x)).collect::<Vec<_>>(), &frame, 1).unwrap();
-        let f2 = fit(&xs.iter().map(|&x| e29(x)).collect::<Vec<_>>(), &frame, 1).unwrap();
+        let f1 = fit(&xs.iter().map(|&x| e28(x)).collect::<Vec<_>>(), &axes, 1).unwrap();
+        let f2 = fit(&xs.iter().map(|&x| e29(x)).collect::<Vec<_>>(), &axes, 1).unwrap();
         let mid = f1.curve.midline(&f2.curve).unwrap();
         // z matches Eq. 37's printed 595.912; the printed y line of Eq. 37
         // does not follow from Eq. 28 and 29 (Eq. 29 is garbled in print),
@@ -233,36 +235,36 @@ mod tests {
 
     #[test]
     fn higher_degree_fits_a_curve() {
-        let frame = Frame { origin: Vec3::new(0.0, 0.0, 800.0), e: Vec3::x(), a: Vec3::y(), b: Vec3::z() };
+        let axes = SeamAxes { origin: Vec3::new(0.0, 0.0, 800.0), e: Vec3::x(), a: Vec3::y(), b: Vec3::z() };
         let pts: Vec<Vec3> =
             (0..60).map(|i| i as f64).map(|x| Vec3::new(x, 0.01 * x * x - 0.3 * x + 2.0, 800.0)).collect();
-        let f = fit(&pts, &frame, 2).unwrap();
+        let f = fit(&pts, &axes, 2).unwrap();
         assert!(f.rms_mm < 1e-8, "{}", f.rms_mm);
         assert!((f.curve.coef_a[2] - 0.01).abs() < 1e-10);
     }
 
     #[test]
     fn trimming_drops_samples_cut_short() {
-        let frame = Frame { origin: Vec3::zeros(), e: Vec3::y(), a: Vec3::x(), b: Vec3::z() };
+        let axes = SeamAxes { origin: Vec3::zeros(), e: Vec3::y(), a: Vec3::x(), b: Vec3::z() };
         let mut pts: Vec<Vec3> =
             (0..200).map(|i| Vec3::new(1.0 + 0.02 * ((i * 7) % 5) as f64, i as f64, 700.0)).collect();
         for i in (0..200).step_by(25) {
             pts[i].x -= 1.5;
         }
-        let f = fit_trimmed(&pts, &frame, 1, 3.0).unwrap();
+        let f = fit_trimmed(&pts, &axes, 1, 3.0).unwrap();
         assert_eq!(f.points_dropped, 8);
         assert!((f.curve.coef_a[0] - 1.04).abs() < 0.01);
     }
 
     #[test]
-    fn principal_frame_follows_the_points() {
+    fn principal_axes_follow_the_points() {
         let n = Vec3::new(0.0, 0.2, 1.0).normalize();
         let d = Vec3::new(1.0, 1.0, -0.2).normalize();
         let d = (d - n * d.dot(&n)).normalize();
         let pts: Vec<Vec3> = (0..30).map(|i| Vec3::new(3.0, 4.0, 600.0) + d * i as f64).collect();
-        let frame = Frame::principal(&pts, &n).unwrap();
-        assert!(frame.e.dot(&d).abs() > 1.0 - 1e-9);
-        let f = fit(&pts, &frame, 1).unwrap();
+        let axes = SeamAxes::principal(&pts, &n).unwrap();
+        assert!(axes.e.dot(&d).abs() > 1.0 - 1e-9);
+        let f = fit(&pts, &axes, 1).unwrap();
         assert!(f.curve.coef_a.iter().chain(&f.curve.coef_b).all(|c| c.abs() < 1e-6));
     }
 }

@@ -127,12 +127,12 @@ pub fn waypoints(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::pipeline::refit::Frame;
+    use crate::pipeline::refit::SeamAxes;
     use nalgebra::{Translation3, UnitQuaternion};
 
     fn line() -> SeamCurve {
         SeamCurve {
-            frame: Frame { origin: Vec3::new(0.0, 0.0, 700.0), e: Vec3::y(), a: Vec3::x(), b: Vec3::z() },
+            axes: SeamAxes { origin: Vec3::new(0.0, 0.0, 700.0), e: Vec3::y(), a: Vec3::x(), b: Vec3::z() },
             coef_a: vec![2.0, 0.0],
             coef_b: vec![0.0, 0.0],
             s_min: -50.0,

@@ -54,11 +54,11 @@ pub fn lap_root(upper_edge: &SeamCurve, step_mm: f64, n: &Vec3) -> SeamCurve {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::pipeline::refit::Frame;
+    use crate::pipeline::refit::SeamAxes;
 
     fn edge(y0: f64, z0: f64) -> SeamCurve {
         SeamCurve {
-            frame: Frame { origin: Vec3::zeros(), e: Vec3::x(), a: Vec3::y(), b: Vec3::z() },
+            axes: SeamAxes { origin: Vec3::zeros(), e: Vec3::x(), a: Vec3::y(), b: Vec3::z() },
             coef_a: vec![y0, 0.0],
             coef_b: vec![z0, 0.0],
             s_min: -50.0,

@@ -188,7 +188,7 @@ fn pixel_rect(solid: &ConvexSolid, camera: &CameraModel) -> Option<PixelRect> {
         if v.z < MIN_BOUNDED_DEPTH_MM {
             return None;
         }
-        let (pu, pv) = camera.project([v.x, v.y, v.z])?;
+        let (pu, pv) = camera.project(v)?;
         rect = [rect[0].min(pu), rect[1].max(pu), rect[2].min(pv), rect[3].max(pv)];
     }
     Some([rect[0] - 1.0, rect[1] + 1.0, rect[2] - 1.0, rect[3] + 1.0])
@@ -277,7 +277,7 @@ mod tests {
         let row = cam.cy().round() as usize;
         let width = cam.width_px as usize;
         // The table at depth 600 around the block, x = ±50 mm, in pixels.
-        let edge = |x: f64| cam.project([x, 0.0, 600.0]).unwrap().0;
+        let edge = |x: f64| cam.project(&Vec3::new(x, 0.0, 600.0)).unwrap().0;
         let (left, right) = (edge(-50.0), edge(50.0));
         let invalid_left = (0..width).filter(|&c| (c as f64) < left && depths[row * width + c].is_nan()).count();
         let invalid_right = (0..width).filter(|&c| (c as f64) > right && depths[row * width + c].is_nan()).count();

@@ -176,7 +176,7 @@ mod tests {
         // clipping rows, and it is the view's height long, 220 mm at
         // 500 mm less the margins.
         let [_, _, v0, v1] = image_rect(&cam);
-        let v_of = |p: &Vec3| cam.project([p.x, p.y, p.z]).unwrap().1;
+        let v_of = |p: &Vec3| cam.project(p).unwrap().1;
         let (va, vb) = (v_of(&truth.start_camera), v_of(&truth.end_camera));
         assert!(((va - v1).abs() < 1e-6 && (vb - v0).abs() < 1e-6), "{va} {vb}");
         let expected = (v1 - v0) / cam.fy() * (500.0 - 6.0 + 6.0);

@@ -1,0 +1,370 @@
+//! What the paper's method ([`super::paper`]) and the robust method
+//! ([`super::robust`]) share while they plan one frame: the configuration
+//! and request, the frame without the points the camera cannot measure, the
+//! clock that times each stage and the point counts. Also the steps both
+//! methods take the same way: the input check, the plane clusters' areas,
+//! the plate labels, the weld per joint type and the trajectory at the end.
+
+use std::borrow::Cow;
+use std::time::Instant;
+
+use rayon::prelude::*;
+
+use crate::camera::{MeasurableVolume, Unmeasurable};
+use crate::cloud::PointCloud;
+use crate::config::{Config, Method};
+use crate::geometry::{Vec3, vec3};
+use crate::joint::JointType;
+
+use super::background::{self, PlaneCluster, Workpiece};
+use super::clustering::UNCLUSTERED;
+use super::ransac::RansacParams;
+use super::refit::{CurveFit, SeamCurve};
+use super::trajectory::{self, Waypoint};
+use super::weld_equation;
+use super::{Plan, PlanError, PlanRequest, PlanStats, Seam, Stage, StageTimings};
+
+/// The fewest plane points a cluster may have. Clusters below a few dozen
+/// points cannot reach the area limit (`pipeline.min_plane_area_mm2`) at any
+/// working distance, so dropping them early only saves work.
+pub(super) const MIN_CLUSTER_POINTS: usize = 30;
+
+/// How much deeper than the measured plates a groove may be, mm: plane
+/// offsets are fitted over thousands of points and agree to a tenth of a
+/// millimetre, so this only absorbs fit noise.
+const GROOVE_DEPTH_TOLERANCE_MM: f64 = 0.5;
+
+/// The step at which a lap root is tested against the image border, mm
+/// along the seam: a fiftieth of a millimetre is far below the waypoint
+/// step, so the clipped ends are exact to well within the plan's accuracy.
+const VIEW_CLIP_STEP_MM: f64 = 0.02;
+
+/// Measures the wall time of each stage: every lap charges the time since
+/// the previous one to the stage just finished.
+pub(super) struct Clock {
+    timings: StageTimings,
+    last: Instant,
+}
+
+impl Clock {
+    fn start() -> Self {
+        Clock { timings: StageTimings::default(), last: Instant::now() }
+    }
+
+    pub(super) fn lap(&mut self, stage: Stage) {
+        let now = Instant::now();
+        self.timings.stages.push((stage, (now - self.last).as_secs_f64() * 1e3));
+        self.last = now;
+    }
+}
+
+/// One frame being planned: the inputs and what both methods record.
+pub(super) struct Context<'a> {
+    pub config: &'a Config,
+    pub request: &'a PlanRequest,
+    /// The frame without the points the camera cannot measure.
+    pub cloud: Cow<'a, PointCloud>,
+    pub clock: Clock,
+    pub stats: PlanStats,
+}
+
+impl<'a> Context<'a> {
+    /// Starts the clock and sanitises the frame: a point outside what the
+    /// camera can measure is a corrupt frame's or noise, and one such point
+    /// far off the axis would widen every window it is part of, so it
+    /// becomes invalid before any stage runs. A frame left without a valid
+    /// point fails here, in the [`Stage::Input`] stage.
+    pub(super) fn sanitise(
+        config: &'a Config,
+        cloud: &'a PointCloud,
+        request: &'a PlanRequest,
+    ) -> Result<Self, PlanError> {
+        let mut ctx = Context {
+            config,
+            request,
+            cloud: Cow::Borrowed(cloud),
+            clock: Clock::start(),
+            stats: PlanStats::default(),
+        };
+        let camera = &config.camera;
+        let volume = camera.measurable_volume(cloud.width(), cloud.height(), cloud.is_organized());
+        let counts = count_measurable(cloud, &volume);
+        if counts.unmeasurable() > 0 {
+            tracing::warn!(
+                near = counts.near,
+                far = counts.far,
+                off_view = counts.off_view,
+                min_depth_mm = camera.min_depth_mm,
+                max_depth_mm = camera.max_depth_mm,
+                max_off_axis_deg = camera.max_off_axis_deg,
+                camera_field_of_view = volume.fov_applies(),
+                "ignoring {} invalid points the camera cannot measure",
+                counts.unmeasurable()
+            );
+            ctx.cloud = Cow::Owned(without_unmeasurable(cloud, &volume));
+        }
+        ctx.stats.valid_points = counts.valid - counts.unmeasurable();
+        if ctx.stats.valid_points == 0 && counts.near > 0 && counts.near == counts.valid {
+            return Err(PlanError::at(
+                Stage::Input,
+                format!(
+                    "the frame has no valid point: all {} points lie nearer than camera.min_depth_mm ({} mm); \
+                     is the cloud in millimetres and in the camera frame?",
+                    counts.near, camera.min_depth_mm
+                ),
+            ));
+        }
+        if ctx.stats.valid_points == 0 && counts.unmeasurable() > 0 {
+            return Err(PlanError::at(
+                Stage::Input,
+                format!(
+                    "the frame has no valid point: of its {} points {} lie nearer than camera.min_depth_mm \
+                     ({} mm), {} farther than camera.max_depth_mm ({} mm) and {} outside the view \
+                     (camera.max_off_axis_deg {}°{}); is the cloud in millimetres and in the camera frame?",
+                    counts.valid,
+                    counts.near,
+                    camera.min_depth_mm,
+                    counts.far,
+                    camera.max_depth_mm,
+                    counts.off_view,
+                    camera.max_off_axis_deg,
+                    if volume.fov_applies() { ", or the camera's field of view" } else { "" }
+                ),
+            ));
+        }
+        if ctx.stats.valid_points == 0 {
+            return Err(PlanError::at(Stage::Input, "the frame has no valid point"));
+        }
+        ctx.clock.lap(Stage::Input);
+        Ok(ctx)
+    }
+
+    /// The clusters as plane patches, those smaller than
+    /// `pipeline.min_plane_area_mm2` left out; `area_per_point` is the
+    /// surface one point stands for at a centroid with a normal.
+    pub(super) fn planes_of(
+        &self,
+        members: Vec<Vec<u32>>,
+        area_per_point: impl Fn(&Vec3, &Vec3) -> f64,
+    ) -> Vec<PlaneCluster> {
+        let min_area = self.config.pipeline.min_plane_area_mm2;
+        background::describe(&self.cloud, members, area_per_point)
+            .into_iter()
+            .filter(|c| c.area_mm2 >= min_area)
+            .collect()
+    }
+
+    /// A groove cannot be deeper than the plates: where the surface they
+    /// rest on is seen, the depth to it bounds the requested groove depth
+    /// (which moves every waypoint along the normal, Eq. 32).
+    pub(super) fn check_groove_depth(&self, workpiece: &Workpiece) -> Result<(), PlanError> {
+        let (JointType::VButt, Some(depth), Some(support)) =
+            (self.request.joint, self.request.groove_depth_mm, workpiece.depth_to_support_mm)
+        else {
+            return Ok(());
+        };
+        if depth > support + GROOVE_DEPTH_TOLERANCE_MM {
+            return Err(PlanError::at(
+                Stage::Request,
+                format!(
+                    "groove depth {depth} mm is deeper than the plates: their top lies {support:.1} mm above \
+                     the surface they rest on"
+                ),
+            ));
+        }
+        Ok(())
+    }
+
+    /// The RANSAC parameters of the configuration, the seed moved by
+    /// `seed_offset` so that runs meant to be independent are.
+    pub(super) fn ransac_params(&self, seed_offset: u64) -> RansacParams {
+        let cfg = &self.config.pipeline;
+        RansacParams {
+            distance_mm: cfg.ransac_distance_mm,
+            iterations: cfg.ransac_iterations,
+            min_line_points: cfg.ransac_min_line_points as usize,
+            min_remaining_points: cfg.ransac_min_remaining_points as usize,
+            max_lines: cfg.ransac_max_lines as usize,
+            seed: cfg.ransac_seed.wrapping_add(seed_offset),
+        }
+    }
+
+    /// The frame's points at `indices`.
+    pub(super) fn points_of(&self, indices: &[u32]) -> Vec<Vec3> {
+        indices.iter().map(|&i| vec3(&self.cloud.points()[i as usize])).collect()
+    }
+
+    /// The weld of the requested joint from its two edges: the midline
+    /// shifted by the groove depth for a V-butt joint (Eq. 32), the midline
+    /// for an I-butt joint (Eq. 36); `lap` gives the lap weld (Eq. 38),
+    /// where the methods differ.
+    pub(super) fn weld(
+        &self,
+        e1: &SeamCurve,
+        e2: &SeamCurve,
+        normal: &Vec3,
+        lap: impl FnOnce() -> SeamCurve,
+    ) -> Result<SeamCurve, PlanError> {
+        match self.request.joint {
+            JointType::VButt => weld_equation::v_butt(e1, e2, self.request.groove_depth_mm.unwrap_or(0.0), normal),
+            JointType::IButt => weld_equation::i_butt(e1, e2),
+            JointType::Lap => Some(lap()),
+        }
+        .ok_or_else(|| PlanError::at(Stage::WeldEquation, "the weld edges were fitted in different axes"))
+    }
+
+    /// Narrows `[s0, s1]` to where `curve` projects inside the image, when
+    /// the frame is the configured camera's pixel grid.
+    pub(super) fn clip_to_view(&self, curve: &SeamCurve, s0: f64, s1: f64) -> (f64, f64) {
+        let camera = &self.config.camera;
+        let grid = (camera.width_px as usize, camera.height_px as usize);
+        if !self.cloud.is_organized() || (self.cloud.width(), self.cloud.height()) != grid {
+            return (s0, s1);
+        }
+        // Half a pixel inside the outermost pixel centres.
+        let (u_max, v_max) = (grid.0 as f64 - 1.5, grid.1 as f64 - 1.5);
+        let inside = |s: f64| {
+            camera.project(&curve.at(s)).is_some_and(|(u, v)| (0.5..=u_max).contains(&u) && (0.5..=v_max).contains(&v))
+        };
+        let steps = ((s1 - s0) / VIEW_CLIP_STEP_MM).ceil().max(1.0) as usize;
+        let ss: Vec<f64> = (0..=steps).map(|k| s0 + (s1 - s0) * k as f64 / steps as f64).collect();
+        match (ss.iter().position(|&s| inside(s)), ss.iter().rposition(|&s| inside(s))) {
+            (Some(first), Some(last)) => (ss[first], ss[last]),
+            _ => (s0, s0),
+        }
+    }
+
+    /// Section 5.1: the weld from `s0` to `s1` sampled into base-frame
+    /// waypoints (Eq. 42), checked against the robot's reach, and the plan.
+    pub(super) fn finish(
+        mut self,
+        method: Method,
+        weld: SeamCurve,
+        (s0, s1): (f64, f64),
+        normal: Vec3,
+        fits: &[CurveFit; 2],
+    ) -> Result<Plan, PlanError> {
+        let hand_eye = self.request.hand_eye.unwrap_or(self.config.hand_eye);
+        let base_from_camera = self.request.pose.to_isometry(self.config.euler) * hand_eye;
+        let t = &self.config.trajectory;
+        let params = trajectory::TrajectoryParams {
+            step_mm: self.request.step_mm.unwrap_or(t.step_mm),
+            work_angle_deg: self.request.work_angle_deg.unwrap_or(t.work_angle_deg),
+            travel_angle_deg: self.request.travel_angle_deg.unwrap_or(t.travel_angle_deg),
+        };
+        let (start, end) = trajectory::travel_order(&weld, s0, s1, &base_from_camera, self.request.start_near);
+        let waypoints = trajectory::waypoints(&weld, start, end, &normal, &base_from_camera, &params);
+        self.check_reach(&waypoints)?;
+        let length_mm = waypoints.windows(2).map(|w| (w[1].position - w[0].position).norm()).sum();
+        self.clock.lap(Stage::Trajectory);
+        let seam = Seam {
+            joint: self.request.joint,
+            start_camera: weld.at(start),
+            end_camera: weld.at(end),
+            normal_camera: normal,
+            length_mm,
+            waypoints,
+            edge_fit_rms_mm: [fits[0].rms_mm, fits[1].rms_mm],
+            edge_samples: [fits[0].points_used, fits[1].points_used],
+            edge_samples_dropped: [fits[0].points_dropped, fits[1].points_dropped],
+        };
+        Ok(Plan { method, seams: vec![seam], stats: self.stats, timings: self.clock.timings })
+    }
+
+    /// Every waypoint must be a place the robot can go: finite and within
+    /// its reach. A waypoint beyond it means the pose, the hand-eye matrix
+    /// or the cloud's units are wrong, and no trajectory is safer than one
+    /// built on them.
+    fn check_reach(&self, waypoints: &[Waypoint]) -> Result<(), PlanError> {
+        let reach = self.config.robot_limits.max_reach_mm;
+        let beyond =
+            waypoints.iter().position(|w| !(w.position.iter().all(|c| c.is_finite()) && w.position.norm() <= reach));
+        match beyond {
+            None => Ok(()),
+            Some(k) => Err(PlanError::at(
+                Stage::Trajectory,
+                format!(
+                    "waypoint {k} lies {:.0} mm from the base origin, beyond robot.max_reach_mm ({reach} mm); \
+                     check the pose, robot.hand_eye and the cloud's units",
+                    waypoints[k].position.norm()
+                ),
+            )),
+        }
+    }
+}
+
+/// The cluster labels renumbered in place so that plate k is label k and
+/// every other point is [`UNCLUSTERED`], as the edge criterion reads them.
+pub(super) fn label_plates(labels: &mut [u32], workpiece: &Workpiece) {
+    let plate_labels = workpiece.plates.each_ref().map(|p| p.label);
+    labels.par_iter_mut().for_each(|l| {
+        *l = match plate_labels.iter().position(|p| p == l) {
+            Some(k) => k as u32,
+            None => UNCLUSTERED,
+        }
+    });
+}
+
+/// The valid points of a frame and, among them, those the camera cannot
+/// measure, by reason.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+struct MeasurableCounts {
+    valid: usize,
+    near: usize,
+    far: usize,
+    off_view: usize,
+}
+
+impl MeasurableCounts {
+    fn unmeasurable(&self) -> usize {
+        self.near + self.far + self.off_view
+    }
+
+    fn add(self, other: MeasurableCounts) -> MeasurableCounts {
+        MeasurableCounts {
+            valid: self.valid + other.valid,
+            near: self.near + other.near,
+            far: self.far + other.far,
+            off_view: self.off_view + other.off_view,
+        }
+    }
+}
+
+/// Counts the valid points and those outside `volume`, in one pass.
+fn count_measurable(cloud: &PointCloud, volume: &MeasurableVolume) -> MeasurableCounts {
+    // Plain loops over chunks: as a per-point filter, map and reduce the
+    // fold's state went through the stack each point and stalled on it,
+    // 15 ms a frame in some builds instead of under one.
+    cloud
+        .points()
+        .par_chunks(1 << 14)
+        .map(|chunk| {
+            let mut counts = MeasurableCounts::default();
+            for p in chunk.iter().filter(|p| p[0].is_finite()) {
+                counts.valid += 1;
+                match volume.reject(p) {
+                    None => {}
+                    Some(Unmeasurable::Near) => counts.near += 1,
+                    Some(Unmeasurable::Far) => counts.far += 1,
+                    Some(Unmeasurable::OffView) => counts.off_view += 1,
+                }
+            }
+            counts
+        })
+        .reduce(MeasurableCounts::default, MeasurableCounts::add)
+}
+
+/// A copy of `cloud` with the points outside `volume` made invalid.
+fn without_unmeasurable(cloud: &PointCloud, volume: &MeasurableVolume) -> PointCloud {
+    let points = cloud
+        .points()
+        .par_iter()
+        .map(|p| if volume.reject(p).is_none() { *p } else { crate::cloud::INVALID_POINT })
+        .collect();
+    if cloud.is_organized() {
+        PointCloud::organized(cloud.width(), cloud.height(), points)
+            .unwrap_or_else(|| PointCloud::unorganized(Vec::new()))
+    } else {
+        PointCloud::unorganized(points)
+    }
+}

@@ -1,0 +1,124 @@
+//! The paper's method, as written, from the sanitised frame to the
+//! waypoints: section 3 (preprocessing), section 4 (the weld) and
+//! section 5.1 (the trajectory), one stage after the other.
+//!
+//! - 3.2: plane points by the neighbour count of a frontal plane (Eq. 6,
+//!   13, 14);
+//! - 3.3: Euclidean clustering at `paper.cluster_tolerance_mm`, the cluster
+//!   with the largest xy bounding box is the background;
+//! - 3.4.1: edge points, at most `paper.edge_ratio` of the frontal count
+//!   (Eq. 15);
+//! - 3.4.2: iterative RANSAC over both plates' edge points at once;
+//! - 4.1: the weld edges are the lines the two centroids lie on either
+//!   side of (Eq. 16);
+//! - 4.2: each edge refitted by least squares along camera x or y
+//!   (Eq. 17 to 25) over its RANSAC inliers;
+//! - 4.3: the normal from the edges' end points (Eq. 33, 34) and the weld
+//!   per joint type (Eq. 32, 36, 38);
+//! - 5.1: base-frame waypoints (Eq. 39 to 42).
+//!
+//! It stays reachable (`pipeline.method = "paper"`) as the reference the
+//! robust method is measured against; [`super::robust`] says where and
+//! why the robust method departs from it.
+
+use crate::config::Method;
+
+use super::context::{self, Context, MIN_CLUSTER_POINTS};
+use super::edge_points::{self, EdgeCriterion, FullCount};
+use super::neighbours::NeighbourSearch;
+use super::refit::{self, CurveFit, SeamAxes};
+use super::{Plan, PlanError, Stage};
+use super::{background, clustering, plane_points, ransac, weld_edges, weld_equation};
+use crate::geometry::Vec3;
+
+/// Plans one frame by the paper's method.
+pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
+    let config = ctx.config;
+    let camera = &config.camera;
+    let cloud = &*ctx.cloud;
+    let search = NeighbourSearch::new(cloud, camera, config.pipeline.neighbour_radius_mm);
+    ctx.clock.lap(Stage::NeighbourIndex);
+
+    // 3.2: a point is a plane point when its neighbour count reaches the
+    // least a frontal plane at its depth can have (Eq. 14).
+    let mut plane = plane_points::paper_criterion(cloud, camera, &search);
+    ctx.stats.plane_points = plane.len();
+    ctx.clock.lap(Stage::PlanePoints);
+    if ctx.stats.plane_points == 0 {
+        return Err(PlanError::at(Stage::PlanePoints, "no point passed the plane point criterion"));
+    }
+
+    // 3.3: Euclidean clustering splits the plane points into planes.
+    let mut clusters = clustering::euclidean(cloud, &plane.mask, config.paper.cluster_tolerance_mm, MIN_CLUSTER_POINTS);
+    // The edge criterion needs the counts, not the mask: free it early,
+    // as the frame-sized arrays of the coming stages add up.
+    plane.mask = Vec::new();
+    ctx.clock.lap(Stage::Clustering);
+
+    // 3.3: the plane with the largest xy bounding box is the background;
+    // a point stands for the area of a frontal plane's pixel (Eq. 4).
+    let planes = ctx.planes_of(std::mem::take(&mut clusters.members), |c, _| 1.0 / camera.density(c.z));
+    ctx.stats.clusters = planes.len();
+    let workpiece = background::paper_select(cloud, planes).map_err(|e| PlanError::at(Stage::Background, e))?;
+    ctx.stats.plate_points = workpiece.plates.each_ref().map(|p| p.members.len());
+    ctx.clock.lap(Stage::Background);
+    ctx.check_groove_depth(&workpiece)?;
+
+    // 3.4.1: an edge point has at most `paper.edge_ratio` of a frontal
+    // plane's neighbour count (Eq. 15).
+    let mut labels = clusters.labels;
+    context::label_plates(&mut labels, &workpiece);
+    let criterion = EdgeCriterion { full: FullCount::Frontal, ratio: config.paper.edge_ratio };
+    let plates = std::array::from_fn(|k| edge_points::Plate {
+        labels: &labels,
+        label: k as u32,
+        members: &workpiece.plates[k].members,
+    });
+    let edges = edge_points::edge_points_of_plates(&search, &plane, plates, &criterion);
+    ctx.stats.edge_points = [edges[0].len(), edges[1].len()];
+    ctx.clock.lap(Stage::EdgePoints);
+
+    // 3.4.2: iterative RANSAC over both plates' edge points together; a
+    // line belongs to the plate most of its inliers come from.
+    let mut all: Vec<Vec3> = ctx.points_of(&edges[0]);
+    let split = all.len();
+    all.extend(ctx.points_of(&edges[1]));
+    let lines = ransac::segment_lines(&all, &ctx.ransac_params(0));
+    ctx.stats.edge_lines = lines.len();
+    ctx.clock.lap(Stage::Ransac);
+
+    // 4.1: the weld edges are the lines with the two plate centroids on
+    // either side (Eq. 16).
+    let centroids = workpiece.plates.each_ref().map(|p| p.centroid);
+    let owner =
+        |l: &ransac::EdgeLine| (l.inliers.iter().filter(|&&i| i >= split).count() * 2 > l.inliers.len()) as usize;
+    let pick = weld_edges::paper_select(&lines, centroids, owner).map_err(|e| PlanError::at(Stage::WeldEdges, e))?;
+    ctx.clock.lap(Stage::WeldEdges);
+
+    // 4.2: each edge's RANSAC inliers refitted by least squares, the
+    // feature along camera x or y (Eq. 17 to 25).
+    let inliers: [Vec<Vec3>; 2] = pick.map(|k| lines[k].inliers.iter().map(|&i| all[i]).collect());
+    let union: Vec<Vec3> = inliers.iter().flatten().copied().collect();
+    let axes = SeamAxes::paper(&union);
+    let degree = config.pipeline.fit_degree as usize;
+    let fits: [CurveFit; 2] = [0, 1]
+        .map(|k| refit::fit(&inliers[k], &axes, degree))
+        .into_iter()
+        .collect::<Option<Vec<_>>>()
+        .and_then(|v| v.try_into().ok())
+        .ok_or_else(|| PlanError::at(Stage::Refit, "a weld edge has too few points for a least-squares fit"))?;
+    ctx.clock.lap(Stage::Refit);
+
+    // 4.3: the normal from the edges' end points (Eq. 33, 34), then the
+    // weld per joint type (Eq. 32, 36; Eq. 38 for a lap), over its own
+    // feature range.
+    let (e1, e2) = (&fits[0].curve, &fits[1].curve);
+    let normal = weld_equation::paper_normal(e1, e2)
+        .ok_or_else(|| PlanError::at(Stage::WeldEquation, "the weld edges are collinear; no plate normal"))?;
+    let weld = ctx.weld(e1, e2, &normal, || weld_equation::lap_paper(e1, e2))?;
+    let span = (weld.s_min, weld.s_max);
+    ctx.clock.lap(Stage::WeldEquation);
+
+    // 5.1: the waypoints in the robot's base frame.
+    ctx.finish(Method::Paper, weld, span, normal, &fits)
+}

@@ -1,0 +1,231 @@
+//! The robust method: the paper's sections 3 to 5 in the same order, with
+//! each rule that breaks on real cells replaced by one that holds there
+//! (each stage module pairs the paper's rule with the robust one and says
+//! why).
+//!
+//! - 3.2: the workpiece's dominant normal first ([`super::orientation`]),
+//!   then plane points by the neighbour count of a plane *tilted* to it
+//!   (Eq. 6 with the foreshortening it leaves out), off-normal faces
+//!   rejected;
+//! - 3.3: clustering on the pixel grid where there is one; background
+//!   removal by depth along the normal, not by the largest bounding box;
+//! - 3.4.1: edge points against the tilted plane's count (Eq. 15's rule);
+//! - 3.4.2: RANSAC per plate, not over both at once;
+//! - 4.1: the weld edges by the centroids (Eq. 16) and the edges' facing
+//!   each other across the gap;
+//! - 4.2: the edges resampled along the plate boundary and refitted along
+//!   their principal direction with outliers trimmed (Eq. 17 to 25);
+//! - 4.3: the normal from the two plates' planes, not the edges' ends
+//!   (Eq. 33, 34), the weld per joint type (Eq. 32, 36) and the lap weld at
+//!   the root (Eq. 38), over the stretch both edges were seen;
+//! - 5.1: base-frame waypoints (Eq. 39 to 42).
+
+use crate::config::Method;
+use crate::geometry::Vec3;
+use crate::joint::JointType;
+
+use super::boundary::{self, Boundary, BoundaryParams, BoundarySample, CoarseEdge};
+use super::context::{self, Context, MIN_CLUSTER_POINTS};
+use super::edge_points::{self, EdgeCriterion, FullCount};
+use super::neighbours::NeighbourSearch;
+use super::ransac::EdgeLine;
+use super::refit::{self, SeamAxes};
+use super::{Plan, PlanError, Stage};
+use super::{background, clustering, orientation, plane_points, ransac, weld_edges, weld_equation};
+
+/// How far, in degrees, a sampled local normal may lie from the most common
+/// one and still be averaged into the dominant normal. Depth noise tilts
+/// the normals of one plate by a degree or two; a bevel or side face lies
+/// tens of degrees off, so five degrees keeps the plates and drops faces.
+const DOMINANT_NORMAL_AGREEMENT_DEG: f64 = 5.0;
+
+/// The shortest vector normalised as a direction: below it the sum of two
+/// plate normals is taken as no direction at all (they point apart).
+const MIN_DIRECTION_NORM: f64 = 1e-9;
+
+/// Plans one frame by the robust method.
+pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
+    let config = ctx.config;
+    let cfg = &config.pipeline;
+    let camera = &config.camera;
+    let cloud = &*ctx.cloud;
+    let search = NeighbourSearch::new(cloud, camera, cfg.neighbour_radius_mm);
+    ctx.clock.lap(Stage::NeighbourIndex);
+
+    // Plates, table and fixture lie parallel: one normal describes them.
+    let dominant = orientation::dominant_normal(cloud, &search, camera.fx(), DOMINANT_NORMAL_AGREEMENT_DEG)
+        .ok_or_else(|| PlanError::at(Stage::Orientation, "no surface normal could be estimated"))?;
+    ctx.clock.lap(Stage::Orientation);
+
+    // 3.2: plane points against the count of a plane tilted to the
+    // dominant normal (Eq. 6 and 14, foreshortened), facing it.
+    let mut plane = plane_points::robust_criterion(
+        &search,
+        &plane_points::RobustPlaneCriterion {
+            normal: dominant,
+            min_ratio: cfg.plane_min_neighbour_ratio,
+            max_angle_deg: cfg.plane_max_normal_angle_deg,
+        },
+    );
+    ctx.stats.plane_points = plane.len();
+    ctx.clock.lap(Stage::PlanePoints);
+    if ctx.stats.plane_points == 0 {
+        return Err(PlanError::at(Stage::PlanePoints, "no point passed the plane point criterion"));
+    }
+
+    // 3.3: clustering, on the pixel grid where the frame has one.
+    let mut clusters = if cloud.is_organized() {
+        clustering::grid(cloud, &plane.mask, cfg.cluster_tolerance_mm, MIN_CLUSTER_POINTS)
+    } else {
+        clustering::euclidean(cloud, &plane.mask, cfg.cluster_tolerance_mm, MIN_CLUSTER_POINTS)
+    };
+    // The edge criterion needs the counts, not the mask: free it early,
+    // as the frame-sized arrays of the coming stages add up.
+    plane.mask = Vec::new();
+    ctx.clock.lap(Stage::Clustering);
+
+    // 3.3: the plates are the nearest parallel planes (a lap: two layers a
+    // plate thickness apart); a point stands for a tilted pixel's area.
+    let planes = ctx.planes_of(std::mem::take(&mut clusters.members), |c, n| 1.0 / camera.plane_density_at(c, n));
+    ctx.stats.clusters = planes.len();
+    let selection = background::Selection {
+        joint: ctx.request.joint,
+        normal: dominant,
+        coplanar_tolerance_mm: cfg.coplanar_tolerance_mm,
+        lap_step_min_mm: cfg.lap_step_min_mm,
+        lap_step_max_mm: cfg.lap_step_max_mm,
+        max_tilt_deg: cfg.plane_max_normal_angle_deg,
+    };
+    let workpiece = background::robust_select(planes, &selection).map_err(|e| PlanError::at(Stage::Background, e))?;
+    ctx.stats.plate_points = workpiece.plates.each_ref().map(|p| p.members.len());
+    ctx.clock.lap(Stage::Background);
+    ctx.check_groove_depth(&workpiece)?;
+
+    // 3.4.1: edge points, at most `pipeline.edge_max_neighbour_ratio` of a
+    // tilted plane's count (Eq. 15's rule).
+    let mut labels = clusters.labels;
+    context::label_plates(&mut labels, &workpiece);
+    let criterion = EdgeCriterion { full: FullCount::Plane, ratio: cfg.edge_max_neighbour_ratio };
+    let plates = std::array::from_fn(|k| edge_points::Plate {
+        labels: &labels,
+        label: k as u32,
+        members: &workpiece.plates[k].members,
+    });
+    let edges = edge_points::edge_points_of_plates(&search, &plane, plates, &criterion);
+    ctx.stats.edge_points = [edges[0].len(), edges[1].len()];
+    ctx.clock.lap(Stage::EdgePoints);
+
+    // The plates' least-squares planes fix the normal far better than the
+    // sampled dominant one: the groove depth (Eq. 32) and the lap step are
+    // shifted along it.
+    let [normal_a, normal_b] = workpiece.plates.each_ref().map(|p| p.plane.normal);
+    let normal = (normal_a + normal_b).try_normalize(MIN_DIRECTION_NORM).unwrap_or(dominant);
+
+    // 3.4.2: RANSAC per plate. The plates' lines are independent and
+    // seeded per plate, so the two run side by side with the same result.
+    let edge_points: [Vec<Vec3>; 2] = [ctx.points_of(&edges[0]), ctx.points_of(&edges[1])];
+    let (params_a, params_b) = (ctx.ransac_params(0), ctx.ransac_params(1));
+    let (lines_a, lines_b) = rayon::join(
+        || ransac::segment_lines(&edge_points[0], &params_a),
+        || ransac::segment_lines(&edge_points[1], &params_b),
+    );
+    let lines: [Vec<EdgeLine>; 2] = [lines_a, lines_b];
+    ctx.stats.edge_lines = lines[0].len() + lines[1].len();
+    ctx.clock.lap(Stage::Ransac);
+
+    // 4.1: one line per plate, the centroids on either side (Eq. 16) and
+    // the two lines facing each other across the gap.
+    let plates = &workpiece.plates;
+    let centroids = plates.each_ref().map(|p| p.centroid);
+    let pick = weld_edges::robust_select(
+        [&lines[0], &lines[1]],
+        [&edge_points[0], &edge_points[1]],
+        centroids,
+        &normal,
+        cfg.max_edge_angle_deg,
+    )
+    .map_err(|e| PlanError::at(Stage::WeldEdges, e))?;
+    ctx.clock.lap(Stage::WeldEdges);
+
+    // 4.2: each weld edge resampled along its plate's boundary, then
+    // refitted along the samples' principal direction with outliers
+    // trimmed (Eq. 17 to 25).
+    let boundary_of = |k: usize| {
+        let line = &lines[k][pick[k]];
+        let plane = &plates[k].plane;
+        if !cloud.is_organized() {
+            // Without a pixel grid the RANSAC inliers are the best samples.
+            let samples = line
+                .inliers
+                .iter()
+                .map(|&i| {
+                    let position = plane.project(&edge_points[k][i]);
+                    BoundarySample { position, along: position.dot(&line.direction) }
+                })
+                .collect();
+            return Boundary { samples, line_spacing_mm: 0.0 };
+        }
+        let direction = (line.direction - plane.normal * line.direction.dot(&plane.normal)).normalize();
+        let mut outward = plane.normal.cross(&direction);
+        if outward.dot(&(centroids[1 - k] - line.point)) < 0.0 {
+            outward = -outward;
+        }
+        let edge = CoarseEdge { point: plane.project(&line.point), direction, outward };
+        let params = BoundaryParams { band_mm: cfg.boundary_band_mm, on_plane_mm: cfg.on_plane_tolerance_mm };
+        boundary::sample_boundary(cloud, &plates[k].members, plane, &edge, &params)
+    };
+    let (boundary_a, boundary_b) = rayon::join(|| boundary_of(0), || boundary_of(1));
+    let boundaries: [Boundary; 2] = [boundary_a, boundary_b];
+    let samples: [Vec<Vec3>; 2] = boundaries.each_ref().map(|b| b.samples.iter().map(|s| s.position).collect());
+    let union: Vec<Vec3> = samples.iter().flatten().copied().collect();
+    let axes = SeamAxes::principal(&union, &normal)
+        .ok_or_else(|| PlanError::at(Stage::Refit, "the weld edge samples do not spread along a line"))?;
+    let degree = cfg.fit_degree as usize;
+    let fit_edge = |k: usize| {
+        refit::fit_trimmed(&samples[k], &axes, degree, cfg.fit_trim_sigma).ok_or_else(|| {
+            PlanError::at(
+                Stage::Refit,
+                format!("weld edge {} has {} boundary samples, too few to fit", k + 1, samples[k].len()),
+            )
+        })
+    };
+    let fits = [fit_edge(0)?, fit_edge(1)?];
+    for (k, f) in fits.iter().enumerate() {
+        tracing::debug!(
+            edge = k + 1,
+            samples = samples[k].len(),
+            dropped = f.points_dropped,
+            rms_mm = f.rms_mm,
+            from_mm = f.curve.s_min,
+            to_mm = f.curve.s_max,
+            "weld edge refitted"
+        );
+    }
+    ctx.clock.lap(Stage::Refit);
+
+    // 4.3: the weld per joint type (Eq. 32, 36), a lap weld at the root a
+    // plate step below the upper edge (Eq. 38), planned only where both
+    // plates were seen and, for a lap, where the root is in view.
+    let (e1, e2) = (&fits[0].curve, &fits[1].curve);
+    let step = plates[1].plane.offset - plates[0].plane.offset;
+    let weld = ctx.weld(e1, e2, &normal, || weld_equation::lap_root(e1, step, &normal))?;
+    let extent = |k: usize| {
+        boundaries[k]
+            .extent(|s| axes.feature(&s.position))
+            .ok_or_else(|| PlanError::at(Stage::WeldEquation, format!("weld edge {} has no boundary sample", k + 1)))
+    };
+    let ((a0, a1), (b0, b1)) = (extent(0)?, extent(1)?);
+    let (mut s0, mut s1) = (a0.max(b0), a1.min(b1));
+    if ctx.request.joint == JointType::Lap {
+        // The root lies a plate thickness below the edges the samples
+        // saw; never plan a stretch of it the camera did not see.
+        (s0, s1) = ctx.clip_to_view(&weld, s0, s1);
+    }
+    if s1 - s0 <= 0.0 {
+        return Err(PlanError::at(Stage::WeldEquation, "the two weld edges do not overlap along the seam"));
+    }
+    ctx.clock.lap(Stage::WeldEquation);
+
+    // 5.1: the waypoints in the robot's base frame.
+    ctx.finish(Method::Robust, weld, (s0, s1), normal, &fits)
+}

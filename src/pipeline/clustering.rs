@@ -20,6 +20,9 @@ use std::collections::{BTreeMap, HashMap};
 use rayon::prelude::*;
 
 use crate::cloud::PointCloud;
+// Two points are close when within the tolerance by the kernels' one
+// predicate, the neighbour counts' own.
+use crate::kernels::within as close;
 
 /// Marks a point that belongs to no cluster.
 pub const UNCLUSTERED: u32 = u32::MAX;
@@ -142,12 +145,6 @@ fn leading<T: Copy + PartialEq>(slots: &[T], value: T) -> usize {
         n += BLOCK;
     }
     n + slots[n..].iter().take_while(|&&s| s == value).count()
-}
-
-#[inline]
-fn close(a: &[f32; 3], b: &[f32; 3], tol_sq: f32) -> bool {
-    let (dx, dy, dz) = (a[0] - b[0], a[1] - b[1], a[2] - b[2]);
-    dx * dx + dy * dy + dz * dz <= tol_sq
 }
 
 /// Clusters the points of an organized frame selected by `mask`, joining

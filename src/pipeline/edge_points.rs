@@ -12,6 +12,7 @@
 use rayon::prelude::*;
 
 use crate::cloud::Point;
+use crate::kernels::{self, Isa};
 
 use super::neighbours::NeighbourSearch;
 use super::plane_points::PlanePoints;
@@ -451,8 +452,8 @@ struct GridCount<'a> {
     width: usize,
     height: usize,
     radius_sq: f32,
-    /// Whether the CPU runs AVX2, checked once.
-    avx2: bool,
+    /// The instruction set the counts run on, taken once per pass.
+    isa: Isa,
 }
 
 impl<'a> GridCount<'a> {
@@ -466,10 +467,7 @@ impl<'a> GridCount<'a> {
             width: cloud.width(),
             height: cloud.height(),
             radius_sq: radius * radius,
-            #[cfg(target_arch = "x86_64")]
-            avx2: std::arch::is_x86_feature_detected!("avx2"),
-            #[cfg(not(target_arch = "x86_64"))]
-            avx2: false,
+            isa: kernels::isa(),
         }
     }
 
@@ -496,16 +494,15 @@ impl<'a> GridCount<'a> {
     /// window with the same predicate, stopped once it exceeds the
     /// threshold.
     fn is_edge(&self, i: usize, label: u32, threshold: f64) -> bool {
-        #[cfg(target_arch = "x86_64")]
-        if self.avx2 {
-            // SAFETY: the CPU runs AVX2, checked in `new`.
-            unsafe { avx2::is_edge(self, i, label, threshold) }
-        } else {
+        match self.isa {
+            // SAFETY: the CPU runs AVX2: `isa` gives no level it lacks.
+            #[cfg(target_arch = "x86_64")]
+            Isa::Avx2 => unsafe { avx2::is_edge(self, i, label, threshold) },
             // SAFETY: SSE2 is part of the x86_64 baseline.
-            unsafe { sse2::is_edge(self, i, label, threshold) }
+            #[cfg(target_arch = "x86_64")]
+            Isa::Sse2 => unsafe { sse2::is_edge(self, i, label, threshold) },
+            _ => self.is_edge_by(i, label, threshold, count_scalar),
         }
-        #[cfg(not(target_arch = "x86_64"))]
-        self.is_edge_by(i, label, threshold, count_scalar)
     }
 
     /// The points and labels of `cols` in row `row`.
@@ -560,6 +557,7 @@ mod sse2 {
     use std::arch::x86_64::*;
 
     use super::{Corner, GridCount, Point, RowBounds, count_scalar};
+    use crate::kernels;
 
     /// `_MM_SHUFFLE` in reading order: lanes `a`, `b` of the first
     /// operand, then `c`, `d` of the second.
@@ -731,9 +729,8 @@ mod sse2 {
         let (r2, wanted) = (_mm_set1_ps(radius_sq), _mm_set1_epi32(label as i32));
         let count_at = |at: usize| -> __m128i {
             let (x, y, z) = lanes(&points[at..]);
-            let (dx, dy, dz) = (_mm_sub_ps(x, px), _mm_sub_ps(y, py), _mm_sub_ps(z, pz));
-            let d2 = _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, dx), _mm_mul_ps(dy, dy)), _mm_mul_ps(dz, dz));
-            _mm_and_si128(_mm_castps_si128(_mm_cmple_ps(d2, r2)), _mm_cmpeq_epi32(load4(&labels[at..]), wanted))
+            let near = kernels::sse2::within([px, py, pz], [x, y, z], r2);
+            _mm_and_si128(_mm_castps_si128(near), _mm_cmpeq_epi32(load4(&labels[at..]), wanted))
         };
         // A counted lane is all ones, -1: subtracting counts it.
         let mut counts = _mm_setzero_si128();
@@ -760,6 +757,7 @@ mod avx2 {
 
     use super::sse2::pick;
     use super::{GridCount, Point, count_scalar, sse2};
+    use crate::kernels;
 
     /// [`GridCount::is_edge`], eight pixels at a time on spans that hold
     /// as many, four on shorter ones.
@@ -810,9 +808,7 @@ mod avx2 {
                 _mm256_shuffle_ps::<{ pick(2, 2, 1, 1) }>(a, b),
                 _mm256_shuffle_ps::<{ pick(0, 0, 3, 3) }>(c, c),
             );
-            let (dx, dy, dz) = (_mm256_sub_ps(x, px), _mm256_sub_ps(y, py), _mm256_sub_ps(z, pz));
-            let d2 = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(dx, dx), _mm256_mul_ps(dy, dy)), _mm256_mul_ps(dz, dz));
-            let near = _mm256_castps_si256(_mm256_cmp_ps::<_CMP_LE_OQ>(d2, r2));
+            let near = _mm256_castps_si256(kernels::avx2::within([px, py, pz], [x, y, z], r2));
             _mm256_and_si256(near, _mm256_cmpeq_epi32(l, wanted))
         };
         // A counted lane is all ones, -1: subtracting counts it.
@@ -838,14 +834,7 @@ mod avx2 {
 /// The pixels of one window row labelled `label` and within the radius of
 /// `p`, by [`super::neighbours`]' predicate term for term.
 fn count_scalar(p: &Point, points: &[Point], labels: &[u32], label: u32, radius_sq: f32) -> u32 {
-    points
-        .iter()
-        .zip(labels)
-        .map(|(q, &l)| {
-            let (dx, dy, dz) = (q[0] - p[0], q[1] - p[1], q[2] - p[2]);
-            ((l == label) & (dx * dx + dy * dy + dz * dz <= radius_sq)) as u32
-        })
-        .sum()
+    points.iter().zip(labels).map(|(q, &l)| ((l == label) & kernels::within(p, q, radius_sq)) as u32).sum()
 }
 
 #[cfg(test)]
@@ -991,7 +980,7 @@ mod tests {
                     assert_eq!(quads, scalar, "{start} + {len}");
                 }
                 #[cfg(target_arch = "x86_64")]
-                if len >= 8 && std::arch::is_x86_feature_detected!("avx2") {
+                if len >= 8 && Isa::Avx2.supported() {
                     // SAFETY: the CPU runs AVX2, checked just above.
                     let octets = unsafe { avx2::count_span(&p, &points[span.clone()], &labels[span], 1, 1.0) };
                     assert_eq!(octets, scalar, "{start} + {len}");
@@ -1096,24 +1085,17 @@ mod tests {
         let cloud = plate();
         let search = NeighbourSearch::new(&cloud, &camera, 1.0);
         let (_, labels, members) = setup(&cloud, &search);
-        let grid = GridCount::new(&search, &labels);
-        let mut edges = 0;
-        for &i in &members {
-            for threshold in [10.0, 20.0, 31.5, 40.0] {
-                let i = i as usize;
-                let scalar = grid.is_edge_by(i, 0, threshold, count_scalar);
-                #[cfg(target_arch = "x86_64")]
-                {
-                    // SAFETY: SSE2 is part of the x86_64 baseline.
-                    assert_eq!(unsafe { sse2::is_edge(&grid, i, 0, threshold) }, scalar, "{i} at {threshold}");
-                    if grid.avx2 {
-                        // SAFETY: the CPU runs AVX2, checked in `new`.
-                        assert_eq!(unsafe { avx2::is_edge(&grid, i, 0, threshold) }, scalar, "{i} at {threshold}");
-                    }
-                }
-                edges += scalar as usize;
-            }
+        let decisions = |grid: &GridCount| -> Vec<bool> {
+            let thresholds = [10.0, 20.0, 31.5, 40.0];
+            members.iter().flat_map(|&i| thresholds.map(|t| grid.is_edge(i as usize, 0, t))).collect()
+        };
+        let (ran, _skipped) = kernels::on_every_isa(|_| decisions(&GridCount::new(&search, &labels)));
+        let (first, scalar) = &ran[0];
+        assert_eq!(*first, Isa::Scalar);
+        for (isa, decided) in &ran[1..] {
+            assert!(decided == scalar, "{isa:?} decides as the scalar form");
         }
+        let edges = scalar.iter().filter(|&&edge| edge).count();
         assert!(edges > 100 && edges < 3 * members.len(), "{edges}");
     }
 }

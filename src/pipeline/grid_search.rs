@@ -12,6 +12,7 @@
 //! too counts no pixel the predicate leaves out.
 
 use crate::cloud::PointCloud;
+use crate::kernels::{self, Isa};
 
 /// Pixels counted together.
 pub const LANES: usize = 8;
@@ -155,15 +156,13 @@ impl Grid {
         let (col, row) = (i % w, i / w);
         let (c0, c1) = (col.saturating_sub(wx), col.saturating_add(wx).min(w - 1));
         let (r0, r1) = (row.saturating_sub(wy), row.saturating_add(wy).min(h - 1));
-        let [px, py, pz] = self.point(i);
+        let p = self.point(i);
         let mut count = 0;
         for r in r0..=r1 {
             let line = r * w + c0..=r * w + c1;
             let (xs, ys, zs) = (&self.xs[line.clone()], &self.ys[line.clone()], &self.zs[line]);
-            for ((x, y), z) in xs.iter().zip(ys).zip(zs) {
-                let (dx, dy, dz) = (x - px, y - py, z - pz);
-                // NaN compares false: invalid pixels never count.
-                count += (dx * dx + dy * dy + dz * dz <= radius_sq) as u32;
+            for ((&x, &y), &z) in xs.iter().zip(ys).zip(zs) {
+                count += kernels::within(&p, &[x, y, z], radius_sq) as u32;
             }
         }
         count
@@ -174,17 +173,15 @@ impl Grid {
     /// checks [`Grid::spans_fit`] first; `member` (when given) restricts the
     /// count to pixels whose label equals `label`.
     pub fn count_block(&self, col: usize, row: usize, spans: &[Span], radius_sq: f32) -> [u32; LANES] {
-        #[cfg(target_arch = "x86_64")]
-        {
-            if std::arch::is_x86_feature_detected!("avx2") {
-                // SAFETY: the CPU supports AVX2, checked just above.
-                return unsafe { self.count_block_avx2(col, row, spans, radius_sq) };
-            }
+        match kernels::isa() {
+            // SAFETY: the CPU supports AVX2: `isa` gives no level it lacks.
+            #[cfg(target_arch = "x86_64")]
+            Isa::Avx2 => unsafe { self.count_block_avx2(col, row, spans, radius_sq) },
             // SAFETY: SSE2 is part of the x86_64 baseline.
-            unsafe { self.count_block_sse2(col, row, spans, radius_sq) }
+            #[cfg(target_arch = "x86_64")]
+            Isa::Sse2 => unsafe { self.count_block_sse2(col, row, spans, radius_sq) },
+            _ => self.count_block_portable(col, row, spans, radius_sq),
         }
-        #[cfg(not(target_arch = "x86_64"))]
-        self.count_block_portable(col, row, spans, radius_sq)
     }
 
     /// A lower bound of [`Grid::count_block`] over prepared runs; `None`
@@ -205,7 +202,7 @@ impl Grid {
             return None;
         }
         #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma") {
+        if kernels::fused() {
             // Rounding the f64 product to f32 adds at most 2⁻²⁴, which the
             // 2⁻¹⁹ leaves room for.
             let inner = (radius_sq as f64 * (1.0 - 2f64.powi(-19))) as f32;
@@ -290,12 +287,7 @@ impl Grid {
                         _mm256_loadu_ps(zs.as_ptr().add(k)),
                     )
                 };
-                // p - q, the negation of the predicate's q - p: the same
-                // squares bit for bit, and the load folds into the subtraction.
-                let (dx, dy, dz) = (_mm256_sub_ps(px, qx), _mm256_sub_ps(py, qy), _mm256_sub_ps(pz, qz));
-                let d2 =
-                    _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(dx, dx), _mm256_mul_ps(dy, dy)), _mm256_mul_ps(dz, dz));
-                let near = _mm256_castps_si256(_mm256_cmp_ps::<_CMP_LE_OQ>(d2, r2));
+                let near = _mm256_castps_si256(kernels::avx2::within([px, py, pz], [qx, qy, qz], r2));
                 // A true lane is all ones, -1: subtracting counts it.
                 counts = _mm256_sub_epi32(counts, near);
             }
@@ -331,9 +323,8 @@ impl Grid {
                             _mm_loadu_ps(zs.as_ptr().add(k)),
                         )
                     };
-                    let (dx, dy, dz) = (_mm_sub_ps(qx, px), _mm_sub_ps(qy, py), _mm_sub_ps(qz, pz));
-                    let d2 = _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, dx), _mm_mul_ps(dy, dy)), _mm_mul_ps(dz, dz));
-                    counts = _mm_sub_epi32(counts, _mm_castps_si128(_mm_cmple_ps(d2, r2)));
+                    let near = kernels::sse2::within([px, py, pz], [qx, qy, qz], r2);
+                    counts = _mm_sub_epi32(counts, _mm_castps_si128(near));
                 }
             }
             // SAFETY: the destination holds exactly four u32.
@@ -342,19 +333,15 @@ impl Grid {
         out
     }
 
-    /// The reference form of the block count, and the path on other CPUs.
-    #[cfg_attr(target_arch = "x86_64", allow(dead_code))]
+    /// The scalar form of the block count: the reference of the vector
+    /// forms, and the path on other CPUs.
     fn count_block_portable(&self, col: usize, row: usize, spans: &[Span], radius_sq: f32) -> [u32; LANES] {
         let first = row * self.width + col;
         let mut counts = [0u32; LANES];
         for (start, end) in self.span_ranges(col, row, spans) {
             for at in start..end {
                 for (l, count) in counts.iter_mut().enumerate() {
-                    let dx = self.xs[at + l] - self.xs[first + l];
-                    let dy = self.ys[at + l] - self.ys[first + l];
-                    let dz = self.zs[at + l] - self.zs[first + l];
-                    // NaN compares false: invalid pixels never count.
-                    *count += (dx * dx + dy * dy + dz * dz <= radius_sq) as u32;
+                    *count += kernels::within(&self.point(first + l), &self.point(at + l), radius_sq) as u32;
                 }
             }
         }

@@ -23,6 +23,7 @@ use crate::cloud::{Point, PointCloud};
 use crate::geometry::{Vec3, ceil_i64, floor_i64};
 
 use super::grid_search::{LANES, Span};
+use crate::kernels::within;
 use point_tree::PointTree;
 
 /// The most neighbours of one point a sampled visit reads: more than any
@@ -53,16 +54,6 @@ struct KdIndex {
     tree: ImmutableKdTree<f32, 3>,
     /// Tree item → cloud point index.
     point_of_item: Vec<u32>,
-}
-
-/// True when `q` lies within the radius of `p`. One predicate for the grid
-/// and the tree paths, so both classify ties identically.
-#[inline(always)]
-fn within(p: &Point, q: &Point, radius_sq: f32) -> bool {
-    let dx = q[0] - p[0];
-    let dy = q[1] - p[1];
-    let dz = q[2] - p[2];
-    dx * dx + dy * dy + dz * dz <= radius_sq
 }
 
 impl<'a> NeighbourSearch<'a> {
@@ -548,6 +539,7 @@ pub fn lattice_count_in_ellipse(camera: &CameraModel, p: &Vec3, n: &Vec3, radius
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::kernels::{self, Isa};
 
     #[test]
     fn floor_i32_floors_and_clamps() {
@@ -560,11 +552,7 @@ mod tests {
     }
 
     #[test]
-    #[cfg(target_arch = "x86_64")]
     fn vector_keys_equal_scalar_keys() {
-        if !std::arch::is_x86_feature_detected!("avx2") {
-            return;
-        }
         let camera = CameraModel::default();
         let cloud = plane_cloud(&camera, 8, 8, 500.0, Vec3::z(), usize::MAX);
         let search = NeighbourSearch::new(&cloud, &camera, 1.0);
@@ -578,34 +566,43 @@ mod tests {
         }
         let depths: Vec<f32> = values.iter().map(|v| v.abs().max(100.0)).chain(values.iter().copied()).collect();
         let tile = (FULL_COUNT_TILE_PX as f64 / camera.fx()) as f32;
-        let mut checked = 0;
-        for (chunk, zs) in depths.chunks_exact(LANES).enumerate() {
-            let zs: [f32; LANES] = zs.try_into().unwrap();
-            let xs: [f32; LANES] =
-                std::array::from_fn(|l| (chunk as f32 - 200.0 + l as f32 * 0.3) * tile * zs[l] / 7.0);
-            let ys: [f32; LANES] = std::array::from_fn(|l| values[(chunk * 3 + l) % values.len()]);
-            // SAFETY: the CPU supports AVX2, checked above; the loads read
-            // exactly LANES floats each.
-            let vector = unsafe {
-                counts.keys_of_lanes_avx2(
-                    _mm256_loadu_ps(xs.as_ptr()),
-                    _mm256_loadu_ps(ys.as_ptr()),
-                    _mm256_loadu_ps(zs.as_ptr()),
-                )
-            };
-            for l in 0..LANES {
-                assert_eq!(
-                    vector[l],
-                    counts.key(&[xs[l], ys[l], zs[l]]),
-                    "lane {l} of ({}, {}, {})",
-                    xs[l],
-                    ys[l],
-                    zs[l]
-                );
-                checked += 1;
+        let blocks: Vec<[[f32; LANES]; 3]> = depths
+            .chunks_exact(LANES)
+            .enumerate()
+            .map(|(chunk, zs)| {
+                let zs: [f32; LANES] = zs.try_into().unwrap();
+                let xs = std::array::from_fn(|l| (chunk as f32 - 200.0 + l as f32 * 0.3) * tile * zs[l] / 7.0);
+                let ys = std::array::from_fn(|l| values[(chunk * 3 + l) % values.len()]);
+                [xs, ys, zs]
+            })
+            .collect();
+        assert!(blocks.len() * LANES > 2000);
+        // The keys of every block by the form each level computes them with.
+        let (ran, _skipped) = kernels::on_every_isa(|isa| -> Vec<[u64; LANES]> {
+            blocks
+                .iter()
+                .map(|lanes| match isa {
+                    #[cfg(target_arch = "x86_64")]
+                    Isa::Avx2 => {
+                        let [xs, ys, zs] = lanes.map(|v| {
+                            // SAFETY: `v` holds exactly LANES floats.
+                            unsafe { _mm256_loadu_ps(v.as_ptr()) }
+                        });
+                        // SAFETY: `on_every_isa` runs only the levels the CPU runs.
+                        unsafe { counts.keys_of_lanes_avx2(xs, ys, zs) }
+                    }
+                    _ => counts.keys_of_lanes(lanes),
+                })
+                .collect()
+        });
+        for (isa, keys) in &ran {
+            for (lanes, keys) in blocks.iter().zip(keys) {
+                for l in 0..LANES {
+                    let p = [lanes[0][l], lanes[1][l], lanes[2][l]];
+                    assert_eq!(keys[l], counts.key(&p), "{isa:?}: lane {l} of {p:?}");
+                }
             }
         }
-        assert!(checked > 2000);
     }
 
     /// A frontal plane at depth z sampled by the camera, with an optional

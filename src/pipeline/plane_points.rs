@@ -21,6 +21,7 @@ use rayon::prelude::*;
 use crate::camera::CameraModel;
 use crate::cloud::PointCloud;
 use crate::geometry::{Vec3, vec3};
+use crate::kernels::{self, Isa};
 
 use super::grid_search::{Grid, LANES, Span, SpanRuns};
 use super::neighbours::{FullCountCache, FullCounts, KeyMemo, NeighbourSearch, PixelEllipse};
@@ -240,8 +241,8 @@ impl Threshold for RobustThreshold<'_> {
     /// a block near the image border, is tested lane by lane.
     fn needed_block(&self, grid: &Grid, row: usize, col: usize, memos: &mut Memos, needs: &mut BlockNeeds) {
         #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx2") {
-            // SAFETY: the CPU supports AVX2, checked just above.
+        if kernels::isa() == Isa::Avx2 {
+            // SAFETY: the CPU supports AVX2: `isa` gives no level it lacks.
             return unsafe { self.needed_block_avx2(grid, row, col, memos, needs) };
         }
         self.needed_block_with::<false>(grid, row, col, memos, needs);
@@ -760,11 +761,7 @@ mod tests {
     }
 
     #[test]
-    #[cfg(target_arch = "x86_64")]
     fn vector_lane_facts_equal_the_scalar_form() {
-        if !std::arch::is_x86_feature_detected!("avx2") {
-            return;
-        }
         let camera = CameraModel::default();
         let (clean, n) = scene(530.0, 15.0, 36);
         // Noise, dropouts, a far point and an infinity, so every test of
@@ -786,19 +783,34 @@ mod tests {
         let c = RobustPlaneCriterion { normal: n, min_ratio: 0.8, max_angle_deg: 20.0 };
         let threshold = RobustThreshold::new(&search, &c);
         let (w, h) = (grid.width(), grid.height());
-        let mut blocks = 0;
-        for step in 1..=4 {
-            for row in step..h - step {
-                for col in (step..w - LANES - step).step_by(3) {
+        let blocks = || {
+            (1..=4).flat_map(move |step| {
+                (step..h - step)
+                    .flat_map(move |row| (step..w - LANES - step).step_by(3).map(move |col| (row, col, step)))
+            })
+        };
+        assert!(blocks().count() > 1000);
+        // The facts of every block by the path each level dispatches to.
+        let (ran, _skipped) = kernels::on_every_isa(|isa| {
+            let facts: Vec<_> = blocks()
+                .map(|(row, col, step)| {
                     let first = row * w + col;
-                    // SAFETY: the CPU supports AVX2, checked above.
-                    let vector = unsafe { threshold.lane_facts_avx2(&grid, first, step) };
-                    assert_eq!(vector, threshold.lane_facts(&grid, first, step), "row {row}, col {col}, step {step}");
-                    blocks += 1;
-                }
+                    match isa {
+                        #[cfg(target_arch = "x86_64")]
+                        // SAFETY: `on_every_isa` runs only the levels the CPU runs.
+                        Isa::Avx2 => unsafe { threshold.lane_facts_avx2(&grid, first, step) },
+                        _ => threshold.lane_facts(&grid, first, step),
+                    }
+                })
+                .collect();
+            facts
+        });
+        let (_, scalar) = &ran[0];
+        for (isa, facts) in &ran[1..] {
+            for (k, (row, col, step)) in blocks().enumerate() {
+                assert_eq!(facts[k], scalar[k], "{isa:?}: row {row}, col {col}, step {step}");
             }
         }
-        assert!(blocks > 1000);
     }
 
     #[test]

@@ -19,7 +19,7 @@ use super::plane_points::PlanePoints;
 
 /// How the full count `N` of Eq. 15 is obtained.
 #[derive(Debug, Clone, Copy)]
-pub enum FullCount {
+pub(crate) enum FullCount {
     /// Eq. 6 at the point's depth: the paper.
     Frontal,
     /// The full-plane lattice count the plane criterion measured the point
@@ -41,7 +41,7 @@ impl FullCount {
 
 /// The edge criterion's settings.
 #[derive(Debug, Clone, Copy)]
-pub struct EdgeCriterion {
+pub(crate) struct EdgeCriterion {
     pub full: FullCount,
     /// A point is an edge point when `N_r <= ratio · N`.
     pub ratio: f64,
@@ -49,7 +49,7 @@ pub struct EdgeCriterion {
 
 /// One plate: the cloud's plate labels, this plate's label and members.
 #[derive(Debug, Clone, Copy)]
-pub struct Plate<'a> {
+pub(crate) struct Plate<'a> {
     pub labels: &'a [u32],
     pub label: u32,
     /// Indices into the cloud, all with `labels[i] == label`.
@@ -65,7 +65,12 @@ pub struct Plate<'a> {
 /// the window's non-members are not of its plate, so when that bound
 /// exceeds `ratio · N` the point is no edge. Only the rest are counted,
 /// exactly.
-pub fn edge_points(search: &NeighbourSearch, plane: &PlanePoints, plate: Plate, criterion: &EdgeCriterion) -> Vec<u32> {
+pub(crate) fn edge_points(
+    search: &NeighbourSearch,
+    plane: &PlanePoints,
+    plate: Plate,
+    criterion: &EdgeCriterion,
+) -> Vec<u32> {
     if !search.cloud().is_organized() {
         return plate
             .members
@@ -80,7 +85,7 @@ pub fn edge_points(search: &NeighbourSearch, plane: &PlanePoints, plate: Plate, 
 
 /// [`edge_points`] of two plates, in one pass over the frame when they
 /// share their labels (each pixel then belongs to at most one of them).
-pub fn edge_points_of_plates(
+pub(crate) fn edge_points_of_plates(
     search: &NeighbourSearch,
     plane: &PlanePoints,
     plates: [Plate; 2],
@@ -94,11 +99,18 @@ pub fn edge_points_of_plates(
 }
 
 /// The straightforward form: every member counted. Kept as the reference.
-pub fn reference(search: &NeighbourSearch, plane: &PlanePoints, plate: Plate, criterion: &EdgeCriterion) -> Vec<u32> {
+#[cfg(test)]
+pub(crate) fn reference(
+    search: &NeighbourSearch,
+    plane: &PlanePoints,
+    plate: Plate,
+    criterion: &EdgeCriterion,
+) -> Vec<u32> {
     plate.members.iter().copied().filter(|&i| counted_edge(search, plane, plate, criterion, i)).collect()
 }
 
 /// Eq. 15 for member `i` of `plate`, by counting its same-plate neighbours.
+#[cfg(test)]
 fn counted_edge(
     search: &NeighbourSearch,
     plane: &PlanePoints,
@@ -561,13 +573,13 @@ mod sse2 {
 
     /// `_MM_SHUFFLE` in reading order: lanes `a`, `b` of the first
     /// operand, then `c`, `d` of the second.
-    pub const fn pick(a: i32, b: i32, c: i32, d: i32) -> i32 {
+    pub(crate) const fn pick(a: i32, b: i32, c: i32, d: i32) -> i32 {
         a | b << 2 | c << 4 | d << 6
     }
 
     /// The x, y and z lanes of four consecutive points.
     #[target_feature(enable = "sse2")]
-    pub fn lanes(quad: &[Point]) -> (__m128, __m128, __m128) {
+    pub(crate) fn lanes(quad: &[Point]) -> (__m128, __m128, __m128) {
         let coords = quad[..4].as_flattened();
         // SAFETY: `coords` holds twelve floats; unaligned loads need no
         // alignment.
@@ -614,7 +626,7 @@ mod sse2 {
     /// operand when the first is NaN, which skips NaN as the scalar form
     /// does.
     #[target_feature(enable = "sse2")]
-    pub fn members_corner<const N: usize>(labels: &[u32], points: &[Point], plate_labels: [u32; N]) -> Corner {
+    pub(crate) fn members_corner<const N: usize>(labels: &[u32], points: &[Point], plate_labels: [u32; N]) -> Corner {
         let abs = _mm_castsi128_ps(_mm_set1_epi32(i32::MAX));
         let far = _mm_set1_ps(f32::INFINITY);
         let (mut z_min, mut x_max, mut y_max, mut any) = (far, _mm_setzero_ps(), _mm_setzero_ps(), _mm_setzero_si128());
@@ -651,7 +663,7 @@ mod sse2 {
     /// threshold `ratio · N` in double lanes as the scalar form computes
     /// it.
     #[target_feature(enable = "sse2")]
-    pub fn open_members<const N: usize>(
+    pub(crate) fn open_members<const N: usize>(
         bounds: &RowBounds<N>,
         cols: std::ops::Range<usize>,
         area: u32,
@@ -700,7 +712,7 @@ mod sse2 {
     /// [`GridCount::is_edge`], four pixels at a time on spans that hold as
     /// many.
     #[target_feature(enable = "sse2")]
-    pub fn is_edge(grid: &GridCount, i: usize, label: u32, threshold: f64) -> bool {
+    pub(crate) fn is_edge(grid: &GridCount, i: usize, label: u32, threshold: f64) -> bool {
         grid.is_edge_by(
             i,
             label,
@@ -723,7 +735,7 @@ mod sse2 {
     /// the scalar order and an ordered compare (NaN is false) give the
     /// same decision for every pixel.
     #[target_feature(enable = "sse2")]
-    pub fn count_span(p: &Point, points: &[Point], labels: &[u32], label: u32, radius_sq: f32) -> u32 {
+    pub(crate) fn count_span(p: &Point, points: &[Point], labels: &[u32], label: u32, radius_sq: f32) -> u32 {
         let n = points.len().min(labels.len());
         let (px, py, pz) = (_mm_set1_ps(p[0]), _mm_set1_ps(p[1]), _mm_set1_ps(p[2]));
         let (r2, wanted) = (_mm_set1_ps(radius_sq), _mm_set1_epi32(label as i32));
@@ -762,7 +774,7 @@ mod avx2 {
     /// [`GridCount::is_edge`], eight pixels at a time on spans that hold
     /// as many, four on shorter ones.
     #[target_feature(enable = "avx2")]
-    pub fn is_edge(grid: &GridCount, i: usize, label: u32, threshold: f64) -> bool {
+    pub(crate) fn is_edge(grid: &GridCount, i: usize, label: u32, threshold: f64) -> bool {
         grid.is_edge_by(
             i,
             label,
@@ -781,7 +793,7 @@ mod avx2 {
     /// out as the SSE2 form has them, so the same in-lane shuffles regroup
     /// them.
     #[target_feature(enable = "avx2")]
-    pub fn count_span(p: &Point, points: &[Point], labels: &[u32], label: u32, radius_sq: f32) -> u32 {
+    pub(crate) fn count_span(p: &Point, points: &[Point], labels: &[u32], label: u32, radius_sq: f32) -> u32 {
         let n = points.len().min(labels.len());
         let (px, py, pz) = (_mm256_set1_ps(p[0]), _mm256_set1_ps(p[1]), _mm256_set1_ps(p[2]));
         let (r2, wanted) = (_mm256_set1_ps(radius_sq), _mm256_set1_epi32(label as i32));

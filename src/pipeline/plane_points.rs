@@ -31,7 +31,7 @@ use super::orientation::{GridPoints, StepTable, cross, cross_agrees, grid_normal
 /// and the full-plane count it was measured against (the edge criterion
 /// reuses both to skip points that cannot be edges).
 #[derive(Debug, Clone, PartialEq)]
-pub struct PlanePoints {
+pub(crate) struct PlanePoints {
     pub mask: Vec<bool>,
     pub counts: Vec<u16>,
     /// The full-plane count of the robust criterion; 0 for the paper's.
@@ -39,12 +39,8 @@ pub struct PlanePoints {
 }
 
 impl PlanePoints {
-    pub fn len(&self) -> usize {
+    pub(crate) fn len(&self) -> usize {
         self.mask.iter().filter(|&&b| b).count()
-    }
-
-    pub fn is_empty(&self) -> bool {
-        !self.mask.iter().any(|&b| b)
     }
 }
 
@@ -158,7 +154,7 @@ impl Threshold for PaperThreshold<'_> {
 
 /// Settings of the robust criterion.
 #[derive(Debug, Clone, Copy)]
-pub struct RobustPlaneCriterion {
+pub(crate) struct RobustPlaneCriterion {
     /// The workpiece's dominant unit normal, facing away from the camera.
     pub normal: Vec3,
     /// Least fraction of the full-plane neighbour count.
@@ -501,20 +497,21 @@ impl RobustThreshold<'_> {
 }
 
 /// Eq. 14, the paper's criterion.
-pub fn paper_criterion(cloud: &PointCloud, camera: &CameraModel, search: &NeighbourSearch) -> PlanePoints {
+pub(crate) fn paper_criterion(cloud: &PointCloud, camera: &CameraModel, search: &NeighbourSearch) -> PlanePoints {
     classify(search, &PaperThreshold { cloud, camera, radius: search.radius_mm() })
 }
 
 /// The robust criterion: `N_r >= ratio · N_plane(p)`, where `N_plane` is
 /// the lattice count of a complete plane with the dominant normal through
 /// `p`, and the local normal within the angle limit.
-pub fn robust_criterion(search: &NeighbourSearch, criterion: &RobustPlaneCriterion) -> PlanePoints {
+pub(crate) fn robust_criterion(search: &NeighbourSearch, criterion: &RobustPlaneCriterion) -> PlanePoints {
     classify(search, &RobustThreshold::new(search, criterion))
 }
 
 /// The straightforward form of either criterion: one radius count per
 /// point through `search` (a KD-tree in the tests). Kept as the reference.
-pub fn reference(search: &NeighbourSearch, paper: bool, criterion: &RobustPlaneCriterion) -> Vec<bool> {
+#[cfg(test)]
+pub(crate) fn reference(search: &NeighbourSearch, paper: bool, criterion: &RobustPlaneCriterion) -> Vec<bool> {
     let cloud = search.cloud();
     let paper_t = PaperThreshold { cloud, camera: search.camera(), radius: search.radius_mm() };
     let robust_t = RobustThreshold::new(search, criterion);
@@ -757,7 +754,7 @@ mod tests {
         let camera = CameraModel::default();
         let cloud = PointCloud::organized(3, 3, vec![[f32::NAN; 3]; 9]).unwrap();
         let search = NeighbourSearch::new(&cloud, &camera, 1.0);
-        assert!(paper_criterion(&cloud, &camera, &search).is_empty());
+        assert_eq!(paper_criterion(&cloud, &camera, &search).len(), 0);
     }
 
     #[test]

@@ -14,6 +14,7 @@ pub mod config;
 pub mod eval;
 pub mod geometry;
 pub mod joint;
+pub(crate) mod kernels;
 pub mod mock;
 pub mod pipeline;
 pub mod report;

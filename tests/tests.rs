@@ -4,7 +4,6 @@
 mod bench;
 mod cli;
 mod daemon;
-mod exactness;
 mod fuzz;
 mod golden;
 mod hostile_clouds;

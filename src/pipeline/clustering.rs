@@ -15,19 +15,22 @@
 //!   pixels at a time and gives exactly the clusters of [`reference()`],
 //!   which joins pixel by pixel.
 
-use std::collections::{BTreeMap, HashMap};
+use std::collections::HashMap;
 
 use rayon::prelude::*;
 
 use crate::cloud::PointCloud;
+// Two points are close when within the tolerance by the kernels' one
+// predicate, the neighbour counts' own.
+use crate::kernels::within as close;
 
 /// Marks a point that belongs to no cluster.
-pub const UNCLUSTERED: u32 = u32::MAX;
+pub(crate) const UNCLUSTERED: u32 = u32::MAX;
 
 /// Cluster labels per point and the member indices of each cluster,
 /// largest first.
 #[derive(Debug, Clone)]
-pub struct Clusters {
+pub(crate) struct Clusters {
     pub labels: Vec<u32>,
     pub members: Vec<Vec<u32>>,
 }
@@ -144,12 +147,6 @@ fn leading<T: Copy + PartialEq>(slots: &[T], value: T) -> usize {
     n + slots[n..].iter().take_while(|&&s| s == value).count()
 }
 
-#[inline]
-fn close(a: &[f32; 3], b: &[f32; 3], tol_sq: f32) -> bool {
-    let (dx, dy, dz) = (a[0] - b[0], a[1] - b[1], a[2] - b[2]);
-    dx * dx + dy * dy + dz * dz <= tol_sq
-}
-
 /// Clusters the points of an organized frame selected by `mask`, joining
 /// 8-adjacent pixels whose points are within `tolerance_mm`.
 ///
@@ -161,7 +158,7 @@ fn close(a: &[f32; 3], b: &[f32; 3], tol_sq: f32) -> bool {
 /// three per pixel. Horizontal strips are labelled in parallel, each in
 /// its own part of the parent array, then joined across the rows where
 /// strips meet.
-pub fn grid(cloud: &PointCloud, mask: &[bool], tolerance_mm: f64, min_points: usize) -> Clusters {
+pub(crate) fn grid(cloud: &PointCloud, mask: &[bool], tolerance_mm: f64, min_points: usize) -> Clusters {
     let (w, h) = (cloud.width(), cloud.height());
     let points = cloud.points();
     let tol_sq = (tolerance_mm * tolerance_mm) as f32;
@@ -199,13 +196,13 @@ pub fn grid(cloud: &PointCloud, mask: &[bool], tolerance_mm: f64, min_points: us
 /// Selected pixels of one row, columns `start..=end`, each within the
 /// tolerance of the next.
 #[derive(Debug, Clone, Copy)]
-struct Run {
+struct PixelRun {
     start: u32,
     end: u32,
 }
 
 /// The runs of one row, left to right; `links` is scratch space.
-fn row_runs(points: &[[f32; 3]], mask: &[bool], tol_sq: f32, links: &mut Vec<bool>, runs: &mut Vec<Run>) {
+fn row_runs(points: &[[f32; 3]], mask: &[bool], tol_sq: f32, links: &mut Vec<bool>, runs: &mut Vec<PixelRun>) {
     let w = mask.len();
     // Whether each pixel joins its right neighbour, for the whole row at
     // once: without an exit in the loop it vectorises.
@@ -222,14 +219,14 @@ fn row_runs(points: &[[f32; 3]], mask: &[bool], tol_sq: f32, links: &mut Vec<boo
             continue;
         }
         let end = col + leading(&links[col.min(links.len())..], true);
-        runs.push(Run { start: col as u32, end: end as u32 });
+        runs.push(PixelRun { start: col as u32, end: end as u32 });
         col = end + 1;
     }
 }
 
 /// Points the pixels of each run at its first pixel and leaves the others
 /// as roots of their own; `base` is the row's first pixel index.
-fn point_at_runs(parent_row: &mut [u32], base: u32, runs: &[Run]) {
+fn point_at_runs(parent_row: &mut [u32], base: u32, runs: &[PixelRun]) {
     let mut col = 0;
     for run in runs {
         let (s, e) = (run.start as usize, run.end as usize);
@@ -251,8 +248,8 @@ fn link_rows(
     points: &[[f32; 3]],
     base: usize,
     w: usize,
-    above: &[Run],
-    below: &[Run],
+    above: &[PixelRun],
+    below: &[PixelRun],
     tol_sq: f32,
 ) {
     let (top, bottom) = (&points[base..base + w], &points[base + w..base + 2 * w]);
@@ -275,7 +272,7 @@ fn link_rows(
 
 /// Whether some pixel of run `a` in row `top` is within the tolerance of
 /// an 8-adjacent pixel of run `b` in the row below.
-fn touch(top: &[[f32; 3]], bottom: &[[f32; 3]], a: Run, b: Run, tol_sq: f32) -> bool {
+fn touch(top: &[[f32; 3]], bottom: &[[f32; 3]], a: PixelRun, b: PixelRun, tol_sq: f32) -> bool {
     let (b0, b1) = (b.start as usize, b.end as usize);
     let cols = (a.start as usize).max(b0.saturating_sub(1))..=(a.end as usize).min(b1 + 1);
     cols.into_iter().any(|c| {
@@ -288,7 +285,8 @@ fn touch(top: &[[f32; 3]], bottom: &[[f32; 3]], a: Run, b: Run, tol_sq: f32) -> 
 /// each selected pixel to its right and three lower neighbours, one pixel
 /// pair at a time, then members grouped by their root in a map. Kept as
 /// the reference.
-pub fn reference(cloud: &PointCloud, mask: &[bool], tolerance_mm: f64, min_points: usize) -> Clusters {
+#[cfg(test)]
+pub(crate) fn reference(cloud: &PointCloud, mask: &[bool], tolerance_mm: f64, min_points: usize) -> Clusters {
     let (w, h) = (cloud.width(), cloud.height());
     let points = cloud.points();
     let tol_sq = (tolerance_mm * tolerance_mm) as f32;
@@ -310,7 +308,7 @@ pub fn reference(cloud: &PointCloud, mask: &[bool], tolerance_mm: f64, min_point
             }
         }
     }
-    let mut groups: BTreeMap<u32, Vec<u32>> = BTreeMap::new();
+    let mut groups: std::collections::BTreeMap<u32, Vec<u32>> = std::collections::BTreeMap::new();
     for i in (0..points.len()).filter(|&i| mask[i]) {
         groups.entry(sets.find(i as u32)).or_default().push(i as u32);
     }
@@ -326,7 +324,7 @@ pub fn reference(cloud: &PointCloud, mask: &[bool], tolerance_mm: f64, min_point
 }
 
 /// Exact Euclidean clustering of the points selected by `mask`.
-pub fn euclidean(cloud: &PointCloud, mask: &[bool], tolerance_mm: f64, min_points: usize) -> Clusters {
+pub(crate) fn euclidean(cloud: &PointCloud, mask: &[bool], tolerance_mm: f64, min_points: usize) -> Clusters {
     let points = cloud.points();
     let tol_sq = (tolerance_mm * tolerance_mm) as f32;
     // Voxels with a diagonal of the tolerance: any two points in one voxel

@@ -12,13 +12,14 @@
 use rayon::prelude::*;
 
 use crate::cloud::Point;
+use crate::kernels::{self, Isa};
 
 use super::neighbours::NeighbourSearch;
 use super::plane_points::PlanePoints;
 
 /// How the full count `N` of Eq. 15 is obtained.
 #[derive(Debug, Clone, Copy)]
-pub enum FullCount {
+pub(crate) enum FullCount {
     /// Eq. 6 at the point's depth: the paper.
     Frontal,
     /// The full-plane lattice count the plane criterion measured the point
@@ -40,7 +41,7 @@ impl FullCount {
 
 /// The edge criterion's settings.
 #[derive(Debug, Clone, Copy)]
-pub struct EdgeCriterion {
+pub(crate) struct EdgeCriterion {
     pub full: FullCount,
     /// A point is an edge point when `N_r <= ratio · N`.
     pub ratio: f64,
@@ -48,7 +49,7 @@ pub struct EdgeCriterion {
 
 /// One plate: the cloud's plate labels, this plate's label and members.
 #[derive(Debug, Clone, Copy)]
-pub struct Plate<'a> {
+pub(crate) struct Plate<'a> {
     pub labels: &'a [u32],
     pub label: u32,
     /// Indices into the cloud, all with `labels[i] == label`.
@@ -64,7 +65,12 @@ pub struct Plate<'a> {
 /// the window's non-members are not of its plate, so when that bound
 /// exceeds `ratio · N` the point is no edge. Only the rest are counted,
 /// exactly.
-pub fn edge_points(search: &NeighbourSearch, plane: &PlanePoints, plate: Plate, criterion: &EdgeCriterion) -> Vec<u32> {
+pub(crate) fn edge_points(
+    search: &NeighbourSearch,
+    plane: &PlanePoints,
+    plate: Plate,
+    criterion: &EdgeCriterion,
+) -> Vec<u32> {
     if !search.cloud().is_organized() {
         return plate
             .members
@@ -79,7 +85,7 @@ pub fn edge_points(search: &NeighbourSearch, plane: &PlanePoints, plate: Plate, 
 
 /// [`edge_points`] of two plates, in one pass over the frame when they
 /// share their labels (each pixel then belongs to at most one of them).
-pub fn edge_points_of_plates(
+pub(crate) fn edge_points_of_plates(
     search: &NeighbourSearch,
     plane: &PlanePoints,
     plates: [Plate; 2],
@@ -93,11 +99,18 @@ pub fn edge_points_of_plates(
 }
 
 /// The straightforward form: every member counted. Kept as the reference.
-pub fn reference(search: &NeighbourSearch, plane: &PlanePoints, plate: Plate, criterion: &EdgeCriterion) -> Vec<u32> {
+#[cfg(test)]
+pub(crate) fn reference(
+    search: &NeighbourSearch,
+    plane: &PlanePoints,
+    plate: Plate,
+    criterion: &EdgeCriterion,
+) -> Vec<u32> {
     plate.members.iter().copied().filter(|&i| counted_edge(search, plane, plate, criterion, i)).collect()
 }
 
 /// Eq. 15 for member `i` of `plate`, by counting its same-plate neighbours.
+#[cfg(test)]
 fn counted_edge(
     search: &NeighbourSearch,
     plane: &PlanePoints,
@@ -451,8 +464,8 @@ struct GridCount<'a> {
     width: usize,
     height: usize,
     radius_sq: f32,
-    /// Whether the CPU runs AVX2, checked once.
-    avx2: bool,
+    /// The instruction set the counts run on, taken once per pass.
+    isa: Isa,
 }
 
 impl<'a> GridCount<'a> {
@@ -466,10 +479,7 @@ impl<'a> GridCount<'a> {
             width: cloud.width(),
             height: cloud.height(),
             radius_sq: radius * radius,
-            #[cfg(target_arch = "x86_64")]
-            avx2: std::arch::is_x86_feature_detected!("avx2"),
-            #[cfg(not(target_arch = "x86_64"))]
-            avx2: false,
+            isa: kernels::isa(),
         }
     }
 
@@ -496,16 +506,15 @@ impl<'a> GridCount<'a> {
     /// window with the same predicate, stopped once it exceeds the
     /// threshold.
     fn is_edge(&self, i: usize, label: u32, threshold: f64) -> bool {
-        #[cfg(target_arch = "x86_64")]
-        if self.avx2 {
-            // SAFETY: the CPU runs AVX2, checked in `new`.
-            unsafe { avx2::is_edge(self, i, label, threshold) }
-        } else {
+        match self.isa {
+            // SAFETY: the CPU runs AVX2: `isa` gives no level it lacks.
+            #[cfg(target_arch = "x86_64")]
+            Isa::Avx2 => unsafe { avx2::is_edge(self, i, label, threshold) },
             // SAFETY: SSE2 is part of the x86_64 baseline.
-            unsafe { sse2::is_edge(self, i, label, threshold) }
+            #[cfg(target_arch = "x86_64")]
+            Isa::Sse2 => unsafe { sse2::is_edge(self, i, label, threshold) },
+            _ => self.is_edge_by(i, label, threshold, count_scalar),
         }
-        #[cfg(not(target_arch = "x86_64"))]
-        self.is_edge_by(i, label, threshold, count_scalar)
     }
 
     /// The points and labels of `cols` in row `row`.
@@ -560,16 +569,17 @@ mod sse2 {
     use std::arch::x86_64::*;
 
     use super::{Corner, GridCount, Point, RowBounds, count_scalar};
+    use crate::kernels;
 
     /// `_MM_SHUFFLE` in reading order: lanes `a`, `b` of the first
     /// operand, then `c`, `d` of the second.
-    pub const fn pick(a: i32, b: i32, c: i32, d: i32) -> i32 {
+    pub(crate) const fn pick(a: i32, b: i32, c: i32, d: i32) -> i32 {
         a | b << 2 | c << 4 | d << 6
     }
 
     /// The x, y and z lanes of four consecutive points.
     #[target_feature(enable = "sse2")]
-    pub fn lanes(quad: &[Point]) -> (__m128, __m128, __m128) {
+    pub(crate) fn lanes(quad: &[Point]) -> (__m128, __m128, __m128) {
         let coords = quad[..4].as_flattened();
         // SAFETY: `coords` holds twelve floats; unaligned loads need no
         // alignment.
@@ -616,7 +626,7 @@ mod sse2 {
     /// operand when the first is NaN, which skips NaN as the scalar form
     /// does.
     #[target_feature(enable = "sse2")]
-    pub fn members_corner<const N: usize>(labels: &[u32], points: &[Point], plate_labels: [u32; N]) -> Corner {
+    pub(crate) fn members_corner<const N: usize>(labels: &[u32], points: &[Point], plate_labels: [u32; N]) -> Corner {
         let abs = _mm_castsi128_ps(_mm_set1_epi32(i32::MAX));
         let far = _mm_set1_ps(f32::INFINITY);
         let (mut z_min, mut x_max, mut y_max, mut any) = (far, _mm_setzero_ps(), _mm_setzero_ps(), _mm_setzero_si128());
@@ -653,7 +663,7 @@ mod sse2 {
     /// threshold `ratio · N` in double lanes as the scalar form computes
     /// it.
     #[target_feature(enable = "sse2")]
-    pub fn open_members<const N: usize>(
+    pub(crate) fn open_members<const N: usize>(
         bounds: &RowBounds<N>,
         cols: std::ops::Range<usize>,
         area: u32,
@@ -702,7 +712,7 @@ mod sse2 {
     /// [`GridCount::is_edge`], four pixels at a time on spans that hold as
     /// many.
     #[target_feature(enable = "sse2")]
-    pub fn is_edge(grid: &GridCount, i: usize, label: u32, threshold: f64) -> bool {
+    pub(crate) fn is_edge(grid: &GridCount, i: usize, label: u32, threshold: f64) -> bool {
         grid.is_edge_by(
             i,
             label,
@@ -725,15 +735,14 @@ mod sse2 {
     /// the scalar order and an ordered compare (NaN is false) give the
     /// same decision for every pixel.
     #[target_feature(enable = "sse2")]
-    pub fn count_span(p: &Point, points: &[Point], labels: &[u32], label: u32, radius_sq: f32) -> u32 {
+    pub(crate) fn count_span(p: &Point, points: &[Point], labels: &[u32], label: u32, radius_sq: f32) -> u32 {
         let n = points.len().min(labels.len());
         let (px, py, pz) = (_mm_set1_ps(p[0]), _mm_set1_ps(p[1]), _mm_set1_ps(p[2]));
         let (r2, wanted) = (_mm_set1_ps(radius_sq), _mm_set1_epi32(label as i32));
         let count_at = |at: usize| -> __m128i {
             let (x, y, z) = lanes(&points[at..]);
-            let (dx, dy, dz) = (_mm_sub_ps(x, px), _mm_sub_ps(y, py), _mm_sub_ps(z, pz));
-            let d2 = _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, dx), _mm_mul_ps(dy, dy)), _mm_mul_ps(dz, dz));
-            _mm_and_si128(_mm_castps_si128(_mm_cmple_ps(d2, r2)), _mm_cmpeq_epi32(load4(&labels[at..]), wanted))
+            let near = kernels::sse2::within([px, py, pz], [x, y, z], r2);
+            _mm_and_si128(_mm_castps_si128(near), _mm_cmpeq_epi32(load4(&labels[at..]), wanted))
         };
         // A counted lane is all ones, -1: subtracting counts it.
         let mut counts = _mm_setzero_si128();
@@ -760,11 +769,12 @@ mod avx2 {
 
     use super::sse2::pick;
     use super::{GridCount, Point, count_scalar, sse2};
+    use crate::kernels;
 
     /// [`GridCount::is_edge`], eight pixels at a time on spans that hold
     /// as many, four on shorter ones.
     #[target_feature(enable = "avx2")]
-    pub fn is_edge(grid: &GridCount, i: usize, label: u32, threshold: f64) -> bool {
+    pub(crate) fn is_edge(grid: &GridCount, i: usize, label: u32, threshold: f64) -> bool {
         grid.is_edge_by(
             i,
             label,
@@ -783,7 +793,7 @@ mod avx2 {
     /// out as the SSE2 form has them, so the same in-lane shuffles regroup
     /// them.
     #[target_feature(enable = "avx2")]
-    pub fn count_span(p: &Point, points: &[Point], labels: &[u32], label: u32, radius_sq: f32) -> u32 {
+    pub(crate) fn count_span(p: &Point, points: &[Point], labels: &[u32], label: u32, radius_sq: f32) -> u32 {
         let n = points.len().min(labels.len());
         let (px, py, pz) = (_mm256_set1_ps(p[0]), _mm256_set1_ps(p[1]), _mm256_set1_ps(p[2]));
         let (r2, wanted) = (_mm256_set1_ps(radius_sq), _mm256_set1_epi32(label as i32));
@@ -810,9 +820,7 @@ mod avx2 {
                 _mm256_shuffle_ps::<{ pick(2, 2, 1, 1) }>(a, b),
                 _mm256_shuffle_ps::<{ pick(0, 0, 3, 3) }>(c, c),
             );
-            let (dx, dy, dz) = (_mm256_sub_ps(x, px), _mm256_sub_ps(y, py), _mm256_sub_ps(z, pz));
-            let d2 = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(dx, dx), _mm256_mul_ps(dy, dy)), _mm256_mul_ps(dz, dz));
-            let near = _mm256_castps_si256(_mm256_cmp_ps::<_CMP_LE_OQ>(d2, r2));
+            let near = _mm256_castps_si256(kernels::avx2::within([px, py, pz], [x, y, z], r2));
             _mm256_and_si256(near, _mm256_cmpeq_epi32(l, wanted))
         };
         // A counted lane is all ones, -1: subtracting counts it.
@@ -838,14 +846,7 @@ mod avx2 {
 /// The pixels of one window row labelled `label` and within the radius of
 /// `p`, by [`super::neighbours`]' predicate term for term.
 fn count_scalar(p: &Point, points: &[Point], labels: &[u32], label: u32, radius_sq: f32) -> u32 {
-    points
-        .iter()
-        .zip(labels)
-        .map(|(q, &l)| {
-            let (dx, dy, dz) = (q[0] - p[0], q[1] - p[1], q[2] - p[2]);
-            ((l == label) & (dx * dx + dy * dy + dz * dz <= radius_sq)) as u32
-        })
-        .sum()
+    points.iter().zip(labels).map(|(q, &l)| ((l == label) & kernels::within(p, q, radius_sq)) as u32).sum()
 }
 
 #[cfg(test)]
@@ -991,7 +992,7 @@ mod tests {
                     assert_eq!(quads, scalar, "{start} + {len}");
                 }
                 #[cfg(target_arch = "x86_64")]
-                if len >= 8 && std::arch::is_x86_feature_detected!("avx2") {
+                if len >= 8 && Isa::Avx2.supported() {
                     // SAFETY: the CPU runs AVX2, checked just above.
                     let octets = unsafe { avx2::count_span(&p, &points[span.clone()], &labels[span], 1, 1.0) };
                     assert_eq!(octets, scalar, "{start} + {len}");
@@ -1096,24 +1097,17 @@ mod tests {
         let cloud = plate();
         let search = NeighbourSearch::new(&cloud, &camera, 1.0);
         let (_, labels, members) = setup(&cloud, &search);
-        let grid = GridCount::new(&search, &labels);
-        let mut edges = 0;
-        for &i in &members {
-            for threshold in [10.0, 20.0, 31.5, 40.0] {
-                let i = i as usize;
-                let scalar = grid.is_edge_by(i, 0, threshold, count_scalar);
-                #[cfg(target_arch = "x86_64")]
-                {
-                    // SAFETY: SSE2 is part of the x86_64 baseline.
-                    assert_eq!(unsafe { sse2::is_edge(&grid, i, 0, threshold) }, scalar, "{i} at {threshold}");
-                    if grid.avx2 {
-                        // SAFETY: the CPU runs AVX2, checked in `new`.
-                        assert_eq!(unsafe { avx2::is_edge(&grid, i, 0, threshold) }, scalar, "{i} at {threshold}");
-                    }
-                }
-                edges += scalar as usize;
-            }
+        let decisions = |grid: &GridCount| -> Vec<bool> {
+            let thresholds = [10.0, 20.0, 31.5, 40.0];
+            members.iter().flat_map(|&i| thresholds.map(|t| grid.is_edge(i as usize, 0, t))).collect()
+        };
+        let (ran, _skipped) = kernels::on_every_isa(|_| decisions(&GridCount::new(&search, &labels)));
+        let (first, scalar) = &ran[0];
+        assert_eq!(*first, Isa::Scalar);
+        for (isa, decided) in &ran[1..] {
+            assert!(decided == scalar, "{isa:?} decides as the scalar form");
         }
+        let edges = scalar.iter().filter(|&&edge| edge).count();
         assert!(edges > 100 && edges < 3 * members.len(), "{edges}");
     }
 }

@@ -12,13 +12,14 @@
 //! too counts no pixel the predicate leaves out.
 
 use crate::cloud::PointCloud;
+use crate::kernels::{self, Isa};
 
 /// Pixels counted together.
-pub const LANES: usize = 8;
+pub(crate) const LANES: usize = 8;
 
 /// One row of window offsets: `dv` and the inclusive `du` range.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct Span {
+pub(crate) struct Span {
     pub dv: isize,
     pub du_lo: isize,
     pub du_hi: isize,
@@ -26,7 +27,7 @@ pub struct Span {
 
 /// The bounding box of a set of spans' offsets.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct SpanExtent {
+pub(crate) struct SpanExtent {
     pub dv_min: isize,
     pub dv_max: isize,
     pub du_min: isize,
@@ -35,7 +36,7 @@ pub struct SpanExtent {
 
 impl SpanExtent {
     /// `None` for no spans.
-    pub fn of(spans: &[Span]) -> Option<SpanExtent> {
+    pub(crate) fn of(spans: &[Span]) -> Option<SpanExtent> {
         let first = spans.first()?;
         let start = SpanExtent { dv_min: first.dv, dv_max: first.dv, du_min: first.du_lo, du_max: first.du_hi };
         Some(spans.iter().fold(start, |e, s| SpanExtent {
@@ -52,7 +53,7 @@ impl SpanExtent {
 /// and its length, so a block checks the spans' extent once instead of
 /// every span's slices.
 #[derive(Debug, Default)]
-pub struct SpanRuns {
+pub(crate) struct SpanRuns {
     spans: Vec<Span>,
     runs: Vec<(isize, usize)>,
     extent: Option<SpanExtent>,
@@ -62,7 +63,7 @@ pub struct SpanRuns {
 impl SpanRuns {
     /// Makes the runs of the spans `fill` writes (into an emptied buffer)
     /// on a grid `width` pixels wide.
-    pub fn prepare(&mut self, width: usize, fill: impl FnOnce(&mut Vec<Span>)) {
+    pub(crate) fn prepare(&mut self, width: usize, fill: impl FnOnce(&mut Vec<Span>)) {
         self.spans.clear();
         fill(&mut self.spans);
         let row = width as isize;
@@ -75,7 +76,7 @@ impl SpanRuns {
 }
 
 /// An organized cloud's coordinates as three planes.
-pub struct Grid {
+pub(crate) struct Grid {
     width: usize,
     height: usize,
     xs: Vec<f32>,
@@ -85,7 +86,7 @@ pub struct Grid {
 
 impl Grid {
     /// Splits an organized cloud into coordinate planes.
-    pub fn new(cloud: &PointCloud) -> Grid {
+    pub(crate) fn new(cloud: &PointCloud) -> Grid {
         use rayon::prelude::*;
         let points = cloud.points();
         let plane = |axis: usize| -> Vec<f32> { points.par_iter().map(|p| p[axis]).collect() };
@@ -95,7 +96,7 @@ impl Grid {
     /// The coordinates of the `LANES` pixels starting at index `at`, as
     /// three lane arrays.
     #[inline(always)]
-    pub fn lanes(&self, at: usize) -> [[f32; LANES]; 3] {
+    pub(crate) fn lanes(&self, at: usize) -> [[f32; LANES]; 3] {
         let take = |v: &[f32]| -> [f32; LANES] {
             let mut out = [0.0; LANES];
             out.copy_from_slice(&v[at..at + LANES]);
@@ -110,7 +111,7 @@ impl Grid {
     /// The CPU must support AVX.
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx")]
-    pub fn lanes_avx(&self, at: usize) -> [std::arch::x86_64::__m256; 3] {
+    pub(crate) fn lanes_avx(&self, at: usize) -> [std::arch::x86_64::__m256; 3] {
         let planes = [&self.xs[at..at + LANES], &self.ys[at..at + LANES], &self.zs[at..at + LANES]];
         // SAFETY: each slice holds exactly LANES floats; loadu needs no alignment.
         planes.map(|v| unsafe { std::arch::x86_64::_mm256_loadu_ps(v.as_ptr()) })
@@ -118,27 +119,27 @@ impl Grid {
 
     /// Point `i`, row-major, from the planes.
     #[inline(always)]
-    pub fn point(&self, i: usize) -> [f32; 3] {
+    pub(crate) fn point(&self, i: usize) -> [f32; 3] {
         [self.xs[i], self.ys[i], self.zs[i]]
     }
 
-    pub fn width(&self) -> usize {
+    pub(crate) fn width(&self) -> usize {
         self.width
     }
 
-    pub fn height(&self) -> usize {
+    pub(crate) fn height(&self) -> usize {
         self.height
     }
 
     /// True when every offset of `spans` stays inside the image for all
     /// lanes of the block whose first pixel is `(col, row)`.
-    pub fn spans_fit(&self, col: usize, row: usize, spans: &[Span]) -> bool {
+    pub(crate) fn spans_fit(&self, col: usize, row: usize, spans: &[Span]) -> bool {
         SpanExtent::of(spans).is_some_and(|e| self.extent_fits(col, row, &e))
     }
 
     /// [`Grid::spans_fit`] for spans whose extent is known.
     #[inline]
-    pub fn extent_fits(&self, col: usize, row: usize, e: &SpanExtent) -> bool {
+    pub(crate) fn extent_fits(&self, col: usize, row: usize, e: &SpanExtent) -> bool {
         let (col, row) = (col as isize, row as isize);
         row + e.dv_min >= 0
             && row + e.dv_max < self.height as isize
@@ -150,20 +151,18 @@ impl Grid {
     /// over its window of half-size `(wx, wy)`, clipped to the image, by
     /// the KD-tree path's predicate. For lanes whose window leaves the
     /// image sideways, which the block counts cannot take.
-    pub fn count_window(&self, i: usize, (wx, wy): (usize, usize), radius_sq: f32) -> u32 {
+    pub(crate) fn count_window(&self, i: usize, (wx, wy): (usize, usize), radius_sq: f32) -> u32 {
         let (w, h) = (self.width, self.height);
         let (col, row) = (i % w, i / w);
         let (c0, c1) = (col.saturating_sub(wx), col.saturating_add(wx).min(w - 1));
         let (r0, r1) = (row.saturating_sub(wy), row.saturating_add(wy).min(h - 1));
-        let [px, py, pz] = self.point(i);
+        let p = self.point(i);
         let mut count = 0;
         for r in r0..=r1 {
             let line = r * w + c0..=r * w + c1;
             let (xs, ys, zs) = (&self.xs[line.clone()], &self.ys[line.clone()], &self.zs[line]);
-            for ((x, y), z) in xs.iter().zip(ys).zip(zs) {
-                let (dx, dy, dz) = (x - px, y - py, z - pz);
-                // NaN compares false: invalid pixels never count.
-                count += (dx * dx + dy * dy + dz * dz <= radius_sq) as u32;
+            for ((&x, &y), &z) in xs.iter().zip(ys).zip(zs) {
+                count += kernels::within(&p, &[x, y, z], radius_sq) as u32;
             }
         }
         count
@@ -173,18 +172,16 @@ impl Grid {
     /// pixels at the offsets `spans` within `radius_sq` of each. The caller
     /// checks [`Grid::spans_fit`] first; `member` (when given) restricts the
     /// count to pixels whose label equals `label`.
-    pub fn count_block(&self, col: usize, row: usize, spans: &[Span], radius_sq: f32) -> [u32; LANES] {
-        #[cfg(target_arch = "x86_64")]
-        {
-            if std::arch::is_x86_feature_detected!("avx2") {
-                // SAFETY: the CPU supports AVX2, checked just above.
-                return unsafe { self.count_block_avx2(col, row, spans, radius_sq) };
-            }
+    pub(crate) fn count_block(&self, col: usize, row: usize, spans: &[Span], radius_sq: f32) -> [u32; LANES] {
+        match kernels::isa() {
+            // SAFETY: the CPU supports AVX2: `isa` gives no level it lacks.
+            #[cfg(target_arch = "x86_64")]
+            Isa::Avx2 => unsafe { self.count_block_avx2(col, row, spans, radius_sq) },
             // SAFETY: SSE2 is part of the x86_64 baseline.
-            unsafe { self.count_block_sse2(col, row, spans, radius_sq) }
+            #[cfg(target_arch = "x86_64")]
+            Isa::Sse2 => unsafe { self.count_block_sse2(col, row, spans, radius_sq) },
+            _ => self.count_block_portable(col, row, spans, radius_sq),
         }
-        #[cfg(not(target_arch = "x86_64"))]
-        self.count_block_portable(col, row, spans, radius_sq)
     }
 
     /// A lower bound of [`Grid::count_block`] over prepared runs; `None`
@@ -199,13 +196,13 @@ impl Grid {
     /// differences, so a fused value under `r² (1 - 2⁻¹⁹)` puts the exact
     /// one under `r²`). Only points within a millionth of the radius of
     /// the rim can be left out, and the count stays a lower bound.
-    pub fn count_runs(&self, col: usize, row: usize, runs: &SpanRuns, radius_sq: f32) -> Option<[u32; LANES]> {
+    pub(crate) fn count_runs(&self, col: usize, row: usize, runs: &SpanRuns, radius_sq: f32) -> Option<[u32; LANES]> {
         let extent = runs.extent?;
         if runs.width != self.width || !self.extent_fits(col, row, &extent) {
             return None;
         }
         #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma") {
+        if kernels::fused() {
             // Rounding the f64 product to f32 adds at most 2⁻²⁴, which the
             // 2⁻¹⁹ leaves room for.
             let inner = (radius_sq as f64 * (1.0 - 2f64.powi(-19))) as f32;
@@ -290,12 +287,7 @@ impl Grid {
                         _mm256_loadu_ps(zs.as_ptr().add(k)),
                     )
                 };
-                // p - q, the negation of the predicate's q - p: the same
-                // squares bit for bit, and the load folds into the subtraction.
-                let (dx, dy, dz) = (_mm256_sub_ps(px, qx), _mm256_sub_ps(py, qy), _mm256_sub_ps(pz, qz));
-                let d2 =
-                    _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(dx, dx), _mm256_mul_ps(dy, dy)), _mm256_mul_ps(dz, dz));
-                let near = _mm256_castps_si256(_mm256_cmp_ps::<_CMP_LE_OQ>(d2, r2));
+                let near = _mm256_castps_si256(kernels::avx2::within([px, py, pz], [qx, qy, qz], r2));
                 // A true lane is all ones, -1: subtracting counts it.
                 counts = _mm256_sub_epi32(counts, near);
             }
@@ -331,9 +323,8 @@ impl Grid {
                             _mm_loadu_ps(zs.as_ptr().add(k)),
                         )
                     };
-                    let (dx, dy, dz) = (_mm_sub_ps(qx, px), _mm_sub_ps(qy, py), _mm_sub_ps(qz, pz));
-                    let d2 = _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, dx), _mm_mul_ps(dy, dy)), _mm_mul_ps(dz, dz));
-                    counts = _mm_sub_epi32(counts, _mm_castps_si128(_mm_cmple_ps(d2, r2)));
+                    let near = kernels::sse2::within([px, py, pz], [qx, qy, qz], r2);
+                    counts = _mm_sub_epi32(counts, _mm_castps_si128(near));
                 }
             }
             // SAFETY: the destination holds exactly four u32.
@@ -342,53 +333,15 @@ impl Grid {
         out
     }
 
-    /// The reference form of the block count, and the path on other CPUs.
-    #[cfg_attr(target_arch = "x86_64", allow(dead_code))]
+    /// The scalar form of the block count: the reference of the vector
+    /// forms, and the path on other CPUs.
     fn count_block_portable(&self, col: usize, row: usize, spans: &[Span], radius_sq: f32) -> [u32; LANES] {
         let first = row * self.width + col;
         let mut counts = [0u32; LANES];
         for (start, end) in self.span_ranges(col, row, spans) {
             for at in start..end {
                 for (l, count) in counts.iter_mut().enumerate() {
-                    let dx = self.xs[at + l] - self.xs[first + l];
-                    let dy = self.ys[at + l] - self.ys[first + l];
-                    let dz = self.zs[at + l] - self.zs[first + l];
-                    // NaN compares false: invalid pixels never count.
-                    *count += (dx * dx + dy * dy + dz * dz <= radius_sq) as u32;
-                }
-            }
-        }
-        counts
-    }
-
-    /// Like [`Grid::count_block`], counting only pixels whose `labels`
-    /// entry equals `label`.
-    pub fn count_block_members(
-        &self,
-        col: usize,
-        row: usize,
-        spans: &[Span],
-        radius_sq: f32,
-        labels: &[u32],
-        label: u32,
-    ) -> [u32; LANES] {
-        let first = row * self.width + col;
-        let px: [f32; LANES] = std::array::from_fn(|l| self.xs[first + l]);
-        let py: [f32; LANES] = std::array::from_fn(|l| self.ys[first + l]);
-        let pz: [f32; LANES] = std::array::from_fn(|l| self.zs[first + l]);
-        let mut counts = [0u32; LANES];
-        for s in spans {
-            let base = ((row as isize + s.dv) as usize) * self.width;
-            for du in s.du_lo..=s.du_hi {
-                let at = (base as isize + col as isize + du) as usize;
-                let (qx, qy, qz) = (&self.xs[at..at + LANES], &self.ys[at..at + LANES], &self.zs[at..at + LANES]);
-                let ql = &labels[at..at + LANES];
-                for l in 0..LANES {
-                    let dx = qx[l] - px[l];
-                    let dy = qy[l] - py[l];
-                    let dz = qz[l] - pz[l];
-                    let near = dx * dx + dy * dy + dz * dz <= radius_sq;
-                    counts[l] += (near & (ql[l] == label)) as u32;
+                    *count += kernels::within(&self.point(first + l), &self.point(at + l), radius_sq) as u32;
                 }
             }
         }
@@ -444,30 +397,22 @@ mod tests {
     fn block_counts_equal_the_reference_over_the_same_offsets() {
         let camera = CameraModel::default();
         let cloud = patch(&camera);
-        let (w, h) = (cloud.width(), cloud.height());
+        let w = cloud.width();
         let grid = Grid::new(&cloud);
         let search = NeighbourSearch::new(&cloud, &camera, 1.0);
         let (wx, wy) = (8isize, 8isize);
         let full: Vec<Span> = (-wy..=wy).map(|dv| Span { dv, du_lo: -wx, du_hi: wx }).collect();
         let (col, row) = (12, 14);
         assert!(grid.spans_fit(col, row, &full));
-        let counts = grid.count_block(col, row, &full, 1.0);
-        assert_eq!(counts, grid.count_block_portable(col, row, &full, 1.0), "SIMD and portable agree");
-        #[cfg(target_arch = "x86_64")]
-        // SAFETY: SSE2 is part of the x86_64 baseline.
-        assert_eq!(counts, unsafe { grid.count_block_sse2(col, row, &full, 1.0) });
+        let counts = grid.count_block_portable(col, row, &full, 1.0);
+        let (ran, _skipped) = kernels::on_every_isa(|_| grid.count_block(col, row, &full, 1.0));
+        for (isa, got) in ran {
+            assert_eq!(got, counts, "{isa:?} and the scalar form agree");
+        }
         for (l, &got) in counts.iter().enumerate() {
             let i = row * w + col + l;
             if cloud.points()[i][0].is_finite() {
                 assert_eq!(got, search.count(i, |_| true), "lane {l}");
-            }
-        }
-        let labels: Vec<u32> = (0..w * h).map(|i| (i % 3 == 0) as u32).collect();
-        let members = grid.count_block_members(col, row, &full, 1.0, &labels, 1);
-        for (l, &got) in members.iter().enumerate() {
-            let i = row * w + col + l;
-            if cloud.points()[i][0].is_finite() {
-                assert_eq!(got, search.count(i, |j| labels[j] == 1), "lane {l}");
             }
         }
     }

@@ -16,6 +16,7 @@ mod point_tree;
 use std::arch::x86_64::*;
 use std::ops::ControlFlow;
 
+#[cfg(test)]
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 
 use crate::camera::CameraModel;
@@ -23,14 +24,16 @@ use crate::cloud::{Point, PointCloud};
 use crate::geometry::{Vec3, ceil_i64, floor_i64};
 
 use super::grid_search::{LANES, Span};
+use crate::kernels::within;
 use point_tree::PointTree;
 
 /// The most neighbours of one point a sampled visit reads: more than any
 /// frame of the paper's camera gives within its field of view at its
 /// nearest depth, far less than a cloud a thousand times denser.
-pub const MAX_SAMPLED_NEIGHBOURS: usize = 4096;
+pub(crate) const MAX_SAMPLED_NEIGHBOURS: usize = 4096;
 
 /// Finds the neighbours of cloud points within a fixed radius.
+// Public only because orientation's public functions take it.
 pub struct NeighbourSearch<'a> {
     cloud: &'a PointCloud,
     camera: &'a CameraModel,
@@ -46,29 +49,21 @@ enum Index {
     /// An unorganized cloud: a tree whose queries stop early.
     Tree(PointTree),
     /// The kiddo KD-tree of the reference search.
+    #[cfg(test)]
     KdTree(KdIndex),
 }
 
+#[cfg(test)]
 struct KdIndex {
     tree: ImmutableKdTree<f32, 3>,
     /// Tree item → cloud point index.
     point_of_item: Vec<u32>,
 }
 
-/// True when `q` lies within the radius of `p`. One predicate for the grid
-/// and the tree paths, so both classify ties identically.
-#[inline(always)]
-fn within(p: &Point, q: &Point, radius_sq: f32) -> bool {
-    let dx = q[0] - p[0];
-    let dy = q[1] - p[1];
-    let dz = q[2] - p[2];
-    dx * dx + dy * dy + dz * dz <= radius_sq
-}
-
 impl<'a> NeighbourSearch<'a> {
     /// Prepares a search with radius `radius_mm`: the pixel grid of an
     /// organized cloud, else a tree of its points.
-    pub fn new(cloud: &'a PointCloud, camera: &'a CameraModel, radius_mm: f64) -> Self {
+    pub(crate) fn new(cloud: &'a PointCloud, camera: &'a CameraModel, radius_mm: f64) -> Self {
         let radius = radius_mm as f32;
         let index = if cloud.is_organized() { Index::Grid } else { Index::Tree(PointTree::new(cloud.points())) };
         NeighbourSearch { cloud, camera, radius, radius_sq: radius * radius, index }
@@ -77,28 +72,29 @@ impl<'a> NeighbourSearch<'a> {
     /// A search that always queries a kiddo KD-tree for every neighbour,
     /// even on a pixel grid: the straightforward reference the grid and
     /// tree paths are tested against.
-    pub fn kdtree(cloud: &'a PointCloud, camera: &'a CameraModel, radius_mm: f64) -> Self {
+    #[cfg(test)]
+    pub(crate) fn kdtree(cloud: &'a PointCloud, camera: &'a CameraModel, radius_mm: f64) -> Self {
         let radius = radius_mm as f32;
         let index = Index::KdTree(build_tree(cloud.points()));
         NeighbourSearch { cloud, camera, radius, radius_sq: radius * radius, index }
     }
 
-    pub fn cloud(&self) -> &PointCloud {
+    pub(crate) fn cloud(&self) -> &PointCloud {
         self.cloud
     }
 
-    pub fn camera(&self) -> &CameraModel {
+    pub(crate) fn camera(&self) -> &CameraModel {
         self.camera
     }
 
-    pub fn radius_mm(&self) -> f64 {
+    pub(crate) fn radius_mm(&self) -> f64 {
         self.radius as f64
     }
 
     /// Calls `visit(j)` for every valid point `j` within the radius of
     /// point `i` (including `i` itself). `i` must be valid.
-    #[inline]
-    pub fn for_each(&self, i: usize, mut visit: impl FnMut(usize)) {
+    #[cfg(test)]
+    pub(crate) fn for_each(&self, i: usize, mut visit: impl FnMut(usize)) {
         self.visit_until(i, |j| {
             visit(j);
             ControlFlow::Continue(())
@@ -110,7 +106,7 @@ impl<'a> NeighbourSearch<'a> {
     /// keeps a cloud far denser than any camera's from costing the whole
     /// cloud per point.
     #[inline]
-    pub fn visit_until(&self, i: usize, mut visit: impl FnMut(usize) -> ControlFlow<()>) {
+    pub(crate) fn visit_until(&self, i: usize, mut visit: impl FnMut(usize) -> ControlFlow<()>) {
         let points = self.cloud.points();
         let p = &points[i];
         match &self.index {
@@ -136,6 +132,7 @@ impl<'a> NeighbourSearch<'a> {
                     if within(p, q, self.radius_sq) { visit(j) } else { ControlFlow::Continue(()) }
                 });
             }
+            #[cfg(test)]
             Index::KdTree(index) => {
                 let reach = self.radius_sq * (1.0 + 1e-5);
                 let found = index.tree.query(p).within::<SquaredEuclidean<f32>>(reach).unsorted().execute();
@@ -151,8 +148,8 @@ impl<'a> NeighbourSearch<'a> {
 
     /// Number of valid points within the radius of point `i` for which
     /// `member(j)` holds.
-    #[inline]
-    pub fn count(&self, i: usize, member: impl Fn(usize) -> bool) -> u32 {
+    #[cfg(test)]
+    pub(crate) fn count(&self, i: usize, member: impl Fn(usize) -> bool) -> u32 {
         let mut n = 0;
         self.for_each(i, |j| n += member(j) as u32);
         n
@@ -162,7 +159,7 @@ impl<'a> NeighbourSearch<'a> {
     /// criterion comparing the count with a threshold needs no more, and
     /// stops there.
     #[inline]
-    pub fn count_up_to(&self, i: usize, member: impl Fn(usize) -> bool, cap: u32) -> u32 {
+    pub(crate) fn count_up_to(&self, i: usize, member: impl Fn(usize) -> bool, cap: u32) -> u32 {
         let mut n = 0;
         if cap == 0 {
             return 0;
@@ -179,7 +176,7 @@ impl<'a> NeighbourSearch<'a> {
     /// ray passes within the radius of `p`. A denser cloud is not this
     /// camera's frame; its neighbourhoods are sampled rather than read
     /// whole (see [`NeighbourSearch::for_each_sampled`]).
-    pub fn frame_neighbours_at_most(&self, p: &Point) -> usize {
+    pub(crate) fn frame_neighbours_at_most(&self, p: &Point) -> usize {
         let (wx, wy) = self.camera.neighbour_window(*p, self.radius as f64);
         let side = |w: usize| w.saturating_mul(2).saturating_add(1);
         side(wx).saturating_mul(side(wy)).min(MAX_SAMPLED_NEIGHBOURS)
@@ -189,7 +186,7 @@ impl<'a> NeighbourSearch<'a> {
     /// [`NeighbourSearch::frame_neighbours_at_most`] of them: all of them
     /// in any frame of the configured camera, a bounded sample of the
     /// neighbours of a point denser than that.
-    pub fn for_each_sampled(&self, i: usize, mut visit: impl FnMut(usize)) {
+    pub(crate) fn for_each_sampled(&self, i: usize, mut visit: impl FnMut(usize)) {
         let cap = self.frame_neighbours_at_most(&self.cloud.points()[i]);
         let mut n = 0;
         self.visit_until(i, |j| {
@@ -198,20 +195,12 @@ impl<'a> NeighbourSearch<'a> {
             if n >= cap { ControlFlow::Break(()) } else { ControlFlow::Continue(()) }
         });
     }
-
-    /// The number of neighbours point `i` would have if the surface were a
-    /// complete plane with unit normal `n` through it, as sampled by this
-    /// camera: the theoretical count of Eq. 6, corrected for the plane's
-    /// tilt and, on a pixel grid, for the grid itself (see [`FullCounts`]).
-    pub fn full_plane_count(&self, i: usize, n: &Vec3) -> f64 {
-        FullCounts::new(self, n).get(i, &mut FullCountCache::default())
-    }
 }
 
 /// Side of the image tiles over which the full-plane count is shared.
-pub const FULL_COUNT_TILE_PX: usize = 32;
+pub(crate) const FULL_COUNT_TILE_PX: usize = 32;
 /// Depth step over which the full-plane count is shared, mm.
-pub const FULL_COUNT_DEPTH_STEP_MM: f64 = 0.5;
+pub(crate) const FULL_COUNT_DEPTH_STEP_MM: f64 = 0.5;
 
 /// Full-plane counts for one plane orientation.
 ///
@@ -223,7 +212,7 @@ pub const FULL_COUNT_DEPTH_STEP_MM: f64 = 0.5;
 /// lattice count give or take one lattice point; in exchange it is computed
 /// once per tile and depth step instead of once per pixel. Without a grid
 /// it is `π R² D` with the exact pinhole density.
-pub struct FullCounts<'a> {
+pub(crate) struct FullCounts<'a> {
     cloud: &'a PointCloud,
     camera: &'a CameraModel,
     normal: Vec3,
@@ -245,7 +234,7 @@ const CACHE_SLOTS: usize = 1024;
 /// A per-thread memo of values keyed by full-count memo key (tile and
 /// depth step, see [`FullCounts::keys_of_lanes`]); a collision only costs
 /// a recomputation.
-pub struct KeyMemo<V> {
+pub(crate) struct KeyMemo<V> {
     slots: Box<[(u64, V); CACHE_SLOTS]>,
 }
 
@@ -259,7 +248,7 @@ impl<V: Copy + Default> Default for KeyMemo<V> {
 impl<V: Copy> KeyMemo<V> {
     /// The value of `key`, from the memo or from `compute`.
     #[inline(always)]
-    pub fn get_or_insert_with(&mut self, key: u64, compute: impl FnOnce() -> V) -> V {
+    pub(crate) fn get_or_insert_with(&mut self, key: u64, compute: impl FnOnce() -> V) -> V {
         let slot = (key.wrapping_mul(0x9e37_79b9_7f4a_7c15) >> (64 - CACHE_SLOTS.trailing_zeros())) as usize;
         let (held, value) = self.slots[slot];
         if held == key {
@@ -272,7 +261,7 @@ impl<V: Copy> KeyMemo<V> {
 }
 
 /// The memo of full-plane counts.
-pub type FullCountCache = KeyMemo<f64>;
+pub(crate) type FullCountCache = KeyMemo<f64>;
 
 /// `x.floor()` as an integer, for the tile and depth indices of the memo
 /// keys. Values are clamped to ±4·10⁶ (NaN to the low end), far beyond any
@@ -306,7 +295,7 @@ fn floor_i32_avx2(x: __m256) -> __m256i {
 }
 
 impl<'a> FullCounts<'a> {
-    pub fn new(search: &NeighbourSearch<'a>, normal: &Vec3) -> Self {
+    pub(crate) fn new(search: &NeighbourSearch<'a>, normal: &Vec3) -> Self {
         let tile = FULL_COUNT_TILE_PX as f64;
         FullCounts {
             cloud: search.cloud,
@@ -336,7 +325,7 @@ impl<'a> FullCounts<'a> {
     /// The full-plane count of the points with memo key `key` (from
     /// [`FullCounts::keys_of_lanes`]), from the memo or computed.
     #[inline]
-    pub fn value_of(&self, key: u64, cache: &mut FullCountCache) -> f64 {
+    pub(crate) fn value_of(&self, key: u64, cache: &mut FullCountCache) -> f64 {
         cache.get_or_insert_with(key, || self.count_of_key(key))
     }
 
@@ -356,13 +345,13 @@ impl<'a> FullCounts<'a> {
     }
 
     /// The full-plane count of point `i`, which must be valid.
-    pub fn get(&self, i: usize, cache: &mut FullCountCache) -> f64 {
+    pub(crate) fn get(&self, i: usize, cache: &mut FullCountCache) -> f64 {
         self.get_point(&self.cloud.points()[i], cache)
     }
 
     /// [`FullCounts::get`] of a valid point of this cloud, given by value.
     #[inline]
-    pub fn get_point(&self, p: &Point, cache: &mut FullCountCache) -> f64 {
+    pub(crate) fn get_point(&self, p: &Point, cache: &mut FullCountCache) -> f64 {
         let p = *p;
         if !self.cloud.is_organized() {
             let n = &self.normal;
@@ -375,7 +364,7 @@ impl<'a> FullCounts<'a> {
     /// The memo keys of `LANES` valid grid points given as coordinate
     /// lanes; inlined into the callers' vector code.
     #[inline(always)]
-    pub fn keys_of_lanes(&self, [xs, ys, zs]: &[[f32; LANES]; 3]) -> [u64; LANES] {
+    pub(crate) fn keys_of_lanes(&self, [xs, ys, zs]: &[[f32; LANES]; 3]) -> [u64; LANES] {
         std::array::from_fn(|l| self.key(&[xs[l], ys[l], zs[l]]))
     }
 
@@ -386,7 +375,7 @@ impl<'a> FullCounts<'a> {
     /// The CPU must support AVX2.
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
-    pub fn keys_of_lanes_avx2(&self, xs: __m256, ys: __m256, zs: __m256) -> [u64; LANES] {
+    pub(crate) fn keys_of_lanes_avx2(&self, xs: __m256, ys: __m256, zs: __m256) -> [u64; LANES] {
         let tile_col = floor_i32_avx2(_mm256_mul_ps(_mm256_div_ps(xs, zs), _mm256_set1_ps(self.tiles_per_x)));
         let tile_row = floor_i32_avx2(_mm256_mul_ps(_mm256_div_ps(ys, zs), _mm256_set1_ps(self.tiles_per_y)));
         let per_step = _mm256_mul_ps(zs, _mm256_set1_ps(1.0 / FULL_COUNT_DEPTH_STEP_MM as f32));
@@ -410,6 +399,7 @@ impl<'a> FullCounts<'a> {
     }
 }
 
+#[cfg(test)]
 fn build_tree(points: &[Point]) -> KdIndex {
     let mut coords = Vec::with_capacity(points.len());
     let mut point_of_item = Vec::with_capacity(points.len());
@@ -430,14 +420,14 @@ fn build_tree(points: &[Point]) -> KdIndex {
 /// lattice point by lattice point: some three hundred times the rows a
 /// 1 mm disc covers at 100 mm with the paper's camera, and more than a
 /// sensor has.
-pub const MAX_LATTICE_ROWS: i64 = 1 << 13;
+pub(crate) const MAX_LATTICE_ROWS: i64 = 1 << 13;
 
 /// The image, in pixel offsets, of the disc of radius R around a point on
 /// a plane: near `p` the plane maps pixel offsets linearly to 3D
 /// displacements, `d ≈ J (du, dv)`, so the offsets within the radius are
 /// the lattice points inside the ellipse `(du, dv)ᵀ JᵀJ (du, dv) <= R²`.
 #[derive(Debug, Clone, Copy)]
-pub struct PixelEllipse {
+pub(crate) struct PixelEllipse {
     a: f64,
     b: f64,
     c: f64,
@@ -448,7 +438,7 @@ pub struct PixelEllipse {
 impl PixelEllipse {
     /// The ellipse of the plane through `p` with unit normal `n`; `None`
     /// when the plane is seen edge-on.
-    pub fn new(camera: &CameraModel, p: &Vec3, n: &Vec3, radius: f64) -> Option<PixelEllipse> {
+    pub(crate) fn new(camera: &CameraModel, p: &Vec3, n: &Vec3, radius: f64) -> Option<PixelEllipse> {
         let z = p.z;
         let ray = Vec3::new(p.x / z, p.y / z, 1.0);
         let n_dot_ray = n.dot(&ray);
@@ -480,7 +470,7 @@ impl PixelEllipse {
     /// pixels of its centre, so some pixel of such a grid could have all
     /// of them in the image: spans of a larger ellipse could never be
     /// counted on it.
-    pub fn fits_grid(&self, width: usize, height: usize) -> bool {
+    pub(crate) fn fits_grid(&self, width: usize, height: usize) -> bool {
         let below = |extent: i64, size: usize| extent >= 0 && (extent as u64) < size as u64;
         below(self.dv_max(), height) && below(self.du_max(), width)
     }
@@ -504,7 +494,7 @@ impl PixelEllipse {
     /// of view) is counted by its area, `π R² / sqrt(det)`, instead: no
     /// camera's frame holds such an ellipse, and counting it row by row
     /// would take time in proportion to its length, which has no bound.
-    pub fn lattice_count(&self) -> f64 {
+    pub(crate) fn lattice_count(&self) -> f64 {
         // The ellipse is centred: row -dv holds the mirror image of row dv,
         // so the same number of lattice points.
         let dv_max = self.dv_max();
@@ -525,7 +515,7 @@ impl PixelEllipse {
     /// ellipse: where most of a plane point's neighbours lie. Noise moves a
     /// few across the rim either way, so a count over the spans is only a
     /// lower bound of the exact one.
-    pub fn spans_into(&self, out: &mut Vec<Span>) {
+    pub(crate) fn spans_into(&self, out: &mut Vec<Span>) {
         out.clear();
         let dv_max = self.dv_max() as isize;
         for dv in -dv_max..=dv_max {
@@ -541,13 +531,14 @@ impl PixelEllipse {
 
 /// The lattice count of a complete plane with normal `n` through `p`
 /// within `radius` (see [`PixelEllipse`]); 0 for a plane seen edge-on.
-pub fn lattice_count_in_ellipse(camera: &CameraModel, p: &Vec3, n: &Vec3, radius: f64) -> f64 {
+pub(crate) fn lattice_count_in_ellipse(camera: &CameraModel, p: &Vec3, n: &Vec3, radius: f64) -> f64 {
     PixelEllipse::new(camera, p, n, radius).map_or(0.0, |e| e.lattice_count())
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::kernels::{self, Isa};
 
     #[test]
     fn floor_i32_floors_and_clamps() {
@@ -560,11 +551,7 @@ mod tests {
     }
 
     #[test]
-    #[cfg(target_arch = "x86_64")]
     fn vector_keys_equal_scalar_keys() {
-        if !std::arch::is_x86_feature_detected!("avx2") {
-            return;
-        }
         let camera = CameraModel::default();
         let cloud = plane_cloud(&camera, 8, 8, 500.0, Vec3::z(), usize::MAX);
         let search = NeighbourSearch::new(&cloud, &camera, 1.0);
@@ -578,34 +565,43 @@ mod tests {
         }
         let depths: Vec<f32> = values.iter().map(|v| v.abs().max(100.0)).chain(values.iter().copied()).collect();
         let tile = (FULL_COUNT_TILE_PX as f64 / camera.fx()) as f32;
-        let mut checked = 0;
-        for (chunk, zs) in depths.chunks_exact(LANES).enumerate() {
-            let zs: [f32; LANES] = zs.try_into().unwrap();
-            let xs: [f32; LANES] =
-                std::array::from_fn(|l| (chunk as f32 - 200.0 + l as f32 * 0.3) * tile * zs[l] / 7.0);
-            let ys: [f32; LANES] = std::array::from_fn(|l| values[(chunk * 3 + l) % values.len()]);
-            // SAFETY: the CPU supports AVX2, checked above; the loads read
-            // exactly LANES floats each.
-            let vector = unsafe {
-                counts.keys_of_lanes_avx2(
-                    _mm256_loadu_ps(xs.as_ptr()),
-                    _mm256_loadu_ps(ys.as_ptr()),
-                    _mm256_loadu_ps(zs.as_ptr()),
-                )
-            };
-            for l in 0..LANES {
-                assert_eq!(
-                    vector[l],
-                    counts.key(&[xs[l], ys[l], zs[l]]),
-                    "lane {l} of ({}, {}, {})",
-                    xs[l],
-                    ys[l],
-                    zs[l]
-                );
-                checked += 1;
+        let blocks: Vec<[[f32; LANES]; 3]> = depths
+            .chunks_exact(LANES)
+            .enumerate()
+            .map(|(chunk, zs)| {
+                let zs: [f32; LANES] = zs.try_into().unwrap();
+                let xs = std::array::from_fn(|l| (chunk as f32 - 200.0 + l as f32 * 0.3) * tile * zs[l] / 7.0);
+                let ys = std::array::from_fn(|l| values[(chunk * 3 + l) % values.len()]);
+                [xs, ys, zs]
+            })
+            .collect();
+        assert!(blocks.len() * LANES > 2000);
+        // The keys of every block by the form each level computes them with.
+        let (ran, _skipped) = kernels::on_every_isa(|isa| -> Vec<[u64; LANES]> {
+            blocks
+                .iter()
+                .map(|lanes| match isa {
+                    #[cfg(target_arch = "x86_64")]
+                    Isa::Avx2 => {
+                        let [xs, ys, zs] = lanes.map(|v| {
+                            // SAFETY: `v` holds exactly LANES floats.
+                            unsafe { _mm256_loadu_ps(v.as_ptr()) }
+                        });
+                        // SAFETY: `on_every_isa` runs only the levels the CPU runs.
+                        unsafe { counts.keys_of_lanes_avx2(xs, ys, zs) }
+                    }
+                    _ => counts.keys_of_lanes(lanes),
+                })
+                .collect()
+        });
+        for (isa, keys) in &ran {
+            for (lanes, keys) in blocks.iter().zip(keys) {
+                for l in 0..LANES {
+                    let p = [lanes[0][l], lanes[1][l], lanes[2][l]];
+                    assert_eq!(keys[l], counts.key(&p), "{isa:?}: lane {l} of {p:?}");
+                }
             }
         }
-        assert!(checked > 2000);
     }
 
     /// A frontal plane at depth z sampled by the camera, with an optional
@@ -655,9 +651,14 @@ mod tests {
             let actual = search.count(centre, |_| true) as f64;
             let expected = lattice_count_in_ellipse(&camera, &vec3(&cloud.points()[centre]), &n, 1.0);
             assert!((actual - expected).abs() <= 1.0, "z {z}: actual {actual}, lattice {expected}");
-            let shared = search.full_plane_count(centre, &n);
+            let shared = full_plane_count(&search, centre, &n);
             assert!((shared - expected).abs() <= 1.0, "z {z}: tile count {shared}, pixel's own {expected}");
         }
+    }
+
+    /// The full-plane count of point `i` through its tile's memo entry.
+    fn full_plane_count(search: &NeighbourSearch, i: usize, n: &Vec3) -> f64 {
+        FullCounts::new(search, n).get(i, &mut FullCountCache::default())
     }
 
     fn vec3(p: &Point) -> Vec3 {
@@ -670,7 +671,7 @@ mod tests {
         let cloud = plane_cloud(&camera, 41, 41, 600.0, Vec3::z(), 21);
         let search = NeighbourSearch::new(&cloud, &camera, 1.0);
         let edge = 20 * 41 + 20;
-        let ratio = search.count(edge, |_| true) as f64 / search.full_plane_count(edge, &Vec3::z());
+        let ratio = search.count(edge, |_| true) as f64 / full_plane_count(&search, edge, &Vec3::z());
         assert!((0.45..0.65).contains(&ratio), "{ratio}");
     }
 

@@ -21,6 +21,7 @@ use rayon::prelude::*;
 use crate::camera::CameraModel;
 use crate::cloud::PointCloud;
 use crate::geometry::{Vec3, vec3};
+use crate::kernels::{self, Isa};
 
 use super::grid_search::{Grid, LANES, Span, SpanRuns};
 use super::neighbours::{FullCountCache, FullCounts, KeyMemo, NeighbourSearch, PixelEllipse};
@@ -30,7 +31,7 @@ use super::orientation::{GridPoints, StepTable, cross, cross_agrees, grid_normal
 /// and the full-plane count it was measured against (the edge criterion
 /// reuses both to skip points that cannot be edges).
 #[derive(Debug, Clone, PartialEq)]
-pub struct PlanePoints {
+pub(crate) struct PlanePoints {
     pub mask: Vec<bool>,
     pub counts: Vec<u16>,
     /// The full-plane count of the robust criterion; 0 for the paper's.
@@ -38,12 +39,8 @@ pub struct PlanePoints {
 }
 
 impl PlanePoints {
-    pub fn len(&self) -> usize {
+    pub(crate) fn len(&self) -> usize {
         self.mask.iter().filter(|&&b| b).count()
-    }
-
-    pub fn is_empty(&self) -> bool {
-        !self.mask.iter().any(|&b| b)
     }
 }
 
@@ -157,7 +154,7 @@ impl Threshold for PaperThreshold<'_> {
 
 /// Settings of the robust criterion.
 #[derive(Debug, Clone, Copy)]
-pub struct RobustPlaneCriterion {
+pub(crate) struct RobustPlaneCriterion {
     /// The workpiece's dominant unit normal, facing away from the camera.
     pub normal: Vec3,
     /// Least fraction of the full-plane neighbour count.
@@ -240,8 +237,8 @@ impl Threshold for RobustThreshold<'_> {
     /// a block near the image border, is tested lane by lane.
     fn needed_block(&self, grid: &Grid, row: usize, col: usize, memos: &mut Memos, needs: &mut BlockNeeds) {
         #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx2") {
-            // SAFETY: the CPU supports AVX2, checked just above.
+        if kernels::isa() == Isa::Avx2 {
+            // SAFETY: the CPU supports AVX2: `isa` gives no level it lacks.
             return unsafe { self.needed_block_avx2(grid, row, col, memos, needs) };
         }
         self.needed_block_with::<false>(grid, row, col, memos, needs);
@@ -500,20 +497,21 @@ impl RobustThreshold<'_> {
 }
 
 /// Eq. 14, the paper's criterion.
-pub fn paper_criterion(cloud: &PointCloud, camera: &CameraModel, search: &NeighbourSearch) -> PlanePoints {
+pub(crate) fn paper_criterion(cloud: &PointCloud, camera: &CameraModel, search: &NeighbourSearch) -> PlanePoints {
     classify(search, &PaperThreshold { cloud, camera, radius: search.radius_mm() })
 }
 
 /// The robust criterion: `N_r >= ratio · N_plane(p)`, where `N_plane` is
 /// the lattice count of a complete plane with the dominant normal through
 /// `p`, and the local normal within the angle limit.
-pub fn robust_criterion(search: &NeighbourSearch, criterion: &RobustPlaneCriterion) -> PlanePoints {
+pub(crate) fn robust_criterion(search: &NeighbourSearch, criterion: &RobustPlaneCriterion) -> PlanePoints {
     classify(search, &RobustThreshold::new(search, criterion))
 }
 
 /// The straightforward form of either criterion: one radius count per
 /// point through `search` (a KD-tree in the tests). Kept as the reference.
-pub fn reference(search: &NeighbourSearch, paper: bool, criterion: &RobustPlaneCriterion) -> Vec<bool> {
+#[cfg(test)]
+pub(crate) fn reference(search: &NeighbourSearch, paper: bool, criterion: &RobustPlaneCriterion) -> Vec<bool> {
     let cloud = search.cloud();
     let paper_t = PaperThreshold { cloud, camera: search.camera(), radius: search.radius_mm() };
     let robust_t = RobustThreshold::new(search, criterion);
@@ -756,15 +754,11 @@ mod tests {
         let camera = CameraModel::default();
         let cloud = PointCloud::organized(3, 3, vec![[f32::NAN; 3]; 9]).unwrap();
         let search = NeighbourSearch::new(&cloud, &camera, 1.0);
-        assert!(paper_criterion(&cloud, &camera, &search).is_empty());
+        assert_eq!(paper_criterion(&cloud, &camera, &search).len(), 0);
     }
 
     #[test]
-    #[cfg(target_arch = "x86_64")]
     fn vector_lane_facts_equal_the_scalar_form() {
-        if !std::arch::is_x86_feature_detected!("avx2") {
-            return;
-        }
         let camera = CameraModel::default();
         let (clean, n) = scene(530.0, 15.0, 36);
         // Noise, dropouts, a far point and an infinity, so every test of
@@ -786,19 +780,34 @@ mod tests {
         let c = RobustPlaneCriterion { normal: n, min_ratio: 0.8, max_angle_deg: 20.0 };
         let threshold = RobustThreshold::new(&search, &c);
         let (w, h) = (grid.width(), grid.height());
-        let mut blocks = 0;
-        for step in 1..=4 {
-            for row in step..h - step {
-                for col in (step..w - LANES - step).step_by(3) {
+        let blocks = || {
+            (1..=4).flat_map(move |step| {
+                (step..h - step)
+                    .flat_map(move |row| (step..w - LANES - step).step_by(3).map(move |col| (row, col, step)))
+            })
+        };
+        assert!(blocks().count() > 1000);
+        // The facts of every block by the path each level dispatches to.
+        let (ran, _skipped) = kernels::on_every_isa(|isa| {
+            let facts: Vec<_> = blocks()
+                .map(|(row, col, step)| {
                     let first = row * w + col;
-                    // SAFETY: the CPU supports AVX2, checked above.
-                    let vector = unsafe { threshold.lane_facts_avx2(&grid, first, step) };
-                    assert_eq!(vector, threshold.lane_facts(&grid, first, step), "row {row}, col {col}, step {step}");
-                    blocks += 1;
-                }
+                    match isa {
+                        #[cfg(target_arch = "x86_64")]
+                        // SAFETY: `on_every_isa` runs only the levels the CPU runs.
+                        Isa::Avx2 => unsafe { threshold.lane_facts_avx2(&grid, first, step) },
+                        _ => threshold.lane_facts(&grid, first, step),
+                    }
+                })
+                .collect();
+            facts
+        });
+        let (_, scalar) = &ran[0];
+        for (isa, facts) in &ran[1..] {
+            for (k, (row, col, step)) in blocks().enumerate() {
+                assert_eq!(facts[k], scalar[k], "{isa:?}: row {row}, col {col}, step {step}");
             }
         }
-        assert!(blocks > 1000);
     }
 
     #[test]

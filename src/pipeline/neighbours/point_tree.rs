@@ -29,7 +29,7 @@ struct Node {
 /// The tree: points in tree order, and a complete binary tree of boxes in
 /// heap order (node `k` has children `2k + 1` and `2k + 2`) over halves of
 /// the point range.
-pub struct PointTree {
+pub(crate) struct PointTree {
     points: Vec<Point>,
     /// Tree position → cloud point index.
     index_of: Vec<u32>,
@@ -58,7 +58,7 @@ fn range_of(n: usize, level: u32, k: usize) -> (usize, usize) {
 
 impl PointTree {
     /// Builds the tree over the valid (finite) points of `cloud_points`.
-    pub fn new(cloud_points: &[Point]) -> PointTree {
+    pub(crate) fn new(cloud_points: &[Point]) -> PointTree {
         let mut items: Vec<(Point, u32)> =
             cloud_points.iter().enumerate().filter(|(_, p)| p[0].is_finite()).map(|(i, p)| (*p, i as u32)).collect();
         let n = items.len();
@@ -91,7 +91,7 @@ impl PointTree {
     /// point within `reach_sq` of `p`, nearer subtrees first, until it
     /// breaks. Candidates are a superset of the points within the reach:
     /// the caller applies its own predicate.
-    pub fn visit_near(&self, p: &Point, reach_sq: f32, mut visit: impl FnMut(usize, &Point) -> ControlFlow<()>) {
+    pub(crate) fn visit_near(&self, p: &Point, reach_sq: f32, mut visit: impl FnMut(usize, &Point) -> ControlFlow<()>) {
         if self.points.is_empty() {
             return;
         }

@@ -1,18 +1,20 @@
 //! The fast grid paths classify every point exactly as the straightforward
 //! KD-tree implementations do, on crops of realistic simulated frames
 //! (noise, dropouts, mixed pixels, bevels, shadows), for both methods, and
-//! cluster the plane points exactly as the per-pixel union-find does.
+//! cluster the plane points exactly as the per-pixel union-find does: on
+//! every instruction set level this CPU runs, forced in turn.
 
-use weldseam::camera::CameraModel;
-use weldseam::cloud::PointCloud;
-use weldseam::geometry::Vec3;
-use weldseam::joint::JointType;
-use weldseam::pipeline::clustering;
-use weldseam::pipeline::edge_points::{self, EdgeCriterion, FullCount, Plate};
-use weldseam::pipeline::neighbours::NeighbourSearch;
-use weldseam::pipeline::orientation::dominant_normal;
-use weldseam::pipeline::plane_points::{self, RobustPlaneCriterion};
-use weldseam::sim::{demo_scene, simulate};
+use super::on_every_isa;
+use crate::camera::CameraModel;
+use crate::cloud::PointCloud;
+use crate::geometry::Vec3;
+use crate::joint::JointType;
+use crate::pipeline::clustering;
+use crate::pipeline::edge_points::{self, EdgeCriterion, FullCount, Plate};
+use crate::pipeline::neighbours::NeighbourSearch;
+use crate::pipeline::orientation::dominant_normal;
+use crate::pipeline::plane_points::{self, RobustPlaneCriterion};
+use crate::sim::{demo_scene, simulate};
 
 /// A `w x h` window of a simulated frame centred on the seam's start.
 fn crop(joint: JointType, distance_mm: f64, tilt_deg: f64, w: usize, h: usize) -> PointCloud {
@@ -42,24 +44,28 @@ fn plane_and_edge_criteria_match_the_kdtree_reference_point_for_point() {
         let normal = dominant_normal(&cloud, &grid, camera.fx(), 5.0).unwrap_or_else(Vec3::z);
         let criterion = RobustPlaneCriterion { normal, min_ratio: 0.8, max_angle_deg: 20.0 };
 
-        let robust = plane_points::robust_criterion(&grid, &criterion);
-        assert_eq!(robust.mask, plane_points::reference(&tree, false, &criterion), "{joint} robust plane points");
-        let paper = plane_points::paper_criterion(&cloud, &camera, &grid);
-        assert_eq!(paper.mask, plane_points::reference(&tree, true, &criterion), "{joint} paper plane points");
+        let robust_expected = plane_points::reference(&tree, false, &criterion);
+        let paper_expected = plane_points::reference(&tree, true, &criterion);
+        on_every_isa(|isa| {
+            let robust = plane_points::robust_criterion(&grid, &criterion);
+            assert_eq!(robust.mask, robust_expected, "{joint} robust plane points on {isa:?}");
+            let paper = plane_points::paper_criterion(&cloud, &camera, &grid);
+            assert_eq!(paper.mask, paper_expected, "{joint} paper plane points on {isa:?}");
 
-        for (plane, edge) in [
-            (&robust, EdgeCriterion { full: FullCount::Plane, ratio: 0.75 }),
-            (&paper, EdgeCriterion { full: FullCount::Frontal, ratio: 0.5 }),
-        ] {
-            // One plate: the plane points themselves, labelled 0.
-            let labels: Vec<u32> = plane.mask.iter().map(|&m| if m { 0 } else { u32::MAX }).collect();
-            let members: Vec<u32> = (0..cloud.len() as u32).filter(|&i| plane.mask[i as usize]).collect();
-            let plate = Plate { labels: &labels, label: 0, members: &members };
-            let mut fast = edge_points::edge_points(&grid, plane, plate, &edge);
-            fast.sort_unstable();
-            assert_eq!(fast, edge_points::reference(&tree, plane, plate, &edge), "{joint} edge points");
-            assert!(!fast.is_empty(), "{joint}: the crop holds edges");
-        }
+            for (plane, edge) in [
+                (&robust, EdgeCriterion { full: FullCount::Plane, ratio: 0.75 }),
+                (&paper, EdgeCriterion { full: FullCount::Frontal, ratio: 0.5 }),
+            ] {
+                // One plate: the plane points themselves, labelled 0.
+                let labels: Vec<u32> = plane.mask.iter().map(|&m| if m { 0 } else { u32::MAX }).collect();
+                let members: Vec<u32> = (0..cloud.len() as u32).filter(|&i| plane.mask[i as usize]).collect();
+                let plate = Plate { labels: &labels, label: 0, members: &members };
+                let mut fast = edge_points::edge_points(&grid, plane, plate, &edge);
+                fast.sort_unstable();
+                assert_eq!(fast, edge_points::reference(&tree, plane, plate, &edge), "{joint} edge points on {isa:?}");
+                assert!(!fast.is_empty(), "{joint}: the crop holds edges");
+            }
+        });
     }
 }
 
@@ -78,12 +84,14 @@ fn grid_clustering_matches_the_per_pixel_reference() {
         for (tolerance, min_points) in [(1.0, 30), (0.3, 1)] {
             let expected = clustering::reference(&cloud, &mask, tolerance, min_points);
             assert!(expected.members.len() >= 2, "{joint}: the crop holds more than one cluster");
-            for pool in &pools {
-                let got = pool.install(|| clustering::grid(&cloud, &mask, tolerance, min_points));
-                let what = format!("{joint}, {tolerance} mm, {} threads", pool.current_num_threads());
-                assert!(got.labels == expected.labels, "{what}: labels differ");
-                assert_eq!(got.members, expected.members, "{what}: members");
-            }
+            on_every_isa(|isa| {
+                for pool in &pools {
+                    let got = pool.install(|| clustering::grid(&cloud, &mask, tolerance, min_points));
+                    let what = format!("{joint}, {tolerance} mm, {} threads, {isa:?}", pool.current_num_threads());
+                    assert!(got.labels == expected.labels, "{what}: labels differ");
+                    assert_eq!(got.members, expected.members, "{what}: members");
+                }
+            });
         }
     }
 }
@@ -121,11 +129,15 @@ fn both_plates_in_one_pass_match_the_kdtree_reference_in_order() {
     for criterion in
         [EdgeCriterion { full: FullCount::Plane, ratio: 0.75 }, EdgeCriterion { full: FullCount::Frontal, ratio: 0.5 }]
     {
-        let both = edge_points::edge_points_of_plates(&grid, &plane, plates, &criterion);
-        for (k, plate) in plates.into_iter().enumerate() {
-            assert_eq!(both[k], edge_points::reference(&tree, &plane, plate, &criterion), "plate {k}");
-            assert_eq!(both[k], edge_points::edge_points(&grid, &plane, plate, &criterion), "plate {k} alone");
-            assert!(both[k].len() > 50, "plate {k} has edges along the split");
-        }
+        let expected = plates.map(|plate| edge_points::reference(&tree, &plane, plate, &criterion));
+        on_every_isa(|isa| {
+            let both = edge_points::edge_points_of_plates(&grid, &plane, plates, &criterion);
+            for (k, plate) in plates.into_iter().enumerate() {
+                assert_eq!(both[k], expected[k], "plate {k} on {isa:?}");
+                let alone = edge_points::edge_points(&grid, &plane, plate, &criterion);
+                assert_eq!(both[k], alone, "plate {k} alone on {isa:?}");
+                assert!(both[k].len() > 50, "plate {k} has edges along the split");
+            }
+        });
     }
 }

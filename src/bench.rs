@@ -15,8 +15,8 @@ use std::process::{Command, ExitStatus};
 use std::time::{Duration, Instant};
 
 use tokio::io::AsyncWriteExt;
-use tokio::net::{TcpListener, TcpStream};
-use tokio::sync::{mpsc, oneshot};
+use tokio::net::TcpStream;
+use tokio::sync::mpsc;
 use weldseam_proto::frame::{self, DEFAULT_MAX_FRAME_BYTES};
 use weldseam_proto::message::{FrameSelect, Hello, Role};
 use weldseam_proto::{Message, PROTOCOL_VERSION};
@@ -29,7 +29,7 @@ use crate::mock::ClientError;
 use crate::mock::controller::{ControllerClient, request_for_simulation};
 use crate::pipeline::{PlanRequest, Planner, Stage};
 use crate::server::connection::{MessageReader, ReadError};
-use crate::server::{self, ServerState};
+use crate::server::local::LocalDaemon;
 use crate::sim::{SceneSpec, Simulation, demo_scene, simulate};
 
 /// The frame sizes of the scaling table: the paper's 1920 x 1200 sensor
@@ -528,6 +528,10 @@ pub enum DaemonBenchError {
     #[error("the camera failed: {0}")]
     Camera(String),
     #[error(transparent)]
+    Start(#[from] crate::server::local::StartError),
+    #[error("the daemon did not stop cleanly: {0}")]
+    Stop(#[from] crate::server::local::StopError),
+    #[error(transparent)]
     Io(#[from] io::Error),
 }
 
@@ -593,13 +597,8 @@ async fn daemon_latency_async(
     sim: &Simulation,
     runs: usize,
 ) -> Result<Vec<f64>, DaemonBenchError> {
-    let camera_listener = TcpListener::bind("127.0.0.1:0").await?;
-    let controller_listener = TcpListener::bind("127.0.0.1:0").await?;
-    let camera_addr = camera_listener.local_addr()?.to_string();
-    let controller_addr = controller_listener.local_addr()?.to_string();
-    let state = ServerState::new(scenario.config()).map_err(|e| DaemonBenchError::Setup(e.to_string()))?;
-    let (stop, stopped) = oneshot::channel::<()>();
-    let daemon = tokio::spawn(server::run(camera_listener, controller_listener, stopped, state));
+    let daemon = LocalDaemon::start(scenario.config()).await?;
+    let (camera_addr, controller_addr) = (daemon.camera_addr.to_string(), daemon.controller_addr.to_string());
 
     let message = frame_message(&sim.cloud, 0, 0).map_err(|e| DaemonBenchError::Setup(e.to_string()))?;
     let (written_tx, mut written) = mpsc::unbounded_channel();
@@ -628,8 +627,7 @@ async fn daemon_latency_async(
     }
     .await;
 
-    let _ = stop.send(());
-    let _ = daemon.await;
+    daemon.stop().await?;
     camera.abort();
     result
 }
@@ -717,16 +715,11 @@ pub async fn daemon_under_load_async(
 ) -> Result<LoadFigures, DaemonBenchError> {
     use std::sync::{Arc, Mutex};
 
-    let camera_listener = TcpListener::bind("127.0.0.1:0").await?;
-    let controller_listener = TcpListener::bind("127.0.0.1:0").await?;
-    let camera_addr = camera_listener.local_addr()?.to_string();
-    let controller_addr = controller_listener.local_addr()?.to_string();
     let mut config = scenario.config();
     config.server.plan_queue_depth = load.queue_depth.max(1);
     config.server.max_requests_per_connection = config.server.max_requests_per_connection.min(load.queue_depth.max(1));
-    let state = ServerState::new(config).map_err(|e| DaemonBenchError::Setup(e.to_string()))?;
-    let (stop, stopped) = oneshot::channel::<()>();
-    let daemon = tokio::spawn(server::run(camera_listener, controller_listener, stopped, state));
+    let daemon = LocalDaemon::start(config).await?;
+    let (camera_addr, controller_addr) = (daemon.camera_addr.to_string(), daemon.controller_addr.to_string());
     let message = frame_message(&sim.cloud, 0, 0).map_err(|e| DaemonBenchError::Setup(e.to_string()))?;
     let camera = tokio::spawn(streaming_camera(camera_addr, message, load.camera_hz));
 
@@ -776,8 +769,7 @@ pub async fn daemon_under_load_async(
     .await;
 
     camera.abort();
-    let _ = stop.send(());
-    let _ = daemon.await;
+    daemon.stop().await?;
     result
 }
 

@@ -889,8 +889,12 @@ mod tests {
     #[cfg(unix)]
     #[test]
     fn a_child_is_reaped_with_its_status_and_memory() {
-        let run = run_measuring_peak_rss(Command::new("sh").args(["-c", "exit 3"])).unwrap();
+        // The shell holds 32 MB in a variable: its own peak, not this
+        // process's, must be at least that.
+        const HELD: u64 = 32 << 20;
+        let script = format!("x=$(head -c {HELD} /dev/zero | tr '\\0' a); exit 3");
+        let run = run_measuring_peak_rss(Command::new("sh").args(["-c", &script])).unwrap();
         assert_eq!(run.status.code(), Some(3));
-        assert!(run.peak_rss_bytes > 0);
+        assert!(run.peak_rss_bytes >= HELD, "{} bytes", run.peak_rss_bytes);
     }
 }

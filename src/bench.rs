@@ -426,7 +426,7 @@ pub fn time_load(path: &Path, runs: usize) -> Result<Vec<f64>, cloud::LoadError>
 /// The wire encoding of `cloud` as a camera's Frame message (header and
 /// payload), millimetres.
 pub fn frame_message(cloud: &PointCloud, frame_id: u64, trigger_id: u64) -> Result<Vec<u8>, frame::EncodeError> {
-    frame::encode(&Message::Frame(crate::mock::camera::frame_of(cloud, frame_id, trigger_id, 0)))
+    frame::encode(&Message::Frame(crate::convert::to_proto::frame(cloud, frame_id, trigger_id, 0)))
 }
 
 /// Reads one message from `bytes` as the daemon's camera link does: the

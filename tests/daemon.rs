@@ -195,7 +195,7 @@ async fn wait_for_camera(ctl: &mut ControllerClient) {
 
 /// A frame captured now.
 fn frame_message(frame_id: u64, trigger_id: u64, cloud: &PointCloud) -> Message {
-    Message::Frame(weldseam::mock::camera::frame_of(cloud, frame_id, trigger_id, now_us(0)))
+    Message::Frame(weldseam::convert::to_proto::frame(cloud, frame_id, trigger_id, now_us(0)))
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
@@ -529,7 +529,7 @@ fn now_us(offset_ms: i64) -> u64 {
 }
 
 fn frame_stamped(frame_id: u64, trigger_id: u64, cloud: &PointCloud, capture_time_us: u64) -> Message {
-    Message::Frame(weldseam::mock::camera::frame_of(cloud, frame_id, trigger_id, capture_time_us))
+    Message::Frame(weldseam::convert::to_proto::frame(cloud, frame_id, trigger_id, capture_time_us))
 }
 
 /// Reads until the reply or error for `request_id` (at most `WAIT`).

@@ -15,8 +15,8 @@ use std::process::{Command, ExitStatus};
 use std::time::{Duration, Instant};
 
 use tokio::io::AsyncWriteExt;
-use tokio::net::{TcpListener, TcpStream};
-use tokio::sync::{mpsc, oneshot};
+use tokio::net::TcpStream;
+use tokio::sync::mpsc;
 use weldseam_proto::frame::{self, DEFAULT_MAX_FRAME_BYTES};
 use weldseam_proto::message::{FrameSelect, Hello, Role};
 use weldseam_proto::{Message, PROTOCOL_VERSION};
@@ -29,7 +29,7 @@ use crate::mock::ClientError;
 use crate::mock::controller::{ControllerClient, request_for_simulation};
 use crate::pipeline::{PlanRequest, Planner, Stage};
 use crate::server::connection::{MessageReader, ReadError};
-use crate::server::{self, ServerState};
+use crate::server::local::LocalDaemon;
 use crate::sim::{SceneSpec, Simulation, demo_scene, simulate};
 
 /// The frame sizes of the scaling table: the paper's 1920 x 1200 sensor
@@ -426,7 +426,7 @@ pub fn time_load(path: &Path, runs: usize) -> Result<Vec<f64>, cloud::LoadError>
 /// The wire encoding of `cloud` as a camera's Frame message (header and
 /// payload), millimetres.
 pub fn frame_message(cloud: &PointCloud, frame_id: u64, trigger_id: u64) -> Result<Vec<u8>, frame::EncodeError> {
-    frame::encode(&Message::Frame(crate::mock::camera::frame_of(cloud, frame_id, trigger_id, 0)))
+    frame::encode(&Message::Frame(crate::convert::to_proto::frame(cloud, frame_id, trigger_id, 0)))
 }
 
 /// Reads one message from `bytes` as the daemon's camera link does: the
@@ -528,6 +528,10 @@ pub enum DaemonBenchError {
     #[error("the camera failed: {0}")]
     Camera(String),
     #[error(transparent)]
+    Start(#[from] crate::server::local::StartError),
+    #[error("the daemon did not stop cleanly: {0}")]
+    Stop(#[from] crate::server::local::StopError),
+    #[error(transparent)]
     Io(#[from] io::Error),
 }
 
@@ -593,13 +597,8 @@ async fn daemon_latency_async(
     sim: &Simulation,
     runs: usize,
 ) -> Result<Vec<f64>, DaemonBenchError> {
-    let camera_listener = TcpListener::bind("127.0.0.1:0").await?;
-    let controller_listener = TcpListener::bind("127.0.0.1:0").await?;
-    let camera_addr = camera_listener.local_addr()?.to_string();
-    let controller_addr = controller_listener.local_addr()?.to_string();
-    let state = ServerState::new(scenario.config()).map_err(|e| DaemonBenchError::Setup(e.to_string()))?;
-    let (stop, stopped) = oneshot::channel::<()>();
-    let daemon = tokio::spawn(server::run(camera_listener, controller_listener, stopped, state));
+    let daemon = LocalDaemon::start(scenario.config()).await?;
+    let (camera_addr, controller_addr) = (daemon.camera_addr.to_string(), daemon.controller_addr.to_string());
 
     let message = frame_message(&sim.cloud, 0, 0).map_err(|e| DaemonBenchError::Setup(e.to_string()))?;
     let (written_tx, mut written) = mpsc::unbounded_channel();
@@ -628,8 +627,7 @@ async fn daemon_latency_async(
     }
     .await;
 
-    let _ = stop.send(());
-    let _ = daemon.await;
+    daemon.stop().await?;
     camera.abort();
     result
 }
@@ -717,16 +715,11 @@ pub async fn daemon_under_load_async(
 ) -> Result<LoadFigures, DaemonBenchError> {
     use std::sync::{Arc, Mutex};
 
-    let camera_listener = TcpListener::bind("127.0.0.1:0").await?;
-    let controller_listener = TcpListener::bind("127.0.0.1:0").await?;
-    let camera_addr = camera_listener.local_addr()?.to_string();
-    let controller_addr = controller_listener.local_addr()?.to_string();
     let mut config = scenario.config();
     config.server.plan_queue_depth = load.queue_depth.max(1);
     config.server.max_requests_per_connection = config.server.max_requests_per_connection.min(load.queue_depth.max(1));
-    let state = ServerState::new(config).map_err(|e| DaemonBenchError::Setup(e.to_string()))?;
-    let (stop, stopped) = oneshot::channel::<()>();
-    let daemon = tokio::spawn(server::run(camera_listener, controller_listener, stopped, state));
+    let daemon = LocalDaemon::start(config).await?;
+    let (camera_addr, controller_addr) = (daemon.camera_addr.to_string(), daemon.controller_addr.to_string());
     let message = frame_message(&sim.cloud, 0, 0).map_err(|e| DaemonBenchError::Setup(e.to_string()))?;
     let camera = tokio::spawn(streaming_camera(camera_addr, message, load.camera_hz));
 
@@ -776,8 +769,7 @@ pub async fn daemon_under_load_async(
     .await;
 
     camera.abort();
-    let _ = stop.send(());
-    let _ = daemon.await;
+    daemon.stop().await?;
     result
 }
 
@@ -897,8 +889,12 @@ mod tests {
     #[cfg(unix)]
     #[test]
     fn a_child_is_reaped_with_its_status_and_memory() {
-        let run = run_measuring_peak_rss(Command::new("sh").args(["-c", "exit 3"])).unwrap();
+        // The shell holds 32 MB in a variable: its own peak, not this
+        // process's, must be at least that.
+        const HELD: u64 = 32 << 20;
+        let script = format!("x=$(head -c {HELD} /dev/zero | tr '\\0' a); exit 3");
+        let run = run_measuring_peak_rss(Command::new("sh").args(["-c", &script])).unwrap();
         assert_eq!(run.status.code(), Some(3));
-        assert!(run.peak_rss_bytes > 0);
+        assert!(run.peak_rss_bytes >= HELD, "{} bytes", run.peak_rss_bytes);
     }
 }

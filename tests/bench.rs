@@ -60,7 +60,10 @@ fn loading_decoding_and_the_daemon_give_one_figure_each() {
 
     let latency = bench::daemon_latency(&scenario, &sim, 1).unwrap();
     assert_eq!(latency.len(), 1);
-    assert!(latency[0] > 0.0);
+    // Not a speed target: a bound that only a lost or stuck reply (or a
+    // sample in the wrong unit) breaks, since the pipeline's own time on
+    // this frame is a fraction of it.
+    assert!(latency[0] > 0.0 && latency[0] < 120_000.0, "{latency:?} ms");
 }
 
 #[test]
@@ -71,5 +74,11 @@ fn the_load_measurement_answers_requests_in_order() {
         bench::Load { duration: std::time::Duration::from_secs(2), controllers: 2, camera_hz: 10.0, queue_depth: 2 };
     let figures = bench::daemon_under_load(&scenario, &sim, load).unwrap();
     assert!(!figures.replies.is_empty(), "no request was answered: {:?}", figures.errors);
-    assert!(figures.replies.iter().all(|r| r.reply_ms > 0.0 && r.plan_ms > 0.0));
+    // A reply time runs from the request written to the reply read, so it
+    // holds the pipeline's time for that plan; a mixed-up sample breaks it.
+    for r in &figures.replies {
+        assert!(r.plan_ms > 0.0 && r.reply_ms >= r.plan_ms, "{r:?}");
+    }
+    let frames: Vec<u64> = figures.replies.iter().map(|r| r.frame_id).collect();
+    assert!(frames.iter().all(|&id| id > 0), "every plan names the camera's frame: {frames:?}");
 }

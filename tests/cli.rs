@@ -1,7 +1,8 @@
 //! The `weldseam` binary's command-line contract, run as scripts run it:
 //! `simulate` writes a frame, `plan --json` prints exactly one JSON object
 //! on stdout with base-frame waypoints, errors exit non-zero naming the
-//! failing stage.
+//! failing stage; `serve`, `camera` and `controller` make a cell of three
+//! processes, and `bench --quick` runs to its table.
 
 use std::path::Path;
 use std::process::{Command, Output};
@@ -223,4 +224,136 @@ fn an_unknown_method_is_refused_before_anything_runs() {
     assert!(!out.status.success());
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(stderr.contains("'fast'") && stderr.contains("possible values: robust, paper"), "{stderr}");
+}
+
+/// A `weldseam serve` child on 127.0.0.1 port 0, killed when dropped so a
+/// failing test leaves no daemon behind.
+struct ServeProcess {
+    child: std::process::Child,
+    camera: String,
+    controller: String,
+}
+
+impl ServeProcess {
+    /// Starts the daemon and learns its ports from its "listening" log line.
+    fn start() -> ServeProcess {
+        use std::io::BufRead;
+        let mut child = Command::new(env!("CARGO_BIN_EXE_weldseam"))
+            .args(["--log-format", "json", "serve", "--camera-listen", "127.0.0.1:0"])
+            .args(["--controller-listen", "127.0.0.1:0"])
+            .env_remove("RUST_LOG")
+            .stdin(std::process::Stdio::null())
+            .stdout(std::process::Stdio::null())
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .expect("start weldseam serve");
+        let stderr = std::io::BufReader::new(child.stderr.take().unwrap());
+        let (tx, rx) = std::sync::mpsc::channel();
+        // Reads every log line, so the daemon never blocks on a full pipe.
+        std::thread::spawn(move || {
+            for line in stderr.lines().map_while(Result::ok) {
+                let Ok(v) = serde_json::from_str::<serde_json::Value>(&line) else { continue };
+                let fields = &v["fields"];
+                if fields["message"] == "listening" {
+                    let addr = |k: &str| fields[k].as_str().unwrap_or_default().to_string();
+                    let _ = tx.send((addr("camera"), addr("controller")));
+                }
+            }
+        });
+        let (camera, controller) = match rx.recv_timeout(std::time::Duration::from_secs(60)) {
+            Ok(addrs) => addrs,
+            Err(_) => {
+                let _ = child.kill();
+                panic!("serve logged no listening line within 60 s: {:?}", child.wait());
+            }
+        };
+        assert!(camera.starts_with("127.0.0.1:") && !camera.ends_with(":0"), "{camera}");
+        assert!(controller.starts_with("127.0.0.1:") && !controller.ends_with(":0"), "{controller}");
+        ServeProcess { child, camera, controller }
+    }
+
+    /// SIGTERM, then the exit status within a generous deadline.
+    fn terminate(mut self) -> std::process::ExitStatus {
+        let pid = libc::pid_t::try_from(self.child.id()).unwrap();
+        // SAFETY: signals our own child, which is not yet reaped.
+        assert_eq!(unsafe { libc::kill(pid, libc::SIGTERM) }, 0);
+        wait_at_most(&mut self.child, std::time::Duration::from_secs(60)).expect("serve stops on SIGTERM")
+    }
+}
+
+impl Drop for ServeProcess {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+/// The child's status once it exits, or None after `limit`.
+fn wait_at_most(child: &mut std::process::Child, limit: std::time::Duration) -> Option<std::process::ExitStatus> {
+    let deadline = std::time::Instant::now() + limit;
+    while std::time::Instant::now() < deadline {
+        if let Some(status) = child.try_wait().expect("poll the child") {
+            return Some(status);
+        }
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    }
+    None
+}
+
+/// The cell as three processes: `serve` on ephemeral ports, a `camera`
+/// serving a simulated frame on trigger, and `controller` asking for its
+/// plan and pinging; then SIGTERM stops the daemon cleanly.
+#[test]
+fn serve_camera_and_controller_run_as_processes() {
+    let dir = tempfile::tempdir().unwrap();
+    let (_, truth) = simulate(dir.path(), "i-butt");
+    let serve = ServeProcess::start();
+
+    let mut camera = Command::new(env!("CARGO_BIN_EXE_weldseam"))
+        .args(["camera", "--connect", &serve.camera, "--simulate", "i-butt", "--name", "cli-camera"])
+        .stdin(std::process::Stdio::null())
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .expect("start weldseam camera");
+    // The camera simulates its frame before it connects: wait for it.
+    let mut connected = false;
+    for _ in 0..600 {
+        let ping = weldseam(&["controller", "--connect", &serve.controller, "--ping", "--json"]);
+        assert!(ping.status.success(), "ping: {}", String::from_utf8_lossy(&ping.stderr));
+        let status: serde_json::Value = serde_json::from_slice(&ping.stdout).expect("ping --json prints JSON");
+        if status["cameras"] == 1 {
+            connected = true;
+            break;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(100));
+    }
+    assert!(connected, "the camera process never connected");
+
+    let pose = format!("--pose={}", pose_of(&truth));
+    let plan = weldseam(&["controller", "--connect", &serve.controller, "--joint", "i_butt", &pose, "--json"]);
+    let _ = camera.kill();
+    let _ = camera.wait();
+    assert!(plan.status.success(), "controller: {}", String::from_utf8_lossy(&plan.stderr));
+    let reply: serde_json::Value = serde_json::from_slice(&plan.stdout).expect("controller --json prints JSON");
+    assert_eq!(reply["request_id"], 1);
+    let seam = &reply["result"]["seams"][0];
+    assert_eq!(seam["joint"], "i_butt");
+    assert!(seam["waypoints"].as_array().is_some_and(|w| w.len() >= 10), "{reply}");
+
+    let status = serve.terminate();
+    assert!(status.success(), "serve exited with {status}");
+}
+
+/// `bench` at its smallest runs to the end and prints the per-stage table
+/// with a row per stage and a total.
+#[test]
+fn bench_quick_runs_as_a_process() {
+    let out = weldseam(&["bench", "--quick", "--stages-only", "--runs", "1"]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{text}\n{}", String::from_utf8_lossy(&out.stderr));
+    assert!(text.contains("Per stage at 500 mm"), "{text}");
+    for row in ["plane_points", "total", "valid points", "Mpoints/s"] {
+        assert!(text.lines().any(|l| l.starts_with(row)), "no {row} row in\n{text}");
+    }
 }

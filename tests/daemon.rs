@@ -7,7 +7,7 @@ use std::sync::Arc;
 use std::time::Duration;
 
 use tokio::io::{AsyncReadExt, AsyncWriteExt};
-use tokio::net::{TcpListener, TcpStream};
+use tokio::net::TcpStream;
 use tokio::sync::oneshot;
 use tokio::task::JoinHandle;
 use weldseam::camera::CameraModel;
@@ -18,7 +18,8 @@ use weldseam::joint::JointType;
 use weldseam::mock::ClientError;
 use weldseam::mock::camera::{CameraOptions, MockCamera};
 use weldseam::mock::controller::ControllerClient;
-use weldseam::server::{self, ServerError, ServerState, Stopped};
+use weldseam::server::Stopped;
+use weldseam::server::local::LocalDaemon;
 use weldseam::sim::{Simulation, demo_scene, simulate};
 use weldseam_proto::frame::{self, HEADER_BYTES, Header};
 use weldseam_proto::message::{FrameSelect, Hello, PlanReply, PlanRequest, Role, Tag, Trigger, joint_code};
@@ -26,23 +27,17 @@ use weldseam_proto::{ErrorCode, Message, PROTOCOL_VERSION};
 
 const WAIT: Duration = Duration::from_secs(60);
 
+/// A local daemon and its two addresses as the peers dial them.
 struct Cell {
     camera: String,
     controller: String,
-    stop: Option<oneshot::Sender<()>>,
-    server: JoinHandle<Result<Stopped, ServerError>>,
+    daemon: LocalDaemon,
 }
 
 impl Cell {
     async fn start(config: Config) -> Cell {
-        let camera = TcpListener::bind("127.0.0.1:0").await.unwrap();
-        let controller = TcpListener::bind("127.0.0.1:0").await.unwrap();
-        let (camera_addr, controller_addr) =
-            (camera.local_addr().unwrap().to_string(), controller.local_addr().unwrap().to_string());
-        let state = ServerState::new(config).unwrap();
-        let (stop, stopped) = oneshot::channel::<()>();
-        let server = tokio::spawn(server::run(camera, controller, stopped, state));
-        Cell { camera: camera_addr, controller: controller_addr, stop: Some(stop), server }
+        let daemon = LocalDaemon::start(config).await.unwrap();
+        Cell { camera: daemon.camera_addr.to_string(), controller: daemon.controller_addr.to_string(), daemon }
     }
 
     async fn controller(&self) -> ControllerClient {
@@ -59,9 +54,8 @@ impl Cell {
         (tx, handle)
     }
 
-    async fn shutdown(mut self) -> Stopped {
-        let _ = self.stop.take().unwrap().send(());
-        tokio::time::timeout(WAIT, self.server).await.unwrap().unwrap().unwrap()
+    async fn shutdown(self) -> Stopped {
+        tokio::time::timeout(WAIT, self.daemon.stop()).await.unwrap().unwrap()
     }
 }
 
@@ -201,7 +195,7 @@ async fn wait_for_camera(ctl: &mut ControllerClient) {
 
 /// A frame captured now.
 fn frame_message(frame_id: u64, trigger_id: u64, cloud: &PointCloud) -> Message {
-    Message::Frame(weldseam::mock::camera::frame_of(cloud, frame_id, trigger_id, now_us(0)))
+    Message::Frame(weldseam::convert::to_proto::frame(cloud, frame_id, trigger_id, now_us(0)))
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
@@ -535,7 +529,7 @@ fn now_us(offset_ms: i64) -> u64 {
 }
 
 fn frame_stamped(frame_id: u64, trigger_id: u64, cloud: &PointCloud, capture_time_us: u64) -> Message {
-    Message::Frame(weldseam::mock::camera::frame_of(cloud, frame_id, trigger_id, capture_time_us))
+    Message::Frame(weldseam::convert::to_proto::frame(cloud, frame_id, trigger_id, capture_time_us))
 }
 
 /// Reads until the reply or error for `request_id` (at most `WAIT`).

@@ -2,7 +2,6 @@
 //! both formats, and errors that name the file.
 
 use std::path::Path;
-use std::time::Instant;
 
 use weldseam::cloud::{INVALID_POINT, LoadError, Point, PointCloud, load, pcd, ply};
 
@@ -85,23 +84,6 @@ fn truncated_files_report_the_full_path_and_offset() {
     let message = load(&path).expect_err("data is cut").to_string();
     assert!(message.contains(&path.display().to_string()), "{message}");
     assert!(message.contains("data at point 7 (byte 91)"), "{message}");
-}
-
-/// Timing probe for a full 1920x1200 camera frame; run it in release with
-/// `--ignored --nocapture`. It prints rather than asserts: timings depend
-/// on the machine.
-#[test]
-#[ignore]
-fn full_frame_binary_pcd_parse_time() {
-    let bytes = encoded(|out| pcd::write_binary(&grid(1920, 1200), out));
-    let mut fastest = f64::INFINITY;
-    for _ in 0..20 {
-        let start = Instant::now();
-        let cloud = pcd::parse(&bytes, Path::new("frame.pcd")).expect("valid frame");
-        fastest = fastest.min(start.elapsed().as_secs_f64());
-        assert_eq!(cloud.len(), 1920 * 1200);
-    }
-    println!("1920x1200 binary PCD ({} bytes): fastest parse {:.2} ms", bytes.len(), fastest * 1e3);
 }
 
 /// Arbitrary and damaged files: neither parser panics, and what a parse

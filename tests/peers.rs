@@ -6,12 +6,11 @@
 use std::time::{Duration, Instant};
 
 use tokio::io::{AsyncReadExt, AsyncWriteExt};
-use tokio::net::{TcpListener, TcpStream};
-use tokio::sync::oneshot;
-use tokio::task::JoinHandle;
+use tokio::net::TcpStream;
 use weldseam::config::Config;
 use weldseam::mock::controller::ControllerClient;
-use weldseam::server::{self, ServerError, ServerState, Stopped};
+use weldseam::server::Stopped;
+use weldseam::server::local::LocalDaemon;
 use weldseam_proto::frame::{self, HEADER_BYTES, Header};
 use weldseam_proto::message::{Frame, FrameMeta, Hello, Role};
 use weldseam_proto::{Message, PROTOCOL_VERSION};
@@ -19,28 +18,21 @@ use weldseam_proto::{Message, PROTOCOL_VERSION};
 /// How long any single step may take before the test calls it a hang.
 const WAIT: Duration = Duration::from_secs(30);
 
+/// A local daemon and its two addresses as the peers dial them.
 struct Cell {
     camera: String,
     controller: String,
-    stop: Option<oneshot::Sender<()>>,
-    server: JoinHandle<Result<Stopped, ServerError>>,
+    daemon: LocalDaemon,
 }
 
 impl Cell {
     async fn start(config: Config) -> Cell {
-        let camera = TcpListener::bind("127.0.0.1:0").await.unwrap();
-        let controller = TcpListener::bind("127.0.0.1:0").await.unwrap();
-        let (camera_addr, controller_addr) =
-            (camera.local_addr().unwrap().to_string(), controller.local_addr().unwrap().to_string());
-        let state = ServerState::new(config).unwrap();
-        let (stop, stopped) = oneshot::channel::<()>();
-        let server = tokio::spawn(server::run(camera, controller, stopped, state));
-        Cell { camera: camera_addr, controller: controller_addr, stop: Some(stop), server }
+        let daemon = LocalDaemon::start(config).await.unwrap();
+        Cell { camera: daemon.camera_addr.to_string(), controller: daemon.controller_addr.to_string(), daemon }
     }
 
-    async fn shutdown(mut self) -> Stopped {
-        let _ = self.stop.take().unwrap().send(());
-        tokio::time::timeout(WAIT, self.server).await.unwrap().unwrap().unwrap()
+    async fn shutdown(self) -> Stopped {
+        tokio::time::timeout(WAIT, self.daemon.stop()).await.unwrap().unwrap()
     }
 }
 
@@ -209,18 +201,12 @@ async fn the_metrics_endpoint_counts_plans_frames_connections_and_refusals() {
     let mut c = config();
     c.server.hello_timeout = Duration::from_millis(200);
     c.server.fresh_frame_timeout = Duration::from_millis(200);
-    let camera = TcpListener::bind("127.0.0.1:0").await.unwrap();
-    let controller = TcpListener::bind("127.0.0.1:0").await.unwrap();
-    let metrics = TcpListener::bind("127.0.0.1:0").await.unwrap();
+    let daemon = LocalDaemon::start_with_metrics(c).await.unwrap();
     let (camera_addr, controller_addr, metrics_addr) = (
-        camera.local_addr().unwrap().to_string(),
-        controller.local_addr().unwrap().to_string(),
-        metrics.local_addr().unwrap().to_string(),
+        daemon.camera_addr.to_string(),
+        daemon.controller_addr.to_string(),
+        daemon.metrics_addr.expect("started with metrics").to_string(),
     );
-    let state = ServerState::new(c).unwrap();
-    let scrape = tokio::spawn(server::metrics::serve(metrics, std::sync::Arc::clone(&state)));
-    let (stop, stopped) = oneshot::channel::<()>();
-    let server = tokio::spawn(server::run(camera, controller, stopped, state));
 
     // A camera sends one frame; a controller asks for a frame by an id
     // that does not exist; a silent connection runs out of time.
@@ -277,7 +263,5 @@ async fn the_metrics_endpoint_counts_plans_frames_connections_and_refusals() {
     assert!(http_get(&metrics_addr, "/other").await.starts_with("HTTP/1.1 404"));
 
     drop((cam, ctl));
-    let _ = stop.send(());
-    tokio::time::timeout(WAIT, server).await.unwrap().unwrap().unwrap();
-    scrape.abort();
+    tokio::time::timeout(WAIT, daemon.stop()).await.unwrap().unwrap();
 }

@@ -5,11 +5,11 @@
 use std::time::Duration;
 
 use anyhow::Context;
+use weldseam::convert::to_proto;
 use weldseam::geometry::pose::RobotPose;
 use weldseam::joint::JointType;
 use weldseam::mock::ClientError;
 use weldseam::mock::controller::ControllerClient;
-use weldseam::report::joint_to_proto;
 use weldseam_proto::message::{FrameSelect, PlanRequest};
 
 use super::args;
@@ -104,7 +104,7 @@ async fn exchange(args: &ControllerArgs) -> anyhow::Result<()> {
     let [rx, ry, rz] = pose.angles_deg;
     let request = PlanRequest {
         request_id: args.request_id,
-        joint: PlanRequest::joint_code(joint_to_proto(joint)),
+        joint: PlanRequest::joint_code(to_proto::joint(joint)),
         groove_depth_mm: args.request.groove_depth,
         pose: [x, y, z, rx, ry, rz],
         step_mm: args.request.step,

@@ -10,7 +10,6 @@ use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use anyhow::{Context, bail};
-use tokio::net::TcpListener;
 use tokio::sync::oneshot;
 use weldseam::config::Config;
 use weldseam::eval::path_error;
@@ -18,7 +17,7 @@ use weldseam::geometry::Vec3;
 use weldseam::joint::JointType;
 use weldseam::mock::camera::{CameraOptions, MockCamera};
 use weldseam::mock::controller::{ControllerClient, request_for_simulation};
-use weldseam::server::{self, ServerState};
+use weldseam::server::local::LocalDaemon;
 use weldseam::sim::{Simulation, demo_scene, simulate};
 use weldseam_proto::message::{FrameSelect, PlanReply};
 
@@ -52,13 +51,8 @@ async fn cell(args: &DemoArgs) -> anyhow::Result<()> {
         })
         .collect();
 
-    let camera_listener = TcpListener::bind("127.0.0.1:0").await.context("cannot bind the camera port")?;
-    let controller_listener = TcpListener::bind("127.0.0.1:0").await.context("cannot bind the controller port")?;
-    let camera_addr = camera_listener.local_addr()?.to_string();
-    let controller_addr = controller_listener.local_addr()?.to_string();
-    let state = ServerState::new(config).context("cannot start the pipeline pool")?;
-    let (stop_server, server_stopped) = oneshot::channel::<()>();
-    let daemon = tokio::spawn(server::run(camera_listener, controller_listener, server_stopped, state));
+    let daemon = LocalDaemon::start(config).await.context("cannot start the daemon")?;
+    let (camera_addr, controller_addr) = (daemon.camera_addr.to_string(), daemon.controller_addr.to_string());
     writeln!(out, "daemon listening: camera link {camera_addr}, controller link {controller_addr}")?;
 
     // The camera answers trigger n with frame n: the scenes in order.
@@ -96,9 +90,8 @@ async fn cell(args: &DemoArgs) -> anyhow::Result<()> {
     }
 
     let _ = stop_camera.send(());
-    let _ = stop_server.send(());
     let _ = tokio::time::timeout(STEP_TIMEOUT, camera).await;
-    tokio::time::timeout(STEP_TIMEOUT, daemon).await.context("the daemon did not stop")???;
+    tokio::time::timeout(STEP_TIMEOUT, daemon.stop()).await.context("the daemon did not stop")??;
     if !failures.is_empty() {
         bail!("demo failed: {}", failures.join("; "));
     }

@@ -8,11 +8,11 @@ use anyhow::Context;
 use std::path::PathBuf;
 
 use weldseam::config::{Config, Method};
+use weldseam::convert::to_proto::plan_result;
 use weldseam::eval::{SceneOutcome, run_suite, summarise};
 use weldseam::geometry::pose::EulerConvention;
 use weldseam::joint::JointType;
 use weldseam::pipeline::Stage;
-use weldseam::report::plan_result;
 use weldseam::sim::eval_suite;
 
 #[derive(Debug, clap::Args)]

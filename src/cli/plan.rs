@@ -6,10 +6,10 @@ use std::path::PathBuf;
 use std::io::Write;
 
 use anyhow::{anyhow, bail};
+use weldseam::convert::to_proto::plan_result;
 use weldseam::geometry::pose::{RobotPose, hand_eye_from_rows};
 use weldseam::joint::JointType;
 use weldseam::pipeline::{PlanRequest, Planner, Stage};
-use weldseam::report::plan_result;
 
 use super::args;
 

@@ -13,7 +13,7 @@ use tokio::net::TcpStream;
 use tokio::sync::mpsc;
 use tracing::{info, warn};
 use weldseam_proto::frame::DEFAULT_MAX_FRAME_BYTES;
-use weldseam_proto::message::{Frame, FrameMeta, Hello, Role, Units};
+use weldseam_proto::message::{Hello, Role};
 use weldseam_proto::{Message, PROTOCOL_VERSION};
 
 use super::ClientError;
@@ -219,7 +219,7 @@ impl MockCamera {
         }
         let cloud = &self.frames[index % self.frames.len()];
         let capture_time_us = SystemTime::now().duration_since(UNIX_EPOCH).map(|d| d.as_micros() as u64).unwrap_or(0);
-        let frame = frame_of(cloud, frame_id, trigger_id, capture_time_us);
+        let frame = crate::convert::to_proto::frame(cloud, frame_id, trigger_id, capture_time_us);
         let meta = frame.meta;
         writer.send(&Message::Frame(frame)).await?;
         info!(frame_id, trigger_id, width = meta.width, height = meta.height, "frame sent");
@@ -234,18 +234,4 @@ async fn tick(ticker: &mut Option<tokio::time::Interval>) {
         }
         None => std::future::pending().await,
     }
-}
-
-/// The camera link's Frame message for `cloud` (millimetres), answering
-/// trigger `trigger_id` (0 when free-running).
-pub fn frame_of(cloud: &PointCloud, frame_id: u64, trigger_id: u64, capture_time_us: u64) -> Frame {
-    let meta = FrameMeta {
-        frame_id,
-        trigger_id,
-        capture_time_us,
-        width: cloud.width() as u32,
-        height: cloud.height() as u32,
-        units: Units::Millimetres as u32,
-    };
-    Frame { meta, points: cloud.points().to_vec() }
 }

@@ -113,19 +113,6 @@ pub fn request_for_simulation(
     sim: &crate::sim::Simulation,
     frame: weldseam_proto::message::FrameSelect,
 ) -> PlanRequest {
-    let p = sim.pose;
-    PlanRequest {
-        request_id,
-        joint: PlanRequest::joint_code(crate::report::joint_to_proto(joint)),
-        groove_depth_mm: sim.truth.groove_depth_mm,
-        pose: [p.xyz_mm[0], p.xyz_mm[1], p.xyz_mm[2], p.angles_deg[0], p.angles_deg[1], p.angles_deg[2]],
-        step_mm: None,
-        work_angle_deg: None,
-        travel_angle_deg: None,
-        frame,
-        timeout_ms: 0,
-        camera: None,
-        hand_eye: None,
-        start_near: None,
-    }
+    let request = crate::pipeline::PlanRequest::new(joint, sim.truth.groove_depth_mm, sim.pose);
+    crate::convert::to_proto::plan_request(request_id, &request, frame)
 }

@@ -29,10 +29,9 @@ use super::connection::{Connection, MessageWriter};
 use super::frames::{FrameError, FrameRequest, FrameWait, StoredFrame, Wanted, wall_clock_us};
 use super::jobs::{JobError, JobSlot, JobTimes};
 use super::shutdown::{Shutdown, StopSignal};
-use crate::geometry::Vec3;
-use crate::geometry::pose::{RobotPose, hand_eye_from_rows};
+use crate::convert::from_proto::{self, RequestError};
+use crate::convert::to_proto::plan_result;
 use crate::pipeline::{Plan, PlanRequest, Stage};
-use crate::report::{joint_from_proto, plan_result};
 
 type Writer = Arc<Mutex<MessageWriter<tokio::net::tcp::OwnedWriteHalf>>>;
 
@@ -139,22 +138,10 @@ type Refusal = (ErrorCode, String);
 fn accept(r: &message::PlanRequest, state: &ServerState, places: &Arc<Semaphore>) -> Result<Accepted, Refusal> {
     let s = &state.config.server;
     let bad = |text: String| (ErrorCode::BadRequest, text);
-    let joint = r.joint_type().ok_or_else(|| {
-        (
-            ErrorCode::UnknownJoint,
-            format!("joint code {} is unknown; expected 0 (v_butt), 1 (i_butt) or 2 (lap)", r.joint),
-        )
+    let request = from_proto::plan_request(r).map_err(|e| match e {
+        RequestError::UnknownJoint(_) => (ErrorCode::UnknownJoint, e.to_string()),
+        RequestError::HandEye(_) | RequestError::StartNear(_) => bad(e.to_string()),
     })?;
-    let [x, y, z, rx, ry, rz] = r.pose;
-    let hand_eye = match &r.hand_eye {
-        Some(rows) => Some(hand_eye_from_rows(rows).map_err(|e| bad(format!("hand_eye (End_T_Camera): {e}")))?),
-        None => None,
-    };
-    let start_near = match r.start_near {
-        Some(p) if p.iter().all(|v| v.is_finite()) => Some(Vec3::from(p)),
-        Some(p) => return Err(bad(format!("start_near has a non-finite coordinate: {p:?}"))),
-        None => None,
-    };
     if r.camera.as_deref() == Some("") {
         return Err(bad("camera is an empty name; leave it absent to use any camera".into()));
     }
@@ -168,16 +155,6 @@ fn accept(r: &message::PlanRequest, state: &ServerState, places: &Arc<Semaphore>
             )));
         }
         ms => Duration::from_millis(ms.into()),
-    };
-    let request = PlanRequest {
-        joint: joint_from_proto(joint),
-        groove_depth_mm: r.groove_depth_mm,
-        pose: RobotPose { xyz_mm: [x, y, z], angles_deg: [rx, ry, rz] },
-        hand_eye,
-        step_mm: r.step_mm,
-        work_angle_deg: r.work_angle_deg,
-        travel_angle_deg: r.travel_angle_deg,
-        start_near,
     };
     state.jobs.planner().check_request(&request).map_err(|e| bad(e.reason))?;
     let place = Arc::clone(places).try_acquire_owned().map_err(|_| {

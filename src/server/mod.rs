@@ -19,6 +19,7 @@ pub mod controller_link;
 pub mod frames;
 pub mod idle;
 pub mod jobs;
+pub mod local;
 pub mod metrics;
 pub mod shutdown;
 

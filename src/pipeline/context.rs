@@ -18,6 +18,9 @@ use crate::joint::JointType;
 
 use super::background::{self, PlaneCluster, Workpiece};
 use super::clustering::UNCLUSTERED;
+use super::edge_points::{self, EdgeCriterion};
+use super::neighbours::NeighbourSearch;
+use super::plane_points::PlanePoints;
 use super::ransac::RansacParams;
 use super::refit::{CurveFit, SeamCurve};
 use super::trajectory::{self, Waypoint};
@@ -293,9 +296,29 @@ impl<'a> Context<'a> {
     }
 }
 
+/// The edge points of both plates (Eq. 15 by `criterion`): the cluster
+/// labels renumbered so that plate k is label k, then each plate's members
+/// classified. Both methods take this step alike; only the criterion
+/// differs.
+pub(super) fn plate_edge_points(
+    mut labels: Vec<u32>,
+    workpiece: &Workpiece,
+    search: &NeighbourSearch,
+    plane: &PlanePoints,
+    criterion: &EdgeCriterion,
+) -> [Vec<u32>; 2] {
+    label_plates(&mut labels, workpiece);
+    let plates = std::array::from_fn(|k| edge_points::Plate {
+        labels: &labels,
+        label: k as u32,
+        members: &workpiece.plates[k].members,
+    });
+    edge_points::edge_points_of_plates(search, plane, plates, criterion)
+}
+
 /// The cluster labels renumbered in place so that plate k is label k and
 /// every other point is [`UNCLUSTERED`], as the edge criterion reads them.
-pub(super) fn label_plates(labels: &mut [u32], workpiece: &Workpiece) {
+fn label_plates(labels: &mut [u32], workpiece: &Workpiece) {
     let plate_labels = workpiece.plates.each_ref().map(|p| p.label);
     labels.par_iter_mut().for_each(|l| {
         *l = match plate_labels.iter().position(|p| p == l) {

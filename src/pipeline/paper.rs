@@ -24,7 +24,7 @@
 use crate::config::Method;
 
 use super::context::{self, Context, MIN_CLUSTER_POINTS};
-use super::edge_points::{self, EdgeCriterion, FullCount};
+use super::edge_points::{EdgeCriterion, FullCount};
 use super::neighbours::NeighbourSearch;
 use super::refit::{self, CurveFit, SeamAxes};
 use super::{Plan, PlanError, Stage};
@@ -66,15 +66,8 @@ pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
 
     // 3.4.1: an edge point has at most `paper.edge_ratio` of a frontal
     // plane's neighbour count (Eq. 15).
-    let mut labels = clusters.labels;
-    context::label_plates(&mut labels, &workpiece);
     let criterion = EdgeCriterion { full: FullCount::Frontal, ratio: config.paper.edge_ratio };
-    let plates = std::array::from_fn(|k| edge_points::Plate {
-        labels: &labels,
-        label: k as u32,
-        members: &workpiece.plates[k].members,
-    });
-    let edges = edge_points::edge_points_of_plates(&search, &plane, plates, &criterion);
+    let edges = context::plate_edge_points(clusters.labels, &workpiece, &search, &plane, &criterion);
     ctx.stats.edge_points = [edges[0].len(), edges[1].len()];
     ctx.clock.lap(Stage::EdgePoints);
 

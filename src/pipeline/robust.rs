@@ -26,7 +26,7 @@ use crate::joint::JointType;
 
 use super::boundary::{self, Boundary, BoundaryParams, BoundarySample, CoarseEdge};
 use super::context::{self, Context, MIN_CLUSTER_POINTS};
-use super::edge_points::{self, EdgeCriterion, FullCount};
+use super::edge_points::{EdgeCriterion, FullCount};
 use super::neighbours::NeighbourSearch;
 use super::ransac::EdgeLine;
 use super::refit::{self, SeamAxes};
@@ -103,15 +103,8 @@ pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
 
     // 3.4.1: edge points, at most `pipeline.edge_max_neighbour_ratio` of a
     // tilted plane's count (Eq. 15's rule).
-    let mut labels = clusters.labels;
-    context::label_plates(&mut labels, &workpiece);
     let criterion = EdgeCriterion { full: FullCount::Plane, ratio: cfg.edge_max_neighbour_ratio };
-    let plates = std::array::from_fn(|k| edge_points::Plate {
-        labels: &labels,
-        label: k as u32,
-        members: &workpiece.plates[k].members,
-    });
-    let edges = edge_points::edge_points_of_plates(&search, &plane, plates, &criterion);
+    let edges = context::plate_edge_points(clusters.labels, &workpiece, &search, &plane, &criterion);
     ctx.stats.edge_points = [edges[0].len(), edges[1].len()];
     ctx.clock.lap(Stage::EdgePoints);
 

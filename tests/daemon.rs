@@ -19,7 +19,8 @@ use weldseam::mock::ClientError;
 use weldseam::mock::camera::{CameraOptions, MockCamera};
 use weldseam::mock::controller::ControllerClient;
 use weldseam::server::Stopped;
-use weldseam::server::local::LocalDaemon;
+
+use crate::util::Cell;
 use weldseam::sim::{Simulation, demo_scene, simulate};
 use weldseam_proto::frame::{self, HEADER_BYTES, Header};
 use weldseam_proto::message::{FrameSelect, Hello, PlanReply, PlanRequest, Role, Tag, Trigger, joint_code};
@@ -27,19 +28,8 @@ use weldseam_proto::{ErrorCode, Message, PROTOCOL_VERSION};
 
 const WAIT: Duration = Duration::from_secs(60);
 
-/// A local daemon and its two addresses as the peers dial them.
-struct Cell {
-    camera: String,
-    controller: String,
-    daemon: LocalDaemon,
-}
-
+// The suite's own ways into the shared test cell.
 impl Cell {
-    async fn start(config: Config) -> Cell {
-        let daemon = LocalDaemon::start(config).await.unwrap();
-        Cell { camera: daemon.camera_addr.to_string(), controller: daemon.controller_addr.to_string(), daemon }
-    }
-
     async fn controller(&self) -> ControllerClient {
         ControllerClient::connect(&self.controller, "test-controller").await.unwrap()
     }
@@ -52,10 +42,6 @@ impl Cell {
             let _ = cam.run(rx).await;
         });
         (tx, handle)
-    }
-
-    async fn shutdown(self) -> Stopped {
-        tokio::time::timeout(WAIT, self.daemon.stop()).await.unwrap().unwrap()
     }
 }
 

@@ -11,30 +11,14 @@ use weldseam::config::Config;
 use weldseam::mock::controller::ControllerClient;
 use weldseam::server::Stopped;
 use weldseam::server::local::LocalDaemon;
+
+use crate::util::Cell;
 use weldseam_proto::frame::{self, HEADER_BYTES, Header};
 use weldseam_proto::message::{Frame, FrameMeta, Hello, Role};
 use weldseam_proto::{Message, PROTOCOL_VERSION};
 
 /// How long any single step may take before the test calls it a hang.
 const WAIT: Duration = Duration::from_secs(30);
-
-/// A local daemon and its two addresses as the peers dial them.
-struct Cell {
-    camera: String,
-    controller: String,
-    daemon: LocalDaemon,
-}
-
-impl Cell {
-    async fn start(config: Config) -> Cell {
-        let daemon = LocalDaemon::start(config).await.unwrap();
-        Cell { camera: daemon.camera_addr.to_string(), controller: daemon.controller_addr.to_string(), daemon }
-    }
-
-    async fn shutdown(self) -> Stopped {
-        tokio::time::timeout(WAIT, self.daemon.stop()).await.unwrap().unwrap()
-    }
-}
 
 fn config() -> Config {
     let mut c = Config::default();

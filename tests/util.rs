@@ -2,7 +2,12 @@
 
 use std::path::PathBuf;
 
+use std::time::Duration;
+
 use tempfile::TempDir;
+use weldseam::config::Config;
+use weldseam::server::Stopped;
+use weldseam::server::local::LocalDaemon;
 
 /// Writes `bytes` to a file named `name` in a fresh temporary directory.
 /// The file lives as long as the returned directory guard.
@@ -11,4 +16,25 @@ pub fn write_temp(name: &str, bytes: &[u8]) -> (TempDir, PathBuf) {
     let path = dir.path().join(name);
     std::fs::write(&path, bytes).expect("write the temporary file");
     (dir, path)
+}
+
+/// A daemon on loopback port 0 and its two addresses as the peers dial
+/// them, for the suites that drive it over sockets; each suite adds its
+/// own ways in.
+pub struct Cell {
+    pub camera: String,
+    pub controller: String,
+    pub daemon: LocalDaemon,
+}
+
+impl Cell {
+    pub async fn start(config: Config) -> Cell {
+        let daemon = LocalDaemon::start(config).await.unwrap();
+        Cell { camera: daemon.camera_addr.to_string(), controller: daemon.controller_addr.to_string(), daemon }
+    }
+
+    /// Stops the daemon; a stop that takes a minute is a hang.
+    pub async fn shutdown(self) -> Stopped {
+        tokio::time::timeout(Duration::from_secs(60), self.daemon.stop()).await.unwrap().unwrap()
+    }
 }

@@ -1,9 +1,10 @@
 //! The on-disk schema of config/weldseam.toml. Sections whose values keep
 //! their type (camera, pipeline, paper, trajectory) are the library's own
-//! parameter structs, deserialized directly; only the two whose type
-//! changes on the way in have a schema of their own here: [robot] (an
-//! Euler convention by name, the hand-eye as 16 numbers) and [server]
-//! (addresses as text, durations in ms). Every struct denies unknown keys,
+//! parameter structs, deserialized directly; only the three whose type
+//! changes on the way in have a schema of their own here: [camera] (the
+//! field of view or the intrinsics, either of which may be left out),
+//! [robot] (an Euler convention by name, the hand-eye as 16 numbers) and
+//! [server] (addresses as text, durations in ms). Every struct denies unknown keys,
 //! so a misspelt key is an error rather than a silently ignored setting.
 //! Nothing here is validated; see [`super::Config::from_file`] for that.
 
@@ -16,12 +17,75 @@ use crate::geometry::pose::{EulerConvention, PAPER_HAND_EYE};
 #[derive(Debug, Clone, Deserialize, Default, PartialEq)]
 #[serde(deny_unknown_fields, default)]
 pub struct ConfigFile {
-    pub camera: CameraModel,
+    pub camera: CameraSection,
     pub robot: RobotSection,
     pub pipeline: PipelineParams,
     pub paper: PaperParams,
     pub trajectory: TrajectoryParams,
     pub server: ServerSection,
+}
+
+/// [camera]: the camera model's keys, with the field of view and the
+/// intrinsics each optional (a key left out is `None`; the defaults the
+/// shipped file shows are the paper's field of view and no intrinsics).
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields, default)]
+pub struct CameraSection {
+    pub width_px: u32,
+    pub height_px: u32,
+    #[serde(default)]
+    pub fov_width_mm: Option<f64>,
+    #[serde(default)]
+    pub fov_height_mm: Option<f64>,
+    pub fov_distance_mm: f64,
+    #[serde(default)]
+    pub fx: Option<f64>,
+    #[serde(default)]
+    pub fy: Option<f64>,
+    #[serde(default)]
+    pub cx: Option<f64>,
+    #[serde(default)]
+    pub cy: Option<f64>,
+    pub k1: f64,
+    pub k2: f64,
+    pub p1: f64,
+    pub p2: f64,
+    pub k3: f64,
+    pub baseline_mm: f64,
+    pub nominal_accuracy_mm: f64,
+    pub min_depth_mm: f64,
+    pub max_depth_mm: f64,
+    pub max_off_axis_deg: f64,
+    pub fov_margin_px: f64,
+}
+
+impl Default for CameraSection {
+    /// The paper's camera (Table 1), in the field-of-view form.
+    fn default() -> Self {
+        let c = CameraModel::default();
+        CameraSection {
+            width_px: c.width_px,
+            height_px: c.height_px,
+            fov_width_mm: Some(c.fov_width_mm),
+            fov_height_mm: Some(c.fov_height_mm),
+            fov_distance_mm: c.fov_distance_mm,
+            fx: None,
+            fy: None,
+            cx: None,
+            cy: None,
+            k1: c.distortion.k1,
+            k2: c.distortion.k2,
+            p1: c.distortion.p1,
+            p2: c.distortion.p2,
+            k3: c.distortion.k3,
+            baseline_mm: c.baseline_mm,
+            nominal_accuracy_mm: c.nominal_accuracy_mm,
+            min_depth_mm: c.min_depth_mm,
+            max_depth_mm: c.max_depth_mm,
+            max_off_axis_deg: c.max_off_axis_deg,
+            fov_margin_px: c.fov_margin_px,
+        }
+    }
 }
 
 /// [robot]: the convention is named, the hand-eye a row-major 4x4 list.

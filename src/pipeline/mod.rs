@@ -34,6 +34,7 @@ mod paper;
 pub mod plane_points;
 pub mod ransac;
 pub mod refit;
+pub mod regrid;
 mod robust;
 pub mod trajectory;
 pub mod weld_edges;
@@ -244,11 +245,24 @@ impl Planner {
 
     /// Runs the pipeline on `cloud` (camera frame, mm).
     ///
+    /// First `regrid::prepare` puts a raw export that lost its grid back
+    /// on the camera's, and takes an organized frame's own intrinsics for
+    /// another camera's frame.
+    ///
     /// The method is chosen here, once: `paper.rs` and `robust.rs` each
     /// run the whole way through.
     pub fn plan(&self, cloud: &PointCloud, request: &PlanRequest) -> Result<Plan, PlanError> {
         validate(request, &self.config)?;
-        let ctx = Context::sanitise(&self.config, cloud, request)?;
+        let input = regrid::prepare(&self.config.camera, cloud);
+        let other_camera;
+        let config = match input.camera {
+            Some(camera) => {
+                other_camera = Config { camera, ..self.config.clone() };
+                &other_camera
+            }
+            None => &self.config,
+        };
+        let ctx = Context::sanitise(config, &input.cloud, request)?;
         match self.config.pipeline.method {
             Method::Paper => paper::plan(ctx),
             Method::Robust => robust::plan(ctx),

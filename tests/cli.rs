@@ -199,7 +199,16 @@ fn eval_runs_as_a_process_and_its_plans_file_repeats_digit_for_digit() {
     let dir = tempfile::tempdir().unwrap();
     let run = |name: &str| {
         let path = dir.path().join(name);
-        let out = weldseam(&["eval", "--filter", "i-butt-0", "--limit", "2", "--plans", path.to_str().unwrap()]);
+        let out = weldseam(&[
+            "eval",
+            "--filter",
+            "i-butt-0",
+            "--limit",
+            "2",
+            "--markdown",
+            "--plans",
+            path.to_str().unwrap(),
+        ]);
         let text = String::from_utf8_lossy(&out.stdout).into_owned();
         assert!(out.status.success(), "{text}\n{}", String::from_utf8_lossy(&out.stderr));
         assert!(text.contains("| robust | all | 2 | 2 | 2 |"), "{text}");
@@ -215,6 +224,32 @@ fn eval_runs_as_a_process_and_its_plans_file_repeats_digit_for_digit() {
     assert!(waypoints.len() >= 10);
     assert!(!first.contains("timing"), "no run-to-run timings in the plans file");
     assert_eq!(first, run("b.jsonl"), "the same suite plans the same, to the last digit");
+}
+
+/// `eval` prints aligned text for a terminal and Markdown for the
+/// documents when asked: the same rows either way.
+#[test]
+fn eval_prints_text_by_default_and_markdown_with_the_flag() {
+    let run = |extra: &[&str]| {
+        let args: Vec<&str> =
+            ["eval", "--filter", "lap-0", "--limit", "1", "--robust-only"].iter().chain(extra).copied().collect();
+        let out = weldseam(&args);
+        let text = String::from_utf8_lossy(&out.stdout).into_owned();
+        assert!(out.status.success(), "{text}\n{}", String::from_utf8_lossy(&out.stderr));
+        text
+    };
+    let text = run(&[]);
+    assert!(!text.lines().any(|l| l.starts_with('|')), "no Markdown row without --markdown:\n{text}");
+    let summary =
+        text.lines().find(|l| l.starts_with("robust") && l.contains(" all ")).unwrap_or_else(|| panic!("{text}"));
+    let words: Vec<&str> = summary.split_whitespace().collect();
+    assert_eq!(words[..5], ["robust", "all", "1", "1", "1"], "{summary}");
+    assert!(text.lines().any(|l| l.starts_with("lap-0") && l.contains("pass")), "{text}");
+
+    let markdown = run(&["--markdown"]);
+    assert!(markdown.contains("| robust | all | 1 | 1 | 1 |"), "{markdown}");
+    assert!(markdown.lines().any(|l| l.starts_with("| lap-0") && l.contains("| pass |")), "{markdown}");
+    assert!(markdown.contains("| --- | ---: |"), "a Markdown rule row:\n{markdown}");
 }
 
 #[test]

@@ -10,6 +10,7 @@
 
 pub mod noise;
 pub mod render;
+pub mod scenarios;
 pub mod scene;
 pub mod suite;
 pub mod truth;

@@ -392,3 +392,45 @@ fn bench_quick_runs_as_a_process() {
         assert!(text.lines().any(|l| l.starts_with(row)), "no {row} row in\n{text}");
     }
 }
+
+/// `simulate --variant` writes the capture as a tool would (here without
+/// its grid, as PLY, and downsampled, as PCD), and says so in the truth.
+#[test]
+fn simulate_writes_variants_as_ply_and_pcd() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = |variant: &str, file: &str| {
+        let (out, json) = (dir.path().join(file), dir.path().join(format!("{file}.json")));
+        let args = ["simulate", "--joint", "i-butt", "--variant", variant, "--out", out.to_str().unwrap()];
+        let status = weldseam(&[&args[..], &["--truth", json.to_str().unwrap()]].concat());
+        assert!(status.status.success(), "{variant}: {}", String::from_utf8_lossy(&status.stderr));
+        let truth: serde_json::Value = serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
+        (weldseam::cloud::load(&out).expect("the written cloud loads"), truth)
+    };
+    let (unorganized, truth) = run("unorganized", "frame.ply");
+    assert!(!unorganized.is_organized());
+    assert_eq!(truth["variant"]["points"].as_u64(), Some(unorganized.len() as u64));
+    assert_eq!(unorganized.valid_count(), unorganized.len(), "valid points only");
+    let (voxel, truth) = run("voxel:2", "voxel.pcd");
+    assert_eq!(truth["variant"]["name"], "voxel:2");
+    assert!(voxel.len() > 1000 && voxel.len() * 4 < unorganized.len(), "{} of {}", voxel.len(), unorganized.len());
+
+    let bad = weldseam(&["simulate", "--joint", "lap", "--variant", "voxel:0", "--out", "x.pcd"]);
+    assert!(!bad.status.success());
+    let stderr = String::from_utf8_lossy(&bad.stderr);
+    assert!(stderr.contains("voxel:0 is outside 0.05 to 50 mm"), "{stderr}");
+}
+
+/// `eval --variant` plans the suite on the variant and reports each scene,
+/// planned or refused, without crashing.
+#[test]
+fn eval_runs_its_suite_on_a_variant() {
+    let out = weldseam(&["eval", "--filter", "i-butt-00", "--limit", "1", "--robust-only", "--variant", "voxel:2"]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    // A scene that misses the bar makes eval exit 1 with that message; a
+    // crash or a refused argument would not.
+    assert!(out.status.success() || stderr.contains("miss the bar"), "{text}\n{stderr}");
+    assert!(text.contains("1 scenes as voxel:2 frames"), "{text}");
+    let row = text.lines().find(|l| l.starts_with("i-butt-00")).unwrap_or_else(|| panic!("no scene row in\n{text}"));
+    assert!(row.contains("pass") || row.contains("FAIL"), "{row}");
+}

@@ -14,6 +14,7 @@ use weldseam::geometry::pose::EulerConvention;
 use weldseam::joint::JointType;
 use weldseam::pipeline::Stage;
 use weldseam::sim::eval_suite;
+use weldseam::sim::variants::Variant;
 
 use crate::cli::table::Table;
 
@@ -28,6 +29,11 @@ pub struct EvalArgs {
     /// At most this many scenes (after the filter).
     #[arg(long)]
     pub limit: Option<usize>,
+    /// Plan each scene as this variant of its frame: unorganized,
+    /// voxel:MM, metres, base, cropped:MM, or several joined by commas
+    /// (e.g. cropped:25,voxel:1,metres). Scored against the same truth.
+    #[arg(long, value_name = "VARIANT")]
+    pub variant: Option<Variant>,
     /// Skip the paper-exact comparison.
     #[arg(long)]
     pub robust_only: bool,
@@ -111,7 +117,9 @@ pub fn run(args: &EvalArgs) -> anyhow::Result<()> {
     if !args.robust_only {
         headers.extend(["paper: max mm", "mean mm", "start mm", "end mm", "result"]);
     }
-    let mut scenes_table = Table::new(format!("{} scenes, each planned once", scenes.len()), &headers);
+    let variant = args.variant.clone().unwrap_or_default();
+    let mut scenes_table =
+        Table::new(format!("{} scenes as {variant} frames, each planned once", scenes.len()), &headers);
     let mut plans = match &args.plans {
         Some(path) => Some(std::io::BufWriter::new(
             std::fs::File::create(path).with_context(|| format!("cannot create {}", path.display()))?,
@@ -120,7 +128,7 @@ pub fn run(args: &EvalArgs) -> anyhow::Result<()> {
     };
     let mut plans_written = Ok(());
     let count = scenes.len();
-    let results = run_suite(&scenes, &robust.camera, &configs, |k, outcomes| {
+    let results = run_suite(&scenes, &robust.camera, &variant, &configs, |k, outcomes| {
         if let Some(file) = plans.as_mut()
             && plans_written.is_ok()
         {

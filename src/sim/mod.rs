@@ -14,6 +14,7 @@ pub mod scenarios;
 pub mod scene;
 pub mod suite;
 pub mod truth;
+pub mod variants;
 
 use nalgebra::{Isometry3, Rotation3, Translation3, Unit, UnitQuaternion};
 

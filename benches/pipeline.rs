@@ -11,10 +11,13 @@ use std::hint::black_box;
 use std::path::Path;
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use weldseam::bench::{self, Scenario};
 use weldseam::camera::CameraModel;
+use weldseam::config::Config;
 use weldseam::joint::JointType;
-use weldseam::pipeline::Planner;
+use weldseam::mock::load::frame_message;
+use weldseam::pipeline::{PlanRequest, Planner};
+use weldseam::server::connection::MessageReader;
+use weldseam::sim::scenarios::Scenario;
 use weldseam_proto::frame::DEFAULT_MAX_FRAME_BYTES;
 
 fn scenario() -> Scenario {
@@ -24,8 +27,8 @@ fn scenario() -> Scenario {
 fn pipeline(c: &mut Criterion) {
     let scenario = scenario();
     let sim = scenario.simulate();
-    let planner = Planner::new(scenario.config());
-    let request = scenario.request(&sim);
+    let planner = Planner::new(Config { camera: scenario.camera, ..Config::default() });
+    let request = PlanRequest::new(scenario.joint, sim.truth.groove_depth_mm, sim.pose);
     let mut group = c.benchmark_group("pipeline");
     group.sample_size(10);
     group.bench_function("plan 1920x1200 i_butt 500 mm", |b| {
@@ -38,7 +41,7 @@ fn frame_input(c: &mut Criterion) {
     let sim = scenario().simulate();
     let mut pcd = Vec::new();
     weldseam::cloud::pcd::write_binary(&sim.cloud, &mut pcd).expect("encode the PCD");
-    let message = bench::frame_message(&sim.cloud, 1, 0).expect("encode the frame message");
+    let message = frame_message(&sim.cloud, 1, 0).expect("encode the frame message");
     let rt = tokio::runtime::Builder::new_current_thread().enable_all().build().expect("a runtime");
 
     let mut group = c.benchmark_group("frame input");
@@ -47,7 +50,11 @@ fn frame_input(c: &mut Criterion) {
         b.iter(|| weldseam::cloud::pcd::parse(black_box(&pcd), Path::new("frame.pcd")).expect("the PCD parses"))
     });
     group.bench_function("camera link reader, Frame 27.6 MB", |b| {
-        b.iter(|| rt.block_on(bench::read_like_the_link(black_box(&message))).expect("the frame decodes"))
+        b.iter(|| {
+            let mut reader =
+                MessageReader::new(black_box(&message[..]), std::time::Duration::from_secs(5), DEFAULT_MAX_FRAME_BYTES);
+            rt.block_on(reader.read()).expect("the frame decodes").expect("a whole message")
+        })
     });
     group.bench_function("proto frame::decode, Frame 27.6 MB", |b| {
         b.iter(|| {

@@ -11,6 +11,7 @@ use crate::camera::CameraModel;
 use crate::config::{Config, Method};
 use crate::geometry::{Vec3, distance_to_polyline};
 use crate::pipeline::{Plan, PlanError, PlanRequest, Planner, Seam};
+use crate::sim::variants::Variant;
 use crate::sim::{GroundTruth, SceneSpec, Simulation, simulate};
 
 /// The number of reference points on the true seam (the paper's 12).
@@ -105,18 +106,21 @@ pub fn evaluate_simulation(planner: &Planner, name: &str, spec: &SceneSpec, sim:
 }
 
 /// Simulates and plans every scene with each of `configs`; returns one
-/// outcome list per config. Scenes are rendered once and shared. Scenes
-/// run one at a time; each plan uses the whole rayon pool.
+/// outcome list per config. Scenes are rendered once, made into `variant`
+/// (the truth stays in the camera frame, mm, where plans are scored) and
+/// shared. Scenes run one at a time; each plan uses the whole rayon pool.
 pub fn run_suite(
     scenes: &[(String, SceneSpec)],
     camera: &CameraModel,
+    variant: &Variant,
     configs: &[Config],
     mut progress: impl FnMut(usize, &[SceneOutcome]),
 ) -> Vec<Vec<SceneOutcome>> {
     let planners: Vec<Planner> = configs.iter().cloned().map(Planner::new).collect();
     let mut out: Vec<Vec<SceneOutcome>> = vec![Vec::new(); planners.len()];
     for (k, (name, spec)) in scenes.iter().enumerate() {
-        let sim = simulate(spec, camera);
+        let rendered = simulate(spec, camera);
+        let sim = if variant.is_raw() { rendered } else { variant.apply(&rendered, spec.seed) };
         let outcomes: Vec<SceneOutcome> = planners.iter().map(|p| evaluate_simulation(p, name, spec, &sim)).collect();
         progress(k, &outcomes);
         for (list, o) in out.iter_mut().zip(outcomes) {

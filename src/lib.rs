@@ -7,7 +7,6 @@
 //! planning method for plane welds", made robust where the method as
 //! written breaks. See docs/ARCHITECTURE.md for the code map.
 
-pub mod bench;
 pub mod camera;
 pub mod cloud;
 pub mod config;

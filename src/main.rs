@@ -26,7 +26,7 @@ enum Command {
     Plan(cli::plan::PlanArgs),
     /// Plan the seeded suite of simulated scenes and print the accuracy table.
     Eval(cli::eval::EvalArgs),
-    /// Render a simulated camera frame (organized PCD) and its ground truth (JSON).
+    /// Render a simulated camera frame (organized PCD, or a variant as PCD or PLY) and its ground truth (JSON).
     Simulate(cli::simulate::SimulateArgs),
     /// Run the cell daemon: camera and controller links over TCP.
     Serve(cli::serve::ServeArgs),

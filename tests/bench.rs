@@ -1,78 +1,101 @@
-//! The measuring code of `weldseam bench` at its smallest: one run of the
-//! smallest frame, checked for shape (every stage has its row, every
-//! measurement produced a figure), never for speed.
+//! `weldseam bench` at its smallest, run as a process: one timed run of the
+//! smallest frame and a one-second load, checked for shape (every table
+//! and every row is there and has a figure, the load's replies are in
+//! order), never for speed. And the daemon-driving code it measures with
+//! (`mock::load`), on its own.
 
-use weldseam::bench::{self, FRAME_SIZES, Scenario, camera_with_size};
+use std::process::Command;
+
+use weldseam::config::Config;
 use weldseam::joint::JointType;
+use weldseam::mock::load::{self, Load};
 use weldseam::pipeline::Stage;
-
-use crate::util::write_temp;
+use weldseam::sim::scenarios::{FRAME_SIZES, Scenario, camera_with_size};
 
 fn smallest() -> Scenario {
     let (w, h) = FRAME_SIZES[0];
     Scenario::new(JointType::IButt, 500.0, camera_with_size(w, h))
 }
 
-#[test]
-fn the_stage_and_scaling_tables_have_every_row() {
-    let scenario = smallest();
-    let sim = scenario.simulate();
-    let timings = bench::time_plans(&scenario, &sim, 1);
-    assert_eq!(timings.error, None);
-    assert_eq!(timings.totals.len(), 1);
-    assert!(timings.valid_points > 0);
+/// The cells of the Markdown row whose first cell is `first`.
+fn row<'a>(markdown: &'a str, first: &str) -> Option<Vec<&'a str>> {
+    markdown.lines().find_map(|line| {
+        let cells: Vec<&str> = line.strip_prefix('|')?.strip_suffix('|')?.split(" | ").map(str::trim).collect();
+        (cells.first() == Some(&first)).then_some(cells)
+    })
+}
 
-    let table = bench::stage_table("per stage", std::slice::from_ref(&timings));
-    assert_eq!(table.headers, ["stage", "i_butt ms"]);
-    for stage in Stage::IN_ORDER {
-        let row = table.row(stage.name()).unwrap_or_else(|| panic!("no {stage} row in\n{}", table.to_text()));
-        assert_ne!(row[1], "-", "{stage}");
-    }
-    for name in ["total", "cpu time, all threads", "valid points", "Mpoints/s"] {
-        assert!(table.row(name).is_some_and(|r| r[1] != "-"), "no {name} row in\n{}", table.to_text());
-    }
-    let markdown = table.to_markdown();
-    assert!(Stage::IN_ORDER.iter().all(|s| markdown.contains(&format!("| {} |", s.name()))), "{markdown}");
-
-    let scaling = bench::scaling_table("scaling", &[timings]);
-    let row = scaling.row("896 x 560").expect("a row for the frame size");
-    assert!(row.iter().all(|c| c != "-"), "{row:?}");
+/// A cell that holds a measured figure: a number first, not `-`.
+fn is_figure(cell: &str) -> bool {
+    cell.split_whitespace().next().is_some_and(|n| n.parse::<f64>().is_ok_and(f64::is_finite))
 }
 
 #[test]
-fn loading_decoding_and_the_daemon_give_one_figure_each() {
+fn bench_prints_every_table_with_a_figure_in_every_row() {
+    let (w, h) = FRAME_SIZES[0];
+    let frame = format!("{w}x{h}");
+    let out = Command::new(env!("CARGO_BIN_EXE_weldseam"))
+        .args(["bench", "--quick", "--runs", "1", "--load-seconds", "1", "--markdown", "--frame", &frame])
+        .output()
+        .expect("run weldseam bench");
+    let md = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{md}\n{}", String::from_utf8_lossy(&out.stderr));
+
+    assert!(md.contains(&format!("**Per stage at 500 mm, {w} x {h} (0.5 MP), tilt 10°**")), "{md}");
+    assert_eq!(
+        row(&md, "stage"),
+        Some(vec!["stage", "v_butt ms", "i_butt ms", "lap ms"]),
+        "one column per joint type in\n{md}"
+    );
+    let rows = Stage::IN_ORDER.iter().map(|s| s.name()).chain(["total", "cpu time, all threads", "valid points"]);
+    for name in rows {
+        let cells = row(&md, name).unwrap_or_else(|| panic!("no {name} row in\n{md}"));
+        assert!(cells[1..].iter().all(|c| is_figure(c)), "{name}: {cells:?}");
+    }
+    assert!(!md.contains("a run failed"), "{md}");
+
+    let scaling = row(&md, &format!("{w} x {h}")).unwrap_or_else(|| panic!("no scaling row in\n{md}"));
+    assert!(scaling[1..].iter().all(|c| is_figure(c)), "{scaling:?}");
+    for op in [
+        "load binary PCD (cloud::load)",
+        "decode Frame, camera link reader",
+        "decode Frame, link reader to organized cloud",
+        "decode Frame, in-memory decoder",
+    ] {
+        let cells = row(&md, op).unwrap_or_else(|| panic!("no {op} row in\n{md}"));
+        assert!(is_figure(cells[1]) && is_figure(cells[2]), "{cells:?}");
+    }
+    // The child's peak holds at least its frame: 12 bytes a pixel.
+    let memory = row(&md, "weldseam plan").unwrap_or_else(|| panic!("no memory row in\n{md}"));
+    let peak_mb: f64 = memory[1].trim_end_matches(" MB").parse().expect("peak RSS in MB");
+    assert!(peak_mb * 1e6 >= (w * h * 12) as f64, "{memory:?}");
+    let latency = row(&md, "frame's last byte written to reply's last byte read").expect("a daemon latency row");
+    assert!(is_figure(latency[1]), "{latency:?}");
+    let answered = row(&md, "requests answered with a plan").expect("a load row");
+    assert!(answered[1].parse::<usize>().is_ok_and(|n| n > 0), "{answered:?}");
+    assert_eq!(row(&md, "requests refused").map(|r| r[1]), Some("0"), "{md}");
+}
+
+#[test]
+fn the_daemon_latency_gives_one_sample_per_run() {
     let scenario = smallest();
     let sim = scenario.simulate();
-
-    let mut pcd = Vec::new();
-    weldseam::cloud::pcd::write_binary(&sim.cloud, &mut pcd).unwrap();
-    let (_dir, path) = write_temp("frame.pcd", &pcd);
-    assert_eq!(bench::time_load(&path, 1).unwrap().len(), 1);
-
-    let message = bench::frame_message(&sim.cloud, 1, 0).unwrap();
-    let decode = bench::time_frame_decode(&message, 1).unwrap();
-    assert_eq!((decode.link_reader.len(), decode.link_to_cloud.len(), decode.in_memory.len()), (1, 1, 1));
-    let rt = tokio::runtime::Builder::new_current_thread().enable_all().build().unwrap();
-    let Ok(weldseam_proto::Message::Frame(frame)) = rt.block_on(bench::read_like_the_link(&message)) else {
-        panic!("the link's reader did not decode the frame");
-    };
-    assert_eq!(frame.points.len(), sim.cloud.len());
-
-    let latency = bench::daemon_latency(&scenario, &sim, 1).unwrap();
-    assert_eq!(latency.len(), 1);
+    let config = Config { camera: scenario.camera, ..Config::default() };
+    let latency = load::daemon_latency(config, scenario.joint, &sim, 2).unwrap();
+    assert_eq!(latency.len(), 2);
     // Not a speed target: a bound that only a lost or stuck reply (or a
     // sample in the wrong unit) breaks, since the pipeline's own time on
     // this frame is a fraction of it.
-    assert!(latency[0] > 0.0 && latency[0] < 120_000.0, "{latency:?} ms");
+    assert!(latency.iter().all(|&ms| ms > 0.0 && ms < 120_000.0), "{latency:?} ms");
 }
 
 #[test]
 fn the_load_measurement_answers_requests_in_order() {
     let scenario = smallest();
     let sim = scenario.simulate();
-    let load =
-        bench::Load { duration: std::time::Duration::from_secs(2), controllers: 2, camera_hz: 10.0, queue_depth: 2 };
-    let figures = bench::daemon_under_load(&scenario, &sim, load).unwrap();
+    let config = Config { camera: scenario.camera, ..Config::default() };
+    let load = Load { duration: std::time::Duration::from_secs(2), controllers: 2, camera_hz: 10.0, queue_depth: 2 };
+    let figures = load::daemon_under_load(config, scenario.joint, &sim, load).unwrap();
     assert!(!figures.replies.is_empty(), "no request was answered: {:?}", figures.errors);
     // A reply time runs from the request written to the reply read, so it
     // holds the pipeline's time for that plan; a mixed-up sample breaks it.

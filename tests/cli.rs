@@ -199,7 +199,16 @@ fn eval_runs_as_a_process_and_its_plans_file_repeats_digit_for_digit() {
     let dir = tempfile::tempdir().unwrap();
     let run = |name: &str| {
         let path = dir.path().join(name);
-        let out = weldseam(&["eval", "--filter", "i-butt-0", "--limit", "2", "--plans", path.to_str().unwrap()]);
+        let out = weldseam(&[
+            "eval",
+            "--filter",
+            "i-butt-0",
+            "--limit",
+            "2",
+            "--markdown",
+            "--plans",
+            path.to_str().unwrap(),
+        ]);
         let text = String::from_utf8_lossy(&out.stdout).into_owned();
         assert!(out.status.success(), "{text}\n{}", String::from_utf8_lossy(&out.stderr));
         assert!(text.contains("| robust | all | 2 | 2 | 2 |"), "{text}");
@@ -215,6 +224,32 @@ fn eval_runs_as_a_process_and_its_plans_file_repeats_digit_for_digit() {
     assert!(waypoints.len() >= 10);
     assert!(!first.contains("timing"), "no run-to-run timings in the plans file");
     assert_eq!(first, run("b.jsonl"), "the same suite plans the same, to the last digit");
+}
+
+/// `eval` prints aligned text for a terminal and Markdown for the
+/// documents when asked: the same rows either way.
+#[test]
+fn eval_prints_text_by_default_and_markdown_with_the_flag() {
+    let run = |extra: &[&str]| {
+        let args: Vec<&str> =
+            ["eval", "--filter", "lap-0", "--limit", "1", "--robust-only"].iter().chain(extra).copied().collect();
+        let out = weldseam(&args);
+        let text = String::from_utf8_lossy(&out.stdout).into_owned();
+        assert!(out.status.success(), "{text}\n{}", String::from_utf8_lossy(&out.stderr));
+        text
+    };
+    let text = run(&[]);
+    assert!(!text.lines().any(|l| l.starts_with('|')), "no Markdown row without --markdown:\n{text}");
+    let summary =
+        text.lines().find(|l| l.starts_with("robust") && l.contains(" all ")).unwrap_or_else(|| panic!("{text}"));
+    let words: Vec<&str> = summary.split_whitespace().collect();
+    assert_eq!(words[..5], ["robust", "all", "1", "1", "1"], "{summary}");
+    assert!(text.lines().any(|l| l.starts_with("lap-0") && l.contains("pass")), "{text}");
+
+    let markdown = run(&["--markdown"]);
+    assert!(markdown.contains("| robust | all | 1 | 1 | 1 |"), "{markdown}");
+    assert!(markdown.lines().any(|l| l.starts_with("| lap-0") && l.contains("| pass |")), "{markdown}");
+    assert!(markdown.contains("| --- | ---: |"), "a Markdown rule row:\n{markdown}");
 }
 
 #[test]
@@ -356,4 +391,46 @@ fn bench_quick_runs_as_a_process() {
     for row in ["plane_points", "total", "valid points", "Mpoints/s"] {
         assert!(text.lines().any(|l| l.starts_with(row)), "no {row} row in\n{text}");
     }
+}
+
+/// `simulate --variant` writes the capture as a tool would (here without
+/// its grid, as PLY, and downsampled, as PCD), and says so in the truth.
+#[test]
+fn simulate_writes_variants_as_ply_and_pcd() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = |variant: &str, file: &str| {
+        let (out, json) = (dir.path().join(file), dir.path().join(format!("{file}.json")));
+        let args = ["simulate", "--joint", "i-butt", "--variant", variant, "--out", out.to_str().unwrap()];
+        let status = weldseam(&[&args[..], &["--truth", json.to_str().unwrap()]].concat());
+        assert!(status.status.success(), "{variant}: {}", String::from_utf8_lossy(&status.stderr));
+        let truth: serde_json::Value = serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
+        (weldseam::cloud::load(&out).expect("the written cloud loads"), truth)
+    };
+    let (unorganized, truth) = run("unorganized", "frame.ply");
+    assert!(!unorganized.is_organized());
+    assert_eq!(truth["variant"]["points"].as_u64(), Some(unorganized.len() as u64));
+    assert_eq!(unorganized.valid_count(), unorganized.len(), "valid points only");
+    let (voxel, truth) = run("voxel:2", "voxel.pcd");
+    assert_eq!(truth["variant"]["name"], "voxel:2");
+    assert!(voxel.len() > 1000 && voxel.len() * 4 < unorganized.len(), "{} of {}", voxel.len(), unorganized.len());
+
+    let bad = weldseam(&["simulate", "--joint", "lap", "--variant", "voxel:0", "--out", "x.pcd"]);
+    assert!(!bad.status.success());
+    let stderr = String::from_utf8_lossy(&bad.stderr);
+    assert!(stderr.contains("voxel:0 is outside 0.05 to 50 mm"), "{stderr}");
+}
+
+/// `eval --variant` plans the suite on the variant and reports each scene,
+/// planned or refused, without crashing.
+#[test]
+fn eval_runs_its_suite_on_a_variant() {
+    let out = weldseam(&["eval", "--filter", "i-butt-00", "--limit", "1", "--robust-only", "--variant", "voxel:2"]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    // A scene that misses the bar makes eval exit 1 with that message; a
+    // crash or a refused argument would not.
+    assert!(out.status.success() || stderr.contains("miss the bar"), "{text}\n{stderr}");
+    assert!(text.contains("1 scenes as voxel:2 frames"), "{text}");
+    let row = text.lines().find(|l| l.starts_with("i-butt-00")).unwrap_or_else(|| panic!("no scene row in\n{text}"));
+    assert!(row.contains("pass") || row.contains("FAIL"), "{row}");
 }

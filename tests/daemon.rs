@@ -766,13 +766,15 @@ async fn version_1_peers_get_a_clear_refusal() {
 /// frame wait, to spare a machine shared with others.
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn under_load_every_request_is_answered_in_order_within_the_documented_bound() {
-    use weldseam::bench::{self, Load, quantile};
+    use weldseam::mock::load::{Load, daemon_under_load_async, quantile};
+    use weldseam::sim::scenarios::{FRAME_SIZES, Scenario, camera_with_size};
     let secs: u64 = std::env::var("WELDSEAM_LOAD_TEST_SECS").ok().and_then(|s| s.parse().ok()).unwrap_or(20);
-    let (w, h) = bench::FRAME_SIZES[0];
-    let scenario = bench::Scenario::new(JointType::IButt, 500.0, bench::camera_with_size(w, h));
+    let (w, h) = FRAME_SIZES[0];
+    let scenario = Scenario::new(JointType::IButt, 500.0, camera_with_size(w, h));
     let sim = scenario.simulate();
     let load = Load { duration: Duration::from_secs(secs), controllers: 4, camera_hz: 20.0, queue_depth: 4 };
-    let figures = bench::daemon_under_load_async(&scenario, &sim, load).await.unwrap();
+    let config = weldseam::config::Config { camera: scenario.camera, ..weldseam::config::Config::default() };
+    let figures = daemon_under_load_async(config, scenario.joint, &sim, load).await.unwrap();
     let (waits, plans) = (figures.reply_ms(), figures.plan_ms());
     assert!(figures.errors.is_empty(), "requests were refused under load: {:?}", figures.errors);
     assert!(waits.len() >= 8, "only {} requests were answered in {secs} s", waits.len());

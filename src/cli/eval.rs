@@ -14,6 +14,9 @@ use weldseam::geometry::pose::EulerConvention;
 use weldseam::joint::JointType;
 use weldseam::pipeline::Stage;
 use weldseam::sim::eval_suite;
+use weldseam::sim::variants::Variant;
+
+use crate::cli::table::Table;
 
 #[derive(Debug, clap::Args)]
 pub struct EvalArgs {
@@ -26,10 +29,16 @@ pub struct EvalArgs {
     /// At most this many scenes (after the filter).
     #[arg(long)]
     pub limit: Option<usize>,
+    /// Plan each scene as this variant of its frame: unorganized,
+    /// voxel:MM, metres, base, cropped:MM, or several joined by commas
+    /// (e.g. cropped:25,voxel:1,metres). Scored against the same truth.
+    #[arg(long, value_name = "VARIANT")]
+    pub variant: Option<Variant>,
     /// Skip the paper-exact comparison.
     #[arg(long)]
     pub robust_only: bool,
-    /// Print Markdown tables (for docs/ACCURACY.md).
+    /// Print the tables as Markdown (for docs/ACCURACY.md) instead of
+    /// aligned text.
     #[arg(long)]
     pub markdown: bool,
     /// Also write every scene's planned seams, one JSON line per scene and
@@ -40,35 +49,41 @@ pub struct EvalArgs {
     pub plans: Option<PathBuf>,
 }
 
-fn cell(o: &SceneOutcome) -> String {
+/// The error columns of one method's outcome: max, mean, start, end, result.
+fn cells(o: &SceneOutcome) -> Vec<String> {
     match &o.result {
-        Ok((e, _)) => format!(
-            "{:.3} | {:.3} | {:.2} | {:.2} | {}",
-            e.max_mm,
-            e.mean_mm,
-            e.start_mm,
-            e.end_mm,
-            if e.passes() { "pass" } else { "FAIL" }
-        ),
-        Err(err) => format!("- | - | - | - | FAIL: {}", err.to_string().replace('|', "/")),
+        Ok((e, _)) => vec![
+            format!("{:.3}", e.max_mm),
+            format!("{:.3}", e.mean_mm),
+            format!("{:.2}", e.start_mm),
+            format!("{:.2}", e.end_mm),
+            if e.passes() { "pass" } else { "FAIL" }.to_string(),
+        ],
+        Err(err) => {
+            let mut row = vec!["-".to_string(); 4];
+            row.push(format!("FAIL: {err}"));
+            row
+        }
     }
 }
 
-fn timings(o: &SceneOutcome) -> String {
+/// The total and the per-stage times, ms.
+fn timings(o: &SceneOutcome) -> Vec<String> {
     match &o.result {
         Ok((_, plan)) => {
             let t = &plan.timings;
             let stages: Vec<String> =
                 Stage::IN_ORDER.iter().map(|s| format!("{:.0}", t.get(*s).unwrap_or(0.0))).collect();
-            format!("{:.0} | {}", t.total_ms(), stages.join(" / "))
+            vec![format!("{:.0}", t.total_ms()), stages.join(" / ")]
         }
-        Err(_) => "- | -".into(),
+        Err(_) => vec!["-".into(), "-".into()],
     }
 }
 
-fn describe(o: &SceneOutcome) -> String {
+/// The scene's name, standoff and tilt.
+fn describe(o: &SceneOutcome) -> Vec<String> {
     let p = &o.spec.placement;
-    format!("{} | {:.0} | {:.1}", o.name, p.distance_mm, p.tilt_deg)
+    vec![o.name.clone(), format!("{:.0}", p.distance_mm), format!("{:.1}", p.tilt_deg)]
 }
 
 /// One scene's plan as a JSON line: the seams as `plan --json` reports
@@ -95,18 +110,16 @@ pub fn run(args: &EvalArgs) -> anyhow::Result<()> {
     anyhow::ensure!(!scenes.is_empty(), "no scene matches the filter");
 
     let stage_names: Vec<&str> = Stage::IN_ORDER.iter().map(|s| s.name()).collect();
-    let mut out = std::io::stdout().lock();
-    writeln!(
-        out,
-        "| scene | distance mm | tilt ° | max mm | mean mm | start mm | end mm | result | total ms | {} |{}",
-        stage_names.join(" / "),
-        if args.robust_only { "" } else { " paper: max mm | mean mm | start mm | end mm | result |" }
-    )?;
-    writeln!(
-        out,
-        "|---|---:|---:|---:|---:|---:|---:|---|---:|---|{}",
-        if args.robust_only { "" } else { "---:|---:|---:|---:|---|" }
-    )?;
+    let stages_header = format!("{} ms", stage_names.join(" / "));
+    let mut headers =
+        vec!["scene", "distance mm", "tilt °", "max mm", "mean mm", "start mm", "end mm", "result", "total ms"];
+    headers.push(&stages_header);
+    if !args.robust_only {
+        headers.extend(["paper: max mm", "mean mm", "start mm", "end mm", "result"]);
+    }
+    let variant = args.variant.clone().unwrap_or_default();
+    let mut scenes_table =
+        Table::new(format!("{} scenes as {variant} frames, each planned once", scenes.len()), &headers);
     let mut plans = match &args.plans {
         Some(path) => Some(std::io::BufWriter::new(
             std::fs::File::create(path).with_context(|| format!("cannot create {}", path.display()))?,
@@ -114,30 +127,42 @@ pub fn run(args: &EvalArgs) -> anyhow::Result<()> {
         None => None,
     };
     let mut plans_written = Ok(());
-    let results = run_suite(&scenes, &robust.camera, &configs, |_, outcomes| {
+    let count = scenes.len();
+    let results = run_suite(&scenes, &robust.camera, &variant, &configs, |k, outcomes| {
         if let Some(file) = plans.as_mut()
             && plans_written.is_ok()
         {
             plans_written = outcomes.iter().try_for_each(|o| writeln!(file, "{}", plan_line(o, robust.euler)));
         }
-        let mut line = format!("| {} | {} | {} |", describe(&outcomes[0]), cell(&outcomes[0]), timings(&outcomes[0]));
+        let mut row = describe(&outcomes[0]);
+        row.extend(cells(&outcomes[0]));
+        row.extend(timings(&outcomes[0]));
         if let Some(p) = outcomes.get(1) {
-            line.push_str(&format!(" {} |", cell(p)));
+            row.extend(cells(p));
         }
-        // Progress lines are the table itself, so a long run shows as it goes.
-        let _ = writeln!(std::io::stdout().lock(), "{line}");
+        // A long run shows as it goes, on stderr; the tables come at the end.
+        eprintln!("scene {} of {count}: {} {}", k + 1, outcomes[0].name, row[7]);
+        scenes_table.push(row);
     });
 
     plans_written.context("cannot write the plans file")?;
     if let Some(mut file) = plans {
         file.flush().context("cannot write the plans file")?;
     }
-    writeln!(out)?;
-    writeln!(
-        out,
-        "| method | joint | scenes | seam found | within 1 mm and ends within 2 mm | worst max mm | mean of max mm | worst end mm | median total ms |"
-    )?;
-    writeln!(out, "|---|---|---:|---:|---:|---:|---:|---:|---:|")?;
+    let mut summary = Table::new(
+        "Per method and joint type",
+        &[
+            "method",
+            "joint",
+            "scenes",
+            "seam found",
+            "within 1 mm and ends within 2 mm",
+            "worst max mm",
+            "mean of max mm",
+            "worst end mm",
+            "median total ms",
+        ],
+    );
     for (config, outcomes) in configs.iter().zip(&results) {
         let groups: Vec<(String, Vec<&SceneOutcome>)> = JointType::ALL
             .iter()
@@ -146,21 +171,24 @@ pub fn run(args: &EvalArgs) -> anyhow::Result<()> {
             .collect();
         for (name, group) in groups {
             let s = summarise(group);
-            writeln!(
-                out,
-                "| {} | {} | {} | {} | {} | {:.3} | {:.3} | {:.2} | {:.0} |",
-                config.pipeline.method.name(),
+            summary.push(vec![
+                config.pipeline.method.name().to_string(),
                 name,
-                s.scenes,
-                s.found,
-                s.passed,
-                s.worst_max_mm,
-                s.mean_max_mm,
-                s.worst_end_mm,
-                s.median_total_ms
-            )?;
+                s.scenes.to_string(),
+                s.found.to_string(),
+                s.passed.to_string(),
+                format!("{:.3}", s.worst_max_mm),
+                format!("{:.3}", s.mean_max_mm),
+                format!("{:.2}", s.worst_end_mm),
+                format!("{:.0}", s.median_total_ms),
+            ]);
         }
     }
+    let render = |t: &Table| if args.markdown { t.to_markdown() } else { t.to_text() };
+    let mut out = std::io::stdout().lock();
+    writeln!(out, "{}", render(&scenes_table))?;
+    writeln!(out, "{}", render(&summary))?;
+    out.flush()?;
     let failed = results[0].iter().filter(|o| !o.passes()).count();
     if failed > 0 {
         anyhow::bail!("{failed} of {} scenes miss the bar with the robust method", results[0].len());

@@ -14,3 +14,4 @@ pub mod memory;
 pub mod plan;
 pub mod serve;
 pub mod simulate;
+pub mod table;

@@ -1,6 +1,8 @@
 //! `weldseam simulate`: renders a simulated capture to an organized PCD
-//! file and writes its ground truth, pose and scene as JSON, with the
-//! arguments that run the planner on it.
+//! file (or, with `--variant`, the capture as a real tool would write it:
+//! unorganized, downsampled, cropped, in metres or in the base frame, as
+//! PCD or PLY) and writes its ground truth, pose and scene as JSON, with
+//! the arguments that run the planner on it.
 
 use std::fs::File;
 use std::io::{BufWriter, Write};
@@ -12,9 +14,10 @@ use nalgebra::Isometry3;
 use serde_json::{Value, json};
 
 use weldseam::camera::CameraModel;
-use weldseam::cloud::pcd;
+use weldseam::cloud::{PointCloud, pcd, ply};
 use weldseam::geometry::Vec3;
 use weldseam::joint::JointType;
+use weldseam::sim::variants::Variant;
 use weldseam::sim::{JointGeometry, NoiseSpec, PlateExtent, SceneSpec, Simulation, demo_scene, eval_suite, simulate};
 
 #[derive(Debug, Clone, clap::Args)]
@@ -44,8 +47,14 @@ pub struct SimulateArgs {
     /// outliers.
     #[arg(long)]
     pub no_noise: bool,
-    /// The organized binary PCD file to write.
-    #[arg(long, value_name = "FILE.pcd")]
+    /// Write the capture as this variant: unorganized, voxel:MM, metres,
+    /// base, cropped:MM, or several joined by commas (e.g.
+    /// cropped:25,voxel:1,metres). The truth stays in the camera frame, mm.
+    #[arg(long, value_name = "VARIANT")]
+    pub variant: Option<Variant>,
+    /// The cloud file to write: binary PCD (`.pcd`, organized unless the
+    /// variant drops the grid) or binary little-endian PLY (`.ply`).
+    #[arg(long, value_name = "FILE.pcd|FILE.ply")]
     pub out: PathBuf,
     /// The ground-truth JSON file to write.
     #[arg(long, value_name = "FILE.json")]
@@ -54,19 +63,32 @@ pub struct SimulateArgs {
 
 pub fn run(args: &SimulateArgs) -> Result<()> {
     let (name, spec) = scene_from_args(args)?;
+    let format = CloudFormat::of(&args.out)?;
     let camera = CameraModel::default();
     let started = Instant::now();
-    let sim = simulate(&spec, &camera);
+    let rendered = simulate(&spec, &camera);
+    let variant = args.variant.clone().unwrap_or_default();
+    let sim = variant.apply(&rendered, spec.seed);
     let elapsed = started.elapsed();
-    write_cloud(&sim, &args.out)?;
+    write_cloud(&sim.cloud, format, &args.out)?;
     if let Some(path) = &args.truth {
-        write_truth(&truth_json(name.as_deref(), &spec, &camera, &sim), path)?;
+        let mut json = truth_json(name.as_deref(), &spec, &camera, &sim);
+        json["variant"] = json!({
+            "name": variant.to_string(),
+            "units": if variant.in_metres() { "m" } else { "mm" },
+            "cloud_frame": if variant.in_base_frame() { "base" } else { "camera" },
+            "organized": sim.cloud.is_organized(),
+            "points": sim.cloud.len(),
+        });
+        write_truth(&json, path)?;
     }
     println!(
-        "{}: {} of {} pixels valid, {:.1} mm of seam in view{}; rendered in {:.0} ms",
+        "{}{}: {} points ({} of {} pixels valid in the frame), {:.1} mm of seam in view{}; made in {:.0} ms",
         name.as_deref().unwrap_or(spec.joint.joint_type().name()),
+        if variant.is_raw() { String::new() } else { format!(" as {variant}") },
         sim.cloud.valid_count(),
-        sim.cloud.len(),
+        rendered.cloud.valid_count(),
+        rendered.cloud.len(),
         sim.truth.length_mm,
         if sim.truth.clipped_start || sim.truth.clipped_end { " (clipped)" } else { "" },
         elapsed.as_secs_f64() * 1e3,
@@ -140,10 +162,35 @@ fn cli_joint_name(joint: JointType) -> &'static str {
     }
 }
 
-fn write_cloud(sim: &Simulation, path: &Path) -> Result<()> {
+/// The file formats `simulate` writes, chosen by the file's extension.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum CloudFormat {
+    /// PCD, DATA binary.
+    PcdBinary,
+    // PCD DATA binary_compressed (LZF) goes here once `cloud::pcd` writes
+    // it, chosen by a flag (the extension is `.pcd` either way).
+    /// PLY, binary little endian.
+    PlyBinary,
+}
+
+impl CloudFormat {
+    fn of(path: &Path) -> Result<CloudFormat> {
+        match path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref() {
+            Some("pcd") => Ok(CloudFormat::PcdBinary),
+            Some("ply") => Ok(CloudFormat::PlyBinary),
+            _ => bail!("{}: give a .pcd or .ply file name to write", path.display()),
+        }
+    }
+}
+
+fn write_cloud(cloud: &PointCloud, format: CloudFormat, path: &Path) -> Result<()> {
     let file = File::create(path).with_context(|| format!("cannot create {}", path.display()))?;
-    pcd::write_binary(&sim.cloud, BufWriter::new(file))
-        .with_context(|| format!("cannot write the point cloud to {}", path.display()))
+    let out = BufWriter::new(file);
+    match format {
+        CloudFormat::PcdBinary => pcd::write_binary(cloud, out),
+        CloudFormat::PlyBinary => ply::write_binary_le(cloud, out),
+    }
+    .with_context(|| format!("cannot write the point cloud to {}", path.display()))
 }
 
 fn write_truth(truth: &Value, path: &Path) -> Result<()> {
@@ -279,6 +326,7 @@ mod tests {
             seed: Some(9),
             suite_scene: None,
             no_noise: false,
+            variant: None,
             out,
             truth,
         }
@@ -328,6 +376,27 @@ mod tests {
         a.tilt = Some(95.0);
         let err = run(&a).unwrap_err().to_string();
         assert!(err.contains("tilt"), "{err}");
+    }
+
+    #[test]
+    fn a_variant_is_written_as_ply_with_its_units_and_frame_in_the_truth() {
+        let dir = tempfile::tempdir().unwrap();
+        let (out, truth) = (dir.path().join("frame.ply"), dir.path().join("truth.json"));
+        let mut a = args(out.clone(), Some(truth.clone()));
+        a.variant = Some(Variant::parse("cropped:25,voxel:1,metres").unwrap());
+        run(&a).unwrap();
+        let cloud = weldseam::cloud::load(&out).unwrap();
+        let json: Value = serde_json::from_slice(&std::fs::read(&truth).unwrap()).unwrap();
+        assert_eq!(json["variant"]["name"], "cropped:25,voxel:1,metres");
+        assert_eq!(
+            (json["variant"]["units"].as_str(), json["variant"]["cloud_frame"].as_str()),
+            (Some("m"), Some("camera"))
+        );
+        assert_eq!(json["variant"]["points"].as_u64(), Some(cloud.len() as u64));
+        assert!(!cloud.is_organized() && cloud.len() > 1000, "{} points", cloud.len());
+        assert!(cloud.points().iter().all(|p| p[2] > 0.3 && p[2] < 1.0), "depths in metres");
+        let err = run(&args(dir.path().join("frame.xyz"), None)).unwrap_err().to_string();
+        assert!(err.contains(".pcd or .ply"), "{err}");
     }
 
     #[test]

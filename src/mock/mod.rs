@@ -5,6 +5,7 @@
 
 pub mod camera;
 pub mod controller;
+pub mod load;
 
 use weldseam_proto::message::ErrorReply;
 

@@ -10,9 +10,11 @@
 
 pub mod noise;
 pub mod render;
+pub mod scenarios;
 pub mod scene;
 pub mod suite;
 pub mod truth;
+pub mod variants;
 
 use nalgebra::{Isometry3, Rotation3, Translation3, Unit, UnitQuaternion};
 

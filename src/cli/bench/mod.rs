@@ -10,13 +10,18 @@ use std::path::PathBuf;
 use std::process::{Command, Stdio};
 
 use anyhow::{Context, bail};
-use weldseam::bench::{
-    self, DISTANCES_MM, FRAME_SIZES, PlanTimings, Scenario, Summary, Table, camera_with_size, megapixels,
-    raw_frame_bytes,
-};
 use weldseam::camera::CameraModel;
 use weldseam::cloud::pcd;
 use weldseam::joint::JointType;
+use weldseam::mock::load::{self as daemon_load, frame_message, quantile};
+use weldseam::sim::scenarios::{
+    DISTANCES_MM, FRAME_SIZES, Scenario, TILT_DEG, camera_with_size, megapixels, raw_frame_bytes,
+};
+
+use crate::cli::table::Table;
+use measure::{PlanTimings, Summary, config_for};
+
+pub mod measure;
 
 #[derive(Debug, clap::Args)]
 pub struct BenchArgs {
@@ -37,6 +42,10 @@ pub struct BenchArgs {
     /// Only the per-stage tables: the quick loop while tuning a stage.
     #[arg(long)]
     pub stages_only: bool,
+    /// Only this sensor size, WIDTHxHEIGHT pixels, with the paper's field
+    /// of view (e.g. 896x560, the smallest of the scaling table).
+    #[arg(long, value_name = "WxH", value_parser = parse_frame_size)]
+    pub frame: Option<(u32, u32)>,
     /// Internal: run this program with the arguments after `--`, print
     /// the child's peak resident bytes and nothing else.
     #[arg(long, hide = true)]
@@ -144,7 +153,7 @@ fn measure_child(args: &[String]) -> anyhow::Result<()> {
     let exe = std::env::current_exe().context("cannot find this program's path")?;
     let mut command = Command::new(exe);
     command.args(args).stdin(Stdio::null()).stdout(Stdio::null()).stderr(Stdio::null());
-    let child = bench::run_measuring_peak_rss(&mut command).context("cannot run the measured command")?;
+    let child = measure::run_measuring_peak_rss(&mut command).context("cannot run the measured command")?;
     if !child.status.success() {
         bail!("the measured command failed: {}", child.status);
     }
@@ -153,10 +162,10 @@ fn measure_child(args: &[String]) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// The reply times and service order of [`bench::daemon_under_load`].
-fn load_table(figures: &bench::LoadFigures, load: &bench::Load) -> Table {
+/// The reply times and service order of [`daemon_load::daemon_under_load`].
+fn load_table(figures: &daemon_load::LoadFigures, load: &daemon_load::Load) -> Table {
     let (replies, plans) = (figures.reply_ms(), figures.plan_ms());
-    let q = |v: &[f64], p: f64| bench::quantile(v, p).map(|x| format!("{x:.0}")).unwrap_or_else(|| "-".into());
+    let q = |v: &[f64], p: f64| quantile(v, p).map(|x| format!("{x:.0}")).unwrap_or_else(|| "-".into());
     let mut t = Table::new(
         format!(
             "The daemon under load: {JOINT} at {NEAR_MM:.0} mm, camera streaming, {} controllers planning in a loop",
@@ -174,7 +183,7 @@ fn load_table(figures: &bench::LoadFigures, load: &bench::Load) -> Table {
         format!("{} / {} / {}", q(&replies, 0.5), q(&replies, 0.99), q(&replies, 1.0)),
     ]);
     t.push(vec!["plan time p50 / max, ms".into(), format!("{} / {}", q(&plans, 0.5), q(&plans, 1.0))]);
-    let bound = bench::quantile(&plans, 1.0).map(|p| p * load.queue_depth as f64);
+    let bound = quantile(&plans, 1.0).map(|p| p * load.queue_depth as f64);
     t.push(vec![
         format!("queue depth x longest plan, ms (bound less the frame wait)"),
         bound.map(|b| format!("{b:.0}")).unwrap_or_else(|| "-".into()),
@@ -187,6 +196,16 @@ fn load_table(figures: &bench::LoadFigures, load: &bench::Load) -> Table {
         load.camera_hz, load.queue_depth
     ));
     t
+}
+
+/// `WIDTHxHEIGHT` in pixels, each at least 16 and at most 8192.
+fn parse_frame_size(text: &str) -> Result<(u32, u32), String> {
+    let (w, h) = text.split_once(['x', 'X']).ok_or_else(|| format!("{text:?} is not WIDTHxHEIGHT, e.g. 896x560"))?;
+    let side = |s: &str| -> Result<u32, String> {
+        let v: u32 = s.trim().parse().map_err(|_| format!("{s:?} in {text:?} is not a whole number of pixels"))?;
+        if (16..=8192).contains(&v) { Ok(v) } else { Err(format!("{v} px is outside 16 to 8192")) }
+    };
+    Ok((side(w)?, side(h)?))
 }
 
 /// The first three fields of /proc/loadavg.
@@ -214,20 +233,20 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
     }
     printer.line("")?;
 
-    let camera = CameraModel::default();
+    let camera = args.frame.map(|(w, h)| camera_with_size(w, h)).unwrap_or_default();
     let distances: &[f64] = if args.quick { &DISTANCES_MM[..1] } else { &DISTANCES_MM };
     let mut near_timings: Option<PlanTimings> = None;
     for &distance in distances {
         progress(&format!("every stage at {distance:.0} mm"));
-        let timings = bench::bench_all(&bench::joint_scenarios(distance, camera), runs);
+        let timings = measure::bench_all(&Scenario::each_joint(distance, camera), runs);
         let title = format!(
             "Per stage at {distance:.0} mm, {} x {} ({:.1} MP), tilt {:.0}°",
             camera.width_px,
             camera.height_px,
             megapixels(&camera),
-            bench::TILT_DEG
+            TILT_DEG
         );
-        printer.table(&bench::stage_table(title, &timings))?;
+        printer.table(&measure::stage_table(title, &timings))?;
         if distance == NEAR_MM {
             near_timings = timings.into_iter().find(|t| t.scenario.joint == JOINT);
         }
@@ -241,16 +260,20 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
     let mut scaling = Vec::new();
     for (w, h) in FRAME_SIZES {
         let cam = camera_with_size(w, h);
-        if args.quick && cam != camera {
+        if (args.quick || args.frame.is_some()) && cam != camera {
             continue;
         }
         match near_timings.as_ref().filter(|t| t.scenario.camera == cam) {
             Some(t) => scaling.push(t.clone()),
-            None => scaling.push(bench::bench_scenario(&Scenario::new(JOINT, NEAR_MM, cam), runs)),
+            None => scaling.push(measure::bench_scenario(&Scenario::new(JOINT, NEAR_MM, cam), runs)),
         }
     }
-    let title = format!("Scaling with frame size: {JOINT} at {NEAR_MM:.0} mm, tilt {:.0}°", bench::TILT_DEG);
-    printer.table(&bench::scaling_table(title, &scaling))?;
+    if scaling.is_empty() {
+        // A --frame outside the scaling table's sizes: its one row.
+        scaling.extend(near_timings.clone());
+    }
+    let title = format!("Scaling with frame size: {JOINT} at {NEAR_MM:.0} mm, tilt {TILT_DEG:.0}°");
+    printer.table(&measure::scaling_table(title, &scaling))?;
 
     let scenario = Scenario::new(JOINT, NEAR_MM, camera);
     let sim = scenario.simulate();
@@ -266,9 +289,9 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
         out.flush()?;
     }
     let pcd_bytes = std::fs::metadata(&pcd_path)?.len();
-    let load = bench::time_load(&pcd_path, runs)?;
-    let message = bench::frame_message(&sim.cloud, 1, 0)?;
-    let decode = bench::time_frame_decode(&message, runs)?;
+    let load = measure::time_load(&pcd_path, runs)?;
+    let message = frame_message(&sim.cloud, 1, 0)?;
+    let decode = measure::time_frame_decode(&message, runs)?;
     let mut io_table = Table::new(
         format!("Loading and decoding a {} x {} frame", camera.width_px, camera.height_px),
         &["operation", "bytes", "ms"],
@@ -302,8 +325,22 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
         ),
         "--json".into(),
     ];
+    // A sensor other than the paper's needs its size in the child's config.
+    let config_file = if camera == CameraModel::default() {
+        None
+    } else {
+        let path = std::env::temp_dir().join(format!("weldseam-bench-{}.toml", std::process::id()));
+        let toml = format!("[camera]\nwidth_px = {}\nheight_px = {}\n", camera.width_px, camera.height_px);
+        std::fs::write(&path, toml).with_context(|| format!("cannot write {}", path.display()))?;
+        Some(TempFile(path))
+    };
+    let mut plan_args = plan_args;
+    if let Some(TempFile(path)) = &config_file {
+        plan_args.extend(["--config".to_string(), path.to_string_lossy().into_owned()]);
+    }
     let started = std::time::Instant::now();
     let peak = peak_rss_of(&plan_args)?;
+    drop(config_file);
     let wall = started.elapsed();
     drop(pcd_file);
     let mut memory = Table::new(
@@ -325,7 +362,7 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
     printer.table(&memory)?;
 
     progress("the daemon, trigger to reply");
-    let latency = bench::daemon_latency(&scenario, &sim, runs)?;
+    let latency = daemon_load::daemon_latency(config_for(&scenario), JOINT, &sim, runs)?;
     let mut daemon = Table::new(
         format!("The daemon: {JOINT} at {NEAR_MM:.0} mm in trigger mode over loopback TCP"),
         &["interval", "ms"],
@@ -338,16 +375,29 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
 
     let seconds = args.load_seconds.unwrap_or(if args.quick { 5 } else { 20 }).clamp(1, 3600);
     progress(&format!("the daemon under load for {seconds} s"));
-    let load = bench::Load {
+    let load = daemon_load::Load {
         duration: std::time::Duration::from_secs(seconds),
         controllers: 4,
         camera_hz: 30.0,
         queue_depth: weldseam::config::ServerConfig::default().plan_queue_depth,
     };
-    let figures = bench::daemon_under_load(&scenario, &sim, load)?;
+    let figures = daemon_load::daemon_under_load(config_for(&scenario), JOINT, &sim, load)?;
     printer.table(&load_table(&figures, &load))?;
     if let Some(load) = load_average() {
         printer.line(&format!("load average at the end (1, 5, 15 min): {load}"))?;
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::parse_frame_size;
+
+    #[test]
+    fn frame_sizes_parse_with_their_limits_named() {
+        assert_eq!(parse_frame_size("896x560"), Ok((896, 560)));
+        assert!(parse_frame_size("896").unwrap_err().contains("WIDTHxHEIGHT"));
+        assert!(parse_frame_size("8x560").unwrap_err().contains("16 to 8192"));
+        assert!(parse_frame_size("ax560").unwrap_err().contains("whole number"));
+    }
 }

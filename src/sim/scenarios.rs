@@ -1,0 +1,102 @@
+//! The captures `weldseam bench` plans: the demo scene of each joint type
+//! seen from a given standoff at a fixed tilt, by the paper's camera or one
+//! with another sensor size and the same field of view (so only the pixel
+//! density changes). Measuring them is the bench subcommand's business;
+//! this module only says what the scenes are.
+
+use crate::camera::CameraModel;
+use crate::joint::JointType;
+use crate::sim::{SceneSpec, Simulation, demo_scene, simulate};
+
+/// The frame sizes of the scaling table: the paper's 1920 x 1200 sensor
+/// (2.3 MP) and smaller and larger ones of the same 16:10 shape, all with
+/// the same field of view.
+pub const FRAME_SIZES: [(u32, u32); 4] = [(896, 560), (1280, 800), (1920, 1200), (2880, 1800)];
+
+/// The camera standoffs of the per-stage tables, mm.
+pub const DISTANCES_MM: [f64; 3] = [500.0, 750.0, 1000.0];
+
+/// The camera tilt of every benchmark scene, degrees.
+pub const TILT_DEG: f64 = 10.0;
+
+/// The paper's camera with another sensor size: same field of view at the
+/// same distance, so only the pixel density changes.
+pub fn camera_with_size(width_px: u32, height_px: u32) -> CameraModel {
+    CameraModel { width_px, height_px, ..CameraModel::default() }
+}
+
+/// Megapixels of a camera, for labels.
+pub fn megapixels(camera: &CameraModel) -> f64 {
+    camera.width_px as f64 * camera.height_px as f64 / 1e6
+}
+
+/// Bytes of a frame's raw points: three f32 per pixel.
+pub fn raw_frame_bytes(camera: &CameraModel) -> u64 {
+    camera.width_px as u64 * camera.height_px as u64 * 12
+}
+
+/// One simulated capture to plan: the demo scene of `joint` seen from
+/// `distance_mm` at `tilt_deg` by `camera`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Scenario {
+    pub joint: JointType,
+    pub distance_mm: f64,
+    pub tilt_deg: f64,
+    pub camera: CameraModel,
+}
+
+impl Scenario {
+    /// The scenario at the benchmark's tilt, [`TILT_DEG`].
+    pub fn new(joint: JointType, distance_mm: f64, camera: CameraModel) -> Self {
+        Scenario { joint, distance_mm, tilt_deg: TILT_DEG, camera }
+    }
+
+    /// One scenario per joint type at `distance_mm`, with `camera`.
+    pub fn each_joint(distance_mm: f64, camera: CameraModel) -> Vec<Scenario> {
+        JointType::ALL.iter().map(|&j| Scenario::new(j, distance_mm, camera)).collect()
+    }
+
+    pub fn spec(&self) -> SceneSpec {
+        let mut spec = demo_scene(self.joint);
+        spec.placement.distance_mm = self.distance_mm;
+        spec.placement.tilt_deg = self.tilt_deg;
+        spec
+    }
+
+    pub fn simulate(&self) -> Simulation {
+        simulate(&self.spec(), &self.camera)
+    }
+
+    /// `v_butt 500 mm 2.3 MP`
+    pub fn label(&self) -> String {
+        format!("{} {:.0} mm {:.1} MP", self.joint, self.distance_mm, megapixels(&self.camera))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_frame_size_keeps_the_papers_field_of_view_and_shape() {
+        let paper = CameraModel::default();
+        assert!(FRAME_SIZES.contains(&(paper.width_px, paper.height_px)));
+        for (w, h) in FRAME_SIZES {
+            let camera = camera_with_size(w, h);
+            assert_eq!(camera.width_px * 10, camera.height_px * 16, "{w} x {h} is 16:10");
+            assert_eq!(CameraModel { width_px: paper.width_px, height_px: paper.height_px, ..camera }, paper);
+        }
+        assert_eq!(raw_frame_bytes(&paper), 1920 * 1200 * 12);
+    }
+
+    #[test]
+    fn a_scenario_places_the_demo_scene_at_its_standoff_and_tilt() {
+        let scenario = Scenario::new(JointType::Lap, 750.0, camera_with_size(896, 560));
+        let spec = scenario.spec();
+        assert_eq!((spec.placement.distance_mm, spec.placement.tilt_deg), (750.0, TILT_DEG));
+        assert_eq!(spec.joint.joint_type(), JointType::Lap);
+        assert_eq!(scenario.label(), "lap 750 mm 0.5 MP");
+        let joints: Vec<JointType> = Scenario::each_joint(500.0, scenario.camera).iter().map(|s| s.joint).collect();
+        assert_eq!(joints, JointType::ALL);
+    }
+}

@@ -28,6 +28,7 @@ pub mod clustering;
 mod context;
 pub mod edge_points;
 pub mod grid_search;
+pub mod input;
 pub mod neighbours;
 pub mod orientation;
 mod paper;
@@ -50,6 +51,7 @@ use crate::geometry::pose::RobotPose;
 use crate::joint::JointType;
 
 use context::Context;
+pub use input::{CloudFrame, Units};
 pub use trajectory::Waypoint;
 
 /// What the controller asks for.
@@ -68,6 +70,10 @@ pub struct PlanRequest {
     /// The waypoints start at the seam's end nearest this point (robot
     /// base frame, mm); else by [`trajectory::travel_order`]'s default.
     pub start_near: Option<Vec3>,
+    /// The cloud's units; guessed from its distances by default.
+    pub units: Units,
+    /// The cloud's frame; the camera's by default.
+    pub cloud_frame: CloudFrame,
 }
 
 impl PlanRequest {
@@ -82,6 +88,8 @@ impl PlanRequest {
             work_angle_deg: None,
             travel_angle_deg: None,
             start_near: None,
+            units: Units::Auto,
+            cloud_frame: CloudFrame::Camera,
         }
     }
 }
@@ -242,7 +250,8 @@ impl Planner {
         validate(request, &self.config)
     }
 
-    /// Runs the pipeline on `cloud` (camera frame, mm).
+    /// Runs the pipeline on `cloud`, in the units and frame the request
+    /// names (camera frame and guessed units by default).
     ///
     /// The method is chosen here, once: `paper.rs` and `robust.rs` each
     /// run the whole way through.

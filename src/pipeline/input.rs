@@ -86,15 +86,10 @@ pub fn guess_units(cloud: &PointCloud) -> UnitsGuess {
     }
 }
 
-/// Brings `cloud` into camera-frame millimetres as `request` says it is
-/// given, and refuses a result that cannot be a camera's view. A cloud
-/// already in camera-frame millimetres is returned as it is, uncopied.
-pub(super) fn prepare<'a>(
-    cloud: &'a PointCloud,
-    request: &PlanRequest,
-    config: &Config,
-) -> Result<Cow<'a, PointCloud>, PlanError> {
-    let metres = match request.units {
+/// True when `cloud` is in metres: as `units` says, or as guessed (and
+/// logged with the figures behind the guess) when it says [`Units::Auto`].
+pub fn is_in_metres(cloud: &PointCloud, units: Units) -> bool {
+    match units {
         Units::Millimetres => false,
         Units::Metres => true,
         Units::Auto => {
@@ -108,11 +103,27 @@ pub(super) fn prepare<'a>(
             );
             guess.metres
         }
-    };
+    }
+}
+
+/// A cloud in metres in millimetres, its organization kept.
+pub fn metres_to_millimetres(cloud: &PointCloud) -> PointCloud {
+    transformed(cloud, 1000.0, &Isometry3::identity())
+}
+
+/// Brings `cloud` into camera-frame millimetres as `request` says it is
+/// given, and refuses a result that cannot be a camera's view. A cloud
+/// already in camera-frame millimetres is returned as it is, uncopied.
+pub(super) fn prepare<'a>(
+    cloud: &'a PointCloud,
+    request: &PlanRequest,
+    config: &Config,
+) -> Result<Cow<'a, PointCloud>, PlanError> {
+    let metres = is_in_metres(cloud, request.units);
     let scale = if metres { 1000.0 } else { 1.0 };
     let prepared = match request.cloud_frame {
         CloudFrame::Camera if !metres => Cow::Borrowed(cloud),
-        CloudFrame::Camera => Cow::Owned(transformed(cloud, scale, &Isometry3::identity())),
+        CloudFrame::Camera => Cow::Owned(metres_to_millimetres(cloud)),
         CloudFrame::Base => {
             // p_cam = (Base_T_End * End_T_Camera)^-1 p_base
             let hand_eye = request.hand_eye.unwrap_or(config.hand_eye);

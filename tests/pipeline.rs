@@ -150,7 +150,11 @@ fn points_at_the_optical_centre_are_ignored_not_searched_forever() {
         (0..w * h).map(|i| [(i % 7) as f32 * 0.01, (i % 5) as f32 * 0.01, 0.2 + (i % 3) as f32 * 0.1]).collect();
     let cloud = weldseam::cloud::PointCloud::organized(w, h, points).expect("grid");
     let pose = weldseam::geometry::pose::RobotPose { xyz_mm: [0.0; 3], angles_deg: [0.0; 3] };
-    let err = Planner::new(Config::default()).plan(&cloud, &PlanRequest::new(JointType::Lap, None, pose)).unwrap_err();
+    // Declared millimetres, as a camera's frames are: guessed, a frame this
+    // near the origin would pass for one in metres.
+    let request =
+        PlanRequest { units: weldseam::pipeline::Units::Millimetres, ..PlanRequest::new(JointType::Lap, None, pose) };
+    let err = Planner::new(Config::default()).plan(&cloud, &request).unwrap_err();
     assert!(err.reason.contains("no valid point") && err.reason.contains("millimetres"), "{err}");
     assert_eq!(err.stage, Stage::Input, "{err}");
 }

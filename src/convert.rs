@@ -117,7 +117,7 @@ pub mod from_proto {
     use crate::geometry::Vec3;
     use crate::geometry::pose::{HandEyeError, RobotPose, hand_eye_from_rows};
     use crate::joint::JointType;
-    use crate::pipeline::PlanRequest;
+    use crate::pipeline::{CloudFrame, PlanRequest, Units};
 
     pub fn joint(j: proto::Joint) -> JointType {
         match j {
@@ -158,6 +158,10 @@ pub mod from_proto {
             work_angle_deg: r.work_angle_deg,
             travel_angle_deg: r.travel_angle_deg,
             start_near,
+            // Frames arrive in the camera frame and are scaled to
+            // millimetres by their units code as they are decoded.
+            units: Units::Millimetres,
+            cloud_frame: CloudFrame::Camera,
         })
     }
 }

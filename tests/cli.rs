@@ -434,3 +434,39 @@ fn eval_runs_its_suite_on_a_variant() {
     let row = text.lines().find(|l| l.starts_with("i-butt-00")).unwrap_or_else(|| panic!("no scene row in\n{text}"));
     assert!(row.contains("pass") || row.contains("FAIL"), "{row}");
 }
+
+#[test]
+fn plan_reads_a_compressed_cloud_in_metres_and_refuses_it_as_millimetres() {
+    use weldseam::cloud::{PointCloud, load, pcd};
+    let dir = tempfile::tempdir().unwrap();
+    let (frame, truth) = simulate(dir.path(), "lap");
+    let pose = format!("--pose={}", pose_of(&truth));
+    let cloud = load(Path::new(&frame)).unwrap();
+    let metres: Vec<_> = cloud.points().iter().map(|p| p.map(|c| c * 1e-3)).collect();
+    let metres = PointCloud::organized(cloud.width(), cloud.height(), metres).unwrap();
+    let path = dir.path().join("lap_metres.pcd");
+    let mut bytes = Vec::new();
+    pcd::write_binary_compressed(&metres, &mut bytes).unwrap();
+    std::fs::write(&path, bytes).unwrap();
+    let path = path.to_str().unwrap();
+    let first_waypoint = |args: &[&str]| {
+        let out = weldseam(args);
+        assert!(out.status.success(), "{args:?}: {}", String::from_utf8_lossy(&out.stderr));
+        let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        let xyz = v["seams"][0]["waypoints"][0]["xyz"].as_array().unwrap().clone();
+        xyz.iter().map(|x| x.as_f64().unwrap()).collect::<Vec<f64>>()
+    };
+    let in_mm = first_waypoint(&["plan", "--cloud", &frame, "--joint", "lap", &pose, "--json"]);
+    for units in ["auto", "m"] {
+        let in_m = first_waypoint(&["plan", "--cloud", path, "--joint", "lap", &pose, "--units", units, "--json"]);
+        let d: f64 = in_mm.iter().zip(&in_m).map(|(a, b)| (a - b).powi(2)).sum::<f64>().sqrt();
+        assert!(d < 0.05, "--units {units}: {in_m:?} vs {in_mm:?}");
+    }
+    let as_mm = weldseam(&["plan", "--cloud", path, "--joint", "lap", &pose, "--units", "mm"]);
+    assert!(!as_mm.status.success());
+    assert!(
+        String::from_utf8_lossy(&as_mm.stderr).contains("millimetres"),
+        "{}",
+        String::from_utf8_lossy(&as_mm.stderr)
+    );
+}

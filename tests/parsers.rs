@@ -38,7 +38,8 @@ fn binary_and_ascii_pcd_files_load_as_organized_clouds() {
     let cloud = grid(16, 9);
     let binary = encoded(|out| pcd::write_binary(&cloud, out));
     let ascii = encoded(|out| pcd::write_ascii(&cloud, out));
-    for (name, bytes) in [("frame.pcd", binary), ("frame_ascii.PCD", ascii)] {
+    let compressed = encoded(|out| pcd::write_binary_compressed(&cloud, out));
+    for (name, bytes) in [("frame.pcd", binary), ("frame_ascii.PCD", ascii), ("frame_lzf.pcd", compressed)] {
         let (_dir, path) = write_temp(name, &bytes);
         let loaded = load(&path).expect(name);
         assert!(loaded.is_organized(), "{name}");
@@ -112,6 +113,7 @@ mod damaged_files {
             ("frame.pcd", encoded(|out| pcd::write_binary(&cloud, out))),
             ("frame.pcd", encoded(|out| pcd::write_ascii(&cloud, out))),
             ("mixed.pcd", mixed_pcd.as_bytes().to_vec()),
+            ("compressed.pcd", encoded(|out| pcd::write_binary_compressed(&cloud, out))),
             ("part.ply", encoded(|out| ply::write_binary_le(&cloud, out))),
             ("part.ply", encoded(|out| ply::write_ascii(&cloud, out))),
             ("mesh.ply", mesh_ply.as_bytes().to_vec()),
@@ -123,9 +125,25 @@ mod damaged_files {
         let path = Path::new(name);
         let parsed = if name.ends_with(".pcd") { pcd::parse(bytes, path) } else { ply::parse(bytes, path) };
         if let Ok(cloud) = parsed {
-            // Every point takes at least five bytes ("1 2 3" in ascii, 12
-            // bytes in binary), so a cloud is never larger than that.
-            prop_assert!(cloud.len() * 5 <= bytes.len(), "{} points from {} bytes of {name}", cloud.len(), bytes.len());
+            if bytes.windows(24).any(|w| w == b"DATA binary_compressed\n") {
+                // 12 or more bytes a point, LZF-compressed: LZF expands at
+                // most 88 times.
+                prop_assert!(
+                    cloud.len() * 12 <= bytes.len() * 88,
+                    "{} points from {} compressed bytes",
+                    cloud.len(),
+                    bytes.len()
+                );
+            } else {
+                // Every point takes at least five bytes ("1 2 3" in ascii, 12
+                // bytes in binary), so a cloud is never larger than that.
+                prop_assert!(
+                    cloud.len() * 5 <= bytes.len(),
+                    "{} points from {} bytes of {name}",
+                    cloud.len(),
+                    bytes.len()
+                );
+            }
         }
         Ok(())
     }
@@ -192,19 +210,87 @@ mod damaged_files {
             // first line.
             let mut file = if ply_magic { b"ply\nformat ascii 1.0\n".to_vec() } else { b"VERSION 0.7\nFIELDS x y z\n".to_vec() };
             file.extend(&bytes);
+            // A complete compressed header, so the bytes reach the sizes
+            // and the LZF decoder.
+            let mut compressed = b"FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nWIDTH 4\nHEIGHT 3\nDATA binary_compressed\n".to_vec();
+            compressed.extend(&bytes);
             for name in ["any.pcd", "any.ply"] {
                 parse_checked(name, &bytes)?;
                 parse_checked(name, &file)?;
             }
+            parse_checked("any.pcd", &compressed)?;
         }
 
         #[test]
-        fn damaged_files_never_panic(original in 0..6usize, edits in prop::collection::vec(edit(), 1..6)) {
+        fn damaged_files_never_panic(original in 0..7usize, edits in prop::collection::vec(edit(), 1..6)) {
             let (name, mut bytes) = originals().swap_remove(original);
             for e in &edits {
                 apply(&mut bytes, e);
             }
             parse_checked(name, &bytes)?;
+        }
+    }
+}
+
+/// Every PCD writer's output reads back as the cloud written, organized
+/// or not, holes and all.
+mod pcd_round_trips {
+    use super::*;
+    use proptest::prelude::*;
+
+    fn coordinate() -> impl Strategy<Value = f32> {
+        prop_oneof![Just(f32::NAN), -3000.0f32..3000.0, any::<f32>().prop_filter("finite", |v| v.is_finite())]
+    }
+
+    fn point() -> impl Strategy<Value = Point> {
+        [coordinate(), coordinate(), coordinate()]
+    }
+
+    fn organized() -> impl Strategy<Value = PointCloud> {
+        (2..12usize, 2..9usize).prop_flat_map(|(width, height)| {
+            prop::collection::vec(point(), width * height)
+                .prop_map(move |points| PointCloud::organized(width, height, points).expect("size matches"))
+        })
+    }
+
+    fn unorganized() -> impl Strategy<Value = PointCloud> {
+        prop::collection::vec(point(), 0..200).prop_map(PointCloud::unorganized)
+    }
+
+    type Writer = fn(&PointCloud, &mut Vec<u8>) -> std::io::Result<()>;
+
+    fn check(cloud: &PointCloud) -> Result<(), TestCaseError> {
+        let writers: [(&str, Writer); 3] = [
+            ("binary_compressed", |c, out| pcd::write_binary_compressed(c, out)),
+            ("binary", |c, out| pcd::write_binary(c, out)),
+            ("ascii", |c, out| pcd::write_ascii(c, out)),
+        ];
+        for (kind, write) in writers {
+            let bytes = encoded(|out| write(cloud, out));
+            let back =
+                pcd::parse(&bytes, Path::new("round.pcd")).map_err(|e| TestCaseError::fail(format!("{kind}: {e}")))?;
+            prop_assert_eq!(
+                (back.width(), back.height(), back.is_organized()),
+                (cloud.width(), cloud.height(), cloud.is_organized()),
+                "{}",
+                kind
+            );
+            prop_assert!(same_points(back.points(), cloud.points()), "{}", kind);
+        }
+        Ok(())
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig { cases: 300, failure_persistence: None, ..ProptestConfig::default() })]
+
+        #[test]
+        fn organized_clouds_survive_every_writer(cloud in organized()) {
+            check(&cloud)?;
+        }
+
+        #[test]
+        fn unorganized_clouds_survive_every_writer(cloud in unorganized()) {
+            check(&cloud)?;
         }
     }
 }

@@ -11,5 +11,6 @@ mod parsers;
 mod peers;
 mod pipeline;
 mod requests;
+mod units_frames;
 mod unorganized;
 mod util;

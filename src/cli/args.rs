@@ -68,6 +68,53 @@ pub struct RequestArgs {
     pub hand_eye: Option<[f64; 16]>,
 }
 
+/// How a cloud file's coordinates are to be read: units and frame.
+#[derive(Debug, Clone, Copy, clap::Args)]
+pub struct CloudInputArgs {
+    /// The cloud's units; auto guesses them from its distances (a median
+    /// distance below 20 means metres) and logs the guess.
+    #[arg(long, value_enum, default_value_t = UnitsArg::Auto)]
+    pub units: UnitsArg,
+    /// The cloud's frame: the camera's, or the robot base's (brought into
+    /// the camera frame with --pose and the hand-eye before planning).
+    #[arg(long, value_enum, default_value_t = CloudFrameArg::Camera)]
+    pub cloud_frame: CloudFrameArg,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum UnitsArg {
+    Mm,
+    M,
+    Auto,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum CloudFrameArg {
+    Camera,
+    Base,
+}
+
+impl UnitsArg {
+    pub fn to_library(self) -> weldseam::pipeline::Units {
+        use weldseam::pipeline::Units;
+        match self {
+            UnitsArg::Mm => Units::Millimetres,
+            UnitsArg::M => Units::Metres,
+            UnitsArg::Auto => Units::Auto,
+        }
+    }
+}
+
+impl CloudFrameArg {
+    pub fn to_library(self) -> weldseam::pipeline::CloudFrame {
+        use weldseam::pipeline::CloudFrame;
+        match self {
+            CloudFrameArg::Camera => CloudFrame::Camera,
+            CloudFrameArg::Base => CloudFrame::Base,
+        }
+    }
+}
+
 /// Parses exactly `N` comma-separated numbers, naming the flag in errors.
 pub fn numbers<const N: usize>(flag: &str, text: &str) -> Result<[f64; N], String> {
     let parts: Vec<&str> = text.split(',').map(str::trim).collect();

@@ -17,9 +17,13 @@ pub struct CameraArgs {
     /// The daemon's camera link, host:port.
     #[arg(long, default_value = "127.0.0.1:7301")]
     pub connect: String,
-    /// Point-cloud files to send in turn (.pcd or .ply, mm).
+    /// Point-cloud files to send in turn (.pcd or .ply, camera frame).
     #[arg(long, num_args = 1..)]
     pub file: Vec<PathBuf>,
+    /// The files' units; auto guesses them per file (a median distance
+    /// below 20 means metres). Frames are sent in millimetres.
+    #[arg(long, value_enum, default_value_t = super::args::UnitsArg::Auto)]
+    pub units: super::args::UnitsArg,
     /// Simulated scenes to send in turn: v-butt, i-butt, lap.
     #[arg(long, num_args = 1.., value_delimiter = ',')]
     pub simulate: Vec<JointType>,
@@ -45,7 +49,10 @@ pub fn run(args: &CameraArgs) -> anyhow::Result<()> {
     }
     let mut frames = Vec::new();
     for path in &args.file {
-        let cloud = weldseam::cloud::load(path)?;
+        let mut cloud = weldseam::cloud::load(path)?;
+        if weldseam::pipeline::input::is_in_metres(&cloud, args.units.to_library()) {
+            cloud = weldseam::pipeline::input::metres_to_millimetres(&cloud);
+        }
         info!(file = %path.display(), width = cloud.width(), height = cloud.height(), "loaded");
         frames.push(Arc::new(cloud));
     }

@@ -15,9 +15,12 @@ use super::args;
 
 #[derive(Debug, clap::Args)]
 pub struct PlanArgs {
-    /// Point cloud in the camera frame, mm: .pcd or .ply.
+    /// Point cloud: .pcd or .ply (camera frame and millimetres unless
+    /// --cloud-frame and --units say otherwise).
     #[arg(long)]
     pub cloud: PathBuf,
+    #[command(flatten)]
+    pub input: args::CloudInputArgs,
     /// Joint type: v-butt, i-butt or lap (underscores work too).
     #[arg(long)]
     pub joint: JointType,
@@ -46,6 +49,8 @@ pub fn run(args: &PlanArgs) -> anyhow::Result<()> {
         step_mm: args.request.step,
         work_angle_deg: args.request.work_angle,
         travel_angle_deg: args.request.travel_angle,
+        units: args.input.units.to_library(),
+        cloud_frame: args.input.cloud_frame.to_library(),
         ..PlanRequest::new(args.joint, args.request.groove_depth, args.pose)
     };
     let planner = Planner::new(config);

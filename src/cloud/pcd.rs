@@ -1,5 +1,12 @@
-//! PCD files (Point Cloud Library format, v0.5 to v0.7): ascii and binary
-//! data, organized and unorganized, with any extra fields beside x, y, z.
+//! PCD files (Point Cloud Library format, v0.5 to v0.7): ascii, binary and
+//! binary_compressed data, organized and unorganized, with any extra fields
+//! beside x, y, z.
+//!
+//! `binary_compressed` is laid out as PCL's writer lays it out: after the
+//! DATA line, the compressed and the uncompressed size (u32, little
+//! endian), then one LZF stream whose uncompressed bytes hold the fields
+//! one after another (every point's first field, then every point's
+//! second...), padding fields named `_` left out.
 
 use std::io::{self, Write};
 use std::path::Path;
@@ -19,6 +26,7 @@ pub fn parse(bytes: &[u8], path: &Path) -> Result<PointCloud, LoadError> {
     let header = read_header(&mut lines, path)?;
     let points = match header.data {
         DataKind::Binary => decode_binary(lines.rest(), &header, path)?,
+        DataKind::BinaryCompressed => decode_compressed(lines.rest(), &header, path)?,
         DataKind::Ascii => decode_ascii(&mut lines, &header, path)?,
     };
     if header.height > 1 {
@@ -33,6 +41,7 @@ pub fn parse(bytes: &[u8], path: &Path) -> Result<PointCloud, LoadError> {
 enum DataKind {
     Ascii,
     Binary,
+    BinaryCompressed,
 }
 
 /// Where one coordinate sits in a point record: by byte for binary data,
@@ -48,7 +57,13 @@ struct Coordinate {
 #[derive(Debug)]
 struct Header {
     xyz: [Coordinate; 3],
+    /// Where x, y and z sit in a compressed file's field-by-field record:
+    /// the bytes of the fields before each, padding fields left out.
+    planes: [Coordinate; 3],
     point_bytes: usize,
+    /// The bytes one point takes in compressed data: `point_bytes` less
+    /// the padding fields, which PCL leaves out there.
+    compressed_point_bytes: usize,
     values_per_point: usize,
     width: usize,
     height: usize,
@@ -117,11 +132,9 @@ fn data_kind(values: &[&str]) -> Result<DataKind, String> {
     match values {
         ["ascii"] => Ok(DataKind::Ascii),
         ["binary"] => Ok(DataKind::Binary),
-        ["binary_compressed"] => {
-            Err("DATA binary_compressed is not supported: re-save the cloud as binary or ascii".into())
-        }
-        [other] => Err(format!("unknown DATA kind {} (expected ascii or binary)", quoted(other))),
-        _ => Err("DATA takes exactly one value: ascii or binary".into()),
+        ["binary_compressed"] => Ok(DataKind::BinaryCompressed),
+        [other] => Err(format!("unknown DATA kind {} (expected ascii, binary or binary_compressed)", quoted(other))),
+        _ => Err("DATA takes exactly one value: ascii, binary or binary_compressed".into()),
     }
 }
 
@@ -166,10 +179,14 @@ impl RawHeader {
         let (width, height, points) = self.dimensions(data_line, path)?;
         let layout = Layout::new(&names.value, &scalars, &counts.value)
             .ok_or_else(|| header_error(path, sizes.line, "point record size overflows"))?;
-        let xyz = locate_xyz(&names.value, &layout, names.line, types.line, path)?;
+        let xyz_lines = XyzLines { fields: names.line, types: types.line, counts: counts.line };
+        let xyz = locate_xyz(&names.value, &layout.starts, &layout, xyz_lines, path)?;
+        let planes = locate_xyz(&names.value, &layout.planes, &layout, xyz_lines, path)?;
         Ok(Header {
             xyz,
+            planes,
             point_bytes: layout.point_bytes,
+            compressed_point_bytes: layout.compressed_point_bytes,
             values_per_point: layout.values_per_point,
             width,
             height,
@@ -312,11 +329,18 @@ fn scalar_for(code: char, size: usize) -> Option<Scalar> {
     })
 }
 
+/// The name PCL gives padding fields; its compressed data leaves them out.
+const PADDING_FIELD: &str = "_";
+
 /// Where each field starts in a point record, with overflow-checked totals.
 struct Layout {
     starts: Vec<Coordinate>,
+    /// Each field's start in the compressed layout's per-point bytes
+    /// (padding fields take none there).
+    planes: Vec<Coordinate>,
     counts: Vec<usize>,
     point_bytes: usize,
+    compressed_point_bytes: usize,
     values_per_point: usize,
 }
 
@@ -324,40 +348,61 @@ impl Layout {
     fn new(names: &[String], scalars: &[Scalar], counts: &[usize]) -> Option<Self> {
         let mut layout = Layout {
             starts: Vec::with_capacity(names.len()),
+            planes: Vec::with_capacity(names.len()),
             counts: counts.to_vec(),
             point_bytes: 0,
+            compressed_point_bytes: 0,
             values_per_point: 0,
         };
-        for (&scalar, &count) in scalars.iter().zip(counts) {
+        for ((name, &scalar), &count) in names.iter().zip(scalars).zip(counts) {
             layout.starts.push(Coordinate {
                 byte_offset: layout.point_bytes,
                 value_index: layout.values_per_point,
                 scalar,
             });
+            layout.planes.push(Coordinate {
+                byte_offset: layout.compressed_point_bytes,
+                value_index: layout.values_per_point,
+                scalar,
+            });
             let bytes = scalar.size().checked_mul(count)?;
             layout.point_bytes = layout.point_bytes.checked_add(bytes)?;
+            if name != PADDING_FIELD {
+                layout.compressed_point_bytes = layout.compressed_point_bytes.checked_add(bytes)?;
+            }
             layout.values_per_point = layout.values_per_point.checked_add(count)?;
         }
         Some(layout)
     }
 }
 
+/// The header lines an error about x, y or z points at.
+#[derive(Clone, Copy)]
+struct XyzLines {
+    fields: usize,
+    types: usize,
+    counts: usize,
+}
+
+/// x, y and z among `starts` (one per field), checked to be single floats.
 fn locate_xyz(
     names: &[String],
+    starts: &[Coordinate],
     layout: &Layout,
-    fields_line: usize,
-    types_line: usize,
+    lines: XyzLines,
     path: &Path,
 ) -> Result<[Coordinate; 3], LoadError> {
     let locate = |axis: &str| {
         let index = names.iter().position(|n| n == axis).ok_or_else(|| {
-            header_error(path, fields_line, format!("no {axis:?} field: FIELDS must include x, y and z"))
+            header_error(path, lines.fields, format!("no {axis:?} field: FIELDS must include x, y and z"))
         })?;
-        let start = layout.starts.get(index).copied();
-        let count = layout.counts.get(index).copied().unwrap_or(0);
-        start.filter(|c| c.scalar.is_float() && count > 0).ok_or_else(|| {
-            header_error(path, types_line, format!("field {axis:?} must be TYPE F with SIZE 4 or 8 and COUNT 1"))
-        })
+        let requirement = format!("field {axis:?} must be TYPE F with SIZE 4 or 8 and COUNT 1");
+        let start = starts.get(index).copied().filter(|c| c.scalar.is_float());
+        let start = start.ok_or_else(|| header_error(path, lines.types, requirement.clone()))?;
+        match layout.counts.get(index).copied().unwrap_or(0) {
+            1 => Ok(start),
+            count => Err(header_error(path, lines.counts, format!("{requirement}, not COUNT {count}"))),
+        }
     };
     Ok([locate("x")?, locate("y")?, locate("z")?])
 }
@@ -386,6 +431,87 @@ fn decode_binary(body: &[u8], header: &Header, path: &Path) -> Result<Vec<Point>
     Ok(data
         .chunks_exact(header.point_bytes.max(1))
         .map(|record| header.xyz.map(|c| c.scalar.read_coordinate(record, c.byte_offset, Endian::Little)))
+        .collect())
+}
+
+/// LZF output is at most this many times its input (a three-byte back
+/// reference copies at most 264 bytes), so a declared size beyond it is
+/// refused before anything is allocated for it.
+const LZF_MAX_EXPANSION: usize = 88;
+
+/// The compressed and the uncompressed size before the LZF stream.
+const COMPRESSED_SIZES_BYTES: usize = 8;
+
+/// Decodes `DATA binary_compressed`: two sizes, then one LZF stream of
+/// the fields laid out one after another.
+fn decode_compressed(body: &[u8], header: &Header, path: &Path) -> Result<Vec<Point>, LoadError> {
+    let Some((sizes, rest)) = body.split_first_chunk::<COMPRESSED_SIZES_BYTES>() else {
+        return Err(data_error(
+            path,
+            "compressed sizes (byte 0)",
+            format!(
+                "file ends early: expected the {COMPRESSED_SIZES_BYTES} bytes of compressed and uncompressed \
+                 size after the header, found {}",
+                body.len()
+            ),
+        ));
+    };
+    let [c0, c1, c2, c3, u0, u1, u2, u3] = *sizes;
+    let compressed = u32::from_le_bytes([c0, c1, c2, c3]) as usize;
+    let uncompressed = u32::from_le_bytes([u0, u1, u2, u3]) as usize;
+    let location = "compressed data (byte 8)";
+    // Cannot overflow: the point total is capped and the record size is a
+    // checked sum, but a corrupt header must still not panic.
+    let expected = header.points.checked_mul(header.compressed_point_bytes);
+    if expected != Some(uncompressed) {
+        return Err(data_error(
+            path,
+            "compressed sizes (byte 4)",
+            format!(
+                "uncompressed size {uncompressed} is not POINTS {} x {} bytes per point",
+                header.points, header.compressed_point_bytes
+            ),
+        ));
+    }
+    let Some(stream) = rest.get(..compressed) else {
+        return Err(data_error(
+            path,
+            location,
+            format!("file ends early: expected {compressed} bytes of compressed data, found {}", rest.len()),
+        ));
+    };
+    if uncompressed > compressed.saturating_mul(LZF_MAX_EXPANSION) {
+        return Err(data_error(
+            path,
+            location,
+            format!(
+                "{compressed} bytes of LZF data cannot hold the {uncompressed} bytes declared \
+                 (LZF expands at most {LZF_MAX_EXPANSION} times)"
+            ),
+        ));
+    }
+    if uncompressed == 0 {
+        return Ok(Vec::new());
+    }
+    let mut data = vec![0; uncompressed];
+    match lzf_rust::decompress(stream, &mut data) {
+        Ok(written) if written == uncompressed => {}
+        Ok(written) => {
+            return Err(data_error(
+                path,
+                location,
+                format!("LZF data decompresses to {written} bytes, not the {uncompressed} declared"),
+            ));
+        }
+        Err(err) => return Err(data_error(path, location, format!("corrupt LZF data: {err}"))),
+    }
+    // Each coordinate's values follow one another from its field's start,
+    // which lies `points` records' worth of earlier fields into the data.
+    let columns = header.planes.map(|c| (c.byte_offset * header.points, c.scalar));
+    Ok((0..header.points)
+        .map(|i| {
+            columns.map(|(start, scalar)| scalar.read_coordinate(&data, start + i * scalar.size(), Endian::Little))
+        })
         .collect())
 }
 
@@ -467,6 +593,37 @@ pub fn write_binary<W: Write>(cloud: &PointCloud, mut out: W) -> io::Result<()> 
         }
     }
     out.write_all(&buf)?;
+    out.flush()
+}
+
+/// Writes `cloud` as PCL writes `DATA binary_compressed` (fields x y z,
+/// f32 little endian), keeping its organization; invalid points are
+/// written as NaN.
+pub fn write_binary_compressed<W: Write>(cloud: &PointCloud, mut out: W) -> io::Result<()> {
+    write_header(cloud, "binary_compressed", &mut out)?;
+    // All x, then all y, then all z: similar values side by side compress
+    // better, which is why PCL lays the fields out so.
+    let mut planar = Vec::with_capacity(cloud.len() * 12);
+    for axis in 0..3 {
+        for p in cloud.points() {
+            planar.extend_from_slice(&p[axis].to_le_bytes());
+        }
+    }
+    let mut compressed = vec![0; lzf_rust::max_compressed_size(planar.len())];
+    let written = if planar.is_empty() {
+        0
+    } else {
+        lzf_rust::compress(&planar, &mut compressed)
+            .map_err(|err| io::Error::other(format!("LZF compression failed: {err}")))?
+    };
+    let size = |n: usize| {
+        u32::try_from(n).map_err(|_| {
+            io::Error::new(io::ErrorKind::InvalidInput, "cloud too large for binary_compressed (over 4 GiB of data)")
+        })
+    };
+    out.write_all(&size(written)?.to_le_bytes())?;
+    out.write_all(&size(planar.len())?.to_le_bytes())?;
+    out.write_all(compressed.get(..written).unwrap_or_default())?;
     out.flush()
 }
 
@@ -636,7 +793,9 @@ mod tests {
             write_binary(&cloud, &mut binary).unwrap();
             let mut ascii = Vec::new();
             write_ascii(&cloud, &mut ascii).unwrap();
-            for bytes in [binary, ascii] {
+            let mut compressed = Vec::new();
+            write_binary_compressed(&cloud, &mut compressed).unwrap();
+            for bytes in [binary, ascii, compressed] {
                 let back = parse(&bytes, path()).unwrap();
                 assert_eq!((back.width(), back.height()), (cloud.width(), cloud.height()));
                 assert_eq!(back.is_organized(), cloud.is_organized());
@@ -645,11 +804,100 @@ mod tests {
         }
     }
 
+    /// The data section PCL's writer puts after `DATA binary_compressed`:
+    /// the two sizes, then the LZF stream of `planar` (fields one after
+    /// another), then the zeros PCL pads the file to a page with.
+    fn pcl_compressed_body(planar: &[u8]) -> Vec<u8> {
+        let mut stream = vec![0; lzf_rust::max_compressed_size(planar.len())];
+        let written = lzf_rust::compress(planar, &mut stream).unwrap();
+        stream.truncate(written);
+        let mut body = Vec::new();
+        body.extend((written as u32).to_le_bytes());
+        body.extend((planar.len() as u32).to_le_bytes());
+        body.extend(stream);
+        body.extend([0; 37]);
+        body
+    }
+
+    /// Fields of 1, 8, 4 and 4 bytes, a padding field PCL leaves out of
+    /// compressed data and an unused rgb field, in PCL's layout.
     #[test]
-    fn compressed_data_is_refused_by_name() {
-        let err = parse_str(&xyz_header(1, 1, "binary_compressed")).unwrap_err();
-        assert!(matches!(err, LoadError::Header { line: 10, .. }), "{err}");
-        assert!(err.to_string().contains("binary_compressed is not supported"));
+    fn compressed_files_laid_out_as_pcl_writes_them() {
+        let header = "# .PCD v0.7 - Point Cloud Data file format\nVERSION 0.7\nFIELDS intensity x y _ z rgb\n\
+                      SIZE 1 8 4 4 4 4\nTYPE U F F U F U\nCOUNT 1 1 1 1 1 1\nWIDTH 3\nHEIGHT 1\n\
+                      VIEWPOINT 0 0 0 1 0 0 0\nPOINTS 3\nDATA binary_compressed\n";
+        let xs = [1.5f64, -250.25, 0.0];
+        let ys = [2.0f32, 7.5, f32::NAN];
+        let zs = [500.0f32, 612.5, f32::NAN];
+        let mut planar = vec![10u8, 20, 30];
+        planar.extend(xs.iter().flat_map(|v| v.to_le_bytes()));
+        planar.extend(ys.iter().flat_map(|v| v.to_le_bytes()));
+        planar.extend(zs.iter().flat_map(|v| v.to_le_bytes()));
+        planar.extend([0xff00_00ffu32, 0x00ff_00ff, 0x0000_ffff].iter().flat_map(|v| v.to_le_bytes()));
+        let mut bytes = header.as_bytes().to_vec();
+        bytes.extend(pcl_compressed_body(&planar));
+        let cloud = parse(&bytes, path()).unwrap();
+        assert_eq!(cloud.points(), &[[1.5, 2.0, 500.0], [-250.25, 7.5, 612.5]]);
+    }
+
+    #[test]
+    fn compressed_organized_frames_keep_the_grid() {
+        let header = xyz_header(2, 2, "binary_compressed");
+        let planar = le_f32(&[1.0, f32::NAN, 3.0, 4.0, -1.0, f32::NAN, -3.0, -4.0, 400.0, f32::NAN, 402.0, 403.0]);
+        let mut bytes = header.into_bytes();
+        bytes.extend(pcl_compressed_body(&planar));
+        let cloud = parse(&bytes, path()).unwrap();
+        assert!(cloud.is_organized());
+        assert_eq!(cloud.valid_count(), 3);
+        assert_eq!(cloud.at(0, 1), Some(&[3.0, -3.0, 402.0]));
+        assert_eq!(cloud.at(1, 0), None);
+    }
+
+    #[test]
+    fn broken_compressed_data_is_an_error_naming_the_problem() {
+        let header = xyz_header(2, 1, "binary_compressed");
+        let planar = le_f32(&[1.0, 2.0, 3.0, 4.0, 5.0, 6.0]);
+        let good = pcl_compressed_body(&planar);
+        let with_body = |body: &[u8]| {
+            let mut bytes = header.clone().into_bytes();
+            bytes.extend(body);
+            parse(&bytes, path()).map_err(|e| e.to_string())
+        };
+        assert!(with_body(&good).is_ok());
+        let sized = |compressed: u32, uncompressed: u32| {
+            let mut body = good.clone();
+            body[..4].copy_from_slice(&compressed.to_le_bytes());
+            body[4..8].copy_from_slice(&uncompressed.to_le_bytes());
+            body
+        };
+        let stream_len = u32::from_le_bytes(good[..4].try_into().unwrap());
+        let mut corrupt = good.clone();
+        corrupt[8] = 0xe0; // a back reference before any output
+        let cases: Vec<(&str, Vec<u8>, &str)> = vec![
+            ("no sizes", good[..5].to_vec(), "expected the 8 bytes of compressed and uncompressed size"),
+            ("size not points x record", sized(stream_len, 25), "uncompressed size 25 is not POINTS 2 x 12"),
+            ("huge size", sized(stream_len, u32::MAX), "is not POINTS 2 x 12"),
+            ("stream cut", sized(10_000, 24), "expected 10000 bytes of compressed data"),
+            ("expansion", sized(0, 24), "cannot hold the 24 bytes declared (LZF expands at most 88 times)"),
+            ("corrupt stream", corrupt, "corrupt LZF data"),
+            ("short stream", sized(stream_len - 1, 24), "data at compressed data (byte 8)"),
+        ];
+        for (name, body, expected) in cases {
+            let message = with_body(&body).expect_err(name);
+            assert!(message.contains(expected), "{name}: {message}");
+            assert!(message.contains("scan.pcd"), "{name}: {message}");
+        }
+    }
+
+    #[test]
+    fn xyz_with_count_above_one_is_refused_as_the_message_says() {
+        for counts in ["3 1 1", "1 2 1", "1 1 4"] {
+            let text =
+                format!("FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT {counts}\nWIDTH 1\nDATA ascii\n1 2 3 4 5\n");
+            let err = parse_str(&text).unwrap_err();
+            assert!(matches!(err, LoadError::Header { line: 4, .. }), "{counts}: {err}");
+            assert!(err.to_string().contains("COUNT 1, not COUNT"), "{counts}: {err}");
+        }
     }
 
     #[test]
@@ -718,11 +966,15 @@ mod tests {
 
     #[test]
     fn every_prefix_of_a_binary_file_fails_cleanly() {
-        let mut bytes = Vec::new();
-        write_binary(&sample_grid(), &mut bytes).unwrap();
-        assert!(parse(&bytes, path()).is_ok());
-        for cut in 0..bytes.len() {
-            assert!(parse(&bytes[..cut], path()).is_err(), "prefix of {cut} bytes");
+        let mut binary = Vec::new();
+        write_binary(&sample_grid(), &mut binary).unwrap();
+        let mut compressed = Vec::new();
+        write_binary_compressed(&sample_grid(), &mut compressed).unwrap();
+        for bytes in [binary, compressed] {
+            assert!(parse(&bytes, path()).is_ok());
+            for cut in 0..bytes.len() {
+                assert!(parse(&bytes[..cut], path()).is_err(), "prefix of {cut} bytes");
+            }
         }
     }
 
@@ -734,7 +986,9 @@ mod tests {
         let mut ascii = Vec::new();
         write_ascii(&grid, &mut ascii).unwrap();
         let mixed = format!("{MIXED_HEADER}DATA ascii\n7 1 2 3 0 0 1 4\n8 4 5 6 0 1 0 0\n");
-        for file in [binary, ascii, mixed.into_bytes()] {
+        let mut compressed = Vec::new();
+        write_binary_compressed(&grid, &mut compressed).unwrap();
+        for file in [binary, ascii, mixed.into_bytes(), compressed] {
             assert!(parse(&file, path()).is_ok());
             for at in 0..file.len() {
                 for byte in [0, b'\n', b' ', b'9', b'x', 0xff] {

@@ -72,26 +72,23 @@ pub(super) struct Context<'a> {
 }
 
 impl<'a> Context<'a> {
-    /// Starts the clock and sanitises the frame: a point outside what the
+    /// Starts the clock, brings the cloud into camera-frame millimetres
+    /// ([`super::input`]) and sanitises it: a point outside what the
     /// camera can measure is a corrupt frame's or noise, and one such point
     /// far off the axis would widen every window it is part of, so it
     /// becomes invalid before any stage runs. A frame left without a valid
-    /// point fails here, in the [`Stage::Input`] stage.
+    /// point, or that cannot be a camera's view, fails here, in the
+    /// [`Stage::Input`] stage.
     pub(super) fn sanitise(
         config: &'a Config,
         cloud: &'a PointCloud,
         request: &'a PlanRequest,
     ) -> Result<Self, PlanError> {
-        let mut ctx = Context {
-            config,
-            request,
-            cloud: Cow::Borrowed(cloud),
-            clock: Clock::start(),
-            stats: PlanStats::default(),
-        };
+        let clock = Clock::start();
+        let mut cloud = super::input::prepare(cloud, request, config)?;
         let camera = &config.camera;
         let volume = camera.measurable_volume(cloud.width(), cloud.height(), cloud.is_organized());
-        let counts = count_measurable(cloud, &volume);
+        let counts = count_measurable(&cloud, &volume);
         if counts.unmeasurable() > 0 {
             tracing::warn!(
                 near = counts.near,
@@ -104,8 +101,9 @@ impl<'a> Context<'a> {
                 "ignoring {} invalid points the camera cannot measure",
                 counts.unmeasurable()
             );
-            ctx.cloud = Cow::Owned(without_unmeasurable(cloud, &volume));
+            cloud = Cow::Owned(without_unmeasurable(&cloud, &volume));
         }
+        let mut ctx = Context { config, request, cloud, clock, stats: PlanStats::default() };
         ctx.stats.valid_points = counts.valid - counts.unmeasurable();
         if ctx.stats.valid_points == 0 && counts.near > 0 && counts.near == counts.valid {
             return Err(PlanError::at(

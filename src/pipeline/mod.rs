@@ -28,6 +28,7 @@ pub mod clustering;
 mod context;
 pub mod edge_points;
 pub mod grid_search;
+pub mod input;
 pub mod neighbours;
 pub mod orientation;
 mod paper;
@@ -51,6 +52,7 @@ use crate::geometry::pose::RobotPose;
 use crate::joint::JointType;
 
 use context::Context;
+pub use input::{CloudFrame, Units};
 pub use trajectory::Waypoint;
 
 /// What the controller asks for.
@@ -69,6 +71,10 @@ pub struct PlanRequest {
     /// The waypoints start at the seam's end nearest this point (robot
     /// base frame, mm); else by [`trajectory::travel_order`]'s default.
     pub start_near: Option<Vec3>,
+    /// The cloud's units: millimetres unless the caller says otherwise.
+    pub units: Units,
+    /// The cloud's frame; the camera's by default.
+    pub cloud_frame: CloudFrame,
 }
 
 impl PlanRequest {
@@ -83,6 +89,8 @@ impl PlanRequest {
             work_angle_deg: None,
             travel_angle_deg: None,
             start_near: None,
+            units: Units::Millimetres,
+            cloud_frame: CloudFrame::Camera,
         }
     }
 }
@@ -243,7 +251,8 @@ impl Planner {
         validate(request, &self.config)
     }
 
-    /// Runs the pipeline on `cloud` (camera frame, mm).
+    /// Runs the pipeline on `cloud`, in the units and frame the request
+    /// names (camera frame and millimetres by default).
     ///
     /// First `regrid::prepare` puts a raw export that lost its grid back
     /// on the camera's, and takes an organized frame's own intrinsics for

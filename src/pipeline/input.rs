@@ -1,0 +1,202 @@
+//! Input preparation, the step before the frame is sanitised: the cloud's
+//! units (millimetres, metres, or guessed from its distances) and its frame
+//! (the camera's, or the robot base's brought into the camera's with the
+//! capture pose and the hand-eye), then the check that what results can be
+//! a camera's view at all. Every later stage sees camera-frame millimetres.
+
+use std::borrow::Cow;
+
+use nalgebra::{Isometry3, Point3};
+use rayon::prelude::*;
+
+use crate::cloud::{INVALID_POINT, Point, PointCloud};
+use crate::config::Config;
+
+use super::{PlanError, PlanRequest, Stage};
+
+/// The units a cloud's coordinates are in.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Units {
+    /// The library's default: a camera's frames are in millimetres, and a
+    /// corrupt frame near the optical centre must not pass for one in
+    /// metres. The command line guesses unless told.
+    #[default]
+    Millimetres,
+    Metres,
+    /// Guessed from the cloud's distances by [`guess_units`].
+    Auto,
+}
+
+/// The frame a cloud's coordinates are in.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum CloudFrame {
+    /// The camera's optical frame, as cameras deliver frames.
+    #[default]
+    Camera,
+    /// The robot base frame, as tools that merge or register scans write
+    /// them: brought into the camera frame with the request's pose and
+    /// hand-eye before planning.
+    Base,
+}
+
+/// A cloud whose valid points lie at a median distance from the origin
+/// below this (in its own units) is taken to be in metres. Structured-light
+/// and depth cameras measure from about 100 mm to a few metres, so a
+/// millimetre cloud has a median of 100 or more and a metre cloud one of a
+/// few at most; 20 sits a factor of 5 or more from both.
+pub const METRES_BELOW_MEDIAN_DISTANCE: f64 = 20.0;
+
+/// The valid points the units guess looks at, evenly spread over the
+/// cloud: the median of a few thousand is as telling as that of millions.
+const UNITS_SAMPLE_POINTS: usize = 4096;
+
+/// No camera sees farther off its optical axis than this (the widest
+/// depth cameras see about 60° to each side).
+pub const MAX_PLAUSIBLE_OFF_AXIS_DEG: f64 = 80.0;
+
+/// A cloud more than this fraction of whose valid points lie behind the
+/// camera or beyond any camera's view cannot be a camera-frame view.
+const MAX_IMPLAUSIBLE_FRACTION: f64 = 0.5;
+
+/// What the units guess saw and concluded.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct UnitsGuess {
+    pub metres: bool,
+    /// The median distance of the sampled valid points from the origin,
+    /// in the cloud's own units.
+    pub median_distance: f64,
+    pub sampled_points: usize,
+}
+
+/// Guesses whether `cloud` is in metres from its valid points' median
+/// distance to the origin (see [`METRES_BELOW_MEDIAN_DISTANCE`]). A cloud
+/// without a valid point is taken as millimetres.
+pub fn guess_units(cloud: &PointCloud) -> UnitsGuess {
+    let valid = || cloud.points().iter().filter(|p| p[0].is_finite());
+    let stride = (cloud.valid_count() / UNITS_SAMPLE_POINTS).max(1);
+    let mut distances: Vec<f64> =
+        valid().step_by(stride).map(|p| p.iter().map(|&c| f64::from(c).powi(2)).sum::<f64>().sqrt()).collect();
+    let median_distance = if distances.is_empty() {
+        f64::NAN
+    } else {
+        let middle = distances.len() / 2;
+        *distances.select_nth_unstable_by(middle, f64::total_cmp).1
+    };
+    UnitsGuess {
+        metres: median_distance < METRES_BELOW_MEDIAN_DISTANCE,
+        median_distance,
+        sampled_points: distances.len(),
+    }
+}
+
+/// True when `cloud` is in metres: as `units` says, or as guessed (and
+/// logged with the figures behind the guess) when it says [`Units::Auto`].
+pub fn is_in_metres(cloud: &PointCloud, units: Units) -> bool {
+    match units {
+        Units::Millimetres => false,
+        Units::Metres => true,
+        Units::Auto => {
+            let guess = guess_units(cloud);
+            tracing::info!(
+                median_distance = guess.median_distance,
+                sampled_points = guess.sampled_points,
+                metres_below = METRES_BELOW_MEDIAN_DISTANCE,
+                "units guessed from the cloud: {}",
+                if guess.metres { "metres" } else { "millimetres" }
+            );
+            guess.metres
+        }
+    }
+}
+
+/// A cloud in metres in millimetres, its organization kept.
+pub fn metres_to_millimetres(cloud: &PointCloud) -> PointCloud {
+    transformed(cloud, 1000.0, &Isometry3::identity())
+}
+
+/// Brings `cloud` into camera-frame millimetres as `request` says it is
+/// given, and refuses a result that cannot be a camera's view. A cloud
+/// already in camera-frame millimetres is returned as it is, uncopied.
+pub(super) fn prepare<'a>(
+    cloud: &'a PointCloud,
+    request: &PlanRequest,
+    config: &Config,
+) -> Result<Cow<'a, PointCloud>, PlanError> {
+    let metres = is_in_metres(cloud, request.units);
+    let scale = if metres { 1000.0 } else { 1.0 };
+    let prepared = match request.cloud_frame {
+        CloudFrame::Camera if !metres => Cow::Borrowed(cloud),
+        CloudFrame::Camera => Cow::Owned(metres_to_millimetres(cloud)),
+        CloudFrame::Base => {
+            // p_cam = (Base_T_End * End_T_Camera)^-1 p_base
+            let hand_eye = request.hand_eye.unwrap_or(config.hand_eye);
+            let base_from_camera = request.pose.to_isometry(config.euler) * hand_eye;
+            Cow::Owned(transformed(cloud, scale, &base_from_camera.inverse()))
+        }
+    };
+    check_camera_view(&prepared, request)?;
+    Ok(prepared)
+}
+
+/// `cloud` scaled by `scale`, then moved by `camera_from_cloud`, in f64.
+fn transformed(cloud: &PointCloud, scale: f64, camera_from_cloud: &Isometry3<f64>) -> PointCloud {
+    let points: Vec<Point> = cloud
+        .points()
+        .par_iter()
+        .map(|p| {
+            if !p[0].is_finite() {
+                return INVALID_POINT;
+            }
+            let q = camera_from_cloud * Point3::new(p[0].into(), p[1].into(), p[2].into()).map(|c: f64| c * scale);
+            [q.x as f32, q.y as f32, q.z as f32]
+        })
+        .collect();
+    if cloud.is_organized() {
+        PointCloud::organized(cloud.width(), cloud.height(), points).unwrap_or_else(|| PointCloud::unorganized(vec![]))
+    } else {
+        PointCloud::unorganized(points)
+    }
+}
+
+/// Refuses a cloud most of whose valid points lie behind the camera or
+/// beyond any camera's field of view: planned, it would give a seam of
+/// nonsense, so the reason and the likely cause are named instead.
+fn check_camera_view(cloud: &PointCloud, request: &PlanRequest) -> Result<(), PlanError> {
+    let max_tan = MAX_PLAUSIBLE_OFF_AXIS_DEG.to_radians().tan();
+    let (valid, behind, off_view) = cloud
+        .points()
+        .par_iter()
+        .filter(|p| p[0].is_finite())
+        .map(|p| {
+            let [x, y, z] = p.map(f64::from);
+            let off_axis = z > 0.0 && x.hypot(y) > z * max_tan;
+            (1usize, usize::from(z <= 0.0), usize::from(off_axis))
+        })
+        .reduce(|| (0, 0, 0), |a, b| (a.0 + b.0, a.1 + b.1, a.2 + b.2));
+    let limit = (valid as f64 * MAX_IMPLAUSIBLE_FRACTION) as usize;
+    let hint = match request.cloud_frame {
+        CloudFrame::Camera => "is the cloud in the robot base frame (cloud frame base, --cloud-frame base)?",
+        CloudFrame::Base => "are the pose and the hand-eye those of the capture, and is the cloud in the base frame?",
+    };
+    if behind > limit {
+        return Err(PlanError::at(
+            Stage::Input,
+            format!(
+                "the cloud is not a camera-frame view: {behind} of its {valid} valid points lie behind the \
+                 camera (z <= 0); {hint}"
+            ),
+        ));
+    }
+    if behind + off_view > limit {
+        return Err(PlanError::at(
+            Stage::Input,
+            format!(
+                "the cloud is not a camera-frame view: {} of its {valid} valid points lie behind the camera or \
+                 more than {MAX_PLAUSIBLE_OFF_AXIS_DEG}° off its axis, beyond any camera's field of view; {hint} \
+                 Are its units right (--units mm|m)?",
+                behind + off_view
+            ),
+        ));
+    }
+    Ok(())
+}

@@ -1,27 +1,42 @@
 //! The speed kernels' layer: which instruction set the fast paths run on,
-//! and the one distance predicate that their exactness depends on.
+//! the one distance predicate that their exactness depends on, and every
+//! vector loop of the pipeline. The stages call the functions here and
+//! hold no intrinsics of their own.
 //!
 //! The instruction set is chosen once per process ([`isa`]): the best the
 //! CPU runs, or a lower one named by the environment variable
-//! `WELDSEAM_ISA` (`scalar`, `sse2` or `avx2`), read once. Every stage
+//! `WELDSEAM_ISA` (`scalar`, `sse2` or `avx2`), read once. Every kernel
 //! asks [`isa`] rather than detecting the CPU itself, so a test can force
 //! each level the machine runs and compare the results: every level
 //! classifies every point identically (see the exactness invariant in
 //! docs/ARCHITECTURE.md).
 //!
+//! The layout follows the usual split of portable SIMD code:
+//! - [`scalar`]: each kernel in plain Rust, the reference of the others
+//!   and the path on any CPU;
+//! - [`vector`]: what a kernel asks of a register ([`vector::Vector`]);
+//! - [`generic`]: each kernel written once over that trait;
+//! - `sse2` and `avx2`: the trait in four and eight lanes, and thin entry
+//!   points compiled for the instruction set that instantiate the generic
+//!   kernels.
+//!
 //! The predicate "`q` lies within the radius of `p`" is [`within`] in
-//! scalar form and [`sse2::within`] / [`avx2::within`] in four and eight
-//! lanes: the same subtractions, multiplies, additions and ordered
-//! compare in the same order, so the same decision bit for bit, NaN
-//! (an invalid pixel) never within.
+//! scalar form and [`generic::within`] in lanes: the same subtractions,
+//! multiplies, additions and ordered compare in the same order, so the
+//! same decision bit for bit, NaN (an invalid pixel) never within.
 
 use std::sync::OnceLock;
 use std::sync::atomic::{AtomicU8, Ordering};
 
 #[cfg(target_arch = "x86_64")]
-pub(crate) mod avx2;
+mod avx2;
+mod generic;
+mod scalar;
 #[cfg(target_arch = "x86_64")]
-pub(crate) mod sse2;
+mod sse2;
+mod vector;
+
+use crate::cloud::Point;
 
 #[cfg(test)]
 mod exactness;
@@ -168,6 +183,177 @@ pub(crate) fn within(p: &[f32; 3], q: &[f32; 3], radius_sq: f32) -> bool {
     dx * dx + dy * dy + dz * dz <= radius_sq
 }
 
+/// Pixels of a grid row counted together by [`count_block`].
+pub(crate) const BLOCK: usize = 8;
+
+/// An organized cloud's coordinates as three row-major planes, which the
+/// block counts load lanes from.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Planes<'a> {
+    pub xs: &'a [f32],
+    pub ys: &'a [f32],
+    pub zs: &'a [f32],
+}
+
+impl Planes<'_> {
+    /// Point `i`, row-major.
+    #[inline(always)]
+    pub(crate) fn point(&self, i: usize) -> Point {
+        [self.xs[i], self.ys[i], self.zs[i]]
+    }
+}
+
+/// For the [`BLOCK`] pixels from index `first`, the pixels within
+/// `radius_sq` of each among those at the same offsets from it, where
+/// `ranges` gives the offsets as index ranges of the first pixel's
+/// neighbours. Every range, shifted by up to `BLOCK - 1`, must lie inside
+/// the planes (it panics otherwise).
+#[inline]
+pub(crate) fn count_block(
+    planes: Planes,
+    first: usize,
+    ranges: impl Iterator<Item = (usize, usize)> + Clone,
+    radius_sq: f32,
+) -> [u32; BLOCK] {
+    match isa() {
+        // SAFETY: the CPU runs AVX2: `isa` gives no level it lacks.
+        #[cfg(target_arch = "x86_64")]
+        Isa::Avx2 => unsafe { avx2::count_block(planes, first, ranges, radius_sq) },
+        // SAFETY: SSE2 is part of the x86_64 baseline.
+        #[cfg(target_arch = "x86_64")]
+        Isa::Sse2 => unsafe { sse2::count_block(planes, first, ranges, radius_sq) },
+        _ => scalar::count_block(planes, first, ranges, radius_sq),
+    }
+}
+
+/// [`count_block`] over runs `(offset from first, length)` with the
+/// squared distance fused into two multiply-adds, where the chosen level
+/// is AVX2 and the CPU fuses ([`fused`]); `None` elsewhere. It rounds
+/// differently from [`within`]: the caller lowers `radius_sq` by enough
+/// to count no point the predicate leaves out.
+///
+/// # Safety
+/// Every run's pixels, and the `BLOCK - 1` after each, must lie inside
+/// the planes.
+#[inline]
+pub(crate) unsafe fn count_runs_fused(
+    planes: Planes,
+    first: usize,
+    runs: &[(isize, usize)],
+    radius_sq: f32,
+) -> Option<[u32; BLOCK]> {
+    #[cfg(target_arch = "x86_64")]
+    if fused() {
+        // SAFETY: the CPU runs AVX2 and FMA (`fused`), and the runs lie
+        // inside the planes by the caller's promise.
+        return Some(unsafe { avx2::count_runs_fused(planes, first, runs, radius_sq) });
+    }
+    let _ = (planes, first, runs, radius_sq);
+    None
+}
+
+/// Runs `loop_body`, plain Rust that the compiler vectorises, compiled
+/// for AVX2 where that is the chosen level: for loops whose every lane
+/// does the same unfused operations as the scalar form, so the level
+/// changes the speed and never the result.
+#[inline]
+pub(crate) fn vectorised<R>(loop_body: impl FnOnce() -> R) -> R {
+    match isa() {
+        // SAFETY: the CPU runs AVX2: `isa` gives no level it lacks.
+        #[cfg(target_arch = "x86_64")]
+        Isa::Avx2 => unsafe { avx2::compiled(loop_body) },
+        _ => loop_body(),
+    }
+}
+
+/// The corner of a row's members: their least depth and largest `|x|` and
+/// `|y|`, NaN skipped; `None` when the row has no member. Its window holds
+/// every member's own.
+#[inline]
+pub(crate) fn members_corner<const N: usize>(
+    labels: &[u32],
+    points: &[Point],
+    plate_labels: [u32; N],
+) -> Option<Point> {
+    let n = labels.len().min(points.len());
+    let (mut corner, done) = match isa() {
+        #[cfg(target_arch = "x86_64")]
+        Isa::Sse2 | Isa::Avx2 => {
+            let done = n / 4 * 4;
+            // SAFETY: SSE2 is part of the x86_64 baseline.
+            (unsafe { sse2::members_corner(&labels[..done], &points[..done], plate_labels) }, done)
+        }
+        _ => (scalar::Corner::default(), 0),
+    };
+    for (&label, p) in labels[done..n].iter().zip(&points[done..n]) {
+        if plate_labels.contains(&label) {
+            corner.add(p);
+        }
+    }
+    corner.any.then_some([corner.x_max, corner.y_max, corner.z_min])
+}
+
+pub(crate) use scalar::RowBounds;
+
+impl<const N: usize> RowBounds<'_, N> {
+    /// [`RowBounds::open_members`] for the columns `cols` (a multiple of
+    /// four, every window inside the row and of `area` pixels) with the
+    /// threshold `ratio · full[c]`, four columns at a time; false, with
+    /// nothing appended, where the level has no vector form.
+    #[inline]
+    pub(crate) fn open_members_in_quads(
+        &self,
+        cols: std::ops::Range<usize>,
+        area: u32,
+        full: &[u16],
+        ratio: f64,
+        open: &mut Vec<(u32, u8)>,
+    ) -> bool {
+        match isa() {
+            #[cfg(target_arch = "x86_64")]
+            Isa::Sse2 | Isa::Avx2 => {
+                // SAFETY: SSE2 is part of the x86_64 baseline.
+                unsafe { sse2::open_members(self, cols, area, full, ratio, open) };
+                true
+            }
+            _ => false,
+        }
+    }
+}
+
+/// A labelled organized cloud: the points and one label per point.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct LabelledGrid<'a> {
+    pub points: &'a [Point],
+    pub labels: &'a [u32],
+    pub width: usize,
+    pub height: usize,
+}
+
+/// True when pixel `i` has at most `threshold` neighbours labelled
+/// `label` within `radius_sq` over its window of half-size `window`,
+/// clipped to the image: the count of the predicate over that window,
+/// stopped once it exceeds the threshold.
+#[inline]
+pub(crate) fn labelled_count_at_most(
+    grid: &LabelledGrid,
+    i: usize,
+    window: (usize, usize),
+    label: u32,
+    radius_sq: f32,
+    threshold: f64,
+) -> bool {
+    match isa() {
+        // SAFETY: the CPU runs AVX2: `isa` gives no level it lacks.
+        #[cfg(target_arch = "x86_64")]
+        Isa::Avx2 => unsafe { avx2::labelled_count_at_most(grid, i, window, label, radius_sq, threshold) },
+        // SAFETY: SSE2 is part of the x86_64 baseline.
+        #[cfg(target_arch = "x86_64")]
+        Isa::Sse2 => unsafe { sse2::labelled_count_at_most(grid, i, window, label, radius_sq, threshold) },
+        _ => scalar::labelled_count_at_most(grid, i, window, label, radius_sq, threshold),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -200,5 +386,136 @@ mod tests {
         assert!(!within(&p, &[1.0, 2.0, 601.0001], 1.0));
         assert!(!within(&p, &[f32::NAN; 3], f32::INFINITY));
         assert!(!within(&[f32::NAN; 3], &p, f32::INFINITY));
+    }
+
+    #[test]
+    fn every_form_of_the_span_count_equals_the_scalar_predicate() {
+        // Distances on both sides of the radius, exact ties, invalid
+        // points and other labels, over every span length to 23 and every
+        // start, so that each lane position meets each case.
+        let p = [0.25f32, -0.5, 600.0];
+        let offsets = [0.0f32, 0.5, 0.999_999, 1.0, 1.000_001, 0.6, 0.8, 2.0, 0.7];
+        let points: Vec<Point> = (0..40)
+            .map(|k| {
+                let d = offsets[k % offsets.len()];
+                match k % 4 {
+                    _ if k % 11 == 3 => [f32::NAN; 3],
+                    0 => [p[0] + d, p[1], p[2]],
+                    1 => [p[0], p[1] - d, p[2]],
+                    2 => [p[0], p[1], p[2] + d],
+                    _ => [p[0] + 0.6 * d, p[1] + 0.8 * d, p[2]],
+                }
+            })
+            .collect();
+        let labels: Vec<u32> = (0..40).map(|k| if k % 5 == 2 { 3 } else { 1 }).collect();
+        let mut counted = 0;
+        for start in 0..17 {
+            for len in 0..24.min(40 - start) {
+                let span = start..start + len;
+                let (points, labels) = (&points[span.clone()], &labels[span]);
+                let scalar = scalar::count_span(&p, points, labels, 1, 1.0);
+                #[cfg(target_arch = "x86_64")]
+                {
+                    // SAFETY: SSE2 is part of the x86_64 baseline.
+                    let quads = unsafe { sse2::count_span(&p, points, labels, 1, 1.0) };
+                    assert_eq!(quads, scalar, "SSE2, {start} + {len}");
+                    if Isa::Avx2.supported() {
+                        // SAFETY: the CPU runs AVX2, checked just above.
+                        let octets = unsafe { avx2::count_span(&p, points, labels, 1, 1.0) };
+                        assert_eq!(octets, scalar, "AVX2, {start} + {len}");
+                    }
+                }
+                counted += scalar;
+            }
+        }
+        assert!(counted > 1000);
+    }
+
+    /// A fixed pseudo-random sequence for the SIMD tests.
+    fn noise(n: usize, seed: u64) -> Vec<u32> {
+        let mut x = seed;
+        (0..n)
+            .map(|_| {
+                x = x.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+                (x >> 33) as u32
+            })
+            .collect()
+    }
+
+    #[test]
+    fn every_form_of_the_members_corner_equals_the_scalar_one() {
+        let n = 64;
+        let r = noise(4 * n, 7);
+        let labels: Vec<u32> = r[..n].iter().map(|v| v % 4).collect();
+        let points: Vec<Point> = (0..n)
+            .map(|k| {
+                let v = |j: usize| (r[n + 3 * k + j] % 2000) as f32 - 1000.0;
+                if r[k].is_multiple_of(9) { [f32::NAN; 3] } else { [v(0), v(1), v(2).abs() + 1.0] }
+            })
+            .collect();
+        for len in (0..=n).step_by(4) {
+            for plates in [[1, 2], [3, 7], [8, 9]] {
+                let mut scalar = scalar::Corner::default();
+                for (l, p) in labels[..len].iter().zip(&points[..len]) {
+                    if plates.contains(l) {
+                        scalar.add(p);
+                    }
+                }
+                let scalar = scalar.any.then_some([scalar.x_max, scalar.y_max, scalar.z_min]);
+                let (ran, _skipped) = on_every_isa(|_| members_corner(&labels[..len], &points[..len], plates));
+                for (isa, corner) in ran {
+                    assert_eq!(corner, scalar, "{len} pixels, plates {plates:?}, {isa:?}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn four_column_bounds_equal_the_scalar_ones() {
+        fn check<const N: usize>(plate_labels: [u32; N], seed: u64) -> usize {
+            let w = 70;
+            let r = noise(4 * w, seed);
+            let labels: Vec<u32> = r[..w].iter().map(|v| if v % 7 == 0 { 5 } else { v % 2 }).collect();
+            let counts: Vec<u16> = r[w..2 * w].iter().map(|v| (v % 120) as u16).collect();
+            let full: Vec<u16> = r[2 * w..3 * w].iter().map(|v| (v % 100 + 40) as u16).collect();
+            let mut opened = 0;
+            for (wx, window_rows) in [(0, 1), (2, 5), (6, 13), (9, 3)] {
+                // Column sums of `window_rows` rows, made up from the row's
+                // own codes at different multiples.
+                let field = 32 / N as u32;
+                let columns: Vec<u32> = (0..w)
+                    .map(|c| {
+                        let code = |k: usize| (labels[c] == plate_labels[k]) as u32;
+                        let rows = (r[3 * w + c] as usize % window_rows) as u32 + code(0).max(code(N - 1));
+                        (0..N).map(|k| (code(k) * rows) << (k as u32 * field)).sum()
+                    })
+                    .collect();
+                let prefix: Vec<u32> = std::iter::once(0)
+                    .chain(columns.iter().scan(0u32, |s, &c| {
+                        *s = s.wrapping_add(c);
+                        Some(*s)
+                    }))
+                    .collect();
+                let bounds =
+                    RowBounds { plate_labels, prefix: &prefix, labels: &labels, counts: &counts, wx, window_rows };
+                let area = ((2 * wx + 1) * window_rows) as u32;
+                let quads = wx..wx + (w - 2 * wx) / 4 * 4;
+                for ratio in [0.2, 0.75, 1.3] {
+                    let mut scalar = Vec::new();
+                    bounds.open_members(quads.clone(), |c| ratio * full[c] as f64, &mut scalar);
+                    let mut simd = Vec::new();
+                    if !bounds.open_members_in_quads(quads.clone(), area, &full, ratio, &mut simd) {
+                        simd.clone_from(&scalar);
+                    }
+                    assert_eq!(simd, scalar, "wx {wx}, {window_rows} rows, ratio {ratio}");
+                    opened += simd.len();
+                }
+            }
+            opened
+        }
+        // Some members open and some settled in each case.
+        for opened in [check([1], 3), check([0, 1], 4), check([1, 0], 5)] {
+            assert!((20..600).contains(&opened), "{opened} opened");
+        }
     }
 }

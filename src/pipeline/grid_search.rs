@@ -12,10 +12,10 @@
 //! too counts no pixel the predicate leaves out.
 
 use crate::cloud::PointCloud;
-use crate::kernels::{self, Isa};
+use crate::kernels::{self, Planes};
 
 /// Pixels counted together.
-pub(crate) const LANES: usize = 8;
+pub(crate) const LANES: usize = kernels::BLOCK;
 
 /// One row of window offsets: `dv` and the inclusive `du` range.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -168,20 +168,17 @@ impl Grid {
         count
     }
 
+    /// The coordinate planes, as the kernels read them.
+    #[inline(always)]
+    fn planes(&self) -> Planes<'_> {
+        Planes { xs: &self.xs, ys: &self.ys, zs: &self.zs }
+    }
+
     /// For the `LANES` pixels starting at `(col, row)`, counts the valid
     /// pixels at the offsets `spans` within `radius_sq` of each. The caller
-    /// checks [`Grid::spans_fit`] first; `member` (when given) restricts the
-    /// count to pixels whose label equals `label`.
+    /// checks [`Grid::spans_fit`] first.
     pub(crate) fn count_block(&self, col: usize, row: usize, spans: &[Span], radius_sq: f32) -> [u32; LANES] {
-        match kernels::isa() {
-            // SAFETY: the CPU supports AVX2: `isa` gives no level it lacks.
-            #[cfg(target_arch = "x86_64")]
-            Isa::Avx2 => unsafe { self.count_block_avx2(col, row, spans, radius_sq) },
-            // SAFETY: SSE2 is part of the x86_64 baseline.
-            #[cfg(target_arch = "x86_64")]
-            Isa::Sse2 => unsafe { self.count_block_sse2(col, row, spans, radius_sq) },
-            _ => self.count_block_portable(col, row, spans, radius_sq),
-        }
+        kernels::count_block(self.planes(), row * self.width + col, self.span_ranges(col, row, spans), radius_sq)
     }
 
     /// A lower bound of [`Grid::count_block`] over prepared runs; `None`
@@ -201,162 +198,30 @@ impl Grid {
         if runs.width != self.width || !self.extent_fits(col, row, &extent) {
             return None;
         }
-        #[cfg(target_arch = "x86_64")]
-        if kernels::fused() {
-            // Rounding the f64 product to f32 adds at most 2⁻²⁴, which the
-            // 2⁻¹⁹ leaves room for.
-            let inner = (radius_sq as f64 * (1.0 - 2f64.powi(-19))) as f32;
-            // SAFETY: the CPU supports AVX2 and FMA, and the runs' extent
-            // fits the image at this block, checked just above.
-            return Some(unsafe { self.count_runs_fused(col, row, runs, inner) });
-        }
-        Some(self.count_block(col, row, &runs.spans, radius_sq))
-    }
-
-    /// [`Grid::count_block_avx2`] over runs, with one bounds check per
-    /// block rather than three per span, and the squared distance fused
-    /// (see [`Grid::count_runs`] for the radius to give it): two of the
-    /// five additions per offset move to the multipliers.
-    ///
-    /// # Safety
-    /// The CPU must support AVX2 and FMA, and `runs` must have been
-    /// prepared for this grid's width with an extent that fits the image
-    /// at the block ([`Grid::extent_fits`]).
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2,fma")]
-    unsafe fn count_runs_fused(&self, col: usize, row: usize, runs: &SpanRuns, radius_sq: f32) -> [u32; LANES] {
-        use std::arch::x86_64::*;
-        let first = row * self.width + col;
-        let [px, py, pz] = self.lanes_avx(first);
-        let r2 = _mm256_set1_ps(radius_sq);
-        let mut counts = _mm256_setzero_si256();
-        let (xs, ys, zs) = (self.xs.as_ptr(), self.ys.as_ptr(), self.zs.as_ptr());
-        for &(offset, len) in &runs.runs {
-            // The extent fits: every span's row is inside the image, and
-            // its columns from `du_lo` to `du_hi + LANES - 1` inside that
-            // row, so each load below reads inside the planes.
-            let start = first.wrapping_add_signed(offset);
-            for k in start..start + len {
-                // SAFETY: in bounds by the extent check (see above).
-                let (qx, qy, qz) =
-                    unsafe { (_mm256_loadu_ps(xs.add(k)), _mm256_loadu_ps(ys.add(k)), _mm256_loadu_ps(zs.add(k))) };
-                // p - q, the negation of the predicate's q - p: the same
-                // squares bit for bit, and the load folds into the subtraction.
-                let (dx, dy, dz) = (_mm256_sub_ps(px, qx), _mm256_sub_ps(py, qy), _mm256_sub_ps(pz, qz));
-                let d2 = _mm256_fmadd_ps(dz, dz, _mm256_fmadd_ps(dy, dy, _mm256_mul_ps(dx, dx)));
-                let near = _mm256_castps_si256(_mm256_cmp_ps::<_CMP_LE_OQ>(d2, r2));
-                // A true lane is all ones, -1: subtracting counts it.
-                counts = _mm256_sub_epi32(counts, near);
-            }
-        }
-        counts_of_avx(counts)
+        // Rounding the f64 product to f32 adds at most 2⁻²⁴, which the
+        // 2⁻¹⁹ leaves room for.
+        let inner = (radius_sq as f64 * (1.0 - 2f64.powi(-19))) as f32;
+        // SAFETY: the runs' extent fits the image at this block, checked
+        // just above: every span's row is inside the image, and its
+        // columns from `du_lo` to `du_hi + LANES - 1` inside that row.
+        let fused = unsafe { kernels::count_runs_fused(self.planes(), row * self.width + col, &runs.runs, inner) };
+        Some(fused.unwrap_or_else(|| self.count_block(col, row, &runs.spans, radius_sq)))
     }
 
     /// The offsets of `spans` as index ranges of the first lane's
     /// neighbour, for the block starting at `(col, row)`.
-    fn span_ranges<'s>(&self, col: usize, row: usize, spans: &'s [Span]) -> impl Iterator<Item = (usize, usize)> + 's {
+    fn span_ranges<'s>(
+        &self,
+        col: usize,
+        row: usize,
+        spans: &'s [Span],
+    ) -> impl Iterator<Item = (usize, usize)> + Clone + 's {
         let width = self.width;
         spans.iter().map(move |s| {
             let base = ((row as isize + s.dv) as usize * width + col) as isize;
             ((base + s.du_lo) as usize, (base + s.du_hi) as usize + 1)
         })
     }
-
-    /// Eight lanes in one AVX2 register. Separate multiply and add in the
-    /// scalar predicate's order and an ordered compare (NaN is false) give
-    /// bit-identical decisions.
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2")]
-    unsafe fn count_block_avx2(&self, col: usize, row: usize, spans: &[Span], radius_sq: f32) -> [u32; LANES] {
-        use std::arch::x86_64::*;
-        let first = row * self.width + col;
-        let [px, py, pz] = self.lanes_avx(first);
-        // Slicing checks the bounds once per span; the loads inside stay in
-        // those slices.
-        let r2 = _mm256_set1_ps(radius_sq);
-        let mut counts = _mm256_setzero_si256();
-        for (start, end) in self.span_ranges(col, row, spans) {
-            let reach = end + LANES - 1;
-            let (xs, ys, zs) = (&self.xs[start..reach], &self.ys[start..reach], &self.zs[start..reach]);
-            for k in 0..end - start {
-                // SAFETY: k + LANES <= reach - start, the length of each slice.
-                let (qx, qy, qz) = unsafe {
-                    (
-                        _mm256_loadu_ps(xs.as_ptr().add(k)),
-                        _mm256_loadu_ps(ys.as_ptr().add(k)),
-                        _mm256_loadu_ps(zs.as_ptr().add(k)),
-                    )
-                };
-                let near = _mm256_castps_si256(kernels::avx2::within([px, py, pz], [qx, qy, qz], r2));
-                // A true lane is all ones, -1: subtracting counts it.
-                counts = _mm256_sub_epi32(counts, near);
-            }
-        }
-        counts_of_avx(counts)
-    }
-
-    /// Two SSE2 registers of four lanes: the x86_64 baseline.
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "sse2")]
-    unsafe fn count_block_sse2(&self, col: usize, row: usize, spans: &[Span], radius_sq: f32) -> [u32; LANES] {
-        use std::arch::x86_64::*;
-        let first = row * self.width + col;
-        let r2 = _mm_set1_ps(radius_sq);
-        let mut out = [0u32; LANES];
-        for half in [0, 4] {
-            let quad = |v: &[f32]| -> __m128 {
-                let lanes = &v[first + half..first + half + 4];
-                // SAFETY: `lanes` holds exactly four floats.
-                unsafe { _mm_loadu_ps(lanes.as_ptr()) }
-            };
-            let (px, py, pz) = (quad(&self.xs), quad(&self.ys), quad(&self.zs));
-            let mut counts = _mm_setzero_si128();
-            for (start, end) in self.span_ranges(col, row, spans) {
-                let (lo, reach) = (start + half, end + half + 3);
-                let (xs, ys, zs) = (&self.xs[lo..reach], &self.ys[lo..reach], &self.zs[lo..reach]);
-                for k in 0..end - start {
-                    // SAFETY: k + 4 <= reach - lo, the length of each slice.
-                    let (qx, qy, qz) = unsafe {
-                        (
-                            _mm_loadu_ps(xs.as_ptr().add(k)),
-                            _mm_loadu_ps(ys.as_ptr().add(k)),
-                            _mm_loadu_ps(zs.as_ptr().add(k)),
-                        )
-                    };
-                    let near = kernels::sse2::within([px, py, pz], [qx, qy, qz], r2);
-                    counts = _mm_sub_epi32(counts, _mm_castps_si128(near));
-                }
-            }
-            // SAFETY: the destination holds exactly four u32.
-            unsafe { _mm_storeu_si128(out[half..half + 4].as_mut_ptr().cast(), counts) };
-        }
-        out
-    }
-
-    /// The scalar form of the block count: the reference of the vector
-    /// forms, and the path on other CPUs.
-    fn count_block_portable(&self, col: usize, row: usize, spans: &[Span], radius_sq: f32) -> [u32; LANES] {
-        let first = row * self.width + col;
-        let mut counts = [0u32; LANES];
-        for (start, end) in self.span_ranges(col, row, spans) {
-            for at in start..end {
-                for (l, count) in counts.iter_mut().enumerate() {
-                    *count += kernels::within(&self.point(first + l), &self.point(at + l), radius_sq) as u32;
-                }
-            }
-        }
-        counts
-    }
-}
-
-/// Eight 32-bit lane counts out of an AVX register.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx")]
-fn counts_of_avx(counts: std::arch::x86_64::__m256i) -> [u32; LANES] {
-    let mut out = [0u32; LANES];
-    // SAFETY: `out` holds exactly eight u32, one 256-bit store.
-    unsafe { std::arch::x86_64::_mm256_storeu_si256(out.as_mut_ptr().cast(), counts) };
-    out
 }
 
 #[cfg(test)]
@@ -404,7 +269,7 @@ mod tests {
         let full: Vec<Span> = (-wy..=wy).map(|dv| Span { dv, du_lo: -wx, du_hi: wx }).collect();
         let (col, row) = (12, 14);
         assert!(grid.spans_fit(col, row, &full));
-        let counts = grid.count_block_portable(col, row, &full, 1.0);
+        let counts = kernels::with_isa(kernels::Isa::Scalar, || grid.count_block(col, row, &full, 1.0)).unwrap();
         let (ran, _skipped) = kernels::on_every_isa(|_| grid.count_block(col, row, &full, 1.0));
         for (isa, got) in ran {
             assert_eq!(got, counts, "{isa:?} and the scalar form agree");

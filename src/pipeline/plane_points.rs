@@ -10,22 +10,22 @@
 //! workpiece's orientation gives at that very pixel, and also requires the
 //! local normal to agree with the workpiece's, which no count can check.
 //!
-//! On a pixel grid the counts run eight pixels at a time over the full
-//! plane's ellipse; a point whose count there already reaches its
-//! threshold is a plane point (the exact count can only be larger), and
-//! only the others are counted over the whole exact window. The result is
-//! the reference's, point for point.
+//! Either criterion needs, for a point, its neighbour count within R and
+//! the count it must reach, derived from the count a complete plane would
+//! give there ([`Threshold::needed`]); how the counts are taken fast is
+//! [`grid`]'s business. [`reference`] counts every point.
 
+#[cfg(test)]
 use rayon::prelude::*;
+
+mod grid;
 
 use crate::camera::CameraModel;
 use crate::cloud::PointCloud;
-use crate::geometry::{Vec3, vec3};
-use crate::kernels::{self, Isa};
+use crate::geometry::Vec3;
 
-use super::grid_search::{Grid, LANES, Span, SpanRuns};
-use super::neighbours::{FullCountCache, FullCounts, KeyMemo, NeighbourSearch, PixelEllipse};
-use super::orientation::{GridPoints, StepTable, cross, cross_agrees, grid_normal_agrees, local_normal, normal_step};
+use super::neighbours::{FullCountCache, FullCounts, NeighbourSearch};
+use super::orientation::{GridPoints, StepTable, grid_normal_agrees, local_normal, normal_step};
 
 /// The plane points and, for each, a lower bound of its neighbour count
 /// and the full-plane count it was measured against (the edge criterion
@@ -51,87 +51,9 @@ trait Threshold: Sync {
     /// when the criterion has none).
     fn needed(&self, i: usize, cache: &mut FullCountCache) -> Option<(f64, f64)>;
 
-    /// [`Threshold::needed`] for the `LANES` pixels from `(col, row)`, all
-    /// inside the row, in integers, into `needs` (all rejected on entry).
-    /// Filled in place: a block returned by value was copied out whole
-    /// right after its lanes were written one by one, which stalls.
-    fn needed_block(&self, grid: &Grid, row: usize, col: usize, memos: &mut Memos, needs: &mut BlockNeeds) {
-        let first = row * grid.width() + col;
-        needs.set_each(LANES, |l| self.needed(first + l, &mut memos.full));
-    }
-
-    /// The plane orientation whose ellipse the counts scan first.
-    fn scan_normal(&self) -> Vec3;
-}
-
-/// What the lanes of a block need, in integers: a count is whole, so
-/// `count >= t` is `count >= ceil(t)`. Plain arrays rather than options
-/// of float pairs: building those lane by lane and reading them back whole
-/// stalled on every lane.
-#[derive(Debug, Clone, Copy)]
-struct BlockNeeds {
-    /// The least neighbour count that makes the lane a plane point, or
-    /// [`BlockNeeds::SKIP`] when it was rejected before counting.
-    count: [u32; LANES],
-    /// The full-plane count, saturated, recorded for the edge stage.
-    full: [u16; LANES],
-}
-
-impl BlockNeeds {
-    /// A lane rejected before counting.
-    const SKIP: u32 = u32::MAX;
-    /// A count no window reaches: the need of a lane whose threshold is
-    /// beyond any count (or not a number).
-    const NEVER: u32 = u32::MAX - 1;
-    const REJECTED: BlockNeeds = BlockNeeds { count: [Self::SKIP; LANES], full: [0; LANES] };
-
-    /// Records `needed(l)` for each of the first `lanes` lanes.
-    #[inline(always)]
-    fn set_each(&mut self, lanes: usize, mut needed: impl FnMut(usize) -> Option<(f64, f64)>) {
-        for l in 0..lanes {
-            self.set(l, needed(l));
-        }
-    }
-
-    /// Records [`Threshold::needed`]'s answer for lane `l`.
-    #[inline(always)]
-    fn set(&mut self, l: usize, needed: Option<(f64, f64)>) {
-        self.set_lane(l, LaneNeed::of(needed));
-    }
-
-    #[inline(always)]
-    fn set_lane(&mut self, l: usize, need: LaneNeed) {
-        self.count[l] = need.count;
-        self.full[l] = need.full;
-    }
-
-    #[inline(always)]
-    fn counted(&self, l: usize) -> bool {
-        self.count[l] != Self::SKIP
-    }
-}
-
-/// One lane of [`BlockNeeds`].
-#[derive(Debug, Clone, Copy, Default)]
-struct LaneNeed {
-    count: u32,
-    full: u16,
-}
-
-impl LaneNeed {
-    /// [`Threshold::needed`]'s answer in integers.
-    #[inline(always)]
-    fn of(needed: Option<(f64, f64)>) -> LaneNeed {
-        let Some((t, full)) = needed else { return LaneNeed { count: BlockNeeds::SKIP, full: 0 } };
-        let count = if t <= 0.0 {
-            0
-        } else if t < BlockNeeds::NEVER as f64 {
-            crate::geometry::ceil_i64(t) as u32
-        } else {
-            BlockNeeds::NEVER
-        };
-        LaneNeed { count, full: full.clamp(0.0, u16::MAX as f64) as u16 }
-    }
+    /// The orientation of the plane the full count assumes: the fast
+    /// classification counts over its ellipse first.
+    fn plane_normal(&self) -> Vec3;
 }
 
 /// Eq. 14: `N_r >= N'min(L)` with `L` the point's depth (Eq. 13).
@@ -147,7 +69,7 @@ impl Threshold for PaperThreshold<'_> {
         p[0].is_finite().then(|| (self.camera.min_plane_neighbours(self.radius, p[2] as f64), 0.0))
     }
 
-    fn scan_normal(&self) -> Vec3 {
+    fn plane_normal(&self) -> Vec3 {
         Vec3::z()
     }
 }
@@ -227,285 +149,21 @@ impl Threshold for RobustThreshold<'_> {
         self.need_of_full(self.full_counts.get(i, cache))
     }
 
-    fn scan_normal(&self) -> Vec3 {
+    fn plane_normal(&self) -> Vec3 {
         self.criterion.normal
-    }
-
-    /// The normal test of eight lanes at once on the coordinate planes,
-    /// for the lanes that have all four neighbours at their step (once per
-    /// step when the block straddles a step boundary); any other lane, and
-    /// a block near the image border, is tested lane by lane.
-    fn needed_block(&self, grid: &Grid, row: usize, col: usize, memos: &mut Memos, needs: &mut BlockNeeds) {
-        #[cfg(target_arch = "x86_64")]
-        if kernels::isa() == Isa::Avx2 {
-            // SAFETY: the CPU supports AVX2: `isa` gives no level it lacks.
-            return unsafe { self.needed_block_avx2(grid, row, col, memos, needs) };
-        }
-        self.needed_block_with::<false>(grid, row, col, memos, needs);
-    }
-}
-
-impl RobustThreshold<'_> {
-    /// [`Threshold::needed_block`] compiled for AVX2: the depth range,
-    /// memo keys and bit masks of a block in eight-wide registers.
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2")]
-    fn needed_block_avx2(&self, grid: &Grid, row: usize, col: usize, memos: &mut Memos, needs: &mut BlockNeeds) {
-        self.needed_block_with::<true>(grid, row, col, memos, needs);
-    }
-
-    /// The block's depth range, in AVX2 registers when `AVX2`.
-    #[inline(always)]
-    fn depth_range_of<const AVX2: bool>(z: &[f32; LANES]) -> (f32, f32) {
-        #[cfg(target_arch = "x86_64")]
-        if AVX2 {
-            // SAFETY: `AVX2` is true only in `needed_block_avx2`, which is
-            // called once the CPU was checked.
-            return unsafe { depth_range_avx2(z) };
-        }
-        depth_range(z)
-    }
-
-    /// The normal test of a block, in AVX2 registers when `AVX2`.
-    #[inline(always)]
-    fn facts_of<const AVX2: bool>(&self, grid: &Grid, first: usize, step: usize) -> LaneFacts {
-        #[cfg(target_arch = "x86_64")]
-        if AVX2 {
-            // SAFETY: as in `depth_range_of`.
-            return unsafe { self.lane_facts_avx2(grid, first, step) };
-        }
-        self.lane_facts(grid, first, step)
-    }
-
-    /// [`Threshold::needed_block`], in AVX2 registers when `AVX2`.
-    #[inline(always)]
-    fn needed_block_with<const AVX2: bool>(
-        &self,
-        grid: &Grid,
-        row: usize,
-        col: usize,
-        memos: &mut Memos,
-        needs: &mut BlockNeeds,
-    ) {
-        let (w, h) = (grid.width(), grid.height());
-        let first = row * w + col;
-        let pz = grid.lanes(first)[2];
-        // The step only falls as depth grows, so the nearest and farthest
-        // lanes bound every valid lane's step; at most two steps occur
-        // where a step boundary crosses the block.
-        let (z_near, z_far) = Self::depth_range_of::<AVX2>(&pz);
-        let (step_near, step_far) = (self.steps.step(z_near), self.steps.step(z_far));
-        let fits = col >= step_near && col + LANES - 1 + step_near < w && row >= step_near && row + step_near < h;
-        // Only positive depths have a step table entry; all-invalid blocks
-        // have no finite nearest depth.
-        let positive = z_near > 0.0 && z_near.is_finite();
-        if !(fits && positive) {
-            needs.set_each(LANES, |l| self.needed_on_grid(grid, first + l, &mut memos.full));
-            return;
-        }
-        // A block across a step boundary is rare: its second normal test
-        // is kept out of line, off the common path.
-        let mut facts = self.facts_of::<AVX2>(grid, first, step_far);
-        if step_near != step_far {
-            let near_lanes = lane_bits(|l| pz[l] < self.steps.depth_limit(step_near));
-            self.straddle::<AVX2>(grid, first, step_near, near_lanes, &mut facts);
-        }
-        // An invalid lane's step is 1 whatever its neighbours: it reads as
-        // incomplete either way and takes the scalar path below.
-        let LaneFacts { complete, facing, keys } = facts;
-        let mut incomplete = !complete & ((1 << LANES) - 1);
-        while incomplete != 0 {
-            // A missing neighbour: the one-sided rule, lane by lane.
-            let l = incomplete.trailing_zeros() as usize;
-            needs.set(l, self.needed_on_grid(grid, first + l, &mut memos.full));
-            incomplete &= incomplete - 1;
-        }
-        let need_of = |key: u64, memos: &mut Memos| {
-            memos.need.get_or_insert_with(key, || {
-                LaneNeed::of(self.need_of_full(self.full_counts.value_of(key, &mut memos.full)))
-            })
-        };
-        let mut open = complete & facing;
-        if open == (1 << LANES) - 1 {
-            // Inside a plate: a look-up per lane, whose hits are certain
-            // enough to predict, where a loop over distinct keys was not.
-            for (l, &key) in keys.iter().enumerate() {
-                needs.set_lane(l, need_of(key, memos));
-            }
-            return;
-        }
-        // Neighbouring pixels mostly share a memo key, and so what they
-        // need: one look-up per distinct key serves every lane that has it.
-        while open != 0 {
-            let key = keys[open.trailing_zeros() as usize];
-            let need = need_of(key, memos);
-            let take = lane_bits(|l| keys[l] == key) & open;
-            for l in 0..LANES {
-                if take >> l & 1 != 0 {
-                    needs.set_lane(l, need);
-                }
-            }
-            open &= !take;
-        }
-    }
-}
-
-/// The nearest and farthest valid depth of a block's lanes: `f32::min`
-/// and `max` pass over NaN, so invalid lanes drop out, and a block of
-/// invalid lanes gives NaN or an infinity. Pairwise, so the eight lanes
-/// take three dependent steps rather than eight.
-#[inline(always)]
-fn depth_range(z: &[f32; LANES]) -> (f32, f32) {
-    let halve = |v: [f32; 4], f: fn(f32, f32) -> f32| f(f(v[0], v[2]), f(v[1], v[3]));
-    let pair = |f: fn(f32, f32) -> f32| halve(std::array::from_fn(|i| f(z[i], z[i + 4])), f);
-    (pair(f32::min), pair(f32::max))
-}
-
-/// [`depth_range`] in AVX2 registers. Invalid lanes are set to the
-/// infinity that cannot win, so a block of invalid lanes gives infinities.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-fn depth_range_avx2(z: &[f32; LANES]) -> (f32, f32) {
-    use std::arch::x86_64::*;
-    // SAFETY: `z` holds exactly LANES floats; loadu needs no alignment.
-    let z = unsafe { _mm256_loadu_ps(z.as_ptr()) };
-    let invalid = _mm256_cmp_ps::<_CMP_UNORD_Q>(z, z);
-    let lows = _mm256_blendv_ps(z, _mm256_set1_ps(f32::INFINITY), invalid);
-    let highs = _mm256_blendv_ps(z, _mm256_set1_ps(f32::NEG_INFINITY), invalid);
-    // Fold the halves, then the pairs, then the neighbours.
-    let fold = |v: __m256, f: fn(__m256, __m256) -> __m256| {
-        let v = f(v, _mm256_permute2f128_ps::<1>(v, v));
-        let v = f(v, _mm256_permute_ps::<0b0100_1110>(v));
-        _mm256_cvtss_f32(f(v, _mm256_permute_ps::<0b1011_0001>(v)))
-    };
-    (fold(lows, |a, b| _mm256_min_ps(a, b)), fold(highs, |a, b| _mm256_max_ps(a, b)))
-}
-
-/// Bit `l` set where `test(l)` holds, for the lanes of a block.
-#[inline(always)]
-fn lane_bits(test: impl Fn(usize) -> bool) -> u32 {
-    (0..LANES).fold(0, |bits, l| bits | (test(l) as u32) << l)
-}
-
-/// What a block's lanes need before counting, for one normal step whose
-/// neighbours of the block are in the image.
-#[derive(Debug, PartialEq, Eq)]
-struct LaneFacts {
-    /// Bit `l`: lane `l` and its four neighbours are valid.
-    complete: u32,
-    /// Bit `l`: the grid normal agrees with the workpiece's (meaningful when complete).
-    facing: u32,
-    /// The full-count memo keys.
-    keys: [u64; LANES],
-}
-
-impl RobustThreshold<'_> {
-    /// The normal test and memo keys of the eight lanes from pixel
-    /// `first`, term for term as the scalar [`Threshold::needed`] computes
-    /// them: the reference of the vector form, and the path on other CPUs.
-    fn lane_facts(&self, grid: &Grid, first: usize, step: usize) -> LaneFacts {
-        let w = grid.width();
-        let centre = grid.lanes(first);
-        let [px, py, pz] = centre;
-        let [lx, ly, lz] = grid.lanes(first - step);
-        let [rx, ry, rz] = grid.lanes(first + step);
-        let [ux, uy, uz] = grid.lanes(first - step * w);
-        let [dx, dy, dz] = grid.lanes(first + step * w);
-        let n = self.criterion.normal;
-        let reference = [n.x as f32, n.y as f32, n.z as f32];
-        let cos_sq = (self.cos_limit * self.cos_limit) as f32;
-        let (mut complete, mut facing) = (0, 0);
-        for l in 0..LANES {
-            let du = [rx[l] - lx[l], ry[l] - ly[l], rz[l] - lz[l]];
-            let dv = [dx[l] - ux[l], dy[l] - uy[l], dz[l] - uz[l]];
-            let valid = (du[0] + du[1] + du[2] + dv[0] + dv[1] + dv[2] + px[l]).is_finite();
-            complete |= (valid as u32) << l;
-            facing |= (cross_agrees(cross(du, dv), [px[l], py[l], pz[l]], reference, cos_sq) as u32) << l;
-        }
-        LaneFacts { complete, facing, keys: self.full_counts.keys_of_lanes(&centre) }
-    }
-
-    /// Takes the normal test of the lanes in `near_lanes`, those of a block
-    /// nearer than a step boundary, at their step `step_near`.
-    #[cold]
-    #[inline(never)]
-    fn straddle<const AVX2: bool>(
-        &self,
-        grid: &Grid,
-        first: usize,
-        step_near: usize,
-        near_lanes: u32,
-        facts: &mut LaneFacts,
-    ) {
-        let near = self.facts_of::<AVX2>(grid, first, step_near);
-        facts.complete = (near.complete & near_lanes) | (facts.complete & !near_lanes);
-        facts.facing = (near.facing & near_lanes) | (facts.facing & !near_lanes);
-    }
-
-    /// [`RobustThreshold::lane_facts`] in eight-wide registers: the same
-    /// operations in the same order (no fused multiply-add), so the same
-    /// bits. Written with intrinsics: the compiler split the lane loops
-    /// into four-wide pieces and spilled them.
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2")]
-    #[inline]
-    fn lane_facts_avx2(&self, grid: &Grid, first: usize, step: usize) -> LaneFacts {
-        use std::arch::x86_64::*;
-        let w = grid.width();
-        let load = |at: usize| grid.lanes_avx(at);
-        let [px, py, pz] = load(first);
-        let [lx, ly, lz] = load(first - step);
-        let [rx, ry, rz] = load(first + step);
-        let [ux, uy, uz] = load(first - step * w);
-        let [dx, dy, dz] = load(first + step * w);
-        let (add, sub, mul) = (_mm256_add_ps, _mm256_sub_ps, _mm256_mul_ps);
-        let du = [sub(rx, lx), sub(ry, ly), sub(rz, lz)];
-        let dv = [sub(dx, ux), sub(dy, uy), sub(dz, uz)];
-        let sum = add(add(add(add(add(add(du[0], du[1]), du[2]), dv[0]), dv[1]), dv[2]), px);
-        // Finite: the magnitude is below infinity (NaN compares false).
-        let magnitude = _mm256_and_ps(sum, _mm256_castsi256_ps(_mm256_set1_epi32(i32::MAX)));
-        let valid = _mm256_cmp_ps::<_CMP_LT_OQ>(magnitude, _mm256_set1_ps(f32::INFINITY));
-        // `cross_agrees(cross(du, dv), p, reference, cos_sq)`, term for term.
-        let n = [
-            sub(mul(du[1], dv[2]), mul(du[2], dv[1])),
-            sub(mul(du[2], dv[0]), mul(du[0], dv[2])),
-            sub(mul(du[0], dv[1]), mul(du[1], dv[0])),
-        ];
-        let dot3 = |a: [__m256; 3], b: [__m256; 3]| add(add(mul(a[0], b[0]), mul(a[1], b[1])), mul(a[2], b[2]));
-        let normal = self.criterion.normal;
-        let reference = [normal.x as f32, normal.y as f32, normal.z as f32].map(|c| _mm256_set1_ps(c));
-        let cos_sq = _mm256_set1_ps((self.cos_limit * self.cos_limit) as f32);
-        let towards = dot3(n, [px, py, pz]);
-        // Multiplying by -1 flips the sign bit; for a NaN the bit differs
-        // but every comparison below is false either way.
-        let away = _mm256_cmp_ps::<_CMP_LT_OQ>(towards, _mm256_setzero_ps());
-        let dot = _mm256_xor_ps(dot3(n, reference), _mm256_and_ps(away, _mm256_set1_ps(-0.0)));
-        let norm_sq = dot3(n, n);
-        let facing = _mm256_and_ps(
-            _mm256_and_ps(
-                _mm256_cmp_ps::<_CMP_GT_OQ>(norm_sq, _mm256_set1_ps(1e-24)),
-                _mm256_cmp_ps::<_CMP_GE_OQ>(dot, _mm256_setzero_ps()),
-            ),
-            _mm256_cmp_ps::<_CMP_GE_OQ>(mul(dot, dot), mul(cos_sq, norm_sq)),
-        );
-        LaneFacts {
-            complete: _mm256_movemask_ps(valid) as u32,
-            facing: _mm256_movemask_ps(facing) as u32,
-            keys: self.full_counts.keys_of_lanes_avx2(px, py, pz),
-        }
     }
 }
 
 /// Eq. 14, the paper's criterion.
 pub(crate) fn paper_criterion(cloud: &PointCloud, camera: &CameraModel, search: &NeighbourSearch) -> PlanePoints {
-    classify(search, &PaperThreshold { cloud, camera, radius: search.radius_mm() })
+    grid::classify(search, &PaperThreshold { cloud, camera, radius: search.radius_mm() })
 }
 
 /// The robust criterion: `N_r >= ratio · N_plane(p)`, where `N_plane` is
 /// the lattice count of a complete plane with the dominant normal through
 /// `p`, and the local normal within the angle limit.
 pub(crate) fn robust_criterion(search: &NeighbourSearch, criterion: &RobustPlaneCriterion) -> PlanePoints {
-    classify(search, &RobustThreshold::new(search, criterion))
+    grid::classify(search, &RobustThreshold::new(search, criterion))
 }
 
 /// The straightforward form of either criterion: one radius count per
@@ -524,189 +182,13 @@ pub(crate) fn reference(search: &NeighbourSearch, paper: bool, criterion: &Robus
         .collect()
 }
 
-fn classify<T: Threshold>(search: &NeighbourSearch, threshold: &T) -> PlanePoints {
-    let cloud = search.cloud();
-    let n = cloud.len();
-    let mut mask = vec![false; n];
-    let mut counts = vec![0u16; n];
-    let mut full = vec![0u16; n];
-    let saturate = |v: f64| v.clamp(0.0, u16::MAX as f64) as u16;
-    if !cloud.is_organized() {
-        mask.par_iter_mut().zip(counts.par_iter_mut()).zip(full.par_iter_mut()).enumerate().for_each_init(
-            FullCountCache::default,
-            |cache, (i, ((m, c), f))| {
-                if let Some((t, full_count)) = threshold.needed(i, cache) {
-                    // Counting stops at the threshold: however dense the
-                    // cloud, a point costs at most that many neighbours,
-                    // and the count kept is a lower bound, as on the grid.
-                    let count = search.count_up_to(i, |_| true, LaneNeed::of(Some((t, 0.0))).count);
-                    *m = count as f64 >= t;
-                    *c = if *m { saturate(count as f64) } else { 0 };
-                    *f = saturate(full_count);
-                }
-            },
-        );
-        return PlanePoints { mask, counts, full };
-    }
-    let grid = Grid::new(cloud);
-    let w = cloud.width();
-    // One scratch per rayon job, not per row: the full-count memo then
-    // serves the 32 rows of a tile instead of starting cold on each.
-    mask.par_chunks_mut(w).zip(counts.par_chunks_mut(w)).zip(full.par_chunks_mut(w)).enumerate().for_each_init(
-        Scratch::new,
-        |scratch, (row, ((mask_row, count_row), full_row))| {
-            scratch.spans_for = None;
-            for col in (0..w).step_by(LANES) {
-                let out =
-                    BlockOut { mask: &mut mask_row[col..], counts: &mut count_row[col..], full: &mut full_row[col..] };
-                classify_block(search, &grid, threshold, row, col, scratch, out);
-            }
-        },
-    );
-    PlanePoints { mask, counts, full }
-}
-
-/// Scratch space reused across the blocks of a row.
-struct Scratch {
-    /// The spans of the ellipse counted first, as runs on the grid.
-    runs: SpanRuns,
-    /// The union of a block's exact windows.
-    window: Vec<Span>,
-    /// Depth and column of the point the spans were made for.
-    spans_for: Option<(f32, usize)>,
-    memos: Memos,
-    needs: BlockNeeds,
-}
-
-/// The memos of a rayon job: full-plane counts, and what a lane of each
-/// memo key needs, which the block path reads without converting.
-#[derive(Default)]
-struct Memos {
-    full: FullCountCache,
-    need: KeyMemo<LaneNeed>,
-}
-
-impl Scratch {
-    fn new() -> Self {
-        Scratch {
-            runs: SpanRuns::default(),
-            window: Vec::new(),
-            spans_for: None,
-            memos: Memos::default(),
-            needs: BlockNeeds::REJECTED,
-        }
-    }
-
-    /// True when the spans were made for a point close enough to `(z, col)`
-    /// to serve it: the spans only choose where counting starts, so a
-    /// slightly different ellipse costs at most a fallback count.
-    fn spans_serve(&self, z: f32, col: usize) -> bool {
-        self.spans_for.is_some_and(|(z0, c0)| (z - z0).abs() <= 0.02 * z0 && col < c0 + 512)
-    }
-}
-
-/// Where a block's results go: slices starting at the block's first pixel.
-struct BlockOut<'a> {
-    mask: &'a mut [bool],
-    counts: &'a mut [u16],
-    full: &'a mut [u16],
-}
-
-/// Classifies up to `LANES` pixels of one row starting at `col`.
-fn classify_block<T: Threshold>(
-    search: &NeighbourSearch,
-    grid: &Grid,
-    threshold: &T,
-    row: usize,
-    col: usize,
-    scratch: &mut Scratch,
-    out: BlockOut,
-) {
-    let w = grid.width();
-    let lanes = LANES.min(w - col);
-    let first = row * w + col;
-    // The predicate's radius, squared in single precision as the KD-tree
-    // path squares it.
-    let radius_sq = (search.radius_mm() * search.radius_mm()) as f32;
-    // Lane `l`'s exact window, where all its neighbours lie.
-    let window_of = |l: usize| search.camera().neighbour_window(grid.point(first + l), search.radius_mm());
-    scratch.needs = BlockNeeds::REJECTED;
-    if lanes == LANES {
-        threshold.needed_block(grid, row, col, &mut scratch.memos, &mut scratch.needs);
-    } else {
-        let cache = &mut scratch.memos.full;
-        scratch.needs.set_each(lanes, |l| threshold.needed(first + l, cache));
-    }
-    let needs = &scratch.needs;
-    let Some(anchor) = (0..lanes).find(|&l| needs.counted(l)) else { return };
-    // The block's partial counts over the ellipse of its first candidate:
-    // lower bounds for every lane. An interior point finds nearly all its
-    // neighbours there; widening the ellipse for the few that noise moves
-    // outside it cost a third more distances than the recounts it saved.
-    let mut partial = [0u32; LANES];
-    if lanes == LANES {
-        let point = grid.point(first + anchor);
-        if !scratch.spans_serve(point[2], col) {
-            // An ellipse wider or taller than the image (a point far off
-            // the axis, or a plane seen nearly edge-on) could never be
-            // counted in it: its spans would only cost time and memory in
-            // proportion to its size, which one corrupt point makes
-            // unbounded. It gets no runs, as one seen edge-on gets none,
-            // and so no partial count: the lanes are counted exactly.
-            let ellipse =
-                PixelEllipse::new(search.camera(), &vec3(&point), &threshold.scan_normal(), search.radius_mm())
-                    .filter(|e| e.fits_grid(w, grid.height()));
-            scratch.runs.prepare(w, |spans| ellipse.iter().for_each(|e| e.spans_into(spans)));
-            scratch.spans_for = Some((point[2], col));
-        }
-        if let Some(counts) = grid.count_runs(col, row, &scratch.runs, radius_sq) {
-            partial = counts;
-        }
-    }
-    // A lane short of its threshold on the ellipse is counted again over
-    // its whole exact window; the whole block at once when it can be.
-    let short = (0..lanes).any(|l| needs.counted(l) && partial[l] < needs.count[l]);
-    let mut exact: Option<[u32; LANES]> = None;
-    if short && lanes == LANES {
-        let windows = (0..lanes).filter(|&l| needs.counted(l)).map(window_of);
-        let (wx, wy) = windows.fold((0, 0), |(a, b), (x, y)| (a.max(x), b.max(y)));
-        let (wx, wy) = (wx as isize, wy as isize);
-        // The union of the lanes' exact windows: counting over more pixels
-        // than a lane's window still gives its exact count.
-        // Rows beyond the top or bottom hold no neighbours, so leaving
-        // them out keeps the count exact along those borders.
-        let rows = (-wy).max(-(row as isize))..=wy.min((grid.height() - 1 - row) as isize);
-        scratch.window.clear();
-        scratch.window.extend(rows.map(|dv| Span { dv, du_lo: -wx, du_hi: wx }));
-        if grid.spans_fit(col, row, &scratch.window) {
-            exact = Some(grid.count_block(col, row, &scratch.window, radius_sq));
-        }
-    }
-    for l in 0..lanes {
-        if !needs.counted(l) {
-            continue;
-        }
-        let need = needs.count[l];
-        let count = match exact {
-            _ if partial[l] >= need => partial[l],
-            Some(counts) => counts[l],
-            None => grid.count_window(first + l, window_of(l), radius_sq),
-        };
-        out.full[l] = needs.full[l];
-        if count >= need {
-            out.mask[l] = true;
-            out.counts[l] = count.min(u16::MAX as u32) as u16;
-        }
-    }
-}
-
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use super::*;
 
     /// A plate at depth `z` tilted by `tilt_deg` about the image y axis, on
     /// columns below `plate_cols`, and a steep bevel after it.
-    fn scene(z: f64, tilt_deg: f64, plate_cols: usize) -> (PointCloud, Vec3) {
+    pub(super) fn scene(z: f64, tilt_deg: f64, plate_cols: usize) -> (PointCloud, Vec3) {
         let camera = CameraModel::default();
         let (w, h) = (60, 40);
         let t = tilt_deg.to_radians();
@@ -755,59 +237,6 @@ mod tests {
         let cloud = PointCloud::organized(3, 3, vec![[f32::NAN; 3]; 9]).unwrap();
         let search = NeighbourSearch::new(&cloud, &camera, 1.0);
         assert_eq!(paper_criterion(&cloud, &camera, &search).len(), 0);
-    }
-
-    #[test]
-    fn vector_lane_facts_equal_the_scalar_form() {
-        let camera = CameraModel::default();
-        let (clean, n) = scene(530.0, 15.0, 36);
-        // Noise, dropouts, a far point and an infinity, so every test of
-        // the normal meets finite, invalid and extreme inputs.
-        let mut points = clean.points().to_vec();
-        for (i, p) in points.iter_mut().enumerate() {
-            let wobble = ((i * 7919) % 13) as f32 * 0.01;
-            p[2] += wobble;
-            match i % 97 {
-                5 => *p = [f32::NAN; 3],
-                17 => p[2] = 1.0e30,
-                29 => p[0] = f32::INFINITY,
-                _ => {}
-            }
-        }
-        let cloud = PointCloud::organized(clean.width(), clean.height(), points).unwrap();
-        let grid = Grid::new(&cloud);
-        let search = NeighbourSearch::new(&cloud, &camera, 1.0);
-        let c = RobustPlaneCriterion { normal: n, min_ratio: 0.8, max_angle_deg: 20.0 };
-        let threshold = RobustThreshold::new(&search, &c);
-        let (w, h) = (grid.width(), grid.height());
-        let blocks = || {
-            (1..=4).flat_map(move |step| {
-                (step..h - step)
-                    .flat_map(move |row| (step..w - LANES - step).step_by(3).map(move |col| (row, col, step)))
-            })
-        };
-        assert!(blocks().count() > 1000);
-        // The facts of every block by the path each level dispatches to.
-        let (ran, _skipped) = kernels::on_every_isa(|isa| {
-            let facts: Vec<_> = blocks()
-                .map(|(row, col, step)| {
-                    let first = row * w + col;
-                    match isa {
-                        #[cfg(target_arch = "x86_64")]
-                        // SAFETY: `on_every_isa` runs only the levels the CPU runs.
-                        Isa::Avx2 => unsafe { threshold.lane_facts_avx2(&grid, first, step) },
-                        _ => threshold.lane_facts(&grid, first, step),
-                    }
-                })
-                .collect();
-            facts
-        });
-        let (_, scalar) = &ran[0];
-        for (isa, facts) in &ran[1..] {
-            for (k, (row, col, step)) in blocks().enumerate() {
-                assert_eq!(facts[k], scalar[k], "{isa:?}: row {row}, col {col}, step {step}");
-            }
-        }
     }
 
     #[test]

@@ -9,6 +9,7 @@ use rand_core::{Rng, SeedableRng};
 
 use crate::geometry::Vec3;
 use crate::geometry::fit::Moments;
+use crate::kernels;
 
 /// A segmented edge line: a point on it, its unit direction and the
 /// indices (into the input slice) of its inliers.
@@ -102,21 +103,14 @@ fn best_line(points: &[Vec3], remaining: &[usize], params: &RansacParams, rng: &
 
 /// Points of `sample` within `distance` of the line through `a` along
 /// `dir`, when that count reaches `needed`; `None` as soon as it cannot.
+/// A plain loop over chunks, which the compiler turns into four-lane
+/// double registers where the kernels run AVX2: the same operations in the
+/// same order, so the same inliers.
 fn score_reaching(sample: &[Vec3], a: &Vec3, dir: &Vec3, distance: f64, needed: usize) -> Option<usize> {
-    #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx2") {
-        // SAFETY: the CPU supports AVX2, checked just above.
-        return unsafe { score_reaching_avx2(sample, a, dir, distance, needed) };
-    }
-    score_reaching_lanes(sample, a, dir, distance, needed)
-}
-
-/// [`score_reaching`] compiled for four-lane double registers: the same
-/// operations in the same order, so the same inliers.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-unsafe fn score_reaching_avx2(sample: &[Vec3], a: &Vec3, dir: &Vec3, distance: f64, needed: usize) -> Option<usize> {
-    score_reaching_lanes(sample, a, dir, distance, needed)
+    kernels::vectorised(
+        #[inline(always)]
+        || score_reaching_lanes(sample, a, dir, distance, needed),
+    )
 }
 
 #[inline(always)]

@@ -1,0 +1,55 @@
+//! What the kernels ask of a vector register: lanes of `f32` coordinates
+//! and, beside them, lanes of `u32` labels and counts. The algorithms in
+//! [`super::generic`] are written once over this trait; [`super::sse2`]
+//! and [`super::avx2`] implement it in four and eight lanes.
+//!
+//! Every method is an `unsafe fn` marked `#[inline(always)]` in the
+//! implementations: it may only be called where the instruction set is
+//! known to run, and it is meant to be inlined into a function compiled
+//! for that set (`#[target_feature]`), never called on its own.
+
+use crate::cloud::Point;
+
+/// A register of [`Vector::LANES`] `f32` lanes, with the integer register
+/// of as many `u32` lanes that its compares and counts live in.
+///
+/// # Safety
+/// An implementation's methods must do what they say on every input,
+/// once the CPU runs its instruction set; the kernels rely on it for the
+/// bounds of their loads.
+pub(crate) unsafe trait Vector: Copy {
+    /// Lanes per register.
+    const LANES: usize;
+    /// A register of `LANES` u32 lanes.
+    type Int: Copy;
+
+    /// Every lane `v`.
+    unsafe fn splat(v: f32) -> Self;
+    /// `LANES` consecutive floats from `at`, unaligned.
+    unsafe fn load(at: *const f32) -> Self;
+    /// The x, y and z lanes of `LANES` consecutive points from `at`.
+    unsafe fn load_points(at: *const Point) -> [Self; 3];
+    unsafe fn add(self, other: Self) -> Self;
+    unsafe fn sub(self, other: Self) -> Self;
+    unsafe fn mul(self, other: Self) -> Self;
+    /// All ones where `self <= other`, by an ordered compare: a NaN lane
+    /// is never less or equal.
+    unsafe fn le(self, other: Self) -> Self::Int;
+
+    /// Every lane `v`.
+    unsafe fn splat_u32(v: u32) -> Self::Int;
+    /// `LANES` consecutive u32 from `at`, unaligned.
+    unsafe fn load_u32(at: *const u32) -> Self::Int;
+    /// All ones where the lanes are equal.
+    unsafe fn eq_u32(a: Self::Int, b: Self::Int) -> Self::Int;
+    unsafe fn and_u32(a: Self::Int, b: Self::Int) -> Self::Int;
+    /// Lane by lane `a - b`, wrapping.
+    unsafe fn sub_u32(a: Self::Int, b: Self::Int) -> Self::Int;
+    /// All ones in the lanes whose index exceeds `k` (every lane for a
+    /// negative `k`).
+    unsafe fn lanes_above(k: i32) -> Self::Int;
+    /// The lanes' sum, wrapping.
+    unsafe fn sum_u32(a: Self::Int) -> u32;
+    /// Stores the lanes to `LANES` u32 at `at`, unaligned.
+    unsafe fn store_u32(a: Self::Int, at: *mut u32);
+}

@@ -7,7 +7,7 @@ use std::arch::x86_64::*;
 
 use super::sse2::deinterleave;
 use super::vector::Vector;
-use super::{BLOCK, LabelledGrid, Planes, generic, scalar};
+use super::{BLOCK, Planes, generic};
 use crate::cloud::Point;
 
 // SAFETY: every method does what the trait says with AVX2, which the
@@ -126,43 +126,6 @@ pub(super) fn count_block(
 ) -> [u32; BLOCK] {
     // SAFETY: this function runs only where AVX2 does; 8 divides 8.
     unsafe { generic::count_block::<__m256>(planes, first, ranges, radius_sq) }
-}
-
-/// [`super::labelled_count_at_most`], eight points at a time on spans that
-/// hold as many, four on shorter ones.
-#[target_feature(enable = "avx2")]
-pub(super) fn labelled_count_at_most(
-    grid: &LabelledGrid,
-    i: usize,
-    window: (usize, usize),
-    label: u32,
-    radius_sq: f32,
-    threshold: f64,
-) -> bool {
-    generic::labelled_count_at_most(
-        grid,
-        i,
-        window,
-        label,
-        radius_sq,
-        threshold,
-        #[inline(always)]
-        |p, points, labels, label, radius_sq| count_span(p, points, labels, label, radius_sq),
-    )
-}
-
-/// [`super::scalar::count_span`] eight points at a time on spans that hold
-/// as many, four on shorter ones.
-#[target_feature(enable = "avx2")]
-#[inline]
-pub(super) fn count_span(p: &Point, points: &[Point], labels: &[u32], label: u32, radius_sq: f32) -> u32 {
-    match points.len().min(labels.len()) {
-        // SAFETY: this function runs only where AVX2, and so SSE2, does.
-        8.. => unsafe { generic::count_span::<__m256>(p, points, labels, label, radius_sq) },
-        // SAFETY: as above.
-        4.. => unsafe { generic::count_span::<__m128>(p, points, labels, label, radius_sq) },
-        _ => scalar::count_span(p, points, labels, label, radius_sq),
-    }
 }
 
 /// [`super::count_runs_fused`]'s eight lanes: [`super::count_block`] over

@@ -50,7 +50,7 @@ pub(super) struct Clock {
 }
 
 impl Clock {
-    fn start() -> Self {
+    pub(super) fn start() -> Self {
         Clock { timings: StageTimings::default(), last: Instant::now() }
     }
 
@@ -83,9 +83,9 @@ impl<'a> Context<'a> {
         config: &'a Config,
         cloud: &'a PointCloud,
         request: &'a PlanRequest,
+        clock: Clock,
     ) -> Result<Self, PlanError> {
-        let clock = Clock::start();
-        let mut cloud = super::input::prepare(cloud, request, config)?;
+        let mut cloud = Cow::Borrowed(cloud);
         let camera = &config.camera;
         let volume = camera.measurable_volume(cloud.width(), cloud.height(), cloud.is_organized());
         let counts = count_measurable(&cloud, &volume);

@@ -254,15 +254,19 @@ impl Planner {
     /// Runs the pipeline on `cloud`, in the units and frame the request
     /// names (camera frame and millimetres by default).
     ///
-    /// First `regrid::prepare` puts a raw export that lost its grid back
-    /// on the camera's, and takes an organized frame's own intrinsics for
-    /// another camera's frame.
+    /// First, timed as the input stage with the screening that follows,
+    /// `input::prepare` brings the cloud into the camera frame in
+    /// millimetres, then `regrid::prepare` puts a raw export that lost its
+    /// grid back on the camera's and takes an organized frame's own
+    /// intrinsics for another camera's frame.
     ///
     /// The method is chosen here, once: `paper.rs` and `robust.rs` each
     /// run the whole way through.
     pub fn plan(&self, cloud: &PointCloud, request: &PlanRequest) -> Result<Plan, PlanError> {
         validate(request, &self.config)?;
-        let input = regrid::prepare(&self.config.camera, cloud);
+        let clock = context::Clock::start();
+        let converted = input::prepare(cloud, request, &self.config)?;
+        let input = regrid::prepare(&self.config.camera, &converted);
         let other_camera;
         let config = match input.camera {
             Some(camera) => {
@@ -271,7 +275,7 @@ impl Planner {
             }
             None => &self.config,
         };
-        let ctx = Context::sanitise(config, &input.cloud, request)?;
+        let ctx = Context::sanitise(config, &input.cloud, request, clock)?;
         match self.config.pipeline.method {
             Method::Paper => paper::plan(ctx),
             Method::Robust => robust::plan(ctx),

@@ -35,6 +35,7 @@ pub mod plane_points;
 pub mod ransac;
 pub mod refit;
 mod robust;
+mod scale;
 pub mod trajectory;
 pub mod weld_edges;
 pub mod weld_equation;

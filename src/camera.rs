@@ -361,6 +361,12 @@ impl CameraModel {
         [x, y, 1.0]
     }
 
+    /// The distance between neighbouring pixels' points on a surface facing
+    /// the camera at `p`, mm: the spacing of this camera's raw frames there.
+    pub fn pixel_footprint_at(&self, p: &Vec3) -> f64 {
+        p.z.abs() / self.fx().min(self.fy())
+    }
+
     /// Depth noise (one sigma, along the ray) at depth `z`: structured
     /// light triangulation error grows with z², anchored at the nominal
     /// accuracy at `fov_distance_mm`.

@@ -58,14 +58,33 @@ fn method_by_name<'de, D: Deserializer<'de>>(deserializer: D) -> Result<Method, 
     })
 }
 
+/// Where the neighbour count a full plane gives comes from, against which
+/// the plane and edge criteria measure each point.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum PointDensity {
+    /// The camera model for organized frames (a raw frame of the camera),
+    /// the cloud's own measured spacing for any other cloud.
+    #[default]
+    Auto,
+    /// Always the camera model (the paper's Eq. 4 to 14): for comparison.
+    Camera,
+    /// Always the cloud's measured spacing, organized frames too.
+    Measured,
+}
+
 /// Parameters of the seam pipeline's stages: the [pipeline] section.
 #[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct PipelineParams {
     #[serde(deserialize_with = "method_by_name")]
     pub method: Method,
-    /// Neighbour search radius R, mm (paper: 1).
+    /// Neighbour search radius R, mm (paper: 1). For a cloud whose density
+    /// is measured, the radius at which a full plane holds about 50 points
+    /// when that is larger.
     pub neighbour_radius_mm: f64,
+    /// Where the full-plane neighbour count comes from.
+    pub point_density: PointDensity,
     /// Robust plane criterion: the least fraction of the neighbours a full
     /// plane would give at this point, tilt and pixel grid included.
     pub plane_min_neighbour_ratio: f64,
@@ -116,6 +135,7 @@ impl Default for PipelineParams {
         PipelineParams {
             method: Method::Robust,
             neighbour_radius_mm: 1.0,
+            point_density: PointDensity::Auto,
             plane_min_neighbour_ratio: 0.8,
             plane_max_normal_angle_deg: 20.0,
             cluster_tolerance_mm: 1.0,

@@ -8,6 +8,15 @@
 //! so the boundary sample is half a pixel step beyond the last one. The
 //! walk also runs past the ends of the coarse edge, so the samples reach
 //! the plate's corners and give the seam's true extent.
+//!
+//! Without a grid ([`sample_scattered`]) the same rule is read from the
+//! points themselves: cut the band beside the coarse edge into strips one
+//! point spacings wide along the edge; in each strip the plate ends on
+//! average one gap beyond its outermost point on the plate's plane, where
+//! the k points of the strip's last row split the spacing into k + 1 gaps
+//! (one point: half a spacing, as on the grid).
+//! The strips cover every on-plane point of the band, so they too reach the
+//! plate's corners.
 
 use crate::cloud::PointCloud;
 use crate::geometry::fit::Plane;
@@ -192,6 +201,69 @@ pub fn sample_boundary(
     Boundary { samples: found.into_iter().map(|(_, _, s)| s).collect(), line_spacing_mm }
 }
 
+/// Samples the boundary of a plate beside `edge` in a cloud without a
+/// pixel grid whose points lie about `spacing_mm` apart. Every valid point
+/// on the plate's plane within the band counts, not only the plate's
+/// members: the plane criterion has trimmed the outermost ones. Points
+/// farther out than `reach_mm` beyond the edge are left out, so a
+/// coplanar neighbour plate across a narrow gap is never taken for this
+/// one.
+pub fn sample_scattered(
+    cloud: &PointCloud,
+    plane: &Plane,
+    edge: &CoarseEdge,
+    params: &BoundaryParams,
+    spacing_mm: f64,
+    reach_mm: f64,
+) -> Boundary {
+    use rayon::prelude::*;
+    use std::collections::BTreeMap;
+
+    if spacing_mm.is_nan() || spacing_mm <= 0.0 {
+        return Boundary::default();
+    }
+    let outward_limit = params.band_mm.min(reach_mm);
+    // Two spacings: a strip one spacing wide misses the boundary row's
+    // point about as often as it holds it, and its outermost point is then
+    // a row in; at two the row is nearly always there.
+    let strip_mm = STRIP_SPACINGS * spacing_mm;
+    // (strip, outward offset, point) of every on-plane point in the band.
+    let in_band: Vec<(i64, f64, Vec3)> = cloud
+        .points()
+        .par_iter()
+        .filter(|p| p[0].is_finite())
+        .filter_map(|p| {
+            let v = vec3(p);
+            let d = v - edge.point;
+            let out = d.dot(&edge.outward);
+            let on_plane = plane.signed_distance(&v).abs() <= params.on_plane_mm;
+            (on_plane && out >= -params.band_mm && out <= outward_limit)
+                .then(|| (crate::geometry::floor_i64(d.dot(&edge.direction) / strip_mm), out, v))
+        })
+        .collect();
+    let mut strips: BTreeMap<i64, Vec<(f64, Vec3)>> = BTreeMap::new();
+    for (strip, out, v) in in_band {
+        strips.entry(strip).or_default().push((out, v));
+    }
+    let samples = strips
+        .into_values()
+        .filter_map(|strip| {
+            let &(last_out, last) = strip.iter().max_by(|a, b| a.0.total_cmp(&b.0))?;
+            // The k points of the strip's last row (within half a spacing
+            // of the outermost) split the spacing beyond the row into k + 1
+            // gaps on average: the plate ends one gap beyond the outermost.
+            let row = strip.iter().filter(|(out, _)| *out >= last_out - spacing_mm / 2.0).count();
+            let beyond = spacing_mm / (row + 1) as f64;
+            let position = plane.project(&last) + edge.outward * beyond;
+            Some(BoundarySample { position, along: (position - edge.point).dot(&edge.direction) })
+        })
+        .collect();
+    Boundary { samples, line_spacing_mm: strip_mm }
+}
+
+/// The width of [`sample_scattered`]'s strips, in point spacings.
+const STRIP_SPACINGS: f64 = 2.0;
+
 /// The median distance along the edge from one scan line's sample to the
 /// next line's, per line. `found` is sorted by line.
 fn median_line_spacing(found: &[(usize, isize, BoundarySample)]) -> f64 {
@@ -309,5 +381,67 @@ mod tests {
         // Half a scan line beyond the last sample is the unbiased end.
         let (_, end) = boundary.extent(|s| s.position.y).unwrap();
         assert!((end - end_y).abs() < 0.55 * pixel, "extent ends at {end}, plate at {end_y}");
+    }
+
+    /// A plate of points about `spacing` apart (a jittered square grid,
+    /// as voxel centroids lie) whose edge is x = `edge_x` + SLOPE y, and a
+    /// coplanar plate beyond a `gap` wide gap.
+    fn scattered(spacing: f64, edge_x: f64, gap: f64) -> PointCloud {
+        let mut state = 0x2545_f491_4f6c_dd1d_u64;
+        let mut jitter = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            ((state >> 11) as f64 / (1u64 << 53) as f64 - 0.5) * 0.5 * spacing
+        };
+        let mut points = Vec::new();
+        let n = (60.0 / spacing) as i64;
+        for row in -n..=n {
+            for col in -n..=n {
+                let (x, y) = (col as f64 * spacing + jitter(), row as f64 * spacing + jitter());
+                let edge = edge_x + SLOPE * y;
+                if x < edge || x > edge + gap {
+                    points.push([x as f32, y as f32, 700.0]);
+                }
+            }
+        }
+        PointCloud::unorganized(points)
+    }
+
+    #[test]
+    fn scattered_samples_lie_on_the_true_edge_within_a_fifth_of_the_spacing() {
+        let (spacing, edge_x) = (1.0, 3.3);
+        let cloud = scattered(spacing, edge_x, 2.0);
+        let plane = Plane { normal: Vec3::z(), offset: 700.0 };
+        let direction = Vec3::new(SLOPE, 1.0, 0.0).normalize();
+        let outward = Vec3::new(1.0, -SLOPE, 0.0).normalize();
+        let edge = CoarseEdge { point: Vec3::new(edge_x - 2.0, 0.0, 700.0), direction, outward };
+        let params = BoundaryParams { band_mm: 6.0, on_plane_mm: 0.4 };
+        // The other plate starts 2 mm beyond the edge: reach halfway.
+        let boundary = sample_scattered(&cloud, &plane, &edge, &params, spacing, 3.0);
+        assert!(boundary.samples.len() > 50, "{} samples", boundary.samples.len());
+        let offset = |p: &Vec3| (p.x - edge_x - SLOPE * p.y) * outward.x;
+        // Away from the plate's ends, where the last strips hold only part
+        // of a row and sample the plate's end rather than its side.
+        let offsets: Vec<f64> =
+            boundary.samples.iter().filter(|s| s.position.y.abs() < 57.0).map(|s| offset(&s.position)).collect();
+        let mean = offsets.iter().sum::<f64>() / offsets.len() as f64;
+        assert!(mean.abs() < 0.2 * spacing, "mean offset {mean} mm");
+        let worst = offsets.iter().map(|o| o.abs()).fold(0.0, f64::max);
+        assert!(worst < spacing, "a sample {worst} mm off the edge");
+    }
+
+    #[test]
+    fn scattered_samples_never_cross_to_the_plate_beyond_the_gap() {
+        let cloud = scattered(1.0, 3.3, 1.5);
+        let plane = Plane { normal: Vec3::z(), offset: 700.0 };
+        let direction = Vec3::new(SLOPE, 1.0, 0.0).normalize();
+        let outward = Vec3::new(1.0, -SLOPE, 0.0).normalize();
+        let edge = CoarseEdge { point: Vec3::new(1.3, 0.0, 700.0), direction, outward };
+        let params = BoundaryParams { band_mm: 6.0, on_plane_mm: 0.4 };
+        let boundary = sample_scattered(&cloud, &plane, &edge, &params, 1.0, 2.75);
+        let beyond = boundary.samples.iter().filter(|s| (s.position.x - 3.3 - SLOPE * s.position.y) > 1.0).count();
+        assert_eq!(beyond, 0);
+        assert!(!sample_scattered(&cloud, &plane, &edge, &params, f64::NAN, 2.75).samples.iter().any(|_| true));
     }
 }

@@ -12,7 +12,7 @@ use rayon::prelude::*;
 
 use crate::camera::{MeasurableVolume, Unmeasurable};
 use crate::cloud::PointCloud;
-use crate::config::{Config, Method};
+use crate::config::{Config, Method, PointDensity};
 use crate::geometry::{Vec3, vec3};
 use crate::joint::JointType;
 
@@ -23,6 +23,7 @@ use super::neighbours::NeighbourSearch;
 use super::plane_points::PlanePoints;
 use super::ransac::RansacParams;
 use super::refit::{CurveFit, SeamCurve};
+use super::scale::{self, Scale};
 use super::trajectory::{self, Waypoint};
 use super::weld_equation;
 use super::{Plan, PlanError, PlanRequest, PlanStats, Seam, Stage, StageTimings};
@@ -69,6 +70,9 @@ pub(super) struct Context<'a> {
     pub cloud: Cow<'a, PointCloud>,
     pub clock: Clock,
     pub stats: PlanStats,
+    /// The radius and spacing the frame is planned at: the camera's until
+    /// [`Context::measure_scale`] measures the cloud.
+    pub scale: Scale,
 }
 
 impl<'a> Context<'a> {
@@ -103,7 +107,14 @@ impl<'a> Context<'a> {
             );
             cloud = Cow::Owned(without_unmeasurable(&cloud, &volume));
         }
-        let mut ctx = Context { config, request, cloud, clock, stats: PlanStats::default() };
+        let mut ctx = Context {
+            config,
+            request,
+            cloud,
+            clock,
+            stats: PlanStats::default(),
+            scale: Scale::of_camera(config.pipeline.neighbour_radius_mm),
+        };
         ctx.stats.valid_points = counts.valid - counts.unmeasurable();
         if ctx.stats.valid_points == 0 && counts.near > 0 && counts.near == counts.valid {
             return Err(PlanError::at(
@@ -138,6 +149,36 @@ impl<'a> Context<'a> {
         }
         ctx.clock.lap(Stage::Input);
         Ok(ctx)
+    }
+
+    /// Decides where the full-plane count comes from
+    /// (`pipeline.point_density`) and, when it is the cloud itself,
+    /// measures the cloud's spacing and derives the radius from it
+    /// ([`super::scale`]). Returns whether the density is measured.
+    pub(super) fn measure_scale(&mut self) -> Result<bool, PlanError> {
+        let cfg = &self.config.pipeline;
+        let measured = match cfg.point_density {
+            PointDensity::Camera => false,
+            PointDensity::Measured => true,
+            PointDensity::Auto => !self.cloud.is_organized(),
+        };
+        if !measured {
+            return Ok(false);
+        }
+        let spacing = scale::measure_spacing(&self.cloud, cfg.neighbour_radius_mm)
+            .map_err(|e| PlanError::at(Stage::NeighbourIndex, format!("{e}; the point density cannot be measured")))?;
+        self.scale = Scale::of_spacing(spacing, cfg.neighbour_radius_mm);
+        tracing::info!(
+            spacing_mm = spacing.spacing_mm,
+            measured_at_mm = spacing.measured_at_mm,
+            median_neighbours = spacing.median_count,
+            samples = spacing.samples,
+            radius_mm = self.scale.radius_mm,
+            configured_radius_mm = cfg.neighbour_radius_mm,
+            organized = self.cloud.is_organized(),
+            "point density measured from the cloud"
+        );
+        Ok(true)
     }
 
     /// The clusters as plane patches, those smaller than
@@ -181,7 +222,8 @@ impl<'a> Context<'a> {
     pub(super) fn ransac_params(&self, seed_offset: u64) -> RansacParams {
         let cfg = &self.config.pipeline;
         RansacParams {
-            distance_mm: cfg.ransac_distance_mm,
+            // Edge points scatter across an edge by about a point spacing.
+            distance_mm: self.scale.at_least_spacings(cfg.ransac_distance_mm, 1.0),
             iterations: cfg.ransac_iterations,
             min_line_points: cfg.ransac_min_line_points as usize,
             min_remaining_points: cfg.ransac_min_remaining_points as usize,
@@ -311,7 +353,33 @@ pub(super) fn plate_edge_points(
         label: k as u32,
         members: &workpiece.plates[k].members,
     });
-    edge_points::edge_points_of_plates(search, plane, plates, criterion)
+    let mut edges = edge_points::edge_points_of_plates(search, plane, plates, criterion);
+    if search.measured().is_some() {
+        for (k, edge) in edges.iter_mut().enumerate() {
+            let before = edge.len();
+            keep_one_sided(edge, &labels, k as u32, &workpiece.plates[k].plane.normal, search);
+            tracing::debug!(plate = k + 1, before, after = edge.len(), "edge points one-sided");
+        }
+    }
+    edges
+}
+
+/// Keeps the edge points whose same-plate neighbours do not surround them
+/// ([`scale::surrounded`]).
+///
+/// A measured cloud's density is not smooth: noise and resampling leave
+/// the odd patch of a plate with a fifth fewer points than its
+/// surroundings, and the count criterion (Eq. 15) takes it for an edge. An
+/// edge is where the plate ends, so its points have an empty side; such a
+/// patch has neighbours all around.
+fn keep_one_sided(edge: &mut Vec<u32>, labels: &[u32], label: u32, normal: &Vec3, search: &NeighbourSearch) {
+    let keep: Vec<bool> =
+        edge.par_iter().map(|&i| !scale::surrounded_by(search, i as usize, normal, |j| labels[j] == label)).collect();
+    let mut k = 0;
+    edge.retain(|_| {
+        k += 1;
+        keep[k - 1]
+    });
 }
 
 /// The cluster labels renumbered in place so that plate k is label k and

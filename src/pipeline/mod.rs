@@ -37,6 +37,7 @@ pub mod ransac;
 pub mod refit;
 pub mod regrid;
 mod robust;
+mod scale;
 pub mod trajectory;
 pub mod weld_edges;
 pub mod weld_equation;

@@ -4,13 +4,13 @@
 //! Organized frames are searched on the pixel grid: every 3D neighbour
 //! within R of a pixel's point lies inside a small image window around the
 //! pixel ([`CameraModel::neighbour_window`]), so scanning that window gives
-//! exactly the count a KD-tree query would. Unorganized clouds use a tree
-//! whose queries stop as soon as the caller has what it needs (a count up
-//! to its threshold, a bounded sample for a normal), so no density makes a
-//! point cost more than that. A kiddo KD-tree that reads every neighbour
+//! exactly the count a KD-tree query would. Unorganized clouds use cells as
+//! wide as the radius ([`cells`]), whose queries stop as soon as the caller
+//! has what it needs (a count up to its threshold, a bounded sample for a
+//! normal), so no density makes a point cost more than that. A kiddo KD-tree that reads every neighbour
 //! serves as the reference both paths are tested against.
 
-mod point_tree;
+pub(crate) mod cells;
 
 #[cfg(target_arch = "x86_64")]
 use std::arch::x86_64::*;
@@ -24,13 +24,18 @@ use crate::cloud::{Point, PointCloud};
 use crate::geometry::{Vec3, ceil_i64, floor_i64};
 
 use super::grid_search::{LANES, Span};
+use super::scale::DensityMap;
 use crate::kernels::within;
-use point_tree::PointTree;
+use cells::CellIndex;
 
 /// The most neighbours of one point a sampled visit reads: more than any
 /// frame of the paper's camera gives within its field of view at its
 /// nearest depth, far less than a cloud a thousand times denser.
 pub(crate) const MAX_SAMPLED_NEIGHBOURS: usize = 4096;
+
+/// Cells a hair wider than the radius: a neighbour exactly at the radius
+/// then never falls two cells away through rounding.
+const CELL_MARGIN: f64 = 1.0 + 1e-5;
 
 /// Finds the neighbours of cloud points within a fixed radius.
 // Public only because orientation's public functions take it.
@@ -40,14 +45,18 @@ pub struct NeighbourSearch<'a> {
     radius: f32,
     radius_sq: f32,
     index: Index,
+    /// The full-plane counts measured from the cloud itself, when they
+    /// replace the camera's ([`super::scale`]).
+    measured: Option<DensityMap>,
 }
 
 /// How the neighbours of a point are found.
 enum Index {
     /// An organized cloud: its pixel window.
     Grid,
-    /// An unorganized cloud: a tree whose queries stop early.
-    Tree(PointTree),
+    /// An unorganized cloud: cells as wide as the radius, whose queries
+    /// stop early.
+    Cells(CellIndex),
     /// The kiddo KD-tree of the reference search.
     #[cfg(test)]
     KdTree(KdIndex),
@@ -62,11 +71,36 @@ struct KdIndex {
 
 impl<'a> NeighbourSearch<'a> {
     /// Prepares a search with radius `radius_mm`: the pixel grid of an
-    /// organized cloud, else a tree of its points.
+    /// organized cloud, else cells of its points.
     pub(crate) fn new(cloud: &'a PointCloud, camera: &'a CameraModel, radius_mm: f64) -> Self {
         let radius = radius_mm as f32;
-        let index = if cloud.is_organized() { Index::Grid } else { Index::Tree(PointTree::new(cloud.points())) };
-        NeighbourSearch { cloud, camera, radius, radius_sq: radius * radius, index }
+        let index = if cloud.is_organized() {
+            Index::Grid
+        } else {
+            Index::Cells(CellIndex::new(cloud.points(), radius_mm * CELL_MARGIN))
+        };
+        NeighbourSearch { cloud, camera, radius, radius_sq: radius * radius, index, measured: None }
+    }
+
+    /// The full-plane counts of this search measured from its cloud rather
+    /// than predicted from the camera.
+    pub(crate) fn measure_full_counts(&mut self) -> Option<&DensityMap> {
+        self.measured = DensityMap::measure(self);
+        self.measured.as_ref()
+    }
+
+    /// The measured full-plane counts, if this search uses them.
+    pub(crate) fn measured(&self) -> Option<&DensityMap> {
+        self.measured.as_ref()
+    }
+
+    /// The surface a point at `p` with unit normal `n` stands for, mm²:
+    /// measured, or one pixel's footprint on the tilted plane.
+    pub(crate) fn area_per_point(&self, p: &Vec3, n: &Vec3) -> f64 {
+        match &self.measured {
+            Some(map) => map.area_per_point_at(&[p.x as f32, p.y as f32, p.z as f32]),
+            None => 1.0 / self.camera.plane_density_at(p, n),
+        }
     }
 
     /// A search that always queries a kiddo KD-tree for every neighbour,
@@ -76,7 +110,7 @@ impl<'a> NeighbourSearch<'a> {
     pub(crate) fn kdtree(cloud: &'a PointCloud, camera: &'a CameraModel, radius_mm: f64) -> Self {
         let radius = radius_mm as f32;
         let index = Index::KdTree(build_tree(cloud.points()));
-        NeighbourSearch { cloud, camera, radius, radius_sq: radius * radius, index }
+        NeighbourSearch { cloud, camera, radius, radius_sq: radius * radius, index, measured: None }
     }
 
     pub(crate) fn cloud(&self) -> &PointCloud {
@@ -93,7 +127,6 @@ impl<'a> NeighbourSearch<'a> {
 
     /// Calls `visit(j)` for every valid point `j` within the radius of
     /// point `i` (including `i` itself). `i` must be valid.
-    #[cfg(test)]
     pub(crate) fn for_each(&self, i: usize, mut visit: impl FnMut(usize)) {
         self.visit_until(i, |j| {
             visit(j);
@@ -102,7 +135,7 @@ impl<'a> NeighbourSearch<'a> {
     }
 
     /// [`NeighbourSearch::for_each`] until `visit` breaks. On a pixel grid
-    /// the window bounds the work; in a tree the break does, which is what
+    /// the window bounds the work; in cells the break does, which is what
     /// keeps a cloud far denser than any camera's from costing the whole
     /// cloud per point.
     #[inline]
@@ -126,9 +159,9 @@ impl<'a> NeighbourSearch<'a> {
                     }
                 }
             }
-            Index::Tree(tree) => {
-                // The tree gives candidates; the shared predicate decides.
-                tree.visit_near(p, self.radius_sq * (1.0 + 1e-5), |j, q| {
+            Index::Cells(cells) => {
+                // The cells give candidates; the shared predicate decides.
+                cells.visit_near(i, p, self.radius_sq * (1.0 + 1e-5), |j, q| {
                     if within(p, q, self.radius_sq) { visit(j) } else { ControlFlow::Continue(()) }
                 });
             }
@@ -182,12 +215,12 @@ impl<'a> NeighbourSearch<'a> {
         side(wx).saturating_mul(side(wy)).min(MAX_SAMPLED_NEIGHBOURS)
     }
 
-    /// Calls `visit(j)` for the neighbours of point `i`, up to
-    /// [`NeighbourSearch::frame_neighbours_at_most`] of them: all of them
-    /// in any frame of the configured camera, a bounded sample of the
-    /// neighbours of a point denser than that.
-    pub(crate) fn for_each_sampled(&self, i: usize, mut visit: impl FnMut(usize)) {
-        let cap = self.frame_neighbours_at_most(&self.cloud.points()[i]);
+    /// Calls `visit(j)` for the neighbours of point `i`, up to `at_most` of
+    /// them and never more than [`NeighbourSearch::frame_neighbours_at_most`]:
+    /// a bounded sample of the neighbours of a point however dense the
+    /// cloud.
+    pub(crate) fn for_each_sampled(&self, i: usize, at_most: usize, mut visit: impl FnMut(usize)) {
+        let cap = self.frame_neighbours_at_most(&self.cloud.points()[i]).min(at_most);
         let mut n = 0;
         self.visit_until(i, |j| {
             visit(j);
@@ -211,10 +244,14 @@ pub(crate) const FULL_COUNT_DEPTH_STEP_MM: f64 = 0.5;
 /// the ellipse changes by about a thousandth, so this is the pixel's own
 /// lattice count give or take one lattice point; in exchange it is computed
 /// once per tile and depth step instead of once per pixel. Without a grid
-/// it is `π R² D` with the exact pinhole density.
+/// it is `π R² D` with the exact pinhole density. When the search measured
+/// its full counts from the cloud ([`super::scale::DensityMap`]), those
+/// replace the camera's: on a grid, the measured count at the tile's
+/// centre and depth step.
 pub(crate) struct FullCounts<'a> {
     cloud: &'a PointCloud,
     camera: &'a CameraModel,
+    measured: Option<&'a DensityMap>,
     normal: Vec3,
     radius: f64,
     /// Tiles per unit of `x / z` and of `y / z`.
@@ -295,11 +332,12 @@ fn floor_i32_avx2(x: __m256) -> __m256i {
 }
 
 impl<'a> FullCounts<'a> {
-    pub(crate) fn new(search: &NeighbourSearch<'a>, normal: &Vec3) -> Self {
+    pub(crate) fn new(search: &'a NeighbourSearch<'a>, normal: &Vec3) -> Self {
         let tile = FULL_COUNT_TILE_PX as f64;
         FullCounts {
             cloud: search.cloud,
             camera: search.camera,
+            measured: search.measured.as_ref(),
             normal: *normal,
             radius: search.radius as f64,
             tiles_per_x: (search.camera.fx() / tile) as f32,
@@ -336,12 +374,11 @@ impl<'a> FullCounts<'a> {
         let tile_col = (key >> 32) as u16 as i16 as f64;
         let depth_step = key as u32 as i32 as f64;
         let ray = Vec3::new((tile_col + 0.5) * self.tile_x, (tile_row + 0.5) * self.tile_y, 1.0);
-        lattice_count_in_ellipse(
-            self.camera,
-            &(ray * (depth_step * FULL_COUNT_DEPTH_STEP_MM)),
-            &self.normal,
-            self.radius,
-        )
+        let centre = ray * (depth_step * FULL_COUNT_DEPTH_STEP_MM);
+        match self.measured {
+            Some(map) => map.full_count_at(&[centre.x as f32, centre.y as f32, centre.z as f32]),
+            None => lattice_count_in_ellipse(self.camera, &centre, &self.normal, self.radius),
+        }
     }
 
     /// The full-plane count of point `i`, which must be valid.
@@ -354,6 +391,9 @@ impl<'a> FullCounts<'a> {
     pub(crate) fn get_point(&self, p: &Point, cache: &mut FullCountCache) -> f64 {
         let p = *p;
         if !self.cloud.is_organized() {
+            if let Some(map) = self.measured {
+                return map.full_count_at(&p);
+            }
             let n = &self.normal;
             let density = self.camera.plane_density_at(&Vec3::new(p[0] as f64, p[1] as f64, p[2] as f64), n);
             return std::f64::consts::PI * self.radius * self.radius * density;

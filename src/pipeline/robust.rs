@@ -24,7 +24,7 @@ use crate::config::Method;
 use crate::geometry::Vec3;
 use crate::joint::JointType;
 
-use super::boundary::{self, Boundary, BoundaryParams, BoundarySample, CoarseEdge};
+use super::boundary::{self, Boundary, BoundaryParams, CoarseEdge};
 use super::context::{self, Context, MIN_CLUSTER_POINTS};
 use super::edge_points::{EdgeCriterion, FullCount};
 use super::neighbours::NeighbourSearch;
@@ -43,13 +43,27 @@ const DOMINANT_NORMAL_AGREEMENT_DEG: f64 = 5.0;
 /// plate normals is taken as no direction at all (they point apart).
 const MIN_DIRECTION_NORM: f64 = 1e-9;
 
+/// The Euclidean clustering tolerance in point spacings, at least, for a
+/// cloud whose spacing is measured: diagonal neighbours lie 1.4 spacings
+/// apart, and the plane criterion leaves the odd hole.
+const CLUSTER_SPACINGS: f64 = 2.5;
+
 /// Plans one frame by the robust method.
 pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
     let config = ctx.config;
     let cfg = &config.pipeline;
     let camera = &config.camera;
+    // The scale: the camera's for its raw frames, else measured from the
+    // cloud's own spacing (Eq. 4 to 14 hold for one camera only).
+    let measured = ctx.measure_scale()?;
+    let scale = ctx.scale;
     let cloud = &*ctx.cloud;
-    let search = NeighbourSearch::new(cloud, camera, cfg.neighbour_radius_mm);
+    let mut search = NeighbourSearch::new(cloud, camera, scale.radius_mm);
+    if measured {
+        let full = search.measure_full_counts().map(|m| m.median_full_count());
+        tracing::debug!(median_full_count = full, radius_mm = scale.radius_mm, "full-plane counts measured");
+    }
+    let search = search;
     ctx.clock.lap(Stage::NeighbourIndex);
 
     // Plates, table and fixture lie parallel: one normal describes them.
@@ -77,7 +91,10 @@ pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
     let mut clusters = if cloud.is_organized() {
         clustering::grid(cloud, &plane.mask, cfg.cluster_tolerance_mm, MIN_CLUSTER_POINTS)
     } else {
-        clustering::euclidean(cloud, &plane.mask, cfg.cluster_tolerance_mm, MIN_CLUSTER_POINTS)
+        // A plate's points connect through neighbours about a spacing
+        // apart, diagonals and the criterion's gaps included.
+        let tolerance = scale.at_least_spacings(cfg.cluster_tolerance_mm, CLUSTER_SPACINGS);
+        clustering::euclidean(cloud, &plane.mask, tolerance, MIN_CLUSTER_POINTS)
     };
     // The edge criterion needs the counts, not the mask: free it early,
     // as the frame-sized arrays of the coming stages add up.
@@ -86,7 +103,7 @@ pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
 
     // 3.3: the plates are the nearest parallel planes (a lap: two layers a
     // plate thickness apart); a point stands for a tilted pixel's area.
-    let planes = ctx.planes_of(std::mem::take(&mut clusters.members), |c, n| 1.0 / camera.plane_density_at(c, n));
+    let planes = ctx.planes_of(std::mem::take(&mut clusters.members), |c, n| search.area_per_point(c, n));
     ctx.stats.clusters = planes.len();
     let selection = background::Selection {
         joint: ctx.request.joint,
@@ -98,6 +115,17 @@ pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
     };
     let workpiece = background::robust_select(planes, &selection).map_err(|e| PlanError::at(Stage::Background, e))?;
     ctx.stats.plate_points = workpiece.plates.each_ref().map(|p| p.members.len());
+    for (k, plate) in workpiece.plates.iter().enumerate() {
+        tracing::debug!(
+            plate = k + 1,
+            points = plate.members.len(),
+            area_mm2 = plate.area_mm2,
+            normal = ?plate.plane.normal.as_slice(),
+            offset_mm = plate.plane.offset,
+            centroid = ?plate.centroid.as_slice(),
+            "plate"
+        );
+    }
     ctx.clock.lap(Stage::Background);
     ctx.check_groove_depth(&workpiece)?;
 
@@ -124,6 +152,17 @@ pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
     );
     let lines: [Vec<EdgeLine>; 2] = [lines_a, lines_b];
     ctx.stats.edge_lines = lines[0].len() + lines[1].len();
+    for (k, plate_lines) in lines.iter().enumerate() {
+        for line in plate_lines {
+            tracing::debug!(
+                plate = k + 1,
+                point = ?line.point.as_slice(),
+                direction = ?line.direction.as_slice(),
+                inliers = line.inliers.len(),
+                "edge line"
+            );
+        }
+    }
     ctx.clock.lap(Stage::Ransac);
 
     // 4.1: one line per plate, the centroids on either side (Eq. 16) and
@@ -146,26 +185,23 @@ pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
     let boundary_of = |k: usize| {
         let line = &lines[k][pick[k]];
         let plane = &plates[k].plane;
-        if !cloud.is_organized() {
-            // Without a pixel grid the RANSAC inliers are the best samples.
-            let samples = line
-                .inliers
-                .iter()
-                .map(|&i| {
-                    let position = plane.project(&edge_points[k][i]);
-                    BoundarySample { position, along: position.dot(&line.direction) }
-                })
-                .collect();
-            return Boundary { samples, line_spacing_mm: 0.0 };
-        }
         let direction = (line.direction - plane.normal * line.direction.dot(&plane.normal)).normalize();
         let mut outward = plane.normal.cross(&direction);
         if outward.dot(&(centroids[1 - k] - line.point)) < 0.0 {
             outward = -outward;
         }
         let edge = CoarseEdge { point: plane.project(&line.point), direction, outward };
-        let params = BoundaryParams { band_mm: cfg.boundary_band_mm, on_plane_mm: cfg.on_plane_tolerance_mm };
-        boundary::sample_boundary(cloud, &plates[k].members, plane, &edge, &params)
+        let params =
+            BoundaryParams { band_mm: scale.band(cfg.boundary_band_mm), on_plane_mm: cfg.on_plane_tolerance_mm };
+        if cloud.is_organized() {
+            return boundary::sample_boundary(cloud, &plates[k].members, plane, &edge, &params);
+        }
+        // Without a pixel grid: strips a spacing wide, reaching no farther
+        // than halfway to the other plate's coarse edge.
+        let other = &lines[1 - k][pick[1 - k]];
+        let reach = (other.point - edge.point).dot(&outward) / 2.0;
+        let spacing = scale.measured.map_or_else(|| camera.pixel_footprint_at(&edge.point), |s| s.spacing_mm);
+        boundary::sample_scattered(cloud, plane, &edge, &params, spacing, reach)
     };
     let (boundary_a, boundary_b) = rayon::join(|| boundary_of(0), || boundary_of(1));
     let boundaries: [Boundary; 2] = [boundary_a, boundary_b];

@@ -1,0 +1,301 @@
+//! A uniform grid of cubic cells over a cloud's valid points, for clouds
+//! without a pixel grid.
+//!
+//! With cells as wide as the search radius, every neighbour of a point lies
+//! in its own cell or one of the 26 around it. The points are stored in
+//! cell order, so a cell's points are one contiguous run, and each occupied
+//! cell keeps the list of its occupied neighbour cells, found once when the
+//! index is built rather than once per query. A query therefore costs a
+//! scan of at most 27 runs, stopping as soon as its visitor has what it
+//! needs (a count up to a threshold, a bounded sample for a normal); each
+//! cell also keeps the bounding box of its points, so a dense clump just
+//! out of reach costs one box test, not a scan.
+//!
+//! Building sorts the points by cell, on rayon, and the order is fixed by
+//! (cell, cloud index), so queries visit neighbours in the same order on
+//! every run and every machine.
+
+use std::ops::ControlFlow;
+
+use rayon::prelude::*;
+
+use crate::cloud::Point;
+
+/// Cell coordinates are packed into 21 bits each. Sanitised clouds lie
+/// within 3 m of the camera and 80° of its axis (17 m across at most), so
+/// cells of a twentieth of a millimetre still fit; coordinates beyond are
+/// clamped, which can only put far-apart points in one cell, never split a
+/// neighbourhood.
+const AXIS_BITS: u32 = 21;
+const AXIS_HALF_RANGE: i64 = 1 << (AXIS_BITS - 1);
+
+/// A cell's points and the box around them.
+#[derive(Debug, Clone, Copy)]
+struct Cell {
+    /// The cell's run in the cell-ordered point array.
+    start: u32,
+    end: u32,
+    min: [f32; 3],
+    max: [f32; 3],
+}
+
+/// The index: points in cell order, the occupied cells and their
+/// neighbourhoods.
+pub(crate) struct CellIndex {
+    points: Vec<Point>,
+    /// Cell-ordered position → cloud point index.
+    index_of: Vec<u32>,
+    /// Cloud point index → its cell (`u32::MAX` for invalid points).
+    cell_of_point: Vec<u32>,
+    cells: Vec<Cell>,
+    /// The occupied cells among each cell's 27 (itself first), as ranges
+    /// of `neighbour_cells` given by `neighbour_start`.
+    neighbour_start: Vec<u32>,
+    neighbour_cells: Vec<u32>,
+}
+
+/// The largest value of one packed field.
+const FIELD_MAX: u64 = (1 << AXIS_BITS) - 1;
+
+fn pack(c: [i64; 3]) -> u64 {
+    let field = |v: i64| (v.clamp(-AXIS_HALF_RANGE, AXIS_HALF_RANGE - 1) + AXIS_HALF_RANGE) as u64;
+    (field(c[0]) << (2 * AXIS_BITS)) | (field(c[1]) << AXIS_BITS) | field(c[2])
+}
+
+/// The (x, y) offsets of a cell's nine columns of three, its own first.
+const COLUMNS: [(i64, i64); 9] = [(0, 0), (-1, 0), (1, 0), (0, -1), (0, 1), (-1, -1), (-1, 1), (1, -1), (1, 1)];
+
+/// The occupied neighbours of every occupied cell (`keys`, sorted), the
+/// cell itself first, as ranges of one array.
+///
+/// Keys are sorted x, then y, then z, so the three cells of a neighbouring
+/// column are consecutive keys, and for a fixed column offset the wanted
+/// keys grow with the cell's own: one cursor per column walks forward
+/// through `keys` once for all cells, with no search per cell.
+fn neighbourhoods(keys: &[u64]) -> (Vec<u32>, Vec<u32>) {
+    let mut starts = Vec::with_capacity(keys.len() + 1);
+    let mut list = Vec::with_capacity(keys.len() * 9);
+    let mut cursors = [0usize; COLUMNS.len()];
+    starts.push(0);
+    for (c, &key) in keys.iter().enumerate() {
+        let (x, y, z) = (key >> (2 * AXIS_BITS), (key >> AXIS_BITS) & FIELD_MAX, key & FIELD_MAX);
+        list.push(c as u32);
+        for (cursor, &(dx, dy)) in cursors.iter_mut().zip(&COLUMNS) {
+            let (nx, ny) = (x as i64 + dx, y as i64 + dy);
+            if !(0..=FIELD_MAX as i64).contains(&nx) || !(0..=FIELD_MAX as i64).contains(&ny) {
+                continue;
+            }
+            let column = ((nx as u64) << (2 * AXIS_BITS)) | ((ny as u64) << AXIS_BITS);
+            let (lo, hi) = (column | z.saturating_sub(1), column | (z + 1).min(FIELD_MAX));
+            while *cursor < keys.len() && keys[*cursor] < lo {
+                *cursor += 1;
+            }
+            let mut k = *cursor;
+            while k < keys.len() && keys[k] <= hi {
+                if k != c {
+                    list.push(k as u32);
+                }
+                k += 1;
+            }
+        }
+        starts.push(list.len() as u32);
+    }
+    (starts, list)
+}
+
+impl CellIndex {
+    /// Indexes the valid (finite) points of `cloud_points` in cells of side
+    /// `cell_mm`, which must be positive and no smaller than the radius of
+    /// the queries to be exact.
+    pub(crate) fn new(cloud_points: &[Point], cell_mm: f64) -> CellIndex {
+        let inverse = 1.0 / cell_mm;
+        let cell_coords = |p: &Point| -> [i64; 3] {
+            std::array::from_fn(|a| {
+                let v = (p[a] as f64 * inverse).floor();
+                v.clamp(-(AXIS_HALF_RANGE as f64), AXIS_HALF_RANGE as f64) as i64
+            })
+        };
+        let mut keyed: Vec<(u64, u32)> = cloud_points
+            .par_iter()
+            .enumerate()
+            .filter(|(_, p)| p[0].is_finite())
+            .map(|(i, p)| (pack(cell_coords(p)), i as u32))
+            .collect();
+        keyed.par_sort_unstable();
+
+        let points: Vec<Point> = keyed.par_iter().map(|&(_, i)| cloud_points[i as usize]).collect();
+        let index_of: Vec<u32> = keyed.par_iter().map(|&(_, i)| i).collect();
+        let mut keys: Vec<u64> = Vec::new();
+        let mut cells: Vec<Cell> = Vec::new();
+        for (position, &(key, _)) in keyed.iter().enumerate() {
+            if keys.last() != Some(&key) {
+                keys.push(key);
+                cells.push(Cell {
+                    start: position as u32,
+                    end: position as u32,
+                    min: [f32::INFINITY; 3],
+                    max: [f32::NEG_INFINITY; 3],
+                });
+            }
+            let cell = cells.last_mut().expect("a cell was just pushed");
+            cell.end = position as u32 + 1;
+            let p = &points[position];
+            for ((lo, hi), v) in cell.min.iter_mut().zip(cell.max.iter_mut()).zip(p) {
+                *lo = lo.min(*v);
+                *hi = hi.max(*v);
+            }
+        }
+        drop(keyed);
+
+        let mut cell_of_point = vec![u32::MAX; cloud_points.len()];
+        for (c, cell) in cells.iter().enumerate() {
+            for &i in &index_of[cell.start as usize..cell.end as usize] {
+                cell_of_point[i as usize] = c as u32;
+            }
+        }
+
+        let (neighbour_start, neighbour_cells) = neighbourhoods(&keys);
+        CellIndex { points, index_of, cell_of_point, cells, neighbour_start, neighbour_cells }
+    }
+
+    /// Calls `visit(j, q)` for candidates `q` (cloud index `j`) of every
+    /// point within `reach_sq` of cloud point `i` (at `p`), nearest cells
+    /// first, until it breaks. Candidates are a superset of the points
+    /// within the reach: the caller applies its own predicate. An invalid
+    /// point has no cell and no neighbours.
+    #[inline]
+    pub(crate) fn visit_near(
+        &self,
+        i: usize,
+        p: &Point,
+        reach_sq: f32,
+        mut visit: impl FnMut(usize, &Point) -> ControlFlow<()>,
+    ) {
+        let Some(&cell) = self.cell_of_point.get(i).filter(|&&c| c != u32::MAX) else {
+            return;
+        };
+        let (from, to) = (self.neighbour_start[cell as usize], self.neighbour_start[cell as usize + 1]);
+        for &c in &self.neighbour_cells[from as usize..to as usize] {
+            let cell = &self.cells[c as usize];
+            if box_distance_sq(cell, p) > reach_sq as f64 {
+                continue;
+            }
+            let run = cell.start as usize..cell.end as usize;
+            for (q, &j) in self.points[run.clone()].iter().zip(&self.index_of[run]) {
+                if visit(j as usize, q).is_break() {
+                    return;
+                }
+            }
+        }
+    }
+}
+
+/// The squared distance from `p` to a cell's box, in double precision:
+/// every single-precision squared distance of a point inside the box is at
+/// least this, less rounding, which the caller's reach leaves room for.
+#[inline]
+fn box_distance_sq(cell: &Cell, p: &Point) -> f64 {
+    (0..3)
+        .map(|axis| {
+            let v = p[axis] as f64;
+            let gap = (cell.min[axis] as f64 - v).max(v - cell.max[axis] as f64).max(0.0);
+            gap * gap
+        })
+        .sum()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn scattered(n: usize) -> Vec<Point> {
+        let mut state = 0x9e37_79b9_7f4a_7c15_u64;
+        let mut next = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 40) as f32 / (1u64 << 24) as f32
+        };
+        (0..n)
+            .map(
+                |i| {
+                    if i % 11 == 3 { [f32::NAN; 3] } else { [next() * 10.0 - 5.0, next() * 10.0, 500.0 + next() * 3.0] }
+                },
+            )
+            .collect()
+    }
+
+    fn brute_force(points: &[Point], p: &Point, r_sq: f32) -> Vec<usize> {
+        (0..points.len())
+            .filter(|&j| {
+                let q = points[j];
+                let d = [q[0] - p[0], q[1] - p[1], q[2] - p[2]];
+                d[0] * d[0] + d[1] * d[1] + d[2] * d[2] <= r_sq
+            })
+            .collect()
+    }
+
+    #[test]
+    fn queries_find_exactly_the_points_a_scan_finds() {
+        for n in [0, 1, 2, 15, 100, 3000] {
+            let points = scattered(n);
+            for radius in [0.3f32, 0.8, 2.5] {
+                let index = CellIndex::new(&points, radius as f64);
+                for (i, p) in points.iter().enumerate().filter(|(_, p)| p[0].is_finite()).take(200) {
+                    let r_sq = radius * radius;
+                    let mut found = Vec::new();
+                    index.visit_near(i, p, r_sq * (1.0 + 1e-5), |j, q| {
+                        assert_eq!(*q, points[j]);
+                        let d = [q[0] - p[0], q[1] - p[1], q[2] - p[2]];
+                        if d[0] * d[0] + d[1] * d[1] + d[2] * d[2] <= r_sq {
+                            found.push(j);
+                        }
+                        ControlFlow::Continue(())
+                    });
+                    found.sort_unstable();
+                    assert_eq!(found, brute_force(&points, p, r_sq), "{n} points, radius {radius}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn a_query_starts_in_its_own_cell_and_stops_when_told() {
+        let mut points = vec![[0.1f32, 0.1, 500.1]; 20_000];
+        points.push([0.9, 0.1, 500.1]);
+        let index = CellIndex::new(&points, 1.0);
+        let mut visited = Vec::new();
+        index.visit_near(0, &points[0], 1.0, |j, _| {
+            visited.push(j);
+            if visited.len() == 10 { ControlFlow::Break(()) } else { ControlFlow::Continue(()) }
+        });
+        assert_eq!(visited, (0..10).collect::<Vec<_>>());
+    }
+
+    #[test]
+    fn a_clump_out_of_reach_costs_one_box_test() {
+        // 20,000 points 1.5 mm from a lone point, in the next cell.
+        let mut points = vec![[1.9f32, 0.5, 500.5]; 20_000];
+        points.push([0.4, 0.5, 500.5]);
+        let index = CellIndex::new(&points, 1.0);
+        let mut candidates = 0;
+        index.visit_near(20_000, &points[20_000], 1.0, |_, _| {
+            candidates += 1;
+            ControlFlow::Continue(())
+        });
+        assert_eq!(candidates, 1, "only the point itself");
+        assert_eq!(index.cells.len(), 2);
+    }
+
+    #[test]
+    fn far_coordinates_are_clamped_not_wrapped() {
+        let points = vec![[1.0e9f32, 0.0, 500.0], [-1.0e9, 0.0, 500.0], [0.0, 0.0, 500.0]];
+        let index = CellIndex::new(&points, 0.05);
+        let mut seen = 0;
+        index.visit_near(2, &points[2], 0.0025, |_, _| {
+            seen += 1;
+            ControlFlow::Continue(())
+        });
+        assert_eq!(seen, 1);
+    }
+}

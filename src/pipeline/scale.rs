@@ -1,0 +1,439 @@
+//! The scale of a cloud: how far apart its points are, and from that the
+//! neighbour radius and the full-plane neighbour count the criteria are
+//! measured against.
+//!
+//! The paper derives the count a full plane gives within the radius R from
+//! the camera (Eq. 4 to 14: resolution, density at the working distance,
+//! the accuracy correction), and the robust method refines that to the
+//! lattice count of the plane tilted to the workpiece. That holds for a raw
+//! frame of the configured camera and for nothing else: a cloud that was
+//! voxel-downsampled, merged, cropped or taken by another camera has its
+//! own spacing, 3 to 40 times sparser in the public scans we tried, and
+//! against the camera's count no point is a plane point; at the paper's
+//! R = 1 mm a 1 mm grid leaves almost no neighbours at all.
+//!
+//! So for such a cloud both come from the data:
+//! - the spacing `s` is measured from the neighbour counts of an even
+//!   sample of points: a surface with areal density ρ gives ρ π r² points
+//!   within r, so `s = 1/√ρ = r √(π / median count)`, the radius r doubled
+//!   until the median count is large enough to measure;
+//! - the radius becomes `max(R, s √(N / π))`, the radius at which a full
+//!   plane holds [`TARGET_FULL_COUNT`] points: enough that the count's
+//!   sampling noise stays well inside the criteria's margins (0.8 and 0.75
+//!   of the full count);
+//! - the full-plane count is measured locally, because density changes
+//!   with depth and tilt even in one cloud: in cubes of
+//!   [`DENSITY_CELL_RADII`] radii, over an even sample of the cube's
+//!   points whose neighbours surround them (no empty quarter around the
+//!   point, [`surrounded`]: edge points are left out), the lower quartile
+//!   of their counts. Not the median: resampling leaves a plate's density
+//!   uneven, and only ever upwards. Where a voxel grid cuts a plate tilted
+//!   a few degrees, the surface crosses a layer of voxels every few
+//!   millimetres and each crossing yields a double row of centroids: the
+//!   counts swing between the base density and half as much again, and a
+//!   median between the two would make the plate's base stripes look like
+//!   edges to Eq. 15.
+//!
+//! Nothing here knows the camera: it measures the cloud.
+
+use std::ops::ControlFlow;
+
+use rayon::prelude::*;
+
+use crate::cloud::{Point, PointCloud};
+use crate::geometry::fit::Moments;
+use crate::geometry::{Vec3, vec3};
+
+use super::neighbours::NeighbourSearch;
+use super::neighbours::cells::CellIndex;
+
+/// The full-plane neighbour count the derived radius aims at. Counts of
+/// well-spread points scatter by a few points around their mean; at 50 the
+/// scatter is under a tenth, inside the plane criterion's 0.8 and the edge
+/// criterion's 0.75.
+pub(crate) const TARGET_FULL_COUNT: f64 = 50.0;
+
+/// The least median neighbour count the spacing is read from: below it a
+/// count is too coarse a measure of density, and the radius doubles.
+const MIN_MEASURED_COUNT: u32 = 12;
+
+/// Counts are read up to this many neighbours: enough for a density twenty
+/// times the target, few enough that a clump costs little.
+const MAX_MEASURED_COUNT: u32 = 1024;
+
+/// The sample the spacing is measured on.
+const SPACING_SAMPLES: usize = 4096;
+
+/// The largest radius the spacing search doubles to, mm: a cloud sparser
+/// than a point per few centimetres has no plate a weld can be planned on.
+pub(crate) const MAX_MEASURING_RADIUS_MM: f64 = 64.0;
+
+/// The side of the cubes the full-plane count is measured in, in radii.
+const DENSITY_CELL_RADII: f64 = 8.0;
+
+/// The points sampled per cube, at most.
+const DENSITY_SAMPLES_PER_CELL: usize = 48;
+
+/// The fewest sampled points a cube's own median is trusted with; sparser
+/// cubes take the cloud's median.
+const MIN_DENSITY_SAMPLES: usize = 8;
+
+/// The sectors a point's neighbourhood is divided into around it, and how
+/// many adjacent empty ones (a quarter turn) make its neighbours not
+/// surround it.
+const SECTORS: u32 = 16;
+const EMPTY_SECTORS_OF_AN_EDGE: u32 = 4;
+
+/// Neighbours nearer than this share of the radius carry no direction
+/// (they sit on the point, as resampled duplicates do).
+const MIN_DIRECTION_RADII: f64 = 0.05;
+
+/// Whether the neighbours of point `i`, seen along the unit `normal`, lie
+/// all around it: no empty sector of a quarter turn or more. Inside a
+/// surface they do at any density; at its edge half the turn is empty.
+/// This is the boundary test of angle gaps (as in PCL's boundary
+/// estimation, with sectors instead of sorted angles), which density
+/// changes cannot fool.
+pub(crate) fn surrounded(search: &NeighbourSearch, i: usize, normal: &Vec3) -> bool {
+    surrounded_by(search, i, normal, |_| true)
+}
+
+/// [`surrounded`] by the neighbours `j` for which `member(j)` holds.
+pub(crate) fn surrounded_by(search: &NeighbourSearch, i: usize, normal: &Vec3, member: impl Fn(usize) -> bool) -> bool {
+    let points = search.cloud().points();
+    let p = vec3(&points[i]);
+    let e1 = normal.cross(&if normal.x.abs() < 0.9 { Vec3::x() } else { Vec3::y() }).normalize();
+    let e2 = normal.cross(&e1);
+    let min_sq = (MIN_DIRECTION_RADII * search.radius_mm()).powi(2);
+    let mut occupied = 0u32;
+    search.for_each(i, |j| {
+        if !member(j) {
+            return;
+        }
+        let d = vec3(&points[j]) - p;
+        let (a, b) = (d.dot(&e1), d.dot(&e2));
+        if a * a + b * b >= min_sq {
+            let turn = b.atan2(a) / std::f64::consts::TAU + 0.5;
+            occupied |= 1 << ((turn * SECTORS as f64) as u32).min(SECTORS - 1);
+        }
+    });
+    longest_empty_run(occupied) < EMPTY_SECTORS_OF_AN_EDGE
+}
+
+/// The longest run of zero bits among the low [`SECTORS`] bits of
+/// `occupied`, read around the circle.
+fn longest_empty_run(occupied: u32) -> u32 {
+    let empty = !occupied & ((1 << SECTORS) - 1);
+    // The run across the wrap-around is the one found in two turns.
+    let twice = empty as u64 | ((empty as u64) << SECTORS);
+    let (mut longest, mut run) = (0, 0);
+    for k in 0..2 * SECTORS {
+        run = if twice >> k & 1 == 1 { run + 1 } else { 0 };
+        longest = longest.max(run);
+    }
+    longest.min(SECTORS)
+}
+
+/// The spacing of a cloud, as measured.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Spacing {
+    /// The typical distance between neighbouring points, mm.
+    pub spacing_mm: f64,
+    /// The radius the density was read at and the median count there.
+    pub measured_at_mm: f64,
+    pub median_count: u32,
+    /// The points sampled.
+    pub samples: usize,
+}
+
+/// Why a cloud's spacing could not be measured.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub(crate) enum SpacingError {
+    #[error("the cloud has no valid point")]
+    Empty,
+    #[error(
+        "the cloud's points are too sparse to measure: fewer than {MIN_MEASURED_COUNT} neighbours in \
+         {MAX_MEASURING_RADIUS_MM} mm around most points"
+    )]
+    TooSparse,
+}
+
+/// Up to `max` valid points of `points`, evenly spread over the array.
+fn even_sample(points: &[Point], max: usize) -> Vec<usize> {
+    let valid: Vec<usize> = (0..points.len()).filter(|&i| points[i][0].is_finite()).collect();
+    let stride = valid.len().div_ceil(max).max(1);
+    valid.into_iter().step_by(stride).collect()
+}
+
+/// The number of points within `radius_mm` of point `i` (itself
+/// included), read up to `cap`.
+fn count_within(index: &CellIndex, points: &[Point], i: usize, radius_mm: f64, cap: u32) -> u32 {
+    let p = points[i];
+    let r_sq = (radius_mm * radius_mm) as f32;
+    let mut n = 0;
+    index.visit_near(i, &p, r_sq, |_, q| {
+        n += crate::kernels::within(&p, q, r_sq) as u32;
+        if n >= cap { ControlFlow::Break(()) } else { ControlFlow::Continue(()) }
+    });
+    n
+}
+
+fn median(values: &mut [u32]) -> u32 {
+    let mid = values.len() / 2;
+    *values.select_nth_unstable(mid).1
+}
+
+fn lower_quartile(values: &mut [u32]) -> u32 {
+    let k = values.len() / 4;
+    *values.select_nth_unstable(k).1
+}
+
+/// The normal of the principal axes of point `i`'s neighbours.
+fn local_normal(search: &NeighbourSearch, i: usize) -> Option<Vec3> {
+    let points = search.cloud().points();
+    let mut moments = Moments::default();
+    search.for_each_sampled(i, NORMAL_SAMPLE, |j| moments.add(&vec3(&points[j])));
+    moments.plane().map(|plane| plane.normal)
+}
+
+/// The neighbours a sampled point's normal is fitted to, at most.
+const NORMAL_SAMPLE: usize = 64;
+
+/// Measures the spacing of `cloud`, starting at radius `start_mm`.
+pub(crate) fn measure_spacing(cloud: &PointCloud, start_mm: f64) -> Result<Spacing, SpacingError> {
+    let points = cloud.points();
+    let sample = even_sample(points, SPACING_SAMPLES);
+    if sample.is_empty() {
+        return Err(SpacingError::Empty);
+    }
+    let mut radius = start_mm;
+    while radius <= MAX_MEASURING_RADIUS_MM {
+        let index = CellIndex::new(points, radius * CELL_MARGIN);
+        let mut counts: Vec<u32> =
+            sample.par_iter().map(|&i| count_within(&index, points, i, radius, MAX_MEASURED_COUNT)).collect();
+        let m = median(&mut counts);
+        if m >= MIN_MEASURED_COUNT {
+            let spacing_mm = radius * (std::f64::consts::PI / m as f64).sqrt();
+            return Ok(Spacing { spacing_mm, measured_at_mm: radius, median_count: m, samples: sample.len() });
+        }
+        radius *= 2.0;
+    }
+    Err(SpacingError::TooSparse)
+}
+
+/// Cells a hair wider than the radius, as the neighbour search makes them.
+const CELL_MARGIN: f64 = 1.0 + 1e-5;
+
+/// The radius at which a full plane of points `spacing_mm` apart holds
+/// [`TARGET_FULL_COUNT`] points, never below `configured_mm`.
+pub(crate) fn radius_for(spacing_mm: f64, configured_mm: f64) -> f64 {
+    (spacing_mm * (TARGET_FULL_COUNT / std::f64::consts::PI).sqrt()).max(configured_mm)
+}
+
+/// The scale a frame is planned at: the neighbour radius and, for a cloud
+/// measured from its data, its spacing. The lengths the configuration gives
+/// for the paper's camera grow with the spacing where it is coarser.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Scale {
+    pub radius_mm: f64,
+    /// The measured spacing; `None` when the camera model sets the scale.
+    pub measured: Option<Spacing>,
+    /// The configured radius the lengths below are relative to.
+    configured_radius_mm: f64,
+}
+
+impl Scale {
+    /// The camera model's scale: the configured radius.
+    pub(crate) fn of_camera(configured_radius_mm: f64) -> Scale {
+        Scale { radius_mm: configured_radius_mm, measured: None, configured_radius_mm }
+    }
+
+    /// The scale of a cloud with the measured `spacing`.
+    pub(crate) fn of_spacing(spacing: Spacing, configured_radius_mm: f64) -> Scale {
+        Scale {
+            radius_mm: radius_for(spacing.spacing_mm, configured_radius_mm),
+            measured: Some(spacing),
+            configured_radius_mm,
+        }
+    }
+
+    /// A length configured for the paper's radius, grown in proportion to
+    /// the radius in use: search bands around edges scale with how far
+    /// inside the edge the criteria leave their points.
+    pub(crate) fn band(&self, configured_mm: f64) -> f64 {
+        configured_mm * self.radius_mm / self.configured_radius_mm
+    }
+
+    /// A tolerance between neighbouring points, at least `per_spacing`
+    /// spacings where the spacing was measured.
+    pub(crate) fn at_least_spacings(&self, configured_mm: f64, per_spacing: f64) -> f64 {
+        match self.measured {
+            Some(s) => configured_mm.max(per_spacing * s.spacing_mm),
+            None => configured_mm,
+        }
+    }
+}
+
+/// The full-plane neighbour count measured across a cloud, cube by cube.
+#[derive(Debug, Clone)]
+pub(crate) struct DensityMap {
+    cube_mm: f64,
+    /// Packed cube coordinates, sorted, and each cube's full count.
+    keys: Vec<u64>,
+    counts: Vec<f64>,
+    /// The cloud's median count, for cubes with too few points.
+    fallback: f64,
+    radius_mm: f64,
+}
+
+impl DensityMap {
+    /// Measures the full-plane count within the search's radius across
+    /// its cloud.
+    pub(crate) fn measure(search: &NeighbourSearch) -> Option<DensityMap> {
+        let cloud = search.cloud();
+        let points = cloud.points();
+        let radius_mm = search.radius_mm();
+        let cube_mm = radius_mm * DENSITY_CELL_RADII;
+        let key_of = |p: &Point| pack_cube(p, cube_mm);
+        let mut by_cube: Vec<(u64, u32)> = points
+            .par_iter()
+            .enumerate()
+            .filter(|(_, p)| p[0].is_finite())
+            .map(|(i, p)| (key_of(p), i as u32))
+            .collect();
+        by_cube.par_sort_unstable();
+        let runs: Vec<&[(u64, u32)]> = by_cube.chunk_by(|a, b| a.0 == b.0).collect();
+        let cap = (4.0 * TARGET_FULL_COUNT).max(MAX_MEASURED_COUNT as f64) as u32;
+        let measured: Vec<(u64, Option<u32>, Vec<u32>)> = runs
+            .par_iter()
+            .map(|run| {
+                let stride = run.len().div_ceil(DENSITY_SAMPLES_PER_CELL).max(1);
+                let mut counts: Vec<u32> = run
+                    .iter()
+                    .step_by(stride)
+                    .map(|&(_, i)| i as usize)
+                    .filter(|&i| local_normal(search, i).is_some_and(|n| surrounded(search, i, &n)))
+                    .map(|i| search.count_up_to(i, |_| true, cap))
+                    .collect();
+                let own = (counts.len() >= MIN_DENSITY_SAMPLES).then(|| lower_quartile(&mut counts));
+                (run[0].0, own, counts)
+            })
+            .collect();
+        let mut all: Vec<u32> = measured.iter().flat_map(|(_, _, c)| c.iter().copied()).collect();
+        if all.is_empty() {
+            return None;
+        }
+        let fallback = lower_quartile(&mut all) as f64;
+        let keys = measured.iter().map(|(k, _, _)| *k).collect();
+        let counts = measured.iter().map(|(_, own, _)| own.map_or(fallback, |c| c as f64)).collect();
+        Some(DensityMap { cube_mm, keys, counts, fallback, radius_mm })
+    }
+
+    /// The neighbour count a full plane gives within the radius at `p`.
+    #[inline]
+    pub(crate) fn full_count_at(&self, p: &Point) -> f64 {
+        match self.keys.binary_search(&pack_cube(p, self.cube_mm)) {
+            Ok(k) => self.counts[k],
+            Err(_) => self.fallback,
+        }
+    }
+
+    /// The surface one point stands for at `p`, mm²: the disc of the
+    /// radius over the full count.
+    pub(crate) fn area_per_point_at(&self, p: &Point) -> f64 {
+        std::f64::consts::PI * self.radius_mm * self.radius_mm / self.full_count_at(p).max(1.0)
+    }
+
+    /// The cloud's full count where a cube has too few points of its own.
+    pub(crate) fn median_full_count(&self) -> f64 {
+        self.fallback
+    }
+}
+
+/// The packed coordinates of the cube of side `cube_mm` holding `p`
+/// (21 bits an axis, clamped).
+fn pack_cube(p: &Point, cube_mm: f64) -> u64 {
+    const HALF: i64 = 1 << 20;
+    let field = |v: f32| ((v as f64 / cube_mm).floor().clamp(-(HALF as f64), (HALF - 1) as f64) as i64 + HALF) as u64;
+    (field(p[0]) << 42) | (field(p[1]) << 21) | field(p[2])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::camera::CameraModel;
+
+    /// A square grid of points `spacing` apart on the plane z = 500 +
+    /// slope x, `n` by `n`.
+    fn grid(spacing: f32, n: usize, slope: f32) -> PointCloud {
+        let points = (0..n * n)
+            .map(|k| {
+                let (x, y) = ((k % n) as f32 * spacing, (k / n) as f32 * spacing);
+                [x, y, 500.0 + slope * x]
+            })
+            .collect();
+        PointCloud::unorganized(points)
+    }
+
+    #[test]
+    fn the_spacing_of_a_grid_is_its_step() {
+        for spacing in [0.2f32, 1.0, 1.4, 5.0] {
+            let cloud = grid(spacing, 200, 0.0);
+            let s = measure_spacing(&cloud, 1.0).unwrap();
+            let error = (s.spacing_mm - spacing as f64).abs() / spacing as f64;
+            assert!(error < 0.1, "step {spacing}: measured {s:?}");
+        }
+    }
+
+    #[test]
+    fn a_cloud_too_sparse_or_empty_is_refused() {
+        assert_eq!(measure_spacing(&grid(200.0, 5, 0.0), 1.0), Err(SpacingError::TooSparse));
+        assert_eq!(measure_spacing(&PointCloud::unorganized(vec![[f32::NAN; 3]]), 1.0), Err(SpacingError::Empty));
+    }
+
+    #[test]
+    fn the_derived_radius_holds_the_target_count_and_the_configured_floor() {
+        let r = radius_for(1.0, 1.0);
+        assert!((std::f64::consts::PI * r * r - TARGET_FULL_COUNT).abs() < 1e-9);
+        assert_eq!(radius_for(0.05, 1.0), 1.0);
+    }
+
+    #[test]
+    fn empty_runs_are_read_around_the_circle() {
+        assert_eq!(longest_empty_run(0xFFFF), 0);
+        assert_eq!(longest_empty_run(0), SECTORS);
+        assert_eq!(longest_empty_run(0b1111_1111_1111_0000), 4);
+        assert_eq!(longest_empty_run(0b0011_1111_1111_1100), 4, "two at each end make four");
+        assert_eq!(longest_empty_run(0b1010_1010_1010_1010), 1);
+    }
+
+    #[test]
+    fn a_point_at_an_edge_is_not_surrounded_and_one_inside_is() {
+        let cloud = grid(1.0, 60, 0.2);
+        let camera = CameraModel::default();
+        let search = NeighbourSearch::new(&cloud, &camera, radius_for(1.0, 1.0));
+        let normal = Vec3::new(-0.2, 0.0, 1.0).normalize();
+        let at = |col: usize, row: usize| row * 60 + col;
+        assert!(surrounded(&search, at(30, 30), &normal));
+        assert!(!surrounded(&search, at(0, 30), &normal));
+        assert!(!surrounded(&search, at(30, 59), &normal));
+        assert!(!surrounded(&search, at(59, 59), &normal));
+        assert!(surrounded(&search, at(2, 30), &normal), "two spacings in, the disc reaches past the edge");
+    }
+
+    #[test]
+    fn the_full_count_is_the_interior_count_even_beside_an_edge() {
+        // A tilted plate 1 mm apart: interior points have about π r² / s²
+        // neighbours, times the tilt's stretch along x.
+        let cloud = grid(1.0, 120, 0.5);
+        let camera = CameraModel::default();
+        let radius = radius_for(1.0, 1.0);
+        let search = NeighbourSearch::new(&cloud, &camera, radius);
+        let map = DensityMap::measure(&search).unwrap();
+        let expected = std::f64::consts::PI * radius * radius / 1.25f64.sqrt();
+        for p in [[60.0f32, 60.0, 530.0], [0.0, 0.0, 500.0], [119.0, 119.0, 559.5]] {
+            let full = map.full_count_at(&p);
+            assert!((full - expected).abs() / expected < 0.12, "{p:?}: {full} against {expected}");
+        }
+    }
+}

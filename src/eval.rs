@@ -10,6 +10,7 @@
 use crate::camera::CameraModel;
 use crate::config::{Config, Method};
 use crate::geometry::{Vec3, distance_to_polyline};
+use crate::pipeline::input::{CloudFrame, Units};
 use crate::pipeline::{Plan, PlanError, PlanRequest, Planner, Seam};
 use crate::sim::variants::Variant;
 use crate::sim::{GroundTruth, SceneSpec, Simulation, simulate};
@@ -84,7 +85,26 @@ impl SceneOutcome {
 
 /// Plans a simulated scene and measures the result.
 pub fn evaluate_simulation(planner: &Planner, name: &str, spec: &SceneSpec, sim: &Simulation) -> SceneOutcome {
-    let request = PlanRequest::new(spec.joint.joint_type(), spec.joint.groove_depth_mm(), sim.pose);
+    evaluate_variant(planner, name, spec, sim, &Variant::default())
+}
+
+/// [`evaluate_simulation`] of a frame made into `variant`, requested as a
+/// user of `plan` would: units guessed (`--units auto`, the command line's
+/// default) and, for a base-frame cloud, `--cloud-frame base`.
+pub fn evaluate_variant(
+    planner: &Planner,
+    name: &str,
+    spec: &SceneSpec,
+    sim: &Simulation,
+    variant: &Variant,
+) -> SceneOutcome {
+    let mut request = PlanRequest::new(spec.joint.joint_type(), spec.joint.groove_depth_mm(), sim.pose);
+    if !variant.is_raw() {
+        request.units = Units::Auto;
+    }
+    if variant.in_base_frame() {
+        request.cloud_frame = CloudFrame::Base;
+    }
     let result = planner.plan(&sim.cloud, &request).and_then(|plan| {
         let seam = plan
             .seams
@@ -121,7 +141,8 @@ pub fn run_suite(
     for (k, (name, spec)) in scenes.iter().enumerate() {
         let rendered = simulate(spec, camera);
         let sim = if variant.is_raw() { rendered } else { variant.apply(&rendered, spec.seed) };
-        let outcomes: Vec<SceneOutcome> = planners.iter().map(|p| evaluate_simulation(p, name, spec, &sim)).collect();
+        let outcomes: Vec<SceneOutcome> =
+            planners.iter().map(|p| evaluate_variant(p, name, spec, &sim, variant)).collect();
         progress(k, &outcomes);
         for (list, o) in out.iter_mut().zip(outcomes) {
             list.push(o);

@@ -24,6 +24,8 @@ enum Command {
     Demo(cli::demo::DemoArgs),
     /// Plan the welding trajectory of one point-cloud file.
     Plan(cli::plan::PlanArgs),
+    /// Show what the planner sees in a cloud file: organization, units, depth, frame, intrinsics, spacing.
+    Inspect(cli::inspect::InspectArgs),
     /// Plan the seeded suite of simulated scenes and print the accuracy table.
     Eval(cli::eval::EvalArgs),
     /// Render a simulated camera frame (organized PCD, or a variant as PCD or PLY) and its ground truth (JSON).
@@ -46,6 +48,7 @@ impl Command {
             Command::Demo(_)
             | Command::Plan(_)
             | Command::Eval(_)
+            | Command::Inspect(_)
             | Command::Simulate(_)
             | Command::Controller(_)
             | Command::Bench(_) => "warn",
@@ -65,6 +68,7 @@ fn main() -> std::process::ExitCode {
         Command::Demo(args) => cli::demo::run(args),
         Command::Plan(args) => cli::plan::run(args),
         Command::Eval(args) => cli::eval::run(args),
+        Command::Inspect(args) => cli::inspect::run(args),
         Command::Simulate(args) => cli::simulate::run(args),
         Command::Serve(args) => cli::serve::run(args),
         Command::Camera(args) => cli::camera::run(args),

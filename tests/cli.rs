@@ -470,3 +470,40 @@ fn plan_reads_a_compressed_cloud_in_metres_and_refuses_it_as_millimetres() {
         String::from_utf8_lossy(&as_mm.stderr)
     );
 }
+
+/// `inspect` tells a raw frame from the same capture voxel-downsampled in
+/// metres, as text and as JSON, and names a file it cannot read.
+#[test]
+fn inspect_tells_a_raw_frame_from_a_downsampled_cloud_in_metres() {
+    let dir = tempfile::tempdir().unwrap();
+    let (frame, _) = simulate(dir.path(), "v-butt");
+    let voxel = dir.path().join("voxel.ply");
+    let out =
+        weldseam(&["simulate", "--joint", "v-butt", "--variant", "voxel:1,metres", "--out", voxel.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let inspect = |file: &str| {
+        let out = weldseam(&["inspect", file, "--json"]);
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        serde_json::from_slice::<serde_json::Value>(&out.stdout).unwrap()
+    };
+    let raw = inspect(&frame);
+    assert_eq!(raw["organized"]["width"], 1920);
+    assert_eq!(raw["units"]["guess"], "mm");
+    assert_eq!(raw["density"], "camera");
+    assert!(raw["intrinsics"]["fx"].as_f64().unwrap() > 0.0);
+    let voxel = inspect(voxel.to_str().unwrap());
+    assert!(voxel["organized"].is_null());
+    assert_eq!(voxel["units"]["guess"], "m");
+    assert_eq!(voxel["density"], "measured");
+    assert_eq!(voxel["regrid"]["raw_frame"], false);
+    let spacing = voxel["spacing_mm"].as_f64().unwrap();
+    assert!((0.7..1.4).contains(&spacing), "a 1 mm voxel grid measured at {spacing} mm");
+    assert!(voxel["depth_mm"][0].as_f64().unwrap() > 100.0, "depth in mm: {}", voxel["depth_mm"]);
+
+    let text = weldseam(&["inspect", &frame]);
+    let text = String::from_utf8_lossy(&text.stdout);
+    assert!(text.contains("1920 x 1200") && text.contains("camera model"), "{text}");
+    let missing = weldseam(&["inspect", "no-such-file.pcd"]);
+    assert!(!missing.status.success());
+    assert!(String::from_utf8_lossy(&missing.stderr).contains("no-such-file.pcd"));
+}

@@ -9,6 +9,7 @@ pub mod controller;
 pub mod demo;
 pub mod errors;
 pub mod eval;
+pub mod inspect;
 pub mod logging;
 pub mod memory;
 pub mod plan;

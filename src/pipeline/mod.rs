@@ -38,6 +38,7 @@ pub mod refit;
 pub mod regrid;
 mod robust;
 mod scale;
+pub mod survey;
 pub mod trajectory;
 pub mod weld_edges;
 pub mod weld_equation;

@@ -373,13 +373,12 @@ pub(super) fn plate_edge_points(
 /// edge is where the plate ends, so its points have an empty side; such a
 /// patch has neighbours all around.
 fn keep_one_sided(edge: &mut Vec<u32>, labels: &[u32], label: u32, normal: &Vec3, search: &NeighbourSearch) {
-    let keep: Vec<bool> =
-        edge.par_iter().map(|&i| !scale::surrounded_by(search, i as usize, normal, |j| labels[j] == label)).collect();
-    let mut k = 0;
-    edge.retain(|_| {
-        k += 1;
-        keep[k - 1]
-    });
+    // A parallel filter keeps the order, so the edge points stay sorted.
+    *edge = edge
+        .par_iter()
+        .copied()
+        .filter(|&i| !scale::surrounded_by(search, i as usize, normal, |j| labels[j] == label))
+        .collect();
 }
 
 /// The cluster labels renumbered in place so that plate k is label k and

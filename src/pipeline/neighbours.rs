@@ -33,10 +33,6 @@ use cells::CellIndex;
 /// nearest depth, far less than a cloud a thousand times denser.
 pub(crate) const MAX_SAMPLED_NEIGHBOURS: usize = 4096;
 
-/// Cells a hair wider than the radius: a neighbour exactly at the radius
-/// then never falls two cells away through rounding.
-const CELL_MARGIN: f64 = 1.0 + 1e-5;
-
 /// Finds the neighbours of cloud points within a fixed radius.
 // Public only because orientation's public functions take it.
 pub struct NeighbourSearch<'a> {
@@ -77,7 +73,7 @@ impl<'a> NeighbourSearch<'a> {
         let index = if cloud.is_organized() {
             Index::Grid
         } else {
-            Index::Cells(CellIndex::new(cloud.points(), radius_mm * CELL_MARGIN))
+            Index::Cells(CellIndex::for_radius(cloud.points(), radius_mm))
         };
         NeighbourSearch { cloud, camera, radius, radius_sq: radius * radius, index, measured: None }
     }

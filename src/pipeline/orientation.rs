@@ -200,7 +200,7 @@ fn grid_cross<G: GridPoints>(grid: &G, i: usize, step: usize) -> Option<[f32; 3]
 /// [`SCATTER_NORMAL_SAMPLE`] of them, nearest cells first: a plane fit
 /// needs no more, and reading every neighbour of a dense cloud would cost
 /// far more than the fit.
-fn scatter_normal(cloud: &PointCloud, search: &NeighbourSearch, i: usize) -> Option<Vec3> {
+pub(crate) fn scatter_normal(cloud: &PointCloud, search: &NeighbourSearch, i: usize) -> Option<Vec3> {
     let mut m = Moments::default();
     search.for_each_sampled(i, SCATTER_NORMAL_SAMPLE, |j| {
         if let Some(q) = vec_at(cloud, j) {

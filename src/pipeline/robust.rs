@@ -58,12 +58,14 @@ pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
     let measured = ctx.measure_scale()?;
     let scale = ctx.scale;
     let cloud = &*ctx.cloud;
-    let mut search = NeighbourSearch::new(cloud, camera, scale.radius_mm);
-    if measured {
-        let full = search.measure_full_counts().map(|m| m.median_full_count());
-        tracing::debug!(median_full_count = full, radius_mm = scale.radius_mm, "full-plane counts measured");
-    }
-    let search = search;
+    let search = {
+        let mut search = NeighbourSearch::new(cloud, camera, scale.radius_mm);
+        if measured {
+            let full = search.measure_full_counts().map(|m| m.cloud_full_count());
+            tracing::debug!(cloud_full_count = full, radius_mm = scale.radius_mm, "full-plane counts measured");
+        }
+        search
+    };
     ctx.clock.lap(Stage::NeighbourIndex);
 
     // Plates, table and fixture lie parallel: one normal describes them.

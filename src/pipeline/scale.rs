@@ -41,11 +41,11 @@ use std::ops::ControlFlow;
 use rayon::prelude::*;
 
 use crate::cloud::{Point, PointCloud};
-use crate::geometry::fit::Moments;
 use crate::geometry::{Vec3, vec3};
 
 use super::neighbours::NeighbourSearch;
 use super::neighbours::cells::CellIndex;
+use super::orientation::scatter_normal;
 
 /// The full-plane neighbour count the derived radius aims at. Counts of
 /// well-spread points scatter by a few points around their mean; at 50 the
@@ -188,17 +188,6 @@ fn lower_quartile(values: &mut [u32]) -> u32 {
     *values.select_nth_unstable(k).1
 }
 
-/// The normal of the principal axes of point `i`'s neighbours.
-fn local_normal(search: &NeighbourSearch, i: usize) -> Option<Vec3> {
-    let points = search.cloud().points();
-    let mut moments = Moments::default();
-    search.for_each_sampled(i, NORMAL_SAMPLE, |j| moments.add(&vec3(&points[j])));
-    moments.plane().map(|plane| plane.normal)
-}
-
-/// The neighbours a sampled point's normal is fitted to, at most.
-const NORMAL_SAMPLE: usize = 64;
-
 /// Measures the spacing of `cloud`, starting at radius `start_mm`.
 pub(crate) fn measure_spacing(cloud: &PointCloud, start_mm: f64) -> Result<Spacing, SpacingError> {
     let points = cloud.points();
@@ -208,7 +197,7 @@ pub(crate) fn measure_spacing(cloud: &PointCloud, start_mm: f64) -> Result<Spaci
     }
     let mut radius = start_mm;
     while radius <= MAX_MEASURING_RADIUS_MM {
-        let index = CellIndex::new(points, radius * CELL_MARGIN);
+        let index = CellIndex::for_radius(points, radius);
         let mut counts: Vec<u32> =
             sample.par_iter().map(|&i| count_within(&index, points, i, radius, MAX_MEASURED_COUNT)).collect();
         let m = median(&mut counts);
@@ -220,9 +209,6 @@ pub(crate) fn measure_spacing(cloud: &PointCloud, start_mm: f64) -> Result<Spaci
     }
     Err(SpacingError::TooSparse)
 }
-
-/// Cells a hair wider than the radius, as the neighbour search makes them.
-const CELL_MARGIN: f64 = 1.0 + 1e-5;
 
 /// The radius at which a full plane of points `spacing_mm` apart holds
 /// [`TARGET_FULL_COUNT`] points, never below `configured_mm`.
@@ -303,7 +289,7 @@ impl DensityMap {
             .collect();
         by_cube.par_sort_unstable();
         let runs: Vec<&[(u64, u32)]> = by_cube.chunk_by(|a, b| a.0 == b.0).collect();
-        let cap = (4.0 * TARGET_FULL_COUNT).max(MAX_MEASURED_COUNT as f64) as u32;
+        let cap = MAX_MEASURED_COUNT;
         let measured: Vec<(u64, Option<u32>, Vec<u32>)> = runs
             .par_iter()
             .map(|run| {
@@ -312,7 +298,7 @@ impl DensityMap {
                     .iter()
                     .step_by(stride)
                     .map(|&(_, i)| i as usize)
-                    .filter(|&i| local_normal(search, i).is_some_and(|n| surrounded(search, i, &n)))
+                    .filter(|&i| scatter_normal(search.cloud(), search, i).is_some_and(|n| surrounded(search, i, &n)))
                     .map(|i| search.count_up_to(i, |_| true, cap))
                     .collect();
                 let own = (counts.len() >= MIN_DENSITY_SAMPLES).then(|| lower_quartile(&mut counts));
@@ -345,7 +331,7 @@ impl DensityMap {
     }
 
     /// The cloud's full count where a cube has too few points of its own.
-    pub(crate) fn median_full_count(&self) -> f64 {
+    pub(crate) fn cloud_full_count(&self) -> f64 {
         self.fallback
     }
 }

@@ -29,6 +29,9 @@ use crate::cloud::Point;
 const AXIS_BITS: u32 = 21;
 const AXIS_HALF_RANGE: i64 = 1 << (AXIS_BITS - 1);
 
+/// How much wider than the query radius a cell is.
+const CELL_MARGIN: f64 = 1.0 + 1e-5;
+
 /// A cell's points and the box around them.
 #[derive(Debug, Clone, Copy)]
 struct Cell {
@@ -104,10 +107,12 @@ fn neighbourhoods(keys: &[u64]) -> (Vec<u32>, Vec<u32>) {
 }
 
 impl CellIndex {
-    /// Indexes the valid (finite) points of `cloud_points` in cells of side
-    /// `cell_mm`, which must be positive and no smaller than the radius of
-    /// the queries to be exact.
-    pub(crate) fn new(cloud_points: &[Point], cell_mm: f64) -> CellIndex {
+    /// Indexes the valid (finite) points of `cloud_points` for queries
+    /// within `radius_mm`: cells a hair wider than the radius, so that a
+    /// neighbour exactly at the radius never falls two cells away through
+    /// rounding.
+    pub(crate) fn for_radius(cloud_points: &[Point], radius_mm: f64) -> CellIndex {
+        let cell_mm = radius_mm * CELL_MARGIN;
         let inverse = 1.0 / cell_mm;
         let cell_coords = |p: &Point| -> [i64; 3] {
             std::array::from_fn(|a| {
@@ -240,7 +245,7 @@ mod tests {
         for n in [0, 1, 2, 15, 100, 3000] {
             let points = scattered(n);
             for radius in [0.3f32, 0.8, 2.5] {
-                let index = CellIndex::new(&points, radius as f64);
+                let index = CellIndex::for_radius(&points, radius as f64);
                 for (i, p) in points.iter().enumerate().filter(|(_, p)| p[0].is_finite()).take(200) {
                     let r_sq = radius * radius;
                     let mut found = Vec::new();
@@ -263,7 +268,7 @@ mod tests {
     fn a_query_starts_in_its_own_cell_and_stops_when_told() {
         let mut points = vec![[0.1f32, 0.1, 500.1]; 20_000];
         points.push([0.9, 0.1, 500.1]);
-        let index = CellIndex::new(&points, 1.0);
+        let index = CellIndex::for_radius(&points, 1.0);
         let mut visited = Vec::new();
         index.visit_near(0, &points[0], 1.0, |j, _| {
             visited.push(j);
@@ -277,7 +282,7 @@ mod tests {
         // 20,000 points 1.5 mm from a lone point, in the next cell.
         let mut points = vec![[1.9f32, 0.5, 500.5]; 20_000];
         points.push([0.4, 0.5, 500.5]);
-        let index = CellIndex::new(&points, 1.0);
+        let index = CellIndex::for_radius(&points, 1.0);
         let mut candidates = 0;
         index.visit_near(20_000, &points[20_000], 1.0, |_, _| {
             candidates += 1;
@@ -290,7 +295,7 @@ mod tests {
     #[test]
     fn far_coordinates_are_clamped_not_wrapped() {
         let points = vec![[1.0e9f32, 0.0, 500.0], [-1.0e9, 0.0, 500.0], [0.0, 0.0, 500.0]];
-        let index = CellIndex::new(&points, 0.05);
+        let index = CellIndex::for_radius(&points, 0.05);
         let mut seen = 0;
         index.visit_near(2, &points[2], 0.0025, |_, _| {
             seen += 1;

@@ -6,6 +6,7 @@ use std::path::PathBuf;
 
 use anyhow::Context as _;
 use serde_json::json;
+use weldseam::pipeline::input::View;
 use weldseam::pipeline::survey::{Survey, survey};
 
 use super::args;
@@ -41,8 +42,8 @@ fn as_json(s: &Survey) -> serde_json::Value {
         "organized": s.grid.map(|(w, h)| json!({"width": w, "height": h})),
         "units": {"guess": if s.units.metres { "m" } else { "mm" }, "median_distance": s.units.median_distance},
         "depth_mm": s.depth_mm.map(|(near, far)| [near, far]),
-        "behind_camera": s.behind_camera,
-        "beyond_any_view": s.beyond_any_view,
+        "behind_camera": s.view.behind,
+        "beyond_any_view": s.view.beyond_any_view,
         "frame": frame_verdict(s),
         "intrinsics": s.intrinsics.map(|e| json!({
             "fx": e.intrinsics.fx, "fy": e.intrinsics.fy, "cx": e.intrinsics.cx, "cy": e.intrinsics.cy,
@@ -61,16 +62,18 @@ fn as_json(s: &Survey) -> serde_json::Value {
     })
 }
 
-/// Whether the cloud looks like a camera-frame view, in words.
+/// Whether the cloud looks like a camera-frame view, in words: the input
+/// step's own verdict.
 fn frame_verdict(s: &Survey) -> &'static str {
-    if s.valid == 0 {
-        "no valid point"
-    } else if s.behind_camera * 2 > s.valid {
-        "not a camera-frame view: most points lie behind the camera (a base-frame cloud? plan it with --cloud-frame base)"
-    } else if (s.behind_camera + s.beyond_any_view) * 2 > s.valid {
-        "not a camera-frame view: most points lie beyond any camera's field of view"
-    } else {
-        "a camera-frame view"
+    if s.view.valid == 0 {
+        return "no valid point";
+    }
+    match s.view.view() {
+        View::Camera => "a camera-frame view",
+        View::MostlyBehind => {
+            "not a camera-frame view: most points lie behind the camera (a base-frame cloud? plan it with --cloud-frame base)"
+        }
+        View::MostlyBeyondView => "not a camera-frame view: most points lie beyond any camera's field of view",
     }
 }
 

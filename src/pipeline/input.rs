@@ -158,56 +158,99 @@ fn transformed(cloud: &PointCloud, scale: f64, camera_from_cloud: &Isometry3<f64
     }
 }
 
+/// Where a cloud's valid points lie against any camera's view.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct ViewCounts {
+    pub valid: usize,
+    /// Behind the camera: z <= 0.
+    pub behind: usize,
+    /// In front of it but more than [`MAX_PLAUSIBLE_OFF_AXIS_DEG`] off its
+    /// axis.
+    pub beyond_any_view: usize,
+}
+
+/// Whether a cloud can be a camera-frame view, from its [`ViewCounts`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum View {
+    /// At least half its valid points lie where a camera can see.
+    Camera,
+    /// More than half lie behind the camera.
+    MostlyBehind,
+    /// More than half lie behind it or beyond any camera's field of view.
+    MostlyBeyondView,
+}
+
+impl ViewCounts {
+    /// Counts `cloud`'s valid points by where they lie.
+    pub fn of(cloud: &PointCloud) -> ViewCounts {
+        let max_tan = MAX_PLAUSIBLE_OFF_AXIS_DEG.to_radians().tan();
+        // Plain loops over chunks, as in the input stage's own count: a
+        // per-point filter, map and reduce keeps its tuple on the stack and
+        // cost a raw frame 12 ms instead of under one.
+        // Squared, with no square root: `hypot` alone cost a raw frame 4 ms.
+        let max_tan_sq = (max_tan * max_tan) as f32;
+        cloud
+            .points()
+            .par_chunks(1 << 14)
+            .map(|chunk| {
+                let mut counts = ViewCounts::default();
+                for p in chunk.iter().filter(|p| p[0].is_finite()) {
+                    counts.valid += 1;
+                    if p[2] <= 0.0 {
+                        counts.behind += 1;
+                    } else if p[0] * p[0] + p[1] * p[1] > p[2] * p[2] * max_tan_sq {
+                        counts.beyond_any_view += 1;
+                    }
+                }
+                counts
+            })
+            .reduce(ViewCounts::default, |a, b| ViewCounts {
+                valid: a.valid + b.valid,
+                behind: a.behind + b.behind,
+                beyond_any_view: a.beyond_any_view + b.beyond_any_view,
+            })
+    }
+
+    /// Whether these points can be a camera-frame view.
+    pub fn view(&self) -> View {
+        let limit = (self.valid as f64 * MAX_IMPLAUSIBLE_FRACTION) as usize;
+        if self.behind > limit {
+            View::MostlyBehind
+        } else if self.behind + self.beyond_any_view > limit {
+            View::MostlyBeyondView
+        } else {
+            View::Camera
+        }
+    }
+}
+
 /// Refuses a cloud most of whose valid points lie behind the camera or
 /// beyond any camera's field of view: planned, it would give a seam of
 /// nonsense, so the reason and the likely cause are named instead.
 fn check_camera_view(cloud: &PointCloud, request: &PlanRequest) -> Result<(), PlanError> {
-    let max_tan = MAX_PLAUSIBLE_OFF_AXIS_DEG.to_radians().tan();
-    // Plain loops over chunks, as in the input stage's own count: a
-    // per-point filter, map and reduce keeps its tuple on the stack and
-    // cost a raw frame 12 ms instead of under one.
-    // Squared, with no square root: `hypot` alone cost a raw frame 4 ms.
-    let max_tan_sq = (max_tan * max_tan) as f32;
-    let (valid, behind, off_view) = cloud
-        .points()
-        .par_chunks(1 << 14)
-        .map(|chunk| {
-            let (mut valid, mut behind, mut off_view) = (0usize, 0usize, 0usize);
-            for p in chunk.iter().filter(|p| p[0].is_finite()) {
-                valid += 1;
-                if p[2] <= 0.0 {
-                    behind += 1;
-                } else if p[0] * p[0] + p[1] * p[1] > p[2] * p[2] * max_tan_sq {
-                    off_view += 1;
-                }
-            }
-            (valid, behind, off_view)
-        })
-        .reduce(|| (0, 0, 0), |a, b| (a.0 + b.0, a.1 + b.1, a.2 + b.2));
-    let limit = (valid as f64 * MAX_IMPLAUSIBLE_FRACTION) as usize;
+    let counts = ViewCounts::of(cloud);
+    let ViewCounts { valid, behind, beyond_any_view } = counts;
     let hint = match request.cloud_frame {
         CloudFrame::Camera => "is the cloud in the robot base frame (cloud frame base, --cloud-frame base)?",
         CloudFrame::Base => "are the pose and the hand-eye those of the capture, and is the cloud in the base frame?",
     };
-    if behind > limit {
-        return Err(PlanError::at(
+    match counts.view() {
+        View::Camera => Ok(()),
+        View::MostlyBehind => Err(PlanError::at(
             Stage::Input,
             format!(
                 "the cloud is not a camera-frame view: {behind} of its {valid} valid points lie behind the \
                  camera (z <= 0); {hint}"
             ),
-        ));
-    }
-    if behind + off_view > limit {
-        return Err(PlanError::at(
+        )),
+        View::MostlyBeyondView => Err(PlanError::at(
             Stage::Input,
             format!(
                 "the cloud is not a camera-frame view: {} of its {valid} valid points lie behind the camera or \
                  more than {MAX_PLAUSIBLE_OFF_AXIS_DEG}° off its axis, beyond any camera's field of view; {hint} \
                  Are its units right (--units mm|m)?",
-                behind + off_view
+                behind + beyond_any_view
             ),
-        ));
+        )),
     }
-    Ok(())
 }

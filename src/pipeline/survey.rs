@@ -12,7 +12,7 @@ use crate::camera::{IntrinsicsEstimate, estimate_intrinsics};
 use crate::cloud::PointCloud;
 use crate::config::{Config, PointDensity};
 
-use super::input::{self, UnitsGuess};
+use super::input::{self, UnitsGuess, ViewCounts};
 use super::regrid::{self, Regridded};
 use super::scale;
 
@@ -44,11 +44,11 @@ pub struct Survey {
     /// Least and greatest depth of the valid points, mm (after the units
     /// guess).
     pub depth_mm: Option<(f64, f64)>,
-    /// Valid points behind the camera (z <= 0) and beyond any camera's
-    /// field of view: many of either and the cloud is not a camera-frame
-    /// view (it may be in the robot base frame).
-    pub behind_camera: usize,
-    pub beyond_any_view: usize,
+    /// Where the valid points lie against any camera's view, as the input
+    /// step counts them before planning: many behind the camera or beyond
+    /// any field of view and the cloud is not a camera-frame view (it may
+    /// be in the robot base frame).
+    pub view: ViewCounts,
     /// An organized frame's own pinhole.
     pub intrinsics: Option<IntrinsicsEstimate>,
     /// For an unorganized cloud: put back on the configured camera's grid,
@@ -72,10 +72,6 @@ pub fn survey(cloud: &PointCloud, config: &Config) -> Survey {
         .iter()
         .map(|p| p[2] as f64)
         .fold(None, |range: Option<(f64, f64)>, z| Some(range.map_or((z, z), |(lo, hi)| (lo.min(z), hi.max(z)))));
-    let max_tan = input::MAX_PLAUSIBLE_OFF_AXIS_DEG.to_radians().tan();
-    let behind_camera = valid.iter().filter(|p| p[2] <= 0.0).count();
-    let beyond_any_view =
-        valid.iter().filter(|p| p[2] > 0.0 && (p[0] as f64).hypot(p[1] as f64) > p[2] as f64 * max_tan).count();
 
     let regrid = (!in_mm.is_organized())
         .then(|| regrid::regrid(&in_mm, &config.camera).map(|(_, done)| done).map_err(|why| why.to_string()));
@@ -97,8 +93,7 @@ pub fn survey(cloud: &PointCloud, config: &Config) -> Survey {
         grid: cloud.is_organized().then(|| (cloud.width(), cloud.height())),
         units,
         depth_mm,
-        behind_camera,
-        beyond_any_view,
+        view: ViewCounts::of(&in_mm),
         intrinsics: estimate_intrinsics(&in_mm),
         regrid,
         spacing_mm,
@@ -144,7 +139,7 @@ mod tests {
         assert!(!raw.units.metres && !raw.measured_density && raw.radius_mm == 1.0);
         let fx = raw.intrinsics.as_ref().map(|e| e.intrinsics.fx).unwrap();
         assert!((fx / config.camera.fx() - 1.0).abs() < 1e-3, "fx {fx}");
-        assert!(raw.behind_camera == 0 && raw.beyond_any_view == 0);
+        assert!(raw.view.behind == 0 && raw.view.beyond_any_view == 0);
 
         // Every fourth point of every fourth row, in metres, unorganized:
         // a sparse cloud that no grid fits.

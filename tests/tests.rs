@@ -7,6 +7,7 @@ mod daemon;
 mod fuzz;
 mod golden;
 mod hostile_clouds;
+mod measured_clouds;
 mod parsers;
 mod peers;
 mod pipeline;

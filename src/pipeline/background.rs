@@ -55,6 +55,16 @@ pub enum BackgroundError {
         "found {found} planes but no two layers {min_mm} to {max_mm} mm apart (offsets {offsets_mm:?} mm) for a lap joint"
     )]
     NoLapStep { found: usize, offsets_mm: Vec<f64>, min_mm: f64, max_mm: f64 },
+    /// A plane larger than either plate of the coplanar pair lies nearer
+    /// the camera: the pair is more likely the table or a fixture seen on
+    /// both sides of the workpiece, and the plane the two plates seen as
+    /// one across a gap the cloud does not resolve.
+    #[error(
+        "a plane of {area_mm2:.0} mm² lies {above_mm:.1} mm nearer the camera than the only coplanar pair \
+         (plates of {smaller_mm2:.0} mm² and more): the pair may be the table on both sides of a workpiece whose \
+         plates are seen as one, across a gap narrower than the cloud resolves"
+    )]
+    PairUnderLargerPlane { area_mm2: f64, above_mm: f64, smaller_mm2: f64 },
 }
 
 /// Fits a plane to each cluster and estimates its area from the sampling
@@ -157,6 +167,16 @@ pub fn robust_select(planes: Vec<PlaneCluster>, s: &Selection) -> Result<Workpie
                 return Err(BackgroundError::NoCoplanarPair { found, offsets_mm });
             };
             let depth_to_support_mm = layers.get(pos + 1).map(|behind| offset(&behind[0]) - offset(&layers[pos][0]));
+            // The plates are the workpiece's top: a nearer plane may be a
+            // clamp, but not one larger than a plate.
+            let smaller_mm2 = layers[pos][1].area_mm2;
+            if let Some(cover) = layers[..pos].iter().map(|l| &l[0]).find(|c| c.area_mm2 > smaller_mm2) {
+                return Err(BackgroundError::PairUnderLargerPlane {
+                    area_mm2: cover.area_mm2,
+                    above_mm: offset(&layers[pos][0]) - offset(cover),
+                    smaller_mm2,
+                });
+            }
             let mut layer = layers.swap_remove(pos).into_iter();
             match (layer.next(), layer.next()) {
                 (Some(a), Some(b)) => Ok(Workpiece { plates: [a, b], depth_to_support_mm }),
@@ -220,6 +240,23 @@ mod tests {
         ];
         let w = robust_select(planes, &selection(JointType::IButt)).unwrap();
         assert!(w.plates.iter().all(|p| p.plane.offset < 701.0));
+    }
+
+    #[test]
+    fn table_pieces_under_plates_seen_as_one_are_refused() {
+        // The plates merged across an unresolved gap (one plane), the table
+        // 34 mm below split in two by the workpiece: no seam lies between
+        // the table pieces, whatever their edges look like.
+        let planes =
+            vec![cluster(905.0, 160_000.0, 0.0), cluster(939.0, 40_000.0, -250.0), cluster(939.3, 30_000.0, 250.0)];
+        let err = robust_select(planes, &selection(JointType::IButt)).unwrap_err();
+        assert!(matches!(err, BackgroundError::PairUnderLargerPlane { .. }), "{err}");
+        assert!(err.to_string().contains("34.0 mm nearer the camera"), "{err}");
+        // A clamp on the plates is smaller than either plate and is passed over.
+        let planes =
+            vec![cluster(880.0, 2_000.0, 0.0), cluster(905.0, 60_000.0, -100.0), cluster(905.2, 50_000.0, 100.0)];
+        let w = robust_select(planes, &selection(JointType::IButt)).unwrap();
+        assert!(w.plates.iter().all(|p| p.plane.offset > 904.0));
     }
 
     #[test]

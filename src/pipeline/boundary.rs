@@ -10,13 +10,15 @@
 //! the plate's corners and give the seam's true extent.
 //!
 //! Without a grid ([`sample_scattered`]) the same rule is read from the
-//! points themselves: cut the band beside the coarse edge into strips one
-//! point spacings wide along the edge; in each strip the plate ends on
-//! average one gap beyond its outermost point on the plate's plane, where
-//! the k points of the strip's last row split the spacing into k + 1 gaps
-//! (one point: half a spacing, as on the grid).
-//! The strips cover every on-plane point of the band, so they too reach the
-//! plate's corners.
+//! points themselves: cut the band beside the coarse edge into strips two
+//! point spacings wide along the edge; walk each strip's on-plane points
+//! outward until they stop (an empty stretch wider than the plate's
+//! interior ever shows, or the band's end); the plate ends on average one
+//! gap beyond the last point, where the k points of the strip's last row
+//! split the spacing into k + 1 gaps (one point: half a spacing, as on the
+//! grid). A strip whose points never stop sees no edge, as a scan line
+//! whose walk leaves the band still on the plane does. The strips cover
+//! every on-plane point of the band, so they too reach the plate's corners.
 
 use crate::cloud::PointCloud;
 use crate::geometry::fit::Plane;
@@ -121,16 +123,75 @@ pub struct Boundary {
     /// Distance along the edge between neighbouring scan lines, mm. The
     /// plate ends on average half of it beyond the outermost samples.
     pub line_spacing_mm: f64,
+    /// Where the samples' extent is read from: all of them, or the longest
+    /// unbroken stretch.
+    pub extent_rule: ExtentRule,
+}
+
+/// Which samples prove how far an edge runs.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub enum ExtentRule {
+    /// Every sample: on a pixel grid each comes from a walk along a scan
+    /// line that stayed on the plate, and one the fit later trims (a walk
+    /// cut short by a mixed pixel) still proves the plate is there.
+    #[default]
+    AllSamples,
+    /// The longest stretch without [`EXTENT_BREAK_LINES`] strips missing:
+    /// without a grid, a lone sample far beyond the rest (a chance hole in
+    /// a sparse strip at the cloud's border) proves nothing about the edge.
+    LongestStretch,
 }
 
 impl Boundary {
-    /// The range of `along` the samples cover, widened by half a scan line
-    /// at each end. Samples that the fit later trims (a walk cut short by
-    /// a mixed pixel) still prove the plate is there, so all count.
+    /// The range of `along` the samples cover by [`ExtentRule`], widened
+    /// by half a scan line at each end.
     pub fn extent(&self, along: impl Fn(&BoundarySample) -> f64) -> Option<(f64, f64)> {
-        let (lo, hi) = self.samples.iter().map(along).fold((f64::MAX, f64::MIN), |(l, h), v| (l.min(v), h.max(v)));
-        (lo <= hi).then(|| (lo - self.line_spacing_mm / 2.0, hi + self.line_spacing_mm / 2.0))
+        let mut at: Vec<f64> = self.samples.iter().map(along).collect();
+        at.sort_unstable_by(f64::total_cmp);
+        let break_mm = match self.extent_rule {
+            ExtentRule::AllSamples => f64::INFINITY,
+            ExtentRule::LongestStretch => EXTENT_BREAK_LINES * self.line_spacing_mm,
+        };
+        let mut best: Option<(usize, f64, f64)> = None;
+        for run in at.chunk_by(|a, b| b - a <= break_mm) {
+            let (lo, hi) = (run[0], run[run.len() - 1]);
+            if best.is_none_or(|(n, _, _)| run.len() > n) {
+                best = Some((run.len(), lo, hi));
+            }
+        }
+        best.map(|(_, lo, hi)| (lo - self.line_spacing_mm / 2.0, hi + self.line_spacing_mm / 2.0))
     }
+}
+
+/// How many strips without a sample break a weld edge into two stretches
+/// ([`ExtentRule::LongestStretch`]). A plate seen at all leaves a sample in
+/// nearly every strip; a few missing in a row are a glare spot or a tack
+/// weld, more than this a different piece of evidence.
+const EXTENT_BREAK_LINES: f64 = 8.0;
+
+/// The fraction of the stretch `[s0, s1]` along the seam that lies within
+/// one scan line (or strip) of a boundary sample, with `along` the
+/// samples' seam coordinate: 1 where the edge was seen all along, near 0
+/// where it was only glimpsed. A seam between edges seen along a small
+/// part of it is a guess, whatever its fit says.
+pub fn coverage(boundary: &Boundary, along: impl Fn(&BoundarySample) -> f64, s0: f64, s1: f64) -> f64 {
+    let step = boundary.line_spacing_mm;
+    if !(step > 0.0 && s1 > s0) {
+        return 0.0;
+    }
+    let mut at: Vec<f64> = boundary.samples.iter().map(along).filter(|a| a.is_finite()).collect();
+    at.sort_unstable_by(f64::total_cmp);
+    // The union of the windows [a - step, a + step], clipped to the stretch.
+    let mut covered = 0.0;
+    let mut reached = s0;
+    for a in at {
+        let (lo, hi) = ((a - step).max(reached), (a + step).min(s1));
+        if hi > lo {
+            covered += hi - lo;
+            reached = hi;
+        }
+    }
+    covered / (s1 - s0)
 }
 
 /// Samples the boundary of the plate whose member pixels are `members`
@@ -198,31 +259,38 @@ pub fn sample_boundary(
     extend_past_ends(&walker, &mut found, mean_step);
     found.sort_by_key(|(line, _, _)| *line);
     let line_spacing_mm = median_line_spacing(&found);
-    Boundary { samples: found.into_iter().map(|(_, _, s)| s).collect(), line_spacing_mm }
+    Boundary {
+        samples: found.into_iter().map(|(_, _, s)| s).collect(),
+        line_spacing_mm,
+        extent_rule: ExtentRule::AllSamples,
+    }
 }
 
 /// Samples the boundary of a plate beside `edge` in a cloud without a
 /// pixel grid whose points lie about `spacing_mm` apart. Every valid point
 /// on the plate's plane within the band counts, not only the plate's
-/// members: the plane criterion has trimmed the outermost ones. Points
-/// farther out than `reach_mm` beyond the edge are left out, so a
-/// coplanar neighbour plate across a narrow gap is never taken for this
-/// one.
+/// members: the plane criterion has trimmed the outermost ones.
+///
+/// A strip has a boundary only where its on-plane points, walked outward
+/// from the inner side of the band, stop: at the first empty stretch wider
+/// than any the plate's interior shows ([`hole_threshold`]), or at the
+/// band's outer side. A strip whose points run on through the band has
+/// none: the plate goes on there (a lap's lower plate beyond the upper
+/// plate's end), or a coplanar plate lies across a gap too narrow for this
+/// cloud to show. Either way no edge is seen there, and none is invented.
 pub fn sample_scattered(
     cloud: &PointCloud,
     plane: &Plane,
     edge: &CoarseEdge,
     params: &BoundaryParams,
     spacing_mm: f64,
-    reach_mm: f64,
 ) -> Boundary {
     use rayon::prelude::*;
     use std::collections::BTreeMap;
 
-    if spacing_mm.is_nan() || spacing_mm <= 0.0 {
+    if !(spacing_mm.is_finite() && spacing_mm > 0.0) {
         return Boundary::default();
     }
-    let outward_limit = params.band_mm.min(reach_mm);
     // Two spacings: a strip one spacing wide misses the boundary row's
     // point about as often as it holds it, and its outermost point is then
     // a row in; at two the row is nearly always there.
@@ -237,7 +305,7 @@ pub fn sample_scattered(
             let d = v - edge.point;
             let out = d.dot(&edge.outward);
             let on_plane = plane.signed_distance(&v).abs() <= params.on_plane_mm;
-            (on_plane && out >= -params.band_mm && out <= outward_limit)
+            (on_plane && out.abs() <= params.band_mm)
                 .then(|| (crate::geometry::floor_i64(d.dot(&edge.direction) / strip_mm), out, v))
         })
         .collect();
@@ -245,24 +313,78 @@ pub fn sample_scattered(
     for (strip, out, v) in in_band {
         strips.entry(strip).or_default().push((out, v));
     }
+    for strip in strips.values_mut() {
+        strip.sort_unstable_by(|a, b| a.0.total_cmp(&b.0));
+    }
+    let hole_mm = hole_threshold(strips.values().map(Vec::as_slice), params.band_mm, spacing_mm);
     let samples = strips
-        .into_values()
+        .values()
         .filter_map(|strip| {
-            let &(last_out, last) = strip.iter().max_by(|a, b| a.0.total_cmp(&b.0))?;
+            let last = strip_boundary(strip, hole_mm, params.band_mm)?;
+            let (last_out, last_point) = strip[last];
             // The k points of the strip's last row (within half a spacing
             // of the outermost) split the spacing beyond the row into k + 1
             // gaps on average: the plate ends one gap beyond the outermost.
-            let row = strip.iter().filter(|(out, _)| *out >= last_out - spacing_mm / 2.0).count();
+            let row = strip[..=last].iter().filter(|(out, _)| *out >= last_out - spacing_mm / 2.0).count();
             let beyond = spacing_mm / (row + 1) as f64;
-            let position = plane.project(&last) + edge.outward * beyond;
+            let position = plane.project(&last_point) + edge.outward * beyond;
             Some(BoundarySample { position, along: (position - edge.point).dot(&edge.direction) })
         })
         .collect();
-    Boundary { samples, line_spacing_mm: strip_mm }
+    Boundary { samples, line_spacing_mm: strip_mm, extent_rule: ExtentRule::LongestStretch }
 }
 
 /// The width of [`sample_scattered`]'s strips, in point spacings.
 const STRIP_SPACINGS: f64 = 2.0;
+
+/// The narrowest empty stretch across a strip taken for the plate's end,
+/// in point spacings: rows lie about one spacing apart, so a stretch half
+/// as wide again is already rare inside a plate.
+const MIN_HOLE_SPACINGS: f64 = 1.5;
+
+/// How much wider than the plate interior's widest common stretch (its
+/// 99th percentile) an empty stretch must be to end the plate.
+const HOLE_OVER_INTERIOR: f64 = 1.25;
+
+/// The empty stretch across a strip that ends a plate, mm: measured on the
+/// cloud itself, from the gaps between consecutive points in the inner
+/// third of the band (well inside the plate, whatever the coarse edge's
+/// error), and never under [`MIN_HOLE_SPACINGS`] spacings. Voxel centroids
+/// of a tilted plate, or a camera's anisotropic grid, leave wider gaps
+/// than the mean spacing says; this keeps them from ending the plate.
+fn hole_threshold<'a>(strips: impl Iterator<Item = &'a [(f64, Vec3)]>, band_mm: f64, spacing_mm: f64) -> f64 {
+    let inner = -band_mm / 3.0;
+    let mut gaps: Vec<f64> =
+        strips.flat_map(|strip| strip.windows(2).filter(move |w| w[1].0 <= inner).map(|w| w[1].0 - w[0].0)).collect();
+    let floor = MIN_HOLE_SPACINGS * spacing_mm;
+    if gaps.is_empty() {
+        return floor;
+    }
+    let k = (gaps.len() * 99 / 100).min(gaps.len() - 1);
+    let q99 = *gaps.select_nth_unstable_by(k, f64::total_cmp).1;
+    floor.max(HOLE_OVER_INTERIOR * q99)
+}
+
+/// The index of a strip's last point before the plate ends, walking
+/// outward from the band's inner side; `None` when the points run on to
+/// the band's outer side (no end seen), or when they start outside the
+/// coarse edge. The coarse edge runs through the plate's edge points, a
+/// little inside the plate, so a run that starts inside it is the plate's;
+/// one that starts outside lies past the plate's end: another plate's
+/// points, or the foot of a steep face (a lap's upper plate beyond the
+/// lower plate's end) whose lowest points graze the plane. Where the image
+/// border cuts the band this also drops the strips that see only the
+/// plate's outer rim, and the seam stops up to a millimetre or two short
+/// of the border: short, never beyond. `strip` is sorted by outward offset.
+fn strip_boundary(strip: &[(f64, Vec3)], hole_mm: f64, band_mm: f64) -> Option<usize> {
+    if strip.first()?.0 > 0.0 {
+        return None;
+    }
+    strip.windows(2).position(|w| w[1].0 - w[0].0 > hole_mm).or_else(|| {
+        let last = strip.len() - 1;
+        (band_mm - strip[last].0 > hole_mm).then_some(last)
+    })
+}
 
 /// The median distance along the edge from one scan line's sample to the
 /// next line's, per line. `found` is sorted by line.
@@ -387,6 +509,14 @@ mod tests {
     /// as voxel centroids lie) whose edge is x = `edge_x` + SLOPE y, and a
     /// coplanar plate beyond a `gap` wide gap.
     fn scattered(spacing: f64, edge_x: f64, gap: f64) -> PointCloud {
+        scattered_where(spacing, |x, y| {
+            let edge = edge_x + SLOPE * y;
+            x < edge || x > edge + gap
+        })
+    }
+
+    /// Jittered grid points about `spacing` apart where `keep(x, y)`.
+    fn scattered_where(spacing: f64, keep: impl Fn(f64, f64) -> bool) -> PointCloud {
         let mut state = 0x2545_f491_4f6c_dd1d_u64;
         let mut jitter = || {
             state ^= state << 13;
@@ -399,8 +529,7 @@ mod tests {
         for row in -n..=n {
             for col in -n..=n {
                 let (x, y) = (col as f64 * spacing + jitter(), row as f64 * spacing + jitter());
-                let edge = edge_x + SLOPE * y;
-                if x < edge || x > edge + gap {
+                if keep(x, y) {
                     points.push([x as f32, y as f32, 700.0]);
                 }
             }
@@ -417,8 +546,7 @@ mod tests {
         let outward = Vec3::new(1.0, -SLOPE, 0.0).normalize();
         let edge = CoarseEdge { point: Vec3::new(edge_x - 2.0, 0.0, 700.0), direction, outward };
         let params = BoundaryParams { band_mm: 6.0, on_plane_mm: 0.4 };
-        // The other plate starts 2 mm beyond the edge: reach halfway.
-        let boundary = sample_scattered(&cloud, &plane, &edge, &params, spacing, 3.0);
+        let boundary = sample_scattered(&cloud, &plane, &edge, &params, spacing);
         assert!(boundary.samples.len() > 50, "{} samples", boundary.samples.len());
         let offset = |p: &Vec3| (p.x - edge_x - SLOPE * p.y) * outward.x;
         // Away from the plate's ends, where the last strips hold only part
@@ -439,9 +567,50 @@ mod tests {
         let outward = Vec3::new(1.0, -SLOPE, 0.0).normalize();
         let edge = CoarseEdge { point: Vec3::new(1.3, 0.0, 700.0), direction, outward };
         let params = BoundaryParams { band_mm: 6.0, on_plane_mm: 0.4 };
-        let boundary = sample_scattered(&cloud, &plane, &edge, &params, 1.0, 2.75);
+        let boundary = sample_scattered(&cloud, &plane, &edge, &params, 1.0);
         let beyond = boundary.samples.iter().filter(|s| (s.position.x - 3.3 - SLOPE * s.position.y) > 1.0).count();
         assert_eq!(beyond, 0);
-        assert!(!sample_scattered(&cloud, &plane, &edge, &params, f64::NAN, 2.75).samples.iter().any(|_| true));
+        assert!(!sample_scattered(&cloud, &plane, &edge, &params, f64::NAN).samples.iter().any(|_| true));
+    }
+
+    /// The band beside the test edge, and the edge 2 mm inside the plate.
+    fn test_edge(edge_x: f64) -> (Plane, CoarseEdge, BoundaryParams) {
+        let plane = Plane { normal: Vec3::z(), offset: 700.0 };
+        let direction = Vec3::new(SLOPE, 1.0, 0.0).normalize();
+        let outward = Vec3::new(1.0, -SLOPE, 0.0).normalize();
+        let edge = CoarseEdge { point: Vec3::new(edge_x - 2.0, 0.0, 700.0), direction, outward };
+        (plane, edge, BoundaryParams { band_mm: 6.0, on_plane_mm: 0.4 })
+    }
+
+    #[test]
+    fn scattered_plate_running_on_past_the_edge_has_no_boundary_there() {
+        // A lap's lower plate: it ends at the upper plate's edge for y < 0
+        // and runs on beyond the upper plate's end, y > 0.
+        let edge_x = 3.3;
+        let cloud = scattered_where(1.0, |x, y| y > 0.0 || x < edge_x + SLOPE * y || x > edge_x + SLOPE * y + 20.0);
+        let (plane, edge, params) = test_edge(edge_x);
+        let boundary = sample_scattered(&cloud, &plane, &edge, &params, 1.0);
+        assert!(boundary.samples.len() > 20, "{} samples", boundary.samples.len());
+        let (_, end) = boundary.extent(|s| s.position.y).unwrap();
+        assert!(end < 2.5, "the edge is seen up to y = {end} mm, where the plate runs on");
+    }
+
+    #[test]
+    fn scattered_gap_narrower_than_the_spacing_is_no_edge() {
+        // Two coplanar plates 0.3 spacings apart: the cloud cannot show the
+        // gap, and no strip may claim to.
+        let cloud = scattered(1.0, 3.3, 0.3);
+        let (plane, edge, params) = test_edge(3.3);
+        // A point that happens to fall into the gap is lost, as a camera
+        // loses it, and leaves a chance hole here and there; the edge is
+        // seen along a small part of the plate only, which is what the
+        // planner's coverage gate refuses.
+        let boundary = sample_scattered(&cloud, &plane, &edge, &params, 1.0);
+        let seen = coverage(&boundary, |s| s.along, -55.0, 55.0);
+        assert!(seen < 0.5, "the edge is claimed along {:.0} % of the plate across a 0.3 mm gap", 100.0 * seen);
+        // The same plates 2 mm apart: the edge is seen nearly everywhere.
+        let cloud = scattered(1.0, 3.3, 2.0);
+        let seen = coverage(&sample_scattered(&cloud, &plane, &edge, &params, 1.0), |s| s.along, -55.0, 55.0);
+        assert!(seen > 0.9, "the edge of a 2 mm gap is seen along {:.0} % of the plate", 100.0 * seen);
     }
 }

@@ -48,6 +48,12 @@ const MIN_DIRECTION_NORM: f64 = 1e-9;
 /// apart, and the plane criterion leaves the odd hole.
 const CLUSTER_SPACINGS: f64 = 2.5;
 
+/// The least part of the seam each weld edge must have been seen along
+/// (within a scan line or strip of a boundary sample). Edges seen along
+/// the whole seam score about 1; half is far below any frame the camera
+/// resolves and far above the chance holes of an unresolved gap.
+const MIN_EDGE_COVERAGE: f64 = 0.5;
+
 /// Plans one frame by the robust method.
 pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
     let config = ctx.config;
@@ -198,12 +204,10 @@ pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
         if cloud.is_organized() {
             return boundary::sample_boundary(cloud, &plates[k].members, plane, &edge, &params);
         }
-        // Without a pixel grid: strips a spacing wide, reaching no farther
-        // than halfway to the other plate's coarse edge.
-        let other = &lines[1 - k][pick[1 - k]];
-        let reach = (other.point - edge.point).dot(&outward) / 2.0;
+        // Without a pixel grid: strips a few spacings wide, each ending
+        // where its points stop.
         let spacing = scale.measured.map_or_else(|| camera.pixel_footprint_at(&edge.point), |s| s.spacing_mm);
-        boundary::sample_scattered(cloud, plane, &edge, &params, spacing, reach)
+        boundary::sample_scattered(cloud, plane, &edge, &params, spacing)
     };
     let (boundary_a, boundary_b) = rayon::join(|| boundary_of(0), || boundary_of(1));
     let boundaries: [Boundary; 2] = [boundary_a, boundary_b];
@@ -246,6 +250,7 @@ pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
             .ok_or_else(|| PlanError::at(Stage::WeldEquation, format!("weld edge {} has no boundary sample", k + 1)))
     };
     let ((a0, a1), (b0, b1)) = (extent(0)?, extent(1)?);
+    tracing::debug!(edge_1_mm = ?[a0, a1], edge_2_mm = ?[b0, b1], "weld edges seen along the seam");
     let (mut s0, mut s1) = (a0.max(b0), a1.min(b1));
     if ctx.request.joint == JointType::Lap {
         // The root lies a plate thickness below the edges the samples
@@ -254,6 +259,28 @@ pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
     }
     if s1 - s0 <= 0.0 {
         return Err(PlanError::at(Stage::WeldEquation, "the two weld edges do not overlap along the seam"));
+    }
+    // Both edges must have been seen along the seam, not glimpsed here and
+    // there: a gap the cloud cannot resolve still leaves the odd chance
+    // hole, and a seam through those is a guess.
+    for (k, boundary) in boundaries.iter().enumerate() {
+        let seen = boundary::coverage(boundary, |s| axes.feature(&s.position), s0, s1);
+        tracing::debug!(edge = k + 1, coverage = seen, length_mm = s1 - s0, "weld edge coverage");
+        if seen < MIN_EDGE_COVERAGE {
+            return Err(PlanError::at(
+                Stage::WeldEquation,
+                format!(
+                    "weld edge {} is seen along {:.0} % of the seam's {:.0} mm, below {:.0} %: the plates' \
+                     boundary is not resolved there (a gap narrower than about two point spacings, {:.2} mm, \
+                     cannot be seen)",
+                    k + 1,
+                    100.0 * seen,
+                    s1 - s0,
+                    100.0 * MIN_EDGE_COVERAGE,
+                    2.0 * scale.measured.map_or_else(|| camera.pixel_footprint_at(&axes.origin), |m| m.spacing_mm),
+                ),
+            ));
+        }
     }
     ctx.clock.lap(Stage::WeldEquation);
 

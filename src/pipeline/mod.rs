@@ -278,7 +278,7 @@ impl Planner {
         let converted = input::prepare(cloud, request, &self.config)?;
         let cropped = match self.region_of_interest(request)? {
             Some(roi) => Cow::Owned(
-                roi::crop(&converted, &roi, &self.box_from_camera(request, &roi))
+                roi::crop(&converted, &roi, self.box_from_camera(request, &roi).as_ref())
                     .map_err(|e| PlanError::at(Stage::Input, e))?,
             ),
             None => converted,
@@ -309,13 +309,14 @@ impl Planner {
         }
     }
 
-    /// The transform from the camera frame into `roi`'s: the identity, or
-    /// `Base_T_End · End_T_Camera` at capture (Eq. 42) for a base-frame box.
-    fn box_from_camera(&self, request: &PlanRequest, roi: &Roi) -> Isometry3<f64> {
+    /// The transform from the camera frame into `roi`'s: none for a
+    /// camera-frame box, `Base_T_End · End_T_Camera` at capture (Eq. 42)
+    /// for a base-frame one.
+    fn box_from_camera(&self, request: &PlanRequest, roi: &Roi) -> Option<Isometry3<f64>> {
         match roi.frame() {
-            CloudFrame::Camera => Isometry3::identity(),
+            CloudFrame::Camera => None,
             CloudFrame::Base => {
-                request.pose.to_isometry(self.config.euler) * request.hand_eye.unwrap_or(self.config.hand_eye)
+                Some(request.pose.to_isometry(self.config.euler) * request.hand_eye.unwrap_or(self.config.hand_eye))
             }
         }
     }

@@ -126,17 +126,37 @@ impl fmt::Display for Roi {
 
 /// `cloud` (camera frame) with every point outside `roi` dropped: made
 /// invalid in an organized cloud, removed from an unorganized one.
-/// `box_from_camera` takes camera-frame points into the box's frame (the
-/// identity for a camera-frame box; `(Base_T_End · End_T_Camera)` for a
-/// base-frame one, the paper's Eq. 42).
-pub fn crop(cloud: &PointCloud, roi: &Roi, box_from_camera: &Isometry3<f64>) -> Result<PointCloud, TooFewPoints> {
+/// `box_from_camera` takes camera-frame points into the box's frame:
+/// None for a camera-frame box, `Base_T_End · End_T_Camera` for a
+/// base-frame one (the paper's Eq. 42).
+pub fn crop(
+    cloud: &PointCloud,
+    roi: &Roi,
+    box_from_camera: Option<&Isometry3<f64>>,
+) -> Result<PointCloud, TooFewPoints> {
     let inside = |p: &Point| {
-        let q = box_from_camera * Point3::new(f64::from(p[0]), f64::from(p[1]), f64::from(p[2]));
-        roi.contains(&q)
+        let q = Point3::new(f64::from(p[0]), f64::from(p[1]), f64::from(p[2]));
+        // A camera-frame box needs no transform: a raw frame's millions
+        // of points are only compared.
+        roi.contains(&box_from_camera.map_or(q, |t| t * q))
     };
-    let points: Vec<Point> =
-        cloud.points().par_iter().map(|p| if p[0].is_finite() && inside(p) { *p } else { INVALID_POINT }).collect();
-    let kept = points.par_iter().filter(|p| p[0].is_finite()).count();
+    // One pass writes the kept points and counts them, chunk by chunk.
+    const CHUNK: usize = 1 << 14;
+    let mut points = vec![INVALID_POINT; cloud.len()];
+    let kept: usize = points
+        .par_chunks_mut(CHUNK)
+        .zip(cloud.points().par_chunks(CHUNK))
+        .map(|(out, chunk)| {
+            let mut kept = 0;
+            for (o, p) in out.iter_mut().zip(chunk) {
+                if p[0].is_finite() && inside(p) {
+                    *o = *p;
+                    kept += 1;
+                }
+            }
+            kept
+        })
+        .sum();
     if kept < MIN_ROI_POINTS {
         return Err(TooFewPoints { roi: *roi, kept, valid: cloud.valid_count() });
     }
@@ -162,11 +182,11 @@ mod tests {
     #[test]
     fn an_organized_cloud_keeps_its_grid_and_an_unorganized_one_loses_the_points() {
         let roi = Roi::new([-20.0, -20.0, 400.0], [19.5, 19.5, 600.0], CloudFrame::Camera).unwrap();
-        let organized = crop(&plate(), &roi, &Isometry3::identity()).unwrap();
+        let organized = crop(&plate(), &roi, None).unwrap();
         assert!(organized.is_organized());
         assert_eq!((organized.width(), organized.height(), organized.valid_count()), (80, 60, 1600));
         let bag = PointCloud::unorganized(plate().points().to_vec());
-        let unorganized = crop(&bag, &roi, &Isometry3::identity()).unwrap();
+        let unorganized = crop(&bag, &roi, None).unwrap();
         assert!(!unorganized.is_organized());
         assert_eq!((unorganized.len(), unorganized.valid_count()), (1600, 1600));
     }
@@ -180,18 +200,18 @@ mod tests {
         );
         // A camera point (x, y, 500) lies at (100 - y, x, 0) there.
         let roi = Roi::new([79.5, -30.5, -1.0], [120.5, 29.5, 1.0], CloudFrame::Base).unwrap();
-        let cropped = crop(&plate(), &roi, &other_from_camera).unwrap();
+        let cropped = crop(&plate(), &roi, Some(&other_from_camera)).unwrap();
         assert_eq!(cropped.valid_count(), 41 * 60);
         let in_camera = Roi::new([-30.5, -20.5, 499.0], [29.5, 20.5, 501.0], CloudFrame::Camera).unwrap();
         let kept = |c: &PointCloud| c.points().iter().map(|p| p[0].is_finite()).collect::<Vec<_>>();
-        let expected = crop(&plate(), &in_camera, &Isometry3::identity()).unwrap();
+        let expected = crop(&plate(), &in_camera, None).unwrap();
         assert!(kept(&cropped) == kept(&expected), "the boxes keep different points");
     }
 
     #[test]
     fn a_box_keeping_too_few_points_is_refused_naming_it_and_the_count() {
         let roi = Roi::new([-2.0, -2.0, 400.0], [2.0, 2.0, 600.0], CloudFrame::Camera).unwrap();
-        let e = crop(&plate(), &roi, &Isometry3::identity()).unwrap_err().to_string();
+        let e = crop(&plate(), &roi, None).unwrap_err().to_string();
         assert!(e.contains("x -2..2, y -2..2, z 400..600 mm (camera frame)") && e.contains("keeps 25 of"), "{e}");
         assert!(e.contains(&format!("at least {MIN_ROI_POINTS}")), "{e}");
     }

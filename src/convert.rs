@@ -12,10 +12,12 @@ pub mod to_proto {
     use weldseam_proto::message::{self, Frame, FrameMeta, FrameSelect, Units};
     use weldseam_proto::plan as proto;
 
+    use super::from_proto::FrameInput;
     use crate::cloud::PointCloud;
     use crate::geometry::pose::EulerConvention;
     use crate::joint::JointType;
-    use crate::pipeline::{Plan, PlanRequest, Seam};
+    use crate::pipeline::roi::Roi;
+    use crate::pipeline::{CloudFrame, Plan, PlanRequest, Seam};
 
     pub fn joint(j: JointType) -> proto::Joint {
         match j {
@@ -91,21 +93,55 @@ pub mod to_proto {
                 std::array::from_fn(|k| h[(k / 4, k % 4)])
             }),
             start_near: request.start_near.map(|p| arr(&p)),
+            roi: request.roi.as_ref().map(roi),
         }
     }
 
-    /// The camera link's Frame message for `cloud` (millimetres), answering
-    /// trigger `trigger_id` (0 when free-running).
+    /// The camera link's Frame message for `cloud` (camera frame,
+    /// millimetres), answering trigger `trigger_id` (0 when free-running).
+    /// An unorganized cloud goes as a frame of height 1.
     pub fn frame(cloud: &PointCloud, frame_id: u64, trigger_id: u64, capture_time_us: u64) -> Frame {
+        frame_in(cloud, FrameInput::default(), frame_id, trigger_id, capture_time_us)
+    }
+
+    /// As [`frame`], for a cloud in the units and frame `input` names.
+    pub fn frame_in(
+        cloud: &PointCloud,
+        input: FrameInput,
+        frame_id: u64,
+        trigger_id: u64,
+        capture_time_us: u64,
+    ) -> Frame {
         let meta = FrameMeta {
             frame_id,
             trigger_id,
             capture_time_us,
             width: cloud.width() as u32,
             height: cloud.height() as u32,
-            units: Units::Millimetres as u32,
+            units: units(input.units) as u32,
+            cloud_frame: cloud_frame(input.cloud_frame) as u32,
         };
         Frame { meta, points: cloud.points().to_vec() }
+    }
+
+    pub fn units(u: crate::pipeline::Units) -> Units {
+        match u {
+            crate::pipeline::Units::Millimetres => Units::Millimetres,
+            crate::pipeline::Units::Metres => Units::Metres,
+            crate::pipeline::Units::Auto => Units::Auto,
+        }
+    }
+
+    pub fn cloud_frame(f: CloudFrame) -> message::CloudFrame {
+        match f {
+            CloudFrame::Camera => message::CloudFrame::Camera,
+            CloudFrame::Base => message::CloudFrame::Base,
+        }
+    }
+
+    /// A region of interest in the wire's form.
+    pub fn roi(r: &Roi) -> message::Roi {
+        message::Roi { min_mm: arr(&r.min()), max_mm: arr(&r.max()), frame: cloud_frame(r.frame()) as u32 }
     }
 }
 
@@ -114,9 +150,11 @@ pub mod from_proto {
     use weldseam_proto::message;
     use weldseam_proto::plan as proto;
 
+    use crate::cloud::PointCloud;
     use crate::geometry::Vec3;
     use crate::geometry::pose::{HandEyeError, RobotPose, hand_eye_from_rows};
     use crate::joint::JointType;
+    use crate::pipeline::roi::{Roi, RoiError};
     use crate::pipeline::{CloudFrame, PlanRequest, Units};
 
     pub fn joint(j: proto::Joint) -> JointType {
@@ -136,6 +174,52 @@ pub mod from_proto {
         HandEye(#[from] HandEyeError),
         #[error("start_near has a non-finite coordinate: {0:?}")]
         StartNear([f64; 3]),
+        #[error("roi.frame code {0} is unknown; expected 0 (camera) or 1 (base)")]
+        RoiFrame(u32),
+        #[error("roi: {0}")]
+        Roi(#[from] RoiError),
+    }
+
+    pub fn cloud_frame(f: message::CloudFrame) -> CloudFrame {
+        match f {
+            message::CloudFrame::Camera => CloudFrame::Camera,
+            message::CloudFrame::Base => CloudFrame::Base,
+        }
+    }
+
+    /// A wire region of interest as the library's, checked as a box.
+    pub fn roi(r: &message::Roi) -> Result<Roi, RequestError> {
+        let frame = message::CloudFrame::from_u32(r.frame).ok_or(RequestError::RoiFrame(r.frame))?;
+        Ok(Roi::new(r.min_mm, r.max_mm, cloud_frame(frame))?)
+    }
+
+    /// How a frame's points are to be read: the units and frame to tell
+    /// the planner once they have been decoded.
+    #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+    pub struct FrameInput {
+        pub units: Units,
+        pub cloud_frame: CloudFrame,
+    }
+
+    /// The library's cloud for a decoded Frame and how to read it. A frame
+    /// of height 1 is unorganized, its invalid points dropped, as a PCD or
+    /// PLY file of height 1 is read; taller frames keep their grid. Metres
+    /// were scaled to millimetres as the points were decoded, so only a
+    /// frame whose units are to be guessed leaves a choice to the planner.
+    /// None when the points are not width x height.
+    pub fn frame(frame: message::Frame) -> Option<(PointCloud, FrameInput)> {
+        let meta = frame.meta;
+        let units = match message::Units::from_u32(meta.units)? {
+            message::Units::Millimetres | message::Units::Metres => Units::Millimetres,
+            message::Units::Auto => Units::Auto,
+        };
+        let cloud_frame = cloud_frame(message::CloudFrame::from_u32(meta.cloud_frame)?);
+        let cloud = if meta.height == 1 {
+            (frame.points.len() == meta.width as usize).then(|| PointCloud::unorganized(frame.points))?
+        } else {
+            PointCloud::organized(meta.width as usize, meta.height as usize, frame.points)?
+        };
+        Some((cloud, FrameInput { units, cloud_frame }))
     }
 
     /// The pipeline's request for a controller's: joint, pose, hand-eye and
@@ -149,6 +233,7 @@ pub mod from_proto {
             Some(p) => return Err(RequestError::StartNear(p)),
             None => None,
         };
+        let roi = r.roi.as_ref().map(roi).transpose()?;
         Ok(PlanRequest {
             joint: self::joint(joint),
             groove_depth_mm: r.groove_depth_mm,
@@ -158,10 +243,11 @@ pub mod from_proto {
             work_angle_deg: r.work_angle_deg,
             travel_angle_deg: r.travel_angle_deg,
             start_near,
-            // Frames arrive in the camera frame and are scaled to
-            // millimetres by their units code as they are decoded.
+            // The frame tells its units and frame when it comes (see
+            // [`frame`]); until then, the library's defaults.
             units: Units::Millimetres,
             cloud_frame: CloudFrame::Camera,
+            roi,
         })
     }
 }

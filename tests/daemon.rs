@@ -76,6 +76,7 @@ fn request(id: u64, frame: FrameSelect) -> PlanRequest {
         camera: None,
         hand_eye: None,
         start_near: None,
+        roi: None,
     }
 }
 
@@ -728,30 +729,33 @@ async fn requests_waiting_at_shutdown_are_told_the_daemon_is_stopping() {
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
-async fn version_1_peers_get_a_clear_refusal() {
+async fn version_1_and_2_peers_get_a_clear_refusal() {
     let cell = Cell::start(config()).await;
-    let hello = Message::Hello(Hello { protocol_version: 1, role: Role::Controller, name: "old".into() });
-    let mut bytes = frame::encode(&hello).unwrap();
-    bytes[4..6].copy_from_slice(&1u16.to_le_bytes());
-    let mut raw = Raw::connect(&cell.controller).await;
-    raw.write(&bytes).await;
-    // The refusal comes in a version 1 header, so a version 1 decoder
-    // reads the reason instead of failing on the header.
-    let mut head = [0u8; HEADER_BYTES];
-    tokio::time::timeout(WAIT, raw.0.read_exact(&mut head)).await.expect("the daemon answers").unwrap();
-    assert_eq!(&head[0..4], b"WSEM");
-    assert_eq!(u16::from_le_bytes([head[4], head[5]]), 1, "a version 1 header");
-    assert_eq!(u16::from_le_bytes([head[6], head[7]]), Tag::Error as u16);
-    let mut body = vec![0u8; u64::from_le_bytes(head[8..16].try_into().unwrap()) as usize];
-    raw.0.read_exact(&mut body).await.unwrap();
-    match frame::decode_body(Tag::Error as u16, &body) {
-        Ok(Message::Error(e)) => {
-            assert_eq!(e.code, ErrorCode::UnsupportedVersion, "{}", e.message);
-            assert!(e.message.contains("version 1") && e.message.contains("version 2"), "{}", e.message);
+    for old in [1u16, 2] {
+        let hello = Message::Hello(Hello { protocol_version: old, role: Role::Controller, name: "old".into() });
+        let mut bytes = frame::encode(&hello).unwrap();
+        bytes[4..6].copy_from_slice(&old.to_le_bytes());
+        let mut raw = Raw::connect(&cell.controller).await;
+        raw.write(&bytes).await;
+        // The refusal comes in the old version's header, so an old decoder
+        // reads the reason instead of failing on the header.
+        let mut head = [0u8; HEADER_BYTES];
+        tokio::time::timeout(WAIT, raw.0.read_exact(&mut head)).await.expect("the daemon answers").unwrap();
+        assert_eq!(&head[0..4], b"WSEM");
+        assert_eq!(u16::from_le_bytes([head[4], head[5]]), old, "a version {old} header");
+        assert_eq!(u16::from_le_bytes([head[6], head[7]]), Tag::Error as u16);
+        let mut body = vec![0u8; u64::from_le_bytes(head[8..16].try_into().unwrap()) as usize];
+        raw.0.read_exact(&mut body).await.unwrap();
+        match frame::decode_body(Tag::Error as u16, &body) {
+            Ok(Message::Error(e)) => {
+                assert_eq!(e.code, ErrorCode::UnsupportedVersion, "{}", e.message);
+                let (theirs, ours) = (format!("version {old}"), format!("version {PROTOCOL_VERSION}"));
+                assert!(e.message.contains(&theirs) && e.message.contains(&ours), "{}", e.message);
+            }
+            other => panic!("expected a refusal, got {other:?}"),
         }
-        other => panic!("expected a refusal, got {other:?}"),
+        raw.expect_closed().await;
     }
-    raw.expect_closed().await;
     cell.shutdown().await;
 }
 
@@ -909,5 +913,135 @@ async fn a_request_may_carry_its_hand_eye_and_the_end_to_start_from() {
     assert!(message.contains("hand_eye"), "{message}");
     let _ = stop_cam.send(());
     cam.await.unwrap();
+    cell.shutdown().await;
+}
+
+/// A plan request for `sim`'s frame `frame_id`, naming it.
+fn request_for_frame(id: u64, sim: &Simulation, frame_id: u64) -> PlanRequest {
+    sim_request(id, JointType::Lap, sim, FrameSelect::FrameId(frame_id))
+}
+
+/// Both plans' waypoints agree to a micrometre.
+fn assert_same_seam(reply: &PlanReply, expected: &weldseam::pipeline::Plan, what: &str) {
+    let (got, want) = (&reply.result.seams[0].waypoints, &expected.seams[0].waypoints);
+    assert_eq!(got.len(), want.len(), "{what}: waypoint counts");
+    for (g, w) in got.iter().zip(want) {
+        assert!((Vec3::from(g.xyz) - w.position).norm() < 1e-3, "{what}: {:?} vs {:?}", g.xyz, w.position);
+    }
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn unorganized_metre_and_base_frame_frames_plan_as_the_library_plans_their_points() {
+    use weldseam::convert::from_proto::FrameInput;
+    use weldseam::pipeline::{CloudFrame, Planner, Units};
+    use weldseam::sim::variants::Variant;
+
+    let scene = simulate(&demo_scene(JointType::Lap), &CameraModel::default());
+    let variant = |v: &str| Variant::parse(v).unwrap().apply(&scene, 11);
+    let planner = Planner::new(config());
+    let library = |sim: &Simulation, units: Units, cloud_frame: CloudFrame| {
+        let request = weldseam::pipeline::PlanRequest {
+            units,
+            cloud_frame,
+            ..weldseam::pipeline::PlanRequest::new(JointType::Lap, None, sim.pose)
+        };
+        planner.plan(&sim.cloud, &request).expect("the library plans it")
+    };
+    let cell = Cell::start(config()).await;
+    let mut camera = Raw::hello(&cell.camera, Role::Camera).await;
+    let mut ctl = cell.controller().await;
+
+    // A cropped export: unorganized, in millimetres and the camera frame.
+    // On the wire it carries invalid points too (NaN and 0, 0, 0), which
+    // are dropped as a file's are.
+    let cropped = variant("cropped:30");
+    assert!(!cropped.cloud.is_organized());
+    let mut points = cropped.cloud.points().to_vec();
+    points.insert(0, [0.0; 3]);
+    points.insert(points.len() / 2, [f32::NAN; 3]);
+    let with_holes = PointCloud::organized(points.len(), 1, points).unwrap();
+    let frame = weldseam::convert::to_proto::frame(&with_holes, 1, 0, now_us(0));
+    assert_eq!((frame.meta.height, frame.meta.width as usize), (1, cropped.cloud.len() + 2));
+    camera.send(&Message::Frame(frame)).await;
+    camera.expect_ack(1, 0).await;
+    let reply = ctl.plan(request_for_frame(1, &cropped, 1), WAIT).await.unwrap();
+    assert_same_seam(&reply, &library(&cropped, Units::Millimetres, CloudFrame::Camera), "cropped");
+    assert_matches_truth(&reply, &cropped);
+
+    // The same in metres, the units left to the daemon to guess, and in
+    // the robot base frame.
+    let cases = [
+        ("cropped:30,metres", FrameInput { units: Units::Auto, cloud_frame: CloudFrame::Camera }),
+        ("cropped:30,base", FrameInput { units: Units::Millimetres, cloud_frame: CloudFrame::Base }),
+        ("cropped:30,base,metres", FrameInput { units: Units::Metres, cloud_frame: CloudFrame::Base }),
+    ];
+    for (k, (name, input)) in cases.into_iter().enumerate() {
+        let sim = variant(name);
+        let id = 2 + k as u64;
+        let frame = weldseam::convert::to_proto::frame_in(&sim.cloud, input, id, 0, now_us(0));
+        camera.send(&Message::Frame(frame)).await;
+        camera.expect_ack(id, 0).await;
+        let reply = ctl.plan(request_for_frame(id, &sim, id), WAIT).await.unwrap();
+        assert_same_seam(&reply, &library(&sim, input.units, input.cloud_frame), name);
+        assert_matches_truth(&reply, &sim);
+    }
+
+    // Unknown codes are refused by name, each with its own code.
+    let mut frame = weldseam::convert::to_proto::frame(&cropped.cloud, 9, 0, now_us(0));
+    frame.meta.cloud_frame = 7;
+    camera.send(&Message::Frame(frame.clone())).await;
+    let ack = camera.expect_ack(9, ErrorCode::UnknownCloudFrame.code()).await;
+    assert!(ack.message.contains("cloud frame code 7"), "{}", ack.message);
+    frame.meta.cloud_frame = 0;
+    frame.meta.units = 3;
+    camera.send(&Message::Frame(frame)).await;
+    let ack = camera.expect_ack(9, ErrorCode::UnknownUnits.code()).await;
+    assert!(ack.message.contains("units code 3"), "{}", ack.message);
+    drop(ctl);
+    cell.shutdown().await;
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_region_of_interest_travels_in_the_request_and_bad_ones_are_refused() {
+    use weldseam_proto::message::{CloudFrame, Roi};
+
+    let sim = simulate(&demo_scene(JointType::Lap), &CameraModel::default());
+    let cell = Cell::start(config()).await;
+    let mut camera = Raw::hello(&cell.camera, Role::Camera).await;
+    let mut ctl = cell.controller().await;
+    camera.send(&frame_message(1, 0, &sim.cloud)).await;
+    camera.expect_ack(1, 0).await;
+
+    // A box around the seam, in the camera frame: the plan is the frame's.
+    let (a, b) = (sim.truth.start_camera, sim.truth.end_camera);
+    let margin = Vec3::new(40.0, 40.0, 40.0);
+    let around = |lo: Vec3, hi: Vec3, frame| Roi { min_mm: lo.into(), max_mm: hi.into(), frame };
+    let seam_box = around(a.inf(&b) - margin, a.sup(&b) + margin, CloudFrame::Camera as u32);
+    let mut r = request_for_frame(1, &sim, 1);
+    r.roi = Some(seam_box);
+    let reply = ctl.plan(r, WAIT).await.unwrap();
+    assert_matches_truth(&reply, &sim);
+
+    // A box that keeps too few points names itself and the count.
+    let tiny = around(a - Vec3::new(0.2, 0.2, 0.2), a + Vec3::new(0.2, 0.2, 0.2), CloudFrame::Camera as u32);
+    let mut r = request_for_frame(2, &sim, 1);
+    r.roi = Some(tiny);
+    let (code, message) = refused(ctl.plan(r, WAIT).await);
+    assert_eq!(code, ErrorCode::PlanFailed);
+    assert!(message.contains("region of interest x ") && message.contains("at least 500"), "{message}");
+
+    // Not a box, or a frame code no one knows: refused at once.
+    let mut inverted = seam_box;
+    inverted.min_mm[2] = inverted.max_mm[2] + 1.0;
+    let mut unknown = seam_box;
+    unknown.frame = 4;
+    for (id, roi, expected) in [(3, inverted, "z min"), (4, unknown, "roi.frame code 4")] {
+        let mut r = request_for_frame(id, &sim, 1);
+        r.roi = Some(roi);
+        let (code, message) = refused(ctl.plan(r, WAIT).await);
+        assert_eq!(code, ErrorCode::BadRequest);
+        assert!(message.contains(expected), "{message}");
+    }
+    drop(ctl);
     cell.shutdown().await;
 }

@@ -20,7 +20,7 @@ use weldseam::server::connection::{MessageDeadline, MessageReader};
 use weldseam_proto::frame::{self, HEADER_BYTES, Header};
 use weldseam_proto::message::{
     ErrorCode, FRAME_META_BYTES, Frame, FrameAck, FrameMeta, FrameSelect, Hello, HelloAck, POINT_BYTES, PlanRequest,
-    Role, Status, Tag, Trigger,
+    Roi, Role, Status, Tag, Trigger,
 };
 use weldseam_proto::{Message, PROTOCOL_VERSION};
 
@@ -132,7 +132,8 @@ fn peak_allocation<T>(f: impl FnOnce() -> T) -> (T, usize) {
 // messages with bytes changed, inserted, removed or cut off.
 
 fn valid_messages() -> Vec<Vec<u8>> {
-    let meta = FrameMeta { frame_id: 7, trigger_id: 1, capture_time_us: 5, width: 4, height: 3, units: 1 };
+    let meta =
+        FrameMeta { frame_id: 7, trigger_id: 1, capture_time_us: 5, width: 4, height: 3, units: 1, cloud_frame: 1 };
     let points = (0..12).map(|i| [i as f32, 0.5, 0.7]).collect();
     let messages = [
         Message::Hello(Hello { protocol_version: PROTOCOL_VERSION, role: Role::Camera, name: "cam-01".into() }),
@@ -165,6 +166,7 @@ fn valid_messages() -> Vec<Vec<u8>> {
             camera: Some("cam-01".into()),
             hand_eye: Some([1.0, 0.0, 0.0, 76.0, 0.0, 1.0, 0.0, -84.0, 0.0, 0.0, 1.0, 100.0, 0.0, 0.0, 0.0, 1.0]),
             start_near: Some([900.0, -100.0, -250.0]),
+            roi: Some(Roi { min_mm: [-50.0, -40.0, 300.0], max_mm: [50.0, 40.0, 700.0], frame: 0 }),
         }),
     ];
     messages.iter().map(|m| frame::encode(m).unwrap()).collect()
@@ -231,7 +233,8 @@ fn big_frame_begun() -> impl Strategy<Value = Vec<u8>> {
             (Just(width), 1..=(max_points as u32 / width).max(1), Just(units), Just(tail))
         })
         .prop_map(|(width, height, units, tail)| {
-            let meta = FrameMeta { frame_id: 1, trigger_id: 0, capture_time_us: 0, width, height, units };
+            let meta =
+                FrameMeta { frame_id: 1, trigger_id: 0, capture_time_us: 0, width, height, units, cloud_frame: 0 };
             let length = (FRAME_META_BYTES + POINT_BYTES * width as usize * height as usize) as u64;
             let mut bytes = Header::new(Tag::Frame, length).to_bytes().to_vec();
             // The meta as the frame encoder writes it, from a one-point frame.

@@ -83,7 +83,8 @@ async fn trickle(mut stream: TcpStream, bytes: Vec<u8>, gap: Duration) -> Option
 
 /// A 32 x 32 frame of valid points, encoded.
 fn small_frame() -> Vec<u8> {
-    let meta = FrameMeta { frame_id: 1, trigger_id: 0, capture_time_us: 0, width: 32, height: 32, units: 0 };
+    let meta =
+        FrameMeta { frame_id: 1, trigger_id: 0, capture_time_us: 0, width: 32, height: 32, units: 0, cloud_frame: 0 };
     let points = (0..32 * 32).map(|i| [(i % 32) as f32, (i / 32) as f32, 700.0]).collect();
     frame::encode(&Message::Frame(Frame { meta, points })).unwrap()
 }

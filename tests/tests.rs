@@ -12,6 +12,7 @@ mod parsers;
 mod peers;
 mod pipeline;
 mod requests;
+mod roi;
 mod units_frames;
 mod unorganized;
 mod util;

@@ -5,22 +5,23 @@
 //! Every message is a 16-byte [`Header`] followed by `length` payload bytes.
 //! The payload of every message but [`Tag::Frame`] is the bincode encoding
 //! of its struct in [`wire_config`]. A frame's payload is its
-//! [`FrameMeta`] (bincode, 36 bytes) followed by the raw points.
+//! [`FrameMeta`] (bincode, 40 bytes) followed by the raw points.
 
 use bincode::config::{Configuration, Fixint, Limit, LittleEndian};
 
 use crate::message::{
-    ErrorReply, FRAME_META_BYTES, Frame, FrameAck, FrameMeta, Hello, HelloAck, Message, POINT_BYTES, PlanReply,
-    PlanRequest, Point, Status, Tag, Trigger, Units,
+    CloudFrame, ErrorReply, FRAME_META_BYTES, Frame, FrameAck, FrameMeta, Hello, HelloAck, Message, POINT_BYTES,
+    PlanReply, PlanRequest, Point, Status, Tag, Trigger, Units,
 };
 
 /// The first four bytes of every message.
 pub const MAGIC: [u8; 4] = *b"WSEM";
 
 /// The protocol version this crate speaks, in every header and hello.
-/// Version 2 changed PlanRequest and Status and added FrameAck; see
-/// PROTOCOL.md, "Changes from version 1".
-pub const PROTOCOL_VERSION: u16 = 2;
+/// Version 2 changed PlanRequest and Status and added FrameAck; version 3
+/// added the frame's cloud frame and the request's region of interest.
+/// See PROTOCOL.md, "Changes from version 2".
+pub const PROTOCOL_VERSION: u16 = 3;
 
 /// Bytes of a message header.
 pub const HEADER_BYTES: usize = 16;
@@ -108,7 +109,7 @@ pub enum FramingError {
     /// The header's version is not [`PROTOCOL_VERSION`].
     #[error(
         "protocol version {0} is not supported; this daemon speaks version {PROTOCOL_VERSION} \
-         (see \"Changes from version 1\" in PROTOCOL.md)"
+         (see \"Changes from version 2\" in PROTOCOL.md)"
     )]
     UnsupportedVersion(u16),
     /// The payload length is over the limit for the tag.
@@ -126,12 +127,15 @@ pub enum DecodeError {
     /// The body does not decode as the tag's struct, or has bytes left over.
     #[error("the {tag} message could not be decoded: {reason}")]
     Malformed { tag: &'static str, reason: String },
-    /// width x height x 12 plus the 36-byte frame header is not the payload length.
+    /// width x height x 12 plus the 40-byte frame header is not the payload length.
     #[error("frame {frame_id} is {width} x {height} points, which needs {expected} payload bytes, but {actual} came")]
     FrameSize { frame_id: u64, trigger_id: u64, width: u32, height: u32, expected: u64, actual: u64 },
     /// The frame's units code is neither 0 (mm) nor 1 (m).
-    #[error("frame {frame_id} has units code {units}; expected 0 (millimetres) or 1 (metres)")]
+    #[error("frame {frame_id} has units code {units}; expected 0 (millimetres), 1 (metres) or 2 (auto)")]
     UnknownUnits { frame_id: u64, trigger_id: u64, units: u32 },
+    /// The frame's cloud frame code is neither 0 (camera) nor 1 (base).
+    #[error("frame {frame_id} has cloud frame code {cloud_frame}; expected 0 (camera) or 1 (base)")]
+    UnknownCloudFrame { frame_id: u64, trigger_id: u64, cloud_frame: u32 },
 }
 
 /// A message could not be encoded (never happens for well-formed values).
@@ -194,14 +198,23 @@ pub fn points_from_le(bytes: &[u8], scale: f32, out: &mut Vec<Point>) {
     }));
 }
 
-/// Decodes the 36 bytes of a frame's meta.
+/// Decodes the 40 bytes of a frame's meta.
 pub fn decode_frame_meta(bytes: &[u8]) -> Result<FrameMeta, DecodeError> {
     decode_struct(Tag::Frame, bytes)
 }
 
-/// Checks a frame's meta against its payload length and returns the
-/// number of point bytes that follow the meta and the units.
-pub fn check_frame_meta(meta: &FrameMeta, payload_len: u64) -> Result<(u64, Units), DecodeError> {
+/// What a checked frame meta says of the points that follow it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct FrameLayout {
+    /// Bytes of points after the meta.
+    pub point_bytes: u64,
+    pub units: Units,
+    pub cloud_frame: CloudFrame,
+}
+
+/// Checks a frame's meta against its payload length and its units and
+/// cloud frame codes.
+pub fn check_frame_meta(meta: &FrameMeta, payload_len: u64) -> Result<FrameLayout, DecodeError> {
     let expected = (meta.width as u64)
         .checked_mul(meta.height as u64)
         .and_then(|n| n.checked_mul(POINT_BYTES as u64))
@@ -221,7 +234,12 @@ pub fn check_frame_meta(meta: &FrameMeta, payload_len: u64) -> Result<(u64, Unit
         trigger_id: meta.trigger_id,
         units: meta.units,
     })?;
-    Ok((payload_len - FRAME_META_BYTES as u64, units))
+    let cloud_frame = CloudFrame::from_u32(meta.cloud_frame).ok_or(DecodeError::UnknownCloudFrame {
+        frame_id: meta.frame_id,
+        trigger_id: meta.trigger_id,
+        cloud_frame: meta.cloud_frame,
+    })?;
+    Ok(FrameLayout { point_bytes: payload_len - FRAME_META_BYTES as u64, units, cloud_frame })
 }
 
 /// The payload of `msg`, without the header.
@@ -272,8 +290,8 @@ pub fn encode_version_refusal(peer_version: u16, message: &Message) -> Result<Ve
     Ok(bytes)
 }
 
-/// Decodes a payload whose header carried `tag`. Frames are converted to
-/// millimetres.
+/// Decodes a payload whose header carried `tag`. Frames in metres are
+/// converted to millimetres (see [`Units::decode_scale`]).
 pub fn decode_body(tag: u16, payload: &[u8]) -> Result<Message, DecodeError> {
     let Some(t) = Tag::from_u16(tag) else {
         return Err(DecodeError::UnknownTag(tag));
@@ -290,9 +308,9 @@ pub fn decode_body(tag: u16, payload: &[u8]) -> Result<Message, DecodeError> {
         Tag::Frame => {
             let (meta_bytes, point_bytes) = payload.split_at(payload.len().min(FRAME_META_BYTES));
             let meta = decode_frame_meta(meta_bytes)?;
-            let (_, units) = check_frame_meta(&meta, payload.len() as u64)?;
+            let layout = check_frame_meta(&meta, payload.len() as u64)?;
             let mut points = Vec::with_capacity(point_bytes.len() / POINT_BYTES);
-            points_from_le(point_bytes, units.to_mm(), &mut points);
+            points_from_le(point_bytes, layout.units.decode_scale(), &mut points);
             Message::Frame(Frame { meta, points })
         }
         Tag::Trigger => Message::Trigger(decode_struct::<Trigger>(t, payload)?),
@@ -346,7 +364,8 @@ impl DecodeError {
     pub fn frame_ids(&self) -> Option<(u64, u64)> {
         match *self {
             DecodeError::FrameSize { frame_id, trigger_id, .. }
-            | DecodeError::UnknownUnits { frame_id, trigger_id, .. } => Some((frame_id, trigger_id)),
+            | DecodeError::UnknownUnits { frame_id, trigger_id, .. }
+            | DecodeError::UnknownCloudFrame { frame_id, trigger_id, .. } => Some((frame_id, trigger_id)),
             DecodeError::UnknownTag(_) | DecodeError::Malformed { .. } => None,
         }
     }
@@ -358,6 +377,7 @@ impl DecodeError {
             DecodeError::Malformed { .. } => ErrorCode::Malformed,
             DecodeError::FrameSize { .. } => ErrorCode::FrameSizeMismatch,
             DecodeError::UnknownUnits { .. } => ErrorCode::UnknownUnits,
+            DecodeError::UnknownCloudFrame { .. } => ErrorCode::UnknownCloudFrame,
         }
     }
 }
@@ -365,7 +385,7 @@ impl DecodeError {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::message::{ErrorCode, FrameSelect, Role};
+    use crate::message::{ErrorCode, FrameSelect, Roi, Role};
 
     fn round_trip(msg: Message) {
         let bytes = encode(&msg).unwrap();
@@ -388,7 +408,8 @@ mod tests {
             latest_frame_id: Some(3),
             latest_capture_time_us: Some(1_700_000_000_000_000),
         }));
-        let meta = FrameMeta { frame_id: 3, trigger_id: 0, capture_time_us: 9, width: 2, height: 1, units: 0 };
+        let meta =
+            FrameMeta { frame_id: 3, trigger_id: 0, capture_time_us: 9, width: 2, height: 1, units: 0, cloud_frame: 1 };
         round_trip(Message::Frame(Frame { meta, points: vec![[1.0, 2.0, 3.0], [4.0, 5.0, 6.0]] }));
         round_trip(Message::Trigger(Trigger { trigger_id: 4 }));
         round_trip(Message::FrameAck(FrameAck {
@@ -411,12 +432,14 @@ mod tests {
             camera: Some("left".into()),
             hand_eye: Some([1.0, 0.0, 0.0, 10.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0]),
             start_near: Some([1.0, 2.0, 3.0]),
+            roi: Some(Roi { min_mm: [-10.0, -20.0, 300.0], max_mm: [10.0, 20.0, 900.0], frame: 1 }),
         }));
     }
 
     #[test]
     fn frame_meta_has_its_documented_size() {
-        let meta = FrameMeta { frame_id: 1, trigger_id: 2, capture_time_us: 3, width: 4, height: 5, units: 1 };
+        let meta =
+            FrameMeta { frame_id: 1, trigger_id: 2, capture_time_us: 3, width: 4, height: 5, units: 1, cloud_frame: 0 };
         let mut out = Vec::new();
         encode_struct(Tag::Frame, &meta, &mut out).unwrap();
         assert_eq!(out.len(), FRAME_META_BYTES);
@@ -424,10 +447,16 @@ mod tests {
 
     #[test]
     fn metres_are_converted_to_millimetres() {
-        let meta = FrameMeta { frame_id: 1, trigger_id: 0, capture_time_us: 0, width: 1, height: 1, units: 1 };
+        let meta =
+            FrameMeta { frame_id: 1, trigger_id: 0, capture_time_us: 0, width: 1, height: 1, units: 1, cloud_frame: 0 };
         let bytes = encode(&Message::Frame(Frame { meta, points: vec![[0.5, 0.25, 1.0]] })).unwrap();
         let Message::Frame(f) = decode(&bytes, DEFAULT_MAX_FRAME_BYTES).unwrap() else { panic!() };
         assert_eq!(f.points, vec![[500.0, 250.0, 1000.0]]);
+        // Units to be guessed are the daemon's to judge: kept as sent.
+        let meta = FrameMeta { units: Units::Auto as u32, ..meta };
+        let bytes = encode(&Message::Frame(Frame { meta, points: vec![[0.5, 0.25, 1.0]] })).unwrap();
+        let Message::Frame(f) = decode(&bytes, DEFAULT_MAX_FRAME_BYTES).unwrap() else { panic!() };
+        assert_eq!(f.points, vec![[0.5, 0.25, 1.0]]);
     }
 
     #[test]
@@ -440,7 +469,10 @@ mod tests {
         assert!(matches!(decode(&bytes, 100), Err(WireError::Framing(FramingError::UnsupportedVersion(9)))));
         bytes[4] = 1;
         let refusal = decode(&bytes, 100).unwrap_err().to_string();
-        assert!(refusal.contains("version 1 is not supported") && refusal.contains("version 2"), "{refusal}");
+        assert!(refusal.contains("version 1 is not supported") && refusal.contains("version 3"), "{refusal}");
+        bytes[4] = 2;
+        let refusal = decode(&bytes, 100).unwrap_err().to_string();
+        assert!(refusal.contains("version 2 is not supported") && refusal.contains("version 3"), "{refusal}");
         let big = Header::new(Tag::Frame, 101).to_bytes();
         assert!(matches!(decode(&big, 100), Err(WireError::Framing(FramingError::TooLarge { .. }))));
         let hello = encode(&Message::Hello(Hello { protocol_version: 1, role: Role::Camera, name: "x".into() }));
@@ -454,11 +486,32 @@ mod tests {
 
     #[test]
     fn frame_sizes_are_checked_without_overflow() {
-        let meta =
-            FrameMeta { frame_id: 1, trigger_id: 0, capture_time_us: 0, width: u32::MAX, height: u32::MAX, units: 0 };
+        let meta = FrameMeta {
+            frame_id: 1,
+            trigger_id: 0,
+            capture_time_us: 0,
+            width: u32::MAX,
+            height: u32::MAX,
+            units: 0,
+            cloud_frame: 0,
+        };
         assert!(matches!(check_frame_meta(&meta, 100), Err(DecodeError::FrameSize { .. })));
         let meta = FrameMeta { width: 2, height: 1, units: 7, ..meta };
-        assert!(matches!(check_frame_meta(&meta, 36 + 24), Err(DecodeError::UnknownUnits { .. })));
+        assert!(matches!(check_frame_meta(&meta, 40 + 24), Err(DecodeError::UnknownUnits { .. })));
+    }
+
+    #[test]
+    fn unknown_units_and_cloud_frames_have_their_own_codes() {
+        let meta =
+            FrameMeta { frame_id: 4, trigger_id: 2, capture_time_us: 0, width: 2, height: 1, units: 2, cloud_frame: 1 };
+        let layout = check_frame_meta(&meta, 40 + 24).unwrap();
+        assert_eq!((layout.point_bytes, layout.units, layout.cloud_frame), (24, Units::Auto, CloudFrame::Base));
+        let unknown_frame = check_frame_meta(&FrameMeta { cloud_frame: 5, ..meta }, 40 + 24).unwrap_err();
+        assert_eq!((unknown_frame.code(), unknown_frame.frame_ids()), (ErrorCode::UnknownCloudFrame, Some((4, 2))));
+        assert!(unknown_frame.to_string().contains("cloud frame code 5"), "{unknown_frame}");
+        let unknown_units = check_frame_meta(&FrameMeta { units: 3, ..meta }, 40 + 24).unwrap_err();
+        assert_eq!(unknown_units.code(), ErrorCode::UnknownUnits);
+        assert!(unknown_units.to_string().contains("2 (auto)"), "{unknown_units}");
     }
 
     #[test]
@@ -473,10 +526,11 @@ mod tests {
 
     #[test]
     fn version_refusals_speak_the_old_peers_header_only_when_they_can() {
-        let refusal = Message::error(ErrorCode::UnsupportedVersion, None, "speak version 2");
+        let refusal = Message::error(ErrorCode::UnsupportedVersion, None, "speak version 3");
         let version_of = |bytes: &[u8]| u16::from_le_bytes([bytes[4], bytes[5]]);
         let old = encode_version_refusal(1, &refusal).unwrap();
         assert_eq!(version_of(&old), 1);
+        assert_eq!(version_of(&encode_version_refusal(2, &refusal).unwrap()), 2);
         assert_eq!(&old[6..], &encode(&refusal).unwrap()[6..], "the same tag, length and body");
         // A version this crate does not know, or a message that is not an
         // Error, keeps this crate's header.

@@ -103,6 +103,9 @@ pub struct HelloAck {
 pub enum Units {
     Millimetres = 0,
     Metres = 1,
+    /// The daemon guesses millimetres or metres from the frame's distances,
+    /// as `weldseam plan --units auto` does.
+    Auto = 2,
 }
 
 impl Units {
@@ -110,15 +113,39 @@ impl Units {
         match n {
             0 => Some(Units::Millimetres),
             1 => Some(Units::Metres),
+            2 => Some(Units::Auto),
             _ => None,
         }
     }
 
-    /// The factor that turns a coordinate in these units into millimetres.
-    pub fn to_mm(self) -> f32 {
+    /// The factor applied to every coordinate as the frame is decoded:
+    /// metres become millimetres at once; a frame whose units are to be
+    /// guessed keeps its values for the planner to judge.
+    pub fn decode_scale(self) -> f32 {
         match self {
-            Units::Millimetres => 1.0,
+            Units::Millimetres | Units::Auto => 1.0,
             Units::Metres => 1000.0,
+        }
+    }
+}
+
+/// The frame a Frame's coordinates are in.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[repr(u32)]
+pub enum CloudFrame {
+    /// The camera's optical frame, as cameras deliver frames.
+    Camera = 0,
+    /// The robot base frame: the plan request's pose and hand-eye bring
+    /// the points into the camera frame before planning.
+    Base = 1,
+}
+
+impl CloudFrame {
+    pub fn from_u32(n: u32) -> Option<CloudFrame> {
+        match n {
+            0 => Some(CloudFrame::Camera),
+            1 => Some(CloudFrame::Base),
+            _ => None,
         }
     }
 }
@@ -135,17 +162,21 @@ pub struct FrameMeta {
     pub capture_time_us: u64,
     pub width: u32,
     pub height: u32,
-    /// A [`Units`] value.
+    /// A [`Units`] value; kept numeric so an unknown one gets its own
+    /// error code rather than a decoding failure.
     pub units: u32,
+    /// A [`CloudFrame`] value, numeric for the same reason.
+    pub cloud_frame: u32,
 }
 
 /// Bytes of an encoded [`FrameMeta`].
-pub const FRAME_META_BYTES: usize = 36;
+pub const FRAME_META_BYTES: usize = 40;
 
 /// Bytes of one point on the wire: three little-endian f32.
 pub const POINT_BYTES: usize = 12;
 
-/// An organized point cloud frame: `width x height` points, row-major.
+/// A frame of `width x height` points, row-major: an organized grid when
+/// `height > 1`, an unorganized list of `width` points when `height == 1`.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Frame {
     pub meta: FrameMeta,
@@ -232,6 +263,22 @@ pub struct PlanRequest {
     /// The waypoints start at the seam's end nearest this point (robot
     /// base frame, mm); else at the documented default end.
     pub start_near: Option<[f64; 3]>,
+    /// Only the frame's points inside this box are planned; the daemon's
+    /// `pipeline.roi` when absent.
+    pub roi: Option<Roi>,
+}
+
+/// A region of interest: an axis-aligned box in the camera or the robot
+/// base frame.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Roi {
+    /// The box's least x, y, z, mm.
+    pub min_mm: [f64; 3],
+    /// The box's greatest x, y, z, mm.
+    pub max_mm: [f64; 3],
+    /// A [`CloudFrame`] value: the frame the box is given in; numeric so an
+    /// unknown one is refused by name rather than as a decoding failure.
+    pub frame: u32,
 }
 
 impl PlanRequest {
@@ -307,6 +354,8 @@ pub enum ErrorCode {
     /// 23: the frame's capture time is ahead of the daemon's clock by
     /// more than the tolerance; a camera clock that cannot be trusted.
     BadCaptureTime,
+    /// 24: the frame's cloud frame code is unknown.
+    UnknownCloudFrame,
     /// 40: a request field is out of range (NaN pose, missing groove depth...).
     BadRequest,
     /// 41: the joint code is unknown.
@@ -333,7 +382,7 @@ pub enum ErrorCode {
 }
 
 impl ErrorCode {
-    pub const ALL: [ErrorCode; 20] = [
+    pub const ALL: [ErrorCode; 21] = [
         ErrorCode::BadMagic,
         ErrorCode::UnsupportedVersion,
         ErrorCode::UnknownMessage,
@@ -344,6 +393,7 @@ impl ErrorCode {
         ErrorCode::EmptyFrame,
         ErrorCode::UnknownUnits,
         ErrorCode::BadCaptureTime,
+        ErrorCode::UnknownCloudFrame,
         ErrorCode::BadRequest,
         ErrorCode::UnknownJoint,
         ErrorCode::UnknownFrame,
@@ -368,6 +418,7 @@ impl ErrorCode {
             ErrorCode::EmptyFrame => 21,
             ErrorCode::UnknownUnits => 22,
             ErrorCode::BadCaptureTime => 23,
+            ErrorCode::UnknownCloudFrame => 24,
             ErrorCode::BadRequest => 40,
             ErrorCode::UnknownJoint => 41,
             ErrorCode::UnknownFrame => 42,
@@ -395,6 +446,7 @@ impl ErrorCode {
             ErrorCode::EmptyFrame => "empty_frame",
             ErrorCode::UnknownUnits => "unknown_units",
             ErrorCode::BadCaptureTime => "bad_capture_time",
+            ErrorCode::UnknownCloudFrame => "unknown_cloud_frame",
             ErrorCode::BadRequest => "bad_request",
             ErrorCode::UnknownJoint => "unknown_joint",
             ErrorCode::UnknownFrame => "unknown_frame",
@@ -439,6 +491,11 @@ pub struct ErrorReply {
 }
 
 /// Every message of the protocol.
+// A PlanRequest (with its hand-eye and region of interest) is a few hundred
+// bytes larger than the smallest messages; a message lives only from its
+// decoding to its handling, one per connection at a time, so boxing it
+// would cost an allocation per message to save nothing that matters.
+#[allow(clippy::large_enum_variant)]
 #[derive(Debug, Clone, PartialEq)]
 pub enum Message {
     Hello(Hello),

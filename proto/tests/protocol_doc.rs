@@ -3,7 +3,8 @@
 
 use weldseam_proto::frame::encode;
 use weldseam_proto::message::{
-    ErrorCode, Frame, FrameAck, FrameMeta, FrameSelect, Hello, Message, PlanRequest, Role, Status, Trigger, joint_code,
+    CloudFrame, ErrorCode, Frame, FrameAck, FrameMeta, FrameSelect, Hello, Message, PlanRequest, Roi, Role, Status,
+    Trigger, Units, joint_code,
 };
 
 fn hex_dump(bytes: &[u8]) -> String {
@@ -19,7 +20,7 @@ fn hex_dump(bytes: &[u8]) -> String {
 
 fn examples() -> Vec<(&'static str, Message)> {
     vec![
-        ("hello", Message::Hello(Hello { protocol_version: 2, role: Role::Camera, name: "cam-1".into() })),
+        ("hello", Message::Hello(Hello { protocol_version: 3, role: Role::Camera, name: "cam-1".into() })),
         (
             "frame",
             Message::Frame(Frame {
@@ -29,7 +30,8 @@ fn examples() -> Vec<(&'static str, Message)> {
                     capture_time_us: 1_700_000_000_000_000,
                     width: 2,
                     height: 1,
-                    units: 0,
+                    units: Units::Millimetres as u32,
+                    cloud_frame: CloudFrame::Camera as u32,
                 },
                 points: vec![[1.0, -2.0, 700.0], [f32::NAN, f32::NAN, f32::NAN]],
             }),
@@ -68,6 +70,29 @@ fn examples() -> Vec<(&'static str, Message)> {
                 camera: Some("cam-1".into()),
                 hand_eye: None,
                 start_near: Some([700.0, -100.0, 0.0]),
+                roi: None,
+            }),
+        ),
+        (
+            "plan_request_roi",
+            Message::PlanRequest(PlanRequest {
+                request_id: 6,
+                joint: joint_code::I_BUTT,
+                groove_depth_mm: None,
+                pose: [800.0, 0.0, 500.0, 180.0, 0.0, 0.0],
+                step_mm: None,
+                work_angle_deg: None,
+                travel_angle_deg: None,
+                frame: FrameSelect::NextFrame,
+                timeout_ms: 0,
+                camera: None,
+                hand_eye: None,
+                start_near: None,
+                roi: Some(Roi {
+                    min_mm: [-60.0, -40.0, 400.0],
+                    max_mm: [60.0, 40.0, 600.0],
+                    frame: CloudFrame::Camera as u32,
+                }),
             }),
         ),
         ("error", Message::error(ErrorCode::Busy, Some(5), "busy")),
@@ -93,4 +118,17 @@ fn protocol_md_hex_examples_match_the_encoder() {
         }
     }
     assert!(wrong.is_empty(), "PROTOCOL.md is out of date; the examples should read:\n{wrong}");
+}
+
+#[test]
+fn protocol_md_lists_every_error_code_and_the_frame_header_size() {
+    let doc = include_str!("../PROTOCOL.md");
+    for code in ErrorCode::ALL {
+        let row = format!("| {} | {} |", code.code(), code.name());
+        assert!(doc.contains(&row), "PROTOCOL.md's error table lacks {row}");
+    }
+    let header = format!("a {}-byte frame header", weldseam_proto::message::FRAME_META_BYTES);
+    assert!(doc.contains(&header), "PROTOCOL.md does not say {header:?}");
+    let version = format!("# The weldseam wire protocol, version {}", weldseam_proto::PROTOCOL_VERSION);
+    assert!(doc.starts_with(&version), "PROTOCOL.md's title is not {version:?}");
 }

@@ -81,6 +81,30 @@ pub struct CloudInputArgs {
     pub cloud_frame: CloudFrameArg,
 }
 
+/// The region of interest: `--roi` and `--roi-frame`.
+#[derive(Debug, Clone, Copy, clap::Args)]
+pub struct RoiArgs {
+    /// Plan only the points inside this box: xmin,ymin,zmin,xmax,ymax,zmax
+    /// in mm (default: pipeline.roi of the config, else the whole cloud).
+    #[arg(long, allow_hyphen_values = true, value_parser = roi_bounds)]
+    pub roi: Option<[f64; 6]>,
+    /// The frame of --roi: the camera's, or the robot base's (through
+    /// --pose and the hand-eye).
+    #[arg(long, value_enum, default_value_t = CloudFrameArg::Camera, requires = "roi")]
+    pub roi_frame: CloudFrameArg,
+}
+
+impl RoiArgs {
+    /// The checked box, if one was given.
+    pub fn to_library(self) -> anyhow::Result<Option<weldseam::pipeline::roi::Roi>> {
+        use weldseam::pipeline::roi::Roi;
+        self.roi
+            .map(|bounds| Roi::from_bounds(bounds, self.roi_frame.to_library()))
+            .transpose()
+            .map_err(|e| anyhow::anyhow!("--roi: {e}"))
+    }
+}
+
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
 pub enum UnitsArg {
     Mm,
@@ -141,6 +165,11 @@ pub fn pose(text: &str) -> Result<RobotPose, String> {
 /// Sixteen numbers, a row-major 4x4 matrix.
 pub fn matrix(text: &str) -> Result<[f64; 16], String> {
     numbers::<16>("--hand-eye", text)
+}
+
+/// `xmin,ymin,zmin,xmax,ymax,zmax` in mm.
+pub fn roi_bounds(text: &str) -> Result<[f64; 6], String> {
+    numbers::<6>("--roi", text)
 }
 
 /// `x,y,z` in mm.

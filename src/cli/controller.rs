@@ -27,6 +27,8 @@ pub struct ControllerArgs {
     pub pose: Option<RobotPose>,
     #[command(flatten)]
     pub request: args::RequestArgs,
+    #[command(flatten)]
+    pub roi: args::RoiArgs,
     /// Which frame: trigger (a fresh capture), next (the next frame to
     /// arrive) or a frame id.
     #[arg(long, default_value = "trigger", value_parser = frame_select)]
@@ -115,6 +117,7 @@ async fn exchange(args: &ControllerArgs) -> anyhow::Result<()> {
         camera: args.camera.clone(),
         hand_eye: args.request.hand_eye,
         start_near: args.start_near,
+        roi: args.roi.to_library()?.as_ref().map(to_proto::roi),
     };
     // The daemon bounds the frame wait; allow for it and a slow plan.
     let wait = Duration::from_millis(u64::from(args.timeout_ms).max(10_000)) + Duration::from_secs(120);

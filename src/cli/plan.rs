@@ -30,6 +30,8 @@ pub struct PlanArgs {
     #[command(flatten)]
     pub request: args::RequestArgs,
     #[command(flatten)]
+    pub roi: args::RoiArgs,
+    #[command(flatten)]
     pub config: args::ConfigArgs,
     /// Print one JSON object on stdout instead of a summary.
     #[arg(long)]
@@ -51,6 +53,7 @@ pub fn run(args: &PlanArgs) -> anyhow::Result<()> {
         travel_angle_deg: args.request.travel_angle,
         units: args.input.units.to_library(),
         cloud_frame: args.input.cloud_frame.to_library(),
+        roi: args.roi.to_library()?,
         ..PlanRequest::new(args.joint, args.request.groove_depth, args.pose)
     };
     let planner = Planner::new(config);

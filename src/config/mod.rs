@@ -17,6 +17,8 @@ use serde::{Deserialize, Deserializer};
 
 use crate::camera::{CameraModel, Distortion, Intrinsics};
 use crate::geometry::pose::{EulerConvention, HandEyeError, hand_eye_from_rows};
+use crate::pipeline::CloudFrame;
+use crate::pipeline::roi::Roi;
 
 pub use file::ConfigFile;
 
@@ -71,6 +73,26 @@ pub enum PointDensity {
     Camera,
     /// Always the cloud's measured spacing, organized frames too.
     Measured,
+}
+
+/// The frame a config's region of interest is given in.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum RoiFrame {
+    /// The camera's optical frame.
+    #[default]
+    Camera,
+    /// The robot base frame, through each request's pose and hand-eye.
+    Base,
+}
+
+impl RoiFrame {
+    pub fn cloud_frame(self) -> CloudFrame {
+        match self {
+            RoiFrame::Camera => CloudFrame::Camera,
+            RoiFrame::Base => CloudFrame::Base,
+        }
+    }
 }
 
 /// Parameters of the seam pipeline's stages: the [pipeline] section.
@@ -128,6 +150,11 @@ pub struct PipelineParams {
     /// Boundary samples further than this many sigmas from the fit are
     /// dropped and the fit repeated.
     pub fit_trim_sigma: f64,
+    /// Region of interest of every plan whose request names none:
+    /// `[xmin, ymin, zmin, xmax, ymax, zmax]`, mm; empty for the whole cloud.
+    pub roi: Vec<f64>,
+    /// The frame `roi` is given in.
+    pub roi_frame: RoiFrame,
 }
 
 impl Default for PipelineParams {
@@ -155,6 +182,8 @@ impl Default for PipelineParams {
             on_plane_tolerance_mm: 0.4,
             fit_degree: 1,
             fit_trim_sigma: 3.0,
+            roi: Vec::new(),
+            roi_frame: RoiFrame::Camera,
         }
     }
 }
@@ -606,7 +635,29 @@ impl PipelineParams {
         check("pipeline.fit_degree", (1..=5).contains(&p.fit_degree), || {
             format!("must be 1 (straight seams) to 5, got {}", p.fit_degree)
         })?;
-        in_range("pipeline.fit_trim_sigma", p.fit_trim_sigma, 1.0, 100.0)
+        in_range("pipeline.fit_trim_sigma", p.fit_trim_sigma, 1.0, 100.0)?;
+        self.region_of_interest().map(|_| ())
+    }
+
+    /// The configured region of interest, or None for the whole cloud;
+    /// the error names `pipeline.roi` and the limit it breaks.
+    pub fn region_of_interest(&self) -> Result<Option<Roi>, ConfigError> {
+        let bounds: [f64; 6] = match self.roi.as_slice().try_into() {
+            Ok(bounds) => bounds,
+            Err(_) if self.roi.is_empty() => return Ok(None),
+            Err(_) => {
+                return Err(ConfigError::Invalid {
+                    key: "pipeline.roi",
+                    message: format!(
+                        "must be [] or 6 numbers [xmin, ymin, zmin, xmax, ymax, zmax], got {}",
+                        self.roi.len()
+                    ),
+                });
+            }
+        };
+        Roi::from_bounds(bounds, self.roi_frame.cloud_frame())
+            .map(Some)
+            .map_err(|e| ConfigError::Invalid { key: "pipeline.roi", message: format!("must be a box: {e}") })
     }
 }
 
@@ -823,6 +874,9 @@ mod tests {
             ("[server]\nmax_pending_connections = 100000\n", "server.max_pending_connections"),
             ("[server]\nmax_pending_per_address = 65\n", "server.max_pending_per_address"),
             ("[server]\nmetrics_listen = \"9100\"\n", "server.metrics_listen"),
+            ("[pipeline]\nroi = [1.0, 2.0]\n", "pipeline.roi"),
+            ("[pipeline]\nroi = [0.0, 0.0, 600.0, 10.0, 10.0, 500.0]\n", "pipeline.roi"),
+            ("[pipeline]\nroi_frame = \"tool\"\n", "roi_frame"),
         ];
         for (text, key) in cases {
             let e = Config::parse(text, "c.toml").unwrap_err().to_string();

@@ -37,12 +37,14 @@ pub mod ransac;
 pub mod refit;
 pub mod regrid;
 mod robust;
+pub mod roi;
 mod scale;
 pub mod survey;
 pub mod trajectory;
 pub mod weld_edges;
 pub mod weld_equation;
 
+use std::borrow::Cow;
 use std::fmt;
 
 use nalgebra::Isometry3;
@@ -55,6 +57,7 @@ use crate::joint::JointType;
 
 use context::Context;
 pub use input::{CloudFrame, Units};
+use roi::Roi;
 pub use trajectory::Waypoint;
 
 /// What the controller asks for.
@@ -77,6 +80,9 @@ pub struct PlanRequest {
     pub units: Units,
     /// The cloud's frame; the camera's by default.
     pub cloud_frame: CloudFrame,
+    /// Only the points inside this box are planned; `pipeline.roi` of the
+    /// config when None.
+    pub roi: Option<Roi>,
 }
 
 impl PlanRequest {
@@ -93,6 +99,7 @@ impl PlanRequest {
             start_near: None,
             units: Units::Millimetres,
             cloud_frame: CloudFrame::Camera,
+            roi: None,
         }
     }
 }
@@ -258,9 +265,10 @@ impl Planner {
     ///
     /// First, timed as the input stage with the screening that follows,
     /// `input::prepare` brings the cloud into the camera frame in
-    /// millimetres, then `regrid::prepare` puts a raw export that lost its
-    /// grid back on the camera's and takes an organized frame's own
-    /// intrinsics for another camera's frame.
+    /// millimetres, `roi::crop` drops the points outside the region of
+    /// interest (the request's, else the config's), then `regrid::prepare`
+    /// puts a raw export that lost its grid back on the camera's and takes
+    /// an organized frame's own intrinsics for another camera's frame.
     ///
     /// The method is chosen here, once: `paper.rs` and `robust.rs` each
     /// run the whole way through.
@@ -268,7 +276,14 @@ impl Planner {
         validate(request, &self.config)?;
         let clock = context::Clock::start();
         let converted = input::prepare(cloud, request, &self.config)?;
-        let input = regrid::prepare(&self.config.camera, &converted);
+        let cropped = match self.region_of_interest(request)? {
+            Some(roi) => Cow::Owned(
+                roi::crop(&converted, &roi, self.box_from_camera(request, &roi).as_ref())
+                    .map_err(|e| PlanError::at(Stage::Input, e))?,
+            ),
+            None => converted,
+        };
+        let input = regrid::prepare(&self.config.camera, &cropped);
         let other_camera;
         let config = match input.camera {
             Some(camera) => {
@@ -281,6 +296,28 @@ impl Planner {
         match self.config.pipeline.method {
             Method::Paper => paper::plan(ctx),
             Method::Robust => robust::plan(ctx),
+        }
+    }
+}
+
+impl Planner {
+    /// The request's region of interest, else the config's, if any.
+    fn region_of_interest(&self, request: &PlanRequest) -> Result<Option<Roi>, PlanError> {
+        match request.roi {
+            Some(roi) => Ok(Some(roi)),
+            None => self.config.pipeline.region_of_interest().map_err(|e| PlanError::at(Stage::Request, e)),
+        }
+    }
+
+    /// The transform from the camera frame into `roi`'s: none for a
+    /// camera-frame box, `Base_T_End · End_T_Camera` at capture (Eq. 42)
+    /// for a base-frame one.
+    fn box_from_camera(&self, request: &PlanRequest, roi: &Roi) -> Option<Isometry3<f64>> {
+        match roi.frame() {
+            CloudFrame::Camera => None,
+            CloudFrame::Base => {
+                Some(request.pose.to_isometry(self.config.euler) * request.hand_eye.unwrap_or(self.config.hand_eye))
+            }
         }
     }
 }

@@ -17,7 +17,7 @@ use super::ServerState;
 use super::connection::{Connection, HandshakeError, MessageWriter, ReadError, Received};
 use super::frames::{CameraRegistration, StoredFrame, wall_clock_us};
 use super::shutdown::Shutdown;
-use crate::cloud::PointCloud;
+use crate::convert::from_proto;
 
 type Writer = Arc<Mutex<MessageWriter<tokio::net::tcp::OwnedWriteHalf>>>;
 
@@ -163,13 +163,15 @@ fn on_message(received: Received, camera: &CameraRegistration, state: &ServerSta
     state.idle.touch();
     let meta = frame.meta;
     let (frame_id, trigger_id) = (meta.frame_id, meta.trigger_id);
-    // The reader has checked width x height against the payload already.
-    let Some(cloud) = PointCloud::organized(meta.width as usize, meta.height as usize, frame.points) else {
+    // The reader has checked width x height, the units and the cloud frame
+    // already; a frame of height 1 becomes an unorganized cloud.
+    let Some((cloud, input)) = from_proto::frame(frame) else {
         let text = format!("frame {frame_id} does not have width x height points");
         warn!("{text}");
         return Some(refusal(frame_id, trigger_id, ErrorCode::FrameSizeMismatch, text));
     };
     let valid = cloud.valid_count();
+    let cloud_organized = cloud.is_organized();
     if valid == 0 {
         let text = format!("frame {frame_id} has no valid point; it was discarded");
         warn!("{text}");
@@ -190,6 +192,7 @@ fn on_message(received: Received, camera: &CameraRegistration, state: &ServerSta
             capture_time_us: meta.capture_time_us,
             camera: Arc::clone(camera.name()),
             cloud: Arc::new(cloud),
+            input,
             upload_started,
             upload_started_us,
             arrived: Instant::now(),
@@ -202,6 +205,9 @@ fn on_message(received: Received, camera: &CameraRegistration, state: &ServerSta
         capture_time_us = meta.capture_time_us,
         width = meta.width,
         height = meta.height,
+        organized = cloud_organized,
+        units = ?input.units,
+        cloud_frame = ?input.cloud_frame,
         valid_points = valid,
         bytes,
         receive_ms = received.elapsed.as_millis() as u64,

@@ -276,13 +276,14 @@ impl<R: AsyncRead + Unpin> MessageReader<R> {
         let rest = length - FRAME_META_BYTES as u64;
         let checked = frame::decode_frame_meta(&self.buffer[..FRAME_META_BYTES])
             .and_then(|meta| Ok((meta, frame::check_frame_meta(&meta, length)?)));
-        let (meta, (point_bytes, units)) = match checked {
+        let (meta, layout) = match checked {
             Ok(ok) => ok,
             Err(e) => {
                 self.skip(rest).await?;
                 return Err(e.into());
             }
         };
+        let point_bytes = layout.point_bytes;
         let count = (point_bytes / POINT_BYTES as u64) as usize;
         // The point buffer doubles as points arrive, up to exactly the
         // announced count: memory follows what the peer has sent, and a
@@ -297,7 +298,7 @@ impl<R: AsyncRead + Unpin> MessageReader<R> {
                 let target = (points.capacity() * 2).max(points.len() + arriving).min(count);
                 points.reserve_exact(target - points.len());
             }
-            frame::points_from_le(&self.buffer[..take], units.to_mm(), &mut points);
+            frame::points_from_le(&self.buffer[..take], layout.units.decode_scale(), &mut points);
             left -= take as u64;
         }
         Ok(Message::Frame(Frame { meta, points }))

@@ -140,7 +140,9 @@ fn accept(r: &message::PlanRequest, state: &ServerState, places: &Arc<Semaphore>
     let bad = |text: String| (ErrorCode::BadRequest, text);
     let request = from_proto::plan_request(r).map_err(|e| match e {
         RequestError::UnknownJoint(_) => (ErrorCode::UnknownJoint, e.to_string()),
-        RequestError::HandEye(_) | RequestError::StartNear(_) => bad(e.to_string()),
+        RequestError::HandEye(_) | RequestError::StartNear(_) | RequestError::RoiFrame(_) | RequestError::Roi(_) => {
+            bad(e.to_string())
+        }
     })?;
     if r.camera.as_deref() == Some("") {
         return Err(bad("camera is an empty name; leave it absent to use any camera".into()));
@@ -223,6 +225,8 @@ async fn plan(
         Ok(frame) => {
             log.frame = Some(Arc::clone(&frame));
             state.idle.touch();
+            // The frame says which units and frame its points are in.
+            let request = PlanRequest { units: frame.input.units, cloud_frame: frame.input.cloud_frame, ..request };
             let (outcome, times) = slot.run(Arc::clone(&frame.cloud), request).await;
             state.idle.touch();
             log.times = times;

@@ -24,6 +24,7 @@ use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
 use tokio::sync::{mpsc, oneshot};
 
 use crate::cloud::PointCloud;
+use crate::convert::from_proto::FrameInput;
 
 /// A frame received from the camera.
 #[derive(Debug)]
@@ -36,6 +37,9 @@ pub struct StoredFrame {
     /// The Hello name of the camera that sent it.
     pub camera: Arc<str>,
     pub cloud: Arc<PointCloud>,
+    /// The units and frame its points are in, as the camera said; every
+    /// plan of it is told them.
+    pub input: FrameInput,
     /// When the upload's first byte arrived, on the daemon's clocks.
     pub upload_started: Instant,
     pub upload_started_us: u64,
@@ -570,6 +574,7 @@ mod tests {
             capture_time_us,
             camera: Arc::from("cam"),
             cloud: Arc::new(cloud),
+            input: FrameInput::default(),
             upload_started,
             upload_started_us: wall_clock_us(),
             arrived: Instant::now(),

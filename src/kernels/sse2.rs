@@ -6,7 +6,9 @@ use std::arch::x86_64::*;
 
 use super::scalar::Corner;
 use super::vector::Vector;
-use super::{BLOCK, LabelledGrid, Planes, RowBounds, generic, scalar};
+use super::{
+    BLOCK, LabelledGrid, LabelledWindow, LaneMasks, NormalTest, Planes, RowBounds, TileScales, generic, scalar,
+};
 use crate::cloud::Point;
 
 /// `_MM_SHUFFLE` in reading order: lanes `a`, `b` of the first operand,
@@ -83,6 +85,61 @@ unsafe impl Vector for __m128 {
         unsafe { _mm_castps_si128(_mm_cmple_ps(self, other)) }
     }
     #[inline(always)]
+    unsafe fn div(self, other: Self) -> Self {
+        // SAFETY: every x86_64 CPU runs SSE2.
+        unsafe { _mm_div_ps(self, other) }
+    }
+    #[inline(always)]
+    unsafe fn min(self, other: Self) -> Self {
+        // SAFETY: every x86_64 CPU runs SSE2.
+        unsafe { _mm_min_ps(self, other) }
+    }
+    #[inline(always)]
+    unsafe fn max(self, other: Self) -> Self {
+        // SAFETY: every x86_64 CPU runs SSE2.
+        unsafe { _mm_max_ps(self, other) }
+    }
+    #[inline(always)]
+    unsafe fn abs(self) -> Self {
+        // SAFETY: every x86_64 CPU runs SSE2.
+        unsafe { _mm_and_ps(self, _mm_castsi128_ps(_mm_set1_epi32(i32::MAX))) }
+    }
+    #[inline(always)]
+    unsafe fn negate_where(self, mask: __m128i) -> Self {
+        // SAFETY: every x86_64 CPU runs SSE2.
+        unsafe { _mm_xor_ps(self, _mm_and_ps(_mm_castsi128_ps(mask), _mm_set1_ps(-0.0))) }
+    }
+    #[inline(always)]
+    unsafe fn store(self, at: *mut f32) {
+        // SAFETY: the caller gives writable floats for every lane.
+        unsafe { _mm_storeu_ps(at, self) }
+    }
+    #[inline(always)]
+    unsafe fn lt(self, other: Self) -> __m128i {
+        // SAFETY: every x86_64 CPU runs SSE2.
+        unsafe { _mm_castps_si128(_mm_cmplt_ps(self, other)) }
+    }
+    #[inline(always)]
+    unsafe fn gt(self, other: Self) -> __m128i {
+        // SAFETY: every x86_64 CPU runs SSE2.
+        unsafe { _mm_castps_si128(_mm_cmpgt_ps(self, other)) }
+    }
+    #[inline(always)]
+    unsafe fn ge(self, other: Self) -> __m128i {
+        // SAFETY: every x86_64 CPU runs SSE2.
+        unsafe { _mm_castps_si128(_mm_cmpge_ps(self, other)) }
+    }
+    #[inline(always)]
+    unsafe fn to_bits(self) -> __m128i {
+        // SAFETY: every x86_64 CPU runs SSE2.
+        unsafe { _mm_castps_si128(self) }
+    }
+    #[inline(always)]
+    unsafe fn from_i32(a: __m128i) -> Self {
+        // SAFETY: every x86_64 CPU runs SSE2.
+        unsafe { _mm_cvtepi32_ps(a) }
+    }
+    #[inline(always)]
     unsafe fn splat_u32(v: u32) -> __m128i {
         // SAFETY: every x86_64 CPU runs SSE2.
         unsafe { _mm_set1_epi32(v as i32) }
@@ -108,6 +165,11 @@ unsafe impl Vector for __m128 {
         unsafe { _mm_sub_epi32(a, b) }
     }
     #[inline(always)]
+    unsafe fn add_u32(a: __m128i, b: __m128i) -> __m128i {
+        // SAFETY: every x86_64 CPU runs SSE2.
+        unsafe { _mm_add_epi32(a, b) }
+    }
+    #[inline(always)]
     unsafe fn lanes_above(k: i32) -> __m128i {
         // SAFETY: every x86_64 CPU runs SSE2.
         unsafe { _mm_cmpgt_epi32(_mm_setr_epi32(0, 1, 2, 3), _mm_set1_epi32(k)) }
@@ -123,6 +185,11 @@ unsafe impl Vector for __m128 {
     unsafe fn store_u32(a: __m128i, at: *mut u32) {
         // SAFETY: the caller gives four writable u32.
         unsafe { _mm_storeu_si128(at.cast(), a) }
+    }
+    #[inline(always)]
+    unsafe fn mask_bits(a: __m128i) -> u32 {
+        // SAFETY: every x86_64 CPU runs SSE2.
+        unsafe { _mm_movemask_ps(_mm_castsi128_ps(a)) as u32 }
     }
 }
 
@@ -153,24 +220,37 @@ pub(super) fn count_span(p: &Point, points: &[Point], labels: &[u32], label: u32
 
 /// [`super::labelled_count_at_most`], four points at a time.
 #[target_feature(enable = "sse2")]
-pub(super) fn labelled_count_at_most(
-    grid: &LabelledGrid,
-    i: usize,
-    window: (usize, usize),
-    label: u32,
-    radius_sq: f32,
-    threshold: f64,
-) -> bool {
+pub(super) fn labelled_count_at_most(grid: &LabelledGrid, query: &LabelledWindow) -> bool {
     generic::labelled_count_at_most(
         grid,
-        i,
-        window,
-        label,
-        radius_sq,
-        threshold,
+        query,
         #[inline(always)]
         |p, points, labels, label, radius_sq| count_span(p, points, labels, label, radius_sq),
     )
+}
+
+/// [`super::depth_range`] in four lanes, twice a block.
+#[target_feature(enable = "sse2")]
+#[inline]
+pub(super) fn depth_range(z: &[f32; BLOCK]) -> (f32, f32) {
+    // SAFETY: this function runs only where SSE2 does; 4 divides 8.
+    unsafe { generic::depth_range::<__m128>(z) }
+}
+
+/// [`super::normal_test`] in four lanes, twice a block.
+#[target_feature(enable = "sse2")]
+#[inline]
+pub(super) fn normal_test(planes: Planes, width: usize, first: usize, step: usize, test: &NormalTest) -> LaneMasks {
+    // SAFETY: this function runs only where SSE2 does; 4 divides 8.
+    unsafe { generic::normal_test::<__m128>(planes, width, first, step, test) }
+}
+
+/// [`super::tile_keys`] in four lanes, twice a block.
+#[target_feature(enable = "sse2")]
+#[inline]
+pub(super) fn tile_keys(lanes: &[[f32; BLOCK]; 3], scales: &TileScales) -> [u64; BLOCK] {
+    // SAFETY: this function runs only where SSE2 does; 4 divides 8.
+    unsafe { generic::tile_keys::<__m128>(lanes, scales) }
 }
 
 #[target_feature(enable = "sse2")]

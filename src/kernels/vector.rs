@@ -32,9 +32,32 @@ pub(crate) unsafe trait Vector: Copy {
     unsafe fn add(self, other: Self) -> Self;
     unsafe fn sub(self, other: Self) -> Self;
     unsafe fn mul(self, other: Self) -> Self;
+    unsafe fn div(self, other: Self) -> Self;
+    /// Lane by lane `if self < other { self } else { other }`: `other`
+    /// where either lane is NaN, as the x86 instructions have it.
+    unsafe fn min(self, other: Self) -> Self;
+    /// Lane by lane `if self > other { self } else { other }`.
+    unsafe fn max(self, other: Self) -> Self;
+    /// The lanes without their sign bit.
+    unsafe fn abs(self) -> Self;
+    /// The lanes with their sign bit flipped where `mask` is all ones:
+    /// multiplying by -1 without rounding.
+    unsafe fn negate_where(self, mask: Self::Int) -> Self;
+    /// Stores the lanes to `LANES` floats at `at`, unaligned.
+    unsafe fn store(self, at: *mut f32);
     /// All ones where `self <= other`, by an ordered compare: a NaN lane
     /// is never less or equal.
     unsafe fn le(self, other: Self) -> Self::Int;
+    /// All ones where `self < other`, ordered.
+    unsafe fn lt(self, other: Self) -> Self::Int;
+    /// All ones where `self > other`, ordered.
+    unsafe fn gt(self, other: Self) -> Self::Int;
+    /// All ones where `self >= other`, ordered.
+    unsafe fn ge(self, other: Self) -> Self::Int;
+    /// The lanes' bits as u32 lanes, unconverted.
+    unsafe fn to_bits(self) -> Self::Int;
+    /// The i32 lanes of `a` converted to the nearest floats.
+    unsafe fn from_i32(a: Self::Int) -> Self;
 
     /// Every lane `v`.
     unsafe fn splat_u32(v: u32) -> Self::Int;
@@ -45,6 +68,8 @@ pub(crate) unsafe trait Vector: Copy {
     unsafe fn and_u32(a: Self::Int, b: Self::Int) -> Self::Int;
     /// Lane by lane `a - b`, wrapping.
     unsafe fn sub_u32(a: Self::Int, b: Self::Int) -> Self::Int;
+    /// Lane by lane `a + b`, wrapping.
+    unsafe fn add_u32(a: Self::Int, b: Self::Int) -> Self::Int;
     /// All ones in the lanes whose index exceeds `k` (every lane for a
     /// negative `k`).
     unsafe fn lanes_above(k: i32) -> Self::Int;
@@ -52,4 +77,6 @@ pub(crate) unsafe trait Vector: Copy {
     unsafe fn sum_u32(a: Self::Int) -> u32;
     /// Stores the lanes to `LANES` u32 at `at`, unaligned.
     unsafe fn store_u32(a: Self::Int, at: *mut u32);
+    /// Bit `l` set where lane `l` of a compare's result is all ones.
+    unsafe fn mask_bits(a: Self::Int) -> u32;
 }

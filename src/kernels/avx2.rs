@@ -89,9 +89,14 @@ unsafe impl Vector for __m256 {
         unsafe { _mm256_xor_ps(self, _mm256_and_ps(_mm256_castsi256_ps(mask), _mm256_set1_ps(-0.0))) }
     }
     #[inline(always)]
-    unsafe fn store(self, at: *mut f32) {
-        // SAFETY: the caller gives writable floats for every lane.
-        unsafe { _mm256_storeu_ps(at, self) }
+    unsafe fn least(self) -> f32 {
+        // SAFETY: inlined only into AVX2 code.
+        unsafe { _mm_min_ps(_mm256_castps256_ps128(self), _mm256_extractf128_ps::<1>(self)).least() }
+    }
+    #[inline(always)]
+    unsafe fn greatest(self) -> f32 {
+        // SAFETY: inlined only into AVX2 code.
+        unsafe { _mm_max_ps(_mm256_castps256_ps128(self), _mm256_extractf128_ps::<1>(self)).greatest() }
     }
     #[inline(always)]
     unsafe fn lt(self, other: Self) -> __m256i {
@@ -165,6 +170,23 @@ unsafe impl Vector for __m256 {
     unsafe fn store_u32(a: __m256i, at: *mut u32) {
         // SAFETY: the caller gives eight writable u32.
         unsafe { _mm256_storeu_si256(at.cast(), a) }
+    }
+    #[inline(always)]
+    unsafe fn pack_u16(high: __m256i, low: __m256i) -> __m256i {
+        // SAFETY: inlined only into AVX2 code.
+        unsafe { _mm256_or_si256(_mm256_slli_epi32::<16>(high), _mm256_and_si256(low, _mm256_set1_epi32(0xffff))) }
+    }
+    #[inline(always)]
+    unsafe fn store_pairs(low: __m256i, high: __m256i, at: *mut u64) {
+        // Unpacking works within 128-bit halves, leaving lanes 0, 1, 4, 5
+        // in one register and 2, 3, 6, 7 in the other; the permutes put
+        // them back in order.
+        // SAFETY: the caller gives eight writable u64, two 256-bit stores.
+        unsafe {
+            let (lows, highs) = (_mm256_unpacklo_epi32(low, high), _mm256_unpackhi_epi32(low, high));
+            _mm256_storeu_si256(at.cast(), _mm256_permute2x128_si256::<0x20>(lows, highs));
+            _mm256_storeu_si256(at.add(4).cast(), _mm256_permute2x128_si256::<0x31>(lows, highs));
+        }
     }
     #[inline(always)]
     unsafe fn mask_bits(a: __m256i) -> u32 {

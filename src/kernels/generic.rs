@@ -5,7 +5,7 @@
 //! inside functions compiled for their instruction set; [`super::scalar`]
 //! holds the plain forms they must agree with.
 
-use super::scalar::{FLOOR_LIMIT, FLOOR_SHIFT, key_of};
+use super::scalar::{FLOOR_LIMIT, FLOOR_SHIFT};
 use super::vector::Vector;
 use super::{BLOCK, LabelledGrid, LabelledWindow, LaneMasks, NormalTest, Planes, TileScales};
 use crate::cloud::Point;
@@ -150,7 +150,7 @@ pub(super) fn labelled_count_at_most(
 
 /// [`super::depth_range`], `V::LANES` lanes at a time: `min` and `max`
 /// keep their second operand where a lane is NaN, so an invalid lane
-/// never wins and a block of them gives the infinities the folds start
+/// never wins and a block of them gives the infinities the lanes start
 /// from.
 ///
 /// # Safety
@@ -158,19 +158,16 @@ pub(super) fn labelled_count_at_most(
 /// [`BLOCK`].
 #[inline(always)]
 pub(super) unsafe fn depth_range<V: Vector>(z: &[f32; BLOCK]) -> (f32, f32) {
-    let (mut lows, mut highs) = ([0f32; BLOCK], [0f32; BLOCK]);
-    // SAFETY: the caller's CPU runs `V`; every load and store touches
-    // `V::LANES` floats of slices checked to hold them.
+    // SAFETY: the caller's CPU runs `V`; every load reads `V::LANES`
+    // floats of slices checked to hold them.
     unsafe {
         let (mut low, mut high) = (V::splat(f32::INFINITY), V::splat(f32::NEG_INFINITY));
         for lane in (0..BLOCK).step_by(V::LANES) {
             let v = V::load(z[lane..lane + V::LANES].as_ptr());
             (low, high) = (v.min(low), v.max(high));
         }
-        low.store(lows[..V::LANES].as_mut_ptr());
-        high.store(highs[..V::LANES].as_mut_ptr());
+        (low.least(), high.greatest())
     }
-    (super::scalar::least(&lows[..V::LANES]), super::scalar::greatest(&highs[..V::LANES]))
 }
 
 /// The x, y and z lanes of the `V::LANES` pixels from index `at`. A
@@ -287,8 +284,7 @@ unsafe fn floor_i32<V: Vector>(x: V) -> V::Int {
 /// [`BLOCK`].
 #[inline(always)]
 pub(super) unsafe fn tile_keys<V: Vector>(lanes: &[[f32; BLOCK]; 3], scales: &TileScales) -> [u64; BLOCK] {
-    // The tile row, tile column and depth step of each lane.
-    let mut fields = [[0u32; BLOCK]; 3];
+    let mut keys = [0u64; BLOCK];
     // SAFETY: the caller's CPU runs `V`; every load and store touches
     // `V::LANES` values of slices checked to hold them.
     unsafe {
@@ -297,16 +293,15 @@ pub(super) unsafe fn tile_keys<V: Vector>(lanes: &[[f32; BLOCK]; 3], scales: &Ti
         for lane in (0..BLOCK).step_by(V::LANES) {
             let own = lane..lane + V::LANES;
             let [xs, ys, zs] = lanes;
-            let (xs, ys, zs) = (&xs[own.clone()], &ys[own.clone()], &zs[own]);
+            let (xs, ys, zs) = (&xs[own.clone()], &ys[own.clone()], &zs[own.clone()]);
             let (x, y, z) = (V::load(xs.as_ptr()), V::load(ys.as_ptr()), V::load(zs.as_ptr()));
-            let row = floor_i32(y.div(z).mul(per_y));
-            let col = floor_i32(x.div(z).mul(per_x));
-            let step = floor_i32(z.mul(per_step).add(half));
-            for (out, v) in fields.iter_mut().zip([row, col, step]) {
-                V::store_u32(v, out[lane..lane + V::LANES].as_mut_ptr());
-            }
+            let tile_row = floor_i32(y.div(z).mul(per_y));
+            let tile_col = floor_i32(x.div(z).mul(per_x));
+            let depth_step = floor_i32(z.mul(per_step).add(half));
+            // As `key_of` lays a key out: the tile row and column as the
+            // high half's 16-bit fields, the depth step as the low half.
+            V::store_pairs(depth_step, V::pack_u16(tile_row, tile_col), keys[own].as_mut_ptr());
         }
     }
-    let [rows, cols, steps] = fields;
-    std::array::from_fn(|l| key_of(rows[l] as i32, cols[l] as i32, steps[l] as i32))
+    keys
 }

@@ -35,14 +35,14 @@ pub(super) fn labelled_count_at_most(grid: &LabelledGrid, query: &LabelledWindow
 
 /// The least of `v`, by `<`: a NaN never wins; infinity for no value.
 #[inline(always)]
-pub(super) fn least(v: &[f32]) -> f32 {
+fn least(v: &[f32]) -> f32 {
     v.iter().fold(f32::INFINITY, |a, &x| if x < a { x } else { a })
 }
 
 /// The greatest of `v`, by `>`: a NaN never wins; minus infinity for no
 /// value.
 #[inline(always)]
-pub(super) fn greatest(v: &[f32]) -> f32 {
+fn greatest(v: &[f32]) -> f32 {
     v.iter().fold(f32::NEG_INFINITY, |a, &x| if x > a { x } else { a })
 }
 
@@ -97,7 +97,7 @@ pub(super) fn floor_i32(x: f32) -> i32 {
 
 /// A memo key from its tile row and column (16 bits each) and depth step.
 #[inline(always)]
-pub(super) fn key_of(tile_row: i32, tile_col: i32, depth_step: i32) -> u64 {
+fn key_of(tile_row: i32, tile_col: i32, depth_step: i32) -> u64 {
     ((tile_row as i16 as u16 as u64) << 48) | ((tile_col as i16 as u16 as u64) << 32) | (depth_step as u32 as u64)
 }
 

@@ -110,9 +110,20 @@ unsafe impl Vector for __m128 {
         unsafe { _mm_xor_ps(self, _mm_and_ps(_mm_castsi128_ps(mask), _mm_set1_ps(-0.0))) }
     }
     #[inline(always)]
-    unsafe fn store(self, at: *mut f32) {
-        // SAFETY: the caller gives writable floats for every lane.
-        unsafe { _mm_storeu_ps(at, self) }
+    unsafe fn least(self) -> f32 {
+        // SAFETY: every x86_64 CPU runs SSE2.
+        unsafe {
+            let v = _mm_min_ps(self, _mm_movehl_ps(self, self));
+            _mm_cvtss_f32(_mm_min_ps(v, _mm_shuffle_ps::<{ pick(1, 1, 1, 1) }>(v, v)))
+        }
+    }
+    #[inline(always)]
+    unsafe fn greatest(self) -> f32 {
+        // SAFETY: every x86_64 CPU runs SSE2.
+        unsafe {
+            let v = _mm_max_ps(self, _mm_movehl_ps(self, self));
+            _mm_cvtss_f32(_mm_max_ps(v, _mm_shuffle_ps::<{ pick(1, 1, 1, 1) }>(v, v)))
+        }
     }
     #[inline(always)]
     unsafe fn lt(self, other: Self) -> __m128i {
@@ -185,6 +196,19 @@ unsafe impl Vector for __m128 {
     unsafe fn store_u32(a: __m128i, at: *mut u32) {
         // SAFETY: the caller gives four writable u32.
         unsafe { _mm_storeu_si128(at.cast(), a) }
+    }
+    #[inline(always)]
+    unsafe fn pack_u16(high: __m128i, low: __m128i) -> __m128i {
+        // SAFETY: every x86_64 CPU runs SSE2.
+        unsafe { _mm_or_si128(_mm_slli_epi32::<16>(high), _mm_and_si128(low, _mm_set1_epi32(0xffff))) }
+    }
+    #[inline(always)]
+    unsafe fn store_pairs(low: __m128i, high: __m128i, at: *mut u64) {
+        // SAFETY: the caller gives four writable u64, two 128-bit stores.
+        unsafe {
+            _mm_storeu_si128(at.cast(), _mm_unpacklo_epi32(low, high));
+            _mm_storeu_si128(at.add(2).cast(), _mm_unpackhi_epi32(low, high));
+        }
     }
     #[inline(always)]
     unsafe fn mask_bits(a: __m128i) -> u32 {

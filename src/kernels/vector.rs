@@ -43,8 +43,10 @@ pub(crate) unsafe trait Vector: Copy {
     /// The lanes with their sign bit flipped where `mask` is all ones:
     /// multiplying by -1 without rounding.
     unsafe fn negate_where(self, mask: Self::Int) -> Self;
-    /// Stores the lanes to `LANES` floats at `at`, unaligned.
-    unsafe fn store(self, at: *mut f32);
+    /// The least lane, by `min`; the lanes hold no NaN.
+    unsafe fn least(self) -> f32;
+    /// The greatest lane, by `max`; the lanes hold no NaN.
+    unsafe fn greatest(self) -> f32;
     /// All ones where `self <= other`, by an ordered compare: a NaN lane
     /// is never less or equal.
     unsafe fn le(self, other: Self) -> Self::Int;
@@ -77,6 +79,11 @@ pub(crate) unsafe trait Vector: Copy {
     unsafe fn sum_u32(a: Self::Int) -> u32;
     /// Stores the lanes to `LANES` u32 at `at`, unaligned.
     unsafe fn store_u32(a: Self::Int, at: *mut u32);
+    /// Lane by lane `high << 16 | (low & 0xffff)`: two 16-bit fields.
+    unsafe fn pack_u16(high: Self::Int, low: Self::Int) -> Self::Int;
+    /// Stores `LANES` u64 to `at`, unaligned: lane `l`'s `low` in the low
+    /// half of the `l`-th, its `high` in the high half.
+    unsafe fn store_pairs(low: Self::Int, high: Self::Int, at: *mut u64);
     /// Bit `l` set where lane `l` of a compare's result is all ones.
     unsafe fn mask_bits(a: Self::Int) -> u32;
 }

@@ -7,7 +7,7 @@ use std::arch::x86_64::*;
 
 use super::sse2::deinterleave;
 use super::vector::Vector;
-use super::{BLOCK, Planes, generic};
+use super::{BLOCK, LaneMasks, NormalTest, Planes, TileScales, generic};
 use crate::cloud::Point;
 
 // SAFETY: every method does what the trait says with AVX2, which the
@@ -64,6 +64,66 @@ unsafe impl Vector for __m256 {
         unsafe { _mm256_castps_si256(_mm256_cmp_ps::<_CMP_LE_OQ>(self, other)) }
     }
     #[inline(always)]
+    unsafe fn div(self, other: Self) -> Self {
+        // SAFETY: inlined only into AVX2 code.
+        unsafe { _mm256_div_ps(self, other) }
+    }
+    #[inline(always)]
+    unsafe fn min(self, other: Self) -> Self {
+        // SAFETY: inlined only into AVX2 code.
+        unsafe { _mm256_min_ps(self, other) }
+    }
+    #[inline(always)]
+    unsafe fn max(self, other: Self) -> Self {
+        // SAFETY: inlined only into AVX2 code.
+        unsafe { _mm256_max_ps(self, other) }
+    }
+    #[inline(always)]
+    unsafe fn abs(self) -> Self {
+        // SAFETY: inlined only into AVX2 code.
+        unsafe { _mm256_and_ps(self, _mm256_castsi256_ps(_mm256_set1_epi32(i32::MAX))) }
+    }
+    #[inline(always)]
+    unsafe fn negate_where(self, mask: __m256i) -> Self {
+        // SAFETY: inlined only into AVX2 code.
+        unsafe { _mm256_xor_ps(self, _mm256_and_ps(_mm256_castsi256_ps(mask), _mm256_set1_ps(-0.0))) }
+    }
+    #[inline(always)]
+    unsafe fn least(self) -> f32 {
+        // SAFETY: inlined only into AVX2 code.
+        unsafe { _mm_min_ps(_mm256_castps256_ps128(self), _mm256_extractf128_ps::<1>(self)).least() }
+    }
+    #[inline(always)]
+    unsafe fn greatest(self) -> f32 {
+        // SAFETY: inlined only into AVX2 code.
+        unsafe { _mm_max_ps(_mm256_castps256_ps128(self), _mm256_extractf128_ps::<1>(self)).greatest() }
+    }
+    #[inline(always)]
+    unsafe fn lt(self, other: Self) -> __m256i {
+        // SAFETY: inlined only into AVX2 code.
+        unsafe { _mm256_castps_si256(_mm256_cmp_ps::<_CMP_LT_OQ>(self, other)) }
+    }
+    #[inline(always)]
+    unsafe fn gt(self, other: Self) -> __m256i {
+        // SAFETY: inlined only into AVX2 code.
+        unsafe { _mm256_castps_si256(_mm256_cmp_ps::<_CMP_GT_OQ>(self, other)) }
+    }
+    #[inline(always)]
+    unsafe fn ge(self, other: Self) -> __m256i {
+        // SAFETY: inlined only into AVX2 code.
+        unsafe { _mm256_castps_si256(_mm256_cmp_ps::<_CMP_GE_OQ>(self, other)) }
+    }
+    #[inline(always)]
+    unsafe fn to_bits(self) -> __m256i {
+        // SAFETY: inlined only into AVX2 code.
+        unsafe { _mm256_castps_si256(self) }
+    }
+    #[inline(always)]
+    unsafe fn from_i32(a: __m256i) -> Self {
+        // SAFETY: inlined only into AVX2 code.
+        unsafe { _mm256_cvtepi32_ps(a) }
+    }
+    #[inline(always)]
     unsafe fn splat_u32(v: u32) -> __m256i {
         // SAFETY: inlined only into AVX2 code.
         unsafe { _mm256_set1_epi32(v as i32) }
@@ -89,6 +149,11 @@ unsafe impl Vector for __m256 {
         unsafe { _mm256_sub_epi32(a, b) }
     }
     #[inline(always)]
+    unsafe fn add_u32(a: __m256i, b: __m256i) -> __m256i {
+        // SAFETY: inlined only into AVX2 code.
+        unsafe { _mm256_add_epi32(a, b) }
+    }
+    #[inline(always)]
     unsafe fn lanes_above(k: i32) -> __m256i {
         // SAFETY: inlined only into AVX2 code.
         unsafe { _mm256_cmpgt_epi32(_mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7), _mm256_set1_epi32(k)) }
@@ -105,6 +170,28 @@ unsafe impl Vector for __m256 {
     unsafe fn store_u32(a: __m256i, at: *mut u32) {
         // SAFETY: the caller gives eight writable u32.
         unsafe { _mm256_storeu_si256(at.cast(), a) }
+    }
+    #[inline(always)]
+    unsafe fn pack_u16(high: __m256i, low: __m256i) -> __m256i {
+        // SAFETY: inlined only into AVX2 code.
+        unsafe { _mm256_or_si256(_mm256_slli_epi32::<16>(high), _mm256_and_si256(low, _mm256_set1_epi32(0xffff))) }
+    }
+    #[inline(always)]
+    unsafe fn store_pairs(low: __m256i, high: __m256i, at: *mut u64) {
+        // Unpacking works within 128-bit halves, leaving lanes 0, 1, 4, 5
+        // in one register and 2, 3, 6, 7 in the other; the permutes put
+        // them back in order.
+        // SAFETY: the caller gives eight writable u64, two 256-bit stores.
+        unsafe {
+            let (lows, highs) = (_mm256_unpacklo_epi32(low, high), _mm256_unpackhi_epi32(low, high));
+            _mm256_storeu_si256(at.cast(), _mm256_permute2x128_si256::<0x20>(lows, highs));
+            _mm256_storeu_si256(at.add(4).cast(), _mm256_permute2x128_si256::<0x31>(lows, highs));
+        }
+    }
+    #[inline(always)]
+    unsafe fn mask_bits(a: __m256i) -> u32 {
+        // SAFETY: inlined only into AVX2 code.
+        unsafe { _mm256_movemask_ps(_mm256_castsi256_ps(a)) as u32 }
     }
 }
 
@@ -126,6 +213,30 @@ pub(super) fn count_block(
 ) -> [u32; BLOCK] {
     // SAFETY: this function runs only where AVX2 does; 8 divides 8.
     unsafe { generic::count_block::<__m256>(planes, first, ranges, radius_sq) }
+}
+
+/// [`super::depth_range`] in one register of eight lanes.
+#[target_feature(enable = "avx2")]
+#[inline]
+pub(super) fn depth_range(z: &[f32; BLOCK]) -> (f32, f32) {
+    // SAFETY: this function runs only where AVX2 does; 8 divides 8.
+    unsafe { generic::depth_range::<__m256>(z) }
+}
+
+/// [`super::normal_test`] in one register of eight lanes.
+#[target_feature(enable = "avx2")]
+#[inline]
+pub(super) fn normal_test(planes: Planes, width: usize, first: usize, step: usize, test: &NormalTest) -> LaneMasks {
+    // SAFETY: this function runs only where AVX2 does; 8 divides 8.
+    unsafe { generic::normal_test::<__m256>(planes, width, first, step, test) }
+}
+
+/// [`super::tile_keys`] in one register of eight lanes.
+#[target_feature(enable = "avx2")]
+#[inline]
+pub(super) fn tile_keys(lanes: &[[f32; BLOCK]; 3], scales: &TileScales) -> [u64; BLOCK] {
+    // SAFETY: this function runs only where AVX2 does; 8 divides 8.
+    unsafe { generic::tile_keys::<__m256>(lanes, scales) }
 }
 
 /// [`super::count_runs_fused`]'s eight lanes: [`super::count_block`] over

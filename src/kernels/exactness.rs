@@ -2,16 +2,18 @@
 //! KD-tree implementations do, on crops of realistic simulated frames
 //! (noise, dropouts, mixed pixels, bevels, shadows), for both methods, and
 //! cluster the plane points exactly as the per-pixel union-find does: on
-//! every instruction set level this CPU runs, forced in turn.
+//! every instruction set level this CPU runs, forced in turn. The robust
+//! plane criterion's block kernels (depth range, normal test, memo keys)
+//! give the bits of their scalar forms on every level.
 
-use super::on_every_isa;
+use super::{BLOCK, Isa, Planes, on_every_isa, scalar};
 use crate::camera::CameraModel;
 use crate::cloud::PointCloud;
 use crate::geometry::Vec3;
 use crate::joint::JointType;
 use crate::pipeline::clustering;
 use crate::pipeline::edge_points::{self, EdgeCriterion, FullCount, Plate};
-use crate::pipeline::neighbours::NeighbourSearch;
+use crate::pipeline::neighbours::{FULL_COUNT_TILE_PX, FullCounts, NeighbourSearch};
 use crate::pipeline::orientation::dominant_normal;
 use crate::pipeline::plane_points::{self, RobustPlaneCriterion};
 use crate::sim::{demo_scene, simulate};
@@ -139,5 +141,137 @@ fn both_plates_in_one_pass_match_the_kdtree_reference_in_order() {
                 assert!(both[k].len() > 50, "plate {k} has edges along the split");
             }
         });
+    }
+}
+
+/// A crop of a simulated frame with noise, dropouts, a far point and
+/// infinities strewn over it, so that every lane test meets finite,
+/// invalid and extreme inputs.
+fn corrupted_crop(w: usize, h: usize) -> PointCloud {
+    let clean = crop(JointType::VButt, 530.0, 15.0, w, h);
+    let mut points = clean.points().to_vec();
+    for (i, p) in points.iter_mut().enumerate() {
+        p[2] += ((i * 7919) % 13) as f32 * 0.01;
+        match i % 97 {
+            5 => *p = [f32::NAN; 3],
+            17 => p[2] = 1.0e30,
+            29 => p[0] = f32::INFINITY,
+            41 => p[1] = f32::NEG_INFINITY,
+            _ => {}
+        }
+    }
+    PointCloud::organized(w, h, points).expect("crop")
+}
+
+/// Results of `compute` on every level this CPU runs, each compared with
+/// the scalar level's, item by item.
+fn agree_with_scalar<T: PartialEq + std::fmt::Debug>(what: &str, compute: impl Fn() -> Vec<T>) -> Vec<T> {
+    let (ran, _skipped) = on_every_isa(|_| compute());
+    let (first, scalar) = &ran[0];
+    assert_eq!(*first, Isa::Scalar);
+    for (isa, got) in &ran[1..] {
+        assert_eq!(got.len(), scalar.len());
+        for (k, (got, want)) in got.iter().zip(scalar).enumerate() {
+            assert_eq!(got, want, "{what} of item {k} on {isa:?}");
+        }
+    }
+    ran.into_iter().next().expect("the scalar level always runs").1
+}
+
+#[test]
+fn the_normal_test_of_every_level_equals_the_scalar_form() {
+    let cloud = corrupted_crop(96, 64);
+    let (w, h) = (cloud.width(), cloud.height());
+    let points = cloud.points();
+    let coordinate = |axis: usize| -> Vec<f32> { points.iter().map(|p| p[axis]).collect() };
+    let (xs, ys, zs) = (coordinate(0), coordinate(1), coordinate(2));
+    let planes = Planes { xs: &xs, ys: &ys, zs: &zs };
+    let blocks: Vec<(usize, usize)> = (1..=4)
+        .flat_map(|step| {
+            (step..h - step)
+                .flat_map(move |row| (step..w - BLOCK - step).step_by(3).map(move |col| (row * w + col, step)))
+        })
+        .collect();
+    assert!(blocks.len() > 5000);
+    // Tilted references and cones wide and narrow, so both answers occur.
+    let tests = [([0.26f32, 0.0, 0.966], 0.883f32), ([0.0, 0.0, 1.0], 0.99), ([-0.6, 0.3, 0.74], 0.5)];
+    let masks = agree_with_scalar("normal test", || {
+        tests
+            .iter()
+            .flat_map(|&(reference, cos_sq)| {
+                let test = super::NormalTest { reference, cos_sq };
+                blocks.iter().map(move |&(first, step)| super::normal_test(planes, w, first, step, &test))
+            })
+            .collect()
+    });
+    let scalar_masks: Vec<_> = tests
+        .iter()
+        .flat_map(|&(reference, cos_sq)| {
+            let test = super::NormalTest { reference, cos_sq };
+            blocks.iter().map(move |&(first, step)| scalar::normal_test(planes, w, first, step, &test))
+        })
+        .collect();
+    assert_eq!(masks, scalar_masks, "the scalar level runs the scalar form");
+    let lanes = |f: fn(&super::LaneMasks) -> u32| masks.iter().map(|m| f(m).count_ones() as usize).sum::<usize>();
+    let (complete, facing) = (lanes(|m| m.complete), lanes(|m| m.complete & m.facing));
+    let all = masks.len() * BLOCK;
+    assert!(complete < all && facing < complete && facing > 0, "{facing} facing of {complete} complete of {all}");
+}
+
+#[test]
+fn the_depth_range_of_every_level_equals_the_scalar_form() {
+    // Every pattern of invalid lanes among eight, over depths that tie,
+    // ascend, descend and include infinities.
+    let depths = [480.0f32, 480.0, 512.25, 1.0e30, f32::INFINITY, 499.999, 700.0, 480.000_03];
+    let blocks: Vec<[f32; BLOCK]> = (0u32..256)
+        .flat_map(|invalid| {
+            (0..3).map(move |shift| {
+                std::array::from_fn(|l| if invalid >> l & 1 == 1 { f32::NAN } else { depths[(l + shift * 3) % BLOCK] })
+            })
+        })
+        .collect();
+    let ranges = agree_with_scalar("depth range", || blocks.iter().map(super::depth_range).collect());
+    for (z, range) in blocks.iter().zip(&ranges) {
+        let valid: Vec<f32> = z.iter().copied().filter(|v| !v.is_nan()).collect();
+        let expected = (
+            valid.iter().copied().fold(f32::INFINITY, f32::min),
+            valid.iter().copied().fold(f32::NEG_INFINITY, f32::max),
+        );
+        assert_eq!(*range, expected, "{z:?}");
+    }
+}
+
+#[test]
+fn the_memo_keys_of_every_level_equal_the_scalar_key() {
+    let camera = CameraModel::default();
+    let cloud = crop(JointType::IButt, 500.0, 10.0, 16, 8);
+    let search = NeighbourSearch::new(&cloud, &camera, 1.0);
+    let scales = FullCounts::new(&search, &Vec3::z()).scales();
+    // Depths on and around the half-millimetre steps, tile borders in
+    // x / z, and the values the floor clamps.
+    let mut values = vec![f32::NAN, f32::INFINITY, f32::NEG_INFINITY, 0.0, -0.0, 1.0e30, -1.0e30, 1.0e-30];
+    for k in 0..400 {
+        let z = 480.0 + k as f32 * 0.125;
+        values.extend([z, f32::from_bits(z.to_bits() + 1), f32::from_bits(z.to_bits() - 1)]);
+    }
+    let depths: Vec<f32> = values.iter().map(|v| v.abs().max(100.0)).chain(values.iter().copied()).collect();
+    let tile = (FULL_COUNT_TILE_PX as f64 / camera.fx()) as f32;
+    let blocks: Vec<[[f32; BLOCK]; 3]> = depths
+        .chunks_exact(BLOCK)
+        .enumerate()
+        .map(|(chunk, zs)| {
+            let zs: [f32; BLOCK] = zs.try_into().unwrap();
+            let xs = std::array::from_fn(|l| (chunk as f32 - 200.0 + l as f32 * 0.3) * tile * zs[l] / 7.0);
+            let ys = std::array::from_fn(|l| values[(chunk * 3 + l) % values.len()]);
+            [xs, ys, zs]
+        })
+        .collect();
+    assert!(blocks.len() * BLOCK > 2000);
+    let keys = agree_with_scalar("memo keys", || blocks.iter().map(|lanes| super::tile_keys(lanes, &scales)).collect());
+    for (lanes, keys) in blocks.iter().zip(&keys) {
+        for l in 0..BLOCK {
+            let p = [lanes[0][l], lanes[1][l], lanes[2][l]];
+            assert_eq!(keys[l], super::tile_key(&p, &scales), "lane {l} of {p:?}");
+        }
     }
 }

@@ -1,11 +1,13 @@
 //! The kernels written once over [`Vector`]: the distance predicate in
-//! lanes, the block count of eight grid pixels and the labelled count of
-//! a span of points. [`super::sse2`] and [`super::avx2`] instantiate them
+//! lanes, the block count of eight grid pixels, the labelled count of a
+//! span of points, and the robust plane criterion's per-block facts (the
+//! depth range, the normal test and the full-count memo keys). [`super::sse2`] and [`super::avx2`] instantiate them
 //! inside functions compiled for their instruction set; [`super::scalar`]
 //! holds the plain forms they must agree with.
 
+use super::scalar::{FLOOR_LIMIT, FLOOR_SHIFT};
 use super::vector::Vector;
-use super::{BLOCK, LabelledGrid, Planes};
+use super::{BLOCK, LabelledGrid, LabelledWindow, LaneMasks, NormalTest, Planes, TileScales};
 use crate::cloud::Point;
 
 /// [`super::within`] in lanes: all ones where `q` lies within `radius_sq`
@@ -113,13 +115,10 @@ pub(super) unsafe fn count_span<V: Vector>(
 #[inline(always)]
 pub(super) fn labelled_count_at_most(
     grid: &LabelledGrid,
-    i: usize,
-    (wx, wy): (usize, usize),
-    label: u32,
-    radius_sq: f32,
-    threshold: f64,
+    query: &LabelledWindow,
     count_span: impl Fn(&Point, &[Point], &[u32], u32, f32) -> u32,
 ) -> bool {
+    let &LabelledWindow { centre: i, window: (wx, wy), label, radius_sq, threshold } = query;
     let (w, h) = (grid.width, grid.height);
     let p = grid.points[i];
     let (col, row) = (i % w, i / w);
@@ -147,4 +146,162 @@ pub(super) fn labelled_count_at_most(
         }
     }
     count as f64 <= threshold
+}
+
+/// [`super::depth_range`], `V::LANES` lanes at a time: `min` and `max`
+/// keep their second operand where a lane is NaN, so an invalid lane
+/// never wins and a block of them gives the infinities the lanes start
+/// from.
+///
+/// # Safety
+/// The CPU must run `V`'s instruction set, and `V::LANES` must divide
+/// [`BLOCK`].
+#[inline(always)]
+pub(super) unsafe fn depth_range<V: Vector>(z: &[f32; BLOCK]) -> (f32, f32) {
+    // SAFETY: the caller's CPU runs `V`; every load reads `V::LANES`
+    // floats of slices checked to hold them.
+    unsafe {
+        let (mut low, mut high) = (V::splat(f32::INFINITY), V::splat(f32::NEG_INFINITY));
+        for lane in (0..BLOCK).step_by(V::LANES) {
+            let v = V::load(z[lane..lane + V::LANES].as_ptr());
+            (low, high) = (v.min(low), v.max(high));
+        }
+        (low.least(), high.greatest())
+    }
+}
+
+/// The x, y and z lanes of the `V::LANES` pixels from index `at`. A
+/// function, not a closure: a closure is compiled without the caller's
+/// instruction set, and its loads were calls.
+///
+/// # Safety
+/// The CPU must run `V`'s instruction set.
+#[inline(always)]
+unsafe fn load_points<V: Vector>(planes: Planes, at: usize) -> [V; 3] {
+    let lanes = at..at + V::LANES;
+    let (xs, ys, zs) = (&planes.xs[lanes.clone()], &planes.ys[lanes.clone()], &planes.zs[lanes]);
+    // SAFETY: the caller's CPU runs `V`; each slice holds `V::LANES` floats.
+    unsafe { [V::load(xs.as_ptr()), V::load(ys.as_ptr()), V::load(zs.as_ptr())] }
+}
+
+/// `du × dv` in lanes, term for term as the scalar cross product.
+///
+/// # Safety
+/// The CPU must run `V`'s instruction set.
+#[inline(always)]
+unsafe fn cross<V: Vector>(du: [V; 3], dv: [V; 3]) -> [V; 3] {
+    // SAFETY: the caller's CPU runs `V`.
+    unsafe {
+        [
+            du[1].mul(dv[2]).sub(du[2].mul(dv[1])),
+            du[2].mul(dv[0]).sub(du[0].mul(dv[2])),
+            du[0].mul(dv[1]).sub(du[1].mul(dv[0])),
+        ]
+    }
+}
+
+/// `a · b` in lanes, x, y, z in order without fusing.
+///
+/// # Safety
+/// The CPU must run `V`'s instruction set.
+#[inline(always)]
+unsafe fn dot<V: Vector>(a: [V; 3], b: [V; 3]) -> V {
+    // SAFETY: the caller's CPU runs `V`.
+    unsafe { a[0].mul(b[0]).add(a[1].mul(b[1])).add(a[2].mul(b[2])) }
+}
+
+/// [`super::normal_test`], `V::LANES` pixels of the block at a time: the
+/// operations of the scalar form in the same order (no fused
+/// multiply-add), so the same bits.
+///
+/// # Safety
+/// The CPU must run `V`'s instruction set, and `V::LANES` must divide
+/// [`BLOCK`].
+#[inline(always)]
+pub(super) unsafe fn normal_test<V: Vector>(
+    planes: Planes,
+    width: usize,
+    first: usize,
+    step: usize,
+    test: &NormalTest,
+) -> LaneMasks {
+    let mut masks = LaneMasks::default();
+    // SAFETY: the caller's CPU runs `V`; every load reads `V::LANES`
+    // floats from slices checked to hold them.
+    unsafe {
+        let [nx, ny, nz] = test.reference;
+        let reference = [V::splat(nx), V::splat(ny), V::splat(nz)];
+        let (cos_sq, zero, tiny) = (V::splat(test.cos_sq), V::splat(0.0), V::splat(super::scalar::MIN_NORM_SQ));
+        for lane in (0..BLOCK).step_by(V::LANES) {
+            let at = first + lane;
+            let centre = load_points::<V>(planes, at);
+            let [lx, ly, lz] = load_points::<V>(planes, at - step);
+            let [rx, ry, rz] = load_points::<V>(planes, at + step);
+            let [ux, uy, uz] = load_points::<V>(planes, at - step * width);
+            let [dx, dy, dz] = load_points::<V>(planes, at + step * width);
+            let du = [rx.sub(lx), ry.sub(ly), rz.sub(lz)];
+            let dv = [dx.sub(ux), dy.sub(uy), dz.sub(uz)];
+            let sum = du[0].add(du[1]).add(du[2]).add(dv[0]).add(dv[1]).add(dv[2]).add(centre[0]);
+            // Finite: the magnitude is below infinity (NaN compares false).
+            let complete = sum.abs().lt(V::splat(f32::INFINITY));
+            let n = cross(du, dv);
+            // Turned away from the camera: the sign flipped where the
+            // normal points towards it. For a NaN the bit differs from the
+            // scalar `-1 *`, but every compare below is false either way.
+            let along = dot(n, reference).negate_where(dot(n, centre).lt(zero));
+            let norm_sq = dot(n, n);
+            let facing =
+                V::and_u32(V::and_u32(norm_sq.gt(tiny), along.ge(zero)), along.mul(along).ge(cos_sq.mul(norm_sq)));
+            masks.complete |= V::mask_bits(complete) << lane;
+            masks.facing |= V::mask_bits(facing) << lane;
+        }
+    }
+    masks
+}
+
+/// [`super::scalar::floor_i32`] in lanes: the same clamps, shift and
+/// compare, so the same integers. `max` gives its second operand for a
+/// NaN lane: the low end, as `f32::max` does in the scalar form.
+///
+/// # Safety
+/// The CPU must run `V`'s instruction set.
+#[inline(always)]
+unsafe fn floor_i32<V: Vector>(x: V) -> V::Int {
+    // SAFETY: the caller's CPU runs `V`.
+    unsafe {
+        let x = x.max(V::splat(-FLOOR_LIMIT)).min(V::splat(FLOOR_LIMIT));
+        let rounded = V::sub_u32(x.add(V::splat(FLOOR_SHIFT)).to_bits(), V::splat_u32(FLOOR_SHIFT.to_bits()));
+        // A true compare is all ones, -1: adding it subtracts one.
+        V::add_u32(rounded, V::from_i32(rounded).gt(x))
+    }
+}
+
+/// [`super::tile_keys`], `V::LANES` lanes at a time: the operations of
+/// [`super::tile_key`] in the same order, so the same keys.
+///
+/// # Safety
+/// The CPU must run `V`'s instruction set, and `V::LANES` must divide
+/// [`BLOCK`].
+#[inline(always)]
+pub(super) unsafe fn tile_keys<V: Vector>(lanes: &[[f32; BLOCK]; 3], scales: &TileScales) -> [u64; BLOCK] {
+    let mut keys = [0u64; BLOCK];
+    // SAFETY: the caller's CPU runs `V`; every load and store touches
+    // `V::LANES` values of slices checked to hold them.
+    unsafe {
+        let (per_x, per_y) = (V::splat(scales.tiles_per_x), V::splat(scales.tiles_per_y));
+        let (per_step, half) = (V::splat(scales.steps_per_mm), V::splat(0.5));
+        for lane in (0..BLOCK).step_by(V::LANES) {
+            let own = lane..lane + V::LANES;
+            let [xs, ys, zs] = lanes;
+            let (xs, ys, zs) = (&xs[own.clone()], &ys[own.clone()], &zs[own.clone()]);
+            let (x, y, z) = (V::load(xs.as_ptr()), V::load(ys.as_ptr()), V::load(zs.as_ptr()));
+            let tile_row = floor_i32(y.div(z).mul(per_y));
+            let tile_col = floor_i32(x.div(z).mul(per_x));
+            let depth_step = floor_i32(z.mul(per_step).add(half));
+            // As `key_of` lays a key out: the tile row and column as the
+            // high half's 16-bit fields, the depth step as the low half.
+            V::store_pairs(depth_step, V::pack_u16(tile_row, tile_col), keys[own].as_mut_ptr());
+        }
+    }
+    keys
 }

@@ -330,19 +330,26 @@ pub(crate) struct LabelledGrid<'a> {
     pub height: usize,
 }
 
-/// True when pixel `i` has at most `threshold` neighbours labelled
-/// `label` within `radius_sq` over its window of half-size `window`,
-/// clipped to the image: the count of the predicate over that window,
-/// stopped once it exceeds the threshold.
+/// The question [`labelled_count_at_most`] answers for one pixel.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct LabelledWindow {
+    /// The pixel's index, row-major.
+    pub centre: usize,
+    /// The window's half-size in columns and rows.
+    pub window: (usize, usize),
+    /// The label the neighbours counted must have.
+    pub label: u32,
+    pub radius_sq: f32,
+    /// The count the answer is about.
+    pub threshold: f64,
+}
+
+/// True when the pixel of `query` has at most `query.threshold`
+/// neighbours labelled `query.label` within `query.radius_sq` over its
+/// window, clipped to the image: the count of the predicate over that
+/// window, stopped once it exceeds the threshold.
 #[inline]
-pub(crate) fn labelled_count_at_most(
-    grid: &LabelledGrid,
-    i: usize,
-    window: (usize, usize),
-    label: u32,
-    radius_sq: f32,
-    threshold: f64,
-) -> bool {
+pub(crate) fn labelled_count_at_most(grid: &LabelledGrid, query: &LabelledWindow) -> bool {
     match isa() {
         // Where AVX2 runs, the four-lane form counts the edge criterion's
         // rows too: an eight-lane form over the vector trait took 150 ms a
@@ -350,8 +357,93 @@ pub(crate) fn labelled_count_at_most(
         // dozen pixels, and the eight-lane point load did not pay there).
         // SAFETY: SSE2 is part of the x86_64 baseline.
         #[cfg(target_arch = "x86_64")]
-        Isa::Avx2 | Isa::Sse2 => unsafe { sse2::labelled_count_at_most(grid, i, window, label, radius_sq, threshold) },
-        _ => scalar::labelled_count_at_most(grid, i, window, label, radius_sq, threshold),
+        Isa::Avx2 | Isa::Sse2 => unsafe { sse2::labelled_count_at_most(grid, query) },
+        _ => scalar::labelled_count_at_most(grid, query),
+    }
+}
+
+/// The nearest and farthest valid depth of a block's lanes: a NaN
+/// (invalid) lane never counts, and a block without a valid lane gives
+/// `(inf, -inf)`.
+#[inline(always)]
+pub(crate) fn depth_range(z: &[f32; BLOCK]) -> (f32, f32) {
+    match isa() {
+        // SAFETY: the CPU runs AVX2: `isa` gives no level it lacks.
+        #[cfg(target_arch = "x86_64")]
+        Isa::Avx2 => unsafe { avx2::depth_range(z) },
+        // SAFETY: SSE2 is part of the x86_64 baseline.
+        #[cfg(target_arch = "x86_64")]
+        Isa::Sse2 => unsafe { sse2::depth_range(z) },
+        _ => scalar::depth_range(z),
+    }
+}
+
+/// The robust plane criterion's normal test, the rule it adds to the
+/// paper's count (Eq. 14): the grid normal from the central differences
+/// at a step must lie within the angle whose squared cosine is `cos_sq`
+/// of the unit `reference`, the workpiece's normal.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct NormalTest {
+    pub reference: [f32; 3],
+    pub cos_sq: f32,
+}
+
+/// Bit `l` of each field is lane `l`'s answer.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub(crate) struct LaneMasks {
+    /// The lane and its four neighbours at the step are valid.
+    pub complete: u32,
+    /// The lane's grid normal passes the test (meaningful when complete).
+    pub facing: u32,
+}
+
+/// [`NormalTest`] for the [`BLOCK`] pixels from index `first` of planes
+/// `width` pixels wide, each against its neighbours `step` pixels left,
+/// right, up and down, which must all lie inside the planes (it panics
+/// otherwise). The same bits on every level: the scalar form is the
+/// criterion's own `cross_agrees(cross(du, dv), ..)` lane by lane.
+#[inline(always)]
+pub(crate) fn normal_test(planes: Planes, width: usize, first: usize, step: usize, test: &NormalTest) -> LaneMasks {
+    match isa() {
+        // SAFETY: the CPU runs AVX2: `isa` gives no level it lacks.
+        #[cfg(target_arch = "x86_64")]
+        Isa::Avx2 => unsafe { avx2::normal_test(planes, width, first, step, test) },
+        // SAFETY: SSE2 is part of the x86_64 baseline.
+        #[cfg(target_arch = "x86_64")]
+        Isa::Sse2 => unsafe { sse2::normal_test(planes, width, first, step, test) },
+        _ => scalar::normal_test(planes, width, first, step, test),
+    }
+}
+
+/// What a full-count memo key measures a point by: tiles per unit of
+/// `x / z` and of `y / z`, and depth steps per millimetre.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct TileScales {
+    pub tiles_per_x: f32,
+    pub tiles_per_y: f32,
+    pub steps_per_mm: f32,
+}
+
+/// The full-count memo key of a valid point: its tile row and column
+/// (16 bits each, from the floors of `y / z` and `x / z` in tiles) and
+/// its depth step (rounded). Every path computes keys with this function
+/// or [`tile_keys`], which gives the same keys.
+#[inline(always)]
+pub(crate) fn tile_key(p: &Point, scales: &TileScales) -> u64 {
+    scalar::tile_key(p, scales)
+}
+
+/// [`tile_key`] of the [`BLOCK`] points given as coordinate lanes.
+#[inline(always)]
+pub(crate) fn tile_keys(lanes: &[[f32; BLOCK]; 3], scales: &TileScales) -> [u64; BLOCK] {
+    match isa() {
+        // SAFETY: the CPU runs AVX2: `isa` gives no level it lacks.
+        #[cfg(target_arch = "x86_64")]
+        Isa::Avx2 => unsafe { avx2::tile_keys(lanes, scales) },
+        // SAFETY: SSE2 is part of the x86_64 baseline.
+        #[cfg(target_arch = "x86_64")]
+        Isa::Sse2 => unsafe { sse2::tile_keys(lanes, scales) },
+        _ => scalar::tile_keys(lanes, scales),
     }
 }
 
@@ -378,6 +470,16 @@ mod tests {
         assert_eq!(ran[0].0, Isa::Scalar, "every CPU runs the scalar form");
         let rayon_sees = with_isa(Isa::Scalar, || rayon::join(isa, isa)).unwrap();
         assert_eq!(rayon_sees, (Isa::Scalar, Isa::Scalar), "forcing reaches rayon's workers");
+    }
+
+    #[test]
+    fn floor_i32_floors_and_clamps() {
+        for x in [-3.5f32, -3.0, -2.5, -0.5, -0.0, 0.0, 0.25, 0.5, 1.0, 1.5, 2.5, 2.999_999_8, 1234.5, -1234.5] {
+            assert_eq!(scalar::floor_i32(x), x.floor() as i32, "{x}");
+        }
+        assert_eq!(scalar::floor_i32(1e9), 4_000_000);
+        assert_eq!(scalar::floor_i32(f32::NEG_INFINITY), -4_000_000);
+        assert_eq!(scalar::floor_i32(f32::NAN), -4_000_000);
     }
 
     #[test]

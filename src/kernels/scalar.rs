@@ -1,8 +1,9 @@
 //! The kernels' plain forms, on any CPU: the reference that every vector
 //! form must equal, and the path where none runs.
 
-use super::{BLOCK, LabelledGrid, Planes, generic, within};
+use super::{BLOCK, LabelledGrid, LabelledWindow, LaneMasks, NormalTest, Planes, TileScales, generic, within};
 use crate::cloud::Point;
+use crate::pipeline::orientation::{cross, cross_agrees};
 
 /// [`super::count_block`] one lane and one neighbour at a time.
 pub(super) fn count_block(
@@ -28,15 +29,93 @@ pub(super) fn count_span(p: &Point, points: &[Point], labels: &[u32], label: u32
 }
 
 /// [`super::labelled_count_at_most`] counting one point at a time.
-pub(super) fn labelled_count_at_most(
-    grid: &LabelledGrid,
-    i: usize,
-    window: (usize, usize),
-    label: u32,
-    radius_sq: f32,
-    threshold: f64,
-) -> bool {
-    generic::labelled_count_at_most(grid, i, window, label, radius_sq, threshold, count_span)
+pub(super) fn labelled_count_at_most(grid: &LabelledGrid, query: &LabelledWindow) -> bool {
+    generic::labelled_count_at_most(grid, query, count_span)
+}
+
+/// The least of `v`, by `<`: a NaN never wins; infinity for no value.
+#[inline(always)]
+fn least(v: &[f32]) -> f32 {
+    v.iter().fold(f32::INFINITY, |a, &x| if x < a { x } else { a })
+}
+
+/// The greatest of `v`, by `>`: a NaN never wins; minus infinity for no
+/// value.
+#[inline(always)]
+fn greatest(v: &[f32]) -> f32 {
+    v.iter().fold(f32::NEG_INFINITY, |a, &x| if x > a { x } else { a })
+}
+
+/// [`super::depth_range`] one lane at a time.
+pub(super) fn depth_range(z: &[f32; BLOCK]) -> (f32, f32) {
+    (least(z), greatest(z))
+}
+
+/// The smallest squared norm of a grid normal that [`cross_agrees`] takes
+/// for a direction.
+pub(super) const MIN_NORM_SQ: f32 = 1e-24;
+
+/// [`super::normal_test`] one lane at a time, by the criterion's own
+/// per-point functions: the reference of the lane forms.
+pub(super) fn normal_test(planes: Planes, width: usize, first: usize, step: usize, test: &NormalTest) -> LaneMasks {
+    let mut masks = LaneMasks::default();
+    for l in 0..BLOCK {
+        let i = first + l;
+        let p = planes.point(i);
+        let (left, right) = (planes.point(i - step), planes.point(i + step));
+        let (up, down) = (planes.point(i - step * width), planes.point(i + step * width));
+        let du = [right[0] - left[0], right[1] - left[1], right[2] - left[2]];
+        let dv = [down[0] - up[0], down[1] - up[1], down[2] - up[2]];
+        let complete = (du[0] + du[1] + du[2] + dv[0] + dv[1] + dv[2] + p[0]).is_finite();
+        masks.complete |= (complete as u32) << l;
+        masks.facing |= (cross_agrees(cross(du, dv), p, test.reference, test.cos_sq) as u32) << l;
+    }
+    masks
+}
+
+/// Adding this to a float below 2²² in magnitude leaves its nearest
+/// integer in the low mantissa bits.
+pub(super) const FLOOR_SHIFT: f32 = 12_582_912.0;
+
+/// The magnitude [`floor_i32`] clamps to: far beyond any tile or depth
+/// index a camera's view gives.
+pub(super) const FLOOR_LIMIT: f32 = 4.0e6;
+
+/// `x.floor()` as an integer, for the tile and depth indices of the memo
+/// keys. Values are clamped to ±[`FLOOR_LIMIT`] (NaN to the low end). No
+/// float-to-int conversion: the baseline x86-64 has no single-instruction
+/// floor, and Rust's saturating casts do not vectorise, while adding
+/// [`FLOOR_SHIFT`] (1.5 · 2²³) leaves `round(x)` in the low mantissa bits.
+#[inline(always)]
+pub(super) fn floor_i32(x: f32) -> i32 {
+    // Not `clamp`, which keeps NaN: `max` maps it to the low end.
+    #[allow(clippy::manual_clamp)]
+    let x = x.max(-FLOOR_LIMIT).min(FLOOR_LIMIT);
+    let rounded = (x + FLOOR_SHIFT).to_bits() as i32 - FLOOR_SHIFT.to_bits() as i32;
+    rounded - ((rounded as f32) > x) as i32
+}
+
+/// A memo key from its tile row and column (16 bits each) and depth step.
+#[inline(always)]
+fn key_of(tile_row: i32, tile_col: i32, depth_step: i32) -> u64 {
+    ((tile_row as i16 as u16 as u64) << 48) | ((tile_col as i16 as u16 as u64) << 32) | (depth_step as u32 as u64)
+}
+
+/// [`super::tile_key`]: single precision and no rounding calls, so the
+/// lane forms can do the same operations.
+#[inline(always)]
+pub(super) fn tile_key(p: &Point, scales: &TileScales) -> u64 {
+    let z = p[2];
+    let tile_row = floor_i32(p[1] / z * scales.tiles_per_y);
+    let tile_col = floor_i32(p[0] / z * scales.tiles_per_x);
+    // Depths are positive, so rounding is the floor of z / step + ½.
+    let depth_step = floor_i32(z * scales.steps_per_mm + 0.5);
+    key_of(tile_row, tile_col, depth_step)
+}
+
+/// [`super::tile_keys`] one lane at a time.
+pub(super) fn tile_keys([xs, ys, zs]: &[[f32; BLOCK]; 3], scales: &TileScales) -> [u64; BLOCK] {
+    std::array::from_fn(|l| tile_key(&[xs[l], ys[l], zs[l]], scales))
 }
 
 /// The corner of a row's members while it is gathered.

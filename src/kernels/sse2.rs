@@ -6,7 +6,9 @@ use std::arch::x86_64::*;
 
 use super::scalar::Corner;
 use super::vector::Vector;
-use super::{BLOCK, LabelledGrid, Planes, RowBounds, generic, scalar};
+use super::{
+    BLOCK, LabelledGrid, LabelledWindow, LaneMasks, NormalTest, Planes, RowBounds, TileScales, generic, scalar,
+};
 use crate::cloud::Point;
 
 /// `_MM_SHUFFLE` in reading order: lanes `a`, `b` of the first operand,
@@ -83,6 +85,72 @@ unsafe impl Vector for __m128 {
         unsafe { _mm_castps_si128(_mm_cmple_ps(self, other)) }
     }
     #[inline(always)]
+    unsafe fn div(self, other: Self) -> Self {
+        // SAFETY: every x86_64 CPU runs SSE2.
+        unsafe { _mm_div_ps(self, other) }
+    }
+    #[inline(always)]
+    unsafe fn min(self, other: Self) -> Self {
+        // SAFETY: every x86_64 CPU runs SSE2.
+        unsafe { _mm_min_ps(self, other) }
+    }
+    #[inline(always)]
+    unsafe fn max(self, other: Self) -> Self {
+        // SAFETY: every x86_64 CPU runs SSE2.
+        unsafe { _mm_max_ps(self, other) }
+    }
+    #[inline(always)]
+    unsafe fn abs(self) -> Self {
+        // SAFETY: every x86_64 CPU runs SSE2.
+        unsafe { _mm_and_ps(self, _mm_castsi128_ps(_mm_set1_epi32(i32::MAX))) }
+    }
+    #[inline(always)]
+    unsafe fn negate_where(self, mask: __m128i) -> Self {
+        // SAFETY: every x86_64 CPU runs SSE2.
+        unsafe { _mm_xor_ps(self, _mm_and_ps(_mm_castsi128_ps(mask), _mm_set1_ps(-0.0))) }
+    }
+    #[inline(always)]
+    unsafe fn least(self) -> f32 {
+        // SAFETY: every x86_64 CPU runs SSE2.
+        unsafe {
+            let v = _mm_min_ps(self, _mm_movehl_ps(self, self));
+            _mm_cvtss_f32(_mm_min_ps(v, _mm_shuffle_ps::<{ pick(1, 1, 1, 1) }>(v, v)))
+        }
+    }
+    #[inline(always)]
+    unsafe fn greatest(self) -> f32 {
+        // SAFETY: every x86_64 CPU runs SSE2.
+        unsafe {
+            let v = _mm_max_ps(self, _mm_movehl_ps(self, self));
+            _mm_cvtss_f32(_mm_max_ps(v, _mm_shuffle_ps::<{ pick(1, 1, 1, 1) }>(v, v)))
+        }
+    }
+    #[inline(always)]
+    unsafe fn lt(self, other: Self) -> __m128i {
+        // SAFETY: every x86_64 CPU runs SSE2.
+        unsafe { _mm_castps_si128(_mm_cmplt_ps(self, other)) }
+    }
+    #[inline(always)]
+    unsafe fn gt(self, other: Self) -> __m128i {
+        // SAFETY: every x86_64 CPU runs SSE2.
+        unsafe { _mm_castps_si128(_mm_cmpgt_ps(self, other)) }
+    }
+    #[inline(always)]
+    unsafe fn ge(self, other: Self) -> __m128i {
+        // SAFETY: every x86_64 CPU runs SSE2.
+        unsafe { _mm_castps_si128(_mm_cmpge_ps(self, other)) }
+    }
+    #[inline(always)]
+    unsafe fn to_bits(self) -> __m128i {
+        // SAFETY: every x86_64 CPU runs SSE2.
+        unsafe { _mm_castps_si128(self) }
+    }
+    #[inline(always)]
+    unsafe fn from_i32(a: __m128i) -> Self {
+        // SAFETY: every x86_64 CPU runs SSE2.
+        unsafe { _mm_cvtepi32_ps(a) }
+    }
+    #[inline(always)]
     unsafe fn splat_u32(v: u32) -> __m128i {
         // SAFETY: every x86_64 CPU runs SSE2.
         unsafe { _mm_set1_epi32(v as i32) }
@@ -108,6 +176,11 @@ unsafe impl Vector for __m128 {
         unsafe { _mm_sub_epi32(a, b) }
     }
     #[inline(always)]
+    unsafe fn add_u32(a: __m128i, b: __m128i) -> __m128i {
+        // SAFETY: every x86_64 CPU runs SSE2.
+        unsafe { _mm_add_epi32(a, b) }
+    }
+    #[inline(always)]
     unsafe fn lanes_above(k: i32) -> __m128i {
         // SAFETY: every x86_64 CPU runs SSE2.
         unsafe { _mm_cmpgt_epi32(_mm_setr_epi32(0, 1, 2, 3), _mm_set1_epi32(k)) }
@@ -123,6 +196,24 @@ unsafe impl Vector for __m128 {
     unsafe fn store_u32(a: __m128i, at: *mut u32) {
         // SAFETY: the caller gives four writable u32.
         unsafe { _mm_storeu_si128(at.cast(), a) }
+    }
+    #[inline(always)]
+    unsafe fn pack_u16(high: __m128i, low: __m128i) -> __m128i {
+        // SAFETY: every x86_64 CPU runs SSE2.
+        unsafe { _mm_or_si128(_mm_slli_epi32::<16>(high), _mm_and_si128(low, _mm_set1_epi32(0xffff))) }
+    }
+    #[inline(always)]
+    unsafe fn store_pairs(low: __m128i, high: __m128i, at: *mut u64) {
+        // SAFETY: the caller gives four writable u64, two 128-bit stores.
+        unsafe {
+            _mm_storeu_si128(at.cast(), _mm_unpacklo_epi32(low, high));
+            _mm_storeu_si128(at.add(2).cast(), _mm_unpackhi_epi32(low, high));
+        }
+    }
+    #[inline(always)]
+    unsafe fn mask_bits(a: __m128i) -> u32 {
+        // SAFETY: every x86_64 CPU runs SSE2.
+        unsafe { _mm_movemask_ps(_mm_castsi128_ps(a)) as u32 }
     }
 }
 
@@ -153,24 +244,37 @@ pub(super) fn count_span(p: &Point, points: &[Point], labels: &[u32], label: u32
 
 /// [`super::labelled_count_at_most`], four points at a time.
 #[target_feature(enable = "sse2")]
-pub(super) fn labelled_count_at_most(
-    grid: &LabelledGrid,
-    i: usize,
-    window: (usize, usize),
-    label: u32,
-    radius_sq: f32,
-    threshold: f64,
-) -> bool {
+pub(super) fn labelled_count_at_most(grid: &LabelledGrid, query: &LabelledWindow) -> bool {
     generic::labelled_count_at_most(
         grid,
-        i,
-        window,
-        label,
-        radius_sq,
-        threshold,
+        query,
         #[inline(always)]
         |p, points, labels, label, radius_sq| count_span(p, points, labels, label, radius_sq),
     )
+}
+
+/// [`super::depth_range`] in four lanes, twice a block.
+#[target_feature(enable = "sse2")]
+#[inline]
+pub(super) fn depth_range(z: &[f32; BLOCK]) -> (f32, f32) {
+    // SAFETY: this function runs only where SSE2 does; 4 divides 8.
+    unsafe { generic::depth_range::<__m128>(z) }
+}
+
+/// [`super::normal_test`] in four lanes, twice a block.
+#[target_feature(enable = "sse2")]
+#[inline]
+pub(super) fn normal_test(planes: Planes, width: usize, first: usize, step: usize, test: &NormalTest) -> LaneMasks {
+    // SAFETY: this function runs only where SSE2 does; 4 divides 8.
+    unsafe { generic::normal_test::<__m128>(planes, width, first, step, test) }
+}
+
+/// [`super::tile_keys`] in four lanes, twice a block.
+#[target_feature(enable = "sse2")]
+#[inline]
+pub(super) fn tile_keys(lanes: &[[f32; BLOCK]; 3], scales: &TileScales) -> [u64; BLOCK] {
+    // SAFETY: this function runs only where SSE2 does; 4 divides 8.
+    unsafe { generic::tile_keys::<__m128>(lanes, scales) }
 }
 
 #[target_feature(enable = "sse2")]

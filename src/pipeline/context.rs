@@ -19,6 +19,7 @@ use crate::joint::JointType;
 use super::background::{self, PlaneCluster, Workpiece};
 use super::clustering::UNCLUSTERED;
 use super::edge_points::{self, EdgeCriterion};
+use super::input::{self, ViewCounts, ViewLimit};
 use super::neighbours::NeighbourSearch;
 use super::plane_points::PlanePoints;
 use super::ransac::RansacParams;
@@ -76,13 +77,13 @@ pub(super) struct Context<'a> {
 }
 
 impl<'a> Context<'a> {
-    /// Starts the clock, brings the cloud into camera-frame millimetres
-    /// ([`super::input`]) and sanitises it: a point outside what the
-    /// camera can measure is a corrupt frame's or noise, and one such point
-    /// far off the axis would widen every window it is part of, so it
-    /// becomes invalid before any stage runs. A frame left without a valid
-    /// point, or that cannot be a camera's view, fails here, in the
-    /// [`Stage::Input`] stage.
+    /// Sanitises the cloud, in camera-frame millimetres
+    /// ([`super::input`]): a point outside what the camera can measure is
+    /// a corrupt frame's or noise, and one such point far off the axis
+    /// would widen every window it is part of, so it becomes invalid
+    /// before any stage runs. A frame that cannot be a camera's view, or
+    /// is left without a valid point, fails here, in the [`Stage::Input`]
+    /// stage. One pass over the frame counts both.
     pub(super) fn sanitise(
         config: &'a Config,
         cloud: &'a PointCloud,
@@ -92,7 +93,8 @@ impl<'a> Context<'a> {
         let mut cloud = Cow::Borrowed(cloud);
         let camera = &config.camera;
         let volume = camera.measurable_volume(cloud.width(), cloud.height(), cloud.is_organized());
-        let counts = count_measurable(&cloud, &volume);
+        let (view, counts) = count_frame(&cloud, &volume);
+        input::check_camera_view(&view, request)?;
         if counts.unmeasurable() > 0 {
             tracing::warn!(
                 near = counts.near,
@@ -418,28 +420,26 @@ impl MeasurableCounts {
     }
 }
 
-/// Counts the valid points and those outside `volume`, in one pass.
-fn count_measurable(cloud: &PointCloud, volume: &MeasurableVolume) -> MeasurableCounts {
-    // Plain loops over chunks: as a per-point filter, map and reduce the
-    // fold's state went through the stack each point and stalled on it,
-    // 15 ms a frame in some builds instead of under one.
-    cloud
-        .points()
-        .par_chunks(1 << 14)
-        .map(|chunk| {
-            let mut counts = MeasurableCounts::default();
-            for p in chunk.iter().filter(|p| p[0].is_finite()) {
-                counts.valid += 1;
-                match volume.reject(p) {
-                    None => {}
-                    Some(Unmeasurable::Near) => counts.near += 1,
-                    Some(Unmeasurable::Far) => counts.far += 1,
-                    Some(Unmeasurable::OffView) => counts.off_view += 1,
-                }
+/// Counts the valid points by where they lie against any camera's view
+/// ([`ViewCounts`], for the input check) and against what this camera can
+/// measure, in one pass over the frame rather than one per count: the
+/// second pass cost a raw frame about 0.3 ms of the stage's 4.
+fn count_frame(cloud: &PointCloud, volume: &MeasurableVolume) -> (ViewCounts, MeasurableCounts) {
+    let limit = ViewLimit::new();
+    input::fold_valid_points(
+        cloud,
+        |(view, counts): &mut (ViewCounts, MeasurableCounts), p| {
+            view.add(p, &limit);
+            counts.valid += 1;
+            match volume.reject(p) {
+                None => {}
+                Some(Unmeasurable::Near) => counts.near += 1,
+                Some(Unmeasurable::Far) => counts.far += 1,
+                Some(Unmeasurable::OffView) => counts.off_view += 1,
             }
-            counts
-        })
-        .reduce(MeasurableCounts::default, MeasurableCounts::add)
+        },
+        |a, b| (a.0.merge(b.0), a.1.add(b.1)),
+    )
 }
 
 /// A copy of `cloud` with the points outside `volume` made invalid.
@@ -454,5 +454,49 @@ fn without_unmeasurable(cloud: &PointCloud, volume: &MeasurableVolume) -> PointC
             .unwrap_or_else(|| PointCloud::unorganized(Vec::new()))
     } else {
         PointCloud::unorganized(points)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::camera::CameraModel;
+    use crate::cloud::INVALID_POINT;
+
+    #[test]
+    fn one_pass_counts_what_the_view_check_and_the_volume_count_alone() {
+        // Points of every kind, in chunks of the pass and across them:
+        // invalid, behind, beyond any view, nearer or farther than the
+        // camera measures, outside its field of view, and measurable.
+        let camera = CameraModel::default();
+        let kinds: [[f32; 3]; 9] = [
+            INVALID_POINT,
+            [0.0, 0.0, -5.0],
+            [10.0, 0.0, 0.0],
+            [5000.0, 0.0, 100.0],
+            [0.0, 0.0, 1.0],
+            [0.0, 0.0, 1.0e6],
+            [900.0, 0.0, 600.0],
+            [1.0, -2.0, 600.0],
+            [f32::INFINITY, 0.0, 600.0],
+        ];
+        let points: Vec<_> = (0..70_000).map(|i| kinds[(i * 7 + i / 9) % kinds.len()]).collect();
+        let cloud = PointCloud::unorganized(points.clone());
+        let volume = camera.measurable_volume(cloud.width(), cloud.height(), false);
+        let (view, counts) = count_frame(&cloud, &volume);
+        assert_eq!(view, ViewCounts::of(&cloud));
+        let valid: Vec<_> = points.iter().filter(|p| p[0].is_finite()).collect();
+        let rejected = |why: Unmeasurable| valid.iter().filter(|p| volume.reject(p) == Some(why)).count();
+        let expected = MeasurableCounts {
+            valid: valid.len(),
+            near: rejected(Unmeasurable::Near),
+            far: rejected(Unmeasurable::Far),
+            off_view: rejected(Unmeasurable::OffView),
+        };
+        assert_eq!(counts, expected);
+        assert!(view.behind > 0 && view.beyond_any_view > 0 && view.valid < points.len());
+        assert!(
+            expected.near > 0 && expected.far > 0 && expected.off_view > 0 && expected.unmeasurable() < valid.len()
+        );
     }
 }

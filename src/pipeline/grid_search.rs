@@ -105,18 +105,6 @@ impl Grid {
         [take(&self.xs), take(&self.ys), take(&self.zs)]
     }
 
-    /// The `LANES` pixels starting at index `at` as three AVX registers.
-    ///
-    /// # Safety
-    /// The CPU must support AVX.
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx")]
-    pub(crate) fn lanes_avx(&self, at: usize) -> [std::arch::x86_64::__m256; 3] {
-        let planes = [&self.xs[at..at + LANES], &self.ys[at..at + LANES], &self.zs[at..at + LANES]];
-        // SAFETY: each slice holds exactly LANES floats; loadu needs no alignment.
-        planes.map(|v| unsafe { std::arch::x86_64::_mm256_loadu_ps(v.as_ptr()) })
-    }
-
     /// Point `i`, row-major, from the planes.
     #[inline(always)]
     pub(crate) fn point(&self, i: usize) -> [f32; 3] {
@@ -170,7 +158,7 @@ impl Grid {
 
     /// The coordinate planes, as the kernels read them.
     #[inline(always)]
-    fn planes(&self) -> Planes<'_> {
+    pub(crate) fn planes(&self) -> Planes<'_> {
         Planes { xs: &self.xs, ys: &self.ys, zs: &self.zs }
     }
 

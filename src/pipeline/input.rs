@@ -1,8 +1,10 @@
 //! Input preparation, the step before the frame is sanitised: the cloud's
 //! units (millimetres, metres, or guessed from its distances) and its frame
 //! (the camera's, or the robot base's brought into the camera's with the
-//! capture pose and the hand-eye), then the check that what results can be
-//! a camera's view at all. Every later stage sees camera-frame millimetres.
+//! capture pose and the hand-eye), and the check that what results can be
+//! a camera's view at all ([`check_camera_view`], on counts that the
+//! sanitising step takes in its one pass over the frame). Every later
+//! stage sees camera-frame millimetres.
 
 use std::borrow::Cow;
 
@@ -115,8 +117,10 @@ pub fn metres_to_millimetres(cloud: &PointCloud) -> PointCloud {
 }
 
 /// Brings `cloud` into camera-frame millimetres as `request` says it is
-/// given, and refuses a result that cannot be a camera's view. A cloud
-/// already in camera-frame millimetres is returned as it is, uncopied.
+/// given. A cloud already in camera-frame millimetres is returned as it
+/// is, uncopied. Whether the result can be a camera's view is checked
+/// when the frame is sanitised, on the counts of its one pass over the
+/// points ([`check_camera_view`]).
 pub(super) fn prepare<'a>(
     cloud: &'a PointCloud,
     request: &PlanRequest,
@@ -134,7 +138,6 @@ pub(super) fn prepare<'a>(
             Cow::Owned(transformed(cloud, scale, &base_from_camera.inverse()))
         }
     };
-    check_camera_view(&prepared, request)?;
     Ok(prepared)
 }
 
@@ -169,6 +172,21 @@ pub struct ViewCounts {
     pub beyond_any_view: usize,
 }
 
+/// [`MAX_PLAUSIBLE_OFF_AXIS_DEG`] as the per-point test takes it: the
+/// squared tangent, so that no point needs a square root (`hypot` alone
+/// cost a raw frame 4 ms).
+#[derive(Debug, Clone, Copy)]
+pub(super) struct ViewLimit {
+    max_tan_sq: f32,
+}
+
+impl ViewLimit {
+    pub(super) fn new() -> ViewLimit {
+        let max_tan = MAX_PLAUSIBLE_OFF_AXIS_DEG.to_radians().tan();
+        ViewLimit { max_tan_sq: (max_tan * max_tan) as f32 }
+    }
+}
+
 /// Whether a cloud can be a camera-frame view, from its [`ViewCounts`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum View {
@@ -180,35 +198,53 @@ pub enum View {
     MostlyBeyondView,
 }
 
+/// Folds every valid point of `cloud` into a `C`, in parallel over chunks
+/// of the frame that are then merged: the one shape of the input step's
+/// passes over a raw frame. Plain loops over chunks: a per-point filter,
+/// map and reduce kept its counts on the stack and stalled on them, 12 to
+/// 15 ms a raw frame in some builds.
+pub(super) fn fold_valid_points<C: Default + Send>(
+    cloud: &PointCloud,
+    add: impl Fn(&mut C, &Point) + Sync,
+    merge: impl Fn(C, C) -> C + Sync + Send,
+) -> C {
+    cloud
+        .points()
+        .par_chunks(1 << 14)
+        .map(|chunk| {
+            let mut counts = C::default();
+            for p in chunk.iter().filter(|p| p[0].is_finite()) {
+                add(&mut counts, p);
+            }
+            counts
+        })
+        .reduce(C::default, merge)
+}
+
 impl ViewCounts {
     /// Counts `cloud`'s valid points by where they lie.
     pub fn of(cloud: &PointCloud) -> ViewCounts {
-        let max_tan = MAX_PLAUSIBLE_OFF_AXIS_DEG.to_radians().tan();
-        // Plain loops over chunks, as in the input stage's own count: a
-        // per-point filter, map and reduce keeps its tuple on the stack and
-        // cost a raw frame 12 ms instead of under one.
-        // Squared, with no square root: `hypot` alone cost a raw frame 4 ms.
-        let max_tan_sq = (max_tan * max_tan) as f32;
-        cloud
-            .points()
-            .par_chunks(1 << 14)
-            .map(|chunk| {
-                let mut counts = ViewCounts::default();
-                for p in chunk.iter().filter(|p| p[0].is_finite()) {
-                    counts.valid += 1;
-                    if p[2] <= 0.0 {
-                        counts.behind += 1;
-                    } else if p[0] * p[0] + p[1] * p[1] > p[2] * p[2] * max_tan_sq {
-                        counts.beyond_any_view += 1;
-                    }
-                }
-                counts
-            })
-            .reduce(ViewCounts::default, |a, b| ViewCounts {
-                valid: a.valid + b.valid,
-                behind: a.behind + b.behind,
-                beyond_any_view: a.beyond_any_view + b.beyond_any_view,
-            })
+        let limit = ViewLimit::new();
+        fold_valid_points(cloud, |counts: &mut ViewCounts, p| counts.add(p, &limit), ViewCounts::merge)
+    }
+
+    /// Counts the valid point `p`.
+    #[inline(always)]
+    pub(super) fn add(&mut self, p: &Point, limit: &ViewLimit) {
+        self.valid += 1;
+        if p[2] <= 0.0 {
+            self.behind += 1;
+        } else if p[0] * p[0] + p[1] * p[1] > p[2] * p[2] * limit.max_tan_sq {
+            self.beyond_any_view += 1;
+        }
+    }
+
+    pub(super) fn merge(self, other: ViewCounts) -> ViewCounts {
+        ViewCounts {
+            valid: self.valid + other.valid,
+            behind: self.behind + other.behind,
+            beyond_any_view: self.beyond_any_view + other.beyond_any_view,
+        }
     }
 
     /// Whether these points can be a camera-frame view.
@@ -225,11 +261,11 @@ impl ViewCounts {
 }
 
 /// Refuses a cloud most of whose valid points lie behind the camera or
-/// beyond any camera's field of view: planned, it would give a seam of
-/// nonsense, so the reason and the likely cause are named instead.
-fn check_camera_view(cloud: &PointCloud, request: &PlanRequest) -> Result<(), PlanError> {
-    let counts = ViewCounts::of(cloud);
-    let ViewCounts { valid, behind, beyond_any_view } = counts;
+/// beyond any camera's field of view, by its `counts`: planned, it would
+/// give a seam of nonsense, so the reason and the likely cause are named
+/// instead.
+pub(super) fn check_camera_view(counts: &ViewCounts, request: &PlanRequest) -> Result<(), PlanError> {
+    let &ViewCounts { valid, behind, beyond_any_view } = counts;
     let hint = match request.cloud_frame {
         CloudFrame::Camera => "is the cloud in the robot base frame (cloud frame base, --cloud-frame base)?",
         CloudFrame::Base => "are the pose and the hand-eye those of the capture, and is the cloud in the base frame?",

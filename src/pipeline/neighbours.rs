@@ -12,8 +12,6 @@
 
 pub(crate) mod cells;
 
-#[cfg(target_arch = "x86_64")]
-use std::arch::x86_64::*;
 use std::ops::ControlFlow;
 
 #[cfg(test)]
@@ -25,7 +23,7 @@ use crate::geometry::{Vec3, ceil_i64, floor_i64};
 
 use super::grid_search::{LANES, Span};
 use super::scale::DensityMap;
-use crate::kernels::within;
+use crate::kernels::{self, TileScales, within};
 use cells::CellIndex;
 
 /// The most neighbours of one point a sampled visit reads: more than any
@@ -250,9 +248,8 @@ pub(crate) struct FullCounts<'a> {
     measured: Option<&'a DensityMap>,
     normal: Vec3,
     radius: f64,
-    /// Tiles per unit of `x / z` and of `y / z`.
-    tiles_per_x: f32,
-    tiles_per_y: f32,
+    /// Tiles per unit of `x / z` and of `y / z`, depth steps per mm.
+    scales: TileScales,
     /// A tile's extent in `x / z` and `y / z`.
     tile_x: f64,
     tile_y: f64,
@@ -296,37 +293,6 @@ impl<V: Copy> KeyMemo<V> {
 /// The memo of full-plane counts.
 pub(crate) type FullCountCache = KeyMemo<f64>;
 
-/// `x.floor()` as an integer, for the tile and depth indices of the memo
-/// keys. Values are clamped to ±4·10⁶ (NaN to the low end), far beyond any
-/// index a camera's view gives. No float-to-int conversion: the baseline
-/// x86-64 has no single-instruction floor, and Rust's saturating casts do
-/// not vectorise, while adding 1.5 · 2²³ leaves `round(x)` in the low
-/// mantissa bits of any |x| < 2²².
-#[inline(always)]
-fn floor_i32(x: f32) -> i32 {
-    const SHIFT: f32 = 12_582_912.0;
-    // Not `clamp`, which keeps NaN: `max` maps it to the low end.
-    #[allow(clippy::manual_clamp)]
-    let x = x.max(-4.0e6).min(4.0e6);
-    let rounded = (x + SHIFT).to_bits() as i32 - SHIFT.to_bits() as i32;
-    rounded - ((rounded as f32) > x) as i32
-}
-
-/// [`floor_i32`] of eight lanes: the same operations, so the same integers.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-fn floor_i32_avx2(x: __m256) -> __m256i {
-    const SHIFT: f32 = 12_582_912.0;
-    // `max` returns its second operand when the first is NaN: the low end,
-    // as `f32::max` gives it in the scalar form.
-    let x = _mm256_min_ps(_mm256_max_ps(x, _mm256_set1_ps(-4.0e6)), _mm256_set1_ps(4.0e6));
-    let shifted = _mm256_castps_si256(_mm256_add_ps(x, _mm256_set1_ps(SHIFT)));
-    let rounded = _mm256_sub_epi32(shifted, _mm256_set1_epi32(SHIFT.to_bits() as i32));
-    // A true comparison is all ones, -1: adding it subtracts one.
-    let above = _mm256_castps_si256(_mm256_cmp_ps::<_CMP_GT_OQ>(_mm256_cvtepi32_ps(rounded), x));
-    _mm256_add_epi32(rounded, above)
-}
-
 impl<'a> FullCounts<'a> {
     pub(crate) fn new(search: &'a NeighbourSearch<'a>, normal: &Vec3) -> Self {
         let tile = FULL_COUNT_TILE_PX as f64;
@@ -336,24 +302,21 @@ impl<'a> FullCounts<'a> {
             measured: search.measured.as_ref(),
             normal: *normal,
             radius: search.radius as f64,
-            tiles_per_x: (search.camera.fx() / tile) as f32,
-            tiles_per_y: (search.camera.fy() / tile) as f32,
+            scales: TileScales {
+                tiles_per_x: (search.camera.fx() / tile) as f32,
+                tiles_per_y: (search.camera.fy() / tile) as f32,
+                steps_per_mm: 1.0 / FULL_COUNT_DEPTH_STEP_MM as f32,
+            },
             tile_x: tile / search.camera.fx(),
             tile_y: tile / search.camera.fy(),
         }
     }
 
-    /// The memo key of a valid grid point: its tile and depth step. Single
-    /// precision and no rounding calls, so eight lanes vectorise; every
-    /// path computes the key with this one function.
+    /// The memo key of a valid grid point: its tile and depth step
+    /// ([`kernels::tile_key`], with which every path computes it).
     #[inline(always)]
     fn key(&self, p: &Point) -> u64 {
-        let z = p[2];
-        let tile_col = floor_i32(p[0] / z * self.tiles_per_x);
-        let tile_row = floor_i32(p[1] / z * self.tiles_per_y);
-        // Depths are positive, so rounding is the floor of z / step + ½.
-        let depth_step = floor_i32(z * (1.0 / FULL_COUNT_DEPTH_STEP_MM as f32) + 0.5);
-        ((tile_row as i16 as u16 as u64) << 48) | ((tile_col as i16 as u16 as u64) << 32) | (depth_step as u32 as u64)
+        kernels::tile_key(p, &self.scales)
     }
 
     /// The full-plane count of the points with memo key `key` (from
@@ -398,40 +361,17 @@ impl<'a> FullCounts<'a> {
     }
 
     /// The memo keys of `LANES` valid grid points given as coordinate
-    /// lanes; inlined into the callers' vector code.
+    /// lanes ([`kernels::tile_keys`]).
     #[inline(always)]
-    pub(crate) fn keys_of_lanes(&self, [xs, ys, zs]: &[[f32; LANES]; 3]) -> [u64; LANES] {
-        std::array::from_fn(|l| self.key(&[xs[l], ys[l], zs[l]]))
+    pub(crate) fn keys_of_lanes(&self, lanes: &[[f32; LANES]; 3]) -> [u64; LANES] {
+        kernels::tile_keys(lanes, &self.scales)
     }
 
-    /// [`FullCounts::keys_of_lanes`] in AVX2 registers: the operations of
-    /// [`FullCounts::key`] in the same order, so the same keys.
-    ///
-    /// # Safety
-    /// The CPU must support AVX2.
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2")]
-    pub(crate) fn keys_of_lanes_avx2(&self, xs: __m256, ys: __m256, zs: __m256) -> [u64; LANES] {
-        let tile_col = floor_i32_avx2(_mm256_mul_ps(_mm256_div_ps(xs, zs), _mm256_set1_ps(self.tiles_per_x)));
-        let tile_row = floor_i32_avx2(_mm256_mul_ps(_mm256_div_ps(ys, zs), _mm256_set1_ps(self.tiles_per_y)));
-        let per_step = _mm256_mul_ps(zs, _mm256_set1_ps(1.0 / FULL_COUNT_DEPTH_STEP_MM as f32));
-        let depth_step = floor_i32_avx2(_mm256_add_ps(per_step, _mm256_set1_ps(0.5)));
-        // A key's high half: the tile row and column as 16-bit fields.
-        let tiles =
-            _mm256_or_si256(_mm256_slli_epi32::<16>(tile_row), _mm256_and_si256(tile_col, _mm256_set1_epi32(0xFFFF)));
-        // Pair each lane's halves into a 64-bit key. Unpacking works within
-        // 128-bit halves, leaving lanes 0, 1, 4, 5 in one register and
-        // 2, 3, 6, 7 in the other; the permutes put them back in order.
-        let (low_pairs, high_pairs) =
-            (_mm256_unpacklo_epi32(depth_step, tiles), _mm256_unpackhi_epi32(depth_step, tiles));
-        let mut keys = [0u64; LANES];
-        let (first, last) = keys.split_at_mut(LANES / 2);
-        // SAFETY: each half of `keys` holds four u64, one 256-bit store.
-        unsafe {
-            _mm256_storeu_si256(first.as_mut_ptr().cast(), _mm256_permute2x128_si256::<0x20>(low_pairs, high_pairs));
-            _mm256_storeu_si256(last.as_mut_ptr().cast(), _mm256_permute2x128_si256::<0x31>(low_pairs, high_pairs));
-        }
-        keys
+    /// The tile and depth scales of the memo keys, for tests that compute
+    /// keys through the kernels directly.
+    #[cfg(test)]
+    pub(crate) fn scales(&self) -> TileScales {
+        self.scales
     }
 }
 
@@ -574,71 +514,6 @@ pub(crate) fn lattice_count_in_ellipse(camera: &CameraModel, p: &Vec3, n: &Vec3,
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::kernels::{self, Isa};
-
-    #[test]
-    fn floor_i32_floors_and_clamps() {
-        for x in [-3.5f32, -3.0, -2.5, -0.5, -0.0, 0.0, 0.25, 0.5, 1.0, 1.5, 2.5, 2.999_999_8, 1234.5, -1234.5] {
-            assert_eq!(floor_i32(x), x.floor() as i32, "{x}");
-        }
-        assert_eq!(floor_i32(1e9), 4_000_000);
-        assert_eq!(floor_i32(f32::NEG_INFINITY), -4_000_000);
-        assert_eq!(floor_i32(f32::NAN), -4_000_000);
-    }
-
-    #[test]
-    fn vector_keys_equal_scalar_keys() {
-        let camera = CameraModel::default();
-        let cloud = plane_cloud(&camera, 8, 8, 500.0, Vec3::z(), usize::MAX);
-        let search = NeighbourSearch::new(&cloud, &camera, 1.0);
-        let counts = FullCounts::new(&search, &Vec3::z());
-        // Depths on and around the half-millimetre steps, tile borders in
-        // x / z, and the values the floor clamps.
-        let mut values = vec![f32::NAN, f32::INFINITY, f32::NEG_INFINITY, 0.0, -0.0, 1.0e30, -1.0e30, 1.0e-30];
-        for k in 0..400 {
-            let z = 480.0 + k as f32 * 0.125;
-            values.extend([z, f32::from_bits(z.to_bits() + 1), f32::from_bits(z.to_bits() - 1)]);
-        }
-        let depths: Vec<f32> = values.iter().map(|v| v.abs().max(100.0)).chain(values.iter().copied()).collect();
-        let tile = (FULL_COUNT_TILE_PX as f64 / camera.fx()) as f32;
-        let blocks: Vec<[[f32; LANES]; 3]> = depths
-            .chunks_exact(LANES)
-            .enumerate()
-            .map(|(chunk, zs)| {
-                let zs: [f32; LANES] = zs.try_into().unwrap();
-                let xs = std::array::from_fn(|l| (chunk as f32 - 200.0 + l as f32 * 0.3) * tile * zs[l] / 7.0);
-                let ys = std::array::from_fn(|l| values[(chunk * 3 + l) % values.len()]);
-                [xs, ys, zs]
-            })
-            .collect();
-        assert!(blocks.len() * LANES > 2000);
-        // The keys of every block by the form each level computes them with.
-        let (ran, _skipped) = kernels::on_every_isa(|isa| -> Vec<[u64; LANES]> {
-            blocks
-                .iter()
-                .map(|lanes| match isa {
-                    #[cfg(target_arch = "x86_64")]
-                    Isa::Avx2 => {
-                        let [xs, ys, zs] = lanes.map(|v| {
-                            // SAFETY: `v` holds exactly LANES floats.
-                            unsafe { _mm256_loadu_ps(v.as_ptr()) }
-                        });
-                        // SAFETY: `on_every_isa` runs only the levels the CPU runs.
-                        unsafe { counts.keys_of_lanes_avx2(xs, ys, zs) }
-                    }
-                    _ => counts.keys_of_lanes(lanes),
-                })
-                .collect()
-        });
-        for (isa, keys) in &ran {
-            for (lanes, keys) in blocks.iter().zip(keys) {
-                for l in 0..LANES {
-                    let p = [lanes[0][l], lanes[1][l], lanes[2][l]];
-                    assert_eq!(keys[l], counts.key(&p), "{isa:?}: lane {l} of {p:?}");
-                }
-            }
-        }
-    }
 
     /// A frontal plane at depth z sampled by the camera, with an optional
     /// hole of invalid pixels for columns >= `cut`.

@@ -12,7 +12,7 @@ use rayon::prelude::*;
 
 use super::FullPlaneCount;
 use crate::cloud::Point;
-use crate::kernels::{self, LabelledGrid, RowBounds, members_corner};
+use crate::kernels::{self, LabelledGrid, LabelledWindow, RowBounds, members_corner};
 use crate::pipeline::neighbours::NeighbourSearch;
 
 /// Rows handed to a rayon job at a time: enough to amortise the first
@@ -289,8 +289,14 @@ impl<'a> GridCount<'a> {
     /// threshold.
     fn is_edge(&self, i: usize, label: u32, threshold: f64) -> bool {
         let grid = LabelledGrid { points: self.points, labels: self.labels, width: self.width, height: self.height };
-        let window = self.window(self.points[i]);
-        kernels::labelled_count_at_most(&grid, i, window, label, self.radius_sq, threshold)
+        let query = LabelledWindow {
+            centre: i,
+            window: self.window(self.points[i]),
+            label,
+            radius_sq: self.radius_sq,
+            threshold,
+        };
+        kernels::labelled_count_at_most(&grid, &query)
     }
 }
 

@@ -6,16 +6,17 @@
 //!
 //! What a point needs comes from the criterion ([`Threshold::needed`]);
 //! [`BlockThreshold`] lets a criterion answer for a block of eight pixels
-//! at once, which the robust one does in eight-wide registers.
+//! at once, which the robust one does with the kernels' lane forms of its
+//! depth range, normal test and memo keys ([`kernels::depth_range`],
+//! [`kernels::normal_test`], [`kernels::tile_keys`]).
 
 use rayon::prelude::*;
 
 use super::{PaperThreshold, PlanePoints, RobustThreshold, Threshold};
 use crate::geometry::vec3;
-use crate::kernels::{self, Isa};
+use crate::kernels::{self, LaneMasks, NormalTest};
 use crate::pipeline::grid_search::{Grid, LANES, Span, SpanRuns};
 use crate::pipeline::neighbours::{FullCountCache, KeyMemo, NeighbourSearch, PixelEllipse};
-use crate::pipeline::orientation::{cross, cross_agrees};
 
 /// [`Threshold::needed`] for a block of pixels of one row.
 pub(super) trait BlockThreshold: Threshold {
@@ -35,14 +36,14 @@ impl BlockThreshold for RobustThreshold<'_> {
     /// The normal test of eight lanes at once on the coordinate planes,
     /// for the lanes that have all four neighbours at their step (once per
     /// step when the block straddles a step boundary); any other lane, and
-    /// a block near the image border, is tested lane by lane.
+    /// a block near the image border, is tested lane by lane. Compiled for
+    /// AVX2 where that is the level, so that the kernels it calls inline
+    /// into it and their lanes stay in registers.
     fn needed_block(&self, grid: &Grid, row: usize, col: usize, memos: &mut Memos, needs: &mut BlockNeeds) {
-        #[cfg(target_arch = "x86_64")]
-        if kernels::isa() == Isa::Avx2 {
-            // SAFETY: the CPU supports AVX2: `isa` gives no level it lacks.
-            return unsafe { self.needed_block_avx2(grid, row, col, memos, needs) };
-        }
-        self.needed_block_with::<false>(grid, row, col, memos, needs);
+        kernels::vectorised(
+            #[inline(always)]
+            || self.needed_block_on_lanes(grid, row, col, memos, needs),
+        );
     }
 }
 
@@ -117,54 +118,24 @@ impl LaneNeed {
 }
 
 impl RobustThreshold<'_> {
-    /// [`BlockThreshold::needed_block`] compiled for AVX2: the depth range,
-    /// memo keys and bit masks of a block in eight-wide registers.
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2")]
-    fn needed_block_avx2(&self, grid: &Grid, row: usize, col: usize, memos: &mut Memos, needs: &mut BlockNeeds) {
-        self.needed_block_with::<true>(grid, row, col, memos, needs);
+    /// The normal test of the criterion, as the kernels take it.
+    #[inline(always)]
+    fn normal_test(&self) -> NormalTest {
+        let n = self.criterion.normal;
+        NormalTest { reference: [n.x as f32, n.y as f32, n.z as f32], cos_sq: (self.cos_limit * self.cos_limit) as f32 }
     }
 
-    /// The block's depth range, in AVX2 registers when `AVX2`.
+    /// [`BlockThreshold::needed_block`]'s body.
     #[inline(always)]
-    fn depth_range_of<const AVX2: bool>(z: &[f32; LANES]) -> (f32, f32) {
-        #[cfg(target_arch = "x86_64")]
-        if AVX2 {
-            // SAFETY: `AVX2` is true only in `needed_block_avx2`, which is
-            // called once the CPU was checked.
-            return unsafe { depth_range_avx2(z) };
-        }
-        depth_range(z)
-    }
-
-    /// The normal test of a block, in AVX2 registers when `AVX2`.
-    #[inline(always)]
-    fn facts_of<const AVX2: bool>(&self, grid: &Grid, first: usize, step: usize) -> LaneFacts {
-        #[cfg(target_arch = "x86_64")]
-        if AVX2 {
-            // SAFETY: as in `depth_range_of`.
-            return unsafe { self.lane_facts_avx2(grid, first, step) };
-        }
-        self.lane_facts(grid, first, step)
-    }
-
-    /// [`BlockThreshold::needed_block`], in AVX2 registers when `AVX2`.
-    #[inline(always)]
-    fn needed_block_with<const AVX2: bool>(
-        &self,
-        grid: &Grid,
-        row: usize,
-        col: usize,
-        memos: &mut Memos,
-        needs: &mut BlockNeeds,
-    ) {
+    fn needed_block_on_lanes(&self, grid: &Grid, row: usize, col: usize, memos: &mut Memos, needs: &mut BlockNeeds) {
         let (w, h) = (grid.width(), grid.height());
         let first = row * w + col;
-        let pz = grid.lanes(first)[2];
+        let centre = grid.lanes(first);
+        let pz = &centre[2];
         // The step only falls as depth grows, so the nearest and farthest
         // lanes bound every valid lane's step; at most two steps occur
         // where a step boundary crosses the block.
-        let (z_near, z_far) = Self::depth_range_of::<AVX2>(&pz);
+        let (z_near, z_far) = kernels::depth_range(pz);
         let (step_near, step_far) = (self.steps.step(z_near), self.steps.step(z_far));
         let fits = col >= step_near && col + LANES - 1 + step_near < w && row >= step_near && row + step_near < h;
         // Only positive depths have a step table entry; all-invalid blocks
@@ -176,14 +147,15 @@ impl RobustThreshold<'_> {
         }
         // A block across a step boundary is rare: its second normal test
         // is kept out of line, off the common path.
-        let mut facts = self.facts_of::<AVX2>(grid, first, step_far);
+        let test = self.normal_test();
+        let mut facts = kernels::normal_test(grid.planes(), w, first, step_far, &test);
         if step_near != step_far {
             let near_lanes = lane_bits(|l| pz[l] < self.steps.depth_limit(step_near));
-            self.straddle::<AVX2>(grid, first, step_near, near_lanes, &mut facts);
+            Self::straddle(grid, first, step_near, near_lanes, &test, &mut facts);
         }
         // An invalid lane's step is 1 whatever its neighbours: it reads as
         // incomplete either way and takes the scalar path below.
-        let LaneFacts { complete, facing, keys } = facts;
+        let LaneMasks { complete, facing } = facts;
         let mut incomplete = !complete & ((1 << LANES) - 1);
         while incomplete != 0 {
             // A missing neighbour: the one-sided rule, lane by lane.
@@ -197,6 +169,10 @@ impl RobustThreshold<'_> {
             })
         };
         let mut open = complete & facing;
+        if open == 0 {
+            return;
+        }
+        let keys = self.full_counts.keys_of_lanes(&centre);
         if open == (1 << LANES) - 1 {
             // Inside a plate: a look-up per lane, whose hits are certain
             // enough to predict, where a loop over distinct keys was not.
@@ -221,149 +197,28 @@ impl RobustThreshold<'_> {
     }
 }
 
-/// The nearest and farthest valid depth of a block's lanes: `f32::min`
-/// and `max` pass over NaN, so invalid lanes drop out, and a block of
-/// invalid lanes gives NaN or an infinity. Pairwise, so the eight lanes
-/// take three dependent steps rather than eight.
-#[inline(always)]
-fn depth_range(z: &[f32; LANES]) -> (f32, f32) {
-    let halve = |v: [f32; 4], f: fn(f32, f32) -> f32| f(f(v[0], v[2]), f(v[1], v[3]));
-    let pair = |f: fn(f32, f32) -> f32| halve(std::array::from_fn(|i| f(z[i], z[i + 4])), f);
-    (pair(f32::min), pair(f32::max))
-}
-
-/// [`depth_range`] in AVX2 registers. Invalid lanes are set to the
-/// infinity that cannot win, so a block of invalid lanes gives infinities.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-fn depth_range_avx2(z: &[f32; LANES]) -> (f32, f32) {
-    use std::arch::x86_64::*;
-    // SAFETY: `z` holds exactly LANES floats; loadu needs no alignment.
-    let z = unsafe { _mm256_loadu_ps(z.as_ptr()) };
-    let invalid = _mm256_cmp_ps::<_CMP_UNORD_Q>(z, z);
-    let lows = _mm256_blendv_ps(z, _mm256_set1_ps(f32::INFINITY), invalid);
-    let highs = _mm256_blendv_ps(z, _mm256_set1_ps(f32::NEG_INFINITY), invalid);
-    // Fold the halves, then the pairs, then the neighbours.
-    let fold = |v: __m256, f: fn(__m256, __m256) -> __m256| {
-        let v = f(v, _mm256_permute2f128_ps::<1>(v, v));
-        let v = f(v, _mm256_permute_ps::<0b0100_1110>(v));
-        _mm256_cvtss_f32(f(v, _mm256_permute_ps::<0b1011_0001>(v)))
-    };
-    (fold(lows, |a, b| _mm256_min_ps(a, b)), fold(highs, |a, b| _mm256_max_ps(a, b)))
-}
-
 /// Bit `l` set where `test(l)` holds, for the lanes of a block.
 #[inline(always)]
 fn lane_bits(test: impl Fn(usize) -> bool) -> u32 {
     (0..LANES).fold(0, |bits, l| bits | (test(l) as u32) << l)
 }
 
-/// What a block's lanes need before counting, for one normal step whose
-/// neighbours of the block are in the image.
-#[derive(Debug, PartialEq, Eq)]
-struct LaneFacts {
-    /// Bit `l`: lane `l` and its four neighbours are valid.
-    complete: u32,
-    /// Bit `l`: the grid normal agrees with the workpiece's (meaningful when complete).
-    facing: u32,
-    /// The full-count memo keys.
-    keys: [u64; LANES],
-}
-
 impl RobustThreshold<'_> {
-    /// The normal test and memo keys of the eight lanes from pixel
-    /// `first`, term for term as the scalar [`Threshold::needed`] computes
-    /// them: the reference of the vector form, and the path on other CPUs.
-    fn lane_facts(&self, grid: &Grid, first: usize, step: usize) -> LaneFacts {
-        let w = grid.width();
-        let centre = grid.lanes(first);
-        let [px, py, pz] = centre;
-        let [lx, ly, lz] = grid.lanes(first - step);
-        let [rx, ry, rz] = grid.lanes(first + step);
-        let [ux, uy, uz] = grid.lanes(first - step * w);
-        let [dx, dy, dz] = grid.lanes(first + step * w);
-        let n = self.criterion.normal;
-        let reference = [n.x as f32, n.y as f32, n.z as f32];
-        let cos_sq = (self.cos_limit * self.cos_limit) as f32;
-        let (mut complete, mut facing) = (0, 0);
-        for l in 0..LANES {
-            let du = [rx[l] - lx[l], ry[l] - ly[l], rz[l] - lz[l]];
-            let dv = [dx[l] - ux[l], dy[l] - uy[l], dz[l] - uz[l]];
-            let valid = (du[0] + du[1] + du[2] + dv[0] + dv[1] + dv[2] + px[l]).is_finite();
-            complete |= (valid as u32) << l;
-            facing |= (cross_agrees(cross(du, dv), [px[l], py[l], pz[l]], reference, cos_sq) as u32) << l;
-        }
-        LaneFacts { complete, facing, keys: self.full_counts.keys_of_lanes(&centre) }
-    }
-
     /// Takes the normal test of the lanes in `near_lanes`, those of a block
     /// nearer than a step boundary, at their step `step_near`.
     #[cold]
     #[inline(never)]
-    fn straddle<const AVX2: bool>(
-        &self,
+    fn straddle(
         grid: &Grid,
         first: usize,
         step_near: usize,
         near_lanes: u32,
-        facts: &mut LaneFacts,
+        test: &NormalTest,
+        facts: &mut LaneMasks,
     ) {
-        let near = self.facts_of::<AVX2>(grid, first, step_near);
+        let near = kernels::normal_test(grid.planes(), grid.width(), first, step_near, test);
         facts.complete = (near.complete & near_lanes) | (facts.complete & !near_lanes);
         facts.facing = (near.facing & near_lanes) | (facts.facing & !near_lanes);
-    }
-
-    /// [`RobustThreshold::lane_facts`] in eight-wide registers: the same
-    /// operations in the same order (no fused multiply-add), so the same
-    /// bits. Written with intrinsics: the compiler split the lane loops
-    /// into four-wide pieces and spilled them.
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2")]
-    #[inline]
-    fn lane_facts_avx2(&self, grid: &Grid, first: usize, step: usize) -> LaneFacts {
-        use std::arch::x86_64::*;
-        let w = grid.width();
-        let load = |at: usize| grid.lanes_avx(at);
-        let [px, py, pz] = load(first);
-        let [lx, ly, lz] = load(first - step);
-        let [rx, ry, rz] = load(first + step);
-        let [ux, uy, uz] = load(first - step * w);
-        let [dx, dy, dz] = load(first + step * w);
-        let (add, sub, mul) = (_mm256_add_ps, _mm256_sub_ps, _mm256_mul_ps);
-        let du = [sub(rx, lx), sub(ry, ly), sub(rz, lz)];
-        let dv = [sub(dx, ux), sub(dy, uy), sub(dz, uz)];
-        let sum = add(add(add(add(add(add(du[0], du[1]), du[2]), dv[0]), dv[1]), dv[2]), px);
-        // Finite: the magnitude is below infinity (NaN compares false).
-        let magnitude = _mm256_and_ps(sum, _mm256_castsi256_ps(_mm256_set1_epi32(i32::MAX)));
-        let valid = _mm256_cmp_ps::<_CMP_LT_OQ>(magnitude, _mm256_set1_ps(f32::INFINITY));
-        // `cross_agrees(cross(du, dv), p, reference, cos_sq)`, term for term.
-        let n = [
-            sub(mul(du[1], dv[2]), mul(du[2], dv[1])),
-            sub(mul(du[2], dv[0]), mul(du[0], dv[2])),
-            sub(mul(du[0], dv[1]), mul(du[1], dv[0])),
-        ];
-        let dot3 = |a: [__m256; 3], b: [__m256; 3]| add(add(mul(a[0], b[0]), mul(a[1], b[1])), mul(a[2], b[2]));
-        let normal = self.criterion.normal;
-        let reference = [normal.x as f32, normal.y as f32, normal.z as f32].map(|c| _mm256_set1_ps(c));
-        let cos_sq = _mm256_set1_ps((self.cos_limit * self.cos_limit) as f32);
-        let towards = dot3(n, [px, py, pz]);
-        // Multiplying by -1 flips the sign bit; for a NaN the bit differs
-        // but every comparison below is false either way.
-        let away = _mm256_cmp_ps::<_CMP_LT_OQ>(towards, _mm256_setzero_ps());
-        let dot = _mm256_xor_ps(dot3(n, reference), _mm256_and_ps(away, _mm256_set1_ps(-0.0)));
-        let norm_sq = dot3(n, n);
-        let facing = _mm256_and_ps(
-            _mm256_and_ps(
-                _mm256_cmp_ps::<_CMP_GT_OQ>(norm_sq, _mm256_set1_ps(1e-24)),
-                _mm256_cmp_ps::<_CMP_GE_OQ>(dot, _mm256_setzero_ps()),
-            ),
-            _mm256_cmp_ps::<_CMP_GE_OQ>(mul(dot, dot), mul(cos_sq, norm_sq)),
-        );
-        LaneFacts {
-            complete: _mm256_movemask_ps(valid) as u32,
-            facing: _mm256_movemask_ps(facing) as u32,
-            keys: self.full_counts.keys_of_lanes_avx2(px, py, pz),
-        }
     }
 }
 
@@ -542,68 +397,6 @@ fn classify_block<T: BlockThreshold>(
         if count >= need {
             out.mask[l] = true;
             out.counts[l] = count.min(u16::MAX as u32) as u16;
-        }
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::camera::CameraModel;
-    use crate::cloud::PointCloud;
-    use crate::pipeline::plane_points::RobustPlaneCriterion;
-    use crate::pipeline::plane_points::tests::scene;
-
-    #[test]
-    fn vector_lane_facts_equal_the_scalar_form() {
-        let camera = CameraModel::default();
-        let (clean, n) = scene(530.0, 15.0, 36);
-        // Noise, dropouts, a far point and an infinity, so every test of
-        // the normal meets finite, invalid and extreme inputs.
-        let mut points = clean.points().to_vec();
-        for (i, p) in points.iter_mut().enumerate() {
-            let wobble = ((i * 7919) % 13) as f32 * 0.01;
-            p[2] += wobble;
-            match i % 97 {
-                5 => *p = [f32::NAN; 3],
-                17 => p[2] = 1.0e30,
-                29 => p[0] = f32::INFINITY,
-                _ => {}
-            }
-        }
-        let cloud = PointCloud::organized(clean.width(), clean.height(), points).unwrap();
-        let grid = Grid::new(&cloud);
-        let search = NeighbourSearch::new(&cloud, &camera, 1.0);
-        let c = RobustPlaneCriterion { normal: n, min_ratio: 0.8, max_angle_deg: 20.0 };
-        let threshold = RobustThreshold::new(&search, &c);
-        let (w, h) = (grid.width(), grid.height());
-        let blocks = || {
-            (1..=4).flat_map(move |step| {
-                (step..h - step)
-                    .flat_map(move |row| (step..w - LANES - step).step_by(3).map(move |col| (row, col, step)))
-            })
-        };
-        assert!(blocks().count() > 1000);
-        // The facts of every block by the path each level dispatches to.
-        let (ran, _skipped) = kernels::on_every_isa(|isa| {
-            let facts: Vec<_> = blocks()
-                .map(|(row, col, step)| {
-                    let first = row * w + col;
-                    match isa {
-                        #[cfg(target_arch = "x86_64")]
-                        // SAFETY: `on_every_isa` runs only the levels the CPU runs.
-                        Isa::Avx2 => unsafe { threshold.lane_facts_avx2(&grid, first, step) },
-                        _ => threshold.lane_facts(&grid, first, step),
-                    }
-                })
-                .collect();
-            facts
-        });
-        let (_, scalar) = &ran[0];
-        for (isa, facts) in &ran[1..] {
-            for (k, (row, col, step)) in blocks().enumerate() {
-                assert_eq!(facts[k], scalar[k], "{isa:?}: row {row}, col {col}, step {step}");
-            }
         }
     }
 }

@@ -46,6 +46,12 @@ pub mod to_proto {
             edge_fit_rms_mm: s.edge_fit_rms_mm,
             edge_samples: s.edge_samples.map(|n| n as u32),
             edge_samples_dropped: s.edge_samples_dropped.map(|n| n as u32),
+            coverage: s.coverage.map(|c| proto::SeamCoverage {
+                edge: c.edge,
+                joint: c.joint,
+                visible_joint_mm: c.visible_joint_mm,
+                beyond_mm: c.beyond_mm,
+            }),
         }
     }
 

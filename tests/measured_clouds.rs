@@ -24,14 +24,22 @@ fn voxel_clouds_plan_their_seam_where_it_is_or_say_why_not() {
     let outcomes = plan_at_one_mm_voxels(&["i-butt-10", "i-butt-13", "lap-13"]);
     for o in &outcomes {
         match &o.result {
-            Ok((err, _)) => assert!(
-                err.max_mm < 1.0 && err.start_mm < 2.0 && err.end_mm < 2.0,
-                "{}: planned with max {:.2} mm, ends {:.2} and {:.2} mm off",
-                o.name,
-                err.max_mm,
-                err.start_mm,
-                err.end_mm
-            ),
+            Ok((err, plan)) => {
+                assert!(
+                    err.max_mm < 1.0 && err.start_mm < 2.0 && err.end_mm < 2.0,
+                    "{}: planned with max {:.2} mm, ends {:.2} and {:.2} mm off",
+                    o.name,
+                    err.max_mm,
+                    err.start_mm,
+                    err.end_mm
+                );
+                // The seam spans the joint both plates are seen beside and
+                // says so: within 2 mm of the evidence's ends, none beyond.
+                let c = plan.seams[0].coverage.expect("the robust method reports coverage");
+                let short_mm = (1.0 - c.joint) * c.visible_joint_mm;
+                assert!(short_mm < 4.0 && c.beyond_mm < 2.0, "{}: {c:?}", o.name);
+                assert!(c.edge.iter().all(|&e| e > 0.9), "{}: {c:?}", o.name);
+            }
             Err(e) => assert!(!e.reason.is_empty(), "{}: refused without a reason", o.name),
         }
     }

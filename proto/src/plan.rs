@@ -40,6 +40,23 @@ pub struct Seam {
     /// Samples each edge fit used, and how many outliers it dropped.
     pub edge_samples: [u32; 2],
     pub edge_samples_dropped: [u32; 2],
+    /// How much of the visible joint the seam spans and how much of the
+    /// seam its edges were seen along; absent from the paper's method.
+    pub coverage: Option<SeamCoverage>,
+}
+
+/// A seam's coverage of the joint the camera saw.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct SeamCoverage {
+    /// The fraction of the seam's length each weld edge was seen along.
+    pub edge: [f64; 2],
+    /// The fraction of the visible joint (where both plates are seen
+    /// beside the seam) the seam spans.
+    pub joint: f64,
+    /// The visible joint's length, mm.
+    pub visible_joint_mm: f64,
+    /// How much of the seam runs beyond the visible joint, mm.
+    pub beyond_mm: f64,
 }
 
 /// Point counts through the pipeline.

@@ -98,6 +98,18 @@ pub fn run(args: &PlanArgs) -> anyhow::Result<()> {
         "edge fits: rms {:.3} / {:.3} mm over {} / {} samples",
         seam.edge_fit_rms_mm[0], seam.edge_fit_rms_mm[1], seam.edge_samples[0], seam.edge_samples[1]
     )?;
+    if let Some(c) = &seam.coverage {
+        writeln!(
+            out,
+            "coverage: {:.1} % of the {:.1} mm of joint both plates are seen beside ({:.1} mm beyond it), \
+             edges seen along {:.0} % / {:.0} % of the seam",
+            100.0 * c.joint,
+            c.visible_joint_mm,
+            c.beyond_mm,
+            100.0 * c.edge[0],
+            100.0 * c.edge[1]
+        )?;
+    }
     writeln!(out, "{:>4}  {:>10} {:>10} {:>10}  {:>9} {:>9} {:>9}", "#", "x mm", "y mm", "z mm", "rx°", "ry°", "rz°")?;
     for (k, w) in seam.waypoints.iter().enumerate() {
         writeln!(

@@ -194,6 +194,52 @@ pub fn coverage(boundary: &Boundary, along: impl Fn(&BoundarySample) -> f64, s0:
     covered / (s1 - s0)
 }
 
+/// The plate's members in the band inside `edge` (between the band's
+/// inner side and the coarse edge) that lie farthest back and farthest
+/// forward along it: where the plate is seen beside the weld. `None`
+/// when no member lies there.
+pub fn members_along(cloud: &PointCloud, members: &[u32], edge: &CoarseEdge, band_mm: f64) -> Option<[Vec3; 2]> {
+    use rayon::prelude::*;
+    let points = cloud.points();
+    let extreme = |a: Option<(f64, Vec3)>, b: Option<(f64, Vec3)>, farther: fn(f64, f64) -> bool| match (a, b) {
+        (Some(x), Some(y)) => Some(if farther(y.0, x.0) { y } else { x }),
+        (x, y) => x.or(y),
+    };
+    let (lo, hi) = members
+        .par_iter()
+        .filter_map(|&i| {
+            let v = vec3(&points[i as usize]);
+            let d = v - edge.point;
+            let out = d.dot(&edge.outward);
+            (-band_mm..=0.0).contains(&out).then(|| (d.dot(&edge.direction), v))
+        })
+        .fold(|| (None, None), |(lo, hi), p| (extreme(lo, Some(p), |a, b| a < b), extreme(hi, Some(p), |a, b| a > b)))
+        .reduce(|| (None, None), |(l1, h1), (l2, h2)| (extreme(l1, l2, |a, b| a < b), extreme(h1, h2, |a, b| a > b)));
+    Some([lo?.1, hi?.1])
+}
+
+/// How deep, in neighbour radii, the plane criterion trims a plate's rim:
+/// a point `d` radii inside a straight edge keeps the part of its disc
+/// within the plate, and passes while that part is at least `min_ratio` of
+/// a whole disc (Eq. 6's count against the full-plane count). The cap
+/// beyond the edge holds `(acos d - d sqrt(1 - d²)) / pi` of the disc;
+/// solved for the cap that leaves `min_ratio`.
+pub fn rim_trim_radii(min_ratio: f64) -> f64 {
+    let cap = |d: f64| (d.acos() - d * (1.0 - d * d).sqrt()) / std::f64::consts::PI;
+    let lost = (1.0 - min_ratio).clamp(0.0, 0.5);
+    // The cap shrinks from half the disc at d = 0 to nothing at d = 1.
+    let (mut near, mut far) = (0.0_f64, 1.0_f64);
+    for _ in 0..60 {
+        let mid = 0.5 * (near + far);
+        if cap(mid) > lost {
+            near = mid;
+        } else {
+            far = mid;
+        }
+    }
+    0.5 * (near + far)
+}
+
 /// Samples the boundary of the plate whose member pixels are `members`
 /// beside `edge`. Organized clouds only.
 pub fn sample_boundary(
@@ -612,5 +658,27 @@ mod tests {
         let cloud = scattered(1.0, 3.3, 2.0);
         let seen = coverage(&sample_scattered(&cloud, &plane, &edge, &params, 1.0), |s| s.along, -55.0, 55.0);
         assert!(seen > 0.9, "the edge of a 2 mm gap is seen along {:.0} % of the plate", 100.0 * seen);
+    }
+
+    #[test]
+    fn the_rim_trim_leaves_the_disc_fraction_the_criterion_asks() {
+        // Half the disc is lost on the edge itself, none a radius inside.
+        assert!(rim_trim_radii(0.5) < 1e-9);
+        assert!((rim_trim_radii(1.0) - 1.0).abs() < 1e-9);
+        // At the default 0.8 a point passes from about half a radius in.
+        let d = rim_trim_radii(0.8);
+        let cap = (d.acos() - d * (1.0 - d * d).sqrt()) / std::f64::consts::PI;
+        assert!((cap - 0.2).abs() < 1e-9 && (0.45..0.55).contains(&d), "d = {d}, cap {cap}");
+    }
+
+    #[test]
+    fn members_along_finds_the_plate_beside_the_edge() {
+        let edge_x = 3.3;
+        let cloud = scattered_where(1.0, |x, y| x < edge_x + SLOPE * y && y.abs() < 30.0);
+        let members: Vec<u32> = (0..cloud.len() as u32).collect();
+        let (_, edge, params) = test_edge(edge_x);
+        let [lo, hi] = members_along(&cloud, &members, &edge, params.band_mm).unwrap();
+        assert!(lo.y > -30.0 && lo.y < -29.0 && hi.y < 30.0 && hi.y > 29.0, "{lo:?} {hi:?}");
+        assert!(members_along(&cloud, &[], &edge, params.band_mm).is_none());
     }
 }

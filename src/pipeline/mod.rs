@@ -227,6 +227,29 @@ pub struct Seam {
     /// Samples used by each edge's fit, and how many the trimming dropped.
     pub edge_samples: [usize; 2],
     pub edge_samples_dropped: [usize; 2],
+    /// How much of the joint the trajectory covers and on what evidence;
+    /// the robust method measures it, the paper's has no such figure.
+    pub coverage: Option<SeamCoverage>,
+}
+
+/// How much of the visible joint a seam spans, and how much of the seam
+/// its weld edges were seen along (issue 11: "report its coverage").
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SeamCoverage {
+    /// The fraction of the seam's length within a scan line (or strip) of
+    /// a boundary sample of each weld edge ([`boundary::coverage`]).
+    pub edge: [f64; 2],
+    /// The fraction of the visible joint the seam spans: the stretch along
+    /// the seam where both plates are seen beside it (each plate's points
+    /// inside its weld edge, widened by the rim the plane criterion trims;
+    /// for a lap, where the root is in view). A seam that stops short of
+    /// where both plates' evidence ends scores below 1.
+    pub joint: f64,
+    /// The visible joint's length, mm.
+    pub visible_joint_mm: f64,
+    /// How much of the seam runs beyond the visible joint, mm: beyond
+    /// where both plates are seen, no weld has evidence.
+    pub beyond_mm: f64,
 }
 
 /// The result of planning one frame.

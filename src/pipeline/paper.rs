@@ -113,5 +113,5 @@ pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
     ctx.clock.lap(Stage::WeldEquation);
 
     // 5.1: the waypoints in the robot's base frame.
-    ctx.finish(Method::Paper, weld, span, normal, &fits)
+    ctx.finish(Method::Paper, weld, span, normal, &fits, None)
 }

@@ -30,7 +30,7 @@ use super::edge_points::{EdgeCriterion, FullCount};
 use super::neighbours::NeighbourSearch;
 use super::ransac::EdgeLine;
 use super::refit::{self, SeamAxes};
-use super::{Plan, PlanError, Stage};
+use super::{Plan, PlanError, SeamCoverage, Stage};
 use super::{background, clustering, orientation, plane_points, ransac, weld_edges, weld_equation};
 
 /// How far, in degrees, a sampled local normal may lie from the most common
@@ -201,15 +201,17 @@ pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
         let edge = CoarseEdge { point: plane.project(&line.point), direction, outward };
         let params =
             BoundaryParams { band_mm: scale.band(cfg.boundary_band_mm), on_plane_mm: cfg.on_plane_tolerance_mm };
+        // Where the plate is seen beside the weld, for the coverage report.
+        let seen_beside = boundary::members_along(cloud, &plates[k].members, &edge, params.band_mm);
         if cloud.is_organized() {
-            return boundary::sample_boundary(cloud, &plates[k].members, plane, &edge, &params);
+            return (boundary::sample_boundary(cloud, &plates[k].members, plane, &edge, &params), seen_beside);
         }
         // Without a pixel grid: strips a few spacings wide, each ending
         // where its points stop.
         let spacing = scale.measured.map_or_else(|| camera.pixel_footprint_at(&edge.point), |s| s.spacing_mm);
-        boundary::sample_scattered(cloud, plane, &edge, &params, spacing)
+        (boundary::sample_scattered(cloud, plane, &edge, &params, spacing), seen_beside)
     };
-    let (boundary_a, boundary_b) = rayon::join(|| boundary_of(0), || boundary_of(1));
+    let ((boundary_a, beside_a), (boundary_b, beside_b)) = rayon::join(|| boundary_of(0), || boundary_of(1));
     let boundaries: [Boundary; 2] = [boundary_a, boundary_b];
     let samples: [Vec<Vec3>; 2] = boundaries.each_ref().map(|b| b.samples.iter().map(|s| s.position).collect());
     let union: Vec<Vec3> = samples.iter().flatten().copied().collect();
@@ -263,8 +265,10 @@ pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
     // Both edges must have been seen along the seam, not glimpsed here and
     // there: a gap the cloud cannot resolve still leaves the odd chance
     // hole, and a seam through those is a guess.
+    let mut edge_coverage = [0.0; 2];
     for (k, boundary) in boundaries.iter().enumerate() {
         let seen = boundary::coverage(boundary, |s| axes.feature(&s.position), s0, s1);
+        edge_coverage[k] = seen;
         tracing::debug!(edge = k + 1, coverage = seen, length_mm = s1 - s0, "weld edge coverage");
         if seen < MIN_EDGE_COVERAGE {
             return Err(PlanError::at(
@@ -282,8 +286,34 @@ pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
             ));
         }
     }
+    // The visible joint: where both plates are seen beside the weld, their
+    // members widened by the rim the plane criterion trimmed (for a lap,
+    // where the root is also in view). The seam should span all of it.
+    let trim = boundary::rim_trim_radii(cfg.plane_min_neighbour_ratio) * scale.radius_mm;
+    let beside = [beside_a, beside_b].map(|b| {
+        // Each plate's edge may run either way along the seam's axis.
+        b.map(|ends| {
+            let [p, q] = ends.map(|e| axes.feature(&e));
+            (p.min(q) - trim, p.max(q) + trim)
+        })
+    });
+    let coverage = match beside {
+        [Some((a0, a1)), Some((b0, b1))] => {
+            let (mut v0, mut v1) = (a0.max(b0), a1.min(b1));
+            if ctx.request.joint == JointType::Lap {
+                (v0, v1) = ctx.clip_to_view(&weld, v0, v1);
+            }
+            let visible_joint_mm = (v1 - v0).max(0.0);
+            let spanned = (s1.min(v1) - s0.max(v0)).max(0.0);
+            let joint = if visible_joint_mm > 0.0 { spanned / visible_joint_mm } else { 0.0 };
+            let beyond_mm = (s1 - s0) - spanned;
+            tracing::debug!(joint_coverage = joint, visible_joint_mm, beyond_mm, "seam coverage");
+            Some(SeamCoverage { edge: edge_coverage, joint, visible_joint_mm, beyond_mm })
+        }
+        _ => None,
+    };
     ctx.clock.lap(Stage::WeldEquation);
 
     // 5.1: the waypoints in the robot's base frame.
-    ctx.finish(Method::Robust, weld, (s0, s1), normal, &fits)
+    ctx.finish(Method::Robust, weld, (s0, s1), normal, &fits, coverage)
 }

@@ -3,6 +3,7 @@
 
 mod bench;
 mod cli;
+mod consumer_camera;
 mod daemon;
 mod fuzz;
 mod golden;

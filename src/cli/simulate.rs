@@ -2,7 +2,8 @@
 //! file (or, with `--variant`, the capture as a real tool would write it:
 //! unorganized, downsampled, cropped, in metres or in the base frame, as
 //! PCD or PLY) and writes its ground truth, pose and scene as JSON, with
-//! the arguments that run the planner on it.
+//! the arguments that run the planner on it. `--camera consumer` renders
+//! with a RealSense-class depth camera instead of the paper's.
 
 use std::fs::File;
 use std::io::{BufWriter, Write};
@@ -17,8 +18,14 @@ use weldseam::camera::CameraModel;
 use weldseam::cloud::{PointCloud, pcd, ply};
 use weldseam::geometry::Vec3;
 use weldseam::joint::JointType;
+use weldseam::sim::consumer::consumer_demo_scene;
 use weldseam::sim::variants::Variant;
-use weldseam::sim::{JointGeometry, NoiseSpec, PlateExtent, SceneSpec, Simulation, demo_scene, eval_suite, simulate};
+use weldseam::sim::{
+    CameraPreset, JointGeometry, NoiseSpec, PlateExtent, SceneSpec, Simulation, consumer_suite, demo_scene, eval_suite,
+    simulate,
+};
+
+use crate::cli::args::CameraArg;
 
 #[derive(Debug, Clone, clap::Args)]
 pub struct SimulateArgs {
@@ -40,6 +47,13 @@ pub struct SimulateArgs {
     /// Seed of the sensor noise.
     #[arg(long, value_name = "N")]
     pub seed: Option<u64>,
+    /// The camera that renders the frame: `industrial` (the paper's, the
+    /// default) or `consumer` (RealSense-class, 1280 x 720 px, 87 x 58
+    /// degrees, with its noise). With `consumer`, --joint starts from a
+    /// scene at 375 mm (for v-butt, a groove 30 mm wide and 10 mm deep) and
+    /// --suite-scene looks in the consumer suite of `eval --suite consumer`.
+    #[arg(long, value_enum, default_value_t)]
+    pub camera: CameraArg,
     /// Start from a scene of the evaluation suite, by name or index.
     #[arg(long, value_name = "NAME_OR_INDEX")]
     pub suite_scene: Option<String>,
@@ -64,7 +78,7 @@ pub struct SimulateArgs {
 pub fn run(args: &SimulateArgs) -> Result<()> {
     let (name, spec) = scene_from_args(args)?;
     let format = CloudFormat::of(&args.out)?;
-    let camera = CameraModel::default();
+    let camera = CameraPreset::from(args.camera).camera();
     let started = Instant::now();
     let rendered = simulate(&spec, &camera);
     let variant = args.variant.clone().unwrap_or_default();
@@ -98,9 +112,10 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
 
 /// The scene the arguments ask for, and its suite name if it has one.
 fn scene_from_args(args: &SimulateArgs) -> Result<(Option<String>, SceneSpec)> {
+    let preset = CameraPreset::from(args.camera);
     let (name, mut spec) = match (&args.suite_scene, args.joint) {
         (Some(key), joint) => {
-            let (name, spec) = find_suite_scene(key)?;
+            let (name, spec) = find_suite_scene(preset, key)?;
             if let Some(joint) = joint
                 && joint != spec.joint.joint_type()
             {
@@ -112,7 +127,10 @@ fn scene_from_args(args: &SimulateArgs) -> Result<(Option<String>, SceneSpec)> {
             }
             (Some(name), spec)
         }
-        (None, Some(joint)) => (None, demo_scene(joint)),
+        (None, Some(joint)) => match preset {
+            CameraPreset::Industrial => (None, demo_scene(joint)),
+            CameraPreset::Consumer => (None, consumer_demo_scene(joint)),
+        },
         (None, None) => bail!("give --joint (v-butt, i-butt or lap) or --suite-scene"),
     };
     let placement = &mut spec.placement;
@@ -137,8 +155,11 @@ fn scene_from_args(args: &SimulateArgs) -> Result<(Option<String>, SceneSpec)> {
     Ok((name, spec))
 }
 
-fn find_suite_scene(key: &str) -> Result<(String, SceneSpec)> {
-    let mut suite = eval_suite();
+fn find_suite_scene(preset: CameraPreset, key: &str) -> Result<(String, SceneSpec)> {
+    let mut suite = match preset {
+        CameraPreset::Industrial => eval_suite(),
+        CameraPreset::Consumer => consumer_suite(),
+    };
     let count = suite.len();
     let position = match key.parse::<usize>() {
         Ok(index) => (index < count).then_some(index),
@@ -324,6 +345,7 @@ mod tests {
             azimuth: None,
             roll: Some(-20.0),
             seed: Some(9),
+            camera: CameraArg::Industrial,
             suite_scene: None,
             no_noise: false,
             variant: None,
@@ -354,10 +376,10 @@ mod tests {
 
     #[test]
     fn suite_scenes_are_found_by_index_or_name() {
-        let (by_index, spec) = find_suite_scene("30").unwrap();
-        let (by_name, again) = find_suite_scene(&by_index).unwrap();
+        let (by_index, spec) = find_suite_scene(CameraPreset::Industrial, "30").unwrap();
+        let (by_name, again) = find_suite_scene(CameraPreset::Industrial, &by_index).unwrap();
         assert_eq!((by_index, spec), (by_name, again));
-        let err = find_suite_scene("9999").unwrap_err().to_string();
+        let err = find_suite_scene(CameraPreset::Industrial, "9999").unwrap_err().to_string();
         assert!(err.contains("below 66"), "{err}");
         let mut a = args(PathBuf::from("x.pcd"), None);
         a.suite_scene = Some("0".into());

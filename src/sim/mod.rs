@@ -8,6 +8,7 @@
 //! the controller would report. [`eval_suite`] is a fixed, seeded set of
 //! scenes spanning the working range for evaluating the planner.
 
+pub mod consumer;
 pub mod noise;
 pub mod render;
 pub mod scenarios;
@@ -24,6 +25,7 @@ use crate::geometry::Vec3;
 use crate::geometry::pose::{EulerConvention, PAPER_HAND_EYE, RobotPose, hand_eye_from_rows};
 use crate::joint::JointType;
 
+pub use consumer::{CameraPreset, consumer_suite};
 pub use noise::NoiseSpec;
 pub use suite::{Framing, eval_suite, framing};
 pub use truth::GroundTruth;

@@ -142,16 +142,21 @@ impl Variant {
         if text == "raw" {
             return Ok(Variant::raw());
         }
-        let mut steps: Vec<Step> = Vec::new();
-        for part in text.split(',') {
-            let step = parse_step(part.trim())?;
-            if steps.iter().any(|s| s.rank() == step.rank()) {
+        let steps = text.split(',').map(|part| parse_step(part.trim())).collect::<Result<Vec<Step>, _>>()?;
+        Variant::from_steps(&steps)
+    }
+
+    /// The variant of these steps (any order; each kind at most once).
+    pub fn from_steps(steps: &[Step]) -> Result<Variant, VariantError> {
+        let mut sorted: Vec<Step> = Vec::with_capacity(steps.len());
+        for step in steps {
+            if sorted.iter().any(|s| s.rank() == step.rank()) {
                 return Err(VariantError::Repeated(step.name()));
             }
-            steps.push(step);
+            sorted.push(*step);
         }
-        steps.sort_by_key(Step::rank);
-        Ok(Variant { steps })
+        sorted.sort_by_key(Step::rank);
+        Ok(Variant { steps: sorted })
     }
 
     /// The simulated capture as this variant: the transformed cloud, with

@@ -7,6 +7,8 @@
 //! leaves out), and to reject bevel and side faces, whose neighbour counts
 //! can pass for a plate's when the camera looks at them squarely.
 
+use std::ops::ControlFlow;
+
 use crate::cloud::PointCloud;
 use crate::geometry::Vec3;
 use crate::geometry::fit::Moments;
@@ -208,6 +210,39 @@ pub(crate) fn scatter_normal(cloud: &PointCloud, search: &NeighbourSearch, i: us
         }
     });
     m.plane().map(|plane| plane.normal)
+}
+
+/// [`local_normal`] of point `i` of a cloud without a pixel grid, and its
+/// neighbour count read up to `count_cap` (as
+/// [`NeighbourSearch::count_up_to`] reads it), in one visit of its
+/// neighbours: the normal's sample is the first neighbours in the order
+/// both visit, so the two answers are the separate calls', which the tests
+/// check point for point.
+pub(crate) fn scatter_normal_and_count(search: &NeighbourSearch, i: usize, count_cap: u32) -> (Option<Vec3>, u32) {
+    let cloud = search.cloud();
+    let points = cloud.points();
+    let sample_cap = search.frame_neighbours_at_most(&points[i]).min(SCATTER_NORMAL_SAMPLE);
+    let count_cap = count_cap as usize;
+    let stop = sample_cap.max(count_cap);
+    let mut m = Moments::default();
+    let mut visited = 0usize;
+    if stop > 0 {
+        search.visit_until(i, |j| {
+            if visited < sample_cap
+                && let Some(q) = vec_at(cloud, j)
+            {
+                m.add(&q);
+            }
+            visited += 1;
+            if visited >= stop { ControlFlow::Break(()) } else { ControlFlow::Continue(()) }
+        });
+    }
+    let count = visited.min(count_cap) as u32;
+    let normal = m.plane().map(|plane| plane.normal).and_then(|n| {
+        let p = vec_at(cloud, i)?;
+        Some(if n.dot(&p) < 0.0 { -n } else { n })
+    });
+    (normal, count)
 }
 
 /// The most neighbours a normal without a pixel grid is fitted to. With

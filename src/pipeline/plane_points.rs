@@ -26,7 +26,7 @@ use crate::geometry::Vec3;
 
 use super::neighbours::{FullCountCache, FullCounts, NeighbourSearch};
 use super::orientation::{
-    GridPoints, StepTable, grid_normal_agrees, local_normal, normal_step, scatter_normal_and_count,
+    GridPoints, StepTable, grid_normal_agrees, local_normal, normal_step, scatter_facing_and_count,
 };
 
 /// The plane points and, for each, a lower bound of its neighbour count
@@ -192,8 +192,8 @@ impl Threshold for RobustThreshold<'_> {
             return None;
         }
         let (t, full) = self.need_of_full(self.full_counts.get(i, cache))?;
-        let (normal, count) = scatter_normal_and_count(search, i, cap_of(t));
-        normal.is_some_and(|n| n.dot(&self.criterion.normal) >= self.cos_limit).then_some((t, full, count))
+        let (facing, count) = scatter_facing_and_count(search, i, cap_of(t), &self.criterion.normal, self.cos_limit);
+        facing.then_some((t, full, count))
     }
 }
 

@@ -184,6 +184,8 @@ impl Threshold for RobustThreshold<'_> {
         cap_of: &dyn Fn(f64) -> u32,
     ) -> Option<(f64, f64, u32)> {
         let cloud = self.search.cloud();
+        // The one visit serves the criterion's own search of a cloud
+        // without a grid; anything else is counted as the default does.
         if cloud.is_organized() || !std::ptr::eq(search, self.search) {
             let (t, full) = self.needed(i, cache)?;
             return Some((t, full, search.count_up_to(i, |_| true, cap_of(t))));

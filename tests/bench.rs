@@ -42,6 +42,12 @@ fn bench_prints_every_table_with_a_figure_in_every_row() {
     assert!(out.status.success(), "{md}\n{}", String::from_utf8_lossy(&out.stderr));
 
     assert!(md.contains(&format!("**Per stage at 500 mm, {w} x {h} (0.5 MP), tilt 10°**")), "{md}");
+    // The measured-cloud table: the same frames voxel-downsampled, planned
+    // without a pixel grid, with a figure for every joint.
+    let measured = format!("**Per stage, measured cloud: the 500 mm frames ({w} x {h}) voxel-downsampled at 1 mm**");
+    let after = md.split(&measured).nth(1).unwrap_or_else(|| panic!("no measured-cloud table in\n{md}"));
+    let total = row(after, "total").unwrap_or_else(|| panic!("no total in the measured-cloud table\n{md}"));
+    assert!(total[1..].iter().all(|c| is_figure(c)), "{total:?}");
     assert_eq!(
         row(&md, "stage"),
         Some(vec!["stage", "v_butt ms", "i_butt ms", "lap ms"]),

@@ -155,9 +155,7 @@ impl<'a> NeighbourSearch<'a> {
             }
             Index::Cells(cells) => {
                 // The cells give candidates; the shared predicate decides.
-                cells.visit_near(i, p, self.radius_sq * (1.0 + 1e-5), |j, q| {
-                    if within(p, q, self.radius_sq) { visit(j) } else { ControlFlow::Continue(()) }
-                });
+                cells.visit_within(i, p, self.radius_sq, self.radius_sq * (1.0 + 1e-5), visit);
             }
             #[cfg(test)]
             Index::KdTree(index) => {

@@ -7,6 +7,8 @@
 //! leaves out), and to reject bevel and side faces, whose neighbour counts
 //! can pass for a plate's when the camera looks at them squarely.
 
+use std::ops::ControlFlow;
+
 use crate::cloud::PointCloud;
 use crate::geometry::Vec3;
 use crate::geometry::fit::Moments;
@@ -210,6 +212,171 @@ pub(crate) fn scatter_normal(cloud: &PointCloud, search: &NeighbourSearch, i: us
     m.plane().map(|plane| plane.normal)
 }
 
+/// Whether the [`local_normal`] of point `i` of a cloud without a pixel
+/// grid lies within the angle whose cosine is `cos_limit` of the unit
+/// `reference`, and the point's neighbour count read up to `count_cap` (as
+/// [`NeighbourSearch::count_up_to`] reads it), from one visit of its
+/// neighbours: the normal's sample is the first neighbours in the order
+/// both visit.
+///
+/// The decision is the reference's ([`local_normal`], nalgebra's
+/// eigen-decomposition) without its iterations where it cannot differ: the
+/// least eigenvalue in closed form ([`least_eigenvector`]) and its vector
+/// from two rows of `C − λ I` answer when the eigenvalues are well apart
+/// and the cosine is clear of the limit by far more than either method's
+/// rounding; every other point is decided by the reference. The tests
+/// check the two point for point.
+pub(crate) fn scatter_facing_and_count(
+    search: &NeighbourSearch,
+    i: usize,
+    count_cap: u32,
+    reference: &Vec3,
+    cos_limit: f64,
+) -> (bool, u32) {
+    let cloud = search.cloud();
+    let points = cloud.points();
+    let sample_cap = search.frame_neighbours_at_most(&points[i]).min(SCATTER_NORMAL_SAMPLE);
+    let count_cap = count_cap as usize;
+    let stop = sample_cap.max(count_cap);
+    let mut sums = SampleSums::default();
+    let mut visited = 0usize;
+    if stop > 0 {
+        search.visit_until(i, |j| {
+            if visited < sample_cap {
+                sums.add(&points[j]);
+            }
+            visited += 1;
+            if visited >= stop { ControlFlow::Break(()) } else { ControlFlow::Continue(()) }
+        });
+    }
+    let count = visited.min(count_cap) as u32;
+    let p = vec_at(cloud, i);
+    let fast = p.and_then(|p| sums.clear_decision(&p, reference, cos_limit));
+    let facing =
+        fast.unwrap_or_else(|| local_normal(cloud, search, i, 1).is_some_and(|n| n.dot(reference) >= cos_limit));
+    (facing, count)
+}
+
+/// How far a cosine must lie from the limit for the closed-form normal to
+/// decide: its error against the iterative one is below 1e-7 wherever the
+/// gap below holds, so a thousand times that is a wide margin.
+const CLEAR_COSINE: f64 = 1e-4;
+
+/// The least relative gap between the least eigenvalue and the next one
+/// (over the trace) for the closed form to decide: an error η in the
+/// eigenvalue turns its vector by about η over the gap.
+const CLEAR_GAP: f64 = 0.01;
+
+/// First and second moments of a normal's sample about its first point.
+#[derive(Default)]
+struct SampleSums {
+    count: usize,
+    origin: [f64; 3],
+    sum: [f64; 3],
+    /// xx, xy, xz, yy, yz, zz.
+    sum_sq: [f64; 6],
+}
+
+impl SampleSums {
+    #[inline(always)]
+    fn add(&mut self, q: &[f32; 3]) {
+        let q = [q[0] as f64, q[1] as f64, q[2] as f64];
+        if self.count == 0 {
+            self.origin = q;
+        }
+        let d = [q[0] - self.origin[0], q[1] - self.origin[1], q[2] - self.origin[2]];
+        self.count += 1;
+        for (s, v) in self.sum.iter_mut().zip(d) {
+            *s += v;
+        }
+        let products = [d[0] * d[0], d[0] * d[1], d[0] * d[2], d[1] * d[1], d[1] * d[2], d[2] * d[2]];
+        for (s, v) in self.sum_sq.iter_mut().zip(products) {
+            *s += v;
+        }
+    }
+
+    /// The decision `normal · reference >= cos_limit` of the normal
+    /// [`local_normal`] gives at `p`, when the closed form settles it;
+    /// `None` when it must be left to the reference (too few points, a
+    /// degenerate or nearly degenerate spread, a cosine near the limit, a
+    /// normal nearly square to the line of sight).
+    fn clear_decision(&self, p: &Vec3, reference: &Vec3, cos_limit: f64) -> Option<bool> {
+        if self.count < 3 {
+            return None;
+        }
+        let n = self.count as f64;
+        let mean = self.sum.map(|s| s / n);
+        let s = &self.sum_sq;
+        let c = [
+            s[0] / n - mean[0] * mean[0],
+            s[1] / n - mean[0] * mean[1],
+            s[2] / n - mean[0] * mean[2],
+            s[3] / n - mean[1] * mean[1],
+            s[4] / n - mean[1] * mean[2],
+            s[5] / n - mean[2] * mean[2],
+        ];
+        let v = least_eigenvector(c)?;
+        let mut normal = Vec3::new(v[0], v[1], v[2]);
+        let towards = normal.dot(p);
+        if towards.abs() < CLEAR_COSINE * p.norm() {
+            return None;
+        }
+        if towards < 0.0 {
+            normal = -normal;
+        }
+        let cosine = normal.dot(reference);
+        ((cosine - cos_limit).abs() >= CLEAR_COSINE).then_some(cosine >= cos_limit)
+    }
+}
+
+/// True for a positive number; false for zero, a negative one and NaN.
+fn positive(v: f64) -> bool {
+    v > 0.0
+}
+
+/// The unit eigenvector of the least eigenvalue of the symmetric 3 x 3
+/// matrix with upper triangle `c` (xx, xy, xz, yy, yz, zz): the eigenvalues
+/// by the trigonometric closed form (Smith, 1961), the vector as the
+/// largest cross product of two rows of `C − λ I`. `None` when the least
+/// eigenvalue is not clearly apart from the next ([`CLEAR_GAP`]) or the
+/// matrix is degenerate.
+fn least_eigenvector(c: [f64; 6]) -> Option<[f64; 3]> {
+    let [a00, a01, a02, a11, a12, a22] = c;
+    let trace = a00 + a11 + a22;
+    if !positive(trace) {
+        return None;
+    }
+    let q = trace / 3.0;
+    let off = a01 * a01 + a02 * a02 + a12 * a12;
+    let (b00, b11, b22) = (a00 - q, a11 - q, a22 - q);
+    let p = ((b00 * b00 + b11 * b11 + b22 * b22 + 2.0 * off) / 6.0).sqrt();
+    if !positive(p) {
+        return None;
+    }
+    let det = b00 * (b11 * b22 - a12 * a12) - a01 * (a01 * b22 - a12 * a02) + a02 * (a01 * a12 - b11 * a02);
+    let r = (det / (2.0 * p * p * p)).clamp(-1.0, 1.0);
+    let phi = r.acos() / 3.0;
+    let largest = q + 2.0 * p * phi.cos();
+    let least = q + 2.0 * p * (phi + 2.0 * std::f64::consts::FRAC_PI_3).cos();
+    let middle = trace - largest - least;
+    if middle - least < CLEAR_GAP * trace || least > middle {
+        return None;
+    }
+    let rows = [[a00 - least, a01, a02], [a01, a11 - least, a12], [a02, a12, a22 - least]];
+    let cross =
+        |u: &[f64; 3], w: &[f64; 3]| [u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0]];
+    let norm_sq = |v: &[f64; 3]| v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
+    let candidates = [cross(&rows[0], &rows[1]), cross(&rows[0], &rows[2]), cross(&rows[1], &rows[2])];
+    let best = candidates.iter().max_by(|a, b| norm_sq(a).total_cmp(&norm_sq(b)))?;
+    let length = norm_sq(best).sqrt();
+    // The largest cross product is at least the product of the other two
+    // eigenvalues over √3; far below it, the rows are not what they seem.
+    if !positive(length - 1e-3 * (middle - least) * (largest - least)) {
+        return None;
+    }
+    Some(best.map(|v| v / length))
+}
+
 /// The most neighbours a normal without a pixel grid is fitted to. With
 /// the radius holding some 50 points of a full plane (measured clouds) or
 /// more (the paper's radius on dense clouds), 64 spread over the disc fix
@@ -331,6 +498,82 @@ mod tests {
                 assert_eq!(grid_normal_agrees(&cloud, i, 3, &reference, cos), slow, "pixel {i}");
             }
         }
+    }
+
+    /// A scattered cloud of a noisy plate, a steep face, a thin line of
+    /// points and a loose clump: normals of every kind of spread.
+    fn scattered_scene(seed: u64) -> PointCloud {
+        let mut state = seed;
+        let mut unit = move || {
+            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (state >> 40) as f64 / (1u64 << 24) as f64
+        };
+        let mut pts = Vec::new();
+        for k in 0..6000 {
+            let (u, v) = (unit() * 40.0, unit() * 30.0);
+            let p = match k % 4 {
+                0 | 1 => [u, v, 600.0 + 0.3 * u + 0.1 * v + unit() * 0.2],
+                2 => [40.0 + unit() * 0.3 + 0.02 * v, v, 600.0 + u * 0.5],
+                _ => [u * 0.5, 10.0 + unit() * 0.05, 600.0 + unit() * 0.05],
+            };
+            pts.push([p[0] as f32, p[1] as f32, p[2] as f32]);
+        }
+        for _ in 0..300 {
+            pts.push([(20.0 + unit() * 2.0) as f32, (15.0 + unit() * 2.0) as f32, (590.0 + unit() * 2.0) as f32]);
+        }
+        PointCloud::unorganized(pts)
+    }
+
+    #[test]
+    fn the_closed_form_decides_as_the_iterative_normal() {
+        let camera = CameraModel::default();
+        for seed in [1, 2, 3] {
+            let cloud = scattered_scene(seed);
+            for radius in [0.8, 2.0] {
+                let search = NeighbourSearch::new(&cloud, &camera, radius);
+                let references = [
+                    (Vec3::new(-0.3, -0.1, 1.0).normalize(), 20f64),
+                    (Vec3::z(), 15.0),
+                    (Vec3::new(1.0, 0.0, -0.5).normalize(), 30.0),
+                ];
+                for i in 0..cloud.len() {
+                    for (reference, limit) in &references {
+                        let cos = limit.to_radians().cos();
+                        let slow = local_normal(&cloud, &search, i, 1).is_some_and(|n| n.dot(reference) >= cos);
+                        for cap in [0, 5, 40, 100] {
+                            let fast = scatter_facing_and_count(&search, i, cap, reference, cos);
+                            assert_eq!(fast, (slow, search.count_up_to(i, |_| true, cap)), "point {i}, seed {seed}");
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn the_closed_form_eigenvector_is_nalgebras() {
+        let mut state = 7u64;
+        let mut unit = move || {
+            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (state >> 40) as f64 / (1u64 << 24) as f64 - 0.5
+        };
+        let mut decided = 0;
+        for _ in 0..20_000 {
+            let m = nalgebra::Matrix3::from_fn(|_, _| unit());
+            let scale =
+                nalgebra::Matrix3::from_diagonal(&nalgebra::Vector3::new(1.0, 1.0 + unit(), 1e-3 + unit().abs()));
+            let c = m * scale * m.transpose();
+            let Some(v) = least_eigenvector([c[(0, 0)], c[(0, 1)], c[(0, 2)], c[(1, 1)], c[(1, 2)], c[(2, 2)]]) else {
+                continue;
+            };
+            decided += 1;
+            let eig = nalgebra::SymmetricEigen::new(c);
+            let least = eig.eigenvalues.imin();
+            let expected = eig.eigenvectors.column(least);
+            let dot = (v[0] * expected[0] + v[1] * expected[1] + v[2] * expected[2]).abs();
+            assert!(dot > 1.0 - 1e-9, "{c}: {v:?} against {expected}");
+        }
+        assert!(decided > 10_000, "{decided}");
     }
 
     #[test]

@@ -25,7 +25,9 @@ use crate::cloud::PointCloud;
 use crate::geometry::Vec3;
 
 use super::neighbours::{FullCountCache, FullCounts, NeighbourSearch};
-use super::orientation::{GridPoints, StepTable, grid_normal_agrees, local_normal, normal_step};
+use super::orientation::{
+    GridPoints, StepTable, grid_normal_agrees, local_normal, normal_step, scatter_facing_and_count,
+};
 
 /// The plane points and, for each, a lower bound of its neighbour count
 /// and the full-plane count it was measured against (the edge criterion
@@ -54,6 +56,22 @@ trait Threshold: Sync {
     /// The orientation of the plane the full count assumes: the fast
     /// classification counts over its ellipse first.
     fn plane_normal(&self) -> Vec3;
+
+    /// [`Threshold::needed`] of point `i` of a cloud without a pixel grid
+    /// and, when it is counted, its neighbour count read up to
+    /// `cap_of(needed count)`: what the classification takes per point
+    /// there. The robust criterion reads its normal and its count in one
+    /// visit of the neighbours.
+    fn needed_and_count(
+        &self,
+        search: &NeighbourSearch,
+        i: usize,
+        cache: &mut FullCountCache,
+        cap_of: &dyn Fn(f64) -> u32,
+    ) -> Option<(f64, f64, u32)> {
+        let (t, full) = self.needed(i, cache)?;
+        Some((t, full, search.count_up_to(i, |_| true, cap_of(t))))
+    }
 }
 
 /// Eq. 14: `N_r >= N'min(L)` with `L` the point's depth (Eq. 13).
@@ -152,6 +170,33 @@ impl Threshold for RobustThreshold<'_> {
     fn plane_normal(&self) -> Vec3 {
         self.criterion.normal
     }
+
+    /// The full count first (a lookup), then the normal and the count it
+    /// sets the cap of from one visit of the neighbours. The same answer
+    /// as `needed` then a count: `needed` is `None` when the point does
+    /// not face the workpiece or its full count is not positive, in either
+    /// order.
+    fn needed_and_count(
+        &self,
+        search: &NeighbourSearch,
+        i: usize,
+        cache: &mut FullCountCache,
+        cap_of: &dyn Fn(f64) -> u32,
+    ) -> Option<(f64, f64, u32)> {
+        let cloud = self.search.cloud();
+        // The one visit serves the criterion's own search of a cloud
+        // without a grid; anything else is counted as the default does.
+        if cloud.is_organized() || !std::ptr::eq(search, self.search) {
+            let (t, full) = self.needed(i, cache)?;
+            return Some((t, full, search.count_up_to(i, |_| true, cap_of(t))));
+        }
+        if !cloud.points()[i][0].is_finite() {
+            return None;
+        }
+        let (t, full) = self.need_of_full(self.full_counts.get(i, cache))?;
+        let (facing, count) = scatter_facing_and_count(search, i, cap_of(t), &self.criterion.normal, self.cos_limit);
+        facing.then_some((t, full, count))
+    }
 }
 
 /// Eq. 14, the paper's criterion.
@@ -237,6 +282,37 @@ pub(super) mod tests {
         let cloud = PointCloud::organized(3, 3, vec![[f32::NAN; 3]; 9]).unwrap();
         let search = NeighbourSearch::new(&cloud, &camera, 1.0);
         assert_eq!(paper_criterion(&cloud, &camera, &search).len(), 0);
+    }
+
+    #[test]
+    fn one_visit_for_normal_and_count_answers_as_the_separate_calls() {
+        let camera = CameraModel::default();
+        for (z, tilt, cols) in [(520.0, 0.0, 33), (800.0, 25.0, 41), (600.0, 10.0, 30)] {
+            let (grid, n) = scene(z, tilt, cols);
+            let cloud = PointCloud::unorganized(grid.points().to_vec());
+            for (radius, measured) in [(1.0, false), (0.6, true), (2.5, true)] {
+                let mut search = NeighbourSearch::new(&cloud, &camera, radius);
+                if measured {
+                    search.measure_full_counts();
+                }
+                let c = RobustPlaneCriterion { normal: n, min_ratio: 0.8, max_angle_deg: 20.0 };
+                let threshold = RobustThreshold::new(&search, &c);
+                let mut cache = FullCountCache::default();
+                for i in 0..cloud.len() {
+                    for cap in [0, 1, 7, 40, 64, 65, 500, u32::MAX] {
+                        let separate = threshold
+                            .needed(i, &mut cache)
+                            .map(|(t, full)| (t, full, search.count_up_to(i, |_| true, cap)));
+                        let fused = threshold.needed_and_count(&search, i, &mut cache, &|_| cap);
+                        assert_eq!(fused, separate, "point {i}, cap {cap}, radius {radius} at {z} mm");
+                    }
+                }
+                let tree = NeighbourSearch::kdtree(&cloud, &camera, radius);
+                if !measured {
+                    assert_eq!(robust_criterion(&search, &c).mask, reference(&tree, false, &c), "{z} mm");
+                }
+            }
+        }
     }
 
     #[test]

@@ -2,10 +2,14 @@
 //! seen from a given standoff at a fixed tilt, by the paper's camera or one
 //! with another sensor size and the same field of view (so only the pixel
 //! density changes). Measuring them is the bench subcommand's business;
-//! this module only says what the scenes are.
+//! this module only says what the scenes are. A scenario can also stand
+//! for a measured cloud: its frame voxel-downsampled, as a depth camera's
+//! tools or a merge of views leave it (unorganized, about a point per
+//! voxel).
 
 use crate::camera::CameraModel;
 use crate::joint::JointType;
+use crate::sim::variants::voxel_grid;
 use crate::sim::{SceneSpec, Simulation, demo_scene, simulate};
 
 /// The frame sizes of the scaling table: the paper's 1920 x 1200 sensor
@@ -18,6 +22,10 @@ pub const DISTANCES_MM: [f64; 3] = [500.0, 750.0, 1000.0];
 
 /// The camera tilt of every benchmark scene, degrees.
 pub const TILT_DEG: f64 = 10.0;
+
+/// The voxel of the measured-cloud scenarios, mm: the size of issue 11's
+/// speed target for downsampled clouds.
+pub const MEASURED_VOXEL_MM: f64 = 1.0;
 
 /// The paper's camera with another sensor size: same field of view at the
 /// same distance, so only the pixel density changes.
@@ -43,12 +51,20 @@ pub struct Scenario {
     pub distance_mm: f64,
     pub tilt_deg: f64,
     pub camera: CameraModel,
+    /// The voxel the frame is downsampled to, mm; `None` for the raw
+    /// organized frame.
+    pub voxel_mm: Option<f64>,
 }
 
 impl Scenario {
     /// The scenario at the benchmark's tilt, [`TILT_DEG`].
     pub fn new(joint: JointType, distance_mm: f64, camera: CameraModel) -> Self {
-        Scenario { joint, distance_mm, tilt_deg: TILT_DEG, camera }
+        Scenario { joint, distance_mm, tilt_deg: TILT_DEG, camera, voxel_mm: None }
+    }
+
+    /// The same capture voxel-downsampled at `size_mm`: a measured cloud.
+    pub fn voxelized(self, size_mm: f64) -> Self {
+        Scenario { voxel_mm: Some(size_mm), ..self }
     }
 
     /// One scenario per joint type at `distance_mm`, with `camera`.
@@ -64,12 +80,21 @@ impl Scenario {
     }
 
     pub fn simulate(&self) -> Simulation {
-        simulate(&self.spec(), &self.camera)
+        let sim = simulate(&self.spec(), &self.camera);
+        match self.voxel_mm {
+            Some(size_mm) => Simulation { cloud: voxel_grid(&sim.cloud, size_mm), ..sim },
+            None => sim,
+        }
     }
 
-    /// `v_butt 500 mm 2.3 MP`
+    /// `v_butt 500 mm 2.3 MP`, and `voxel 1 mm` after it for a measured
+    /// cloud.
     pub fn label(&self) -> String {
-        format!("{} {:.0} mm {:.1} MP", self.joint, self.distance_mm, megapixels(&self.camera))
+        let raw = format!("{} {:.0} mm {:.1} MP", self.joint, self.distance_mm, megapixels(&self.camera));
+        match self.voxel_mm {
+            Some(size_mm) => format!("{raw} voxel {size_mm} mm"),
+            None => raw,
+        }
     }
 }
 
@@ -98,5 +123,15 @@ mod tests {
         assert_eq!(scenario.label(), "lap 750 mm 0.5 MP");
         let joints: Vec<JointType> = Scenario::each_joint(500.0, scenario.camera).iter().map(|s| s.joint).collect();
         assert_eq!(joints, JointType::ALL);
+    }
+
+    #[test]
+    fn a_measured_scenario_is_the_frame_voxel_downsampled() {
+        let raw = Scenario::new(JointType::IButt, 500.0, camera_with_size(896, 560));
+        let voxel = raw.voxelized(MEASURED_VOXEL_MM);
+        assert_eq!(voxel.label(), "i_butt 500 mm 0.5 MP voxel 1 mm");
+        let (frame, cloud) = (raw.simulate().cloud, voxel.simulate().cloud);
+        assert!(frame.is_organized() && !cloud.is_organized());
+        assert!(cloud.valid_count() > 1000 && cloud.valid_count() < frame.valid_count() / 2, "{}", cloud.valid_count());
     }
 }

@@ -15,11 +15,13 @@
 //! (cell, cloud index), so queries visit neighbours in the same order on
 //! every run and every machine.
 
-use std::ops::ControlFlow;
+use std::ops::{ControlFlow, Range};
 
 use rayon::prelude::*;
 
 use crate::cloud::Point;
+#[cfg(doc)]
+use crate::kernels::within;
 
 /// Cell coordinates are packed into 21 bits each. Sanitised clouds lie
 /// within 3 m of the camera and 80° of its axis (17 m across at most), so
@@ -45,7 +47,11 @@ struct Cell {
 /// The index: points in cell order, the occupied cells and their
 /// neighbourhoods.
 pub(crate) struct CellIndex {
-    points: Vec<Point>,
+    /// The points' coordinates in cell order, one array per axis, so a
+    /// cell's distances are computed lanes at a time.
+    xs: Vec<f32>,
+    ys: Vec<f32>,
+    zs: Vec<f32>,
     /// Cell-ordered position → cloud point index.
     index_of: Vec<u32>,
     /// Cloud point index → its cell (`u32::MAX` for invalid points).
@@ -128,7 +134,8 @@ impl CellIndex {
             .collect();
         keyed.par_sort_unstable();
 
-        let points: Vec<Point> = keyed.par_iter().map(|&(_, i)| cloud_points[i as usize]).collect();
+        let axis = |a: usize| -> Vec<f32> { keyed.par_iter().map(|&(_, i)| cloud_points[i as usize][a]).collect() };
+        let (xs, ys, zs) = (axis(0), axis(1), axis(2));
         let index_of: Vec<u32> = keyed.par_iter().map(|&(_, i)| i).collect();
         let mut keys: Vec<u64> = Vec::new();
         let mut cells: Vec<Cell> = Vec::new();
@@ -144,10 +151,10 @@ impl CellIndex {
             }
             let cell = cells.last_mut().expect("a cell was just pushed");
             cell.end = position as u32 + 1;
-            let p = &points[position];
+            let p = [xs[position], ys[position], zs[position]];
             for ((lo, hi), v) in cell.min.iter_mut().zip(cell.max.iter_mut()).zip(p) {
-                *lo = lo.min(*v);
-                *hi = hi.max(*v);
+                *lo = lo.min(v);
+                *hi = hi.max(v);
             }
         }
         drop(keyed);
@@ -160,7 +167,25 @@ impl CellIndex {
         }
 
         let (neighbour_start, neighbour_cells) = neighbourhoods(&keys);
-        CellIndex { points, index_of, cell_of_point, cells, neighbour_start, neighbour_cells }
+        CellIndex { xs, ys, zs, index_of, cell_of_point, cells, neighbour_start, neighbour_cells }
+    }
+
+    /// The runs of the cell-ordered arrays of the cells around cloud point
+    /// `i` (at `p`) whose boxes come within `reach_sq` of it, its own cell
+    /// first; none for an invalid point, which has no cell.
+    #[inline]
+    fn runs_in_reach<'s>(&'s self, i: usize, p: &'s Point, reach_sq: f32) -> impl Iterator<Item = Range<usize>> + 's {
+        let around = match self.cell_of_point.get(i).filter(|&&c| c != u32::MAX) {
+            Some(&cell) => {
+                self.neighbour_start[cell as usize] as usize..self.neighbour_start[cell as usize + 1] as usize
+            }
+            None => 0..0,
+        };
+        self.neighbour_cells[around]
+            .iter()
+            .map(|&c| &self.cells[c as usize])
+            .filter(move |cell| box_distance_sq(cell, p) <= reach_sq as f64)
+            .map(|cell| cell.start as usize..cell.end as usize)
     }
 
     /// Calls `visit(j, q)` for candidates `q` (cloud index `j`) of every
@@ -176,23 +201,66 @@ impl CellIndex {
         reach_sq: f32,
         mut visit: impl FnMut(usize, &Point) -> ControlFlow<()>,
     ) {
-        let Some(&cell) = self.cell_of_point.get(i).filter(|&&c| c != u32::MAX) else {
-            return;
-        };
-        let (from, to) = (self.neighbour_start[cell as usize], self.neighbour_start[cell as usize + 1]);
-        for &c in &self.neighbour_cells[from as usize..to as usize] {
-            let cell = &self.cells[c as usize];
-            if box_distance_sq(cell, p) > reach_sq as f64 {
-                continue;
-            }
-            let run = cell.start as usize..cell.end as usize;
-            for (q, &j) in self.points[run.clone()].iter().zip(&self.index_of[run]) {
-                if visit(j as usize, q).is_break() {
+        for run in self.runs_in_reach(i, p, reach_sq) {
+            for k in run {
+                let q = [self.xs[k], self.ys[k], self.zs[k]];
+                if visit(self.index_of[k] as usize, &q).is_break() {
                     return;
                 }
             }
         }
     }
+
+    /// Calls `visit(j)` for every point `j` within `radius_sq` of cloud
+    /// point `i` (at `p`) by the kernels' predicate ([`within`]), in the
+    /// order of [`CellIndex::visit_near`], until it breaks: the same
+    /// visits as `visit_near` with that predicate in the visitor, with the
+    /// distances of a cell's points computed [`LANES_PER_TEST`] at a time.
+    /// Cells farther than `reach_sq` are skipped whole, as there.
+    #[inline]
+    pub(crate) fn visit_within(
+        &self,
+        i: usize,
+        p: &Point,
+        radius_sq: f32,
+        reach_sq: f32,
+        mut visit: impl FnMut(usize) -> ControlFlow<()>,
+    ) {
+        for run in self.runs_in_reach(i, p, reach_sq) {
+            let (start, end) = (run.start, run.end);
+            let mut block = start;
+            while block < end {
+                let stop = (block + LANES_PER_TEST).min(end);
+                let mut inside =
+                    within_mask(p, &self.xs[block..stop], &self.ys[block..stop], &self.zs[block..stop], radius_sq);
+                while inside != 0 {
+                    let lane = inside.trailing_zeros() as usize;
+                    inside &= inside - 1;
+                    if visit(self.index_of[block + lane] as usize).is_break() {
+                        return;
+                    }
+                }
+                block = stop;
+            }
+        }
+    }
+}
+
+/// Points of a cell whose distances [`CellIndex::visit_within`] computes
+/// together.
+const LANES_PER_TEST: usize = 16;
+
+/// Bit `l` set when point `l` of the coordinate slices is within
+/// `radius_sq` of `p`, by [`within`]'s arithmetic term for term (so the
+/// same answer), written as a loop the compiler runs in vector lanes.
+#[inline(always)]
+fn within_mask(p: &Point, xs: &[f32], ys: &[f32], zs: &[f32], radius_sq: f32) -> u32 {
+    let mut mask = 0u32;
+    for (lane, ((&x, &y), &z)) in xs.iter().zip(ys).zip(zs).enumerate() {
+        let (dx, dy, dz) = (p[0] - x, p[1] - y, p[2] - z);
+        mask |= ((dx * dx + dy * dy + dz * dz <= radius_sq) as u32) << lane;
+    }
+    mask
 }
 
 /// The squared distance from `p` to a cell's box, in double precision:
@@ -257,6 +325,12 @@ mod tests {
                         }
                         ControlFlow::Continue(())
                     });
+                    let mut within_order = Vec::new();
+                    index.visit_within(i, p, r_sq, r_sq * (1.0 + 1e-5), |j| {
+                        within_order.push(j);
+                        ControlFlow::Continue(())
+                    });
+                    assert_eq!(within_order, found, "the same points in the same order");
                     found.sort_unstable();
                     assert_eq!(found, brute_force(&points, p, r_sq), "{n} points, radius {radius}");
                 }

@@ -236,11 +236,11 @@ pub(super) fn classify<T: BlockThreshold>(search: &NeighbourSearch, threshold: &
         mask.par_iter_mut().zip(counts.par_iter_mut()).zip(full.par_iter_mut()).enumerate().for_each_init(
             FullCountCache::default,
             |cache, (i, ((m, c), f))| {
-                if let Some((t, full_count)) = threshold.needed(i, cache) {
-                    // Counting stops at the threshold: however dense the
-                    // cloud, a point costs at most that many neighbours,
-                    // and the count kept is a lower bound, as on the grid.
-                    let count = search.count_up_to(i, |_| true, LaneNeed::of(Some((t, 0.0))).count);
+                // Counting stops at the threshold: however dense the
+                // cloud, a point costs at most that many neighbours, and
+                // the count kept is a lower bound, as on the grid.
+                let cap_of = |t: f64| LaneNeed::of(Some((t, 0.0))).count;
+                if let Some((t, full_count, count)) = threshold.needed_and_count(search, i, cache, &cap_of) {
                     *m = count as f64 >= t;
                     *c = if *m { saturate(count as f64) } else { 0 };
                     *f = saturate(full_count);

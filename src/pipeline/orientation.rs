@@ -139,7 +139,7 @@ pub fn grid_normal_agrees<G: GridPoints>(grid: &G, i: usize, step: usize, refere
 /// Whether the unnormalised normal `n` at point `p`, turned away from the
 /// camera, is within the angle whose squared cosine is `cos_sq` of the unit
 /// `reference`: `dot >= 0` and `dot² >= cos² |n|²`. Single precision in a
-/// fixed order, so the eight-lane form in `plane_points` decides the same.
+/// fixed order, so the lane forms of `kernels::normal_test` decide the same.
 #[inline(always)]
 pub fn cross_agrees(n: [f32; 3], p: [f32; 3], reference: [f32; 3], cos_sq: f32) -> bool {
     let towards = n[0] * p[0] + n[1] * p[1] + n[2] * p[2];

@@ -190,6 +190,8 @@ pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
     // 4.2: each weld edge resampled along its plate's boundary, then
     // refitted along the samples' principal direction with outliers
     // trimmed (Eq. 17 to 25).
+    // The point spacing near `p`: measured, or the camera's pixel footprint.
+    let spacing_at = |p: &Vec3| scale.measured.map_or_else(|| camera.pixel_footprint_at(p), |m| m.spacing_mm);
     let boundary_of = |k: usize| {
         let line = &lines[k][pick[k]];
         let plane = &plates[k].plane;
@@ -208,7 +210,7 @@ pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
         }
         // Without a pixel grid: strips a few spacings wide, each ending
         // where its points stop.
-        let spacing = scale.measured.map_or_else(|| camera.pixel_footprint_at(&edge.point), |s| s.spacing_mm);
+        let spacing = spacing_at(&edge.point);
         (boundary::sample_scattered(cloud, plane, &edge, &params, spacing), seen_beside)
     };
     let ((boundary_a, beside_a), (boundary_b, beside_b)) = rayon::join(|| boundary_of(0), || boundary_of(1));
@@ -281,7 +283,7 @@ pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
                     100.0 * seen,
                     s1 - s0,
                     100.0 * MIN_EDGE_COVERAGE,
-                    2.0 * scale.measured.map_or_else(|| camera.pixel_footprint_at(&axes.origin), |m| m.spacing_mm),
+                    2.0 * spacing_at(&axes.origin),
                 ),
             ));
         }

@@ -18,7 +18,11 @@
 //! split the spacing into k + 1 gaps (one point: half a spacing, as on the
 //! grid). A strip whose points never stop sees no edge, as a scan line
 //! whose walk leaves the band still on the plane does. The strips cover
-//! every on-plane point of the band, so they too reach the plate's corners.
+//! every on-plane point of the band, so they too reach the plate's corners,
+//! but only to a strip's width, and where the cloud's border cuts the
+//! band a strip sees part of the plate and misses or mistakes its end;
+//! [`rim_refined_extent`] reads the ends again from the plate's last rows
+//! along the fitted edge.
 
 use crate::cloud::PointCloud;
 use crate::geometry::fit::Plane;
@@ -380,6 +384,136 @@ pub fn sample_scattered(
     Boundary { samples, line_spacing_mm: strip_mm, extent_rule: ExtentRule::LongestStretch }
 }
 
+/// Refines the ends of a weld edge's extent `(lo, hi)`, read from strips
+/// to a strip's width, where the cloud's border cuts the plate, in a cloud
+/// without a pixel grid, in the camera frame. `edge` is a line fitted to
+/// the boundary samples, `edge_rms_mm` its fit's RMS; `along` gives the
+/// coordinate the extent is in.
+///
+/// Where the image border or a crop cuts the band beside the weld, a
+/// strip sees part of the plate only and either misses the edge (the
+/// seam stops short) or takes the border for it (the seam runs on). The
+/// rows between half a spacing and a spacing and a half inside the edge
+/// ([`RIM_ROWS_SPACINGS`]) run wherever the plate runs beside the weld,
+/// and nothing beyond the edge (another plate, the foot of a face grazing
+/// the plane) lies in them. Each end walks along the rim's on-plane
+/// points from a point well inside the strips' extent for as long as they
+/// follow one another within [`RIM_BREAK_SPACINGS`] (or the rim's own
+/// steps); the plate ends half a spacing beyond the last.
+///
+/// The rim's end is taken only where the cloud itself ends there: where
+/// no point of any depth, carried along its line of sight onto the
+/// plate's plane, lies in the rows beyond it ([`RIM_AT_BORDER_SPACINGS`]).
+/// Elsewhere the table or a shadow lies beyond a plate's own end, and the
+/// strips read that end. Where the edge's fit scatters too much to place
+/// the rows ([`MAX_RIM_EDGE_RMS_SPACINGS`]), the extent stays.
+#[allow(clippy::too_many_arguments)]
+pub fn rim_refined_extent(
+    cloud: &PointCloud,
+    plane: &Plane,
+    edge: &CoarseEdge,
+    params: &BoundaryParams,
+    spacing_mm: f64,
+    edge_rms_mm: f64,
+    along: impl Fn(&Vec3) -> f64 + Sync,
+    (lo, hi): (f64, f64),
+) -> (f64, f64) {
+    use rayon::prelude::*;
+
+    // The rows keep half a spacing clear of the fitted edge: an edge whose
+    // samples scatter by more than a quarter spacing (two RMS past the
+    // clearance) wanders in and out of them, and its rim says nothing.
+    let known = edge_rms_mm <= MAX_RIM_EDGE_RMS_SPACINGS * spacing_mm;
+    if !(spacing_mm.is_finite() && spacing_mm > 0.0 && known) {
+        return (lo, hi);
+    }
+    let [inner, outer] = RIM_ROWS_SPACINGS.map(|rows| -rows * spacing_mm);
+    let in_rows = |q: &Vec3| (outer..=inner).contains(&(q - edge.point).dot(&edge.outward));
+    // (along, on the plate) of every point whose line of sight crosses the
+    // plate's plane in the rows.
+    let mut rows: Vec<(f64, bool)> = cloud
+        .points()
+        .par_iter()
+        .filter(|p| p[0].is_finite())
+        .filter_map(|p| {
+            let v = vec3(p);
+            if plane.signed_distance(&v).abs() <= params.on_plane_mm {
+                return in_rows(&v).then(|| (along(&v), true));
+            }
+            // The plane n·x = offset meets the line of sight t v at t = offset / n·v.
+            let t = plane.offset / plane.normal.dot(&v);
+            let q = v * t;
+            (t.is_finite() && t > 0.0 && in_rows(&q)).then(|| (along(&q), false))
+        })
+        .collect();
+    rows.sort_unstable_by(|a, b| a.0.total_cmp(&b.0));
+    let rim: Vec<f64> = rows.iter().filter(|r| r.1).map(|r| r.0).collect();
+    let (Some(&(view_lo, _)), Some(&(view_hi, _))) = (rows.first(), rows.last()) else {
+        return (lo, hi);
+    };
+    let inside = RIM_START_STRIPS * STRIP_SPACINGS * spacing_mm;
+    if rim.is_empty() || hi - lo <= 2.0 * inside {
+        return (lo, hi);
+    }
+    // A tilted plate's voxel centroids, or a camera's anisotropic grid,
+    // leave wider steps along the rim than the mean spacing says: the
+    // rim's own steps set the break, as the plate's do for the strips.
+    let mut steps: Vec<f64> = rim.windows(2).map(|w| w[1] - w[0]).collect();
+    let typical = if steps.is_empty() {
+        0.0
+    } else {
+        let k = (steps.len() * 99 / 100).min(steps.len() - 1);
+        *steps.select_nth_unstable_by(k, f64::total_cmp).1
+    };
+    let break_mm = (RIM_BREAK_SPACINGS * spacing_mm).max(HOLE_OVER_INTERIOR * typical);
+    let half = spacing_mm / 2.0;
+    let border_mm = RIM_AT_BORDER_SPACINGS * spacing_mm;
+    let end = match rim.iter().rposition(|&a| a <= hi - inside) {
+        Some(from) => {
+            let run = rim[from..].windows(2).position(|w| w[1] - w[0] > break_mm).unwrap_or(rim.len() - 1 - from);
+            let rim_end = rim[from + run];
+            if view_hi - rim_end <= border_mm { rim_end + half } else { hi }
+        }
+        None => hi,
+    };
+    let start = match rim.iter().position(|&a| a >= lo + inside) {
+        Some(from) => {
+            let run = rim[..=from].windows(2).rev().position(|w| w[1] - w[0] > break_mm).unwrap_or(from);
+            let rim_start = rim[from - run];
+            if rim_start - view_lo <= border_mm { rim_start - half } else { lo }
+        }
+        None => lo,
+    };
+    (start, end)
+}
+
+/// How close to the cloud's end along the rim's rows, in point spacings,
+/// the rim must run for [`rim_refined_extent`] to take the plate's end
+/// from it: where the cloud ends, the rim ends within a step or two of
+/// the last point of any depth in its rows.
+const RIM_AT_BORDER_SPACINGS: f64 = 3.0;
+
+/// The largest RMS of an edge's fit, in point spacings, for which
+/// [`rim_refined_extent`] reads its rim: two RMS within the rows' half a
+/// spacing of clearance. A noisy cloud's edge (a consumer camera's at
+/// 400 mm and beyond) keeps the strips' ends.
+const MAX_RIM_EDGE_RMS_SPACINGS: f64 = 0.25;
+
+/// The rows [`rim_refined_extent`] follows, as offsets inside a fitted
+/// edge in point spacings: the plate's last row lies within a spacing of
+/// its end, so this band of one spacing holds a point about every spacing
+/// along the plate, and is half a spacing clear of the edge, where the
+/// foot of a face or the noise of the edge's fit could put points.
+const RIM_ROWS_SPACINGS: [f64; 2] = [0.5, 1.5];
+
+/// The widest step along the rim, in point spacings, that still continues
+/// it: a point every spacing on average, so three is a dropout or two.
+const RIM_BREAK_SPACINGS: f64 = 3.0;
+
+/// How far inside the strips' extent, in strips, a rim walk starts: the
+/// strips read each end to about one strip.
+const RIM_START_STRIPS: f64 = 2.0;
+
 /// The width of [`sample_scattered`]'s strips, in point spacings.
 const STRIP_SPACINGS: f64 = 2.0;
 
@@ -658,6 +792,92 @@ mod tests {
         let cloud = scattered(1.0, 3.3, 2.0);
         let seen = coverage(&sample_scattered(&cloud, &plane, &edge, &params, 1.0), |s| s.along, -55.0, 55.0);
         assert!(seen > 0.9, "the edge of a 2 mm gap is seen along {:.0} % of the plate", 100.0 * seen);
+    }
+
+    /// The far end along y of the strips' extent of the plate beside the
+    /// test edge, and of the same refined along the rim of the true edge
+    /// (the line a fit of the samples gives).
+    fn strip_and_rim_ends(cloud: &PointCloud, edge_x: f64) -> (f64, f64) {
+        let (plane, coarse, params) = test_edge(edge_x);
+        let strips = sample_scattered(cloud, &plane, &coarse, &params, 1.0).extent(|s| s.position.y).unwrap();
+        let fitted = CoarseEdge { point: Vec3::new(edge_x, 0.0, 700.0), ..coarse };
+        let rim = rim_refined_extent(cloud, &plane, &fitted, &params, 1.0, 0.0, |p: &Vec3| p.y, strips);
+        (strips.1, rim.1)
+    }
+
+    /// The plate of [`test_edge`] cut by a straight cloud border (the image
+    /// border or a crop) that crosses its edge at y = 20 mm, obliquely:
+    /// a point `d` inside the edge is kept up to y = 20 - `lean` d / 0.8.
+    fn plate_cut_by_a_border(edge_x: f64, lean: f64) -> PointCloud {
+        scattered_where(1.0, |x, y| x < edge_x + SLOPE * y && y < 20.0 - SLOPE * 20.0 * lean + lean * (x - edge_x))
+    }
+
+    #[test]
+    fn the_rim_reaches_a_border_that_cuts_the_band_inside_the_plate() {
+        // Beyond y = 10 the border has cut the band's inner side away and
+        // left the plate's rim up to where it crosses the edge, y = 20:
+        // the strips there start outside the coarse edge and are dropped.
+        // The rim's rows, 0.5 to 1.5 mm inside the edge, meet the border
+        // at y = 18.75 to 16.25: the rule reads the end to that, no better.
+        let (strips, rim) = strip_and_rim_ends(&plate_cut_by_a_border(3.3, 2.0), 3.3);
+        assert!((16.25..=19.25).contains(&rim), "the rim reaches y = {rim} mm, the plate is seen up to 20");
+        assert!(20.0 - strips > 20.0 - rim + 1.0, "the strips reach y = {strips} mm, the rim {rim}");
+    }
+
+    #[test]
+    fn the_rim_stops_where_a_border_cuts_the_edge_away() {
+        // Beyond y = 20 the border has cut the edge away and left the
+        // plate's inside up to y = 27.5 (the band's inner side): strips
+        // that stop at the border take it for the plate's end.
+        // The rim's rows meet the border at y = 20.6 to 21.9.
+        let (strips, rim) = strip_and_rim_ends(&plate_cut_by_a_border(3.3, -1.0), 3.3);
+        assert!((20.6..=22.4).contains(&rim), "the rim reaches y = {rim} mm, the edge is seen up to 20");
+        assert!(strips - 20.0 > rim - 20.0 + 1.0, "the strips reach y = {strips} mm, the rim {rim}");
+    }
+
+    #[test]
+    fn the_rim_reaches_the_plate_corner_and_not_the_foot_of_a_face_beyond() {
+        // The plate ends at y = 20; beyond, along the edge line, lie only
+        // points on the edge itself at the plate's height, as the foot of
+        // a lap's upper plate leaves them beyond the lower plate's end.
+        let edge_x = 3.3;
+        let cloud = scattered_where(1.0, |x, y| {
+            let edge = edge_x + SLOPE * y;
+            (x < edge && y < 20.0) || (y >= 20.0 && (x - edge).abs() < 0.2)
+        });
+        let (_, rim) = strip_and_rim_ends(&cloud, edge_x);
+        assert!((rim - 20.0).abs() < 0.5, "the rim reaches y = {rim} mm, the plate ends at 20");
+    }
+
+    #[test]
+    fn past_a_plate_end_where_the_table_is_seen_the_strips_keep_the_end() {
+        // The plate ends at y = 20 and the table, 40 mm further away, is
+        // seen beyond: the plate's own end, which the strips read; the rim
+        // is the cloud's border's witness only.
+        let edge_x = 3.3;
+        let plate = scattered_where(1.0, |x, y| x < edge_x + SLOPE * y && y < 20.0);
+        let table = scattered_where(1.0, |_, y| y >= 20.0);
+        let mut points = plate.points().to_vec();
+        points.extend(table.points().iter().map(|p| [p[0] * 740.0 / 700.0, p[1] * 740.0 / 700.0, 740.0]));
+        let cloud = PointCloud::unorganized(points);
+        let (plane, coarse, params) = test_edge(edge_x);
+        let strips = sample_scattered(&cloud, &plane, &coarse, &params, 1.0).extent(|s| s.position.y).unwrap();
+        let fitted = CoarseEdge { point: Vec3::new(edge_x, 0.0, 700.0), ..coarse };
+        let refined = rim_refined_extent(&cloud, &plane, &fitted, &params, 1.0, 0.0, |p: &Vec3| p.y, strips);
+        assert_eq!(refined.1, strips.1);
+        // The same plate with nothing beyond: the cloud ends with it.
+        let (strips_end, rim_end) = strip_and_rim_ends(&plate, edge_x);
+        assert!((rim_end - 20.0).abs() < 0.5 && rim_end != strips_end, "rim {rim_end}, strips {strips_end}");
+    }
+
+    #[test]
+    fn an_edge_fitted_to_noisy_samples_keeps_the_strips_ends() {
+        let cloud = plate_cut_by_a_border(3.3, 2.0);
+        let (plane, coarse, params) = test_edge(3.3);
+        let strips = sample_scattered(&cloud, &plane, &coarse, &params, 1.0).extent(|s| s.position.y).unwrap();
+        let fitted = CoarseEdge { point: Vec3::new(3.3, 0.0, 700.0), ..coarse };
+        let noisy = rim_refined_extent(&cloud, &plane, &fitted, &params, 1.0, 0.3, |p: &Vec3| p.y, strips);
+        assert_eq!(noisy, strips);
     }
 
     #[test]

@@ -192,17 +192,22 @@ pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
     // trimmed (Eq. 17 to 25).
     // The point spacing near `p`: measured, or the camera's pixel footprint.
     let spacing_at = |p: &Vec3| scale.measured.map_or_else(|| camera.pixel_footprint_at(p), |m| m.spacing_mm);
+    let params = BoundaryParams { band_mm: scale.band(cfg.boundary_band_mm), on_plane_mm: cfg.on_plane_tolerance_mm };
+    // The edge through `point` along `direction`, laid in plate k's plane,
+    // its outward side towards the other plate.
+    let edge_across = |k: usize, point: &Vec3, direction: &Vec3| {
+        let plane = &plates[k].plane;
+        let direction = (direction - plane.normal * direction.dot(&plane.normal)).normalize();
+        let mut outward = plane.normal.cross(&direction);
+        if outward.dot(&(centroids[1 - k] - point)) < 0.0 {
+            outward = -outward;
+        }
+        CoarseEdge { point: plane.project(point), direction, outward }
+    };
     let boundary_of = |k: usize| {
         let line = &lines[k][pick[k]];
         let plane = &plates[k].plane;
-        let direction = (line.direction - plane.normal * line.direction.dot(&plane.normal)).normalize();
-        let mut outward = plane.normal.cross(&direction);
-        if outward.dot(&(centroids[1 - k] - line.point)) < 0.0 {
-            outward = -outward;
-        }
-        let edge = CoarseEdge { point: plane.project(&line.point), direction, outward };
-        let params =
-            BoundaryParams { band_mm: scale.band(cfg.boundary_band_mm), on_plane_mm: cfg.on_plane_tolerance_mm };
+        let edge = edge_across(k, &line.point, &line.direction);
         // Where the plate is seen beside the weld, for the coverage report.
         let seen_beside = boundary::members_along(cloud, &plates[k].members, &edge, params.band_mm);
         if cloud.is_organized() {
@@ -253,7 +258,25 @@ pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
             .extent(|s| axes.feature(&s.position))
             .ok_or_else(|| PlanError::at(Stage::WeldEquation, format!("weld edge {} has no boundary sample", k + 1)))
     };
-    let ((a0, a1), (b0, b1)) = (extent(0)?, extent(1)?);
+    let mut extents = [extent(0)?, extent(1)?];
+    if !cloud.is_organized() && degree == 1 {
+        // Without a grid the strips read each end to a strip's width, and
+        // miss or mistake the ends where the cloud's border cuts a plate:
+        // the plate's last rows inside the fitted edge say where it ends.
+        let spacing = spacing_at(&axes.origin);
+        let refine = |k: usize| {
+            let curve = &fits[k].curve;
+            let middle = 0.5 * (curve.s_min + curve.s_max);
+            let edge = edge_across(k, &curve.at(middle), &curve.tangent(middle));
+            let along = |p: &Vec3| axes.feature(p);
+            let rms = fits[k].rms_mm;
+            boundary::rim_refined_extent(cloud, &plates[k].plane, &edge, &params, spacing, rms, along, extents[k])
+        };
+        let refined = [refine(0), refine(1)];
+        tracing::debug!(strips = ?extents, rims = ?refined, "weld edge ends refined along the plates' rims");
+        extents = refined;
+    }
+    let [(a0, a1), (b0, b1)] = extents;
     tracing::debug!(edge_1_mm = ?[a0, a1], edge_2_mm = ?[b0, b1], "weld edges seen along the seam");
     let (mut s0, mut s1) = (a0.max(b0), a1.min(b1));
     if ctx.request.joint == JointType::Lap {

@@ -10,7 +10,7 @@ use weldseam::config::Config;
 use weldseam::joint::JointType;
 use weldseam::mock::load::{self, Load};
 use weldseam::pipeline::Stage;
-use weldseam::sim::scenarios::{FRAME_SIZES, Scenario, camera_with_size};
+use weldseam::sim::scenarios::{FRAME_SIZES, Scenario, VARIANTS, camera_with_size};
 
 fn smallest() -> Scenario {
     let (w, h) = FRAME_SIZES[0];
@@ -75,6 +75,24 @@ fn bench_prints_every_table_with_a_figure_in_every_row() {
     let memory = row(&md, "weldseam plan").unwrap_or_else(|| panic!("no memory row in\n{md}"));
     let peak_mb: f64 = memory[1].trim_end_matches(" MB").parse().expect("peak RSS in MB");
     assert!(peak_mb * 1e6 >= (w * h * 12) as f64, "{memory:?}");
+    // The per-variant table: a row per variant and the compressed PCD,
+    // every cell a figure, the ratio the peak over the raw size.
+    let title = format!("**Per variant: v_butt at 500 mm ({w} x {h}), plan time and peak memory**");
+    let variants = md.split(&title).nth(1).unwrap_or_else(|| panic!("no per-variant table in\n{md}"));
+    assert_eq!(
+        row(variants, "cloud"),
+        Some(vec!["cloud", "points", "raw MB", "load ms", "plan ms", "cpu ms", "peak RSS MB", "x raw", "under 4 x"]),
+        "{md}"
+    );
+    let names = VARIANTS.iter().map(|v| v.to_string()).chain(["raw, PCD binary_compressed".to_string()]);
+    for name in names {
+        let cells = row(variants, &name).unwrap_or_else(|| panic!("no {name} row in the per-variant table\n{md}"));
+        assert!(cells[1..8].iter().all(|c| is_figure(c)), "{name}: {cells:?}");
+        // The child holds its cloud at least once.
+        let [raw_mb, peak_mb, ratio]: [f64; 3] = [2, 6, 7].map(|k| cells[k].parse().unwrap());
+        assert!(peak_mb >= raw_mb && ratio >= 1.0, "{name}: {cells:?}");
+        assert_eq!(cells[8], if ratio < 4.0 { "yes" } else { "no" }, "{name}: {cells:?}");
+    }
     let latency = row(&md, "frame's last byte written to reply's last byte read").expect("a daemon latency row");
     assert!(is_figure(latency[1]), "{latency:?}");
     let answered = row(&md, "requests answered with a plan").expect("a load row");

@@ -132,9 +132,10 @@ fn plan_args(
     args
 }
 
-/// One row of the per-variant table: `sim` made into `variant` and saved
-/// as a PCD at `path`, loaded and planned in-process, and planned by
-/// `weldseam plan` as a child for its peak memory.
+/// One row of the per-variant table: `frame` made into `variant` and
+/// saved as a PCD (`data`) in a temporary file, loaded and planned
+/// in-process, and planned by `weldseam plan` as a child for its peak
+/// memory.
 fn measure_variant(
     scenario: &Scenario,
     frame: &Simulation,

@@ -41,6 +41,16 @@ enum Command {
 }
 
 impl Command {
+    /// The commands that plan (or send) frame after frame, whose next frame
+    /// reuses the buffers the last one freed (`cli::memory`). A one-shot
+    /// command has no next frame: kept memory would only raise its peak.
+    fn plans_frame_after_frame(&self) -> bool {
+        match self {
+            Command::Demo(_) | Command::Eval(_) | Command::Serve(_) | Command::Camera(_) | Command::Bench(_) => true,
+            Command::Plan(_) | Command::Inspect(_) | Command::Simulate(_) | Command::Controller(_) => false,
+        }
+    }
+
     /// The long-running services log what they do; one-shot commands only
     /// what goes wrong.
     fn log_level(&self) -> &'static str {
@@ -58,8 +68,10 @@ impl Command {
 }
 
 fn main() -> std::process::ExitCode {
-    cli::memory::keep_freed_memory();
     let cli = Cli::parse();
+    if cli.command.plans_frame_after_frame() {
+        cli::memory::keep_freed_memory();
+    }
     if let Err(e) = logging::init(cli.log_format, cli.command.log_level()) {
         eprintln!("error: {e:#}");
         return std::process::ExitCode::FAILURE;

@@ -110,8 +110,13 @@ impl Raw {
     }
 
     async fn hello(addr: &str, role: Role) -> Raw {
+        Raw::hello_as(addr, role, "raw").await
+    }
+
+    /// Connects and says Hello as `name`; returns once the ack is read.
+    async fn hello_as(addr: &str, role: Role, name: &str) -> Raw {
         let mut raw = Raw::connect(addr).await;
-        raw.send(&Message::Hello(Hello { protocol_version: PROTOCOL_VERSION, role, name: "raw".into() })).await;
+        raw.send(&Message::Hello(Hello { protocol_version: PROTOCOL_VERSION, role, name: name.into() })).await;
         assert!(matches!(raw.recv().await, Some(Message::HelloAck(_))));
         raw
     }
@@ -669,6 +674,30 @@ async fn one_connection_cannot_hold_every_slot_nor_wait_forever() {
     let (code, message) = refused(other.plan(r, WAIT).await);
     assert_eq!(code, ErrorCode::FrameTimeout, "another controller still gets a slot: {message}");
     drop(greedy);
+    cell.shutdown().await;
+}
+
+/// A camera's HelloAck means the daemon knows the camera: a request sent
+/// the moment the ack has arrived finds it. The camera link used to send
+/// the ack first and register the camera after, so a request could slip
+/// in between and be refused with no_camera (the test above failed so now
+/// and then, its requests refused before the camera counted). Each camera
+/// here has its own name, so no earlier camera can answer for it.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_camera_is_known_to_the_daemon_once_its_hello_is_acknowledged() {
+    const CAMERAS: usize = 40;
+    let mut c = config();
+    c.server.max_camera_connections = CAMERAS;
+    let cell = Cell::start(c).await;
+    let mut ctl = cell.controller().await;
+    let mut cameras = Vec::with_capacity(CAMERAS);
+    for k in 0..CAMERAS {
+        let name = format!("camera-{k}");
+        cameras.push(Raw::hello_as(&cell.camera, Role::Camera, &name).await);
+        let r = PlanRequest { timeout_ms: 1, camera: Some(name), ..request(k as u64 + 1, FrameSelect::NextFrame) };
+        let (code, message) = refused(ctl.plan(r, WAIT).await);
+        assert_eq!(code, ErrorCode::FrameTimeout, "camera {k}, right after its ack: {message}");
+    }
     cell.shutdown().await;
 }
 

@@ -2,12 +2,20 @@
 //! needing the same few frame-sized buffers (the cloud, its coordinate
 //! planes, masks and labels): handing them back to the kernel between
 //! frames only makes the next frame fault in and zero the same pages again.
+//! A one-shot command has no next frame, and there the policy only costs:
+//! main applies it to the commands that plan frame after frame.
 
 /// Keeps freed memory in the process for reuse: no `mmap` of its own for
 /// any buffer up to twice a 2.3 MP frame, and no trimming of the heap.
 /// `weldseam bench --quick --stages-only --runs 6` (21 plans of 2.3 MP
 /// frames) took 133,000 page faults before and 19,000 after. Only
 /// glibc's allocator has these settings; elsewhere this does nothing.
+///
+/// Not for a process that plans once: the fixed mmap threshold puts every
+/// frame-sized buffer in the heap, where a freed one need not fit the next
+/// request, and a one-shot `weldseam plan` of the 2.2 M point unorganized
+/// V-butt frame peaked about 7 MB higher with it (4.1 instead of 3.9 times
+/// its 26.2 MB of raw points; the trim threshold alone changes nothing).
 pub fn keep_freed_memory() {
     #[cfg(all(target_os = "linux", target_env = "gnu"))]
     {

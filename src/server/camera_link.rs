@@ -26,16 +26,26 @@ pub(crate) fn server_name() -> String {
     format!("weldseam {}", env!("CARGO_PKG_VERSION"))
 }
 
-/// Answers a handshake: an ack, or the typed refusal. Returns the peer's
-/// Hello, or None when the connection should close. Before the Hello
+/// Answers a handshake: an ack, or the typed refusal. `join` runs on the
+/// accepted Hello *before* the ack is sent (a camera is registered there),
+/// so a peer that has read its HelloAck is already known to the daemon: a
+/// request sent the moment a camera's ack arrived finds that camera.
+/// Returns the peer's Hello and what `join` made, or None when the
+/// connection should close (dropping what `join` made). Before the Hello
 /// every error closes the connection: a peer that cannot say Hello is not
 /// speaking this protocol, and must not keep a connection slot.
-pub(crate) async fn handshake(conn: &mut Connection, role: Role, state: &ServerState) -> Option<Hello> {
+pub(crate) async fn handshake<T>(
+    conn: &mut Connection,
+    role: Role,
+    state: &ServerState,
+    join: impl FnOnce(&Hello) -> T,
+) -> Option<(Hello, T)> {
     match conn.expect_hello(role, state.config.server.stall_timeout).await {
         Ok(hello) => {
             info!(name = %hello.name, "{} connected", role.name());
+            let joined = join(&hello);
             let ack = Message::HelloAck(HelloAck { protocol_version: PROTOCOL_VERSION, server: server_name() });
-            conn.writer.send(&ack).await.is_ok().then_some(hello)
+            conn.writer.send(&ack).await.is_ok().then_some((hello, joined))
         }
         Err(HandshakeError::Closed) => {
             info!("closed before its hello");
@@ -72,12 +82,12 @@ pub(crate) async fn handshake(conn: &mut Connection, role: Role, state: &ServerS
 
 /// Serves one camera connection until it closes or the server stops.
 pub async fn serve(mut conn: Connection, state: Arc<ServerState>, mut shutdown: Shutdown) {
-    let Some(hello) = handshake(&mut conn, Role::Camera, &state).await else {
+    let joined = handshake(&mut conn, Role::Camera, &state, |hello| state.frames.attach_camera(&hello.name)).await;
+    let Some((_, (registration, mut triggers))) = joined else {
         return;
     };
     let Connection { mut reader, writer, .. } = conn;
     let writer: Writer = Arc::new(Mutex::new(writer));
-    let (registration, mut triggers) = state.frames.attach_camera(&hello.name);
 
     // Triggers go out from their own task so a frame being received is
     // never interrupted.

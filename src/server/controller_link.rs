@@ -39,7 +39,7 @@ type Writer = Arc<Mutex<MessageWriter<tokio::net::tcp::OwnedWriteHalf>>>;
 /// then waits for its plans in flight (on shutdown) or cancels them (when
 /// the peer has gone).
 pub async fn serve(mut conn: Connection, state: Arc<ServerState>, mut shutdown: Shutdown) {
-    if handshake(&mut conn, Role::Controller, &state).await.is_none() {
+    if handshake(&mut conn, Role::Controller, &state, |_| ()).await.is_none() {
         return;
     }
     let Connection { mut reader, writer, .. } = conn;

@@ -1,7 +1,7 @@
 //! The measurements of `weldseam bench`: repeated plans of a scenario with
 //! the pipeline's own stage clock and the process's CPU time, loading and
 //! decoding a frame, and a child process's peak memory; and the tables
-//! that summarise them. Nothing asserts a time: the figures are for
+//! that summarise them, the per-variant one included. Nothing asserts a time: the figures are for
 //! reading, against the targets in docs/PERFORMANCE.md.
 
 use std::io;
@@ -11,10 +11,11 @@ use std::time::{Duration, Instant};
 
 use weldseam::cloud::{self, PointCloud};
 use weldseam::config::Config;
-use weldseam::pipeline::{PlanRequest, Planner, Stage};
+use weldseam::pipeline::{CloudFrame, PlanRequest, Planner, Stage, Units};
 use weldseam::server::connection::{MessageReader, ReadError};
 use weldseam::sim::Simulation;
 use weldseam::sim::scenarios::{Scenario, megapixels};
+use weldseam::sim::variants::Variant;
 use weldseam_proto::Message;
 use weldseam_proto::frame::{self, DEFAULT_MAX_FRAME_BYTES};
 
@@ -109,13 +110,33 @@ impl PlanTimings {
     }
 }
 
+/// The request for `sim` made into `variant`, as `weldseam eval
+/// --variant` and a user of `plan` make it: a raw frame in millimetres, any
+/// other cloud's units guessed (`--units auto`), a base-frame cloud
+/// brought into the camera frame (`--cloud-frame base`).
+pub fn request_for_variant(scenario: &Scenario, sim: &Simulation, variant: &Variant) -> PlanRequest {
+    let mut request = request_for(scenario, sim);
+    if !variant.is_raw() {
+        request.units = Units::Auto;
+    }
+    if variant.in_base_frame() {
+        request.cloud_frame = CloudFrame::Base;
+    }
+    request
+}
+
 /// Plans `sim` `runs` times after one discarded warm-up plan.
 pub fn time_plans(scenario: &Scenario, sim: &Simulation, runs: usize) -> PlanTimings {
+    time_request(scenario, &sim.cloud, &request_for(scenario, sim), runs)
+}
+
+/// Plans `cloud` with `request` `runs` times after one discarded warm-up
+/// plan.
+pub fn time_request(scenario: &Scenario, cloud: &PointCloud, request: &PlanRequest, runs: usize) -> PlanTimings {
     let planner = Planner::new(config_for(scenario));
-    let request = request_for(scenario, sim);
     let mut out = PlanTimings {
         scenario: *scenario,
-        valid_points: sim.cloud.valid_count(),
+        valid_points: cloud.valid_count(),
         stages: Vec::new(),
         totals: Vec::new(),
         cpu: Vec::new(),
@@ -123,7 +144,7 @@ pub fn time_plans(scenario: &Scenario, sim: &Simulation, runs: usize) -> PlanTim
     };
     for run in 0..=runs {
         let cpu_start = process_cpu_ms();
-        let result = planner.plan(&sim.cloud, &request);
+        let result = planner.plan(cloud, request);
         let cpu_ms = process_cpu_ms() - cpu_start;
         let plan = match result {
             Ok(plan) => plan,
@@ -258,6 +279,73 @@ pub fn scaling_table(title: impl Into<String>, timings: &[PlanTimings]) -> Table
             0,
             format!("median (min-max) ms of {runs} runs after a discarded warm-up; throughput at the median total"),
         );
+    }
+    table
+}
+
+/// One row of the per-variant table: a cloud as a file, its plan timed
+/// in-process and `weldseam plan` run on the file as a child.
+#[derive(Debug, Clone)]
+pub struct VariantRow {
+    /// The cloud, as `--variant` spells it (and the file format if not a
+    /// binary PCD).
+    pub name: String,
+    /// Points the file holds, valid or not.
+    pub points: usize,
+    /// Its raw size: [`weldseam::sim::scenarios::raw_cloud_bytes`].
+    pub raw_bytes: u64,
+    /// Milliseconds per [`cloud::load`] of the file.
+    pub load_ms: Vec<f64>,
+    /// The in-process plans of the cloud.
+    pub plans: PlanTimings,
+    /// The child's peak resident set, bytes.
+    pub peak_rss_bytes: u64,
+}
+
+impl VariantRow {
+    /// The peak resident set over the raw size.
+    pub fn peak_ratio(&self) -> f64 {
+        self.peak_rss_bytes as f64 / self.raw_bytes.max(1) as f64
+    }
+}
+
+/// The issue's memory target: peak under this many times the raw size.
+pub const PEAK_OVER_RAW_TARGET: f64 = 4.0;
+
+/// One row per variant: points, raw size, load and plan time, the child's
+/// peak memory and its ratio to the raw size against the target.
+pub fn variant_table(title: impl Into<String>, rows: &[VariantRow]) -> Table {
+    let mut table = Table::new(
+        title,
+        &["cloud", "points", "raw MB", "load ms", "plan ms", "cpu ms", "peak RSS MB", "x raw", "under 4 x"],
+    );
+    for row in rows {
+        let ratio = row.peak_ratio();
+        table.push(vec![
+            row.name.clone(),
+            row.points.to_string(),
+            format!("{:.1}", row.raw_bytes as f64 / 1e6),
+            cell(Summary::of(&row.load_ms), 1),
+            cell(row.plans.total(), 1),
+            cell(row.plans.cpu(), 1),
+            format!("{:.1}", row.peak_rss_bytes as f64 / 1e6),
+            format!("{ratio:.2}"),
+            if ratio < PEAK_OVER_RAW_TARGET { "yes" } else { "no" }.into(),
+        ]);
+    }
+    if let Some(row) = rows.first() {
+        let runs = row.plans.totals.len();
+        table.notes.push(format!(
+            "median (min-max) ms of {runs} runs after a discarded warm-up; raw MB: 12 bytes (x, y, z as f32) for \
+             every point the file holds, an organized frame's invalid pixels included; load: cloud::load of the \
+             file, in the page cache; plan: the pipeline's total in-process, warm, and the process's CPU time; \
+             peak RSS: `weldseam plan --json` on the file as a child process (load, plan, JSON), one run"
+        ));
+    }
+    for row in rows {
+        if let Some(e) = &row.plans.error {
+            table.notes.push(format!("{}: a run failed: {e}", row.name));
+        }
     }
     table
 }

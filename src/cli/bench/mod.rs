@@ -2,25 +2,30 @@
 //! the tables of docs/PERFORMANCE.md: per stage at three standoffs and on
 //! the nearest frames voxel-downsampled (a measured cloud), the
 //! scaling with frame size, loading and decoding a frame, the peak memory
-//! of `weldseam plan`, the daemon's trigger-to-reply latency, and its
-//! reply times and service order under load.
+//! of `weldseam plan`, every variant of a cloud as real tools write it
+//! (plan time and peak memory against its raw size), the daemon's
+//! trigger-to-reply latency, and its reply times and service order under
+//! load.
 
 use std::fs::File;
 use std::io::{BufWriter, Write};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 
 use anyhow::{Context, bail};
 use weldseam::camera::CameraModel;
-use weldseam::cloud::pcd;
+use weldseam::cloud::{self, PointCloud, pcd};
 use weldseam::joint::JointType;
 use weldseam::mock::load::{self as daemon_load, frame_message, quantile};
+use weldseam::sim::Simulation;
 use weldseam::sim::scenarios::{
-    DISTANCES_MM, FRAME_SIZES, MEASURED_VOXEL_MM, Scenario, TILT_DEG, camera_with_size, megapixels, raw_frame_bytes,
+    DISTANCES_MM, FRAME_SIZES, MEASURED_VOXEL_MM, Scenario, TILT_DEG, VARIANT_JOINT, camera_with_size, megapixels,
+    raw_cloud_bytes, raw_frame_bytes, variants,
 };
+use weldseam::sim::variants::Variant;
 
 use crate::cli::table::Table;
-use measure::{PlanTimings, Summary, config_for};
+use measure::{PlanTimings, Summary, VariantRow, config_for};
 
 pub mod measure;
 
@@ -68,6 +73,98 @@ impl Drop for TempFile {
     fn drop(&mut self) {
         let _ = std::fs::remove_file(&self.0);
     }
+}
+
+/// How a PCD file's data is stored.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum PcdData {
+    Binary,
+    /// LZF-compressed, as PCL's tools write it.
+    BinaryCompressed,
+}
+
+/// Writes `cloud` to `path` as a PCD; returns the file's size in bytes.
+fn write_pcd(cloud: &PointCloud, path: &Path, data: PcdData) -> anyhow::Result<u64> {
+    let file = File::create(path).with_context(|| format!("cannot create {}", path.display()))?;
+    let mut out = BufWriter::new(file);
+    match data {
+        PcdData::Binary => pcd::write_binary(cloud, &mut out)?,
+        PcdData::BinaryCompressed => pcd::write_binary_compressed(cloud, &mut out)?,
+    }
+    out.flush()?;
+    Ok(std::fs::metadata(path)?.len())
+}
+
+/// The arguments of `weldseam plan --json` on the capture `sim`, made into
+/// `variant` and saved at `cloud`: the flags a user gives for it (units,
+/// and the cloud's frame) and the config holding the camera, if any.
+fn plan_args(
+    cloud: &Path,
+    joint: JointType,
+    sim: &Simulation,
+    variant: &Variant,
+    config: Option<&Path>,
+) -> Vec<String> {
+    let p = sim.pose;
+    let mut args: Vec<String> = vec![
+        "plan".into(),
+        "--cloud".into(),
+        cloud.to_string_lossy().into_owned(),
+        "--joint".into(),
+        joint.name().into(),
+        format!(
+            "--pose={},{},{},{},{},{}",
+            p.xyz_mm[0], p.xyz_mm[1], p.xyz_mm[2], p.angles_deg[0], p.angles_deg[1], p.angles_deg[2]
+        ),
+        "--units".into(),
+        if variant.is_raw() { "mm" } else { "auto" }.into(),
+        "--json".into(),
+    ];
+    if let Some(depth) = sim.truth.groove_depth_mm {
+        args.push(format!("--groove-depth={depth}"));
+    }
+    if variant.in_base_frame() {
+        args.extend(["--cloud-frame".into(), "base".into()]);
+    }
+    if let Some(path) = config {
+        args.extend(["--config".into(), path.to_string_lossy().into_owned()]);
+    }
+    args
+}
+
+/// One row of the per-variant table: `frame` made into `variant` and
+/// saved as a PCD (`data`) in a temporary file, loaded and planned
+/// in-process, and planned by `weldseam plan` as a child for its peak
+/// memory.
+fn measure_variant(
+    scenario: &Scenario,
+    frame: &Simulation,
+    variant: &Variant,
+    data: PcdData,
+    config: Option<&Path>,
+    runs: usize,
+) -> anyhow::Result<VariantRow> {
+    let path = std::env::temp_dir().join(format!("weldseam-bench-{}-variant.pcd", std::process::id()));
+    let file = TempFile(path.clone());
+    let sim = variant.apply(frame, scenario.seed());
+    write_pcd(&sim.cloud, &path, data)?;
+    let raw_bytes = raw_cloud_bytes(&sim.cloud);
+    let points = sim.cloud.len();
+    let request = measure::request_for_variant(scenario, &sim, variant);
+    let args = plan_args(&path, scenario.joint, &sim, variant, config);
+    drop(sim);
+    let load_ms = measure::time_load(&path, runs)?;
+    // What `plan` plans: the cloud as read back from the file.
+    let loaded = cloud::load(&path)?;
+    let plans = measure::time_request(scenario, &loaded, &request, runs);
+    drop(loaded);
+    let peak_rss_bytes = peak_rss_of(&args)?;
+    drop(file);
+    let name = match data {
+        PcdData::Binary => variant.to_string(),
+        PcdData::BinaryCompressed => format!("{variant}, PCD binary_compressed"),
+    };
+    Ok(VariantRow { name, points, raw_bytes, load_ms, plans, peak_rss_bytes })
 }
 
 struct Printer {
@@ -299,13 +396,7 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
     progress("loading and decoding a frame");
     let pcd_path = std::env::temp_dir().join(format!("weldseam-bench-{}.pcd", std::process::id()));
     let pcd_file = TempFile(pcd_path.clone());
-    {
-        let file = File::create(&pcd_path).with_context(|| format!("cannot create {}", pcd_path.display()))?;
-        let mut out = BufWriter::new(file);
-        pcd::write_binary(&sim.cloud, &mut out)?;
-        out.flush()?;
-    }
-    let pcd_bytes = std::fs::metadata(&pcd_path)?.len();
+    let pcd_bytes = write_pcd(&sim.cloud, &pcd_path, PcdData::Binary)?;
     let load = measure::time_load(&pcd_path, runs)?;
     let message = frame_message(&sim.cloud, 1, 0)?;
     let decode = measure::time_frame_decode(&message, runs)?;
@@ -329,19 +420,6 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
     printer.table(&io_table)?;
 
     progress("peak memory of `weldseam plan`");
-    let p = sim.pose;
-    let plan_args: Vec<String> = vec![
-        "plan".into(),
-        "--cloud".into(),
-        pcd_path.to_string_lossy().into_owned(),
-        "--joint".into(),
-        JOINT.name().into(),
-        format!(
-            "--pose={},{},{},{},{},{}",
-            p.xyz_mm[0], p.xyz_mm[1], p.xyz_mm[2], p.angles_deg[0], p.angles_deg[1], p.angles_deg[2]
-        ),
-        "--json".into(),
-    ];
     // A sensor other than the paper's needs its size in the child's config.
     let config_file = if camera == CameraModel::default() {
         None
@@ -351,13 +429,10 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
         std::fs::write(&path, toml).with_context(|| format!("cannot write {}", path.display()))?;
         Some(TempFile(path))
     };
-    let mut plan_args = plan_args;
-    if let Some(TempFile(path)) = &config_file {
-        plan_args.extend(["--config".to_string(), path.to_string_lossy().into_owned()]);
-    }
+    let config_path = config_file.as_ref().map(|TempFile(path)| path.as_path());
+    let plan_args = plan_args(&pcd_path, JOINT, &sim, &Variant::raw(), config_path);
     let started = std::time::Instant::now();
     let peak = peak_rss_of(&plan_args)?;
-    drop(config_file);
     let wall = started.elapsed();
     drop(pcd_file);
     let mut memory = Table::new(
@@ -377,6 +452,22 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
         mb(raw)
     ));
     printer.table(&memory)?;
+
+    progress("every variant: plan time and peak memory");
+    let variant_scenario = Scenario::new(VARIANT_JOINT, NEAR_MM, camera);
+    let frame = variant_scenario.simulate();
+    let mut rows = Vec::new();
+    for variant in variants()? {
+        rows.push(measure_variant(&variant_scenario, &frame, &variant, PcdData::Binary, config_path, runs)?);
+    }
+    let compressed = PcdData::BinaryCompressed;
+    rows.push(measure_variant(&variant_scenario, &frame, &Variant::raw(), compressed, config_path, runs)?);
+    drop((frame, config_file));
+    let title = format!(
+        "Per variant: {VARIANT_JOINT} at {NEAR_MM:.0} mm ({} x {}), plan time and peak memory",
+        camera.width_px, camera.height_px
+    );
+    printer.table(&measure::variant_table(title, &rows))?;
 
     progress("the daemon, trigger to reply");
     let latency = daemon_load::daemon_latency(config_for(&scenario), JOINT, &sim, runs)?;

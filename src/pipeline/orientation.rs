@@ -212,6 +212,27 @@ pub(crate) fn scatter_normal(cloud: &PointCloud, search: &NeighbourSearch, i: us
     m.plane().map(|plane| plane.normal)
 }
 
+/// [`scatter_normal`] of point `i` from its neighbours as a whole visit of
+/// them gives them (`neighbours`, in [`NeighbourSearch::visit_until`]'s
+/// order): the same sample, the leading ones, so the same normal, for a
+/// caller that reads every neighbour anyway.
+pub(crate) fn scatter_normal_of_visit(
+    cloud: &PointCloud,
+    search: &NeighbourSearch,
+    i: usize,
+    neighbours: &[u32],
+) -> Option<Vec3> {
+    // As `for_each_sampled` stops: after its cap, and never before the first.
+    let sample = search.frame_neighbours_at_most(&cloud.points()[i]).clamp(1, SCATTER_NORMAL_SAMPLE);
+    let mut m = Moments::default();
+    for &j in neighbours.iter().take(sample) {
+        if let Some(q) = vec_at(cloud, j as usize) {
+            m.add(&q);
+        }
+    }
+    m.plane().map(|plane| plane.normal)
+}
+
 /// Whether the [`local_normal`] of point `i` of a cloud without a pixel
 /// grid lies within the angle whose cosine is `cos_limit` of the unit
 /// `reference`, and the point's neighbour count read up to `count_cap` (as

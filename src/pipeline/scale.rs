@@ -36,6 +36,7 @@
 //!
 //! Nothing here knows the camera: it measures the cloud.
 
+#[cfg(test)]
 use std::ops::ControlFlow;
 
 use rayon::prelude::*;
@@ -43,9 +44,11 @@ use rayon::prelude::*;
 use crate::cloud::{Point, PointCloud};
 use crate::geometry::{Vec3, vec3};
 
-use super::neighbours::NeighbourSearch;
+#[cfg(test)]
 use super::neighbours::cells::CellIndex;
-use super::orientation::scatter_normal;
+use super::neighbours::cells::SortedCells;
+use super::neighbours::{MAX_SAMPLED_NEIGHBOURS, NeighbourSearch};
+use super::orientation::scatter_normal_of_visit;
 
 /// The full-plane neighbour count the derived radius aims at. Counts of
 /// well-spread points scatter by a few points around their mean; at 50 the
@@ -82,6 +85,8 @@ const MIN_DENSITY_SAMPLES: usize = 8;
 /// many adjacent empty ones (a quarter turn) make its neighbours not
 /// surround it.
 const SECTORS: u32 = 16;
+// The sectors by comparison ([`sector_of`]) are sixteenths of a turn.
+const _: () = assert!(SECTORS == 16);
 const EMPTY_SECTORS_OF_AN_EDGE: u32 = 4;
 
 /// Neighbours nearer than this share of the radius carry no direction
@@ -101,23 +106,86 @@ pub(crate) fn surrounded(search: &NeighbourSearch, i: usize, normal: &Vec3) -> b
 /// [`surrounded`] by the neighbours `j` for which `member(j)` holds.
 pub(crate) fn surrounded_by(search: &NeighbourSearch, i: usize, normal: &Vec3, member: impl Fn(usize) -> bool) -> bool {
     let points = search.cloud().points();
-    let p = vec3(&points[i]);
-    let e1 = normal.cross(&if normal.x.abs() < 0.9 { Vec3::x() } else { Vec3::y() }).normalize();
-    let e2 = normal.cross(&e1);
-    let min_sq = (MIN_DIRECTION_RADII * search.radius_mm()).powi(2);
-    let mut occupied = 0u32;
+    let mut sectors = Sectors::around(&points[i], normal, search.radius_mm());
     search.for_each(i, |j| {
-        if !member(j) {
-            return;
-        }
-        let d = vec3(&points[j]) - p;
-        let (a, b) = (d.dot(&e1), d.dot(&e2));
-        if a * a + b * b >= min_sq {
-            let turn = b.atan2(a) / std::f64::consts::TAU + 0.5;
-            occupied |= 1 << ((turn * SECTORS as f64) as u32).min(SECTORS - 1);
+        if member(j) {
+            sectors.add(&points[j]);
         }
     });
-    longest_empty_run(occupied) < EMPTY_SECTORS_OF_AN_EDGE
+    sectors.surrounded()
+}
+
+/// The sectors around a point occupied by its neighbours, seen along a
+/// normal: the state of [`surrounded_by`].
+struct Sectors {
+    p: Vec3,
+    /// Two unit vectors square to the normal and to each other.
+    e1: Vec3,
+    e2: Vec3,
+    min_sq: f64,
+    occupied: u32,
+}
+
+impl Sectors {
+    fn around(p: &Point, normal: &Vec3, radius_mm: f64) -> Sectors {
+        let e1 = normal.cross(&if normal.x.abs() < 0.9 { Vec3::x() } else { Vec3::y() }).normalize();
+        let e2 = normal.cross(&e1);
+        let min_sq = (MIN_DIRECTION_RADII * radius_mm).powi(2);
+        Sectors { p: vec3(p), e1, e2, min_sq, occupied: 0 }
+    }
+
+    #[inline]
+    fn add(&mut self, q: &Point) {
+        let d = vec3(q) - self.p;
+        let (a, b) = (d.dot(&self.e1), d.dot(&self.e2));
+        if a * a + b * b >= self.min_sq {
+            self.occupied |= 1 << sector_of(a, b);
+        }
+    }
+
+    fn surrounded(&self) -> bool {
+        longest_empty_run(self.occupied) < EMPTY_SECTORS_OF_AN_EDGE
+    }
+}
+
+/// The sector of the direction `(a, b)`: [`SECTORS`] equal turns counted
+/// from the direction `(-1, 0)` the positive way, as [`sector_by_angle`]
+/// numbers them.
+///
+/// By comparisons instead of an arc tangent: the signs give the quadrant,
+/// and within it the boundaries at 22.5°, 45° and 67.5° are the lines
+/// `|b| = t |a|`, `|b| = |a|` and `|a| = t |b|` with `t = tan 22.5°`.
+/// A direction within a billionth of its length of a boundary (the axes
+/// included, where the sign of a zero may decide) goes to
+/// [`sector_by_angle`]: so far from a boundary neither form's rounding, a
+/// few parts in 10¹⁶, can put it on the other side.
+#[inline]
+fn sector_of(a: f64, b: f64) -> u32 {
+    const TAN_EIGHTH_TURN_HALVED: f64 = std::f64::consts::SQRT_2 - 1.0;
+    const CLEAR: f64 = 1e-9;
+    let (x, y) = (a.abs(), b.abs());
+    let margin = CLEAR * (x + y);
+    let gaps = [y - TAN_EIGHTH_TURN_HALVED * x, y - x, TAN_EIGHTH_TURN_HALVED * y - x];
+    // The axes are boundaries too. NaN or infinite lengths fail the first
+    // test and go to the reference as well; past it the gaps are finite.
+    if !(x > margin && y > margin) || gaps.iter().any(|g| g.abs() < margin) {
+        return sector_by_angle(a, b);
+    }
+    // The sixteenth of a turn the direction lies in within its quadrant,
+    // counted from the a axis: the boundaries it lies beyond.
+    let within = gaps.iter().filter(|&&g| g > 0.0).count() as u32;
+    match (a > 0.0, b > 0.0) {
+        (true, true) => 8 + within,
+        (false, true) => 15 - within,
+        (true, false) => 7 - within,
+        (false, false) => within,
+    }
+}
+
+/// [`sector_of`] by the arc tangent: the reference.
+fn sector_by_angle(a: f64, b: f64) -> u32 {
+    let turn = b.atan2(a) / std::f64::consts::TAU + 0.5;
+    ((turn * SECTORS as f64) as u32).min(SECTORS - 1)
 }
 
 /// The longest run of zero bits among the low [`SECTORS`] bits of
@@ -166,7 +234,9 @@ fn even_sample(points: &[Point], max: usize) -> Vec<usize> {
 }
 
 /// The number of points within `radius_mm` of point `i` (itself
-/// included), read up to `cap`.
+/// included), read up to `cap`: the reference [`SortedCells::count_within`]
+/// is tested against.
+#[cfg(test)]
 fn count_within(index: &CellIndex, points: &[Point], i: usize, radius_mm: f64, cap: u32) -> u32 {
     let p = points[i];
     let r_sq = (radius_mm * radius_mm) as f32;
@@ -191,15 +261,35 @@ fn lower_quartile(values: &mut [u32]) -> u32 {
 /// Measures the spacing of `cloud`, starting at radius `start_mm`.
 pub(crate) fn measure_spacing(cloud: &PointCloud, start_mm: f64) -> Result<Spacing, SpacingError> {
     let points = cloud.points();
-    let sample = even_sample(points, SPACING_SAMPLES);
+    // A few thousand queries: cells sorted once, without CellIndex's
+    // per-cell neighbourhoods, which only a query per point repays; cells
+    // for twice the radius serve the next radius too.
+    let mut cells: Option<SortedCells> = None;
+    measure_spacing_by(cloud, start_mm, |radius, sample| {
+        let cells = match cells.take() {
+            Some(c) if c.radius_mm() >= radius => cells.insert(c),
+            _ => cells.insert(SortedCells::for_radius(points, 2.0 * radius)),
+        };
+        let r_sq = (radius * radius) as f32;
+        sample.par_iter().map(|&i| cells.count_within(&points[i], r_sq, MAX_MEASURED_COUNT)).collect()
+    })
+}
+
+/// [`measure_spacing`] with the counts of the sampled points within a
+/// radius, read up to [`MAX_MEASURED_COUNT`], from `counts_at(radius,
+/// sample)`.
+fn measure_spacing_by(
+    cloud: &PointCloud,
+    start_mm: f64,
+    mut counts_at: impl FnMut(f64, &[usize]) -> Vec<u32>,
+) -> Result<Spacing, SpacingError> {
+    let sample = even_sample(cloud.points(), SPACING_SAMPLES);
     if sample.is_empty() {
         return Err(SpacingError::Empty);
     }
     let mut radius = start_mm;
     while radius <= MAX_MEASURING_RADIUS_MM {
-        let index = CellIndex::for_radius(points, radius);
-        let mut counts: Vec<u32> =
-            sample.par_iter().map(|&i| count_within(&index, points, i, radius, MAX_MEASURED_COUNT)).collect();
+        let mut counts = counts_at(radius, &sample);
         let m = median(&mut counts);
         if m >= MIN_MEASURED_COUNT {
             let spacing_mm = radius * (std::f64::consts::PI / m as f64).sqrt();
@@ -292,14 +382,12 @@ impl DensityMap {
         let cap = MAX_MEASURED_COUNT;
         let measured: Vec<(u64, Option<u32>, Vec<u32>)> = runs
             .par_iter()
-            .map(|run| {
+            .map_init(Vec::new, |neighbours, run| {
                 let stride = run.len().div_ceil(DENSITY_SAMPLES_PER_CELL).max(1);
                 let mut counts: Vec<u32> = run
                     .iter()
                     .step_by(stride)
-                    .map(|&(_, i)| i as usize)
-                    .filter(|&i| scatter_normal(search.cloud(), search, i).is_some_and(|n| surrounded(search, i, &n)))
-                    .map(|i| search.count_up_to(i, |_| true, cap))
+                    .filter_map(|&(_, i)| surrounded_count(search, i as usize, cap, neighbours))
                     .collect();
                 let own = (counts.len() >= MIN_DENSITY_SAMPLES).then(|| lower_quartile(&mut counts));
                 (run[0].0, own, counts)
@@ -336,6 +424,38 @@ impl DensityMap {
     }
 }
 
+/// The neighbour count of point `i` read up to `cap` when its
+/// [`scatter_normal`](super::orientation::scatter_normal) exists and its
+/// neighbours [`surrounded`] it along
+/// that normal, else `None`: the three from one visit of the neighbours
+/// instead of one each (the normal's sample is the visit's first
+/// neighbours, the sectors and the count take them all). `neighbours` is
+/// scratch space; past [`MAX_SAMPLED_NEIGHBOURS`] neighbours it stops
+/// growing and the sectors are read by a second visit.
+fn surrounded_count(search: &NeighbourSearch, i: usize, cap: u32, neighbours: &mut Vec<u32>) -> Option<u32> {
+    let cloud = search.cloud();
+    let points = cloud.points();
+    neighbours.clear();
+    let mut total = 0usize;
+    search.for_each(i, |j| {
+        if neighbours.len() < MAX_SAMPLED_NEIGHBOURS {
+            neighbours.push(j as u32);
+        }
+        total += 1;
+    });
+    let normal = scatter_normal_of_visit(cloud, search, i, neighbours)?;
+    let all_around = if total <= neighbours.len() {
+        let mut sectors = Sectors::around(&points[i], &normal, search.radius_mm());
+        for &j in neighbours.iter() {
+            sectors.add(&points[j as usize]);
+        }
+        sectors.surrounded()
+    } else {
+        surrounded(search, i, &normal)
+    };
+    all_around.then(|| total.min(cap as usize) as u32)
+}
+
 /// The packed coordinates of the cube of side `cube_mm` holding `p`
 /// (21 bits an axis, clamped).
 fn pack_cube(p: &Point, cube_mm: f64) -> u64 {
@@ -348,6 +468,116 @@ fn pack_cube(p: &Point, cube_mm: f64) -> u64 {
 mod tests {
     use super::*;
     use crate::camera::CameraModel;
+    use crate::pipeline::orientation::scatter_normal;
+
+    /// [`surrounded_count`] as three visits: the normal's, the sectors',
+    /// the count's. The reference.
+    fn surrounded_count_reference(search: &NeighbourSearch, i: usize, cap: u32) -> Option<u32> {
+        let normal = scatter_normal(search.cloud(), search, i)?;
+        surrounded(search, i, &normal).then(|| search.count_up_to(i, |_| true, cap))
+    }
+
+    /// The spacing as measured before [`SortedCells`]: a [`CellIndex`] per
+    /// radius and its queries. The reference.
+    fn measure_spacing_reference(cloud: &PointCloud, start_mm: f64) -> Result<Spacing, SpacingError> {
+        let points = cloud.points();
+        measure_spacing_by(cloud, start_mm, |radius, sample| {
+            let index = CellIndex::for_radius(points, radius);
+            sample.iter().map(|&i| count_within(&index, points, i, radius, MAX_MEASURED_COUNT)).collect()
+        })
+    }
+
+    /// A plate of points about `spacing` apart with a jitter, a hole and
+    /// a cut edge, tilted, with duplicates: what a voxel grid leaves.
+    fn jittered_plate(spacing: f32, n: usize) -> PointCloud {
+        let mut state = 0x2545_f491_4f6c_dd1d_u64;
+        let mut next = move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 40) as f32 / (1u64 << 24) as f32 - 0.5
+        };
+        let mut points = Vec::new();
+        for k in 0..n * n {
+            let (col, row) = ((k % n) as f32, (k / n) as f32);
+            if (col - 20.0).powi(2) + (row - 25.0).powi(2) < 30.0 || col > row + 30.0 {
+                continue;
+            }
+            let (x, y) = ((col + 0.3 * next()) * spacing, (row + 0.3 * next()) * spacing);
+            points.push([x, y, 400.0 + 0.3 * x + 0.1 * next()]);
+            if k % 17 == 0 {
+                points.push([x, y, 400.0 + 0.3 * x]);
+            }
+        }
+        PointCloud::unorganized(points)
+    }
+
+    #[test]
+    fn the_spacing_is_measured_as_the_reference_measures_it() {
+        for cloud in [grid(1.0, 120, 0.3), grid(0.37, 90, 0.0), jittered_plate(1.0, 70), jittered_plate(2.6, 60)] {
+            for start in [0.5, 1.0, 3.0] {
+                assert_eq!(measure_spacing(&cloud, start), measure_spacing_reference(&cloud, start));
+            }
+        }
+    }
+
+    #[test]
+    fn one_visit_decides_each_sampled_point_as_three_do() {
+        let camera = CameraModel::default();
+        // A clump of duplicates past the scratch list's bound: its points'
+        // sectors are read by a second visit.
+        let mut clumped = jittered_plate(1.0, 70).points().to_vec();
+        clumped.extend(std::iter::repeat_n([30.0f32, 40.0, 409.0], MAX_SAMPLED_NEIGHBOURS + 10));
+        let clumped = PointCloud::unorganized(clumped);
+        for cloud in [grid(1.0, 60, 0.2), jittered_plate(1.0, 70), jittered_plate(0.5, 50), clumped] {
+            let radius = radius_for(measure_spacing(&cloud, 1.0).unwrap().spacing_mm, 1.0);
+            let search = NeighbourSearch::new(&cloud, &camera, radius);
+            let mut scratch = Vec::new();
+            let mut surrounded_points = 0;
+            for i in 0..cloud.len() {
+                for cap in [0, 7, MAX_MEASURED_COUNT] {
+                    let fast = surrounded_count(&search, i, cap, &mut scratch);
+                    assert_eq!(fast, surrounded_count_reference(&search, i, cap), "point {i}, cap {cap}");
+                    surrounded_points += fast.is_some() as usize;
+                }
+            }
+            assert!(surrounded_points > cloud.len() && surrounded_points < 3 * cloud.len(), "{surrounded_points}");
+        }
+    }
+
+    #[test]
+    fn sectors_by_comparison_are_the_sectors_by_angle() {
+        let mut directions: Vec<(f64, f64)> = Vec::new();
+        // Every boundary, exactly and a few units in the last place either
+        // side, in every length; the axes with either zero.
+        for k in 0..64 {
+            let angle = k as f64 * std::f64::consts::TAU / 64.0 - std::f64::consts::PI;
+            for length in [1e-3, 0.7, 3.0, 1e3] {
+                let (a, b) = (length * angle.cos(), length * angle.sin());
+                for ulps in -3i64..=3 {
+                    let nudge = |v: f64| f64::from_bits((v.to_bits() as i64 + ulps) as u64);
+                    directions.extend([(nudge(a), b), (a, nudge(b))]);
+                }
+            }
+        }
+        directions.extend([(1.0, 0.0), (-1.0, 0.0), (1.0, -0.0), (-1.0, -0.0), (0.0, 1.0), (-0.0, 1.0), (0.0, -1.0)]);
+        // And a spread of directions between.
+        let mut state = 0x9e37_79b9_7f4a_7c15_u64;
+        for _ in 0..200_000 {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            let a = (state >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0;
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            let b = (state >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0;
+            directions.push((a, b));
+        }
+        for (a, b) in directions {
+            assert_eq!(sector_of(a, b), sector_by_angle(a, b), "({a:e}, {b:e})");
+        }
+    }
 
     /// A square grid of points `spacing` apart on the plane z = 500 +
     /// slope x, `n` by `n`.

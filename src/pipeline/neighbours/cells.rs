@@ -14,6 +14,11 @@
 //! Building sorts the points by cell, on rayon, and the order is fixed by
 //! (cell, cloud index), so queries visit neighbours in the same order on
 //! every run and every machine.
+//!
+//! For a few thousand queries (the spacing measurement) the neighbourhood
+//! lists, boxes and per-point cells cost more to build than they save:
+//! [`SortedCells`] keeps only the sorted points and finds a query's cells
+//! by binary search.
 
 use std::ops::{ControlFlow, Range};
 
@@ -87,15 +92,9 @@ fn neighbourhoods(keys: &[u64]) -> (Vec<u32>, Vec<u32>) {
     let mut cursors = [0usize; COLUMNS.len()];
     starts.push(0);
     for (c, &key) in keys.iter().enumerate() {
-        let (x, y, z) = (key >> (2 * AXIS_BITS), (key >> AXIS_BITS) & FIELD_MAX, key & FIELD_MAX);
         list.push(c as u32);
-        for (cursor, &(dx, dy)) in cursors.iter_mut().zip(&COLUMNS) {
-            let (nx, ny) = (x as i64 + dx, y as i64 + dy);
-            if !(0..=FIELD_MAX as i64).contains(&nx) || !(0..=FIELD_MAX as i64).contains(&ny) {
-                continue;
-            }
-            let column = ((nx as u64) << (2 * AXIS_BITS)) | ((ny as u64) << AXIS_BITS);
-            let (lo, hi) = (column | z.saturating_sub(1), column | (z + 1).min(FIELD_MAX));
+        for (cursor, range) in cursors.iter_mut().zip(column_ranges(key)) {
+            let Some((lo, hi)) = range else { continue };
             while *cursor < keys.len() && keys[*cursor] < lo {
                 *cursor += 1;
             }
@@ -112,28 +111,108 @@ fn neighbourhoods(keys: &[u64]) -> (Vec<u32>, Vec<u32>) {
     (starts, list)
 }
 
+/// The packed key of the cell holding `p` among cells `cell_mm` wide.
+#[inline]
+fn cell_key(p: &Point, inverse_cell_mm: f64) -> u64 {
+    pack(std::array::from_fn(|a| {
+        let v = (p[a] as f64 * inverse_cell_mm).floor();
+        v.clamp(-(AXIS_HALF_RANGE as f64), AXIS_HALF_RANGE as f64) as i64
+    }))
+}
+
+/// The inclusive key ranges of the nine columns of three cells around the
+/// cell `key`, in [`COLUMNS`] order; `None` for a column outside the
+/// packed range. Every key of the 27 cells lies in one of them.
+#[inline]
+fn column_ranges(key: u64) -> [Option<(u64, u64)>; COLUMNS.len()] {
+    let (x, y, z) = (key >> (2 * AXIS_BITS), (key >> AXIS_BITS) & FIELD_MAX, key & FIELD_MAX);
+    COLUMNS.map(|(dx, dy)| {
+        let (nx, ny) = (x as i64 + dx, y as i64 + dy);
+        if !(0..=FIELD_MAX as i64).contains(&nx) || !(0..=FIELD_MAX as i64).contains(&ny) {
+            return None;
+        }
+        let column = ((nx as u64) << (2 * AXIS_BITS)) | ((ny as u64) << AXIS_BITS);
+        Some((column | z.saturating_sub(1), column | (z + 1).min(FIELD_MAX)))
+    })
+}
+
+/// The valid points of a cloud sorted by cell, and nothing else: what a
+/// few thousand radius counts need (the spacing measurement), built with
+/// one sort instead of [`CellIndex`]'s per-cell boxes and neighbourhoods,
+/// which pay off only over a query per point. A query finds its 27 cells
+/// by nine binary searches, one per column of three.
+pub(crate) struct SortedCells {
+    /// The largest radius the cells answer for.
+    radius_mm: f64,
+    inverse_cell_mm: f64,
+    /// Cell keys, sorted, and the points' coordinates in the same order.
+    keys: Vec<u64>,
+    points: Vec<Point>,
+}
+
+impl SortedCells {
+    /// Sorts the valid points of `cloud_points` into cells a hair wider
+    /// than `radius_mm` (as [`CellIndex::for_radius`] does).
+    pub(crate) fn for_radius(cloud_points: &[Point], radius_mm: f64) -> SortedCells {
+        let inverse_cell_mm = 1.0 / (radius_mm * CELL_MARGIN);
+        let mut keyed: Vec<(u64, Point)> =
+            cloud_points.par_iter().filter(|p| p[0].is_finite()).map(|p| (cell_key(p, inverse_cell_mm), *p)).collect();
+        // Counting does not depend on the order within a cell.
+        keyed.par_sort_unstable_by_key(|&(key, _)| key);
+        let (keys, points) = keyed.into_par_iter().unzip();
+        SortedCells { radius_mm, inverse_cell_mm, keys, points }
+    }
+
+    /// The largest radius the cells answer for.
+    pub(crate) fn radius_mm(&self) -> f64 {
+        self.radius_mm
+    }
+
+    /// The number of points within `radius_sq` of `p` by the kernels'
+    /// predicate ([`within`]), `p` itself included if it is in the
+    /// index, read up to `cap`. The radius must be at most
+    /// [`SortedCells::radius_mm`]: beyond, neighbours lie outside the
+    /// cells read.
+    pub(crate) fn count_within(&self, p: &Point, radius_sq: f32, cap: u32) -> u32 {
+        debug_assert!(
+            radius_sq as f64 <= self.radius_mm * self.radius_mm * (1.0 + 1e-6),
+            "a radius the cells answer for"
+        );
+        let mut n = 0;
+        for (lo, hi) in column_ranges(cell_key(p, self.inverse_cell_mm)).into_iter().flatten() {
+            // A column holds a few cells: found by one search, read to
+            // its end by a scan.
+            let start = self.keys.partition_point(|&k| k < lo);
+            let in_column = self.keys[start..].iter().take_while(|&&k| k <= hi).count();
+            for q in &self.points[start..start + in_column] {
+                n += crate::kernels::within(p, q, radius_sq) as u32;
+                if n >= cap {
+                    return n;
+                }
+            }
+        }
+        n
+    }
+}
+
 impl CellIndex {
     /// Indexes the valid (finite) points of `cloud_points` for queries
     /// within `radius_mm`: cells a hair wider than the radius, so that a
     /// neighbour exactly at the radius never falls two cells away through
     /// rounding.
     pub(crate) fn for_radius(cloud_points: &[Point], radius_mm: f64) -> CellIndex {
-        let cell_mm = radius_mm * CELL_MARGIN;
-        let inverse = 1.0 / cell_mm;
-        let cell_coords = |p: &Point| -> [i64; 3] {
-            std::array::from_fn(|a| {
-                let v = (p[a] as f64 * inverse).floor();
-                v.clamp(-(AXIS_HALF_RANGE as f64), AXIS_HALF_RANGE as f64) as i64
-            })
-        };
+        let inverse = 1.0 / (radius_mm * CELL_MARGIN);
         let mut keyed: Vec<(u64, u32)> = cloud_points
             .par_iter()
             .enumerate()
             .filter(|(_, p)| p[0].is_finite())
-            .map(|(i, p)| (pack(cell_coords(p)), i as u32))
+            .map(|(i, p)| (cell_key(p, inverse), i as u32))
             .collect();
         keyed.par_sort_unstable();
 
+        // Each axis ends in a lane block's worth of padding, so that a
+        // block starting at any point's position can be read whole
+        // (`visit_within`); the padding is never within any radius.
         let axis = |a: usize| -> Vec<f32> { keyed.par_iter().map(|&(_, i)| cloud_points[i as usize][a]).collect() };
         let (xs, ys, zs) = (axis(0), axis(1), axis(2));
         let index_of: Vec<u32> = keyed.par_iter().map(|&(_, i)| i).collect();
@@ -192,8 +271,9 @@ impl CellIndex {
     /// point within `reach_sq` of cloud point `i` (at `p`), nearest cells
     /// first, until it breaks. Candidates are a superset of the points
     /// within the reach: the caller applies its own predicate. An invalid
-    /// point has no cell and no neighbours.
-    #[inline]
+    /// point has no cell and no neighbours. The reference of
+    /// [`CellIndex::visit_within`]'s order.
+    #[cfg(test)]
     pub(crate) fn visit_near(
         &self,
         i: usize,
@@ -212,9 +292,9 @@ impl CellIndex {
     }
 
     /// Calls `visit(j)` for every point `j` within `radius_sq` of cloud
-    /// point `i` (at `p`) by the kernels' predicate ([`within`]), in the
-    /// order of [`CellIndex::visit_near`], until it breaks: the same
-    /// visits as `visit_near` with that predicate in the visitor, with the
+    /// point `i` (at `p`) by the kernels' predicate ([`within`]), nearest
+    /// cells first, until it breaks: the same visits as `visit_near` (the
+    /// tests' candidates) with that predicate in the visitor, with the
     /// distances of a cell's points computed [`LANES_PER_TEST`] at a time.
     /// Cells farther than `reach_sq` are skipped whole, as there.
     #[inline]
@@ -336,6 +416,29 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn sorted_cells_count_exactly_what_a_scan_counts() {
+        for n in [0, 1, 2, 15, 100, 3000] {
+            let points = scattered(n);
+            for radius in [0.3f32, 0.8, 2.5] {
+                let sorted = SortedCells::for_radius(&points, radius as f64);
+                for r in [radius, radius * 0.5] {
+                    let r_sq = r * r;
+                    for p in points.iter().filter(|p| p[0].is_finite()).take(300) {
+                        let all = brute_force(&points, p, r_sq).len() as u32;
+                        assert_eq!(sorted.count_within(p, r_sq, u32::MAX), all, "{n} points, radius {r} of {radius}");
+                        for cap in [1, 3, 10] {
+                            assert_eq!(sorted.count_within(p, r_sq, cap), all.min(cap), "cap {cap}");
+                        }
+                    }
+                }
+            }
+        }
+        let far = vec![[1.0e9f32, 0.0, 500.0], [-1.0e9, 0.0, 500.0], [0.0, 0.0, 500.0]];
+        let sorted = SortedCells::for_radius(&far, 0.05);
+        assert_eq!(sorted.count_within(&far[2], 0.0025, u32::MAX), 1, "clamped, not wrapped");
     }
 
     #[test]

@@ -427,6 +427,10 @@ pub fn rim_refined_extent(
     if !(spacing_mm.is_finite() && spacing_mm > 0.0 && known) {
         return (lo, hi);
     }
+    let inside = RIM_START_STRIPS * STRIP_SPACINGS * spacing_mm;
+    if hi - lo <= 2.0 * inside {
+        return (lo, hi);
+    }
     let [inner, outer] = RIM_ROWS_SPACINGS.map(|rows| -rows * spacing_mm);
     let in_rows = |q: &Vec3| (outer..=inner).contains(&(q - edge.point).dot(&edge.outward));
     // (along, on the plate) of every point whose line of sight crosses the
@@ -451,20 +455,14 @@ pub fn rim_refined_extent(
     let (Some(&(view_lo, _)), Some(&(view_hi, _))) = (rows.first(), rows.last()) else {
         return (lo, hi);
     };
-    let inside = RIM_START_STRIPS * STRIP_SPACINGS * spacing_mm;
-    if rim.is_empty() || hi - lo <= 2.0 * inside {
+    if rim.is_empty() {
         return (lo, hi);
     }
     // A tilted plate's voxel centroids, or a camera's anisotropic grid,
     // leave wider steps along the rim than the mean spacing says: the
     // rim's own steps set the break, as the plate's do for the strips.
     let mut steps: Vec<f64> = rim.windows(2).map(|w| w[1] - w[0]).collect();
-    let typical = if steps.is_empty() {
-        0.0
-    } else {
-        let k = (steps.len() * 99 / 100).min(steps.len() - 1);
-        *steps.select_nth_unstable_by(k, f64::total_cmp).1
-    };
+    let typical = percentile_99(&mut steps).unwrap_or(0.0);
     let break_mm = (RIM_BREAK_SPACINGS * spacing_mm).max(HOLE_OVER_INTERIOR * typical);
     let half = spacing_mm / 2.0;
     let border_mm = RIM_AT_BORDER_SPACINGS * spacing_mm;
@@ -537,12 +535,13 @@ fn hole_threshold<'a>(strips: impl Iterator<Item = &'a [(f64, Vec3)]>, band_mm: 
     let mut gaps: Vec<f64> =
         strips.flat_map(|strip| strip.windows(2).filter(move |w| w[1].0 <= inner).map(|w| w[1].0 - w[0].0)).collect();
     let floor = MIN_HOLE_SPACINGS * spacing_mm;
-    if gaps.is_empty() {
-        return floor;
-    }
-    let k = (gaps.len() * 99 / 100).min(gaps.len() - 1);
-    let q99 = *gaps.select_nth_unstable_by(k, f64::total_cmp).1;
-    floor.max(HOLE_OVER_INTERIOR * q99)
+    percentile_99(&mut gaps).map_or(floor, |q99| floor.max(HOLE_OVER_INTERIOR * q99))
+}
+
+/// The 99th percentile of `values` (reordered in place), `None` when empty.
+fn percentile_99(values: &mut [f64]) -> Option<f64> {
+    let k = (values.len() * 99 / 100).min(values.len().checked_sub(1)?);
+    Some(*values.select_nth_unstable_by(k, f64::total_cmp).1)
 }
 
 /// The index of a strip's last point before the plate ends, walking

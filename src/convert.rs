@@ -9,6 +9,7 @@
 pub mod to_proto {
     use std::collections::BTreeMap;
 
+    use weldseam_proto::ErrorCode;
     use weldseam_proto::message::{self, Frame, FrameMeta, FrameSelect, Units};
     use weldseam_proto::plan as proto;
 
@@ -16,8 +17,9 @@ pub mod to_proto {
     use crate::cloud::PointCloud;
     use crate::geometry::pose::EulerConvention;
     use crate::joint::JointType;
+    use crate::pipeline::quality::{Gate, GateFailure, SeamQuality, Spread};
     use crate::pipeline::roi::Roi;
-    use crate::pipeline::{CloudFrame, Plan, PlanRequest, Seam};
+    use crate::pipeline::{CloudFrame, Plan, PlanError, PlanRequest, Seam, Stage};
 
     pub fn joint(j: JointType) -> proto::Joint {
         match j {
@@ -52,6 +54,58 @@ pub mod to_proto {
                 visible_joint_mm: c.visible_joint_mm,
                 beyond_mm: c.beyond_mm,
             }),
+            quality: s.quality.as_ref().map(quality),
+            warnings: s.warnings.iter().map(warning).collect(),
+        }
+    }
+
+    fn spread(s: &Spread) -> proto::Spread {
+        proto::Spread { min: s.min, mean: s.mean, max: s.max }
+    }
+
+    pub fn quality(q: &SeamQuality) -> proto::SeamQuality {
+        proto::SeamQuality {
+            point_spacing_mm: q.point_spacing_mm,
+            gap_mm: q.gap_mm.as_ref().map(spread),
+            misalignment_mm: q.misalignment_mm,
+            lap_step_mm: q.lap_step_mm,
+            depth_to_support_mm: q.depth_to_support_mm,
+            plate_angle_deg: q.plate_angle_deg,
+            uncertainty_across_mm: q.uncertainty_across_mm,
+            uncertainty_normal_mm: q.uncertainty_normal_mm,
+        }
+    }
+
+    pub fn warning(f: &GateFailure) -> proto::GateWarning {
+        proto::GateWarning {
+            gate: f.gate.name().to_string(),
+            value: f.value,
+            limit: f.limit,
+            message: f.message.clone(),
+        }
+    }
+
+    /// The error code a refused plan carries: the gate's own code for a
+    /// seam a quality gate refused, `bad_request` for a request that does
+    /// not fit the frame, `plan_failed` for every other stage.
+    pub fn plan_error_code(e: &PlanError) -> ErrorCode {
+        match (e.gate, e.stage) {
+            (Some(gate), _) => gate_code(gate),
+            (None, Stage::Request) => ErrorCode::BadRequest,
+            (None, _) => ErrorCode::PlanFailed,
+        }
+    }
+
+    pub fn gate_code(gate: Gate) -> ErrorCode {
+        match gate {
+            Gate::EdgeFitResidual => ErrorCode::EdgeFitResidual,
+            Gate::EdgeCoverage => ErrorCode::EdgeCoverage,
+            Gate::JointCoverage => ErrorCode::JointCoverage,
+            Gate::Misalignment => ErrorCode::Misalignment,
+            Gate::GapWidth => ErrorCode::GapWidth,
+            Gate::PlateAngle => ErrorCode::PlateAngle,
+            Gate::PositionUncertainty => ErrorCode::PositionUncertainty,
+            Gate::JointMismatch => ErrorCode::JointMismatch,
         }
     }
 

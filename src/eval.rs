@@ -106,14 +106,9 @@ pub fn evaluate_variant(
         request.cloud_frame = CloudFrame::Base;
     }
     let result = planner.plan(&sim.cloud, &request).and_then(|plan| {
-        let seam = plan
-            .seams
-            .first()
-            .ok_or_else(|| PlanError { stage: crate::pipeline::Stage::Trajectory, reason: "no seam".into() })?;
-        let err = seam_error(&sim.truth, seam).ok_or_else(|| PlanError {
-            stage: crate::pipeline::Stage::Trajectory,
-            reason: "the trajectory has no waypoint".into(),
-        })?;
+        let seam = plan.seams.first().ok_or_else(|| PlanError::at(crate::pipeline::Stage::Trajectory, "no seam"))?;
+        let err = seam_error(&sim.truth, seam)
+            .ok_or_else(|| PlanError::at(crate::pipeline::Stage::Trajectory, "the trajectory has no waypoint"))?;
         Ok((err, plan))
     });
     SceneOutcome {

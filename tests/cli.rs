@@ -100,12 +100,17 @@ fn failures_exit_non_zero_and_say_why() {
     let dir = tempfile::tempdir().unwrap();
     let (pcd, truth) = simulate(dir.path(), "lap");
     let pose = format!("--pose={}", pose_of(&truth));
-    // A lap frame planned as a butt joint: no two coplanar plates.
+    // A lap frame planned as a butt joint: no two coplanar plates, but a
+    // lap's step. With --json the refusal is on stdout too, as one object
+    // (no trajectory in it), for scripts to read the code.
     let out = weldseam(&["plan", "--cloud", &pcd, "--joint", "i-butt", &pose, "--json"]);
     assert!(!out.status.success());
-    assert!(out.stdout.is_empty(), "nothing on stdout on failure");
+    let refusal: serde_json::Value = serde_json::from_slice(&out.stdout).expect("one JSON object on stdout");
+    assert_eq!(refusal["error"]["stage"].as_str(), Some("background"), "{refusal}");
+    assert_eq!(refusal["error"]["code"].as_str(), Some("joint_mismatch"), "{refusal}");
+    assert!(refusal.get("seams").is_none(), "{refusal}");
     let err = String::from_utf8_lossy(&out.stderr);
-    assert!(err.contains("background stage failed"), "{err}");
+    assert!(err.contains("background stage failed") && err.contains("looks like a lap joint"), "{err}");
 
     let missing = weldseam(&["plan", "--cloud", "no-such.pcd", "--joint", "lap", "--pose=0,0,0,0,0,0"]);
     assert!(!missing.status.success());

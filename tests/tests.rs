@@ -12,6 +12,7 @@ mod measured_clouds;
 mod parsers;
 mod peers;
 mod pipeline;
+mod quality;
 mod requests;
 mod roi;
 mod units_frames;

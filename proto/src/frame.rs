@@ -19,9 +19,10 @@ pub const MAGIC: [u8; 4] = *b"WSEM";
 
 /// The protocol version this crate speaks, in every header and hello.
 /// Version 2 changed PlanRequest and Status and added FrameAck; version 3
-/// added the frame's cloud frame and the request's region of interest.
-/// See PROTOCOL.md, "Changes from version 2".
-pub const PROTOCOL_VERSION: u16 = 3;
+/// added the frame's cloud frame and the request's region of interest;
+/// version 4 added each seam's quality figures and warnings to the plan
+/// reply. See PROTOCOL.md, "Changes from version 3".
+pub const PROTOCOL_VERSION: u16 = 4;
 
 /// Bytes of a message header.
 pub const HEADER_BYTES: usize = 16;
@@ -469,10 +470,12 @@ mod tests {
         assert!(matches!(decode(&bytes, 100), Err(WireError::Framing(FramingError::UnsupportedVersion(9)))));
         bytes[4] = 1;
         let refusal = decode(&bytes, 100).unwrap_err().to_string();
-        assert!(refusal.contains("version 1 is not supported") && refusal.contains("version 3"), "{refusal}");
-        bytes[4] = 2;
-        let refusal = decode(&bytes, 100).unwrap_err().to_string();
-        assert!(refusal.contains("version 2 is not supported") && refusal.contains("version 3"), "{refusal}");
+        assert!(refusal.contains("version 1 is not supported") && refusal.contains("version 4"), "{refusal}");
+        for old in [2, 3] {
+            bytes[4] = old;
+            let refusal = decode(&bytes, 100).unwrap_err().to_string();
+            assert!(refusal.contains(&format!("version {old} is not supported")) && refusal.contains("version 4"));
+        }
         let big = Header::new(Tag::Frame, 101).to_bytes();
         assert!(matches!(decode(&big, 100), Err(WireError::Framing(FramingError::TooLarge { .. }))));
         let hello = encode(&Message::Hello(Hello { protocol_version: 1, role: Role::Camera, name: "x".into() }));

@@ -377,12 +377,29 @@ pub enum ErrorCode {
     /// 49: the frame answering the request's trigger was not captured
     /// within the fresh window (before the request, or clock skew).
     StaleFrame,
+    /// 60: a seam was found but refused: a weld edge's fit residual is
+    /// above `quality.max_edge_fit_rms_spacings`.
+    EdgeFitResidual,
+    /// 61: refused: a weld edge was seen along too little of the seam.
+    EdgeCoverage,
+    /// 62: refused: the seam spans too little of the joint the camera saw.
+    JointCoverage,
+    /// 63: refused: the butt plates' high-low misalignment is above its limit.
+    Misalignment,
+    /// 64: refused: the I-butt gap is wider than `quality.max_gap_mm`.
+    GapWidth,
+    /// 65: refused: the plates' planes are not parallel.
+    PlateAngle,
+    /// 66: refused: the seam's position is too uncertain.
+    PositionUncertainty,
+    /// 67: refused: the plates seen are not those of the joint requested.
+    JointMismatch,
     /// Any other number, from a newer peer.
     Other(u16),
 }
 
 impl ErrorCode {
-    pub const ALL: [ErrorCode; 21] = [
+    pub const ALL: [ErrorCode; 29] = [
         ErrorCode::BadMagic,
         ErrorCode::UnsupportedVersion,
         ErrorCode::UnknownMessage,
@@ -404,6 +421,14 @@ impl ErrorCode {
         ErrorCode::ShuttingDown,
         ErrorCode::Internal,
         ErrorCode::StaleFrame,
+        ErrorCode::EdgeFitResidual,
+        ErrorCode::EdgeCoverage,
+        ErrorCode::JointCoverage,
+        ErrorCode::Misalignment,
+        ErrorCode::GapWidth,
+        ErrorCode::PlateAngle,
+        ErrorCode::PositionUncertainty,
+        ErrorCode::JointMismatch,
     ];
 
     pub fn code(self) -> u16 {
@@ -429,6 +454,14 @@ impl ErrorCode {
             ErrorCode::ShuttingDown => 47,
             ErrorCode::Internal => 48,
             ErrorCode::StaleFrame => 49,
+            ErrorCode::EdgeFitResidual => 60,
+            ErrorCode::EdgeCoverage => 61,
+            ErrorCode::JointCoverage => 62,
+            ErrorCode::Misalignment => 63,
+            ErrorCode::GapWidth => 64,
+            ErrorCode::PlateAngle => 65,
+            ErrorCode::PositionUncertainty => 66,
+            ErrorCode::JointMismatch => 67,
             ErrorCode::Other(n) => n,
         }
     }
@@ -457,6 +490,14 @@ impl ErrorCode {
             ErrorCode::ShuttingDown => "shutting_down",
             ErrorCode::Internal => "internal",
             ErrorCode::StaleFrame => "stale_frame",
+            ErrorCode::EdgeFitResidual => "edge_fit_residual",
+            ErrorCode::EdgeCoverage => "edge_coverage",
+            ErrorCode::JointCoverage => "joint_coverage",
+            ErrorCode::Misalignment => "misalignment",
+            ErrorCode::GapWidth => "gap_width",
+            ErrorCode::PlateAngle => "plate_angle",
+            ErrorCode::PositionUncertainty => "position_uncertainty",
+            ErrorCode::JointMismatch => "joint_mismatch",
             ErrorCode::Other(_) => "other",
         }
     }

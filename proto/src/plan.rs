@@ -43,6 +43,54 @@ pub struct Seam {
     /// How much of the visible joint the seam spans and how much of the
     /// seam its edges were seen along; absent from the paper's method.
     pub coverage: Option<SeamCoverage>,
+    /// What the fits say about the seam; absent from the paper's method.
+    pub quality: Option<SeamQuality>,
+    /// The quality gates the seam failed that the daemon's config makes
+    /// warnings (`quality.warn_only`) rather than refusals.
+    pub warnings: Vec<GateWarning>,
+}
+
+/// A figure's least, mean and greatest value along the seam.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Spread {
+    pub min: f64,
+    pub mean: f64,
+    pub max: f64,
+}
+
+/// A seam's quality figures, read from the pipeline's fits.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct SeamQuality {
+    /// The cloud's point spacing at the seam, mm.
+    pub point_spacing_mm: f64,
+    /// Butt joints: the distance between the weld edges across the seam,
+    /// mm (an I-butt's gap, a V-groove's top width).
+    pub gap_mm: Option<Spread>,
+    /// Butt joints: the plates' high-low misalignment, mm.
+    pub misalignment_mm: Option<f64>,
+    /// Lap joints: the step from the upper to the lower plate, mm.
+    pub lap_step_mm: Option<f64>,
+    /// How far behind the plates (the lower one of a lap) the surface they
+    /// rest on lies, mm, when it is seen: the plates are at most that thick.
+    pub depth_to_support_mm: Option<f64>,
+    /// The angle between the two plates' planes, degrees.
+    pub plate_angle_deg: f64,
+    /// The seam's estimated position uncertainty (one sigma), across it
+    /// and along the plate normal, mm.
+    pub uncertainty_across_mm: f64,
+    pub uncertainty_normal_mm: f64,
+}
+
+/// A quality gate the seam failed, reported as a warning.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct GateWarning {
+    /// The gate's name, as `quality.warn_only` and the error codes 60 to
+    /// 66 name it (e.g. `joint_coverage`).
+    pub gate: String,
+    pub value: f64,
+    pub limit: f64,
+    /// One sentence with the figure, its value and the limit.
+    pub message: String,
 }
 
 /// A seam's coverage of the joint the camera saw.

@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use std::io::Write;
 
 use anyhow::{anyhow, bail};
-use weldseam::convert::to_proto::plan_result;
+use weldseam::convert::to_proto::{plan_error_code, plan_result};
 use weldseam::geometry::pose::{RobotPose, hand_eye_from_rows};
 use weldseam::joint::JointType;
 use weldseam::pipeline::{PlanRequest, Planner, Stage};
@@ -33,7 +33,9 @@ pub struct PlanArgs {
     pub roi: args::RoiArgs,
     #[command(flatten)]
     pub config: args::ConfigArgs,
-    /// Print one JSON object on stdout instead of a summary.
+    /// Print one JSON object on stdout instead of a summary: the plan, or
+    /// on a refusal `{"error": {"stage", "code", "gate", "message"}}` (the
+    /// code a controller would get; the exit status is non-zero).
     #[arg(long)]
     pub json: bool,
 }
@@ -71,10 +73,27 @@ pub fn run(args: &PlanArgs) -> anyhow::Result<()> {
         load_ms = format!("{load_ms:.1}"),
         "loaded point cloud"
     );
-    let plan = planner.plan(&cloud, &request).map_err(|e| match e.stage {
-        Stage::Request => anyhow!("the request does not fit {}: {}", args.cloud.display(), e.reason),
-        _ => anyhow!(e).context(format!("no seam found in {}", args.cloud.display())),
-    })?;
+    let plan = match planner.plan(&cloud, &request) {
+        Ok(plan) => plan,
+        Err(e) => {
+            if args.json {
+                // Scripts read why as well as that: the stage, the code a
+                // controller would get and the sentence, on stdout.
+                let refusal = serde_json::json!({ "error": {
+                    "stage": e.stage.name(),
+                    "code": plan_error_code(&e).name(),
+                    "gate": e.gate.map(|g| g.name()),
+                    "message": e.reason,
+                }});
+                writeln!(out, "{refusal}")?;
+            }
+            return Err(match e.stage {
+                Stage::Request => anyhow!("the request does not fit {}: {}", args.cloud.display(), e.reason),
+                _ if e.gate.is_some() => anyhow!(e).context(format!("seam refused in {}", args.cloud.display())),
+                _ => anyhow!(e).context(format!("no seam found in {}", args.cloud.display())),
+            });
+        }
+    };
     let mut report = plan_result(&plan, planner.config().euler);
     report.timing_ms.insert("load".into(), load_ms);
     if args.json {
@@ -110,6 +129,12 @@ pub fn run(args: &PlanArgs) -> anyhow::Result<()> {
             100.0 * c.edge[1]
         )?;
     }
+    if let Some(q) = &seam.quality {
+        writeln!(out, "{}", quality_line(q))?;
+    }
+    for w in &seam.warnings {
+        writeln!(out, "warning ({}): {}", w.gate, w.message)?;
+    }
     writeln!(out, "{:>4}  {:>10} {:>10} {:>10}  {:>9} {:>9} {:>9}", "#", "x mm", "y mm", "z mm", "rx°", "ry°", "rz°")?;
     for (k, w) in seam.waypoints.iter().enumerate() {
         writeln!(
@@ -119,4 +144,27 @@ pub fn run(args: &PlanArgs) -> anyhow::Result<()> {
         )?;
     }
     Ok(())
+}
+
+/// The quality figures in one line: what a welding engineer checks first.
+fn quality_line(q: &weldseam_proto::plan::SeamQuality) -> String {
+    let mut parts = vec![format!("point spacing {:.2} mm", q.point_spacing_mm)];
+    if let Some(g) = &q.gap_mm {
+        parts.push(format!("gap {:.2} / {:.2} / {:.2} mm (min / mean / max)", g.min, g.mean, g.max));
+    }
+    if let Some(h) = q.misalignment_mm {
+        parts.push(format!("misalignment {h:.2} mm"));
+    }
+    if let Some(step) = q.lap_step_mm {
+        parts.push(format!("lap step {step:.2} mm"));
+    }
+    if let Some(t) = q.depth_to_support_mm {
+        parts.push(format!("support {t:.1} mm behind the plates"));
+    }
+    parts.push(format!("plates at {:.1}°", q.plate_angle_deg));
+    parts.push(format!(
+        "position known to {:.2} mm across, {:.2} mm along the normal (one sigma)",
+        q.uncertainty_across_mm, q.uncertainty_normal_mm
+    ));
+    format!("quality: {}", parts.join(", "))
 }

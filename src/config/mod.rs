@@ -225,6 +225,83 @@ impl Default for TrajectoryParams {
     }
 }
 
+/// The limits a planned seam must meet (issue 12): the [quality] section.
+/// A seam that breaks one is refused with the figure, its value and the
+/// limit, unless the gate is named in `warn_only`; see
+/// [`crate::pipeline::quality`] for how each figure is measured.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct QualityParams {
+    /// The largest RMS residual of a weld edge's fit, in point spacings at
+    /// the seam (the boundary is sampled to about a third of one).
+    pub max_edge_fit_rms_spacings: f64,
+    /// The least fraction of the seam each weld edge must be seen along.
+    pub min_edge_coverage: f64,
+    /// The least fraction of the visible joint (where both plates are seen
+    /// beside it) the seam must span.
+    pub min_joint_coverage: f64,
+    /// Butt joints: the largest high-low misalignment of the plates, mm,
+    /// and as a fraction of their thickness t (ISO 5817 quality level C:
+    /// 0.15 t, at most 4 mm); the smaller limit applies. The camera sees
+    /// only a ceiling on t, the depth to the surface the plates rest on,
+    /// so the fraction applies to that when it is seen.
+    pub max_misalignment_mm: f64,
+    pub max_misalignment_of_thickness: f64,
+    /// I-butt joints: the widest root gap, mm.
+    pub max_gap_mm: f64,
+    /// The largest angle between the two plates' planes, degrees.
+    pub max_plate_angle_deg: f64,
+    /// The largest estimated position uncertainty (one sigma) of the seam,
+    /// across it or along the normal, mm.
+    pub max_position_uncertainty_mm: f64,
+    /// Gates (by name) whose failure is a warning on the seam, not a
+    /// refusal.
+    pub warn_only: Vec<String>,
+}
+
+impl Default for QualityParams {
+    fn default() -> Self {
+        QualityParams {
+            max_edge_fit_rms_spacings: 1.5,
+            min_edge_coverage: 0.5,
+            min_joint_coverage: 0.8,
+            max_misalignment_mm: 4.0,
+            max_misalignment_of_thickness: 0.15,
+            max_gap_mm: 4.0,
+            max_plate_angle_deg: 5.0,
+            max_position_uncertainty_mm: 0.5,
+            warn_only: Vec::new(),
+        }
+    }
+}
+
+impl QualityParams {
+    /// Whether a failure of `gate` only warns.
+    pub fn warns_only(&self, gate: crate::pipeline::quality::Gate) -> bool {
+        self.warn_only.iter().any(|name| name == gate.name())
+    }
+
+    /// Checks the [quality] section.
+    pub fn validate(&self) -> Result<(), ConfigError> {
+        use crate::pipeline::quality::Gate;
+        in_range("quality.max_edge_fit_rms_spacings", self.max_edge_fit_rms_spacings, 0.05, 100.0)?;
+        in_range("quality.min_edge_coverage", self.min_edge_coverage, 0.0, 1.0)?;
+        in_range("quality.min_joint_coverage", self.min_joint_coverage, 0.0, 1.0)?;
+        in_range("quality.max_misalignment_mm", self.max_misalignment_mm, 0.0, 50.0)?;
+        in_range("quality.max_misalignment_of_thickness", self.max_misalignment_of_thickness, 0.0, 1.0)?;
+        in_range("quality.max_gap_mm", self.max_gap_mm, 0.0, 50.0)?;
+        in_range("quality.max_plate_angle_deg", self.max_plate_angle_deg, 0.0, 90.0)?;
+        in_range("quality.max_position_uncertainty_mm", self.max_position_uncertainty_mm, 0.001, 100.0)?;
+        for name in &self.warn_only {
+            check("quality.warn_only", Gate::from_name(name).is_some_and(Gate::can_warn), || {
+                let names: Vec<&str> = Gate::ALL.iter().filter(|g| g.can_warn()).map(|g| g.name()).collect();
+                format!("{name:?} is not a gate that can warn; those are {}", names.join(", "))
+            })?;
+        }
+        Ok(())
+    }
+}
+
 /// The cell daemon's network and scheduling settings.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ServerConfig {
@@ -361,6 +438,7 @@ pub struct Config {
     pub pipeline: PipelineParams,
     pub paper: PaperParams,
     pub trajectory: TrajectoryParams,
+    pub quality: QualityParams,
     pub server: ServerConfig,
 }
 
@@ -436,6 +514,7 @@ impl Config {
         f.pipeline.validate()?;
         f.paper.validate()?;
         f.trajectory.validate()?;
+        f.quality.validate()?;
         let server = f.server.validate()?;
         Ok(Config {
             camera,
@@ -445,6 +524,7 @@ impl Config {
             pipeline: f.pipeline,
             paper: f.paper,
             trajectory: f.trajectory,
+            quality: f.quality,
             server,
         })
     }

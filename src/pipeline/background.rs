@@ -65,7 +65,32 @@ pub enum BackgroundError {
          plates are seen as one, across a gap narrower than the cloud resolves"
     )]
     PairUnderLargerPlane { area_mm2: f64, above_mm: f64, smaller_mm2: f64 },
+    /// A butt joint was asked for, but the nearest plates lie in two
+    /// layers one plate thickness apart, as a lap's do.
+    #[error(
+        "no two plates lie in one plane for a {joint} joint, but the nearest two lie {step_mm:.1} mm apart along \
+         the normal, one over the other: this looks like a lap joint, not the {joint} joint requested"
+    )]
+    LooksLikeLap { joint: JointType, step_mm: f64 },
+    /// A lap joint was asked for, but the upper layer holds two plates
+    /// side by side, as butt plates lie.
+    #[error(
+        "the upper layer holds two plates side by side in one plane ({first_mm2:.0} and {second_mm2:.0} mm²), \
+         coplanar within {tolerance_mm} mm: this looks like a butt joint, not the lap requested"
+    )]
+    LooksLikeButt { first_mm2: f64, second_mm2: f64, tolerance_mm: f64 },
 }
+
+impl BackgroundError {
+    /// Whether the error says the joint seen is not the joint requested.
+    pub fn is_joint_mismatch(&self) -> bool {
+        matches!(self, BackgroundError::LooksLikeLap { .. } | BackgroundError::LooksLikeButt { .. })
+    }
+}
+
+/// How large the second plate of a layer must be, against the first, to
+/// count as a plate beside it rather than a piece of fixture or a clamp.
+const SIDE_BY_SIDE_AREA_RATIO: f64 = 0.25;
 
 /// Fits a plane to each cluster and estimates its area from the sampling
 /// density the camera gives on that plane.
@@ -164,6 +189,13 @@ pub fn robust_select(planes: Vec<PlaneCluster>, s: &Selection) -> Result<Workpie
     match s.joint {
         JointType::VButt | JointType::IButt => {
             let Some(pos) = layers.iter().position(|l| l.len() >= 2) else {
+                // Say what the layers look like when they look like a lap.
+                if let [upper, lower, ..] = layers.as_slice() {
+                    let step_mm = offset(&lower[0]) - offset(&upper[0]);
+                    if (s.lap_step_min_mm..=s.lap_step_max_mm).contains(&step_mm) {
+                        return Err(BackgroundError::LooksLikeLap { joint: s.joint, step_mm });
+                    }
+                }
                 return Err(BackgroundError::NoCoplanarPair { found, offsets_mm });
             };
             let depth_to_support_mm = layers.get(pos + 1).map(|behind| offset(&behind[0]) - offset(&layers[pos][0]));
@@ -191,6 +223,16 @@ pub fn robust_select(planes: Vec<PlaneCluster>, s: &Selection) -> Result<Workpie
                         break;
                     }
                     if step >= s.lap_step_min_mm {
+                        // Two plates side by side on top are a butt joint's.
+                        if let [first, second, ..] = layers[upper].as_slice()
+                            && second.area_mm2 >= SIDE_BY_SIDE_AREA_RATIO * first.area_mm2
+                        {
+                            return Err(BackgroundError::LooksLikeButt {
+                                first_mm2: first.area_mm2,
+                                second_mm2: second.area_mm2,
+                                tolerance_mm: s.coplanar_tolerance_mm,
+                            });
+                        }
                         let depth_to_support_mm =
                             layers.get(lower + 1).map(|behind| offset(&behind[0]) - offset(&layers[lower][0]));
                         let low = layers.swap_remove(lower).swap_remove(0);
@@ -272,6 +314,31 @@ mod tests {
         let w = robust_select(planes, &selection(JointType::Lap)).unwrap();
         assert_eq!(w.plates[0].plane.offset, 700.0);
         assert_eq!(w.plates[1].plane.offset, 706.0);
+    }
+
+    #[test]
+    fn the_wrong_joint_requested_is_named_for_what_it_looks_like() {
+        // A lap: the upper plate 6 mm over the lower one, the table behind.
+        let lap = vec![cluster(760.0, 90_000.0, 0.0), cluster(706.0, 20_000.0, 50.0), cluster(700.0, 25_000.0, -50.0)];
+        for joint in [JointType::IButt, JointType::VButt] {
+            let err = robust_select(lap.clone(), &selection(joint)).unwrap_err();
+            assert!(err.is_joint_mismatch(), "{err}");
+            assert!(err.to_string().contains("6.0 mm apart") && err.to_string().contains("looks like a lap"), "{err}");
+        }
+        // Butt plates side by side, the table 20 mm behind them (within a
+        // lap's step range).
+        let butt = vec![cluster(700.0, 30_000.0, -60.0), cluster(700.3, 25_000.0, 60.0), cluster(720.0, 90_000.0, 0.0)];
+        let err = robust_select(butt.clone(), &selection(JointType::Lap)).unwrap_err();
+        assert!(err.is_joint_mismatch() && err.to_string().contains("looks like a butt joint"), "{err}");
+        assert!(robust_select(butt, &selection(JointType::IButt)).is_ok());
+        // A clamp beside a lap's upper plate is not a second plate.
+        let clamped = vec![
+            cluster(700.0, 30_000.0, -60.0),
+            cluster(700.5, 2_000.0, 60.0),
+            cluster(706.0, 20_000.0, 50.0),
+            cluster(760.0, 90_000.0, 0.0),
+        ];
+        assert!(robust_select(clamped, &selection(JointType::Lap)).is_ok());
     }
 
     #[test]

@@ -27,7 +27,7 @@ use super::refit::{CurveFit, SeamCurve};
 use super::scale::{self, Scale};
 use super::trajectory::{self, Waypoint};
 use super::weld_equation;
-use super::{Plan, PlanError, PlanRequest, PlanStats, Seam, SeamCoverage, Stage, StageTimings};
+use super::{Plan, PlanError, PlanRequest, PlanStats, Seam, SeamAssessment, Stage, StageTimings};
 
 /// The fewest plane points a cluster may have. Clusters below a few dozen
 /// points cannot reach the area limit (`pipeline.min_plane_area_mm2`) at any
@@ -288,7 +288,7 @@ impl<'a> Context<'a> {
         (s0, s1): (f64, f64),
         normal: Vec3,
         fits: &[CurveFit; 2],
-        coverage: Option<SeamCoverage>,
+        assessment: SeamAssessment,
     ) -> Result<Plan, PlanError> {
         let hand_eye = self.request.hand_eye.unwrap_or(self.config.hand_eye);
         let base_from_camera = self.request.pose.to_isometry(self.config.euler) * hand_eye;
@@ -313,7 +313,9 @@ impl<'a> Context<'a> {
             edge_fit_rms_mm: [fits[0].rms_mm, fits[1].rms_mm],
             edge_samples: [fits[0].points_used, fits[1].points_used],
             edge_samples_dropped: [fits[0].points_dropped, fits[1].points_dropped],
-            coverage,
+            coverage: assessment.coverage,
+            quality: assessment.quality,
+            warnings: assessment.warnings,
         };
         Ok(Plan { method, seams: vec![seam], stats: self.stats, timings: self.clock.timings })
     }

@@ -33,6 +33,7 @@ pub mod neighbours;
 pub mod orientation;
 mod paper;
 pub mod plane_points;
+pub mod quality;
 pub mod ransac;
 pub mod refit;
 pub mod regrid;
@@ -119,6 +120,8 @@ pub enum Stage {
     WeldEdges,
     Refit,
     WeldEquation,
+    /// The seam's quality figures against the configured gates.
+    Quality,
     Trajectory,
 }
 
@@ -128,8 +131,9 @@ impl Stage {
     /// the same work in both methods: [`Stage::Input`] the frame's check
     /// against what the camera can measure, [`Stage::NeighbourIndex`] the
     /// neighbour search's index (a point tree, or nothing to build on a
-    /// pixel grid); the paper's method has no [`Stage::Orientation`].
-    pub const IN_ORDER: [Stage; 12] = [
+    /// pixel grid); the paper's method has no [`Stage::Orientation`] and
+    /// no [`Stage::Quality`].
+    pub const IN_ORDER: [Stage; 13] = [
         Stage::Input,
         Stage::NeighbourIndex,
         Stage::Orientation,
@@ -141,6 +145,7 @@ impl Stage {
         Stage::WeldEdges,
         Stage::Refit,
         Stage::WeldEquation,
+        Stage::Quality,
         Stage::Trajectory,
     ];
 
@@ -158,6 +163,7 @@ impl Stage {
             Stage::WeldEdges => "weld_edges",
             Stage::Refit => "refit",
             Stage::WeldEquation => "weld_equation",
+            Stage::Quality => "quality",
             Stage::Trajectory => "trajectory",
         }
     }
@@ -169,17 +175,25 @@ impl fmt::Display for Stage {
     }
 }
 
-/// Why no trajectory could be planned: the stage that failed and why.
+/// Why no trajectory could be planned: the stage that failed and why and,
+/// for a seam the planner found but will not trust, the quality gate it
+/// failed.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[error("{stage} stage failed: {reason}")]
 pub struct PlanError {
     pub stage: Stage,
     pub reason: String,
+    pub gate: Option<quality::Gate>,
 }
 
 impl PlanError {
-    fn at(stage: Stage, reason: impl fmt::Display) -> Self {
-        PlanError { stage, reason: reason.to_string() }
+    pub fn at(stage: Stage, reason: impl fmt::Display) -> Self {
+        PlanError { stage, reason: reason.to_string(), gate: None }
+    }
+
+    /// A refusal by a quality gate.
+    fn refused(failure: &quality::GateFailure) -> Self {
+        PlanError { stage: Stage::Quality, reason: failure.message.clone(), gate: Some(failure.gate) }
     }
 }
 
@@ -230,6 +244,10 @@ pub struct Seam {
     /// How much of the joint the trajectory covers and on what evidence;
     /// the robust method measures it, the paper's has no such figure.
     pub coverage: Option<SeamCoverage>,
+    /// The seam's quality figures (robust method).
+    pub quality: Option<quality::SeamQuality>,
+    /// The gates the seam failed that `quality.warn_only` makes warnings.
+    pub warnings: Vec<quality::GateFailure>,
 }
 
 /// How much of the visible joint a seam spans, and how much of the seam
@@ -250,6 +268,15 @@ pub struct SeamCoverage {
     /// How much of the seam runs beyond the visible joint, mm: beyond
     /// where both plates are seen, no weld has evidence.
     pub beyond_mm: f64,
+}
+
+/// What the robust method adds to a seam beyond its geometry: coverage,
+/// quality figures and the warnings of gates that only warn.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub(crate) struct SeamAssessment {
+    pub coverage: Option<SeamCoverage>,
+    pub quality: Option<quality::SeamQuality>,
+    pub warnings: Vec<quality::GateFailure>,
 }
 
 /// The result of planning one frame.

@@ -27,7 +27,7 @@ use super::context::{self, Context, MIN_CLUSTER_POINTS};
 use super::edge_points::{EdgeCriterion, FullCount};
 use super::neighbours::NeighbourSearch;
 use super::refit::{self, CurveFit, SeamAxes};
-use super::{Plan, PlanError, Stage};
+use super::{Plan, PlanError, SeamAssessment, Stage};
 use super::{background, clustering, plane_points, ransac, weld_edges, weld_equation};
 use crate::geometry::Vec3;
 
@@ -113,5 +113,5 @@ pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
     ctx.clock.lap(Stage::WeldEquation);
 
     // 5.1: the waypoints in the robot's base frame.
-    ctx.finish(Method::Paper, weld, span, normal, &fits, None)
+    ctx.finish(Method::Paper, weld, span, normal, &fits, SeamAssessment::default())
 }

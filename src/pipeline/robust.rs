@@ -30,8 +30,8 @@ use super::edge_points::{EdgeCriterion, FullCount};
 use super::neighbours::NeighbourSearch;
 use super::ransac::EdgeLine;
 use super::refit::{self, SeamAxes};
-use super::{Plan, PlanError, SeamCoverage, Stage};
-use super::{background, clustering, orientation, plane_points, ransac, weld_edges, weld_equation};
+use super::{Plan, PlanError, SeamAssessment, SeamCoverage, Stage};
+use super::{background, clustering, orientation, plane_points, quality, ransac, weld_edges, weld_equation};
 
 /// How far, in degrees, a sampled local normal may lie from the most common
 /// one and still be averaged into the dominant normal. Depth noise tilts
@@ -47,12 +47,6 @@ const MIN_DIRECTION_NORM: f64 = 1e-9;
 /// cloud whose spacing is measured: diagonal neighbours lie 1.4 spacings
 /// apart, and the plane criterion leaves the odd hole.
 const CLUSTER_SPACINGS: f64 = 2.5;
-
-/// The least part of the seam each weld edge must have been seen along
-/// (within a scan line or strip of a boundary sample). Edges seen along
-/// the whole seam score about 1; half is far below any frame the camera
-/// resolves and far above the chance holes of an unresolved gap.
-const MIN_EDGE_COVERAGE: f64 = 0.5;
 
 /// Plans one frame by the robust method.
 pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
@@ -121,7 +115,10 @@ pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
         lap_step_max_mm: cfg.lap_step_max_mm,
         max_tilt_deg: cfg.plane_max_normal_angle_deg,
     };
-    let workpiece = background::robust_select(planes, &selection).map_err(|e| PlanError::at(Stage::Background, e))?;
+    let workpiece = background::robust_select(planes, &selection).map_err(|e| {
+        let gate = e.is_joint_mismatch().then_some(quality::Gate::JointMismatch);
+        PlanError { gate, ..PlanError::at(Stage::Background, e) }
+    })?;
     ctx.stats.plate_points = workpiece.plates.each_ref().map(|p| p.members.len());
     for (k, plate) in workpiece.plates.iter().enumerate() {
         tracing::debug!(
@@ -289,28 +286,9 @@ pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
     }
     // Both edges must have been seen along the seam, not glimpsed here and
     // there: a gap the cloud cannot resolve still leaves the odd chance
-    // hole, and a seam through those is a guess.
-    let mut edge_coverage = [0.0; 2];
-    for (k, boundary) in boundaries.iter().enumerate() {
-        let seen = boundary::coverage(boundary, |s| axes.feature(&s.position), s0, s1);
-        edge_coverage[k] = seen;
-        tracing::debug!(edge = k + 1, coverage = seen, length_mm = s1 - s0, "weld edge coverage");
-        if seen < MIN_EDGE_COVERAGE {
-            return Err(PlanError::at(
-                Stage::WeldEquation,
-                format!(
-                    "weld edge {} is seen along {:.0} % of the seam's {:.0} mm, below {:.0} %: the plates' \
-                     boundary is not resolved there (a gap narrower than about two point spacings, {:.2} mm, \
-                     cannot be seen)",
-                    k + 1,
-                    100.0 * seen,
-                    s1 - s0,
-                    100.0 * MIN_EDGE_COVERAGE,
-                    2.0 * spacing_at(&axes.origin),
-                ),
-            ));
-        }
-    }
+    // hole, and a seam through those is a guess (the edge coverage gate).
+    let edge_coverage = boundaries.each_ref().map(|b| boundary::coverage(b, |s| axes.feature(&s.position), s0, s1));
+    tracing::debug!(coverage = ?edge_coverage, length_mm = s1 - s0, "weld edge coverage");
     // The visible joint: where both plates are seen beside the weld, their
     // members widened by the rim the plane criterion trimmed (for a lap,
     // where the root is also in view). The seam should span all of it.
@@ -339,6 +317,37 @@ pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
     };
     ctx.clock.lap(Stage::WeldEquation);
 
+    // What the fits say about the seam, against the configured gates: a
+    // seam that fails one is refused, unless the gate only warns.
+    let quality = quality::measure(&quality::SeamFits {
+        joint: ctx.request.joint,
+        fits: &fits,
+        degree,
+        planes: [&plates[0].plane, &plates[1].plane],
+        span: (s0, s1),
+        point_spacing_mm: spacing_at(&axes.origin),
+        depth_to_support_mm: workpiece.depth_to_support_mm,
+    });
+    tracing::debug!(?quality, "seam quality");
+    let evidence = quality::SeamEvidence {
+        joint: ctx.request.joint,
+        quality: &quality,
+        edge_fit_rms_mm: fits.each_ref().map(|f| f.rms_mm),
+        edge_coverage: Some(edge_coverage),
+        coverage: coverage.as_ref(),
+        length_mm: s1 - s0,
+    };
+    let (warnings, refusals): (Vec<_>, Vec<_>) =
+        quality::check(&evidence, &config.quality).into_iter().partition(|f| config.quality.warns_only(f.gate));
+    for failure in &warnings {
+        tracing::warn!(gate = %failure.gate, value = failure.value, limit = failure.limit, "{}", failure.message);
+    }
+    if let Some(first) = refusals.first() {
+        return Err(PlanError::refused(first));
+    }
+    ctx.clock.lap(Stage::Quality);
+
     // 5.1: the waypoints in the robot's base frame.
-    ctx.finish(Method::Robust, weld, (s0, s1), normal, &fits, coverage)
+    let assessment = SeamAssessment { coverage, quality: Some(quality), warnings };
+    ctx.finish(Method::Robust, weld, (s0, s1), normal, &fits, assessment)
 }

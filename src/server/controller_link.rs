@@ -30,8 +30,8 @@ use super::frames::{FrameError, FrameRequest, FrameWait, StoredFrame, Wanted, wa
 use super::jobs::{JobError, JobSlot, JobTimes};
 use super::shutdown::{Shutdown, StopSignal};
 use crate::convert::from_proto::{self, RequestError};
-use crate::convert::to_proto::plan_result;
-use crate::pipeline::{Plan, PlanRequest, Stage};
+use crate::convert::to_proto::{plan_error_code, plan_result};
+use crate::pipeline::{Plan, PlanRequest};
 
 type Writer = Arc<Mutex<MessageWriter<tokio::net::tcp::OwnedWriteHalf>>>;
 
@@ -238,8 +238,7 @@ async fn plan(
                     Ok(Message::PlanReply(PlanReply { request_id, frame_id: frame.frame_id, result }))
                 }
                 Err(JobError::Plan(e)) => {
-                    let code = if e.stage == Stage::Request { ErrorCode::BadRequest } else { ErrorCode::PlanFailed };
-                    Err(Failure { code, text: format!("frame {}: {e}", frame.frame_id) })
+                    Err(Failure { code: plan_error_code(&e), text: format!("frame {}: {e}", frame.frame_id) })
                 }
                 Err(e @ JobError::Panicked) => {
                     error!(request_id, frame_id = frame.frame_id, "{e}");

@@ -1,0 +1,491 @@
+//! Quality figures and gates (issue 12): what the planner knows about how
+//! good a seam is, and the limits beyond which it refuses the seam rather
+//! than let a robot weld a guess.
+//!
+//! The paper reports errors after the fact, against a tape measure; a cell
+//! has no tape measure, so every figure here is read from the fits the
+//! pipeline already made:
+//!
+//! - each weld edge's least-squares residual (Eq. 17 to 25) and the
+//!   samples behind it;
+//! - the distance between the two weld edges across the seam at stations
+//!   along it (the gap of an I-butt joint, the top of a V-groove), and
+//!   their height difference along the normal (the high-low misalignment
+//!   of butt plates, which ISO 5817 limits to 0.15 t and 4 mm at quality
+//!   level C for butt welds);
+//! - the lap step, the angle between the two plates' planes and, when the
+//!   surface the plates rest on is seen, how far behind them it lies (the
+//!   plates are at most that thick; on spacers, much thinner);
+//! - an estimate of the seam's position uncertainty (one sigma) across it
+//!   and along the normal.
+//!
+//! A polynomial of degree p fitted by least squares to n samples spread
+//! evenly along its interval, each with scatter σ, is known at the
+//! interval's ends to `σ (p + 1) / √n` (the endpoint variance of a
+//! Legendre-basis fit is `(p + 1)² σ² / n`); the ends are where the fit is
+//! worst, so that is the figure. On top of it each edge carries the
+//! sampling of the boundary itself: a plate ends somewhere between its
+//! last point and the next one, a spacing further, which no number of
+//! samples averages away if the edge criterion leans one way, so a floor
+//! of `spacing / √12` (a uniform spread over one spacing) per edge.
+//!
+//! The gates compare the figures with [`QualityParams`]: a seam that fails
+//! one is refused with the figure, its value and the limit, and a
+//! [`Gate`] code the protocol carries; `quality.warn_only` turns a gate
+//! into a warning on the seam instead.
+
+use std::fmt;
+
+use crate::config::QualityParams;
+use crate::geometry::Vec3;
+use crate::geometry::fit::Plane;
+use crate::joint::JointType;
+
+use super::SeamCoverage;
+use super::refit::CurveFit;
+
+/// How many stations along the seam the gap and the misalignment are read
+/// at: enough to see a gap that opens towards one end, few enough to cost
+/// nothing.
+const STATIONS: usize = 16;
+
+/// A figure's least, mean and greatest value along the seam.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Spread {
+    pub min: f64,
+    pub mean: f64,
+    pub max: f64,
+}
+
+impl Spread {
+    fn of(values: impl IntoIterator<Item = f64>) -> Option<Spread> {
+        let (mut min, mut max, mut sum, mut n) = (f64::INFINITY, f64::NEG_INFINITY, 0.0, 0usize);
+        for v in values {
+            min = min.min(v);
+            max = max.max(v);
+            sum += v;
+            n += 1;
+        }
+        (n > 0).then(|| Spread { min, mean: sum / n as f64, max })
+    }
+}
+
+/// What the fits say about one seam.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SeamQuality {
+    /// The cloud's point spacing at the seam, mm: measured, or the camera's
+    /// pixel footprint there.
+    pub point_spacing_mm: f64,
+    /// Butt joints: the distance between the two weld edges across the
+    /// seam, mm: the root gap of an I-butt joint, the top width of a
+    /// V-groove.
+    pub gap_mm: Option<Spread>,
+    /// Butt joints: the largest height difference between the two weld
+    /// edges along the plate normal, mm (the linear misalignment).
+    pub misalignment_mm: Option<f64>,
+    /// Lap joints: how far the lower plate lies below the upper one at the
+    /// seam, mm (the upper plate's thickness, as seen).
+    pub lap_step_mm: Option<f64>,
+    /// How far the surface the plates rest on (a table, a fixture) lies
+    /// behind the plates (the butt plates, or the lower lap plate), mm,
+    /// when it is seen: the plates are at most that thick.
+    pub depth_to_support_mm: Option<f64>,
+    /// The angle between the two plates' planes, degrees.
+    pub plate_angle_deg: f64,
+    /// The seam's position uncertainty (one sigma) across it, in the
+    /// plates' plane, and along the plate normal, mm.
+    pub uncertainty_across_mm: f64,
+    pub uncertainty_normal_mm: f64,
+}
+
+/// What [`measure`] reads the figures from.
+#[derive(Debug, Clone, Copy)]
+pub struct SeamFits<'a> {
+    pub joint: JointType,
+    /// The two weld edges' fits, on shared axes (`a` across the seam, `b`
+    /// along the normal); for a lap the upper plate's edge first.
+    pub fits: &'a [CurveFit; 2],
+    /// The fits' polynomial degree.
+    pub degree: usize,
+    pub planes: [&'a Plane; 2],
+    /// The planned stretch along the seam's feature axis, mm.
+    pub span: (f64, f64),
+    pub point_spacing_mm: f64,
+    pub depth_to_support_mm: Option<f64>,
+}
+
+/// Reads a seam's quality figures from its fits.
+pub fn measure(seam: &SeamFits) -> SeamQuality {
+    let [e1, e2] = seam.fits.each_ref().map(|f| &f.curve);
+    let axes = &e1.axes;
+    let (s0, s1) = seam.span;
+    let stations = (0..STATIONS).map(|k| s0 + (s1 - s0) * (k as f64 + 0.5) / STATIONS as f64);
+    let offsets: Vec<Vec3> = stations.map(|s| e2.at(s) - e1.at(s)).collect();
+    let butt = seam.joint != JointType::Lap;
+    let gap_mm = if butt { Spread::of(offsets.iter().map(|d| d.dot(&axes.a).abs())) } else { None };
+    let misalignment_mm = if butt { offsets.iter().map(|d| d.dot(&axes.b).abs()).reduce(f64::max) } else { None };
+    let lap_step_mm = (!butt).then(|| seam.planes[1].offset - seam.planes[0].offset);
+    let cos = seam.planes[0].normal.dot(&seam.planes[1].normal).clamp(-1.0, 1.0);
+
+    // One sigma at an end of each edge's fit, with the boundary's floor.
+    let floor = seam.point_spacing_mm / 12f64.sqrt();
+    let edge_sigma = seam.fits.each_ref().map(|f| {
+        let fitted = f.rms_mm * (seam.degree as f64 + 1.0) / (f.points_used.max(1) as f64).sqrt();
+        fitted.hypot(floor)
+    });
+    // A butt weld lies midway between the edges (Eq. 32, 36); a lap weld
+    // at the root under the upper plate's edge (Eq. 38).
+    let uncertainty = if butt { 0.5 * edge_sigma[0].hypot(edge_sigma[1]) } else { edge_sigma[0] };
+    SeamQuality {
+        point_spacing_mm: seam.point_spacing_mm,
+        gap_mm,
+        misalignment_mm,
+        lap_step_mm,
+        depth_to_support_mm: seam.depth_to_support_mm,
+        plate_angle_deg: cos.acos().to_degrees(),
+        uncertainty_across_mm: uncertainty,
+        uncertainty_normal_mm: uncertainty,
+    }
+}
+
+/// A limit a seam must meet. The names and numbers are stable: the
+/// protocol and `plan --json` carry them, and `quality.warn_only` names
+/// them.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Gate {
+    /// A weld edge's fit residual is above `quality.max_edge_fit_rms_spacings`.
+    EdgeFitResidual,
+    /// A weld edge was seen along less of the seam than `quality.min_edge_coverage`.
+    EdgeCoverage,
+    /// The seam spans less of the visible joint than `quality.min_joint_coverage`.
+    JointCoverage,
+    /// The butt plates' high-low misalignment exceeds its limit.
+    Misalignment,
+    /// An I-butt joint's gap is wider than `quality.max_gap_mm`.
+    GapWidth,
+    /// The two plates' planes meet at more than `quality.max_plate_angle_deg`.
+    PlateAngle,
+    /// The seam's position is known less well than `quality.max_position_uncertainty_mm`.
+    PositionUncertainty,
+    /// The plates seen are not those of the joint requested (a lap's step
+    /// where a butt joint was asked for, or butt plates for a lap). Found
+    /// before any seam, so it cannot be only a warning.
+    JointMismatch,
+}
+
+impl Gate {
+    pub const ALL: [Gate; 8] = [
+        Gate::EdgeFitResidual,
+        Gate::EdgeCoverage,
+        Gate::JointCoverage,
+        Gate::Misalignment,
+        Gate::GapWidth,
+        Gate::PlateAngle,
+        Gate::PositionUncertainty,
+        Gate::JointMismatch,
+    ];
+
+    /// Whether `quality.warn_only` may name the gate: every gate read from
+    /// a planned seam's figures.
+    pub fn can_warn(self) -> bool {
+        self != Gate::JointMismatch
+    }
+
+    /// The gate's snake_case name, as config, logs and JSON write it.
+    pub fn name(self) -> &'static str {
+        match self {
+            Gate::EdgeFitResidual => "edge_fit_residual",
+            Gate::EdgeCoverage => "edge_coverage",
+            Gate::JointCoverage => "joint_coverage",
+            Gate::Misalignment => "misalignment",
+            Gate::GapWidth => "gap_width",
+            Gate::PlateAngle => "plate_angle",
+            Gate::PositionUncertainty => "position_uncertainty",
+            Gate::JointMismatch => "joint_mismatch",
+        }
+    }
+
+    pub fn from_name(name: &str) -> Option<Gate> {
+        Gate::ALL.into_iter().find(|g| g.name() == name)
+    }
+}
+
+impl fmt::Display for Gate {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// A gate a seam failed: the figure's value, the limit it broke, and one
+/// sentence that says both and what it means.
+#[derive(Debug, Clone, PartialEq)]
+pub struct GateFailure {
+    pub gate: Gate,
+    pub value: f64,
+    pub limit: f64,
+    pub message: String,
+}
+
+/// The figures a gate reads that are not in [`SeamQuality`].
+#[derive(Debug, Clone, Copy)]
+pub struct SeamEvidence<'a> {
+    pub joint: JointType,
+    pub quality: &'a SeamQuality,
+    pub edge_fit_rms_mm: [f64; 2],
+    /// The fraction of the seam each weld edge was seen along (robust
+    /// method).
+    pub edge_coverage: Option<[f64; 2]>,
+    /// How much of the visible joint the seam spans, when both plates are
+    /// seen beside it.
+    pub coverage: Option<&'a SeamCoverage>,
+    /// The planned seam's length along its feature axis, mm.
+    pub length_mm: f64,
+}
+
+/// Every gate `seam` fails, in [`Gate::ALL`]'s order.
+pub fn check(seam: &SeamEvidence, limits: &QualityParams) -> Vec<GateFailure> {
+    let q = seam.quality;
+    let mut failed = Vec::new();
+    let mut fail = |gate, value: f64, limit: f64, message: String| {
+        failed.push(GateFailure { gate, value, limit, message });
+    };
+
+    let (edge, rms) = if seam.edge_fit_rms_mm[0] >= seam.edge_fit_rms_mm[1] {
+        (1, seam.edge_fit_rms_mm[0])
+    } else {
+        (2, seam.edge_fit_rms_mm[1])
+    };
+    let rms_limit = limits.max_edge_fit_rms_spacings * q.point_spacing_mm;
+    if rms > rms_limit {
+        fail(
+            Gate::EdgeFitResidual,
+            rms,
+            rms_limit,
+            format!(
+                "weld edge {edge}'s fit residual is {rms:.2} mm, above {rms_limit:.2} mm ({} point spacings of \
+                 {:.2} mm): its boundary samples do not lie on one line",
+                limits.max_edge_fit_rms_spacings, q.point_spacing_mm
+            ),
+        );
+    }
+
+    if let Some(e) = seam.edge_coverage {
+        let (edge, seen) = if e[0] <= e[1] { (1, e[0]) } else { (2, e[1]) };
+        if seen < limits.min_edge_coverage {
+            fail(
+                Gate::EdgeCoverage,
+                seen,
+                limits.min_edge_coverage,
+                format!(
+                    "weld edge {edge} is seen along {:.0} % of the seam's {:.0} mm, below {:.0} %: the plates' \
+                     boundary is not resolved there (a gap narrower than about two point spacings, {:.2} mm, \
+                     cannot be seen)",
+                    100.0 * seen,
+                    seam.length_mm,
+                    100.0 * limits.min_edge_coverage,
+                    2.0 * q.point_spacing_mm,
+                ),
+            );
+        }
+    }
+    if let Some(c) = seam.coverage
+        && c.joint < limits.min_joint_coverage
+    {
+        fail(
+            Gate::JointCoverage,
+            c.joint,
+            limits.min_joint_coverage,
+            format!(
+                "the seam spans {:.0} % of the {:.0} mm of joint both plates are seen beside, below {:.0} %: \
+                     its edges were found along part of the joint only",
+                100.0 * c.joint,
+                c.visible_joint_mm,
+                100.0 * limits.min_joint_coverage,
+            ),
+        );
+    }
+
+    if let Some(h) = q.misalignment_mm {
+        // The thickness is not seen, only its ceiling (the plates may lie on
+        // spacers): the fraction of that ceiling never refuses a seam the
+        // real thickness would pass.
+        let (limit, why) = match q.depth_to_support_mm {
+            Some(t) if limits.max_misalignment_of_thickness * t < limits.max_misalignment_mm => (
+                limits.max_misalignment_of_thickness * t,
+                format!(
+                    "{} of the plates' thickness, at most the {t:.1} mm to the surface they rest on",
+                    limits.max_misalignment_of_thickness
+                ),
+            ),
+            _ => (limits.max_misalignment_mm, "quality.max_misalignment_mm".to_string()),
+        };
+        if h > limit {
+            fail(
+                Gate::Misalignment,
+                h,
+                limit,
+                format!("the plates' edges are misaligned by {h:.2} mm along the normal, above {limit:.2} mm ({why})"),
+            );
+        }
+    }
+
+    if let (JointType::IButt, Some(gap)) = (seam.joint, q.gap_mm)
+        && gap.max > limits.max_gap_mm
+    {
+        fail(
+            Gate::GapWidth,
+            gap.max,
+            limits.max_gap_mm,
+            format!(
+                "the gap between the plates opens to {:.2} mm (mean {:.2} mm), wider than {:.2} mm",
+                gap.max, gap.mean, limits.max_gap_mm
+            ),
+        );
+    }
+
+    if q.plate_angle_deg > limits.max_plate_angle_deg {
+        fail(
+            Gate::PlateAngle,
+            q.plate_angle_deg,
+            limits.max_plate_angle_deg,
+            format!(
+                "the two plates' planes meet at {:.1}°, above {:.1}°: they are not the parallel plates of a {} joint",
+                q.plate_angle_deg, limits.max_plate_angle_deg, seam.joint
+            ),
+        );
+    }
+
+    let uncertainty = q.uncertainty_across_mm.max(q.uncertainty_normal_mm);
+    if uncertainty > limits.max_position_uncertainty_mm {
+        fail(
+            Gate::PositionUncertainty,
+            uncertainty,
+            limits.max_position_uncertainty_mm,
+            format!(
+                "the seam's position is known to {uncertainty:.2} mm (one sigma), above {:.2} mm",
+                limits.max_position_uncertainty_mm
+            ),
+        );
+    }
+    failed
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::pipeline::refit::{SeamAxes, SeamCurve};
+
+    fn edge(across: f64, height: f64, rms: f64, samples: usize) -> CurveFit {
+        let axes = SeamAxes { origin: Vec3::zeros(), e: Vec3::y(), a: Vec3::x(), b: Vec3::z() };
+        CurveFit {
+            curve: SeamCurve { axes, coef_a: vec![across, 0.0], coef_b: vec![height, 0.0], s_min: -50.0, s_max: 50.0 },
+            rms_mm: rms,
+            points_used: samples,
+            points_dropped: 0,
+        }
+    }
+
+    fn plane(tilt_deg: f64, offset: f64) -> Plane {
+        let t = tilt_deg.to_radians();
+        Plane { normal: Vec3::new(t.sin(), 0.0, t.cos()), offset }
+    }
+
+    fn measured(joint: JointType, fits: &[CurveFit; 2], planes: [&Plane; 2]) -> SeamQuality {
+        measure(&SeamFits {
+            joint,
+            fits,
+            degree: 1,
+            planes,
+            span: (-50.0, 50.0),
+            point_spacing_mm: 0.3,
+            depth_to_support_mm: Some(10.0),
+        })
+    }
+
+    fn evidence<'a>(joint: JointType, q: &'a SeamQuality, rms: [f64; 2]) -> SeamEvidence<'a> {
+        SeamEvidence { joint, quality: q, edge_fit_rms_mm: rms, edge_coverage: None, coverage: None, length_mm: 100.0 }
+    }
+
+    #[test]
+    fn the_gap_and_the_misalignment_are_read_across_and_along_the_normal() {
+        let (flat, high) = (plane(0.0, 500.0), plane(0.0, 501.5));
+        let fits = [edge(-1.0, 0.0, 0.05, 300), edge(1.5, 1.5, 0.05, 300)];
+        let q = measured(JointType::IButt, &fits, [&flat, &high]);
+        let gap = q.gap_mm.unwrap();
+        assert!((gap.min - 2.5).abs() < 1e-9 && (gap.max - 2.5).abs() < 1e-9);
+        assert!((q.misalignment_mm.unwrap() - 1.5).abs() < 1e-9);
+        assert_eq!(q.lap_step_mm, None);
+        let lap = measured(JointType::Lap, &fits, [&flat, &high]);
+        assert_eq!((lap.gap_mm, lap.misalignment_mm), (None, None));
+        assert!((lap.lap_step_mm.unwrap() - 1.5).abs() < 1e-9);
+    }
+
+    #[test]
+    fn the_uncertainty_falls_with_samples_and_never_below_the_boundary_floor() {
+        let flat = plane(0.0, 500.0);
+        let sparse = measured(JointType::IButt, &[edge(-1.0, 0.0, 0.5, 10), edge(1.0, 0.0, 0.5, 10)], [&flat, &flat]);
+        let dense =
+            measured(JointType::IButt, &[edge(-1.0, 0.0, 0.5, 1000), edge(1.0, 0.0, 0.5, 1000)], [&flat, &flat]);
+        assert!(sparse.uncertainty_across_mm > 2.0 * dense.uncertainty_across_mm);
+        let exact =
+            measured(JointType::IButt, &[edge(-1.0, 0.0, 0.0, 1000), edge(1.0, 0.0, 0.0, 1000)], [&flat, &flat]);
+        let floor = 0.5 * std::f64::consts::SQRT_2 * 0.3 / 12f64.sqrt();
+        assert!((exact.uncertainty_across_mm - floor).abs() < 1e-12);
+    }
+
+    #[test]
+    fn a_good_seam_passes_every_gate() {
+        let flat = plane(0.0, 500.0);
+        let fits = [edge(-1.0, 0.0, 0.05, 300), edge(1.0, 0.1, 0.06, 300)];
+        let q = measured(JointType::IButt, &fits, [&flat, &flat]);
+        assert_eq!(check(&evidence(JointType::IButt, &q, [0.05, 0.06]), &QualityParams::default()), vec![]);
+    }
+
+    #[test]
+    fn each_gate_names_its_figure_value_and_limit() {
+        let limits = QualityParams::default();
+        let flat = plane(0.0, 500.0);
+        // Misaligned by 2 mm on 10 mm plates: the limit is 0.15 t = 1.5 mm.
+        let fits = [edge(-1.0, 0.0, 0.05, 300), edge(1.0, 2.0, 0.05, 300)];
+        let q = measured(JointType::IButt, &fits, [&flat, &flat]);
+        let failed = check(&evidence(JointType::IButt, &q, [0.05, 0.05]), &limits);
+        assert_eq!(failed.iter().map(|f| f.gate).collect::<Vec<_>>(), vec![Gate::Misalignment]);
+        assert!((failed[0].limit - 1.5).abs() < 1e-9, "{failed:?}");
+        assert!(
+            failed[0].message.contains("2.00 mm") && failed[0].message.contains("1.50 mm"),
+            "{}",
+            failed[0].message
+        );
+
+        // A scattered edge, a wide gap, tilted plates.
+        let tilted = plane(20.0, 500.0);
+        let fits = [edge(-3.0, 0.0, 3.0, 20), edge(3.0, 0.0, 0.05, 300)];
+        let q = measured(JointType::IButt, &fits, [&flat, &tilted]);
+        let failed = check(&evidence(JointType::IButt, &q, [3.0, 0.05]), &limits);
+        let gates: Vec<Gate> = failed.iter().map(|f| f.gate).collect();
+        assert_eq!(gates, vec![Gate::EdgeFitResidual, Gate::GapWidth, Gate::PlateAngle, Gate::PositionUncertainty]);
+        assert!(failed[0].message.starts_with("weld edge 1's fit residual is 3.00 mm"), "{}", failed[0].message);
+
+        // Coverage: an edge seen along a third of the seam, a seam over
+        // third of the visible joint.
+        let coverage = SeamCoverage { edge: [0.9, 0.3], joint: 0.3, visible_joint_mm: 200.0, beyond_mm: 0.0 };
+        let fits = [edge(-1.0, 0.0, 0.05, 300), edge(1.0, 0.0, 0.05, 300)];
+        let q = measured(JointType::IButt, &fits, [&flat, &flat]);
+        let seam = SeamEvidence {
+            edge_coverage: Some(coverage.edge),
+            coverage: Some(&coverage),
+            ..evidence(JointType::IButt, &q, [0.05, 0.05])
+        };
+        let failed = check(&seam, &limits);
+        assert_eq!(failed.iter().map(|f| f.gate).collect::<Vec<_>>(), vec![Gate::EdgeCoverage, Gate::JointCoverage]);
+        assert!(failed[0].message.starts_with("weld edge 2 is seen along 30 %"), "{}", failed[0].message);
+    }
+
+    #[test]
+    fn gate_names_round_trip() {
+        for gate in Gate::ALL {
+            assert_eq!(Gate::from_name(gate.name()), Some(gate));
+        }
+        assert_eq!(Gate::from_name("gap"), None);
+    }
+}

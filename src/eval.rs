@@ -169,8 +169,11 @@ pub fn classify(answer: &ScoredAnswer, planned: Result<&[Vec<Vec3>], &str>) -> V
         if piece_errors.iter().any(SeamError::passes) {
             continue;
         }
+        // The nearest right answer: the one the seam misses by the least,
+        // each figure against its own bar (1 mm across, 2 mm at the ends).
+        let miss = |e: &SeamError| e.max_mm.max(e.start_mm / 2.0).max(e.end_mm / 2.0);
         let nearest = piece_errors.iter().chain(answer.whole_allowed.then_some(whole.as_ref()).flatten());
-        let error = nearest.min_by(|a, b| a.max_mm.total_cmp(&b.max_mm)).copied().or(*whole);
+        let error = nearest.min_by(|a, b| miss(a).total_cmp(&miss(b))).copied().or(*whole);
         let why = if answer.whole_allowed || answer.pieces.is_empty() {
             "the seam misses the bar"
         } else {
@@ -375,6 +378,13 @@ mod tests {
         // Running 10 mm into the hidden stretch is a piece's end 10 mm off.
         let verdict = classify(&hidden, Ok(&[path(0.0, 50.0, 0.0)]));
         assert!(matches!(verdict, Verdict::ConfidentWrong { error: Some(e), .. } if (e.end_mm - 10.0).abs() < 1e-9));
+        // A whole seam 1.5 mm off is reported against the whole, not
+        // against the piece it lies along but overruns by 60 mm.
+        let verdict = classify(&hidden, Ok(&[path(0.0, 100.0, 1.5)]));
+        assert!(
+            matches!(verdict, Verdict::ConfidentWrong { error: Some(e), .. } if e.start_mm < 2.0 && e.end_mm < 2.0),
+            "{verdict:?}"
+        );
     }
 
     #[test]

@@ -6,6 +6,14 @@
 //! The paper taught its twelve points by hand; here they come from the
 //! simulator's geometry, in the robot base frame, so the figure includes
 //! the hand-eye and pose transform exactly as a robot would follow it.
+//!
+//! Each scene's outcome is also judged against its right answer (issue
+//! 12, [`Verdict`]): within the bar, refused (the planner said why), or a
+//! confident wrong seam (one returned that is no right answer: off the
+//! bar, or any seam where the wrong joint was requested), counted apart
+//! as the worst outcome. The scene's faults decide what is right
+//! (`sim::faults`: the whole seam, a piece of it beside what hides it, or
+//! only a refusal).
 
 use crate::camera::CameraModel;
 use crate::config::{Config, Method};
@@ -46,16 +54,23 @@ pub fn seam_error(truth: &GroundTruth, seam: &Seam) -> Option<SeamError> {
 /// Compares a trajectory (base-frame waypoint positions, in order) with
 /// the truth.
 pub fn path_error(truth: &GroundTruth, path: &[Vec3]) -> Option<SeamError> {
+    segment_error(&[truth.start_base, truth.end_base], path)
+}
+
+/// Compares a trajectory with a straight stretch of seam from `ends[0]`
+/// to `ends[1]` (robot base frame), as [`path_error`] does with the whole.
+pub fn segment_error(ends: &[Vec3; 2], path: &[Vec3]) -> Option<SeamError> {
     let (first, last) = (path.first()?, path.last()?);
+    let [start, end] = ends;
     let distances: Vec<f64> = (0..REFERENCE_POINTS)
         .map(|k| {
             let t = k as f64 / (REFERENCE_POINTS - 1) as f64;
-            let p = truth.start_base + (truth.end_base - truth.start_base) * t;
+            let p = start + (end - start) * t;
             distance_to_polyline(&p, path)
         })
         .collect();
-    let direct = ((first - truth.start_base).norm(), (last - truth.end_base).norm());
-    let swapped = ((first - truth.end_base).norm(), (last - truth.start_base).norm());
+    let direct = ((first - start).norm(), (last - end).norm());
+    let swapped = ((first - end).norm(), (last - start).norm());
     let (start_mm, end_mm) = if direct.0 + direct.1 <= swapped.0 + swapped.1 { direct } else { swapped };
     Some(SeamError {
         max_mm: distances.iter().copied().fold(0.0, f64::max),
@@ -75,6 +90,98 @@ pub struct SceneOutcome {
     pub truth: GroundTruth,
     /// The error against the truth and the plan it was measured on.
     pub result: Result<(SeamError, Plan), PlanError>,
+    /// The outcome as issue 12 counts it, against the scene's right
+    /// answer (which its faults decide).
+    pub verdict: Verdict,
+}
+
+/// One scene's outcome against its right answer.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Verdict {
+    /// Every seam returned meets the bar against the seam, or against a
+    /// piece of it where the scene's faults allow pieces.
+    WithinBar,
+    /// No seam: the planner said why.
+    Refused { reason: String },
+    /// A seam returned (the planner exits 0) that is not a right answer:
+    /// the worst outcome, counted apart. `error` is the seam's error
+    /// against the nearest right answer (or the whole seam).
+    ConfidentWrong { error: Option<SeamError>, why: String },
+}
+
+impl Verdict {
+    /// `within the bar`, `refused` or `confident wrong`.
+    pub fn label(&self) -> &'static str {
+        match self {
+            Verdict::WithinBar => "within the bar",
+            Verdict::Refused { .. } => "refused",
+            Verdict::ConfidentWrong { .. } => "confident wrong",
+        }
+    }
+}
+
+/// A scene's right answer in the robot base frame, where plans are scored.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ScoredAnswer {
+    /// Only a refusal is right.
+    pub refuse: bool,
+    /// The observed seam's ends.
+    pub whole: [Vec3; 2],
+    /// The whole seam is a right answer.
+    pub whole_allowed: bool,
+    /// The ends of the pieces a seam may be returned for instead.
+    pub pieces: Vec<[Vec3; 2]>,
+}
+
+impl ScoredAnswer {
+    /// The right answer of a simulated scene, in the base frame.
+    pub fn of(spec: &SceneSpec, sim: &Simulation) -> Self {
+        let seam_z = spec.joint.seam_z();
+        let at = |y: f64| spec.base_from_workpiece.transform_point(&Vec3::new(0.0, y, seam_z).into()).coords;
+        ScoredAnswer {
+            refuse: sim.answer.refuse,
+            whole: [sim.truth.start_base, sim.truth.end_base],
+            whole_allowed: sim.answer.whole_seam,
+            pieces: sim.answer.pieces_mm.iter().map(|[a, b]| [at(*a), at(*b)]).collect(),
+        }
+    }
+}
+
+/// Classifies what the planner gave for a scene: the trajectories of the
+/// seams it returned (base-frame waypoint positions), or why it refused.
+pub fn classify(answer: &ScoredAnswer, planned: Result<&[Vec<Vec3>], &str>) -> Verdict {
+    let paths = match planned {
+        Err(reason) => return Verdict::Refused { reason: reason.to_string() },
+        Ok([]) => return Verdict::Refused { reason: "no seam".into() },
+        Ok(paths) => paths,
+    };
+    let whole_errors: Vec<Option<SeamError>> = paths.iter().map(|p| segment_error(&answer.whole, p)).collect();
+    if answer.refuse {
+        let why = "a seam returned for a joint the scene does not show".to_string();
+        return Verdict::ConfidentWrong { error: whole_errors[0], why };
+    }
+    for (path, whole) in paths.iter().zip(&whole_errors) {
+        let whole_passes = whole.is_some_and(|e| e.passes());
+        if answer.whole_allowed && whole_passes {
+            continue;
+        }
+        let piece_errors: Vec<SeamError> = answer.pieces.iter().filter_map(|ends| segment_error(ends, path)).collect();
+        if piece_errors.iter().any(SeamError::passes) {
+            continue;
+        }
+        // The nearest right answer: the one the seam misses by the least,
+        // each figure against its own bar (1 mm across, 2 mm at the ends).
+        let miss = |e: &SeamError| e.max_mm.max(e.start_mm / 2.0).max(e.end_mm / 2.0);
+        let nearest = piece_errors.iter().chain(answer.whole_allowed.then_some(whole.as_ref()).flatten());
+        let error = nearest.min_by(|a, b| miss(a).total_cmp(&miss(b))).copied().or(*whole);
+        let why = if answer.whole_allowed || answer.pieces.is_empty() {
+            "the seam misses the bar"
+        } else {
+            "the seam matches no piece of the seam in view"
+        };
+        return Verdict::ConfidentWrong { error, why: why.to_string() };
+    }
+    Verdict::WithinBar
 }
 
 impl SceneOutcome {
@@ -98,7 +205,7 @@ pub fn evaluate_variant(
     sim: &Simulation,
     variant: &Variant,
 ) -> SceneOutcome {
-    let mut request = PlanRequest::new(spec.joint.joint_type(), spec.joint.groove_depth_mm(), sim.pose);
+    let mut request = PlanRequest::new(spec.requested_joint(), spec.requested_groove_depth_mm(), sim.pose);
     if !variant.is_raw() {
         request.units = Units::Auto;
     }
@@ -111,12 +218,22 @@ pub fn evaluate_variant(
             .ok_or_else(|| PlanError::at(crate::pipeline::Stage::Trajectory, "the trajectory has no waypoint"))?;
         Ok((err, plan))
     });
+    let answer = ScoredAnswer::of(spec, sim);
+    let verdict = match &result {
+        Ok((_, plan)) => {
+            let paths: Vec<Vec<Vec3>> =
+                plan.seams.iter().map(|s| s.waypoints.iter().map(|w| w.position).collect()).collect();
+            classify(&answer, Ok(&paths))
+        }
+        Err(e) => classify(&answer, Err(&e.to_string())),
+    };
     SceneOutcome {
         name: name.to_string(),
         method: planner.config().pipeline.method,
         spec: spec.clone(),
         truth: sim.truth.clone(),
         result,
+        verdict,
     }
 }
 
@@ -178,4 +295,100 @@ pub fn summarise<'a>(outcomes: impl IntoIterator<Item = &'a SceneOutcome>) -> Su
     totals.sort_by(f64::total_cmp);
     s.median_total_ms = totals.get(totals.len() / 2).copied().unwrap_or(0.0);
     s
+}
+
+/// How many outcomes were within the bar, refused and confidently wrong.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct VerdictCounts {
+    pub scenes: usize,
+    pub within_bar: usize,
+    pub refused: usize,
+    pub confident_wrong: usize,
+}
+
+/// Counts the verdicts of `outcomes`.
+pub fn count_verdicts<'a>(outcomes: impl IntoIterator<Item = &'a SceneOutcome>) -> VerdictCounts {
+    let mut c = VerdictCounts::default();
+    for o in outcomes {
+        c.scenes += 1;
+        match o.verdict {
+            Verdict::WithinBar => c.within_bar += 1,
+            Verdict::Refused { .. } => c.refused += 1,
+            Verdict::ConfidentWrong { .. } => c.confident_wrong += 1,
+        }
+    }
+    c
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A 100 mm seam along x, hidden from 40 to 60 mm.
+    fn answer(refuse: bool, with_pieces: bool) -> ScoredAnswer {
+        let at = |x: f64| Vec3::new(x, 0.0, 0.0);
+        ScoredAnswer {
+            refuse,
+            whole: [at(0.0), at(100.0)],
+            whole_allowed: !refuse,
+            pieces: if with_pieces { vec![[at(0.0), at(40.0)], [at(60.0), at(100.0)]] } else { Vec::new() },
+        }
+    }
+
+    fn path(from: f64, to: f64, off: f64) -> Vec<Vec3> {
+        (0..=10).map(|k| Vec3::new(from + (to - from) * k as f64 / 10.0, off, 0.0)).collect()
+    }
+
+    fn wrong_by(verdict: &Verdict) -> f64 {
+        match verdict {
+            Verdict::ConfidentWrong { error: Some(e), .. } => e.max_mm,
+            other => panic!("not a confident wrong seam: {other:?}"),
+        }
+    }
+
+    #[test]
+    fn outcomes_are_within_the_bar_refused_or_confident_wrong() {
+        let clean = answer(false, false);
+        assert_eq!(classify(&clean, Ok(&[path(0.0, 100.0, 0.3)])), Verdict::WithinBar);
+        // Either way round.
+        assert_eq!(classify(&clean, Ok(&[path(100.0, 0.0, 0.0)])), Verdict::WithinBar);
+        let refused = classify(&clean, Err("weld_edges stage failed: no pair"));
+        assert_eq!(refused, Verdict::Refused { reason: "weld_edges stage failed: no pair".into() });
+        assert_eq!(classify(&clean, Ok(&[])), Verdict::Refused { reason: "no seam".into() });
+        // 1.5 mm beside the seam, and a seam stopping 60 mm short.
+        assert!((wrong_by(&classify(&clean, Ok(&[path(0.0, 100.0, 1.5)]))) - 1.5).abs() < 1e-9);
+        assert!(wrong_by(&classify(&clean, Ok(&[path(0.0, 40.0, 0.0)]))) > 50.0);
+        // Every seam returned must be right.
+        let one_bad = [path(0.0, 100.0, 0.0), path(0.0, 100.0, 5.0)];
+        assert!((wrong_by(&classify(&clean, Ok(&one_bad))) - 5.0).abs() < 1e-9);
+    }
+
+    #[test]
+    fn pieces_are_right_where_a_fault_hides_part_of_the_seam() {
+        let hidden = answer(false, true);
+        assert_eq!(classify(&hidden, Ok(&[path(0.0, 40.0, 0.2)])), Verdict::WithinBar);
+        assert_eq!(classify(&hidden, Ok(&[path(99.5, 60.5, 0.0)])), Verdict::WithinBar);
+        assert_eq!(classify(&hidden, Ok(&[path(0.0, 100.0, 0.0)])), Verdict::WithinBar);
+        assert_eq!(classify(&hidden, Ok(&[path(0.0, 40.0, 0.0), path(60.0, 100.0, 0.0)])), Verdict::WithinBar);
+        // Running 10 mm into the hidden stretch is a piece's end 10 mm off.
+        let verdict = classify(&hidden, Ok(&[path(0.0, 50.0, 0.0)]));
+        assert!(matches!(verdict, Verdict::ConfidentWrong { error: Some(e), .. } if (e.end_mm - 10.0).abs() < 1e-9));
+        // A whole seam 1.5 mm off is reported against the whole, not
+        // against the piece it lies along but overruns by 60 mm.
+        let verdict = classify(&hidden, Ok(&[path(0.0, 100.0, 1.5)]));
+        assert!(
+            matches!(verdict, Verdict::ConfidentWrong { error: Some(e), .. } if e.start_mm < 2.0 && e.end_mm < 2.0),
+            "{verdict:?}"
+        );
+    }
+
+    #[test]
+    fn any_seam_for_the_wrong_joint_is_confident_wrong() {
+        let wrong_joint = answer(true, false);
+        let verdict = classify(&wrong_joint, Ok(&[path(0.0, 100.0, 0.0)]));
+        assert!(matches!(&verdict, Verdict::ConfidentWrong { why, .. } if why.contains("joint")), "{verdict:?}");
+        assert!(wrong_by(&verdict) < 1e-9);
+        let reason = "the requested lap joint does not fit: plates coplanar";
+        assert_eq!(classify(&wrong_joint, Err(reason)), Verdict::Refused { reason: reason.into() });
+    }
 }

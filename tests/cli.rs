@@ -512,3 +512,57 @@ fn inspect_tells_a_raw_frame_from_a_downsampled_cloud_in_metres() {
     assert!(!missing.status.success());
     assert!(String::from_utf8_lossy(&missing.stderr).contains("no-such-file.pcd"));
 }
+
+/// `eval --suite faults` judges every scene against its right answer: a
+/// wrong joint requested must be refused, so no scene of that fault is
+/// within the bar, and each is counted as refused or confident wrong.
+#[test]
+fn eval_counts_fault_scenes_as_within_the_bar_refused_or_confident_wrong() {
+    let out = weldseam(&["eval", "--suite", "faults", "--filter", "wrong-joint-lap", "--limit", "2", "--robust-only"]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    // Only a confident wrong seam fails this suite; refusals are answers.
+    assert!(out.status.success() || stderr.contains("got a confident wrong seam"), "{text}\n{stderr}");
+    assert!(text.contains("2 scenes as raw frames"), "{text}");
+    let rows: Vec<&str> = text.lines().filter(|l| l.starts_with("fault-wrong-joint-lap-")).collect();
+    assert!(rows.len() >= 2, "{text}");
+    for row in &rows[..2] {
+        assert!(row.contains("-as-") && (row.ends_with("refused") || row.ends_with("confident wrong")), "{row}");
+    }
+    let per_fault = text
+        .lines()
+        .find(|l| l.starts_with("robust") && l.contains("wrong-joint"))
+        .unwrap_or_else(|| panic!("no per-fault row in\n{text}"));
+    let counts: Vec<&str> = per_fault.split_whitespace().skip(2).collect();
+    assert_eq!(counts[..2], ["2", "0"], "two scenes, none within the bar: {per_fault}");
+    assert!(text.contains("Confident wrong seams (robust)") && text.contains("Refusals (robust)"), "{text}");
+}
+
+/// `simulate --fault` and `--suite-scene` write one fault or hard scene
+/// for a person to look at, with its right answer in the truth.
+#[test]
+fn simulate_writes_fault_and_hard_scenes_with_their_right_answer() {
+    let dir = tempfile::tempdir().unwrap();
+    let write = |args: &[&str], stem: &str| -> serde_json::Value {
+        let (pcd, json) = (dir.path().join(format!("{stem}.pcd")), dir.path().join(format!("{stem}.json")));
+        let mut all = vec!["simulate", "--out", pcd.to_str().unwrap(), "--truth", json.to_str().unwrap()];
+        all.extend(args);
+        let out = weldseam(&all);
+        assert!(out.status.success(), "{stem}: {}", String::from_utf8_lossy(&out.stderr));
+        serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap()
+    };
+    let clamp = write(&["--joint", "lap", "--fault", "clamp"], "clamp");
+    assert_eq!(clamp["right_answer"]["pieces_mm"].as_array().map(Vec::len), Some(2), "{clamp}");
+    assert!(clamp["parameters"]["faults"][0].as_str().unwrap().starts_with("Clamp"), "{clamp}");
+    let wrong = write(&["--joint", "i-butt", "--fault", "wrong-joint"], "wrong");
+    assert_eq!(wrong["right_answer"]["refuse"], true);
+    assert!(wrong["plan_args"].as_str().unwrap().starts_with("--joint lap "), "{wrong}");
+    let fault_name = weldseam::sim::fault_suite().into_iter().find(|(n, _)| n.contains("streaks")).unwrap().0;
+    let streaks = write(&["--suite-scene", &fault_name], "streaks");
+    assert_eq!(streaks["scene"], fault_name.as_str());
+    let hard_name = weldseam::sim::hard_suite().swap_remove(30).0;
+    let hard = write(&["--suite-scene", &hard_name], "hard");
+    assert!(hard["parameters"]["noise"]["depth_noise_scale"].as_f64().unwrap() > 1.0, "{hard}");
+    let out = weldseam(&["simulate", "--joint", "lap", "--fault", "rust", "--out", "x.pcd"]);
+    assert!(String::from_utf8_lossy(&out.stderr).contains("unknown fault"), "{out:?}");
+}

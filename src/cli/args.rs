@@ -48,8 +48,25 @@ impl From<MethodArg> for Method {
     }
 }
 
-/// `--camera` of `simulate` and `--suite` of `eval`: which simulated
-/// camera renders the frames.
+/// `--suite` of `eval`: which seeded suite of simulated scenes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, clap::ValueEnum)]
+pub enum SuiteArg {
+    /// The 66 scenes of the paper's camera (`sim::eval_suite`).
+    #[default]
+    Industrial,
+    /// 20 scans of a RealSense-class camera at 200 to 500 mm, made into
+    /// cropped:40,voxel:1,metres (`sim::consumer_suite`).
+    Consumer,
+    /// Every fault on every joint type (`sim::fault_suite`): a wrong joint
+    /// requested, dropouts along the seam, a clamp, tack welds, spatter,
+    /// specular streaks, a plate barely in view, a touching part.
+    Faults,
+    /// The industrial suite tilted up to 45 degrees, depth noise up to
+    /// 0.15 mm, dropouts up to 5 % (`sim::hard_suite`).
+    Hard,
+}
+
+/// `--camera` of `simulate`: which simulated camera renders the frames.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, clap::ValueEnum)]
 pub enum CameraArg {
     /// The paper's industrial structured-light camera, 1920 x 1200 px.

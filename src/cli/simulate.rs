@@ -3,7 +3,10 @@
 //! unorganized, downsampled, cropped, in metres or in the base frame, as
 //! PCD or PLY) and writes its ground truth, pose and scene as JSON, with
 //! the arguments that run the planner on it. `--camera consumer` renders
-//! with a RealSense-class depth camera instead of the paper's.
+//! with a RealSense-class depth camera instead of the paper's. `--fault`
+//! adds one of the fault suite's faults to the scene, and `--suite-scene`
+//! finds scenes of the fault and hard suites by name too, so a person can
+//! write one out and look at it.
 
 use std::fs::File;
 use std::io::{BufWriter, Write};
@@ -19,10 +22,11 @@ use weldseam::cloud::{PointCloud, pcd, ply};
 use weldseam::geometry::Vec3;
 use weldseam::joint::JointType;
 use weldseam::sim::consumer::consumer_demo_scene;
+use weldseam::sim::faults::frame_barely_in_view;
 use weldseam::sim::variants::Variant;
 use weldseam::sim::{
-    CameraPreset, JointGeometry, NoiseSpec, PlateExtent, SceneSpec, Simulation, consumer_suite, demo_scene, eval_suite,
-    simulate,
+    CameraPreset, Fault, FaultKind, JointGeometry, NoiseSpec, PlateExtent, SceneSpec, Simulation, consumer_suite,
+    demo_scene, eval_suite, fault_suite, hard_suite, simulate,
 };
 
 use crate::cli::args::CameraArg;
@@ -54,9 +58,15 @@ pub struct SimulateArgs {
     /// --suite-scene looks in the consumer suite of `eval --suite consumer`.
     #[arg(long, value_enum, default_value_t)]
     pub camera: CameraArg,
-    /// Start from a scene of the evaluation suite, by name or index.
+    /// Start from a scene of the evaluation suite, by name or index, or of
+    /// the fault or hard suite (`eval --suite faults|hard`) by name.
     #[arg(long, value_name = "NAME_OR_INDEX")]
     pub suite_scene: Option<String>,
+    /// Add a fault to the scene, at the seam's middle: wrong-joint,
+    /// seam-dropout, clamp, tack-welds, spatter, streaks, barely-in-view or
+    /// touching-part (the truth's plan_args then name the wrong joint).
+    #[arg(long, value_name = "KIND")]
+    pub fault: Option<FaultKind>,
     /// Render an exact frame: no depth noise, dropouts, mixed pixels or
     /// outliers.
     #[arg(long)]
@@ -151,6 +161,10 @@ fn scene_from_args(args: &SimulateArgs) -> Result<(Option<String>, SceneSpec)> {
     if args.no_noise {
         spec.noise = NoiseSpec::none();
     }
+    if let Some(kind) = args.fault {
+        spec.faults.push(Fault::example(kind, &spec));
+        frame_barely_in_view(&mut spec, &preset.camera())?;
+    }
     spec.validate()?;
     Ok((name, spec))
 }
@@ -160,6 +174,13 @@ fn find_suite_scene(preset: CameraPreset, key: &str) -> Result<(String, SceneSpe
         CameraPreset::Industrial => eval_suite(),
         CameraPreset::Consumer => consumer_suite(),
     };
+    if preset == CameraPreset::Industrial {
+        let other =
+            if key.starts_with("fault-") { Some(fault_suite()) } else { key.starts_with("hard-").then(hard_suite) };
+        if let Some(found) = other.into_iter().flatten().find(|(name, _)| name == key) {
+            return Ok(found);
+        }
+    }
     let count = suite.len();
     let position = match key.parse::<usize>() {
         Ok(index) => (index < count).then_some(index),
@@ -250,6 +271,11 @@ fn truth_json(name: Option<&str>, spec: &SceneSpec, camera: &CameraModel, sim: &
             "length_mm": t.length_mm,
         },
         "plan_args": plan_args(spec, &pose),
+        "right_answer": {
+            "refuse": sim.answer.refuse,
+            "whole_seam": sim.answer.whole_seam,
+            "pieces_mm": sim.answer.pieces_mm,
+        },
     })
 }
 
@@ -285,6 +311,7 @@ fn scene_json(spec: &SceneSpec, camera: &CameraModel) -> Value {
         },
         "noise": {
             "depth_noise": noise.depth_noise,
+            "depth_noise_scale": noise.depth_noise_scale,
             "dropout_rate": noise.dropout_rate,
             "mixed_pixel_probability": noise.mixed_pixel_probability,
             "mixed_pixel_jump_mm": noise.mixed_pixel_jump_mm,
@@ -293,6 +320,7 @@ fn scene_json(spec: &SceneSpec, camera: &CameraModel) -> Value {
             "max_incidence_deg": noise.max_incidence_deg,
         },
         "seed": spec.seed,
+        "faults": spec.faults.iter().map(|f| format!("{f:?}")).collect::<Vec<_>>(),
         "base_from_workpiece": rows(&spec.base_from_workpiece),
         "camera": {
             "width_px": camera.width_px,
@@ -307,8 +335,8 @@ fn scene_json(spec: &SceneSpec, camera: &CameraModel) -> Value {
 
 /// The planner's arguments for this capture.
 fn plan_args(spec: &SceneSpec, pose: &[f64]) -> String {
-    let mut args = format!("--joint {}", cli_joint_name(spec.joint.joint_type()));
-    if let Some(depth) = spec.joint.groove_depth_mm() {
+    let mut args = format!("--joint {}", cli_joint_name(spec.requested_joint()));
+    if let Some(depth) = spec.requested_groove_depth_mm() {
         args.push_str(&format!(" --groove-depth {}", short(depth)));
     }
     let pose: Vec<String> = pose.iter().map(|v| short(*v)).collect();
@@ -347,6 +375,7 @@ mod tests {
             seed: Some(9),
             camera: CameraArg::Industrial,
             suite_scene: None,
+            fault: None,
             no_noise: false,
             variant: None,
             out,

@@ -204,6 +204,7 @@ fn draw_scene(joint: JointType, distance_mm: f64, tilt_deg: f64, seed: u64, rng:
         hand_eye: paper_hand_eye(),
         euler: EulerConvention::Zyx,
         seed,
+        faults: Vec::new(),
     }
 }
 

@@ -9,6 +9,7 @@
 //! scenes spanning the working range for evaluating the planner.
 
 pub mod consumer;
+pub mod faults;
 pub mod noise;
 pub mod render;
 pub mod scenarios;
@@ -26,8 +27,9 @@ use crate::geometry::pose::{EulerConvention, PAPER_HAND_EYE, RobotPose, hand_eye
 use crate::joint::JointType;
 
 pub use consumer::{CameraPreset, consumer_suite};
+pub use faults::{Fault, FaultKind, RightAnswer};
 pub use noise::NoiseSpec;
-pub use suite::{Framing, eval_suite, framing};
+pub use suite::{Framing, eval_suite, fault_suite, framing, hard_suite};
 pub use truth::GroundTruth;
 
 /// The joint's cross-section. Plate A is on the -x side of the seam (the
@@ -137,6 +139,9 @@ pub struct SceneSpec {
     /// How the reported robot pose's angles are to be read.
     pub euler: EulerConvention,
     pub seed: u64,
+    /// What a real cell adds to the frame or the request (none in a
+    /// clean scene); see [`faults`].
+    pub faults: Vec<Fault>,
 }
 
 /// Why a scene cannot be simulated; the message names the parameter.
@@ -232,7 +237,8 @@ impl SceneSpec {
         if !angles.iter().chain(&p.target_offset_mm).all(|v| v.is_finite()) {
             return fail("the camera placement must be finite");
         }
-        self.noise.validate()
+        self.noise.validate()?;
+        self.faults.iter().try_for_each(|f| f.validate(self))
     }
 }
 
@@ -245,6 +251,9 @@ pub struct Simulation {
     /// The flange pose the controller reports at capture.
     pub pose: RobotPose,
     pub base_from_camera: Isometry3<f64>,
+    /// What the planner should answer: the seam, pieces of it or a
+    /// refusal, as the scene's faults decide.
+    pub answer: RightAnswer,
 }
 
 /// Simulates one capture. Run [`SceneSpec::validate`] first on untrusted
@@ -253,13 +262,16 @@ pub fn simulate(spec: &SceneSpec, camera: &CameraModel) -> Simulation {
     let workpiece_from_camera = spec.workpiece_from_camera();
     let scene = scene::build_scene(spec).transformed(&workpiece_from_camera.inverse());
     let view = render::CameraView::new(scene, camera, spec.noise.max_incidence_deg);
-    let exact = view.trace_depths();
-    let depths = noise::degrade(&exact, camera, &spec.noise, spec.seed);
+    let mut exact = view.trace_depths();
+    faults::erase_dropout_bands(&mut exact, spec, camera);
+    let mut depths = noise::degrade(&exact, camera, &spec.noise, spec.seed);
+    faults::draw_streaks(&mut depths, spec, camera);
     let cloud = render::depths_to_cloud(&depths, camera);
     let truth = truth::ground_truth(spec, camera);
+    let answer = faults::right_answer(spec, camera);
     let base_from_camera = spec.base_from_workpiece * workpiece_from_camera;
     let base_from_end = base_from_camera * spec.hand_eye.inverse();
-    Simulation { cloud, truth, pose: RobotPose::from_isometry(&base_from_end, spec.euler), base_from_camera }
+    Simulation { cloud, truth, pose: RobotPose::from_isometry(&base_from_end, spec.euler), base_from_camera, answer }
 }
 
 /// The paper's hand-eye matrix as a transform.
@@ -301,6 +313,7 @@ pub fn demo_scene(joint: JointType) -> SceneSpec {
         hand_eye: paper_hand_eye(),
         euler: EulerConvention::Zyx,
         seed: 1,
+        faults: Vec::new(),
     }
 }
 

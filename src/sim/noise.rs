@@ -12,11 +12,18 @@ use rayon::prelude::*;
 use super::InvalidScene;
 use crate::camera::CameraModel;
 
+/// The largest [`NoiseSpec::depth_noise_scale`]: ten times the camera's
+/// sigma is already no structured-light camera's.
+pub const MAX_DEPTH_NOISE_SCALE: f64 = 10.0;
+
 /// How the simulated sensor degrades a frame.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct NoiseSpec {
     /// Gaussian noise along each ray with the camera's depth sigma.
     pub depth_noise: bool,
+    /// The depth sigma as a multiple of the camera's (1 for the camera as
+    /// specified; the hard suite raises it).
+    pub depth_noise_scale: f64,
     /// Fraction of valid pixels that lose their return.
     pub dropout_rate: f64,
     /// Chance that a pixel at a depth edge mixes with its neighbour.
@@ -38,6 +45,7 @@ impl Default for NoiseSpec {
     fn default() -> Self {
         NoiseSpec {
             depth_noise: true,
+            depth_noise_scale: 1.0,
             dropout_rate: 0.003,
             mixed_pixel_probability: 0.5,
             mixed_pixel_jump_mm: 2.0,
@@ -70,6 +78,11 @@ impl NoiseSpec {
             if !(0.0..=1.0).contains(&rate) {
                 return Err(InvalidScene(format!("the {name} must be between 0 and 1")));
             }
+        }
+        if !(self.depth_noise_scale > 0.0 && self.depth_noise_scale <= MAX_DEPTH_NOISE_SCALE) {
+            return Err(InvalidScene(format!(
+                "the depth noise scale must be above 0 and at most {MAX_DEPTH_NOISE_SCALE}"
+            )));
         }
         if !(self.mixed_pixel_jump_mm >= 0.0 && self.outlier_range_mm >= 0.0) {
             return Err(InvalidScene("the mixed pixel jump and the outlier range must not be negative".into()));
@@ -150,7 +163,9 @@ fn degrade_pixel(
     let [rx, ry, _] = camera.ray(col as f64, row as f64);
     let z_per_mm = 1.0 / (1.0 + rx * rx + ry * ry).sqrt();
     if spec.depth_noise {
-        z += random.gaussian() * camera.depth_sigma(z) * z_per_mm;
+        // Scaled before the obliquity, so a scale of 1 gives the camera's
+        // frame bit for bit.
+        z += random.gaussian() * camera.depth_sigma(z) * spec.depth_noise_scale * z_per_mm;
     }
     // One draw decides between a dropout, an outlier and a normal return.
     let fate = random.uniform();

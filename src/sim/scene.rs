@@ -27,6 +27,10 @@ pub enum SurfaceKind {
     Plate,
     Spacer,
     Table,
+    /// Something lying on the workpiece that is not part of it (a clamp).
+    Clutter,
+    /// Weld metal: tacks and spatter.
+    Weld,
 }
 
 /// A bounded convex polyhedron: its half-spaces and its corner points
@@ -319,6 +323,7 @@ pub fn build_scene(spec: &SceneSpec) -> Scene {
     } else {
         solids.extend(spacers_under(a, a.x_range(), table_top));
     }
+    solids.extend(super::faults::fault_solids(spec));
     solids.extend(ConvexSolid::cuboid(
         SurfaceKind::Table,
         Vec3::new(-TABLE_HALF_SIDE_MM, -TABLE_HALF_SIDE_MM, table_top - TABLE_THICKNESS_MM),

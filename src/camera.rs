@@ -538,6 +538,16 @@ impl MeasurableVolume {
         (!inside).then_some(Unmeasurable::OffView)
     }
 
+    /// True when every point the volume accepts lies in front of the
+    /// camera and within the cone whose squared tangent is `max_tan_sq`
+    /// of its axis, with a margin far beyond single-precision rounding:
+    /// a test on every such point against that cone can then be skipped.
+    pub fn inside_cone(&self, max_tan_sq: f64) -> bool {
+        let [u_lo, u_hi, v_lo, v_hi] = self.tangents.map(f64::from);
+        let corner_sq = u_lo.abs().max(u_hi.abs()).powi(2) + v_lo.abs().max(v_hi.abs()).powi(2);
+        self.min_depth > 0.0 && corner_sq <= max_tan_sq * (1.0 - 1e-3)
+    }
+
     /// True when the frame's directions are held to the camera's own
     /// field of view (an organized frame of its size).
     pub fn fov_applies(&self) -> bool {

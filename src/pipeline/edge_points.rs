@@ -117,6 +117,10 @@ pub(crate) fn edge_points(
     criterion: &EdgeCriterion,
 ) -> Vec<u32> {
     if !search.cloud().is_organized() {
+        if let Some([edges]) = by_cell(search, plane, [plate], criterion) {
+            return edges;
+        }
+        // The tests' KD-tree: member by member.
         return plate
             .members
             .par_iter()
@@ -126,6 +130,45 @@ pub(crate) fn edge_points(
     }
     let [edges] = on_grid(search, plane, plate.labels, [plate.label], criterion);
     edges
+}
+
+/// [`edge_points`] of plates without a pixel grid, with distinct labels,
+/// in one pass over the cloud's cells ([`NeighbourSearch::query_by_cell`]):
+/// each cell's candidates flagged once per plate by label, each member
+/// then counted over its own plate's flags. `None` when the search has no
+/// cells.
+fn by_cell<const N: usize>(
+    search: &NeighbourSearch,
+    plane: &PlanePoints,
+    plates: [Plate; N],
+    criterion: &EdgeCriterion,
+) -> Option<[Vec<u32>; N]> {
+    const NONE: u8 = u8::MAX;
+    let n = search.cloud().len();
+    let mut plate_of = vec![NONE; n];
+    for (k, plate) in plates.iter().enumerate() {
+        for &i in plate.members {
+            plate_of[i as usize] = k as u8;
+        }
+    }
+    let answers = search.query_by_cell(
+        || std::array::from_fn::<Vec<u32>, N, _>(|_| Vec::new()),
+        |i| plate_of[i] != NONE,
+        |flags, candidates| {
+            for (bits, plate) in flags.iter_mut().zip(&plates) {
+                candidates.flags_into(bits, |j| plate.labels[j] == plate.label);
+            }
+        },
+        |flags, i, neighbours| {
+            let k = plate_of[i] as usize;
+            edge_by_count(search, plane, criterion, i, |cap| neighbours.count_flagged_up_to(&flags[k], cap))
+        },
+    )?;
+    let mut is_edge = vec![false; n];
+    for (i, edge) in answers {
+        is_edge[i as usize] = edge;
+    }
+    Some(plates.map(|plate| plate.members.iter().copied().filter(|&i| is_edge[i as usize]).collect()))
 }
 
 /// The fast classification on a pixel grid ([`grid::edge_points`]),
@@ -154,8 +197,12 @@ pub(crate) fn edge_points_of_plates(
     criterion: &EdgeCriterion,
 ) -> [Vec<u32>; 2] {
     let [a, b] = plates;
-    if !search.cloud().is_organized() || !std::ptr::eq(a.labels, b.labels) || a.label == b.label {
+    if !std::ptr::eq(a.labels, b.labels) || a.label == b.label {
         return plates.map(|p| edge_points(search, plane, p, criterion));
+    }
+    if !search.cloud().is_organized() {
+        return by_cell(search, plane, plates, criterion)
+            .unwrap_or_else(|| plates.map(|p| edge_points(search, plane, p, criterion)));
     }
     on_grid(search, plane, a.labels, [a.label, b.label], criterion)
 }
@@ -196,6 +243,20 @@ fn counted_edge_up_to_threshold(
     i: u32,
 ) -> bool {
     let i = i as usize;
+    edge_by_count(search, plane, criterion, i, |cap| search.count_up_to(i, |j| plate.labels[j] == plate.label, cap))
+}
+
+/// Eq. 15 for a member `i` of a plate, given `count_up_to(cap)`, its count
+/// of same-plate neighbours read up to `cap`: counted only until the
+/// count passes `ratio · N`.
+#[inline(always)]
+fn edge_by_count(
+    search: &NeighbourSearch,
+    plane: &PlanePoints,
+    criterion: &EdgeCriterion,
+    i: usize,
+    count_up_to: impl FnOnce(u32) -> u32,
+) -> bool {
     let limit = criterion.ratio * criterion.full.of(search, plane, i);
     if limit.is_nan() || limit < 0.0 {
         return false;
@@ -207,7 +268,7 @@ fn counted_edge_up_to_threshold(
     // A whole count is at most `limit` exactly when it is below
     // floor(limit) + 1; the first count to reach that decides "no edge".
     let cap = (limit.floor() + 1.0).min(u32::MAX as f64) as u32;
-    search.count_up_to(i, |j| plate.labels[j] == plate.label, cap) < cap
+    count_up_to(cap) < cap
 }
 
 #[cfg(test)]
@@ -279,6 +340,45 @@ pub(super) mod tests {
             let mut fast = edge_points(&search, &plane, plate, &criterion);
             fast.sort();
             assert_eq!(fast, reference(&tree, &plane, plate, &criterion));
+        }
+    }
+
+    #[test]
+    fn by_cell_classification_answers_as_the_reference() {
+        // The plate as a cloud without a grid, split into two plates by
+        // column and a few points left to neither.
+        let camera = CameraModel::default();
+        let grid = plate();
+        let cloud = PointCloud::unorganized(grid.points().iter().copied().filter(|p| p[0].is_finite()).collect());
+        for radius in [1.0, 2.5] {
+            let search = NeighbourSearch::new(&cloud, &camera, radius);
+            let (plane, _, _) = setup(&cloud, &search);
+            let labels: Vec<u32> = (0..cloud.len())
+                .map(|i| {
+                    let x = cloud.points()[i][0];
+                    if i % 13 == 4 {
+                        u32::MAX
+                    } else if x < -1.0 {
+                        3
+                    } else {
+                        5
+                    }
+                })
+                .collect();
+            let members =
+                |l: u32| -> Vec<u32> { (0..cloud.len() as u32).filter(|&i| labels[i as usize] == l).collect() };
+            let (a, b) = (members(3), members(5));
+            let plates =
+                [Plate { labels: &labels, label: 3, members: &a }, Plate { labels: &labels, label: 5, members: &b }];
+            for criterion in [
+                EdgeCriterion { full: FullCount::Plane, ratio: 0.75 },
+                EdgeCriterion { full: FullCount::Frontal, ratio: 0.5 },
+            ] {
+                let expected = plates.map(|p| reference(&search, &plane, p, &criterion));
+                assert!(expected.iter().all(|e| !e.is_empty()), "edges to find at radius {radius}");
+                assert_eq!(edge_points_of_plates(&search, &plane, plates, &criterion), expected, "both at once");
+                assert_eq!(plates.map(|p| edge_points(&search, &plane, p, &criterion)), expected, "one by one");
+            }
         }
     }
 

@@ -25,6 +25,7 @@ use super::grid_search::{LANES, Span};
 use super::scale::DensityMap;
 use crate::kernels::{self, TileScales, within};
 use cells::CellIndex;
+pub(crate) use cells::Neighbourhood;
 
 /// The most neighbours of one point a sampled visit reads: more than any
 /// frame of the paper's camera gives within its field of view at its
@@ -219,6 +220,118 @@ impl<'a> NeighbourSearch<'a> {
             n += 1;
             if n >= cap { ControlFlow::Break(()) } else { ControlFlow::Continue(()) }
         });
+    }
+}
+
+impl NeighbourSearch<'_> {
+    /// For a cloud without a pixel grid, `query(state, i, neighbours)` of
+    /// every valid point `i` for which `wanted(i)` holds (after
+    /// `prepare(state, candidates)` of its cell), with its
+    /// neighbours read from candidates gathered once per cell
+    /// ([`CellIndex::query_by_cell`]): the same neighbours in the same
+    /// order as [`NeighbourSearch::visit_until`], for less work when every
+    /// point is queried. The answers come with their points' indices, in
+    /// no particular order; `None` on a pixel grid, which is searched by
+    /// window.
+    pub(crate) fn query_by_cell<S, T: Send>(
+        &self,
+        init: impl Fn() -> S + Sync,
+        wanted: impl Fn(usize) -> bool + Sync,
+        prepare: impl Fn(&mut S, &Neighbourhood) + Sync,
+        query: impl Fn(&mut S, usize, &PointNeighbours) -> T + Sync,
+    ) -> Option<Vec<(u32, T)>> {
+        let Index::Cells(cells) = &self.index else { return None };
+        let points = self.cloud.points();
+        Some(cells.query_by_cell(init, wanted, prepare, |state, hood, i| {
+            query(state, i, &PointNeighbours { hood, p: points[i], radius_sq: self.radius_sq })
+        }))
+    }
+}
+
+/// How the neighbours of one point are read: through the search, or from
+/// its cell's gathered candidates. Both give the same neighbours in the
+/// same order.
+pub(crate) trait VisitNeighbours {
+    /// Calls `visit(j)` for every neighbour `j` of the point, in the
+    /// search's order, until it breaks.
+    fn visit_until(&self, visit: impl FnMut(usize) -> ControlFlow<()>);
+
+    /// The number of neighbours `j` with `member(j)`, read up to `cap`:
+    /// [`NeighbourSearch::count_up_to`].
+    fn count_up_to(&self, member: impl Fn(usize) -> bool, cap: u32) -> u32;
+
+    /// The first neighbours, in order, into `sample` (as many as it
+    /// holds, less [`SAMPLE_SLACK`]), reading until `stop` of them are
+    /// seen; returns how many were seen, at least `stop` when the visit
+    /// stopped there. The slots past the sample's may hold anything.
+    #[inline(always)]
+    fn sample_until(&self, sample: &mut [u32], stop: usize) -> usize {
+        let room = sample.len().saturating_sub(SAMPLE_SLACK);
+        let mut seen = 0usize;
+        if stop > 0 {
+            self.visit_until(|j| {
+                if seen < room {
+                    sample[seen] = j as u32;
+                }
+                seen += 1;
+                if seen >= stop { ControlFlow::Break(()) } else { ControlFlow::Continue(()) }
+            });
+        }
+        seen
+    }
+}
+
+/// Slots a sample buffer of [`VisitNeighbours::sample_until`] needs past
+/// the sample itself: a block of candidates is stored whole.
+pub(crate) const SAMPLE_SLACK: usize = cells::HOOD_LANES;
+
+/// Point `i` of a search: its neighbours as the search finds them.
+pub(crate) struct SearchedPoint<'s, 'a>(pub &'s NeighbourSearch<'a>, pub usize);
+
+impl VisitNeighbours for SearchedPoint<'_, '_> {
+    #[inline(always)]
+    fn visit_until(&self, visit: impl FnMut(usize) -> ControlFlow<()>) {
+        self.0.visit_until(self.1, visit);
+    }
+
+    #[inline(always)]
+    fn count_up_to(&self, member: impl Fn(usize) -> bool, cap: u32) -> u32 {
+        self.0.count_up_to(self.1, member, cap)
+    }
+}
+
+/// A point's neighbours read from its cell's candidates
+/// ([`NeighbourSearch::query_by_cell`]).
+pub(crate) struct PointNeighbours<'h> {
+    hood: &'h Neighbourhood,
+    p: Point,
+    radius_sq: f32,
+}
+
+impl PointNeighbours<'_> {
+    /// The number of neighbours whose candidate bit is set in `flags`
+    /// (made by [`Neighbourhood::flags_into`] from this point's cell's
+    /// candidates), read up to `cap`.
+    #[inline(always)]
+    pub(crate) fn count_flagged_up_to(&self, flags: &[u32], cap: u32) -> u32 {
+        self.hood.count_flagged_up_to(&self.p, self.radius_sq, flags, cap)
+    }
+}
+
+impl VisitNeighbours for PointNeighbours<'_> {
+    #[inline(always)]
+    fn visit_until(&self, visit: impl FnMut(usize) -> ControlFlow<()>) {
+        self.hood.visit_within(&self.p, self.radius_sq, visit);
+    }
+
+    #[inline(always)]
+    fn count_up_to(&self, member: impl Fn(usize) -> bool, cap: u32) -> u32 {
+        self.hood.count_up_to(&self.p, self.radius_sq, member, cap)
+    }
+
+    #[inline(always)]
+    fn sample_until(&self, sample: &mut [u32], stop: usize) -> usize {
+        self.hood.sample_until(&self.p, self.radius_sq, sample, stop)
     }
 }
 

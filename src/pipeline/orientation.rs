@@ -7,14 +7,14 @@
 //! leaves out), and to reject bevel and side faces, whose neighbour counts
 //! can pass for a plate's when the camera looks at them squarely.
 
-use std::ops::ControlFlow;
+use rayon::prelude::*;
 
 use crate::cloud::PointCloud;
 use crate::geometry::Vec3;
 use crate::geometry::fit::Moments;
 
 use super::grid_search::Grid;
-use super::neighbours::NeighbourSearch;
+use super::neighbours::{NeighbourSearch, SAMPLE_SLACK, VisitNeighbours};
 
 /// Estimates the unit normal of the surface at point `i`, oriented away
 /// from the camera. On a pixel grid it is the cross product of central
@@ -247,9 +247,31 @@ pub(crate) fn scatter_normal_of_visit(
 /// and the cosine is clear of the limit by far more than either method's
 /// rounding; every other point is decided by the reference. The tests
 /// check the two point for point.
+#[cfg(test)]
 pub(crate) fn scatter_facing_and_count(
     search: &NeighbourSearch,
     i: usize,
+    count_cap: u32,
+    reference: &Vec3,
+    cos_limit: f64,
+) -> (bool, u32) {
+    scatter_facing_and_count_of(
+        search,
+        i,
+        &super::neighbours::SearchedPoint(search, i),
+        count_cap,
+        reference,
+        cos_limit,
+    )
+}
+
+/// [`scatter_facing_and_count`] with point `i`'s neighbours read through
+/// `neighbours`, which must give them as `search` does, in its order (the
+/// normal's sample is the first of them).
+pub(crate) fn scatter_facing_and_count_of(
+    search: &NeighbourSearch,
+    i: usize,
+    neighbours: &impl VisitNeighbours,
     count_cap: u32,
     reference: &Vec3,
     cos_limit: f64,
@@ -259,16 +281,14 @@ pub(crate) fn scatter_facing_and_count(
     let sample_cap = search.frame_neighbours_at_most(&points[i]).min(SCATTER_NORMAL_SAMPLE);
     let count_cap = count_cap as usize;
     let stop = sample_cap.max(count_cap);
+    // The sample's indices first, its sums after, in the same order: the
+    // sums' chains of additions then run in registers, not through the
+    // visitor's captures.
+    let mut sample = [0u32; SCATTER_NORMAL_SAMPLE + SAMPLE_SLACK];
+    let visited = neighbours.sample_until(&mut sample, stop);
     let mut sums = SampleSums::default();
-    let mut visited = 0usize;
-    if stop > 0 {
-        search.visit_until(i, |j| {
-            if visited < sample_cap {
-                sums.add(&points[j]);
-            }
-            visited += 1;
-            if visited >= stop { ControlFlow::Break(()) } else { ControlFlow::Continue(()) }
-        });
+    for &j in &sample[..visited.min(sample_cap)] {
+        sums.add(&points[j as usize]);
     }
     let count = visited.min(count_cap) as u32;
     let p = vec_at(cloud, i);
@@ -414,9 +434,12 @@ pub fn dominant_normal(cloud: &PointCloud, search: &NeighbourSearch, fx: f64, ag
     // An even stride over all pixels; invalid ones simply give no normal.
     // The stride is odd so it does not run down one image column.
     let stride = ((cloud.len() / SAMPLES).max(1)) | 1;
-    let normals: Vec<Vec3> = (0..cloud.len())
-        .step_by(stride)
-        .filter_map(|i| {
+    // On rayon: a cloud without a grid fits a plane per sample. Collected
+    // in sample order, so the sums below add up as a serial loop's would.
+    let sampled: Vec<usize> = (0..cloud.len()).step_by(stride).collect();
+    let normals: Vec<Vec3> = sampled
+        .par_iter()
+        .filter_map(|&i| {
             let p = cloud.points()[i];
             if !p[0].is_finite() {
                 return None;
@@ -430,7 +453,10 @@ pub fn dominant_normal(cloud: &PointCloud, search: &NeighbourSearch, fx: f64, ag
     let cos_agree = agree_deg.to_radians().cos();
     let support = |n: &Vec3| normals.iter().filter(|m| m.dot(n) >= cos_agree).count();
     let cand_stride = (normals.len() / CANDIDATES).max(1);
-    let best = normals.iter().step_by(cand_stride).max_by_key(|n| support(n))?;
+    let candidates: Vec<&Vec3> = normals.iter().step_by(cand_stride).collect();
+    let supports: Vec<usize> = candidates.par_iter().map(|n| support(n)).collect();
+    // The last of equals, as a serial `max_by_key` picks.
+    let (best, _) = candidates.into_iter().zip(supports).max_by_key(|&(_, s)| s)?;
     let mut mean = *best;
     for _ in 0..3 {
         let sum: Vec3 = normals.iter().filter(|m| m.dot(&mean) >= cos_agree).sum();
@@ -494,6 +520,55 @@ mod tests {
         let search = NeighbourSearch::new(&cloud, &camera, 1.0);
         let got = local_normal(&cloud, &search, 20 * 60 + 10, 3).unwrap();
         assert!(got.dot(&n) > 0.9999, "{got:?}");
+    }
+
+    /// [`dominant_normal`] as one serial loop: the reference of its
+    /// parallel form.
+    fn dominant_normal_serial(cloud: &PointCloud, search: &NeighbourSearch, fx: f64, agree_deg: f64) -> Option<Vec3> {
+        let stride = ((cloud.len() / 6000).max(1)) | 1;
+        let normals: Vec<Vec3> = (0..cloud.len())
+            .step_by(stride)
+            .filter_map(|i| {
+                let p = cloud.points()[i];
+                if !p[0].is_finite() {
+                    return None;
+                }
+                local_normal(cloud, search, i, normal_step(fx, p[2] as f64, search.radius_mm() * 2.0))
+            })
+            .collect();
+        let cos_agree = agree_deg.to_radians().cos();
+        let support = |n: &Vec3| normals.iter().filter(|m| m.dot(n) >= cos_agree).count();
+        let best = normals.iter().step_by((normals.len() / 240).max(1)).max_by_key(|n| support(n))?;
+        let mut mean = *best;
+        for _ in 0..3 {
+            let sum: Vec3 = normals.iter().filter(|m| m.dot(&mean) >= cos_agree).sum();
+            if sum.norm() < 1e-12 {
+                break;
+            }
+            mean = sum / sum.norm();
+        }
+        Some(mean)
+    }
+
+    #[test]
+    fn dominant_normal_is_the_serial_loops_to_the_last_digit() {
+        let camera = CameraModel::default();
+        for seed in [1, 2, 3] {
+            let cloud = scattered_scene(seed);
+            for radius in [0.8, 2.0] {
+                let search = NeighbourSearch::new(&cloud, &camera, radius);
+                for agree in [2.0, 5.0, 40.0] {
+                    let got = dominant_normal(&cloud, &search, camera.fx(), agree);
+                    assert_eq!(got, dominant_normal_serial(&cloud, &search, camera.fx(), agree), "seed {seed}");
+                }
+            }
+        }
+        let grid = tilted_grid(Vec3::new(0.25, 0.1, 1.0).normalize());
+        let search = NeighbourSearch::new(&grid, &camera, 1.0);
+        assert_eq!(
+            dominant_normal(&grid, &search, camera.fx(), 5.0),
+            dominant_normal_serial(&grid, &search, camera.fx(), 5.0)
+        );
     }
 
     #[test]

@@ -24,9 +24,9 @@ use crate::camera::CameraModel;
 use crate::cloud::PointCloud;
 use crate::geometry::Vec3;
 
-use super::neighbours::{FullCountCache, FullCounts, NeighbourSearch};
+use super::neighbours::{FullCountCache, FullCounts, NeighbourSearch, SearchedPoint, VisitNeighbours};
 use super::orientation::{
-    GridPoints, StepTable, grid_normal_agrees, local_normal, normal_step, scatter_facing_and_count,
+    GridPoints, StepTable, grid_normal_agrees, local_normal, normal_step, scatter_facing_and_count_of,
 };
 
 /// The plane points and, for each, a lower bound of its neighbour count
@@ -68,9 +68,29 @@ trait Threshold: Sync {
         i: usize,
         cache: &mut FullCountCache,
         cap_of: &dyn Fn(f64) -> u32,
-    ) -> Option<(f64, f64, u32)> {
+    ) -> Option<(f64, f64, u32)>
+    where
+        Self: Sized,
+    {
+        self.needed_and_count_of(search, i, &SearchedPoint(search, i), cache, cap_of)
+    }
+
+    /// [`Threshold::needed_and_count`] with point `i`'s neighbours read
+    /// through `neighbours`, which gives them as `search` would.
+    fn needed_and_count_of(
+        &self,
+        search: &NeighbourSearch,
+        i: usize,
+        neighbours: &impl VisitNeighbours,
+        cache: &mut FullCountCache,
+        cap_of: &dyn Fn(f64) -> u32,
+    ) -> Option<(f64, f64, u32)>
+    where
+        Self: Sized,
+    {
+        let _ = search;
         let (t, full) = self.needed(i, cache)?;
-        Some((t, full, search.count_up_to(i, |_| true, cap_of(t))))
+        Some((t, full, neighbours.count_up_to(|_| true, cap_of(t))))
     }
 }
 
@@ -176,25 +196,30 @@ impl Threshold for RobustThreshold<'_> {
     /// as `needed` then a count: `needed` is `None` when the point does
     /// not face the workpiece or its full count is not positive, in either
     /// order.
-    fn needed_and_count(
+    fn needed_and_count_of(
         &self,
         search: &NeighbourSearch,
         i: usize,
+        neighbours: &impl VisitNeighbours,
         cache: &mut FullCountCache,
         cap_of: &dyn Fn(f64) -> u32,
-    ) -> Option<(f64, f64, u32)> {
+    ) -> Option<(f64, f64, u32)>
+    where
+        Self: Sized,
+    {
         let cloud = self.search.cloud();
         // The one visit serves the criterion's own search of a cloud
         // without a grid; anything else is counted as the default does.
         if cloud.is_organized() || !std::ptr::eq(search, self.search) {
             let (t, full) = self.needed(i, cache)?;
-            return Some((t, full, search.count_up_to(i, |_| true, cap_of(t))));
+            return Some((t, full, neighbours.count_up_to(|_| true, cap_of(t))));
         }
         if !cloud.points()[i][0].is_finite() {
             return None;
         }
         let (t, full) = self.need_of_full(self.full_counts.get(i, cache))?;
-        let (facing, count) = scatter_facing_and_count(search, i, cap_of(t), &self.criterion.normal, self.cos_limit);
+        let (facing, count) =
+            scatter_facing_and_count_of(search, i, neighbours, cap_of(t), &self.criterion.normal, self.cos_limit);
         facing.then_some((t, full, count))
     }
 }
@@ -310,6 +335,59 @@ pub(super) mod tests {
                 let tree = NeighbourSearch::kdtree(&cloud, &camera, radius);
                 if !measured {
                     assert_eq!(robust_criterion(&search, &c).mask, reference(&tree, false, &c), "{z} mm");
+                }
+            }
+        }
+    }
+
+    /// [`grid::classify`] of a cloud without a grid, point by point
+    /// through the search: what the by-cell classification must give.
+    fn point_by_point(search: &NeighbourSearch, threshold: &impl Threshold) -> PlanePoints {
+        let n = search.cloud().len();
+        let mut out = PlanePoints { mask: vec![false; n], counts: vec![0; n], full: vec![0; n] };
+        let mut cache = FullCountCache::default();
+        let cap_of = |t: f64| if t <= 0.0 { 0 } else { t.ceil().min(u32::MAX as f64 - 1.0) as u32 };
+        for i in 0..n {
+            if let Some((t, full, count)) = threshold.needed_and_count(search, i, &mut cache, &cap_of) {
+                out.mask[i] = count as f64 >= t;
+                out.counts[i] = if out.mask[i] { count.min(u16::MAX as u32) as u16 } else { 0 };
+                out.full[i] = full.clamp(0.0, u16::MAX as f64) as u16;
+            }
+        }
+        out
+    }
+
+    #[test]
+    fn by_cell_classification_answers_as_point_by_point() {
+        let camera = CameraModel::default();
+        for (z, tilt, cols) in [(520.0, 0.0, 33), (800.0, 25.0, 41), (600.0, 10.0, 30)] {
+            let (grid, n) = scene(z, tilt, cols);
+            // Jittered, so that cells and distances are not a lattice's.
+            let jittered: Vec<_> = grid
+                .points()
+                .iter()
+                .enumerate()
+                .map(|(k, p)| {
+                    let h = (k as u32).wrapping_mul(2_654_435_761);
+                    let d = |s: u32| ((h >> s) & 0xff) as f32 / 255.0 * 0.04 - 0.02;
+                    [p[0] + d(0), p[1] + d(8), p[2] + d(16)]
+                })
+                .collect();
+            for cloud in [PointCloud::unorganized(grid.points().to_vec()), PointCloud::unorganized(jittered)] {
+                for (radius, measured) in [(1.0, false), (0.6, true), (2.5, true), (0.3, false)] {
+                    let mut search = NeighbourSearch::new(&cloud, &camera, radius);
+                    if measured {
+                        search.measure_full_counts();
+                    }
+                    let c = RobustPlaneCriterion { normal: n, min_ratio: 0.8, max_angle_deg: 20.0 };
+                    let robust = RobustThreshold::new(&search, &c);
+                    assert_eq!(robust_criterion(&search, &c), point_by_point(&search, &robust), "robust, {z} mm");
+                    let paper = PaperThreshold { cloud: &cloud, camera: &camera, radius };
+                    assert_eq!(
+                        paper_criterion(&cloud, &camera, &search),
+                        point_by_point(&search, &paper),
+                        "paper, {z} mm"
+                    );
                 }
             }
         }

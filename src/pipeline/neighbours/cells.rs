@@ -326,6 +326,204 @@ impl CellIndex {
     }
 }
 
+impl CellIndex {
+    /// Runs `query(state, hood, i)` for every point `i` of the index for
+    /// which `wanted(i)` holds, cell by cell on rayon, `hood` holding the
+    /// candidates of the cell's points ([`Neighbourhood`]), after
+    /// `prepare(state, hood)` has seen them once; returns each
+    /// point's answer with its cloud index, in no particular order. A
+    /// query per point then reads one contiguous run of candidates instead
+    /// of up to 27 cells, and the run is gathered once for the cell's
+    /// points. Cells without a wanted point are skipped.
+    pub(crate) fn query_by_cell<S, T: Send>(
+        &self,
+        init: impl Fn() -> S + Sync,
+        wanted: impl Fn(usize) -> bool + Sync,
+        prepare: impl Fn(&mut S, &Neighbourhood) + Sync,
+        query: impl Fn(&mut S, &Neighbourhood, usize) -> T + Sync,
+    ) -> Vec<(u32, T)> {
+        self.cells
+            .par_iter()
+            .enumerate()
+            .map_init(
+                || (init(), Neighbourhood::default(), Vec::new()),
+                |(state, hood, answers), (c, cell)| {
+                    answers.clear();
+                    let members = &self.index_of[cell.start as usize..cell.end as usize];
+                    if members.iter().any(|&i| wanted(i as usize)) {
+                        hood.gather(self, c);
+                        prepare(state, hood);
+                        for &i in members.iter().filter(|&&i| wanted(i as usize)) {
+                            answers.push((i, query(state, hood, i as usize)));
+                        }
+                    }
+                    std::mem::take(answers)
+                },
+            )
+            .flatten_iter()
+            .collect()
+    }
+}
+
+/// The candidate neighbours of the points of one cell: the points of its
+/// occupied neighbour cells, concatenated in the order
+/// [`CellIndex::visit_within`] reads them (the cell itself first, then its
+/// neighbourhood list, each cell's points in cell order), one array per
+/// axis, ending in padding no point is ever near. Every neighbour of a
+/// point of the cell is among them, and filtering them by [`within`]
+/// gives the point's neighbours in `visit_within`'s order: that visit
+/// only skips whole cells holding no neighbour.
+#[derive(Default)]
+pub(crate) struct Neighbourhood {
+    xs: Vec<f32>,
+    ys: Vec<f32>,
+    zs: Vec<f32>,
+    index_of: Vec<u32>,
+}
+
+impl Neighbourhood {
+    /// Fills this with the candidates of the points of cell `c`.
+    fn gather(&mut self, index: &CellIndex, c: usize) {
+        let (xs, ys, zs, index_of) = (&mut self.xs, &mut self.ys, &mut self.zs, &mut self.index_of);
+        for v in [&mut *xs, &mut *ys, &mut *zs] {
+            v.clear();
+        }
+        index_of.clear();
+        let around = index.neighbour_start[c] as usize..index.neighbour_start[c + 1] as usize;
+        for &n in &index.neighbour_cells[around] {
+            let cell = &index.cells[n as usize];
+            let run = cell.start as usize..cell.end as usize;
+            xs.extend_from_slice(&index.xs[run.clone()]);
+            ys.extend_from_slice(&index.ys[run.clone()]);
+            zs.extend_from_slice(&index.zs[run.clone()]);
+            index_of.extend_from_slice(&index.index_of[run]);
+        }
+        // Whole blocks: the padding's distance from any finite point is
+        // infinite, so never within a radius.
+        let padded = index_of.len().next_multiple_of(HOOD_LANES);
+        for v in [xs, ys, zs] {
+            v.resize(padded, f32::INFINITY);
+        }
+        index_of.resize(padded, 0);
+    }
+
+    /// One bit per candidate, `flag(j)` of candidate `j`, as
+    /// [`Neighbourhood::count_flagged_up_to`] reads them, into `bits`.
+    pub(crate) fn flags_into(&self, bits: &mut Vec<u32>, flag: impl Fn(usize) -> bool) {
+        bits.clear();
+        bits.extend(
+            self.index_of.chunks(HOOD_LANES).map(|block| {
+                block.iter().enumerate().fold(0u32, |b, (lane, &j)| b | ((flag(j as usize) as u32) << lane))
+            }),
+        );
+    }
+
+    /// [`Neighbourhood::count_up_to`] of the candidates whose bit is set
+    /// in `flags` ([`Neighbourhood::flags_into`]).
+    #[inline(always)]
+    pub(crate) fn count_flagged_up_to(&self, p: &Point, radius_sq: f32, flags: &[u32], cap: u32) -> u32 {
+        if cap == 0 {
+            return 0;
+        }
+        let mut n = 0;
+        for ((_, inside), &flagged) in self.masks(p, radius_sq).zip(flags) {
+            n += (inside & flagged).count_ones();
+            if n >= cap {
+                return cap;
+            }
+        }
+        n
+    }
+
+    /// The blocks of candidates, each with the mask of its lanes within
+    /// `radius_sq` of `p` by the kernels' predicate ([`within`]).
+    #[inline(always)]
+    fn masks<'s>(&'s self, p: &'s Point, radius_sq: f32) -> impl Iterator<Item = (usize, u32)> + 's {
+        let blocks = |axis: &'s [f32]| axis.as_chunks::<HOOD_LANES>().0;
+        let (xs, ys, zs) = (blocks(&self.xs), blocks(&self.ys), blocks(&self.zs));
+        xs.iter()
+            .zip(ys)
+            .zip(zs)
+            .enumerate()
+            .map(move |(b, ((x, y), z))| (b * HOOD_LANES, within_mask(p, x, y, z, radius_sq)))
+    }
+
+    /// Calls `visit(j)` for every candidate `j` within `radius_sq` of `p`
+    /// by the kernels' predicate ([`within`]), in order, until it breaks:
+    /// for a point of the cell, [`CellIndex::visit_within`]'s visits.
+    #[inline(always)]
+    pub(crate) fn visit_within(&self, p: &Point, radius_sq: f32, mut visit: impl FnMut(usize) -> ControlFlow<()>) {
+        for (first, mut inside) in self.masks(p, radius_sq) {
+            while inside != 0 {
+                let lane = inside.trailing_zeros() as usize;
+                inside &= inside - 1;
+                if visit(self.index_of[first + lane] as usize).is_break() {
+                    return;
+                }
+            }
+        }
+    }
+
+    /// [`super::VisitNeighbours::sample_until`] of `p`'s neighbours: each
+    /// block's lanes within `radius_sq` stored in order without a branch
+    /// per lane (a block is stored whole, hence the slack), the rest only
+    /// counted.
+    #[inline(always)]
+    pub(crate) fn sample_until(&self, p: &Point, radius_sq: f32, sample: &mut [u32], stop: usize) -> usize {
+        let room = sample.len().saturating_sub(HOOD_LANES);
+        let mut seen = 0usize;
+        if stop == 0 {
+            return 0;
+        }
+        for (first, inside) in self.masks(p, radius_sq) {
+            if inside == 0 {
+                continue;
+            }
+            if seen < room {
+                let slots = &mut sample[seen..seen + HOOD_LANES];
+                let mut at = 0;
+                for (lane, &j) in self.index_of[first..first + HOOD_LANES].iter().enumerate() {
+                    slots[at] = j;
+                    at += ((inside >> lane) & 1) as usize;
+                }
+            }
+            seen += inside.count_ones() as usize;
+            if seen >= stop {
+                return seen;
+            }
+        }
+        seen
+    }
+
+    /// The number of candidates within `radius_sq` of `p` for which
+    /// `member` holds, read up to `cap` (as
+    /// [`super::NeighbourSearch::count_up_to`] reads it): the count does
+    /// not depend on the order, so a block is counted whole before the cap
+    /// is checked.
+    #[inline(always)]
+    pub(crate) fn count_up_to(&self, p: &Point, radius_sq: f32, member: impl Fn(usize) -> bool, cap: u32) -> u32 {
+        if cap == 0 {
+            return 0;
+        }
+        let mut n = 0;
+        for (first, mut inside) in self.masks(p, radius_sq) {
+            while inside != 0 {
+                let lane = inside.trailing_zeros() as usize;
+                inside &= inside - 1;
+                n += member(self.index_of[first + lane] as usize) as u32;
+            }
+            if n >= cap {
+                return cap;
+            }
+        }
+        n
+    }
+}
+
+/// Candidates of a [`Neighbourhood`] tested together: a fixed block the
+/// compiler lays out in vector lanes.
+pub(crate) const HOOD_LANES: usize = 16;
+
 /// Points of a cell whose distances [`CellIndex::visit_within`] computes
 /// together.
 const LANES_PER_TEST: usize = 16;
@@ -413,6 +611,71 @@ mod tests {
                     assert_eq!(within_order, found, "the same points in the same order");
                     found.sort_unstable();
                     assert_eq!(found, brute_force(&points, p, r_sq), "{n} points, radius {radius}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn a_cells_candidates_give_each_point_the_visit_of_the_index() {
+        for n in [0, 1, 2, 15, 100, 3000] {
+            let points = scattered(n);
+            for radius in [0.3f32, 0.8, 2.5] {
+                let index = CellIndex::for_radius(&points, radius as f64);
+                let r_sq = radius * radius;
+                let reach = r_sq * (1.0 + 1e-5);
+                let flag = |j: usize| j % 3 != 1;
+                let answers = index.query_by_cell(
+                    Vec::new,
+                    |i| i % 5 != 2,
+                    |flags, hood| hood.flags_into(flags, flag),
+                    |flags, hood, i| {
+                        let p = &points[i];
+                        let mut order = Vec::new();
+                        hood.visit_within(p, r_sq, |j| {
+                            order.push(j);
+                            ControlFlow::Continue(())
+                        });
+                        let caps = [0, 1, 5, 17, 40, u32::MAX];
+                        let counts = caps.map(|cap| hood.count_up_to(p, r_sq, |j| j % 2 == 0, cap));
+                        let flagged = caps.map(|cap| hood.count_flagged_up_to(p, r_sq, flags, cap));
+                        let samples = [0, 1, 3, 16, 33, 70, 500].map(|stop| {
+                            let mut sample = vec![u32::MAX; 20 + HOOD_LANES];
+                            let seen = hood.sample_until(p, r_sq, &mut sample, stop);
+                            sample.truncate(seen.min(20));
+                            (seen, sample)
+                        });
+                        (order, counts, flagged, samples)
+                    },
+                );
+                let mut answered: Vec<u32> = answers.iter().map(|(i, _)| *i).collect();
+                answered.sort_unstable();
+                let wanted: Vec<u32> =
+                    (0..n as u32).filter(|&i| i % 5 != 2 && points[i as usize][0].is_finite()).collect();
+                assert_eq!(answered, wanted, "every wanted valid point once");
+                for (i, (order, counts, flagged, samples)) in answers {
+                    let (i, p) = (i as usize, &points[i as usize]);
+                    let mut expected = Vec::new();
+                    index.visit_within(i, p, r_sq, reach, |j| {
+                        expected.push(j);
+                        ControlFlow::Continue(())
+                    });
+                    assert_eq!(order, expected, "point {i} of {n}, radius {radius}");
+                    let caps = [0, 1, 5, 17, 40, u32::MAX];
+                    let count_of =
+                        |member: &dyn Fn(usize) -> bool| expected.iter().filter(|&&j| member(j)).count() as u32;
+                    assert_eq!(counts, caps.map(|cap| count_of(&|j| j % 2 == 0).min(cap)), "counts");
+                    assert_eq!(flagged, caps.map(|cap| count_of(&flag).min(cap)), "flagged counts");
+                    for (stop, (seen, sample)) in [0, 1, 3, 16, 33, 70, 500].into_iter().zip(samples) {
+                        let all = expected.len();
+                        if stop == 0 {
+                            assert_eq!(seen, 0);
+                            continue;
+                        }
+                        assert!(seen >= stop.min(all) && seen <= all, "seen {seen} of {all}, stop {stop}");
+                        let first: Vec<u32> = expected.iter().take(seen.min(20)).map(|&j| j as u32).collect();
+                        assert_eq!(sample, first, "the sample is the visit's first, stop {stop}");
+                    }
                 }
             }
         }

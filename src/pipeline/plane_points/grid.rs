@@ -232,21 +232,42 @@ pub(super) fn classify<T: BlockThreshold>(search: &NeighbourSearch, threshold: &
     let mut counts = vec![0u16; n];
     let mut full = vec![0u16; n];
     let saturate = |v: f64| v.clamp(0.0, u16::MAX as f64) as u16;
+    // Counting stops at the threshold: however dense the cloud, a point
+    // costs at most that many neighbours, and the count kept is a lower
+    // bound, as on the grid.
+    let cap_of = |t: f64| LaneNeed::of(Some((t, 0.0))).count;
+    // A point's mask, kept count and full count from what it needs and
+    // its count.
+    let decide = |answer: Option<(f64, f64, u32)>| match answer {
+        Some((t, full_count, count)) => {
+            let plane = count as f64 >= t;
+            (plane, if plane { saturate(count as f64) } else { 0 }, saturate(full_count))
+        }
+        None => (false, 0, 0),
+    };
+    // Cells: each cell's candidates gathered once for all its points.
+    let by_cell = search.query_by_cell(
+        FullCountCache::default,
+        |_| true,
+        |_, _| {},
+        |cache, i, neighbours| decide(threshold.needed_and_count_of(search, i, neighbours, cache, &cap_of)),
+    );
+    if let Some(answers) = by_cell {
+        for (i, (m, c, f)) in answers {
+            let i = i as usize;
+            (mask[i], counts[i], full[i]) = (m, c, f);
+        }
+        return PlanePoints { mask, counts, full };
+    }
     if !cloud.is_organized() {
-        mask.par_iter_mut().zip(counts.par_iter_mut()).zip(full.par_iter_mut()).enumerate().for_each_init(
-            FullCountCache::default,
-            |cache, (i, ((m, c), f))| {
-                // Counting stops at the threshold: however dense the
-                // cloud, a point costs at most that many neighbours, and
-                // the count kept is a lower bound, as on the grid.
-                let cap_of = |t: f64| LaneNeed::of(Some((t, 0.0))).count;
-                if let Some((t, full_count, count)) = threshold.needed_and_count(search, i, cache, &cap_of) {
-                    *m = count as f64 >= t;
-                    *c = if *m { saturate(count as f64) } else { 0 };
-                    *f = saturate(full_count);
-                }
-            },
-        );
+        // The tests' KD-tree: point by point.
+        mask.par_iter_mut()
+            .zip(counts.par_iter_mut())
+            .zip(full.par_iter_mut())
+            .enumerate()
+            .for_each_init(FullCountCache::default, |cache, (i, ((m, c), f))| {
+                (*m, *c, *f) = decide(threshold.needed_and_count(search, i, cache, &cap_of))
+            });
         return PlanePoints { mask, counts, full };
     }
     let grid = Grid::new(cloud);

@@ -262,7 +262,7 @@ pub struct QualityParams {
 impl Default for QualityParams {
     fn default() -> Self {
         QualityParams {
-            max_edge_fit_rms_spacings: 1.5,
+            max_edge_fit_rms_spacings: 2.0,
             min_edge_coverage: 0.5,
             min_joint_coverage: 0.8,
             max_misalignment_mm: 4.0,

@@ -21,11 +21,18 @@ use weldseam_proto::message::FrameSelect;
 
 use crate::util::{Cell, write_temp};
 
-/// The demo I-butt scene, whose gap is wider than `limit_mm`.
-fn i_butt_wider_than(limit_mm: f64) -> (SceneSpec, Simulation) {
+/// The demo I-butt scene (what `simulate --joint i-butt` renders), its
+/// gap checked to be wider than `limit_mm`.
+fn i_butt_spec_wider_than(limit_mm: f64) -> SceneSpec {
     let spec = demo_scene(JointType::IButt);
     let JointGeometry::IButt { gap_mm, .. } = spec.joint else { panic!("the demo I-butt scene is an I-butt") };
     assert!(gap_mm > limit_mm + 0.2, "the demo gap ({gap_mm} mm) must be clearly over the test's limit");
+    spec
+}
+
+/// [`i_butt_spec_wider_than`] and its rendered frame.
+fn i_butt_wider_than(limit_mm: f64) -> (SceneSpec, Simulation) {
+    let spec = i_butt_spec_wider_than(limit_mm);
     let sim = simulate(&spec, &CameraModel::default());
     (spec, sim)
 }
@@ -99,7 +106,7 @@ fn a_config_naming_an_unknown_gate_is_refused_with_the_list_of_gates() {
 
 #[test]
 fn plan_json_prints_the_refusal_with_its_code() {
-    i_butt_wider_than(0.3);
+    i_butt_spec_wider_than(0.3);
     let dir = tempfile::tempdir().unwrap();
     let cloud = dir.path().join("i-butt.pcd");
     let truth = dir.path().join("i-butt.json");

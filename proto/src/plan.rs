@@ -76,7 +76,8 @@ pub struct SeamQuality {
     /// The angle between the two plates' planes, degrees.
     pub plate_angle_deg: f64,
     /// The seam's estimated position uncertainty (one sigma), across it
-    /// and along the plate normal, mm.
+    /// and along the plate normal, mm; today one estimate from the edge
+    /// fits' residual, not split by direction, so the two are equal.
     pub uncertainty_across_mm: f64,
     pub uncertainty_normal_mm: f64,
 }

@@ -93,7 +93,9 @@ pub struct SeamQuality {
     /// The angle between the two plates' planes, degrees.
     pub plate_angle_deg: f64,
     /// The seam's position uncertainty (one sigma) across it, in the
-    /// plates' plane, and along the plate normal, mm.
+    /// plates' plane, and along the plate normal, mm. Both come from the
+    /// edge fits' residual, which is one distance, not split by direction,
+    /// so today the two are the same estimate.
     pub uncertainty_across_mm: f64,
     pub uncertainty_normal_mm: f64,
 }

@@ -16,7 +16,7 @@ pub mod to_proto {
     use super::from_proto::FrameInput;
     use crate::cloud::PointCloud;
     use crate::geometry::pose::EulerConvention;
-    use crate::joint::JointType;
+    use crate::joint::{JointType, RequestedJoint};
     use crate::pipeline::quality::{Gate, GateFailure, SeamQuality, Spread};
     use crate::pipeline::roi::Roi;
     use crate::pipeline::{CloudFrame, Plan, PlanError, PlanRequest, Seam, Stage};
@@ -36,6 +36,7 @@ pub mod to_proto {
     fn seam(s: &Seam, euler: EulerConvention) -> proto::Seam {
         proto::Seam {
             joint: joint(s.joint),
+            joint_evidence: s.joint_evidence.clone(),
             waypoints: s
                 .waypoints
                 .iter()
@@ -73,6 +74,8 @@ pub mod to_proto {
             plate_angle_deg: q.plate_angle_deg,
             uncertainty_across_mm: q.uncertainty_across_mm,
             uncertainty_normal_mm: q.uncertainty_normal_mm,
+            groove_angle_deg: q.groove_angle_deg,
+            groove_depth_mm: q.groove_depth_mm,
         }
     }
 
@@ -105,7 +108,9 @@ pub mod to_proto {
             Gate::GapWidth => ErrorCode::GapWidth,
             Gate::PlateAngle => ErrorCode::PlateAngle,
             Gate::PositionUncertainty => ErrorCode::PositionUncertainty,
+            Gate::GrooveDepth => ErrorCode::GrooveDepth,
             Gate::JointMismatch => ErrorCode::JointMismatch,
+            Gate::JointUnknown => ErrorCode::JointUnknown,
         }
     }
 
@@ -139,7 +144,10 @@ pub mod to_proto {
         let [rx, ry, rz] = request.pose.angles_deg;
         message::PlanRequest {
             request_id,
-            joint: message::PlanRequest::joint_code(joint(request.joint)),
+            joint: match request.joint {
+                RequestedJoint::Auto => message::joint_code::AUTO,
+                RequestedJoint::Type(j) => message::PlanRequest::joint_code(joint(j)),
+            },
             groove_depth_mm: request.groove_depth_mm,
             pose: [x, y, z, rx, ry, rz],
             step_mm: request.step_mm,
@@ -213,7 +221,7 @@ pub mod from_proto {
     use crate::cloud::PointCloud;
     use crate::geometry::Vec3;
     use crate::geometry::pose::{HandEyeError, RobotPose, hand_eye_from_rows};
-    use crate::joint::JointType;
+    use crate::joint::{JointType, RequestedJoint};
     use crate::pipeline::roi::{Roi, RoiError};
     use crate::pipeline::{CloudFrame, PlanRequest, Units};
 
@@ -285,7 +293,11 @@ pub mod from_proto {
     /// The pipeline's request for a controller's: joint, pose, hand-eye and
     /// the optional overrides. The planner checks their ranges.
     pub fn plan_request(r: &message::PlanRequest) -> Result<PlanRequest, RequestError> {
-        let joint = r.joint_type().ok_or(RequestError::UnknownJoint(r.joint))?;
+        let joint = match r.joint_type() {
+            Some(joint) => RequestedJoint::Type(self::joint(joint)),
+            None if r.is_auto_joint() => RequestedJoint::Auto,
+            None => return Err(RequestError::UnknownJoint(r.joint)),
+        };
         let [x, y, z, rx, ry, rz] = r.pose;
         let hand_eye = r.hand_eye.as_ref().map(hand_eye_from_rows).transpose()?;
         let start_near = match r.start_near {
@@ -295,7 +307,7 @@ pub mod from_proto {
         };
         let roi = r.roi.as_ref().map(roi).transpose()?;
         Ok(PlanRequest {
-            joint: self::joint(joint),
+            joint,
             groove_depth_mm: r.groove_depth_mm,
             pose: RobotPose { xyz_mm: [x, y, z], angles_deg: [rx, ry, rz] },
             hand_eye,
@@ -319,7 +331,7 @@ mod tests {
     use super::{from_proto, to_proto};
     use crate::geometry::Vec3;
     use crate::geometry::pose::RobotPose;
-    use crate::joint::JointType;
+    use crate::joint::{JointType, RequestedJoint};
     use crate::pipeline::PlanRequest;
 
     #[test]
@@ -331,9 +343,15 @@ mod tests {
         let wire = to_proto::plan_request(7, &request, FrameSelect::NextFrame);
         assert_eq!((wire.request_id, wire.frame), (7, FrameSelect::NextFrame));
         let back = from_proto::plan_request(&wire).unwrap();
-        assert_eq!((back.joint, back.groove_depth_mm, back.step_mm), (JointType::VButt, Some(4.0), Some(2.5)));
+        assert_eq!((back.joint, back.groove_depth_mm, back.step_mm), (JointType::VButt.into(), Some(4.0), Some(2.5)));
         assert_eq!((back.pose.xyz_mm, back.pose.angles_deg), (pose.xyz_mm, pose.angles_deg));
         assert_eq!(back.start_near, request.start_near);
+
+        // `auto` has its own code and comes back as `auto`.
+        let auto = PlanRequest { joint: RequestedJoint::Auto, groove_depth_mm: None, ..request.clone() };
+        let auto_wire = to_proto::plan_request(8, &auto, FrameSelect::NextFrame);
+        assert_eq!(auto_wire.joint, weldseam_proto::message::joint_code::AUTO);
+        assert_eq!(from_proto::plan_request(&auto_wire).unwrap().joint, RequestedJoint::Auto);
 
         let mut unknown = wire.clone();
         unknown.joint = 9;

@@ -18,6 +18,7 @@
 use crate::camera::CameraModel;
 use crate::config::{Config, Method};
 use crate::geometry::{Vec3, distance_to_polyline};
+use crate::joint::{JointType, RequestedJoint};
 use crate::pipeline::input::{CloudFrame, Units};
 use crate::pipeline::{Plan, PlanError, PlanRequest, Planner, Seam};
 use crate::sim::variants::Variant;
@@ -80,10 +81,85 @@ pub fn segment_error(ends: &[Vec3; 2], path: &[Vec3]) -> Option<SeamError> {
     })
 }
 
+/// How each scene's plan is requested: its own joint type (as a person
+/// would name it), `auto`, or a wrong type on purpose; the groove depth
+/// given, or left to be measured.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct EvalRequest {
+    pub joint: JointAsk,
+    pub groove_depth: DepthAsk,
+}
+
+/// The joint a scene's plan request names.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub enum JointAsk {
+    /// The scene's own (or, for a wrong-joint fault, the fault's).
+    #[default]
+    AsScene,
+    /// `auto`: the planner decides; a wrong-joint fault then asks nothing
+    /// wrong, and the seam must name the scene's joint.
+    Auto,
+    /// The type `k` places after the scene's in [`JointType::ALL`] (1 or
+    /// 2): the wrong joint, whose only right answer is a refusal.
+    Wrong(usize),
+}
+
+/// The groove depth a V-butt request gives.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub enum DepthAsk {
+    /// The scene's depth (or a plausible wrong one for a wrong V-butt).
+    #[default]
+    Given,
+    /// None: the planner measures it.
+    Measured,
+}
+
+impl EvalRequest {
+    /// The joint requested for `spec`.
+    pub fn joint_for(&self, spec: &SceneSpec) -> RequestedJoint {
+        match self.joint {
+            JointAsk::AsScene => spec.requested_joint().into(),
+            JointAsk::Auto => RequestedJoint::Auto,
+            JointAsk::Wrong(k) => {
+                let own = JointType::ALL.iter().position(|j| *j == spec.joint.joint_type()).unwrap_or(0);
+                JointType::ALL[(own + k) % JointType::ALL.len()].into()
+            }
+        }
+    }
+
+    /// The groove depth requested for `spec`.
+    pub fn groove_depth_for(&self, spec: &SceneSpec) -> Option<f64> {
+        match (self.groove_depth, self.joint_for(spec)) {
+            (DepthAsk::Measured, _) | (_, RequestedJoint::Auto) => None,
+            (DepthAsk::Given, RequestedJoint::Type(JointType::VButt)) => {
+                spec.joint.groove_depth_mm().or(Some(spec.joint.seam_z() / 2.0))
+            }
+            (DepthAsk::Given, RequestedJoint::Type(_)) => None,
+        }
+    }
+
+    /// The scene's right answer under this request: a wrong joint asked
+    /// on purpose is only to be refused; `auto` asks nothing wrong.
+    fn right_answer(&self, spec: &SceneSpec, sim: &Simulation) -> ScoredAnswer {
+        let mut answer = ScoredAnswer::of(spec, sim);
+        match self.joint {
+            JointAsk::Wrong(_) => answer.refuse = true,
+            JointAsk::Auto if spec.faults.iter().all(|f| f.kind() == crate::sim::faults::FaultKind::WrongJoint) => {
+                answer.refuse = false;
+                answer.whole_allowed = true;
+            }
+            _ => {}
+        }
+        answer
+    }
+}
+
 /// What happened to one scene.
 #[derive(Debug, Clone)]
 pub struct SceneOutcome {
     pub name: String,
+    /// The joint the plan request named.
+    pub requested: RequestedJoint,
     /// The method that planned it.
     pub method: Method,
     pub spec: SceneSpec,
@@ -192,7 +268,7 @@ impl SceneOutcome {
 
 /// Plans a simulated scene and measures the result.
 pub fn evaluate_simulation(planner: &Planner, name: &str, spec: &SceneSpec, sim: &Simulation) -> SceneOutcome {
-    evaluate_variant(planner, name, spec, sim, &Variant::default())
+    evaluate_variant(planner, name, spec, sim, &Variant::default(), &EvalRequest::default())
 }
 
 /// [`evaluate_simulation`] of a frame made into `variant`, requested as a
@@ -204,8 +280,10 @@ pub fn evaluate_variant(
     spec: &SceneSpec,
     sim: &Simulation,
     variant: &Variant,
+    ask: &EvalRequest,
 ) -> SceneOutcome {
-    let mut request = PlanRequest::new(spec.requested_joint(), spec.requested_groove_depth_mm(), sim.pose);
+    let requested = ask.joint_for(spec);
+    let mut request = PlanRequest::new(requested, ask.groove_depth_for(spec), sim.pose);
     if !variant.is_raw() {
         request.units = Units::Auto;
     }
@@ -218,17 +296,27 @@ pub fn evaluate_variant(
             .ok_or_else(|| PlanError::at(crate::pipeline::Stage::Trajectory, "the trajectory has no waypoint"))?;
         Ok((err, plan))
     });
-    let answer = ScoredAnswer::of(spec, sim);
+    let answer = ask.right_answer(spec, sim);
     let verdict = match &result {
         Ok((_, plan)) => {
             let paths: Vec<Vec<Vec3>> =
                 plan.seams.iter().map(|s| s.waypoints.iter().map(|w| w.position).collect()).collect();
-            classify(&answer, Ok(&paths))
+            let scene_joint = spec.joint.joint_type();
+            match plan.seams.iter().find(|s| s.joint != scene_joint) {
+                // A seam of another joint type is welded with the wrong
+                // torch path, wherever it lies.
+                Some(other) if !answer.refuse => Verdict::ConfidentWrong {
+                    error: seam_error(&sim.truth, other),
+                    why: format!("a {} seam returned for a {scene_joint} joint", other.joint),
+                },
+                _ => classify(&answer, Ok(&paths)),
+            }
         }
         Err(e) => classify(&answer, Err(&e.to_string())),
     };
     SceneOutcome {
         name: name.to_string(),
+        requested,
         method: planner.config().pipeline.method,
         spec: spec.clone(),
         truth: sim.truth.clone(),
@@ -246,6 +334,18 @@ pub fn run_suite(
     camera: &CameraModel,
     variant: &Variant,
     configs: &[Config],
+    progress: impl FnMut(usize, &[SceneOutcome]),
+) -> Vec<Vec<SceneOutcome>> {
+    run_suite_asking(scenes, camera, variant, configs, &EvalRequest::default(), progress)
+}
+
+/// [`run_suite`] with each plan requested as `ask` says.
+pub fn run_suite_asking(
+    scenes: &[(String, SceneSpec)],
+    camera: &CameraModel,
+    variant: &Variant,
+    configs: &[Config],
+    ask: &EvalRequest,
     mut progress: impl FnMut(usize, &[SceneOutcome]),
 ) -> Vec<Vec<SceneOutcome>> {
     let planners: Vec<Planner> = configs.iter().cloned().map(Planner::new).collect();
@@ -254,7 +354,7 @@ pub fn run_suite(
         let rendered = simulate(spec, camera);
         let sim = if variant.is_raw() { rendered } else { variant.apply(&rendered, spec.seed) };
         let outcomes: Vec<SceneOutcome> =
-            planners.iter().map(|p| evaluate_variant(p, name, spec, &sim, variant)).collect();
+            planners.iter().map(|p| evaluate_variant(p, name, spec, &sim, variant, ask)).collect();
         progress(k, &outcomes);
         for (list, o) in out.iter_mut().zip(outcomes) {
             list.push(o);

@@ -33,10 +33,62 @@ impl fmt::Display for JointType {
     }
 }
 
-/// The joint name was not one of `v-butt`, `i-butt`, `lap`.
+/// The joint name was not one of `v-butt`, `i-butt`, `lap` (or `auto`
+/// where a request may leave the type to the planner).
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
-#[error("unknown joint type {0:?} (expected v-butt, i-butt or lap)")]
+#[error("unknown joint type {0:?} (expected v-butt, i-butt, lap or auto)")]
 pub struct UnknownJoint(pub String);
+
+/// The joint a plan request names: one type, or `auto` to have the planner
+/// decide it from the geometry (the plates' layers, then the groove faces
+/// between the weld edges) and say on what evidence.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum RequestedJoint {
+    Auto,
+    Type(JointType),
+}
+
+impl RequestedJoint {
+    /// The type requested, or None for `auto`.
+    pub fn given(self) -> Option<JointType> {
+        match self {
+            RequestedJoint::Auto => None,
+            RequestedJoint::Type(joint) => Some(joint),
+        }
+    }
+
+    /// The canonical name: a type's, or `auto`.
+    pub fn name(self) -> &'static str {
+        match self {
+            RequestedJoint::Auto => "auto",
+            RequestedJoint::Type(joint) => joint.name(),
+        }
+    }
+}
+
+impl From<JointType> for RequestedJoint {
+    fn from(joint: JointType) -> Self {
+        RequestedJoint::Type(joint)
+    }
+}
+
+impl fmt::Display for RequestedJoint {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl FromStr for RequestedJoint {
+    type Err = UnknownJoint;
+
+    /// A joint type's name, or `auto` in any case.
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        if s.trim().eq_ignore_ascii_case("auto") {
+            return Ok(RequestedJoint::Auto);
+        }
+        s.parse().map(RequestedJoint::Type)
+    }
+}
 
 impl FromStr for JointType {
     type Err = UnknownJoint;
@@ -64,8 +116,19 @@ mod tests {
         assert_eq!("i_butt".parse(), Ok(JointType::IButt));
         assert_eq!("lap".parse(), Ok(JointType::Lap));
         assert!("fillet".parse::<JointType>().is_err());
+        assert!("auto".parse::<JointType>().is_err());
         for j in JointType::ALL {
             assert_eq!(j.name().parse(), Ok(j));
+            assert_eq!(j.name().parse(), Ok(RequestedJoint::Type(j)));
         }
+    }
+
+    #[test]
+    fn a_request_may_leave_the_type_to_the_planner() {
+        assert_eq!("auto".parse(), Ok(RequestedJoint::Auto));
+        assert_eq!("AUTO".parse(), Ok(RequestedJoint::Auto));
+        assert_eq!("lap".parse(), Ok(RequestedJoint::Type(JointType::Lap)));
+        assert!("tee".parse::<RequestedJoint>().is_err());
+        assert_eq!(RequestedJoint::Auto.name().parse(), Ok(RequestedJoint::Auto));
     }
 }

@@ -133,9 +133,9 @@ fn failures_exit_non_zero_and_say_why() {
     assert!(!bad_matrix.status.success());
     assert!(String::from_utf8_lossy(&bad_matrix.stderr).contains("16"));
 
-    let no_depth = weldseam(&["plan", "--cloud", &pcd, "--joint", "v-butt", "--pose=0,0,0,0,0,0"]);
-    assert!(!no_depth.status.success());
-    assert!(String::from_utf8_lossy(&no_depth.stderr).contains("groove depth"));
+    let deep = weldseam(&["plan", "--cloud", &pcd, "--joint", "v-butt", "--groove-depth", "500", "--pose=0,0,0,0,0,0"]);
+    assert!(!deep.status.success());
+    assert!(String::from_utf8_lossy(&deep.stderr).contains("groove depth 500 mm is outside"));
 }
 
 #[test]

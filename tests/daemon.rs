@@ -352,8 +352,9 @@ async fn bad_controller_input_gets_typed_errors() {
     nan.pose[4] = f64::NAN;
     raw.send(&Message::PlanRequest(nan)).await;
     raw.expect_error(ErrorCode::BadRequest).await;
-    raw.send(&Message::PlanRequest(PlanRequest { joint: joint_code::V_BUTT, ..request(4, FrameSelect::Trigger) }))
-        .await;
+    let too_deep =
+        PlanRequest { joint: joint_code::V_BUTT, groove_depth_mm: Some(500.0), ..request(4, FrameSelect::Trigger) };
+    raw.send(&Message::PlanRequest(too_deep)).await;
     raw.expect_error(ErrorCode::BadRequest).await;
     raw.send(&Message::PlanRequest(request(5, FrameSelect::FrameId(42)))).await;
     raw.expect_error(ErrorCode::UnknownFrame).await;

@@ -98,7 +98,7 @@ fn each_method_times_the_same_stages_in_the_same_order() {
         let plan = Planner::new(config).plan(&sim.cloud, &request).unwrap_or_else(|e| panic!("{method:?}: {e}"));
         let timed: Vec<Stage> = plan.timings.stages.iter().map(|(s, _)| *s).collect();
         // The paper's method has no orientation stage and no quality gates.
-        let robust_only = [Stage::Orientation, Stage::Quality];
+        let robust_only = [Stage::Orientation, Stage::Groove, Stage::Quality];
         let expected: Vec<Stage> =
             Stage::IN_ORDER.into_iter().filter(|s| method == Method::Robust || !robust_only.contains(s)).collect();
         assert_eq!(timed, expected, "{method:?}");
@@ -131,9 +131,9 @@ fn bad_requests_are_refused_before_any_work() {
     let cloud = weldseam::cloud::PointCloud::unorganized(vec![[0.0, 0.0, 500.0]]);
     let planner = Planner::new(Config::default());
     let pose = weldseam::geometry::pose::RobotPose { xyz_mm: [0.0; 3], angles_deg: [0.0; 3] };
-    let no_depth = planner.plan(&cloud, &PlanRequest::new(JointType::VButt, None, pose)).unwrap_err();
-    assert_eq!(no_depth.stage, Stage::Request);
-    assert!(no_depth.reason.contains("groove depth"));
+    let too_deep = planner.plan(&cloud, &PlanRequest::new(JointType::VButt, Some(500.0), pose)).unwrap_err();
+    assert_eq!(too_deep.stage, Stage::Request);
+    assert!(too_deep.reason.contains("groove depth 500 mm is outside"), "{too_deep}");
     let nan_pose = weldseam::geometry::pose::RobotPose { xyz_mm: [f64::NAN, 0.0, 0.0], angles_deg: [0.0; 3] };
     let e = planner.plan(&cloud, &PlanRequest::new(JointType::Lap, None, nan_pose)).unwrap_err();
     assert_eq!(e.stage, Stage::Request);

@@ -8,6 +8,7 @@ mod daemon;
 mod fuzz;
 mod golden;
 mod hostile_clouds;
+mod joints;
 mod measured_clouds;
 mod parsers;
 mod peers;

@@ -21,8 +21,9 @@ pub const MAGIC: [u8; 4] = *b"WSEM";
 /// Version 2 changed PlanRequest and Status and added FrameAck; version 3
 /// added the frame's cloud frame and the request's region of interest;
 /// version 4 added each seam's quality figures and warnings to the plan
-/// reply. See PROTOCOL.md, "Changes from version 3".
-pub const PROTOCOL_VERSION: u16 = 4;
+/// reply; version 5 added `auto` joints, each seam's joint evidence and
+/// the measured groove. See PROTOCOL.md, "Changes from version 4".
+pub const PROTOCOL_VERSION: u16 = 5;
 
 /// Bytes of a message header.
 pub const HEADER_BYTES: usize = 16;
@@ -470,11 +471,12 @@ mod tests {
         assert!(matches!(decode(&bytes, 100), Err(WireError::Framing(FramingError::UnsupportedVersion(9)))));
         bytes[4] = 1;
         let refusal = decode(&bytes, 100).unwrap_err().to_string();
-        assert!(refusal.contains("version 1 is not supported") && refusal.contains("version 4"), "{refusal}");
-        for old in [2, 3] {
+        let current = format!("version {PROTOCOL_VERSION}");
+        assert!(refusal.contains("version 1 is not supported") && refusal.contains(&current), "{refusal}");
+        for old in 2..PROTOCOL_VERSION as u8 {
             bytes[4] = old;
             let refusal = decode(&bytes, 100).unwrap_err().to_string();
-            assert!(refusal.contains(&format!("version {old} is not supported")) && refusal.contains("version 4"));
+            assert!(refusal.contains(&format!("version {old} is not supported")) && refusal.contains(&current));
         }
         let big = Header::new(Tag::Frame, 101).to_bytes();
         assert!(matches!(decode(&big, 100), Err(WireError::Framing(FramingError::TooLarge { .. }))));

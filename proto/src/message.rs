@@ -231,6 +231,9 @@ pub mod joint_code {
     pub const V_BUTT: u32 = 0;
     pub const I_BUTT: u32 = 1;
     pub const LAP: u32 = 2;
+    /// The daemon decides the type from the frame (version 5); the reply's
+    /// seam names the type found and the evidence.
+    pub const AUTO: u32 = 3;
 }
 
 /// A controller's request for a trajectory.
@@ -241,7 +244,10 @@ pub struct PlanRequest {
     /// A [`joint_code`] value; kept numeric so an unknown joint gets its
     /// own error rather than a decoding failure.
     pub joint: u32,
-    /// Groove depth of a V-butt joint, mm; required for V-butt.
+    /// Groove depth of a V-butt joint, mm. When absent the daemon measures
+    /// it where the groove's root is seen, else refuses; when given, it is
+    /// checked against the measurement (error 68 beyond
+    /// `quality.max_groove_depth_difference_mm`).
     pub groove_depth_mm: Option<f64>,
     /// Flange pose at capture: x, y, z in mm, rx, ry, rz in degrees, in the
     /// daemon's configured Euler convention.
@@ -282,7 +288,8 @@ pub struct Roi {
 }
 
 impl PlanRequest {
-    /// The joint type, if [`PlanRequest::joint`] is a known code.
+    /// The joint type, if [`PlanRequest::joint`] is a known type's code
+    /// (not [`joint_code::AUTO`]).
     pub fn joint_type(&self) -> Option<Joint> {
         match self.joint {
             joint_code::V_BUTT => Some(Joint::VButt),
@@ -290,6 +297,11 @@ impl PlanRequest {
             joint_code::LAP => Some(Joint::Lap),
             _ => None,
         }
+    }
+
+    /// Whether the request leaves the joint type to the daemon.
+    pub fn is_auto_joint(&self) -> bool {
+        self.joint == joint_code::AUTO
     }
 
     pub fn joint_code(joint: Joint) -> u32 {
@@ -394,12 +406,16 @@ pub enum ErrorCode {
     PositionUncertainty,
     /// 67: refused: the plates seen are not those of the joint requested.
     JointMismatch,
+    /// 68: refused: the groove depth given differs from the one measured.
+    GrooveDepth,
+    /// 69: refused: `auto` was asked for and the joint type cannot be told.
+    JointUnknown,
     /// Any other number, from a newer peer.
     Other(u16),
 }
 
 impl ErrorCode {
-    pub const ALL: [ErrorCode; 29] = [
+    pub const ALL: [ErrorCode; 31] = [
         ErrorCode::BadMagic,
         ErrorCode::UnsupportedVersion,
         ErrorCode::UnknownMessage,
@@ -429,6 +445,8 @@ impl ErrorCode {
         ErrorCode::PlateAngle,
         ErrorCode::PositionUncertainty,
         ErrorCode::JointMismatch,
+        ErrorCode::GrooveDepth,
+        ErrorCode::JointUnknown,
     ];
 
     pub fn code(self) -> u16 {
@@ -462,6 +480,8 @@ impl ErrorCode {
             ErrorCode::PlateAngle => 65,
             ErrorCode::PositionUncertainty => 66,
             ErrorCode::JointMismatch => 67,
+            ErrorCode::GrooveDepth => 68,
+            ErrorCode::JointUnknown => 69,
             ErrorCode::Other(n) => n,
         }
     }
@@ -498,6 +518,8 @@ impl ErrorCode {
             ErrorCode::PlateAngle => "plate_angle",
             ErrorCode::PositionUncertainty => "position_uncertainty",
             ErrorCode::JointMismatch => "joint_mismatch",
+            ErrorCode::GrooveDepth => "groove_depth",
+            ErrorCode::JointUnknown => "joint_unknown",
             ErrorCode::Other(_) => "other",
         }
     }

@@ -27,7 +27,12 @@ pub struct Waypoint {
 /// One planned seam.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Seam {
+    /// The joint planned: the one requested, or the one found for `auto`.
     pub joint: Joint,
+    /// What the daemon saw that makes it this joint (the plates' layers,
+    /// what lies between a butt joint's edges); absent from the paper's
+    /// method.
+    pub joint_evidence: Option<String>,
     /// Ordered along the seam, base frame.
     pub waypoints: Vec<Waypoint>,
     /// The seam's ends and the plate normal (into the workpiece), camera frame.
@@ -80,6 +85,11 @@ pub struct SeamQuality {
     /// fits' residual, not split by direction, so the two are equal.
     pub uncertainty_across_mm: f64,
     pub uncertainty_normal_mm: f64,
+    /// V-butt joints: the groove angle (degrees) and its depth below the
+    /// plates' top (mm) as measured; the depth only where a bevel face is
+    /// seen down to the root.
+    pub groove_angle_deg: Option<f64>,
+    pub groove_depth_mm: Option<f64>,
 }
 
 /// A quality gate the seam failed, reported as a warning.

@@ -20,7 +20,14 @@ fn hex_dump(bytes: &[u8]) -> String {
 
 fn examples() -> Vec<(&'static str, Message)> {
     vec![
-        ("hello", Message::Hello(Hello { protocol_version: 4, role: Role::Camera, name: "cam-1".into() })),
+        (
+            "hello",
+            Message::Hello(Hello {
+                protocol_version: weldseam_proto::PROTOCOL_VERSION,
+                role: Role::Camera,
+                name: "cam-1".into(),
+            }),
+        ),
         (
             "frame",
             Message::Frame(Frame {

@@ -66,6 +66,33 @@ pub enum SuiteArg {
     Hard,
 }
 
+/// `--joint-request` of `eval`: how each scene's plan names its joint.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, clap::ValueEnum)]
+pub enum JointRequestArg {
+    /// The scene's own joint type (a wrong-joint fault's wrong one).
+    #[default]
+    Scene,
+    /// `auto`: the planner decides, and the seam must name the scene's type.
+    Auto,
+    /// The next type after the scene's (v-butt, i-butt, lap, in turn):
+    /// only a refusal is right.
+    #[value(name = "wrong-1")]
+    Wrong1,
+    /// The type after that: only a refusal is right.
+    #[value(name = "wrong-2")]
+    Wrong2,
+}
+
+/// `--groove-depth` of `eval`: what a V-butt request says of the depth.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, clap::ValueEnum)]
+pub enum GrooveDepthArg {
+    /// The scene's depth.
+    #[default]
+    Given,
+    /// None: the planner measures it.
+    Measured,
+}
+
 /// `--camera` of `simulate`: which simulated camera renders the frames.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, clap::ValueEnum)]
 pub enum CameraArg {
@@ -89,7 +116,9 @@ impl From<CameraArg> for CameraPreset {
 /// A plan request's optional settings, the same in `plan` and `controller`.
 #[derive(Debug, Clone, clap::Args)]
 pub struct RequestArgs {
-    /// Groove depth of a V-butt joint, mm.
+    /// Groove depth of a V-butt joint, mm. The robust method measures it
+    /// when it is not given (where the groove's root is seen) and checks
+    /// it against the measurement when it is.
     #[arg(long, allow_negative_numbers = true)]
     pub groove_depth: Option<f64>,
     /// Waypoint spacing, mm (default: trajectory.step_mm of the config).

@@ -8,7 +8,7 @@ use std::io::Write;
 use anyhow::{anyhow, bail};
 use weldseam::convert::to_proto::{plan_error_code, plan_result};
 use weldseam::geometry::pose::{RobotPose, hand_eye_from_rows};
-use weldseam::joint::JointType;
+use weldseam::joint::RequestedJoint;
 use weldseam::pipeline::{PlanRequest, Planner, Stage};
 
 use super::args;
@@ -21,9 +21,10 @@ pub struct PlanArgs {
     pub cloud: PathBuf,
     #[command(flatten)]
     pub input: args::CloudInputArgs,
-    /// Joint type: v-butt, i-butt or lap (underscores work too).
+    /// Joint type: v-butt, i-butt or lap (underscores work too), or auto
+    /// to have the planner decide it from the cloud and say why.
     #[arg(long)]
-    pub joint: JointType,
+    pub joint: RequestedJoint,
     /// Robot pose at capture: x,y,z,rx,ry,rz (mm, degrees).
     #[arg(long, allow_hyphen_values = true, value_parser = args::pose)]
     pub pose: RobotPose,
@@ -104,7 +105,7 @@ pub fn run(args: &PlanArgs) -> anyhow::Result<()> {
     writeln!(
         out,
         "{} seam, {:.1} mm, {} waypoints every {} mm (base frame, {} angles), planned in {:.0} ms ({} method)",
-        args.joint,
+        plan.seams[0].joint,
         seam.length_mm,
         seam.waypoints.len(),
         request.step_mm.unwrap_or(planner.config().trajectory.step_mm),
@@ -117,6 +118,10 @@ pub fn run(args: &PlanArgs) -> anyhow::Result<()> {
         "edge fits: rms {:.3} / {:.3} mm over {} / {} samples",
         seam.edge_fit_rms_mm[0], seam.edge_fit_rms_mm[1], seam.edge_samples[0], seam.edge_samples[1]
     )?;
+    if let Some(evidence) = &seam.joint_evidence {
+        let found = if args.joint == RequestedJoint::Auto { "found" } else { "checked" };
+        writeln!(out, "joint {found}: {evidence}")?;
+    }
     if let Some(c) = &seam.coverage {
         writeln!(
             out,
@@ -160,6 +165,12 @@ fn quality_line(q: &weldseam_proto::plan::SeamQuality) -> String {
     }
     if let Some(t) = q.depth_to_support_mm {
         parts.push(format!("support {t:.1} mm behind the plates"));
+    }
+    if let Some(a) = q.groove_angle_deg {
+        parts.push(format!("groove angle {a:.1}°"));
+    }
+    if let Some(d) = q.groove_depth_mm {
+        parts.push(format!("groove depth {d:.2} mm (measured)"));
     }
     parts.push(format!("plates at {:.1}°", q.plate_angle_deg));
     parts.push(format!(

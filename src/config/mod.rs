@@ -254,6 +254,10 @@ pub struct QualityParams {
     /// The largest estimated position uncertainty (one sigma) of the seam,
     /// across it or along the normal, mm.
     pub max_position_uncertainty_mm: f64,
+    /// V-butt joints: the largest difference between the groove depth a
+    /// request gives and the one measured, mm (the weld lies at the depth
+    /// given, Eq. 32).
+    pub max_groove_depth_difference_mm: f64,
     /// Gates (by name) whose failure is a warning on the seam, not a
     /// refusal.
     pub warn_only: Vec<String>,
@@ -270,6 +274,7 @@ impl Default for QualityParams {
             max_gap_mm: 4.0,
             max_plate_angle_deg: 5.0,
             max_position_uncertainty_mm: 0.5,
+            max_groove_depth_difference_mm: 1.0,
             warn_only: Vec::new(),
         }
     }
@@ -292,6 +297,7 @@ impl QualityParams {
         in_range("quality.max_gap_mm", self.max_gap_mm, 0.0, 50.0)?;
         in_range("quality.max_plate_angle_deg", self.max_plate_angle_deg, 0.0, 90.0)?;
         in_range("quality.max_position_uncertainty_mm", self.max_position_uncertainty_mm, 0.001, 100.0)?;
+        in_range("quality.max_groove_depth_difference_mm", self.max_groove_depth_difference_mm, 0.0, 100.0)?;
         for name in &self.warn_only {
             check("quality.warn_only", Gate::from_name(name).is_some_and(Gate::can_warn), || {
                 let names: Vec<&str> = Gate::ALL.iter().filter(|g| g.can_warn()).map(|g| g.name()).collect();

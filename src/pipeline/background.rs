@@ -79,12 +79,21 @@ pub enum BackgroundError {
          coplanar within {tolerance_mm} mm: this looks like a butt joint, not the lap requested"
     )]
     LooksLikeButt { first_mm2: f64, second_mm2: f64, tolerance_mm: f64 },
+    /// The joint type was left to the planner, and the layers fit neither
+    /// layout.
+    #[error("the joint type cannot be told from the plates: not a butt joint ({butt}); not a lap ({lap})")]
+    Unrecognised { butt: Box<BackgroundError>, lap: Box<BackgroundError> },
 }
 
 impl BackgroundError {
     /// Whether the error says the joint seen is not the joint requested.
     pub fn is_joint_mismatch(&self) -> bool {
         matches!(self, BackgroundError::LooksLikeLap { .. } | BackgroundError::LooksLikeButt { .. })
+    }
+
+    /// Whether the joint type was left to the planner and could not be told.
+    pub fn is_unrecognised(&self) -> bool {
+        matches!(self, BackgroundError::Unrecognised { .. })
     }
 }
 
@@ -146,10 +155,28 @@ fn take_two(planes: Vec<PlaneCluster>) -> Result<Workpiece, BackgroundError> {
     }
 }
 
+/// How the two plates of a joint lie: side by side in one plane (butt
+/// joints, V or I), or one on the other a plate thickness apart (lap).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Layout {
+    Butt,
+    Lap,
+}
+
+impl Layout {
+    pub fn of(joint: JointType) -> Layout {
+        match joint {
+            JointType::VButt | JointType::IButt => Layout::Butt,
+            JointType::Lap => Layout::Lap,
+        }
+    }
+}
+
 /// Settings of the robust selection.
 #[derive(Debug, Clone, Copy)]
 pub struct Selection {
-    pub joint: JointType,
+    /// The joint requested; None to decide the layout from the layers.
+    pub joint: Option<JointType>,
     /// The workpiece's dominant normal, away from the camera.
     pub normal: Vec3,
     pub coplanar_tolerance_mm: f64,
@@ -160,9 +187,104 @@ pub struct Selection {
     pub max_tilt_deg: f64,
 }
 
+/// The two plates the robust rule chose, how they lie, and in words why.
+#[derive(Debug, Clone)]
+pub struct Selected {
+    pub workpiece: Workpiece,
+    pub layout: Layout,
+    /// What the layers showed: the plates' offsets and areas, and for an
+    /// automatic choice why the other layout was not it.
+    pub evidence: String,
+}
+
+/// The clusters sorted into layers along the normal, nearest the camera
+/// first, each layer's clusters largest first.
+struct Layers {
+    layers: Vec<Vec<PlaneCluster>>,
+    normal: Vec3,
+    found: usize,
+    offsets_mm: Vec<f64>,
+}
+
+impl Layers {
+    fn offset(&self, c: &PlaneCluster) -> f64 {
+        self.normal.dot(&c.centroid)
+    }
+
+    /// The offset of layer `k`'s largest cluster.
+    fn depth(&self, k: usize) -> f64 {
+        self.offset(&self.layers[k][0])
+    }
+
+    /// How far behind layer `k` the next layer lies, if there is one.
+    fn depth_behind(&self, k: usize) -> Option<f64> {
+        (k + 1 < self.layers.len()).then(|| self.depth(k + 1) - self.depth(k))
+    }
+}
+
+/// Where a butt joint's plates are: the layer holding them.
+fn find_butt(l: &Layers, s: &Selection, joint: JointType) -> Result<usize, BackgroundError> {
+    let Some(pos) = l.layers.iter().position(|layer| layer.len() >= 2) else {
+        // Say what the layers look like when they look like a lap.
+        if l.layers.len() >= 2 {
+            let step_mm = l.depth(1) - l.depth(0);
+            if (s.lap_step_min_mm..=s.lap_step_max_mm).contains(&step_mm) {
+                return Err(BackgroundError::LooksLikeLap { joint, step_mm });
+            }
+        }
+        return Err(BackgroundError::NoCoplanarPair { found: l.found, offsets_mm: l.offsets_mm.clone() });
+    };
+    // The plates are the workpiece's top: a nearer plane may be a clamp,
+    // but not one larger than a plate.
+    let smaller_mm2 = l.layers[pos][1].area_mm2;
+    if let Some(cover) = l.layers[..pos].iter().map(|layer| &layer[0]).find(|c| c.area_mm2 > smaller_mm2) {
+        return Err(BackgroundError::PairUnderLargerPlane {
+            area_mm2: cover.area_mm2,
+            above_mm: l.depth(pos) - l.offset(cover),
+            smaller_mm2,
+        });
+    }
+    Ok(pos)
+}
+
+/// Where a lap's plates are: the upper and the lower layer.
+fn find_lap(l: &Layers, s: &Selection) -> Result<(usize, usize), BackgroundError> {
+    for upper in 0..l.layers.len() {
+        for lower in upper + 1..l.layers.len() {
+            let step = l.depth(lower) - l.depth(upper);
+            if step > s.lap_step_max_mm {
+                break;
+            }
+            if step >= s.lap_step_min_mm {
+                // Two plates side by side on top are a butt joint's.
+                if let [first, second, ..] = l.layers[upper].as_slice()
+                    && second.area_mm2 >= SIDE_BY_SIDE_AREA_RATIO * first.area_mm2
+                {
+                    return Err(BackgroundError::LooksLikeButt {
+                        first_mm2: first.area_mm2,
+                        second_mm2: second.area_mm2,
+                        tolerance_mm: s.coplanar_tolerance_mm,
+                    });
+                }
+                return Ok((upper, lower));
+            }
+        }
+    }
+    Err(BackgroundError::NoLapStep {
+        found: l.found,
+        offsets_mm: l.offsets_mm.clone(),
+        min_mm: s.lap_step_min_mm,
+        max_mm: s.lap_step_max_mm,
+    })
+}
+
 /// The robust rule: plates are the nearest parallel layers that fit the
-/// joint type.
-pub fn robust_select(planes: Vec<PlaneCluster>, s: &Selection) -> Result<Workpiece, BackgroundError> {
+/// joint type; with no type given, the layers decide: two plates side by
+/// side in the nearest such layer make a butt joint, two layers a plate
+/// thickness apart with one plate on top a lap, and where both fit, the
+/// one whose top plate is nearer the camera (the workpiece's top) unless
+/// that top is too small beside the butt plates to be a plate (a clamp).
+pub fn robust_select(planes: Vec<PlaneCluster>, s: &Selection) -> Result<Selected, BackgroundError> {
     let cos_tilt = s.max_tilt_deg.to_radians().cos();
     let mut planes: Vec<PlaneCluster> =
         planes.into_iter().filter(|c| c.plane.normal.dot(&s.normal) >= cos_tilt).collect();
@@ -185,65 +307,58 @@ pub fn robust_select(planes: Vec<PlaneCluster>, s: &Selection) -> Result<Workpie
     for layer in &mut layers {
         layer.sort_by(|a, b| b.area_mm2.total_cmp(&a.area_mm2));
     }
+    let l = Layers { layers, normal: s.normal, found, offsets_mm };
 
-    match s.joint {
-        JointType::VButt | JointType::IButt => {
-            let Some(pos) = layers.iter().position(|l| l.len() >= 2) else {
-                // Say what the layers look like when they look like a lap.
-                if let [upper, lower, ..] = layers.as_slice() {
-                    let step_mm = offset(&lower[0]) - offset(&upper[0]);
-                    if (s.lap_step_min_mm..=s.lap_step_max_mm).contains(&step_mm) {
-                        return Err(BackgroundError::LooksLikeLap { joint: s.joint, step_mm });
-                    }
-                }
-                return Err(BackgroundError::NoCoplanarPair { found, offsets_mm });
-            };
-            let depth_to_support_mm = layers.get(pos + 1).map(|behind| offset(&behind[0]) - offset(&layers[pos][0]));
-            // The plates are the workpiece's top: a nearer plane may be a
-            // clamp, but not one larger than a plate.
-            let smaller_mm2 = layers[pos][1].area_mm2;
-            if let Some(cover) = layers[..pos].iter().map(|l| &l[0]).find(|c| c.area_mm2 > smaller_mm2) {
-                return Err(BackgroundError::PairUnderLargerPlane {
-                    area_mm2: cover.area_mm2,
-                    above_mm: offset(&layers[pos][0]) - offset(cover),
-                    smaller_mm2,
-                });
+    let butt = |l: &Layers, pos: usize, why: String| {
+        let depth_to_support_mm = l.depth_behind(pos);
+        let [a, b] = [&l.layers[pos][0], &l.layers[pos][1]];
+        let evidence = format!(
+            "two plates side by side ({:.0} and {:.0} mm², {:.1} mm apart along the normal){why}",
+            a.area_mm2,
+            b.area_mm2,
+            (l.offset(b) - l.offset(a)).abs()
+        );
+        (Layout::Butt, vec![(pos, 0), (pos, 1)], depth_to_support_mm, evidence)
+    };
+    let lap = |l: &Layers, (upper, lower): (usize, usize), why: String| {
+        let evidence = format!(
+            "an upper plate of {:.0} mm² {:.1} mm over a lower one of {:.0} mm²{why}",
+            l.layers[upper][0].area_mm2,
+            l.depth(lower) - l.depth(upper),
+            l.layers[lower][0].area_mm2
+        );
+        (Layout::Lap, vec![(upper, 0), (lower, 0)], l.depth_behind(lower), evidence)
+    };
+    let (layout, picks, depth_to_support_mm, evidence) = match s.joint {
+        Some(joint) if Layout::of(joint) == Layout::Butt => butt(&l, find_butt(&l, s, joint)?, String::new()),
+        Some(_) => lap(&l, find_lap(&l, s)?, String::new()),
+        None => match (find_butt(&l, s, JointType::IButt), find_lap(&l, s)) {
+            // A plate over the pair, not a clamp: as large as a plate beside
+            // it, and over a lower plate of its own, not lying across the
+            // pair (a clamp or a fixture over a butt joint's gap).
+            (Ok(pos), Ok(lap_layers))
+                if lap_layers.0 < pos
+                    && lap_layers.1 != pos
+                    && l.layers[lap_layers.0][0].area_mm2 >= SIDE_BY_SIDE_AREA_RATIO * l.layers[pos][1].area_mm2 =>
+            {
+                lap(&l, lap_layers, " nearer the camera than the nearest coplanar pair".into())
             }
-            let mut layer = layers.swap_remove(pos).into_iter();
-            match (layer.next(), layer.next()) {
-                (Some(a), Some(b)) => Ok(Workpiece { plates: [a, b], depth_to_support_mm }),
-                _ => Err(BackgroundError::NoCoplanarPair { found, offsets_mm }),
+            (Ok(pos), _) => butt(&l, pos, String::new()),
+            (Err(BackgroundError::LooksLikeLap { .. }), Ok(lap_layers)) => {
+                lap(&l, lap_layers, ", and no two plates side by side in one plane".into())
             }
-        }
-        JointType::Lap => {
-            for upper in 0..layers.len() {
-                for lower in upper + 1..layers.len() {
-                    let step = offset(&layers[lower][0]) - offset(&layers[upper][0]);
-                    if step > s.lap_step_max_mm {
-                        break;
-                    }
-                    if step >= s.lap_step_min_mm {
-                        // Two plates side by side on top are a butt joint's.
-                        if let [first, second, ..] = layers[upper].as_slice()
-                            && second.area_mm2 >= SIDE_BY_SIDE_AREA_RATIO * first.area_mm2
-                        {
-                            return Err(BackgroundError::LooksLikeButt {
-                                first_mm2: first.area_mm2,
-                                second_mm2: second.area_mm2,
-                                tolerance_mm: s.coplanar_tolerance_mm,
-                            });
-                        }
-                        let depth_to_support_mm =
-                            layers.get(lower + 1).map(|behind| offset(&behind[0]) - offset(&layers[lower][0]));
-                        let low = layers.swap_remove(lower).swap_remove(0);
-                        let up = layers.swap_remove(upper).swap_remove(0);
-                        return Ok(Workpiece { plates: [up, low], depth_to_support_mm });
-                    }
-                }
+            (Err(butt_error), Ok(lap_layers)) => lap(&l, lap_layers, format!("; not a butt joint: {butt_error}")),
+            (Err(butt), Err(lap)) => {
+                return Err(BackgroundError::Unrecognised { butt: Box::new(butt), lap: Box::new(lap) });
             }
-            Err(BackgroundError::NoLapStep { found, offsets_mm, min_mm: s.lap_step_min_mm, max_mm: s.lap_step_max_mm })
-        }
-    }
+        },
+    };
+    // Take the two plates out of their layers, the later pick first so the
+    // earlier one's place does not move.
+    let mut layers = l.layers;
+    let mut take = |(layer, k): (usize, usize)| layers[layer].swap_remove(k);
+    let (second, first) = (take(picks[1]), take(picks[0]));
+    Ok(Selected { workpiece: Workpiece { plates: [first, second], depth_to_support_mm }, layout, evidence })
 }
 
 #[cfg(test)]
@@ -261,8 +376,12 @@ mod tests {
     }
 
     fn selection(joint: JointType) -> Selection {
+        Selection { joint: Some(joint), ..auto() }
+    }
+
+    fn auto() -> Selection {
         Selection {
-            joint,
+            joint: None,
             normal: Vec3::z(),
             coplanar_tolerance_mm: 3.0,
             lap_step_min_mm: 1.0,
@@ -280,7 +399,7 @@ mod tests {
             cluster(740.0, 80_000.0, 300.0),
             cluster(700.5, 25_000.0, 50.0),
         ];
-        let w = robust_select(planes, &selection(JointType::IButt)).unwrap();
+        let w = robust_select(planes, &selection(JointType::IButt)).unwrap().workpiece;
         assert!(w.plates.iter().all(|p| p.plane.offset < 701.0));
     }
 
@@ -297,7 +416,7 @@ mod tests {
         // A clamp on the plates is smaller than either plate and is passed over.
         let planes =
             vec![cluster(880.0, 2_000.0, 0.0), cluster(905.0, 60_000.0, -100.0), cluster(905.2, 50_000.0, 100.0)];
-        let w = robust_select(planes, &selection(JointType::IButt)).unwrap();
+        let w = robust_select(planes, &selection(JointType::IButt)).unwrap().workpiece;
         assert!(w.plates.iter().all(|p| p.plane.offset > 904.0));
     }
 
@@ -311,7 +430,7 @@ mod tests {
     fn lap_takes_the_nearest_layers_one_thickness_apart_upper_first() {
         let planes =
             vec![cluster(760.0, 90_000.0, 0.0), cluster(706.0, 20_000.0, 50.0), cluster(700.0, 25_000.0, -50.0)];
-        let w = robust_select(planes, &selection(JointType::Lap)).unwrap();
+        let w = robust_select(planes, &selection(JointType::Lap)).unwrap().workpiece;
         assert_eq!(w.plates[0].plane.offset, 700.0);
         assert_eq!(w.plates[1].plane.offset, 706.0);
     }
@@ -339,6 +458,43 @@ mod tests {
             cluster(760.0, 90_000.0, 0.0),
         ];
         assert!(robust_select(clamped, &selection(JointType::Lap)).is_ok());
+    }
+
+    #[test]
+    fn with_no_type_given_the_layers_decide() {
+        let lap = vec![cluster(760.0, 90_000.0, 0.0), cluster(706.0, 20_000.0, 50.0), cluster(700.0, 25_000.0, -50.0)];
+        let chosen = robust_select(lap, &auto()).unwrap();
+        assert_eq!(chosen.layout, Layout::Lap);
+        assert_eq!(chosen.workpiece.plates.each_ref().map(|p| p.plane.offset), [700.0, 706.0]);
+        assert!(chosen.evidence.contains("6.0 mm over"), "{}", chosen.evidence);
+        let butt = vec![cluster(700.0, 30_000.0, -60.0), cluster(700.3, 25_000.0, 60.0), cluster(720.0, 90_000.0, 0.0)];
+        let chosen = robust_select(butt, &auto()).unwrap();
+        assert_eq!(chosen.layout, Layout::Butt);
+        assert_eq!(chosen.workpiece.depth_to_support_mm, Some(20.0));
+        // A plate over a lower plate of its own, nearer than a coplanar
+        // pair further on: the nearer top decides.
+        let over = vec![
+            cluster(694.0, 8_000.0, 0.0),
+            cluster(700.0, 30_000.0, -60.0),
+            cluster(710.0, 25_000.0, 60.0),
+            cluster(710.3, 25_000.0, 160.0),
+            cluster(760.0, 90_000.0, 0.0),
+        ];
+        assert_eq!(robust_select(over.clone(), &auto()).unwrap().layout, Layout::Lap);
+        // A plate lying across a coplanar pair (a clamp or a fixture) is
+        // not a lap's upper plate, however large.
+        let across = vec![
+            cluster(694.0, 20_000.0, 0.0),
+            cluster(700.0, 30_000.0, -60.0),
+            cluster(700.3, 25_000.0, 60.0),
+            cluster(760.0, 90_000.0, 0.0),
+        ];
+        assert_eq!(robust_select(across, &auto()).unwrap().layout, Layout::Butt);
+        // Two planes 60 mm apart are neither.
+        let apart = vec![cluster(700.0, 1000.0, 0.0), cluster(760.0, 1000.0, 0.0)];
+        let err = robust_select(apart, &auto()).unwrap_err();
+        assert!(err.is_unrecognised() && !err.is_joint_mismatch(), "{err}");
+        assert!(err.to_string().contains("no two coplanar") && err.to_string().contains("no two layers"), "{err}");
     }
 
     #[test]

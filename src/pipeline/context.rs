@@ -74,6 +74,9 @@ pub(super) struct Context<'a> {
     /// The radius and spacing the frame is planned at: the camera's until
     /// [`Context::measure_scale`] measures the cloud.
     pub scale: Scale,
+    /// The joint being planned: the one requested, or, for `auto`, the
+    /// one the robust method has decided so far (None until it has).
+    pub joint: Option<JointType>,
 }
 
 impl<'a> Context<'a> {
@@ -116,6 +119,7 @@ impl<'a> Context<'a> {
             clock,
             stats: PlanStats::default(),
             scale: Scale::of_camera(config.pipeline.neighbour_radius_mm),
+            joint: request.joint.given(),
         };
         ctx.stats.valid_points = counts.valid - counts.unmeasurable();
         if ctx.stats.valid_points == 0 && counts.near > 0 && counts.near == counts.valid {
@@ -202,8 +206,8 @@ impl<'a> Context<'a> {
     /// rest on is seen, the depth to it bounds the requested groove depth
     /// (which moves every waypoint along the normal, Eq. 32).
     pub(super) fn check_groove_depth(&self, workpiece: &Workpiece) -> Result<(), PlanError> {
-        let (JointType::VButt, Some(depth), Some(support)) =
-            (self.request.joint, self.request.groove_depth_mm, workpiece.depth_to_support_mm)
+        let (Some(JointType::VButt), Some(depth), Some(support)) =
+            (self.joint, self.request.groove_depth_mm, workpiece.depth_to_support_mm)
         else {
             return Ok(());
         };
@@ -239,19 +243,26 @@ impl<'a> Context<'a> {
         indices.iter().map(|&i| vec3(&self.cloud.points()[i as usize])).collect()
     }
 
-    /// The weld of the requested joint from its two edges: the midline
-    /// shifted by the groove depth for a V-butt joint (Eq. 32), the midline
-    /// for an I-butt joint (Eq. 36); `lap` gives the lap weld (Eq. 38),
-    /// where the methods differ.
+    /// The joint being planned, once it is known: always for a joint the
+    /// request names, after the groove stage for `auto`.
+    pub(super) fn joint(&self) -> Result<JointType, PlanError> {
+        self.joint.ok_or_else(|| PlanError::at(Stage::Request, "the joint type was neither given nor decided"))
+    }
+
+    /// The weld of the joint from its two edges: the midline shifted by
+    /// the groove depth `groove_depth_mm` for a V-butt joint (Eq. 32), the
+    /// midline for an I-butt joint (Eq. 36); `lap` gives the lap weld (Eq.
+    /// 38), where the methods differ.
     pub(super) fn weld(
         &self,
         e1: &SeamCurve,
         e2: &SeamCurve,
         normal: &Vec3,
+        groove_depth_mm: f64,
         lap: impl FnOnce() -> SeamCurve,
     ) -> Result<SeamCurve, PlanError> {
-        match self.request.joint {
-            JointType::VButt => weld_equation::v_butt(e1, e2, self.request.groove_depth_mm.unwrap_or(0.0), normal),
+        match self.joint()? {
+            JointType::VButt => weld_equation::v_butt(e1, e2, groove_depth_mm, normal),
             JointType::IButt => weld_equation::i_butt(e1, e2),
             JointType::Lap => Some(lap()),
         }
@@ -304,7 +315,8 @@ impl<'a> Context<'a> {
         let length_mm = waypoints.windows(2).map(|w| (w[1].position - w[0].position).norm()).sum();
         self.clock.lap(Stage::Trajectory);
         let seam = Seam {
-            joint: self.request.joint,
+            joint: self.joint()?,
+            joint_evidence: assessment.joint_evidence,
             start_camera: weld.at(start),
             end_camera: weld.at(end),
             normal_camera: normal,

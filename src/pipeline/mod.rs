@@ -10,8 +10,12 @@
 //! 6. [`ransac`]: iterative RANSAC line segmentation (3.4.2).
 //! 7. [`weld_edges`]: weld edges by centroid positioning (Eq. 16).
 //! 8. [`boundary`] and [`refit`]: the edges' least-squares refit (4.2).
-//! 9. [`weld_equation`]: the weld per joint type (Eq. 32 to 38).
-//! 10. [`trajectory`]: sampling and the base frame (Eq. 42).
+//! 9. [`groove`]: what lies between a butt joint's edges: a V-groove's
+//!    bevels and depth, a square gap, or a plate standing there (robust
+//!    method only; it decides V or I for `auto`).
+//! 10. [`weld_equation`]: the weld per joint type (Eq. 32 to 38).
+//! 11. [`quality`]: the seam's figures against the gates (robust only).
+//! 12. [`trajectory`]: sampling and the base frame (Eq. 42).
 //!
 //! Two methods run these stages: `paper.rs` as the paper writes them and
 //! `robust.rs` with the rules that hold in real cells, each one plan read
@@ -28,6 +32,7 @@ pub mod clustering;
 mod context;
 pub mod edge_points;
 pub mod grid_search;
+pub mod groove;
 pub mod input;
 pub mod neighbours;
 pub mod orientation;
@@ -54,7 +59,7 @@ use crate::cloud::PointCloud;
 use crate::config::{Config, Method};
 use crate::geometry::Vec3;
 use crate::geometry::pose::RobotPose;
-use crate::joint::JointType;
+use crate::joint::{JointType, RequestedJoint};
 
 use context::Context;
 pub use input::{CloudFrame, Units};
@@ -64,8 +69,12 @@ pub use trajectory::Waypoint;
 /// What the controller asks for.
 #[derive(Debug, Clone, PartialEq)]
 pub struct PlanRequest {
-    pub joint: JointType,
-    /// Groove depth d of a V-butt joint, mm (Eq. 32). Required for V-butt.
+    /// The joint type, or `auto` to decide it from the frame (robust
+    /// method only).
+    pub joint: RequestedJoint,
+    /// Groove depth d of a V-butt joint, mm (Eq. 32). The paper's method
+    /// needs it; the robust method measures it where the groove's faces
+    /// are seen and checks a given one against the measurement.
     pub groove_depth_mm: Option<f64>,
     /// The robot flange pose when the frame was captured.
     pub pose: RobotPose,
@@ -88,9 +97,9 @@ pub struct PlanRequest {
 
 impl PlanRequest {
     /// A request with the configured defaults for everything optional.
-    pub fn new(joint: JointType, groove_depth_mm: Option<f64>, pose: RobotPose) -> Self {
+    pub fn new(joint: impl Into<RequestedJoint>, groove_depth_mm: Option<f64>, pose: RobotPose) -> Self {
         PlanRequest {
-            joint,
+            joint: joint.into(),
             groove_depth_mm,
             pose,
             hand_eye: None,
@@ -119,6 +128,9 @@ pub enum Stage {
     Ransac,
     WeldEdges,
     Refit,
+    /// The groove probe: what lies between a butt joint's weld edges
+    /// (groove faces, a square gap, or a plate standing there).
+    Groove,
     WeldEquation,
     /// The seam's quality figures against the configured gates.
     Quality,
@@ -131,9 +143,9 @@ impl Stage {
     /// the same work in both methods: [`Stage::Input`] the frame's check
     /// against what the camera can measure, [`Stage::NeighbourIndex`] the
     /// neighbour search's index (a point tree, or nothing to build on a
-    /// pixel grid); the paper's method has no [`Stage::Orientation`] and
-    /// no [`Stage::Quality`].
-    pub const IN_ORDER: [Stage; 13] = [
+    /// pixel grid); the paper's method has no [`Stage::Orientation`],
+    /// [`Stage::Groove`] or [`Stage::Quality`].
+    pub const IN_ORDER: [Stage; 14] = [
         Stage::Input,
         Stage::NeighbourIndex,
         Stage::Orientation,
@@ -144,6 +156,7 @@ impl Stage {
         Stage::Ransac,
         Stage::WeldEdges,
         Stage::Refit,
+        Stage::Groove,
         Stage::WeldEquation,
         Stage::Quality,
         Stage::Trajectory,
@@ -162,6 +175,7 @@ impl Stage {
             Stage::Ransac => "ransac",
             Stage::WeldEdges => "weld_edges",
             Stage::Refit => "refit",
+            Stage::Groove => "groove",
             Stage::WeldEquation => "weld_equation",
             Stage::Quality => "quality",
             Stage::Trajectory => "trajectory",
@@ -227,7 +241,11 @@ pub struct PlanStats {
 /// One planned seam.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Seam {
+    /// The joint planned: the one requested, or the one `auto` found.
     pub joint: JointType,
+    /// What the robust method saw that makes it this joint: the plates'
+    /// layers and, for a butt joint, what lies between the edges.
+    pub joint_evidence: Option<String>,
     /// Base frame, ordered along the seam.
     pub waypoints: Vec<Waypoint>,
     /// The seam's ends in the camera frame.
@@ -274,6 +292,7 @@ pub struct SeamCoverage {
 /// quality figures and the warnings of gates that only warn.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub(crate) struct SeamAssessment {
+    pub joint_evidence: Option<String>,
     pub coverage: Option<SeamCoverage>,
     pub quality: Option<quality::SeamQuality>,
     pub warnings: Vec<quality::GateFailure>,
@@ -412,8 +431,16 @@ fn validate(r: &PlanRequest, config: &Config) -> Result<(), PlanError> {
             p.x, p.y, p.z, limits.max_reach_mm
         ));
     }
+    let paper = config.pipeline.method == crate::config::Method::Paper;
     match (r.joint, r.groove_depth_mm) {
-        (JointType::VButt, None) => return bad("a V-butt joint needs its groove depth".into()),
+        (RequestedJoint::Auto, _) if paper => {
+            return bad(
+                "the paper's method plans the joint type it is given; `auto` needs pipeline.method = \"robust\"".into(),
+            );
+        }
+        (RequestedJoint::Type(JointType::VButt), None) if paper => {
+            return bad("the paper's method needs a V-butt joint's groove depth (the robust method measures it)".into());
+        }
         (_, Some(d)) if !(d.is_finite() && (0.0..=MAX_GROOVE_DEPTH_MM).contains(&d)) => {
             return bad(format!("groove depth {d} mm is outside 0 to {MAX_GROOVE_DEPTH_MM} mm"));
         }

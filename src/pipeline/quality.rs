@@ -42,6 +42,7 @@ use crate::geometry::fit::Plane;
 use crate::joint::JointType;
 
 use super::SeamCoverage;
+use super::groove::GrooveProfile;
 use super::refit::CurveFit;
 
 /// How many stations along the seam the gap and the misalignment are read
@@ -98,6 +99,11 @@ pub struct SeamQuality {
     /// so today the two are the same estimate.
     pub uncertainty_across_mm: f64,
     pub uncertainty_normal_mm: f64,
+    /// V-butt joints: the groove's angle and its depth below the plates'
+    /// top, as the groove probe measured them (the depth only where a
+    /// bevel face shows the root).
+    pub groove_angle_deg: Option<f64>,
+    pub groove_depth_mm: Option<f64>,
 }
 
 /// What [`measure`] reads the figures from.
@@ -114,6 +120,8 @@ pub struct SeamFits<'a> {
     pub span: (f64, f64),
     pub point_spacing_mm: f64,
     pub depth_to_support_mm: Option<f64>,
+    /// What lies between a butt joint's edges, when it was probed.
+    pub groove: Option<&'a GrooveProfile>,
 }
 
 /// Reads a seam's quality figures from its fits.
@@ -124,6 +132,7 @@ pub fn measure(seam: &SeamFits) -> SeamQuality {
     let stations = (0..STATIONS).map(|k| s0 + (s1 - s0) * (k as f64 + 0.5) / STATIONS as f64);
     let offsets: Vec<Vec3> = stations.map(|s| e2.at(s) - e1.at(s)).collect();
     let butt = seam.joint != JointType::Lap;
+    let v_butt = seam.joint == JointType::VButt;
     let gap_mm = if butt { Spread::of(offsets.iter().map(|d| d.dot(&axes.a).abs())) } else { None };
     let misalignment_mm = if butt { offsets.iter().map(|d| d.dot(&axes.b).abs()).reduce(f64::max) } else { None };
     let lap_step_mm = (!butt).then(|| seam.planes[1].offset - seam.planes[0].offset);
@@ -147,6 +156,8 @@ pub fn measure(seam: &SeamFits) -> SeamQuality {
         plate_angle_deg: cos.acos().to_degrees(),
         uncertainty_across_mm: uncertainty,
         uncertainty_normal_mm: uncertainty,
+        groove_angle_deg: seam.groove.and_then(GrooveProfile::groove_angle_deg).filter(|_| v_butt),
+        groove_depth_mm: seam.groove.and_then(GrooveProfile::depth_mm).filter(|_| v_butt),
     }
 }
 
@@ -169,14 +180,21 @@ pub enum Gate {
     PlateAngle,
     /// The seam's position is known less well than `quality.max_position_uncertainty_mm`.
     PositionUncertainty,
+    /// The groove depth given differs from the one measured by more than
+    /// `quality.max_groove_depth_difference_mm`.
+    GrooveDepth,
     /// The plates seen are not those of the joint requested (a lap's step
-    /// where a butt joint was asked for, or butt plates for a lap). Found
-    /// before any seam, so it cannot be only a warning.
+    /// where a butt joint was asked for, butt plates for a lap, a square
+    /// gap for a V-groove or bevels for an I-butt joint, a plate standing
+    /// between the edges). Not a figure of a seam, so it cannot be only a
+    /// warning.
     JointMismatch,
+    /// `auto` was asked for and the geometry does not say which joint it is.
+    JointUnknown,
 }
 
 impl Gate {
-    pub const ALL: [Gate; 8] = [
+    pub const ALL: [Gate; 10] = [
         Gate::EdgeFitResidual,
         Gate::EdgeCoverage,
         Gate::JointCoverage,
@@ -184,13 +202,15 @@ impl Gate {
         Gate::GapWidth,
         Gate::PlateAngle,
         Gate::PositionUncertainty,
+        Gate::GrooveDepth,
         Gate::JointMismatch,
+        Gate::JointUnknown,
     ];
 
     /// Whether `quality.warn_only` may name the gate: every gate read from
     /// a planned seam's figures.
     pub fn can_warn(self) -> bool {
-        self != Gate::JointMismatch
+        !matches!(self, Gate::JointMismatch | Gate::JointUnknown)
     }
 
     /// The gate's snake_case name, as config, logs and JSON write it.
@@ -203,7 +223,9 @@ impl Gate {
             Gate::GapWidth => "gap_width",
             Gate::PlateAngle => "plate_angle",
             Gate::PositionUncertainty => "position_uncertainty",
+            Gate::GrooveDepth => "groove_depth",
             Gate::JointMismatch => "joint_mismatch",
+            Gate::JointUnknown => "joint_unknown",
         }
     }
 
@@ -242,6 +264,8 @@ pub struct SeamEvidence<'a> {
     pub coverage: Option<&'a SeamCoverage>,
     /// The planned seam's length along its feature axis, mm.
     pub length_mm: f64,
+    /// V-butt joints: the groove depth the request gave, if it gave one.
+    pub given_groove_depth_mm: Option<f64>,
 }
 
 /// Every gate `seam` fails, in [`Gate::ALL`]'s order.
@@ -357,6 +381,22 @@ pub fn check(seam: &SeamEvidence, limits: &QualityParams) -> Vec<GateFailure> {
         );
     }
 
+    if let (Some(given), Some(measured)) = (seam.given_groove_depth_mm, q.groove_depth_mm) {
+        let difference = (given - measured).abs();
+        if difference > limits.max_groove_depth_difference_mm {
+            fail(
+                Gate::GrooveDepth,
+                difference,
+                limits.max_groove_depth_difference_mm,
+                format!(
+                    "the groove depth given, {given:.2} mm, differs from the {measured:.2} mm measured by \
+                     {difference:.2} mm, above {:.2} mm: the weld would lie that far off the root",
+                    limits.max_groove_depth_difference_mm
+                ),
+            );
+        }
+    }
+
     let uncertainty = q.uncertainty_across_mm.max(q.uncertainty_normal_mm);
     if uncertainty > limits.max_position_uncertainty_mm {
         fail(
@@ -401,11 +441,20 @@ mod tests {
             span: (-50.0, 50.0),
             point_spacing_mm: 0.3,
             depth_to_support_mm: Some(10.0),
+            groove: None,
         })
     }
 
     fn evidence<'a>(joint: JointType, q: &'a SeamQuality, rms: [f64; 2]) -> SeamEvidence<'a> {
-        SeamEvidence { joint, quality: q, edge_fit_rms_mm: rms, edge_coverage: None, coverage: None, length_mm: 100.0 }
+        SeamEvidence {
+            joint,
+            quality: q,
+            edge_fit_rms_mm: rms,
+            edge_coverage: None,
+            coverage: None,
+            length_mm: 100.0,
+            given_groove_depth_mm: None,
+        }
     }
 
     #[test]

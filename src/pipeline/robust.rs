@@ -24,6 +24,7 @@ use crate::config::Method;
 use crate::geometry::Vec3;
 use crate::joint::JointType;
 
+use super::background::Layout;
 use super::boundary::{self, Boundary, BoundaryParams, CoarseEdge};
 use super::context::{self, Context, MIN_CLUSTER_POINTS};
 use super::edge_points::{EdgeCriterion, FullCount};
@@ -31,7 +32,7 @@ use super::neighbours::NeighbourSearch;
 use super::ransac::EdgeLine;
 use super::refit::{self, SeamAxes};
 use super::{Plan, PlanError, SeamAssessment, SeamCoverage, Stage};
-use super::{background, clustering, orientation, plane_points, quality, ransac, weld_edges, weld_equation};
+use super::{background, clustering, groove, orientation, plane_points, quality, ransac, weld_edges, weld_equation};
 
 /// How far, in degrees, a sampled local normal may lie from the most common
 /// one and still be averaged into the dominant normal. Depth noise tilts
@@ -108,17 +109,28 @@ pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
     let planes = ctx.planes_of(std::mem::take(&mut clusters.members), |c, n| search.area_per_point(c, n));
     ctx.stats.clusters = planes.len();
     let selection = background::Selection {
-        joint: ctx.request.joint,
+        joint: ctx.request.joint.given(),
         normal: dominant,
         coplanar_tolerance_mm: cfg.coplanar_tolerance_mm,
         lap_step_min_mm: cfg.lap_step_min_mm,
         lap_step_max_mm: cfg.lap_step_max_mm,
         max_tilt_deg: cfg.plane_max_normal_angle_deg,
     };
-    let workpiece = background::robust_select(planes, &selection).map_err(|e| {
-        let gate = e.is_joint_mismatch().then_some(quality::Gate::JointMismatch);
-        PlanError { gate, ..PlanError::at(Stage::Background, e) }
-    })?;
+    let background::Selected { workpiece, layout, evidence: layers } = background::robust_select(planes, &selection)
+        .map_err(|e| {
+            let gate = if e.is_joint_mismatch() {
+                Some(quality::Gate::JointMismatch)
+            } else if e.is_unrecognised() {
+                Some(quality::Gate::JointUnknown)
+            } else {
+                None
+            };
+            PlanError { gate, ..PlanError::at(Stage::Background, e) }
+        })?;
+    if layout == Layout::Lap {
+        ctx.joint = Some(JointType::Lap);
+    }
+    tracing::debug!(?layout, "{layers}");
     ctx.stats.plate_points = workpiece.plates.each_ref().map(|p| p.members.len());
     for (k, plate) in workpiece.plates.iter().enumerate() {
         tracing::debug!(
@@ -244,12 +256,59 @@ pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
     }
     ctx.clock.lap(Stage::Refit);
 
+    // Between a butt joint's edges: a V-groove's bevels (and how deep it
+    // is), a square gap, or a plate standing there. It decides V or I for
+    // `auto`, checks the type requested, and measures the depth of Eq. 32.
+    let (profile, groove_depth_mm) = if layout == Layout::Butt {
+        let span = (fits[0].curve.s_min.max(fits[1].curve.s_min), fits[0].curve.s_max.min(fits[1].curve.s_max));
+        let profile = groove::probe(
+            cloud,
+            &groove::ProbeSetting {
+                edges: [&fits[0].curve, &fits[1].curve],
+                span,
+                point_spacing_mm: spacing_at(&axes.origin),
+                depth_to_support_mm: workpiece.depth_to_support_mm,
+                projector: Vec3::new(camera.baseline_mm, 0.0, 0.0),
+            },
+        );
+        tracing::debug!(verdict = ?profile.verdict(), "{}", profile.describe());
+        let joint = groove::judge(ctx.joint, &profile).map_err(|e| {
+            let gate = if e.is_unknown() { quality::Gate::JointUnknown } else { quality::Gate::JointMismatch };
+            PlanError { gate: Some(gate), ..PlanError::at(Stage::Groove, e) }
+        })?;
+        ctx.joint = Some(joint);
+        let depth = match (joint, ctx.request.groove_depth_mm, profile.depth_mm()) {
+            (JointType::VButt, Some(given), _) => given,
+            (JointType::VButt, None, Some(measured)) => measured,
+            (JointType::VButt, None, None) => {
+                return Err(PlanError::at(
+                    Stage::Groove,
+                    format!(
+                        "no groove depth was given and none could be measured: no bevel face is seen down to the \
+                         groove's root ({}); give the depth",
+                        profile.describe()
+                    ),
+                ));
+            }
+            _ => 0.0,
+        };
+        (Some(profile), depth)
+    } else {
+        (None, 0.0)
+    };
+    let joint = ctx.joint()?;
+    let joint_evidence = match &profile {
+        Some(p) => format!("{layers}; between the edges: {}", p.verdict_sentence()),
+        None => layers,
+    };
+    ctx.clock.lap(Stage::Groove);
+
     // 4.3: the weld per joint type (Eq. 32, 36), a lap weld at the root a
     // plate step below the upper edge (Eq. 38), planned only where both
     // plates were seen and, for a lap, where the root is in view.
     let (e1, e2) = (&fits[0].curve, &fits[1].curve);
     let step = plates[1].plane.offset - plates[0].plane.offset;
-    let weld = ctx.weld(e1, e2, &normal, || weld_equation::lap_root(e1, step, &normal))?;
+    let weld = ctx.weld(e1, e2, &normal, groove_depth_mm, || weld_equation::lap_root(e1, step, &normal))?;
     let extent = |k: usize| {
         boundaries[k]
             .extent(|s| axes.feature(&s.position))
@@ -276,7 +335,7 @@ pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
     let [(a0, a1), (b0, b1)] = extents;
     tracing::debug!(edge_1_mm = ?[a0, a1], edge_2_mm = ?[b0, b1], "weld edges seen along the seam");
     let (mut s0, mut s1) = (a0.max(b0), a1.min(b1));
-    if ctx.request.joint == JointType::Lap {
+    if layout == Layout::Lap {
         // The root lies a plate thickness below the edges the samples
         // saw; never plan a stretch of it the camera did not see.
         (s0, s1) = ctx.clip_to_view(&weld, s0, s1);
@@ -303,7 +362,7 @@ pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
     let coverage = match beside {
         [Some((a0, a1)), Some((b0, b1))] => {
             let (mut v0, mut v1) = (a0.max(b0), a1.min(b1));
-            if ctx.request.joint == JointType::Lap {
+            if layout == Layout::Lap {
                 (v0, v1) = ctx.clip_to_view(&weld, v0, v1);
             }
             let visible_joint_mm = (v1 - v0).max(0.0);
@@ -320,22 +379,24 @@ pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
     // What the fits say about the seam, against the configured gates: a
     // seam that fails one is refused, unless the gate only warns.
     let quality = quality::measure(&quality::SeamFits {
-        joint: ctx.request.joint,
+        joint,
         fits: &fits,
         degree,
         planes: [&plates[0].plane, &plates[1].plane],
         span: (s0, s1),
         point_spacing_mm: spacing_at(&axes.origin),
         depth_to_support_mm: workpiece.depth_to_support_mm,
+        groove: profile.as_ref(),
     });
     tracing::debug!(?quality, "seam quality");
     let evidence = quality::SeamEvidence {
-        joint: ctx.request.joint,
+        joint,
         quality: &quality,
         edge_fit_rms_mm: fits.each_ref().map(|f| f.rms_mm),
         edge_coverage: Some(edge_coverage),
         coverage: coverage.as_ref(),
         length_mm: s1 - s0,
+        given_groove_depth_mm: ctx.request.groove_depth_mm.filter(|_| joint == JointType::VButt),
     };
     let (warnings, refusals): (Vec<_>, Vec<_>) =
         quality::check(&evidence, &config.quality).into_iter().partition(|f| config.quality.warns_only(f.gate));
@@ -348,6 +409,7 @@ pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
     ctx.clock.lap(Stage::Quality);
 
     // 5.1: the waypoints in the robot's base frame.
-    let assessment = SeamAssessment { coverage, quality: Some(quality), warnings };
+    let assessment =
+        SeamAssessment { joint_evidence: Some(joint_evidence), coverage, quality: Some(quality), warnings };
     ctx.finish(Method::Robust, weld, (s0, s1), normal, &fits, assessment)
 }

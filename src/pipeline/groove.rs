@@ -1,0 +1,803 @@
+//! The groove probe: what lies between a butt joint's two weld edges, and
+//! how deep a V-groove is (issue 12, items 3 to 6).
+//!
+//! The paper takes the joint type and the groove depth `d` of Eq. 32,
+//! `f_V = (f_E1 + f_E2) / 2 + d n_V`, on trust: a wrong `d` moves every
+//! waypoint by the difference, and an I-butt planned as a V-butt sinks the
+//! torch into a gap that has no groove. The cloud says which it is. In the
+//! seam's axes (`s` along it, `t` across from the midline of the two
+//! fitted edges, `h` along the plate normal below the edges' mean height),
+//! the points between the edges are:
+//!
+//! - on a V-groove's two bevel faces: `|t| = w - h tan α` for
+//!   `0 <= h <= d`, where `w` is half the groove's opening at the top and
+//!   `α` each face's angle from the normal (half the groove angle); below
+//!   `d` the root faces stand vertical, `|t| = g / 2` for a root gap `g`;
+//! - on a square gap's walls: `|t| = w` at every depth (`α = 0`), or none
+//!   at all where the gap is narrower than the point spacing;
+//! - on a plate standing between the edges (a tee joint's web on its
+//!   flange): far above the plates, `h << 0`, all along the seam.
+//!
+//! So each side's points are fitted as `|t| = c - h tan α` (least squares
+//! after a robust start from the median `|t|` per depth bin, outliers
+//! trimmed): a face at `α` between 10 and 60 degrees is a bevel, one at
+//! nearly zero a wall.
+//!
+//! The depth: where a root gap leaves a root face standing along the
+//! normal below the bevel and the camera sees it, the median `|t|` of each
+//! depth bin runs down the bevel's line and then stays at `g / 2`; the
+//! hinge that fits the bins best splits the two, and the depth is where
+//! the bevel's line meets `|t| = g / 2`. Where no root face is seen (a
+//! camera looking straight down, a zero root gap), the bevel's foot is the
+//! `|t|` of the kept point nearest the midline at each station along the
+//! seam, median over the stations, read on the fitted line: points thin
+//! out towards the bottom of a groove (less light reaches it), so only
+//! the foot, not the spread of depths, says where the face ends. A face
+//! whose lower part the near plate hides from the camera ends higher, and
+//! its foot then lies far from the midline: only a face whose foot comes
+//! within half the widest root gap of the midline is taken to show the
+//! root.
+
+use rayon::prelude::*;
+
+use crate::cloud::{PointCloud, is_valid_point};
+use crate::geometry::{Vec3, vec3};
+use crate::joint::JointType;
+
+use super::refit::SeamCurve;
+
+/// A face between these angles from the plate normal is a bevel: V-groove
+/// bevels are 15 to 45 degrees (groove angles of 30 to 90), and a square
+/// gap's wall, seen through noise, a few degrees at most.
+const MIN_BEVEL_DEG: f64 = 10.0;
+const MAX_BEVEL_DEG: f64 = 60.0;
+
+/// The fewest points a face is fitted from, and the least share of the
+/// seam's stations it must be seen at: a face is seen along the seam, not
+/// in one spot, as spatter or a tack is.
+const MIN_FACE_POINTS: usize = 30;
+const MIN_STATION_SHARE: f64 = 0.3;
+
+/// The stations the seam is cut into to count where something is seen.
+const STATIONS: usize = 32;
+
+/// Points nearer the plates' top than this, in point spacings, are the
+/// plates' own rims and noise, not a face.
+const TOP_MARGIN_SPACINGS: f64 = 1.0;
+/// ... and never nearer than this, mm.
+const MIN_TOP_MARGIN_MM: f64 = 0.3;
+
+/// The deepest groove probed below the plates, mm, when the surface they
+/// rest on is not seen (then the probe stops half a millimetre above it).
+const MAX_PROBE_DEPTH_MM: f64 = 60.0;
+
+/// Something standing this far above the plates between the edges, along
+/// much of the seam, is a plate, not a tack or spatter: a weld bead or a
+/// tack stands 1 to 3 mm proud.
+const STANDING_MIN_MM: f64 = 5.0;
+
+/// The widest root gap a V-groove has, mm: a face whose foot lies further
+/// than half of it from the midline did not show its lower end.
+const MAX_ROOT_GAP_MM: f64 = 4.0;
+
+/// The inlier band of a face fit, in robust sigmas of its residuals, and
+/// its floor in point spacings.
+const TRIM_SIGMA: f64 = 2.5;
+const MIN_BAND_SPACINGS: f64 = 0.5;
+
+/// A face whose direction across the seam lies within this many degrees of
+/// the camera's rays is no face: a face along the rays is edge-on and
+/// invisible, and what lines up with them there is the veil of mixed
+/// pixels a depth jump leaves (depths between the near and the far
+/// surface along one pixel's ray).
+const RAY_ALIGNED_DEG: f64 = 8.0;
+
+/// A point on a surface has other points around it; one of a veil of
+/// mixed pixels has only its own row's neighbours at unrelated depths. The
+/// points between the edges with fewer than this many others within
+/// [`SURFACE_RADIUS_SPACINGS`] are dropped before any fit.
+const MIN_SURFACE_NEIGHBOURS: usize = 4;
+const SURFACE_RADIUS_SPACINGS: f64 = 2.0;
+
+/// A root face is taken as seen below a bevel when at least this many
+/// depth bins (point spacings) of it are, under at least this many of the
+/// bevel, and a hinge fits the bins' medians with at most this share of
+/// one line's squared residual.
+const MIN_ROOT_BINS: usize = 3;
+const MIN_BEVEL_BINS: usize = 3;
+const HINGE_GAIN: f64 = 0.5;
+
+/// How far below a face's foot the opposite plate's shadow may begin and
+/// still be what ends the face, mm: the foot is read to a few tenths.
+const OCCLUSION_MARGIN_MM: f64 = 0.5;
+
+/// The share of the stations along the seam whose bevel foot is taken as
+/// the face's: the groove's bottom is hidden or unlit at some stations
+/// (the camera's rays lean differently along the seam), seen at others.
+const FOOT_QUANTILE: f64 = 0.1;
+
+/// A face fit whose residual RMS exceeds this many point spacings is not a
+/// plane face.
+const MAX_FACE_RMS_SPACINGS: f64 = 1.0;
+
+/// What the probe needs besides the cloud.
+#[derive(Debug, Clone, Copy)]
+pub struct ProbeSetting<'a> {
+    /// The two weld edges, fitted on shared axes (`a` across, `b` along the
+    /// plate normal, away from the camera).
+    pub edges: [&'a SeamCurve; 2],
+    /// The stretch along the seam's feature axis both edges were seen.
+    pub span: (f64, f64),
+    pub point_spacing_mm: f64,
+    /// How far below the plates' top the surface they rest on lies.
+    pub depth_to_support_mm: Option<f64>,
+    /// Where the structured-light projector sits in the camera frame: a
+    /// point it does not light is not measured, so its shadow ends a face
+    /// as the camera's own view does. The camera's origin for a sensor
+    /// without one.
+    pub projector: Vec3,
+}
+
+/// One side's face between the edges.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Face {
+    /// -1 for the side of the first weld edge, +1 for the second's.
+    pub side: i8,
+    /// The points the fit kept.
+    pub points: usize,
+    /// The face's angle from the plate normal, degrees (`α`).
+    pub angle_deg: f64,
+    /// Half the opening at the plates' top, mm (`c`).
+    pub half_opening_mm: f64,
+    /// The fit's RMS residual, mm.
+    pub rms_mm: f64,
+    /// How deep the face goes below the plates' top, mm (from the spread
+    /// of its depths).
+    pub depth_mm: f64,
+    /// How far from the midline its foot lies, mm.
+    pub foot_mm: f64,
+    /// The share of the seam's stations it was seen at.
+    pub station_share: f64,
+    /// Whether the face runs along the camera's rays (a veil, not a face).
+    pub along_rays: bool,
+    /// Whether the camera's rays past the opposite plate's edge meet the
+    /// face at its foot: then the plate hides the face's lower part, and
+    /// the foot is where the view ends, not the root.
+    pub foot_hidden: bool,
+}
+
+impl Face {
+    /// A bevel face: at a groove's angle, as flat as a plate, seen along
+    /// the seam.
+    pub fn is_bevel(&self, spacing_mm: f64) -> bool {
+        (MIN_BEVEL_DEG..=MAX_BEVEL_DEG).contains(&self.angle_deg) && self.is_plane(spacing_mm)
+    }
+
+    /// A square gap's wall: nearly along the normal.
+    pub fn is_wall(&self, spacing_mm: f64) -> bool {
+        self.angle_deg < MIN_BEVEL_DEG && self.is_plane(spacing_mm)
+    }
+
+    fn is_plane(&self, spacing_mm: f64) -> bool {
+        !self.along_rays
+            && self.points >= MIN_FACE_POINTS
+            && self.station_share >= MIN_STATION_SHARE
+            && self.rms_mm <= MAX_FACE_RMS_SPACINGS * spacing_mm
+    }
+
+    /// Whether the face shows the groove's root: its foot comes within
+    /// half the widest root gap of the midline.
+    pub fn reaches_root(&self, spacing_mm: f64) -> bool {
+        !self.foot_hidden && self.foot_mm <= MAX_ROOT_GAP_MM / 2.0 + spacing_mm
+    }
+}
+
+/// Something standing between the edges, above the plates.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Standing {
+    pub points: usize,
+    /// How far above the plates its highest point lies, mm.
+    pub height_mm: f64,
+    /// The share of the seam's stations it was seen at.
+    pub station_share: f64,
+}
+
+/// What lies between a butt joint's edges.
+#[derive(Debug, Clone, PartialEq)]
+pub struct GrooveProfile {
+    pub point_spacing_mm: f64,
+    /// The points between the edges below the plates' top margin.
+    pub points_below: usize,
+    /// The face fitted on each side that had points to fit.
+    pub faces: Vec<Face>,
+    /// A plate standing between the edges, when one does.
+    pub standing: Option<Standing>,
+}
+
+/// What the profile says the joint is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Between {
+    /// Bevel faces: a V-groove.
+    Groove,
+    /// No face, or walls along the normal: a square (I) gap.
+    SquareGap,
+    /// A plate stands between the edges, all along the seam: a tee joint's
+    /// web on its flange, not a butt joint.
+    StandingPlate,
+    /// Points between the edges that fit neither.
+    Unclear,
+}
+
+impl GrooveProfile {
+    pub fn bevels(&self) -> impl Iterator<Item = &Face> {
+        self.faces.iter().filter(|f| f.is_bevel(self.point_spacing_mm))
+    }
+
+    pub fn verdict(&self) -> Between {
+        if self.standing.is_some_and(|s| s.points >= MIN_FACE_POINTS && s.station_share >= MIN_STATION_SHARE) {
+            return Between::StandingPlate;
+        }
+        if self.bevels().next().is_some() {
+            return Between::Groove;
+        }
+        // Walls, veils along the rays, or too little to be a face.
+        let spacing = self.point_spacing_mm;
+        let not_a_face = |f: &Face| {
+            f.along_rays || f.is_wall(spacing) || f.points < MIN_FACE_POINTS || f.station_share < MIN_STATION_SHARE
+        };
+        if self.faces.iter().all(not_a_face) { Between::SquareGap } else { Between::Unclear }
+    }
+
+    /// The groove's angle: both bevels' angles, or twice the one seen.
+    pub fn groove_angle_deg(&self) -> Option<f64> {
+        let angles: Vec<f64> = self.bevels().map(|f| f.angle_deg).collect();
+        match angles.as_slice() {
+            [one] => Some(2.0 * one),
+            [a, b] => Some(a + b),
+            _ => None,
+        }
+    }
+
+    /// The groove's depth below the plates' top, from the bevels that show
+    /// the root, the deeper where both do (a face is only ever seen
+    /// shorter than it is); None when none does.
+    pub fn depth_mm(&self) -> Option<f64> {
+        let spacing = self.point_spacing_mm;
+        self.bevels().filter(|f| f.reaches_root(spacing)).map(|f| f.depth_mm).reduce(f64::max)
+    }
+
+    /// The verdict and its figures in a sentence, for the seam's evidence.
+    pub fn verdict_sentence(&self) -> String {
+        match self.verdict() {
+            Between::Groove => {
+                let angle = self.groove_angle_deg().map_or(String::new(), |a| format!(" of {a:.0}°"));
+                let depth = self.depth_mm().map_or("root not seen".into(), |d| format!("{d:.1} mm deep"));
+                let sides = self.bevels().count();
+                format!("a V-groove{angle}, {depth}, bevel faces seen on {sides} side(s)")
+            }
+            Between::SquareGap => format!("a square gap, no bevel face ({} points below the top)", self.points_below),
+            Between::StandingPlate => "a plate standing between the edges".into(),
+            Between::Unclear => format!("neither bevels nor a square gap ({})", self.describe()),
+        }
+    }
+
+    /// The profile in a sentence, for logs and refusals.
+    pub fn describe(&self) -> String {
+        let mut parts = vec![format!("{} points between the edges below their top", self.points_below)];
+        for f in &self.faces {
+            parts.push(format!(
+                "side {}: {} points at {:.1}° from the normal{}, rms {:.2} mm, {:.1} mm deep{}, seen at {:.0}% of the seam",
+                if f.side < 0 { 1 } else { 2 },
+                f.points,
+                f.angle_deg,
+                if f.along_rays { " along the camera's rays" } else { "" },
+                f.rms_mm,
+                f.depth_mm,
+                if f.foot_hidden { " (below it hidden by the other plate)" } else { "" },
+                100.0 * f.station_share
+            ));
+        }
+        if let Some(s) = &self.standing {
+            parts.push(format!(
+                "{} points up to {:.1} mm above the plates, at {:.0}% of the seam",
+                s.points,
+                s.height_mm,
+                100.0 * s.station_share
+            ));
+        }
+        parts.join("; ")
+    }
+}
+
+/// Why the joint between the edges is not the one requested, or cannot be
+/// told.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum GrooveError {
+    #[error(
+        "a plate stands between the two plates' edges, up to {height_mm:.0} mm above them along {share:.0} % of the \
+         seam: this looks like a tee joint (a web standing on a flange), which is not planned; {profile}"
+    )]
+    LooksLikeTee { height_mm: f64, share: f64, profile: String },
+    #[error(
+        "no groove faces between the weld edges ({profile}): this looks like an I-butt joint, not the V-butt requested"
+    )]
+    LooksLikeIButt { profile: String },
+    #[error(
+        "groove faces between the weld edges ({profile}): this looks like a V-butt joint, not the I-butt requested"
+    )]
+    LooksLikeVButt { profile: String },
+    #[error(
+        "the points between the weld edges are neither a V-groove's faces nor a square gap ({profile}): the joint \
+         type cannot be told; name it in the request"
+    )]
+    Unclear { profile: String },
+}
+
+impl GrooveError {
+    /// Whether the type was left to the planner and could not be told
+    /// (every other error names what the joint looks like).
+    pub fn is_unknown(&self) -> bool {
+        matches!(self, GrooveError::Unclear { .. })
+    }
+}
+
+/// The butt joint the profile shows, checked against the one requested
+/// (None: `auto`). A V-butt joint needs bevel faces between its edges and
+/// an I-butt joint must show none; a plate standing between them is
+/// neither; points that fit nothing are refused only when the planner must
+/// decide, or when a V-groove was requested and its faces are not seen.
+pub fn judge(requested: Option<JointType>, profile: &GrooveProfile) -> Result<JointType, GrooveError> {
+    let described = || profile.describe();
+    match (profile.verdict(), requested) {
+        (Between::StandingPlate, _) => {
+            let s = profile.standing.unwrap_or(Standing { points: 0, height_mm: 0.0, station_share: 0.0 });
+            Err(GrooveError::LooksLikeTee {
+                height_mm: s.height_mm,
+                share: 100.0 * s.station_share,
+                profile: described(),
+            })
+        }
+        (Between::Groove, Some(JointType::IButt)) => Err(GrooveError::LooksLikeVButt { profile: described() }),
+        (Between::Groove, _) => Ok(JointType::VButt),
+        (Between::SquareGap | Between::Unclear, Some(JointType::VButt)) => {
+            Err(GrooveError::LooksLikeIButt { profile: described() })
+        }
+        (Between::SquareGap, _) => Ok(JointType::IButt),
+        (Between::Unclear, Some(joint)) => Ok(joint),
+        (Between::Unclear, None) => Err(GrooveError::Unclear { profile: described() }),
+    }
+}
+
+/// A point between the edges in the seam's axes.
+#[derive(Debug, Clone, Copy)]
+struct Across {
+    /// Along the seam, mm.
+    s: f64,
+    station: usize,
+    /// Signed distance from the midline, positive towards the second edge.
+    t: f64,
+    /// Depth below the edges' mean height, along the normal.
+    h: f64,
+}
+
+/// Probes the points between the two weld edges.
+pub fn probe(cloud: &PointCloud, setting: &ProbeSetting) -> GrooveProfile {
+    let [e1, e2] = setting.edges;
+    let axes = e1.axes;
+    let (s0, s1) = setting.span;
+    let spacing = setting.point_spacing_mm;
+    let top_margin = (TOP_MARGIN_SPACINGS * spacing).max(MIN_TOP_MARGIN_MM);
+    let bottom = setting.depth_to_support_mm.map_or(MAX_PROBE_DEPTH_MM, |d| (d - 0.5).min(MAX_PROBE_DEPTH_MM));
+    let station_len = (s1 - s0) / STATIONS as f64;
+
+    let collected: Vec<Across> = cloud
+        .points()
+        .par_iter()
+        .filter(|p| is_valid_point(p))
+        .filter_map(|p| {
+            let d = vec3(p) - axes.origin;
+            let s = d.dot(&axes.e);
+            if !(s0..s1).contains(&s) {
+                return None;
+            }
+            let (q1, q2) = (e1.at(s) - axes.origin, e2.at(s) - axes.origin);
+            let (a1, a2) = (q1.dot(&axes.a), q2.dot(&axes.a));
+            let half = 0.5 * (a2 - a1).abs();
+            let sign = (a2 - a1).signum();
+            let t = (d.dot(&axes.a) - 0.5 * (a1 + a2)) * sign;
+            // Strictly between the edges: the plates' own boundary points
+            // lie on them.
+            if t.abs() >= half - 0.5 * spacing {
+                return None;
+            }
+            let h = d.dot(&axes.b) - 0.5 * (q1.dot(&axes.b) + q2.dot(&axes.b));
+            let station = (((s - s0) / station_len) as usize).min(STATIONS - 1);
+            (h < -STANDING_MIN_MM || (top_margin..bottom).contains(&h)).then_some(Across { s, station, t, h })
+        })
+        .collect();
+    let collected = on_surfaces(collected, SURFACE_RADIUS_SPACINGS * spacing);
+
+    // The camera's rays at the seam's middle, as a slope across the seam
+    // (dt/dh): the camera sits at the frame's origin.
+    let middle = 0.5 * (s0 + s1);
+    let (q1, q2) = (e1.at(middle), e2.at(middle));
+    let sign = ((q2 - q1).dot(&axes.a)).signum();
+    let slope_from = |eye: Vec3| {
+        let ray = 0.5 * (q1 + q2) - eye;
+        sign * ray.dot(&axes.a) / ray.dot(&axes.b)
+    };
+    let view = Views { camera: slope_from(Vec3::zeros()), projector: slope_from(setting.projector) };
+    let half_opening = 0.5 * (q2 - q1).dot(&axes.a).abs();
+
+    let (above, below): (Vec<Across>, Vec<Across>) = collected.into_iter().partition(|p| p.h < 0.0);
+    let standing = (!above.is_empty()).then(|| Standing {
+        points: above.len(),
+        height_mm: above.iter().map(|p| -p.h).fold(0.0, f64::max),
+        station_share: station_share(&above),
+    });
+    let faces = [-1i8, 1]
+        .into_iter()
+        .filter_map(|side| {
+            let points: Vec<Across> = below.iter().filter(|p| p.t.signum() as i8 == side).copied().collect();
+            fit_face(&points, side, spacing, top_margin, &view, half_opening)
+        })
+        .collect();
+    GrooveProfile { point_spacing_mm: spacing, points_below: below.len(), faces, standing }
+}
+
+/// The share of the stations at least one of `points` lies at.
+fn station_share(points: &[Across]) -> f64 {
+    let mut seen = [false; STATIONS];
+    for p in points {
+        seen[p.station] = true;
+    }
+    seen.iter().filter(|&&s| s).count() as f64 / STATIONS as f64
+}
+
+/// The points with at least [`MIN_SURFACE_NEIGHBOURS`] others within
+/// `radius` (in s, t, h), found through a hash of cells `radius` wide.
+fn on_surfaces(points: Vec<Across>, radius: f64) -> Vec<Across> {
+    use std::collections::HashMap;
+    let cell = |p: &Across| [p.s, p.t, p.h].map(|v| (v / radius).floor() as i64);
+    let mut cells: HashMap<[i64; 3], Vec<usize>> = HashMap::with_capacity(points.len());
+    for (k, p) in points.iter().enumerate() {
+        cells.entry(cell(p)).or_default().push(k);
+    }
+    let r2 = radius * radius;
+    let keep: Vec<bool> = points
+        .par_iter()
+        .map(|p| {
+            let c = cell(p);
+            let mut n = 0;
+            for dc in 0..27i64 {
+                let key = [c[0] + dc % 3 - 1, c[1] + (dc / 3) % 3 - 1, c[2] + dc / 9 - 1];
+                for &k in cells.get(&key).map_or(&[][..], Vec::as_slice) {
+                    let q = &points[k];
+                    let d2 = (p.s - q.s).powi(2) + (p.t - q.t).powi(2) + (p.h - q.h).powi(2);
+                    n += usize::from(d2 <= r2);
+                }
+            }
+            // The point itself is among them.
+            n > MIN_SURFACE_NEIGHBOURS
+        })
+        .collect();
+    points.into_iter().zip(keep).filter_map(|(p, k)| k.then_some(p)).collect()
+}
+
+/// The slopes `dt/dh` of the camera's and the projector's rays at the
+/// seam.
+#[derive(Debug, Clone, Copy)]
+struct Views {
+    camera: f64,
+    projector: f64,
+}
+
+/// Fits one side's points as `|t| = c - h tan α`; `half_opening` is half
+/// the distance between the weld edges.
+fn fit_face(
+    points: &[Across],
+    side: i8,
+    spacing: f64,
+    top_margin: f64,
+    view: &Views,
+    half_opening: f64,
+) -> Option<Face> {
+    if points.len() < 3 {
+        return None;
+    }
+    // A robust start: the median |t| of each depth bin a spacing high,
+    // bins with a few points only, fitted by least squares; the table
+    // seen through a root gap or a stray return then moves one bin, not
+    // the line.
+    let bin_of = |h: f64| ((h - top_margin) / spacing).max(0.0) as usize;
+    let bins = points.iter().map(|p| bin_of(p.h)).max()? + 1;
+    let mut by_bin: Vec<Vec<f64>> = vec![Vec::new(); bins];
+    for p in points {
+        by_bin[bin_of(p.h)].push(p.t.abs());
+    }
+    let medians: Vec<(f64, f64)> = by_bin
+        .iter_mut()
+        .enumerate()
+        .filter(|(_, ts)| ts.len() >= 3)
+        .map(|(k, ts)| {
+            ts.sort_by(f64::total_cmp);
+            (top_margin + (k as f64 + 0.5) * spacing, ts[ts.len() / 2])
+        })
+        .collect();
+    // Below a bevel with a root gap the root face stands along the
+    // normal: fit the bevel above that hinge only, and read the depth
+    // where the two meet.
+    let hinge = root_hinge(&medians, spacing);
+    let above: Vec<Across> = match hinge {
+        Some(h) => points.iter().filter(|p| p.h < h.depth_mm).copied().collect(),
+        None => points.to_vec(),
+    };
+    let start = &medians[..hinge.map_or(medians.len(), |h| h.bins_above)];
+    let mut line = fit_line(start.iter().copied())?;
+    // Then all points within a band of the line, twice.
+    let mut kept: Vec<&Across> = above.iter().collect();
+    for _ in 0..2 {
+        // The residuals' spread by their median, which the outliers do not
+        // move (1.4826 MAD is one sigma of a normal spread).
+        let mut residuals: Vec<f64> = above.iter().map(|p| (p.t.abs() - line.at(p.h)).abs()).collect();
+        let middle = residuals.len() / 2;
+        let mad = *residuals.select_nth_unstable_by(middle, f64::total_cmp).1;
+        let band = (TRIM_SIGMA * 1.4826 * mad).max(MIN_BAND_SPACINGS * spacing);
+        kept = above.iter().filter(|p| (p.t.abs() - line.at(p.h)).abs() <= band).collect();
+        line = fit_line(kept.iter().map(|p| (p.h, p.t.abs())))?;
+    }
+    let depth_mm = match hinge {
+        // The bevel's line meets the root face's |t| = g / 2.
+        Some(h) if line.slope < 0.0 => (h.root_half_gap_mm - line.intercept) / line.slope,
+        // Else where the bevel ends: at each station the kept point
+        // nearest the midline, read on the line by its |t| (the depth
+        // noise lies mostly along h, and a veil of mixed pixels below the
+        // bevel's foot keeps the foot's |t|); the stations where the
+        // groove's bottom is seen best, a low quantile of them.
+        _ => {
+            let mut nearest = [f64::INFINITY; STATIONS];
+            for p in &kept {
+                nearest[p.station] = nearest[p.station].min(p.t.abs());
+            }
+            let mut feet: Vec<f64> = nearest.into_iter().filter(|t| t.is_finite()).collect();
+            let rank = (FOOT_QUANTILE * feet.len() as f64) as usize;
+            let foot = *feet.select_nth_unstable_by(rank, f64::total_cmp).1;
+            (foot - line.intercept) / line.slope
+        }
+    };
+    let slope = -line.slope;
+    let angle = slope.atan();
+    // The face's dt/dh on this side: |t| = c - h tan α, t = side |t|.
+    let face_slope = f64::from(side) * line.slope;
+    let along_rays = (face_slope.atan() - view.camera.atan()).abs().to_degrees() < RAY_ALIGNED_DEG;
+    // A ray past the opposite edge, t = -side w + k h, meets this face,
+    // t = side (c - h tan α), at h_occ; at or above the foot, the opposite
+    // plate hides the face below it from the camera, or shades it from the
+    // projector.
+    let side_f = f64::from(side);
+    let hidden_below = |k: f64| {
+        let towards = k - side_f * line.slope;
+        let h_occ = side_f * (line.intercept + half_opening) / towards;
+        towards.abs() > f64::EPSILON && h_occ > 0.0 && h_occ <= depth_mm + OCCLUSION_MARGIN_MM
+    };
+    let foot_hidden = hidden_below(view.camera) || hidden_below(view.projector);
+    let kept_points: Vec<Across> = kept.iter().map(|p| **p).collect();
+    Some(Face {
+        side,
+        points: kept.len(),
+        angle_deg: angle.to_degrees(),
+        half_opening_mm: line.intercept,
+        // Perpendicular to the face, not along t.
+        rms_mm: line.rms * angle.cos(),
+        depth_mm,
+        foot_mm: line.at(depth_mm),
+        station_share: station_share(&kept_points),
+        along_rays,
+        foot_hidden,
+    })
+}
+
+/// Where a bevel meets the root face below it.
+#[derive(Debug, Clone, Copy)]
+struct Hinge {
+    /// The depth bins above the root face.
+    bins_above: usize,
+    /// The depth the root face starts at (the split between the bins).
+    depth_mm: f64,
+    /// The root face's distance from the midline, mm (half the root gap).
+    root_half_gap_mm: f64,
+}
+
+/// The split of the depth bins' median `|t|` (`(h, |t|)` by increasing
+/// `h`) into a sloping line above and a constant below that fits them far
+/// better than one line does, when the part below is a wall along the
+/// normal at least [`MIN_ROOT_BINS`] bins high.
+fn root_hinge(medians: &[(f64, f64)], spacing: f64) -> Option<Hinge> {
+    let sse_line = |part: &[(f64, f64)]| fit_line(part.iter().copied()).map(|l| l.rms * l.rms * part.len() as f64);
+    let whole = sse_line(medians)?;
+    let mut best: Option<(f64, usize, f64)> = None;
+    for k in MIN_BEVEL_BINS..=medians.len().saturating_sub(MIN_ROOT_BINS) {
+        let (upper, lower) = medians.split_at(k);
+        let Some(line_sse) = sse_line(upper) else { continue };
+        let mean = lower.iter().map(|m| m.1).sum::<f64>() / lower.len() as f64;
+        let wall_sse: f64 = lower.iter().map(|m| (m.1 - mean).powi(2)).sum();
+        // The wall stands along the normal: its |t| barely varies.
+        if wall_sse / lower.len() as f64 > spacing * spacing {
+            continue;
+        }
+        let sse = line_sse + wall_sse;
+        if best.is_none_or(|(b, _, _)| sse < b) {
+            best = Some((sse, k, mean));
+        }
+    }
+    let (sse, k, root_half_gap_mm) = best?;
+    (sse < HINGE_GAIN * whole).then(|| Hinge {
+        bins_above: k,
+        depth_mm: 0.5 * (medians[k - 1].0 + medians[k].0),
+        root_half_gap_mm,
+    })
+}
+
+/// `y = intercept + slope x`, fitted by least squares, and its RMS
+/// residual in y.
+#[derive(Debug, Clone, Copy)]
+struct Line {
+    intercept: f64,
+    slope: f64,
+    rms: f64,
+}
+
+impl Line {
+    fn at(&self, x: f64) -> f64 {
+        self.intercept + self.slope * x
+    }
+}
+
+fn fit_line(points: impl Iterator<Item = (f64, f64)> + Clone) -> Option<Line> {
+    let n = points.clone().count() as f64;
+    if n < 2.0 {
+        return None;
+    }
+    let (mx, my) = points.clone().fold((0.0, 0.0), |(x, y), (px, py)| (x + px / n, y + py / n));
+    let (sxx, sxy) =
+        points.clone().fold((0.0, 0.0), |(xx, xy), (px, py)| (xx + (px - mx) * (px - mx), xy + (px - mx) * (py - my)));
+    if sxx <= f64::EPSILON {
+        return None;
+    }
+    let slope = sxy / sxx;
+    let intercept = my - slope * mx;
+    let rms = (points.map(|(px, py)| (py - intercept - slope * px).powi(2)).sum::<f64>() / n).sqrt();
+    Some(Line { intercept, slope, rms })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::pipeline::refit::SeamAxes;
+
+    fn edge(a: f64) -> SeamCurve {
+        SeamCurve {
+            axes: SeamAxes { origin: Vec3::new(0.0, 0.0, 700.0), e: Vec3::y(), a: Vec3::x(), b: Vec3::z() },
+            coef_a: vec![a, 0.0],
+            coef_b: vec![0.0, 0.0],
+            s_min: -50.0,
+            s_max: 50.0,
+        }
+    }
+
+    /// Points every `step` mm over a profile `z(x)` across the seam (x) and
+    /// along it (y), rows shifted against each other as a camera's pixels
+    /// fall, at 700 mm from the camera.
+    fn cloud_of(profile: impl Fn(f64) -> Option<f64>, half_width: f64, step: f64) -> PointCloud {
+        let mut points = Vec::new();
+        let n = (half_width / step) as i64;
+        let rows = (50.0 / step) as i64;
+        for j in -rows..=rows {
+            for i in -n..=n {
+                let x = i as f64 * step + step * (j as f64 * 0.618).fract();
+                if let Some(depth) = profile(x) {
+                    points.push([x as f32, (j as f64 * step) as f32, (700.0 + depth) as f32]);
+                }
+            }
+        }
+        PointCloud::unorganized(points)
+    }
+
+    fn probed(cloud: &PointCloud, half_opening: f64) -> GrooveProfile {
+        let (e1, e2) = (edge(-half_opening), edge(half_opening));
+        probe(
+            cloud,
+            &ProbeSetting {
+                edges: [&e1, &e2],
+                span: (-45.0, 45.0),
+                point_spacing_mm: 0.2,
+                depth_to_support_mm: Some(20.0),
+                projector: Vec3::zeros(),
+            },
+        )
+    }
+
+    #[test]
+    fn a_v_groove_shows_two_bevels_its_angle_and_depth() {
+        // 60 degrees, 5 mm deep, root gap 1 mm: the bevels reach x = ±0.5.
+        let tan = 30f64.to_radians().tan();
+        let w = 0.5 + 5.0 * tan;
+        let v = |x: f64| {
+            if x.abs() >= w {
+                Some(0.0)
+            } else if x.abs() >= 0.5 {
+                Some((w - x.abs()) / tan)
+            } else {
+                None
+            }
+        };
+        let profile = probed(&cloud_of(v, 10.0, 0.2), w);
+        assert_eq!(profile.verdict(), Between::Groove, "{}", profile.describe());
+        assert!((profile.groove_angle_deg().unwrap() - 60.0).abs() < 1.0, "{}", profile.describe());
+        assert!((profile.depth_mm().unwrap() - 5.0).abs() < 0.2, "{}", profile.describe());
+        // The bevels alone tell the joint: a V-butt, never an I-butt.
+        assert_eq!(judge(None, &profile), Ok(JointType::VButt));
+        assert!(matches!(judge(Some(JointType::IButt), &profile), Err(GrooveError::LooksLikeVButt { .. })));
+    }
+
+    #[test]
+    fn a_square_gap_shows_no_bevel() {
+        let gap = |x: f64| if x.abs() >= 1.5 { Some(0.0) } else { None };
+        let profile = probed(&cloud_of(gap, 10.0, 0.2), 1.5);
+        assert_eq!(profile.verdict(), Between::SquareGap, "{}", profile.describe());
+        assert_eq!(profile.depth_mm(), None);
+        assert_eq!(judge(None, &profile), Ok(JointType::IButt));
+        let err = judge(Some(JointType::VButt), &profile).unwrap_err();
+        assert!(err.to_string().contains("looks like an I-butt joint"), "{err}");
+    }
+
+    #[test]
+    fn a_veil_along_the_rays_is_no_face() {
+        // A square gap whose walls' top edges leave mixed pixels along the
+        // camera's rays: a dense sheet, but along the rays (here the rays
+        // run along the normal, so the veil is at 0 degrees and a wall).
+        // Tilt the rays instead: the seam 200 mm off the optical axis.
+        let mut points = Vec::new();
+        for j in -250..=250 {
+            let y = j as f64 * 0.2;
+            for i in -50..=50 {
+                let x = i as f64 * 0.2 + 0.2 * (j as f64 * 0.618).fract();
+                if x.abs() >= 1.5 {
+                    points.push([(x + 200.0) as f32, y as f32, 700.0]);
+                }
+            }
+            // Mixed pixels from the gap's edge down towards the table, on
+            // the ray through (201.5, y, 700).
+            for k in 1..40 {
+                let f = 1.0 + k as f64 * 0.005;
+                points.push([(201.5 * f) as f32, (y * f) as f32, (700.0 * f) as f32]);
+            }
+        }
+        let cloud = PointCloud::unorganized(points);
+        let axes = SeamAxes { origin: Vec3::new(200.0, 0.0, 700.0), e: Vec3::y(), a: Vec3::x(), b: Vec3::z() };
+        let edge = |a: f64| SeamCurve { axes, coef_a: vec![a, 0.0], coef_b: vec![0.0, 0.0], s_min: -45.0, s_max: 45.0 };
+        let (e1, e2) = (edge(-1.5), edge(1.5));
+        let setting = ProbeSetting {
+            edges: [&e1, &e2],
+            span: (-45.0, 45.0),
+            point_spacing_mm: 0.2,
+            depth_to_support_mm: None,
+            projector: Vec3::zeros(),
+        };
+        let profile = probe(&cloud, &setting);
+        assert!(profile.faces.iter().all(|f| f.along_rays || f.points < MIN_FACE_POINTS), "{}", profile.describe());
+        assert_eq!(profile.verdict(), Between::SquareGap, "{}", profile.describe());
+    }
+
+    #[test]
+    fn a_plate_standing_between_the_edges_is_seen() {
+        let tee = |x: f64| if x.abs() >= 5.0 { Some(0.0) } else { Some(-60.0) };
+        let profile = probed(&cloud_of(tee, 15.0, 0.2), 5.5);
+        assert_eq!(profile.verdict(), Between::StandingPlate, "{}", profile.describe());
+        assert!((profile.standing.unwrap().height_mm - 60.0).abs() < 1e-3);
+        for requested in [None, Some(JointType::VButt), Some(JointType::IButt)] {
+            let err = judge(requested, &profile).unwrap_err();
+            assert!(err.to_string().contains("looks like a tee joint"), "{err}");
+        }
+    }
+}

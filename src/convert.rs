@@ -1,7 +1,8 @@
 //! Conversions between the library's types and the wire protocol's, the
 //! one place where they meet: [`to_proto`] for what leaves the library
-//! (plan reports, plan requests, frames) and [`from_proto`] for what
-//! arrives (requests, joints). Policy (limits, timeouts, which frame) stays
+//! (plan reports, plan requests, frames, the text link's waypoint lines)
+//! and [`from_proto`] for what arrives (requests, joints, the text link's
+//! plan lines). Policy (limits, timeouts, which frame) stays
 //! with the daemon; here a value only changes its form, and a wire value
 //! the library cannot represent is an error naming the field.
 
@@ -205,6 +206,65 @@ pub mod to_proto {
     }
 }
 
+/// The text link's forms of library values: poses in a robot dialect's
+/// convention, and a plan as the waypoint lines a robot pulls.
+pub mod to_text {
+    use weldseam_proto::text::{Dialect, PointKind, Reply};
+
+    use crate::geometry::Isometry3;
+    use crate::geometry::conventions::PoseConvention;
+    use crate::pipeline::Plan;
+    use crate::pipeline::trajectory::{Waypoint, backed_off};
+
+    /// How `dialect` writes a pose.
+    pub fn convention(dialect: Dialect) -> PoseConvention {
+        match dialect {
+            Dialect::Ur => PoseConvention::UR,
+            Dialect::Abb => PoseConvention::ABB,
+            Dialect::Kuka => PoseConvention::KUKA,
+            Dialect::Fanuc => PoseConvention::FANUC,
+        }
+    }
+
+    /// A waypoint's numbers in `dialect`'s convention and units.
+    pub fn pose(w: &Waypoint, dialect: Dialect) -> Vec<f64> {
+        let convention = convention(dialect);
+        let iso = Isometry3::from_parts(w.position.into(), w.orientation.into());
+        convention.numbers(&iso)[..convention.numbers_len()].to_vec()
+    }
+
+    /// Every line a robot pulls for `plan`, seam by seam: each seam's
+    /// approach point (`approach_offset_mm` back from its first waypoint
+    /// along the torch axis), its waypoints, its retract point; each line
+    /// counting the lines left after it. A seam without waypoints has no
+    /// lines.
+    pub fn waypoint_lines(plan: &Plan, dialect: Dialect, approach_offset_mm: f64) -> Vec<Reply> {
+        let points: Vec<(u32, PointKind, Waypoint)> = plan
+            .seams
+            .iter()
+            .zip(1u32..)
+            .filter_map(|(seam, number)| Some((seam, number, seam.waypoints.first()?, seam.waypoints.last()?)))
+            .flat_map(|(seam, number, first, last)| {
+                let approach = (number, PointKind::Approach, backed_off(first, approach_offset_mm));
+                let weld = seam.waypoints.iter().map(move |w| (number, PointKind::Weld, *w));
+                let retract = (number, PointKind::Retract, backed_off(last, approach_offset_mm));
+                std::iter::once(approach).chain(weld).chain(std::iter::once(retract))
+            })
+            .collect();
+        let total = points.len() as u64;
+        points
+            .into_iter()
+            .zip(1u64..)
+            .map(|((seam, kind, w), pulled)| Reply::Waypoint {
+                kind,
+                seam,
+                remaining: total - pulled,
+                pose: pose(&w, dialect),
+            })
+            .collect()
+    }
+}
+
 /// Protocol values in the library's form.
 pub mod from_proto {
     use weldseam_proto::message;
@@ -280,6 +340,31 @@ pub mod from_proto {
             PointCloud::organized(meta.width as usize, meta.height as usize, frame.points)?
         };
         Some((cloud, FrameInput { units, cloud_frame }))
+    }
+
+    /// Why a text link plan line has no library form.
+    #[derive(Debug, thiserror::Error)]
+    pub enum TextRequestError {
+        #[error(transparent)]
+        Joint(#[from] crate::joint::UnknownJoint),
+        #[error("pose: {0}")]
+        Pose(#[from] crate::geometry::conventions::PoseError),
+    }
+
+    /// The pipeline's request for a text link plan line in `dialect`: the
+    /// joint by the library's names, the pose read in the dialect's
+    /// convention and carried into the daemon's (`euler`), the groove
+    /// depth from the dialect's length unit into mm.
+    pub fn text_plan_request(
+        line: &weldseam_proto::text::PlanLine,
+        dialect: weldseam_proto::text::Dialect,
+        euler: crate::geometry::pose::EulerConvention,
+    ) -> Result<PlanRequest, TextRequestError> {
+        let joint: JointType = line.joint.parse()?;
+        let convention = super::to_text::convention(dialect);
+        let pose = convention.to_robot_pose(&line.pose, euler)?;
+        let groove_depth_mm = line.groove_depth.map(|d| d * convention.length.mm());
+        Ok(PlanRequest::new(joint, groove_depth_mm, pose))
     }
 
     /// The pipeline's request for a controller's: joint, pose, hand-eye and

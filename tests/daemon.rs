@@ -77,6 +77,7 @@ fn request(id: u64, frame: FrameSelect) -> PlanRequest {
         hand_eye: None,
         start_near: None,
         roi: None,
+        pose_in: None,
     }
 }
 

@@ -21,8 +21,9 @@ pub const MAGIC: [u8; 4] = *b"WSEM";
 /// Version 2 changed PlanRequest and Status and added FrameAck; version 3
 /// added the frame's cloud frame and the request's region of interest;
 /// version 4 added each seam's quality figures and warnings to the plan
-/// reply. See PROTOCOL.md, "Changes from version 3".
-pub const PROTOCOL_VERSION: u16 = 4;
+/// reply; version 5 the request's pose in a convention it names. See
+/// PROTOCOL.md, "Changes from version 4".
+pub const PROTOCOL_VERSION: u16 = 5;
 
 /// Bytes of a message header.
 pub const HEADER_BYTES: usize = 16;
@@ -386,7 +387,7 @@ impl DecodeError {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::message::{ErrorCode, FrameSelect, Roi, Role};
+    use crate::message::{ErrorCode, FrameSelect, PoseIn, Roi, Role};
 
     fn round_trip(msg: Message) {
         let bytes = encode(&msg).unwrap();
@@ -434,6 +435,12 @@ mod tests {
             hand_eye: Some([1.0, 0.0, 0.0, 10.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0]),
             start_near: Some([1.0, 2.0, 3.0]),
             roi: Some(Roi { min_mm: [-10.0, -20.0, 300.0], max_mm: [10.0, 20.0, 900.0], frame: 1 }),
+            pose_in: Some(PoseIn {
+                convention: "kuka_abc".into(),
+                length_unit: 0,
+                angle_unit: 0,
+                values: vec![800.0, 0.0, 500.0, 0.0, 0.0, 180.0],
+            }),
         }));
     }
 
@@ -470,11 +477,12 @@ mod tests {
         assert!(matches!(decode(&bytes, 100), Err(WireError::Framing(FramingError::UnsupportedVersion(9)))));
         bytes[4] = 1;
         let refusal = decode(&bytes, 100).unwrap_err().to_string();
-        assert!(refusal.contains("version 1 is not supported") && refusal.contains("version 4"), "{refusal}");
-        for old in [2, 3] {
+        let speaks = format!("version {PROTOCOL_VERSION}");
+        assert!(refusal.contains("version 1 is not supported") && refusal.contains(&speaks), "{refusal}");
+        for old in [2, 3, 4] {
             bytes[4] = old;
             let refusal = decode(&bytes, 100).unwrap_err().to_string();
-            assert!(refusal.contains(&format!("version {old} is not supported")) && refusal.contains("version 4"));
+            assert!(refusal.contains(&format!("version {old} is not supported")) && refusal.contains(&speaks));
         }
         let big = Header::new(Tag::Frame, 101).to_bytes();
         assert!(matches!(decode(&big, 100), Err(WireError::Framing(FramingError::TooLarge { .. }))));

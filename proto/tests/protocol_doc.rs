@@ -20,7 +20,7 @@ fn hex_dump(bytes: &[u8]) -> String {
 
 fn examples() -> Vec<(&'static str, Message)> {
     vec![
-        ("hello", Message::Hello(Hello { protocol_version: 4, role: Role::Camera, name: "cam-1".into() })),
+        ("hello", Message::Hello(Hello { protocol_version: 5, role: Role::Camera, name: "cam-1".into() })),
         (
             "frame",
             Message::Frame(Frame {
@@ -71,6 +71,7 @@ fn examples() -> Vec<(&'static str, Message)> {
                 hand_eye: None,
                 start_near: Some([700.0, -100.0, 0.0]),
                 roi: None,
+                pose_in: None,
             }),
         ),
         (
@@ -93,6 +94,7 @@ fn examples() -> Vec<(&'static str, Message)> {
                     max_mm: [60.0, 40.0, 600.0],
                     frame: CloudFrame::Camera as u32,
                 }),
+                pose_in: None,
             }),
         ),
         ("error", Message::error(ErrorCode::Busy, Some(5), "busy")),

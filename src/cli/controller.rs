@@ -198,6 +198,7 @@ async fn exchange(args: &ControllerArgs) -> anyhow::Result<()> {
         hand_eye: args.request.hand_eye,
         start_near: args.start_near,
         roi: args.roi.to_library()?.as_ref().map(to_proto::roi),
+        pose_in: None,
     };
     // The daemon bounds the frame wait; allow for it and a slow plan.
     let wait = Duration::from_millis(u64::from(args.timeout_ms).max(10_000)) + Duration::from_secs(120);

@@ -29,6 +29,7 @@ use super::planning::{Accepted, Ask, Failure, Planned, Refusal, accept, fulfil, 
 use super::shutdown::{Shutdown, StopSignal};
 use crate::convert::from_proto::{self, RequestError};
 use crate::convert::to_proto::plan_result;
+use crate::geometry::pose::EulerConvention;
 
 type Writer = Arc<Mutex<MessageWriter<tokio::net::tcp::OwnedWriteHalf>>>;
 
@@ -56,7 +57,7 @@ pub async fn serve(mut conn: Connection, state: Arc<ServerState>, mut shutdown: 
                 Message::PlanRequest(request) => {
                     let arrived = Instant::now();
                     let request_id = request.request_id;
-                    let accepted = match ask(&request) {
+                    let accepted = match ask(&request, state.config.euler) {
                         Ok(ask) => accept(ask, arrived, &state, &places),
                         Err(refusal) => Err(refused(request_id, refusal, &state)),
                     };
@@ -115,12 +116,16 @@ pub async fn serve(mut conn: Connection, state: Arc<ServerState>, mut shutdown: 
 }
 
 /// The library's request and the daemon's options for a wire request.
-fn ask(r: &message::PlanRequest) -> Result<Ask, Refusal> {
-    let request = from_proto::plan_request(r).map_err(|e| match e {
+fn ask(r: &message::PlanRequest, euler: EulerConvention) -> Result<Ask, Refusal> {
+    let request = from_proto::plan_request(r, euler).map_err(|e| match e {
         RequestError::UnknownJoint(_) => (ErrorCode::UnknownJoint, e.to_string()),
-        RequestError::HandEye(_) | RequestError::StartNear(_) | RequestError::RoiFrame(_) | RequestError::Roi(_) => {
-            (ErrorCode::BadRequest, e.to_string())
-        }
+        RequestError::HandEye(_)
+        | RequestError::StartNear(_)
+        | RequestError::RoiFrame(_)
+        | RequestError::Roi(_)
+        | RequestError::PoseConvention(_)
+        | RequestError::PoseUnit { .. }
+        | RequestError::Pose(_) => (ErrorCode::BadRequest, e.to_string()),
     })?;
     let wanted = match r.frame {
         FrameSelect::Trigger => Wanted::Trigger,

@@ -331,6 +331,9 @@ async fn play_the_urscript_example(cell: &Cell, sim: &Simulation) {
 #[tokio::test]
 async fn malformed_lines_get_an_error_line_and_the_session_goes_on() {
     let cell = Cell::start(config()).await;
+    // Another robot's session, open all along, is not disturbed.
+    let mut bystander = robot(&cell).await;
+    assert_eq!(bystander.ask("HELLO,abb").await.unwrap(), "0,1,0\r\n");
     let mut robot = robot(&cell).await;
     let code = |reply: &str| reply.split(',').next().unwrap().trim_start_matches('(').to_string();
     // Before the dialect: a plan line is refused, in the neutral form.
@@ -364,7 +367,8 @@ async fn malformed_lines_get_an_error_line_and_the_session_goes_on() {
     robot.send("PING", "").await.unwrap();
     assert_eq!(robot.recv().await.unwrap(), "(-4,0,0)\n");
     assert_eq!(robot.ask("PING").await.unwrap(), "(0,0,0)\n");
-    drop(robot);
+    assert_eq!(bystander.ask("PING").await.unwrap(), "0,0,0\r\n");
+    drop((robot, bystander));
     assert_eq!(cell.shutdown().await, Stopped::Clean);
 }
 

@@ -93,6 +93,24 @@ pub fn run(args: &ControllerArgs) -> anyhow::Result<()> {
 
 /// One robot session on the text link, printed line by line.
 async fn text_session(args: &ControllerArgs, dialect: Dialect) -> anyhow::Result<()> {
+    // A text plan line carries the joint, the pose and the groove depth;
+    // the rest is the daemon's configuration.
+    let r = &args.request;
+    let unsent = [
+        ("--step", r.step.is_some()),
+        ("--work-angle", r.work_angle.is_some()),
+        ("--travel-angle", r.travel_angle.is_some()),
+        ("--hand-eye", r.hand_eye.is_some()),
+        ("--roi", args.roi.roi.is_some()),
+        ("--camera", args.camera.is_some()),
+        ("--start-near", args.start_near.is_some()),
+        ("--json", args.json),
+    ];
+    if let Some((flag, _)) = unsent.iter().find(|(_, given)| *given) {
+        anyhow::bail!(
+            "{flag} has no field on the text link; its plan lines carry the joint, the pose and the groove depth"
+        );
+    }
     let addr = args.connect.clone().unwrap_or_else(|| "127.0.0.1:7303".into());
     let wait = Duration::from_millis(u64::from(args.timeout_ms).max(10_000)) + Duration::from_secs(120);
     let mut robot = TextRobot::connect(&addr, wait).await.map_err(explain)?;

@@ -230,6 +230,9 @@ fn error(code: ErrorCode, reason: impl Into<String>, numbers: usize) -> Reply {
     Reply::Error { code: code.code(), reason: reason.into(), numbers }
 }
 
+/// Serves one robot session until the robot leaves, the session idles out
+/// or the daemon stops (a plan in flight is answered first), holding its
+/// slot of the link throughout.
 async fn serve(stream: TcpStream, state: Arc<ServerState>, mut shutdown: Shutdown, slot: OwnedSemaphorePermit) {
     let _slot = slot;
     let _counted = state.metrics.link_connection_opened(LINK);

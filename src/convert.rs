@@ -1,7 +1,8 @@
 //! Conversions between the library's types and the wire protocol's, the
 //! one place where they meet: [`to_proto`] for what leaves the library
-//! (plan reports, plan requests, frames) and [`from_proto`] for what
-//! arrives (requests, joints). Policy (limits, timeouts, which frame) stays
+//! (plan reports, plan requests, frames, the text link's waypoint lines)
+//! and [`from_proto`] for what arrives (requests, joints, the text link's
+//! plan lines). Policy (limits, timeouts, which frame) stays
 //! with the daemon; here a value only changes its form, and a wire value
 //! the library cannot represent is an error naming the field.
 
@@ -162,6 +163,7 @@ pub mod to_proto {
             }),
             start_near: request.start_near.map(|p| arr(&p)),
             roi: request.roi.as_ref().map(roi),
+            pose_in: None,
         }
     }
 
@@ -213,6 +215,65 @@ pub mod to_proto {
     }
 }
 
+/// The text link's forms of library values: poses in a robot dialect's
+/// convention, and a plan as the waypoint lines a robot pulls.
+pub mod to_text {
+    use weldseam_proto::text::{Dialect, PointKind, Reply};
+
+    use crate::geometry::Isometry3;
+    use crate::geometry::conventions::PoseConvention;
+    use crate::pipeline::Plan;
+    use crate::pipeline::trajectory::{Waypoint, backed_off};
+
+    /// How `dialect` writes a pose.
+    pub fn convention(dialect: Dialect) -> PoseConvention {
+        match dialect {
+            Dialect::Ur => PoseConvention::UR,
+            Dialect::Abb => PoseConvention::ABB,
+            Dialect::Kuka => PoseConvention::KUKA,
+            Dialect::Fanuc => PoseConvention::FANUC,
+        }
+    }
+
+    /// A waypoint's numbers in `dialect`'s convention and units.
+    pub fn pose(w: &Waypoint, dialect: Dialect) -> Vec<f64> {
+        let convention = convention(dialect);
+        let iso = Isometry3::from_parts(w.position.into(), w.orientation.into());
+        convention.numbers(&iso)[..convention.numbers_len()].to_vec()
+    }
+
+    /// Every line a robot pulls for `plan`, seam by seam: each seam's
+    /// approach point (`approach_offset_mm` back from its first waypoint
+    /// along the torch axis), its waypoints, its retract point; each line
+    /// counting the lines left after it. A seam without waypoints has no
+    /// lines.
+    pub fn waypoint_lines(plan: &Plan, dialect: Dialect, approach_offset_mm: f64) -> Vec<Reply> {
+        let points: Vec<(u32, PointKind, Waypoint)> = plan
+            .seams
+            .iter()
+            .zip(1u32..)
+            .filter_map(|(seam, number)| Some((seam, number, seam.waypoints.first()?, seam.waypoints.last()?)))
+            .flat_map(|(seam, number, first, last)| {
+                let approach = (number, PointKind::Approach, backed_off(first, approach_offset_mm));
+                let weld = seam.waypoints.iter().map(move |w| (number, PointKind::Weld, *w));
+                let retract = (number, PointKind::Retract, backed_off(last, approach_offset_mm));
+                std::iter::once(approach).chain(weld).chain(std::iter::once(retract))
+            })
+            .collect();
+        let total = points.len() as u64;
+        points
+            .into_iter()
+            .zip(1u64..)
+            .map(|((seam, kind, w), pulled)| Reply::Waypoint {
+                kind,
+                seam,
+                remaining: total - pulled,
+                pose: pose(&w, dialect),
+            })
+            .collect()
+    }
+}
+
 /// Protocol values in the library's form.
 pub mod from_proto {
     use weldseam_proto::message;
@@ -220,7 +281,10 @@ pub mod from_proto {
 
     use crate::cloud::PointCloud;
     use crate::geometry::Vec3;
-    use crate::geometry::pose::{HandEyeError, RobotPose, hand_eye_from_rows};
+    use crate::geometry::conventions::{
+        AngleUnit, LengthUnit, PoseConvention, PoseError, RotationForm, UnknownConvention,
+    };
+    use crate::geometry::pose::{EulerConvention, HandEyeError, RobotPose, hand_eye_from_rows};
     use crate::joint::{JointType, RequestedJoint};
     use crate::pipeline::roi::{Roi, RoiError};
     use crate::pipeline::{CloudFrame, PlanRequest, Units};
@@ -246,6 +310,32 @@ pub mod from_proto {
         RoiFrame(u32),
         #[error("roi: {0}")]
         Roi(#[from] RoiError),
+        #[error("pose_in.convention: {0}")]
+        PoseConvention(#[from] UnknownConvention),
+        #[error("pose_in.{field} code {code} is unknown; expected 0 ({}) or 1 ({})", .names[0], .names[1])]
+        PoseUnit { field: &'static str, code: u32, names: [&'static str; 2] },
+        #[error("pose_in: {0}")]
+        Pose(#[from] PoseError),
+    }
+
+    /// The convention a wire pose names.
+    pub fn pose_convention(p: &message::PoseIn) -> Result<PoseConvention, RequestError> {
+        let rotation: RotationForm = p.convention.parse()?;
+        let length = match message::LengthUnit::from_u32(p.length_unit) {
+            Some(message::LengthUnit::Millimetres) => LengthUnit::Millimetres,
+            Some(message::LengthUnit::Metres) => LengthUnit::Metres,
+            None => {
+                return Err(RequestError::PoseUnit { field: "length_unit", code: p.length_unit, names: ["mm", "m"] });
+            }
+        };
+        let angle = match message::AngleUnit::from_u32(p.angle_unit) {
+            Some(message::AngleUnit::Degrees) => AngleUnit::Degrees,
+            Some(message::AngleUnit::Radians) => AngleUnit::Radians,
+            None => {
+                return Err(RequestError::PoseUnit { field: "angle_unit", code: p.angle_unit, names: ["deg", "rad"] });
+            }
+        };
+        Ok(PoseConvention { rotation, length, angle })
     }
 
     pub fn cloud_frame(f: message::CloudFrame) -> CloudFrame {
@@ -290,15 +380,48 @@ pub mod from_proto {
         Some((cloud, FrameInput { units, cloud_frame }))
     }
 
+    /// Why a text link plan line has no library form.
+    #[derive(Debug, thiserror::Error)]
+    pub enum TextRequestError {
+        #[error(transparent)]
+        Joint(#[from] crate::joint::UnknownJoint),
+        #[error("pose: {0}")]
+        Pose(#[from] crate::geometry::conventions::PoseError),
+    }
+
+    /// The pipeline's request for a text link plan line in `dialect`: the
+    /// joint by the library's names, the pose read in the dialect's
+    /// convention and carried into the daemon's (`euler`), the groove
+    /// depth from the dialect's length unit into mm.
+    pub fn text_plan_request(
+        line: &weldseam_proto::text::PlanLine,
+        dialect: weldseam_proto::text::Dialect,
+        euler: crate::geometry::pose::EulerConvention,
+    ) -> Result<PlanRequest, TextRequestError> {
+        let joint: JointType = line.joint.parse()?;
+        let convention = super::to_text::convention(dialect);
+        let pose = convention.to_robot_pose(&line.pose, euler)?;
+        let groove_depth_mm = line.groove_depth.map(|d| d * convention.length.mm());
+        Ok(PlanRequest::new(joint, groove_depth_mm, pose))
+    }
+
     /// The pipeline's request for a controller's: joint, pose, hand-eye and
-    /// the optional overrides. The planner checks their ranges.
-    pub fn plan_request(r: &message::PlanRequest) -> Result<PlanRequest, RequestError> {
+    /// the optional overrides. A pose in a convention of its own
+    /// (`pose_in`) is carried into the daemon's, `euler`. The planner
+    /// checks the ranges.
+    pub fn plan_request(r: &message::PlanRequest, euler: EulerConvention) -> Result<PlanRequest, RequestError> {
         let joint = match r.joint_type() {
             Some(joint) => RequestedJoint::Type(self::joint(joint)),
             None if r.is_auto_joint() => RequestedJoint::Auto,
             None => return Err(RequestError::UnknownJoint(r.joint)),
         };
-        let [x, y, z, rx, ry, rz] = r.pose;
+        let pose = match &r.pose_in {
+            Some(p) => pose_convention(p)?.to_robot_pose(&p.values, euler)?,
+            None => {
+                let [x, y, z, rx, ry, rz] = r.pose;
+                RobotPose { xyz_mm: [x, y, z], angles_deg: [rx, ry, rz] }
+            }
+        };
         let hand_eye = r.hand_eye.as_ref().map(hand_eye_from_rows).transpose()?;
         let start_near = match r.start_near {
             Some(p) if p.iter().all(|v| v.is_finite()) => Some(Vec3::from(p)),
@@ -309,7 +432,7 @@ pub mod from_proto {
         Ok(PlanRequest {
             joint,
             groove_depth_mm: r.groove_depth_mm,
-            pose: RobotPose { xyz_mm: [x, y, z], angles_deg: [rx, ry, rz] },
+            pose,
             hand_eye,
             step_mm: r.step_mm,
             work_angle_deg: r.work_angle_deg,
@@ -326,11 +449,12 @@ pub mod from_proto {
 
 #[cfg(test)]
 mod tests {
-    use weldseam_proto::message::FrameSelect;
+    use weldseam_proto::message::{FrameSelect, PoseIn};
 
     use super::{from_proto, to_proto};
     use crate::geometry::Vec3;
-    use crate::geometry::pose::RobotPose;
+    use crate::geometry::conventions::PoseConvention;
+    use crate::geometry::pose::{EulerConvention, RobotPose};
     use crate::joint::{JointType, RequestedJoint};
     use crate::pipeline::PlanRequest;
 
@@ -342,7 +466,7 @@ mod tests {
         request.start_near = Some(Vec3::new(7.0, 8.0, 9.0));
         let wire = to_proto::plan_request(7, &request, FrameSelect::NextFrame);
         assert_eq!((wire.request_id, wire.frame), (7, FrameSelect::NextFrame));
-        let back = from_proto::plan_request(&wire).unwrap();
+        let back = from_proto::plan_request(&wire, EulerConvention::Zyx).unwrap();
         assert_eq!((back.joint, back.groove_depth_mm, back.step_mm), (JointType::VButt.into(), Some(4.0), Some(2.5)));
         assert_eq!((back.pose.xyz_mm, back.pose.angles_deg), (pose.xyz_mm, pose.angles_deg));
         assert_eq!(back.start_near, request.start_near);
@@ -351,13 +475,45 @@ mod tests {
         let auto = PlanRequest { joint: RequestedJoint::Auto, groove_depth_mm: None, ..request.clone() };
         let auto_wire = to_proto::plan_request(8, &auto, FrameSelect::NextFrame);
         assert_eq!(auto_wire.joint, weldseam_proto::message::joint_code::AUTO);
-        assert_eq!(from_proto::plan_request(&auto_wire).unwrap().joint, RequestedJoint::Auto);
+        assert_eq!(from_proto::plan_request(&auto_wire, EulerConvention::Zyx).unwrap().joint, RequestedJoint::Auto);
 
         let mut unknown = wire.clone();
         unknown.joint = 9;
-        assert!(from_proto::plan_request(&unknown).unwrap_err().to_string().contains("joint code 9"));
+        assert!(
+            from_proto::plan_request(&unknown, EulerConvention::Zyx).unwrap_err().to_string().contains("joint code 9")
+        );
         let mut far = wire;
         far.start_near = Some([f64::NAN, 0.0, 0.0]);
-        assert!(from_proto::plan_request(&far).unwrap_err().to_string().contains("start_near"));
+        assert!(from_proto::plan_request(&far, EulerConvention::Zyx).unwrap_err().to_string().contains("start_near"));
+    }
+
+    #[test]
+    fn a_pose_in_any_convention_reads_as_the_daemons() {
+        let pose = RobotPose { xyz_mm: [800.0, -35.0, 556.0], angles_deg: [174.68, 2.24, 18.09] };
+        let mut wire = to_proto::plan_request(1, &PlanRequest::new(JointType::Lap, None, pose), FrameSelect::Trigger);
+        let iso = pose.to_isometry(EulerConvention::Zyx);
+        for (name, length_unit, angle_unit, convention) in [
+            ("kuka_abc", 0, 0, PoseConvention::KUKA),
+            ("rotation_vector", 1, 1, PoseConvention::UR),
+            ("quaternion_wxyz", 0, 0, PoseConvention::ABB),
+        ] {
+            let values = convention.numbers(&iso)[..convention.numbers_len()].to_vec();
+            wire.pose = [0.0; 6];
+            wire.pose_in = Some(PoseIn { convention: name.into(), length_unit, angle_unit, values });
+            // Read into the daemon's convention, whichever it is.
+            for euler in [EulerConvention::Zyx, EulerConvention::Xyz] {
+                let back = from_proto::plan_request(&wire, euler).unwrap().pose.to_isometry(euler);
+                assert!((back.to_homogeneous() - iso.to_homogeneous()).norm() < 1e-9, "{name} as {euler:?}");
+            }
+        }
+        let bad = |convention: &str, length_unit: u32, values: Vec<f64>| {
+            let mut w = wire.clone();
+            w.pose_in = Some(PoseIn { convention: convention.into(), length_unit, angle_unit: 0, values });
+            from_proto::plan_request(&w, EulerConvention::Zyx).unwrap_err().to_string()
+        };
+        assert!(bad("zyz", 0, vec![0.0; 6]).contains("pose_in.convention"));
+        assert!(bad("kuka_abc", 7, vec![0.0; 6]).contains("pose_in.length_unit code 7"));
+        assert!(bad("kuka_abc", 0, vec![0.0; 5]).contains("6 numbers, got 5"));
+        assert!(bad("kuka_abc", 0, vec![0.0, 0.0, f64::NAN, 0.0, 0.0, 0.0]).contains("not finite"));
     }
 }

@@ -272,6 +272,7 @@ struct ServeProcess {
     child: std::process::Child,
     camera: String,
     controller: String,
+    text: String,
 }
 
 impl ServeProcess {
@@ -280,7 +281,7 @@ impl ServeProcess {
         use std::io::BufRead;
         let mut child = Command::new(env!("CARGO_BIN_EXE_weldseam"))
             .args(["--log-format", "json", "serve", "--camera-listen", "127.0.0.1:0"])
-            .args(["--controller-listen", "127.0.0.1:0"])
+            .args(["--controller-listen", "127.0.0.1:0", "--text-listen", "127.0.0.1:0"])
             .env_remove("RUST_LOG")
             .stdin(std::process::Stdio::null())
             .stdout(std::process::Stdio::null())
@@ -296,11 +297,11 @@ impl ServeProcess {
                 let fields = &v["fields"];
                 if fields["message"] == "listening" {
                     let addr = |k: &str| fields[k].as_str().unwrap_or_default().to_string();
-                    let _ = tx.send((addr("camera"), addr("controller")));
+                    let _ = tx.send((addr("camera"), addr("controller"), addr("text")));
                 }
             }
         });
-        let (camera, controller) = match rx.recv_timeout(std::time::Duration::from_secs(60)) {
+        let (camera, controller, text) = match rx.recv_timeout(std::time::Duration::from_secs(60)) {
             Ok(addrs) => addrs,
             Err(_) => {
                 let _ = child.kill();
@@ -309,7 +310,8 @@ impl ServeProcess {
         };
         assert!(camera.starts_with("127.0.0.1:") && !camera.ends_with(":0"), "{camera}");
         assert!(controller.starts_with("127.0.0.1:") && !controller.ends_with(":0"), "{controller}");
-        ServeProcess { child, camera, controller }
+        assert!(text.starts_with("127.0.0.1:") && !text.ends_with(":0"), "{text}");
+        ServeProcess { child, camera, controller, text }
     }
 
     /// SIGTERM, then the exit status within a generous deadline.
@@ -342,7 +344,8 @@ fn wait_at_most(child: &mut std::process::Child, limit: std::time::Duration) -> 
 
 /// The cell as three processes: `serve` on ephemeral ports, a `camera`
 /// serving a simulated frame on trigger, and `controller` asking for its
-/// plan and pinging; then SIGTERM stops the daemon cleanly.
+/// plan and pinging, on the binary link and as a robot program on the
+/// text link; then SIGTERM stops the daemon cleanly.
 #[test]
 fn serve_camera_and_controller_run_as_processes() {
     let dir = tempfile::tempdir().unwrap();
@@ -372,6 +375,8 @@ fn serve_camera_and_controller_run_as_processes() {
 
     let pose = format!("--pose={}", pose_of(&truth));
     let plan = weldseam(&["controller", "--connect", &serve.controller, "--joint", "i_butt", &pose, "--json"]);
+    let text =
+        weldseam(&["controller", "--text", "--dialect", "kuka", "--connect", &serve.text, "--joint", "i_butt", &pose]);
     let _ = camera.kill();
     let _ = camera.wait();
     assert!(plan.status.success(), "controller: {}", String::from_utf8_lossy(&plan.stderr));
@@ -380,6 +385,17 @@ fn serve_camera_and_controller_run_as_processes() {
     let seam = &reply["result"]["seams"][0];
     assert_eq!(seam["joint"], "i_butt");
     assert!(seam["waypoints"].as_array().is_some_and(|w| w.len() >= 10), "{reply}");
+    // The text session: hello, trigger, and every waypoint line pulled,
+    // approach first and retract last.
+    let session = String::from_utf8_lossy(&text.stdout);
+    assert!(text.status.success(), "controller --text: {session}{}", String::from_utf8_lossy(&text.stderr));
+    let lines: Vec<&str> = session.lines().collect();
+    assert_eq!(lines[..2], ["> HELLO,kuka", "< 0,1,0"], "{session}");
+    assert!(lines[2].starts_with("> TRIGGER,i_butt,") && lines[3].starts_with("< 0,1,"), "{session}");
+    let pulled: Vec<&str> =
+        lines.iter().filter(|l| l.starts_with("< ") && l.matches(',').count() == 8).copied().collect();
+    assert_eq!(pulled.len(), seam["waypoints"].as_array().unwrap().len() + 2, "{session}");
+    assert!(pulled[0].starts_with("< 1,1,") && pulled[pulled.len() - 1].starts_with("< 3,1,0,"), "{session}");
 
     let status = serve.terminate();
     assert!(status.success(), "serve exited with {status}");

@@ -23,7 +23,7 @@ use weldseam::server::Stopped;
 use crate::util::Cell;
 use weldseam::sim::{Simulation, demo_scene, simulate};
 use weldseam_proto::frame::{self, HEADER_BYTES, Header};
-use weldseam_proto::message::{FrameSelect, Hello, PlanReply, PlanRequest, Role, Tag, Trigger, joint_code};
+use weldseam_proto::message::{FrameSelect, Hello, PlanReply, PlanRequest, PoseIn, Role, Tag, Trigger, joint_code};
 use weldseam_proto::{ErrorCode, Message, PROTOCOL_VERSION};
 
 const WAIT: Duration = Duration::from_secs(60);
@@ -77,6 +77,7 @@ fn request(id: u64, frame: FrameSelect) -> PlanRequest {
         hand_eye: None,
         start_near: None,
         roi: None,
+        pose_in: None,
     }
 }
 
@@ -358,6 +359,25 @@ async fn bad_controller_input_gets_typed_errors() {
     raw.expect_error(ErrorCode::BadRequest).await;
     raw.send(&Message::PlanRequest(request(5, FrameSelect::FrameId(42)))).await;
     raw.expect_error(ErrorCode::UnknownFrame).await;
+    // A pose in a convention of its own: read (so the request gets as far
+    // as the frame it names), or refused naming the field.
+    let kuka = PoseIn {
+        convention: "kuka_abc".into(),
+        length_unit: 0,
+        angle_unit: 0,
+        values: vec![800.0, 0.0, 500.0, 0.0, 0.0, 180.0],
+    };
+    let in_kuka = PlanRequest { pose_in: Some(kuka.clone()), ..request(7, FrameSelect::FrameId(42)) };
+    raw.send(&Message::PlanRequest(in_kuka)).await;
+    raw.expect_error(ErrorCode::UnknownFrame).await;
+    for bad in [
+        PoseIn { convention: "zyz".into(), ..kuka.clone() },
+        PoseIn { angle_unit: 3, ..kuka.clone() },
+        PoseIn { values: vec![800.0, 0.0, 500.0], ..kuka.clone() },
+    ] {
+        raw.send(&Message::PlanRequest(PlanRequest { pose_in: Some(bad), ..request(8, FrameSelect::Trigger) })).await;
+        raw.expect_error(ErrorCode::BadRequest).await;
+    }
     raw.send(&Message::Trigger(Trigger { trigger_id: 1 })).await;
     raw.expect_error(ErrorCode::UnexpectedMessage).await;
     raw.ping().await;

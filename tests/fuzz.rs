@@ -20,7 +20,7 @@ use weldseam::server::connection::{MessageDeadline, MessageReader};
 use weldseam_proto::frame::{self, HEADER_BYTES, Header};
 use weldseam_proto::message::{
     ErrorCode, FRAME_META_BYTES, Frame, FrameAck, FrameMeta, FrameSelect, Hello, HelloAck, POINT_BYTES, PlanRequest,
-    Roi, Role, Status, Tag, Trigger,
+    PoseIn, Roi, Role, Status, Tag, Trigger,
 };
 use weldseam_proto::{Message, PROTOCOL_VERSION};
 
@@ -167,6 +167,12 @@ fn valid_messages() -> Vec<Vec<u8>> {
             hand_eye: Some([1.0, 0.0, 0.0, 76.0, 0.0, 1.0, 0.0, -84.0, 0.0, 0.0, 1.0, 100.0, 0.0, 0.0, 0.0, 1.0]),
             start_near: Some([900.0, -100.0, -250.0]),
             roi: Some(Roi { min_mm: [-50.0, -40.0, 300.0], max_mm: [50.0, 40.0, 700.0], frame: 0 }),
+            pose_in: Some(PoseIn {
+                convention: "quaternion_wxyz".into(),
+                length_unit: 0,
+                angle_unit: 0,
+                values: vec![800.0, 0.0, 500.0, 0.0, 1.0, 0.0, 0.0],
+            }),
         }),
     ];
     messages.iter().map(|m| frame::encode(m).unwrap()).collect()

@@ -16,6 +16,7 @@ mod pipeline;
 mod quality;
 mod requests;
 mod roi;
+mod text_link;
 mod units_frames;
 mod unorganized;
 mod util;

@@ -21,8 +21,9 @@ pub const MAGIC: [u8; 4] = *b"WSEM";
 /// Version 2 changed PlanRequest and Status and added FrameAck; version 3
 /// added the frame's cloud frame and the request's region of interest;
 /// version 4 added each seam's quality figures and warnings to the plan
-/// reply; version 5 added `auto` joints, each seam's joint evidence and
-/// the measured groove. See PROTOCOL.md, "Changes from version 4".
+/// reply; version 5 added `auto` joints, each seam's joint evidence, the
+/// measured groove and the request's pose in a convention it names. See
+/// PROTOCOL.md, "Changes from version 4".
 pub const PROTOCOL_VERSION: u16 = 5;
 
 /// Bytes of a message header.
@@ -387,7 +388,7 @@ impl DecodeError {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::message::{ErrorCode, FrameSelect, Roi, Role};
+    use crate::message::{ErrorCode, FrameSelect, PoseIn, Roi, Role};
 
     fn round_trip(msg: Message) {
         let bytes = encode(&msg).unwrap();
@@ -435,6 +436,12 @@ mod tests {
             hand_eye: Some([1.0, 0.0, 0.0, 10.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0]),
             start_near: Some([1.0, 2.0, 3.0]),
             roi: Some(Roi { min_mm: [-10.0, -20.0, 300.0], max_mm: [10.0, 20.0, 900.0], frame: 1 }),
+            pose_in: Some(PoseIn {
+                convention: "kuka_abc".into(),
+                length_unit: 0,
+                angle_unit: 0,
+                values: vec![800.0, 0.0, 500.0, 0.0, 0.0, 180.0],
+            }),
         }));
     }
 

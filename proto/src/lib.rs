@@ -8,10 +8,13 @@
 //!   tags and error codes.
 //! - [`frame`]: the message header, the bincode configuration and the
 //!   encoding of bodies; see PROTOCOL.md for every byte.
+//! - [`text`]: the text controller link's lines, which robot programs
+//!   read with their own primitives; see ROBOTS.md.
 
 pub mod frame;
 pub mod message;
 pub mod plan;
+pub mod text;
 
 pub use frame::{MAX_CONTROL_MESSAGE_BYTES, PROTOCOL_VERSION};
 pub use message::{ErrorCode, Message};

@@ -250,7 +250,7 @@ pub struct PlanRequest {
     /// `quality.max_groove_depth_difference_mm`).
     pub groove_depth_mm: Option<f64>,
     /// Flange pose at capture: x, y, z in mm, rx, ry, rz in degrees, in the
-    /// daemon's configured Euler convention.
+    /// daemon's configured Euler convention; ignored when `pose_in` is given.
     pub pose: [f64; 6],
     /// Waypoint spacing, mm; the configured one when absent.
     pub step_mm: Option<f64>,
@@ -272,6 +272,60 @@ pub struct PlanRequest {
     /// Only the frame's points inside this box are planned; the daemon's
     /// `pipeline.roi` when absent.
     pub roi: Option<Roi>,
+    /// The flange pose at capture in a convention the request names (a
+    /// controller's own), instead of `pose`.
+    pub pose_in: Option<PoseIn>,
+}
+
+/// A pose written in a named convention and units: the robot's own
+/// numbers, which the daemon converts.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct PoseIn {
+    /// How the rotation is written: `extrinsic_` or `intrinsic_` and the
+    /// three axes in some order (`intrinsic_zyx`), `kuka_abc`, `fanuc_wpr`,
+    /// `rotation_vector`, `quaternion_wxyz`, `quaternion_xyzw`, or the
+    /// config's `zyx` and `xyz`.
+    pub convention: String,
+    /// A [`LengthUnit`] value: 0 millimetres, 1 metres.
+    pub length_unit: u32,
+    /// An [`AngleUnit`] value: 0 degrees, 1 radians; ignored by quaternions.
+    pub angle_unit: u32,
+    /// x, y, z, then the rotation's 3 numbers (4 for a quaternion).
+    pub values: Vec<f64>,
+}
+
+/// Wire values of [`PoseIn::length_unit`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum LengthUnit {
+    Millimetres = 0,
+    Metres = 1,
+}
+
+impl LengthUnit {
+    pub fn from_u32(v: u32) -> Option<Self> {
+        match v {
+            0 => Some(LengthUnit::Millimetres),
+            1 => Some(LengthUnit::Metres),
+            _ => None,
+        }
+    }
+}
+
+/// Wire values of [`PoseIn::angle_unit`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum AngleUnit {
+    Degrees = 0,
+    Radians = 1,
+}
+
+impl AngleUnit {
+    pub fn from_u32(v: u32) -> Option<Self> {
+        match v {
+            0 => Some(AngleUnit::Degrees),
+            1 => Some(AngleUnit::Radians),
+            _ => None,
+        }
+    }
 }
 
 /// A region of interest: an axis-aligned box in the camera or the robot

@@ -78,6 +78,7 @@ fn examples() -> Vec<(&'static str, Message)> {
                 hand_eye: None,
                 start_near: Some([700.0, -100.0, 0.0]),
                 roi: None,
+                pose_in: None,
             }),
         ),
         (
@@ -100,6 +101,7 @@ fn examples() -> Vec<(&'static str, Message)> {
                     max_mm: [60.0, 40.0, 600.0],
                     frame: CloudFrame::Camera as u32,
                 }),
+                pose_in: None,
             }),
         ),
         ("error", Message::error(ErrorCode::Busy, Some(5), "busy")),

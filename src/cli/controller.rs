@@ -1,24 +1,37 @@
 //! `weldseam controller`: a mock robot controller. Sends one plan request
 //! (or a ping) and prints the reply as a table or JSON; an error reply
-//! exits non-zero with its code and message.
+//! exits non-zero with its code and message. With `--text --dialect`, it
+//! plays a robot program on the text link instead, for commissioning: the
+//! hello, a trigger (or plan) line, every waypoint pulled, and the reason
+//! of an error line, each line printed as sent (`>`) and received (`<`).
 
 use std::time::Duration;
 
 use anyhow::Context;
-use weldseam::convert::to_proto;
-use weldseam::geometry::pose::RobotPose;
+use weldseam::convert::{to_proto, to_text};
+use weldseam::geometry::pose::{EulerConvention, RobotPose};
 use weldseam::joint::JointType;
 use weldseam::mock::ClientError;
 use weldseam::mock::controller::ControllerClient;
+use weldseam::mock::text_robot::TextRobot;
 use weldseam_proto::message::{FrameSelect, PlanRequest};
+use weldseam_proto::text::Dialect;
 
 use super::args;
 
 #[derive(Debug, clap::Args)]
 pub struct ControllerArgs {
-    /// The daemon's controller link, host:port.
-    #[arg(long, default_value = "127.0.0.1:7302")]
-    pub connect: String,
+    /// The daemon's controller link, host:port (the text link's with
+    /// --text); 127.0.0.1:7302 (7303 with --text) when absent.
+    #[arg(long)]
+    pub connect: Option<String>,
+    /// Speak the text link, as a robot program does, and print the session.
+    #[arg(long, requires = "dialect")]
+    pub text: bool,
+    /// The robot language on the text link: ur, abb, kuka or fanuc. The
+    /// --pose is converted into its convention and units.
+    #[arg(long, value_parser = dialect)]
+    pub dialect: Option<Dialect>,
     /// Joint type: v-butt, i-butt or lap.
     #[arg(long, required_unless_present = "ping")]
     pub joint: Option<JointType>,
@@ -55,6 +68,10 @@ pub struct ControllerArgs {
     pub ping: bool,
 }
 
+fn dialect(text: &str) -> Result<Dialect, String> {
+    Dialect::from_name(text).ok_or_else(|| format!("expected ur, abb, kuka or fanuc, got {text:?}"))
+}
+
 fn frame_select(text: &str) -> Result<FrameSelect, String> {
     match text {
         "trigger" => Ok(FrameSelect::Trigger),
@@ -68,11 +85,92 @@ fn frame_select(text: &str) -> Result<FrameSelect, String> {
 
 pub fn run(args: &ControllerArgs) -> anyhow::Result<()> {
     let runtime = tokio::runtime::Builder::new_current_thread().enable_all().build().context("cannot start")?;
-    runtime.block_on(exchange(args))
+    match (args.text, args.dialect) {
+        (true, Some(dialect)) => runtime.block_on(text_session(args, dialect)),
+        _ => runtime.block_on(exchange(args)),
+    }
+}
+
+/// One robot session on the text link, printed line by line.
+async fn text_session(args: &ControllerArgs, dialect: Dialect) -> anyhow::Result<()> {
+    // A text plan line carries the joint, the pose and the groove depth;
+    // the rest is the daemon's configuration.
+    let r = &args.request;
+    let unsent = [
+        ("--step", r.step.is_some()),
+        ("--work-angle", r.work_angle.is_some()),
+        ("--travel-angle", r.travel_angle.is_some()),
+        ("--hand-eye", r.hand_eye.is_some()),
+        ("--roi", args.roi.roi.is_some()),
+        ("--camera", args.camera.is_some()),
+        ("--start-near", args.start_near.is_some()),
+        ("--json", args.json),
+    ];
+    if let Some((flag, _)) = unsent.iter().find(|(_, given)| *given) {
+        anyhow::bail!(
+            "{flag} has no field on the text link; its plan lines carry the joint, the pose and the groove depth"
+        );
+    }
+    let addr = args.connect.clone().unwrap_or_else(|| "127.0.0.1:7303".into());
+    let wait = Duration::from_millis(u64::from(args.timeout_ms).max(10_000)) + Duration::from_secs(120);
+    let mut robot = TextRobot::connect(&addr, wait).await.map_err(explain)?;
+    let mut say = async |line: String| -> anyhow::Result<String> {
+        println!("> {line}");
+        let reply = robot.ask(&line).await.map_err(explain)?;
+        print!("< {reply}");
+        Ok(reply)
+    };
+    let hello = say(format!("HELLO,{}", dialect.name())).await?;
+    let failed = |reply: &str| reply.trim_start_matches('(').starts_with('-');
+    if failed(&hello) {
+        say("WHY".into()).await?;
+        anyhow::bail!("the daemon refused the hello");
+    }
+    if args.ping {
+        say("PING".into()).await?;
+        return Ok(());
+    }
+    let (Some(joint), Some(pose)) = (args.joint, args.pose) else {
+        anyhow::bail!("--joint and --pose are required for a plan request");
+    };
+    let convention = to_text::convention(dialect);
+    let numbers = convention.numbers(&pose.to_isometry(EulerConvention::default()));
+    let (position, rotation) = dialect.decimals();
+    let mut fields: Vec<String> = numbers[..convention.numbers_len()]
+        .iter()
+        .enumerate()
+        .map(|(k, v)| format!("{v:.*}", if k < 3 { position } else { rotation }))
+        .collect();
+    if let Some(depth) = args.request.groove_depth {
+        fields.push(format!("{:.*}", position, depth / convention.length.mm()));
+    }
+    let verb = match args.frame {
+        FrameSelect::Trigger => "TRIGGER",
+        FrameSelect::NextFrame => "PLAN",
+        FrameSelect::FrameId(_) => anyhow::bail!("the text link plans a triggered or the next frame, not a frame id"),
+    };
+    let status = say(format!("{verb},{},{}", joint.name(), fields.join(","))).await?;
+    if failed(&status) {
+        say("WHY".into()).await?;
+        anyhow::bail!("the daemon answered an error line");
+    }
+    // The ok line's third number: the waypoint lines to pull.
+    let lines: u64 = status
+        .trim()
+        .trim_matches(['(', ')'])
+        .split(',')
+        .nth(2)
+        .and_then(|n| n.parse().ok())
+        .context("the ok line has no waypoint count")?;
+    for _ in 0..lines {
+        say("NEXT".into()).await?;
+    }
+    Ok(())
 }
 
 async fn exchange(args: &ControllerArgs) -> anyhow::Result<()> {
-    let mut client = ControllerClient::connect(&args.connect, "weldseam-controller").await.map_err(explain)?;
+    let addr = args.connect.clone().unwrap_or_else(|| "127.0.0.1:7302".into());
+    let mut client = ControllerClient::connect(&addr, "weldseam-controller").await.map_err(explain)?;
     if args.ping {
         let s = client.ping(Duration::from_secs(10)).await.map_err(explain)?;
         if args.json {
@@ -118,6 +216,7 @@ async fn exchange(args: &ControllerArgs) -> anyhow::Result<()> {
         hand_eye: args.request.hand_eye,
         start_near: args.start_near,
         roi: args.roi.to_library()?.as_ref().map(to_proto::roi),
+        pose_in: None,
     };
     // The daemon bounds the frame wait; allow for it and a slow plan.
     let wait = Duration::from_millis(u64::from(args.timeout_ms).max(10_000)) + Duration::from_secs(120);

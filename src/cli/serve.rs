@@ -1,4 +1,4 @@
-//! `weldseam serve`: the cell daemon. Binds both links (and the metrics
+//! `weldseam serve`: the cell daemon. Binds its links (and the metrics
 //! endpoint when configured), tells systemd it is ready, serves until
 //! SIGINT or SIGTERM, then lets plans in flight finish within the
 //! configured grace and exits.
@@ -23,6 +23,9 @@ pub struct ServeArgs {
     /// Controller link address, overriding server.controller_listen.
     #[arg(long)]
     pub controller_listen: Option<SocketAddr>,
+    /// Text link address, overriding text_link.listen.
+    #[arg(long)]
+    pub text_listen: Option<SocketAddr>,
 }
 
 /// Completes on SIGINT or SIGTERM.
@@ -44,6 +47,9 @@ pub fn run(args: &ServeArgs) -> anyhow::Result<()> {
     if let Some(a) = args.controller_listen {
         config.server.controller_listen = a;
     }
+    if let Some(a) = args.text_listen {
+        config.text_link.listen = Some(a);
+    }
     let runtime = tokio::runtime::Builder::new_multi_thread()
         .enable_all()
         .thread_name("net")
@@ -60,6 +66,12 @@ async fn serve(config: weldseam::config::Config) -> anyhow::Result<()> {
     let controller = TcpListener::bind(s.controller_listen)
         .await
         .with_context(|| format!("cannot listen on {} (server.controller_listen)", s.controller_listen))?;
+    let text = match config.text_link.listen {
+        Some(addr) => {
+            Some(TcpListener::bind(addr).await.with_context(|| format!("cannot listen on {addr} (text_link.listen)"))?)
+        }
+        None => None,
+    };
     let metrics = match s.metrics_listen {
         Some(addr) => Some(
             TcpListener::bind(addr)
@@ -71,6 +83,7 @@ async fn serve(config: weldseam::config::Config) -> anyhow::Result<()> {
     info!(
         camera = %camera.local_addr()?,
         controller = %controller.local_addr()?,
+        text = text.as_ref().and_then(|t| t.local_addr().ok()).map(|a| a.to_string()).unwrap_or_else(|| "off".into()),
         pipeline_threads = s.pipeline_threads,
         plan_queue_depth = s.plan_queue_depth,
         "listening"
@@ -87,7 +100,7 @@ async fn serve(config: weldseam::config::Config) -> anyhow::Result<()> {
     };
     // The metrics endpoint lives until the links have stopped.
     let metrics = metrics.map(|listener| tokio::spawn(server::metrics::serve(listener, Arc::clone(&state))));
-    let stopped = server::run(camera, controller, shutdown, state).await;
+    let stopped = server::run(server::Listeners { camera, controller, text }, shutdown, state).await;
     if let Some(task) = metrics {
         task.abort();
     }

@@ -4,12 +4,13 @@
 //! changes on the way in have a schema of their own here: [camera] (the
 //! field of view or the intrinsics, either of which may be left out),
 //! [robot] (an Euler convention by name, the hand-eye as 16 numbers) and
-//! [server] (addresses as text, durations in ms). Every struct denies unknown keys,
+//! [server] and [text_link] (addresses as text, durations in ms). Every struct denies unknown keys,
 //! so a misspelt key is an error rather than a silently ignored setting.
 //! Nothing here is validated; see [`super::Config::from_file`] for that.
 
 use serde::Deserialize;
 
+use super::text_link::TextLinkConfig;
 use super::{PaperParams, PipelineParams, QualityParams, RobotLimits, ServerConfig, TrajectoryParams};
 use crate::camera::CameraModel;
 use crate::geometry::pose::{EulerConvention, PAPER_HAND_EYE};
@@ -24,6 +25,7 @@ pub struct ConfigFile {
     pub trajectory: TrajectoryParams,
     pub quality: QualityParams,
     pub server: ServerSection,
+    pub text_link: TextLinkSection,
 }
 
 /// [camera]: the camera model's keys, with the field of view and the
@@ -173,6 +175,39 @@ impl Default for ServerSection {
             max_request_timeout_ms: ms(s.max_request_timeout),
             max_requests_per_connection: s.max_requests_per_connection as u32,
             idle_trim_ms: ms(s.idle_trim),
+        }
+    }
+}
+
+/// [text_link]: the address as text (empty is off), the dialect by name
+/// (empty: the robot names it), durations in whole milliseconds.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields, default)]
+pub struct TextLinkSection {
+    pub listen: String,
+    pub allow: Vec<String>,
+    pub max_connections: u32,
+    pub dialect: String,
+    pub max_line_bytes: u64,
+    pub line_timeout_ms: u64,
+    pub idle_timeout_ms: u64,
+    pub approach_offset_mm: f64,
+}
+
+impl Default for TextLinkSection {
+    /// [`TextLinkConfig::default`] written the file's way.
+    fn default() -> Self {
+        let t = TextLinkConfig::default();
+        let ms = |d: std::time::Duration| d.as_millis() as u64;
+        TextLinkSection {
+            listen: t.listen.map(|a| a.to_string()).unwrap_or_default(),
+            allow: t.allow.iter().map(ToString::to_string).collect(),
+            max_connections: t.max_connections as u32,
+            dialect: t.dialect.map(|d| d.name().to_string()).unwrap_or_default(),
+            max_line_bytes: t.max_line_bytes as u64,
+            line_timeout_ms: ms(t.line_timeout),
+            idle_timeout_ms: ms(t.idle_timeout),
+            approach_offset_mm: t.approach_offset_mm,
         }
     }
 }

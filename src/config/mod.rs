@@ -7,6 +7,7 @@
 //! measured values for the robust method's own settings.
 
 mod file;
+mod text_link;
 
 use std::net::{IpAddr, SocketAddr};
 use std::path::Path;
@@ -21,6 +22,7 @@ use crate::pipeline::CloudFrame;
 use crate::pipeline::roi::Roi;
 
 pub use file::ConfigFile;
+pub use text_link::TextLinkConfig;
 
 /// Which variant of the pipeline runs.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -446,6 +448,8 @@ pub struct Config {
     pub trajectory: TrajectoryParams,
     pub quality: QualityParams,
     pub server: ServerConfig,
+    /// The text controller link robot programs speak directly.
+    pub text_link: TextLinkConfig,
 }
 
 impl Default for Config {
@@ -522,6 +526,7 @@ impl Config {
         f.trajectory.validate()?;
         f.quality.validate()?;
         let server = f.server.validate()?;
+        let text_link = f.text_link.validate()?;
         Ok(Config {
             camera,
             euler,
@@ -532,6 +537,7 @@ impl Config {
             trajectory: f.trajectory,
             quality: f.quality,
             server,
+            text_link,
         })
     }
 }

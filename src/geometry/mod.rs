@@ -1,6 +1,8 @@
 //! Geometry shared by the pipeline, the simulator and the evaluation:
-//! rigid transforms and poses, and least-squares plane and line fits.
+//! rigid transforms and poses, the pose conventions of robot controllers,
+//! and least-squares plane and line fits.
 
+pub mod conventions;
 pub mod fit;
 pub mod pose;
 

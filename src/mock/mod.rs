@@ -1,11 +1,13 @@
 //! Mock peers of the cell daemon, for commissioning and tests: a camera
-//! that pushes frames over the camera link and answers triggers, and a
-//! controller that sends plan requests and pings. They speak the wire
-//! protocol through the same connection type as the daemon.
+//! that pushes frames over the camera link and answers triggers, a
+//! controller that sends plan requests and pings, and a robot program on
+//! the text link. The first two speak the wire protocol through the same
+//! connection type as the daemon.
 
 pub mod camera;
 pub mod controller;
 pub mod load;
+pub mod text_robot;
 
 use weldseam_proto::message::ErrorReply;
 

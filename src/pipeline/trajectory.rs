@@ -124,6 +124,14 @@ pub fn waypoints(
         .collect()
 }
 
+/// The point `offset_mm` back from `w` along its torch axis (tool z points
+/// into the workpiece, so back is out of it), with the same orientation:
+/// where a robot approaches the seam's first waypoint from and retracts
+/// to after its last.
+pub fn backed_off(w: &Waypoint, offset_mm: f64) -> Waypoint {
+    Waypoint { position: w.position - w.orientation * Vec3::z() * offset_mm, orientation: w.orientation }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -176,5 +184,8 @@ mod tests {
         // Camera (2, -50, 700) → rotate 180° about x → (2, 50, -700) → translate.
         assert!((w[0].position - Vec3::new(102.0, -150.0, -400.0)).norm() < 1e-9);
         assert!((w[0].orientation * Vec3::z() - Vec3::new(0.0, 0.0, -1.0)).norm() < 1e-9);
+        // The torch points down (base -z) here, so backing off rises.
+        let above = backed_off(&w[0], 50.0);
+        assert!((above.position - w[0].position - Vec3::new(0.0, 0.0, 50.0)).norm() < 1e-9);
     }
 }

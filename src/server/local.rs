@@ -1,7 +1,7 @@
 //! A daemon in this process on loopback ports the system chooses: the
 //! whole cell for `weldseam demo`, the daemon `weldseam bench` measures,
 //! and the daemon the integration tests talk to. It is [`super::run`] with
-//! listeners bound to 127.0.0.1 port 0 and a stop signal, so every caller
+//! listeners (every link's) bound to 127.0.0.1 port 0 and a stop signal, so every caller
 //! starts and stops it the same way.
 
 use std::net::{Ipv4Addr, SocketAddr};
@@ -46,6 +46,8 @@ pub struct LocalDaemon {
     pub camera_addr: SocketAddr,
     /// Where controllers connect.
     pub controller_addr: SocketAddr,
+    /// Where robot programs connect to the text link.
+    pub text_addr: SocketAddr,
     /// The metrics endpoint, when started with [`LocalDaemon::start_with_metrics`].
     pub metrics_addr: Option<SocketAddr>,
     /// The state the daemon's handlers share: its config, frames and counters.
@@ -77,6 +79,7 @@ impl LocalDaemon {
     async fn start_inner(config: Config, with_metrics: bool) -> Result<Self, StartError> {
         let (camera, camera_addr) = bind_loopback("camera link").await?;
         let (controller, controller_addr) = bind_loopback("controller link").await?;
+        let (text, text_addr) = bind_loopback("text link").await?;
         let metrics_listener = match with_metrics {
             true => Some(bind_loopback("metrics endpoint").await?),
             false => None,
@@ -86,8 +89,18 @@ impl LocalDaemon {
         let metrics =
             metrics_listener.map(|(listener, _)| tokio::spawn(super::metrics::serve(listener, Arc::clone(&state))));
         let (stop, stopped) = oneshot::channel::<()>();
-        let server = tokio::spawn(super::run(camera, controller, stopped, Arc::clone(&state)));
-        Ok(LocalDaemon { camera_addr, controller_addr, metrics_addr, state, stop: Some(stop), server, metrics })
+        let listeners = super::Listeners { camera, controller, text: Some(text) };
+        let server = tokio::spawn(super::run(listeners, stopped, Arc::clone(&state)));
+        Ok(LocalDaemon {
+            camera_addr,
+            controller_addr,
+            text_addr,
+            metrics_addr,
+            state,
+            stop: Some(stop),
+            server,
+            metrics,
+        })
     }
 
     /// Asks the daemon to stop and waits for it: plans in flight finish

@@ -26,8 +26,8 @@ use prometheus_client::registry::Registry;
 use tokio::net::TcpListener;
 use tokio::sync::Semaphore;
 use tracing::{Instrument, debug, info, warn};
+use weldseam_proto::ErrorCode;
 use weldseam_proto::message::Role;
-use weldseam_proto::{ErrorCode, Message};
 
 use super::ServerState;
 
@@ -156,11 +156,10 @@ impl Metrics {
 
     /// Counts a plan request's answer (a plan or an error reply) and the
     /// time since the request arrived.
-    pub fn plan_answered(&self, reply: &Message, since_request: Duration) {
-        let outcome = match reply {
-            Message::PlanReply(_) => "planned",
-            Message::Error(e) => e.code.name(),
-            _ => "other",
+    pub fn plan_answered(&self, outcome: Result<(), ErrorCode>, since_request: Duration) {
+        let outcome = match outcome {
+            Ok(()) => "planned",
+            Err(code) => code.name(),
         };
         self.plans.get_or_create(&OutcomeLabels { outcome }).inc();
         self.reply_seconds.observe(since_request.as_secs_f64());
@@ -183,7 +182,13 @@ impl Metrics {
 
     /// Counts a connection past its Hello until the guard is dropped.
     pub fn connection_opened(&self, role: Role) -> GaugeGuard {
-        let gauge = self.connections.get_or_create_owned(&LinkLabels { link: role.name() });
+        self.link_connection_opened(role.name())
+    }
+
+    /// Counts a connection of the link named `link` (`text` for the text
+    /// controller link) until the guard is dropped.
+    pub fn link_connection_opened(&self, link: &'static str) -> GaugeGuard {
+        let gauge = self.connections.get_or_create_owned(&LinkLabels { link });
         gauge.inc();
         GaugeGuard(gauge)
     }
@@ -275,7 +280,7 @@ mod tests {
     #[test]
     fn the_exposition_names_every_figure() {
         let m = Metrics::new();
-        m.plan_answered(&Message::error(ErrorCode::PlanFailed, Some(1), "no seam"), Duration::from_millis(40));
+        m.plan_answered(Err(ErrorCode::PlanFailed), Duration::from_millis(40));
         m.request_refused(ErrorCode::Busy);
         m.frame_received();
         m.bytes_counter(Role::Camera).inc_by(100);

@@ -1,6 +1,7 @@
 //! The cell daemon: a camera link that receives frames and sends capture
-//! triggers, a controller link that answers plan requests, a frame history
-//! and a bounded plan queue on a dedicated rayon pool.
+//! triggers, a controller link that answers plan requests, a text link
+//! robot programs speak directly ([`text_link`]), a frame history and a
+//! bounded plan queue on a dedicated rayon pool.
 //!
 //! [`run`] takes bound listeners and a shutdown future, so tests serve on
 //! ephemeral loopback ports. Each accepted connection gets its own task
@@ -21,7 +22,9 @@ pub mod idle;
 pub mod jobs;
 pub mod local;
 pub mod metrics;
+mod planning;
 pub mod shutdown;
+pub mod text_link;
 
 use std::collections::{HashMap, VecDeque};
 use std::future::Future;
@@ -126,21 +129,32 @@ pub enum Stopped {
     GraceExpired,
 }
 
-/// Serves both links until `shutdown` completes, then stops accepting,
+/// The bound listeners of the daemon's links.
+#[derive(Debug)]
+pub struct Listeners {
+    pub camera: TcpListener,
+    pub controller: TcpListener,
+    /// The text controller link; None leaves it off.
+    pub text: Option<TcpListener>,
+}
+
+/// Serves every link until `shutdown` completes, then stops accepting,
 /// tells every handler to stop, and waits for them (plans in flight
 /// finish) for at most the configured grace period.
-pub async fn run(
-    camera: TcpListener,
-    controller: TcpListener,
-    shutdown: impl Future,
-    state: Arc<ServerState>,
-) -> Result<Stopped, ServerError> {
+pub async fn run(listeners: Listeners, shutdown: impl Future, state: Arc<ServerState>) -> Result<Stopped, ServerError> {
     let control = ShutdownController::new();
-    let cameras = Acceptor::new(camera, Role::Camera, &state);
-    let controllers = Acceptor::new(controller, Role::Controller, &state);
+    let cameras = Acceptor::new(listeners.camera, Role::Camera, &state);
+    let controllers = Acceptor::new(listeners.controller, Role::Controller, &state);
+    let texts = async {
+        match listeners.text {
+            Some(listener) => text_link::accept_loop(listener, Arc::clone(&state), &control).await,
+            None => std::future::pending().await,
+        }
+    };
     let outcome = tokio::select! {
         r = cameras.run(&control) => r,
         r = controllers.run(&control) => r,
+        r = texts => r,
         _ = shutdown => {
             info!("shutdown requested: no new connections; waiting for plans in flight");
             Ok(())
@@ -240,21 +254,26 @@ impl Acceptor {
         refuse(&self.state, &self.refusal_log, self.role, peer, why, message);
     }
 
-    /// Accepts the next connection, retrying transient errors (such as
-    /// running out of file descriptors) with a growing pause.
     async fn accept(&self) -> Result<(TcpStream, SocketAddr), ServerError> {
-        let mut backoff = Duration::from_millis(50);
-        loop {
-            match self.listener.accept().await {
-                Ok(ok) => return Ok(ok),
-                Err(e) if backoff > Duration::from_secs(5) => {
-                    return Err(ServerError::Accept { link: self.role.name(), source: e });
-                }
-                Err(e) => {
-                    warn!(link = self.role.name(), "accept failed: {e}; retrying in {} ms", backoff.as_millis());
-                    tokio::time::sleep(backoff).await;
-                    backoff *= 2;
-                }
+        accept_with_backoff(&self.listener, self.role.name()).await
+    }
+}
+
+/// Accepts the next connection on `link`, retrying transient errors (such
+/// as running out of file descriptors) with a growing pause.
+async fn accept_with_backoff(
+    listener: &TcpListener,
+    link: &'static str,
+) -> Result<(TcpStream, SocketAddr), ServerError> {
+    let mut backoff = Duration::from_millis(50);
+    loop {
+        match listener.accept().await {
+            Ok(ok) => return Ok(ok),
+            Err(e) if backoff > Duration::from_secs(5) => return Err(ServerError::Accept { link, source: e }),
+            Err(e) => {
+                warn!(link, "accept failed: {e}; retrying in {} ms", backoff.as_millis());
+                tokio::time::sleep(backoff).await;
+                backoff *= 2;
             }
         }
     }

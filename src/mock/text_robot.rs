@@ -1,0 +1,88 @@
+//! A mock robot program on the text link: sends lines as a robot program
+//! does and reads one reply line for each, for `weldseam controller
+//! --text` and the tests. It also reads replies the way the robot
+//! languages do ([`ur_read_ascii_float`]), so a test can hold the daemon's
+//! lines to what a robot can parse.
+
+use std::time::Duration;
+
+use tokio::io::{AsyncBufReadExt, AsyncReadExt, AsyncWriteExt, BufReader};
+use tokio::net::TcpStream;
+use tokio::net::tcp::{OwnedReadHalf, OwnedWriteHalf};
+
+use super::ClientError;
+
+/// The longest reply line read, far above any dialect's.
+const MAX_REPLY_BYTES: u64 = 4096;
+
+/// A robot program's session with the text link.
+#[derive(Debug)]
+pub struct TextRobot {
+    reader: BufReader<OwnedReadHalf>,
+    writer: OwnedWriteHalf,
+    /// How long one reply may take (a plan included).
+    pub wait: Duration,
+}
+
+impl TextRobot {
+    /// Connects to the text link at `addr`.
+    pub async fn connect(addr: &str, wait: Duration) -> Result<Self, ClientError> {
+        let stream =
+            TcpStream::connect(addr).await.map_err(|source| ClientError::Connect { addr: addr.to_string(), source })?;
+        let (read, writer) = stream.into_split();
+        Ok(TextRobot { reader: BufReader::new(read), writer, wait })
+    }
+
+    /// Sends `line` with the terminator `end` (a robot's CR, LF or CR LF).
+    pub async fn send(&mut self, line: &str, end: &str) -> Result<(), ClientError> {
+        let bytes = format!("{line}{end}");
+        self.writer.write_all(bytes.as_bytes()).await.map_err(|e| ClientError::Read(e.into()))
+    }
+
+    /// Reads the next reply line, its terminator included.
+    pub async fn recv(&mut self) -> Result<String, ClientError> {
+        let mut line = Vec::new();
+        let mut limited = (&mut self.reader).take(MAX_REPLY_BYTES);
+        match tokio::time::timeout(self.wait, limited.read_until(b'\n', &mut line)).await {
+            Err(_) => Err(ClientError::Timeout(self.wait.as_millis())),
+            Ok(Err(e)) => Err(ClientError::Read(e.into())),
+            Ok(Ok(0)) => Err(ClientError::Closed),
+            Ok(Ok(_)) => Ok(String::from_utf8_lossy(&line).into_owned()),
+        }
+    }
+
+    /// Sends `line` ended by LF and reads its reply.
+    pub async fn ask(&mut self, line: &str) -> Result<String, ClientError> {
+        self.send(line, "\n").await?;
+        self.recv().await
+    }
+}
+
+/// What URScript's `socket_read_ascii_float(n)` returns for a reply:
+/// `[count, v1, ...]`, or `[0]` when the message is not `(`, up to 30
+/// numbers separated by commas, `)` (it would then be `[0, nan, ...]`).
+pub fn ur_read_ascii_float(reply: &str, n: usize) -> Vec<f64> {
+    let failed = vec![0.0];
+    let Some(body) = reply.trim_end_matches(['\r', '\n']).strip_prefix('(').and_then(|b| b.strip_suffix(')')) else {
+        return failed;
+    };
+    let values: Option<Vec<f64>> =
+        body.split(',').map(|v| v.trim().parse::<f64>().ok().filter(|v| v.is_finite())).collect();
+    match values {
+        Some(values) if values.len() <= weldseam_proto::text::UR_MAX_NUMBERS && values.len() <= n => {
+            std::iter::once(values.len() as f64).chain(values).collect()
+        }
+        _ => failed,
+    }
+}
+
+/// Whether `field` is a number RAPID's `StrToVal` reads into a `num`: an
+/// optional minus, digits, and an optional point with digits.
+pub fn rapid_num(field: &str) -> bool {
+    let digits = field.strip_prefix('-').unwrap_or(field);
+    let (whole, fraction) = digits.split_once('.').unwrap_or((digits, "0"));
+    !whole.is_empty()
+        && !fraction.is_empty()
+        && whole.bytes().all(|b| b.is_ascii_digit())
+        && fraction.bytes().all(|b| b.is_ascii_digit())
+}

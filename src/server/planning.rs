@@ -1,0 +1,259 @@
+//! The plan path both controller links share, the binary one and the text
+//! one: a request is checked (joint, pose, hand-eye, groove depth, step,
+//! angles, timeout), takes one of its connection's request places
+//! (`server.max_requests_per_connection`) and a queue slot (or Busy is
+//! answered at once), and its frame wait is registered at once, so the
+//! instant it arrived is the one the freshness rule uses ([`accept`]).
+//! Then [`fulfil`] waits for the frame, plans it on the pool, counts the
+//! outcome and logs one line with everything an operator needs about it.
+//! The links only read requests and write replies in their own form.
+
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+use tokio::sync::{OwnedSemaphorePermit, Semaphore};
+use tracing::{error, info, warn};
+use weldseam_proto::ErrorCode;
+
+use super::ServerState;
+use super::frames::{FrameError, FrameRequest, FrameWait, StoredFrame, Wanted, wall_clock_us};
+use super::jobs::{JobError, JobSlot, JobTimes};
+use super::shutdown::StopSignal;
+use crate::convert::to_proto::plan_error_code;
+use crate::pipeline::{Plan, PlanRequest};
+
+/// A plan request in the library's form, with what the daemon needs to
+/// serve it: which frame, how long to wait, which camera.
+#[derive(Debug, Clone)]
+pub(crate) struct Ask {
+    /// Echoed in the reply and the log.
+    pub request_id: u64,
+    pub request: PlanRequest,
+    pub wanted: Wanted,
+    /// How long to wait for the frame, ms; 0 is the daemon's default.
+    pub timeout_ms: u32,
+    /// The camera (its Hello name) to use; any when None.
+    pub camera: Option<String>,
+}
+
+/// A request that passed its checks, with its places taken and its frame
+/// wait registered.
+pub(crate) struct Accepted {
+    request_id: u64,
+    request: PlanRequest,
+    wait: FrameWait,
+    timeout: Duration,
+    slot: JobSlot,
+    /// When the request arrived: its frame must be newer.
+    arrived: Instant,
+    _place: OwnedSemaphorePermit,
+}
+
+/// A request refused before it was queued: the code and the reason.
+pub(crate) type Refusal = (ErrorCode, String);
+
+/// Checks a request that arrived at `arrived`, takes its places and
+/// starts its frame wait; a refusal is counted.
+pub(crate) fn accept(
+    ask: Ask,
+    arrived: Instant,
+    state: &ServerState,
+    places: &Arc<Semaphore>,
+) -> Result<Accepted, Refusal> {
+    let request_id = ask.request_id;
+    check_and_reserve(ask, arrived, state, places).map_err(|refusal| refused(request_id, refusal, state))
+}
+
+/// Counts and logs a request refused before it was queued.
+pub(crate) fn refused(request_id: u64, refusal: Refusal, state: &ServerState) -> Refusal {
+    let (code, text) = &refusal;
+    state.metrics.request_refused(*code);
+    warn!(request_id, code = code.name(), outcome = code.name(), "request refused: {text}");
+    refusal
+}
+
+fn check_and_reserve(
+    ask: Ask,
+    arrived: Instant,
+    state: &ServerState,
+    places: &Arc<Semaphore>,
+) -> Result<Accepted, Refusal> {
+    let s = &state.config.server;
+    let bad = |text: String| (ErrorCode::BadRequest, text);
+    let Ask { request_id, request, wanted, timeout_ms, camera } = ask;
+    if camera.as_deref() == Some("") {
+        return Err(bad("camera is an empty name; leave it absent to use any camera".into()));
+    }
+    let max_timeout = s.max_request_timeout;
+    let timeout = match timeout_ms {
+        0 => s.fresh_frame_timeout,
+        ms if u128::from(ms) > max_timeout.as_millis() => {
+            return Err(bad(format!(
+                "timeout_ms {ms} is over the daemon's server.max_request_timeout_ms ({})",
+                max_timeout.as_millis()
+            )));
+        }
+        ms => Duration::from_millis(ms.into()),
+    };
+    state.jobs.planner().check_request(&request).map_err(|e| bad(e.reason))?;
+    let place = Arc::clone(places).try_acquire_owned().map_err(|_| {
+        (
+            ErrorCode::Busy,
+            format!(
+                "this connection already has {} requests waiting or running \
+                 (server.max_requests_per_connection); retry when one is answered",
+                s.max_requests_per_connection
+            ),
+        )
+    })?;
+    let slot = state.jobs.reserve().map_err(|e| (ErrorCode::Busy, e.to_string()))?;
+    let wait =
+        state.frames.request(&FrameRequest::now(wanted, camera)).map_err(|e| (frame_error_code(&e), e.to_string()))?;
+    Ok(Accepted { request_id, request, wait, timeout, slot, arrived, _place: place })
+}
+
+fn frame_error_code(e: &FrameError) -> ErrorCode {
+    match e {
+        FrameError::NoCamera { .. } | FrameError::CameraGone => ErrorCode::NoCamera,
+        FrameError::Timeout { .. } => ErrorCode::FrameTimeout,
+        FrameError::UnknownFrame(_) | FrameError::NotArrived { .. } => ErrorCode::UnknownFrame,
+        FrameError::Stale(_) => ErrorCode::StaleFrame,
+    }
+}
+
+/// Why a request got no plan, as its error reply.
+#[derive(Debug)]
+pub(crate) struct Failure {
+    pub code: ErrorCode,
+    pub text: String,
+}
+
+/// A plan and the frame it was computed from.
+#[derive(Debug)]
+pub(crate) struct Planned {
+    pub frame_id: u64,
+    pub plan: Plan,
+}
+
+/// One request's life after acceptance: the frame, the plan, the count of
+/// its outcome and the one log line about it. The caller writes the reply.
+pub(crate) async fn fulfil(accepted: Accepted, state: &ServerState, mut stop: StopSignal) -> Result<Planned, Failure> {
+    let Accepted { request_id, request, wait, timeout, slot, arrived, _place } = accepted;
+    let fetched = tokio::select! {
+        f = wait.wait(timeout) => f,
+        _ = stop.stopped() => Err(FrameError::CameraGone),
+    };
+    let frame_wait = arrived.elapsed();
+    let mut log = PlanLog { request_id, joint: request.joint.name(), frame_wait, ..PlanLog::default() };
+    let outcome = match fetched {
+        // A camera link closed by the shutdown is not a camera that left.
+        Err(_) if stop.is_stopping() => Err(Failure {
+            code: ErrorCode::ShuttingDown,
+            text: "the daemon is shutting down; no frame will be planned for this request".into(),
+        }),
+        Err(e) => Err(Failure { code: frame_error_code(&e), text: e.to_string() }),
+        Ok(frame) => {
+            log.frame = Some(Arc::clone(&frame));
+            state.idle.touch();
+            // The frame says which units and frame its points are in.
+            let request = PlanRequest { units: frame.input.units, cloud_frame: frame.input.cloud_frame, ..request };
+            let (outcome, times) = slot.run(Arc::clone(&frame.cloud), request).await;
+            state.idle.touch();
+            log.times = times;
+            match outcome {
+                Ok(plan) => {
+                    state.count_plan();
+                    Ok(Planned { frame_id: frame.frame_id, plan })
+                }
+                Err(JobError::Plan(e)) => {
+                    Err(Failure { code: plan_error_code(&e), text: format!("frame {}: {e}", frame.frame_id) })
+                }
+                Err(e @ JobError::Panicked) => {
+                    error!(request_id, frame_id = frame.frame_id, "{e}");
+                    Err(Failure { code: ErrorCode::Internal, text: e.to_string() })
+                }
+            }
+        }
+    };
+    match &outcome {
+        Ok(planned) => log.plan = Some(&planned.plan),
+        Err(Failure { code, text }) => log.failure = Some((*code, text.clone())),
+    }
+    log.latency = arrived.elapsed();
+    log.emit();
+    state.metrics.plan_answered(outcome.as_ref().map(|_| ()).map_err(|f| f.code), arrived.elapsed());
+    outcome
+}
+
+/// The one log line per plan request.
+#[derive(Default)]
+struct PlanLog<'a> {
+    request_id: u64,
+    joint: &'static str,
+    frame: Option<Arc<StoredFrame>>,
+    frame_wait: Duration,
+    times: JobTimes,
+    plan: Option<&'a Plan>,
+    failure: Option<(ErrorCode, String)>,
+    latency: Duration,
+}
+
+impl PlanLog<'_> {
+    fn emit(&self) {
+        let ms = |d: Duration| d.as_secs_f64() * 1e3;
+        let frame_id = self.frame.as_ref().map(|f| f.frame_id);
+        let camera = self.frame.as_ref().map(|f| f.camera.to_string());
+        // Capture to plan start, by the camera's stamp on the daemon's clock.
+        let frame_age_ms = self.frame.as_ref().map(|f| {
+            let planned_us = wall_clock_us().saturating_sub((self.times.planning.as_micros()) as u64);
+            planned_us.saturating_sub(f.capture_time_us) as f64 / 1e3
+        });
+        let seam = self.plan.as_ref().and_then(|p| p.seams.first());
+        let stages = self.plan.as_ref().map(|p| {
+            p.timings.stages.iter().map(|(s, t)| format!("{}={t:.1}", s.name())).collect::<Vec<_>>().join(" ")
+        });
+        let outcome = self.failure.as_ref().map(|(code, _)| code.name()).unwrap_or("planned");
+        let fields = format!(
+            "frame_wait_ms={:.1} queue_ms={:.1} plan_ms={:.1}",
+            ms(self.frame_wait),
+            ms(self.times.queued),
+            ms(self.times.planning)
+        );
+        let detail = self.failure.as_ref().map(|(_, text)| text.as_str()).unwrap_or("");
+        let line = tracing::field::display(detail);
+        if self.failure.is_some() {
+            warn!(
+                request_id = self.request_id,
+                joint = self.joint,
+                frame_id,
+                camera,
+                frame_age_ms,
+                outcome,
+                times = fields,
+                latency_ms = ms(self.latency),
+                reason = line,
+                "plan"
+            );
+        } else {
+            info!(
+                request_id = self.request_id,
+                joint = self.joint,
+                frame_id,
+                camera,
+                frame_age_ms,
+                seams = self.plan.as_ref().map(|p| p.seams.len()),
+                seam_length_mm = seam.map(|s| s.length_mm),
+                waypoints = seam.map(|s| s.waypoints.len()),
+                edge_fit_rms_mm = seam.map(|s| format!("{:.3}/{:.3}", s.edge_fit_rms_mm[0], s.edge_fit_rms_mm[1])),
+                edge_samples = seam.map(|s| format!("{}/{}", s.edge_samples[0], s.edge_samples[1])),
+                edge_samples_dropped =
+                    seam.map(|s| format!("{}/{}", s.edge_samples_dropped[0], s.edge_samples_dropped[1])),
+                stages_ms = stages,
+                outcome,
+                times = fields,
+                latency_ms = ms(self.latency),
+                "plan"
+            );
+        }
+    }
+}

@@ -8,10 +8,13 @@
 //!   tags and error codes.
 //! - [`frame`]: the message header, the bincode configuration and the
 //!   encoding of bodies; see PROTOCOL.md for every byte.
+//! - [`trace`]: the figures of one plan stage by stage, as `plan --debug`
+//!   and the daemon's `[debug]` section write them.
 
 pub mod frame;
 pub mod message;
 pub mod plan;
+pub mod trace;
 
 pub use frame::{MAX_CONTROL_MESSAGE_BYTES, PROTOCOL_VERSION};
 pub use message::{ErrorCode, Message};

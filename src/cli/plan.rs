@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use std::io::Write;
 
 use anyhow::{anyhow, bail};
-use weldseam::convert::to_proto::{plan_error_code, plan_result};
+use weldseam::convert::to_proto::{plan_result, refusal};
 use weldseam::geometry::pose::{RobotPose, hand_eye_from_rows};
 use weldseam::joint::JointType;
 use weldseam::pipeline::{PlanRequest, Planner, Stage};
@@ -79,12 +79,7 @@ pub fn run(args: &PlanArgs) -> anyhow::Result<()> {
             if args.json {
                 // Scripts read why as well as that: the stage, the code a
                 // controller would get and the sentence, on stdout.
-                let refusal = serde_json::json!({ "error": {
-                    "stage": e.stage.name(),
-                    "code": plan_error_code(&e).name(),
-                    "gate": e.gate.map(|g| g.name()),
-                    "message": e.reason,
-                }});
+                let refusal = serde_json::json!({ "error": refusal(&e) });
                 writeln!(out, "{refusal}")?;
             }
             return Err(match e.stage {

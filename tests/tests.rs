@@ -11,6 +11,7 @@ mod hostile_clouds;
 mod measured_clouds;
 mod parsers;
 mod peers;
+mod pictures;
 mod pipeline;
 mod quality;
 mod requests;

@@ -1,5 +1,5 @@
 //! The on-disk schema of config/weldseam.toml. Sections whose values keep
-//! their type (camera, pipeline, paper, trajectory, quality) are the library's own
+//! their type (camera, pipeline, paper, trajectory, quality, debug) are the library's own
 //! parameter structs, deserialized directly; only the three whose type
 //! changes on the way in have a schema of their own here: [camera] (the
 //! field of view or the intrinsics, either of which may be left out),
@@ -10,7 +10,7 @@
 
 use serde::Deserialize;
 
-use super::{PaperParams, PipelineParams, QualityParams, RobotLimits, ServerConfig, TrajectoryParams};
+use super::{DebugParams, PaperParams, PipelineParams, QualityParams, RobotLimits, ServerConfig, TrajectoryParams};
 use crate::camera::CameraModel;
 use crate::geometry::pose::{EulerConvention, PAPER_HAND_EYE};
 
@@ -24,6 +24,7 @@ pub struct ConfigFile {
     pub trajectory: TrajectoryParams,
     pub quality: QualityParams,
     pub server: ServerSection,
+    pub debug: DebugParams,
 }
 
 /// [camera]: the camera model's keys, with the field of view and the

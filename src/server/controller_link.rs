@@ -215,6 +215,8 @@ async fn plan(
     };
     let frame_wait = arrived.elapsed();
     let mut log = PlanLog { request_id, joint: request.joint.name(), frame_wait, ..PlanLog::default() };
+    // The plan's trace and report, for the debug set written after the reply.
+    let (mut traced, mut reported) = (None, None);
     let reply = match fetched {
         // A camera link closed by the shutdown is not a camera that left.
         Err(_) if stop.is_stopping() => Err(Failure {
@@ -227,13 +229,22 @@ async fn plan(
             state.idle.touch();
             // The frame says which units and frame its points are in.
             let request = PlanRequest { units: frame.input.units, cloud_frame: frame.input.cloud_frame, ..request };
-            let (outcome, times) = slot.run(Arc::clone(&frame.cloud), request).await;
+            let cloud = Arc::clone(&frame.cloud);
+            let (outcome, times) = match &state.debug {
+                Some(debug) if debug.ready() => {
+                    let (outcome, trace, times) = slot.run_traced(cloud, request).await;
+                    traced = trace;
+                    (outcome, times)
+                }
+                _ => slot.run(cloud, request).await,
+            };
             state.idle.touch();
             log.times = times;
             match outcome {
                 Ok(plan) => {
                     state.count_plan();
                     let result = plan_result(&plan, state.config.euler);
+                    reported = traced.is_some().then(|| result.clone());
                     log.plan = Some(plan);
                     Ok(Message::PlanReply(PlanReply { request_id, frame_id: frame.frame_id, result }))
                 }
@@ -259,6 +270,9 @@ async fn plan(
     state.metrics.plan_answered(&reply, arrived.elapsed());
     if let Err(e) = writer.lock().await.send(&reply).await {
         warn!(request_id, "cannot send the reply: {e}");
+    }
+    if let (Some(debug), Some(trace)) = (&state.debug, traced) {
+        debug.keep(request_id, trace, reported);
     }
 }
 

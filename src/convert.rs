@@ -13,14 +13,17 @@ pub mod to_proto {
     use weldseam_proto::ErrorCode;
     use weldseam_proto::message::{self, Frame, FrameMeta, FrameSelect, Units};
     use weldseam_proto::plan as proto;
+    use weldseam_proto::trace as proto_trace;
 
     use super::from_proto::FrameInput;
     use crate::cloud::PointCloud;
     use crate::geometry::pose::EulerConvention;
     use crate::joint::{JointType, RequestedJoint};
     use crate::pipeline::quality::{Gate, GateFailure, SeamQuality, Spread};
+    use crate::pipeline::refit::SeamCurve;
     use crate::pipeline::roi::Roi;
-    use crate::pipeline::{CloudFrame, Plan, PlanError, PlanRequest, Seam, Stage};
+    use crate::pipeline::trace::TracedLine;
+    use crate::pipeline::{CloudFrame, Plan, PlanError, PlanRequest, PlanTrace, Seam, Stage};
 
     pub fn joint(j: JointType) -> proto::Joint {
         match j {
@@ -112,6 +115,82 @@ pub mod to_proto {
             Gate::GrooveDepth => ErrorCode::GrooveDepth,
             Gate::JointMismatch => ErrorCode::JointMismatch,
             Gate::JointUnknown => ErrorCode::JointUnknown,
+        }
+    }
+
+    /// Why a plan was refused, as `plan --json` prints it.
+    pub fn refusal(e: &PlanError) -> proto::Refusal {
+        proto::Refusal {
+            stage: e.stage.name().into(),
+            code: plan_error_code(e).name().into(),
+            gate: e.gate.map(|g| g.name().into()),
+            message: e.reason.clone(),
+        }
+    }
+
+    /// The figures of a plan's trace, with `report` (the plan as `plan
+    /// --json` prints it) when there is one.
+    pub fn plan_trace(trace: &PlanTrace, report: Option<proto::PlanResult>) -> proto_trace::PlanTrace {
+        let count = |n: usize| n as u64;
+        let plate_of = |label: u32| {
+            trace.plate_labels.and_then(|labels| labels.iter().position(|&l| l == label)).map(|k| k as u8 + 1)
+        };
+        let ends = |curve: &SeamCurve, (s0, s1): (f64, f64)| [arr(&curve.at(s0)), arr(&curve.at(s1))];
+        let line = |l: &TracedLine| proto_trace::TraceLine {
+            plate: l.plate as u8 + 1,
+            rank: l.rank as u32,
+            inliers: count(l.inliers),
+            ends: l.ends.each_ref().map(arr),
+            picked: l.picked,
+        };
+        proto_trace::PlanTrace {
+            joint: trace.joint.map(joint),
+            groove_depth_mm: trace.groove_depth_mm,
+            method: trace.method.name().into(),
+            plan: report,
+            error: trace.refusal.as_ref().map(refusal),
+            points: proto_trace::TracePoints {
+                valid: trace.cloud.as_ref().map_or(0, |c| count(c.valid_count())),
+                plane: count(trace.plane_points.iter().filter(|&&p| p).count()),
+                plates: trace
+                    .plate_labels
+                    .map(|_| [0, 1].map(|k| trace.plate(k).map_or(0, |p| count(p.members.len())))),
+                edges: trace.edge_points.each_ref().map(|e| count(e.len())),
+                fit_samples: trace.fit_samples.each_ref().map(|s| count(s.len())),
+            },
+            dominant_normal: trace.dominant_normal.as_ref().map(arr),
+            planes: trace
+                .planes
+                .iter()
+                .map(|p| proto_trace::TracePlane {
+                    label: p.label,
+                    points: count(p.members.len()),
+                    area_mm2: p.area_mm2,
+                    normal: arr(&p.plane.normal),
+                    offset_mm: p.plane.offset,
+                    centroid: arr(&p.centroid),
+                    plate: plate_of(p.label),
+                })
+                .collect(),
+            edge_lines: trace.edge_lines.iter().map(line).collect(),
+            weld_edges: trace
+                .weld_edges
+                .iter()
+                .flatten()
+                .map(|f| proto_trace::TraceEdge {
+                    rms_mm: f.rms_mm,
+                    samples: count(f.points_used),
+                    dropped: count(f.points_dropped),
+                    ends: ends(&f.curve, (f.curve.s_min, f.curve.s_max)),
+                })
+                .collect(),
+            weld: trace.weld.as_ref().map(|w| proto_trace::TraceWeld {
+                ends: ends(&w.curve, w.span),
+                normal: arr(&w.normal),
+                length_mm: w.length_mm(),
+            }),
+            waypoints_camera: trace.waypoints_camera.iter().map(arr).collect(),
+            quality: trace.quality.as_ref().map(quality),
         }
     }
 

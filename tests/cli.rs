@@ -582,3 +582,58 @@ fn simulate_writes_fault_and_hard_scenes_with_their_right_answer() {
     let out = weldseam(&["simulate", "--joint", "lap", "--fault", "rust", "--out", "x.pcd"]);
     assert!(String::from_utf8_lossy(&out.stderr).contains("unknown fault"), "{out:?}");
 }
+
+/// The width and height of a PNG file.
+fn png_size(path: &Path) -> (u32, u32) {
+    let file = std::io::BufReader::new(std::fs::File::open(path).unwrap());
+    let reader = png::Decoder::new(file).read_info().unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let info = reader.info();
+    (info.width, info.height)
+}
+
+#[test]
+fn plan_debug_writes_pictures_and_figures_that_match_plan_json() {
+    let dir = tempfile::tempdir().unwrap();
+    let (pcd, truth) = simulate(dir.path(), "i-butt");
+    let pose = format!("--pose={}", pose_of(&truth));
+    let plan = |joint: &str, debug: Option<&Path>| {
+        let mut args = vec!["plan", "--cloud", pcd.as_str(), "--joint", joint, pose.as_str(), "--json"];
+        if let Some(dir) = debug {
+            args.extend(["--debug", dir.to_str().unwrap()]);
+        }
+        let out = weldseam(&args);
+        let stdout: serde_json::Value = serde_json::from_slice(&out.stdout).expect("one JSON object");
+        (out.status.success(), stdout)
+    };
+
+    let debug = dir.path().join("debug/i-butt");
+    let (planned, printed) = plan("i-butt", Some(&debug));
+    assert!(planned, "{printed}");
+    let (_, plain) = plan("i-butt", None);
+    assert_eq!(printed["seams"], plain["seams"], "--debug changes nothing about the plan");
+    let figures: serde_json::Value = serde_json::from_slice(&std::fs::read(debug.join("trace.json")).unwrap()).unwrap();
+    // The figures hold the plan exactly as printed, timings and all.
+    assert_eq!(figures["plan"], printed, "trace.json's plan is what --json printed");
+    assert!(figures["error"].is_null());
+    assert_eq!(figures["points"]["plates"], printed["points"]["plates"]);
+    assert_eq!(figures["points"]["edges"], printed["points"]["edges"]);
+    let waypoints = printed["seams"][0]["waypoints"].as_array().unwrap().len();
+    assert_eq!(figures["waypoints_camera"].as_array().unwrap().len(), waypoints);
+    let picked = figures["edge_lines"].as_array().unwrap().iter().filter(|l| l["picked"] == true).count();
+    assert_eq!(picked, 2);
+    let (width, height) = png_size(&debug.join("camera.png"));
+    assert!(width == 960 && (600..900).contains(&height), "camera.png is {width} x {height}");
+    let (width, height) = png_size(&debug.join("sections.png"));
+    assert!(width == 960 && (660..900).contains(&height), "sections.png is {width} x {height}");
+
+    // A refusal: the camera view and the figures, with the error as printed.
+    let refused = dir.path().join("debug/as-lap");
+    let (planned, printed) = plan("lap", Some(&refused));
+    assert!(!planned);
+    let figures: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(refused.join("trace.json")).unwrap()).unwrap();
+    assert_eq!(figures["error"], printed["error"], "{printed}");
+    assert!(figures["plan"].is_null() && figures["weld"].is_null());
+    assert_eq!(png_size(&refused.join("camera.png")).0, 960);
+    assert!(!refused.join("sections.png").exists(), "no weld, no sections");
+}

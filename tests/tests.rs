@@ -12,6 +12,7 @@ mod joints;
 mod measured_clouds;
 mod parsers;
 mod peers;
+mod pictures;
 mod pipeline;
 mod quality;
 mod requests;

@@ -10,11 +10,14 @@
 //!   encoding of bodies; see PROTOCOL.md for every byte.
 //! - [`text`]: the text controller link's lines, which robot programs
 //!   read with their own primitives; see ROBOTS.md.
+//! - [`trace`]: the figures of one plan stage by stage, as `plan --debug`
+//!   and the daemon's `[debug]` section write them.
 
 pub mod frame;
 pub mod message;
 pub mod plan;
 pub mod text;
+pub mod trace;
 
 pub use frame::{MAX_CONTROL_MESSAGE_BYTES, PROTOCOL_VERSION};
 pub use message::{ErrorCode, Message};

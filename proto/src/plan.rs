@@ -141,3 +141,17 @@ pub struct PlanResult {
     pub euler_convention: String,
     pub points: PointCounts,
 }
+
+/// Why a plan was refused, as `weldseam plan --json` prints it under
+/// `error` and a plan's trace records it.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Refusal {
+    /// The pipeline stage that refused, e.g. `background`.
+    pub stage: String,
+    /// The error code a controller would get, by name.
+    pub code: String,
+    /// The quality gate that refused, when one did.
+    pub gate: Option<String>,
+    /// One sentence a person can act on.
+    pub message: String,
+}

@@ -5,8 +5,8 @@ use std::path::PathBuf;
 
 use std::io::Write;
 
-use anyhow::{anyhow, bail};
-use weldseam::convert::to_proto::{plan_error_code, plan_result};
+use anyhow::{Context, anyhow, bail};
+use weldseam::convert::to_proto::{plan_result, refusal};
 use weldseam::geometry::pose::{RobotPose, hand_eye_from_rows};
 use weldseam::joint::RequestedJoint;
 use weldseam::pipeline::{PlanRequest, Planner, Stage};
@@ -39,6 +39,12 @@ pub struct PlanArgs {
     /// code a controller would get; the exit status is non-zero).
     #[arg(long)]
     pub json: bool,
+    /// Also write the plan's pictures and figures into this directory
+    /// (created when needed): camera.png (the plates, edges, seam and
+    /// waypoints, or the refusal), sections.png (profiles across the seam)
+    /// and trace.json (every stage's figures, the plan as --json prints it).
+    #[arg(long, value_name = "DIR")]
+    pub debug: Option<PathBuf>,
 }
 
 pub fn run(args: &PlanArgs) -> anyhow::Result<()> {
@@ -74,18 +80,31 @@ pub fn run(args: &PlanArgs) -> anyhow::Result<()> {
         load_ms = format!("{load_ms:.1}"),
         "loaded point cloud"
     );
-    let plan = match planner.plan(&cloud, &request) {
-        Ok(plan) => plan,
-        Err(e) => {
+    let (outcome, trace) = match &args.debug {
+        Some(_) => {
+            let (outcome, trace) = planner.plan_traced(&cloud, &request);
+            (outcome, Some(trace))
+        }
+        None => (planner.plan(&cloud, &request), None),
+    };
+    let report = outcome.as_ref().ok().map(|plan| {
+        let mut report = plan_result(plan, planner.config().euler);
+        report.timing_ms.insert("load".into(), load_ms);
+        report
+    });
+    if let (Some(dir), Some(trace)) = (&args.debug, &trace) {
+        let set = weldseam::report::debug_set(trace, report.clone())?;
+        weldseam::debug_dir::write_set(dir, &set).context("--debug")?;
+        tracing::info!(dir = %dir.display(), files = set.files.len(), "debug pictures and figures written");
+    }
+    let (plan, report) = match (outcome, report) {
+        (Ok(plan), Some(report)) => (plan, report),
+        (Ok(_), None) => bail!("no report of the plan of {}", args.cloud.display()),
+        (Err(e), _) => {
             if args.json {
                 // Scripts read why as well as that: the stage, the code a
                 // controller would get and the sentence, on stdout.
-                let refusal = serde_json::json!({ "error": {
-                    "stage": e.stage.name(),
-                    "code": plan_error_code(&e).name(),
-                    "gate": e.gate.map(|g| g.name()),
-                    "message": e.reason,
-                }});
+                let refusal = serde_json::json!({ "error": refusal(&e) });
                 writeln!(out, "{refusal}")?;
             }
             return Err(match e.stage {
@@ -95,8 +114,6 @@ pub fn run(args: &PlanArgs) -> anyhow::Result<()> {
             });
         }
     };
-    let mut report = plan_result(&plan, planner.config().euler);
-    report.timing_ms.insert("load".into(), load_ms);
     if args.json {
         writeln!(out, "{}", serde_json::to_string(&report)?)?;
         return Ok(());

@@ -1,5 +1,5 @@
 //! The on-disk schema of config/weldseam.toml. Sections whose values keep
-//! their type (camera, pipeline, paper, trajectory, quality) are the library's own
+//! their type (camera, pipeline, paper, trajectory, quality, debug) are the library's own
 //! parameter structs, deserialized directly; only the three whose type
 //! changes on the way in have a schema of their own here: [camera] (the
 //! field of view or the intrinsics, either of which may be left out),
@@ -11,7 +11,7 @@
 use serde::Deserialize;
 
 use super::text_link::TextLinkConfig;
-use super::{PaperParams, PipelineParams, QualityParams, RobotLimits, ServerConfig, TrajectoryParams};
+use super::{DebugParams, PaperParams, PipelineParams, QualityParams, RobotLimits, ServerConfig, TrajectoryParams};
 use crate::camera::CameraModel;
 use crate::geometry::pose::{EulerConvention, PAPER_HAND_EYE};
 
@@ -26,6 +26,7 @@ pub struct ConfigFile {
     pub quality: QualityParams,
     pub server: ServerSection,
     pub text_link: TextLinkSection,
+    pub debug: DebugParams,
 }
 
 /// [camera]: the camera model's keys, with the field of view and the

@@ -310,6 +310,45 @@ impl QualityParams {
     }
 }
 
+/// The pictures and figures of the daemon's last plans: the [debug]
+/// section. Each plan's set (what `weldseam plan --debug DIR` writes: the
+/// camera view, the cross-sections and `trace.json`) goes into a directory
+/// of its own under `dir`, the oldest beyond `keep_last` deleted. An empty
+/// `dir` keeps none.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct DebugParams {
+    pub dir: String,
+    pub keep_last: u32,
+}
+
+/// How many plans' sets the daemon keeps by default: the last few minutes
+/// of a busy cell, a few megabytes each.
+pub const DEFAULT_DEBUG_KEEP_LAST: u32 = 20;
+
+/// The most sets `debug.keep_last` may ask for: about a gigabyte of
+/// pictures, beyond which the directory is an archive, not a debug aid.
+pub const MAX_DEBUG_KEEP_LAST: u32 = 1000;
+
+impl Default for DebugParams {
+    fn default() -> Self {
+        DebugParams { dir: String::new(), keep_last: DEFAULT_DEBUG_KEEP_LAST }
+    }
+}
+
+impl DebugParams {
+    /// Where the sets go, when the daemon keeps them.
+    pub fn directory(&self) -> Option<&Path> {
+        (!self.dir.is_empty()).then(|| Path::new(&self.dir))
+    }
+
+    /// Checks the [debug] section.
+    pub fn validate(&self) -> Result<(), ConfigError> {
+        count_in("debug.keep_last", self.keep_last.into(), 1, MAX_DEBUG_KEEP_LAST.into())?;
+        check("debug.dir", !self.dir.contains('\0'), || "must not contain a NUL character".into())
+    }
+}
+
 /// The cell daemon's network and scheduling settings.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ServerConfig {
@@ -450,6 +489,7 @@ pub struct Config {
     pub server: ServerConfig,
     /// The text controller link robot programs speak directly.
     pub text_link: TextLinkConfig,
+    pub debug: DebugParams,
 }
 
 impl Default for Config {
@@ -527,6 +567,7 @@ impl Config {
         f.quality.validate()?;
         let server = f.server.validate()?;
         let text_link = f.text_link.validate()?;
+        f.debug.validate()?;
         Ok(Config {
             camera,
             euler,
@@ -538,6 +579,7 @@ impl Config {
             quality: f.quality,
             server,
             text_link,
+            debug: f.debug,
         })
     }
 }
@@ -969,6 +1011,8 @@ mod tests {
             ("[pipeline]\nroi = [1.0, 2.0]\n", "pipeline.roi"),
             ("[pipeline]\nroi = [0.0, 0.0, 600.0, 10.0, 10.0, 500.0]\n", "pipeline.roi"),
             ("[pipeline]\nroi_frame = \"tool\"\n", "roi_frame"),
+            ("[debug]\nkeep_last = 0\n", "debug.keep_last"),
+            ("[debug]\nkeep = 3\n", "keep"),
         ];
         for (text, key) in cases {
             let e = Config::parse(text, "c.toml").unwrap_err().to_string();

@@ -25,6 +25,7 @@ use super::plane_points::PlanePoints;
 use super::ransac::RansacParams;
 use super::refit::{CurveFit, SeamCurve};
 use super::scale::{self, Scale};
+use super::trace::Tracer;
 use super::trajectory::{self, Waypoint};
 use super::weld_equation;
 use super::{Plan, PlanError, PlanRequest, PlanStats, Seam, SeamAssessment, Stage, StageTimings};
@@ -77,6 +78,8 @@ pub(super) struct Context<'a> {
     /// The joint being planned: the one requested, or, for `auto`, the
     /// one the robust method has decided so far (None until it has).
     pub joint: Option<JointType>,
+    /// What each stage found, when the caller asked for it.
+    pub trace: Tracer<'a>,
 }
 
 impl<'a> Context<'a> {
@@ -92,6 +95,7 @@ impl<'a> Context<'a> {
         cloud: &'a PointCloud,
         request: &'a PlanRequest,
         clock: Clock,
+        mut trace: Tracer<'a>,
     ) -> Result<Self, PlanError> {
         let mut cloud = Cow::Borrowed(cloud);
         let camera = &config.camera;
@@ -112,6 +116,7 @@ impl<'a> Context<'a> {
             );
             cloud = Cow::Owned(without_unmeasurable(&cloud, &volume));
         }
+        trace.record(|t| (t.cloud, t.camera) = (Some(cloud.clone().into_owned()), Some(*camera)));
         let mut ctx = Context {
             config,
             request,
@@ -120,6 +125,7 @@ impl<'a> Context<'a> {
             stats: PlanStats::default(),
             scale: Scale::of_camera(config.pipeline.neighbour_radius_mm),
             joint: request.joint.given(),
+            trace,
         };
         ctx.stats.valid_points = counts.valid - counts.unmeasurable();
         if ctx.stats.valid_points == 0 && counts.near > 0 && counts.near == counts.valid {
@@ -311,6 +317,11 @@ impl<'a> Context<'a> {
         };
         let (start, end) = trajectory::travel_order(&weld, s0, s1, &base_from_camera, self.request.start_near);
         let waypoints = trajectory::waypoints(&weld, start, end, &normal, &base_from_camera, &params);
+        self.trace.record(|t| {
+            let to_camera = |w: &Waypoint| base_from_camera.inverse_transform_point(&w.position.into()).coords;
+            (t.waypoints_camera, t.base_from_camera) =
+                (waypoints.iter().map(to_camera).collect(), Some(base_from_camera));
+        });
         self.check_reach(&waypoints)?;
         let length_mm = waypoints.windows(2).map(|w| (w[1].position - w[0].position).norm()).sum();
         self.clock.lap(Stage::Trajectory);

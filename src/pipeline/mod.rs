@@ -46,6 +46,7 @@ mod robust;
 pub mod roi;
 mod scale;
 pub mod survey;
+pub mod trace;
 pub mod trajectory;
 pub mod weld_edges;
 pub mod weld_equation;
@@ -64,6 +65,8 @@ use crate::joint::{JointType, RequestedJoint};
 use context::Context;
 pub use input::{CloudFrame, Units};
 use roi::Roi;
+pub use trace::PlanTrace;
+use trace::Tracer;
 pub use trajectory::Waypoint;
 
 /// What the controller asks for.
@@ -342,6 +345,20 @@ impl Planner {
     /// The method is chosen here, once: `paper.rs` and `robust.rs` each
     /// run the whole way through.
     pub fn plan(&self, cloud: &PointCloud, request: &PlanRequest) -> Result<Plan, PlanError> {
+        self.run(cloud, request, Tracer::off())
+    }
+
+    /// [`Planner::plan`], recording what each stage found ([`PlanTrace`]),
+    /// and on a refusal the stage and reason beside everything gathered
+    /// up to it.
+    pub fn plan_traced(&self, cloud: &PointCloud, request: &PlanRequest) -> (Result<Plan, PlanError>, PlanTrace) {
+        let mut trace = PlanTrace::new(request.joint.given(), request.groove_depth_mm, self.config.pipeline.method);
+        let result = self.run(cloud, request, Tracer::on(&mut trace));
+        trace.refusal = result.as_ref().err().cloned();
+        (result, trace)
+    }
+
+    fn run(&self, cloud: &PointCloud, request: &PlanRequest, tracer: Tracer) -> Result<Plan, PlanError> {
         validate(request, &self.config)?;
         let clock = context::Clock::start();
         let converted = input::prepare(cloud, request, &self.config)?;
@@ -361,7 +378,7 @@ impl Planner {
             }
             None => &self.config,
         };
-        let ctx = Context::sanitise(config, &input.cloud, request, clock)?;
+        let ctx = Context::sanitise(config, &input.cloud, request, clock, tracer)?;
         match self.config.pipeline.method {
             Method::Paper => paper::plan(ctx),
             Method::Robust => robust::plan(ctx),

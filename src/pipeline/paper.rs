@@ -27,6 +27,7 @@ use super::context::{self, Context, MIN_CLUSTER_POINTS};
 use super::edge_points::{EdgeCriterion, FullCount};
 use super::neighbours::NeighbourSearch;
 use super::refit::{self, CurveFit, SeamAxes};
+use super::trace::TracedWeld;
 use super::{Plan, PlanError, SeamAssessment, Stage};
 use super::{background, clustering, plane_points, ransac, weld_edges, weld_equation};
 use crate::geometry::Vec3;
@@ -43,6 +44,7 @@ pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
     // least a frontal plane at its depth can have (Eq. 14).
     let mut plane = plane_points::paper_criterion(cloud, camera, &search);
     ctx.stats.plane_points = plane.len();
+    ctx.trace.record(|t| t.plane_points = plane.mask.clone());
     ctx.clock.lap(Stage::PlanePoints);
     if ctx.stats.plane_points == 0 {
         return Err(PlanError::at(Stage::PlanePoints, "no point passed the plane point criterion"));
@@ -59,8 +61,10 @@ pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
     // a point stands for the area of a frontal plane's pixel (Eq. 4).
     let planes = ctx.planes_of(std::mem::take(&mut clusters.members), |c, _| 1.0 / camera.density(c.z));
     ctx.stats.clusters = planes.len();
+    ctx.trace.record(|t| t.planes = planes.clone());
     let workpiece = background::paper_select(cloud, planes).map_err(|e| PlanError::at(Stage::Background, e))?;
     ctx.stats.plate_points = workpiece.plates.each_ref().map(|p| p.members.len());
+    ctx.trace.record(|t| t.plate_labels = Some(workpiece.plates.each_ref().map(|p| p.label)));
     ctx.clock.lap(Stage::Background);
     ctx.check_groove_depth(&workpiece)?;
 
@@ -69,6 +73,7 @@ pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
     let criterion = EdgeCriterion { full: FullCount::Frontal, ratio: config.paper.edge_ratio };
     let edges = context::plate_edge_points(clusters.labels, &workpiece, &search, &plane, &criterion);
     ctx.stats.edge_points = [edges[0].len(), edges[1].len()];
+    ctx.trace.record(|t| t.edge_points = edges.clone());
     ctx.clock.lap(Stage::EdgePoints);
 
     // 3.4.2: iterative RANSAC over both plates' edge points together; a
@@ -85,7 +90,9 @@ pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
     let centroids = workpiece.plates.each_ref().map(|p| p.centroid);
     let owner =
         |l: &ransac::EdgeLine| (l.inliers.iter().filter(|&&i| i >= split).count() * 2 > l.inliers.len()) as usize;
+    ctx.trace.record(|t| t.add_lines(&lines, &all, owner));
     let pick = weld_edges::paper_select(&lines, centroids, owner).map_err(|e| PlanError::at(Stage::WeldEdges, e))?;
+    ctx.trace.record(|t| t.pick_lines(|l| pick.contains(&l.rank)));
     ctx.clock.lap(Stage::WeldEdges);
 
     // 4.2: each edge's RANSAC inliers refitted by least squares, the
@@ -100,6 +107,7 @@ pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
         .collect::<Option<Vec<_>>>()
         .and_then(|v| v.try_into().ok())
         .ok_or_else(|| PlanError::at(Stage::Refit, "a weld edge has too few points for a least-squares fit"))?;
+    ctx.trace.record(|t| (t.weld_edges, t.fit_samples) = (Some(fits.clone()), inliers.clone()));
     ctx.clock.lap(Stage::Refit);
 
     // 4.3: the normal from the edges' end points (Eq. 33, 34), then the
@@ -111,6 +119,7 @@ pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
     let depth = ctx.request.groove_depth_mm.unwrap_or(0.0);
     let weld = ctx.weld(e1, e2, &normal, depth, || weld_equation::lap_paper(e1, e2))?;
     let span = (weld.s_min, weld.s_max);
+    ctx.trace.record(|t| t.weld = Some(TracedWeld { curve: weld.clone(), span, normal }));
     ctx.clock.lap(Stage::WeldEquation);
 
     // 5.1: the waypoints in the robot's base frame.

@@ -31,6 +31,7 @@ use super::edge_points::{EdgeCriterion, FullCount};
 use super::neighbours::NeighbourSearch;
 use super::ransac::EdgeLine;
 use super::refit::{self, SeamAxes};
+use super::trace::TracedWeld;
 use super::{Plan, PlanError, SeamAssessment, SeamCoverage, Stage};
 use super::{background, clustering, groove, orientation, plane_points, quality, ransac, weld_edges, weld_equation};
 
@@ -72,6 +73,7 @@ pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
     // Plates, table and fixture lie parallel: one normal describes them.
     let dominant = orientation::dominant_normal(cloud, &search, camera.fx(), DOMINANT_NORMAL_AGREEMENT_DEG)
         .ok_or_else(|| PlanError::at(Stage::Orientation, "no surface normal could be estimated"))?;
+    ctx.trace.record(|t| t.dominant_normal = Some(dominant));
     ctx.clock.lap(Stage::Orientation);
 
     // 3.2: plane points against the count of a plane tilted to the
@@ -85,6 +87,7 @@ pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
         },
     );
     ctx.stats.plane_points = plane.len();
+    ctx.trace.record(|t| t.plane_points = plane.mask.clone());
     ctx.clock.lap(Stage::PlanePoints);
     if ctx.stats.plane_points == 0 {
         return Err(PlanError::at(Stage::PlanePoints, "no point passed the plane point criterion"));
@@ -108,6 +111,7 @@ pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
     // plate thickness apart); a point stands for a tilted pixel's area.
     let planes = ctx.planes_of(std::mem::take(&mut clusters.members), |c, n| search.area_per_point(c, n));
     ctx.stats.clusters = planes.len();
+    ctx.trace.record(|t| t.planes = planes.clone());
     let selection = background::Selection {
         joint: ctx.request.joint.given(),
         normal: dominant,
@@ -129,9 +133,11 @@ pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
         })?;
     if layout == Layout::Lap {
         ctx.joint = Some(JointType::Lap);
+        ctx.trace.record(|t| t.joint = Some(JointType::Lap));
     }
     tracing::debug!(?layout, "{layers}");
     ctx.stats.plate_points = workpiece.plates.each_ref().map(|p| p.members.len());
+    ctx.trace.record(|t| t.plate_labels = Some(workpiece.plates.each_ref().map(|p| p.label)));
     for (k, plate) in workpiece.plates.iter().enumerate() {
         tracing::debug!(
             plate = k + 1,
@@ -151,6 +157,7 @@ pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
     let criterion = EdgeCriterion { full: FullCount::Plane, ratio: cfg.edge_max_neighbour_ratio };
     let edges = context::plate_edge_points(clusters.labels, &workpiece, &search, &plane, &criterion);
     ctx.stats.edge_points = [edges[0].len(), edges[1].len()];
+    ctx.trace.record(|t| t.edge_points = edges.clone());
     ctx.clock.lap(Stage::EdgePoints);
 
     // The plates' least-squares planes fix the normal far better than the
@@ -169,6 +176,7 @@ pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
     );
     let lines: [Vec<EdgeLine>; 2] = [lines_a, lines_b];
     ctx.stats.edge_lines = lines[0].len() + lines[1].len();
+    ctx.trace.record(|t| (0..2).for_each(|k| t.add_lines(&lines[k], &edge_points[k], |_| k)));
     for (k, plate_lines) in lines.iter().enumerate() {
         for line in plate_lines {
             tracing::debug!(
@@ -194,6 +202,7 @@ pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
         cfg.max_edge_angle_deg,
     )
     .map_err(|e| PlanError::at(Stage::WeldEdges, e))?;
+    ctx.trace.record(|t| t.pick_lines(|l| l.rank == pick[l.plate]));
     ctx.clock.lap(Stage::WeldEdges);
 
     // 4.2: each weld edge resampled along its plate's boundary, then
@@ -230,6 +239,7 @@ pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
     let ((boundary_a, beside_a), (boundary_b, beside_b)) = rayon::join(|| boundary_of(0), || boundary_of(1));
     let boundaries: [Boundary; 2] = [boundary_a, boundary_b];
     let samples: [Vec<Vec3>; 2] = boundaries.each_ref().map(|b| b.samples.iter().map(|s| s.position).collect());
+    ctx.trace.record(|t| t.fit_samples = samples.clone());
     let union: Vec<Vec3> = samples.iter().flatten().copied().collect();
     let axes = SeamAxes::principal(&union, &normal)
         .ok_or_else(|| PlanError::at(Stage::Refit, "the weld edge samples do not spread along a line"))?;
@@ -243,6 +253,7 @@ pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
         })
     };
     let fits = [fit_edge(0)?, fit_edge(1)?];
+    ctx.trace.record(|t| t.weld_edges = Some(fits.clone()));
     for (k, f) in fits.iter().enumerate() {
         tracing::debug!(
             edge = k + 1,
@@ -277,6 +288,7 @@ pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
             PlanError { gate: Some(gate), ..PlanError::at(Stage::Groove, e) }
         })?;
         ctx.joint = Some(joint);
+        ctx.trace.record(|t| t.joint = Some(joint));
         let depth = match (joint, ctx.request.groove_depth_mm, profile.depth_mm()) {
             (JointType::VButt, Some(given), _) => given,
             (JointType::VButt, None, Some(measured)) => measured,
@@ -340,6 +352,7 @@ pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
         // saw; never plan a stretch of it the camera did not see.
         (s0, s1) = ctx.clip_to_view(&weld, s0, s1);
     }
+    ctx.trace.record(|t| t.weld = Some(TracedWeld { curve: weld.clone(), span: (s0, s1), normal }));
     if s1 - s0 <= 0.0 {
         return Err(PlanError::at(Stage::WeldEquation, "the two weld edges do not overlap along the seam"));
     }
@@ -400,6 +413,7 @@ pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
     };
     let (warnings, refusals): (Vec<_>, Vec<_>) =
         quality::check(&evidence, &config.quality).into_iter().partition(|f| config.quality.warns_only(f.gate));
+    ctx.trace.record(|t| (t.quality, t.warnings) = (Some(quality), warnings.clone()));
     for failure in &warnings {
         tracing::warn!(gate = %failure.gate, value = failure.value, limit = failure.limit, "{}", failure.message);
     }

@@ -25,7 +25,7 @@ use super::ServerState;
 use super::camera_link::handshake;
 use super::connection::{Connection, MessageWriter};
 use super::frames::Wanted;
-use super::planning::{Accepted, Ask, Failure, Planned, Refusal, accept, fulfil, refused};
+use super::planning::{Accepted, Ask, Failure, Planned, Refusal, accept, fulfil_traced, refused};
 use super::shutdown::{Shutdown, StopSignal};
 use crate::convert::from_proto::{self, RequestError};
 use crate::convert::to_proto::plan_result;
@@ -136,16 +136,23 @@ fn ask(r: &message::PlanRequest, euler: EulerConvention) -> Result<Ask, Refusal>
 }
 
 /// One request's life after acceptance: the shared plan path, then the
-/// reply on this link.
+/// reply on this link, then (when the daemon keeps them) the plan's debug
+/// set, written after the reply so it never delays one.
 async fn plan(request_id: u64, accepted: Accepted, state: Arc<ServerState>, writer: Writer, stop: StopSignal) {
-    let reply = match fulfil(accepted, &state, stop).await {
+    let (outcome, traced) = fulfil_traced(accepted, &state, stop).await;
+    let mut reported = None;
+    let reply = match outcome {
         Ok(Planned { frame_id, plan }) => {
             let result = plan_result(&plan, state.config.euler);
+            reported = traced.is_some().then(|| result.clone());
             Message::PlanReply(PlanReply { request_id, frame_id, result })
         }
         Err(Failure { code, text }) => Message::error(code, Some(request_id), text),
     };
     if let Err(e) = writer.lock().await.send(&reply).await {
         warn!(request_id, "cannot send the reply: {e}");
+    }
+    if let (Some(debug), Some(trace)) = (&state.debug, traced) {
+        debug.keep(request_id, trace, reported);
     }
 }

@@ -23,7 +23,7 @@ use std::time::{Duration, Instant};
 use tokio::sync::{OwnedSemaphorePermit, Semaphore, oneshot};
 
 use crate::cloud::PointCloud;
-use crate::pipeline::{Plan, PlanError, PlanRequest, Planner};
+use crate::pipeline::{Plan, PlanError, PlanRequest, PlanTrace, Planner};
 
 /// Why a plan job did not produce a plan.
 #[derive(Debug, thiserror::Error)]
@@ -136,6 +136,21 @@ impl JobSlot {
         let planner = Arc::clone(&self.planner);
         let (outcome, times) = self.execute(move || planner.plan(&cloud, &request)).await;
         (outcome.and_then(|r| Ok(r?)), times)
+    }
+
+    /// [`JobSlot::run`], recording what each stage found; the trace is
+    /// lost only when the pipeline panicked.
+    pub async fn run_traced(
+        self,
+        cloud: Arc<PointCloud>,
+        request: PlanRequest,
+    ) -> (Result<Plan, JobError>, Option<PlanTrace>, JobTimes) {
+        let planner = Arc::clone(&self.planner);
+        let (outcome, times) = self.execute(move || planner.plan_traced(&cloud, &request)).await;
+        match outcome {
+            Ok((result, trace)) => (result.map_err(JobError::from), Some(trace), times),
+            Err(e) => (Err(e), None, times),
+        }
     }
 
     /// Runs `work` on the pool in its turn, holding the slot until done.

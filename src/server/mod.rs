@@ -17,6 +17,7 @@
 pub mod camera_link;
 pub mod connection;
 pub mod controller_link;
+pub mod debug_sets;
 pub mod frames;
 pub mod idle;
 pub mod jobs;
@@ -56,6 +57,8 @@ pub struct ServerState {
     /// Hands freed memory back once the cell is idle.
     pub idle: Arc<IdleTrim>,
     pub metrics: Metrics,
+    /// The last plans' pictures and figures, when `[debug]` asks for them.
+    pub debug: Option<debug_sets::DebugSets>,
     started: Instant,
     frames_received: AtomicU64,
     plans_done: AtomicU64,
@@ -75,6 +78,7 @@ impl ServerState {
             jobs,
             idle: IdleTrim::new(s.idle_trim),
             metrics: Metrics::new(),
+            debug: debug_sets::DebugSets::open(&config.debug),
             started: Instant::now(),
             frames_received: AtomicU64::new(0),
             plans_done: AtomicU64::new(0),

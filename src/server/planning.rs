@@ -20,6 +20,7 @@ use super::frames::{FrameError, FrameRequest, FrameWait, StoredFrame, Wanted, wa
 use super::jobs::{JobError, JobSlot, JobTimes};
 use super::shutdown::StopSignal;
 use crate::convert::to_proto::plan_error_code;
+use crate::pipeline::trace::PlanTrace;
 use crate::pipeline::{Plan, PlanRequest};
 
 /// A plan request in the library's form, with what the daemon needs to
@@ -137,7 +138,18 @@ pub(crate) struct Planned {
 
 /// One request's life after acceptance: the frame, the plan, the count of
 /// its outcome and the one log line about it. The caller writes the reply.
-pub(crate) async fn fulfil(accepted: Accepted, state: &ServerState, mut stop: StopSignal) -> Result<Planned, Failure> {
+pub(crate) async fn fulfil(accepted: Accepted, state: &ServerState, stop: StopSignal) -> Result<Planned, Failure> {
+    fulfil_traced(accepted, state, stop).await.0
+}
+
+/// [`fulfil`], and the plan's trace when the daemon keeps debug sets
+/// (`[debug]`) and none is being written: the caller keeps it after its
+/// reply is sent.
+pub(crate) async fn fulfil_traced(
+    accepted: Accepted,
+    state: &ServerState,
+    mut stop: StopSignal,
+) -> (Result<Planned, Failure>, Option<PlanTrace>) {
     let Accepted { request_id, request, wait, timeout, slot, arrived, _place } = accepted;
     let fetched = tokio::select! {
         f = wait.wait(timeout) => f,
@@ -145,6 +157,7 @@ pub(crate) async fn fulfil(accepted: Accepted, state: &ServerState, mut stop: St
     };
     let frame_wait = arrived.elapsed();
     let mut log = PlanLog { request_id, joint: request.joint.name(), frame_wait, ..PlanLog::default() };
+    let mut traced = None;
     let outcome = match fetched {
         // A camera link closed by the shutdown is not a camera that left.
         Err(_) if stop.is_stopping() => Err(Failure {
@@ -157,7 +170,15 @@ pub(crate) async fn fulfil(accepted: Accepted, state: &ServerState, mut stop: St
             state.idle.touch();
             // The frame says which units and frame its points are in.
             let request = PlanRequest { units: frame.input.units, cloud_frame: frame.input.cloud_frame, ..request };
-            let (outcome, times) = slot.run(Arc::clone(&frame.cloud), request).await;
+            let cloud = Arc::clone(&frame.cloud);
+            let (outcome, times) = match &state.debug {
+                Some(debug) if debug.ready() => {
+                    let (outcome, trace, times) = slot.run_traced(cloud, request).await;
+                    traced = trace;
+                    (outcome, times)
+                }
+                _ => slot.run(cloud, request).await,
+            };
             state.idle.touch();
             log.times = times;
             match outcome {
@@ -182,7 +203,7 @@ pub(crate) async fn fulfil(accepted: Accepted, state: &ServerState, mut stop: St
     log.latency = arrived.elapsed();
     log.emit();
     state.metrics.plan_answered(outcome.as_ref().map(|_| ()).map_err(|f| f.code), arrived.elapsed());
-    outcome
+    (outcome, traced)
 }
 
 /// The one log line per plan request.

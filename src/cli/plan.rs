@@ -73,7 +73,9 @@ pub fn run(args: &PlanArgs) -> anyhow::Result<()> {
         load_ms = format!("{load_ms:.1}"),
         "loaded point cloud"
     );
-    let plan = match planner.plan(&cloud, &request) {
+    // The cloud is not needed after planning: the planner converts it in
+    // place rather than hold a copy beside it.
+    let plan = match planner.plan_owned(cloud, &request) {
         Ok(plan) => plan,
         Err(e) => {
             if args.json {

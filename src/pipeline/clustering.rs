@@ -349,8 +349,13 @@ const LATER_COLUMNS: [(i64, i64, i64); 13] = [
     (2, 2, -VOXEL_REACH),
 ];
 
-/// Voxels of a parallel job: enough to amortise its binary searches.
-const VOXELS_PER_JOB: usize = 4096;
+/// Voxels of a parallel job: enough to amortise its binary searches, few
+/// enough that the pairs a job holds until it joins them stay small
+/// (about a hundred kilobytes).
+const VOXELS_PER_JOB: usize = 1024;
+
+/// The points of a parallel chunk when the selected points are gathered.
+const POINTS_PER_CHUNK: usize = 1 << 14;
 
 /// Exact Euclidean clustering of the points selected by `mask`.
 ///
@@ -359,9 +364,15 @@ const VOXELS_PER_JOB: usize = 4096;
 /// within reach joined when any pair of their points is close. What
 /// differs is how: keys are packed and sorted once on rayon, the voxels
 /// within reach are found by walking the sorted keys column by column (no
-/// hashing), the pairs of voxels are tested in parallel, and only the
-/// joined pairs go through the union-find. Clusters depend only on which
-/// points connect, not on the order of the unions.
+/// hashing), and the pairs of voxels are tested in parallel jobs, each
+/// joining the pairs it found as soon as it is done. Clusters depend only
+/// on which points connect, not on the order of the unions.
+///
+/// Memory: the selected points' keys sorted with their indices (16 bytes
+/// a point, in one vector sized once), where each voxel starts (4 bytes a
+/// voxel) and the union-find (4 bytes a point of the cloud, which becomes
+/// the labels); a job's joined pairs live only until it has joined them,
+/// not in one list of every pair of the cloud.
 pub(crate) fn euclidean(cloud: &PointCloud, mask: &[bool], tolerance_mm: f64, min_points: usize) -> Clusters {
     let points = cloud.points();
     let tol_sq = (tolerance_mm * tolerance_mm) as f32;
@@ -380,83 +391,109 @@ pub(crate) fn euclidean(cloud: &PointCloud, mask: &[bool], tolerance_mm: f64, mi
         }
         Some(key)
     };
-    let keyed: Option<Vec<(u64, u32)>> = (0..points.len() as u32)
-        .into_par_iter()
-        .filter(|&i| mask[i as usize])
-        .map(|i| key_of(&points[i as usize]).map(|k| (k, i)))
-        .collect();
-    let Some(mut keyed) = keyed else {
+    let Some(mut keyed) = gather_selected(mask, |i| key_of(&points[i]).map(|k| (k, i as u32))) else {
         return euclidean_reference(cloud, mask, tolerance_mm, min_points);
     };
     keyed.par_sort_unstable();
-    let order: Vec<u32> = keyed.iter().map(|&(_, i)| i).collect();
-    let mut keys: Vec<u64> = Vec::new();
-    let mut starts: Vec<u32> = Vec::new();
-    for (position, &(key, _)) in keyed.iter().enumerate() {
-        if keys.last() != Some(&key) {
-            keys.push(key);
+    // Where each voxel's run of points starts in `keyed`, and its end.
+    let voxels = if keyed.is_empty() { 0 } else { 1 + keyed.par_windows(2).filter(|w| w[0].0 != w[1].0).count() };
+    let mut starts: Vec<u32> = Vec::with_capacity(voxels + 1);
+    for (position, pair) in keyed.iter().enumerate() {
+        if position == 0 || keyed[position - 1].0 != pair.0 {
             starts.push(position as u32);
         }
     }
-    starts.push(order.len() as u32);
-    drop(keyed);
-    let run = |v: usize| &order[starts[v] as usize..starts[v + 1] as usize];
-
-    // Every pair of voxels within reach whose points connect, found in
-    // parallel over jobs of consecutive voxels.
-    let joined: Vec<(u32, u32)> = (0..keys.len().div_ceil(VOXELS_PER_JOB))
-        .into_par_iter()
-        .flat_map_iter(|job| {
-            let range = job * VOXELS_PER_JOB..((job + 1) * VOXELS_PER_JOB).min(keys.len());
-            let mut found = Vec::new();
-            // One cursor per column: for consecutive voxels the wanted
-            // keys of a column only grow, so each walks forward.
-            let mut cursors = [usize::MAX; LATER_COLUMNS.len()];
-            for v in range {
-                let key = keys[v];
-                for (cursor, &(dx, dy, dz0)) in cursors.iter_mut().zip(&LATER_COLUMNS) {
-                    let shift = |k: u64, dx: i64, dy: i64, dz: i64| {
-                        let delta = (dx << (2 * VOXEL_AXIS_BITS)) + (dy << VOXEL_AXIS_BITS) + dz;
-                        (k as i64 + delta) as u64
-                    };
-                    // Fields never overflow: every coordinate is at least
-                    // the reach away from the ends of its field.
-                    let (lo, hi) = (shift(key, dx, dy, dz0), shift(key, dx, dy, VOXEL_REACH));
-                    if *cursor == usize::MAX {
-                        *cursor = keys.partition_point(|&k| k < lo);
-                    }
-                    while *cursor < keys.len() && keys[*cursor] < lo {
-                        *cursor += 1;
-                    }
-                    let mut w = *cursor;
-                    while w < keys.len() && keys[w] <= hi {
-                        let connected = run(v).iter().any(|&a| {
-                            let p = &points[a as usize];
-                            run(w).iter().any(|&b| close(p, &points[b as usize], tol_sq))
-                        });
-                        if connected {
-                            found.push((v as u32, w as u32));
-                        }
-                        w += 1;
-                    }
-                }
-            }
-            found
-        })
-        .collect();
+    starts.push(keyed.len() as u32);
+    let key = |v: usize| keyed[starts[v] as usize].0;
+    let run = |v: usize| &keyed[starts[v] as usize..starts[v + 1] as usize];
 
     let mut parent = identity(points.len());
     let mut sets = DisjointSets { parent: &mut parent, offset: 0 };
-    for v in 0..keys.len() {
+    for v in 0..voxels {
         let members = run(v);
-        for &b in &members[1..] {
-            sets.union(members[0], b);
+        for &(_, b) in &members[1..] {
+            sets.union(members[0].1, b);
         }
     }
-    for (v, w) in joined {
-        sets.union(run(v as usize)[0], run(w as usize)[0]);
-    }
+    // Every pair of voxels within reach whose points connect, found in
+    // parallel over jobs of consecutive voxels and joined job by job.
+    let sets = std::sync::Mutex::new(sets);
+    (0..voxels.div_ceil(VOXELS_PER_JOB)).into_par_iter().for_each(|job| {
+        let range = job * VOXELS_PER_JOB..((job + 1) * VOXELS_PER_JOB).min(voxels);
+        let mut found: Vec<(u32, u32)> = Vec::new();
+        // One cursor per column: for consecutive voxels the wanted
+        // keys of a column only grow, so each walks forward.
+        let mut cursors = [usize::MAX; LATER_COLUMNS.len()];
+        for v in range {
+            let own = key(v);
+            for (cursor, &(dx, dy, dz0)) in cursors.iter_mut().zip(&LATER_COLUMNS) {
+                let shift = |k: u64, dx: i64, dy: i64, dz: i64| {
+                    let delta = (dx << (2 * VOXEL_AXIS_BITS)) + (dy << VOXEL_AXIS_BITS) + dz;
+                    (k as i64 + delta) as u64
+                };
+                // Fields never overflow: every coordinate is at least
+                // the reach away from the ends of its field.
+                let (lo, hi) = (shift(own, dx, dy, dz0), shift(own, dx, dy, VOXEL_REACH));
+                if *cursor == usize::MAX {
+                    *cursor = starts[..voxels].partition_point(|&start| keyed[start as usize].0 < lo);
+                }
+                while *cursor < voxels && key(*cursor) < lo {
+                    *cursor += 1;
+                }
+                let mut w = *cursor;
+                while w < voxels && key(w) <= hi {
+                    let connected = run(v).iter().any(|&(_, a)| {
+                        let p = &points[a as usize];
+                        run(w).iter().any(|&(_, b)| close(p, &points[b as usize], tol_sq))
+                    });
+                    if connected {
+                        found.push((run(v)[0].1, run(w)[0].1));
+                    }
+                    w += 1;
+                }
+            }
+        }
+        // A poisoned lock means a panic elsewhere, which unwinds the
+        // whole plan anyway; the sets themselves are never left half-set.
+        let mut sets = sets.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
+        for (a, b) in found {
+            sets.union(a, b);
+        }
+    });
+    drop(keyed);
+    drop(starts);
     collect(parent, |i| mask[i], min_points)
+}
+
+/// `item(i)` for every index `i` that `mask` selects, in index order, in
+/// one vector of exactly their number (rayon's collect of a filter would
+/// gather per-job pieces and then copy them into a vector grown by
+/// doubling); `None` if any item is.
+fn gather_selected<T: Copy + Default + Send>(
+    mask: &[bool],
+    item: impl Fn(usize) -> Option<T> + Sync,
+) -> Option<Vec<T>> {
+    let counts: Vec<usize> = mask.par_chunks(POINTS_PER_CHUNK).map(|c| c.iter().filter(|&&m| m).count()).collect();
+    let mut gathered = vec![T::default(); counts.iter().sum()];
+    let mut pieces = Vec::with_capacity(counts.len());
+    let mut rest = gathered.as_mut_slice();
+    for &count in &counts {
+        let (piece, tail) = rest.split_at_mut(count);
+        pieces.push(piece);
+        rest = tail;
+    }
+    let complete =
+        pieces.into_par_iter().zip(mask.par_chunks(POINTS_PER_CHUNK)).enumerate().all(|(k, (piece, chunk))| {
+            let selected = chunk.iter().enumerate().filter(|(_, m)| **m).map(|(j, _)| k * POINTS_PER_CHUNK + j);
+            for (slot, i) in piece.iter_mut().zip(selected) {
+                match item(i) {
+                    Some(value) => *slot = value,
+                    None => return false,
+                }
+            }
+            true
+        });
+    complete.then_some(gathered)
 }
 
 /// The straightforward form of [`euclidean`]: voxels in a hash map, each

@@ -234,8 +234,8 @@ fn even_sample(points: &[Point], max: usize) -> Vec<usize> {
 }
 
 /// The number of points within `radius_mm` of point `i` (itself
-/// included), read up to `cap`: the reference [`SortedCells::count_within`]
-/// is tested against.
+/// included), read up to `cap`, by a [`CellIndex`] query: the reference
+/// the spacing's counts ([`counts_around`]) are tested against.
 #[cfg(test)]
 fn count_within(index: &CellIndex, points: &[Point], i: usize, radius_mm: f64, cap: u32) -> u32 {
     let p = points[i];

@@ -87,17 +87,45 @@ fn bench_prints_every_table_with_a_figure_in_every_row() {
     let variants = md.split(&title).nth(1).unwrap_or_else(|| panic!("no per-variant table in\n{md}"));
     assert_eq!(
         row(variants, "cloud"),
-        Some(vec!["cloud", "points", "raw MB", "load ms", "plan ms", "cpu ms", "peak RSS MB", "x raw", "under 4 x"]),
+        Some(vec![
+            "cloud",
+            "points",
+            "raw MB",
+            "load ms",
+            "plan ms",
+            "cpu ms",
+            "heap MB",
+            "heap x raw",
+            "heap under 4 x",
+            "peak RSS MB",
+            "RSS x raw",
+            "RSS under 4 x"
+        ]),
         "{md}"
     );
     let names = VARIANTS.iter().map(|v| v.to_string()).chain(["raw, PCD binary_compressed".to_string()]);
     for name in names {
         let cells = row(variants, &name).unwrap_or_else(|| panic!("no {name} row in the per-variant table\n{md}"));
-        assert!(cells[1..8].iter().all(|c| is_figure(c)), "{name}: {cells:?}");
+        assert!(cells[1..6].iter().chain(&cells[9..11]).all(|c| is_figure(c)), "{name}: {cells:?}");
         // The child holds its cloud at least once.
-        let [raw_mb, peak_mb, ratio]: [f64; 3] = [2, 6, 7].map(|k| cells[k].parse().unwrap());
+        let [raw_mb, peak_mb, ratio]: [f64; 3] = [2, 9, 10].map(|k| cells[k].parse().unwrap());
         assert!(peak_mb >= raw_mb && ratio >= 1.0, "{name}: {cells:?}");
-        assert_eq!(cells[8], if ratio < 4.0 { "yes" } else { "no" }, "{name}: {cells:?}");
+        // The verdict is read from the unrounded ratio: where the printed
+        // one rounds to the bound itself, either verdict fits it.
+        if (ratio - 4.0).abs() >= 0.005 {
+            assert_eq!(cells[11], if ratio < 4.0 { "yes" } else { "no" }, "{name}: {cells:?}");
+        }
+        // The heap is counted only in a build with the counting allocator;
+        // it holds the loaded cloud at least once.
+        if cfg!(feature = "heap-count") {
+            let [heap_mb, heap_ratio]: [f64; 2] = [6, 7].map(|k| cells[k].parse().unwrap());
+            assert!(heap_mb >= raw_mb && heap_ratio >= 1.0, "{name}: {cells:?}");
+            if (heap_ratio - 4.0).abs() >= 0.005 {
+                assert_eq!(cells[8], if heap_ratio < 4.0 { "yes" } else { "no" }, "{name}: {cells:?}");
+            }
+        } else {
+            assert_eq!(cells[6..9], ["-", "-", "-"], "{name}: {cells:?}");
+        }
     }
     let latency = row(&md, "frame's last byte written to reply's last byte read").expect("a daemon latency row");
     assert!(is_figure(latency[1]), "{latency:?}");
@@ -136,21 +164,41 @@ fn the_load_measurement_answers_requests_in_order() {
     assert!(frames.iter().all(|&id| id > 0), "every plan names the camera's frame: {frames:?}");
 }
 
-/// Issue 11's memory target on the one variant of the bench's table whose
-/// cloud is large enough for it to be about the cloud (the smaller ones
+/// Issue 11's memory target on the variants of the bench's table whose
+/// clouds are large enough for it to be about the cloud (the smaller ones
 /// are mostly the program itself): a one-shot `weldseam plan` of the
-/// 500 mm V-butt frame without its grid, 2.2 M points (26.2 MB of raw
-/// points), peaks under 4 times its raw size. It peaked at 4.1 times while
-/// `plan` kept freed memory as the daemon does (`cli::memory`). Measured
+/// 500 mm V-butt frame without its grid (2.2 M points, 26.2 MB of raw
+/// points), in metres and in the base frame (2.3 MP, 27.6 MB) peaks under
+/// 4 times its raw size. Without its grid it peaked at 4.1 times while
+/// `plan` kept freed memory as the daemon does (`cli::memory`), and the
+/// converted ones at 3.7 times while the planner copied the cloud it
+/// converts (`Planner::plan_owned` converts it in place). Measured
 /// through the bench's small measuring process, with two pipeline threads
 /// so that the figure does not grow with the machine's cores.
 #[test]
-fn a_one_shot_plan_of_an_unorganized_frame_peaks_under_four_times_its_raw_size() {
+fn a_one_shot_plan_of_a_large_variant_peaks_under_four_times_its_raw_size() {
     let scenario = Scenario::new(VARIANT_JOINT, 500.0, CameraModel::default());
-    let sim = Variant::parse("unorganized").unwrap().apply(&scenario.simulate(), scenario.seed());
+    let frame = scenario.simulate();
+    for text in ["unorganized", "metres", "base"] {
+        let variant = Variant::parse(text).unwrap();
+        let (peak, raw) = one_shot_peak(&variant.apply(&frame, scenario.seed()), variant.in_base_frame());
+        let ratio = peak as f64 / raw as f64;
+        assert!(
+            ratio < 4.0,
+            "{text}: peak {:.1} MB is {ratio:.2} times the raw {:.1} MB",
+            peak as f64 / 1e6,
+            raw as f64 / 1e6
+        );
+    }
+}
+
+/// The peak resident bytes of `weldseam plan --json` on `sim`'s cloud
+/// written as a binary PCD (units guessed, in the base frame if `base`),
+/// and the cloud's raw size.
+fn one_shot_peak(sim: &weldseam::sim::Simulation, base: bool) -> (u64, u64) {
     let mut bytes = Vec::new();
     pcd::write_binary(&sim.cloud, &mut bytes).unwrap();
-    let (_dir, path) = write_temp("unorganized.pcd", &bytes);
+    let (_dir, path) = write_temp("cloud.pcd", &bytes);
     drop(bytes);
     let raw = raw_cloud_bytes(&sim.cloud);
     let (p, depth) = (sim.pose, sim.truth.groove_depth_mm.expect("a V-butt has a groove depth"));
@@ -158,17 +206,15 @@ fn a_one_shot_plan_of_an_unorganized_frame_peaks_under_four_times_its_raw_size()
         "--pose={},{},{},{},{},{}",
         p.xyz_mm[0], p.xyz_mm[1], p.xyz_mm[2], p.angles_deg[0], p.angles_deg[1], p.angles_deg[2]
     );
-    drop(sim);
     let out = Command::new(env!("CARGO_BIN_EXE_weldseam"))
         .args(["bench", "--peak-rss-of-child", "--", "plan", "--cloud"])
         .arg(&path)
         .args(["--joint", "v-butt", &format!("--groove-depth={depth}"), &pose, "--json"])
+        .args(["--cloud-frame", if base { "base" } else { "camera" }])
         .env("RAYON_NUM_THREADS", "2")
         .output()
         .expect("run weldseam bench --peak-rss-of-child");
     let text = String::from_utf8_lossy(&out.stdout);
     assert!(out.status.success(), "{text}\n{}", String::from_utf8_lossy(&out.stderr));
-    let peak: u64 = text.trim().parse().unwrap_or_else(|_| panic!("not a byte count: {text:?}"));
-    let ratio = peak as f64 / raw as f64;
-    assert!(ratio < 4.0, "peak {:.1} MB is {ratio:.2} times the raw {:.1} MB", peak as f64 / 1e6, raw as f64 / 1e6);
+    (text.trim().parse().unwrap_or_else(|_| panic!("not a byte count: {text:?}")), raw)
 }

@@ -113,3 +113,43 @@ fn clouds_no_camera_could_see_are_refused_with_the_reason() {
     assert_eq!(err.stage, Stage::Input);
     assert!(err.reason.contains("off its axis, beyond any camera's field of view"), "{err}");
 }
+
+/// A cloud handed over by value (`Planner::plan_owned`, as `weldseam plan`
+/// and the daemon plan the frames they no longer need) is converted in
+/// place instead of copied, and plans as the same cloud lent does: the
+/// same seams, counts and refusals on every variant of the bench's table
+/// and on their mixes, the points the camera cannot measure included.
+#[test]
+fn a_cloud_planned_by_value_plans_as_the_same_cloud_borrowed() {
+    use weldseam::sim::scenarios::{Scenario, VARIANT_JOINT, VARIANTS, camera_with_size};
+    use weldseam::sim::variants::Variant;
+    let scenario = Scenario::new(VARIANT_JOINT, 500.0, camera_with_size(896, 560));
+    let frame = scenario.simulate();
+    let planner = Planner::new(Config { camera: scenario.camera, ..Config::default() });
+    let untimed = |plan: Result<Plan, _>| plan.map(|plan| Plan { timings: Default::default(), ..plan });
+    let mut planned = 0;
+    for text in VARIANTS.into_iter().chain(["unorganized,metres,base", "cropped:25,metres"]) {
+        let variant = Variant::parse(text).unwrap();
+        let sim = variant.apply(&frame, scenario.seed());
+        let mut request = PlanRequest::new(scenario.joint, sim.truth.groove_depth_mm, sim.pose);
+        request.units = Units::Auto;
+        if variant.in_base_frame() {
+            request.cloud_frame = CloudFrame::Base;
+        }
+        let borrowed = untimed(planner.plan(&sim.cloud, &request));
+        let owned = untimed(planner.plan_owned(sim.cloud.clone(), &request));
+        assert_eq!(owned, borrowed, "{text}");
+        planned += borrowed.is_ok() as usize;
+    }
+    assert!(planned >= 5, "most variants plan: {planned}");
+    // A frame with points the camera cannot measure loses them in place.
+    let mut points = frame.cloud.points().to_vec();
+    for p in points.iter_mut().step_by(97).filter(|p| p[0].is_finite()) {
+        p[2] *= 50.0;
+    }
+    let far = PointCloud::organized(frame.cloud.width(), frame.cloud.height(), points).expect("same size");
+    let request = PlanRequest::new(scenario.joint, frame.truth.groove_depth_mm, frame.pose);
+    let borrowed = untimed(planner.plan(&far, &request));
+    assert_eq!(untimed(planner.plan_owned(far, &request)), borrowed);
+    assert!(borrowed.is_ok(), "{borrowed:?}");
+}

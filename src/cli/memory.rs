@@ -3,7 +3,8 @@
 //! planes, masks and labels): handing them back to the kernel between
 //! frames only makes the next frame fault in and zero the same pages again.
 //! A one-shot command has no next frame, and there the policy only costs:
-//! main applies it to the commands that plan frame after frame.
+//! main applies it to the commands that plan frame after frame. And, for
+//! `weldseam bench`, the count of the heap a plan uses ([`heap_peak_of`]).
 
 /// Keeps freed memory in the process for reuse: no `mmap` of its own for
 /// any buffer up to twice a 2.3 MP frame, and no trimming of the heap.
@@ -27,5 +28,32 @@ pub fn keep_freed_memory() {
             libc::mallopt(libc::M_MMAP_THRESHOLD, MMAP_THRESHOLD_BYTES);
             libc::mallopt(libc::M_TRIM_THRESHOLD, libc::c_int::MAX);
         }
+    }
+}
+
+/// With the `heap-count` feature the process counts its heap: every
+/// allocation and free moves a live-bytes counter and its peak (two atomic
+/// operations each, which the daemon, the same program, does without).
+#[cfg(feature = "heap-count")]
+#[global_allocator]
+static HEAP: &peakmem_alloc::PeakMemAlloc<std::alloc::System> = &peakmem_alloc::INSTRUMENTED_SYSTEM;
+
+/// Runs `f` and returns its result and the peak of the heap bytes live
+/// while it ran, above those live when it started (a block allocated
+/// before and freed meanwhile lowers the count, as a cloud handed to the
+/// planner and freed there should); `None` without the `heap-count`
+/// feature. Every thread's allocations count, so the caller runs nothing
+/// else meanwhile.
+pub fn heap_peak_of<T>(f: impl FnOnce() -> T) -> (T, Option<u64>) {
+    #[cfg(feature = "heap-count")]
+    {
+        use peakmem_alloc::PeakMemAllocTrait;
+        HEAP.reset_peak_memory();
+        let result = f();
+        (result, Some(HEAP.get_peak_memory() as u64))
+    }
+    #[cfg(not(feature = "heap-count"))]
+    {
+        (f(), None)
     }
 }

@@ -85,7 +85,9 @@ pub fn run(args: &PlanArgs) -> anyhow::Result<()> {
             let (outcome, trace) = planner.plan_traced(&cloud, &request);
             (outcome, Some(trace))
         }
-        None => (planner.plan(&cloud, &request), None),
+        // The cloud is not needed after planning: the planner converts it
+        // in place rather than hold a copy beside it.
+        None => (planner.plan_owned(cloud, &request), None),
     };
     let report = outcome.as_ref().ok().map(|plan| {
         let mut report = plan_result(plan, planner.config().euler);

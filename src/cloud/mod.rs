@@ -64,6 +64,14 @@ impl PointCloud {
         &self.points
     }
 
+    /// The points, taken out of the cloud: for a caller that changes them
+    /// and makes a cloud of them again ([`PointCloud::organized`] and
+    /// [`PointCloud::unorganized`] keep the vector they are given), so a
+    /// frame is changed without a second copy of it.
+    pub fn into_points(self) -> Vec<Point> {
+        self.points
+    }
+
     pub fn width(&self) -> usize {
         self.width
     }

@@ -349,8 +349,13 @@ const LATER_COLUMNS: [(i64, i64, i64); 13] = [
     (2, 2, -VOXEL_REACH),
 ];
 
-/// Voxels of a parallel job: enough to amortise its binary searches.
-const VOXELS_PER_JOB: usize = 4096;
+/// Voxels of a parallel job: enough to amortise its binary searches, few
+/// enough that the pairs a job holds until it joins them stay small
+/// (about a hundred kilobytes).
+const VOXELS_PER_JOB: usize = 1024;
+
+/// The points of a parallel chunk when the selected points are gathered.
+const POINTS_PER_CHUNK: usize = 1 << 14;
 
 /// Exact Euclidean clustering of the points selected by `mask`.
 ///
@@ -359,104 +364,217 @@ const VOXELS_PER_JOB: usize = 4096;
 /// within reach joined when any pair of their points is close. What
 /// differs is how: keys are packed and sorted once on rayon, the voxels
 /// within reach are found by walking the sorted keys column by column (no
-/// hashing), the pairs of voxels are tested in parallel, and only the
-/// joined pairs go through the union-find. Clusters depend only on which
-/// points connect, not on the order of the unions.
+/// hashing), and the pairs of voxels are tested in parallel jobs, each
+/// joining the pairs it found as soon as it is done. Clusters depend only
+/// on which points connect, not on the order of the unions.
+///
+/// Memory: each selected point's voxel key and index sorted together, in
+/// one vector sized once: 8 bytes a point when the selection's voxels span
+/// few enough to number in 32 bits (a workpiece's, at any tolerance above
+/// a few hundredths of a millimetre), else 16; where each voxel starts (4
+/// bytes a voxel); and the union-find (4 bytes a point of the cloud, which
+/// becomes the labels). A job's joined pairs live only until it has
+/// joined them, not in one list of every pair of the cloud.
 pub(crate) fn euclidean(cloud: &PointCloud, mask: &[bool], tolerance_mm: f64, min_points: usize) -> Clusters {
     let points = cloud.points();
-    let tol_sq = (tolerance_mm * tolerance_mm) as f32;
     let cell = tolerance_mm / 3f64.sqrt();
+    // The reference's voxel coordinates (i32, as it computes them).
+    let voxel_of = |i: usize| points[i].map(|v| (v as f64 / cell).floor() as i32 as i64);
+    let none = || ([i64::MAX; 3], [i64::MIN; 3]);
+    let (low, high) = (0..points.len())
+        .into_par_iter()
+        .filter(|&i| mask[i])
+        .map(|i| (voxel_of(i), voxel_of(i)))
+        .reduce(none, |(a0, a1), (b0, b1)| {
+            (std::array::from_fn(|k| a0[k].min(b0[k])), std::array::from_fn(|k| a1[k].max(b1[k])))
+        });
+    // Each axis's field holds the coordinates offset to leave the reach
+    // free on either side, so that no step to a neighbour leaves it.
+    let bits: [u32; 3] = std::array::from_fn(|k| {
+        let span = (high[k].saturating_sub(low[k])).max(0) as u64 + 2 * VOXEL_REACH as u64 + 1;
+        u64::BITS - span.leading_zeros()
+    });
+    if bits.iter().sum::<u32>() <= u32::BITS {
+        let layout = VoxelLayout { y_shift: bits[2], x_shift: bits[1] + bits[2] };
+        let field = |k: usize, c: i64| (c - low[k] + VOXEL_REACH) as u64;
+        let packed = gather_selected(mask, |i| {
+            let c = voxel_of(i);
+            let key = (field(0, c[0]) << layout.x_shift) | (field(1, c[1]) << layout.y_shift) | field(2, c[2]);
+            Some(PackedEntry((key << u32::BITS) | i as u64))
+        });
+        if let Some(entries) = packed {
+            return join_voxels(entries, points, mask, tolerance_mm, layout, min_points);
+        }
+    }
+    // Wide fields: each coordinate offset by half its field, when every
+    // one leaves room for the reach on either side.
     let half = 1i64 << (VOXEL_AXIS_BITS - 1);
-    // The reference's voxel coordinates (i32, as it computes them),
-    // packed when every one leaves room for the reach on either side.
-    let key_of = |p: &[f32; 3]| -> Option<u64> {
+    let layout = VoxelLayout { y_shift: VOXEL_AXIS_BITS, x_shift: 2 * VOXEL_AXIS_BITS };
+    let wide = gather_selected(mask, |i| {
         let mut key = 0u64;
-        for &v in p {
-            let c = (v as f64 / cell).floor() as i32 as i64;
+        for c in voxel_of(i) {
             if c.abs() >= half - VOXEL_REACH {
                 return None;
             }
             key = (key << VOXEL_AXIS_BITS) | (c + half) as u64;
         }
-        Some(key)
-    };
-    let keyed: Option<Vec<(u64, u32)>> = (0..points.len() as u32)
-        .into_par_iter()
-        .filter(|&i| mask[i as usize])
-        .map(|i| key_of(&points[i as usize]).map(|k| (k, i)))
-        .collect();
-    let Some(mut keyed) = keyed else {
-        return euclidean_reference(cloud, mask, tolerance_mm, min_points);
-    };
+        Some((key, i as u32))
+    });
+    match wide {
+        Some(entries) => join_voxels(entries, points, mask, tolerance_mm, layout, min_points),
+        None => euclidean_reference(cloud, mask, tolerance_mm, min_points),
+    }
+}
+
+/// Where a voxel key's x and y fields start (z fills the bits below y).
+#[derive(Debug, Clone, Copy)]
+struct VoxelLayout {
+    x_shift: u32,
+    y_shift: u32,
+}
+
+/// A selected point's voxel key and index, sorted by key, then index.
+trait VoxelEntry: Copy + Ord + Send + Sync + Default {
+    fn key(&self) -> u64;
+    fn index(&self) -> u32;
+}
+
+/// A key of up to 64 bits beside the index: 16 bytes.
+impl VoxelEntry for (u64, u32) {
+    fn key(&self) -> u64 {
+        self.0
+    }
+    fn index(&self) -> u32 {
+        self.1
+    }
+}
+
+/// A key of up to 32 bits above the index, in 8 bytes; ordered as the
+/// pair would be.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, PartialOrd, Ord)]
+struct PackedEntry(u64);
+
+impl VoxelEntry for PackedEntry {
+    fn key(&self) -> u64 {
+        self.0 >> u32::BITS
+    }
+    fn index(&self) -> u32 {
+        self.0 as u32
+    }
+}
+
+/// [`euclidean`] once the selected points are keyed: `keyed` sorted, the
+/// voxels walked and joined.
+fn join_voxels<E: VoxelEntry>(
+    mut keyed: Vec<E>,
+    points: &[[f32; 3]],
+    mask: &[bool],
+    tolerance_mm: f64,
+    layout: VoxelLayout,
+    min_points: usize,
+) -> Clusters {
+    let tol_sq = (tolerance_mm * tolerance_mm) as f32;
     keyed.par_sort_unstable();
-    let order: Vec<u32> = keyed.iter().map(|&(_, i)| i).collect();
-    let mut keys: Vec<u64> = Vec::new();
-    let mut starts: Vec<u32> = Vec::new();
-    for (position, &(key, _)) in keyed.iter().enumerate() {
-        if keys.last() != Some(&key) {
-            keys.push(key);
+    // Where each voxel's run of points starts in `keyed`, and its end.
+    let voxels =
+        if keyed.is_empty() { 0 } else { 1 + keyed.par_windows(2).filter(|w| w[0].key() != w[1].key()).count() };
+    let mut starts: Vec<u32> = Vec::with_capacity(voxels + 1);
+    for (position, entry) in keyed.iter().enumerate() {
+        if position == 0 || keyed[position - 1].key() != entry.key() {
             starts.push(position as u32);
         }
     }
-    starts.push(order.len() as u32);
-    drop(keyed);
-    let run = |v: usize| &order[starts[v] as usize..starts[v + 1] as usize];
-
-    // Every pair of voxels within reach whose points connect, found in
-    // parallel over jobs of consecutive voxels.
-    let joined: Vec<(u32, u32)> = (0..keys.len().div_ceil(VOXELS_PER_JOB))
-        .into_par_iter()
-        .flat_map_iter(|job| {
-            let range = job * VOXELS_PER_JOB..((job + 1) * VOXELS_PER_JOB).min(keys.len());
-            let mut found = Vec::new();
-            // One cursor per column: for consecutive voxels the wanted
-            // keys of a column only grow, so each walks forward.
-            let mut cursors = [usize::MAX; LATER_COLUMNS.len()];
-            for v in range {
-                let key = keys[v];
-                for (cursor, &(dx, dy, dz0)) in cursors.iter_mut().zip(&LATER_COLUMNS) {
-                    let shift = |k: u64, dx: i64, dy: i64, dz: i64| {
-                        let delta = (dx << (2 * VOXEL_AXIS_BITS)) + (dy << VOXEL_AXIS_BITS) + dz;
-                        (k as i64 + delta) as u64
-                    };
-                    // Fields never overflow: every coordinate is at least
-                    // the reach away from the ends of its field.
-                    let (lo, hi) = (shift(key, dx, dy, dz0), shift(key, dx, dy, VOXEL_REACH));
-                    if *cursor == usize::MAX {
-                        *cursor = keys.partition_point(|&k| k < lo);
-                    }
-                    while *cursor < keys.len() && keys[*cursor] < lo {
-                        *cursor += 1;
-                    }
-                    let mut w = *cursor;
-                    while w < keys.len() && keys[w] <= hi {
-                        let connected = run(v).iter().any(|&a| {
-                            let p = &points[a as usize];
-                            run(w).iter().any(|&b| close(p, &points[b as usize], tol_sq))
-                        });
-                        if connected {
-                            found.push((v as u32, w as u32));
-                        }
-                        w += 1;
-                    }
-                }
-            }
-            found
-        })
-        .collect();
+    starts.push(keyed.len() as u32);
+    let key = |v: usize| keyed[starts[v] as usize].key();
+    let run = |v: usize| &keyed[starts[v] as usize..starts[v + 1] as usize];
 
     let mut parent = identity(points.len());
     let mut sets = DisjointSets { parent: &mut parent, offset: 0 };
-    for v in 0..keys.len() {
+    for v in 0..voxels {
         let members = run(v);
-        for &b in &members[1..] {
-            sets.union(members[0], b);
+        for b in &members[1..] {
+            sets.union(members[0].index(), b.index());
         }
     }
-    for (v, w) in joined {
-        sets.union(run(v as usize)[0], run(w as usize)[0]);
-    }
+    // Every pair of voxels within reach whose points connect, found in
+    // parallel over jobs of consecutive voxels and joined job by job.
+    let sets = std::sync::Mutex::new(sets);
+    (0..voxels.div_ceil(VOXELS_PER_JOB)).into_par_iter().for_each(|job| {
+        let range = job * VOXELS_PER_JOB..((job + 1) * VOXELS_PER_JOB).min(voxels);
+        let mut found: Vec<(u32, u32)> = Vec::new();
+        // One cursor per column: for consecutive voxels the wanted
+        // keys of a column only grow, so each walks forward.
+        let mut cursors = [usize::MAX; LATER_COLUMNS.len()];
+        for v in range {
+            let own = key(v);
+            for (cursor, &(dx, dy, dz0)) in cursors.iter_mut().zip(&LATER_COLUMNS) {
+                let shift = |k: u64, dx: i64, dy: i64, dz: i64| {
+                    let delta = (dx << layout.x_shift) + (dy << layout.y_shift) + dz;
+                    (k as i64 + delta) as u64
+                };
+                // Fields never overflow: every coordinate is at least
+                // the reach away from the ends of its field.
+                let (lo, hi) = (shift(own, dx, dy, dz0), shift(own, dx, dy, VOXEL_REACH));
+                if *cursor == usize::MAX {
+                    *cursor = starts[..voxels].partition_point(|&start| keyed[start as usize].key() < lo);
+                }
+                while *cursor < voxels && key(*cursor) < lo {
+                    *cursor += 1;
+                }
+                let mut w = *cursor;
+                while w < voxels && key(w) <= hi {
+                    let connected = run(v).iter().any(|a| {
+                        let p = &points[a.index() as usize];
+                        run(w).iter().any(|b| close(p, &points[b.index() as usize], tol_sq))
+                    });
+                    if connected {
+                        found.push((run(v)[0].index(), run(w)[0].index()));
+                    }
+                    w += 1;
+                }
+            }
+        }
+        // A poisoned lock means a panic elsewhere, which unwinds the
+        // whole plan anyway; the sets themselves are never left half-set.
+        let mut sets = sets.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
+        for (a, b) in found {
+            sets.union(a, b);
+        }
+    });
+    drop(keyed);
+    drop(starts);
     collect(parent, |i| mask[i], min_points)
+}
+
+/// `item(i)` for every index `i` that `mask` selects, in index order, in
+/// one vector of exactly their number (rayon's collect of a filter would
+/// gather per-job pieces and then copy them into a vector grown by
+/// doubling); `None` if any item is.
+fn gather_selected<T: Copy + Default + Send>(
+    mask: &[bool],
+    item: impl Fn(usize) -> Option<T> + Sync,
+) -> Option<Vec<T>> {
+    let counts: Vec<usize> = mask.par_chunks(POINTS_PER_CHUNK).map(|c| c.iter().filter(|&&m| m).count()).collect();
+    let mut gathered = vec![T::default(); counts.iter().sum()];
+    let mut pieces = Vec::with_capacity(counts.len());
+    let mut rest = gathered.as_mut_slice();
+    for &count in &counts {
+        let (piece, tail) = rest.split_at_mut(count);
+        pieces.push(piece);
+        rest = tail;
+    }
+    let complete =
+        pieces.into_par_iter().zip(mask.par_chunks(POINTS_PER_CHUNK)).enumerate().all(|(k, (piece, chunk))| {
+            let selected = chunk.iter().enumerate().filter(|(_, m)| **m).map(|(j, _)| k * POINTS_PER_CHUNK + j);
+            for (slot, i) in piece.iter_mut().zip(selected) {
+                match item(i) {
+                    Some(value) => *slot = value,
+                    None => return false,
+                }
+            }
+            true
+        });
+    complete.then_some(gathered)
 }
 
 /// The straightforward form of [`euclidean`]: voxels in a hash map, each
@@ -624,6 +742,18 @@ mod tests {
             let fast = euclidean(&far, &far_mask, tolerance, 1);
             assert_eq!(fast.labels, euclidean_reference(&far, &far_mask, tolerance, 1).labels);
         }
+        // Voxels too many to number in 32 bits (a fine tolerance over a
+        // 200 mm span: 14 + 14 + 12 bits) take the 16-byte keys.
+        let mut pts: Vec<[f32; 3]> = (0..3000)
+            .map(|_| [rng.unit() * 1.5, rng.unit() * 1.5, 500.0 + rng.unit() * 0.05])
+            .chain([[-100.0, -100.0, 480.0], [100.0, 100.0, 520.0]])
+            .collect();
+        pts.extend((0..200).map(|k| [k as f32 * 0.02 - 2.0, 0.5, 500.0]));
+        let mut mask: Vec<bool> = (0..pts.len()).map(|_| rng.chance(0.9)).collect();
+        mask[3000..3002].fill(true);
+        let cloud = PointCloud::unorganized(pts);
+        let (fast, slow) = (euclidean(&cloud, &mask, 0.03, 2), euclidean_reference(&cloud, &mask, 0.03, 2));
+        assert_eq!((fast.labels, fast.members), (slow.labels, slow.members));
     }
 
     #[test]

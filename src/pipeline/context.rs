@@ -90,14 +90,16 @@ impl<'a> Context<'a> {
     /// before any stage runs. A frame that cannot be a camera's view, or
     /// is left without a valid point, fails here, in the [`Stage::Input`]
     /// stage. One pass over the frame counts both.
+    ///
+    /// A cloud the planner owns (`Cow::Owned`) loses those points in
+    /// place; a borrowed one is copied only if it has any.
     pub(super) fn sanitise(
         config: &'a Config,
-        cloud: &'a PointCloud,
+        mut cloud: Cow<'a, PointCloud>,
         request: &'a PlanRequest,
         clock: Clock,
         mut trace: Tracer<'a>,
     ) -> Result<Self, PlanError> {
-        let mut cloud = Cow::Borrowed(cloud);
         let camera = &config.camera;
         let volume = camera.measurable_volume(cloud.width(), cloud.height(), cloud.is_organized());
         let (view, counts) = count_frame(&cloud, &volume);
@@ -114,7 +116,7 @@ impl<'a> Context<'a> {
                 "ignoring {} invalid points the camera cannot measure",
                 counts.unmeasurable()
             );
-            cloud = Cow::Owned(without_unmeasurable(&cloud, &volume));
+            cloud = Cow::Owned(without_unmeasurable(cloud, &volume));
         }
         trace.record(|t| (t.cloud, t.camera) = (Some(cloud.clone().into_owned()), Some(*camera)));
         let mut ctx = Context {
@@ -481,19 +483,9 @@ fn count_frame(cloud: &PointCloud, volume: &MeasurableVolume) -> (ViewCounts, Me
     )
 }
 
-/// A copy of `cloud` with the points outside `volume` made invalid.
-fn without_unmeasurable(cloud: &PointCloud, volume: &MeasurableVolume) -> PointCloud {
-    let points = cloud
-        .points()
-        .par_iter()
-        .map(|p| if volume.reject(p).is_none() { *p } else { crate::cloud::INVALID_POINT })
-        .collect();
-    if cloud.is_organized() {
-        PointCloud::organized(cloud.width(), cloud.height(), points)
-            .unwrap_or_else(|| PointCloud::unorganized(Vec::new()))
-    } else {
-        PointCloud::unorganized(points)
-    }
+/// `cloud` with the points outside `volume` made invalid.
+fn without_unmeasurable(cloud: Cow<'_, PointCloud>, volume: &MeasurableVolume) -> PointCloud {
+    input::map_points(cloud, |p| if volume.reject(p).is_none() { *p } else { crate::cloud::INVALID_POINT })
 }
 
 #[cfg(test)]

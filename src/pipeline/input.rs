@@ -113,24 +113,25 @@ pub fn is_in_metres(cloud: &PointCloud, units: Units) -> bool {
 
 /// A cloud in metres in millimetres, its organization kept.
 pub fn metres_to_millimetres(cloud: &PointCloud) -> PointCloud {
-    transformed(cloud, 1000.0, &Isometry3::identity())
+    transformed(Cow::Borrowed(cloud), 1000.0, &Isometry3::identity())
 }
 
 /// Brings `cloud` into camera-frame millimetres as `request` says it is
 /// given. A cloud already in camera-frame millimetres is returned as it
-/// is, uncopied. Whether the result can be a camera's view is checked
-/// when the frame is sanitised, on the counts of its one pass over the
-/// points ([`check_camera_view`]).
+/// is, uncopied; one the caller handed over (`Cow::Owned`) is converted
+/// in place, so a frame is never held twice. Whether the result can be a
+/// camera's view is checked when the frame is sanitised, on the counts of
+/// its one pass over the points ([`check_camera_view`]).
 pub(super) fn prepare<'a>(
-    cloud: &'a PointCloud,
+    cloud: Cow<'a, PointCloud>,
     request: &PlanRequest,
     config: &Config,
 ) -> Result<Cow<'a, PointCloud>, PlanError> {
-    let metres = is_in_metres(cloud, request.units);
+    let metres = is_in_metres(&cloud, request.units);
     let scale = if metres { 1000.0 } else { 1.0 };
     let prepared = match request.cloud_frame {
-        CloudFrame::Camera if !metres => Cow::Borrowed(cloud),
-        CloudFrame::Camera => Cow::Owned(metres_to_millimetres(cloud)),
+        CloudFrame::Camera if !metres => cloud,
+        CloudFrame::Camera => Cow::Owned(transformed(cloud, scale, &Isometry3::identity())),
         CloudFrame::Base => {
             // p_cam = (Base_T_End * End_T_Camera)^-1 p_base
             let hand_eye = request.hand_eye.unwrap_or(config.hand_eye);
@@ -142,20 +143,32 @@ pub(super) fn prepare<'a>(
 }
 
 /// `cloud` scaled by `scale`, then moved by `camera_from_cloud`, in f64.
-fn transformed(cloud: &PointCloud, scale: f64, camera_from_cloud: &Isometry3<f64>) -> PointCloud {
-    let points: Vec<Point> = cloud
-        .points()
-        .par_iter()
-        .map(|p| {
-            if !p[0].is_finite() {
-                return INVALID_POINT;
-            }
-            let q = camera_from_cloud * Point3::new(p[0].into(), p[1].into(), p[2].into()).map(|c: f64| c * scale);
-            [q.x as f32, q.y as f32, q.z as f32]
-        })
-        .collect();
-    if cloud.is_organized() {
-        PointCloud::organized(cloud.width(), cloud.height(), points).unwrap_or_else(|| PointCloud::unorganized(vec![]))
+fn transformed(cloud: Cow<'_, PointCloud>, scale: f64, camera_from_cloud: &Isometry3<f64>) -> PointCloud {
+    map_points(cloud, |p| {
+        if !p[0].is_finite() {
+            return INVALID_POINT;
+        }
+        let q = camera_from_cloud * Point3::new(p[0].into(), p[1].into(), p[2].into()).map(|c: f64| c * scale);
+        [q.x as f32, q.y as f32, q.z as f32]
+    })
+}
+
+/// `cloud` with every point replaced by `f` of it, its organization kept
+/// (and, as the cloud's constructors do, any point `f` makes invalid
+/// marked NaN in a grid, dropped from a bag of points). A borrowed cloud
+/// is copied; an owned one is changed in place, in its own buffer.
+pub(super) fn map_points(cloud: Cow<'_, PointCloud>, f: impl Fn(&Point) -> Point + Sync + Send) -> PointCloud {
+    let (width, height, organized) = (cloud.width(), cloud.height(), cloud.is_organized());
+    let points = match cloud {
+        Cow::Borrowed(cloud) => cloud.points().par_iter().map(&f).collect(),
+        Cow::Owned(cloud) => {
+            let mut points = cloud.into_points();
+            points.par_iter_mut().for_each(|p| *p = f(p));
+            points
+        }
+    };
+    if organized {
+        PointCloud::organized(width, height, points).unwrap_or_else(|| PointCloud::unorganized(Vec::new()))
     } else {
         PointCloud::unorganized(points)
     }

@@ -233,7 +233,7 @@ impl NeighbourSearch<'_> {
     /// point is queried. The answers come with their points' indices, in
     /// no particular order; `None` on a pixel grid, which is searched by
     /// window.
-    pub(crate) fn query_by_cell<S, T: Send>(
+    pub(crate) fn query_by_cell<S, T: Send + Clone + Default>(
         &self,
         init: impl Fn() -> S + Sync,
         wanted: impl Fn(usize) -> bool + Sync,

@@ -18,7 +18,7 @@
 
 use std::borrow::Cow;
 use std::fmt;
-use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::atomic::{AtomicU32, Ordering};
 use std::time::Instant;
 
 use rayon::prelude::*;
@@ -144,6 +144,11 @@ pub struct Regridded {
 const OFF_CENTRE: u32 = u32::MAX;
 const OUTSIDE: u32 = u32::MAX - 1;
 
+/// A pixel no point has landed on. No point has this index: a cloud has
+/// at most as many points as the sensor has pixels, and pixel numbers
+/// stop short of [`OUTSIDE`].
+const EMPTY_SLOT: u32 = u32::MAX;
+
 /// Puts the points of an unorganized camera-frame cloud back on `camera`'s
 /// pixel grid, each on the pixel it projects to (through the distortion,
 /// if any), when the projection is that of a raw frame of this camera (see
@@ -178,24 +183,36 @@ pub fn regrid(cloud: &PointCloud, camera: &CameraModel) -> Result<(PointCloud, R
     if (off_centre + outside) as f64 > MAX_MISFIT_FRACTION * n as f64 {
         return Err(NotARawFrame::OffGrid { off_centre, outside, points: n });
     }
-    // Each pixel keeps its nearest point: the depth's bits (positive
-    // floats order as their bits) above the index, so the choice is the
-    // same whatever order the points come in.
-    let slots: Vec<AtomicU64> = (0..width * height).into_par_iter().map(|_| AtomicU64::new(u64::MAX)).collect();
+    // Each pixel keeps its nearest point: the least key, the depth's bits
+    // (positive floats order as their bits) above the index, so the choice
+    // is the same whatever order the points come in. A slot holds the
+    // index alone (half a 64-bit key's memory over the sensor, 9 MB at
+    // 2.3 MP), and the key is made again to compare.
+    let key_of = |i: u32| (u64::from(points[i as usize][2].to_bits()) << 32) | u64::from(i);
+    let slots: Vec<AtomicU32> = (0..width * height).into_par_iter().map(|_| AtomicU32::new(EMPTY_SLOT)).collect();
     let collisions: usize = pixels
         .par_iter()
         .enumerate()
         .filter(|(_, k)| **k < OUTSIDE)
         .map(|(i, &k)| {
-            let key = (u64::from(points[i][2].to_bits()) << 32) | i as u64;
-            (slots[k as usize].fetch_min(key, Ordering::Relaxed) != u64::MAX) as usize
+            let (i, slot) = (i as u32, &slots[k as usize]);
+            // Exactly one point of a pixel finds it empty: the others
+            // are its collisions, whichever of them comes first.
+            let mut held = slot.load(Ordering::Relaxed);
+            while held == EMPTY_SLOT || key_of(i) < key_of(held) {
+                match slot.compare_exchange_weak(held, i, Ordering::Relaxed, Ordering::Relaxed) {
+                    Ok(_) => break,
+                    Err(now) => held = now,
+                }
+            }
+            (held != EMPTY_SLOT) as usize
         })
         .sum();
     if collisions as f64 > MAX_COLLISION_FRACTION * n as f64 {
         return Err(NotARawFrame::Collisions { collisions, points: n });
     }
     drop(pixels);
-    let occupied = |k: usize| slots[k].load(Ordering::Relaxed) != u64::MAX;
+    let occupied = |k: usize| slots[k].load(Ordering::Relaxed) != EMPTY_SLOT;
     // Per row: occupied pixels, those with neighbours along both axes, and
     // the occupied columns' extent; rows merged in order.
     let rows: Vec<(usize, usize, usize, usize)> = (0..height)
@@ -237,8 +254,8 @@ pub fn regrid(cloud: &PointCloud, camera: &CameraModel) -> Result<(PointCloud, R
     let grid: Vec<[f32; 3]> = slots
         .par_iter()
         .map(|s| match s.load(Ordering::Relaxed) {
-            u64::MAX => INVALID_POINT,
-            key => points[(key & u64::from(u32::MAX)) as usize],
+            EMPTY_SLOT => INVALID_POINT,
+            i => points[i as usize],
         })
         .collect();
     let cloud = PointCloud::organized(width, height, grid).expect("the grid has the sensor's size");
@@ -255,11 +272,13 @@ pub(super) struct Prepared<'a> {
 /// The planner's one step before the stages: re-grid a raw export, check
 /// an organized frame's pinhole against the config, or take it in place of
 /// the config for another camera's frame. Logs what it decided and why.
-pub(super) fn prepare<'a>(camera: &CameraModel, cloud: &'a PointCloud) -> Prepared<'a> {
-    let keep = |cloud: &'a PointCloud| Prepared { cloud: Cow::Borrowed(cloud), camera: None };
+/// A re-gridded cloud is dropped as soon as its grid is made, so a cloud
+/// the planner owns is not held beside it.
+pub(super) fn prepare<'a>(camera: &CameraModel, cloud: Cow<'a, PointCloud>) -> Prepared<'a> {
+    let keep = |cloud: Cow<'a, PointCloud>| Prepared { cloud, camera: None };
     if !cloud.is_organized() {
         let start = Instant::now();
-        return match regrid(cloud, camera) {
+        return match regrid(&cloud, camera) {
             Ok((grid, done)) => {
                 tracing::info!(
                     placed = done.placed,
@@ -278,7 +297,7 @@ pub(super) fn prepare<'a>(camera: &CameraModel, cloud: &'a PointCloud) -> Prepar
             }
         };
     }
-    let Some(estimate) = estimate_intrinsics(cloud) else {
+    let Some(estimate) = estimate_intrinsics(&cloud) else {
         return keep(cloud);
     };
     let (e, c) = (estimate.intrinsics, camera.pinhole());
@@ -335,5 +354,5 @@ pub(super) fn prepare<'a>(camera: &CameraModel, cloud: &'a PointCloud) -> Prepar
         cloud.height()
     );
     let other = camera.with_pinhole(cloud.width() as u32, cloud.height() as u32, e);
-    Prepared { cloud: Cow::Borrowed(cloud), camera: Some(other) }
+    Prepared { cloud, camera: Some(other) }
 }

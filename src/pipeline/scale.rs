@@ -46,7 +46,7 @@ use crate::geometry::{Vec3, vec3};
 
 #[cfg(test)]
 use super::neighbours::cells::CellIndex;
-use super::neighbours::cells::SortedCells;
+use super::neighbours::cells::counts_around;
 use super::neighbours::{MAX_SAMPLED_NEIGHBOURS, NeighbourSearch};
 use super::orientation::scatter_normal_of_visit;
 
@@ -228,14 +228,14 @@ pub(crate) enum SpacingError {
 
 /// Up to `max` valid points of `points`, evenly spread over the array.
 fn even_sample(points: &[Point], max: usize) -> Vec<usize> {
-    let valid: Vec<usize> = (0..points.len()).filter(|&i| points[i][0].is_finite()).collect();
-    let stride = valid.len().div_ceil(max).max(1);
-    valid.into_iter().step_by(stride).collect()
+    let valid = || (0..points.len()).filter(|&i| points[i][0].is_finite());
+    let stride = valid().count().div_ceil(max).max(1);
+    valid().step_by(stride).collect()
 }
 
 /// The number of points within `radius_mm` of point `i` (itself
-/// included), read up to `cap`: the reference [`SortedCells::count_within`]
-/// is tested against.
+/// included), read up to `cap`, by a [`CellIndex`] query: the reference
+/// the spacing's counts ([`counts_around`]) are tested against.
 #[cfg(test)]
 fn count_within(index: &CellIndex, points: &[Point], i: usize, radius_mm: f64, cap: u32) -> u32 {
     let p = points[i];
@@ -261,17 +261,11 @@ fn lower_quartile(values: &mut [u32]) -> u32 {
 /// Measures the spacing of `cloud`, starting at radius `start_mm`.
 pub(crate) fn measure_spacing(cloud: &PointCloud, start_mm: f64) -> Result<Spacing, SpacingError> {
     let points = cloud.points();
-    // A few thousand queries: cells sorted once, without CellIndex's
-    // per-cell neighbourhoods, which only a query per point repays; cells
-    // for twice the radius serve the next radius too.
-    let mut cells: Option<SortedCells> = None;
+    // A few thousand counts: one pass over the cloud per radius against
+    // the sample, with no index of the whole cloud.
     measure_spacing_by(cloud, start_mm, |radius, sample| {
-        let cells = match cells.take() {
-            Some(c) if c.radius_mm() >= radius => cells.insert(c),
-            _ => cells.insert(SortedCells::for_radius(points, 2.0 * radius)),
-        };
-        let r_sq = (radius * radius) as f32;
-        sample.par_iter().map(|&i| cells.count_within(&points[i], r_sq, MAX_MEASURED_COUNT)).collect()
+        let centres: Vec<Point> = sample.iter().map(|&i| points[i]).collect();
+        counts_around(points, &centres, radius, MAX_MEASURED_COUNT)
     })
 }
 
@@ -367,28 +361,16 @@ impl DensityMap {
     /// its cloud.
     pub(crate) fn measure(search: &NeighbourSearch) -> Option<DensityMap> {
         let cloud = search.cloud();
-        let points = cloud.points();
         let radius_mm = search.radius_mm();
         let cube_mm = radius_mm * DENSITY_CELL_RADII;
-        let key_of = |p: &Point| pack_cube(p, cube_mm);
-        let mut by_cube: Vec<(u64, u32)> = points
-            .par_iter()
-            .enumerate()
-            .filter(|(_, p)| p[0].is_finite())
-            .map(|(i, p)| (key_of(p), i as u32))
-            .collect();
-        by_cube.par_sort_unstable();
-        let runs: Vec<&[(u64, u32)]> = by_cube.chunk_by(|a, b| a.0 == b.0).collect();
+        let sampled = density_samples(cloud.points(), cube_mm);
+        let runs: Vec<&[(u64, u32)]> = sampled.chunk_by(|a, b| a.0 == b.0).collect();
         let cap = MAX_MEASURED_COUNT;
         let measured: Vec<(u64, Option<u32>, Vec<u32>)> = runs
             .par_iter()
             .map_init(Vec::new, |neighbours, run| {
-                let stride = run.len().div_ceil(DENSITY_SAMPLES_PER_CELL).max(1);
-                let mut counts: Vec<u32> = run
-                    .iter()
-                    .step_by(stride)
-                    .filter_map(|&(_, i)| surrounded_count(search, i as usize, cap, neighbours))
-                    .collect();
+                let mut counts: Vec<u32> =
+                    run.iter().filter_map(|&(_, i)| surrounded_count(search, i as usize, cap, neighbours)).collect();
                 let own = (counts.len() >= MIN_DENSITY_SAMPLES).then(|| lower_quartile(&mut counts));
                 (run[0].0, own, counts)
             })
@@ -456,6 +438,80 @@ fn surrounded_count(search: &NeighbourSearch, i: usize, cap: u32, neighbours: &m
     all_around.then(|| total.min(cap as usize) as u32)
 }
 
+/// The points of a parallel chunk of [`density_samples`]' passes.
+const DENSITY_CHUNK: usize = 1 << 14;
+
+/// The points the full-plane count is measured on, as `(cube, index)`
+/// sorted: in each cube of side `cube_mm`, up to
+/// [`DENSITY_SAMPLES_PER_CELL`] of its valid points, every `stride`-th in
+/// index order from its first (the stride the cube's number of points
+/// needs).
+///
+/// Two passes over the cloud in parallel chunks keep only what is
+/// sampled, not a cube key for every point: the first counts each chunk's
+/// points per cube, which gives every cube its stride and every chunk the
+/// number of each cube's points before it; the second then knows each
+/// point's rank in its cube as it reaches it.
+fn density_samples(points: &[Point], cube_mm: f64) -> Vec<(u64, u32)> {
+    let key_of = |p: &Point| pack_cube(p, cube_mm);
+    // Each chunk's cubes, sorted, and its valid points in each.
+    let tallies: Vec<Vec<(u64, u32)>> = points
+        .par_chunks(DENSITY_CHUNK)
+        .map(|chunk| {
+            let mut keys: Vec<u64> = chunk.iter().filter(|p| p[0].is_finite()).map(key_of).collect();
+            keys.sort_unstable();
+            keys.chunk_by(|a, b| a == b).map(|run| (run[0], run.len() as u32)).collect()
+        })
+        .collect();
+    let mut cubes: Vec<(u64, u32)> = tallies.iter().flatten().copied().collect();
+    cubes.sort_unstable();
+    cubes.dedup_by(|later, kept| {
+        let same = later.0 == kept.0;
+        if same {
+            kept.1 += later.1;
+        }
+        same
+    });
+    let stride_of = |n: u32| (n as usize).div_ceil(DENSITY_SAMPLES_PER_CELL).max(1);
+    // For each chunk's cubes: the cube's stride and its points in the
+    // chunks before.
+    let mut before = vec![0u32; cubes.len()];
+    let starts: Vec<Vec<(usize, u32)>> = tallies
+        .iter()
+        .map(|tally| {
+            tally
+                .iter()
+                .map(|&(key, n)| {
+                    let c = cubes.partition_point(|&(k, _)| k < key);
+                    let start = before[c];
+                    before[c] += n;
+                    (stride_of(cubes[c].1), start)
+                })
+                .collect()
+        })
+        .collect();
+    let mut sampled: Vec<(u64, u32)> = points
+        .par_chunks(DENSITY_CHUNK)
+        .zip(tallies.par_iter().zip(starts.par_iter()))
+        .enumerate()
+        .flat_map_iter(|(k, (chunk, (tally, starts)))| {
+            let mut rank: Vec<u32> = starts.iter().map(|&(_, start)| start).collect();
+            let mut kept = Vec::new();
+            for (j, p) in chunk.iter().enumerate().filter(|(_, p)| p[0].is_finite()) {
+                let key = key_of(p);
+                let t = tally.partition_point(|&(k, _)| k < key);
+                if (rank[t] as usize).is_multiple_of(starts[t].0) {
+                    kept.push((key, (k * DENSITY_CHUNK + j) as u32));
+                }
+                rank[t] += 1;
+            }
+            kept
+        })
+        .collect();
+    sampled.par_sort_unstable();
+    sampled
+}
+
 /// The packed coordinates of the cube of side `cube_mm` holding `p`
 /// (21 bits an axis, clamped).
 fn pack_cube(p: &Point, cube_mm: f64) -> u64 {
@@ -477,8 +533,8 @@ mod tests {
         surrounded(search, i, &normal).then(|| search.count_up_to(i, |_| true, cap))
     }
 
-    /// The spacing as measured before [`SortedCells`]: a [`CellIndex`] per
-    /// radius and its queries. The reference.
+    /// The spacing as measured by a [`CellIndex`] per radius and its
+    /// queries. The reference.
     fn measure_spacing_reference(cloud: &PointCloud, start_mm: f64) -> Result<Spacing, SpacingError> {
         let points = cloud.points();
         measure_spacing_by(cloud, start_mm, |radius, sample| {
@@ -510,6 +566,47 @@ mod tests {
             }
         }
         PointCloud::unorganized(points)
+    }
+
+    /// [`density_samples`] as every valid point keyed by cube, sorted,
+    /// and each cube's run stepped through. The reference.
+    fn density_samples_reference(points: &[Point], cube_mm: f64) -> Vec<(u64, u32)> {
+        let mut by_cube: Vec<(u64, u32)> = (0..points.len())
+            .filter(|&i| points[i][0].is_finite())
+            .map(|i| (pack_cube(&points[i], cube_mm), i as u32))
+            .collect();
+        by_cube.sort_unstable();
+        by_cube
+            .chunk_by(|a, b| a.0 == b.0)
+            .flat_map(|run| run.iter().step_by(run.len().div_ceil(DENSITY_SAMPLES_PER_CELL).max(1)).copied())
+            .collect()
+    }
+
+    #[test]
+    fn the_density_sample_is_each_cubes_points_stepped_through() {
+        // Plates of many chunks whose cubes span chunk boundaries, with
+        // invalid points between; a cloud in cube order and one shuffled.
+        let plate = jittered_plate(0.4, 400);
+        let mut points = plate.points().to_vec();
+        for k in (0..points.len()).step_by(7) {
+            points[k] = crate::cloud::INVALID_POINT;
+        }
+        let mut shuffled = points.clone();
+        let mut state = 0x9e37_79b9_7f4a_7c15_u64;
+        for k in (1..shuffled.len()).rev() {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            shuffled.swap(k, (state % (k as u64 + 1)) as usize);
+        }
+        assert!(points.len() > 4 * DENSITY_CHUNK);
+        for cloud in [&points, &shuffled] {
+            for cube_mm in [0.5, 3.0, 40.0] {
+                let sample = density_samples(cloud, cube_mm);
+                assert_eq!(sample, density_samples_reference(cloud, cube_mm), "cubes of {cube_mm} mm");
+                assert!(!sample.is_empty());
+            }
+        }
     }
 
     #[test]

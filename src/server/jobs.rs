@@ -131,10 +131,16 @@ impl JobSlot {
     /// earlier has run; the slot is freed when the plan is done. Once
     /// started the job holds its slot itself, so it stays taken while the
     /// pipeline runs even if the caller stops waiting; a caller that stops
-    /// waiting before the job's turn frees the slot at once.
+    /// waiting before the job's turn frees the slot at once. A frame only
+    /// this job still holds is planned by value, converted in place
+    /// ([`Planner::plan_owned`]); one the frame store keeps is borrowed.
     pub async fn run(self, cloud: Arc<PointCloud>, request: PlanRequest) -> (Result<Plan, JobError>, JobTimes) {
         let planner = Arc::clone(&self.planner);
-        let (outcome, times) = self.execute(move || planner.plan(&cloud, &request)).await;
+        let plan = move || match Arc::try_unwrap(cloud) {
+            Ok(owned) => planner.plan_owned(owned, &request),
+            Err(shared) => planner.plan(&shared, &request),
+        };
+        let (outcome, times) = self.execute(plan).await;
         (outcome.and_then(|r| Ok(r?)), times)
     }
 

@@ -17,6 +17,7 @@ use weldseam::camera::CameraModel;
 use weldseam::cloud::{self, PointCloud, pcd};
 use weldseam::joint::JointType;
 use weldseam::mock::load::{self as daemon_load, frame_message, quantile};
+use weldseam::pipeline::Planner;
 use weldseam::sim::Simulation;
 use weldseam::sim::scenarios::{
     DISTANCES_MM, FRAME_SIZES, MEASURED_VOXEL_MM, Scenario, TILT_DEG, VARIANT_JOINT, camera_with_size, megapixels,
@@ -24,6 +25,7 @@ use weldseam::sim::scenarios::{
 };
 use weldseam::sim::variants::Variant;
 
+use crate::cli::memory;
 use crate::cli::table::Table;
 use measure::{PlanTimings, Summary, VariantRow, config_for};
 
@@ -158,13 +160,21 @@ fn measure_variant(
     let loaded = cloud::load(&path)?;
     let plans = measure::time_request(scenario, &loaded, &request, runs);
     drop(loaded);
+    // The heap of a one-shot plan as `weldseam plan` makes it: the file
+    // loaded and handed over to the planner.
+    let planner = Planner::new(config_for(scenario));
+    let (loaded, heap_peak_bytes) = memory::heap_peak_of(|| -> anyhow::Result<()> {
+        let _ = planner.plan_owned(cloud::load(&path)?, &request);
+        Ok(())
+    });
+    loaded?;
     let peak_rss_bytes = peak_rss_of(&args)?;
     drop(file);
     let name = match data {
         PcdData::Binary => variant.to_string(),
         PcdData::BinaryCompressed => format!("{variant}, PCD binary_compressed"),
     };
-    Ok(VariantRow { name, points, raw_bytes, load_ms, plans, peak_rss_bytes })
+    Ok(VariantRow { name, points, raw_bytes, load_ms, plans, heap_peak_bytes, peak_rss_bytes })
 }
 
 struct Printer {

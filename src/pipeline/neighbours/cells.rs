@@ -15,10 +15,9 @@
 //! (cell, cloud index), so queries visit neighbours in the same order on
 //! every run and every machine.
 //!
-//! For a few thousand queries (the spacing measurement) the neighbourhood
-//! lists, boxes and per-point cells cost more to build than they save:
-//! [`SortedCells`] keeps only the sorted points and finds a query's cells
-//! by binary search.
+//! For a few thousand queries (the spacing measurement) no index of the
+//! cloud pays: [`counts_around`] lists the few thousand query points by
+//! cell and reads the cloud once against them.
 
 use std::ops::{ControlFlow, Range};
 
@@ -87,12 +86,24 @@ const COLUMNS: [(i64, i64); 9] = [(0, 0), (-1, 0), (1, 0), (0, -1), (0, 1), (-1,
 /// keys grow with the cell's own: one cursor per column walks forward
 /// through `keys` once for all cells, with no search per cell.
 fn neighbourhoods(keys: &[u64]) -> (Vec<u32>, Vec<u32>) {
+    // Two walks: the first counts each list so that the second fills one
+    // array of exactly their length (a plate's cells have 9 to 27 occupied
+    // neighbours; a guessed capacity doubled past its end).
     let mut starts = Vec::with_capacity(keys.len() + 1);
-    let mut list = Vec::with_capacity(keys.len() * 9);
+    starts.push(0u32);
+    let total = std::cell::Cell::new(0u32);
+    walk_neighbourhoods(keys, |_, _| total.set(total.get() + 1), |_| starts.push(total.get()));
+    let mut list = Vec::with_capacity(total.get() as usize);
+    walk_neighbourhoods(keys, |_, k| list.push(k), |_| {});
+    (starts, list)
+}
+
+/// Calls `neighbour(c, k)` for each occupied cell `c` of `keys` and each
+/// occupied cell `k` of its 27, `c` itself first, then `done(c)`.
+fn walk_neighbourhoods(keys: &[u64], mut neighbour: impl FnMut(u32, u32), mut done: impl FnMut(u32)) {
     let mut cursors = [0usize; COLUMNS.len()];
-    starts.push(0);
     for (c, &key) in keys.iter().enumerate() {
-        list.push(c as u32);
+        neighbour(c as u32, c as u32);
         for (cursor, range) in cursors.iter_mut().zip(column_ranges(key)) {
             let Some((lo, hi)) = range else { continue };
             while *cursor < keys.len() && keys[*cursor] < lo {
@@ -101,23 +112,27 @@ fn neighbourhoods(keys: &[u64]) -> (Vec<u32>, Vec<u32>) {
             let mut k = *cursor;
             while k < keys.len() && keys[k] <= hi {
                 if k != c {
-                    list.push(k as u32);
+                    neighbour(c as u32, k as u32);
                 }
                 k += 1;
             }
         }
-        starts.push(list.len() as u32);
+        done(c as u32);
     }
-    (starts, list)
 }
 
 /// The packed key of the cell holding `p` among cells `cell_mm` wide.
 #[inline]
 fn cell_key(p: &Point, inverse_cell_mm: f64) -> u64 {
-    pack(std::array::from_fn(|a| {
-        let v = (p[a] as f64 * inverse_cell_mm).floor();
-        v.clamp(-(AXIS_HALF_RANGE as f64), AXIS_HALF_RANGE as f64) as i64
-    }))
+    pack(std::array::from_fn(|a| cell_coordinate(f64::from(p[a]), inverse_cell_mm)))
+}
+
+/// The cell coordinate of `v` among cells `cell_mm` wide, clamped to what
+/// a key packs (as [`pack`] clamps), so that distinct coordinates give
+/// distinct keys.
+#[inline]
+fn cell_coordinate(v: f64, inverse_cell_mm: f64) -> i64 {
+    (v * inverse_cell_mm).floor().clamp(-(AXIS_HALF_RANGE as f64), (AXIS_HALF_RANGE - 1) as f64) as i64
 }
 
 /// The inclusive key ranges of the nine columns of three cells around the
@@ -136,63 +151,80 @@ fn column_ranges(key: u64) -> [Option<(u64, u64)>; COLUMNS.len()] {
     })
 }
 
-/// The valid points of a cloud sorted by cell, and nothing else: what a
-/// few thousand radius counts need (the spacing measurement), built with
-/// one sort instead of [`CellIndex`]'s per-cell boxes and neighbourhoods,
-/// which pay off only over a query per point. A query finds its 27 cells
-/// by nine binary searches, one per column of three.
-pub(crate) struct SortedCells {
-    /// The largest radius the cells answer for.
-    radius_mm: f64,
-    inverse_cell_mm: f64,
-    /// Cell keys, sorted, and the points' coordinates in the same order.
-    keys: Vec<u64>,
-    points: Vec<Point>,
-}
+/// How much wider than the radius the cells of [`counts_around`] are, in
+/// radii: more than two, so that a disc (the radius and a hair for
+/// rounding) reaches at most two cells along each axis.
+const SAMPLE_CELL_RADII: f64 = 2.5;
 
-impl SortedCells {
-    /// Sorts the valid points of `cloud_points` into cells a hair wider
-    /// than `radius_mm` (as [`CellIndex::for_radius`] does).
-    pub(crate) fn for_radius(cloud_points: &[Point], radius_mm: f64) -> SortedCells {
-        let inverse_cell_mm = 1.0 / (radius_mm * CELL_MARGIN);
-        let mut keyed: Vec<(u64, Point)> =
-            cloud_points.par_iter().filter(|p| p[0].is_finite()).map(|p| (cell_key(p, inverse_cell_mm), *p)).collect();
-        // Counting does not depend on the order within a cell.
-        keyed.par_sort_unstable_by_key(|&(key, _)| key);
-        let (keys, points) = keyed.into_par_iter().unzip();
-        SortedCells { radius_mm, inverse_cell_mm, keys, points }
-    }
+/// How far past the radius a sample's disc is taken to reach when its
+/// cells are listed: the kernels' f32 predicate accepts points up to a
+/// few parts in 10⁷ beyond the radius.
+const SAMPLE_REACH_MARGIN: f64 = 1e-5;
 
-    /// The largest radius the cells answer for.
-    pub(crate) fn radius_mm(&self) -> f64 {
-        self.radius_mm
-    }
+/// The points of a parallel chunk of [`counts_around`]'s pass.
+const COUNT_CHUNK: usize = 1 << 14;
 
-    /// The number of points within `radius_sq` of `p` by the kernels'
-    /// predicate ([`within`]), `p` itself included if it is in the
-    /// index, read up to `cap`. The radius must be at most
-    /// [`SortedCells::radius_mm`]: beyond, neighbours lie outside the
-    /// cells read.
-    pub(crate) fn count_within(&self, p: &Point, radius_sq: f32, cap: u32) -> u32 {
-        debug_assert!(
-            radius_sq as f64 <= self.radius_mm * self.radius_mm * (1.0 + 1e-6),
-            "a radius the cells answer for"
-        );
-        let mut n = 0;
-        for (lo, hi) in column_ranges(cell_key(p, self.inverse_cell_mm)).into_iter().flatten() {
-            // A column holds a few cells: found by one search, read to
-            // its end by a scan.
-            let start = self.keys.partition_point(|&k| k < lo);
-            let in_column = self.keys[start..].iter().take_while(|&&k| k <= hi).count();
-            for q in &self.points[start..start + in_column] {
-                n += crate::kernels::within(p, q, radius_sq) as u32;
-                if n >= cap {
-                    return n;
-                }
+/// The number of valid points of `points` within `radius_mm` of each of
+/// `samples` by the kernels' predicate ([`within`]), a sample itself
+/// included if it is one of the points, read up to `cap`.
+///
+/// For a few thousand samples (the spacing measurement), in one pass over
+/// the cloud and nothing the cloud's size: each sample is listed under the
+/// cells its disc reaches (at most eight), and each point of the cloud is
+/// tested against the samples listed under its own cell. Sorting the
+/// whole cloud into cells instead (as [`CellIndex`] does for a query per
+/// point) cost several times the cloud's own memory for 4096 counts.
+pub(crate) fn counts_around(points: &[Point], samples: &[Point], radius_mm: f64, cap: u32) -> Vec<u32> {
+    let inverse_cell_mm = 1.0 / (SAMPLE_CELL_RADII * radius_mm);
+    let reach = radius_mm * (1.0 + SAMPLE_REACH_MARGIN);
+    // At most two cells an axis (see SAMPLE_CELL_RADII): sized once.
+    let mut listed: Vec<(u64, u32)> = Vec::with_capacity(8 * samples.len());
+    for (s, p) in samples.iter().enumerate() {
+        let span = |a: usize| {
+            let v = f64::from(p[a]);
+            cell_coordinate(v - reach, inverse_cell_mm)..=cell_coordinate(v + reach, inverse_cell_mm)
+        };
+        for x in span(0) {
+            for y in span(1) {
+                listed.extend(span(2).map(|z| (pack([x, y, z]), s as u32)));
             }
         }
-        n
     }
+    listed.sort_unstable();
+    let radius_sq = (radius_mm * radius_mm) as f32;
+    let counts = points
+        .par_chunks(COUNT_CHUNK)
+        .map(|chunk| {
+            let mut counts = vec![0u32; samples.len()];
+            // Neighbouring points mostly share a cell: its samples are
+            // looked up once for the run.
+            let mut cached: Option<(u64, Range<usize>)> = None;
+            for q in chunk.iter().filter(|q| q[0].is_finite()) {
+                let key = cell_key(q, inverse_cell_mm);
+                let run = match &cached {
+                    Some((k, run)) if *k == key => run.clone(),
+                    _ => {
+                        let start = listed.partition_point(|&(k, _)| k < key);
+                        let run = start..start + listed[start..].iter().take_while(|&&(k, _)| k == key).count();
+                        cached.insert((key, run)).1.clone()
+                    }
+                };
+                for &(_, s) in &listed[run] {
+                    counts[s as usize] += crate::kernels::within(&samples[s as usize], q, radius_sq) as u32;
+                }
+            }
+            counts
+        })
+        .reduce(
+            || vec![0u32; samples.len()],
+            |mut total, part| {
+                for (t, p) in total.iter_mut().zip(part) {
+                    *t += p;
+                }
+                total
+            },
+        );
+    counts.into_iter().map(|n| n.min(cap)).collect()
 }
 
 impl CellIndex {
@@ -216,8 +248,10 @@ impl CellIndex {
         let axis = |a: usize| -> Vec<f32> { keyed.par_iter().map(|&(_, i)| cloud_points[i as usize][a]).collect() };
         let (xs, ys, zs) = (axis(0), axis(1), axis(2));
         let index_of: Vec<u32> = keyed.par_iter().map(|&(_, i)| i).collect();
-        let mut keys: Vec<u64> = Vec::new();
-        let mut cells: Vec<Cell> = Vec::new();
+        // Sized once: the cells are counted before they are listed.
+        let occupied = if keyed.is_empty() { 0 } else { 1 + keyed.par_windows(2).filter(|w| w[0].0 != w[1].0).count() };
+        let mut keys: Vec<u64> = Vec::with_capacity(occupied);
+        let mut cells: Vec<Cell> = Vec::with_capacity(occupied);
         for (position, &(key, _)) in keyed.iter().enumerate() {
             if keys.last() != Some(&key) {
                 keys.push(key);
@@ -335,33 +369,47 @@ impl CellIndex {
     /// query per point then reads one contiguous run of candidates instead
     /// of up to 27 cells, and the run is gathered once for the cell's
     /// points. Cells without a wanted point are skipped.
-    pub(crate) fn query_by_cell<S, T: Send>(
+    ///
+    /// The answers go straight into one vector of exactly their number,
+    /// each cell's into its own part: collected from rayon's per-job
+    /// pieces, they took twice their size at the plane criterion, the
+    /// measured path's peak.
+    pub(crate) fn query_by_cell<S, T: Send + Clone + Default>(
         &self,
         init: impl Fn() -> S + Sync,
         wanted: impl Fn(usize) -> bool + Sync,
         prepare: impl Fn(&mut S, &Neighbourhood) + Sync,
         query: impl Fn(&mut S, &Neighbourhood, usize) -> T + Sync,
     ) -> Vec<(u32, T)> {
-        self.cells
+        let members = |cell: &Cell| &self.index_of[cell.start as usize..cell.end as usize];
+        let wanted_in: Vec<u32> = self
+            .cells
             .par_iter()
-            .enumerate()
-            .map_init(
-                || (init(), Neighbourhood::default(), Vec::new()),
-                |(state, hood, answers), (c, cell)| {
-                    answers.clear();
-                    let members = &self.index_of[cell.start as usize..cell.end as usize];
-                    if members.iter().any(|&i| wanted(i as usize)) {
-                        hood.gather(self, c);
-                        prepare(state, hood);
-                        for &i in members.iter().filter(|&&i| wanted(i as usize)) {
-                            answers.push((i, query(state, hood, i as usize)));
-                        }
-                    }
-                    std::mem::take(answers)
-                },
-            )
-            .flatten_iter()
-            .collect()
+            .map(|cell| members(cell).iter().filter(|&&i| wanted(i as usize)).count() as u32)
+            .collect();
+        let mut answers = vec![(0u32, T::default()); wanted_in.iter().map(|&n| n as usize).sum()];
+        let mut parts: Vec<&mut [(u32, T)]> = Vec::with_capacity(self.cells.len());
+        let mut rest = answers.as_mut_slice();
+        for &n in &wanted_in {
+            let (part, tail) = rest.split_at_mut(n as usize);
+            parts.push(part);
+            rest = tail;
+        }
+        self.cells.par_iter().zip(parts).enumerate().for_each_init(
+            || (init(), Neighbourhood::default()),
+            |(state, hood), (c, (cell, part))| {
+                if part.is_empty() {
+                    return;
+                }
+                hood.gather(self, c);
+                prepare(state, hood);
+                let cell_wanted = members(cell).iter().filter(|&&i| wanted(i as usize));
+                for (slot, &i) in part.iter_mut().zip(cell_wanted) {
+                    *slot = (i, query(state, hood, i as usize));
+                }
+            },
+        );
+        answers
     }
 }
 
@@ -682,26 +730,25 @@ mod tests {
     }
 
     #[test]
-    fn sorted_cells_count_exactly_what_a_scan_counts() {
+    fn counts_around_samples_are_exactly_what_a_scan_counts() {
         for n in [0, 1, 2, 15, 100, 3000] {
             let points = scattered(n);
+            let samples: Vec<Point> = points.iter().filter(|p| p[0].is_finite()).take(300).copied().collect();
             for radius in [0.3f32, 0.8, 2.5] {
-                let sorted = SortedCells::for_radius(&points, radius as f64);
-                for r in [radius, radius * 0.5] {
-                    let r_sq = r * r;
-                    for p in points.iter().filter(|p| p[0].is_finite()).take(300) {
-                        let all = brute_force(&points, p, r_sq).len() as u32;
-                        assert_eq!(sorted.count_within(p, r_sq, u32::MAX), all, "{n} points, radius {r} of {radius}");
-                        for cap in [1, 3, 10] {
-                            assert_eq!(sorted.count_within(p, r_sq, cap), all.min(cap), "cap {cap}");
-                        }
-                    }
+                let r_sq = radius * radius;
+                let all: Vec<u32> = samples.iter().map(|p| brute_force(&points, p, r_sq).len() as u32).collect();
+                assert_eq!(counts_around(&points, &samples, radius as f64, u32::MAX), all, "{n} points, {radius}");
+                for cap in [1, 3, 10] {
+                    let capped: Vec<u32> = all.iter().map(|&c| c.min(cap)).collect();
+                    assert_eq!(counts_around(&points, &samples, radius as f64, cap), capped, "cap {cap}");
                 }
             }
         }
-        let far = vec![[1.0e9f32, 0.0, 500.0], [-1.0e9, 0.0, 500.0], [0.0, 0.0, 500.0]];
-        let sorted = SortedCells::for_radius(&far, 0.05);
-        assert_eq!(sorted.count_within(&far[2], 0.0025, u32::MAX), 1, "clamped, not wrapped");
+        // A sample off the cloud's points counts its neighbours, not
+        // itself; far coordinates are clamped, not wrapped.
+        let far = vec![[1.0e9f32, 0.0, 500.0], [-1.0e9, 0.0, 500.0], [0.0, 0.0, 500.0], [0.04, 0.0, 500.0]];
+        assert_eq!(counts_around(&far, &[far[2], [0.0, 0.02, 500.0]], 0.05, u32::MAX), vec![2, 2]);
+        assert_eq!(counts_around(&far, &[far[0]], 0.05, u32::MAX), vec![1], "clamped, not wrapped");
     }
 
     #[test]

@@ -469,7 +469,7 @@ pub mod from_proto {
     }
 
     /// The pipeline's request for a text link plan line in `dialect`: the
-    /// joint by the library's names, the pose read in the dialect's
+    /// joint by the library's names (`auto` too), the pose read in the dialect's
     /// convention and carried into the daemon's (`euler`), the groove
     /// depth from the dialect's length unit into mm.
     pub fn text_plan_request(
@@ -477,7 +477,7 @@ pub mod from_proto {
         dialect: weldseam_proto::text::Dialect,
         euler: crate::geometry::pose::EulerConvention,
     ) -> Result<PlanRequest, TextRequestError> {
-        let joint: JointType = line.joint.parse()?;
+        let joint: RequestedJoint = line.joint.parse()?;
         let convention = super::to_text::convention(dialect);
         let pose = convention.to_robot_pose(&line.pose, euler)?;
         let groove_depth_mm = line.groove_depth.map(|d| d * convention.length.mm());

@@ -401,3 +401,27 @@ async fn a_full_link_says_busy_and_a_freed_slot_serves_again() {
     drop(third);
     assert_eq!(cell.shutdown().await, Stopped::Clean);
 }
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_plan_line_may_leave_the_joint_to_the_daemon() {
+    let sim = simulate(&demo_scene(JointType::Lap), &CameraModel::default());
+    let cell = Cell::start(config()).await;
+    let (stop_camera, rx) = oneshot::channel::<()>();
+    let camera = MockCamera::new(cell.camera.clone(), vec![Arc::new(sim.cloud.clone())], CameraOptions::default());
+    let camera = tokio::spawn(async move {
+        let _ = camera.run(rx).await;
+    });
+    let mut ctl = ControllerClient::connect(&cell.controller, "test").await.unwrap();
+    ctl.wait_for_camera(Duration::from_secs(5)).await.unwrap();
+    let mut robot = robot(&cell).await;
+    let hello = robot.ask("HELLO,kuka").await.unwrap();
+    assert_eq!(numbers(&hello)[0], 0.0, "{hello}");
+    let auto = trigger_line(Dialect::Kuka, &sim).replacen("TRIGGER,lap,", "TRIGGER,auto,", 1);
+    assert!(auto.starts_with("TRIGGER,auto,"), "{auto}");
+    let ok = robot.ask(&auto).await.unwrap();
+    assert_eq!(&numbers(&ok)[..2], &[0.0, 1.0], "the lap found and planned: {ok}");
+    drop(robot);
+    let _ = stop_camera.send(());
+    camera.await.unwrap();
+    cell.shutdown().await;
+}

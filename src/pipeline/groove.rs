@@ -390,10 +390,33 @@ pub fn probe(cloud: &PointCloud, setting: &ProbeSetting) -> GrooveProfile {
     let bottom = setting.depth_to_support_mm.map_or(MAX_PROBE_DEPTH_MM, |d| (d - 0.5).min(MAX_PROBE_DEPTH_MM));
     let station_len = (s1 - s0) / STATIONS as f64;
 
+    // A cheap first test in single precision, on every point of the frame:
+    // along the seam within its span, across it within the band both
+    // edges span over it (a millimetre wider, for the rounding); only the
+    // points that pass are read in the seam's axes exactly.
+    let band = {
+        let samples = (0..=16).map(|k| s0 + (s1 - s0) * k as f64 / 16.0);
+        let across = |c: &SeamCurve, s: f64| (c.at(s) - axes.origin).dot(&axes.a);
+        let (lo, hi) = samples.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), s| {
+            let (a1, a2) = (across(e1, s), across(e2, s));
+            (lo.min(a1.min(a2)), hi.max(a1.max(a2)))
+        });
+        (lo - 1.0, hi + 1.0)
+    };
+    let f32s = |v: &Vec3| [v.x as f32, v.y as f32, v.z as f32];
+    let (origin, along, across) = (f32s(&axes.origin), f32s(&axes.e), f32s(&axes.a));
+    let (span32, band32) = ((s0 as f32 - 1.0, s1 as f32 + 1.0), (band.0 as f32, band.1 as f32));
+    let near_seam = |p: &[f32; 3]| {
+        let d = [p[0] - origin[0], p[1] - origin[1], p[2] - origin[2]];
+        let s = d[0] * along[0] + d[1] * along[1] + d[2] * along[2];
+        let a = d[0] * across[0] + d[1] * across[1] + d[2] * across[2];
+        // NaN (an invalid pixel) fails both.
+        (span32.0..=span32.1).contains(&s) && (band32.0..=band32.1).contains(&a)
+    };
     let collected: Vec<Across> = cloud
         .points()
         .par_iter()
-        .filter(|p| is_valid_point(p))
+        .filter(|p| near_seam(p) && is_valid_point(p))
         .filter_map(|p| {
             let d = vec3(p) - axes.origin;
             let s = d.dot(&axes.e);
@@ -469,16 +492,20 @@ fn on_surfaces(points: Vec<Across>, radius: f64) -> Vec<Across> {
         .map(|p| {
             let c = cell(p);
             let mut n = 0;
-            for dc in 0..27i64 {
+            // The point's own cell first: on a surface it holds enough.
+            for dc in (0..27i64).map(|k| (k + 13) % 27) {
                 let key = [c[0] + dc % 3 - 1, c[1] + (dc / 3) % 3 - 1, c[2] + dc / 9 - 1];
                 for &k in cells.get(&key).map_or(&[][..], Vec::as_slice) {
                     let q = &points[k];
                     let d2 = (p.s - q.s).powi(2) + (p.t - q.t).powi(2) + (p.h - q.h).powi(2);
                     n += usize::from(d2 <= r2);
                 }
+                // The point itself is among them.
+                if n > MIN_SURFACE_NEIGHBOURS {
+                    return true;
+                }
             }
-            // The point itself is among them.
-            n > MIN_SURFACE_NEIGHBOURS
+            false
         })
         .collect();
     points.into_iter().zip(keep).filter_map(|(p, k)| k.then_some(p)).collect()

@@ -8,15 +8,13 @@ use std::time::Duration;
 
 use tokio::io::{AsyncReadExt, AsyncWriteExt};
 use tokio::net::TcpStream;
-use tokio::sync::oneshot;
-use tokio::task::JoinHandle;
 use weldseam::camera::CameraModel;
 use weldseam::cloud::PointCloud;
 use weldseam::config::Config;
 use weldseam::geometry::{Vec3, distance_to_polyline};
 use weldseam::joint::JointType;
 use weldseam::mock::ClientError;
-use weldseam::mock::camera::{CameraOptions, MockCamera};
+use weldseam::mock::camera::CameraOptions;
 use weldseam::mock::controller::ControllerClient;
 use weldseam::server::Stopped;
 
@@ -32,16 +30,6 @@ const WAIT: Duration = Duration::from_secs(60);
 impl Cell {
     async fn controller(&self) -> ControllerClient {
         ControllerClient::connect(&self.controller, "test-controller").await.unwrap()
-    }
-
-    /// Starts a mock camera serving `frames`; it stops with the returned sender.
-    fn camera(&self, frames: Vec<Arc<PointCloud>>, options: CameraOptions) -> (oneshot::Sender<()>, JoinHandle<()>) {
-        let (tx, rx) = oneshot::channel::<()>();
-        let cam = MockCamera::new(self.camera.clone(), frames, options);
-        let handle = tokio::spawn(async move {
-            let _ = cam.run(rx).await;
-        });
-        (tx, handle)
     }
 }
 

@@ -209,7 +209,7 @@ async fn the_daemon_keeps_the_sets_of_its_last_plans_only() {
     use std::sync::Arc;
     use std::time::{Duration, Instant};
     use weldseam::config::DebugParams;
-    use weldseam::mock::camera::{CameraOptions, MockCamera};
+    use weldseam::mock::camera::CameraOptions;
     use weldseam::mock::controller::{ControllerClient, request_for_simulation};
     use weldseam_proto::message::FrameSelect;
 
@@ -219,11 +219,7 @@ async fn the_daemon_keeps_the_sets_of_its_last_plans_only() {
     config.server.pipeline_threads = 2;
     config.debug = DebugParams { dir: dir.path().to_str().unwrap().into(), keep_last: 2 };
     let cell = crate::util::Cell::start(config).await;
-    let (stop, rx) = tokio::sync::oneshot::channel();
-    let camera = MockCamera::new(cell.camera.clone(), vec![Arc::new(sim.cloud.clone())], CameraOptions::default());
-    let camera = tokio::spawn(async move {
-        let _ = camera.run(rx).await;
-    });
+    let (stop, camera) = cell.camera(vec![Arc::new(sim.cloud.clone())], CameraOptions::default());
     let mut ctl = ControllerClient::connect(&cell.controller, "debug-sets-test").await.unwrap();
     ctl.wait_for_camera(Duration::from_secs(5)).await.expect("the mock camera connects");
     let debug = cell.daemon.state.debug.as_ref().expect("[debug] with a directory keeps sets");

@@ -11,7 +11,7 @@ use weldseam::camera::CameraModel;
 use weldseam::config::Config;
 use weldseam::joint::JointType;
 use weldseam::mock::ClientError;
-use weldseam::mock::camera::{CameraOptions, MockCamera};
+use weldseam::mock::camera::CameraOptions;
 use weldseam::mock::controller::{ControllerClient, request_for_simulation};
 use weldseam::pipeline::quality::Gate;
 use weldseam::pipeline::{PlanRequest, Planner, Stage};
@@ -135,11 +135,7 @@ async fn the_daemon_answers_a_refused_seam_with_the_gates_error_code() {
     let mut config = with_max_gap(0.3, false);
     config.server.pipeline_threads = 2;
     let cell = Cell::start(config).await;
-    let (stop, rx) = tokio::sync::oneshot::channel();
-    let camera = MockCamera::new(cell.camera.clone(), vec![Arc::new(sim.cloud.clone())], CameraOptions::default());
-    let camera = tokio::spawn(async move {
-        let _ = camera.run(rx).await;
-    });
+    let (stop, camera) = cell.camera(vec![Arc::new(sim.cloud.clone())], CameraOptions::default());
     let mut ctl = ControllerClient::connect(&cell.controller, "quality-test").await.unwrap();
     ctl.wait_for_camera(Duration::from_secs(5)).await.expect("the mock camera connects");
     let request = request_for_simulation(7, spec.joint.joint_type(), &sim, FrameSelect::Trigger);

@@ -15,13 +15,12 @@ use std::time::Duration;
 
 use tokio::io::AsyncReadExt;
 use tokio::net::TcpStream;
-use tokio::sync::oneshot;
 use weldseam::camera::CameraModel;
 use weldseam::config::Config;
 use weldseam::convert::to_text;
 use weldseam::geometry::Isometry3;
 use weldseam::joint::JointType;
-use weldseam::mock::camera::{CameraOptions, MockCamera};
+use weldseam::mock::camera::CameraOptions;
 use weldseam::mock::controller::{ControllerClient, request_for_simulation};
 use weldseam::mock::text_robot::{TextRobot, rapid_num, ur_read_ascii_float};
 use weldseam::server::Stopped;
@@ -184,11 +183,7 @@ async fn binary_plan(
 async fn every_dialect_pulls_the_binary_links_waypoints_as_robots_md_shows() {
     let sim = simulate(&demo_scene(JointType::Lap), &CameraModel::default());
     let cell = Cell::start(config()).await;
-    let (stop_camera, rx) = oneshot::channel::<()>();
-    let camera = MockCamera::new(cell.camera.clone(), vec![Arc::new(sim.cloud.clone())], CameraOptions::default());
-    let camera = tokio::spawn(async move {
-        let _ = camera.run(rx).await;
-    });
+    let (stop_camera, camera) = cell.camera(vec![Arc::new(sim.cloud.clone())], CameraOptions::default());
     let mut ctl = ControllerClient::connect(&cell.controller, "test").await.unwrap();
     ctl.wait_for_camera(Duration::from_secs(5)).await.unwrap();
     let offset = cell.daemon.state.config.text_link.approach_offset_mm;
@@ -406,11 +401,7 @@ async fn a_full_link_says_busy_and_a_freed_slot_serves_again() {
 async fn a_plan_line_may_leave_the_joint_to_the_daemon() {
     let sim = simulate(&demo_scene(JointType::Lap), &CameraModel::default());
     let cell = Cell::start(config()).await;
-    let (stop_camera, rx) = oneshot::channel::<()>();
-    let camera = MockCamera::new(cell.camera.clone(), vec![Arc::new(sim.cloud.clone())], CameraOptions::default());
-    let camera = tokio::spawn(async move {
-        let _ = camera.run(rx).await;
-    });
+    let (stop_camera, camera) = cell.camera(vec![Arc::new(sim.cloud.clone())], CameraOptions::default());
     let mut ctl = ControllerClient::connect(&cell.controller, "test").await.unwrap();
     ctl.wait_for_camera(Duration::from_secs(5)).await.unwrap();
     let mut robot = robot(&cell).await;

@@ -1,11 +1,15 @@
 //! Helpers shared by the integration-test suites.
 
 use std::path::PathBuf;
-
+use std::sync::Arc;
 use std::time::Duration;
 
 use tempfile::TempDir;
+use tokio::sync::oneshot;
+use tokio::task::JoinHandle;
+use weldseam::cloud::PointCloud;
 use weldseam::config::Config;
+use weldseam::mock::camera::{CameraOptions, MockCamera};
 use weldseam::server::Stopped;
 use weldseam::server::local::LocalDaemon;
 
@@ -31,6 +35,21 @@ impl Cell {
     pub async fn start(config: Config) -> Cell {
         let daemon = LocalDaemon::start(config).await.unwrap();
         Cell { camera: daemon.camera_addr.to_string(), controller: daemon.controller_addr.to_string(), daemon }
+    }
+
+    /// Starts a mock camera serving `frames` to the cell; it stops with the
+    /// returned sender.
+    pub fn camera(
+        &self,
+        frames: Vec<Arc<PointCloud>>,
+        options: CameraOptions,
+    ) -> (oneshot::Sender<()>, JoinHandle<()>) {
+        let (tx, rx) = oneshot::channel::<()>();
+        let cam = MockCamera::new(self.camera.clone(), frames, options);
+        let handle = tokio::spawn(async move {
+            let _ = cam.run(rx).await;
+        });
+        (tx, handle)
     }
 
     /// Stops the daemon; a stop that takes a minute is a hang.

@@ -131,10 +131,7 @@ impl EvalRequest {
     pub fn groove_depth_for(&self, spec: &SceneSpec) -> Option<f64> {
         match (self.groove_depth, self.joint_for(spec)) {
             (DepthAsk::Measured, _) | (_, RequestedJoint::Auto) => None,
-            (DepthAsk::Given, RequestedJoint::Type(JointType::VButt)) => {
-                spec.joint.groove_depth_mm().or(Some(spec.joint.seam_z() / 2.0))
-            }
-            (DepthAsk::Given, RequestedJoint::Type(_)) => None,
+            (DepthAsk::Given, RequestedJoint::Type(joint)) => spec.groove_depth_requested_as(joint),
         }
     }
 

@@ -310,7 +310,6 @@ pub fn robust_select(planes: Vec<PlaneCluster>, s: &Selection) -> Result<Selecte
     let l = Layers { layers, normal: s.normal, found, offsets_mm };
 
     let butt = |l: &Layers, pos: usize, why: String| {
-        let depth_to_support_mm = l.depth_behind(pos);
         let [a, b] = [&l.layers[pos][0], &l.layers[pos][1]];
         let evidence = format!(
             "two plates side by side ({:.0} and {:.0} mm², {:.1} mm apart along the normal){why}",
@@ -318,7 +317,7 @@ pub fn robust_select(planes: Vec<PlaneCluster>, s: &Selection) -> Result<Selecte
             b.area_mm2,
             (l.offset(b) - l.offset(a)).abs()
         );
-        (Layout::Butt, vec![(pos, 0), (pos, 1)], depth_to_support_mm, evidence)
+        (Layout::Butt, [(pos, 0), (pos, 1)], l.depth_behind(pos), evidence)
     };
     let lap = |l: &Layers, (upper, lower): (usize, usize), why: String| {
         let evidence = format!(
@@ -327,7 +326,7 @@ pub fn robust_select(planes: Vec<PlaneCluster>, s: &Selection) -> Result<Selecte
             l.depth(lower) - l.depth(upper),
             l.layers[lower][0].area_mm2
         );
-        (Layout::Lap, vec![(upper, 0), (lower, 0)], l.depth_behind(lower), evidence)
+        (Layout::Lap, [(upper, 0), (lower, 0)], l.depth_behind(lower), evidence)
     };
     let (layout, picks, depth_to_support_mm, evidence) = match s.joint {
         Some(joint) if Layout::of(joint) == Layout::Butt => butt(&l, find_butt(&l, s, joint)?, String::new()),

@@ -35,8 +35,9 @@
 //! the foot, not the spread of depths, says where the face ends. A face
 //! whose lower part the near plate hides from the camera ends higher, and
 //! its foot then lies far from the midline: only a face whose foot comes
-//! within half the widest root gap of the midline is taken to show the
-//! root.
+//! within half the widest root gap of the midline, and where no ray past
+//! the other plate's edge from the camera or the projector meets it, is
+//! taken to show the root.
 
 use rayon::prelude::*;
 
@@ -147,12 +148,10 @@ pub struct Face {
     pub points: usize,
     /// The face's angle from the plate normal, degrees (`α`).
     pub angle_deg: f64,
-    /// Half the opening at the plates' top, mm (`c`).
-    pub half_opening_mm: f64,
     /// The fit's RMS residual, mm.
     pub rms_mm: f64,
-    /// How deep the face goes below the plates' top, mm (from the spread
-    /// of its depths).
+    /// How deep the face goes below the plates' top, mm: where it meets
+    /// the root face below it, or its foot.
     pub depth_mm: f64,
     /// How far from the midline its foot lies, mm.
     pub foot_mm: f64,
@@ -179,10 +178,13 @@ impl Face {
     }
 
     fn is_plane(&self, spacing_mm: f64) -> bool {
-        !self.along_rays
-            && self.points >= MIN_FACE_POINTS
-            && self.station_share >= MIN_STATION_SHARE
-            && self.rms_mm <= MAX_FACE_RMS_SPACINGS * spacing_mm
+        self.is_seen() && self.rms_mm <= MAX_FACE_RMS_SPACINGS * spacing_mm
+    }
+
+    /// Whether the points are evidence of a surface at all: enough of
+    /// them, along the seam, not a veil along the camera's rays.
+    fn is_seen(&self) -> bool {
+        !self.along_rays && self.points >= MIN_FACE_POINTS && self.station_share >= MIN_STATION_SHARE
     }
 
     /// Whether the face shows the groove's root: its foot comes within
@@ -215,7 +217,7 @@ pub struct GrooveProfile {
 }
 
 /// What the profile says the joint is.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Between {
     /// Bevel faces: a V-groove.
     Groove,
@@ -223,7 +225,7 @@ pub enum Between {
     SquareGap,
     /// A plate stands between the edges, all along the seam: a tee joint's
     /// web on its flange, not a butt joint.
-    StandingPlate,
+    StandingPlate(Standing),
     /// Points between the edges that fit neither.
     Unclear,
 }
@@ -234,17 +236,14 @@ impl GrooveProfile {
     }
 
     pub fn verdict(&self) -> Between {
-        if self.standing.is_some_and(|s| s.points >= MIN_FACE_POINTS && s.station_share >= MIN_STATION_SHARE) {
-            return Between::StandingPlate;
+        if let Some(s) = self.standing.filter(|s| s.points >= MIN_FACE_POINTS && s.station_share >= MIN_STATION_SHARE) {
+            return Between::StandingPlate(s);
         }
         if self.bevels().next().is_some() {
             return Between::Groove;
         }
         // Walls, veils along the rays, or too little to be a face.
-        let spacing = self.point_spacing_mm;
-        let not_a_face = |f: &Face| {
-            f.along_rays || f.is_wall(spacing) || f.points < MIN_FACE_POINTS || f.station_share < MIN_STATION_SHARE
-        };
+        let not_a_face = |f: &Face| !f.is_seen() || f.is_wall(self.point_spacing_mm);
         if self.faces.iter().all(not_a_face) { Between::SquareGap } else { Between::Unclear }
     }
 
@@ -276,7 +275,7 @@ impl GrooveProfile {
                 format!("a V-groove{angle}, {depth}, bevel faces seen on {sides} side(s)")
             }
             Between::SquareGap => format!("a square gap, no bevel face ({} points below the top)", self.points_below),
-            Between::StandingPlate => "a plate standing between the edges".into(),
+            Between::StandingPlate(_) => "a plate standing between the edges".into(),
             Between::Unclear => format!("neither bevels nor a square gap ({})", self.describe()),
         }
     }
@@ -349,14 +348,11 @@ impl GrooveError {
 pub fn judge(requested: Option<JointType>, profile: &GrooveProfile) -> Result<JointType, GrooveError> {
     let described = || profile.describe();
     match (profile.verdict(), requested) {
-        (Between::StandingPlate, _) => {
-            let s = profile.standing.unwrap_or(Standing { points: 0, height_mm: 0.0, station_share: 0.0 });
-            Err(GrooveError::LooksLikeTee {
-                height_mm: s.height_mm,
-                share: 100.0 * s.station_share,
-                profile: described(),
-            })
-        }
+        (Between::StandingPlate(s), _) => Err(GrooveError::LooksLikeTee {
+            height_mm: s.height_mm,
+            share: 100.0 * s.station_share,
+            profile: described(),
+        }),
         (Between::Groove, Some(JointType::IButt)) => Err(GrooveError::LooksLikeVButt { profile: described() }),
         (Between::Groove, _) => Ok(JointType::VButt),
         (Between::SquareGap | Between::Unclear, Some(JointType::VButt)) => {
@@ -613,7 +609,6 @@ fn fit_face(
         side,
         points: kept.len(),
         angle_deg: angle.to_degrees(),
-        half_opening_mm: line.intercept,
         // Perpendicular to the face, not along t.
         rms_mm: line.rms * angle.cos(),
         depth_mm,
@@ -820,7 +815,7 @@ mod tests {
     fn a_plate_standing_between_the_edges_is_seen() {
         let tee = |x: f64| if x.abs() >= 5.0 { Some(0.0) } else { Some(-60.0) };
         let profile = probed(&cloud_of(tee, 15.0, 0.2), 5.5);
-        assert_eq!(profile.verdict(), Between::StandingPlate, "{}", profile.describe());
+        assert!(matches!(profile.verdict(), Between::StandingPlate(_)), "{}", profile.describe());
         assert!((profile.standing.unwrap().height_mm - 60.0).abs() < 1e-3);
         for requested in [None, Some(JointType::VButt), Some(JointType::IButt)] {
             let err = judge(requested, &profile).unwrap_err();

@@ -314,7 +314,14 @@ impl SceneSpec {
     /// V-butt; for a wrong V-butt request, half the plates' top height (a
     /// plausible figure a person would type).
     pub fn requested_groove_depth_mm(&self) -> Option<f64> {
-        match (self.requested_joint(), self.joint.groove_depth_mm()) {
+        self.groove_depth_requested_as(self.requested_joint())
+    }
+
+    /// The groove depth a request for `joint` gives: the scene's for a
+    /// V-butt request on its own V-butt, half the plates' top height for
+    /// one on another joint, none for any other request.
+    pub fn groove_depth_requested_as(&self, joint: JointType) -> Option<f64> {
+        match (joint, self.joint.groove_depth_mm()) {
             (JointType::VButt, Some(depth)) => Some(depth),
             (JointType::VButt, None) => Some(self.joint.seam_z() / 2.0),
             _ => None,

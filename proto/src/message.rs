@@ -422,7 +422,7 @@ pub enum ErrorCode {
     BadCaptureTime,
     /// 24: the frame's cloud frame code is unknown.
     UnknownCloudFrame,
-    /// 40: a request field is out of range (NaN pose, missing groove depth...).
+    /// 40: a request field is out of range (NaN pose, a groove deeper than 100 mm...).
     BadRequest,
     /// 41: the joint code is unknown.
     UnknownJoint,

@@ -5,6 +5,7 @@ mod bench;
 mod cli;
 mod consumer_camera;
 mod daemon;
+mod faults;
 mod fuzz;
 mod golden;
 mod hostile_clouds;

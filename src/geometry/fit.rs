@@ -93,6 +93,19 @@ impl Moments {
         Some(Plane { normal, offset: normal.dot(&centroid) }.facing_away_from_camera())
     }
 
+    /// How the points spread in their plane: the unit direction they
+    /// spread along most, and how many times further along it than across
+    /// it (the ratio of the two largest standard deviations). None for
+    /// fewer than two distinct points.
+    pub fn elongation(&self) -> Option<(Vec3, f64)> {
+        let (values, vectors) = self.principal_axes()?;
+        if values[2] <= 0.0 {
+            return None;
+        }
+        let ratio = (values[2] / values[1].max(f64::MIN_POSITIVE)).sqrt();
+        Some((vectors[2].normalize(), ratio))
+    }
+
     /// The least-squares line as (point on it, unit direction).
     pub fn line(&self) -> Option<(Vec3, Vec3)> {
         let (values, vectors) = self.principal_axes()?;
@@ -137,6 +150,15 @@ mod tests {
         let (c, dir) = pts.iter().collect::<Moments>().line().unwrap();
         assert!(dir.cross(&d).norm() < 1e-9);
         assert!((c - Vec3::new(5.0, 6.0, 700.0) - d * 24.5).norm() < 1e-9);
+    }
+
+    #[test]
+    fn elongation_is_the_long_side_over_the_short_one() {
+        // A uniform 60 x 10 grid: standard deviations in the ratio 6.
+        let pts: Vec<Vec3> = (0..600).map(|i| Vec3::new((i % 60) as f64 + 0.5, (i / 60) as f64 + 0.5, 500.0)).collect();
+        let (dir, ratio) = pts.iter().collect::<Moments>().elongation().unwrap();
+        assert!(dir.cross(&Vec3::x()).norm() < 1e-9);
+        assert!((ratio - 6.0).abs() < 0.05, "{ratio}");
     }
 
     #[test]

@@ -24,6 +24,10 @@ pub struct PlaneCluster {
     pub centroid: Vec3,
     /// The area the points cover on their plane, mm².
     pub area_mm2: f64,
+    /// The direction the points spread along most, and how many times
+    /// further than across it: a bar lying on a plate is long and narrow.
+    pub long_axis: Vec3,
+    pub elongation: f64,
 }
 
 /// The two workpiece plates. For a lap joint `plates[0]` is the upper
@@ -37,6 +41,13 @@ pub struct Workpiece {
     /// table or fixture they rest on, when the camera sees it. The plates
     /// are no thicker than this, so neither is a groove (robust method).
     pub depth_to_support_mm: Option<f64>,
+    /// The other clusters of each plate's layer (robust method): pieces
+    /// of a plate a streak or a dropout split off, or whatever else lies
+    /// in its plane. The coverage report joins those beside the weld that
+    /// continue the plate across a narrow break, so a seam that stops
+    /// where one piece ends is not taken for the whole joint. Butt plates
+    /// share one layer, and so these.
+    pub layer_mates: [Vec<PlaneCluster>; 2],
 }
 
 /// Why no workpiece could be found among the plane clusters.
@@ -79,6 +90,26 @@ pub enum BackgroundError {
          coplanar within {tolerance_mm} mm: this looks like a butt joint, not the lap requested"
     )]
     LooksLikeButt { first_mm2: f64, second_mm2: f64, tolerance_mm: f64 },
+    /// A nearer plane lies across the plane the plates were sought in,
+    /// which is seen on both of its long sides: an object lying on the
+    /// workpiece, not a plate of the joint.
+    #[error(
+        "a long plane of {top_mm2:.0} mm², {above_mm:.1} mm nearer the camera, lies across the plane under it, \
+         which is seen on both of its sides ({first_mm2:.0} and {second_mm2:.0} mm²): an object lying on the \
+         workpiece (a clamp or a bar) covers the joint; a lap's upper plate ends on its lower plate, and butt \
+         plates are not one plane cut in two; clear the joint or set a region of interest beside the object"
+    )]
+    LiesAcross { top_mm2: f64, above_mm: f64, first_mm2: f64, second_mm2: f64 },
+    /// The joint type was left to the planner, and the nearest layer holds
+    /// a plate and a piece too small to be a plate beside it, over a lower
+    /// plane one plate thickness behind: butt plates, one barely seen, or a
+    /// lap's upper plate that a gap in the cloud cut in two.
+    #[error(
+        "the nearest layer holds a plate of {first_mm2:.0} mm² and a piece of {second_mm2:.0} mm² beside it, \
+         {step_mm:.1} mm over a lower plane: two butt plates, one barely in view, or a lap's upper plate cut in two \
+         by a gap in the cloud; the joint type cannot be told: name it in the request"
+    )]
+    Ambiguous { first_mm2: f64, second_mm2: f64, step_mm: f64 },
     /// The joint type was left to the planner, and the layers fit neither
     /// layout.
     #[error("the joint type cannot be told from the plates: not a butt joint ({butt}); not a lap ({lap})")]
@@ -93,13 +124,31 @@ impl BackgroundError {
 
     /// Whether the joint type was left to the planner and could not be told.
     pub fn is_unrecognised(&self) -> bool {
-        matches!(self, BackgroundError::Unrecognised { .. })
+        matches!(self, BackgroundError::Unrecognised { .. } | BackgroundError::Ambiguous { .. })
     }
 }
 
 /// How large the second plate of a layer must be, against the first, to
 /// count as a plate beside it rather than a piece of fixture or a clamp.
 const SIDE_BY_SIDE_AREA_RATIO: f64 = 0.25;
+
+/// A plane at least this many times longer than wide is a bar that can lie
+/// across another plane, cutting it in two.
+const BAR_ELONGATION: f64 = 2.0;
+
+/// Whether `top`, nearer the camera, lies across the plane that `a` and
+/// `b` are pieces of: `top` is long and narrow, and the two lie on
+/// opposite sides of its long axis. A lap's upper plate ends on its lower
+/// plate, so the lower one is seen on one side of it only; two butt
+/// plates have nothing lying along the gap between them.
+fn lies_across(top: &PlaneCluster, a: &PlaneCluster, b: &PlaneCluster, normal: &Vec3) -> bool {
+    if top.elongation < BAR_ELONGATION {
+        return false;
+    }
+    let across = normal.cross(&top.long_axis);
+    let side = |c: &PlaneCluster| across.dot(&(c.centroid - top.centroid));
+    side(a) * side(b) < 0.0
+}
 
 /// Fits a plane to each cluster and estimates its area from the sampling
 /// density the camera gives on that plane.
@@ -120,7 +169,8 @@ pub fn describe(
             let plane = moments.plane()?;
             let centroid = moments.centroid()?;
             let area_mm2 = m.len() as f64 * area_per_point(&centroid, &plane.normal);
-            Some(PlaneCluster { label: label as u32, members: m, plane, centroid, area_mm2 })
+            let (long_axis, elongation) = moments.elongation()?;
+            Some(PlaneCluster { label: label as u32, members: m, plane, centroid, area_mm2, long_axis, elongation })
         })
         .collect()
 }
@@ -150,7 +200,9 @@ fn take_two(planes: Vec<PlaneCluster>) -> Result<Workpiece, BackgroundError> {
     let found = planes.len();
     let mut it = planes.into_iter();
     match (it.next(), it.next()) {
-        (Some(a), Some(b)) => Ok(Workpiece { plates: [a, b], depth_to_support_mm: None }),
+        (Some(a), Some(b)) => {
+            Ok(Workpiece { plates: [a, b], depth_to_support_mm: None, layer_mates: Default::default() })
+        }
         _ => Err(BackgroundError::TooFewPlanes { found }),
     }
 }
@@ -235,13 +287,22 @@ fn find_butt(l: &Layers, s: &Selection, joint: JointType) -> Result<usize, Backg
         return Err(BackgroundError::NoCoplanarPair { found: l.found, offsets_mm: l.offsets_mm.clone() });
     };
     // The plates are the workpiece's top: a nearer plane may be a clamp,
-    // but not one larger than a plate.
-    let smaller_mm2 = l.layers[pos][1].area_mm2;
+    // but not one larger than a plate, nor one lying across the pair.
+    let [first, second] = [&l.layers[pos][0], &l.layers[pos][1]];
+    let smaller_mm2 = second.area_mm2;
     if let Some(cover) = l.layers[..pos].iter().map(|layer| &layer[0]).find(|c| c.area_mm2 > smaller_mm2) {
         return Err(BackgroundError::PairUnderLargerPlane {
             area_mm2: cover.area_mm2,
             above_mm: l.depth(pos) - l.offset(cover),
             smaller_mm2,
+        });
+    }
+    if let Some(bar) = l.layers[..pos].iter().flatten().find(|c| lies_across(c, first, second, &l.normal)) {
+        return Err(BackgroundError::LiesAcross {
+            top_mm2: bar.area_mm2,
+            above_mm: l.depth(pos) - l.offset(bar),
+            first_mm2: first.area_mm2,
+            second_mm2: second.area_mm2,
         });
     }
     Ok(pos)
@@ -264,6 +325,20 @@ fn find_lap(l: &Layers, s: &Selection) -> Result<(usize, usize), BackgroundError
                         first_mm2: first.area_mm2,
                         second_mm2: second.area_mm2,
                         tolerance_mm: s.coplanar_tolerance_mm,
+                    });
+                }
+                // The lower plate seen on both sides of the upper one: the
+                // upper one lies across it.
+                let (top, under) = (&l.layers[upper][0], &l.layers[lower]);
+                if let Some(piece) = under[1..].iter().find(|c| {
+                    c.area_mm2 >= SIDE_BY_SIDE_AREA_RATIO * under[0].area_mm2
+                        && lies_across(top, &under[0], c, &l.normal)
+                }) {
+                    return Err(BackgroundError::LiesAcross {
+                        top_mm2: top.area_mm2,
+                        above_mm: step,
+                        first_mm2: under[0].area_mm2,
+                        second_mm2: piece.area_mm2,
                     });
                 }
                 return Ok((upper, lower));
@@ -342,6 +417,15 @@ pub fn robust_select(planes: Vec<PlaneCluster>, s: &Selection) -> Result<Selecte
             {
                 lap(&l, lap_layers, " nearer the camera than the nearest coplanar pair".into())
             }
+            // The lap's upper layer is the pair's, and the lap found no
+            // second plate beside the first there: a plate and a piece.
+            (Ok(pos), Ok((upper, lower))) if upper == pos => {
+                return Err(BackgroundError::Ambiguous {
+                    first_mm2: l.layers[pos][0].area_mm2,
+                    second_mm2: l.layers[pos][1].area_mm2,
+                    step_mm: l.depth(lower) - l.depth(upper),
+                });
+            }
             (Ok(pos), _) => butt(&l, pos, String::new()),
             (Err(BackgroundError::LooksLikeLap { .. }), Ok(lap_layers)) => {
                 lap(&l, lap_layers, ", and no two plates side by side in one plane".into())
@@ -357,13 +441,16 @@ pub fn robust_select(planes: Vec<PlaneCluster>, s: &Selection) -> Result<Selecte
     let mut layers = l.layers;
     let mut take = |(layer, k): (usize, usize)| layers[layer].swap_remove(k);
     let (second, first) = (take(picks[1]), take(picks[0]));
-    Ok(Selected { workpiece: Workpiece { plates: [first, second], depth_to_support_mm }, layout, evidence })
+    let layer_mates = [layers[picks[0].0].clone(), std::mem::take(&mut layers[picks[1].0])];
+    let workpiece = Workpiece { plates: [first, second], depth_to_support_mm, layer_mates };
+    Ok(Selected { workpiece, layout, evidence })
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
 
+    /// A plate as long along y as it is wide across x.
     fn cluster(offset: f64, area: f64, centre_x: f64) -> PlaneCluster {
         PlaneCluster {
             label: 0,
@@ -371,7 +458,14 @@ mod tests {
             plane: Plane { normal: Vec3::z(), offset },
             centroid: Vec3::new(centre_x, 0.0, offset),
             area_mm2: area,
+            long_axis: Vec3::y(),
+            elongation: 1.0,
         }
+    }
+
+    /// A bar along y, five times longer than wide.
+    fn bar(offset: f64, area: f64, centre_x: f64) -> PlaneCluster {
+        PlaneCluster { elongation: 5.0, ..cluster(offset, area, centre_x) }
     }
 
     fn selection(joint: JointType) -> Selection {
@@ -435,6 +529,44 @@ mod tests {
     }
 
     #[test]
+    fn a_bar_lying_across_a_plate_is_no_lap_and_no_butt_pair() {
+        // A clamp 15 mm over one plate, which is seen on both of its sides;
+        // the other plate lies 7 mm lower, the table further.
+        let planes = || {
+            vec![
+                bar(685.0, 8_000.0, 0.0),
+                cluster(700.0, 9_000.0, -40.0),
+                cluster(700.0, 8_500.0, 40.0),
+                cluster(707.0, 14_000.0, 80.0),
+                cluster(760.0, 90_000.0, 0.0),
+            ]
+        };
+        let lap = robust_select(planes(), &selection(JointType::Lap)).unwrap_err();
+        assert!(matches!(lap, BackgroundError::LiesAcross { .. }), "{lap}");
+        assert!(lap.to_string().contains("clamp"), "{lap}");
+        let butt = robust_select(planes(), &selection(JointType::IButt)).unwrap_err();
+        assert!(matches!(butt, BackgroundError::LiesAcross { .. }), "{butt}");
+        assert!(robust_select(planes(), &auto()).is_err());
+    }
+
+    #[test]
+    fn a_lap_whose_lower_plate_is_seen_on_one_side_only_is_kept() {
+        // The lower plate split in two along the seam (a streak), both
+        // pieces beside the upper plate on the same side of it.
+        let mut planes = vec![
+            bar(700.0, 20_000.0, 0.0),
+            cluster(706.0, 15_000.0, 60.0),
+            cluster(706.0, 12_000.0, 60.0),
+            cluster(760.0, 90_000.0, 0.0),
+        ];
+        planes[1].centroid.y = -80.0;
+        planes[2].centroid.y = 80.0;
+        let w = robust_select(planes, &selection(JointType::Lap)).unwrap().workpiece;
+        assert_eq!(w.plates[0].plane.offset, 700.0);
+        assert_eq!(w.plates[1].area_mm2, 15_000.0);
+    }
+
+    #[test]
     fn the_wrong_joint_requested_is_named_for_what_it_looks_like() {
         // A lap: the upper plate 6 mm over the lower one, the table behind.
         let lap = vec![cluster(760.0, 90_000.0, 0.0), cluster(706.0, 20_000.0, 50.0), cluster(700.0, 25_000.0, -50.0)];
@@ -489,6 +621,17 @@ mod tests {
             cluster(760.0, 90_000.0, 0.0),
         ];
         assert_eq!(robust_select(across, &auto()).unwrap().layout, Layout::Butt);
+        // A plate with a small piece beside it, 4 mm over a lower plane: a
+        // butt pair barely in view, or a lap's upper plate cut by a streak.
+        let piece = vec![
+            cluster(700.0, 20_000.0, 0.0),
+            cluster(700.0, 1_600.0, -70.0),
+            cluster(704.0, 40_000.0, -120.0),
+            cluster(760.0, 90_000.0, 0.0),
+        ];
+        let err = robust_select(piece.clone(), &auto()).unwrap_err();
+        assert!(matches!(err, BackgroundError::Ambiguous { .. }) && err.is_unrecognised(), "{err}");
+        assert_eq!(robust_select(piece, &selection(JointType::IButt)).unwrap().layout, Layout::Butt);
         // Two planes 60 mm apart are neither.
         let apart = vec![cluster(700.0, 1000.0, 0.0), cluster(760.0, 1000.0, 0.0)];
         let err = robust_select(apart, &auto()).unwrap_err();

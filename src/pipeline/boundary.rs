@@ -24,8 +24,10 @@
 //! [`rim_refined_extent`] reads the ends again from the plate's last rows
 //! along the fitted edge.
 
-use crate::cloud::PointCloud;
+use crate::cloud::{PointCloud, is_valid_point};
 use crate::geometry::fit::Plane;
+
+use super::refit::SeamCurve;
 use crate::geometry::{Vec3, vec3};
 
 /// One sample of a plate's boundary: a point on the plate's plane and its
@@ -220,6 +222,106 @@ pub fn members_along(cloud: &PointCloud, members: &[u32], edge: &CoarseEdge, ban
         .fold(|| (None, None), |(lo, hi), p| (extreme(lo, Some(p), |a, b| a < b), extreme(hi, Some(p), |a, b| a > b)))
         .reduce(|| (None, None), |(l1, h1), (l2, h2)| (extreme(l1, l2, |a, b| a < b), extreme(h1, h2, |a, b| a > b)));
     Some([lo?.1, hi?.1])
+}
+
+/// How far past a weld edge's end, along the seam, the image border may lie
+/// for the end to be taken for the border's: a seam leaving the image at a
+/// grazing angle runs this far inside the rim the plane criterion trims
+/// along the border.
+const MAX_BORDER_REACH_MM: f64 = 40.0;
+/// The share of the pixels between an edge's end and the image border,
+/// just inside the plate, that must lie on the plate's plane for the plate
+/// to be taken to run on to the border.
+const MIN_ON_PLATE_TO_BORDER: f64 = 0.8;
+/// How far inside the fitted edge those pixels are read, in point spacings
+/// (the first inside the image), and how far off the plate's plane a point
+/// may lie and still be on it.
+const BORDER_INSET_SPACINGS: [f64; 2] = [3.0, 1.0];
+const ON_PLATE_MM: f64 = 1.0;
+
+/// A weld edge's extent carried to the image border where the plate runs
+/// on to it. The plane criterion trims a plate's rim along the border as
+/// along any edge, so the boundary samples stop a rim's depth inside it;
+/// where the seam leaves the image at a grazing angle, that depth becomes
+/// millimetres along the seam. The end is moved to where the fitted edge
+/// leaves the image (`in_view` says whether a point projects inside it)
+/// only when the pixels just inside the plate between the two are seen on
+/// the plate's plane (`pixel_of` gives a point's pixel): where the plate
+/// ends before the border, or the view beyond its end is empty, the end
+/// stays.
+#[allow(clippy::too_many_arguments)]
+pub fn reach_image_border(
+    cloud: &PointCloud,
+    pixel_of: impl Fn(&Vec3) -> Option<usize>,
+    in_view: impl Fn(&Vec3) -> bool,
+    edge: &SeamCurve,
+    plate: &Plane,
+    inward: &Vec3,
+    spacing_mm: f64,
+    (lo, hi): (f64, f64),
+) -> (f64, f64) {
+    if !(spacing_mm.is_finite() && spacing_mm > 0.0) {
+        return (lo, hi);
+    }
+    let step = 0.5 * spacing_mm;
+    let reach = |end: f64, outward: f64| -> f64 {
+        let steps = (MAX_BORDER_REACH_MM / step) as usize;
+        let Some(exit) = (1..=steps).map(|k| end + outward * k as f64 * step).find(|&s| !in_view(&edge.at(s))) else {
+            return end;
+        };
+        // The border lies between the last step in view and `exit`.
+        let border = exit - outward * 0.5 * step;
+        let insets = BORDER_INSET_SPACINGS.map(|k| k * spacing_mm);
+        let (mut seen, mut on_plate) = (0usize, 0usize);
+        let mut s = end;
+        while (border - s) * outward > 0.0 {
+            // Where the plate lies between the edge and the border, the
+            // deeper reading may fall outside the image.
+            let at = edge.at(s);
+            if let Some(i) = insets.iter().find_map(|d| pixel_of(&(at + inward * *d))) {
+                seen += 1;
+                let q = cloud.points()[i];
+                on_plate += usize::from(is_valid_point(&q) && plate.signed_distance(&vec3(&q)).abs() <= ON_PLATE_MM);
+            }
+            s += outward * step;
+        }
+        // Where nothing inside the plate is in view, the edge runs along
+        // the border itself.
+        if on_plate as f64 >= MIN_ON_PLATE_TO_BORDER * seen as f64 { border } else { end }
+    };
+    (reach(lo, -1.0), reach(hi, 1.0))
+}
+
+/// The longest break along the weld, in point spacings, across which a
+/// piece of a plate in its plane is taken for the same plate seen through a
+/// narrow gap in the cloud: a streak or a stripe of dropouts a few pixels
+/// wide, crossing the weld obliquely.
+pub const JOINT_BREAK_SPACINGS: f64 = 12.0;
+
+/// Where a plate is seen along the weld, from where its own cluster is
+/// (`own`) and where other pieces in its plane are (`pieces`): the pieces
+/// that reach within `max_break` of it, and of each other so joined, are
+/// the same plate seen through a narrow gap in the cloud (a streak, a
+/// stripe of dropouts); a piece beyond a longer break is the plate on the
+/// far side of something hiding the joint (a clamp), another stretch of
+/// the joint, not this one.
+pub fn joined_extent(own: (f64, f64), pieces: &[(f64, f64)], max_break: f64) -> (f64, f64) {
+    let mut pieces: Vec<(f64, f64)> = pieces.to_vec();
+    pieces.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let (mut lo, mut hi) = own;
+    // Each pass joins what touches the extent so far; a piece joined on
+    // one side may bring another within reach, so repeat until none does.
+    loop {
+        let before = (lo, hi);
+        for &(a, b) in &pieces {
+            if a <= hi + max_break && b >= lo - max_break {
+                (lo, hi) = (lo.min(a), hi.max(b));
+            }
+        }
+        if (lo, hi) == before {
+            return (lo, hi);
+        }
+    }
 }
 
 /// How deep, in neighbour radii, the plane criterion trims a plate's rim:
@@ -888,6 +990,17 @@ mod tests {
         let d = rim_trim_radii(0.8);
         let cap = (d.acos() - d * (1.0 - d * d).sqrt()) / std::f64::consts::PI;
         assert!((cap - 0.2).abs() < 1e-9 && (0.45..0.55).contains(&d), "d = {d}, cap {cap}");
+    }
+
+    #[test]
+    fn pieces_join_a_plate_across_narrow_breaks_only() {
+        // A streak's 2 mm break joins; a clamp's 30 mm does not, nor what
+        // lies beyond it.
+        let pieces = [(52.0, 80.0), (110.0, 150.0), (-40.0, -2.0)];
+        assert_eq!(joined_extent((0.0, 50.0), &pieces, 4.0), (-40.0, 80.0));
+        assert_eq!(joined_extent((0.0, 50.0), &[], 4.0), (0.0, 50.0));
+        // Chains: each piece within reach of the one before.
+        assert_eq!(joined_extent((0.0, 10.0), &[(23.0, 30.0), (12.0, 20.0)], 4.0), (0.0, 30.0));
     }
 
     #[test]

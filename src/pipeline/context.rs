@@ -10,7 +10,7 @@ use std::time::Instant;
 
 use rayon::prelude::*;
 
-use crate::camera::{MeasurableVolume, Unmeasurable};
+use crate::camera::{CameraModel, MeasurableVolume, Unmeasurable};
 use crate::cloud::PointCloud;
 use crate::config::{Config, Method, PointDensity};
 use crate::geometry::{Vec3, vec3};
@@ -280,22 +280,25 @@ impl<'a> Context<'a> {
     /// Narrows `[s0, s1]` to where `curve` projects inside the image, when
     /// the frame is the configured camera's pixel grid.
     pub(super) fn clip_to_view(&self, curve: &SeamCurve, s0: f64, s1: f64) -> (f64, f64) {
-        let camera = &self.config.camera;
-        let grid = (camera.width_px as usize, camera.height_px as usize);
-        if !self.cloud.is_organized() || (self.cloud.width(), self.cloud.height()) != grid {
+        let Some(grid) = self.camera_grid() else {
             return (s0, s1);
-        }
-        // Half a pixel inside the outermost pixel centres.
-        let (u_max, v_max) = (grid.0 as f64 - 1.5, grid.1 as f64 - 1.5);
-        let inside = |s: f64| {
-            camera.project(&curve.at(s)).is_some_and(|(u, v)| (0.5..=u_max).contains(&u) && (0.5..=v_max).contains(&v))
         };
+        let inside = |s: f64| grid.in_view(&curve.at(s));
         let steps = ((s1 - s0) / VIEW_CLIP_STEP_MM).ceil().max(1.0) as usize;
         let ss: Vec<f64> = (0..=steps).map(|k| s0 + (s1 - s0) * k as f64 / steps as f64).collect();
         match (ss.iter().position(|&s| inside(s)), ss.iter().rposition(|&s| inside(s))) {
             (Some(first), Some(last)) => (ss[first], ss[last]),
             _ => (s0, s0),
         }
+    }
+
+    /// The configured camera's pixel grid, when the frame lies on it (a raw
+    /// organized frame, or one re-gridded onto it).
+    pub(super) fn camera_grid(&self) -> Option<CameraGrid<'_>> {
+        let camera = &self.config.camera;
+        let (width, height) = (camera.width_px as usize, camera.height_px as usize);
+        (self.cloud.is_organized() && (self.cloud.width(), self.cloud.height()) == (width, height))
+            .then_some(CameraGrid { camera, width, height })
     }
 
     /// Section 5.1: the weld from `s0` to `s1` sampled into base-frame
@@ -486,6 +489,31 @@ fn count_frame(cloud: &PointCloud, volume: &MeasurableVolume) -> (ViewCounts, Me
 /// `cloud` with the points outside `volume` made invalid.
 fn without_unmeasurable(cloud: Cow<'_, PointCloud>, volume: &MeasurableVolume) -> PointCloud {
     input::map_points(cloud, |p| if volume.reject(p).is_none() { *p } else { crate::cloud::INVALID_POINT })
+}
+
+/// A frame's pixel grid and the camera that made it: where a point in the
+/// camera frame falls on it.
+pub(super) struct CameraGrid<'a> {
+    camera: &'a CameraModel,
+    width: usize,
+    height: usize,
+}
+
+impl CameraGrid<'_> {
+    /// Whether `p` projects inside the image, half a pixel inside the
+    /// outermost pixel centres.
+    pub(super) fn in_view(&self, p: &Vec3) -> bool {
+        let (u_max, v_max) = (self.width as f64 - 1.5, self.height as f64 - 1.5);
+        self.camera.project(p).is_some_and(|(u, v)| (0.5..=u_max).contains(&u) && (0.5..=v_max).contains(&v))
+    }
+
+    /// The index of the pixel `p` projects into, if inside the image.
+    pub(super) fn pixel_of(&self, p: &Vec3) -> Option<usize> {
+        let (u, v) = self.camera.project(p)?;
+        let (u, v) = (u.round(), v.round());
+        let inside = (0.0..self.width as f64).contains(&u) && (0.0..self.height as f64).contains(&v);
+        inside.then(|| v as usize * self.width + u as usize)
+    }
 }
 
 #[cfg(test)]

@@ -117,6 +117,13 @@ const OCCLUSION_MARGIN_MM: f64 = 0.5;
 /// (the camera's rays lean differently along the seam), seen at others.
 const FOOT_QUANTILE: f64 = 0.1;
 
+/// How far the weld edges' distance may stray from the opening the bevels
+/// and the depth give a V-groove: this many millimetres and this share of
+/// the widest opening (the angles are fitted, not known), before the edges
+/// are taken for something else's.
+const OPENING_SLACK_MM: f64 = 1.0;
+const OPENING_SLACK_SHARE: f64 = 0.15;
+
 /// A face fit whose residual RMS exceeds this many point spacings is not a
 /// plane face.
 const MAX_FACE_RMS_SPACINGS: f64 = 1.0;
@@ -208,6 +215,9 @@ pub struct Standing {
 #[derive(Debug, Clone, PartialEq)]
 pub struct GrooveProfile {
     pub point_spacing_mm: f64,
+    /// How far apart the weld edges are at the seam's middle, mm: a
+    /// V-groove's opening at the top.
+    pub opening_mm: f64,
     /// The points between the edges below the plates' top margin.
     pub points_below: usize,
     /// The face fitted on each side that had points to fit.
@@ -263,6 +273,43 @@ impl GrooveProfile {
     pub fn depth_mm(&self) -> Option<f64> {
         let spacing = self.point_spacing_mm;
         self.bevels().filter(|f| f.reaches_root(spacing)).map(|f| f.depth_mm).reduce(f64::max)
+    }
+
+    /// The opening at the top a V-groove `depth_mm` deep has with the
+    /// bevels seen, least and most: `g + d (tan α1 + tan α2)` over root
+    /// gaps `g` up to the widest, and for a side whose bevel is not seen,
+    /// any bevel angle. None when no bevel is seen.
+    pub fn expected_opening_mm(&self, depth_mm: f64) -> Option<(f64, f64)> {
+        let run = |deg: f64| depth_mm * deg.to_radians().tan();
+        let angles: Vec<f64> = self.bevels().map(|f| f.angle_deg).collect();
+        match angles.as_slice() {
+            [a, b] => Some((run(*a) + run(*b), MAX_ROOT_GAP_MM + run(*a) + run(*b))),
+            [a] => Some((run(*a) + run(MIN_BEVEL_DEG), MAX_ROOT_GAP_MM + run(*a) + run(MAX_BEVEL_DEG))),
+            _ => None,
+        }
+    }
+
+    /// Checks that the weld edges are as far apart as the top of the
+    /// V-groove the bevels and `depth_mm` make. Edges much further apart
+    /// belong to something beside the groove (another part abutting a
+    /// plate, with the true groove between the edges); much nearer, to
+    /// something inside it; and a depth given for a groove whose root the
+    /// camera cannot see is checked here too.
+    pub fn check_opening(&self, depth_mm: f64) -> Result<(), GrooveError> {
+        let Some((least, most)) = self.expected_opening_mm(depth_mm) else {
+            return Ok(());
+        };
+        let slack = OPENING_SLACK_MM + OPENING_SLACK_SHARE * most + 2.0 * self.point_spacing_mm;
+        if (least - slack..=most + slack).contains(&self.opening_mm) {
+            return Ok(());
+        }
+        Err(GrooveError::OpeningMismatch {
+            opening_mm: self.opening_mm,
+            depth_mm,
+            least_mm: least,
+            most_mm: most,
+            profile: self.describe(),
+        })
     }
 
     /// The verdict and its figures in a sentence, for the seam's evidence.
@@ -330,6 +377,12 @@ pub enum GrooveError {
          type cannot be told; name it in the request"
     )]
     Unclear { profile: String },
+    #[error(
+        "the weld edges are {opening_mm:.1} mm apart, but a V-groove {depth_mm:.1} mm deep with the bevels seen \
+         opens {least_mm:.1} to {most_mm:.1} mm at its top ({profile}): the edges found are not this groove's \
+         (another part beside the joint, or something in the groove), or the groove depth is wrong"
+    )]
+    OpeningMismatch { opening_mm: f64, depth_mm: f64, least_mm: f64, most_mm: f64, profile: String },
 }
 
 impl GrooveError {
@@ -461,7 +514,13 @@ pub fn probe(cloud: &PointCloud, setting: &ProbeSetting) -> GrooveProfile {
             fit_face(&points, side, spacing, top_margin, &view, half_opening)
         })
         .collect();
-    GrooveProfile { point_spacing_mm: spacing, points_below: below.len(), faces, standing }
+    GrooveProfile {
+        point_spacing_mm: spacing,
+        opening_mm: 2.0 * half_opening,
+        points_below: below.len(),
+        faces,
+        standing,
+    }
 }
 
 /// The share of the stations at least one of `points` lies at.
@@ -760,6 +819,13 @@ mod tests {
         // The bevels alone tell the joint: a V-butt, never an I-butt.
         assert_eq!(judge(None, &profile), Ok(JointType::VButt));
         assert!(matches!(judge(Some(JointType::IButt), &profile), Err(GrooveError::LooksLikeVButt { .. })));
+        // Its opening, 6.3 mm, fits its depth, and fits neither a groove
+        // twice as deep nor the edges of a part standing 40 mm off.
+        assert_eq!(profile.check_opening(5.0), Ok(()));
+        assert!(matches!(profile.check_opening(10.0), Err(GrooveError::OpeningMismatch { .. })));
+        let far_apart = GrooveProfile { opening_mm: 40.0, ..profile.clone() };
+        let refusal = far_apart.check_opening(5.0).unwrap_err();
+        assert!(refusal.to_string().contains("40.0 mm apart"), "{refusal}");
     }
 
     #[test]

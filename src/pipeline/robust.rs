@@ -227,7 +227,9 @@ pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
         let plane = &plates[k].plane;
         let edge = edge_across(k, &line.point, &line.direction);
         // Where the plate is seen beside the weld, for the coverage report.
-        let seen_beside = boundary::members_along(cloud, &plates[k].members, &edge, params.band_mm);
+        let along = |members: &[u32]| boundary::members_along(cloud, members, &edge, params.band_mm);
+        let mates = workpiece.layer_mates[k].iter().filter_map(|c| along(&c.members)).collect::<Vec<_>>();
+        let seen_beside = (along(&plates[k].members), mates);
         if cloud.is_organized() {
             return (boundary::sample_boundary(cloud, &plates[k].members, plane, &edge, &params), seen_beside);
         }
@@ -304,6 +306,9 @@ pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
             }
             _ => 0.0,
         };
+        if joint == JointType::VButt {
+            profile.check_opening(depth).map_err(|e| PlanError::at(Stage::Groove, e))?;
+        }
         (Some(profile), depth)
     } else {
         (None, 0.0)
@@ -344,6 +349,32 @@ pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
         tracing::debug!(strips = ?extents, rims = ?refined, "weld edge ends refined along the plates' rims");
         extents = refined;
     }
+    if let Some(grid) = ctx.camera_grid() {
+        // On the camera's grid the boundary samples stop a trimmed rim
+        // short of the image border; where the plate runs on to it, so
+        // does the edge.
+        let reach = |k: usize| {
+            let curve = &fits[k].curve;
+            let middle = 0.5 * (curve.s_min + curve.s_max);
+            let edge = edge_across(k, &curve.at(middle), &curve.tangent(middle));
+            let pixel_of = |p: &Vec3| grid.pixel_of(p);
+            let in_view = |p: &Vec3| grid.in_view(p);
+            let spacing = spacing_at(&edge.point);
+            boundary::reach_image_border(
+                cloud,
+                pixel_of,
+                in_view,
+                curve,
+                &plates[k].plane,
+                &-edge.outward,
+                spacing,
+                extents[k],
+            )
+        };
+        let reached = [reach(0), reach(1)];
+        tracing::debug!(samples = ?extents, borders = ?reached, "weld edge ends carried to the image border");
+        extents = reached;
+    }
     let [(a0, a1), (b0, b1)] = extents;
     tracing::debug!(edge_1_mm = ?[a0, a1], edge_2_mm = ?[b0, b1], "weld edges seen along the seam");
     let (mut s0, mut s1) = (a0.max(b0), a1.min(b1));
@@ -365,12 +396,18 @@ pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
     // members widened by the rim the plane criterion trimmed (for a lap,
     // where the root is also in view). The seam should span all of it.
     let trim = boundary::rim_trim_radii(cfg.plane_min_neighbour_ratio) * scale.radius_mm;
-    let beside = [beside_a, beside_b].map(|b| {
-        // Each plate's edge may run either way along the seam's axis.
-        b.map(|ends| {
-            let [p, q] = ends.map(|e| axes.feature(&e));
-            (p.min(q) - trim, p.max(q) + trim)
-        })
+    // Each plate's edge may run either way along the seam's axis.
+    let interval = |ends: [Vec3; 2]| {
+        let [p, q] = ends.map(|e| axes.feature(&e));
+        (p.min(q) - trim, p.max(q) + trim)
+    };
+    // Pieces of a plate in its plane beyond a narrow break (a streak cut
+    // it) show the joint going on; beyond a wide one (a clamp), another
+    // stretch of it.
+    let max_break = boundary::JOINT_BREAK_SPACINGS * spacing_at(&axes.origin);
+    let beside = [beside_a, beside_b].map(|(own, mates)| {
+        let mates: Vec<(f64, f64)> = mates.into_iter().map(interval).collect();
+        own.map(|ends| boundary::joined_extent(interval(ends), &mates, max_break))
     });
     let coverage = match beside {
         [Some((a0, a1)), Some((b0, b1))] => {

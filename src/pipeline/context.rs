@@ -298,7 +298,7 @@ impl<'a> Context<'a> {
         let camera = &self.config.camera;
         let (width, height) = (camera.width_px as usize, camera.height_px as usize);
         (self.cloud.is_organized() && (self.cloud.width(), self.cloud.height()) == (width, height))
-            .then_some(CameraGrid { camera, width, height })
+            .then(|| CameraGrid::for_camera(camera))
     }
 
     /// Section 5.1: the weld from `s0` to `s1` sampled into base-frame
@@ -493,18 +493,34 @@ fn without_unmeasurable(cloud: Cow<'_, PointCloud>, volume: &MeasurableVolume) -
 
 /// A frame's pixel grid and the camera that made it: where a point in the
 /// camera frame falls on it.
+#[derive(Debug)]
 pub(super) struct CameraGrid<'a> {
     camera: &'a CameraModel,
     width: usize,
     height: usize,
 }
 
-impl CameraGrid<'_> {
+impl<'a> CameraGrid<'a> {
+    /// The grid of `camera`'s own frames.
+    pub(super) fn for_camera(camera: &'a CameraModel) -> Self {
+        CameraGrid { camera, width: camera.width_px as usize, height: camera.height_px as usize }
+    }
+
     /// Whether `p` projects inside the image, half a pixel inside the
     /// outermost pixel centres.
     pub(super) fn in_view(&self, p: &Vec3) -> bool {
         let (u_max, v_max) = (self.width as f64 - 1.5, self.height as f64 - 1.5);
         self.camera.project(p).is_some_and(|(u, v)| (0.5..=u_max).contains(&u) && (0.5..=v_max).contains(&v))
+    }
+
+    /// Where `p` projects on the image, pixels.
+    pub(super) fn project(&self, p: &Vec3) -> Option<(f64, f64)> {
+        self.camera.project(p)
+    }
+
+    /// The image's width and height, pixels.
+    pub(super) fn size(&self) -> (usize, usize) {
+        (self.width, self.height)
     }
 
     /// The index of the pixel `p` projects into, if inside the image.

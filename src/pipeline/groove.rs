@@ -41,10 +41,12 @@
 
 use rayon::prelude::*;
 
-use crate::cloud::{PointCloud, is_valid_point};
+use crate::cloud::{Point, PointCloud, is_valid_point};
 use crate::geometry::{Vec3, vec3};
 use crate::joint::JointType;
 
+use super::context::CameraGrid;
+use super::neighbours::cells::CellIndex;
 use super::refit::SeamCurve;
 
 /// A face between these angles from the plate normal is a bevel: V-groove
@@ -128,6 +130,16 @@ const OPENING_SLACK_SHARE: f64 = 0.15;
 /// plane face.
 const MAX_FACE_RMS_SPACINGS: f64 = 1.0;
 
+/// How far above the plates the probe looks for a plate standing between
+/// the edges: a tee's web is taller, and its lower part tells.
+const STANDING_PROBE_MM: f64 = 150.0;
+/// How near the camera, along its axis, a corner of the probed box may come
+/// before the box is not projected (the whole frame is read instead).
+const MIN_PROJECTED_DEPTH_MM: f64 = 10.0;
+/// How many pixels the projected box is widened by each way: a point's
+/// pixel is its projection rounded, and the box's margins are a millimetre.
+const PIXEL_MARGIN: f64 = 2.0;
+
 /// What the probe needs besides the cloud.
 #[derive(Debug, Clone, Copy)]
 pub struct ProbeSetting<'a> {
@@ -139,6 +151,10 @@ pub struct ProbeSetting<'a> {
     pub point_spacing_mm: f64,
     /// How far below the plates' top the surface they rest on lies.
     pub depth_to_support_mm: Option<f64>,
+    /// The frame's pixel grid, when it lies on the configured camera's:
+    /// then only the pixels the probed box projects onto are read, not the
+    /// whole frame.
+    pub(super) grid: Option<&'a CameraGrid<'a>>,
     /// Where the structured-light projector sits in the camera frame: a
     /// point it does not light is not measured, so its shadow ends a face
     /// as the camera's own view does. The camera's origin for a sensor
@@ -462,11 +478,11 @@ pub fn probe(cloud: &PointCloud, setting: &ProbeSetting) -> GrooveProfile {
         // NaN (an invalid pixel) fails both.
         (span32.0..=span32.1).contains(&s) && (band32.0..=band32.1).contains(&a)
     };
-    let collected: Vec<Across> = cloud
-        .points()
-        .par_iter()
-        .filter(|p| near_seam(p) && is_valid_point(p))
-        .filter_map(|p| {
+    let read = |p: &Point| -> Option<Across> {
+        if !(near_seam(p) && is_valid_point(p)) {
+            return None;
+        }
+        {
             let d = vec3(p) - axes.origin;
             let s = d.dot(&axes.e);
             if !(s0..s1).contains(&s) {
@@ -484,9 +500,39 @@ pub fn probe(cloud: &PointCloud, setting: &ProbeSetting) -> GrooveProfile {
             }
             let h = d.dot(&axes.b) - 0.5 * (q1.dot(&axes.b) + q2.dot(&axes.b));
             let station = (((s - s0) / station_len) as usize).min(STATIONS - 1);
-            (h < -STANDING_MIN_MM || (top_margin..bottom).contains(&h)).then_some(Across { s, station, t, h })
+            let standing = (-STANDING_PROBE_MM..-STANDING_MIN_MM).contains(&h);
+            (standing || (top_margin..bottom).contains(&h)).then_some(Across { s, station, t, h })
+        }
+    };
+    // On the camera's grid only the pixels under the probed box are read:
+    // the box (along the span, across the band, from the standing probe's
+    // height above the edges to the bottom below them) projects inside the
+    // convex hull of its corners.
+    let heights = {
+        let samples = (0..=16).map(|k| s0 + (s1 - s0) * k as f64 / 16.0);
+        let height = |s: f64| 0.5 * ((e1.at(s) - axes.origin).dot(&axes.b) + (e2.at(s) - axes.origin).dot(&axes.b));
+        let (lo, hi) =
+            samples.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), s| (lo.min(height(s)), hi.max(height(s))));
+        (lo - STANDING_PROBE_MM - 1.0, hi + bottom + 1.0)
+    };
+    let corners: Vec<Vec3> = (0..8)
+        .map(|k| {
+            let s = if k & 1 == 0 { s0 - 1.0 } else { s1 + 1.0 };
+            let a = if k & 2 == 0 { band.0 } else { band.1 };
+            let b = if k & 4 == 0 { heights.0 } else { heights.1 };
+            axes.origin + axes.e * s + axes.a * a + axes.b * b
         })
         .collect();
+    let points = cloud.points();
+    let collected: Vec<Across> = match setting.grid.and_then(|grid| rows_under(grid, &corners)) {
+        Some(rows) => {
+            let width = cloud.width();
+            rows.par_iter()
+                .flat_map_iter(|&(v, u0, u1)| points[v * width + u0..=v * width + u1].iter().filter_map(read))
+                .collect()
+        }
+        None => points.par_iter().filter_map(read).collect(),
+    };
     let collected = on_surfaces(collected, SURFACE_RADIUS_SPACINGS * spacing);
 
     // The camera's rays at the seam's middle, as a slope across the seam
@@ -523,6 +569,56 @@ pub fn probe(cloud: &PointCloud, setting: &ProbeSetting) -> GrooveProfile {
     }
 }
 
+/// The image rows the convex hull of `corners` projects onto, each with
+/// the columns it covers there (widened by [`PIXEL_MARGIN`]), as `(row,
+/// first column, last column)`. None when a corner lies behind or too near
+/// the camera, where a projection says nothing.
+fn rows_under(grid: &CameraGrid, corners: &[Vec3]) -> Option<Vec<(usize, usize, usize)>> {
+    let (width, height) = grid.size();
+    let projected: Vec<(f64, f64)> = corners
+        .iter()
+        .map(|c| if c.z > MIN_PROJECTED_DEPTH_MM { grid.project(c) } else { None })
+        .collect::<Option<_>>()?;
+    let (v_lo, v_hi) =
+        projected.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| (lo.min(p.1), hi.max(p.1)));
+    let first = (v_lo - PIXEL_MARGIN).floor().max(0.0) as usize;
+    let last = ((v_hi + PIXEL_MARGIN).ceil().min(height as f64 - 1.0)).max(-1.0);
+    if last < first as f64 {
+        return Some(Vec::new());
+    }
+    // The hull's part in the strip of rows `v ± margin`: the corners in it
+    // and the pairs' segments where they cross its two lines (the hull of
+    // points meets a line where the segments between them do).
+    let columns = |v: f64| {
+        let (y0, y1) = (v - PIXEL_MARGIN, v + PIXEL_MARGIN);
+        let mut range = (f64::INFINITY, f64::NEG_INFINITY);
+        let mut take = |u: f64| range = (range.0.min(u), range.1.max(u));
+        for (k, a) in projected.iter().enumerate() {
+            if (y0..=y1).contains(&a.1) {
+                take(a.0);
+            }
+            for b in &projected[k + 1..] {
+                for y in [y0, y1] {
+                    if (a.1 - y) * (b.1 - y) <= 0.0 && a.1 != b.1 {
+                        take(a.0 + (b.0 - a.0) * (y - a.1) / (b.1 - a.1));
+                    }
+                }
+            }
+        }
+        range
+    };
+    Some(
+        (first..=last as usize)
+            .filter_map(|v| {
+                let (lo, hi) = columns(v as f64);
+                let (lo, hi) =
+                    ((lo - PIXEL_MARGIN).floor().max(0.0), (hi + PIXEL_MARGIN).ceil().min(width as f64 - 1.0));
+                (lo <= hi).then_some((v, lo as usize, hi as usize))
+            })
+            .collect(),
+    )
+}
+
 /// The share of the stations at least one of `points` lies at.
 fn station_share(points: &[Across]) -> f64 {
     let mut seen = [false; STATIONS];
@@ -533,34 +629,26 @@ fn station_share(points: &[Across]) -> f64 {
 }
 
 /// The points with at least [`MIN_SURFACE_NEIGHBOURS`] others within
-/// `radius` (in s, t, h), found through a hash of cells `radius` wide.
+/// `radius` (in s, t, h), through the cell index the unorganized clouds'
+/// neighbour searches use: a query stops as soon as it has enough.
 fn on_surfaces(points: Vec<Across>, radius: f64) -> Vec<Across> {
-    use std::collections::HashMap;
-    let cell = |p: &Across| [p.s, p.t, p.h].map(|v| (v / radius).floor() as i64);
-    let mut cells: HashMap<[i64; 3], Vec<usize>> = HashMap::with_capacity(points.len());
-    for (k, p) in points.iter().enumerate() {
-        cells.entry(cell(p)).or_default().push(k);
-    }
-    let r2 = radius * radius;
-    let keep: Vec<bool> = points
+    use std::ops::ControlFlow;
+    // Single precision: the coordinates are millimetres from the seam's
+    // middle, so a hundredth of a micrometre at worst.
+    let coords: Vec<Point> = points.iter().map(|p| [p.s, p.t, p.h].map(|v| v as f32)).collect();
+    let index = CellIndex::for_radius(&coords, radius);
+    let radius_sq = (radius * radius) as f32;
+    let keep: Vec<bool> = coords
         .par_iter()
-        .map(|p| {
-            let c = cell(p);
-            let mut n = 0;
-            // The point's own cell first: on a surface it holds enough.
-            for dc in (0..27i64).map(|k| (k + 13) % 27) {
-                let key = [c[0] + dc % 3 - 1, c[1] + (dc / 3) % 3 - 1, c[2] + dc / 9 - 1];
-                for &k in cells.get(&key).map_or(&[][..], Vec::as_slice) {
-                    let q = &points[k];
-                    let d2 = (p.s - q.s).powi(2) + (p.t - q.t).powi(2) + (p.h - q.h).powi(2);
-                    n += usize::from(d2 <= r2);
-                }
-                // The point itself is among them.
-                if n > MIN_SURFACE_NEIGHBOURS {
-                    return true;
-                }
-            }
-            false
+        .enumerate()
+        .map(|(i, p)| {
+            // The point itself is among them.
+            let mut found = 0;
+            index.visit_within(i, p, radius_sq, radius_sq * (1.0 + 1e-5), |_| {
+                found += 1;
+                if found > MIN_SURFACE_NEIGHBOURS { ControlFlow::Break(()) } else { ControlFlow::Continue(()) }
+            });
+            found > MIN_SURFACE_NEIGHBOURS
         })
         .collect();
     points.into_iter().zip(keep).filter_map(|(p, k)| k.then_some(p)).collect()
@@ -793,9 +881,48 @@ mod tests {
                 span: (-45.0, 45.0),
                 point_spacing_mm: 0.2,
                 depth_to_support_mm: Some(20.0),
+                grid: None,
                 projector: Vec3::zeros(),
             },
         )
+    }
+
+    #[test]
+    fn every_point_of_the_probed_box_falls_in_the_rows_read() {
+        let camera = crate::camera::CameraModel::default();
+        let grid = CameraGrid::for_camera(&camera);
+        // A box 300 mm along a seam crossing the view at a slant, 20 mm
+        // across, from 150 mm above the plates to 30 mm below, 700 mm off.
+        let (e, a) = (Vec3::new(0.8, 0.55, 0.2).normalize(), Vec3::new(-0.55, 0.8, 0.1).normalize());
+        let b = e.cross(&a).normalize();
+        let origin = Vec3::new(20.0, -10.0, 700.0);
+        let at = |s: f64, t: f64, h: f64| origin + e * s + a * t + b * h;
+        let corners: Vec<Vec3> = (0..8)
+            .map(|k| {
+                at(
+                    if k & 1 == 0 { -150.0 } else { 150.0 },
+                    if k & 2 == 0 { -10.0 } else { 10.0 },
+                    if k & 4 == 0 { -150.0 } else { 30.0 },
+                )
+            })
+            .collect();
+        let rows = rows_under(&grid, &corners).unwrap();
+        let (width, height) = grid.size();
+        let read: std::collections::HashSet<usize> =
+            rows.iter().flat_map(|&(v, u0, u1)| (u0..=u1).map(move |u| v * width + u)).collect();
+        assert!(read.len() < width * height / 4, "{} of {} pixels", read.len(), width * height);
+        let mut missed = 0;
+        for k in 0..20_000 {
+            let f = |m: u64| ((k * m) % 1009) as f64 / 1008.0;
+            let p = at(-150.0 + 300.0 * f(7), -10.0 + 20.0 * f(13), -150.0 + 180.0 * f(31));
+            if let Some(i) = grid.pixel_of(&p) {
+                missed += usize::from(!read.contains(&i));
+            }
+        }
+        assert_eq!(missed, 0);
+        // A corner behind the camera: no projection, the whole frame.
+        let behind: Vec<Vec3> = corners.iter().map(|c| c - Vec3::new(0.0, 0.0, 800.0)).collect();
+        assert!(rows_under(&grid, &behind).is_none());
     }
 
     #[test]
@@ -870,6 +997,7 @@ mod tests {
             span: (-45.0, 45.0),
             point_spacing_mm: 0.2,
             depth_to_support_mm: None,
+            grid: None,
             projector: Vec3::zeros(),
         };
         let profile = probe(&cloud, &setting);

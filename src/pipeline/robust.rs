@@ -274,6 +274,7 @@ pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
     // `auto`, checks the type requested, and measures the depth of Eq. 32.
     let (profile, groove_depth_mm) = if layout == Layout::Butt {
         let span = (fits[0].curve.s_min.max(fits[1].curve.s_min), fits[0].curve.s_max.min(fits[1].curve.s_max));
+        let grid = ctx.camera_grid();
         let profile = groove::probe(
             cloud,
             &groove::ProbeSetting {
@@ -281,6 +282,7 @@ pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
                 span,
                 point_spacing_mm: spacing_at(&axes.origin),
                 depth_to_support_mm: workpiece.depth_to_support_mm,
+                grid: grid.as_ref(),
                 projector: Vec3::new(camera.baseline_mm, 0.0, 0.0),
             },
         );

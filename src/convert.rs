@@ -30,6 +30,7 @@ pub mod to_proto {
             JointType::VButt => proto::Joint::VButt,
             JointType::IButt => proto::Joint::IButt,
             JointType::Lap => proto::Joint::Lap,
+            JointType::TFillet => proto::Joint::TFillet,
         }
     }
 
@@ -373,13 +374,14 @@ pub mod from_proto {
             proto::Joint::VButt => JointType::VButt,
             proto::Joint::IButt => JointType::IButt,
             proto::Joint::Lap => JointType::Lap,
+            proto::Joint::TFillet => JointType::TFillet,
         }
     }
 
     /// Why a wire plan request has no library form.
     #[derive(Debug, thiserror::Error)]
     pub enum RequestError {
-        #[error("joint code {0} is unknown; expected 0 (v_butt), 1 (i_butt) or 2 (lap)")]
+        #[error("joint code {0} is unknown; expected 0 (v_butt), 1 (i_butt), 2 (lap), 3 (auto) or 4 (t_fillet)")]
         UnknownJoint(u32),
         #[error("hand_eye (End_T_Camera): {0}")]
         HandEye(#[from] HandEyeError),

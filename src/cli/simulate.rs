@@ -33,7 +33,9 @@ use crate::cli::args::CameraArg;
 
 #[derive(Debug, Clone, clap::Args)]
 pub struct SimulateArgs {
-    /// Joint type: v-butt, i-butt or lap. Optional with --suite-scene.
+    /// Joint type: v-butt, i-butt, lap or t-fillet (a tee: a web standing
+    /// on a flange, its two fillet roots in the truth's `seams`). Optional
+    /// with --suite-scene.
     #[arg(long)]
     pub joint: Option<JointType>,
     /// Camera standoff along the optical axis to the target, mm.
@@ -131,8 +133,8 @@ fn scene_from_args(args: &SimulateArgs) -> Result<(Option<String>, SceneSpec)> {
             {
                 bail!(
                     "suite scene {name} is a {} joint, not {}",
-                    cli_joint_name(spec.joint.joint_type()),
-                    cli_joint_name(joint)
+                    spec.joint.joint_type().dashed_name(),
+                    joint.dashed_name()
                 );
             }
             (Some(name), spec)
@@ -141,7 +143,7 @@ fn scene_from_args(args: &SimulateArgs) -> Result<(Option<String>, SceneSpec)> {
             CameraPreset::Industrial => (None, demo_scene(joint)),
             CameraPreset::Consumer => (None, consumer_demo_scene(joint)),
         },
-        (None, None) => bail!("give --joint (v-butt, i-butt or lap) or --suite-scene"),
+        (None, None) => bail!("give --joint (v-butt, i-butt, lap or t-fillet) or --suite-scene"),
     };
     let placement = &mut spec.placement;
     let overrides = [
@@ -192,15 +194,6 @@ fn find_suite_scene(preset: CameraPreset, key: &str) -> Result<(String, SceneSpe
             "no suite scene {key:?}: give an index below {count} or a name such as {}",
             suite.first().map_or("", |(name, _)| name.as_str())
         ),
-    }
-}
-
-/// The joint's name as the command line spells it.
-fn cli_joint_name(joint: JointType) -> &'static str {
-    match joint {
-        JointType::VButt => "v-butt",
-        JointType::IButt => "i-butt",
-        JointType::Lap => "lap",
     }
 }
 
@@ -270,6 +263,24 @@ fn truth_json(name: Option<&str>, spec: &SceneSpec, camera: &CameraModel, sim: &
             "clipped_end": t.clipped_end,
             "length_mm": t.length_mm,
         },
+        "seams": sim.seams.iter().map(|seam| {
+            let t = &seam.truth;
+            json!({
+                "workpiece": seam.workpiece + 1,
+                "root": seam.root,
+                "label": seam.label(),
+                "joint": t.joint.name(),
+                "start_base": xyz(&t.start_base),
+                "end_base": xyz(&t.end_base),
+                "start_camera": xyz(&t.start_camera),
+                "end_camera": xyz(&t.end_camera),
+                "in_image_mm": t.length_mm,
+                "physical_mm": seam.physical_mm,
+                "seen_mm": seam.seen_mm,
+                "seen_share": seam.seen_share,
+                "seen": seam.is_seen(),
+            })
+        }).collect::<Vec<_>>(),
         "plan_args": plan_args(spec, &pose),
         "right_answer": {
             "refuse": sim.answer.refuse,
@@ -279,8 +290,9 @@ fn truth_json(name: Option<&str>, spec: &SceneSpec, camera: &CameraModel, sim: &
     })
 }
 
-fn scene_json(spec: &SceneSpec, camera: &CameraModel) -> Value {
-    let geometry = match spec.joint {
+/// A joint's cross-section by its parameters.
+fn geometry_json(joint: &JointGeometry) -> Value {
+    match *joint {
         JointGeometry::VButt { thickness_mm, groove_angle_deg, groove_depth_mm, root_gap_mm } => json!({
             "thickness_mm": thickness_mm,
             "groove_angle_deg": groove_angle_deg,
@@ -293,14 +305,37 @@ fn scene_json(spec: &SceneSpec, camera: &CameraModel) -> Value {
             "upper_thickness_mm": upper_thickness_mm,
             "overlap_mm": overlap_mm,
         }),
-    };
+        JointGeometry::Tee { flange_thickness_mm, web_thickness_mm, web_height_mm } => json!({
+            "flange_thickness_mm": flange_thickness_mm,
+            "web_thickness_mm": web_thickness_mm,
+            "web_height_mm": web_height_mm,
+        }),
+    }
+}
+
+fn scene_json(spec: &SceneSpec, camera: &CameraModel) -> Value {
     let plate = |p: &PlateExtent| json!({ "width_mm": p.width_mm, "length_mm": p.length_mm, "offset_mm": p.offset_mm });
     let placement = &spec.placement;
     let noise = &spec.noise;
+    let others: Vec<Value> = spec
+        .others
+        .iter()
+        .map(|w| {
+            json!({
+                "joint": w.joint.joint_type().name(),
+                "geometry": geometry_json(&w.joint),
+                "plate_a": plate(&w.plate_a),
+                "plate_b": plate(&w.plate_b),
+                "at_mm": w.at_mm,
+                "yaw_deg": w.yaw_deg,
+            })
+        })
+        .collect();
     json!({
-        "geometry": geometry,
+        "geometry": geometry_json(&spec.joint),
         "plate_a": plate(&spec.plate_a),
         "plate_b": plate(&spec.plate_b),
+        "other_workpieces": others,
         "spacer_height_mm": spec.spacer_height_mm,
         "placement": {
             "distance_mm": placement.distance_mm,
@@ -335,7 +370,7 @@ fn scene_json(spec: &SceneSpec, camera: &CameraModel) -> Value {
 
 /// The planner's arguments for this capture.
 fn plan_args(spec: &SceneSpec, pose: &[f64]) -> String {
-    let mut args = format!("--joint {}", cli_joint_name(spec.requested_joint()));
+    let mut args = format!("--joint {}", spec.requested_joint().dashed_name());
     if let Some(depth) = spec.requested_groove_depth_mm() {
         args.push_str(&format!(" --groove-depth {}", short(depth)));
     }

@@ -166,7 +166,9 @@ pub enum Layout {
 impl Layout {
     pub fn of(joint: JointType) -> Layout {
         match joint {
-            JointType::VButt | JointType::IButt => Layout::Butt,
+            // A tee's flange shows either side of the web in one plane
+            // (a tee request itself is refused before any stage runs).
+            JointType::VButt | JointType::IButt | JointType::TFillet => Layout::Butt,
             JointType::Lap => Layout::Lap,
         }
     }

@@ -141,7 +141,7 @@ fn gap_half_width(joint: &JointGeometry) -> f64 {
     match *joint {
         JointGeometry::IButt { gap_mm, .. } => gap_mm / 2.0,
         JointGeometry::VButt { root_gap_mm, .. } => root_gap_mm / 2.0,
-        JointGeometry::Lap { .. } => 0.0,
+        JointGeometry::Lap { .. } | JointGeometry::Tee { .. } => 0.0,
     }
 }
 
@@ -241,7 +241,7 @@ impl ScenePlan {
     }
 
     fn name(&self) -> String {
-        let joint = joint_slug(self.joint);
+        let joint = self.joint.dashed_name();
         let side = match self.lap_side {
             Some(LapSide::Upper) => "-upper-side",
             Some(LapSide::Lower) => "-lower-side",
@@ -270,6 +270,7 @@ impl ScenePlan {
                 upper_thickness_mm: uniform(rng, 3.0, 10.0),
                 overlap_mm: uniform(rng, 20.0, 60.0),
             },
+            JointType::TFillet => draw_tee(rng),
         }
     }
 
@@ -334,6 +335,7 @@ impl ScenePlan {
             euler: EulerConvention::Zyx,
             seed,
             faults: Vec::new(),
+            others: Vec::new(),
         };
         let [y0, y1] = spec.seam_range();
         spec.placement = self.draw_placement(y1 - y0, rng);
@@ -358,6 +360,16 @@ impl ScenePlan {
             spec = self.draw(seed, &mut rng);
         }
         spec
+    }
+}
+
+/// A tee's cross-section as issue 15 states its range: a web 4 to 12 mm
+/// thick and 40 to 100 mm tall on a flange 6 to 16 mm thick.
+pub(super) fn draw_tee(rng: &mut ChaCha8Rng) -> JointGeometry {
+    JointGeometry::Tee {
+        flange_thickness_mm: uniform(rng, 6.0, 16.0),
+        web_thickness_mm: uniform(rng, 4.0, 12.0),
+        web_height_mm: uniform(rng, 40.0, 100.0),
     }
 }
 
@@ -468,12 +480,12 @@ pub fn fault_suite() -> Vec<(String, SceneSpec)> {
                 plan.tilt_deg = MAX_TILT_DEG * tilt_step;
                 let spec = draw_faulted(&plan, kind, s, base_seed, stream, &camera);
                 let requested = match spec.requested_joint() {
-                    r if r != joint => format!("-as-{}", joint_slug(r)),
+                    r if r != joint => format!("-as-{}", r.dashed_name()),
                     _ => String::new(),
                 };
                 let name = format!(
                     "fault-{kind}-{}-{s:02}-d{:.0}-t{:.0}{requested}{}",
-                    joint_slug(joint),
+                    joint.dashed_name(),
                     plan.distance_mm,
                     plan.tilt_deg,
                     if holdout { "-holdout" } else { "" }
@@ -483,15 +495,6 @@ pub fn fault_suite() -> Vec<(String, SceneSpec)> {
         }
     }
     suite
-}
-
-/// The joint's name as scene names and the command line spell it.
-fn joint_slug(joint: JointType) -> &'static str {
-    match joint {
-        JointType::VButt => "v-butt",
-        JointType::IButt => "i-butt",
-        JointType::Lap => "lap",
-    }
 }
 
 /// Draws a clean scene for `plan` with a `kind` fault on it until both are
@@ -669,6 +672,7 @@ mod tests {
                         lower += 1;
                     }
                 }
+                JointGeometry::Tee { .. } => panic!("{name}: the eval suite has no tee"),
             }
         }
         assert!(narrow_gaps >= 6, "{narrow_gaps} narrow gaps");

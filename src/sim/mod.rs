@@ -15,6 +15,7 @@ pub mod render;
 pub mod scenarios;
 pub mod scene;
 pub mod suite;
+pub mod tee_multi;
 pub mod truth;
 pub mod variants;
 
@@ -30,6 +31,7 @@ pub use consumer::{CameraPreset, consumer_suite};
 pub use faults::{Fault, FaultKind, RightAnswer};
 pub use noise::NoiseSpec;
 pub use suite::{Framing, eval_suite, fault_suite, framing, hard_suite};
+pub use tee_multi::{multi_suite, tee_suite};
 pub use truth::{GroundTruth, SeamTruth};
 
 /// The joint's cross-section. Plate A is on the -x side of the seam (the

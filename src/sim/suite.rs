@@ -199,7 +199,7 @@ enum LapSide {
 
 /// The fixed part of one suite scene; the rest is drawn.
 #[derive(Debug, Clone, Copy)]
-struct ScenePlan {
+pub(super) struct ScenePlan {
     joint: JointType,
     index: usize,
     distance_mm: f64,
@@ -211,7 +211,7 @@ struct ScenePlan {
 }
 
 impl ScenePlan {
-    fn new(joint: JointType, joint_index: usize, k: usize, max_tilt_deg: f64) -> ScenePlan {
+    pub(super) fn new(joint: JointType, joint_index: usize, k: usize, max_tilt_deg: f64) -> ScenePlan {
         let steps = (SCENES_PER_JOINT - 1) as f64;
         let goal = Goal::for_index(k);
         // The plates can only fill the view from close by, so those scenes
@@ -240,7 +240,7 @@ impl ScenePlan {
         }
     }
 
-    fn name(&self) -> String {
+    pub(super) fn name(&self) -> String {
         let joint = self.joint.dashed_name();
         let side = match self.lap_side {
             Some(LapSide::Upper) => "-upper-side",
@@ -250,7 +250,7 @@ impl ScenePlan {
         format!("{joint}-{:02}-d{:.0}-t{:.0}{}{side}", self.index, self.distance_mm, self.tilt_deg, self.goal.tag())
     }
 
-    fn draw_joint(&self, rng: &mut ChaCha8Rng) -> JointGeometry {
+    pub(super) fn draw_joint(&self, rng: &mut ChaCha8Rng) -> JointGeometry {
         match self.joint {
             JointType::VButt => {
                 let t = uniform(rng, 6.0, 12.0);
@@ -319,7 +319,7 @@ impl ScenePlan {
         }
     }
 
-    fn draw(&self, seed: u64, rng: &mut ChaCha8Rng) -> SceneSpec {
+    pub(super) fn draw(&self, seed: u64, rng: &mut ChaCha8Rng) -> SceneSpec {
         let joint = self.draw_joint(rng);
         let [plate_a, plate_b] = self.draw_plates(rng);
         let spacer_height_mm = uniform(rng, 20.0, 60.0);
@@ -346,7 +346,7 @@ impl ScenePlan {
 impl ScenePlan {
     /// Draws from stream `stream` of `base_seed` until the scene is valid
     /// and framed as its goal asks (the last draw after [`MAX_DRAWS`]).
-    fn draw_framed(&self, base_seed: u64, stream: u64, camera: &CameraModel) -> SceneSpec {
+    pub(super) fn draw_framed(&self, base_seed: u64, stream: u64, camera: &CameraModel) -> SceneSpec {
         let mut rng = ChaCha8Rng::seed_from_u64(base_seed);
         rng.set_stream(stream);
         let seed = base_seed + stream;

@@ -371,13 +371,21 @@ pub struct SeamMatches {
     pub found: Vec<SeamMatch>,
     /// True seams seen (at least half their length) that no seam found.
     pub missed: Vec<usize>,
-    /// Returned seams matching no true seam (or one already found), with
-    /// the error against the nearest.
-    pub extra: Vec<(usize, Option<SeamError>)>,
+    /// Returned seams matching no true seam (or one already found).
+    pub extra: Vec<ExtraSeam>,
     /// Found seams whose joint type is not their true seam's.
     pub wrong_type: Vec<SeamMatch>,
     /// The true seams seen.
     pub seen: usize,
+}
+
+/// A returned seam on no true seam: its index, the nearest true seam and
+/// the error against it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ExtraSeam {
+    pub returned: usize,
+    pub nearest: Option<usize>,
+    pub error: Option<SeamError>,
 }
 
 /// Matches each returned seam (its trajectory and joint type) to the
@@ -402,12 +410,13 @@ pub fn match_seams(truths: &[TrueSeam], returned: &[(Vec<Vec3>, JointType)]) -> 
                 }
             }
             None => {
-                let nearest = verdicts.iter().min_by(|a, b| miss(a).total_cmp(&miss(b)));
-                let error = match nearest {
+                let nearest = (0..truths.len()).min_by(|a, b| miss(&verdicts[*a]).total_cmp(&miss(&verdicts[*b])));
+                let error = match nearest.map(|t| &verdicts[t]) {
                     Some(Verdict::ConfidentWrong { error, .. }) => *error,
-                    _ => None,
+                    // Within the bar of a seam an earlier one took.
+                    _ => nearest.and_then(|t| segment_error(&truths[t].whole, path)),
                 };
-                m.extra.push((r, error));
+                m.extra.push(ExtraSeam { returned: r, nearest, error });
             }
         }
     }
@@ -424,8 +433,10 @@ pub fn classify_several(matches: Result<&SeamMatches, &str>, truths: &[TrueSeam]
         Ok(m) if m.found.is_empty() && m.extra.is_empty() => return Verdict::Refused { reason: "no seam".into() },
         Ok(m) => m,
     };
-    if let Some((_, error)) = m.extra.first() {
-        return Verdict::ConfidentWrong { error: *error, why: "a seam on no seam of the frame".into() };
+    if let Some(extra) = m.extra.first() {
+        let nearest = extra.nearest.map_or(String::new(), |t| format!(" (the nearest is the {})", truths[t].label));
+        let why = format!("a seam on no seam of the frame, or on one found already{nearest}");
+        return Verdict::ConfidentWrong { error: extra.error, why };
     }
     if let Some(w) = m.wrong_type.first() {
         let why = format!("a seam of another joint type returned on the {}", truths[w.truth].label);
@@ -681,6 +692,63 @@ mod tests {
             matches!(verdict, Verdict::ConfidentWrong { error: Some(e), .. } if e.start_mm < 2.0 && e.end_mm < 2.0),
             "{verdict:?}"
         );
+    }
+
+    /// A 100 mm seam along x at `y` mm across, seen from 0 to `seen_to`.
+    fn true_seam(y: f64, joint: JointType, seen_to: f64) -> TrueSeam {
+        let at = |x: f64| Vec3::new(x, y, 0.0);
+        TrueSeam {
+            label: format!("seam at {y}"),
+            joint,
+            whole: [at(0.0), at(100.0)],
+            seen: if seen_to > 0.0 { vec![[at(0.0), at(seen_to)]] } else { Vec::new() },
+            seen_share: seen_to / 100.0,
+            seen_enough: seen_to >= 50.0,
+        }
+    }
+
+    #[test]
+    fn on_a_tee_a_seam_is_right_only_on_a_root() {
+        // Roots 8 mm apart; the camera sees the second.
+        let roots = [true_seam(0.0, JointType::TFillet, 0.0), true_seam(8.0, JointType::TFillet, 100.0)];
+        assert_eq!(classify_tee(&roots, Ok(&[path(0.0, 100.0, 8.3)])), Verdict::WithinBar);
+        // Between the roots (on the web's foot, a 'butt joint's midline').
+        let verdict = classify_tee(&roots, Ok(&[path(0.0, 100.0, 4.0)]));
+        assert!((wrong_by(&verdict) - 4.0).abs() < 1e-9, "{verdict:?}");
+        // On the hidden root: invented, not seen.
+        let verdict = classify_tee(&roots, Ok(&[path(0.0, 100.0, 0.0)]));
+        assert!(matches!(verdict, Verdict::ConfidentWrong { .. }), "{verdict:?}");
+        let reason = "groove stage failed: ... this looks like a tee joint (a web standing on a flange)";
+        assert_eq!(classify_tee(&roots, Err(reason)), Verdict::Refused { reason: reason.into() });
+        assert!(names_a_tee(reason) && names_a_tee("t_fillet planning is not built yet"));
+        assert!(!names_a_tee("background stage failed: no two layers 1 to 30 mm apart for a lap joint"));
+    }
+
+    #[test]
+    fn several_seams_are_found_missed_or_extra() {
+        let truths = [
+            true_seam(0.0, JointType::IButt, 100.0),
+            true_seam(200.0, JointType::Lap, 100.0),
+            true_seam(400.0, JointType::TFillet, 30.0),
+        ];
+        let on = |y: f64, joint: JointType| (path(0.0, 100.0, y), joint);
+        let m = match_seams(&truths, &[on(200.2, JointType::Lap)]);
+        assert_eq!(m.found, [SeamMatch { returned: 0, truth: 1 }]);
+        assert_eq!((m.missed.clone(), m.extra.len(), m.seen), (vec![0], 0, 2));
+        assert_eq!(classify_several(Ok(&m), &truths), Verdict::WithinBar);
+        // The same seam twice: the second is extra; one 5 mm off is extra.
+        let m =
+            match_seams(&truths, &[on(0.0, JointType::IButt), on(0.1, JointType::IButt), on(205.0, JointType::Lap)]);
+        assert_eq!((m.found.len(), m.extra.len(), m.missed.clone()), (1, 2, vec![1]));
+        assert!((m.extra[1].error.unwrap().max_mm - 5.0).abs() < 1e-9);
+        assert_eq!((m.extra[0].nearest, m.extra[1].nearest), (Some(0), Some(1)));
+        assert!(matches!(classify_several(Ok(&m), &truths), Verdict::ConfidentWrong { .. }));
+        // Found, but named another joint.
+        let m = match_seams(&truths, &[on(0.0, JointType::Lap)]);
+        assert_eq!(m.wrong_type.len(), 1);
+        let verdict = classify_several(Ok(&m), &truths);
+        assert!(matches!(&verdict, Verdict::ConfidentWrong { why, .. } if why.contains("seam at 0")), "{verdict:?}");
+        assert_eq!(classify_several(Err("refused"), &truths), Verdict::Refused { reason: "refused".into() });
     }
 
     #[test]

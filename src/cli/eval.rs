@@ -407,11 +407,12 @@ fn seam_tables(outcomes: &[SceneOutcome]) -> Vec<Table> {
                 if first { outcome.clone() } else { String::new() },
             ]);
         }
-        for (r, error) in &matches.extra {
-            let error = error.map_or("-".into(), |e| format!("{:.3}", e.max_mm));
+        for extra in &matches.extra {
+            let error = extra.error.map_or("-".into(), |e| format!("{:.3}", e.max_mm));
+            let nearest = extra.nearest.map_or(String::new(), |t| format!(", nearest the {}", truths[t].label));
             scenes.push(vec![
                 String::new(),
-                format!("returned seam {} on no seam", r + 1),
+                format!("returned seam {} on no seam{nearest}", extra.returned + 1),
                 "-".into(),
                 "-".into(),
                 "extra".into(),

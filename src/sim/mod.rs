@@ -537,6 +537,32 @@ mod tests {
     }
 
     #[test]
+    fn a_rendered_tee_shows_the_root_the_truth_sees_and_not_the_other() {
+        let cam = small_camera();
+        let mut spec = demo_scene(JointType::TFillet);
+        spec.noise = NoiseSpec::none();
+        let sim = simulate(&spec, &cam);
+        let points: Vec<Vec3> = sim.cloud.points().iter().filter(|p| p[0].is_finite()).map(vec3).collect();
+        let nearest_along = |t: &GroundTruth| {
+            (0..=20)
+                .map(|k| {
+                    let on_root = t.start_camera + (t.end_camera - t.start_camera) * (k as f64 / 20.0);
+                    points.iter().map(|p| (p - on_root).norm()).fold(f64::INFINITY, f64::min)
+                })
+                .fold(0.0, f64::max)
+        };
+        let [hidden, seen] = [&sim.seams[0], &sim.seams[1]];
+        assert!(seen.is_seen() && !hidden.is_seen(), "{:?}", sim.seams);
+        // Returns along the whole seen root (a pixel or two away at this
+        // resolution); the web hides the other root and the flange beside it.
+        assert!(nearest_along(&seen.truth) < 2.5, "{}", nearest_along(&seen.truth));
+        assert!(nearest_along(&hidden.truth) > 5.0, "{}", nearest_along(&hidden.truth));
+        // The frame's one-seam truth of a tee is its first root's (all of
+        // it in view here).
+        assert_eq!(sim.truth, sim.seams[0].truth);
+    }
+
+    #[test]
     fn the_same_seed_gives_the_same_frame_on_any_thread_count() {
         let cam = small_camera();
         let spec = demo_scene(JointType::VButt);

@@ -458,6 +458,43 @@ mod tests {
     }
 
     #[test]
+    fn a_tees_web_stands_on_its_flange_along_both_roots() {
+        let joint = JointGeometry::Tee { flange_thickness_mm: 10.0, web_thickness_mm: 6.0, web_height_mm: 50.0 };
+        let web_extent = PlateExtent { width_mm: 80.0, length_mm: 200.0, offset_mm: 10.0 };
+        let flange_extent = PlateExtent { width_mm: 100.0, length_mm: 240.0, offset_mm: 0.0 };
+        let [web, flange] = joint.plate_shapes(&web_extent, &flange_extent);
+        let web = ConvexSolid::extruded(SurfaceKind::Plate, &web.profile_xz, web.y_range).unwrap();
+        let flange = ConvexSolid::extruded(SurfaceKind::Plate, &flange.profile_xz, flange.y_range).unwrap();
+        assert_eq!(joint.seam_lines_xz(), [[-3.0, 10.0], [3.0, 10.0]]);
+        for [x, z] in joint.seam_lines_xz() {
+            for y in [10.0, 110.0, 210.0] {
+                // On the web's side face and the flange's top at once.
+                let root = Vec3::new(x, y, z);
+                assert!(web.excess(&root).abs() < 1e-12 && flange.excess(&root).abs() < 1e-12, "{root:?}");
+            }
+        }
+        // The flange spans -80 to 100 mm across, the web's top is 60 mm up.
+        assert!(flange.excess(&Vec3::new(-80.0, 5.0, 10.0)).abs() < 1e-12);
+        assert!(flange.excess(&Vec3::new(100.0, 5.0, 0.0)).abs() < 1e-12);
+        assert!(web.excess(&Vec3::new(0.0, 100.0, 60.0)).abs() < 1e-12);
+        assert_eq!((joint.top_z(0.0), joint.top_z(3.5), joint.seam_edge_half_width()), (60.0, 10.0, 3.0));
+    }
+
+    #[test]
+    fn a_tees_spacers_carry_the_flange_only() {
+        let spec = crate::sim::demo_scene(crate::joint::JointType::TFillet);
+        let scene = build_scene(&spec);
+        let spacers: Vec<&ConvexSolid> = scene.solids.iter().filter(|s| s.kind == SurfaceKind::Spacer).collect();
+        assert_eq!(spacers.len(), 2);
+        for s in spacers {
+            // From the table up to the flange's bottom, nowhere into it.
+            let top = s.vertices().iter().map(|v| v.z).fold(f64::NEG_INFINITY, f64::max);
+            assert!(top.abs() < 1e-12, "{top}");
+        }
+        assert_eq!(scene.solids.iter().filter(|s| s.kind == SurfaceKind::Plate).count(), 2);
+    }
+
+    #[test]
     fn a_full_depth_v_groove_drops_its_root_face() {
         let joint =
             JointGeometry::VButt { thickness_mm: 8.0, groove_angle_deg: 60.0, groove_depth_mm: 8.0, root_gap_mm: 0.0 };

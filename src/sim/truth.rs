@@ -354,6 +354,89 @@ mod tests {
         assert!((truth.length_mm - expected).abs() < 1e-6, "{}", truth.length_mm);
     }
 
+    /// The demo tee seen from 600 mm, tilted 20 degrees towards `azimuth`.
+    fn tee_from(azimuth_deg: f64) -> SceneSpec {
+        let mut spec = demo_scene(JointType::TFillet);
+        spec.placement = CameraPlacement { tilt_azimuth_deg: azimuth_deg, ..CameraPlacement::straight(600.0, 20.0) };
+        spec.noise = NoiseSpec::none();
+        spec
+    }
+
+    #[test]
+    fn a_tee_shows_the_root_on_the_cameras_side_and_hides_the_other() {
+        let cam = CameraModel::default();
+        for (azimuth, seen_root) in [(0.0, 1), (180.0, 0)] {
+            let spec = tee_from(azimuth);
+            let seams = seam_truths(&spec, &cam);
+            assert_eq!(seams.len(), 2);
+            for seam in &seams {
+                assert_eq!((seam.workpiece, seam.truth.joint), (0, JointType::TFillet));
+                assert!((seam.physical_mm - 240.0).abs() < 1e-9 && (seam.truth.length_mm - 240.0).abs() < 1e-9);
+                if seam.root == seen_root {
+                    assert!(seam.is_seen() && seam.seen_share > 0.99, "{azimuth}: {seam:?}");
+                    assert_eq!(seam.seen_mm.len(), 1);
+                } else {
+                    assert!(seam.seen_mm.is_empty() && seam.seen_share == 0.0, "{azimuth}: {seam:?}");
+                }
+            }
+            // The roots lie where the web's side faces meet the flange's
+            // top: 8 mm apart, on the flange's top (10 mm), in the base frame.
+            let [x, z] = spec.joint.seam_lines_xz()[seen_root];
+            assert!((x.abs() - 4.0).abs() < 1e-12 && (z - 10.0).abs() < 1e-12);
+            let expected = spec.base_from_workpiece.transform_point(&Vec3::new(x, 0.0, z).into()).coords;
+            assert!((seams[seen_root].truth.start_base - expected).norm() < 1e-9);
+            let apart = seams[0].truth.start_base - seams[1].truth.start_base;
+            assert!((apart.norm() - 8.0).abs() < 1e-9);
+        }
+        // Straight down over the web: each root is seen by one of camera
+        // and projector at most, so neither counts as seen.
+        let mut over = tee_from(0.0);
+        over.placement = CameraPlacement::straight(600.0, 0.0);
+        assert!(seam_truths(&over, &cam).iter().all(|s| !s.is_seen()));
+    }
+
+    #[test]
+    fn every_workpiece_has_its_seams_where_its_pose_puts_them() {
+        let cam = CameraModel::default();
+        let mut spec = frontal_i_butt();
+        spec.placement.distance_mm = 1000.0;
+        let mut lap = crate::sim::demo_scene(JointType::Lap).first_workpiece();
+        lap.plate_a = PlateExtent { width_mm: 60.0, length_mm: 150.0, offset_mm: 0.0 };
+        lap.plate_b = lap.plate_a;
+        // Turned so that its lower plate faces the camera, whose view at
+        // 1000 mm spans 700 by 440 mm around the first seam's middle.
+        lap.at_mm = [250.0, 150.0];
+        lap.yaw_deg = 210.0;
+        spec.others.push(lap);
+        assert_eq!(spec.validate(), Ok(()));
+        let seams = seam_truths(&spec, &cam);
+        assert_eq!(
+            seams.iter().map(|s| (s.workpiece, s.truth.joint)).collect::<Vec<_>>(),
+            [(0, JointType::IButt), (1, JointType::Lap)]
+        );
+        // The lap's root (x = 0 on its 6 mm lower plate, y 0 to 150) turned
+        // 210 degrees and moved to (250, 150) on the table.
+        let (yaw, root_z) = (210f64.to_radians(), 6.0);
+        let start = Vec3::new(250.0, 150.0, root_z);
+        let end = Vec3::new(250.0 - yaw.sin() * 150.0, 150.0 + yaw.cos() * 150.0, root_z);
+        let b = spec.base_from_workpiece;
+        let lap_seam = &seams[1].truth;
+        assert!((lap_seam.start_base - b.transform_point(&start.into()).coords).norm() < 1e-9);
+        assert!((lap_seam.end_base - b.transform_point(&end.into()).coords).norm() < 1e-9);
+        assert!(seams.iter().all(|s| s.is_seen()), "{seams:?}");
+        // The first workpiece's truth is unchanged by the second.
+        assert_eq!(seams[0].truth, ground_truth(&frontal_i_butt_at(1000.0), &cam));
+        // Moved onto the first one, the second is refused.
+        spec.others[0].at_mm = [120.0, 150.0];
+        assert!(spec.validate().unwrap_err().to_string().contains("closer than 10 mm"));
+    }
+
+    fn frontal_i_butt_at(distance_mm: f64) -> SceneSpec {
+        let mut spec = frontal_i_butt();
+        spec.placement.distance_mm = distance_mm;
+        spec
+    }
+
     #[test]
     fn the_interval_matches_point_tests() {
         let cam = CameraModel::default();

@@ -558,6 +558,17 @@ mod tests {
         assert_eq!(auto_wire.joint, weldseam_proto::message::joint_code::AUTO);
         assert_eq!(from_proto::plan_request(&auto_wire, EulerConvention::Zyx).unwrap().joint, RequestedJoint::Auto);
 
+        // A tee is named on the wire (code 4) and on the text link, and
+        // comes back as itself for the planner to refuse by name.
+        let tee = PlanRequest { joint: JointType::TFillet.into(), groove_depth_mm: None, ..request.clone() };
+        let tee_wire = to_proto::plan_request(9, &tee, FrameSelect::NextFrame);
+        assert_eq!(tee_wire.joint, weldseam_proto::message::joint_code::T_FILLET);
+        assert_eq!(from_proto::plan_request(&tee_wire, EulerConvention::Zyx).unwrap().joint, tee.joint);
+        let line = weldseam_proto::text::PlanLine { joint: "t-fillet".into(), pose: vec![0.0; 6], groove_depth: None };
+        let from_text =
+            from_proto::text_plan_request(&line, weldseam_proto::text::Dialect::Kuka, EulerConvention::Zyx).unwrap();
+        assert_eq!(from_text.joint, tee.joint);
+
         let mut unknown = wire.clone();
         unknown.joint = 9;
         assert!(

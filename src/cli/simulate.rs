@@ -26,7 +26,7 @@ use weldseam::sim::faults::frame_barely_in_view;
 use weldseam::sim::variants::Variant;
 use weldseam::sim::{
     CameraPreset, Fault, FaultKind, JointGeometry, NoiseSpec, PlateExtent, SceneSpec, Simulation, consumer_suite,
-    demo_scene, eval_suite, fault_suite, hard_suite, simulate,
+    demo_scene, eval_suite, fault_suite, hard_suite, multi_suite, simulate, tee_suite,
 };
 
 use crate::cli::args::CameraArg;
@@ -61,7 +61,8 @@ pub struct SimulateArgs {
     #[arg(long, value_enum, default_value_t)]
     pub camera: CameraArg,
     /// Start from a scene of the evaluation suite, by name or index, or of
-    /// the fault or hard suite (`eval --suite faults|hard`) by name.
+    /// the fault, hard, tee or multi suite (`eval --suite
+    /// faults|hard|tee|multi`) by name.
     #[arg(long, value_name = "NAME_OR_INDEX")]
     pub suite_scene: Option<String>,
     /// Add a fault to the scene, at the seam's middle: wrong-joint,
@@ -177,8 +178,13 @@ fn find_suite_scene(preset: CameraPreset, key: &str) -> Result<(String, SceneSpe
         CameraPreset::Consumer => consumer_suite(),
     };
     if preset == CameraPreset::Industrial {
-        let other =
-            if key.starts_with("fault-") { Some(fault_suite()) } else { key.starts_with("hard-").then(hard_suite) };
+        let other = match key.split('-').next() {
+            Some("fault") => Some(fault_suite()),
+            Some("hard") => Some(hard_suite()),
+            Some("t") => Some(tee_suite()),
+            Some("multi") => Some(multi_suite()),
+            _ => None,
+        };
         if let Some(found) = other.into_iter().flatten().find(|(name, _)| name == key) {
             return Ok(found);
         }

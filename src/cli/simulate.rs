@@ -445,6 +445,29 @@ mod tests {
     }
 
     #[test]
+    fn a_tee_is_written_with_both_roots_and_what_the_camera_sees_of_each() {
+        let dir = tempfile::tempdir().unwrap();
+        let (out, truth) = (dir.path().join("tee.pcd"), dir.path().join("tee.json"));
+        let mut a = args(out, Some(truth.clone()));
+        a.joint = Some("t_fillet".parse().unwrap());
+        run(&a).unwrap();
+        let json: Value = serde_json::from_slice(&std::fs::read(&truth).unwrap()).unwrap();
+        assert_eq!(json["joint"], "t_fillet");
+        assert_eq!(json["parameters"]["geometry"]["web_thickness_mm"], 8.0);
+        assert!(json["plan_args"].as_str().unwrap().starts_with("--joint t-fillet --pose="), "{}", json["plan_args"]);
+        let seams = json["seams"].as_array().unwrap();
+        assert_eq!(seams.len(), 2);
+        let seen: Vec<bool> = seams.iter().map(|s| s["seen"].as_bool().unwrap()).collect();
+        // The demo camera leans towards +x: it sees the +x root only.
+        assert_eq!(seen, [false, true], "{seams:?}");
+        assert_eq!(seams[1]["label"], "workpiece 1 t-fillet root +x");
+        assert!(seams[1]["seen_share"].as_f64().unwrap() > 0.99);
+        // A suite scene of several workpieces is found by its name.
+        let name = weldseam::sim::multi_suite()[0].0.clone();
+        assert_eq!(find_suite_scene(CameraPreset::Industrial, &name).unwrap().0, name);
+    }
+
+    #[test]
     fn suite_scenes_are_found_by_index_or_name() {
         let (by_index, spec) = find_suite_scene(CameraPreset::Industrial, "30").unwrap();
         let (by_name, again) = find_suite_scene(CameraPreset::Industrial, &by_index).unwrap();

@@ -30,6 +30,7 @@ pub mod to_proto {
             JointType::VButt => proto::Joint::VButt,
             JointType::IButt => proto::Joint::IButt,
             JointType::Lap => proto::Joint::Lap,
+            JointType::TFillet => proto::Joint::TFillet,
         }
     }
 
@@ -373,13 +374,14 @@ pub mod from_proto {
             proto::Joint::VButt => JointType::VButt,
             proto::Joint::IButt => JointType::IButt,
             proto::Joint::Lap => JointType::Lap,
+            proto::Joint::TFillet => JointType::TFillet,
         }
     }
 
     /// Why a wire plan request has no library form.
     #[derive(Debug, thiserror::Error)]
     pub enum RequestError {
-        #[error("joint code {0} is unknown; expected 0 (v_butt), 1 (i_butt) or 2 (lap)")]
+        #[error("joint code {0} is unknown; expected 0 (v_butt), 1 (i_butt), 2 (lap), 3 (auto) or 4 (t_fillet)")]
         UnknownJoint(u32),
         #[error("hand_eye (End_T_Camera): {0}")]
         HandEye(#[from] HandEyeError),
@@ -555,6 +557,17 @@ mod tests {
         let auto_wire = to_proto::plan_request(8, &auto, FrameSelect::NextFrame);
         assert_eq!(auto_wire.joint, weldseam_proto::message::joint_code::AUTO);
         assert_eq!(from_proto::plan_request(&auto_wire, EulerConvention::Zyx).unwrap().joint, RequestedJoint::Auto);
+
+        // A tee is named on the wire (code 4) and on the text link, and
+        // comes back as itself for the planner to refuse by name.
+        let tee = PlanRequest { joint: JointType::TFillet.into(), groove_depth_mm: None, ..request.clone() };
+        let tee_wire = to_proto::plan_request(9, &tee, FrameSelect::NextFrame);
+        assert_eq!(tee_wire.joint, weldseam_proto::message::joint_code::T_FILLET);
+        assert_eq!(from_proto::plan_request(&tee_wire, EulerConvention::Zyx).unwrap().joint, tee.joint);
+        let line = weldseam_proto::text::PlanLine { joint: "t-fillet".into(), pose: vec![0.0; 6], groove_depth: None };
+        let from_text =
+            from_proto::text_plan_request(&line, weldseam_proto::text::Dialect::Kuka, EulerConvention::Zyx).unwrap();
+        assert_eq!(from_text.joint, tee.joint);
 
         let mut unknown = wire.clone();
         unknown.joint = 9;

@@ -14,6 +14,16 @@
 //! as the worst outcome. The scene's faults decide what is right
 //! (`sim::faults`: the whole seam, a piece of it beside what hides it, or
 //! only a refusal).
+//!
+//! Frames of issue 15 hold more seams than one: a tee's two fillet roots,
+//! or the seams of several workpieces. The planner plans neither yet, so
+//! what it returns is judged against every seam the frame shows
+//! ([`TrueSeam`]): on a tee, a refusal whose reason names a tee is the
+//! right answer (issue 12: recognised and refused by name) and a seam is
+//! confident wrong unless it lies within the bar on a root
+//! ([`classify_tee`]); on several workpieces each seam returned is matched
+//! to the nearest true seam, and the seams seen are counted found, missed
+//! or extra ([`match_seams`], [`classify_several`]).
 
 use crate::camera::CameraModel;
 use crate::config::{Config, Method};
@@ -22,7 +32,7 @@ use crate::joint::{JointType, RequestedJoint};
 use crate::pipeline::input::{CloudFrame, Units};
 use crate::pipeline::{Plan, PlanError, PlanRequest, Planner, Seam};
 use crate::sim::variants::Variant;
-use crate::sim::{GroundTruth, SceneSpec, Simulation, simulate};
+use crate::sim::{GroundTruth, SceneSpec, SeamTruth, Simulation, simulate};
 
 /// The number of reference points on the true seam (the paper's 12).
 pub const REFERENCE_POINTS: usize = 12;
@@ -48,8 +58,12 @@ impl SeamError {
 
 /// Compares a planned seam with the truth, both in the robot base frame.
 pub fn seam_error(truth: &GroundTruth, seam: &Seam) -> Option<SeamError> {
-    let path: Vec<Vec3> = seam.waypoints.iter().map(|w| w.position).collect();
-    path_error(truth, &path)
+    path_error(truth, &trajectory(seam))
+}
+
+/// A seam's trajectory: its waypoints' positions, in order.
+fn trajectory(seam: &Seam) -> Vec<Vec3> {
+    seam.waypoints.iter().map(|w| w.position).collect()
 }
 
 /// Compares a trajectory (base-frame waypoint positions, in order) with
@@ -166,6 +180,9 @@ pub struct SceneOutcome {
     /// The outcome as issue 12 counts it, against the scene's right
     /// answer (which its faults decide).
     pub verdict: Verdict,
+    /// On a tee or several workpieces: every true seam, and the seams
+    /// returned matched to them.
+    pub seams: Option<(Vec<TrueSeam>, SeamMatches)>,
 }
 
 /// One scene's outcome against its right answer.
@@ -257,6 +274,177 @@ pub fn classify(answer: &ScoredAnswer, planned: Result<&[Vec<Vec3>], &str>) -> V
     Verdict::WithinBar
 }
 
+/// One seam of a frame as the tee and several-workpiece judging sees it,
+/// in the robot base frame.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TrueSeam {
+    /// `workpiece 2 lap`, `workpiece 1 t-fillet root -x`.
+    pub label: String,
+    pub joint: JointType,
+    /// Its stretch in the image.
+    pub whole: [Vec3; 2],
+    /// The stretches the camera sees.
+    pub seen: Vec<[Vec3; 2]>,
+    /// Their length over the seam's whole length.
+    pub seen_share: f64,
+    /// The camera sees at least half of it: a planner is to find it.
+    pub seen_enough: bool,
+}
+
+impl TrueSeam {
+    pub fn of(spec: &SceneSpec, seam: &SeamTruth) -> Self {
+        TrueSeam {
+            label: seam.label(),
+            joint: seam.truth.joint,
+            whole: [seam.truth.start_base, seam.truth.end_base],
+            seen: seam.seen_base(spec),
+            seen_share: seam.seen_share,
+            seen_enough: seam.is_seen(),
+        }
+    }
+
+    /// A trajectory against this seam: within the bar of the whole seam
+    /// (when enough of it is seen) or of a stretch seen, or the error
+    /// against the nearest of them.
+    fn judge(&self, path: &[Vec3]) -> Verdict {
+        let answer = ScoredAnswer {
+            refuse: false,
+            whole: self.whole,
+            whole_allowed: self.seen_enough,
+            pieces: self.seen.clone(),
+        };
+        classify(&answer, Ok(std::slice::from_ref(&path.to_vec())))
+    }
+}
+
+/// How far a verdict's seam misses its bar: each figure against its own
+/// (1 mm across, 2 mm at the ends); infinite without an error.
+fn miss(verdict: &Verdict) -> f64 {
+    match verdict {
+        Verdict::ConfidentWrong { error: Some(e), .. } => e.max_mm.max(e.start_mm / 2.0).max(e.end_mm / 2.0),
+        Verdict::WithinBar => 0.0,
+        _ => f64::INFINITY,
+    }
+}
+
+/// Whether a refusal's reason names a tee joint.
+pub fn names_a_tee(reason: &str) -> bool {
+    let reason = reason.to_ascii_lowercase();
+    ["tee joint", "t_fillet", "t-fillet", "t-joint"].iter().any(|name| reason.contains(name))
+}
+
+/// A tee scene's outcome: a refusal is a refusal (whether it names the tee
+/// is [`names_a_tee`]'s to say); a seam is right only within the bar on a
+/// root, else confident wrong, reported against the nearest root.
+pub fn classify_tee(roots: &[TrueSeam], planned: Result<&[Vec<Vec3>], &str>) -> Verdict {
+    let paths = match planned {
+        Err(reason) => return Verdict::Refused { reason: reason.to_string() },
+        Ok([]) => return Verdict::Refused { reason: "no seam".into() },
+        Ok(paths) => paths,
+    };
+    for path in paths {
+        let verdicts: Vec<Verdict> = roots.iter().map(|root| root.judge(path)).collect();
+        if verdicts.contains(&Verdict::WithinBar) {
+            continue;
+        }
+        let error = verdicts.iter().min_by(|a, b| miss(a).total_cmp(&miss(b))).and_then(|v| match v {
+            Verdict::ConfidentWrong { error, .. } => *error,
+            _ => None,
+        });
+        return Verdict::ConfidentWrong { error, why: "a seam on no root of the tee".into() };
+    }
+    Verdict::WithinBar
+}
+
+/// A seam returned, matched to a true one within the bar.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SeamMatch {
+    /// Index into the seams returned, and into the true seams.
+    pub returned: usize,
+    pub truth: usize,
+}
+
+/// The seams returned for a frame of several seams against the true ones.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct SeamMatches {
+    /// Returned seams within the bar of a true seam, each true seam once.
+    pub found: Vec<SeamMatch>,
+    /// True seams seen (at least half their length) that no seam found.
+    pub missed: Vec<usize>,
+    /// Returned seams matching no true seam (or one already found).
+    pub extra: Vec<ExtraSeam>,
+    /// Found seams whose joint type is not their true seam's.
+    pub wrong_type: Vec<SeamMatch>,
+    /// The true seams seen.
+    pub seen: usize,
+}
+
+/// A returned seam on no true seam: its index, the nearest true seam and
+/// the error against it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ExtraSeam {
+    pub returned: usize,
+    pub nearest: Option<usize>,
+    pub error: Option<SeamError>,
+}
+
+/// Matches each returned seam (its trajectory and joint type) to the
+/// nearest true seam within the bar that no earlier one took.
+pub fn match_seams(truths: &[TrueSeam], returned: &[(Vec<Vec3>, JointType)]) -> SeamMatches {
+    let mut m = SeamMatches { seen: truths.iter().filter(|t| t.seen_enough).count(), ..SeamMatches::default() };
+    let mut taken = vec![false; truths.len()];
+    for (r, (path, joint)) in returned.iter().enumerate() {
+        let verdicts: Vec<Verdict> = truths.iter().map(|t| t.judge(path)).collect();
+        let nearest_free =
+            (0..truths.len()).filter(|t| !taken[*t] && verdicts[*t] == Verdict::WithinBar).min_by(|a, b| {
+                let error = |t: usize| segment_error(&truths[t].whole, path).map_or(f64::INFINITY, |e| e.mean_mm);
+                error(*a).total_cmp(&error(*b))
+            });
+        match nearest_free {
+            Some(t) => {
+                taken[t] = true;
+                let found = SeamMatch { returned: r, truth: t };
+                m.found.push(found);
+                if truths[t].joint != *joint {
+                    m.wrong_type.push(found);
+                }
+            }
+            None => {
+                let nearest = (0..truths.len()).min_by(|a, b| miss(&verdicts[*a]).total_cmp(&miss(&verdicts[*b])));
+                let error = match nearest.map(|t| &verdicts[t]) {
+                    Some(Verdict::ConfidentWrong { error, .. }) => *error,
+                    // Within the bar of a seam an earlier one took.
+                    _ => nearest.and_then(|t| segment_error(&truths[t].whole, path)),
+                };
+                m.extra.push(ExtraSeam { returned: r, nearest, error });
+            }
+        }
+    }
+    m.missed = (0..truths.len()).filter(|t| truths[*t].seen_enough && !taken[*t]).collect();
+    m
+}
+
+/// A several-workpiece scene's outcome: refused, confident wrong when a
+/// seam matches no true seam or names another joint than its own, else
+/// within the bar (seams missed are counted in [`SeamMatches`], not here).
+pub fn classify_several(matches: Result<&SeamMatches, &str>, truths: &[TrueSeam]) -> Verdict {
+    let m = match matches {
+        Err(reason) => return Verdict::Refused { reason: reason.to_string() },
+        Ok(m) if m.found.is_empty() && m.extra.is_empty() => return Verdict::Refused { reason: "no seam".into() },
+        Ok(m) => m,
+    };
+    if let Some(extra) = m.extra.first() {
+        let nearest = extra.nearest.map_or(String::new(), |t| format!(" (the nearest is the {})", truths[t].label));
+        let why = format!("a seam on no seam of the frame, or on one found already{nearest}");
+        return Verdict::ConfidentWrong { error: extra.error, why };
+    }
+    if let Some(w) = m.wrong_type.first() {
+        let why = format!("a seam of another joint type returned on the {}", truths[w.truth].label);
+        return Verdict::ConfidentWrong { error: None, why };
+    }
+    Verdict::WithinBar
+}
+
 impl SceneOutcome {
     pub fn passes(&self) -> bool {
         matches!(&self.result, Ok((e, _)) if e.passes())
@@ -293,23 +481,24 @@ pub fn evaluate_variant(
             .ok_or_else(|| PlanError::at(crate::pipeline::Stage::Trajectory, "the trajectory has no waypoint"))?;
         Ok((err, plan))
     });
+    let several_seams = spec.joint.joint_type() == JointType::TFillet || !spec.others.is_empty();
+    let seams = several_seams.then(|| {
+        let truths: Vec<TrueSeam> = sim.seams.iter().map(|s| TrueSeam::of(spec, s)).collect();
+        let returned: Vec<(Vec<Vec3>, JointType)> = match &result {
+            Ok((_, plan)) => plan.seams.iter().map(|s| (trajectory(s), s.joint)).collect(),
+            Err(_) => Vec::new(),
+        };
+        let matches = match_seams(&truths, &returned);
+        (truths, matches)
+    });
     let answer = ask.right_answer(spec, sim);
-    let verdict = match &result {
-        Ok((_, plan)) => {
-            let paths: Vec<Vec<Vec3>> =
-                plan.seams.iter().map(|s| s.waypoints.iter().map(|w| w.position).collect()).collect();
-            let scene_joint = spec.joint.joint_type();
-            match plan.seams.iter().find(|s| s.joint != scene_joint) {
-                // A seam of another joint type is welded with the wrong
-                // torch path, wherever it lies.
-                Some(other) if !answer.refuse => Verdict::ConfidentWrong {
-                    error: seam_error(&sim.truth, other),
-                    why: format!("a {} seam returned for a {scene_joint} joint", other.joint),
-                },
-                _ => classify(&answer, Ok(&paths)),
-            }
+    let verdict = match (&result, &seams) {
+        (Err(e), Some(_)) => Verdict::Refused { reason: e.to_string() },
+        (Ok((_, plan)), Some((truths, _))) if spec.others.is_empty() => {
+            classify_tee(truths, Ok(&plan.seams.iter().map(trajectory).collect::<Vec<_>>()))
         }
-        Err(e) => classify(&answer, Err(&e.to_string())),
+        (Ok(_), Some((truths, matches))) => classify_several(Ok(matches), truths),
+        (result, None) => plain_verdict(result, spec, sim, &answer),
     };
     SceneOutcome {
         name: name.to_string(),
@@ -319,6 +508,32 @@ pub fn evaluate_variant(
         truth: sim.truth.clone(),
         result,
         verdict,
+        seams,
+    }
+}
+
+/// A scene of one seam's outcome against its right answer.
+fn plain_verdict(
+    result: &Result<(SeamError, Plan), PlanError>,
+    spec: &SceneSpec,
+    sim: &Simulation,
+    answer: &ScoredAnswer,
+) -> Verdict {
+    match result {
+        Ok((_, plan)) => {
+            let paths: Vec<Vec<Vec3>> = plan.seams.iter().map(trajectory).collect();
+            let scene_joint = spec.joint.joint_type();
+            match plan.seams.iter().find(|s| s.joint != scene_joint) {
+                // A seam of another joint type is welded with the wrong
+                // torch path, wherever it lies.
+                Some(other) if !answer.refuse => Verdict::ConfidentWrong {
+                    error: seam_error(&sim.truth, other),
+                    why: format!("a {} seam returned for a {scene_joint} joint", other.joint),
+                },
+                _ => classify(answer, Ok(&paths)),
+            }
+        }
+        Err(e) => classify(answer, Err(&e.to_string())),
     }
 }
 
@@ -477,6 +692,63 @@ mod tests {
             matches!(verdict, Verdict::ConfidentWrong { error: Some(e), .. } if e.start_mm < 2.0 && e.end_mm < 2.0),
             "{verdict:?}"
         );
+    }
+
+    /// A 100 mm seam along x at `y` mm across, seen from 0 to `seen_to`.
+    fn true_seam(y: f64, joint: JointType, seen_to: f64) -> TrueSeam {
+        let at = |x: f64| Vec3::new(x, y, 0.0);
+        TrueSeam {
+            label: format!("seam at {y}"),
+            joint,
+            whole: [at(0.0), at(100.0)],
+            seen: if seen_to > 0.0 { vec![[at(0.0), at(seen_to)]] } else { Vec::new() },
+            seen_share: seen_to / 100.0,
+            seen_enough: seen_to >= 50.0,
+        }
+    }
+
+    #[test]
+    fn on_a_tee_a_seam_is_right_only_on_a_root() {
+        // Roots 8 mm apart; the camera sees the second.
+        let roots = [true_seam(0.0, JointType::TFillet, 0.0), true_seam(8.0, JointType::TFillet, 100.0)];
+        assert_eq!(classify_tee(&roots, Ok(&[path(0.0, 100.0, 8.3)])), Verdict::WithinBar);
+        // Between the roots (on the web's foot, a 'butt joint's midline').
+        let verdict = classify_tee(&roots, Ok(&[path(0.0, 100.0, 4.0)]));
+        assert!((wrong_by(&verdict) - 4.0).abs() < 1e-9, "{verdict:?}");
+        // On the hidden root: invented, not seen.
+        let verdict = classify_tee(&roots, Ok(&[path(0.0, 100.0, 0.0)]));
+        assert!(matches!(verdict, Verdict::ConfidentWrong { .. }), "{verdict:?}");
+        let reason = "groove stage failed: ... this looks like a tee joint (a web standing on a flange)";
+        assert_eq!(classify_tee(&roots, Err(reason)), Verdict::Refused { reason: reason.into() });
+        assert!(names_a_tee(reason) && names_a_tee("t_fillet planning is not built yet"));
+        assert!(!names_a_tee("background stage failed: no two layers 1 to 30 mm apart for a lap joint"));
+    }
+
+    #[test]
+    fn several_seams_are_found_missed_or_extra() {
+        let truths = [
+            true_seam(0.0, JointType::IButt, 100.0),
+            true_seam(200.0, JointType::Lap, 100.0),
+            true_seam(400.0, JointType::TFillet, 30.0),
+        ];
+        let on = |y: f64, joint: JointType| (path(0.0, 100.0, y), joint);
+        let m = match_seams(&truths, &[on(200.2, JointType::Lap)]);
+        assert_eq!(m.found, [SeamMatch { returned: 0, truth: 1 }]);
+        assert_eq!((m.missed.clone(), m.extra.len(), m.seen), (vec![0], 0, 2));
+        assert_eq!(classify_several(Ok(&m), &truths), Verdict::WithinBar);
+        // The same seam twice: the second is extra; one 5 mm off is extra.
+        let m =
+            match_seams(&truths, &[on(0.0, JointType::IButt), on(0.1, JointType::IButt), on(205.0, JointType::Lap)]);
+        assert_eq!((m.found.len(), m.extra.len(), m.missed.clone()), (1, 2, vec![1]));
+        assert!((m.extra[1].error.unwrap().max_mm - 5.0).abs() < 1e-9);
+        assert_eq!((m.extra[0].nearest, m.extra[1].nearest), (Some(0), Some(1)));
+        assert!(matches!(classify_several(Ok(&m), &truths), Verdict::ConfidentWrong { .. }));
+        // Found, but named another joint.
+        let m = match_seams(&truths, &[on(0.0, JointType::Lap)]);
+        assert_eq!(m.wrong_type.len(), 1);
+        let verdict = classify_several(Ok(&m), &truths);
+        assert!(matches!(&verdict, Verdict::ConfidentWrong { why, .. } if why.contains("seam at 0")), "{verdict:?}");
+        assert_eq!(classify_several(Err("refused"), &truths), Verdict::Refused { reason: "refused".into() });
     }
 
     #[test]

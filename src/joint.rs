@@ -12,10 +12,18 @@ pub enum JointType {
     IButt,
     /// Plane lap joint: one plate lying on another.
     Lap,
+    /// Tee joint with fillet welds: a web plate standing on a flange plate,
+    /// welded along the two lines where the web's side faces meet the
+    /// flange's top (the fillet roots). Named and simulated; not planned
+    /// yet (a request for it is refused saying so).
+    TFillet,
 }
 
 impl JointType {
+    /// The joint types the planner plans (the paper's three).
     pub const ALL: [JointType; 3] = [JointType::VButt, JointType::IButt, JointType::Lap];
+    /// Every joint type with a name, planned or not.
+    pub const NAMED: [JointType; 4] = [JointType::VButt, JointType::IButt, JointType::Lap, JointType::TFillet];
 
     /// The canonical name, as written in JSON output and on the wire.
     pub fn name(self) -> &'static str {
@@ -23,7 +31,24 @@ impl JointType {
             JointType::VButt => "v_butt",
             JointType::IButt => "i_butt",
             JointType::Lap => "lap",
+            JointType::TFillet => "t_fillet",
         }
+    }
+
+    /// The name as the command line and scene names spell it: `v-butt`,
+    /// `i-butt`, `lap`, `t-fillet`.
+    pub fn dashed_name(self) -> &'static str {
+        match self {
+            JointType::VButt => "v-butt",
+            JointType::IButt => "i-butt",
+            JointType::Lap => "lap",
+            JointType::TFillet => "t-fillet",
+        }
+    }
+
+    /// Whether the planner plans this joint (see [`JointType::ALL`]).
+    pub fn is_planned(self) -> bool {
+        JointType::ALL.contains(&self)
     }
 }
 
@@ -33,10 +58,10 @@ impl fmt::Display for JointType {
     }
 }
 
-/// The joint name was not one of `v-butt`, `i-butt`, `lap` (or `auto`
-/// where a request may leave the type to the planner).
+/// The joint name was not one of `v-butt`, `i-butt`, `lap`, `t-fillet`
+/// (or `auto` where a request may leave the type to the planner).
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
-#[error("unknown joint type {0:?} (expected v-butt, i-butt, lap or auto)")]
+#[error("unknown joint type {0:?} (expected v-butt, i-butt, lap, t-fillet or auto)")]
 pub struct UnknownJoint(pub String);
 
 /// The joint a plan request names: one type, or `auto` to have the planner
@@ -93,13 +118,15 @@ impl FromStr for RequestedJoint {
 impl FromStr for JointType {
     type Err = UnknownJoint;
 
-    /// Accepts `v-butt`, `v_butt`, `vbutt` and the like, any case.
+    /// Accepts `v-butt`, `v_butt`, `vbutt`, `t-fillet` and the like, any
+    /// case.
     fn from_str(s: &str) -> Result<Self, Self::Err> {
         let key: String = s.chars().filter(|c| !matches!(c, '-' | '_' | ' ')).collect::<String>().to_ascii_lowercase();
         match key.as_str() {
             "vbutt" | "v" => Ok(JointType::VButt),
             "ibutt" | "i" => Ok(JointType::IButt),
             "lap" => Ok(JointType::Lap),
+            "tfillet" => Ok(JointType::TFillet),
             _ => Err(UnknownJoint(s.to_string())),
         }
     }
@@ -115,10 +142,14 @@ mod tests {
         assert_eq!("V_BUTT".parse(), Ok(JointType::VButt));
         assert_eq!("i_butt".parse(), Ok(JointType::IButt));
         assert_eq!("lap".parse(), Ok(JointType::Lap));
+        assert_eq!("t-fillet".parse(), Ok(JointType::TFillet));
+        assert_eq!("T_FILLET".parse(), Ok(RequestedJoint::Type(JointType::TFillet)));
         assert!("fillet".parse::<JointType>().is_err());
         assert!("auto".parse::<JointType>().is_err());
-        for j in JointType::ALL {
+        assert!(!JointType::TFillet.is_planned() && JointType::ALL.iter().all(|j| j.is_planned()));
+        for j in JointType::NAMED {
             assert_eq!(j.name().parse(), Ok(j));
+            assert_eq!(j.dashed_name().parse(), Ok(j));
             assert_eq!(j.name().parse(), Ok(RequestedJoint::Type(j)));
         }
     }

@@ -18,6 +18,7 @@ mod pipeline;
 mod quality;
 mod requests;
 mod roi;
+mod several_seams;
 mod text_link;
 mod units_frames;
 mod unorganized;

@@ -22,9 +22,10 @@ pub const MAGIC: [u8; 4] = *b"WSEM";
 /// added the frame's cloud frame and the request's region of interest;
 /// version 4 added each seam's quality figures and warnings to the plan
 /// reply; version 5 added `auto` joints, each seam's joint evidence, the
-/// measured groove and the request's pose in a convention it names. See
-/// PROTOCOL.md, "Changes from version 4".
-pub const PROTOCOL_VERSION: u16 = 5;
+/// measured groove and the request's pose in a convention it names;
+/// version 6 names the tee joint (`t_fillet`, joint code 4). See
+/// PROTOCOL.md, "Changes from version 5".
+pub const PROTOCOL_VERSION: u16 = 6;
 
 /// Bytes of a message header.
 pub const HEADER_BYTES: usize = 16;

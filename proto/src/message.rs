@@ -234,6 +234,10 @@ pub mod joint_code {
     /// The daemon decides the type from the frame (version 5); the reply's
     /// seam names the type found and the evidence.
     pub const AUTO: u32 = 3;
+    /// A tee joint's fillet welds (version 6): named so a request for it
+    /// is refused by name ("t_fillet planning is not built yet"), not as
+    /// an unknown code.
+    pub const T_FILLET: u32 = 4;
 }
 
 /// A controller's request for a trajectory.
@@ -349,6 +353,7 @@ impl PlanRequest {
             joint_code::V_BUTT => Some(Joint::VButt),
             joint_code::I_BUTT => Some(Joint::IButt),
             joint_code::LAP => Some(Joint::Lap),
+            joint_code::T_FILLET => Some(Joint::TFillet),
             _ => None,
         }
     }
@@ -363,6 +368,7 @@ impl PlanRequest {
             Joint::VButt => joint_code::V_BUTT,
             Joint::IButt => joint_code::I_BUTT,
             Joint::Lap => joint_code::LAP,
+            Joint::TFillet => joint_code::T_FILLET,
         }
     }
 }

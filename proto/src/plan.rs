@@ -7,13 +7,14 @@ use std::collections::BTreeMap;
 use serde::{Deserialize, Serialize};
 
 /// A plane weld joint type; JSON and wire names are `v_butt`, `i_butt`,
-/// `lap`.
+/// `lap`, `t_fillet` (version 6: named, not planned yet).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Joint {
     VButt,
     IButt,
     Lap,
+    TFillet,
 }
 
 /// One waypoint in the robot base frame: position in mm, torch

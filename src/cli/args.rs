@@ -64,6 +64,12 @@ pub enum SuiteArg {
     /// The industrial suite tilted up to 45 degrees, depth noise up to
     /// 0.15 mm, dropouts up to 5 % (`sim::hard_suite`).
     Hard,
+    /// 22 tee joints at 500 to 1000 mm, tilted up to 30 degrees
+    /// (`sim::tee_suite`), judged against both fillet roots.
+    Tee,
+    /// 12 frames of two or three workpieces, each with its own joint
+    /// (`sim::multi_suite`), every seam returned matched to the nearest.
+    Multi,
 }
 
 /// `--joint-request` of `eval`: how each scene's plan names its joint.

@@ -7,6 +7,10 @@
 //! bed. Below the accuracy tables, every scene's outcome is counted as
 //! within the bar, refused or a confident wrong seam, per joint (and per
 //! fault), and the confident wrong seams and the refusals are listed.
+//! `--suite tee` and `--suite multi` are issue 15's frames of more seams
+//! than one (a tee's two roots, several workpieces): below the scenes,
+//! the seams the frames show against what the planner returned (found,
+//! missed, extra) and, for tees, the refusals that name the tee.
 
 use std::io::Write;
 
@@ -16,14 +20,14 @@ use std::path::PathBuf;
 use weldseam::config::{Config, Method};
 use weldseam::convert::to_proto::plan_result;
 use weldseam::eval::{
-    DepthAsk, EvalRequest, JointAsk, SceneOutcome, Verdict, count_verdicts, run_suite_asking, summarise,
+    DepthAsk, EvalRequest, JointAsk, SceneOutcome, Verdict, count_verdicts, names_a_tee, run_suite_asking, summarise,
 };
 use weldseam::geometry::pose::EulerConvention;
 use weldseam::joint::JointType;
 use weldseam::pipeline::Stage;
 use weldseam::sim::consumer::{consumer_camera, consumer_variant};
 use weldseam::sim::variants::Variant;
-use weldseam::sim::{FaultKind, consumer_suite, eval_suite, fault_suite, hard_suite};
+use weldseam::sim::{FaultKind, consumer_suite, eval_suite, fault_suite, hard_suite, multi_suite, tee_suite};
 
 use crate::cli::args::{GrooveDepthArg, JointRequestArg, SuiteArg};
 use crate::cli::table::Table;
@@ -152,10 +156,15 @@ pub fn run(args: &EvalArgs) -> anyhow::Result<()> {
         SuiteArg::Consumer => (consumer_suite(), consumer_camera(), consumer_variant()),
         SuiteArg::Faults => (fault_suite(), robust.camera, Variant::raw()),
         SuiteArg::Hard => (hard_suite(), robust.camera, Variant::raw()),
+        SuiteArg::Tee => (tee_suite(), robust.camera, Variant::raw()),
+        SuiteArg::Multi => (multi_suite(), robust.camera, Variant::raw()),
     };
+    let several_seams = matches!(args.suite, SuiteArg::Tee | SuiteArg::Multi);
     // Refusals are right answers on these suites; only a confident wrong
     // seam fails them.
-    let judged = matches!(args.suite, SuiteArg::Faults | SuiteArg::Hard) || matches!(ask.joint, JointAsk::Wrong(_));
+    let judged = matches!(args.suite, SuiteArg::Faults | SuiteArg::Hard)
+        || several_seams
+        || matches!(ask.joint, JointAsk::Wrong(_));
     if let Some(f) = &args.filter {
         scenes.retain(|(name, _)| name.contains(f.as_str()));
     }
@@ -246,11 +255,21 @@ pub fn run(args: &EvalArgs) -> anyhow::Result<()> {
     let render = |t: &Table| if args.markdown { t.to_markdown() } else { t.to_text() };
     let mut out = std::io::stdout().lock();
     writeln!(out, "{}", render(&scenes_table))?;
-    writeln!(out, "{}", render(&summary))?;
+    // Its errors are against each frame's first seam only: on frames of
+    // several seams the seam tables below say what was found.
+    if !several_seams {
+        writeln!(out, "{}", render(&summary))?;
+    }
     for table in verdict_tables(&configs, &results) {
         writeln!(out, "{}", render(&table))?;
     }
-    writeln!(out, "{}", render(&joint_table(&results[0])))?;
+    if several_seams {
+        for table in seam_tables(&results[0]) {
+            writeln!(out, "{}", render(&table))?;
+        }
+    } else {
+        writeln!(out, "{}", render(&joint_table(&results[0])))?;
+    }
     out.flush()?;
     let robust_outcomes = &results[0];
     if judged {
@@ -323,6 +342,96 @@ fn joint_table(outcomes: &[SceneOutcome]) -> Table {
         ]);
     }
     table
+}
+
+/// Issue 15's tables (robust): every seam the frames show against what
+/// was returned, scene by scene, then the counts: seams seen (at least
+/// half their length), found within the bar, missed, extra, of the wrong
+/// type, and the refusals that name a tee.
+fn seam_tables(outcomes: &[SceneOutcome]) -> Vec<Table> {
+    let mut scenes = Table::new(
+        "Seams of each frame (robust)",
+        &["scene", "seam", "seen %", "seen", "returned", "error mm", "outcome"],
+    );
+    let mut totals = Table::new(
+        "Seams found, missed and extra (robust)",
+        &[
+            "scenes",
+            "seams",
+            "seams seen",
+            "found",
+            "missed",
+            "extra",
+            "type wrong",
+            "refused",
+            "refusals naming a tee",
+            "confident wrong",
+        ],
+    );
+    let (mut seams, mut seen, mut found, mut missed, mut extra, mut wrong_type, mut tee_refusals) =
+        (0, 0, 0, 0, 0, 0, 0);
+    for o in outcomes {
+        let Some((truths, matches)) = &o.seams else { continue };
+        seams += truths.len();
+        seen += matches.seen;
+        found += matches.found.len();
+        missed += matches.missed.len();
+        extra += matches.extra.len();
+        wrong_type += matches.wrong_type.len();
+        if let Verdict::Refused { reason } = &o.verdict {
+            tee_refusals += usize::from(names_a_tee(reason));
+        }
+        let outcome = match &o.verdict {
+            Verdict::Refused { reason } => format!("refused: {reason}"),
+            other => other.label().to_string(),
+        };
+        for (t, truth) in truths.iter().enumerate() {
+            let found_by = matches.found.iter().find(|m| m.truth == t);
+            let returned = match (found_by, &o.result) {
+                (Some(m), Ok((_, plan))) => format!("found ({})", plan.seams[m.returned].joint),
+                (None, _) if truth.seen_enough => "missed".to_string(),
+                _ => "-".to_string(),
+            };
+            let error = match (found_by, &o.result) {
+                (Some(m), Ok((_, plan))) => weldseam::eval::segment_error(
+                    &truth.whole,
+                    &plan.seams[m.returned].waypoints.iter().map(|w| w.position).collect::<Vec<_>>(),
+                )
+                .map_or("-".into(), |e| format!("{:.3}", e.max_mm)),
+                _ => "-".into(),
+            };
+            let first = t == 0;
+            scenes.push(vec![
+                if first { o.name.clone() } else { String::new() },
+                truth.label.clone(),
+                format!("{:.0}", 100.0 * truth.seen_share),
+                if truth.seen_enough { "yes" } else { "no" }.into(),
+                returned,
+                error,
+                if first { outcome.clone() } else { String::new() },
+            ]);
+        }
+        for extra in &matches.extra {
+            let error = extra.error.map_or("-".into(), |e| format!("{:.3}", e.max_mm));
+            let nearest = extra.nearest.map_or(String::new(), |t| format!(", nearest the {}", truths[t].label));
+            scenes.push(vec![
+                String::new(),
+                format!("returned seam {} on no seam{nearest}", extra.returned + 1),
+                "-".into(),
+                "-".into(),
+                "extra".into(),
+                error,
+                String::new(),
+            ]);
+        }
+    }
+    let c = count_verdicts(outcomes.iter().filter(|o| o.seams.is_some()));
+    totals.push(
+        [c.scenes, seams, seen, found, missed, extra, wrong_type, c.refused, tee_refusals, c.confident_wrong]
+            .map(|n| n.to_string())
+            .to_vec(),
+    );
+    vec![scenes, totals]
 }
 
 /// The fault a scene carries, by name (`none` for a clean scene).

@@ -22,7 +22,8 @@ pub struct PlanArgs {
     #[command(flatten)]
     pub input: args::CloudInputArgs,
     /// Joint type: v-butt, i-butt or lap (underscores work too), or auto
-    /// to have the planner decide it from the cloud and say why.
+    /// to have the planner decide it from the cloud and say why
+    /// (t-fillet, a tee joint, is named and refused as not planned yet).
     #[arg(long)]
     pub joint: RequestedJoint,
     /// Robot pose at capture: x,y,z,rx,ry,rz (mm, degrees).

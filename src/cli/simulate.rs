@@ -26,14 +26,16 @@ use weldseam::sim::faults::frame_barely_in_view;
 use weldseam::sim::variants::Variant;
 use weldseam::sim::{
     CameraPreset, Fault, FaultKind, JointGeometry, NoiseSpec, PlateExtent, SceneSpec, Simulation, consumer_suite,
-    demo_scene, eval_suite, fault_suite, hard_suite, simulate,
+    demo_scene, eval_suite, fault_suite, hard_suite, multi_suite, simulate, tee_suite,
 };
 
 use crate::cli::args::CameraArg;
 
 #[derive(Debug, Clone, clap::Args)]
 pub struct SimulateArgs {
-    /// Joint type: v-butt, i-butt or lap. Optional with --suite-scene.
+    /// Joint type: v-butt, i-butt, lap or t-fillet (a tee: a web standing
+    /// on a flange, its two fillet roots in the truth's `seams`). Optional
+    /// with --suite-scene.
     #[arg(long)]
     pub joint: Option<JointType>,
     /// Camera standoff along the optical axis to the target, mm.
@@ -59,7 +61,8 @@ pub struct SimulateArgs {
     #[arg(long, value_enum, default_value_t)]
     pub camera: CameraArg,
     /// Start from a scene of the evaluation suite, by name or index, or of
-    /// the fault or hard suite (`eval --suite faults|hard`) by name.
+    /// the fault, hard, tee or multi suite (`eval --suite
+    /// faults|hard|tee|multi`) by name.
     #[arg(long, value_name = "NAME_OR_INDEX")]
     pub suite_scene: Option<String>,
     /// Add a fault to the scene, at the seam's middle: wrong-joint,
@@ -131,8 +134,8 @@ fn scene_from_args(args: &SimulateArgs) -> Result<(Option<String>, SceneSpec)> {
             {
                 bail!(
                     "suite scene {name} is a {} joint, not {}",
-                    cli_joint_name(spec.joint.joint_type()),
-                    cli_joint_name(joint)
+                    spec.joint.joint_type().dashed_name(),
+                    joint.dashed_name()
                 );
             }
             (Some(name), spec)
@@ -141,7 +144,7 @@ fn scene_from_args(args: &SimulateArgs) -> Result<(Option<String>, SceneSpec)> {
             CameraPreset::Industrial => (None, demo_scene(joint)),
             CameraPreset::Consumer => (None, consumer_demo_scene(joint)),
         },
-        (None, None) => bail!("give --joint (v-butt, i-butt or lap) or --suite-scene"),
+        (None, None) => bail!("give --joint (v-butt, i-butt, lap or t-fillet) or --suite-scene"),
     };
     let placement = &mut spec.placement;
     let overrides = [
@@ -175,8 +178,13 @@ fn find_suite_scene(preset: CameraPreset, key: &str) -> Result<(String, SceneSpe
         CameraPreset::Consumer => consumer_suite(),
     };
     if preset == CameraPreset::Industrial {
-        let other =
-            if key.starts_with("fault-") { Some(fault_suite()) } else { key.starts_with("hard-").then(hard_suite) };
+        let other = match key.split('-').next() {
+            Some("fault") => Some(fault_suite()),
+            Some("hard") => Some(hard_suite()),
+            Some("t") => Some(tee_suite()),
+            Some("multi") => Some(multi_suite()),
+            _ => None,
+        };
         if let Some(found) = other.into_iter().flatten().find(|(name, _)| name == key) {
             return Ok(found);
         }
@@ -192,15 +200,6 @@ fn find_suite_scene(preset: CameraPreset, key: &str) -> Result<(String, SceneSpe
             "no suite scene {key:?}: give an index below {count} or a name such as {}",
             suite.first().map_or("", |(name, _)| name.as_str())
         ),
-    }
-}
-
-/// The joint's name as the command line spells it.
-fn cli_joint_name(joint: JointType) -> &'static str {
-    match joint {
-        JointType::VButt => "v-butt",
-        JointType::IButt => "i-butt",
-        JointType::Lap => "lap",
     }
 }
 
@@ -270,6 +269,24 @@ fn truth_json(name: Option<&str>, spec: &SceneSpec, camera: &CameraModel, sim: &
             "clipped_end": t.clipped_end,
             "length_mm": t.length_mm,
         },
+        "seams": sim.seams.iter().map(|seam| {
+            let t = &seam.truth;
+            json!({
+                "workpiece": seam.workpiece + 1,
+                "root": seam.root,
+                "label": seam.label(),
+                "joint": t.joint.name(),
+                "start_base": xyz(&t.start_base),
+                "end_base": xyz(&t.end_base),
+                "start_camera": xyz(&t.start_camera),
+                "end_camera": xyz(&t.end_camera),
+                "in_image_mm": t.length_mm,
+                "physical_mm": seam.physical_mm,
+                "seen_mm": seam.seen_mm,
+                "seen_share": seam.seen_share,
+                "seen": seam.is_seen(),
+            })
+        }).collect::<Vec<_>>(),
         "plan_args": plan_args(spec, &pose),
         "right_answer": {
             "refuse": sim.answer.refuse,
@@ -279,8 +296,9 @@ fn truth_json(name: Option<&str>, spec: &SceneSpec, camera: &CameraModel, sim: &
     })
 }
 
-fn scene_json(spec: &SceneSpec, camera: &CameraModel) -> Value {
-    let geometry = match spec.joint {
+/// A joint's cross-section by its parameters.
+fn geometry_json(joint: &JointGeometry) -> Value {
+    match *joint {
         JointGeometry::VButt { thickness_mm, groove_angle_deg, groove_depth_mm, root_gap_mm } => json!({
             "thickness_mm": thickness_mm,
             "groove_angle_deg": groove_angle_deg,
@@ -293,14 +311,37 @@ fn scene_json(spec: &SceneSpec, camera: &CameraModel) -> Value {
             "upper_thickness_mm": upper_thickness_mm,
             "overlap_mm": overlap_mm,
         }),
-    };
+        JointGeometry::Tee { flange_thickness_mm, web_thickness_mm, web_height_mm } => json!({
+            "flange_thickness_mm": flange_thickness_mm,
+            "web_thickness_mm": web_thickness_mm,
+            "web_height_mm": web_height_mm,
+        }),
+    }
+}
+
+fn scene_json(spec: &SceneSpec, camera: &CameraModel) -> Value {
     let plate = |p: &PlateExtent| json!({ "width_mm": p.width_mm, "length_mm": p.length_mm, "offset_mm": p.offset_mm });
     let placement = &spec.placement;
     let noise = &spec.noise;
+    let others: Vec<Value> = spec
+        .others
+        .iter()
+        .map(|w| {
+            json!({
+                "joint": w.joint.joint_type().name(),
+                "geometry": geometry_json(&w.joint),
+                "plate_a": plate(&w.plate_a),
+                "plate_b": plate(&w.plate_b),
+                "at_mm": w.at_mm,
+                "yaw_deg": w.yaw_deg,
+            })
+        })
+        .collect();
     json!({
-        "geometry": geometry,
+        "geometry": geometry_json(&spec.joint),
         "plate_a": plate(&spec.plate_a),
         "plate_b": plate(&spec.plate_b),
+        "other_workpieces": others,
         "spacer_height_mm": spec.spacer_height_mm,
         "placement": {
             "distance_mm": placement.distance_mm,
@@ -335,7 +376,7 @@ fn scene_json(spec: &SceneSpec, camera: &CameraModel) -> Value {
 
 /// The planner's arguments for this capture.
 fn plan_args(spec: &SceneSpec, pose: &[f64]) -> String {
-    let mut args = format!("--joint {}", cli_joint_name(spec.requested_joint()));
+    let mut args = format!("--joint {}", spec.requested_joint().dashed_name());
     if let Some(depth) = spec.requested_groove_depth_mm() {
         args.push_str(&format!(" --groove-depth {}", short(depth)));
     }
@@ -401,6 +442,29 @@ mod tests {
         let plan = json["plan_args"].as_str().unwrap();
         assert!(plan.starts_with("--joint v-butt --groove-depth 6 --pose="), "{plan}");
         assert!(json["truth"]["length_mm"].as_f64().unwrap() > 200.0);
+    }
+
+    #[test]
+    fn a_tee_is_written_with_both_roots_and_what_the_camera_sees_of_each() {
+        let dir = tempfile::tempdir().unwrap();
+        let (out, truth) = (dir.path().join("tee.pcd"), dir.path().join("tee.json"));
+        let mut a = args(out, Some(truth.clone()));
+        a.joint = Some("t_fillet".parse().unwrap());
+        run(&a).unwrap();
+        let json: Value = serde_json::from_slice(&std::fs::read(&truth).unwrap()).unwrap();
+        assert_eq!(json["joint"], "t_fillet");
+        assert_eq!(json["parameters"]["geometry"]["web_thickness_mm"], 8.0);
+        assert!(json["plan_args"].as_str().unwrap().starts_with("--joint t-fillet --pose="), "{}", json["plan_args"]);
+        let seams = json["seams"].as_array().unwrap();
+        assert_eq!(seams.len(), 2);
+        let seen: Vec<bool> = seams.iter().map(|s| s["seen"].as_bool().unwrap()).collect();
+        // The demo camera leans towards +x: it sees the +x root only.
+        assert_eq!(seen, [false, true], "{seams:?}");
+        assert_eq!(seams[1]["label"], "workpiece 1 t-fillet root +x");
+        assert!(seams[1]["seen_share"].as_f64().unwrap() > 0.99);
+        // A suite scene of several workpieces is found by its name.
+        let name = weldseam::sim::multi_suite()[0].0.clone();
+        assert_eq!(find_suite_scene(CameraPreset::Industrial, &name).unwrap().0, name);
     }
 
     #[test]

@@ -91,13 +91,15 @@ pub enum BackgroundError {
     )]
     LooksLikeButt { first_mm2: f64, second_mm2: f64, tolerance_mm: f64 },
     /// A nearer plane lies across the plane the plates were sought in,
-    /// which is seen on both of its long sides: an object lying on the
-    /// workpiece, not a plate of the joint.
+    /// which is seen on both of its long sides: a tee's web on its flange,
+    /// or an object lying on the workpiece; not a plate of a butt or lap
+    /// joint. The layers alone cannot tell the two apart.
     #[error(
         "a long plane of {top_mm2:.0} mm², {above_mm:.1} mm nearer the camera, lies across the plane under it, \
-         which is seen on both of its sides ({first_mm2:.0} and {second_mm2:.0} mm²): an object lying on the \
-         workpiece (a clamp or a bar) covers the joint; a lap's upper plate ends on its lower plate, and butt \
-         plates are not one plane cut in two; clear the joint or set a region of interest beside the object"
+         which is seen on both of its sides ({first_mm2:.0} and {second_mm2:.0} mm²): the web of a tee joint \
+         standing on its flange (tee joints are not planned), or an object lying on the workpiece (a clamp or a \
+         bar) over the joint; a lap's upper plate ends on its lower plate, and butt plates are not one plane cut \
+         in two; for a clamp, clear the joint or set a region of interest beside it"
     )]
     LiesAcross { top_mm2: f64, above_mm: f64, first_mm2: f64, second_mm2: f64 },
     /// The joint type was left to the planner, and the nearest layer holds
@@ -218,7 +220,9 @@ pub enum Layout {
 impl Layout {
     pub fn of(joint: JointType) -> Layout {
         match joint {
-            JointType::VButt | JointType::IButt => Layout::Butt,
+            // A tee's flange shows either side of the web in one plane
+            // (a tee request itself is refused before any stage runs).
+            JointType::VButt | JointType::IButt | JointType::TFillet => Layout::Butt,
             JointType::Lap => Layout::Lap,
         }
     }
@@ -287,22 +291,15 @@ fn find_butt(l: &Layers, s: &Selection, joint: JointType) -> Result<usize, Backg
         return Err(BackgroundError::NoCoplanarPair { found: l.found, offsets_mm: l.offsets_mm.clone() });
     };
     // The plates are the workpiece's top: a nearer plane may be a clamp,
-    // but not one larger than a plate, nor one lying across the pair.
-    let [first, second] = [&l.layers[pos][0], &l.layers[pos][1]];
-    let smaller_mm2 = second.area_mm2;
+    // but not one larger than a plate. One lying across the pair (a clamp,
+    // or a tee's web on its flange) stands between the pair's edges, where
+    // the groove probe sees it and says which.
+    let smaller_mm2 = l.layers[pos][1].area_mm2;
     if let Some(cover) = l.layers[..pos].iter().map(|layer| &layer[0]).find(|c| c.area_mm2 > smaller_mm2) {
         return Err(BackgroundError::PairUnderLargerPlane {
             area_mm2: cover.area_mm2,
             above_mm: l.depth(pos) - l.offset(cover),
             smaller_mm2,
-        });
-    }
-    if let Some(bar) = l.layers[..pos].iter().flatten().find(|c| lies_across(c, first, second, &l.normal)) {
-        return Err(BackgroundError::LiesAcross {
-            top_mm2: bar.area_mm2,
-            above_mm: l.depth(pos) - l.offset(bar),
-            first_mm2: first.area_mm2,
-            second_mm2: second.area_mm2,
         });
     }
     Ok(pos)
@@ -529,7 +526,7 @@ mod tests {
     }
 
     #[test]
-    fn a_bar_lying_across_a_plate_is_no_lap_and_no_butt_pair() {
+    fn a_bar_lying_across_a_plate_is_no_lap() {
         // A clamp 15 mm over one plate, which is seen on both of its sides;
         // the other plate lies 7 mm lower, the table further.
         let planes = || {
@@ -544,9 +541,11 @@ mod tests {
         let lap = robust_select(planes(), &selection(JointType::Lap)).unwrap_err();
         assert!(matches!(lap, BackgroundError::LiesAcross { .. }), "{lap}");
         assert!(lap.to_string().contains("clamp"), "{lap}");
-        let butt = robust_select(planes(), &selection(JointType::IButt)).unwrap_err();
-        assert!(matches!(butt, BackgroundError::LiesAcross { .. }), "{butt}");
-        assert!(robust_select(planes(), &auto()).is_err());
+        // As butt plates, the two sides are a pair, and what lies between
+        // their edges is the groove probe's to name.
+        let butt = robust_select(planes(), &selection(JointType::IButt)).unwrap();
+        assert_eq!(butt.workpiece.plates.each_ref().map(|p| p.plane.offset), [700.0, 700.0]);
+        assert_eq!(robust_select(planes(), &auto()).unwrap().layout, Layout::Butt);
     }
 
     #[test]

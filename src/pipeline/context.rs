@@ -273,6 +273,7 @@ impl<'a> Context<'a> {
             JointType::VButt => weld_equation::v_butt(e1, e2, groove_depth_mm, normal),
             JointType::IButt => weld_equation::i_butt(e1, e2),
             JointType::Lap => Some(lap()),
+            JointType::TFillet => return Err(PlanError::at(Stage::WeldEquation, "t_fillet planning is not built yet")),
         }
         .ok_or_else(|| PlanError::at(Stage::WeldEquation, "the weld edges were fitted in different axes"))
     }

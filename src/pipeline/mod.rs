@@ -465,6 +465,11 @@ fn validate(r: &PlanRequest, config: &Config) -> Result<(), PlanError> {
     }
     let paper = config.pipeline.method == crate::config::Method::Paper;
     match (r.joint, r.groove_depth_mm) {
+        (RequestedJoint::Type(joint), _) if !joint.is_planned() => {
+            return bad(format!(
+                "{joint} planning is not built yet: a tee joint's fillet welds are named, not planned"
+            ));
+        }
         (RequestedJoint::Auto, _) if paper => {
             return bad(
                 "the paper's method plans the joint type it is given; `auto` needs pipeline.method = \"robust\"".into(),

@@ -134,6 +134,7 @@ fn headline(trace: &PlanTrace) -> String {
         Some(JointType::VButt) => "V-butt",
         Some(JointType::IButt) => "I-butt",
         Some(JointType::Lap) => "Lap",
+        Some(JointType::TFillet) => "Tee",
         None => "Joint auto, not decided",
     };
     let depth = trace.groove_depth_mm.map(|d| format!(" (groove depth {d} mm)")).unwrap_or_default();

@@ -112,7 +112,7 @@ pub fn consumer_demo_scene(joint: JointType) -> SceneSpec {
         }
         // At 1 mm voxels a gap must span a few voxels to show.
         JointType::IButt => spec.joint = JointGeometry::IButt { thickness_mm: 6.0, gap_mm: 3.0 },
-        JointType::Lap => {}
+        JointType::Lap | JointType::TFillet => {}
     }
     let plate = PlateExtent { width_mm: 120.0, length_mm: 420.0, offset_mm: 0.0 };
     (spec.plate_a, spec.plate_b) = (plate, plate);
@@ -177,6 +177,7 @@ fn draw_joint(joint: JointType, rng: &mut ChaCha8Rng) -> JointGeometry {
             upper_thickness_mm: uniform(rng, 4.0, 10.0),
             overlap_mm: uniform(rng, 20.0, 60.0),
         },
+        JointType::TFillet => super::suite::draw_tee(rng),
     }
 }
 
@@ -205,6 +206,7 @@ fn draw_scene(joint: JointType, distance_mm: f64, tilt_deg: f64, seed: u64, rng:
         euler: EulerConvention::Zyx,
         seed,
         faults: Vec::new(),
+        others: Vec::new(),
     }
 }
 
@@ -243,21 +245,13 @@ pub fn consumer_suite() -> Vec<(String, SceneSpec)> {
             }
             let name = format!(
                 "consumer-{}-{k:02}-d{distance_mm:.0}-t{tilt_deg:.0}{}",
-                joint_name(joint),
+                joint.dashed_name(),
                 if holdout { "-holdout" } else { "" }
             );
             suite.push((name, spec));
         }
     }
     suite
-}
-
-fn joint_name(joint: JointType) -> &'static str {
-    match joint {
-        JointType::VButt => "v-butt",
-        JointType::IButt => "i-butt",
-        JointType::Lap => "lap",
-    }
 }
 
 #[cfg(test)]

@@ -51,7 +51,7 @@ use rayon::prelude::*;
 
 use super::scene::{ConvexSolid, SurfaceKind};
 use super::suite::{MIN_PLATE_IN_VIEW_MM, plates_in_view, uniform};
-use super::truth::observed_seam_range;
+use super::truth::{LineOfSight, observed_seam_range, unhidden_stretches};
 use super::{InvalidScene, JointGeometry, SceneSpec};
 use crate::camera::CameraModel;
 use crate::geometry::Vec3;
@@ -59,13 +59,8 @@ use crate::joint::JointType;
 
 /// Pieces of seam shorter than this are no answer a planner is asked for.
 pub const MIN_PIECE_MM: f64 = 5.0;
-/// Step along the seam at which [`visible_pieces`] samples it.
-const PIECE_STEP_MM: f64 = 0.25;
 /// Corners of the octagon a spatter bead's cross-section is.
 const BEAD_CORNERS: usize = 8;
-/// A shadow or view ray counts as blocked only through this fraction of
-/// its length inside a solid (touching surfaces do not block).
-const MIN_BLOCKED_FRACTION: f64 = 1e-7;
 
 /// The kinds of fault, for naming scenes, choosing from the command line
 /// and counting per fault.
@@ -219,6 +214,9 @@ impl Fault {
         let fail = |what: String| Err(InvalidScene(format!("{}: {what}", self.kind())));
         let positive = |v: f64| v > 0.0 && v.is_finite();
         let [y0, y1] = spec.seam_range();
+        if matches!(spec.joint, JointGeometry::Tee { .. }) || !spec.others.is_empty() {
+            return fail("faults are drawn on one butt or lap joint per frame only".into());
+        }
         match *self {
             Fault::WrongJoint { requested } => {
                 if requested == spec.joint.joint_type() {
@@ -424,6 +422,12 @@ fn tack_profile(joint: &JointGeometry, crown: f64, spread: f64) -> Vec<[f64; 2]>
             let leg = spread + crown;
             vec![[-0.5, t1], [leg, t1], [-0.5, t1 + leg.min(t2)]]
         }
+        // A tack in the -x root's corner (faults are not drawn on tees yet:
+        // [`Fault::validate`] refuses them; this keeps the profile total).
+        JointGeometry::Tee { flange_thickness_mm: f, web_thickness_mm: w, web_height_mm: h } => {
+            let (leg, root) = (spread + crown, -w / 2.0);
+            vec![[root + 0.5, f], [root - leg, f], [root + 0.5, f + leg.min(h)]]
+        }
     }
 }
 
@@ -598,38 +602,15 @@ pub fn visible_pieces(spec: &SceneSpec, camera: &CameraModel) -> Vec<[f64; 2]> {
             _ => None,
         })
         .collect();
-    let projector = Vec3::new(camera.baseline_mm, 0.0, 0.0);
-    let blocked = |from: &Vec3, to: &Vec3| {
-        solids
-            .iter()
-            .any(|s| s.clip(from, &(to - from), 0.0, 1.0).is_some_and(|c| c.exit - c.enter > MIN_BLOCKED_FRACTION))
-    };
-    let hidden = |y: f64| {
-        bands.iter().any(|[a, b]| (*a..=*b).contains(&y))
-            || spec.joint.seam_edges_xz().iter().any(|[x, z]| {
-                let p = camera_from_workpiece.transform_point(&Vec3::new(*x, y, *z).into()).coords;
-                blocked(&Vec3::zeros(), &p) || blocked(&projector, &p)
-            })
-    };
-    let steps = ((y1 - y0) / PIECE_STEP_MM).ceil().max(1.0) as usize;
-    let mut pieces = Vec::new();
-    let mut open: Option<f64> = None;
-    for k in 0..=steps {
-        let y = y0 + (y1 - y0) * k as f64 / steps as f64;
-        match (hidden(y), open) {
-            (false, None) => open = Some(y),
-            (true, Some(start)) => {
-                pieces.push([start, y - (y1 - y0) / steps as f64]);
-                open = None;
-            }
-            _ => {}
-        }
-    }
-    if let Some(start) = open {
-        pieces.push([start, y1]);
-    }
-    pieces.retain(|[a, b]| b - a >= MIN_PIECE_MM);
-    pieces
+    let sight = LineOfSight::new(solids, camera);
+    let hidden =
+        |y: f64| {
+            bands.iter().any(|[a, b]| (*a..=*b).contains(&y))
+                || spec.joint.seam_edges_xz().iter().any(|[x, z]| {
+                    sight.hides(&camera_from_workpiece.transform_point(&Vec3::new(*x, y, *z).into()).coords)
+                })
+        };
+    unhidden_stretches([y0, y1], hidden, MIN_PIECE_MM)
 }
 
 #[cfg(test)]

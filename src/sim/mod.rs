@@ -15,6 +15,7 @@ pub mod render;
 pub mod scenarios;
 pub mod scene;
 pub mod suite;
+pub mod tee_multi;
 pub mod truth;
 pub mod variants;
 
@@ -30,7 +31,8 @@ pub use consumer::{CameraPreset, consumer_suite};
 pub use faults::{Fault, FaultKind, RightAnswer};
 pub use noise::NoiseSpec;
 pub use suite::{Framing, eval_suite, fault_suite, framing, hard_suite};
-pub use truth::GroundTruth;
+pub use tee_multi::{multi_suite, tee_suite};
+pub use truth::{GroundTruth, SeamTruth};
 
 /// The joint's cross-section. Plate A is on the -x side of the seam (the
 /// upper plate of a lap), plate B on the +x side (the lower plate).
@@ -45,6 +47,11 @@ pub enum JointGeometry {
     /// The upper plate lies on the lower one; `overlap_mm` is how far the
     /// lower plate reaches under the upper one from the seam.
     Lap { lower_thickness_mm: f64, upper_thickness_mm: f64, overlap_mm: f64 },
+    /// A tee joint: the web (plate A) stands on the flange (plate B),
+    /// centred on the seam line x = 0. Its two fillet welds run along the
+    /// roots, where the web's side faces meet the flange's top: the lines
+    /// x = ∓web_thickness/2 at z = flange_thickness ([`JointGeometry::seam_lines_xz`]).
+    Tee { flange_thickness_mm: f64, web_thickness_mm: f64, web_height_mm: f64 },
 }
 
 impl JointGeometry {
@@ -53,7 +60,52 @@ impl JointGeometry {
             JointGeometry::VButt { .. } => JointType::VButt,
             JointGeometry::IButt { .. } => JointType::IButt,
             JointGeometry::Lap { .. } => JointType::Lap,
+            JointGeometry::Tee { .. } => JointType::TFillet,
         }
+    }
+
+    /// Checks that the cross-section can be built; the message names the
+    /// parameter.
+    pub fn validate(&self) -> Result<(), InvalidScene> {
+        let fail = |what: &str| Err(InvalidScene(what.to_string()));
+        match *self {
+            JointGeometry::VButt { thickness_mm: t, groove_angle_deg: a, groove_depth_mm: d, root_gap_mm: r } => {
+                if !(t > 0.0 && t.is_finite()) {
+                    return fail("the thickness must be positive");
+                }
+                if !(a > 0.0 && a < 150.0) {
+                    return fail("the groove angle must be between 0 and 150 degrees");
+                }
+                if !(d > 0.0 && d <= t) {
+                    return fail("the groove depth must be positive and at most the thickness");
+                }
+                if !(r >= 0.0 && r.is_finite()) {
+                    return fail("the root gap must be zero or positive");
+                }
+            }
+            JointGeometry::IButt { thickness_mm: t, gap_mm: g } => {
+                if !(t > 0.0 && t.is_finite()) {
+                    return fail("the thickness must be positive");
+                }
+                if !(g >= 0.0 && g.is_finite()) {
+                    return fail("the gap must be zero or positive");
+                }
+            }
+            JointGeometry::Lap { lower_thickness_mm: t1, upper_thickness_mm: t2, overlap_mm: o } => {
+                if !(t1 > 0.0 && t2 > 0.0 && t1.is_finite() && t2.is_finite()) {
+                    return fail("both lap plate thicknesses must be positive");
+                }
+                if !(o > 0.0 && o.is_finite()) {
+                    return fail("the overlap must be positive");
+                }
+            }
+            JointGeometry::Tee { flange_thickness_mm: f, web_thickness_mm: w, web_height_mm: h } => {
+                if ![f, w, h].iter().all(|v| *v > 0.0 && v.is_finite()) {
+                    return fail("the flange and web thicknesses and the web height must be positive");
+                }
+            }
+        }
+        Ok(())
     }
 
     /// The groove depth the planner is told for a V-butt joint.
@@ -68,12 +120,108 @@ impl JointGeometry {
 /// One plate's size and place. `width_mm` is measured across the seam from
 /// the seam line (x = 0) to the plate's outer edge; the plate spans
 /// `offset_mm .. offset_mm + length_mm` along the seam. For a lap, plate A
-/// is the upper plate and plate B the lower one.
+/// is the upper plate and plate B the lower one. For a tee, plate A is the
+/// web (its length and offset; its width is how far the flange reaches on
+/// the -x side) and plate B the flange (its length, offset and reach on
+/// the +x side): the flange spans `-plate_a.width_mm .. plate_b.width_mm`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PlateExtent {
     pub width_mm: f64,
     pub length_mm: f64,
     pub offset_mm: f64,
+}
+
+/// A further workpiece in the frame (several per frame): its joint, its
+/// plates as [`PlateExtent`] describes them, and where its own seam frame
+/// lies in the first workpiece's: `at_mm`, the x and y of its origin on
+/// the table, and `yaw_deg` about the vertical. Every workpiece rests on
+/// spacers of the scene's height on the one table.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Workpiece {
+    pub joint: JointGeometry,
+    pub plate_a: PlateExtent,
+    pub plate_b: PlateExtent,
+    pub at_mm: [f64; 2],
+    pub yaw_deg: f64,
+}
+
+/// Workpieces closer than this on the table count as overlapping: a
+/// fixture keeps parts apart, and plates that touch are one workpiece to
+/// the planner.
+pub const MIN_WORKPIECE_CLEARANCE_MM: f64 = 10.0;
+
+impl Workpiece {
+    /// The first workpiece's frame from this one's.
+    pub fn pose(&self) -> Isometry3<f64> {
+        Isometry3::new(Vec3::new(self.at_mm[0], self.at_mm[1], 0.0), Vec3::new(0.0, 0.0, self.yaw_deg.to_radians()))
+    }
+
+    /// The y range where both plates exist, in its own frame.
+    pub fn seam_range(&self) -> [f64; 2] {
+        let (a, b) = (&self.plate_a, &self.plate_b);
+        [a.offset_mm.max(b.offset_mm), (a.offset_mm + a.length_mm).min(b.offset_mm + b.length_mm)]
+    }
+
+    /// The corners of the rectangle its plates cover on the table, in the
+    /// first workpiece's frame (x, y), in order round it.
+    pub fn footprint(&self) -> [[f64; 2]; 4] {
+        let (a, b) = (&self.plate_a, &self.plate_b);
+        let (y0, y1) = (a.offset_mm.min(b.offset_mm), (a.offset_mm + a.length_mm).max(b.offset_mm + b.length_mm));
+        let (x0, x1) = (-a.width_mm, b.width_mm);
+        let pose = self.pose();
+        [[x0, y0], [x1, y0], [x1, y1], [x0, y1]].map(|[x, y]| {
+            let p = pose.transform_point(&Vec3::new(x, y, 0.0).into());
+            [p.x, p.y]
+        })
+    }
+
+    fn validate(&self) -> Result<(), InvalidScene> {
+        self.joint.validate()?;
+        let edge = self.joint.seam_edge_half_width();
+        for (name, p) in [("plate A", &self.plate_a), ("plate B", &self.plate_b)] {
+            if !(p.width_mm > edge + 1.0 && p.width_mm.is_finite()) {
+                return Err(InvalidScene(format!(
+                    "{name} must be wider than its seam edge ({edge:.2} mm from the seam)"
+                )));
+            }
+            if !(p.length_mm > 0.0 && p.length_mm.is_finite() && p.offset_mm.is_finite()) {
+                return Err(InvalidScene(format!("{name} needs a positive length")));
+            }
+        }
+        let [y0, y1] = self.seam_range();
+        if y1 <= y0 {
+            return Err(InvalidScene("the plates do not overlap along the seam".into()));
+        }
+        if !(self.at_mm.iter().all(|v| v.is_finite()) && self.yaw_deg.is_finite()) {
+            return Err(InvalidScene("a workpiece's place must be finite".into()));
+        }
+        Ok(())
+    }
+}
+
+/// Whether two convex footprints (corners in order) lie at least `gap`
+/// apart: some edge's outward normal separates them by that much (the
+/// separating axis test).
+fn footprints_apart(a: &[[f64; 2]; 4], b: &[[f64; 2]; 4], gap: f64) -> bool {
+    let separated_by_an_edge_of = |p: &[[f64; 2]; 4], q: &[[f64; 2]; 4]| {
+        (0..4).any(|i| {
+            let (u, v) = (p[i], p[(i + 1) % 4]);
+            let (ex, ey) = (v[0] - u[0], v[1] - u[1]);
+            let length = ex.hypot(ey);
+            if length == 0.0 {
+                return false;
+            }
+            // The normal on the side away from the polygon's other corners.
+            let mut normal = [ey / length, -ex / length];
+            let centre = p.iter().fold([0.0, 0.0], |c, w| [c[0] + w[0] / 4.0, c[1] + w[1] / 4.0]);
+            if normal[0] * (centre[0] - u[0]) + normal[1] * (centre[1] - u[1]) > 0.0 {
+                normal = [-normal[0], -normal[1]];
+            }
+            let edge_at = normal[0] * u[0] + normal[1] * u[1];
+            q.iter().all(|w| normal[0] * w[0] + normal[1] * w[1] >= edge_at + gap)
+        })
+    };
+    separated_by_an_edge_of(a, b) || separated_by_an_edge_of(b, a)
 }
 
 /// Where the camera looks from.
@@ -142,6 +290,9 @@ pub struct SceneSpec {
     /// What a real cell adds to the frame or the request (none in a
     /// clean scene); see [`faults`].
     pub faults: Vec<Fault>,
+    /// Further workpieces in the frame, each with its own joint (none in
+    /// a scene of one workpiece); the fields above describe the first.
+    pub others: Vec<Workpiece>,
 }
 
 /// Why a scene cannot be simulated; the message names the parameter.
@@ -152,8 +303,18 @@ pub struct InvalidScene(pub String);
 impl SceneSpec {
     /// The y range where both plates exist: the seam's physical extent.
     pub fn seam_range(&self) -> [f64; 2] {
-        let (a, b) = (&self.plate_a, &self.plate_b);
-        [a.offset_mm.max(b.offset_mm), (a.offset_mm + a.length_mm).min(b.offset_mm + b.length_mm)]
+        self.first_workpiece().seam_range()
+    }
+
+    /// The first workpiece, the one the scene's own fields describe, at
+    /// the origin of the workpiece frame.
+    pub fn first_workpiece(&self) -> Workpiece {
+        Workpiece { joint: self.joint, plate_a: self.plate_a, plate_b: self.plate_b, at_mm: [0.0; 2], yaw_deg: 0.0 }
+    }
+
+    /// Every workpiece in the frame, the first one first.
+    pub fn workpieces(&self) -> Vec<Workpiece> {
+        std::iter::once(self.first_workpiece()).chain(self.others.iter().copied()).collect()
     }
 
     /// The point the camera looks at: on the top surface, offset from the
@@ -176,52 +337,23 @@ impl SceneSpec {
     /// above it.
     pub fn validate(&self) -> Result<(), InvalidScene> {
         let fail = |what: &str| Err(InvalidScene(what.to_string()));
-        match self.joint {
-            JointGeometry::VButt { thickness_mm: t, groove_angle_deg: a, groove_depth_mm: d, root_gap_mm: r } => {
-                if !(t > 0.0 && t.is_finite()) {
-                    return fail("the thickness must be positive");
-                }
-                if !(a > 0.0 && a < 150.0) {
-                    return fail("the groove angle must be between 0 and 150 degrees");
-                }
-                if !(d > 0.0 && d <= t) {
-                    return fail("the groove depth must be positive and at most the thickness");
-                }
-                if !(r >= 0.0 && r.is_finite()) {
-                    return fail("the root gap must be zero or positive");
-                }
-            }
-            JointGeometry::IButt { thickness_mm: t, gap_mm: g } => {
-                if !(t > 0.0 && t.is_finite()) {
-                    return fail("the thickness must be positive");
-                }
-                if !(g >= 0.0 && g.is_finite()) {
-                    return fail("the gap must be zero or positive");
-                }
-            }
-            JointGeometry::Lap { lower_thickness_mm: t1, upper_thickness_mm: t2, overlap_mm: o } => {
-                if !(t1 > 0.0 && t2 > 0.0 && t1.is_finite() && t2.is_finite()) {
-                    return fail("both lap plate thicknesses must be positive");
-                }
-                if !(o > 0.0 && o.is_finite()) {
-                    return fail("the overlap must be positive");
-                }
-            }
+        let workpieces = self.workpieces();
+        for (k, workpiece) in workpieces.iter().enumerate() {
+            workpiece.validate().map_err(|e| match k {
+                0 => e,
+                _ => InvalidScene(format!("workpiece {}: {}", k + 1, e.0)),
+            })?;
         }
-        let edge = self.joint.seam_edge_half_width();
-        for (name, p) in [("plate A", &self.plate_a), ("plate B", &self.plate_b)] {
-            if !(p.width_mm > edge + 1.0 && p.width_mm.is_finite()) {
-                return Err(InvalidScene(format!(
-                    "{name} must be wider than its seam edge ({edge:.2} mm from the seam)"
-                )));
+        for (k, a) in workpieces.iter().enumerate() {
+            for (l, b) in workpieces.iter().enumerate().skip(k + 1) {
+                if !footprints_apart(&a.footprint(), &b.footprint(), MIN_WORKPIECE_CLEARANCE_MM) {
+                    return Err(InvalidScene(format!(
+                        "workpieces {} and {} lie closer than {MIN_WORKPIECE_CLEARANCE_MM} mm on the table",
+                        k + 1,
+                        l + 1
+                    )));
+                }
             }
-            if !(p.length_mm > 0.0 && p.length_mm.is_finite() && p.offset_mm.is_finite()) {
-                return Err(InvalidScene(format!("{name} needs a positive length")));
-            }
-        }
-        let [y0, y1] = self.seam_range();
-        if y1 <= y0 {
-            return fail("the plates do not overlap along the seam");
         }
         if !(self.spacer_height_mm > 0.0 && self.spacer_height_mm.is_finite()) {
             return fail("the spacer height must be positive");
@@ -254,6 +386,9 @@ pub struct Simulation {
     /// What the planner should answer: the seam, pieces of it or a
     /// refusal, as the scene's faults decide.
     pub answer: RightAnswer,
+    /// Every seam in the frame (a tee's two roots, every workpiece's) and
+    /// how much of each the camera sees.
+    pub seams: Vec<SeamTruth>,
 }
 
 /// Simulates one capture. Run [`SceneSpec::validate`] first on untrusted
@@ -269,9 +404,11 @@ pub fn simulate(spec: &SceneSpec, camera: &CameraModel) -> Simulation {
     let cloud = render::depths_to_cloud(&depths, camera);
     let truth = truth::ground_truth(spec, camera);
     let answer = faults::right_answer(spec, camera);
+    let seams = truth::seam_truths(spec, camera);
     let base_from_camera = spec.base_from_workpiece * workpiece_from_camera;
     let base_from_end = base_from_camera * spec.hand_eye.inverse();
-    Simulation { cloud, truth, pose: RobotPose::from_isometry(&base_from_end, spec.euler), base_from_camera, answer }
+    let pose = RobotPose::from_isometry(&base_from_end, spec.euler);
+    Simulation { cloud, truth, pose, base_from_camera, answer, seams }
 }
 
 /// The paper's hand-eye matrix as a transform.
@@ -294,6 +431,9 @@ pub fn demo_scene(joint: JointType) -> SceneSpec {
         }
         JointType::IButt => JointGeometry::IButt { thickness_mm: 6.0, gap_mm: 1.5 },
         JointType::Lap => JointGeometry::Lap { lower_thickness_mm: 6.0, upper_thickness_mm: 5.0, overlap_mm: 40.0 },
+        JointType::TFillet => {
+            JointGeometry::Tee { flange_thickness_mm: 10.0, web_thickness_mm: 8.0, web_height_mm: 60.0 }
+        }
     };
     let plate = PlateExtent { width_mm: 150.0, length_mm: 240.0, offset_mm: 0.0 };
     SceneSpec {
@@ -314,6 +454,7 @@ pub fn demo_scene(joint: JointType) -> SceneSpec {
         euler: EulerConvention::Zyx,
         seed: 1,
         faults: Vec::new(),
+        others: Vec::new(),
     }
 }
 
@@ -393,6 +534,32 @@ mod tests {
                 assert!(nearest < 2.5, "{joint}: nothing within {nearest} mm of {on_seam:?}");
             }
         }
+    }
+
+    #[test]
+    fn a_rendered_tee_shows_the_root_the_truth_sees_and_not_the_other() {
+        let cam = small_camera();
+        let mut spec = demo_scene(JointType::TFillet);
+        spec.noise = NoiseSpec::none();
+        let sim = simulate(&spec, &cam);
+        let points: Vec<Vec3> = sim.cloud.points().iter().filter(|p| p[0].is_finite()).map(vec3).collect();
+        let nearest_along = |t: &GroundTruth| {
+            (0..=20)
+                .map(|k| {
+                    let on_root = t.start_camera + (t.end_camera - t.start_camera) * (k as f64 / 20.0);
+                    points.iter().map(|p| (p - on_root).norm()).fold(f64::INFINITY, f64::min)
+                })
+                .fold(0.0, f64::max)
+        };
+        let [hidden, seen] = [&sim.seams[0], &sim.seams[1]];
+        assert!(seen.is_seen() && !hidden.is_seen(), "{:?}", sim.seams);
+        // Returns along the whole seen root (a pixel or two away at this
+        // resolution); the web hides the other root and the flange beside it.
+        assert!(nearest_along(&seen.truth) < 2.5, "{}", nearest_along(&seen.truth));
+        assert!(nearest_along(&hidden.truth) > 5.0, "{}", nearest_along(&hidden.truth));
+        // The frame's one-seam truth of a tee is its first root's (all of
+        // it in view here).
+        assert_eq!(sim.truth, sim.seams[0].truth);
     }
 
     #[test]

@@ -17,10 +17,6 @@ use crate::geometry::Vec3;
 /// Solids closer to the camera plane than this are treated as possibly
 /// crossing it, so their projection is not bounded.
 const MIN_BOUNDED_DEPTH_MM: f64 = 1e-3;
-/// A shadow ray must pass this far (as a fraction of its length) through
-/// a solid to count as blocked, so surfaces that merely touch the hit
-/// point (a plate on its spacer, a lap's plates) do not shadow it.
-const MIN_BLOCKED_FRACTION: f64 = 1e-7;
 
 /// Pixel-space bounds `[u_min, u_max, v_min, v_max]` of a solid.
 type PixelRect = [f64; 4];
@@ -154,11 +150,7 @@ impl CameraView {
             None => true,
         };
         (0..self.solids.len()).any(|i| {
-            i != lit_solid
-                && may_block(&self.projector_footprints[i])
-                && self.solids[i]
-                    .clip(point, to_projector, 0.0, 1.0)
-                    .is_some_and(|s| s.exit - s.enter > MIN_BLOCKED_FRACTION)
+            i != lit_solid && may_block(&self.projector_footprints[i]) && self.solids[i].blocks(point, to_projector)
         })
     }
 

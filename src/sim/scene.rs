@@ -52,6 +52,10 @@ pub struct Span {
     pub normal: Option<Vec3>,
 }
 
+/// A shadow or view ray counts as blocked only through this fraction of
+/// its length inside a solid (touching surfaces do not block).
+pub const MIN_BLOCKED_FRACTION: f64 = 1e-7;
+
 /// Edges shorter than this are dropped from profiles: a V groove as deep
 /// as the plate has no root face, and the zero-length edge has no normal.
 const MIN_EDGE_MM: f64 = 1e-9;
@@ -158,6 +162,14 @@ impl ConvexSolid {
         Some(Span { enter, exit, normal })
     }
 
+    /// Whether the solid blocks the segment from `from` to `from + delta`
+    /// (a view or shadow ray): only a stretch inside it longer than
+    /// [`MIN_BLOCKED_FRACTION`] of the segment does, so surfaces the
+    /// segment merely touches at its end do not.
+    pub fn blocks(&self, from: &Vec3, delta: &Vec3) -> bool {
+        self.clip(from, delta, 0.0, 1.0).is_some_and(|s| s.exit - s.enter > MIN_BLOCKED_FRACTION)
+    }
+
     /// How far `p` lies outside the worst of the half-spaces: negative
     /// inside, zero exactly on the surface, and a lower bound of the
     /// distance to the solid outside.
@@ -244,6 +256,9 @@ impl JointGeometry {
             JointGeometry::Lap { lower_thickness_mm: t1, upper_thickness_mm: t2, overlap_mm } => {
                 (rectangle(-plate_a.width_mm, 0.0, t1, t1 + t2), rectangle(-overlap_mm, plate_b.width_mm, 0.0, t1))
             }
+            JointGeometry::Tee { flange_thickness_mm: f, web_thickness_mm: w, web_height_mm: h } => {
+                (rectangle(-w / 2.0, w / 2.0, f, f + h), rectangle(-plate_a.width_mm, plate_b.width_mm, 0.0, f))
+            }
         };
         [
             PlateShape { profile_xz: a, y_range: y_range(plate_a) },
@@ -260,15 +275,30 @@ impl JointGeometry {
                 root_gap_mm / 2.0 + groove_depth_mm * (groove_angle_deg / 2.0).to_radians().tan()
             }
             JointGeometry::Lap { .. } => 0.0,
+            JointGeometry::Tee { web_thickness_mm, .. } => web_thickness_mm / 2.0,
+        }
+    }
+
+    /// The weld roots as `(x, z)` of lines along y: the one seam of a butt
+    /// or lap joint (at x = 0, [`JointGeometry::seam_z`] high), or a tee's
+    /// two fillet roots, the -x side's first.
+    pub fn seam_lines_xz(&self) -> Vec<[f64; 2]> {
+        match *self {
+            JointGeometry::Tee { flange_thickness_mm, web_thickness_mm, .. } => {
+                vec![[-web_thickness_mm / 2.0, flange_thickness_mm], [web_thickness_mm / 2.0, flange_thickness_mm]]
+            }
+            _ => vec![[0.0, self.seam_z()]],
         }
     }
 
     /// The seam-side top edges whose visibility defines the observed seam,
     /// as `(x, z)` of lines along y: both plates' top edges for a butt
-    /// joint; the upper plate's top edge and the root line for a lap.
+    /// joint; the upper plate's top edge and the root line for a lap; a
+    /// tee's two roots.
     pub fn seam_edges_xz(&self) -> [[f64; 2]; 2] {
         match *self {
             JointGeometry::Lap { lower_thickness_mm: t1, upper_thickness_mm: t2, .. } => [[0.0, t1 + t2], [0.0, t1]],
+            JointGeometry::Tee { flange_thickness_mm: f, web_thickness_mm: w, .. } => [[-w / 2.0, f], [w / 2.0, f]],
             _ => {
                 let x = self.seam_edge_half_width();
                 let t = self.top_z(0.0);
@@ -277,9 +307,11 @@ impl JointGeometry {
         }
     }
 
-    /// Height of the true seam point (the weld root) above z = 0.
+    /// Height of the true seam point (the weld root) above z = 0; a tee's
+    /// roots lie on the flange's top.
     pub fn seam_z(&self) -> f64 {
         match *self {
+            JointGeometry::Tee { flange_thickness_mm, .. } => flange_thickness_mm,
             JointGeometry::IButt { thickness_mm, .. } => thickness_mm,
             JointGeometry::VButt { thickness_mm, groove_depth_mm, .. } => thickness_mm - groove_depth_mm,
             JointGeometry::Lap { lower_thickness_mm, .. } => lower_thickness_mm,
@@ -287,9 +319,13 @@ impl JointGeometry {
     }
 
     /// Height of the top surface at `x` across the seam; for a lap, the
-    /// upper plate's top on its side (x < 0) and the lower one's beyond.
+    /// upper plate's top on its side (x < 0) and the lower one's beyond;
+    /// for a tee, the web's top over it and the flange's beside it.
     pub fn top_z(&self, x: f64) -> f64 {
         match *self {
+            JointGeometry::Tee { flange_thickness_mm: f, web_thickness_mm: w, web_height_mm: h } => {
+                if x.abs() <= w / 2.0 { f + h } else { f }
+            }
             JointGeometry::IButt { thickness_mm, .. } | JointGeometry::VButt { thickness_mm, .. } => thickness_mm,
             JointGeometry::Lap { lower_thickness_mm, upper_thickness_mm, .. } => {
                 if x < 0.0 {
@@ -306,22 +342,15 @@ fn rectangle(x0: f64, x1: f64, z0: f64, z1: f64) -> Vec<[f64; 2]> {
     vec![[x0, z0], [x1, z0], [x1, z1], [x0, z1]]
 }
 
-/// Builds the scene in the workpiece frame.
+/// Builds the scene in the (first) workpiece's frame: every workpiece's
+/// plates and spacers, the faults and the table.
 pub fn build_scene(spec: &SceneSpec) -> Scene {
-    let shapes = spec.joint.plate_shapes(&spec.plate_a, &spec.plate_b);
     let table_top = -spec.spacer_height_mm;
-    let mut solids: Vec<ConvexSolid> =
-        shapes.iter().filter_map(|s| ConvexSolid::extruded(SurfaceKind::Plate, &s.profile_xz, s.y_range)).collect();
-    let [a, b] = &shapes;
-    solids.extend(spacers_under(b, b.x_range(), table_top));
-    if let JointGeometry::Lap { overlap_mm, .. } = spec.joint {
-        // The upper plate lies on the lower one and overhangs its edge; a
-        // raised block carries the overhang as it would on a fixture.
-        let [x0, _] = a.x_range();
-        let support_end = -overlap_mm - SUPPORT_CLEARANCE_MM + SPACER_INSET_MM;
-        solids.extend(spacers_under(a, [x0, support_end], table_top));
-    } else {
-        solids.extend(spacers_under(a, a.x_range(), table_top));
+    let mut solids: Vec<ConvexSolid> = Vec::new();
+    for workpiece in spec.workpieces() {
+        let pose = workpiece.pose();
+        let own = workpiece_solids(&workpiece.joint, &workpiece.plate_a, &workpiece.plate_b, table_top);
+        solids.extend(own.iter().map(|s| s.transformed(&pose)));
     }
     solids.extend(super::faults::fault_solids(spec));
     solids.extend(ConvexSolid::cuboid(
@@ -330,6 +359,33 @@ pub fn build_scene(spec: &SceneSpec) -> Scene {
         Vec3::new(TABLE_HALF_SIDE_MM, TABLE_HALF_SIDE_MM, table_top),
     ));
     Scene { solids }
+}
+
+/// One workpiece's plates and the spacers carrying them, in its own frame.
+fn workpiece_solids(
+    joint: &JointGeometry,
+    plate_a: &PlateExtent,
+    plate_b: &PlateExtent,
+    table_top: f64,
+) -> Vec<ConvexSolid> {
+    let shapes = joint.plate_shapes(plate_a, plate_b);
+    let mut solids: Vec<ConvexSolid> =
+        shapes.iter().filter_map(|s| ConvexSolid::extruded(SurfaceKind::Plate, &s.profile_xz, s.y_range)).collect();
+    let [a, b] = &shapes;
+    solids.extend(spacers_under(b, b.x_range(), table_top));
+    match *joint {
+        JointGeometry::Lap { overlap_mm, .. } => {
+            // The upper plate lies on the lower one and overhangs its edge;
+            // a raised block carries the overhang as it would on a fixture.
+            let [x0, _] = a.x_range();
+            let support_end = -overlap_mm - SUPPORT_CLEARANCE_MM + SPACER_INSET_MM;
+            solids.extend(spacers_under(a, [x0, support_end], table_top));
+        }
+        // The web stands on the flange.
+        JointGeometry::Tee { .. } => {}
+        _ => solids.extend(spacers_under(a, a.x_range(), table_top)),
+    }
+    solids
 }
 
 /// Two blocks across the plate near its ends, inset from its edges,
@@ -399,6 +455,43 @@ mod tests {
         for v in moved.vertices() {
             assert!(moved.excess(v).abs() < 1e-9);
         }
+    }
+
+    #[test]
+    fn a_tees_web_stands_on_its_flange_along_both_roots() {
+        let joint = JointGeometry::Tee { flange_thickness_mm: 10.0, web_thickness_mm: 6.0, web_height_mm: 50.0 };
+        let web_extent = PlateExtent { width_mm: 80.0, length_mm: 200.0, offset_mm: 10.0 };
+        let flange_extent = PlateExtent { width_mm: 100.0, length_mm: 240.0, offset_mm: 0.0 };
+        let [web, flange] = joint.plate_shapes(&web_extent, &flange_extent);
+        let web = ConvexSolid::extruded(SurfaceKind::Plate, &web.profile_xz, web.y_range).unwrap();
+        let flange = ConvexSolid::extruded(SurfaceKind::Plate, &flange.profile_xz, flange.y_range).unwrap();
+        assert_eq!(joint.seam_lines_xz(), [[-3.0, 10.0], [3.0, 10.0]]);
+        for [x, z] in joint.seam_lines_xz() {
+            for y in [10.0, 110.0, 210.0] {
+                // On the web's side face and the flange's top at once.
+                let root = Vec3::new(x, y, z);
+                assert!(web.excess(&root).abs() < 1e-12 && flange.excess(&root).abs() < 1e-12, "{root:?}");
+            }
+        }
+        // The flange spans -80 to 100 mm across, the web's top is 60 mm up.
+        assert!(flange.excess(&Vec3::new(-80.0, 5.0, 10.0)).abs() < 1e-12);
+        assert!(flange.excess(&Vec3::new(100.0, 5.0, 0.0)).abs() < 1e-12);
+        assert!(web.excess(&Vec3::new(0.0, 100.0, 60.0)).abs() < 1e-12);
+        assert_eq!((joint.top_z(0.0), joint.top_z(3.5), joint.seam_edge_half_width()), (60.0, 10.0, 3.0));
+    }
+
+    #[test]
+    fn a_tees_spacers_carry_the_flange_only() {
+        let spec = crate::sim::demo_scene(crate::joint::JointType::TFillet);
+        let scene = build_scene(&spec);
+        let spacers: Vec<&ConvexSolid> = scene.solids.iter().filter(|s| s.kind == SurfaceKind::Spacer).collect();
+        assert_eq!(spacers.len(), 2);
+        for s in spacers {
+            // From the table up to the flange's bottom, nowhere into it.
+            let top = s.vertices().iter().map(|v| v.z).fold(f64::NEG_INFINITY, f64::max);
+            assert!(top.abs() < 1e-12, "{top}");
+        }
+        assert_eq!(scene.solids.iter().filter(|s| s.kind == SurfaceKind::Plate).count(), 2);
     }
 
     #[test]

@@ -141,7 +141,7 @@ fn gap_half_width(joint: &JointGeometry) -> f64 {
     match *joint {
         JointGeometry::IButt { gap_mm, .. } => gap_mm / 2.0,
         JointGeometry::VButt { root_gap_mm, .. } => root_gap_mm / 2.0,
-        JointGeometry::Lap { .. } => 0.0,
+        JointGeometry::Lap { .. } | JointGeometry::Tee { .. } => 0.0,
     }
 }
 
@@ -199,7 +199,7 @@ enum LapSide {
 
 /// The fixed part of one suite scene; the rest is drawn.
 #[derive(Debug, Clone, Copy)]
-struct ScenePlan {
+pub(super) struct ScenePlan {
     joint: JointType,
     index: usize,
     distance_mm: f64,
@@ -211,7 +211,7 @@ struct ScenePlan {
 }
 
 impl ScenePlan {
-    fn new(joint: JointType, joint_index: usize, k: usize, max_tilt_deg: f64) -> ScenePlan {
+    pub(super) fn new(joint: JointType, joint_index: usize, k: usize, max_tilt_deg: f64) -> ScenePlan {
         let steps = (SCENES_PER_JOINT - 1) as f64;
         let goal = Goal::for_index(k);
         // The plates can only fill the view from close by, so those scenes
@@ -240,8 +240,8 @@ impl ScenePlan {
         }
     }
 
-    fn name(&self) -> String {
-        let joint = joint_slug(self.joint);
+    pub(super) fn name(&self) -> String {
+        let joint = self.joint.dashed_name();
         let side = match self.lap_side {
             Some(LapSide::Upper) => "-upper-side",
             Some(LapSide::Lower) => "-lower-side",
@@ -250,7 +250,7 @@ impl ScenePlan {
         format!("{joint}-{:02}-d{:.0}-t{:.0}{}{side}", self.index, self.distance_mm, self.tilt_deg, self.goal.tag())
     }
 
-    fn draw_joint(&self, rng: &mut ChaCha8Rng) -> JointGeometry {
+    pub(super) fn draw_joint(&self, rng: &mut ChaCha8Rng) -> JointGeometry {
         match self.joint {
             JointType::VButt => {
                 let t = uniform(rng, 6.0, 12.0);
@@ -270,6 +270,7 @@ impl ScenePlan {
                 upper_thickness_mm: uniform(rng, 3.0, 10.0),
                 overlap_mm: uniform(rng, 20.0, 60.0),
             },
+            JointType::TFillet => draw_tee(rng),
         }
     }
 
@@ -318,7 +319,7 @@ impl ScenePlan {
         }
     }
 
-    fn draw(&self, seed: u64, rng: &mut ChaCha8Rng) -> SceneSpec {
+    pub(super) fn draw(&self, seed: u64, rng: &mut ChaCha8Rng) -> SceneSpec {
         let joint = self.draw_joint(rng);
         let [plate_a, plate_b] = self.draw_plates(rng);
         let spacer_height_mm = uniform(rng, 20.0, 60.0);
@@ -334,6 +335,7 @@ impl ScenePlan {
             euler: EulerConvention::Zyx,
             seed,
             faults: Vec::new(),
+            others: Vec::new(),
         };
         let [y0, y1] = spec.seam_range();
         spec.placement = self.draw_placement(y1 - y0, rng);
@@ -344,7 +346,7 @@ impl ScenePlan {
 impl ScenePlan {
     /// Draws from stream `stream` of `base_seed` until the scene is valid
     /// and framed as its goal asks (the last draw after [`MAX_DRAWS`]).
-    fn draw_framed(&self, base_seed: u64, stream: u64, camera: &CameraModel) -> SceneSpec {
+    pub(super) fn draw_framed(&self, base_seed: u64, stream: u64, camera: &CameraModel) -> SceneSpec {
         let mut rng = ChaCha8Rng::seed_from_u64(base_seed);
         rng.set_stream(stream);
         let seed = base_seed + stream;
@@ -358,6 +360,16 @@ impl ScenePlan {
             spec = self.draw(seed, &mut rng);
         }
         spec
+    }
+}
+
+/// A tee's cross-section as issue 15 states its range: a web 4 to 12 mm
+/// thick and 40 to 100 mm tall on a flange 6 to 16 mm thick.
+pub(super) fn draw_tee(rng: &mut ChaCha8Rng) -> JointGeometry {
+    JointGeometry::Tee {
+        flange_thickness_mm: uniform(rng, 6.0, 16.0),
+        web_thickness_mm: uniform(rng, 4.0, 12.0),
+        web_height_mm: uniform(rng, 40.0, 100.0),
     }
 }
 
@@ -468,12 +480,12 @@ pub fn fault_suite() -> Vec<(String, SceneSpec)> {
                 plan.tilt_deg = MAX_TILT_DEG * tilt_step;
                 let spec = draw_faulted(&plan, kind, s, base_seed, stream, &camera);
                 let requested = match spec.requested_joint() {
-                    r if r != joint => format!("-as-{}", joint_slug(r)),
+                    r if r != joint => format!("-as-{}", r.dashed_name()),
                     _ => String::new(),
                 };
                 let name = format!(
                     "fault-{kind}-{}-{s:02}-d{:.0}-t{:.0}{requested}{}",
-                    joint_slug(joint),
+                    joint.dashed_name(),
                     plan.distance_mm,
                     plan.tilt_deg,
                     if holdout { "-holdout" } else { "" }
@@ -483,15 +495,6 @@ pub fn fault_suite() -> Vec<(String, SceneSpec)> {
         }
     }
     suite
-}
-
-/// The joint's name as scene names and the command line spell it.
-fn joint_slug(joint: JointType) -> &'static str {
-    match joint {
-        JointType::VButt => "v-butt",
-        JointType::IButt => "i-butt",
-        JointType::Lap => "lap",
-    }
 }
 
 /// Draws a clean scene for `plan` with a `kind` fault on it until both are
@@ -669,6 +672,7 @@ mod tests {
                         lower += 1;
                     }
                 }
+                JointGeometry::Tee { .. } => panic!("{name}: the eval suite has no tee"),
             }
         }
         assert!(narrow_gaps >= 6, "{narrow_gaps} narrow gaps");

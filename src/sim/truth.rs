@@ -6,8 +6,18 @@
 //! upper plate's edge and the root line) project inside the image. Each
 //! image border is a linear inequality along a 3D line, so the clipping is
 //! exact, not sampled.
+//!
+//! A frame may show more seams than one: a tee's two fillet roots, and the
+//! seams of several workpieces. [`seam_truths`] gives each its own truth
+//! and how much of it the camera sees: the stretches that are in the image
+//! and that neither the camera's view ray nor the projector's light ray
+//! reaches through a solid ([`LineOfSight`]; a web hides the root behind
+//! it, a neighbouring part may shade one), sampled along the seam.
 
-use super::SceneSpec;
+use nalgebra::Isometry3;
+
+use super::scene::{ConvexSolid, build_scene};
+use super::{SceneSpec, Workpiece};
 use crate::camera::CameraModel;
 use crate::geometry::Vec3;
 use crate::joint::JointType;
@@ -109,9 +119,10 @@ pub fn ground_truth(spec: &SceneSpec, camera: &CameraModel) -> GroundTruth {
         let middle = (physical[0] + physical[1]) / 2.0;
         [middle, middle]
     });
-    let seam_z = spec.joint.seam_z();
-    let start = Vec3::new(0.0, y0, seam_z);
-    let end = Vec3::new(0.0, y1, seam_z);
+    // The seam, or a tee's first root.
+    let [seam_x, seam_z] = spec.joint.seam_lines_xz()[0];
+    let start = Vec3::new(seam_x, y0, seam_z);
+    let end = Vec3::new(seam_x, y1, seam_z);
     let in_camera = |p: &Vec3| camera_from_workpiece.transform_point(&(*p).into()).coords;
     let in_base = |p: &Vec3| base_from_workpiece.transform_point(&(*p).into()).coords;
     let into_workpiece = -Vec3::z();
@@ -128,6 +139,166 @@ pub fn ground_truth(spec: &SceneSpec, camera: &CameraModel) -> GroundTruth {
         clipped_end: observed.is_none() || y1 < physical[1],
         length_mm: y1 - y0,
     }
+}
+
+/// A seam counts as seen when the camera sees at least this share of its
+/// length (issue 15's bar for a root that must be found).
+pub const MIN_SEEN_SHARE: f64 = 0.5;
+/// Step along a seam at which its seen stretches are sampled.
+const SEEN_STEP_MM: f64 = 0.25;
+/// Seen stretches shorter than this do not count.
+pub const MIN_SEEN_STRETCH_MM: f64 = 5.0;
+
+/// One weld seam of a frame and how much of it the camera sees.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SeamTruth {
+    /// Which workpiece (0: the first, the scene's own) and which of its
+    /// seams (0; a tee's root on its +x side is 1).
+    pub workpiece: usize,
+    pub root: usize,
+    /// The stretch of the seam whose line is in the image, as
+    /// [`GroundTruth`] has it for a frame's one seam.
+    pub truth: GroundTruth,
+    /// The seam's whole length, where both plates exist, mm.
+    pub physical_mm: f64,
+    /// The stretches (the workpiece's own y, mm) the camera sees: in the
+    /// image, and neither the view ray nor the projector's ray blocked.
+    pub seen_mm: Vec<[f64; 2]>,
+    /// The seen stretches' length over the physical length.
+    pub seen_share: f64,
+}
+
+impl SeamTruth {
+    /// Whether a planner is to find it: at least [`MIN_SEEN_SHARE`] seen.
+    pub fn is_seen(&self) -> bool {
+        self.seen_share >= MIN_SEEN_SHARE
+    }
+
+    /// A name for tables: `workpiece 2 lap`, `tee root -x`.
+    pub fn label(&self) -> String {
+        let root = match (self.truth.joint, self.root) {
+            (JointType::TFillet, 0) => " root -x",
+            (JointType::TFillet, _) => " root +x",
+            _ => "",
+        };
+        format!("workpiece {} {}{root}", self.workpiece + 1, self.truth.joint.dashed_name())
+    }
+
+    /// The ends of the seen stretches in the robot base frame.
+    pub fn seen_base(&self, spec: &SceneSpec) -> Vec<[Vec3; 2]> {
+        let Some(workpiece) = spec.workpieces().get(self.workpiece).copied() else { return Vec::new() };
+        let Some([x, z]) = workpiece.joint.seam_lines_xz().get(self.root).copied() else { return Vec::new() };
+        let base_from_own = spec.base_from_workpiece * workpiece.pose();
+        let at = |y: f64| base_from_own.transform_point(&Vec3::new(x, y, z).into()).coords;
+        self.seen_mm.iter().map(|[a, b]| [at(*a), at(*b)]).collect()
+    }
+}
+
+/// What hides a point from the camera or leaves it unlit: the scene's
+/// solids in the camera frame, the camera at the origin and the projector
+/// `camera.baseline_mm` along +x.
+pub struct LineOfSight {
+    solids: Vec<ConvexSolid>,
+    projector: Vec3,
+}
+
+impl LineOfSight {
+    /// `solids` in the camera frame.
+    pub fn new(solids: Vec<ConvexSolid>, camera: &CameraModel) -> Self {
+        LineOfSight { solids, projector: Vec3::new(camera.baseline_mm, 0.0, 0.0) }
+    }
+
+    /// Whether a camera-frame point is hidden from the camera or shaded
+    /// from the projector.
+    pub fn hides(&self, p: &Vec3) -> bool {
+        [Vec3::zeros(), self.projector].iter().any(|from| self.solids.iter().any(|s| s.blocks(from, &(p - from))))
+    }
+}
+
+/// The stretches of `range` (sampled every [`SEEN_STEP_MM`]) where
+/// `hidden` is false, each at least `min_length_mm` long.
+pub fn unhidden_stretches(range: [f64; 2], hidden: impl Fn(f64) -> bool, min_length_mm: f64) -> Vec<[f64; 2]> {
+    let [y0, y1] = range;
+    let steps = ((y1 - y0) / SEEN_STEP_MM).ceil().max(1.0) as usize;
+    let mut pieces = Vec::new();
+    let mut open: Option<f64> = None;
+    for k in 0..=steps {
+        let y = y0 + (y1 - y0) * k as f64 / steps as f64;
+        match (hidden(y), open) {
+            (false, None) => open = Some(y),
+            (true, Some(start)) => {
+                pieces.push([start, y - (y1 - y0) / steps as f64]);
+                open = None;
+            }
+            _ => {}
+        }
+    }
+    if let Some(start) = open {
+        pieces.push([start, y1]);
+    }
+    pieces.retain(|[a, b]| b - a >= min_length_mm);
+    pieces
+}
+
+/// Every seam of every workpiece in the frame (a tee's two roots), the
+/// first workpiece's first, with what the camera sees of each.
+pub fn seam_truths(spec: &SceneSpec, camera: &CameraModel) -> Vec<SeamTruth> {
+    let camera_from_first = spec.workpiece_from_camera().inverse();
+    let sight = LineOfSight::new(build_scene(spec).transformed(&camera_from_first).solids, camera);
+    let mut seams = Vec::new();
+    for (k, workpiece) in spec.workpieces().iter().enumerate() {
+        for (root, line) in workpiece.joint.seam_lines_xz().into_iter().enumerate() {
+            seams.push(seam_truth(spec, camera, &sight, &camera_from_first, k, workpiece, root, line));
+        }
+    }
+    seams
+}
+
+/// One seam's truth: the line `line_xz` of `workpiece` along its y.
+#[allow(clippy::too_many_arguments)]
+fn seam_truth(
+    spec: &SceneSpec,
+    camera: &CameraModel,
+    sight: &LineOfSight,
+    camera_from_first: &Isometry3<f64>,
+    index: usize,
+    workpiece: &Workpiece,
+    root: usize,
+    line_xz: [f64; 2],
+) -> SeamTruth {
+    let [x, z] = line_xz;
+    let camera_from_own = camera_from_first * workpiece.pose();
+    let base_from_own = spec.base_from_workpiece * workpiece.pose();
+    let point = |y: f64| Vec3::new(x, y, z);
+    let in_camera = |y: f64| camera_from_own.transform_point(&point(y).into()).coords;
+    let in_base = |y: f64| base_from_own.transform_point(&point(y).into()).coords;
+    let physical = workpiece.seam_range();
+    let along = camera_from_own.rotation * Vec3::y();
+    let observed = visible_interval(camera, &in_camera(0.0), &along)
+        .map(|[lo, hi]| [physical[0].max(lo), physical[1].min(hi)])
+        .filter(|[lo, hi]| lo <= hi);
+    let [y0, y1] = observed.unwrap_or_else(|| [(physical[0] + physical[1]) / 2.0; 2]);
+    let seen_mm = match observed {
+        Some(range) => unhidden_stretches(range, |y| sight.hides(&in_camera(y)), MIN_SEEN_STRETCH_MM),
+        None => Vec::new(),
+    };
+    let physical_mm = physical[1] - physical[0];
+    let seen_share = seen_mm.iter().fold(0.0, |sum, [a, b]| sum + (b - a)) / physical_mm;
+    let into_workpiece = -Vec3::z();
+    let truth = GroundTruth {
+        joint: workpiece.joint.joint_type(),
+        groove_depth_mm: workpiece.joint.groove_depth_mm(),
+        start_camera: in_camera(y0),
+        end_camera: in_camera(y1),
+        start_base: in_base(y0),
+        end_base: in_base(y1),
+        plate_normal_camera: camera_from_own.rotation * into_workpiece,
+        plate_normal_base: base_from_own.rotation * into_workpiece,
+        clipped_start: observed.is_none() || y0 > physical[0],
+        clipped_end: observed.is_none() || y1 < physical[1],
+        length_mm: y1 - y0,
+    };
+    SeamTruth { workpiece: index, root, truth, physical_mm, seen_mm, seen_share }
 }
 
 #[cfg(test)]
@@ -181,6 +352,89 @@ mod tests {
         assert!(((va - v1).abs() < 1e-6 && (vb - v0).abs() < 1e-6), "{va} {vb}");
         let expected = (v1 - v0) / cam.fy() * (500.0 - 6.0 + 6.0);
         assert!((truth.length_mm - expected).abs() < 1e-6, "{}", truth.length_mm);
+    }
+
+    /// The demo tee seen from 600 mm, tilted 20 degrees towards `azimuth`.
+    fn tee_from(azimuth_deg: f64) -> SceneSpec {
+        let mut spec = demo_scene(JointType::TFillet);
+        spec.placement = CameraPlacement { tilt_azimuth_deg: azimuth_deg, ..CameraPlacement::straight(600.0, 20.0) };
+        spec.noise = NoiseSpec::none();
+        spec
+    }
+
+    #[test]
+    fn a_tee_shows_the_root_on_the_cameras_side_and_hides_the_other() {
+        let cam = CameraModel::default();
+        for (azimuth, seen_root) in [(0.0, 1), (180.0, 0)] {
+            let spec = tee_from(azimuth);
+            let seams = seam_truths(&spec, &cam);
+            assert_eq!(seams.len(), 2);
+            for seam in &seams {
+                assert_eq!((seam.workpiece, seam.truth.joint), (0, JointType::TFillet));
+                assert!((seam.physical_mm - 240.0).abs() < 1e-9 && (seam.truth.length_mm - 240.0).abs() < 1e-9);
+                if seam.root == seen_root {
+                    assert!(seam.is_seen() && seam.seen_share > 0.99, "{azimuth}: {seam:?}");
+                    assert_eq!(seam.seen_mm.len(), 1);
+                } else {
+                    assert!(seam.seen_mm.is_empty() && seam.seen_share == 0.0, "{azimuth}: {seam:?}");
+                }
+            }
+            // The roots lie where the web's side faces meet the flange's
+            // top: 8 mm apart, on the flange's top (10 mm), in the base frame.
+            let [x, z] = spec.joint.seam_lines_xz()[seen_root];
+            assert!((x.abs() - 4.0).abs() < 1e-12 && (z - 10.0).abs() < 1e-12);
+            let expected = spec.base_from_workpiece.transform_point(&Vec3::new(x, 0.0, z).into()).coords;
+            assert!((seams[seen_root].truth.start_base - expected).norm() < 1e-9);
+            let apart = seams[0].truth.start_base - seams[1].truth.start_base;
+            assert!((apart.norm() - 8.0).abs() < 1e-9);
+        }
+        // Straight down over the web: each root is seen by one of camera
+        // and projector at most, so neither counts as seen.
+        let mut over = tee_from(0.0);
+        over.placement = CameraPlacement::straight(600.0, 0.0);
+        assert!(seam_truths(&over, &cam).iter().all(|s| !s.is_seen()));
+    }
+
+    #[test]
+    fn every_workpiece_has_its_seams_where_its_pose_puts_them() {
+        let cam = CameraModel::default();
+        let mut spec = frontal_i_butt();
+        spec.placement.distance_mm = 1000.0;
+        let mut lap = crate::sim::demo_scene(JointType::Lap).first_workpiece();
+        lap.plate_a = PlateExtent { width_mm: 60.0, length_mm: 150.0, offset_mm: 0.0 };
+        lap.plate_b = lap.plate_a;
+        // Turned so that its lower plate faces the camera, whose view at
+        // 1000 mm spans 700 by 440 mm around the first seam's middle.
+        lap.at_mm = [250.0, 150.0];
+        lap.yaw_deg = 210.0;
+        spec.others.push(lap);
+        assert_eq!(spec.validate(), Ok(()));
+        let seams = seam_truths(&spec, &cam);
+        assert_eq!(
+            seams.iter().map(|s| (s.workpiece, s.truth.joint)).collect::<Vec<_>>(),
+            [(0, JointType::IButt), (1, JointType::Lap)]
+        );
+        // The lap's root (x = 0 on its 6 mm lower plate, y 0 to 150) turned
+        // 210 degrees and moved to (250, 150) on the table.
+        let (yaw, root_z) = (210f64.to_radians(), 6.0);
+        let start = Vec3::new(250.0, 150.0, root_z);
+        let end = Vec3::new(250.0 - yaw.sin() * 150.0, 150.0 + yaw.cos() * 150.0, root_z);
+        let b = spec.base_from_workpiece;
+        let lap_seam = &seams[1].truth;
+        assert!((lap_seam.start_base - b.transform_point(&start.into()).coords).norm() < 1e-9);
+        assert!((lap_seam.end_base - b.transform_point(&end.into()).coords).norm() < 1e-9);
+        assert!(seams.iter().all(|s| s.is_seen()), "{seams:?}");
+        // The first workpiece's truth is unchanged by the second.
+        assert_eq!(seams[0].truth, ground_truth(&frontal_i_butt_at(1000.0), &cam));
+        // Moved onto the first one, the second is refused.
+        spec.others[0].at_mm = [120.0, 150.0];
+        assert!(spec.validate().unwrap_err().to_string().contains("closer than 10 mm"));
+    }
+
+    fn frontal_i_butt_at(distance_mm: f64) -> SceneSpec {
+        let mut spec = frontal_i_butt();
+        spec.placement.distance_mm = distance_mm;
+        spec
     }
 
     #[test]

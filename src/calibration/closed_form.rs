@@ -51,10 +51,7 @@ impl ClosedForm {
             ClosedForm::ParkMartin => park_martin_rotation(&usable)?,
         };
         let translation = translation(&usable, &rotation)?;
-        Some(Isometry3::from_parts(
-            Translation3::from(translation),
-            UnitQuaternion::from_rotation_matrix(&rotation),
-        ))
+        Some(Isometry3::from_parts(Translation3::from(translation), UnitQuaternion::from_rotation_matrix(&rotation)))
     }
 }
 

@@ -239,7 +239,10 @@ fn check_count(found: usize) -> Result<(), CalibrationError> {
 }
 
 /// The best refined fit on `use_` from any of the closed-form starts.
-fn best_fit(problem: &dyn Problem, use_: &[usize]) -> Result<(Fit, String, Vec<(&'static str, Isometry3<f64>)>), CalibrationError> {
+fn best_fit(
+    problem: &dyn Problem,
+    use_: &[usize],
+) -> Result<(Fit, String, Vec<(&'static str, Isometry3<f64>)>), CalibrationError> {
     let starts = problem.starts(use_);
     let mut best: Option<(Fit, &'static str)> = None;
     let mut last_error = None;
@@ -302,14 +305,14 @@ fn solve(problem: &dyn Problem, mount: Mount) -> Result<Calibration, Calibration
     }
     if !outliers.is_empty() {
         let list: Vec<String> = outliers.iter().map(ToString::to_string).collect();
+        let which = match outliers.len() {
+            1 => format!("capture {} looks like an outlier", list[0]),
+            _ => format!("captures {} look like outliers", list.join(", ")),
+        };
         warnings.push(format!(
-            "capture{} {} look{} like outliers (a robot pose paired with the wrong capture, a target that moved, a \
-             bad detection) and {} left out; check {} and capture again",
-            if outliers.len() > 1 { "s" } else { "" },
-            list.join(", "),
-            if outliers.len() > 1 { "" } else { "s" },
+            "{which} (a robot pose paired with the wrong capture, a target that moved, a bad detection) and \
+             {} left out of the result; check and capture again",
             if outliers.len() > 1 { "were" } else { "was" },
-            if outliers.len() > 1 { "them" } else { "it" },
         ));
     }
     Ok(Calibration {
@@ -385,10 +388,7 @@ fn isometry_params(x: &Isometry3<f64>) -> [f64; 6] {
 /// The isometry of six refinement parameters around `reference`.
 fn params_isometry(reference: &Rotation3<f64>, p: &[f64]) -> Isometry3<f64> {
     let rotation = refine::perturbed(reference, &p[..3]);
-    Isometry3::from_parts(
-        Translation3::new(p[3], p[4], p[5]),
-        UnitQuaternion::from_rotation_matrix(&rotation),
-    )
+    Isometry3::from_parts(Translation3::new(p[3], p[4], p[5]), UnitQuaternion::from_rotation_matrix(&rotation))
 }
 
 /// The target captures as a problem.
@@ -595,7 +595,7 @@ impl Spheres<'_> {
         let (to_mean, from_mean) =
             pairs.iter().fold((Vec3::zeros(), Vec3::zeros()), |(t, f), (a, b)| (t + a / n, f + b / n));
         let centred: Vec<(Vec3, Vec3)> = pairs.iter().map(|(a, b)| (a - to_mean, b - from_mean)).collect();
-        Some(procrustes(&centred)?.angle().to_degrees())
+        Some(UnitQuaternion::from_rotation_matrix(&procrustes(&centred)?).angle().to_degrees())
     }
 }
 

@@ -181,7 +181,8 @@ mod tests {
     fn a_line_fit_ignores_a_gross_outlier_under_the_huber_loss() {
         // y = 2x + 1 at ten points, one of them 50 off.
         let xs: Vec<f64> = (0..10).map(f64::from).collect();
-        let ys: Vec<f64> = xs.iter().map(|x| 2.0 * x + 1.0 + if *x == 4.0 { 50.0 } else { 0.01 * (x * 7.0).sin() }).collect();
+        let ys: Vec<f64> =
+            xs.iter().map(|x| 2.0 * x + 1.0 + if *x == 4.0 { 50.0 } else { 0.01 * (x * 7.0).sin() }).collect();
         let blocks = |p: &[f64]| -> Blocks { xs.iter().zip(&ys).map(|(x, y)| vec![p[0] * x + p[1] - y]).collect() };
         let plain = least_squares(&[0.0, 0.0], &|p| blocks(p).concat()).unwrap();
         let robust = robust_fit(&[0.0, 0.0], &blocks).unwrap();

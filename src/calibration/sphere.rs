@@ -19,7 +19,10 @@
 //! centres are matched to a reference capture's (the first that shows
 //! every sphere) by the assignment whose pairwise distances agree best,
 //! and a capture whose best and second-best assignments agree about as
-//! well is left unnamed.
+//! well is left unnamed. Distances tell spheres apart only when a capture
+//! sees three or more of them (one distance reads the same either way
+//! round), so equal spheres need at least three in the cell, each pair at
+//! its own distance.
 
 use nalgebra::{Matrix4, Vector4};
 use rand_chacha::ChaCha8Rng;
@@ -47,6 +50,18 @@ pub const RANSAC_HYPOTHESES: usize = 1500;
 /// The points RANSAC scores hypotheses on (a uniform subsample of the
 /// cloud); the refinement uses every point near the sphere found.
 pub const RANSAC_SAMPLE_POINTS: usize = 40_000;
+
+/// A fit whose surface points lie further than this fraction of the
+/// inlier band from it, RMS, is not a sphere of that radius.
+pub const MAX_RMS_OVER_BAND: f64 = 0.5;
+
+/// RANSAC rounds per sphere sought, counting the rejected ones.
+pub const MAX_ATTEMPTS_PER_SPHERE: usize = 2;
+
+/// The most points the refinement uses (a uniform subsample): the
+/// centre of twenty thousand points with the sensor's noise is already
+/// pinned to microns, and the cost stays bounded whatever the cloud.
+pub const REFINE_MAX_POINTS: usize = 20_000;
 
 /// The fewest points on a sphere's surface for it to count as seen.
 pub const MIN_SPHERE_POINTS: usize = 150;
@@ -114,24 +129,31 @@ pub fn radii_distinct(radii: &[f64]) -> bool {
 /// draws repeatable.
 pub fn fit_spheres(points: &[[f32; 3]], radii: &[f64], seed: u64) -> Result<Vec<FittedSphere>, SphereError> {
     check_radii(radii)?;
-    let valid: Vec<Vec3> =
-        points.iter().filter(|p| p.iter().all(|v| v.is_finite())).map(vec3).collect();
+    let valid: Vec<Vec3> = points.iter().filter(|p| p.iter().all(|v| v.is_finite())).map(vec3).collect();
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let mut claimed = vec![false; valid.len()];
     let mut found: Vec<FittedSphere> = Vec::new();
-    let (smallest, largest) =
-        radii.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), r| (lo.min(*r), hi.max(*r)));
-    for _ in 0..radii.len() {
+    let (smallest, largest) = radii.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), r| (lo.min(*r), hi.max(*r)));
+    // A rejected hypothesis (another object's points, a sphere hidden
+    // behind another) claims its points too, and the search goes on.
+    for _ in 0..MAX_ATTEMPTS_PER_SPHERE * radii.len() {
+        if found.len() == radii.len() {
+            break;
+        }
         let free: Vec<usize> = (0..valid.len()).filter(|&i| !claimed[i]).collect();
         let Some(start) = ransac(&valid, &free, radii, smallest, largest, &mut rng) else { break };
-        let Some(sphere) = refine_sphere(&valid, &free, start, radii, &found) else { break };
-        let reach = radii[sphere.radius_index] + 3.0 * inlier_band(radii[sphere.radius_index]);
+        let sphere = refine_sphere(&valid, &free, start, radii, &found);
+        let (centre, radius) = match &sphere {
+            Some(s) => (s.centre, radii[s.radius_index]),
+            None => (start.centre, start.radius),
+        };
+        let reach = radius + 3.0 * inlier_band(radius);
         for (i, c) in claimed.iter_mut().enumerate() {
-            if (valid[i] - sphere.centre).norm() < reach {
+            if (valid[i] - centre).norm() < reach {
                 *c = true;
             }
         }
-        found.push(sphere);
+        found.extend(sphere);
     }
     Ok(found)
 }
@@ -223,6 +245,7 @@ fn refine_sphere(
     if near.len() < MIN_SPHERE_POINTS {
         return None;
     }
+    let near: Vec<Vec3> = near.iter().step_by(near.len().div_ceil(REFINE_MAX_POINTS)).copied().collect();
     let distances = |p: &[f64], radius: f64| -> Blocks {
         let c = Vec3::new(p[0], p[1], p[2]);
         near.iter().map(|q| vec![(q - c).norm() - radius]).collect()
@@ -236,7 +259,10 @@ fn refine_sphere(
         .filter(|&k| !taken(k))
         .min_by(|&a, &b| (radii[a] - measured).abs().total_cmp(&(radii[b] - measured).abs()))?;
     let radius = radii[radius_index];
-    if (measured - radius).abs() > RADIUS_TOLERANCE * radius {
+    // A real sphere measures its own radius to a few hundredths of a
+    // millimetre; a patch of something else that RANSAC took for one
+    // does not.
+    if (measured - radius).abs() > inlier_band(radius) {
         return None;
     }
     let fixed = refine::robust_fit(&free_fit.params[..3], &|p| distances(p, radius)).ok()?;
@@ -248,6 +274,10 @@ fn refine_sphere(
     let rms = (on_surface.iter().map(|q| ((q - centre).norm() - radius).powi(2)).sum::<f64>()
         / on_surface.len() as f64)
         .sqrt();
+    // Points spread across the whole shell rather than on the surface.
+    if rms > MAX_RMS_OVER_BAND * band {
+        return None;
+    }
     Some(FittedSphere { centre, measured_radius_mm: measured, radius_index, points: on_surface.len(), rms_mm: rms })
 }
 
@@ -326,8 +356,9 @@ fn match_by_distances(spheres: &[FittedSphere], reference: &[Vec3], radii: &[f64
         Some((second, _)) => *best <= DISTANCE_MATCH_MM && *second > best + DISTANCE_MATCH_MM,
         None => *best <= DISTANCE_MATCH_MM,
     };
-    // One sphere alone has no distance to tell it by.
-    if clear && (spheres.len() >= 2 || n == 1) {
+    // One distance is the same read either way round: two spheres of one
+    // radius are told apart only with a third in view.
+    if clear && (spheres.len() >= 3 || n == 1) {
         for (sphere, &label) in spheres.iter().zip(labels) {
             named[label] = Some(sphere.centre);
         }
@@ -406,7 +437,11 @@ mod tests {
         }
         for i in 0..300 {
             let t = i as f64;
-            points.push([(t * 0.37).sin() as f32 * 60.0, (t * 0.11).cos() as f32 * 60.0, 560.0 + (t * 0.7).sin() as f32 * 80.0]);
+            points.push([
+                (t * 0.37).sin() as f32 * 60.0,
+                (t * 0.11).cos() as f32 * 60.0,
+                560.0 + (t * 0.7).sin() as f32 * 80.0,
+            ]);
         }
         points.push([f32::NAN, 0.0, 0.0]);
         let found = fit_spheres(&points, &[25.0], 1).unwrap();
@@ -429,16 +464,25 @@ mod tests {
     #[test]
     fn equal_spheres_are_named_by_their_distances() {
         let centres = [Vec3::new(-60.0, 0.0, 550.0), Vec3::new(60.0, 10.0, 580.0), Vec3::new(0.0, 70.0, 600.0)];
-        let sphere = |c: Vec3, k: usize| FittedSphere { centre: c, measured_radius_mm: 20.0, radius_index: k, points: 500, rms_mm: 0.03 };
+        let sphere = |c: Vec3, k: usize| FittedSphere {
+            centre: c,
+            measured_radius_mm: 20.0,
+            radius_index: k,
+            points: 500,
+            rms_mm: 0.03,
+        };
         let reference: Vec<FittedSphere> = centres.iter().map(|c| sphere(*c, 0)).collect();
-        // The same constellation moved and listed in another order, one
-        // sphere missing.
+        // The same constellation moved and listed in another order; then
+        // one sphere missing, which leaves the other two's one distance
+        // reading the same either way round.
         let moved = |c: &Vec3| nalgebra::Rotation3::new(Vec3::new(0.1, -0.2, 0.3)) * c + Vec3::new(5.0, 3.0, -8.0);
-        let other = vec![sphere(moved(&centres[2]), 0), sphere(moved(&centres[0]), 0)];
-        let named = identify(&[reference, other], &[20.0; 3]);
-        assert!((named[1][0].unwrap() - moved(&centres[0])).norm() < 1e-9, "{named:?}");
-        assert!(named[1][1].is_none());
-        assert!((named[1][2].unwrap() - moved(&centres[2])).norm() < 1e-9);
+        let other: Vec<FittedSphere> = [2, 0, 1].iter().map(|&k| sphere(moved(&centres[k]), 0)).collect();
+        let partial = vec![sphere(moved(&centres[2]), 0), sphere(moved(&centres[0]), 0)];
+        let named = identify(&[reference, other, partial], &[20.0; 3]);
+        for k in 0..3 {
+            assert!((named[1][k].unwrap() - moved(&centres[k])).norm() < 1e-9, "{named:?}");
+        }
+        assert_eq!(named[2], vec![None; 3]);
     }
 
     #[test]

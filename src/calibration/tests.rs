@@ -87,7 +87,7 @@ fn exact_sphere_centres_give_the_hand_eye() {
         .collect();
     let c = calibrate_spheres(&captures, Mount::EyeInHand).unwrap();
     assert!(close(&c.hand_eye, &x, 1e-6, 1e-6), "{:?}", c.hand_eye);
-    assert!(c.residuals.iter().all(|r| r.rotation_deg.is_some_and(|d| d < 1e-6)));
+    assert!(c.residuals.iter().all(|r| r.rotation_deg.is_some_and(|d| d < 1e-4)), "{:?}", c.residuals);
     // One sphere alone determines it too, with rotations.
     let one: Vec<SphereCapture> =
         captures.iter().map(|c| SphereCapture { base_t_end: c.base_t_end, centres: vec![c.centres[0]] }).collect();
@@ -104,7 +104,10 @@ fn too_few_captures_and_unseen_spheres_are_refused() {
     let captures: Vec<SphereCapture> = hands()
         .into_iter()
         .enumerate()
-        .map(|(i, a)| SphereCapture { base_t_end: a, centres: vec![Some(Vec3::new(0.0, 0.0, 500.0)), (i == 0).then(Vec3::zeros)] })
+        .map(|(i, a)| SphereCapture {
+            base_t_end: a,
+            centres: vec![Some(Vec3::new(0.0, 0.0, 500.0)), (i == 0).then(Vec3::zeros)],
+        })
         .collect();
     assert_eq!(
         calibrate_spheres(&captures, Mount::EyeInHand),

@@ -11,10 +11,13 @@
 //! in the cell (the target on the flange) `Base_T_End = Base_T_Camera ·
 //! Camera_T_Target · End_T_Target⁻¹`.
 //!
-//! Noise: the pose the controller reports differs from the true one by
-//! [`ROBOT_TRANSLATION_SIGMA_MM`] and [`ROBOT_ROTATION_SIGMA_DEG`] per
-//! axis; a board's pose by [`BOARD_TRANSLATION_SIGMA_MM`] and
-//! [`BOARD_ROTATION_SIGMA_DEG`]; a sphere cloud carries the simulator's
+//! Noise: the pose the controller reports differs from the true one by a
+//! random translation of RMS length [`ROBOT_TRANSLATION_SIGMA_MM`] and a
+//! random rotation of RMS angle [`ROBOT_ROTATION_SIGMA_DEG`] (each axis a
+//! third of the variance; a robot's repeatability as specified, ISO 9283's
+//! three-sigma radius, is larger than this RMS error, so the set is no
+//! easier than a real cell); a board's pose by
+//! [`BOARD_TRANSLATION_SIGMA_MM`] and [`BOARD_ROTATION_SIGMA_DEG`] alike; a sphere cloud carries the simulator's
 //! sensor noise ([`super::noise`]: depth noise along each ray, mixed
 //! pixels at the spheres' rims against the table, dropouts, outliers).
 //! Spheres are rendered only in windows of pixels around each sphere, so a
@@ -36,11 +39,11 @@ use crate::camera::{CameraModel, Intrinsics};
 use crate::cloud::{INVALID_POINT, PointCloud};
 use crate::geometry::Vec3;
 
-/// The robot's pose noise, one sigma per axis.
+/// The robot's pose noise: RMS length of the translation error.
 pub const ROBOT_TRANSLATION_SIGMA_MM: f64 = 0.05;
 /// See [`ROBOT_TRANSLATION_SIGMA_MM`].
 pub const ROBOT_ROTATION_SIGMA_DEG: f64 = 0.01;
-/// A board detector's pose noise, one sigma per axis.
+/// A board detector's pose noise: RMS length of the translation error.
 pub const BOARD_TRANSLATION_SIGMA_MM: f64 = 0.05;
 /// See [`BOARD_TRANSLATION_SIGMA_MM`].
 pub const BOARD_ROTATION_SIGMA_DEG: f64 = 0.02;
@@ -57,7 +60,7 @@ pub enum CalibrationTarget {
 }
 
 /// The spheres' default radii, mm: different, so they are named by size.
-pub const DEFAULT_SPHERE_RADII_MM: [f64; 3] = [20.0, 15.0, 12.5];
+pub const DEFAULT_SPHERE_RADII_MM: [f64; 3] = [20.0, 15.0, 10.0];
 
 /// A calibration set to simulate.
 #[derive(Debug, Clone, PartialEq)]
@@ -77,7 +80,7 @@ pub struct CalibrationSpec {
 }
 
 impl CalibrationSpec {
-    /// Fifteen captures at 600 mm, the camera on the flange with the
+    /// Fifteen captures at 500 mm, the camera on the flange with the
     /// paper's hand-eye.
     pub fn new(target: CalibrationTarget, mount: Mount, seed: u64) -> CalibrationSpec {
         let hand_eye = match mount {
@@ -89,7 +92,7 @@ impl CalibrationSpec {
             mount,
             captures: 15,
             seed,
-            distance_mm: 600.0,
+            distance_mm: 500.0,
             wrong_pairing: None,
             parallel_axes: false,
             hand_eye,
@@ -181,9 +184,11 @@ impl Draws {
         Vec3::new(self.gaussian(), self.gaussian(), self.gaussian()) * sigma
     }
 
-    /// `pose` moved by a random rigid motion of the given sigmas.
-    fn jitter(&mut self, pose: &Isometry3<f64>, sigma_mm: f64, sigma_deg: f64) -> Isometry3<f64> {
-        let delta = Isometry3::new(self.vector(sigma_mm), self.vector(sigma_deg.to_radians()));
+    /// `pose` moved by a random rigid motion whose translation and
+    /// rotation have the given RMS length and angle.
+    fn jitter(&mut self, pose: &Isometry3<f64>, rms_mm: f64, rms_deg: f64) -> Isometry3<f64> {
+        let per_axis = 1.0 / 3f64.sqrt();
+        let delta = Isometry3::new(self.vector(rms_mm * per_axis), self.vector(rms_deg.to_radians() * per_axis));
         Isometry3::from_parts(
             Translation3::from(pose.translation.vector + delta.translation.vector),
             delta.rotation * pose.rotation,
@@ -192,9 +197,12 @@ impl Draws {
 }
 
 /// The spheres' centres in the target frame: on posts over the table
-/// (`z = 0`), spread over about 160 mm.
+/// (`z = 0`), spread over about 160 mm, the distances between the first
+/// three all different by 10 mm or more so that equal spheres can be told
+/// apart by them.
 fn sphere_layout(radii: &[f64]) -> Vec<Vec3> {
-    const SPOTS: [[f64; 2]; 6] = [[-70.0, -40.0], [65.0, -50.0], [5.0, 75.0], [-60.0, 60.0], [75.0, 35.0], [0.0, -5.0]];
+    const SPOTS: [[f64; 2]; 6] =
+        [[-90.0, -50.0], [70.0, -50.0], [-30.0, 60.0], [60.0, 75.0], [0.0, -5.0], [-95.0, 20.0]];
     radii.iter().zip(SPOTS).enumerate().map(|(k, (r, [x, y]))| Vec3::new(x, y, r + 30.0 + 10.0 * k as f64)).collect()
 }
 
@@ -206,7 +214,13 @@ fn view(draws: &mut Draws, spec: &CalibrationSpec, index: usize) -> Isometry3<f6
         let roll = -60.0 + 120.0 * index as f64 / (spec.captures.max(2) - 1) as f64;
         (20.0 + draws.between(-0.3, 0.3), draws.between(-0.5, 0.5), roll + draws.between(-2.0, 2.0))
     } else {
-        (draws.between(10.0, 35.0), draws.between(0.0, 360.0), draws.between(-45.0, 45.0))
+        // A sphere looks the same from any side, so sphere sets tilt
+        // further than a board can be detected at.
+        let steepest = match spec.target {
+            CalibrationTarget::Board => 45.0,
+            CalibrationTarget::Spheres(_) => 60.0,
+        };
+        (draws.between(20.0, steepest), draws.between(0.0, 360.0), draws.between(-90.0, 90.0))
     };
     let distance = spec.distance_mm * draws.between(0.92, 1.08);
     let aim = Vec3::new(draws.between(-30.0, 30.0), draws.between(-30.0, 30.0), 0.0);
@@ -252,8 +266,7 @@ pub fn simulate_calibration(spec: &CalibrationSpec, camera: &CameraModel) -> Cal
     let captures = (0..spec.captures)
         .map(|i| {
             let seen = if spec.wrong_pairing == Some(i) { views[spec.captures] } else { views[i] };
-            let reported =
-                draws.jitter(&true_hand(&views[i]), ROBOT_TRANSLATION_SIGMA_MM, ROBOT_ROTATION_SIGMA_DEG);
+            let reported = draws.jitter(&true_hand(&views[i]), ROBOT_TRANSLATION_SIGMA_MM, ROBOT_ROTATION_SIGMA_DEG);
             let observation = match &spec.target {
                 CalibrationTarget::Board => SimObservation::TargetPose(draws.jitter(
                     &seen,
@@ -279,10 +292,20 @@ const WINDOW_REACH: f64 = 1.4;
 
 /// A surface of the sphere scene, in the camera frame.
 enum Surface {
-    Sphere { centre: Vec3, radius: f64 },
+    Sphere {
+        centre: Vec3,
+        radius: f64,
+    },
     /// A vertical post from the table (`base`) up to the sphere's centre.
-    Post { base: Vec3, top: Vec3, radius: f64 },
-    Table { point: Vec3, normal: Vec3 },
+    Post {
+        base: Vec3,
+        top: Vec3,
+        radius: f64,
+    },
+    Table {
+        point: Vec3,
+        normal: Vec3,
+    },
 }
 
 impl Surface {
@@ -293,7 +316,10 @@ impl Surface {
             Surface::Sphere { centre, radius } => {
                 let (a, b, c) = (ray.norm_squared(), ray.dot(centre), centre.norm_squared() - radius * radius);
                 let disc = b * b - a * c;
-                (disc >= 0.0).then(|| (b - disc.sqrt()) / a).filter(|t| *t > 0.0).map(|t| (t, (ray * t - centre) / *radius))
+                (disc >= 0.0)
+                    .then(|| (b - disc.sqrt()) / a)
+                    .filter(|t| *t > 0.0)
+                    .map(|t| (t, (ray * t - centre) / *radius))
             }
             Surface::Table { point, normal } => {
                 let denom = normal.dot(ray);
@@ -362,10 +388,7 @@ fn render_spheres(
                     continue;
                 }
                 let ray = Vec3::from(sub.ray(col as f64, row as f64));
-                let nearest = surfaces
-                    .iter()
-                    .filter_map(|s| s.hit(&ray))
-                    .min_by(|a, b| a.0.total_cmp(&b.0));
+                let nearest = surfaces.iter().filter_map(|s| s.hit(&ray)).min_by(|a, b| a.0.total_cmp(&b.0));
                 if let Some((depth, normal)) = nearest {
                     let p = ray * depth;
                     let to_camera = (-p).normalize();
@@ -425,25 +448,22 @@ mod tests {
             let target = c.base_t_end * set.hand_eye * b;
             // Robot and board noise only: well under a millimetre.
             assert!((target.translation.vector - set.target_pose.translation.vector).norm() < 1.0);
-            assert!((b.translation.vector.norm() - 600.0).abs() < 60.0);
+            assert!((b.translation.vector.norm() - 500.0).abs() < 60.0);
         }
     }
 
     #[test]
     fn a_sphere_cloud_shows_every_sphere_around_its_true_centre() {
-        let spec = CalibrationSpec::new(CalibrationTarget::Spheres(DEFAULT_SPHERE_RADII_MM.to_vec()), Mount::EyeInHand, 5);
+        let spec =
+            CalibrationSpec::new(CalibrationTarget::Spheres(DEFAULT_SPHERE_RADII_MM.to_vec()), Mount::EyeInHand, 5);
         let set = simulate_calibration(&CalibrationSpec { captures: 3, ..spec }, &CameraModel::default());
         let SimObservation::Cloud(cloud) = &set.captures[0].observation else { panic!("cloud") };
         assert!(cloud.len() > 20_000, "{}", cloud.len());
-        let camera_t_target =
-            (set.captures[0].base_t_end * set.hand_eye).inverse() * set.target_pose;
+        let camera_t_target = (set.captures[0].base_t_end * set.hand_eye).inverse() * set.target_pose;
         for (c, r) in set.sphere_centres.iter().zip(DEFAULT_SPHERE_RADII_MM) {
             let centre = (camera_t_target * Point3::from(*c)).coords;
-            let on_sphere = cloud
-                .points()
-                .iter()
-                .filter(|p| (crate::geometry::vec3(p) - centre).norm() - r < 1.5)
-                .count();
+            let on_sphere =
+                cloud.points().iter().filter(|p| (crate::geometry::vec3(p) - centre).norm() - r < 1.5).count();
             assert!(on_sphere > 1000, "{on_sphere} points on the sphere of radius {r}");
         }
     }

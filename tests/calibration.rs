@@ -133,6 +133,13 @@ fn a_pose_paired_with_the_wrong_capture_is_flagged_and_left_out() {
 }
 
 #[test]
+fn small_rotations_are_warned() {
+    let set = simulate(CalibrationTarget::Board, Mount::EyeInHand, 109, |s| s.small_rotations = true);
+    let c = solve_targets(&set, Mount::EyeInHand);
+    assert!(c.warnings.iter().any(|w| w.contains("ill-posed") && w.contains("larger rotations")), "{:?}", c.warnings);
+}
+
+#[test]
 fn near_parallel_rotation_axes_are_warned() {
     for seed in [1, 101] {
         let set = simulate(CalibrationTarget::Board, Mount::EyeInHand, seed, |s| s.parallel_axes = true);

@@ -108,5 +108,6 @@ pub struct CalibrationTruth {
     /// The capture whose observation belongs to another pose.
     pub wrong_pairing: Option<usize>,
     pub parallel_axes: bool,
+    pub small_rotations: bool,
     pub seed: u64,
 }

@@ -74,6 +74,11 @@ pub const MAX_OUTLIER_FRACTION: f64 = 0.25;
 
 /// An expected error above this at the working distance is warned about.
 pub const EXPECTED_ERROR_WARN_MM: f64 = 0.5;
+/// A result whose own translation or rotation is this uncertain (one
+/// sigma) is warned about: the issue's bound for a calibration.
+pub const HAND_EYE_SIGMA_WARN_MM: f64 = 0.2;
+/// See [`HAND_EYE_SIGMA_WARN_MM`].
+pub const HAND_EYE_SIGMA_WARN_DEG: f64 = 0.05;
 
 /// Where the camera is.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -297,6 +302,15 @@ fn solve(problem: &dyn Problem, mount: Mount) -> Result<Calibration, Calibration
             (None, None, None)
         }
     };
+    if let (Some(t), Some(r)) = (translation_sigma_mm, rotation_sigma_deg)
+        && (t > HAND_EYE_SIGMA_WARN_MM || r > HAND_EYE_SIGMA_WARN_DEG)
+    {
+        warnings.push(format!(
+            "the captures determine the hand-eye only to {t:.2} mm and {r:.3} degrees (one sigma; {HAND_EYE_SIGMA_WARN_MM} \
+             mm and {HAND_EYE_SIGMA_WARN_DEG} degrees wanted): the set is ill-posed for its noise; add poses with \
+             larger rotations (30 degrees or more) about different axes"
+        ));
+    }
     if let Some(e) = expected_error_mm.filter(|e| *e > EXPECTED_ERROR_WARN_MM) {
         warnings.push(format!(
             "the expected error at the working distance ({working_distance_mm:.0} mm) is {e:.2} mm, above \

@@ -108,6 +108,10 @@ pub struct SimulateArgs {
     /// rotation axes are nearly parallel (an ill-posed set).
     #[arg(long, requires = "calibration")]
     pub parallel_axes: bool,
+    /// Calibration set: tilt the camera only 3 to 8 degrees and roll it
+    /// within 8 (a set with too little rotation).
+    #[arg(long, requires = "calibration")]
+    pub small_rotations: bool,
 }
 
 /// `--calibration`: what the calibration set's camera sees.
@@ -421,6 +425,7 @@ mod tests {
             sphere_radii: None,
             wrong_pairing: None,
             parallel_axes: false,
+            small_rotations: false,
         }
     }
 

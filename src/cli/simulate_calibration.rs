@@ -39,6 +39,7 @@ pub fn run(args: &SimulateArgs, target: CalibrationTargetArg) -> Result<()> {
     }
     spec.wrong_pairing = args.wrong_pairing;
     spec.parallel_axes = args.parallel_axes;
+    spec.small_rotations = args.small_rotations;
     spec.validate()?;
     let set = simulate_calibration(&spec, &CameraModel::default());
     let dir = args.out.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
@@ -63,7 +64,7 @@ pub fn run(args: &SimulateArgs, target: CalibrationTargetArg) -> Result<()> {
     };
     write().with_context(|| format!("cannot write the capture file {}", args.out.display()))?;
     if let Some(path) = &args.truth {
-        write_truth(&truth(&set, mount, spec.wrong_pairing, spec.parallel_axes, spec.seed), path)?;
+        write_truth(&truth(&set, &spec), path)?;
     }
     println!(
         "{} captures of {} ({}){}{} written to {}",
@@ -77,7 +78,11 @@ pub fn run(args: &SimulateArgs, target: CalibrationTargetArg) -> Result<()> {
             Mount::EyeToHand => "camera fixed in the cell",
         },
         spec.wrong_pairing.map(|i| format!(", capture {i} paired with the wrong pose")).unwrap_or_default(),
-        if spec.parallel_axes { ", rotations about one axis" } else { "" },
+        match (spec.parallel_axes, spec.small_rotations) {
+            (true, _) => ", rotations about one axis",
+            (false, true) => ", small rotations",
+            (false, false) => "",
+        },
         args.out.display()
     );
     Ok(())

@@ -9,7 +9,7 @@ use weldseam_proto::calibration as proto;
 use crate::calibration::{Calibration, Mount, TargetCapture};
 use crate::geometry::conventions::{AngleUnit, LengthUnit, PoseConvention, PoseError, RotationForm, UnknownConvention};
 use crate::geometry::pose::{HandEyeError, hand_eye_from_rows};
-use crate::sim::calibration::CalibrationSet;
+use crate::sim::calibration::{CalibrationSet, CalibrationSpec};
 
 /// A transform's 16 numbers, row-major.
 pub fn rows(iso: &Isometry3<f64>) -> Vec<f64> {
@@ -183,26 +183,21 @@ pub fn capture_file(
     }
 }
 
-/// A simulated set's truth.
-pub fn truth(
-    set: &CalibrationSet,
-    mount: Mount,
-    wrong_pairing: Option<usize>,
-    parallel_axes: bool,
-    seed: u64,
-) -> proto::CalibrationTruth {
+/// A simulated set's truth, with the spec that made it.
+pub fn truth(set: &CalibrationSet, spec: &CalibrationSpec) -> proto::CalibrationTruth {
     proto::CalibrationTruth {
         hand_eye: rows(&set.hand_eye),
-        mount: match mount {
+        mount: match spec.mount {
             Mount::EyeInHand => "eye_in_hand",
             Mount::EyeToHand => "eye_to_hand",
         }
         .into(),
         target_pose: rows(&set.target_pose),
         sphere_centres_mm: set.sphere_centres.iter().map(|c| [c.x, c.y, c.z]).collect(),
-        wrong_pairing,
-        parallel_axes,
-        seed,
+        wrong_pairing: spec.wrong_pairing,
+        parallel_axes: spec.parallel_axes,
+        small_rotations: spec.small_rotations,
+        seed: spec.seed,
     }
 }
 

@@ -23,9 +23,10 @@
 //! Spheres are rendered only in windows of pixels around each sphere, so a
 //! capture is about 10⁵ points rather than a whole frame.
 //!
-//! Two faults on request: one capture's observation taken at a pose the
-//! controller did not report (a wrong pairing), and rotations all about
-//! the camera's axis (near-parallel rotation axes).
+//! Three faults on request: one capture's observation taken at a pose the
+//! controller did not report (a wrong pairing), rotations all about the
+//! camera's axis (near-parallel rotation axes), and small rotations (tilts
+//! of 3 to 8 degrees).
 
 use std::collections::HashSet;
 
@@ -75,6 +76,9 @@ pub struct CalibrationSpec {
     pub wrong_pairing: Option<usize>,
     /// Every rotation about the camera's axis.
     pub parallel_axes: bool,
+    /// Tilts of 3 to 8 degrees and rolls within 8 degrees: the small
+    /// rotations integrators complain of.
+    pub small_rotations: bool,
     /// The true hand-eye: `End_T_Camera`, or `Base_T_Camera`.
     pub hand_eye: Isometry3<f64>,
 }
@@ -95,6 +99,7 @@ impl CalibrationSpec {
             distance_mm: 500.0,
             wrong_pairing: None,
             parallel_axes: false,
+            small_rotations: false,
             hand_eye,
         }
     }
@@ -213,6 +218,8 @@ fn view(draws: &mut Draws, spec: &CalibrationSpec, index: usize) -> Isometry3<f6
         // direction wobbles by a fraction of a degree.
         let roll = -60.0 + 120.0 * index as f64 / (spec.captures.max(2) - 1) as f64;
         (20.0 + draws.between(-0.3, 0.3), draws.between(-0.5, 0.5), roll + draws.between(-2.0, 2.0))
+    } else if spec.small_rotations {
+        (draws.between(3.0, 8.0), draws.between(0.0, 360.0), draws.between(-8.0, 8.0))
     } else {
         // A sphere looks the same from any side, so sphere sets tilt
         // further than a board can be detected at.

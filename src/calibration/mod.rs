@@ -477,7 +477,7 @@ impl Problem for Targets<'_> {
         let unpack = |p: &[f64]| (params_isometry(&rx, &p[..6]), params_isometry(&ry, &p[6..]));
         let blocks = |p: &[f64]| -> Blocks {
             let (x, y) = unpack(p);
-            use_.iter().map(|&i| self.residual(i, &x, &y).to_vec()).collect()
+            use_.iter().map(|&i| self.residual(i, &x, &y)).collect()
         };
         let fit = refine::robust_fit(&p0, &blocks)?;
         let (x, y) = unpack(&fit.params);

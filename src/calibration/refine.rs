@@ -41,8 +41,55 @@ pub enum RefineError {
 }
 
 /// A residual function's value at some parameters: its blocks, each a
-/// short vector of residuals in units of their nominal noise.
-pub type Blocks = Vec<Vec<f64>>;
+/// short run of residuals in units of their nominal noise, kept in one
+/// buffer (a fit over a sphere's twenty thousand points makes one block
+/// per point, many times per iteration).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Blocks {
+    values: Vec<f64>,
+    /// Where each block starts in `values`.
+    starts: Vec<usize>,
+}
+
+impl Blocks {
+    pub fn with_capacity(blocks: usize, values: usize) -> Blocks {
+        Blocks { values: Vec::with_capacity(values), starts: Vec::with_capacity(blocks) }
+    }
+
+    /// Appends one block.
+    pub fn push(&mut self, block: &[f64]) {
+        self.starts.push(self.values.len());
+        self.values.extend_from_slice(block);
+    }
+
+    pub fn len(&self) -> usize {
+        self.starts.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.starts.is_empty()
+    }
+
+    /// Block `b`'s residuals.
+    pub fn block(&self, b: usize) -> &[f64] {
+        let end = self.starts.get(b + 1).copied().unwrap_or(self.values.len());
+        &self.values[self.starts[b]..end]
+    }
+
+    pub fn iter(&self) -> impl Iterator<Item = &[f64]> {
+        (0..self.len()).map(|b| self.block(b))
+    }
+}
+
+impl<B: AsRef<[f64]>> FromIterator<B> for Blocks {
+    fn from_iter<I: IntoIterator<Item = B>>(iter: I) -> Self {
+        let mut blocks = Blocks::default();
+        for b in iter {
+            blocks.push(b.as_ref());
+        }
+        blocks
+    }
+}
 
 /// The result of a robust fit.
 #[derive(Debug, Clone)]
@@ -57,7 +104,7 @@ pub struct RobustFit {
 /// of the Huber loss on the block norms recomputed until they settle.
 pub fn robust_fit(start: &[f64], residuals: &dyn Fn(&[f64]) -> Blocks) -> Result<RobustFit, RefineError> {
     let blocks = residuals(start);
-    if !blocks.iter().flatten().all(|r| r.is_finite()) {
+    if !blocks.values.iter().all(|r| r.is_finite()) {
         return Err(RefineError::NotFinite);
     }
     let mut weights = vec![1.0; blocks.len()];
@@ -77,14 +124,19 @@ pub fn robust_fit(start: &[f64], residuals: &dyn Fn(&[f64]) -> Blocks) -> Result
 /// The Huber weights of blocks: 1 up to [`HUBER_OVER_MEDIAN`] times the
 /// median norm, `threshold / norm` beyond.
 pub fn huber_weights(blocks: &Blocks) -> Vec<f64> {
-    let norms: Vec<f64> = blocks.iter().map(|b| norm(b)).collect();
+    let norms: Vec<f64> = blocks.iter().map(norm).collect();
     let threshold = HUBER_OVER_MEDIAN * median(&norms);
     norms.iter().map(|&n| if n <= threshold || n == 0.0 { 1.0 } else { threshold / n }).collect()
 }
 
 /// The blocks scaled by the square roots of their weights, as one vector.
 pub fn weighted(blocks: &Blocks, weights: &[f64]) -> Vec<f64> {
-    blocks.iter().zip(weights).flat_map(|(b, w)| b.iter().map(move |r| r * w.sqrt())).collect()
+    let mut out = Vec::with_capacity(blocks.values.len());
+    for (b, w) in blocks.iter().zip(weights) {
+        let scale = w.sqrt();
+        out.extend(b.iter().map(|r| r * scale));
+    }
+    out
 }
 
 /// Euclidean norm of a slice.
@@ -183,8 +235,8 @@ mod tests {
         let xs: Vec<f64> = (0..10).map(f64::from).collect();
         let ys: Vec<f64> =
             xs.iter().map(|x| 2.0 * x + 1.0 + if *x == 4.0 { 50.0 } else { 0.01 * (x * 7.0).sin() }).collect();
-        let blocks = |p: &[f64]| -> Blocks { xs.iter().zip(&ys).map(|(x, y)| vec![p[0] * x + p[1] - y]).collect() };
-        let plain = least_squares(&[0.0, 0.0], &|p| blocks(p).concat()).unwrap();
+        let blocks = |p: &[f64]| -> Blocks { xs.iter().zip(&ys).map(|(x, y)| [p[0] * x + p[1] - y]).collect() };
+        let plain = least_squares(&[0.0, 0.0], &|p| blocks(p).iter().flatten().copied().collect()).unwrap();
         let robust = robust_fit(&[0.0, 0.0], &blocks).unwrap();
         assert!((plain[1] - 1.0).abs() > 1.0, "the plain fit is pulled: {plain:?}");
         assert!((robust.params[0] - 2.0).abs() < 0.05 && (robust.params[1] - 1.0).abs() < 0.3, "{robust:?}");

@@ -45,11 +45,11 @@ pub const RADIUS_TOLERANCE: f64 = 0.1;
 pub const MIN_RADIUS_GAP_MM: f64 = 3.0;
 
 /// RANSAC hypotheses tried per sphere.
-pub const RANSAC_HYPOTHESES: usize = 1500;
+pub const RANSAC_HYPOTHESES: usize = 1000;
 
 /// The points RANSAC scores hypotheses on (a uniform subsample of the
 /// cloud); the refinement uses every point near the sphere found.
-pub const RANSAC_SAMPLE_POINTS: usize = 40_000;
+pub const RANSAC_SAMPLE_POINTS: usize = 10_000;
 
 /// A fit whose surface points lie further than this fraction of the
 /// inlier band from it, RMS, is not a sphere of that radius.
@@ -248,7 +248,7 @@ fn refine_sphere(
     let near: Vec<Vec3> = near.iter().step_by(near.len().div_ceil(REFINE_MAX_POINTS)).copied().collect();
     let distances = |p: &[f64], radius: f64| -> Blocks {
         let c = Vec3::new(p[0], p[1], p[2]);
-        near.iter().map(|q| vec![(q - c).norm() - radius]).collect()
+        near.iter().map(|q| [(q - c).norm() - radius]).collect()
     };
     let c0 = [start.centre.x, start.centre.y, start.centre.z, start.radius];
     let free_fit = refine::robust_fit(&c0, &|p| distances(p, p[3])).ok()?;

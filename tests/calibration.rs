@@ -286,7 +286,7 @@ fn a_bad_capture_file_is_refused_naming_the_capture_and_the_field() {
             "capture 1: robot_pose: a extrinsic_xyz (mm, deg) pose has 6 numbers, got 5",
         ),
         (
-            format!(r#"{{"captures": [{{"robot_pose": [0,0,0,0,0,0], "camera_T_target": [1,0,0]}}]}}"#),
+            r#"{"captures": [{"robot_pose": [0,0,0,0,0,0], "camera_T_target": [1,0,0]}]}"#.to_string(),
             "capture 0: camera_T_target needs 16 numbers",
         ),
         (r#"{"captures": [{"robot_pose": [0,0,0,0,0,0], "cloud": "a.pcd"}]}"#.to_string(), "sphere_radius_mm"),

@@ -184,7 +184,7 @@ mod tests {
         let motions = motions(&exact_pairs(&x, &y));
         assert_eq!(motions.len(), 10);
         for form in ClosedForm::ALL {
-            let found = form.solve(&motions).expect(form.name());
+            let found = form.solve(&motions).unwrap_or_else(|| panic!("{}", form.name()));
             assert!((found.translation.vector - x.translation.vector).norm() < 1e-6, "{}", form.name());
             assert!(found.rotation.angle_to(&x.rotation) < 1e-9, "{}", form.name());
         }

@@ -147,7 +147,7 @@ pub struct Calibration {
     /// How it was found: the closed form that started the refinement.
     pub method: String,
     /// The closed forms' own answers on the inliers, for comparison.
-    pub closed_forms: Vec<(&'static str, Isometry3<f64>)>,
+    pub closed_forms: Vec<NamedStart>,
     /// Every capture's residual against `hand_eye`, outliers included.
     pub residuals: Vec<CaptureResidual>,
     /// The captures left out, in the order they were removed.
@@ -194,7 +194,7 @@ trait Problem {
     fn hands(&self) -> Vec<Isometry3<f64>>;
     fn working_distance_mm(&self) -> f64;
     /// Closed-form starts on the captures `use_`, with their names.
-    fn starts(&self, use_: &[usize]) -> Vec<(&'static str, Isometry3<f64>)>;
+    fn starts(&self, use_: &[usize]) -> Vec<NamedStart>;
     /// Refines from `start` on `use_`; the fit can evaluate any capture.
     fn refine(&self, start: &Isometry3<f64>, use_: &[usize]) -> Result<Fit, CalibrationError>;
 }
@@ -243,11 +243,11 @@ fn check_count(found: usize) -> Result<(), CalibrationError> {
     Ok(())
 }
 
+/// A closed form's name and its answer.
+pub type NamedStart = (&'static str, Isometry3<f64>);
+
 /// The best refined fit on `use_` from any of the closed-form starts.
-fn best_fit(
-    problem: &dyn Problem,
-    use_: &[usize],
-) -> Result<(Fit, String, Vec<(&'static str, Isometry3<f64>)>), CalibrationError> {
+fn best_fit(problem: &dyn Problem, use_: &[usize]) -> Result<(Fit, String, Vec<NamedStart>), CalibrationError> {
     let starts = problem.starts(use_);
     let mut best: Option<(Fit, &'static str)> = None;
     let mut last_error = None;
@@ -385,11 +385,37 @@ fn covariance(params: &[f64], weighted_residuals: &dyn Fn(&[f64]) -> Vec<f64>) -
     // A normal matrix this close to singular leaves a direction free.
     let eigen = normal.clone().symmetric_eigen();
     let (lo, hi) = eigen.eigenvalues.iter().fold((f64::INFINITY, 0.0f64), |(l, h), v| (l.min(*v), h.max(*v)));
-    if !(lo > hi * 1e-12) {
+    if lo.is_nan() || lo <= hi * 1e-12 {
         return None;
     }
     let inverse = normal.try_inverse()?;
     Some(inverse.fixed_view::<6, 6>(0, 0).into_owned() * s2)
+}
+
+/// The robust fit of the parameters `p0` (the hand-eye's six first, then
+/// the target's or the spheres') over the captures `use_`, and every one
+/// of the `captures` evaluated against it: `residual` gives a capture's
+/// residuals in nominal sigmas for the hand-eye and the rest as `unpack`
+/// makes them, `report` its [`CaptureResidual`] and its norm.
+fn fit_captures<T, R: AsRef<[f64]>>(
+    p0: &[f64],
+    use_: &[usize],
+    captures: usize,
+    unpack: impl Fn(&[f64]) -> (Isometry3<f64>, T),
+    residual: impl Fn(usize, &Isometry3<f64>, &T) -> R,
+    report: impl Fn(usize, &Isometry3<f64>, &T, &[f64]) -> (CaptureResidual, f64),
+) -> Result<Fit, CalibrationError> {
+    let blocks = |p: &[f64]| -> Blocks {
+        let (x, rest) = unpack(p);
+        use_.iter().map(|&i| residual(i, &x, &rest)).collect()
+    };
+    let fit = refine::robust_fit(p0, &blocks)?;
+    let (x, rest) = unpack(&fit.params);
+    let weighted = |p: &[f64]| refine::weighted(&blocks(p), &fit.weights);
+    let cost = weighted(&fit.params).iter().map(|v| v * v).sum();
+    let (residuals, normalised) = (0..captures).map(|i| report(i, &x, &rest, residual(i, &x, &rest).as_ref())).unzip();
+    let covariance = covariance(&fit.params, &weighted);
+    Ok(Fit { hand_eye: x, residuals, normalised, covariance, cost })
 }
 
 /// The rotation's parameters and the translation of an isometry, as the
@@ -463,7 +489,7 @@ impl Problem for Targets<'_> {
         refine::median(&d)
     }
 
-    fn starts(&self, use_: &[usize]) -> Vec<(&'static str, Isometry3<f64>)> {
+    fn starts(&self, use_: &[usize]) -> Vec<NamedStart> {
         let pairs: Vec<_> = use_.iter().map(|&i| self.pair(i)).collect();
         let motions = closed_form::motions(&pairs);
         ClosedForm::ALL.iter().filter_map(|form| Some((form.name(), form.solve(&motions)?))).collect()
@@ -475,25 +501,21 @@ impl Problem for Targets<'_> {
         let mut p0 = isometry_params(start).to_vec();
         p0.extend(isometry_params(&y0));
         let unpack = |p: &[f64]| (params_isometry(&rx, &p[..6]), params_isometry(&ry, &p[6..]));
-        let blocks = |p: &[f64]| -> Blocks {
-            let (x, y) = unpack(p);
-            use_.iter().map(|&i| self.residual(i, &x, &y)).collect()
-        };
-        let fit = refine::robust_fit(&p0, &blocks)?;
-        let (x, y) = unpack(&fit.params);
-        let weighted = |p: &[f64]| refine::weighted(&blocks(p), &fit.weights);
-        let cost = weighted(&fit.params).iter().map(|v| v * v).sum();
-        let mut residuals = Vec::with_capacity(self.len());
-        let mut normalised = Vec::with_capacity(self.len());
-        for i in 0..self.len() {
-            let r = self.residual(i, &x, &y);
-            let rot = Vector3::new(r[0], r[1], r[2]) * TARGET_ROTATION_SIGMA_DEG;
-            let t = Vector3::new(r[3], r[4], r[5]) * TARGET_TRANSLATION_SIGMA_MM;
-            residuals.push(CaptureResidual { capture: i, translation_mm: t.norm(), rotation_deg: Some(rot.norm()) });
-            normalised.push(refine::norm(&r));
-        }
-        let covariance = covariance(&fit.params, &weighted);
-        Ok(Fit { hand_eye: x, residuals, normalised, covariance, cost })
+        fit_captures(
+            &p0,
+            use_,
+            self.len(),
+            unpack,
+            |i, x, y| self.residual(i, x, y),
+            |i, _, _, r| {
+                let rot = Vector3::new(r[0], r[1], r[2]) * TARGET_ROTATION_SIGMA_DEG;
+                let t = Vector3::new(r[3], r[4], r[5]) * TARGET_TRANSLATION_SIGMA_MM;
+                (
+                    CaptureResidual { capture: i, translation_mm: t.norm(), rotation_deg: Some(rot.norm()) },
+                    refine::norm(r),
+                )
+            },
+        )
     }
 }
 
@@ -576,7 +598,6 @@ impl Spheres<'_> {
                         let c = self.captures[i].centres.get(j)?.as_ref()?;
                         Some(self.mount.hand(&self.captures[i].base_t_end) * (x * nalgebra::Point3::from(*c)).coords)
                     })
-                    .map(|p| p)
                     .collect();
                 let axis = |k: usize| refine::median(&seen.iter().map(|p| p[k]).collect::<Vec<_>>());
                 Vec3::new(axis(0), axis(1), axis(2))
@@ -627,7 +648,7 @@ impl Problem for Spheres<'_> {
         refine::median(&d)
     }
 
-    fn starts(&self, use_: &[usize]) -> Vec<(&'static str, Isometry3<f64>)> {
+    fn starts(&self, use_: &[usize]) -> Vec<NamedStart> {
         self.linear_start(use_).map(|x| ("linear", x)).into_iter().collect()
     }
 
@@ -639,29 +660,23 @@ impl Problem for Spheres<'_> {
             let centres: Vec<Vec3> = p[6..].chunks(3).map(|c| Vec3::new(c[0], c[1], c[2])).collect();
             (params_isometry(&rx, &p[..6]), centres)
         };
-        let blocks = |p: &[f64]| -> Blocks {
-            let (x, s) = unpack(p);
-            use_.iter().map(|&i| self.residual(i, &x, &s)).collect()
-        };
-        let fit = refine::robust_fit(&p0, &blocks)?;
-        let (x, s) = unpack(&fit.params);
-        let weighted = |p: &[f64]| refine::weighted(&blocks(p), &fit.weights);
-        let cost = weighted(&fit.params).iter().map(|v| v * v).sum();
-        let mut residuals = Vec::with_capacity(self.len());
-        let mut normalised = Vec::with_capacity(self.len());
-        for i in 0..self.len() {
-            let r = self.residual(i, &x, &s);
-            let spheres = (r.len() / 3).max(1) as f64;
-            let rms = refine::norm(&r) / spheres.sqrt();
-            residuals.push(CaptureResidual {
-                capture: i,
-                translation_mm: rms * SPHERE_SIGMA_MM,
-                rotation_deg: self.rotation_residual(i, &x, &s),
-            });
-            normalised.push(rms);
-        }
-        let covariance = covariance(&fit.params, &weighted);
-        Ok(Fit { hand_eye: x, residuals, normalised, covariance, cost })
+        fit_captures(
+            &p0,
+            use_,
+            self.len(),
+            unpack,
+            |i, x, s| self.residual(i, x, s),
+            |i, x, s, r| {
+                let spheres = (r.len() / 3).max(1) as f64;
+                let rms = refine::norm(r) / spheres.sqrt();
+                let residual = CaptureResidual {
+                    capture: i,
+                    translation_mm: rms * SPHERE_SIGMA_MM,
+                    rotation_deg: self.rotation_residual(i, x, s),
+                };
+                (residual, rms)
+            },
+        )
     }
 }
 

@@ -31,16 +31,18 @@ fn simulate(
     simulate_calibration(&spec, &CameraModel::default())
 }
 
-fn solve_targets(set: &CalibrationSet, mount: Mount) -> Calibration {
-    let captures: Vec<TargetCapture> = set
-        .captures
+fn target_captures(set: &CalibrationSet) -> Vec<TargetCapture> {
+    set.captures
         .iter()
         .map(|c| match &c.observation {
             SimObservation::TargetPose(b) => TargetCapture { base_t_end: c.base_t_end, camera_t_target: *b },
             SimObservation::Cloud(_) => panic!("a board set"),
         })
-        .collect();
-    calibrate_targets(&captures, mount).unwrap()
+        .collect()
+}
+
+fn solve_targets(set: &CalibrationSet, mount: Mount) -> Calibration {
+    calibrate_targets(&target_captures(set), mount).unwrap()
 }
 
 fn solve_spheres(set: &CalibrationSet, radii: &[f64], mount: Mount) -> Calibration {
@@ -143,14 +145,7 @@ fn small_rotations_are_warned() {
 fn near_parallel_rotation_axes_are_warned() {
     for seed in [1, 101] {
         let set = simulate(CalibrationTarget::Board, Mount::EyeInHand, seed, |s| s.parallel_axes = true);
-        let captures: Vec<TargetCapture> = set
-            .captures
-            .iter()
-            .map(|c| match &c.observation {
-                SimObservation::TargetPose(b) => TargetCapture { base_t_end: c.base_t_end, camera_t_target: *b },
-                SimObservation::Cloud(_) => unreachable!(),
-            })
-            .collect();
+        let captures = target_captures(&set);
         match calibrate_targets(&captures, Mount::EyeInHand) {
             Ok(c) => assert!(
                 c.warnings.iter().any(|w| w.contains("nearly parallel") && w.contains("add poses")),

@@ -284,7 +284,8 @@ fn solve(problem: &dyn Problem, mount: Mount) -> Result<Calibration, Calibration
         outliers.push(worst);
         (fit, method, starts) = next;
     }
-    let inlier_hands: Vec<Isometry3<f64>> = inliers.iter().map(|&i| problem.hands()[i]).collect();
+    let hands = problem.hands();
+    let inlier_hands: Vec<Isometry3<f64>> = inliers.iter().map(|&i| hands[i]).collect();
     let conditioning = Conditioning::of(&inlier_hands);
     let mut warnings = conditioning.warnings();
     let working_distance_mm = problem.working_distance_mm();

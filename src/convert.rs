@@ -6,6 +6,8 @@
 //! with the daemon; here a value only changes its form, and a wire value
 //! the library cannot represent is an error naming the field.
 
+pub mod calibration;
+
 /// Library values in the protocol's form.
 pub mod to_proto {
     use std::collections::BTreeMap;

@@ -7,6 +7,7 @@
 //! planning method for plane welds", made robust where the method as
 //! written breaks. See docs/ARCHITECTURE.md for the code map.
 
+pub mod calibration;
 pub mod camera;
 pub mod cloud;
 pub mod config;

@@ -1,6 +1,6 @@
 //! The `weldseam` command line: plan a weld from a file, simulate a scan,
 //! run the cell daemon and its mock camera and controller,
-//! evaluate accuracy, run the demo.
+//! evaluate accuracy, run the demo, calibrate the hand-eye.
 
 mod cli;
 
@@ -30,6 +30,8 @@ enum Command {
     Eval(cli::eval::EvalArgs),
     /// Render a simulated camera frame (organized PCD, or a variant as PCD or PLY) and its ground truth (JSON).
     Simulate(cli::simulate::SimulateArgs),
+    /// Hand-eye calibration: solve End_T_Camera (AX = XB) from robot poses and target poses or sphere clouds.
+    Calibrate(cli::calibrate::CalibrateArgs),
     /// Run the cell daemon: camera and controller links over TCP.
     Serve(cli::serve::ServeArgs),
     /// A mock camera: send point-cloud files or simulated scenes to the daemon.
@@ -47,7 +49,11 @@ impl Command {
     fn plans_frame_after_frame(&self) -> bool {
         match self {
             Command::Demo(_) | Command::Eval(_) | Command::Serve(_) | Command::Camera(_) | Command::Bench(_) => true,
-            Command::Plan(_) | Command::Inspect(_) | Command::Simulate(_) | Command::Controller(_) => false,
+            Command::Plan(_)
+            | Command::Inspect(_)
+            | Command::Simulate(_)
+            | Command::Controller(_)
+            | Command::Calibrate(_) => false,
         }
     }
 
@@ -61,6 +67,7 @@ impl Command {
             | Command::Inspect(_)
             | Command::Simulate(_)
             | Command::Controller(_)
+            | Command::Calibrate(_)
             | Command::Bench(_) => "warn",
             Command::Serve(_) | Command::Camera(_) => "info",
         }
@@ -82,6 +89,7 @@ fn main() -> std::process::ExitCode {
         Command::Eval(args) => cli::eval::run(args),
         Command::Inspect(args) => cli::inspect::run(args),
         Command::Simulate(args) => cli::simulate::run(args),
+        Command::Calibrate(args) => cli::calibrate::run(args),
         Command::Serve(args) => cli::serve::run(args),
         Command::Camera(args) => cli::camera::run(args),
         Command::Controller(args) => cli::controller::run(args),

@@ -2,6 +2,7 @@
 //! is linked once for all of them.
 
 mod bench;
+mod calibration;
 mod cli;
 mod consumer_camera;
 mod daemon;

@@ -10,9 +10,12 @@
 //!   encoding of bodies; see PROTOCOL.md for every byte.
 //! - [`text`]: the text controller link's lines, which robot programs
 //!   read with their own primitives; see ROBOTS.md.
+//! - [`calibration`]: hand-eye calibration's capture files, its report
+//!   and a simulated set's truth.
 //! - [`trace`]: the figures of one plan stage by stage, as `plan --debug`
 //!   and the daemon's `[debug]` section write them.
 
+pub mod calibration;
 pub mod frame;
 pub mod message;
 pub mod plan;

@@ -4,6 +4,7 @@
 
 pub mod args;
 pub mod bench;
+pub mod calibrate;
 pub mod camera;
 pub mod controller;
 pub mod demo;
@@ -15,4 +16,5 @@ pub mod memory;
 pub mod plan;
 pub mod serve;
 pub mod simulate;
+pub mod simulate_calibration;
 pub mod table;

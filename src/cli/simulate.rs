@@ -80,15 +80,54 @@ pub struct SimulateArgs {
     #[arg(long, value_name = "VARIANT")]
     pub variant: Option<Variant>,
     /// The cloud file to write: binary PCD (`.pcd`, organized unless the
-    /// variant drops the grid) or binary little-endian PLY (`.ply`).
+    /// variant drops the grid) or binary little-endian PLY (`.ply`); with
+    /// --calibration, the capture file (`.json`).
     #[arg(long, value_name = "FILE.pcd|FILE.ply")]
     pub out: PathBuf,
     /// The ground-truth JSON file to write.
     #[arg(long, value_name = "FILE.json")]
     pub truth: Option<PathBuf>,
+    /// Write a hand-eye calibration set instead of a frame: `board` (each
+    /// capture a target pose) or `spheres` (each capture a point cloud of
+    /// calibration spheres, written beside --out as capture-NN.pcd).
+    /// --out is then the capture file (JSON) for `weldseam calibrate`, and
+    /// --truth gets the true hand-eye.
+    #[arg(long, value_enum, value_name = "TARGET")]
+    pub calibration: Option<CalibrationTargetArg>,
+    /// Calibration set: the camera fixed in the cell, the target on the flange.
+    #[arg(long, requires = "calibration")]
+    pub eye_to_hand: bool,
+    /// Calibration set: how many captures (default 15).
+    #[arg(long, value_name = "N", requires = "calibration")]
+    pub captures: Option<usize>,
+    /// Calibration set: the spheres' radii, mm (default 20,15,10).
+    #[arg(long, value_name = "MM,...", value_delimiter = ',', requires = "calibration")]
+    pub sphere_radii: Option<Vec<f64>>,
+    /// Calibration set: pair this capture's robot pose with an
+    /// observation taken elsewhere (an outlier to find).
+    #[arg(long, value_name = "INDEX", requires = "calibration")]
+    pub wrong_pairing: Option<usize>,
+    /// Calibration set: turn the camera only about its axis, so the
+    /// rotation axes are nearly parallel (an ill-posed set).
+    #[arg(long, requires = "calibration")]
+    pub parallel_axes: bool,
+    /// Calibration set: tilt the camera only 3 to 8 degrees and roll it
+    /// within 8 (a set with too little rotation).
+    #[arg(long, requires = "calibration")]
+    pub small_rotations: bool,
+}
+
+/// `--calibration`: what the calibration set's camera sees.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum CalibrationTargetArg {
+    Board,
+    Spheres,
 }
 
 pub fn run(args: &SimulateArgs) -> Result<()> {
+    if let Some(target) = args.calibration {
+        return crate::cli::simulate_calibration::run(args, target);
+    }
     let (name, spec) = scene_from_args(args)?;
     let format = CloudFormat::of(&args.out)?;
     let camera = CameraPreset::from(args.camera).camera();
@@ -205,7 +244,7 @@ fn find_suite_scene(preset: CameraPreset, key: &str) -> Result<(String, SceneSpe
 
 /// The file formats `simulate` writes, chosen by the file's extension.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum CloudFormat {
+pub(super) enum CloudFormat {
     /// PCD, DATA binary.
     PcdBinary,
     // PCD DATA binary_compressed (LZF) goes here once `cloud::pcd` writes
@@ -224,7 +263,7 @@ impl CloudFormat {
     }
 }
 
-fn write_cloud(cloud: &PointCloud, format: CloudFormat, path: &Path) -> Result<()> {
+pub(super) fn write_cloud(cloud: &PointCloud, format: CloudFormat, path: &Path) -> Result<()> {
     let file = File::create(path).with_context(|| format!("cannot create {}", path.display()))?;
     let out = BufWriter::new(file);
     match format {
@@ -234,7 +273,7 @@ fn write_cloud(cloud: &PointCloud, format: CloudFormat, path: &Path) -> Result<(
     .with_context(|| format!("cannot write the point cloud to {}", path.display()))
 }
 
-fn write_truth(truth: &Value, path: &Path) -> Result<()> {
+pub(super) fn write_truth(truth: &impl serde::Serialize, path: &Path) -> Result<()> {
     let write = || -> std::io::Result<()> {
         let mut out = BufWriter::new(File::create(path)?);
         serde_json::to_writer_pretty(&mut out, truth)?;
@@ -421,6 +460,13 @@ mod tests {
             variant: None,
             out,
             truth,
+            calibration: None,
+            eye_to_hand: false,
+            captures: None,
+            sphere_radii: None,
+            wrong_pairing: None,
+            parallel_axes: false,
+            small_rotations: false,
         }
     }
 

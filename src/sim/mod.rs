@@ -8,6 +8,7 @@
 //! the controller would report. [`eval_suite`] is a fixed, seeded set of
 //! scenes spanning the working range for evaluating the planner.
 
+pub mod calibration;
 pub mod consumer;
 pub mod faults;
 pub mod noise;

@@ -1,0 +1,306 @@
+//! Hand-eye calibration on simulated sets of 15 captures with the
+//! simulator's noise (robot 0.05 mm and 0.01 degrees per axis, the board's
+//! pose or the sphere clouds' sensor noise): the issue's bound of 0.2 mm
+//! and 0.05 degrees for target poses, spheres and a camera fixed in the
+//! cell; one pose paired with the wrong capture flagged and the result
+//! within the bound without it; near-parallel rotation axes warned. Seeds
+//! 1 to 10 and, for spheres, 101 were looked at while the solver and the
+//! simulated pose sets were written; the others (102 to 108) were added
+//! unseen.
+
+use nalgebra::Isometry3;
+use weldseam::calibration::sphere::{fit_spheres, identify};
+use weldseam::calibration::{Calibration, Mount, SphereCapture, TargetCapture, calibrate_spheres, calibrate_targets};
+use weldseam::camera::CameraModel;
+use weldseam::sim::calibration::{
+    CalibrationSet, CalibrationSpec, CalibrationTarget, DEFAULT_SPHERE_RADII_MM, SimObservation, simulate_calibration,
+};
+
+const BOUND_MM: f64 = 0.2;
+const BOUND_DEG: f64 = 0.05;
+
+fn simulate(
+    target: CalibrationTarget,
+    mount: Mount,
+    seed: u64,
+    tweak: impl Fn(&mut CalibrationSpec),
+) -> CalibrationSet {
+    let mut spec = CalibrationSpec::new(target, mount, seed);
+    tweak(&mut spec);
+    spec.validate().unwrap();
+    simulate_calibration(&spec, &CameraModel::default())
+}
+
+fn target_captures(set: &CalibrationSet) -> Vec<TargetCapture> {
+    set.captures
+        .iter()
+        .map(|c| match &c.observation {
+            SimObservation::TargetPose(b) => TargetCapture { base_t_end: c.base_t_end, camera_t_target: *b },
+            SimObservation::Cloud(_) => panic!("a board set"),
+        })
+        .collect()
+}
+
+fn solve_targets(set: &CalibrationSet, mount: Mount) -> Calibration {
+    calibrate_targets(&target_captures(set), mount).unwrap()
+}
+
+fn solve_spheres(set: &CalibrationSet, radii: &[f64], mount: Mount) -> Calibration {
+    let fitted: Vec<_> = set
+        .captures
+        .iter()
+        .enumerate()
+        .map(|(i, c)| match &c.observation {
+            SimObservation::Cloud(cloud) => fit_spheres(cloud.points(), radii, i as u64).unwrap(),
+            SimObservation::TargetPose(_) => panic!("a sphere set"),
+        })
+        .collect();
+    let named = identify(&fitted, radii);
+    let captures: Vec<SphereCapture> = set
+        .captures
+        .iter()
+        .zip(named)
+        .map(|(c, centres)| SphereCapture { base_t_end: c.base_t_end, centres })
+        .collect();
+    calibrate_spheres(&captures, mount).unwrap()
+}
+
+/// Translation (mm) and rotation (degrees) between two transforms.
+fn error(a: &Isometry3<f64>, b: &Isometry3<f64>) -> (f64, f64) {
+    ((a.translation.vector - b.translation.vector).norm(), a.rotation.angle_to(&b.rotation).to_degrees())
+}
+
+fn assert_within(c: &Calibration, truth: &Isometry3<f64>, what: &str) {
+    let (mm, deg) = error(&c.hand_eye, truth);
+    assert!(mm < BOUND_MM && deg < BOUND_DEG, "{what}: {mm:.4} mm, {deg:.4} deg off the truth; {c:#?}");
+}
+
+#[test]
+fn board_poses_give_the_hand_eye_within_the_bound() {
+    for seed in [1, 2, 3, 101, 102, 103, 104, 107, 108] {
+        let set = simulate(CalibrationTarget::Board, Mount::EyeInHand, seed, |_| {});
+        let c = solve_targets(&set, Mount::EyeInHand);
+        assert_within(&c, &set.hand_eye, &format!("board seed {seed}"));
+        assert!(c.outliers.is_empty() && c.warnings.is_empty(), "seed {seed}: {:?} {:?}", c.outliers, c.warnings);
+        let expected = c.expected_error_mm.unwrap();
+        assert!(expected > 0.0 && expected < 0.5, "seed {seed}: expected error {expected}");
+    }
+}
+
+#[test]
+fn a_camera_fixed_in_the_cell_is_found_within_the_bound() {
+    for seed in [1, 2, 101, 102] {
+        let set = simulate(CalibrationTarget::Board, Mount::EyeToHand, seed, |_| {});
+        let c = solve_targets(&set, Mount::EyeToHand);
+        assert_within(&c, &set.hand_eye, &format!("eye-to-hand board seed {seed}"));
+    }
+    let radii = DEFAULT_SPHERE_RADII_MM.to_vec();
+    let set = simulate(CalibrationTarget::Spheres(radii.clone()), Mount::EyeToHand, 103, |_| {});
+    assert_within(&solve_spheres(&set, &radii, Mount::EyeToHand), &set.hand_eye, "eye-to-hand spheres seed 103");
+}
+
+#[test]
+fn sphere_clouds_give_the_hand_eye_within_the_bound() {
+    let radii = DEFAULT_SPHERE_RADII_MM.to_vec();
+    for seed in [1, 101, 105, 106] {
+        let set = simulate(CalibrationTarget::Spheres(radii.clone()), Mount::EyeInHand, seed, |_| {});
+        let c = solve_spheres(&set, &radii, Mount::EyeInHand);
+        assert_within(&c, &set.hand_eye, &format!("spheres seed {seed}"));
+        assert!(c.outliers.is_empty(), "seed {seed}: {:?}", c.outliers);
+    }
+}
+
+#[test]
+fn equal_spheres_are_told_apart_by_their_distances() {
+    let radii = vec![15.0; 3];
+    let set = simulate(CalibrationTarget::Spheres(radii.clone()), Mount::EyeInHand, 104, |_| {});
+    assert_within(&solve_spheres(&set, &radii, Mount::EyeInHand), &set.hand_eye, "equal spheres seed 104");
+}
+
+#[test]
+fn a_pose_paired_with_the_wrong_capture_is_flagged_and_left_out() {
+    for (seed, wrong) in [(2, 6), (101, 0), (102, 14)] {
+        let set = simulate(CalibrationTarget::Board, Mount::EyeInHand, seed, |s| s.wrong_pairing = Some(wrong));
+        let c = solve_targets(&set, Mount::EyeInHand);
+        assert_eq!(c.outliers, vec![wrong], "seed {seed}: {:#?}", c.residuals);
+        assert_within(&c, &set.hand_eye, &format!("board seed {seed} without capture {wrong}"));
+        let with = c.hand_eye_with_outliers.unwrap();
+        assert!(error(&with, &c.hand_eye).0 > 0.0);
+    }
+    let radii = DEFAULT_SPHERE_RADII_MM.to_vec();
+    let set = simulate(CalibrationTarget::Spheres(radii.clone()), Mount::EyeInHand, 103, |s| s.wrong_pairing = Some(4));
+    let c = solve_spheres(&set, &radii, Mount::EyeInHand);
+    assert_eq!(c.outliers, vec![4], "{:#?}", c.residuals);
+    assert_within(&c, &set.hand_eye, "spheres seed 103 without capture 4");
+}
+
+#[test]
+fn small_rotations_are_warned() {
+    let set = simulate(CalibrationTarget::Board, Mount::EyeInHand, 109, |s| s.small_rotations = true);
+    let c = solve_targets(&set, Mount::EyeInHand);
+    assert!(c.warnings.iter().any(|w| w.contains("ill-posed") && w.contains("larger rotations")), "{:?}", c.warnings);
+}
+
+#[test]
+fn near_parallel_rotation_axes_are_warned() {
+    for seed in [1, 101] {
+        let set = simulate(CalibrationTarget::Board, Mount::EyeInHand, seed, |s| s.parallel_axes = true);
+        let captures = target_captures(&set);
+        match calibrate_targets(&captures, Mount::EyeInHand) {
+            Ok(c) => assert!(
+                c.warnings.iter().any(|w| w.contains("nearly parallel") && w.contains("add poses")),
+                "seed {seed}: {:?}",
+                c.warnings
+            ),
+            Err(e) => assert!(e.to_string().contains("about one axis"), "seed {seed}: {e}"),
+        }
+    }
+}
+
+/// The `weldseam` binary, run as a script runs it.
+fn weldseam(args: &[&str]) -> std::process::Output {
+    std::process::Command::new(env!("CARGO_BIN_EXE_weldseam")).args(args).output().expect("run weldseam")
+}
+
+fn matrix(values: &serde_json::Value) -> Isometry3<f64> {
+    let v: Vec<f64> = values.as_array().expect("16 numbers").iter().map(|x| x.as_f64().unwrap()).collect();
+    let rows: [f64; 16] = v.try_into().expect("16 numbers");
+    weldseam::geometry::pose::hand_eye_from_rows(&rows).unwrap()
+}
+
+fn json_file(path: &std::path::Path) -> serde_json::Value {
+    serde_json::from_slice(&std::fs::read(path).unwrap()).unwrap()
+}
+
+#[test]
+fn simulate_then_calibrate_round_trips_through_files() {
+    let dir = tempfile::tempdir().unwrap();
+    for (target, extra) in [("board", vec!["--wrong-pairing", "5"]), ("spheres", vec!["--eye-to-hand"])] {
+        let set = dir.path().join(format!("{target}/set.json"));
+        std::fs::create_dir_all(set.parent().unwrap()).unwrap();
+        let truth = dir.path().join(format!("{target}-truth.json"));
+        let mut args = vec!["simulate", "--calibration", target, "--seed", "11", "--out", set.to_str().unwrap()];
+        args.extend(["--truth", truth.to_str().unwrap()]);
+        args.extend(&extra);
+        let out = weldseam(&args);
+        assert!(out.status.success(), "simulate: {}", String::from_utf8_lossy(&out.stderr));
+        let mut args = vec!["calibrate", "--captures", set.to_str().unwrap(), "--json"];
+        if target == "spheres" {
+            args.push("--eye-to-hand");
+        }
+        let out = weldseam(&args);
+        assert!(out.status.success(), "calibrate: {}", String::from_utf8_lossy(&out.stderr));
+        let report: serde_json::Value = serde_json::from_slice(&out.stdout).expect("one JSON object on stdout");
+        let truth = json_file(&truth);
+        let (mm, deg) = error(&matrix(&report["hand_eye"]), &matrix(&truth["hand_eye"]));
+        assert!(mm < BOUND_MM && deg < BOUND_DEG, "{target}: {mm} mm {deg} deg");
+        assert_eq!(report["residuals"].as_array().unwrap().len(), 15);
+        let outliers: Vec<u64> = report["outliers"].as_array().unwrap().iter().map(|v| v.as_u64().unwrap()).collect();
+        match target {
+            "board" => {
+                assert_eq!(outliers, vec![5]);
+                assert_eq!(report["solved_for"], "End_T_Camera");
+            }
+            _ => {
+                assert!(outliers.is_empty(), "{outliers:?}");
+                assert_eq!(report["solved_for"], "Base_T_Camera");
+                // A sphere hidden behind another or out of view is missed
+                // in a capture or two, never invented.
+                let found: Vec<u64> =
+                    report["spheres_found"].as_array().unwrap().iter().map(|n| n.as_u64().unwrap()).collect();
+                assert!(found.iter().all(|n| *n <= 3) && found.iter().filter(|n| **n == 3).count() >= 12, "{found:?}");
+            }
+        }
+        assert!(report["expected_error_mm"].as_f64().unwrap() > 0.0);
+    }
+}
+
+#[test]
+fn write_config_replaces_only_the_hand_eye() {
+    let dir = tempfile::tempdir().unwrap();
+    let set = dir.path().join("set.json");
+    let out = weldseam(&["simulate", "--calibration", "board", "--seed", "12", "--out", set.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let shipped = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/config/weldseam.toml")).unwrap();
+    let original = shipped.replace("max_reach_mm = 3500.0", "max_reach_mm = 2800.0  # our cell's robot");
+    let config = dir.path().join("cell.toml");
+    std::fs::write(&config, &original).unwrap();
+    let out = weldseam(&[
+        "calibrate",
+        "--captures",
+        set.to_str().unwrap(),
+        "--json",
+        "--write-config",
+        config.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let report: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let written = std::fs::read_to_string(&config).unwrap();
+    // Every line outside the hand-eye's four rows is as it was, the
+    // comments above it and the edited key included.
+    let outside = |text: &str| -> Vec<String> {
+        let mut in_matrix = false;
+        text.lines()
+            .filter(|line| {
+                if line.starts_with("hand_eye = [") {
+                    in_matrix = true;
+                }
+                let keep = !in_matrix;
+                if in_matrix && line.trim() == "]" {
+                    in_matrix = false;
+                }
+                keep
+            })
+            .map(str::to_string)
+            .collect()
+    };
+    assert_eq!(outside(&written), outside(&original));
+    assert!(written.contains("# End_T_Camera from the hand-eye calibration") && written.contains("# our cell's robot"));
+    let loaded = weldseam::config::Config::load(&config).unwrap();
+    assert_eq!(loaded.robot_limits.max_reach_mm, 2800.0);
+    let (mm, deg) = error(&loaded.hand_eye, &matrix(&report["hand_eye"]));
+    assert!(mm < 1e-4 && deg < 1e-4, "{mm} mm {deg} deg");
+    // A fixed camera's Base_T_Camera is not End_T_Camera.
+    let out = weldseam(&[
+        "calibrate",
+        "--captures",
+        set.to_str().unwrap(),
+        "--eye-to-hand",
+        "--write-config",
+        config.to_str().unwrap(),
+    ]);
+    assert!(!out.status.success() && String::from_utf8_lossy(&out.stderr).contains("End_T_Camera"));
+}
+
+#[test]
+fn a_bad_capture_file_is_refused_naming_the_capture_and_the_field() {
+    let target = "[1,0,0,0, 0,1,0,0, 0,0,1,500, 0,0,0,1]";
+    let cases = [
+        (
+            format!(r#"{{"captures": [{{"robot_pose": [0,0,0,0,0,0], "camera_T_target": {target}}}, {{"robot_pose": [0,0,0,0,0], "camera_T_target": {target}}}]}}"#),
+            "capture 1: robot_pose: a extrinsic_xyz (mm, deg) pose has 6 numbers, got 5",
+        ),
+        (
+            r#"{"captures": [{"robot_pose": [0,0,0,0,0,0], "camera_T_target": [1,0,0]}]}"#.to_string(),
+            "capture 0: camera_T_target needs 16 numbers",
+        ),
+        (r#"{"captures": [{"robot_pose": [0,0,0,0,0,0], "cloud": "a.pcd"}]}"#.to_string(), "sphere_radius_mm"),
+        (r#"{"captures": [], "colour": 1}"#.to_string(), "unknown field `colour`"),
+        (
+            format!(r#"{{"captures": [{}]}}"#, vec![format!(r#"{{"robot_pose": [0,0,0,0,0,0], "camera_T_target": {target}}}"#); 501].join(",")),
+            "501 captures; at most 500",
+        ),
+        (
+            r#"{"sphere_radius_mm": 20, "captures": [{"robot_pose": [0,0,0,0,0,0], "cloud": "missing.pcd"}, {"robot_pose": [0,0,0,0,0,0], "cloud": "missing.pcd"}, {"robot_pose": [0,0,0,0,0,0], "cloud": "missing.pcd"}]}"#.to_string(),
+            "capture 0: cloud",
+        ),
+    ];
+    let dir = tempfile::tempdir().unwrap();
+    for (text, expected) in cases {
+        let path = dir.path().join("captures.json");
+        std::fs::write(&path, &text).unwrap();
+        let out = weldseam(&["calibrate", "--captures", path.to_str().unwrap()]);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success() && stderr.contains(expected), "{expected}: {stderr}");
+    }
+}

@@ -126,6 +126,10 @@ const FOOT_QUANTILE: f64 = 0.1;
 const OPENING_SLACK_MM: f64 = 1.0;
 const OPENING_SLACK_SHARE: f64 = 0.15;
 
+/// A face whose foot comes within this many point spacings of the probe's
+/// bottom may go on below it: its foot is not taken for the root.
+const BOTTOM_MARGIN_SPACINGS: f64 = 2.0;
+
 /// A face fit whose residual RMS exceeds this many point spacings is not a
 /// plane face.
 const MAX_FACE_RMS_SPACINGS: f64 = 1.0;
@@ -186,6 +190,11 @@ pub struct Face {
     /// face at its foot: then the plate hides the face's lower part, and
     /// the foot is where the view ends, not the root.
     pub foot_hidden: bool,
+    /// Whether the face runs down to the deepest points the probe reads
+    /// (the surface the plates seem to rest on, which in a frame of several
+    /// parts may be another part's plate): its foot is the probe's, not
+    /// the root.
+    pub foot_at_probe_bottom: bool,
 }
 
 impl Face {
@@ -213,7 +222,7 @@ impl Face {
     /// Whether the face shows the groove's root: its foot comes within
     /// half the widest root gap of the midline.
     pub fn reaches_root(&self, spacing_mm: f64) -> bool {
-        !self.foot_hidden && self.foot_mm <= MAX_ROOT_GAP_MM / 2.0 + spacing_mm
+        !self.foot_hidden && !self.foot_at_probe_bottom && self.foot_mm <= MAX_ROOT_GAP_MM / 2.0 + spacing_mm
     }
 }
 
@@ -355,7 +364,13 @@ impl GrooveProfile {
                 if f.along_rays { " along the camera's rays" } else { "" },
                 f.rms_mm,
                 f.depth_mm,
-                if f.foot_hidden { " (below it hidden by the other plate)" } else { "" },
+                if f.foot_hidden {
+                    " (below it hidden by the other plate)"
+                } else if f.foot_at_probe_bottom {
+                    " (down to the surface behind the plates, where the probe stops)"
+                } else {
+                    ""
+                },
                 100.0 * f.station_share
             ));
         }
@@ -557,7 +572,7 @@ pub fn probe(cloud: &PointCloud, setting: &ProbeSetting) -> GrooveProfile {
         .into_iter()
         .filter_map(|side| {
             let points: Vec<Across> = below.iter().filter(|p| p.t.signum() as i8 == side).copied().collect();
-            fit_face(&points, side, spacing, top_margin, &view, half_opening)
+            fit_face(&points, side, spacing, (top_margin, bottom), &view, half_opening)
         })
         .collect();
     GrooveProfile {
@@ -668,7 +683,7 @@ fn fit_face(
     points: &[Across],
     side: i8,
     spacing: f64,
-    top_margin: f64,
+    (top_margin, bottom): (f64, f64),
     view: &Views,
     half_opening: f64,
 ) -> Option<Face> {
@@ -763,6 +778,7 @@ fn fit_face(
         station_share: station_share(&kept_points),
         along_rays,
         foot_hidden,
+        foot_at_probe_bottom: depth_mm >= bottom - BOTTOM_MARGIN_SPACINGS * spacing,
     })
 }
 
@@ -923,6 +939,31 @@ mod tests {
         // A corner behind the camera: no projection, the whole frame.
         let behind: Vec<Vec3> = corners.iter().map(|c| c - Vec3::new(0.0, 0.0, 800.0)).collect();
         assert!(rows_under(&grid, &behind).is_none());
+    }
+
+    #[test]
+    fn a_bevel_cut_by_the_probes_bottom_shows_no_root() {
+        // The groove of the test below, 5 mm deep, with a surface taken for
+        // the plates' support 3.5 mm down (another part's plate, in a frame
+        // of several): the probe stops at 3 mm, and the bevels' feet there
+        // are not the root.
+        let tan = 30f64.to_radians().tan();
+        let w = 0.5 + 5.0 * tan;
+        let v = |x: f64| if x.abs() >= w { Some(0.0) } else { (x.abs() >= 0.5).then(|| (w - x.abs()) / tan) };
+        let cloud = cloud_of(v, 10.0, 0.2);
+        let (e1, e2) = (edge(-w), edge(w));
+        let setting = ProbeSetting {
+            edges: [&e1, &e2],
+            span: (-45.0, 45.0),
+            point_spacing_mm: 0.2,
+            depth_to_support_mm: Some(3.5),
+            grid: None,
+            projector: Vec3::zeros(),
+        };
+        let profile = probe(&cloud, &setting);
+        assert_eq!(profile.verdict(), Between::Groove, "{}", profile.describe());
+        assert!(profile.bevels().all(|f| f.foot_at_probe_bottom), "{}", profile.describe());
+        assert_eq!(profile.depth_mm(), None, "{}", profile.describe());
     }
 
     #[test]

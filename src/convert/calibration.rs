@@ -60,21 +60,14 @@ pub fn pose_convention(file: &proto::CaptureFile, default: PoseConvention) -> Re
         Some(name) => name.parse::<RotationForm>()?,
         None => default.rotation,
     };
+    let unknown = |field, value: &str, expected| CaptureFileError::Unit { field, value: value.into(), expected };
     let length = match file.length_unit.as_deref() {
         None => default.length,
-        Some("mm") => LengthUnit::Millimetres,
-        Some("m") => LengthUnit::Metres,
-        Some(other) => {
-            return Err(CaptureFileError::Unit { field: "length_unit", value: other.into(), expected: "mm, m" });
-        }
+        Some(name) => LengthUnit::from_name(name).ok_or_else(|| unknown("length_unit", name, "mm, m"))?,
     };
     let angle = match file.angle_unit.as_deref() {
         None => default.angle,
-        Some("deg") => AngleUnit::Degrees,
-        Some("rad") => AngleUnit::Radians,
-        Some(other) => {
-            return Err(CaptureFileError::Unit { field: "angle_unit", value: other.into(), expected: "deg, rad" });
-        }
+        Some(name) => AngleUnit::from_name(name).ok_or_else(|| unknown("angle_unit", name, "deg, rad"))?,
     };
     Ok(PoseConvention { rotation, length, angle })
 }

@@ -99,6 +99,11 @@ impl LengthUnit {
             LengthUnit::Metres => "m",
         }
     }
+
+    /// The unit [`LengthUnit::name`] calls `name`.
+    pub fn from_name(name: &str) -> Option<Self> {
+        [LengthUnit::Millimetres, LengthUnit::Metres].into_iter().find(|u| u.name() == name)
+    }
 }
 
 /// The unit of a pose's angles (quaternions have none).
@@ -128,6 +133,11 @@ impl AngleUnit {
             AngleUnit::Degrees => "deg",
             AngleUnit::Radians => "rad",
         }
+    }
+
+    /// The unit [`AngleUnit::name`] calls `name`.
+    pub fn from_name(name: &str) -> Option<Self> {
+        [AngleUnit::Degrees, AngleUnit::Radians].into_iter().find(|u| u.name() == name)
     }
 }
 

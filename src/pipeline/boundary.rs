@@ -27,6 +27,7 @@
 use crate::cloud::{PointCloud, is_valid_point};
 use crate::geometry::fit::Plane;
 
+use super::context::CameraGrid;
 use super::refit::SeamCurve;
 use crate::geometry::{Vec3, vec3};
 
@@ -244,16 +245,13 @@ const ON_PLATE_MM: f64 = 1.0;
 /// along any edge, so the boundary samples stop a rim's depth inside it;
 /// where the seam leaves the image at a grazing angle, that depth becomes
 /// millimetres along the seam. The end is moved to where the fitted edge
-/// leaves the image (`in_view` says whether a point projects inside it)
-/// only when the pixels just inside the plate between the two are seen on
-/// the plate's plane (`pixel_of` gives a point's pixel): where the plate
+/// leaves the image only when the pixels just inside the plate between the
+/// two are seen on the plate's plane: where the plate
 /// ends before the border, or the view beyond its end is empty, the end
 /// stays.
-#[allow(clippy::too_many_arguments)]
-pub fn reach_image_border(
+pub(super) fn reach_image_border(
     cloud: &PointCloud,
-    pixel_of: impl Fn(&Vec3) -> Option<usize>,
-    in_view: impl Fn(&Vec3) -> bool,
+    grid: &CameraGrid,
     edge: &SeamCurve,
     plate: &Plane,
     inward: &Vec3,
@@ -266,7 +264,8 @@ pub fn reach_image_border(
     let step = 0.5 * spacing_mm;
     let reach = |end: f64, outward: f64| -> f64 {
         let steps = (MAX_BORDER_REACH_MM / step) as usize;
-        let Some(exit) = (1..=steps).map(|k| end + outward * k as f64 * step).find(|&s| !in_view(&edge.at(s))) else {
+        let Some(exit) = (1..=steps).map(|k| end + outward * k as f64 * step).find(|&s| !grid.in_view(&edge.at(s)))
+        else {
             return end;
         };
         // The border lies between the last step in view and `exit`.
@@ -278,7 +277,7 @@ pub fn reach_image_border(
             // Where the plate lies between the edge and the border, the
             // deeper reading may fall outside the image.
             let at = edge.at(s);
-            if let Some(i) = insets.iter().find_map(|d| pixel_of(&(at + inward * *d))) {
+            if let Some(i) = insets.iter().find_map(|d| grid.pixel_of(&(at + inward * *d))) {
                 seen += 1;
                 let q = cloud.points()[i];
                 on_plate += usize::from(is_valid_point(&q) && plate.signed_distance(&vec3(&q)).abs() <= ON_PLATE_MM);

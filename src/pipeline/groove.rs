@@ -470,19 +470,24 @@ pub fn probe(cloud: &PointCloud, setting: &ProbeSetting) -> GrooveProfile {
     let bottom = setting.depth_to_support_mm.map_or(MAX_PROBE_DEPTH_MM, |d| (d - 0.5).min(MAX_PROBE_DEPTH_MM));
     let station_len = (s1 - s0) / STATIONS as f64;
 
-    // A cheap first test in single precision, on every point of the frame:
-    // along the seam within its span, across it within the band both
-    // edges span over it (a millimetre wider, for the rounding); only the
-    // points that pass are read in the seam's axes exactly.
-    let band = {
+    // The box the probed points lie in, from the two edges at stations
+    // along the span: across, the band both edges span (a millimetre
+    // wider, for the rounding); along the normal, from the standing
+    // probe's height above the edges' mean height to the bottom below it.
+    let (band, heights) = {
         let samples = (0..=16).map(|k| s0 + (s1 - s0) * k as f64 / 16.0);
-        let across = |c: &SeamCurve, s: f64| (c.at(s) - axes.origin).dot(&axes.a);
-        let (lo, hi) = samples.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), s| {
-            let (a1, a2) = (across(e1, s), across(e2, s));
-            (lo.min(a1.min(a2)), hi.max(a1.max(a2)))
+        let widen = |(lo, hi): (f64, f64), v: f64| (lo.min(v), hi.max(v));
+        let empty = (f64::INFINITY, f64::NEG_INFINITY);
+        let (across, height) = samples.fold((empty, empty), |(across, height), s| {
+            let (q1, q2) = (e1.at(s) - axes.origin, e2.at(s) - axes.origin);
+            let across = widen(widen(across, q1.dot(&axes.a)), q2.dot(&axes.a));
+            (across, widen(height, 0.5 * (q1.dot(&axes.b) + q2.dot(&axes.b))))
         });
-        (lo - 1.0, hi + 1.0)
+        ((across.0 - 1.0, across.1 + 1.0), (height.0 - STANDING_PROBE_MM - 1.0, height.1 + bottom + 1.0))
     };
+    // A cheap first test in single precision: along the seam within its
+    // span, across it within the band; only the points that pass are read
+    // in the seam's axes exactly.
     let f32s = |v: &Vec3| [v.x as f32, v.y as f32, v.z as f32];
     let (origin, along, across) = (f32s(&axes.origin), f32s(&axes.e), f32s(&axes.a));
     let (span32, band32) = ((s0 as f32 - 1.0, s1 as f32 + 1.0), (band.0 as f32, band.1 as f32));
@@ -497,39 +502,28 @@ pub fn probe(cloud: &PointCloud, setting: &ProbeSetting) -> GrooveProfile {
         if !(near_seam(p) && is_valid_point(p)) {
             return None;
         }
-        {
-            let d = vec3(p) - axes.origin;
-            let s = d.dot(&axes.e);
-            if !(s0..s1).contains(&s) {
-                return None;
-            }
-            let (q1, q2) = (e1.at(s) - axes.origin, e2.at(s) - axes.origin);
-            let (a1, a2) = (q1.dot(&axes.a), q2.dot(&axes.a));
-            let half = 0.5 * (a2 - a1).abs();
-            let sign = (a2 - a1).signum();
-            let t = (d.dot(&axes.a) - 0.5 * (a1 + a2)) * sign;
-            // Strictly between the edges: the plates' own boundary points
-            // lie on them.
-            if t.abs() >= half - 0.5 * spacing {
-                return None;
-            }
-            let h = d.dot(&axes.b) - 0.5 * (q1.dot(&axes.b) + q2.dot(&axes.b));
-            let station = (((s - s0) / station_len) as usize).min(STATIONS - 1);
-            let standing = (-STANDING_PROBE_MM..-STANDING_MIN_MM).contains(&h);
-            (standing || (top_margin..bottom).contains(&h)).then_some(Across { s, station, t, h })
+        let d = vec3(p) - axes.origin;
+        let s = d.dot(&axes.e);
+        if !(s0..s1).contains(&s) {
+            return None;
         }
+        let (q1, q2) = (e1.at(s) - axes.origin, e2.at(s) - axes.origin);
+        let (a1, a2) = (q1.dot(&axes.a), q2.dot(&axes.a));
+        let half = 0.5 * (a2 - a1).abs();
+        let sign = (a2 - a1).signum();
+        let t = (d.dot(&axes.a) - 0.5 * (a1 + a2)) * sign;
+        // Strictly between the edges: the plates' own boundary points lie
+        // on them.
+        if t.abs() >= half - 0.5 * spacing {
+            return None;
+        }
+        let h = d.dot(&axes.b) - 0.5 * (q1.dot(&axes.b) + q2.dot(&axes.b));
+        let station = (((s - s0) / station_len) as usize).min(STATIONS - 1);
+        let standing = (-STANDING_PROBE_MM..-STANDING_MIN_MM).contains(&h);
+        (standing || (top_margin..bottom).contains(&h)).then_some(Across { s, station, t, h })
     };
     // On the camera's grid only the pixels under the probed box are read:
-    // the box (along the span, across the band, from the standing probe's
-    // height above the edges to the bottom below them) projects inside the
-    // convex hull of its corners.
-    let heights = {
-        let samples = (0..=16).map(|k| s0 + (s1 - s0) * k as f64 / 16.0);
-        let height = |s: f64| 0.5 * ((e1.at(s) - axes.origin).dot(&axes.b) + (e2.at(s) - axes.origin).dot(&axes.b));
-        let (lo, hi) =
-            samples.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), s| (lo.min(height(s)), hi.max(height(s))));
-        (lo - STANDING_PROBE_MM - 1.0, hi + bottom + 1.0)
-    };
+    // it projects inside the convex hull of its corners.
     let corners: Vec<Vec3> = (0..8)
         .map(|k| {
             let s = if k & 1 == 0 { s0 - 1.0 } else { s1 + 1.0 };

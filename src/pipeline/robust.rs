@@ -334,17 +334,20 @@ pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
             .ok_or_else(|| PlanError::at(Stage::WeldEquation, format!("weld edge {} has no boundary sample", k + 1)))
     };
     let mut extents = [extent(0)?, extent(1)?];
+    // Each weld edge as its fit gives it, at the middle of its span.
+    let fitted_edge = |k: usize| {
+        let curve = &fits[k].curve;
+        let middle = 0.5 * (curve.s_min + curve.s_max);
+        edge_across(k, &curve.at(middle), &curve.tangent(middle))
+    };
     if !cloud.is_organized() && degree == 1 {
         // Without a grid the strips read each end to a strip's width, and
         // miss or mistake the ends where the cloud's border cuts a plate:
         // the plate's last rows inside the fitted edge say where it ends.
         let spacing = spacing_at(&axes.origin);
         let refine = |k: usize| {
-            let curve = &fits[k].curve;
-            let middle = 0.5 * (curve.s_min + curve.s_max);
-            let edge = edge_across(k, &curve.at(middle), &curve.tangent(middle));
             let along = |p: &Vec3| axes.feature(p);
-            let rms = fits[k].rms_mm;
+            let (edge, rms) = (fitted_edge(k), fits[k].rms_mm);
             boundary::rim_refined_extent(cloud, &plates[k].plane, &edge, &params, spacing, rms, along, extents[k])
         };
         let refined = [refine(0), refine(1)];
@@ -356,17 +359,12 @@ pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
         // short of the image border; where the plate runs on to it, so
         // does the edge.
         let reach = |k: usize| {
-            let curve = &fits[k].curve;
-            let middle = 0.5 * (curve.s_min + curve.s_max);
-            let edge = edge_across(k, &curve.at(middle), &curve.tangent(middle));
-            let pixel_of = |p: &Vec3| grid.pixel_of(p);
-            let in_view = |p: &Vec3| grid.in_view(p);
+            let edge = fitted_edge(k);
             let spacing = spacing_at(&edge.point);
             boundary::reach_image_border(
                 cloud,
-                pixel_of,
-                in_view,
-                curve,
+                &grid,
+                &fits[k].curve,
                 &plates[k].plane,
                 &-edge.outward,
                 spacing,

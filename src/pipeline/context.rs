@@ -346,7 +346,7 @@ impl<'a> Context<'a> {
             quality: assessment.quality,
             warnings: assessment.warnings,
         };
-        Ok(Plan { method, seams: vec![seam], stats: self.stats, timings: self.clock.timings })
+        Ok(Plan { method, seams: vec![seam], unplanned: Vec::new(), stats: self.stats, timings: self.clock.timings })
     }
 
     /// Every waypoint must be a place the robot can go: finite and within

@@ -301,11 +301,28 @@ pub(crate) struct SeamAssessment {
     pub warnings: Vec<quality::GateFailure>,
 }
 
+/// A joint seen in the frame for which no seam is returned, and why: the
+/// root of a tee the web hides, or one workpiece of several whose seam
+/// failed a stage or a gate while the others planned. A frame of one
+/// joint that cannot be planned is a [`PlanError`], not a plan.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Unplanned {
+    /// The joint, where the planner could tell it.
+    pub joint: Option<JointType>,
+    /// Where in the camera frame the joint lies (its plates' middle), so
+    /// a person can tell which one is meant.
+    pub near_camera: Option<Vec3>,
+    /// The stage, the reason and the gate, as a refusal would give them.
+    pub reason: PlanError,
+}
+
 /// The result of planning one frame.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Plan {
     pub method: Method,
     pub seams: Vec<Seam>,
+    /// The joints seen but not planned, each with its reason.
+    pub unplanned: Vec<Unplanned>,
     pub stats: PlanStats,
     pub timings: StageTimings,
 }

@@ -561,7 +561,7 @@ mod tests {
         assert_eq!(from_proto::plan_request(&auto_wire, EulerConvention::Zyx).unwrap().joint, RequestedJoint::Auto);
 
         // A tee is named on the wire (code 4) and on the text link, and
-        // comes back as itself for the planner to refuse by name.
+        // comes back as itself for the planner.
         let tee = PlanRequest { joint: JointType::TFillet.into(), groove_depth_mm: None, ..request.clone() };
         let tee_wire = to_proto::plan_request(9, &tee, FrameSelect::NextFrame);
         assert_eq!(tee_wire.joint, weldseam_proto::message::joint_code::T_FILLET);

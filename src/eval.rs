@@ -16,18 +16,20 @@
 //! only a refusal).
 //!
 //! Frames of issue 15 hold more seams than one: a tee's two fillet roots,
-//! or the seams of several workpieces. The planner plans neither yet, so
-//! what it returns is judged against every seam the frame shows
-//! ([`TrueSeam`]): on a tee, a refusal whose reason names a tee is the
-//! right answer (issue 12: recognised and refused by name) and a seam is
-//! confident wrong unless it lies within the bar on a root
-//! ([`classify_tee`]); on several workpieces each seam returned is matched
-//! to the nearest true seam, and the seams seen are counted found, missed
-//! or extra ([`match_seams`], [`classify_several`]).
+//! or the seams of several workpieces. What the planner returns is judged
+//! against every seam the frame shows ([`TrueSeam`]): on a tee, each seam
+//! returned must lie on a root, within issue 15's bar for a fillet (0.5 mm
+//! across, its ends within 1 mm of the root's, or of a stretch of it the
+//! camera sees), else it is confident wrong; a root the camera sees along
+//! half its length and no seam found is missed, and one it does not see
+//! is to be reported as not planned, never invented ([`classify_tee`]);
+//! on several workpieces each seam returned is matched to the nearest true
+//! seam, and the seams seen are counted found, missed or extra
+//! ([`match_seams`], [`classify_several`]).
 
 use crate::camera::CameraModel;
 use crate::config::{Config, Method};
-use crate::geometry::{Vec3, distance_to_polyline};
+use crate::geometry::{Vec3, distance_to_polyline, distance_to_segment};
 use crate::joint::{JointType, RequestedJoint};
 use crate::pipeline::input::{CloudFrame, Units};
 use crate::pipeline::{Plan, PlanError, PlanRequest, Planner, Seam};
@@ -47,12 +49,32 @@ pub struct SeamError {
     /// true seam ends (matched in whichever order is closer).
     pub start_mm: f64,
     pub end_mm: f64,
+    /// The largest distance of a waypoint from the true stretch: how far
+    /// across it the trajectory strays, whatever its ends.
+    pub across_mm: f64,
 }
+
+/// Issue 15's bar for a fillet root: found within 0.5 mm across, its ends
+/// within 1 mm.
+pub const FILLET_ACROSS_MM: f64 = 0.5;
+pub const FILLET_END_MM: f64 = 1.0;
 
 impl SeamError {
     /// The paper's bar (1 mm) and ours for the ends (2 mm).
     pub fn passes(&self) -> bool {
         self.max_mm < 1.0 && self.start_mm < 2.0 && self.end_mm < 2.0
+    }
+
+    /// Issue 15's bar for a fillet root ([`FILLET_ACROSS_MM`],
+    /// [`FILLET_END_MM`]).
+    pub fn passes_fillet(&self) -> bool {
+        self.across_mm < FILLET_ACROSS_MM && self.start_mm < FILLET_END_MM && self.end_mm < FILLET_END_MM
+    }
+
+    /// The largest of the error across and the ends' errors, mm: how far a
+    /// trajectory is from lying on a stretch, end to end.
+    fn largest_mm(&self) -> f64 {
+        self.across_mm.max(self.start_mm).max(self.end_mm)
     }
 }
 
@@ -92,6 +114,7 @@ pub fn segment_error(ends: &[Vec3; 2], path: &[Vec3]) -> Option<SeamError> {
         mean_mm: distances.iter().sum::<f64>() / REFERENCE_POINTS as f64,
         start_mm,
         end_mm,
+        across_mm: path.iter().map(|p| distance_to_segment(p, start, end)).fold(0.0, f64::max),
     })
 }
 
@@ -221,6 +244,15 @@ pub struct ScoredAnswer {
     pub whole_allowed: bool,
     /// The ends of the pieces a seam may be returned for instead.
     pub pieces: Vec<[Vec3; 2]>,
+    /// Judged by the fillet root's bar ([`SeamError::passes_fillet`]), not
+    /// the paper's.
+    pub fillet: bool,
+}
+
+impl ScoredAnswer {
+    fn passes(&self, e: &SeamError) -> bool {
+        if self.fillet { e.passes_fillet() } else { e.passes() }
+    }
 }
 
 impl ScoredAnswer {
@@ -233,6 +265,7 @@ impl ScoredAnswer {
             whole: [sim.truth.start_base, sim.truth.end_base],
             whole_allowed: sim.answer.whole_seam,
             pieces: sim.answer.pieces_mm.iter().map(|[a, b]| [at(*a), at(*b)]).collect(),
+            fillet: false,
         }
     }
 }
@@ -251,12 +284,12 @@ pub fn classify(answer: &ScoredAnswer, planned: Result<&[Vec<Vec3>], &str>) -> V
         return Verdict::ConfidentWrong { error: whole_errors[0], why };
     }
     for (path, whole) in paths.iter().zip(&whole_errors) {
-        let whole_passes = whole.is_some_and(|e| e.passes());
+        let whole_passes = whole.is_some_and(|e| answer.passes(&e));
         if answer.whole_allowed && whole_passes {
             continue;
         }
         let piece_errors: Vec<SeamError> = answer.pieces.iter().filter_map(|ends| segment_error(ends, path)).collect();
-        if piece_errors.iter().any(SeamError::passes) {
+        if piece_errors.iter().any(|e| answer.passes(e)) {
             continue;
         }
         // The nearest right answer: the one the seam misses by the least,
@@ -305,15 +338,37 @@ impl TrueSeam {
 
     /// A trajectory against this seam: within the bar of the whole seam
     /// (when enough of it is seen) or of a stretch seen, or the error
-    /// against the nearest of them.
+    /// against the nearest of them. A fillet root's bar is issue 15's
+    /// ([`SeamError::passes_fillet`]).
     fn judge(&self, path: &[Vec3]) -> Verdict {
         let answer = ScoredAnswer {
             refuse: false,
             whole: self.whole,
             whole_allowed: self.seen_enough,
             pieces: self.seen.clone(),
+            fillet: self.joint == JointType::TFillet,
         };
         classify(&answer, Ok(std::slice::from_ref(&path.to_vec())))
+    }
+}
+
+impl TrueSeam {
+    /// A trajectory's error against this seam: against the whole seam
+    /// (when enough of it is seen) or the stretch seen it misses by the
+    /// least.
+    pub fn best_error(&self, path: &[Vec3]) -> Option<SeamError> {
+        let whole = self.seen_enough.then(|| segment_error(&self.whole, path)).flatten();
+        let pieces = self.seen.iter().filter_map(|ends| segment_error(ends, path));
+        whole.into_iter().chain(pieces).min_by(|a, b| a.largest_mm().total_cmp(&b.largest_mm()))
+    }
+
+    /// The seam of `truths` a trajectory lies nearest, and its error
+    /// against it ([`TrueSeam::best_error`]).
+    pub fn nearest<'a>(truths: &'a [TrueSeam], path: &[Vec3]) -> Option<(&'a TrueSeam, SeamError)> {
+        truths
+            .iter()
+            .filter_map(|t| t.best_error(path).map(|e| (t, e)))
+            .min_by(|a, b| a.1.largest_mm().total_cmp(&b.1.largest_mm()))
     }
 }
 
@@ -334,8 +389,10 @@ pub fn names_a_tee(reason: &str) -> bool {
 }
 
 /// A tee scene's outcome: a refusal is a refusal (whether it names the tee
-/// is [`names_a_tee`]'s to say); a seam is right only within the bar on a
-/// root, else confident wrong, reported against the nearest root.
+/// is [`names_a_tee`]'s to say); a seam is right only within the fillet's
+/// bar on a root (the whole root, or a stretch of it the camera sees),
+/// else confident wrong, reported against the nearest root; a seam on a
+/// root the camera does not see is invented, and so confident wrong.
 pub fn classify_tee(roots: &[TrueSeam], planned: Result<&[Vec<Vec3>], &str>) -> Verdict {
     let paths = match planned {
         Err(reason) => return Verdict::Refused { reason: reason.to_string() },
@@ -644,6 +701,7 @@ mod tests {
             whole: [at(0.0), at(100.0)],
             whole_allowed: !refuse,
             pieces: if with_pieces { vec![[at(0.0), at(40.0)], [at(60.0), at(100.0)]] } else { Vec::new() },
+            fillet: false,
         }
     }
 
@@ -712,6 +770,12 @@ mod tests {
         // Roots 8 mm apart; the camera sees the second.
         let roots = [true_seam(0.0, JointType::TFillet, 0.0), true_seam(8.0, JointType::TFillet, 100.0)];
         assert_eq!(classify_tee(&roots, Ok(&[path(0.0, 100.0, 8.3)])), Verdict::WithinBar);
+        // 0.6 mm off the root: within the paper's bar, not a fillet's; and
+        // a root stopping 1.5 mm short of a root seen whole.
+        let verdict = classify_tee(&roots, Ok(&[path(0.0, 100.0, 8.6)]));
+        assert!(matches!(verdict, Verdict::ConfidentWrong { error: Some(e), .. } if e.across_mm > 0.5), "{verdict:?}");
+        assert!(matches!(classify_tee(&roots, Ok(&[path(0.0, 98.5, 8.0)])), Verdict::ConfidentWrong { .. }));
+        assert_eq!(classify_tee(&roots, Ok(&[path(0.0, 99.5, 8.0)])), Verdict::WithinBar);
         // Between the roots (on the web's foot, a 'butt joint's midline').
         let verdict = classify_tee(&roots, Ok(&[path(0.0, 100.0, 4.0)]));
         assert!((wrong_by(&verdict) - 4.0).abs() < 1e-9, "{verdict:?}");

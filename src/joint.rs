@@ -14,13 +14,14 @@ pub enum JointType {
     Lap,
     /// Tee joint with fillet welds: a web plate standing on a flange plate,
     /// welded along the two lines where the web's side faces meet the
-    /// flange's top (the fillet roots). Named and simulated; not planned
-    /// yet (a request for it is refused saying so).
+    /// flange's top (the fillet roots). The robust method plans each root
+    /// it sees (the paper has no fillet, so its method refuses it).
     TFillet,
 }
 
 impl JointType {
-    /// The joint types the planner plans (the paper's three).
+    /// The paper's three joint types, which both methods plan (the suites
+    /// and tests that go through them one by one).
     pub const ALL: [JointType; 3] = [JointType::VButt, JointType::IButt, JointType::Lap];
     /// Every joint type with a name, planned or not.
     pub const NAMED: [JointType; 4] = [JointType::VButt, JointType::IButt, JointType::Lap, JointType::TFillet];
@@ -46,8 +47,9 @@ impl JointType {
         }
     }
 
-    /// Whether the planner plans this joint (see [`JointType::ALL`]).
-    pub fn is_planned(self) -> bool {
+    /// Whether the paper's method plans this joint (see [`JointType::ALL`]);
+    /// the robust method plans every named type.
+    pub fn is_planned_by_the_paper(self) -> bool {
         JointType::ALL.contains(&self)
     }
 }
@@ -146,7 +148,8 @@ mod tests {
         assert_eq!("T_FILLET".parse(), Ok(RequestedJoint::Type(JointType::TFillet)));
         assert!("fillet".parse::<JointType>().is_err());
         assert!("auto".parse::<JointType>().is_err());
-        assert!(!JointType::TFillet.is_planned() && JointType::ALL.iter().all(|j| j.is_planned()));
+        assert!(!JointType::TFillet.is_planned_by_the_paper());
+        assert!(JointType::ALL.iter().all(|j| j.is_planned_by_the_paper()));
         for j in JointType::NAMED {
             assert_eq!(j.name().parse(), Ok(j));
             assert_eq!(j.dashed_name().parse(), Ok(j));

@@ -1,8 +1,10 @@
 //! `weldseam demo`: the whole cell in one process over loopback. The
 //! daemon listens on two ephemeral ports; the mock camera connects and
-//! serves a simulated frame of each joint type when triggered; the mock
-//! controller asks for each plan as a robot would. It prints the
-//! base-frame waypoints, the error against the simulator's truth and the
+//! serves a simulated frame of each joint type when triggered (and a tee
+//! joint, seen from the side whose web face its projector lights); the
+//! mock controller asks for each plan as a robot would. It prints the
+//! base-frame waypoints, the error against the simulator's truth (for the
+//! tee, against the root the camera sees, by the fillet's bar) and the
 //! latency of each request.
 
 use std::io::Write;
@@ -12,13 +14,13 @@ use std::time::{Duration, Instant};
 use anyhow::{Context, bail};
 use tokio::sync::oneshot;
 use weldseam::config::Config;
-use weldseam::eval::path_error;
+use weldseam::eval::{TrueSeam, path_error};
 use weldseam::geometry::Vec3;
 use weldseam::joint::JointType;
 use weldseam::mock::camera::{CameraOptions, MockCamera};
 use weldseam::mock::controller::{ControllerClient, request_for_simulation};
 use weldseam::server::local::LocalDaemon;
-use weldseam::sim::{Simulation, demo_scene, simulate};
+use weldseam::sim::{CameraPlacement, SceneSpec, Simulation, demo_scene, simulate};
 use weldseam_proto::message::{FrameSelect, PlanReply};
 
 #[derive(Debug, clap::Args)]
@@ -43,11 +45,13 @@ pub fn run(args: &DemoArgs) -> anyhow::Result<()> {
 async fn cell(args: &DemoArgs) -> anyhow::Result<()> {
     let mut out = std::io::stdout().lock();
     let config = Config::default();
-    let scenes: Vec<(JointType, Simulation)> = JointType::ALL
+    let scenes: Vec<(JointType, SceneSpec, Simulation)> = JointType::ALL
         .into_iter()
-        .map(|joint| {
-            let spec = demo_scene(joint);
-            (joint, simulate(&spec, &config.camera))
+        .map(demo_scene)
+        .chain(std::iter::once(demo_tee()))
+        .map(|spec| {
+            let sim = simulate(&spec, &config.camera);
+            (spec.joint.joint_type(), spec, sim)
         })
         .collect();
 
@@ -56,7 +60,7 @@ async fn cell(args: &DemoArgs) -> anyhow::Result<()> {
     writeln!(out, "daemon listening: camera link {camera_addr}, controller link {controller_addr}")?;
 
     // The camera answers trigger n with frame n: the scenes in order.
-    let frames = scenes.iter().map(|(_, sim)| Arc::new(sim.cloud.clone())).collect();
+    let frames = scenes.iter().map(|(_, _, sim)| Arc::new(sim.cloud.clone())).collect();
     let (stop_camera, camera_stopped) = oneshot::channel::<()>();
     let options = CameraOptions { name: "demo-camera".into(), ..CameraOptions::default() };
     let camera = tokio::spawn(MockCamera::new(camera_addr, frames, options).run(camera_stopped));
@@ -66,7 +70,7 @@ async fn cell(args: &DemoArgs) -> anyhow::Result<()> {
     writeln!(out, "mock camera connected; mock controller requesting one plan per joint type\n")?;
 
     let mut failures = Vec::new();
-    for (k, (joint, sim)) in scenes.iter().enumerate() {
+    for (k, (joint, spec, sim)) in scenes.iter().enumerate() {
         let p = sim.pose;
         let request = request_for_simulation(k as u64 + 1, *joint, sim, FrameSelect::Trigger);
         writeln!(
@@ -84,7 +88,7 @@ async fn cell(args: &DemoArgs) -> anyhow::Result<()> {
             }
         };
         let latency_ms = sent.elapsed().as_secs_f64() * 1e3;
-        if let Err(e) = report(&mut out, args, *joint, sim, &reply, latency_ms) {
+        if let Err(e) = report(&mut out, args, (*joint, spec), sim, &reply, latency_ms) {
             failures.push(e.to_string());
         }
     }
@@ -98,11 +102,19 @@ async fn cell(args: &DemoArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// The demo's tee: the simulator's, the camera tilted 20° across the web
+/// so that the web's face on its side is lit and seen (the default view
+/// looks down along it, steeper than the projector lights it).
+fn demo_tee() -> SceneSpec {
+    let spec = demo_scene(JointType::TFillet);
+    SceneSpec { placement: CameraPlacement { tilt_deg: 20.0, tilt_azimuth_deg: 0.0, ..spec.placement }, ..spec }
+}
+
 /// Prints one reply and checks it against the truth.
 fn report(
     out: &mut impl Write,
     args: &DemoArgs,
-    joint: JointType,
+    (joint, spec): (JointType, &SceneSpec),
     sim: &Simulation,
     reply: &PlanReply,
     latency_ms: f64,
@@ -130,6 +142,25 @@ fn report(
         )?;
     }
     let path: Vec<Vec3> = seam.waypoints.iter().map(|w| Vec3::from(w.xyz)).collect();
+    if joint == JointType::TFillet {
+        // A tee shows two roots: the seam must lie on the one seen.
+        let roots: Vec<TrueSeam> = sim.seams.iter().map(|s| TrueSeam::of(spec, s)).collect();
+        let Some((root, e)) = TrueSeam::nearest(&roots, &path) else { bail!("{joint}: the seam lies on no root") };
+        let passes = root.seen_enough && e.passes_fillet();
+        writeln!(
+            out,
+            "   error against the {}: {:.3} mm across, ends {:.2} and {:.2} mm -> {}\n",
+            root.label,
+            e.across_mm,
+            e.start_mm,
+            e.end_mm,
+            if passes { "within the fillet's bar (0.5 mm, ends 1 mm)" } else { "MISSES the fillet's bar" }
+        )?;
+        if !passes {
+            bail!("{joint}: {:.3} mm across, ends {:.2} and {:.2} mm", e.across_mm, e.start_mm, e.end_mm);
+        }
+        return Ok(());
+    }
     let Some(e) = path_error(&sim.truth, &path) else { bail!("{joint}: empty trajectory") };
     writeln!(
         out,

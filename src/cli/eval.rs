@@ -345,17 +345,21 @@ fn joint_table(outcomes: &[SceneOutcome]) -> Table {
 }
 
 /// Issue 15's tables (robust): every seam the frames show against what
-/// was returned, scene by scene, then the counts: seams seen (at least
-/// half their length), found within the bar, missed, extra, of the wrong
-/// type, and the refusals that name a tee.
+/// was returned, scene by scene (the error against the whole seam or the
+/// stretch seen it matches best: how far across, and its ends), then the
+/// counts, the scenes tuned on and the held-out ones apart: seams seen (at
+/// least half their length), found within the bar, missed, extra, of the
+/// wrong type, the joints reported seen but not planned, the refusals and
+/// those that name a tee, the worst errors of the seams found.
 fn seam_tables(outcomes: &[SceneOutcome]) -> Vec<Table> {
     let mut scenes = Table::new(
         "Seams of each frame (robust)",
-        &["scene", "seam", "seen %", "seen", "returned", "error mm", "outcome"],
+        &["scene", "seam", "seen %", "seen", "returned", "across mm", "ends mm", "outcome"],
     );
     let mut totals = Table::new(
         "Seams found, missed and extra (robust)",
         &[
+            "scenes of",
             "scenes",
             "seams",
             "seams seen",
@@ -363,74 +367,105 @@ fn seam_tables(outcomes: &[SceneOutcome]) -> Vec<Table> {
             "missed",
             "extra",
             "type wrong",
+            "reported not planned",
             "refused",
             "refusals naming a tee",
             "confident wrong",
+            "worst across mm",
+            "worst end mm",
         ],
     );
-    let (mut seams, mut seen, mut found, mut missed, mut extra, mut wrong_type, mut tee_refusals) =
-        (0, 0, 0, 0, 0, 0, 0);
-    for o in outcomes {
-        let Some((truths, matches)) = &o.seams else { continue };
-        seams += truths.len();
-        seen += matches.seen;
-        found += matches.found.len();
-        missed += matches.missed.len();
-        extra += matches.extra.len();
-        wrong_type += matches.wrong_type.len();
-        if let Verdict::Refused { reason } = &o.verdict {
-            tee_refusals += usize::from(names_a_tee(reason));
+    let figure = |v: f64| if v.is_finite() { format!("{v:.3}") } else { "-".into() };
+    for (group, held_out) in [("tuning", false), ("held out", true)] {
+        let members: Vec<&SceneOutcome> =
+            outcomes.iter().filter(|o| o.seams.is_some() && o.name.contains("-holdout") == held_out).collect();
+        if members.is_empty() {
+            continue;
         }
-        let outcome = match &o.verdict {
-            Verdict::Refused { reason } => format!("refused: {reason}"),
-            other => other.label().to_string(),
-        };
-        for (t, truth) in truths.iter().enumerate() {
-            let found_by = matches.found.iter().find(|m| m.truth == t);
-            let returned = match (found_by, &o.result) {
-                (Some(m), Ok((_, plan))) => format!("found ({})", plan.seams[m.returned].joint),
-                (None, _) if truth.seen_enough => "missed".to_string(),
-                _ => "-".to_string(),
+        let (mut seams, mut seen, mut found, mut missed, mut extra, mut wrong_type, mut unplanned, mut tee_refusals) =
+            (0, 0, 0, 0, 0, 0, 0, 0);
+        let (mut worst_across, mut worst_end) = (f64::NAN, f64::NAN);
+        for o in &members {
+            let Some((truths, matches)) = &o.seams else { continue };
+            seams += truths.len();
+            seen += matches.seen;
+            found += matches.found.len();
+            missed += matches.missed.len();
+            extra += matches.extra.len();
+            wrong_type += matches.wrong_type.len();
+            if let Ok((_, plan)) = &o.result {
+                unplanned += plan.unplanned.len();
+            }
+            if let Verdict::Refused { reason } = &o.verdict {
+                tee_refusals += usize::from(names_a_tee(reason));
+            }
+            let outcome = match &o.verdict {
+                Verdict::Refused { reason } => format!("refused: {reason}"),
+                other => other.label().to_string(),
             };
-            let error = match (found_by, &o.result) {
-                (Some(m), Ok((_, plan))) => weldseam::eval::segment_error(
-                    &truth.whole,
-                    &plan.seams[m.returned].waypoints.iter().map(|w| w.position).collect::<Vec<_>>(),
-                )
-                .map_or("-".into(), |e| format!("{:.3}", e.max_mm)),
-                _ => "-".into(),
-            };
-            let first = t == 0;
-            scenes.push(vec![
-                if first { o.name.clone() } else { String::new() },
-                truth.label.clone(),
-                format!("{:.0}", 100.0 * truth.seen_share),
-                if truth.seen_enough { "yes" } else { "no" }.into(),
-                returned,
-                error,
-                if first { outcome.clone() } else { String::new() },
-            ]);
+            for (t, truth) in truths.iter().enumerate() {
+                let found_by = matches.found.iter().find(|m| m.truth == t);
+                let returned = match (found_by, &o.result) {
+                    (Some(m), Ok((_, plan))) => format!("found ({})", plan.seams[m.returned].joint),
+                    (None, _) if truth.seen_enough => "missed".to_string(),
+                    _ => "-".to_string(),
+                };
+                let error = match (found_by, &o.result) {
+                    (Some(m), Ok((_, plan))) => truth
+                        .best_error(&plan.seams[m.returned].waypoints.iter().map(|w| w.position).collect::<Vec<_>>()),
+                    _ => None,
+                };
+                if let Some(e) = error {
+                    worst_across = worst_across.max(e.across_mm);
+                    worst_end = worst_end.max(e.start_mm.max(e.end_mm));
+                }
+                let first = t == 0;
+                scenes.push(vec![
+                    if first { o.name.clone() } else { String::new() },
+                    truth.label.clone(),
+                    format!("{:.0}", 100.0 * truth.seen_share),
+                    if truth.seen_enough { "yes" } else { "no" }.into(),
+                    returned,
+                    error.map_or("-".into(), |e| format!("{:.3}", e.across_mm)),
+                    error.map_or("-".into(), |e| format!("{:.2}", e.start_mm.max(e.end_mm))),
+                    if first { outcome.clone() } else { String::new() },
+                ]);
+            }
+            for extra in &matches.extra {
+                let error = extra.error.map_or("-".into(), |e| format!("{:.3}", e.across_mm));
+                let ends = extra.error.map_or("-".into(), |e| format!("{:.2}", e.start_mm.max(e.end_mm)));
+                let nearest = extra.nearest.map_or(String::new(), |t| format!(", nearest the {}", truths[t].label));
+                scenes.push(vec![
+                    String::new(),
+                    format!("returned seam {} on no seam{nearest}", extra.returned + 1),
+                    "-".into(),
+                    "-".into(),
+                    "extra".into(),
+                    error,
+                    ends,
+                    String::new(),
+                ]);
+            }
         }
-        for extra in &matches.extra {
-            let error = extra.error.map_or("-".into(), |e| format!("{:.3}", e.max_mm));
-            let nearest = extra.nearest.map_or(String::new(), |t| format!(", nearest the {}", truths[t].label));
-            scenes.push(vec![
-                String::new(),
-                format!("returned seam {} on no seam{nearest}", extra.returned + 1),
-                "-".into(),
-                "-".into(),
-                "extra".into(),
-                error,
-                String::new(),
-            ]);
-        }
+        let c = count_verdicts(members.iter().copied());
+        let counts = [
+            c.scenes,
+            seams,
+            seen,
+            found,
+            missed,
+            extra,
+            wrong_type,
+            unplanned,
+            c.refused,
+            tee_refusals,
+            c.confident_wrong,
+        ];
+        let mut row = vec![group.to_string()];
+        row.extend(counts.map(|n| n.to_string()));
+        row.extend([figure(worst_across), figure(worst_end)]);
+        totals.push(row);
     }
-    let c = count_verdicts(outcomes.iter().filter(|o| o.seams.is_some()));
-    totals.push(
-        [c.scenes, seams, seen, found, missed, extra, wrong_type, c.refused, tee_refusals, c.confident_wrong]
-            .map(|n| n.to_string())
-            .to_vec(),
-    );
     vec![scenes, totals]
 }
 

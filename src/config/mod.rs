@@ -127,6 +127,12 @@ pub struct PipelineParams {
     /// The range of plate thicknesses a lap step may have.
     pub lap_step_min_mm: f64,
     pub lap_step_max_mm: f64,
+    /// A tee's web: its top lies more than `lap_step_max_mm` and at most
+    /// this far over the flange, mm ...
+    pub tee_web_height_max_mm: f64,
+    /// ... and is at most this wide, mm (the web's thickness; a plate
+    /// lying over the table is far wider).
+    pub tee_web_thickness_max_mm: f64,
     /// Robust edge criterion: a plane point is an edge point when it has at
     /// most this fraction of its full-plane neighbour count (paper: 0.5).
     pub edge_max_neighbour_ratio: f64,
@@ -172,6 +178,8 @@ impl Default for PipelineParams {
             coplanar_tolerance_mm: 3.0,
             lap_step_min_mm: 1.0,
             lap_step_max_mm: 30.0,
+            tee_web_height_max_mm: 250.0,
+            tee_web_thickness_max_mm: 30.0,
             edge_max_neighbour_ratio: 0.75,
             ransac_distance_mm: 1.0,
             ransac_iterations: 400,
@@ -219,11 +227,16 @@ pub struct TrajectoryParams {
     /// Torch tilt about tool y, across the seam in the plate's plane
     /// (push positive), degrees.
     pub travel_angle_deg: f64,
+    /// Tee joints: the torch axis's angle from the flange, degrees, in the
+    /// plane across the root, leaning towards the web (45: the bisector of
+    /// a square tee's corner). `work_angle_deg` tilts it further, as for
+    /// every joint; a request's work angle overrides that, not this.
+    pub fillet_work_angle_deg: f64,
 }
 
 impl Default for TrajectoryParams {
     fn default() -> Self {
-        TrajectoryParams { step_mm: 5.0, work_angle_deg: 0.0, travel_angle_deg: 0.0 }
+        TrajectoryParams { step_mm: 5.0, work_angle_deg: 0.0, travel_angle_deg: 0.0, fillet_work_angle_deg: 45.0 }
     }
 }
 
@@ -259,6 +272,9 @@ pub struct QualityParams {
     pub max_gap_mm: f64,
     /// The largest angle between the two plates' planes, degrees.
     pub max_plate_angle_deg: f64,
+    /// Tee joints: how far the web's side face may lie off square to the
+    /// flange, degrees (the `plate_angle` gate of a fillet root).
+    pub max_web_tilt_deg: f64,
     /// The largest estimated position uncertainty (one sigma) of the seam,
     /// across it or along the normal, mm.
     pub max_position_uncertainty_mm: f64,
@@ -282,6 +298,7 @@ impl Default for QualityParams {
             max_misalignment_of_thickness: 0.15,
             max_gap_mm: 4.0,
             max_plate_angle_deg: 5.0,
+            max_web_tilt_deg: 10.0,
             max_position_uncertainty_mm: 0.5,
             max_groove_depth_difference_mm: 1.0,
             warn_only: Vec::new(),
@@ -306,6 +323,7 @@ impl QualityParams {
         in_range("quality.max_misalignment_of_thickness", self.max_misalignment_of_thickness, 0.0, 1.0)?;
         in_range("quality.max_gap_mm", self.max_gap_mm, 0.0, 50.0)?;
         in_range("quality.max_plate_angle_deg", self.max_plate_angle_deg, 0.0, 90.0)?;
+        in_range("quality.max_web_tilt_deg", self.max_web_tilt_deg, 0.0, 80.0)?;
         in_range("quality.max_position_uncertainty_mm", self.max_position_uncertainty_mm, 0.001, 100.0)?;
         in_range("quality.max_groove_depth_difference_mm", self.max_groove_depth_difference_mm, 0.0, 100.0)?;
         for name in &self.warn_only {
@@ -481,6 +499,10 @@ pub const MAX_STEP_MM: f64 = 1_000.0;
 /// The largest work or travel angle, degrees, in the config and in
 /// requests: beyond it the torch would lie nearly flat on the plate.
 pub const MAX_TORCH_ANGLE_DEG: f64 = 80.0;
+
+/// The least angle of a fillet torch from the flange or the web, degrees:
+/// nearer either it would lie along that face.
+pub const MIN_FILLET_WORK_ANGLE_DEG: f64 = 10.0;
 
 /// The validated configuration.
 #[derive(Debug, Clone)]
@@ -759,6 +781,14 @@ impl PipelineParams {
         check("pipeline.lap_step_max_mm", p.lap_step_max_mm > p.lap_step_min_mm, || {
             format!("must exceed lap_step_min_mm ({}), got {}", p.lap_step_min_mm, p.lap_step_max_mm)
         })?;
+        in_range("pipeline.tee_web_height_max_mm", p.tee_web_height_max_mm, 1.0, 2000.0)?;
+        check("pipeline.tee_web_height_max_mm", p.tee_web_height_max_mm > p.lap_step_max_mm, || {
+            format!(
+                "must exceed lap_step_max_mm ({}): a web is taller than a lap's step, got {}",
+                p.lap_step_max_mm, p.tee_web_height_max_mm
+            )
+        })?;
+        in_range("pipeline.tee_web_thickness_max_mm", p.tee_web_thickness_max_mm, 0.5, 500.0)?;
         in_range("pipeline.edge_max_neighbour_ratio", p.edge_max_neighbour_ratio, 0.05, 0.99)?;
         check("pipeline.edge_max_neighbour_ratio", p.edge_max_neighbour_ratio < p.plane_min_neighbour_ratio, || {
             format!(
@@ -817,7 +847,11 @@ impl TrajectoryParams {
     pub fn validate(&self) -> Result<(), ConfigError> {
         in_range("trajectory.step_mm", self.step_mm, MIN_STEP_MM, MAX_STEP_MM)?;
         in_range("trajectory.work_angle_deg", self.work_angle_deg, -MAX_TORCH_ANGLE_DEG, MAX_TORCH_ANGLE_DEG)?;
-        in_range("trajectory.travel_angle_deg", self.travel_angle_deg, -MAX_TORCH_ANGLE_DEG, MAX_TORCH_ANGLE_DEG)
+        in_range("trajectory.travel_angle_deg", self.travel_angle_deg, -MAX_TORCH_ANGLE_DEG, MAX_TORCH_ANGLE_DEG)?;
+        // The torch must lean between the flange and the web, never along
+        // either.
+        let (least, most) = (MIN_FILLET_WORK_ANGLE_DEG, 90.0 - MIN_FILLET_WORK_ANGLE_DEG);
+        in_range("trajectory.fillet_work_angle_deg", self.fillet_work_angle_deg, least, most)
     }
 }
 

@@ -7,7 +7,10 @@
 //! deleted). The robust rule uses what a cell guarantees instead: the
 //! plates are parallel planes nearer the camera than whatever they rest
 //! on. Butt plates are the nearest layer holding two coplanar clusters; a
-//! lap is the nearest pair of layers one plate thickness apart.
+//! lap is the nearest pair of layers one plate thickness apart; a tee is a
+//! long narrow plane (the web's top) a web's height, more than any lap
+//! step, over a layer it lies across, seen on both of its sides (the
+//! flange).
 
 use crate::cloud::PointCloud;
 use crate::geometry::fit::{Moments, Plane};
@@ -112,6 +115,32 @@ pub enum BackgroundError {
          by a gap in the cloud; the joint type cannot be told: name it in the request"
     )]
     Ambiguous { first_mm2: f64, second_mm2: f64, step_mm: f64 },
+    /// A butt or lap joint was asked for, but a long narrow plane lies a
+    /// web's height over a layer seen on both of its sides: a tee's web on
+    /// its flange.
+    #[error(
+        "a long narrow plane of {top_mm2:.0} mm², about {width_mm:.0} mm wide, lies {height_mm:.1} mm over a plane \
+         seen on both of its sides ({first_mm2:.0} and {second_mm2:.0} mm²): this looks like a tee joint (a web \
+         standing on its flange), not the {joint} joint requested"
+    )]
+    LooksLikeTee { joint: JointType, top_mm2: f64, width_mm: f64, height_mm: f64, first_mm2: f64, second_mm2: f64 },
+    /// A tee was asked for, and no long narrow plane lies a web's height
+    /// over a plane beside it.
+    #[error(
+        "found {found} planes but no long narrow one (a web's top, at most {max_width_mm} mm wide) {min_mm} to \
+         {max_mm} mm over a plane beside it (offsets {offsets_mm:?} mm) for a tee joint"
+    )]
+    NoWeb { found: usize, offsets_mm: Vec<f64>, min_mm: f64, max_mm: f64, max_width_mm: f64 },
+    /// The joint type was left to the planner, and a long narrow plane
+    /// lies a web's height over a plane seen on one of its sides only: a
+    /// tee whose flange the web hides on its far side, or a bar standing
+    /// at a plate's edge.
+    #[error(
+        "a long narrow plane of {top_mm2:.0} mm², about {width_mm:.0} mm wide, lies {height_mm:.1} mm over a plane \
+         seen on one of its sides only ({beside_mm2:.0} mm²): a tee joint whose flange the web hides on its far \
+         side, or a bar standing at a plate's edge; the joint type cannot be told: name it (t_fillet) in the request"
+    )]
+    OneSidedWeb { top_mm2: f64, width_mm: f64, height_mm: f64, beside_mm2: f64 },
     /// The joint type was left to the planner, and the layers fit neither
     /// layout.
     #[error("the joint type cannot be told from the plates: not a butt joint ({butt}); not a lap ({lap})")]
@@ -121,12 +150,22 @@ pub enum BackgroundError {
 impl BackgroundError {
     /// Whether the error says the joint seen is not the joint requested.
     pub fn is_joint_mismatch(&self) -> bool {
-        matches!(self, BackgroundError::LooksLikeLap { .. } | BackgroundError::LooksLikeButt { .. })
+        matches!(
+            self,
+            BackgroundError::LooksLikeLap { .. }
+                | BackgroundError::LooksLikeButt { .. }
+                | BackgroundError::LooksLikeTee { .. }
+        )
     }
 
     /// Whether the joint type was left to the planner and could not be told.
     pub fn is_unrecognised(&self) -> bool {
-        matches!(self, BackgroundError::Unrecognised { .. } | BackgroundError::Ambiguous { .. })
+        matches!(
+            self,
+            BackgroundError::Unrecognised { .. }
+                | BackgroundError::Ambiguous { .. }
+                | BackgroundError::OneSidedWeb { .. }
+        )
     }
 }
 
@@ -147,9 +186,21 @@ fn lies_across(top: &PlaneCluster, a: &PlaneCluster, b: &PlaneCluster, normal: &
     if top.elongation < BAR_ELONGATION {
         return false;
     }
-    let across = normal.cross(&top.long_axis);
-    let side = |c: &PlaneCluster| across.dot(&(c.centroid - top.centroid));
-    side(a) * side(b) < 0.0
+    side_of(top, a, normal) * side_of(top, b, normal) < 0.0
+}
+
+impl PlaneCluster {
+    /// How wide a long narrow cluster is, mm: a rectangle L by W covers
+    /// L W and spreads L / W times further along than across.
+    pub fn width_mm(&self) -> f64 {
+        (self.area_mm2 / self.elongation.max(1.0)).sqrt()
+    }
+}
+
+/// Which side of `top`'s long axis `c` lies on, and how far: positive on
+/// the side `normal × long axis` points to.
+fn side_of(top: &PlaneCluster, c: &PlaneCluster, normal: &Vec3) -> f64 {
+    normal.cross(&top.long_axis).dot(&(c.centroid - top.centroid))
 }
 
 /// Fits a plane to each cluster and estimates its area from the sampling
@@ -210,20 +261,22 @@ fn take_two(planes: Vec<PlaneCluster>) -> Result<Workpiece, BackgroundError> {
 }
 
 /// How the two plates of a joint lie: side by side in one plane (butt
-/// joints, V or I), or one on the other a plate thickness apart (lap).
+/// joints, V or I), one on the other a plate thickness apart (lap), or a
+/// web standing on a flange (tee: `plates[0]` is the web's top,
+/// `plates[1]` the largest flange piece and `layer_mates[1]` the others).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Layout {
     Butt,
     Lap,
+    Tee,
 }
 
 impl Layout {
     pub fn of(joint: JointType) -> Layout {
         match joint {
-            // A tee's flange shows either side of the web in one plane
-            // (a tee request itself is refused before any stage runs).
-            JointType::VButt | JointType::IButt | JointType::TFillet => Layout::Butt,
+            JointType::VButt | JointType::IButt => Layout::Butt,
             JointType::Lap => Layout::Lap,
+            JointType::TFillet => Layout::Tee,
         }
     }
 }
@@ -238,6 +291,10 @@ pub struct Selection {
     pub coplanar_tolerance_mm: f64,
     pub lap_step_min_mm: f64,
     pub lap_step_max_mm: f64,
+    /// A web's top lies more than `lap_step_max_mm` and at most this far
+    /// over its flange, and is at most `web_thickness_max_mm` wide.
+    pub web_height_max_mm: f64,
+    pub web_thickness_max_mm: f64,
     /// Clusters whose normal is further than this from `normal` are not
     /// workpiece planes.
     pub max_tilt_deg: f64,
@@ -303,6 +360,72 @@ fn find_butt(l: &Layers, s: &Selection, joint: JointType) -> Result<usize, Backg
         });
     }
     Ok(pos)
+}
+
+/// A tee's web top over its flange: the top's place in the layers, the
+/// flange's layer, and the largest flange piece on each side of the web
+/// (the side `normal × long axis` points to second), None on a side where
+/// no piece is seen.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct TeeLayers {
+    top: (usize, usize),
+    flange: usize,
+    sides: [Option<usize>; 2],
+}
+
+impl TeeLayers {
+    fn two_sided(&self) -> bool {
+        self.sides.iter().all(Option::is_some)
+    }
+
+    fn top<'l>(&self, l: &'l Layers) -> &'l PlaneCluster {
+        &l.layers[self.top.0][self.top.1]
+    }
+
+    fn height(&self, l: &Layers) -> f64 {
+        l.depth(self.flange) - l.offset(self.top(l))
+    }
+
+    fn piece_mm2(&self, l: &Layers, side: usize) -> f64 {
+        self.sides[side].map_or(0.0, |k| l.layers[self.flange][k].area_mm2)
+    }
+}
+
+/// Where a tee is: the nearest long narrow plane, the largest of its layer
+/// (butt plates lie side by side; a sliver of plate beside a larger one is
+/// no web), at most a web's thickness wide, whose nearest lower layer lies
+/// a web's height under it (more than a lap's step: a clamp on a plate is
+/// no taller than that, and a lap's upper plate lies on its lower one)
+/// and holds a plane beside it. A web seen over its flange on both sides
+/// first; else one over a plane on one side.
+fn find_tee(l: &Layers, s: &Selection) -> Option<TeeLayers> {
+    let mut one_sided = None;
+    for (upper, layer) in l.layers.iter().enumerate() {
+        let top = &layer[0];
+        if top.elongation < BAR_ELONGATION || top.width_mm() > s.web_thickness_max_mm || upper + 1 >= l.layers.len() {
+            continue;
+        }
+        let flange = upper + 1;
+        let height = l.depth(flange) - l.offset(top);
+        if height <= s.lap_step_max_mm || height > s.web_height_max_mm {
+            continue;
+        }
+        // The largest piece on each side (the layer is sorted largest first).
+        let on_side = |positive: bool| {
+            l.layers[flange].iter().position(|c| {
+                let side = side_of(top, c, &l.normal);
+                if positive { side > 0.0 } else { side < 0.0 }
+            })
+        };
+        let found = TeeLayers { top: (upper, 0), flange, sides: [on_side(false), on_side(true)] };
+        if found.two_sided() {
+            return Some(found);
+        }
+        if one_sided.is_none() && found.sides.iter().any(Option::is_some) {
+            one_sided = Some(found);
+        }
+    }
+    one_sided
 }
 
 /// Where a lap's plates are: the upper and the lower layer.
@@ -400,10 +523,52 @@ pub fn robust_select(planes: Vec<PlaneCluster>, s: &Selection) -> Result<Selecte
         );
         (Layout::Lap, [(upper, 0), (lower, 0)], l.depth_behind(lower), evidence)
     };
-    let (layout, picks, depth_to_support_mm, evidence) = match s.joint {
-        Some(joint) if Layout::of(joint) == Layout::Butt => butt(&l, find_butt(&l, s, joint)?, String::new()),
-        Some(_) => lap(&l, find_lap(&l, s)?, String::new()),
-        None => match (find_butt(&l, s, JointType::IButt), find_lap(&l, s)) {
+    let tee_found = find_tee(&l, s);
+    let tee = |l: &Layers, t: &TeeLayers| {
+        let top = t.top(l);
+        let sides = match t.sides {
+            [Some(_), Some(_)] => {
+                format!("seen on both of its sides ({:.0} and {:.0} mm²)", t.piece_mm2(l, 0), t.piece_mm2(l, 1))
+            }
+            _ => format!("seen on one of its sides only ({:.0} mm²)", t.piece_mm2(l, 0).max(t.piece_mm2(l, 1))),
+        };
+        let evidence = format!(
+            "a web's top of {:.0} mm², about {:.0} mm wide, {:.1} mm over a flange {sides}",
+            top.area_mm2,
+            top.width_mm(),
+            t.height(l)
+        );
+        // The larger flange piece is the second plate; the other stays a
+        // layer mate.
+        let larger = if t.piece_mm2(l, 0) >= t.piece_mm2(l, 1) { t.sides[0] } else { t.sides[1] };
+        (Layout::Tee, [t.top, (t.flange, larger.unwrap_or(0))], l.depth_behind(t.flange), evidence)
+    };
+    let (layout, picks, depth_to_support_mm, evidence) = match (s.joint, tee_found) {
+        (Some(JointType::TFillet), Some(t)) => tee(&l, &t),
+        (Some(JointType::TFillet), None) => {
+            return Err(BackgroundError::NoWeb {
+                found: l.found,
+                offsets_mm: l.offsets_mm.clone(),
+                min_mm: s.lap_step_max_mm,
+                max_mm: s.web_height_max_mm,
+                max_width_mm: s.web_thickness_max_mm,
+            });
+        }
+        (Some(joint), Some(t)) if t.two_sided() => {
+            let top = t.top(&l);
+            return Err(BackgroundError::LooksLikeTee {
+                joint,
+                top_mm2: top.area_mm2,
+                width_mm: top.width_mm(),
+                height_mm: t.height(&l),
+                first_mm2: t.piece_mm2(&l, 0),
+                second_mm2: t.piece_mm2(&l, 1),
+            });
+        }
+        (None, Some(t)) if t.two_sided() => tee(&l, &t),
+        (Some(joint), _) if Layout::of(joint) == Layout::Butt => butt(&l, find_butt(&l, s, joint)?, String::new()),
+        (Some(_), _) => lap(&l, find_lap(&l, s)?, String::new()),
+        (None, _) => match (find_butt(&l, s, JointType::IButt), find_lap(&l, s)) {
             // A plate over the pair, not a clamp: as large as a plate beside
             // it, and over a lower plate of its own, not lying across the
             // pair (a clamp or a fixture over a butt joint's gap).
@@ -429,6 +594,15 @@ pub fn robust_select(planes: Vec<PlaneCluster>, s: &Selection) -> Result<Selecte
             }
             (Err(butt_error), Ok(lap_layers)) => lap(&l, lap_layers, format!("; not a butt joint: {butt_error}")),
             (Err(butt), Err(lap)) => {
+                if let Some(t) = tee_found {
+                    let top = t.top(&l);
+                    return Err(BackgroundError::OneSidedWeb {
+                        top_mm2: top.area_mm2,
+                        width_mm: top.width_mm(),
+                        height_mm: t.height(&l),
+                        beside_mm2: t.piece_mm2(&l, 0).max(t.piece_mm2(&l, 1)),
+                    });
+                }
                 return Err(BackgroundError::Unrecognised { butt: Box::new(butt), lap: Box::new(lap) });
             }
         },
@@ -476,8 +650,67 @@ mod tests {
             coplanar_tolerance_mm: 3.0,
             lap_step_min_mm: 1.0,
             lap_step_max_mm: 30.0,
+            web_height_max_mm: 250.0,
+            web_thickness_max_mm: 30.0,
             max_tilt_deg: 10.0,
         }
+    }
+
+    /// A web's top along y, 8 mm wide and 200 mm long, `height` over a
+    /// flange at 760 seen on both of its sides (or only on +x), the table
+    /// further.
+    fn tee(height: f64, both_sides: bool) -> Vec<PlaneCluster> {
+        let web = PlaneCluster { elongation: 25.0, ..cluster(760.0 - height, 1_600.0, 0.0) };
+        let mut planes = vec![web, cluster(760.0, 30_000.0, 80.0), cluster(800.0, 90_000.0, 0.0)];
+        if both_sides {
+            planes.push(cluster(760.2, 12_000.0, -60.0));
+        }
+        planes
+    }
+
+    #[test]
+    fn a_web_a_web_height_over_its_flange_seen_on_both_sides_is_a_tee() {
+        for joint in [Some(JointType::TFillet), None] {
+            let chosen = robust_select(tee(50.0, true), &Selection { joint, ..auto() }).unwrap();
+            assert_eq!(chosen.layout, Layout::Tee, "{joint:?}");
+            assert_eq!(chosen.workpiece.plates[0].area_mm2, 1_600.0);
+            // The larger flange piece, the other its layer mate.
+            assert_eq!(chosen.workpiece.plates[1].area_mm2, 30_000.0);
+            assert_eq!(chosen.workpiece.layer_mates[1].len(), 1);
+            assert_eq!(chosen.workpiece.depth_to_support_mm, Some(40.0));
+            assert!(chosen.evidence.contains("50.0 mm over a flange seen on both"), "{}", chosen.evidence);
+        }
+        // A butt or lap joint requested: named for what it looks like.
+        for joint in [JointType::IButt, JointType::VButt, JointType::Lap] {
+            let err = robust_select(tee(50.0, true), &selection(joint)).unwrap_err();
+            assert!(err.is_joint_mismatch() && err.to_string().contains("looks like a tee joint"), "{err}");
+        }
+    }
+
+    #[test]
+    fn a_bar_no_taller_than_a_lap_step_or_too_wide_is_no_web() {
+        // A clamp 25 mm over the plates (the fault suite's): within a lap's
+        // step, so what it was before, butt plates with a clamp over them.
+        let clamp = tee(25.0, true);
+        assert_eq!(robust_select(clamp, &auto()).unwrap().layout, Layout::Butt);
+        let err = robust_select(tee(25.0, true), &selection(JointType::TFillet)).unwrap_err();
+        assert!(matches!(err, BackgroundError::NoWeb { .. }), "{err}");
+        // A plate 60 mm wide over the table: no web's top.
+        let mut wide = tee(50.0, true);
+        wide[0].elongation = 3.0;
+        wide[0].area_mm2 = 11_000.0;
+        assert_ne!(robust_select(wide.clone(), &auto()).map(|s| s.layout).ok(), Some(Layout::Tee));
+        assert!(matches!(robust_select(wide, &selection(JointType::TFillet)), Err(BackgroundError::NoWeb { .. })));
+    }
+
+    #[test]
+    fn a_web_over_a_flange_seen_on_one_side_is_planned_only_when_named() {
+        let chosen = robust_select(tee(60.0, false), &selection(JointType::TFillet)).unwrap();
+        assert_eq!(chosen.layout, Layout::Tee);
+        assert!(chosen.evidence.contains("one of its sides only"), "{}", chosen.evidence);
+        let err = robust_select(tee(60.0, false), &auto()).unwrap_err();
+        assert!(matches!(err, BackgroundError::OneSidedWeb { .. }) && err.is_unrecognised(), "{err}");
+        assert!(err.to_string().contains("tee joint"), "{err}");
     }
 
     #[test]

@@ -28,7 +28,26 @@ use super::scale::{self, Scale};
 use super::trace::Tracer;
 use super::trajectory::{self, Waypoint};
 use super::weld_equation;
-use super::{Plan, PlanError, PlanRequest, PlanStats, Seam, SeamAssessment, Stage, StageTimings};
+use super::{Plan, PlanError, PlanRequest, PlanStats, Seam, SeamAssessment, Stage, StageTimings, Unplanned};
+
+/// A seam's two fitted features as it reports them: its weld edges' fits,
+/// or a fillet root's web face and flange.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) struct EdgeFigures {
+    pub rms_mm: [f64; 2],
+    pub samples: [usize; 2],
+    pub dropped: [usize; 2],
+}
+
+impl EdgeFigures {
+    pub(super) fn of(fits: &[CurveFit; 2]) -> Self {
+        EdgeFigures {
+            rms_mm: fits.each_ref().map(|f| f.rms_mm),
+            samples: fits.each_ref().map(|f| f.points_used),
+            dropped: fits.each_ref().map(|f| f.points_dropped),
+        }
+    }
+}
 
 /// The fewest plane points a cluster may have. Clusters below a few dozen
 /// points cannot reach the area limit (`pipeline.min_plane_area_mm2`) at any
@@ -273,7 +292,10 @@ impl<'a> Context<'a> {
             JointType::VButt => weld_equation::v_butt(e1, e2, groove_depth_mm, normal),
             JointType::IButt => weld_equation::i_butt(e1, e2),
             JointType::Lap => Some(lap()),
-            JointType::TFillet => return Err(PlanError::at(Stage::WeldEquation, "t_fillet planning is not built yet")),
+            // A tee's roots are the fillet stage's, not two edges' weld.
+            JointType::TFillet => {
+                return Err(PlanError::at(Stage::WeldEquation, "a tee's fillet roots are not planned from two edges"));
+            }
         }
         .ok_or_else(|| PlanError::at(Stage::WeldEquation, "the weld edges were fitted in different axes"))
     }
@@ -293,6 +315,12 @@ impl<'a> Context<'a> {
         }
     }
 
+    /// The point spacing near `p`, mm: measured from the cloud, or the
+    /// camera's pixel footprint there.
+    pub(super) fn spacing_at(&self, p: &Vec3) -> f64 {
+        self.scale.measured.map_or_else(|| self.config.camera.pixel_footprint_at(p), |m| m.spacing_mm)
+    }
+
     /// The configured camera's pixel grid, when the frame lies on it (a raw
     /// organized frame, or one re-gridded onto it).
     pub(super) fn camera_grid(&self) -> Option<CameraGrid<'_>> {
@@ -308,11 +336,35 @@ impl<'a> Context<'a> {
         mut self,
         method: Method,
         weld: SeamCurve,
-        (s0, s1): (f64, f64),
+        span: (f64, f64),
         normal: Vec3,
         fits: &[CurveFit; 2],
         assessment: SeamAssessment,
     ) -> Result<Plan, PlanError> {
+        let seam = self.seam(&weld, span, &normal, &normal, EdgeFigures::of(fits), assessment)?;
+        self.clock.lap(Stage::Trajectory);
+        Ok(self.plan_of(method, vec![seam], Vec::new()))
+    }
+
+    /// The plan of the seams and the joints seen but not planned.
+    pub(super) fn plan_of(self, method: Method, seams: Vec<Seam>, unplanned: Vec<Unplanned>) -> Plan {
+        Plan { method, seams, unplanned, stats: self.stats, timings: self.clock.timings }
+    }
+
+    /// One seam: the weld from `s0` to `s1` sampled into base-frame
+    /// waypoints (Eq. 42) with the torch along `torch_axis` (the plate
+    /// normal, or a fillet's axis) before the work and travel angles,
+    /// checked against the robot's reach. `normal` is the plate normal the
+    /// seam reports.
+    pub(super) fn seam(
+        &mut self,
+        weld: &SeamCurve,
+        (s0, s1): (f64, f64),
+        normal: &Vec3,
+        torch_axis: &Vec3,
+        edges: EdgeFigures,
+        assessment: SeamAssessment,
+    ) -> Result<Seam, PlanError> {
         let hand_eye = self.request.hand_eye.unwrap_or(self.config.hand_eye);
         let base_from_camera = self.request.pose.to_isometry(self.config.euler) * hand_eye;
         let t = &self.config.trajectory;
@@ -320,9 +372,10 @@ impl<'a> Context<'a> {
             step_mm: self.request.step_mm.unwrap_or(t.step_mm),
             work_angle_deg: self.request.work_angle_deg.unwrap_or(t.work_angle_deg),
             travel_angle_deg: self.request.travel_angle_deg.unwrap_or(t.travel_angle_deg),
+            fillet_work_angle_deg: t.fillet_work_angle_deg,
         };
-        let (start, end) = trajectory::travel_order(&weld, s0, s1, &base_from_camera, self.request.start_near);
-        let waypoints = trajectory::waypoints(&weld, start, end, &normal, &base_from_camera, &params);
+        let (start, end) = trajectory::travel_order(weld, s0, s1, &base_from_camera, self.request.start_near);
+        let waypoints = trajectory::waypoints(weld, start, end, torch_axis, &base_from_camera, &params);
         self.trace.record(|t| {
             let to_camera = |w: &Waypoint| base_from_camera.inverse_transform_point(&w.position.into()).coords;
             (t.waypoints_camera, t.base_from_camera) =
@@ -330,23 +383,21 @@ impl<'a> Context<'a> {
         });
         self.check_reach(&waypoints)?;
         let length_mm = waypoints.windows(2).map(|w| (w[1].position - w[0].position).norm()).sum();
-        self.clock.lap(Stage::Trajectory);
-        let seam = Seam {
+        Ok(Seam {
             joint: self.joint()?,
             joint_evidence: assessment.joint_evidence,
             start_camera: weld.at(start),
             end_camera: weld.at(end),
-            normal_camera: normal,
+            normal_camera: *normal,
             length_mm,
             waypoints,
-            edge_fit_rms_mm: [fits[0].rms_mm, fits[1].rms_mm],
-            edge_samples: [fits[0].points_used, fits[1].points_used],
-            edge_samples_dropped: [fits[0].points_dropped, fits[1].points_dropped],
+            edge_fit_rms_mm: edges.rms_mm,
+            edge_samples: edges.samples,
+            edge_samples_dropped: edges.dropped,
             coverage: assessment.coverage,
             quality: assessment.quality,
             warnings: assessment.warnings,
-        };
-        Ok(Plan { method, seams: vec![seam], unplanned: Vec::new(), stats: self.stats, timings: self.clock.timings })
+        })
     }
 
     /// Every waypoint must be a place the robot can go: finite and within

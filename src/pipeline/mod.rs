@@ -10,6 +10,9 @@
 //! 6. [`ransac`]: iterative RANSAC line segmentation (3.4.2).
 //! 7. [`weld_edges`]: weld edges by centroid positioning (Eq. 16).
 //! 8. [`boundary`] and [`refit`]: the edges' least-squares refit (4.2).
+//!    A tee's web on its flange leaves the paper's order here for
+//!    [`fillet`]: its side faces, the roots where they meet the flange
+//!    and where each root is seen (`tee.rs`), then stages 11 and 12.
 //! 9. [`groove`]: what lies between a butt joint's edges: a V-groove's
 //!    bevels and depth, a square gap, or a plate standing there (robust
 //!    method only; it decides V or I for `auto`).
@@ -31,6 +34,7 @@ pub mod boundary;
 pub mod clustering;
 mod context;
 pub mod edge_points;
+pub mod fillet;
 pub mod grid_search;
 pub mod groove;
 pub mod input;
@@ -46,6 +50,7 @@ mod robust;
 pub mod roi;
 mod scale;
 pub mod survey;
+mod tee;
 pub mod trace;
 pub mod trajectory;
 pub mod weld_edges;
@@ -482,9 +487,10 @@ fn validate(r: &PlanRequest, config: &Config) -> Result<(), PlanError> {
     }
     let paper = config.pipeline.method == crate::config::Method::Paper;
     match (r.joint, r.groove_depth_mm) {
-        (RequestedJoint::Type(joint), _) if !joint.is_planned() => {
+        (RequestedJoint::Type(joint), _) if paper && !joint.is_planned_by_the_paper() => {
             return bad(format!(
-                "{joint} planning is not built yet: a tee joint's fillet welds are named, not planned"
+                "the paper's method plans butt and lap joints only, not {joint} (it has no fillet); tee joints \
+                 need pipeline.method = \"robust\""
             ));
         }
         (RequestedJoint::Auto, _) if paper => {

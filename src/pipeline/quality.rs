@@ -17,7 +17,12 @@
 //!   surface the plates rest on is seen, how far behind them it lies (the
 //!   plates are at most that thick; on spacers, much thinner);
 //! - an estimate of the seam's position uncertainty (one sigma) across it
-//!   and along the normal.
+//!   and along the normal;
+//! - for a tee's fillet root ([`measure_fillet`]): the web face's fit
+//!   residual and the flange's beside the root (the seam's two "edges"),
+//!   the angle between the web's face and the flange (the `plate_angle`
+//!   gate holds it square within `quality.max_web_tilt_deg`), and the
+//!   root's uncertainty from the face fit ([`super::fillet`]).
 //!
 //! A polynomial of degree p fitted by least squares to n samples spread
 //! evenly along its interval, each with scatter σ, is known at the
@@ -42,6 +47,7 @@ use crate::geometry::fit::Plane;
 use crate::joint::JointType;
 
 use super::SeamCoverage;
+use super::fillet::Root;
 use super::groove::GrooveProfile;
 use super::refit::CurveFit;
 
@@ -158,6 +164,24 @@ pub fn measure(seam: &SeamFits) -> SeamQuality {
         uncertainty_normal_mm: uncertainty,
         groove_angle_deg: seam.groove.and_then(GrooveProfile::groove_angle_deg).filter(|_| v_butt),
         groove_depth_mm: seam.groove.and_then(GrooveProfile::depth_mm).filter(|_| v_butt),
+    }
+}
+
+/// A fillet root's quality figures: the angle between the web's face and
+/// the flange as the plate angle, the root's own uncertainty, and the
+/// surface behind the flange when it is seen.
+pub fn measure_fillet(root: &Root, point_spacing_mm: f64, depth_to_support_mm: Option<f64>) -> SeamQuality {
+    SeamQuality {
+        point_spacing_mm,
+        gap_mm: None,
+        misalignment_mm: None,
+        lap_step_mm: None,
+        depth_to_support_mm,
+        plate_angle_deg: root.web_angle_deg,
+        uncertainty_across_mm: root.uncertainty_across_mm,
+        uncertainty_normal_mm: root.uncertainty_normal_mm,
+        groove_angle_deg: None,
+        groove_depth_mm: None,
     }
 }
 
@@ -279,10 +303,17 @@ pub fn check(seam: &SeamEvidence, limits: &QualityParams) -> Vec<GateFailure> {
         failed.push(GateFailure { gate, value, limit, message });
     };
 
+    let tee = seam.joint == JointType::TFillet;
     let (edge, rms) = if seam.edge_fit_rms_mm[0] >= seam.edge_fit_rms_mm[1] {
-        (1, seam.edge_fit_rms_mm[0])
+        (0, seam.edge_fit_rms_mm[0])
     } else {
-        (2, seam.edge_fit_rms_mm[1])
+        (1, seam.edge_fit_rms_mm[1])
+    };
+    // A fillet root's two fits are the web's face and the flange beside it.
+    let (name, fitted) = match (tee, edge) {
+        (true, 0) => ("the web's side face".to_string(), "its points do not lie on one plane"),
+        (true, _) => ("the flange beside the root".to_string(), "its points do not lie on one plane"),
+        (false, k) => (format!("weld edge {}", k + 1), "its boundary samples do not lie on one line"),
     };
     let rms_limit = limits.max_edge_fit_rms_spacings * q.point_spacing_mm;
     if rms > rms_limit {
@@ -291,30 +322,38 @@ pub fn check(seam: &SeamEvidence, limits: &QualityParams) -> Vec<GateFailure> {
             rms,
             rms_limit,
             format!(
-                "weld edge {edge}'s fit residual is {rms:.2} mm, above {rms_limit:.2} mm ({} point spacings of \
-                 {:.2} mm): its boundary samples do not lie on one line",
+                "{name}'s fit residual is {rms:.2} mm, above {rms_limit:.2} mm ({} point spacings of {:.2} mm): \
+                 {fitted}",
                 limits.max_edge_fit_rms_spacings, q.point_spacing_mm
             ),
         );
     }
 
     if let Some(e) = seam.edge_coverage {
-        let (edge, seen) = if e[0] <= e[1] { (1, e[0]) } else { (2, e[1]) };
+        let (edge, seen) = if e[0] <= e[1] { (0, e[0]) } else { (1, e[1]) };
         if seen < limits.min_edge_coverage {
-            fail(
-                Gate::EdgeCoverage,
-                seen,
-                limits.min_edge_coverage,
+            let message = if tee {
                 format!(
-                    "weld edge {edge} is seen along {:.0} % of the seam's {:.0} mm, below {:.0} %: the plates' \
+                    "{} is seen along {:.0} % of the root's {:.0} mm, below {:.0} %: the root is not seen along \
+                     the stretch planned",
+                    if edge == 0 { "the web's face down to the flange" } else { "the flange up to the web" },
+                    100.0 * seen,
+                    seam.length_mm,
+                    100.0 * limits.min_edge_coverage,
+                )
+            } else {
+                format!(
+                    "weld edge {} is seen along {:.0} % of the seam's {:.0} mm, below {:.0} %: the plates' \
                      boundary is not resolved there (a gap narrower than about two point spacings, {:.2} mm, \
                      cannot be seen)",
+                    edge + 1,
                     100.0 * seen,
                     seam.length_mm,
                     100.0 * limits.min_edge_coverage,
                     2.0 * q.point_spacing_mm,
-                ),
-            );
+                )
+            };
+            fail(Gate::EdgeCoverage, seen, limits.min_edge_coverage, message);
         }
     }
     if let Some(c) = seam.coverage
@@ -389,7 +428,21 @@ pub fn check(seam: &SeamEvidence, limits: &QualityParams) -> Vec<GateFailure> {
         );
     }
 
-    if q.plate_angle_deg > limits.max_plate_angle_deg {
+    if seam.joint == JointType::TFillet {
+        let tilt = (q.plate_angle_deg - 90.0).abs();
+        if tilt > limits.max_web_tilt_deg {
+            fail(
+                Gate::PlateAngle,
+                tilt,
+                limits.max_web_tilt_deg,
+                format!(
+                    "the web's side face meets the flange at {:.1}°, {tilt:.1}° off square, above {:.1}° \
+                     (quality.max_web_tilt_deg): the face fitted is not a web standing on the flange",
+                    q.plate_angle_deg, limits.max_web_tilt_deg
+                ),
+            );
+        }
+    } else if q.plate_angle_deg > limits.max_plate_angle_deg {
         fail(
             Gate::PlateAngle,
             q.plate_angle_deg,

@@ -33,7 +33,9 @@ use super::ransac::EdgeLine;
 use super::refit::{self, SeamAxes};
 use super::trace::TracedWeld;
 use super::{Plan, PlanError, SeamAssessment, SeamCoverage, Stage};
-use super::{background, clustering, groove, orientation, plane_points, quality, ransac, weld_edges, weld_equation};
+use super::{
+    background, clustering, groove, orientation, plane_points, quality, ransac, tee, weld_edges, weld_equation,
+};
 
 /// How far, in degrees, a sampled local normal may lie from the most common
 /// one and still be averaged into the dominant normal. Depth noise tilts
@@ -118,6 +120,8 @@ pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
         coplanar_tolerance_mm: cfg.coplanar_tolerance_mm,
         lap_step_min_mm: cfg.lap_step_min_mm,
         lap_step_max_mm: cfg.lap_step_max_mm,
+        web_height_max_mm: cfg.tee_web_height_max_mm,
+        web_thickness_max_mm: cfg.tee_web_thickness_max_mm,
         max_tilt_deg: cfg.plane_max_normal_angle_deg,
     };
     let background::Selected { workpiece, layout, evidence: layers } = background::robust_select(planes, &selection)
@@ -150,6 +154,10 @@ pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
         );
     }
     ctx.clock.lap(Stage::Background);
+    if layout == Layout::Tee {
+        // A web on its flange: its fillet roots, not two plates' edges.
+        return tee::plan(ctx, workpiece, layers);
+    }
     ctx.check_groove_depth(&workpiece)?;
 
     // 3.4.1: edge points, at most `pipeline.edge_max_neighbour_ratio` of a

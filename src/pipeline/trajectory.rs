@@ -8,6 +8,13 @@
 //! then tilted by the work angle about tool x and the travel angle about
 //! tool y.
 //!
+//! A tee's fillet weld has two faces, not one plate: its torch axis
+//! ([`fillet_torch_axis`]) lies in the plane across the root, leaning
+//! from the flange towards the web by `trajectory.fillet_work_angle_deg`
+//! (45°: the bisector of a square tee's corner), and takes the place of
+//! the plate normal as tool z; the work and travel angles then tilt it as
+//! for every joint.
+//!
 //! Which end the waypoints start from is a rule a robot programmer can
 //! rely on, stated in the robot base frame (the camera's view of the seam
 //! changes with the pose; the base frame does not): the end nearest the
@@ -95,9 +102,23 @@ pub fn torch_orientation(travel: &Vec3, into: &Vec3, work_deg: f64, travel_deg: 
     base * work * push
 }
 
+/// A fillet weld's torch axis, into the joint (the tool z of a tee's
+/// waypoints): in the plane across the root, at `angle_from_flange_deg`
+/// from the flange towards the web. `into_flange` is the flange's normal
+/// into the workpiece, `away_from_web` the direction in the flange's plane
+/// across the root away from the web; the torch lies on the open side,
+/// between the flange and the web, and points back down at the root.
+pub fn fillet_torch_axis(into_flange: &Vec3, away_from_web: &Vec3, angle_from_flange_deg: f64) -> Vec3 {
+    let a = angle_from_flange_deg.to_radians();
+    // From the root out to the torch: along the flange, then up off it.
+    let out = away_from_web * a.cos() - into_flange * a.sin();
+    -out.normalize()
+}
+
 /// Samples the weld from `s_start` to `s_end` (in travel order) and
-/// returns base-frame waypoints (Eq. 42). `normal` is the plate normal in
-/// the camera frame, pointing into the workpiece.
+/// returns base-frame waypoints (Eq. 42). `normal` is the torch's axis
+/// before the work and travel angles, in the camera frame, into the
+/// workpiece: the plate normal, or a fillet's [`fillet_torch_axis`].
 pub fn waypoints(
     curve: &SeamCurve,
     s_start: f64,
@@ -166,12 +187,27 @@ mod tests {
     }
 
     #[test]
+    fn a_fillet_torch_bisects_a_square_tee_and_leans_as_configured() {
+        // The flange is z = const (into it +z), the web stands at the
+        // root's -x side, so away from the web is +x.
+        let axis = fillet_torch_axis(&Vec3::z(), &Vec3::x(), 45.0);
+        let half = std::f64::consts::FRAC_1_SQRT_2;
+        assert!((axis - Vec3::new(-half, 0.0, half)).norm() < 1e-12, "{axis:?}");
+        // 30° from the flange: flatter, further out over the flange.
+        let flat = fillet_torch_axis(&Vec3::z(), &Vec3::x(), 30.0);
+        assert!((flat.z - 0.5).abs() < 1e-12 && flat.x < -0.86, "{flat:?}");
+        // As tool z, a work angle tilts it further about the travel axis.
+        let r = torch_orientation(&Vec3::y(), &axis, 10.0, 0.0);
+        assert!(((r * Vec3::z()).dot(&axis) - 10f64.to_radians().cos()).abs() < 1e-12);
+    }
+
+    #[test]
     fn waypoints_are_transformed_into_the_base_frame() {
         let base_from_camera = Isometry3::from_parts(
             Translation3::new(100.0, -200.0, 300.0),
             UnitQuaternion::from_axis_angle(&Vec3::x_axis(), std::f64::consts::PI),
         );
-        let params = TrajectoryParams { step_mm: 10.0, work_angle_deg: 0.0, travel_angle_deg: 0.0 };
+        let params = TrajectoryParams { step_mm: 10.0, ..TrajectoryParams::default() };
         // The seam runs along camera y, which this pose turns into base -y:
         // the default starts at the smaller base y, camera y = +50.
         let (s0, s1) = travel_order(&line(), -50.0, 50.0, &base_from_camera, None);

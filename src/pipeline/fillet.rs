@@ -1,0 +1,701 @@
+//! The fillet roots of a tee joint (issue 15): where each side face of the
+//! web meets the flange's top. The paper plans butt and lap joints only and
+//! has no fillet; this stage is ours, built from the planes the robust
+//! method already found (the web's top and the flange pieces either side
+//! of it, [`super::background`]).
+//!
+//! The geometry, in the camera frame, with `n` the flange's unit normal
+//! into the workpiece (away from the camera), `e` the web top's long axis
+//! laid in the flange's plane and `u = n × e` across the web:
+//!
+//! - height above the flange `h(p) = d_f − n·p`, for the flange plane
+//!   `n·p = d_f`; the web's top lies at `h = H`, the web's height;
+//! - a side face of the web: the points between the flange and the web's
+//!   top (`h_lo ≤ h ≤ H − h_margin`, both margins a few point spacings)
+//!   on that side of the web's middle and at most a trimmed rim and a few
+//!   spacings beyond the top's edge. The plane criterion drops these
+//!   points (their normals lie ~90° from the plates'), so they are read
+//!   from the cloud itself, fitted by least squares (the scatter's least
+//!   principal axis) and refitted without the points further than
+//!   `trim_sigma` residuals from it; the residual is reported;
+//! - the root: the line where the face `m·p = d_m` meets the flange,
+//!   direction `r = n × m`, through the point of both planes nearest the
+//!   web top's centroid (a 2 × 2 solve in the span of `n` and `m`);
+//! - the stretch planned: stations a few spacings long along the root,
+//!   each seen when it holds both a point of the face's foot (the lowest
+//!   band of the face) and a flange point a few spacings outward of the
+//!   root (beyond the margin that keeps the face's own foot out: where the
+//!   web overhangs the flange's end, its foot lies at the flange's height
+//!   with no flange beside it). The longest run of seen stations (across breaks no longer
+//!   than [`super::boundary::JOINT_BREAK_SPACINGS`]) is the root planned,
+//!   from the last evidence inward at each end: never extrapolated;
+//! - the web-to-flange angle: between the face's upward direction and the
+//!   flange's outward one, both across the root (90° for a square tee);
+//! - the torch ([`super::trajectory::fillet_torch_axis`]) leans from the
+//!   flange towards the web in the plane across the root.
+//!
+//! One view sees at most one root: the web's faces are steep, so the web
+//! hides the face on its far side and the flange beside it from the
+//! camera or the projector. A root whose face is not seen, or whose flange
+//! up to the root is not, is not invented: it is returned as not seen,
+//! saying which and why.
+//!
+//! The root's position uncertainty (one sigma) is the face fit's
+//! prediction error at the root's ends: `rms · √(1/N + h̄²/var h + (t −
+//! t̄)²/var t)` for a face fitted over N points at mean height h̄ and
+//! along-root spread var t, the root lying at h = 0, with the floor of
+//! [`super::quality`] (a spacing over √12) for the sampling.
+
+use crate::cloud::PointCloud;
+use crate::geometry::Vec3;
+use crate::geometry::fit::{Moments, Plane};
+
+use super::background::PlaneCluster;
+use super::boundary::JOINT_BREAK_SPACINGS;
+use super::refit::{SeamAxes, SeamCurve};
+
+/// The fewest face points that make a face: a handful of returns on a web
+/// face seen edge-on fix no plane.
+pub const MIN_FACE_POINTS: usize = 30;
+
+/// How far beyond the web top's trimmed edge a face point may lie, in
+/// point spacings on top of the trimmed rim: depth noise and the face seen
+/// at a grazing angle spread its points a little across.
+const FACE_REACH_SPACINGS: f64 = 6.0;
+
+/// The margins, in point spacings, that keep the flange's and the web
+/// top's own points (and their noise) out of the face.
+const HEIGHT_MARGIN_SPACINGS: f64 = 2.0;
+
+/// The face's foot: its points up to this many spacings above the lowest
+/// face height.
+const FOOT_BAND_SPACINGS: f64 = 10.0;
+
+/// The flange seen up to the root: a flange point within this many
+/// spacings outward of the root line.
+const FLANGE_REACH_SPACINGS: f64 = 6.0;
+
+/// The length of a station along the root, in point spacings.
+const STATION_SPACINGS: f64 = 4.0;
+
+/// The least angle, degrees, between a face and the camera's ray to it: a
+/// face turned further from the camera is not seen at all (or only as
+/// noise), and points lying along the rays are the mixed returns a depth
+/// jump leaves at the web's edge (a veil from its top down to whatever
+/// lies behind), not a face.
+const MIN_FACE_VIEW_DEG: f64 = 5.0;
+
+/// Refits of the face after trimming its outliers.
+const FACE_REFITS: usize = 4;
+
+/// The most stations a root is read at: a root a few metres long at a
+/// fine spacing still costs nothing.
+const MAX_STATIONS: usize = 20_000;
+
+/// A tee as the background stage found it, and what the stage needs to
+/// read its roots from the cloud.
+#[derive(Debug, Clone, Copy)]
+pub struct TeeView<'a> {
+    pub cloud: &'a PointCloud,
+    /// The web's top.
+    pub web_top: &'a PlaneCluster,
+    /// Every cluster of the flange's layer.
+    pub flange_pieces: &'a [&'a PlaneCluster],
+    /// The cloud's point spacing at the web, mm.
+    pub point_spacing_mm: f64,
+    /// How far inside a plane's edge the plane criterion trimmed it, mm.
+    pub rim_mm: f64,
+    /// A point lies on the flange when within this distance of its plane.
+    pub on_plane_mm: f64,
+    /// Face points further than this many residuals from the fit are
+    /// dropped and the face refitted.
+    pub trim_sigma: f64,
+}
+
+/// Which side of the web a root lies on, as the camera sees it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Side {
+    /// The side facing the camera.
+    Near,
+    /// The side turned away from the camera.
+    Far,
+    /// The camera looks down on the web's top, neither face turned to it.
+    Above,
+}
+
+impl Side {
+    /// `the root on the web's near side`, for reasons and evidence.
+    pub fn root_name(self, sign: f64) -> String {
+        let side = if sign > 0.0 { "+u" } else { "-u" };
+        match self {
+            Side::Near => format!("the root on the web's side facing the camera ({side})"),
+            Side::Far => format!("the root on the web's far side ({side})"),
+            Side::Above => format!("the root on the web's {side} side (the camera looks down on the web)"),
+        }
+    }
+}
+
+/// A root seen and fitted.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Root {
+    pub side: Side,
+    /// +1 or −1: the side of the web along `u = n × e`.
+    pub sign: f64,
+    /// The root line over the stretch seen: `axes.e` along the root, `a`
+    /// outward along the flange, away from the web, `b` the flange normal.
+    pub line: SeamCurve,
+    /// The web's side face, its fit's RMS residual, the points kept and
+    /// the points the trimming dropped.
+    pub face: Plane,
+    pub face_rms_mm: f64,
+    pub face_points: usize,
+    pub face_dropped: usize,
+    /// The flange plane near the root and the RMS distance of the flange
+    /// points beside the root from it.
+    pub flange: Plane,
+    pub flange_rms_mm: f64,
+    pub flange_points: usize,
+    /// The angle between the web's face and the flange on the open side,
+    /// degrees (90 for a square tee).
+    pub web_angle_deg: f64,
+    /// The web's height over the flange, mm.
+    pub web_height_mm: f64,
+    /// The fraction of the stations of the stretch planned with the face's
+    /// foot seen, and with the flange seen up to the root.
+    pub coverage: [f64; 2],
+    /// The stretch planned over the length of root seen anywhere (the
+    /// longest run of stations against all seen stations' extent).
+    pub seen_share: f64,
+    /// The root's length seen anywhere, mm.
+    pub seen_mm: f64,
+    /// One-sigma position uncertainty across the root (in the flange's
+    /// plane) and along the flange normal, mm.
+    pub uncertainty_across_mm: f64,
+    pub uncertainty_normal_mm: f64,
+}
+
+impl Root {
+    /// The stretch planned, along `line`'s feature axis.
+    pub fn span(&self) -> (f64, f64) {
+        (self.line.s_min, self.line.s_max)
+    }
+
+    /// The unit direction in the flange's plane, across the root, away from
+    /// the web.
+    pub fn away_from_web(&self) -> Vec3 {
+        self.line.axes.a
+    }
+}
+
+/// A root not seen, and why.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RootNotSeen {
+    pub side: Side,
+    pub sign: f64,
+    pub reason: String,
+    /// Where the root would lie, roughly: at the web's foot on that side.
+    pub near_camera: Vec3,
+}
+
+/// The web's frame: where its top is and how the flange lies.
+#[derive(Debug, Clone, Copy)]
+struct WebFrame {
+    /// Into the workpiece.
+    n: Vec3,
+    /// Along the web.
+    e: Vec3,
+    /// Across the web.
+    u: Vec3,
+    origin: Vec3,
+    /// The flange plane's offset along `n`.
+    flange_offset: f64,
+    /// The web's middle and half its top's width across, mm from `origin`.
+    middle: f64,
+    half_width: f64,
+    height: f64,
+}
+
+impl WebFrame {
+    fn height_of(&self, p: &Vec3) -> f64 {
+        self.flange_offset - self.n.dot(p)
+    }
+
+    fn across(&self, p: &Vec3) -> f64 {
+        (p - self.origin).dot(&self.u)
+    }
+}
+
+/// Finds both roots of the tee in `view`: `[−u side, +u side]`, each
+/// fitted or said not to be seen.
+pub fn find_roots(view: &TeeView) -> [Result<Root, RootNotSeen>; 2] {
+    let Some(frame) = web_frame(view) else {
+        let why = "the flange's plane and the web's top give no frame to read the roots in".to_string();
+        let near = view.web_top.centroid;
+        return [-1.0, 1.0].map(|sign| {
+            Err(RootNotSeen { side: Side::Above, sign, reason: format!("no root is seen: {why}"), near_camera: near })
+        });
+    };
+    let points: Vec<Vec3> = view
+        .cloud
+        .points()
+        .iter()
+        .filter(|p| p[0].is_finite() && p[1].is_finite() && p[2].is_finite())
+        .map(|p| Vec3::new(p[0] as f64, p[1] as f64, p[2] as f64))
+        .collect();
+    [-1.0, 1.0].map(|sign| find_root(view, &frame, &points, sign))
+}
+
+/// The web's frame from its top and the flange pieces.
+fn web_frame(view: &TeeView) -> Option<WebFrame> {
+    let points = view.cloud.points();
+    let member = |&i: &u32| {
+        let p = points[i as usize];
+        Vec3::new(p[0] as f64, p[1] as f64, p[2] as f64)
+    };
+    // The flange's plane from all its pieces (one plate on both sides).
+    let flange_points: Vec<Vec3> = view
+        .flange_pieces
+        .iter()
+        .flat_map(|c| {
+            let stride = (c.members.len() / 20_000).max(1);
+            c.members.iter().step_by(stride).map(member)
+        })
+        .collect();
+    let flange = flange_points.iter().collect::<Moments>().plane()?;
+    let n = flange.normal;
+    let top = view.web_top;
+    let e = (top.long_axis - n * top.long_axis.dot(&n)).try_normalize(1e-9)?;
+    let u = n.cross(&e);
+    let origin = top.centroid;
+    let mut across: Vec<f64> = top.members.iter().map(|i| (member(i) - origin).dot(&u)).collect();
+    if across.len() < 2 {
+        return None;
+    }
+    across.sort_by(f64::total_cmp);
+    // The top's edges, a hundredth of its points in from either side, so a
+    // stray point does not widen it.
+    let k = across.len() / 100;
+    let (lo, hi) = (across[k], across[across.len() - 1 - k]);
+    let height = flange.offset - n.dot(&origin);
+    (height > 0.0).then_some(WebFrame {
+        n,
+        e,
+        u,
+        origin,
+        flange_offset: flange.offset,
+        middle: 0.5 * (lo + hi),
+        half_width: 0.5 * (hi - lo),
+        height,
+    })
+}
+
+/// Which side of the web `sign` is, as the camera (at the frame's origin)
+/// sees it.
+fn side_seen(frame: &WebFrame, sign: f64) -> Side {
+    let camera_across = sign * (frame.across(&Vec3::zeros()) - frame.middle);
+    if camera_across > frame.half_width {
+        Side::Near
+    } else if camera_across < -frame.half_width {
+        Side::Far
+    } else {
+        Side::Above
+    }
+}
+
+fn find_root(view: &TeeView, frame: &WebFrame, points: &[Vec3], sign: f64) -> Result<Root, RootNotSeen> {
+    let side = side_seen(frame, sign);
+    let spacing = view.point_spacing_mm;
+    let margin = view.on_plane_mm.max(HEIGHT_MARGIN_SPACINGS * spacing);
+    let (h_lo, h_hi) = (margin, frame.height - margin);
+    let reach = frame.half_width + view.rim_mm + FACE_REACH_SPACINGS * spacing;
+    // The web's foot on this side, where its root would lie.
+    let foot_at =
+        frame.origin + frame.u * (frame.middle + sign * (frame.half_width + view.rim_mm)) + frame.n * frame.height;
+    let not_seen = |why: String| RootNotSeen {
+        side,
+        sign,
+        reason: format!("{} is not planned: {why}", side.root_name(sign)),
+        near_camera: foot_at,
+    };
+    // The flange pieces on this side of the web.
+    let pieces: Vec<&PlaneCluster> = view
+        .flange_pieces
+        .iter()
+        .copied()
+        .filter(|c| sign * (frame.across(&c.centroid) - frame.middle) > 0.0)
+        .collect();
+    if pieces.is_empty() {
+        return Err(not_seen("the flange on this side is not seen (hidden by the web)".into()));
+    }
+    let face_points: Vec<Vec3> = points
+        .iter()
+        .filter(|p| {
+            let h = frame.height_of(p);
+            let off = sign * (frame.across(p) - frame.middle);
+            (h_lo..=h_hi).contains(&h) && (0.0..=reach).contains(&off)
+        })
+        .copied()
+        .collect();
+    let hidden = if side == Side::Far { ", hidden by the web" } else { "" };
+    if face_points.len() < MIN_FACE_POINTS {
+        return Err(not_seen(format!(
+            "the web's side face there is not seen{hidden} ({} points between the flange and the web's top, \
+             fewer than {MIN_FACE_POINTS})",
+            face_points.len()
+        )));
+    }
+    let Some(face) = fit_face(&face_points, view.trim_sigma) else {
+        return Err(not_seen("the points on the web's side face span no plane".into()));
+    };
+    // The face's normal out of the web, towards this side.
+    let m = if face.plane.normal.dot(&frame.u) * sign >= 0.0 { face.plane.normal } else { -face.plane.normal };
+    let d_m = m.dot(&face.centroid);
+    let view_deg = m.dot(&(-face.centroid).normalize()).clamp(-1.0, 1.0).asin().to_degrees();
+    if view_deg < MIN_FACE_VIEW_DEG {
+        return Err(not_seen(format!(
+            "the {} points between the flange and the web's top lie along the camera's rays ({view_deg:.1}° from \
+             them, below {MIN_FACE_VIEW_DEG}°): mixed returns at the web's edge, not its side face{hidden}",
+            face.inliers.len()
+        )));
+    }
+    let n = frame.n;
+    let Some(r) = n.cross(&m).try_normalize(1e-6) else {
+        return Err(not_seen("the points between the flange and the web's top lie parallel to the flange".into()));
+    };
+    let r = if r.dot(&frame.e) >= 0.0 { r } else { -r };
+    // The point on both planes nearest the web top's centroid.
+    let o = frame.origin;
+    let nm = n.dot(&m);
+    let det = 1.0 - nm * nm;
+    let (rn, rm) = (frame.flange_offset - n.dot(&o), d_m - m.dot(&o));
+    let p0 = o + n * ((rn - nm * rm) / det) + m * ((rm - nm * rn) / det);
+    // Across the root in the flange, away from the web.
+    let w = {
+        let w = r.cross(&n);
+        if w.dot(&m) >= 0.0 { w } else { -w }
+    };
+    // Up the face from the root.
+    let up = {
+        let v = r.cross(&m);
+        if v.dot(&n) <= 0.0 { v } else { -v }
+    };
+    let web_angle_deg = up.dot(&w).clamp(-1.0, 1.0).acos().to_degrees();
+
+    // The evidence along the root: the face's foot and the flange up to it.
+    let along = |p: &Vec3| (p - p0).dot(&r);
+    let lowest = face.inliers.iter().map(|p| frame.height_of(p)).fold(f64::INFINITY, f64::min);
+    let foot: Vec<f64> = face
+        .inliers
+        .iter()
+        .filter(|p| frame.height_of(p) <= lowest + FOOT_BAND_SPACINGS * spacing)
+        .map(along)
+        .collect();
+    // Outward of the face's own foot (which lies at the flange's height
+    // too, where the web overhangs the flange's end) by the same margin
+    // that keeps the flange out of the face.
+    let flange_reach = margin + FLANGE_REACH_SPACINGS * spacing;
+    let beside: Vec<&Vec3> = points
+        .iter()
+        .filter(|p| {
+            let out = (*p - p0).dot(&w);
+            frame.height_of(p).abs() <= view.on_plane_mm && (margin..=flange_reach).contains(&out)
+        })
+        .collect();
+    if foot.is_empty() {
+        return Err(not_seen("the web's side face is not seen down to the flange".into()));
+    }
+    if beside.is_empty() {
+        return Err(not_seen(format!(
+            "the flange is not seen up to the web's face{}",
+            if side == Side::Far { " (the web hides it)" } else { " (in the web's shadow)" }
+        )));
+    }
+    let flange_along: Vec<f64> = beside.iter().map(|p| along(p)).collect();
+    let Some(run) = seen_run(&foot, &flange_along, spacing) else {
+        return Err(not_seen(
+            "the web's face and the flange up to it are not seen together anywhere along the root".into(),
+        ));
+    };
+    // The flange near the root: its points beside the run, against the
+    // plane of all its pieces.
+    let near_flange: Vec<&Vec3> = beside.iter().copied().filter(|p| (run.s0..=run.s1).contains(&along(p))).collect();
+    let flange_plane = Plane { normal: n, offset: frame.flange_offset };
+    let flange_rms_mm = rms(near_flange.iter().map(|p| flange_plane.signed_distance(p)));
+
+    // The face fit's prediction error at the root's ends (h = 0).
+    let stats = FaceSpread::of(&face.inliers, |p| frame.height_of(p), along);
+    let floor = spacing / 12f64.sqrt();
+    let at_end = |t: f64| {
+        let n = face.inliers.len() as f64;
+        let lever = 1.0 / n + stats.mean_h.powi(2) / (n * stats.var_h) + (t - stats.mean_t).powi(2) / (n * stats.var_t);
+        face.rms_mm * lever.sqrt()
+    };
+    let face_sigma = at_end(run.s0).max(at_end(run.s1));
+    // Across: the face's offset error, seen through the web's angle to the
+    // flange; along the normal: the flange's (thousands of points) and the
+    // face's share where the web is not square.
+    let sin = web_angle_deg.to_radians().sin().max(0.1);
+    let uncertainty_across_mm = (face_sigma / sin).hypot(floor);
+    let uncertainty_normal_mm = (face_sigma * web_angle_deg.to_radians().cos().abs() / sin).hypot(floor);
+
+    let line = SeamCurve {
+        axes: SeamAxes { origin: p0, e: r, a: w, b: n },
+        coef_a: vec![0.0, 0.0],
+        coef_b: vec![0.0, 0.0],
+        s_min: run.s0,
+        s_max: run.s1,
+    };
+    Ok(Root {
+        side,
+        sign,
+        line,
+        face: Plane { normal: m, offset: d_m },
+        face_rms_mm: face.rms_mm,
+        face_points: face.inliers.len(),
+        face_dropped: face.dropped,
+        flange: flange_plane,
+        flange_rms_mm,
+        flange_points: near_flange.len(),
+        web_angle_deg,
+        web_height_mm: frame.height,
+        coverage: run.coverage,
+        seen_share: run.share,
+        seen_mm: run.seen_mm,
+        uncertainty_across_mm,
+        uncertainty_normal_mm,
+    })
+}
+
+fn rms(values: impl Iterator<Item = f64>) -> f64 {
+    let (sum, n) = values.fold((0.0, 0usize), |(s, n), v| (s + v * v, n + 1));
+    if n == 0 { 0.0 } else { (sum / n as f64).sqrt() }
+}
+
+/// A plane fitted to a face's points, refitted without its outliers.
+#[derive(Debug, Clone)]
+struct FaceFit {
+    plane: Plane,
+    centroid: Vec3,
+    inliers: Vec<Vec3>,
+    rms_mm: f64,
+    dropped: usize,
+}
+
+/// Least squares (the scatter's least axis), then refits without the
+/// points further than `trim_sigma` residuals from the plane.
+fn fit_face(points: &[Vec3], trim_sigma: f64) -> Option<FaceFit> {
+    let mut inliers: Vec<Vec3> = points.to_vec();
+    let mut fit = None;
+    for _ in 0..=FACE_REFITS {
+        let moments: Moments = inliers.iter().collect();
+        let plane = moments.plane()?;
+        let centroid = moments.centroid()?;
+        let rms_mm = rms(inliers.iter().map(|p| plane.signed_distance(p)));
+        fit =
+            Some(FaceFit { plane, centroid, inliers: inliers.clone(), rms_mm, dropped: points.len() - inliers.len() });
+        let limit = trim_sigma * rms_mm;
+        let kept: Vec<Vec3> = points.iter().filter(|p| plane.signed_distance(p).abs() <= limit).copied().collect();
+        if kept.len() == inliers.len() || kept.len() < MIN_FACE_POINTS {
+            break;
+        }
+        inliers = kept;
+    }
+    fit
+}
+
+/// The face points' spread in height and along the root.
+struct FaceSpread {
+    mean_h: f64,
+    var_h: f64,
+    mean_t: f64,
+    var_t: f64,
+}
+
+impl FaceSpread {
+    fn of(points: &[Vec3], height: impl Fn(&Vec3) -> f64, along: impl Fn(&Vec3) -> f64) -> FaceSpread {
+        let n = points.len().max(1) as f64;
+        let (hs, ts): (Vec<f64>, Vec<f64>) = points.iter().map(|p| (height(p), along(p))).unzip();
+        let mean = |v: &[f64]| v.iter().sum::<f64>() / n;
+        let var = |v: &[f64], m: f64| (v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / n).max(f64::MIN_POSITIVE);
+        let (mean_h, mean_t) = (mean(&hs), mean(&ts));
+        FaceSpread { mean_h, var_h: var(&hs, mean_h), mean_t, var_t: var(&ts, mean_t) }
+    }
+}
+
+/// The stretch of the root seen: the longest run of stations holding both
+/// kinds of evidence, across breaks of at most
+/// [`JOINT_BREAK_SPACINGS`], its ends at the last evidence inward.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct SeenRun {
+    s0: f64,
+    s1: f64,
+    coverage: [f64; 2],
+    share: f64,
+    seen_mm: f64,
+}
+
+fn seen_run(foot: &[f64], flange: &[f64], spacing: f64) -> Option<SeenRun> {
+    let lo = foot.iter().chain(flange).copied().fold(f64::INFINITY, f64::min);
+    let hi = foot.iter().chain(flange).copied().fold(f64::NEG_INFINITY, f64::max);
+    if !(lo.is_finite() && hi.is_finite()) {
+        return None;
+    }
+    let width = (STATION_SPACINGS * spacing).max((hi - lo) / MAX_STATIONS as f64).max(f64::MIN_POSITIVE);
+    let stations = (((hi - lo) / width).floor() as usize + 1).min(MAX_STATIONS);
+    let station = |s: f64| (((s - lo) / width).floor() as usize).min(stations - 1);
+    let mut has = vec![[false; 2]; stations];
+    foot.iter().for_each(|&s| has[station(s)][0] = true);
+    flange.iter().for_each(|&s| has[station(s)][1] = true);
+    let seen: Vec<bool> = has.iter().map(|h| h[0] && h[1]).collect();
+    // Runs of seen stations joined across short breaks.
+    let max_break = ((JOINT_BREAK_SPACINGS * spacing) / width).floor() as usize;
+    let mut runs: Vec<(usize, usize)> = Vec::new();
+    for k in (0..stations).filter(|&k| seen[k]) {
+        match runs.last_mut() {
+            Some((_, last)) if k - *last - 1 <= max_break => *last = k,
+            _ => runs.push((k, k)),
+        }
+    }
+    let &(first, last) = runs.iter().max_by_key(|(a, b)| b - a)?;
+    let all_seen = runs.iter().map(|(a, b)| b - a + 1).sum::<usize>();
+    let in_run = |k: usize| (first..=last).contains(&k);
+    let (run_lo, run_hi) = (lo + first as f64 * width, lo + (last + 1) as f64 * width);
+    let inside = |v: &[f64]| v.iter().copied().filter(|s| (run_lo..run_hi).contains(s)).collect::<Vec<f64>>();
+    let (foot_in, flange_in) = (inside(foot), inside(flange));
+    let min = |v: &[f64]| v.iter().copied().fold(f64::INFINITY, f64::min);
+    let max = |v: &[f64]| v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    let (s0, s1) = (min(&foot_in).max(min(&flange_in)), max(&foot_in).min(max(&flange_in)));
+    if s1 <= s0 {
+        return None;
+    }
+    let count = (last - first + 1) as f64;
+    let share_of = |j: usize| (first..=last).filter(|&k| in_run(k) && has[k][j]).count() as f64 / count;
+    let seen_mm = all_seen as f64 * width;
+    Some(SeenRun { s0, s1, coverage: [share_of(0), share_of(1)], share: ((s1 - s0) / seen_mm).min(1.0), seen_mm })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Where the web stands across the camera's x: 200 mm to the camera's
+    /// −x, so the camera (at the origin, looking down +z) sees its +x face.
+    const WEB_X: f64 = -200.0;
+
+    /// A web face standing on a flange: the flange z = 700, the face x =
+    /// WEB_X + 5, points on the face from 1 to 39 mm above the flange,
+    /// along y from −50 to 49.
+    fn face_points(noise: f64) -> Vec<Vec3> {
+        let mut pts = Vec::new();
+        for i in 0..100 {
+            for j in 0..20 {
+                let jitter = noise * (((i * 7 + j * 13) % 11) as f64 / 5.0 - 1.0);
+                pts.push(Vec3::new(WEB_X + 5.0 + jitter, -50.0 + i as f64, 700.0 - 1.0 - 2.0 * j as f64));
+            }
+        }
+        pts
+    }
+
+    #[test]
+    fn a_face_is_fitted_through_its_outliers_and_its_residual_reported() {
+        let mut pts = face_points(0.05);
+        // A few stray returns a centimetre off the face.
+        pts.extend((0..20).map(|k| Vec3::new(WEB_X + 15.0, k as f64, 690.0)));
+        let fit = fit_face(&pts, 3.0).unwrap();
+        assert!(fit.dropped >= 20, "{} dropped", fit.dropped);
+        assert!(fit.rms_mm < 0.06, "{}", fit.rms_mm);
+        assert!((fit.plane.normal.x.abs() - 1.0).abs() < 1e-4, "{:?}", fit.plane.normal);
+        assert!((fit.plane.signed_distance(&Vec3::new(WEB_X + 5.0, 0.0, 690.0))).abs() < 0.01);
+    }
+
+    #[test]
+    fn the_root_is_where_the_face_meets_the_flange_and_runs_where_both_are_seen() {
+        // A 40 mm web 10 mm thick centred on x = WEB_X: its top at z = 660
+        // 4 mm either side of it (a trimmed rim of 1 mm), its +x face 5 mm
+        // out, seen from y = −50 to 49; the flange seen at z = 700 from the
+        // face outward, but only for y < 20 beside the face; the −x side
+        // shows the flange beyond the web's shadow from 40 mm out on, and
+        // no face.
+        let mut pts = face_points(0.0);
+        for i in 0..100 {
+            for j in 0..=8 {
+                pts.push(Vec3::new(WEB_X - 4.0 + j as f64, -50.0 + i as f64, 660.0));
+            }
+            for j in 0..30 {
+                let y = -50.0 + i as f64;
+                if y < 20.0 {
+                    pts.push(Vec3::new(WEB_X + 5.0 + 0.5 * j as f64, y, 700.0));
+                }
+                pts.push(Vec3::new(WEB_X - 40.0 - j as f64, y, 700.0));
+            }
+        }
+        let cloud = PointCloud::unorganized(pts.iter().map(|p| [p.x as f32, p.y as f32, p.z as f32]).collect());
+        let index = |pred: &dyn Fn(&Vec3) -> bool| {
+            pts.iter().enumerate().filter(|(_, p)| pred(p)).map(|(i, _)| i as u32).collect::<Vec<u32>>()
+        };
+        let cluster = |members: Vec<u32>| {
+            let member_points: Vec<Vec3> = members.iter().map(|&i| pts[i as usize]).collect();
+            let moments: Moments = member_points.iter().collect();
+            let (long_axis, elongation) = moments.elongation().unwrap();
+            PlaneCluster {
+                label: 0,
+                area_mm2: members.len() as f64,
+                plane: moments.plane().unwrap(),
+                centroid: moments.centroid().unwrap(),
+                members,
+                long_axis,
+                elongation,
+            }
+        };
+        let top = cluster(index(&|p| p.z == 660.0));
+        let plus = cluster(index(&|p| p.z == 700.0 && p.x > WEB_X));
+        let minus = cluster(index(&|p| p.z == 700.0 && p.x < WEB_X));
+        let pieces = [&plus, &minus];
+        let view = TeeView {
+            cloud: &cloud,
+            web_top: &top,
+            flange_pieces: &pieces,
+            point_spacing_mm: 1.0,
+            rim_mm: 1.0,
+            on_plane_mm: 0.4,
+            trim_sigma: 3.0,
+        };
+        let roots = find_roots(&view);
+        let seen: Vec<&Root> = roots.iter().filter_map(|r| r.as_ref().ok()).collect();
+        assert_eq!(seen.len(), 1, "{roots:?}");
+        let root = seen[0];
+        // The root is x = WEB_X + 5, z = 700, from y = −50 to the flange's
+        // end at 19, on the side facing the camera.
+        assert_eq!(root.side, Side::Near);
+        for s in [root.line.s_min, root.line.s_max] {
+            let p = root.line.at(s);
+            assert!((p.x - WEB_X - 5.0).abs() < 1e-6 && (p.z - 700.0).abs() < 1e-6, "{p:?}");
+        }
+        let ends = [root.line.at(root.line.s_min).y, root.line.at(root.line.s_max).y];
+        assert!((ends[0] + 50.0).abs() < 1e-6 && (ends[1] - 19.0).abs() < 1e-6, "{ends:?}");
+        assert!((root.web_angle_deg - 90.0).abs() < 1e-6, "{}", root.web_angle_deg);
+        assert!((root.web_height_mm - 40.0).abs() < 1e-6);
+        assert!(root.coverage.iter().all(|c| *c > 0.99), "{:?}", root.coverage);
+        assert!(root.away_from_web().x > 0.99);
+        // The other side: no face seen, so no root, and the reason says so.
+        let hidden = roots.iter().find_map(|r| r.as_ref().err()).unwrap();
+        assert_eq!(hidden.side, Side::Far);
+        assert!(hidden.reason.contains("far side") && hidden.reason.contains("hidden by the web"), "{}", hidden.reason);
+    }
+
+    #[test]
+    fn the_run_seen_bridges_short_breaks_and_not_long_ones() {
+        // Evidence every 0.5 mm from 0 to 40 and 44 to 60 (a 4 mm break,
+        // bridged), then 100 to 110 (a 40 mm break, not).
+        let s: Vec<f64> = (0..=220)
+            .map(|k| k as f64 * 0.5)
+            .filter(|s| (0.0..=40.0).contains(s) || (44.0..=60.0).contains(s) || *s >= 100.0)
+            .collect();
+        let run = seen_run(&s, &s, 0.5).unwrap();
+        assert_eq!((run.s0, run.s1), (0.0, 60.0));
+        assert!(run.share < 1.0 && run.share > 0.8, "{}", run.share);
+        assert!(run.coverage[0] < 1.0);
+        // Nothing seen together: no run.
+        assert!(seen_run(&[0.0, 1.0], &[50.0, 51.0], 0.5).is_none());
+    }
+}

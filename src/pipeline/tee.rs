@@ -1,0 +1,156 @@
+//! The robust method's page for a tee joint (issue 15), taken once the
+//! background stage has found a web standing on its flange: the paper has
+//! no fillet, so past section 3.3 this page replaces its edge sections
+//! (3.4 to 4.3) by the fillet stage ([`super::fillet`]), then checks each
+//! root's figures against the gates and samples it as section 5.1 does.
+//!
+//! - the roots: each web side face fitted where the cloud shows it, the
+//!   root where it meets the flange, clipped to where the face's foot and
+//!   the flange up to it are both seen (timed as the refit stage);
+//! - the gates ([`super::quality`]): the face's and the flange's fit
+//!   residuals, the root's evidence along the stretch planned, the web
+//!   square to the flange, the root's position uncertainty;
+//! - 5.1: each root its own seam, the torch leaning from the flange towards
+//!   the web ([`super::trajectory::fillet_torch_axis`]).
+//!
+//! A root not seen (the web hides its face or the flange beside it) or
+//! refused by a gate is a joint seen but not planned ([`Unplanned`]),
+//! beside the root that was; with no root planned the plan is refused.
+
+use crate::config::Method;
+use crate::joint::JointType;
+
+use super::background::{PlaneCluster, Workpiece};
+use super::context::{Context, EdgeFigures};
+use super::fillet::{self, Root, TeeView};
+use super::trace::TracedWeld;
+use super::{Plan, PlanError, SeamAssessment, SeamCoverage, Stage, Unplanned, boundary, quality, trajectory};
+
+/// Plans the seen roots of the tee in `workpiece` (the web's top and the
+/// largest flange piece, the flange's other pieces its layer mates);
+/// `layers` says in words what the background stage saw.
+pub(super) fn plan(mut ctx: Context, workpiece: Workpiece, layers: String) -> Result<Plan, PlanError> {
+    let config = ctx.config;
+    let cfg = &config.pipeline;
+    ctx.joint = Some(JointType::TFillet);
+    ctx.trace.record(|t| t.joint = Some(JointType::TFillet));
+    let [web_top, flange] = &workpiece.plates;
+    let pieces: Vec<&PlaneCluster> = std::iter::once(flange).chain(&workpiece.layer_mates[1]).collect();
+    let spacing = ctx.spacing_at(&web_top.centroid);
+    let view = TeeView {
+        cloud: &ctx.cloud,
+        web_top,
+        flange_pieces: &pieces,
+        point_spacing_mm: spacing,
+        rim_mm: boundary::rim_trim_radii(cfg.plane_min_neighbour_ratio) * ctx.scale.radius_mm,
+        on_plane_mm: cfg.on_plane_tolerance_mm,
+        trim_sigma: cfg.fit_trim_sigma,
+    };
+    let roots = fillet::find_roots(&view);
+    for root in &roots {
+        match root {
+            Ok(r) => tracing::debug!(
+                side = ?r.side,
+                face_points = r.face_points,
+                face_rms_mm = r.face_rms_mm,
+                web_angle_deg = r.web_angle_deg,
+                from_mm = r.line.s_min,
+                to_mm = r.line.s_max,
+                "fillet root"
+            ),
+            Err(not) => tracing::debug!(side = ?not.side, "{}", not.reason),
+        }
+    }
+    ctx.clock.lap(Stage::Refit);
+
+    // Each root's figures against the gates; a root refused or not seen
+    // is named beside the ones planned.
+    let mut planned: Vec<(Root, SeamAssessment)> = Vec::new();
+    let mut unplanned: Vec<Unplanned> = Vec::new();
+    for root in roots {
+        let root = match root {
+            Ok(root) => root,
+            Err(not) => {
+                unplanned.push(Unplanned {
+                    joint: Some(JointType::TFillet),
+                    near_camera: Some(not.near_camera),
+                    reason: PlanError::at(Stage::Refit, not.reason),
+                });
+                continue;
+            }
+        };
+        let near_camera = root.line.at(0.5 * (root.line.s_min + root.line.s_max));
+        let quality = quality::measure_fillet(&root, spacing, workpiece.depth_to_support_mm);
+        let coverage = SeamCoverage {
+            edge: root.coverage,
+            joint: root.seen_share,
+            visible_joint_mm: root.seen_mm,
+            beyond_mm: 0.0,
+        };
+        let evidence = quality::SeamEvidence {
+            joint: JointType::TFillet,
+            quality: &quality,
+            edge_fit_rms_mm: [root.face_rms_mm, root.flange_rms_mm],
+            edge_coverage: Some(root.coverage),
+            coverage: Some(&coverage),
+            length_mm: root.line.s_max - root.line.s_min,
+            given_groove_depth_mm: None,
+        };
+        let (warnings, refusals): (Vec<_>, Vec<_>) =
+            quality::check(&evidence, &config.quality).into_iter().partition(|f| config.quality.warns_only(f.gate));
+        if let Some(first) = refusals.first() {
+            let mut reason = PlanError::refused(first);
+            reason.reason = format!("{}: {}", root.side.root_name(root.sign), reason.reason);
+            unplanned.push(Unplanned { joint: Some(JointType::TFillet), near_camera: Some(near_camera), reason });
+            continue;
+        }
+        for failure in &warnings {
+            tracing::warn!(gate = %failure.gate, value = failure.value, limit = failure.limit, "{}", failure.message);
+        }
+        let joint_evidence = format!(
+            "{layers}; {}: the web's side face fitted to {} points (rms {:.2} mm), meeting the flange at {:.1}°",
+            root.side.root_name(root.sign),
+            root.face_points,
+            root.face_rms_mm,
+            root.web_angle_deg
+        );
+        let assessment = SeamAssessment {
+            joint_evidence: Some(joint_evidence),
+            coverage: Some(coverage),
+            quality: Some(quality),
+            warnings,
+        };
+        planned.push((root, assessment));
+    }
+    ctx.clock.lap(Stage::Quality);
+    if planned.is_empty() {
+        // Nothing to weld: the gate that refused a root seen, else why
+        // neither was seen.
+        let gated = unplanned.iter().find(|u| u.reason.gate.is_some()).map(|u| u.reason.clone());
+        return Err(gated.unwrap_or_else(|| {
+            let why: Vec<&str> = unplanned.iter().map(|u| u.reason.reason.as_str()).collect();
+            PlanError::at(Stage::Refit, format!("no fillet root of the tee joint is seen: {}", why.join("; ")))
+        }));
+    }
+
+    // 5.1: each root its own seam, the torch between the flange and the web.
+    ctx.trace.record(|t| {
+        let (root, _) = &planned[0];
+        let normal = root.flange.normal;
+        t.weld = Some(TracedWeld { curve: root.line.clone(), span: root.span(), normal });
+    });
+    let mut seams = Vec::with_capacity(planned.len());
+    for (root, assessment) in planned {
+        let normal = root.flange.normal;
+        let axis =
+            trajectory::fillet_torch_axis(&normal, &root.away_from_web(), config.trajectory.fillet_work_angle_deg);
+        let edges = EdgeFigures {
+            rms_mm: [root.face_rms_mm, root.flange_rms_mm],
+            samples: [root.face_points, root.flange_points],
+            dropped: [root.face_dropped, 0],
+        };
+        seams.push(ctx.seam(&root.line, root.span(), &normal, &axis, edges, assessment)?);
+    }
+    ctx.clock.lap(Stage::Trajectory);
+    Ok(ctx.plan_of(Method::Robust, seams, unplanned))
+}

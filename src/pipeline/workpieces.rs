@@ -25,8 +25,6 @@
 
 use std::collections::BTreeSet;
 
-use rayon::prelude::*;
-
 use crate::cloud::PointCloud;
 use crate::geometry::{Vec3, vec3};
 
@@ -47,6 +45,9 @@ const CELL_SPACINGS: f64 = 2.0;
 /// The most cells the grid may have; a coarser cell is taken beyond it,
 /// so a wide, fine frame costs no more than this.
 const MAX_CELLS: f64 = 4.0e6;
+
+/// Every how many points the clusters' extent is taken.
+const BOUNDS_STRIDE: usize = 8;
 
 /// The fewest clusters a frame of two workpieces shows: two plates each
 /// and the table.
@@ -179,18 +180,15 @@ impl OccupancyGrid {
             let p = vec3(&points[i as usize]);
             (p.dot(&u_axis), p.dot(&v_axis))
         };
-        // The clusters' extent along the plane.
-        let bounds = others
-            .par_iter()
-            .flat_map_iter(|&k| planes[k].members.iter().map(|&i| project(i)))
-            .fold(
-                || [f64::INFINITY, f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY],
-                |b, (u, v)| [b[0].min(u), b[1].min(v), b[2].max(u), b[3].max(v)],
-            )
-            .reduce(
-                || [f64::INFINITY, f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY],
-                |a, b| [a[0].min(b[0]), a[1].min(b[1]), a[2].max(b[2]), a[3].max(b[3])],
-            );
+        // The clusters' extent along the plane, from every few points: the
+        // margin around it is far wider than what the sample misses.
+        let bounds = others.iter().flat_map(|&k| planes[k].members.iter().step_by(BOUNDS_STRIDE)).fold(
+            [f64::INFINITY, f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY],
+            |b, &i| {
+                let (u, v) = project(i);
+                [b[0].min(u), b[1].min(v), b[2].max(u), b[3].max(v)]
+            },
+        );
         let margin = MAX_JOINT_OPENING_MM;
         let [u0, v0, u1, v1] = [bounds[0] - margin, bounds[1] - margin, bounds[2] + margin, bounds[3] + margin];
         if !(u1 > u0 && v1 > v0) {
@@ -205,21 +203,15 @@ impl OccupancyGrid {
             ((0.0..width as f64).contains(&cu) && (0.0..height as f64).contains(&cv))
                 .then(|| cv as usize * width + cu as usize)
         };
-        let cells_of = |k: usize| {
-            let mut cells: Vec<usize> = planes[k].members.par_iter().filter_map(|&i| cell_of(i)).collect();
-            cells.par_sort_unstable();
-            cells.dedup();
-            cells
-        };
+        // One pass over each cluster's points, each marking its cell: the
+        // table first, so a cell it shares with a cluster is the cluster's.
         let mut grid = vec![EMPTY; width * height];
-        for &k in table {
-            for c in cells_of(k) {
-                grid[c] = TABLE;
-            }
-        }
-        for (n, &k) in others.iter().enumerate() {
-            for c in cells_of(k) {
-                grid[c] = n as u32;
+        let owners = table.iter().map(|&k| (k, TABLE)).chain(others.iter().enumerate().map(|(n, &k)| (k, n as u32)));
+        for (k, owner) in owners {
+            for &i in &planes[k].members {
+                if let Some(c) = cell_of(i) {
+                    grid[c] = owner;
+                }
             }
         }
         let reach = (MAX_JOINT_OPENING_MM / cell_mm).ceil() as u32;

@@ -25,7 +25,7 @@ pub mod to_proto {
     use crate::pipeline::refit::SeamCurve;
     use crate::pipeline::roi::Roi;
     use crate::pipeline::trace::TracedLine;
-    use crate::pipeline::{CloudFrame, Plan, PlanError, PlanRequest, PlanTrace, Seam, Stage};
+    use crate::pipeline::{CloudFrame, Plan, PlanError, PlanRequest, PlanTrace, Seam, Stage, Unplanned};
 
     pub fn joint(j: JointType) -> proto::Joint {
         match j {
@@ -121,6 +121,17 @@ pub mod to_proto {
         }
     }
 
+    /// A joint seen but not planned, with the code and refusal a plan of
+    /// it alone would have given.
+    pub fn unplanned(u: &Unplanned) -> proto::UnplannedJoint {
+        proto::UnplannedJoint {
+            joint: u.joint.map(|j| j.name().into()),
+            near_camera_mm: u.near_camera.as_ref().map(arr),
+            code: plan_error_code(&u.reason).into(),
+            refusal: refusal(&u.reason),
+        }
+    }
+
     /// Why a plan was refused, as `plan --json` prints it.
     pub fn refusal(e: &PlanError) -> proto::Refusal {
         proto::Refusal {
@@ -205,6 +216,7 @@ pub mod to_proto {
         let s = &plan.stats;
         proto::PlanResult {
             seams: plan.seams.iter().map(|x| seam(x, euler)).collect(),
+            unplanned: plan.unplanned.iter().map(unplanned).collect(),
             timing_ms,
             method: plan.method.name().into(),
             euler_convention: euler.name().into(),
@@ -246,6 +258,7 @@ pub mod to_proto {
             start_near: request.start_near.map(|p| arr(&p)),
             roi: request.roi.as_ref().map(roi),
             pose_in: None,
+            one_seam: request.one_seam,
         }
     }
 
@@ -521,6 +534,7 @@ pub mod from_proto {
             work_angle_deg: r.work_angle_deg,
             travel_angle_deg: r.travel_angle_deg,
             start_near,
+            one_seam: r.one_seam,
             // The frame tells its units and frame when it comes (see
             // [`frame`]); until then, the library's defaults.
             units: Units::Millimetres,

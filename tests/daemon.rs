@@ -66,6 +66,7 @@ fn request(id: u64, frame: FrameSelect) -> PlanRequest {
         start_near: None,
         roi: None,
         pose_in: None,
+        one_seam: false,
     }
 }
 
@@ -1082,4 +1083,46 @@ async fn a_region_of_interest_travels_in_the_request_and_bad_ones_are_refused() 
     }
     drop(ctl);
     cell.shutdown().await;
+}
+
+/// A frame of three workpieces (an I-butt, a lap and a tee) over the wire:
+/// the reply carries both seams planned, each its own, and the tee as a
+/// joint not planned, with its code and reason.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_frame_of_several_workpieces_replies_with_every_seam_and_the_unplanned_joint() {
+    let (name, spec) =
+        weldseam::sim::multi_suite().into_iter().find(|(n, _)| n.starts_with("multi-01")).expect("the scene");
+    let sim = simulate(&spec, &CameraModel::default());
+    let cell = Cell::start(config()).await;
+    let mut cam = Raw::hello(&cell.camera, Role::Camera).await;
+    cam.send(&frame_message(5, 0, &sim.cloud)).await;
+    cam.expect_ack(5, 0).await;
+    let mut ctl = Raw::hello(&cell.controller, Role::Controller).await;
+    let mut request = sim_request(9, JointType::Lap, &sim, FrameSelect::FrameId(5));
+    request.joint = joint_code::AUTO;
+    ctl.send(&Message::PlanRequest(request)).await;
+    let Some(Message::PlanReply(reply)) = ctl.recv().await else { panic!("{name}: no plan reply") };
+    assert_eq!(reply.request_id, 9);
+    let joints: Vec<_> = reply.result.seams.iter().map(|s| s.joint).collect();
+    assert_eq!(joints.len(), 2, "{name}: {joints:?}");
+    // Each seam lies on one of the frame's true seams, each on another.
+    let truths: Vec<weldseam::eval::TrueSeam> =
+        sim.seams.iter().map(|s| weldseam::eval::TrueSeam::of(&spec, s)).collect();
+    let returned: Vec<(Vec<Vec3>, JointType)> = reply
+        .result
+        .seams
+        .iter()
+        .map(|s| {
+            let joint = weldseam::convert::from_proto::joint(s.joint);
+            (s.waypoints.iter().map(|w| Vec3::from(w.xyz)).collect(), joint)
+        })
+        .collect();
+    let m = weldseam::eval::match_seams(&truths, &returned);
+    assert_eq!((m.found.len(), m.extra.len(), m.wrong_type.len()), (2, 0, 0), "{name}: {m:?}");
+    let [tee] = &reply.result.unplanned[..] else { panic!("{name}: {:?}", reply.result.unplanned) };
+    assert_eq!(tee.code, u16::from(ErrorCode::JointMismatch), "{name}: {tee:?}");
+    assert_eq!(tee.refusal.code, "joint_mismatch");
+    assert!(weldseam::eval::names_a_tee(&tee.refusal.message), "{name}: {}", tee.refusal.message);
+    assert!(tee.near_camera_mm.is_some());
+    assert_eq!(cell.shutdown().await, Stopped::Clean);
 }

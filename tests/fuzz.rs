@@ -173,6 +173,7 @@ fn valid_messages() -> Vec<Vec<u8>> {
                 angle_unit: 0,
                 values: vec![800.0, 0.0, 500.0, 0.0, 1.0, 0.0, 0.0],
             }),
+            one_seam: true,
         }),
     ];
     messages.iter().map(|m| frame::encode(m).unwrap()).collect()

@@ -416,3 +416,44 @@ async fn a_plan_line_may_leave_the_joint_to_the_daemon() {
     camera.await.unwrap();
     cell.shutdown().await;
 }
+
+/// A frame of three workpieces (an I-butt, a lap and a tee): the ok line
+/// counts the two seams planned, the waypoint lines carry seam numbers 1
+/// and 2, each seam from approach to retract, and WHY names the tee not
+/// planned.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn several_seams_are_served_seam_by_seam_and_why_names_the_unplanned() {
+    let (name, spec) =
+        weldseam::sim::multi_suite().into_iter().find(|(n, _)| n.starts_with("multi-01")).expect("the scene");
+    let sim = simulate(&spec, &CameraModel::default());
+    let cell = Cell::start(config()).await;
+    let (stop_camera, camera) = cell.camera(vec![Arc::new(sim.cloud.clone())], CameraOptions::default());
+    let mut ctl = ControllerClient::connect(&cell.controller, "test").await.unwrap();
+    ctl.wait_for_camera(Duration::from_secs(5)).await.unwrap();
+    let mut robot = robot(&cell).await;
+    robot.ask("HELLO,kuka").await.unwrap();
+    let auto = trigger_line(Dialect::Kuka, &sim).replacen("TRIGGER,lap,", "TRIGGER,auto,", 1);
+    let ok = robot.ask(&auto).await.unwrap();
+    let status = numbers(&ok);
+    assert_eq!(&status[..2], &[0.0, 2.0], "{name}: two seams planned: {ok}");
+    let mut kinds_by_seam: Vec<(u32, Vec<u8>)> = Vec::new();
+    for _ in 0..status[2] as usize {
+        let line = numbers(&robot.ask("NEXT").await.unwrap());
+        let (kind, seam) = (line[0] as u8, line[1] as u32);
+        match kinds_by_seam.last_mut() {
+            Some((s, kinds)) if *s == seam => kinds.push(kind),
+            _ => kinds_by_seam.push((seam, vec![kind])),
+        }
+    }
+    assert_eq!(kinds_by_seam.iter().map(|(s, _)| *s).collect::<Vec<_>>(), [1, 2], "{name}");
+    for (seam, kinds) in &kinds_by_seam {
+        assert!(kinds.len() >= 3 && kinds[0] == 1 && kinds[kinds.len() - 1] == 3, "seam {seam}: {kinds:?}");
+        assert!(kinds[1..kinds.len() - 1].iter().all(|k| *k == 2), "seam {seam}: {kinds:?}");
+    }
+    let why = robot.ask("WHY").await.unwrap();
+    assert!(why.starts_with("2 seams planned; 1 not: t_fillet at ("), "{name}: {why}");
+    drop(robot);
+    let _ = stop_camera.send(());
+    camera.await.unwrap();
+    cell.shutdown().await;
+}

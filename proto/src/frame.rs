@@ -25,7 +25,7 @@ pub const MAGIC: [u8; 4] = *b"WSEM";
 /// measured groove and the request's pose in a convention it names;
 /// version 6 names the tee joint (`t_fillet`, joint code 4). See
 /// PROTOCOL.md, "Changes from version 5".
-pub const PROTOCOL_VERSION: u16 = 6;
+pub const PROTOCOL_VERSION: u16 = 7;
 
 /// Bytes of a message header.
 pub const HEADER_BYTES: usize = 16;
@@ -443,6 +443,7 @@ mod tests {
                 angle_unit: 0,
                 values: vec![800.0, 0.0, 500.0, 0.0, 0.0, 180.0],
             }),
+            one_seam: true,
         }));
     }
 

@@ -279,6 +279,10 @@ pub struct PlanRequest {
     /// The flange pose at capture in a convention the request names (a
     /// controller's own), instead of `pose`.
     pub pose_in: Option<PoseIn>,
+    /// Reply with one seam only (version 7): the one nearest `start_near`
+    /// (the first of the documented order without it). The frame's other
+    /// workpieces are planned and their seams dropped.
+    pub one_seam: bool,
 }
 
 /// A pose written in a named convention and units: the robot's own

@@ -133,7 +133,13 @@ pub struct PointCounts {
 /// The result of planning one frame.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct PlanResult {
+    /// Every seam planned, in the order to weld them (a frame of several
+    /// workpieces has several; PROTOCOL.md states the order).
     pub seams: Vec<Seam>,
+    /// The joints seen but not planned (version 7): each refused
+    /// workpiece of a frame of several, with why. Empty for a frame of one
+    /// workpiece, whose refusal is the reply's error instead.
+    pub unplanned: Vec<UnplannedJoint>,
     /// Milliseconds per pipeline stage, plus `total`.
     pub timing_ms: BTreeMap<String, f64>,
     /// `robust` or `paper`.
@@ -141,6 +147,21 @@ pub struct PlanResult {
     /// The Euler convention of every `rpy_deg`.
     pub euler_convention: String,
     pub points: PointCounts,
+}
+
+/// A joint seen in the frame but not planned, and why.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct UnplannedJoint {
+    /// `v_butt`, `i_butt`, `lap` or `t_fillet`, where the planner could
+    /// tell the joint.
+    pub joint: Option<String>,
+    /// Where the joint lies in the camera frame (its plates' middle), mm.
+    pub near_camera_mm: Option<[f64; 3]>,
+    /// The error code a refusal of this joint alone would carry (as the
+    /// wire's `ErrorCode` number).
+    pub code: u16,
+    /// The stage, the code's name, the gate and the sentence.
+    pub refusal: Refusal,
 }
 
 /// Why a plan was refused, as `weldseam plan --json` prints it under

@@ -79,6 +79,7 @@ fn examples() -> Vec<(&'static str, Message)> {
                 start_near: Some([700.0, -100.0, 0.0]),
                 roi: None,
                 pose_in: None,
+                one_seam: false,
             }),
         ),
         (
@@ -102,6 +103,7 @@ fn examples() -> Vec<(&'static str, Message)> {
                     frame: CloudFrame::Camera as u32,
                 }),
                 pose_in: None,
+                one_seam: false,
             }),
         ),
         ("error", Message::error(ErrorCode::Busy, Some(5), "busy")),

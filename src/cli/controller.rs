@@ -58,6 +58,10 @@ pub struct ControllerArgs {
     /// point: x,y,z (mm).
     #[arg(long, allow_hyphen_values = true, value_parser = args::point)]
     pub start_near: Option<[f64; 3]>,
+    /// Ask for one seam only: the one nearest --start-near (the first of
+    /// the documented order without it).
+    #[arg(long)]
+    pub one_seam: bool,
     /// The request id echoed in the reply.
     #[arg(long, default_value_t = 1)]
     pub request_id: u64,
@@ -218,6 +222,7 @@ async fn exchange(args: &ControllerArgs) -> anyhow::Result<()> {
         start_near: args.start_near,
         roi: args.roi.to_library()?.as_ref().map(to_proto::roi),
         pose_in: None,
+        one_seam: args.one_seam,
     };
     // The daemon bounds the frame wait; allow for it and a slow plan.
     let wait = Duration::from_millis(u64::from(args.timeout_ms).max(10_000)) + Duration::from_secs(120);

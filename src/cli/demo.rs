@@ -2,10 +2,11 @@
 //! daemon listens on two ephemeral ports; the mock camera connects and
 //! serves a simulated frame of each joint type when triggered (and a tee
 //! joint, seen from the side whose web face its projector lights); the
-//! mock controller asks for each plan as a robot would. It prints the
-//! base-frame waypoints, the error against the simulator's truth (for the
-//! tee, against the root the camera sees, by the fillet's bar) and the
-//! latency of each request.
+//! mock controller asks for each plan as a robot would, then for a frame
+//! of three workpieces (V-butt, I-butt and lap side by side, each joint
+//! left to the daemon). It prints the base-frame waypoints, the error
+//! against the simulator's truth (for the tee, against the root the camera
+//! sees, by the fillet's bar) and the latency of each request.
 
 use std::io::Write;
 use std::sync::Arc;
@@ -20,8 +21,9 @@ use weldseam::joint::JointType;
 use weldseam::mock::camera::{CameraOptions, MockCamera};
 use weldseam::mock::controller::{ControllerClient, request_for_simulation};
 use weldseam::server::local::LocalDaemon;
+use weldseam::sim::scenarios::several_workpieces;
 use weldseam::sim::{CameraPlacement, SceneSpec, Simulation, demo_scene, simulate};
-use weldseam_proto::message::{FrameSelect, PlanReply};
+use weldseam_proto::message::{FrameSelect, PlanReply, joint_code};
 
 #[derive(Debug, clap::Args)]
 pub struct DemoArgs {
@@ -54,13 +56,16 @@ async fn cell(args: &DemoArgs) -> anyhow::Result<()> {
             (spec.joint.joint_type(), spec, sim)
         })
         .collect();
+    let several = simulate(&several_workpieces(3), &config.camera);
 
     let daemon = LocalDaemon::start(config).await.context("cannot start the daemon")?;
     let (camera_addr, controller_addr) = (daemon.camera_addr.to_string(), daemon.controller_addr.to_string());
     writeln!(out, "daemon listening: camera link {camera_addr}, controller link {controller_addr}")?;
 
-    // The camera answers trigger n with frame n: the scenes in order.
-    let frames = scenes.iter().map(|(_, _, sim)| Arc::new(sim.cloud.clone())).collect();
+    // The camera answers trigger n with frame n: the scenes in order, then
+    // the frame of several parts.
+    let frames =
+        scenes.iter().map(|(_, _, sim)| &sim.cloud).chain([&several.cloud]).map(|c| Arc::new(c.clone())).collect();
     let (stop_camera, camera_stopped) = oneshot::channel::<()>();
     let options = CameraOptions { name: "demo-camera".into(), ..CameraOptions::default() };
     let camera = tokio::spawn(MockCamera::new(camera_addr, frames, options).run(camera_stopped));
@@ -93,6 +98,24 @@ async fn cell(args: &DemoArgs) -> anyhow::Result<()> {
         }
     }
 
+    // Several parts in one frame: every seam, each joint found by the daemon.
+    let mut request = request_for_simulation(scenes.len() as u64 + 1, JointType::VButt, &several, FrameSelect::Trigger);
+    (request.joint, request.groove_depth_mm) = (joint_code::AUTO, None);
+    writeln!(out, "== several parts in one frame: V-butt, I-butt and lap side by side, joints left to the daemon")?;
+    let sent = Instant::now();
+    match controller.plan(request, STEP_TIMEOUT).await {
+        Ok(reply) => {
+            let latency_ms = sent.elapsed().as_secs_f64() * 1e3;
+            if let Err(e) = report_several(&mut out, args, &several, &reply, latency_ms) {
+                failures.push(e.to_string());
+            }
+        }
+        Err(e) => {
+            writeln!(out, "   no plan: {e}")?;
+            failures.push(format!("several parts: {e}"));
+        }
+    }
+
     let _ = stop_camera.send(());
     let _ = tokio::time::timeout(STEP_TIMEOUT, camera).await;
     tokio::time::timeout(STEP_TIMEOUT, daemon.stop()).await.context("the daemon did not stop")??;
@@ -108,6 +131,72 @@ async fn cell(args: &DemoArgs) -> anyhow::Result<()> {
 fn demo_tee() -> SceneSpec {
     let spec = demo_scene(JointType::TFillet);
     SceneSpec { placement: CameraPlacement { tilt_deg: 20.0, tilt_azimuth_deg: 0.0, ..spec.placement }, ..spec }
+}
+
+/// Prints the reply for the frame of several parts: each seam against the
+/// true seam it lies nearest, every part's seam found once.
+fn report_several(
+    out: &mut impl Write,
+    args: &DemoArgs,
+    sim: &Simulation,
+    reply: &PlanReply,
+    latency_ms: f64,
+) -> anyhow::Result<()> {
+    let pipeline_ms = reply.result.timing_ms.get("total").copied().unwrap_or(f64::NAN);
+    writeln!(
+        out,
+        "   frame {} planned: {} seams, {} not planned; pipeline {:.0} ms, request to reply {:.0} ms",
+        reply.frame_id,
+        reply.result.seams.len(),
+        reply.result.unplanned.len(),
+        pipeline_ms,
+        latency_ms
+    )?;
+    let mut found = vec![false; sim.seams.len()];
+    for (k, seam) in reply.result.seams.iter().enumerate() {
+        let path: Vec<Vec3> = seam.waypoints.iter().map(|w| Vec3::from(w.xyz)).collect();
+        let nearest = sim
+            .seams
+            .iter()
+            .enumerate()
+            .filter_map(|(t, truth)| path_error(&truth.truth, &path).map(|e| (t, e)))
+            .min_by(|a, b| a.1.max_mm.total_cmp(&b.1.max_mm));
+        let Some((t, e)) = nearest else { bail!("several parts: seam {} matches no true seam", k + 1) };
+        let joint = weldseam::convert::from_proto::joint(seam.joint);
+        writeln!(
+            out,
+            "   seam {}: {joint} (workpiece {}), {:.1} mm, {} waypoints from ({:.1}, {:.1}, {:.1}) mm; \
+             error max {:.3} mm, ends {:.2} and {:.2} mm -> {}",
+            k + 1,
+            sim.seams[t].workpiece + 1,
+            seam.length_mm,
+            seam.waypoints.len(),
+            path.first().map_or(f64::NAN, |p| p.x),
+            path.first().map_or(f64::NAN, |p| p.y),
+            path.first().map_or(f64::NAN, |p| p.z),
+            e.max_mm,
+            e.start_mm,
+            e.end_mm,
+            if e.passes() { "within the 1 mm bar" } else { "MISSES the 1 mm bar" }
+        )?;
+        if !args.brief {
+            for w in &seam.waypoints {
+                writeln!(
+                    out,
+                    "        xyz {:>9.3} {:>9.3} {:>9.3}   rpy {:>8.3} {:>8.3} {:>8.3}",
+                    w.xyz[0], w.xyz[1], w.xyz[2], w.rpy_deg[0], w.rpy_deg[1], w.rpy_deg[2]
+                )?;
+            }
+        }
+        if !e.passes() || joint != sim.seams[t].truth.joint || std::mem::replace(&mut found[t], true) {
+            bail!("several parts: seam {} is not its workpiece's seam within the bar", k + 1);
+        }
+    }
+    writeln!(out)?;
+    if found.iter().any(|f| !f) {
+        bail!("several parts: {} of {} seams found", found.iter().filter(|f| **f).count(), found.len());
+    }
+    Ok(())
 }
 
 /// Prints one reply and checks it against the truth.

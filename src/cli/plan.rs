@@ -7,6 +7,7 @@ use std::io::Write;
 
 use anyhow::{Context, anyhow, bail};
 use weldseam::convert::to_proto::{plan_result, refusal};
+use weldseam::geometry::Vec3;
 use weldseam::geometry::pose::{RobotPose, hand_eye_from_rows};
 use weldseam::joint::RequestedJoint;
 use weldseam::pipeline::{PlanRequest, Planner, Stage};
@@ -46,6 +47,15 @@ pub struct PlanArgs {
     /// and trace.json (every stage's figures, the plan as --json prints it).
     #[arg(long, value_name = "DIR")]
     pub debug: Option<PathBuf>,
+    /// Start at the seam end nearest this base-frame point: x,y,z (mm).
+    /// With several workpieces in view, the seam nearest it comes first,
+    /// then each next the nearest to where the last one ends.
+    #[arg(long, allow_hyphen_values = true, value_parser = args::point)]
+    pub start_near: Option<[f64; 3]>,
+    /// Return one seam only: the one nearest --start-near (the first of
+    /// the default order without it).
+    #[arg(long)]
+    pub one_seam: bool,
 }
 
 pub fn run(args: &PlanArgs) -> anyhow::Result<()> {
@@ -64,6 +74,8 @@ pub fn run(args: &PlanArgs) -> anyhow::Result<()> {
         units: args.input.units.to_library(),
         cloud_frame: args.input.cloud_frame.to_library(),
         roi: args.roi.to_library()?,
+        start_near: args.start_near.map(Vec3::from),
+        one_seam: args.one_seam,
         ..PlanRequest::new(args.joint, args.request.groove_depth, args.pose)
     };
     let planner = Planner::new(config);
@@ -121,25 +133,48 @@ pub fn run(args: &PlanArgs) -> anyhow::Result<()> {
         writeln!(out, "{}", serde_json::to_string(&report)?)?;
         return Ok(());
     }
-    let Some(seam) = report.seams.first() else { bail!("no seam found in {}", args.cloud.display()) };
-    writeln!(
-        out,
-        "{} seam, {:.1} mm, {} waypoints every {} mm (base frame, {} angles), planned in {:.0} ms ({} method)",
-        plan.seams[0].joint,
-        seam.length_mm,
-        seam.waypoints.len(),
-        request.step_mm.unwrap_or(planner.config().trajectory.step_mm),
-        report.euler_convention,
-        plan.timings.total_ms(),
-        report.method
-    )?;
+    if report.seams.is_empty() {
+        bail!("no seam found in {}", args.cloud.display());
+    }
+    let count = report.seams.len();
+    for (k, (seam, planned)) in report.seams.iter().zip(&plan.seams).enumerate() {
+        let heading = if count > 1 { format!("seam {} of {count}: ", k + 1) } else { String::new() };
+        writeln!(
+            out,
+            "{heading}{} seam, {:.1} mm, {} waypoints every {} mm (base frame, {} angles), planned in {:.0} ms ({} method)",
+            planned.joint,
+            seam.length_mm,
+            seam.waypoints.len(),
+            request.step_mm.unwrap_or(planner.config().trajectory.step_mm),
+            report.euler_convention,
+            plan.timings.total_ms(),
+            report.method
+        )?;
+        write_seam(&mut out, seam, args.joint)?;
+    }
+    for u in &report.unplanned {
+        let joint = u.joint.as_deref().map_or(String::new(), |j| format!(" {j}"));
+        let place = u
+            .near_camera_mm
+            .map_or(String::new(), |p| format!(" near ({:.0}, {:.0}, {:.0}) mm in the camera frame", p[0], p[1], p[2]));
+        writeln!(out, "not planned:{joint} joint{place} ({}): {}", u.refusal.code, u.refusal.message)?;
+    }
+    Ok(())
+}
+
+/// One seam's figures and waypoints, after its heading line.
+fn write_seam(
+    out: &mut impl Write,
+    seam: &weldseam_proto::plan::Seam,
+    requested: RequestedJoint,
+) -> anyhow::Result<()> {
     writeln!(
         out,
         "edge fits: rms {:.3} / {:.3} mm over {} / {} samples",
         seam.edge_fit_rms_mm[0], seam.edge_fit_rms_mm[1], seam.edge_samples[0], seam.edge_samples[1]
     )?;
     if let Some(evidence) = &seam.joint_evidence {
-        let found = if args.joint == RequestedJoint::Auto { "found" } else { "checked" };
+        let found = if requested == RequestedJoint::Auto { "found" } else { "checked" };
         writeln!(out, "joint {found}: {evidence}")?;
     }
     if let Some(c) = &seam.coverage {

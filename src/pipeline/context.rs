@@ -8,6 +8,8 @@
 use std::borrow::Cow;
 use std::time::Instant;
 
+use nalgebra::{Isometry3, Point3};
+
 use rayon::prelude::*;
 
 use crate::camera::{CameraModel, MeasurableVolume, Unmeasurable};
@@ -65,7 +67,8 @@ const GROOVE_DEPTH_TOLERANCE_MM: f64 = 0.5;
 const VIEW_CLIP_STEP_MM: f64 = 0.02;
 
 /// Measures the wall time of each stage: every lap charges the time since
-/// the previous one to the stage just finished.
+/// the previous one to the stage just finished (added up when a stage
+/// runs again, for the next workpiece of a frame).
 pub(super) struct Clock {
     timings: StageTimings,
     last: Instant,
@@ -78,7 +81,12 @@ impl Clock {
 
     pub(super) fn lap(&mut self, stage: Stage) {
         let now = Instant::now();
-        self.timings.stages.push((stage, (now - self.last).as_secs_f64() * 1e3));
+        let ms = (now - self.last).as_secs_f64() * 1e3;
+        // A stage that runs once per workpiece is charged their sum.
+        match self.timings.stages.iter_mut().find(|(s, _)| *s == stage) {
+            Some((_, total)) => *total += ms,
+            None => self.timings.stages.push((stage, ms)),
+        }
         self.last = now;
     }
 }
@@ -87,8 +95,10 @@ impl Clock {
 pub(super) struct Context<'a> {
     pub config: &'a Config,
     pub request: &'a PlanRequest,
-    /// The frame without the points the camera cannot measure.
-    pub cloud: Cow<'a, PointCloud>,
+    /// The frame without the points the camera cannot measure. Held
+    /// outside the context (by the planner), so the stages' borrows of it
+    /// leave the context free to record each workpiece's progress.
+    pub cloud: &'a PointCloud,
     pub clock: Clock,
     pub stats: PlanStats,
     /// The radius and spacing the frame is planned at: the camera's until
@@ -101,87 +111,100 @@ pub(super) struct Context<'a> {
     pub trace: Tracer<'a>,
 }
 
+/// Sanitises the cloud, in camera-frame millimetres
+/// ([`super::input`]): a point outside what the camera can measure is
+/// a corrupt frame's or noise, and one such point far off the axis
+/// would widen every window it is part of, so it becomes invalid
+/// before any stage runs. A frame that cannot be a camera's view, or
+/// is left without a valid point, fails here, in the [`Stage::Input`]
+/// stage. One pass over the frame counts both. Returns the frame the
+/// stages plan and how many valid points it has.
+///
+/// A cloud the planner owns (`Cow::Owned`) loses those points in
+/// place; a borrowed one is copied only if it has any.
+pub(super) fn sanitise<'c>(
+    config: &Config,
+    mut cloud: Cow<'c, PointCloud>,
+    request: &PlanRequest,
+    trace: &mut Tracer<'_>,
+) -> Result<(Cow<'c, PointCloud>, usize), PlanError> {
+    let camera = &config.camera;
+    let volume = camera.measurable_volume(cloud.width(), cloud.height(), cloud.is_organized());
+    let (view, counts) = count_frame(&cloud, &volume);
+    input::check_camera_view(&view, request)?;
+    if counts.unmeasurable() > 0 {
+        tracing::warn!(
+            near = counts.near,
+            far = counts.far,
+            off_view = counts.off_view,
+            min_depth_mm = camera.min_depth_mm,
+            max_depth_mm = camera.max_depth_mm,
+            max_off_axis_deg = camera.max_off_axis_deg,
+            camera_field_of_view = volume.fov_applies(),
+            "ignoring {} invalid points the camera cannot measure",
+            counts.unmeasurable()
+        );
+        cloud = Cow::Owned(without_unmeasurable(cloud, &volume));
+    }
+    trace.record(|t| (t.cloud, t.camera) = (Some(cloud.clone().into_owned()), Some(*camera)));
+    let valid_points = counts.valid - counts.unmeasurable();
+    if valid_points == 0 && counts.near > 0 && counts.near == counts.valid {
+        return Err(PlanError::at(
+            Stage::Input,
+            format!(
+                "the frame has no valid point: all {} points lie nearer than camera.min_depth_mm ({} mm); \
+                 is the cloud in millimetres and in the camera frame?",
+                counts.near, camera.min_depth_mm
+            ),
+        ));
+    }
+    if valid_points == 0 && counts.unmeasurable() > 0 {
+        return Err(PlanError::at(
+            Stage::Input,
+            format!(
+                "the frame has no valid point: of its {} points {} lie nearer than camera.min_depth_mm \
+                 ({} mm), {} farther than camera.max_depth_mm ({} mm) and {} outside the view \
+                 (camera.max_off_axis_deg {}°{}); is the cloud in millimetres and in the camera frame?",
+                counts.valid,
+                counts.near,
+                camera.min_depth_mm,
+                counts.far,
+                camera.max_depth_mm,
+                counts.off_view,
+                camera.max_off_axis_deg,
+                if volume.fov_applies() { ", or the camera's field of view" } else { "" }
+            ),
+        ));
+    }
+    if valid_points == 0 {
+        return Err(PlanError::at(Stage::Input, "the frame has no valid point"));
+    }
+    Ok((cloud, valid_points))
+}
+
 impl<'a> Context<'a> {
-    /// Sanitises the cloud, in camera-frame millimetres
-    /// ([`super::input`]): a point outside what the camera can measure is
-    /// a corrupt frame's or noise, and one such point far off the axis
-    /// would widen every window it is part of, so it becomes invalid
-    /// before any stage runs. A frame that cannot be a camera's view, or
-    /// is left without a valid point, fails here, in the [`Stage::Input`]
-    /// stage. One pass over the frame counts both.
-    ///
-    /// A cloud the planner owns (`Cow::Owned`) loses those points in
-    /// place; a borrowed one is copied only if it has any.
-    pub(super) fn sanitise(
+    /// The context of a frame [`sanitise`] passed, with `valid_points`
+    /// valid points; the input stage ends here.
+    pub(super) fn new(
         config: &'a Config,
-        mut cloud: Cow<'a, PointCloud>,
+        cloud: &'a PointCloud,
         request: &'a PlanRequest,
         clock: Clock,
-        mut trace: Tracer<'a>,
-    ) -> Result<Self, PlanError> {
-        let camera = &config.camera;
-        let volume = camera.measurable_volume(cloud.width(), cloud.height(), cloud.is_organized());
-        let (view, counts) = count_frame(&cloud, &volume);
-        input::check_camera_view(&view, request)?;
-        if counts.unmeasurable() > 0 {
-            tracing::warn!(
-                near = counts.near,
-                far = counts.far,
-                off_view = counts.off_view,
-                min_depth_mm = camera.min_depth_mm,
-                max_depth_mm = camera.max_depth_mm,
-                max_off_axis_deg = camera.max_off_axis_deg,
-                camera_field_of_view = volume.fov_applies(),
-                "ignoring {} invalid points the camera cannot measure",
-                counts.unmeasurable()
-            );
-            cloud = Cow::Owned(without_unmeasurable(cloud, &volume));
-        }
-        trace.record(|t| (t.cloud, t.camera) = (Some(cloud.clone().into_owned()), Some(*camera)));
+        trace: Tracer<'a>,
+        valid_points: usize,
+    ) -> Self {
         let mut ctx = Context {
             config,
             request,
             cloud,
             clock,
-            stats: PlanStats::default(),
+            stats: PlanStats { valid_points, ..PlanStats::default() },
             scale: Scale::of_camera(config.pipeline.neighbour_radius_mm),
             joint: request.joint.given(),
             trace,
         };
-        ctx.stats.valid_points = counts.valid - counts.unmeasurable();
-        if ctx.stats.valid_points == 0 && counts.near > 0 && counts.near == counts.valid {
-            return Err(PlanError::at(
-                Stage::Input,
-                format!(
-                    "the frame has no valid point: all {} points lie nearer than camera.min_depth_mm ({} mm); \
-                     is the cloud in millimetres and in the camera frame?",
-                    counts.near, camera.min_depth_mm
-                ),
-            ));
-        }
-        if ctx.stats.valid_points == 0 && counts.unmeasurable() > 0 {
-            return Err(PlanError::at(
-                Stage::Input,
-                format!(
-                    "the frame has no valid point: of its {} points {} lie nearer than camera.min_depth_mm \
-                     ({} mm), {} farther than camera.max_depth_mm ({} mm) and {} outside the view \
-                     (camera.max_off_axis_deg {}°{}); is the cloud in millimetres and in the camera frame?",
-                    counts.valid,
-                    counts.near,
-                    camera.min_depth_mm,
-                    counts.far,
-                    camera.max_depth_mm,
-                    counts.off_view,
-                    camera.max_off_axis_deg,
-                    if volume.fov_applies() { ", or the camera's field of view" } else { "" }
-                ),
-            ));
-        }
-        if ctx.stats.valid_points == 0 {
-            return Err(PlanError::at(Stage::Input, "the frame has no valid point"));
-        }
         ctx.clock.lap(Stage::Input);
-        Ok(ctx)
+        ctx
     }
 
     /// Decides where the full-plane count comes from
@@ -198,7 +221,7 @@ impl<'a> Context<'a> {
         if !measured {
             return Ok(false);
         }
-        let spacing = scale::measure_spacing(&self.cloud, cfg.neighbour_radius_mm)
+        let spacing = scale::measure_spacing(self.cloud, cfg.neighbour_radius_mm)
             .map_err(|e| PlanError::at(Stage::NeighbourIndex, format!("{e}; the point density cannot be measured")))?;
         self.scale = Scale::of_spacing(spacing, cfg.neighbour_radius_mm);
         tracing::info!(
@@ -223,7 +246,7 @@ impl<'a> Context<'a> {
         area_per_point: impl Fn(&Vec3, &Vec3) -> f64,
     ) -> Vec<PlaneCluster> {
         let min_area = self.config.pipeline.min_plane_area_mm2;
-        background::describe(&self.cloud, members, area_per_point)
+        background::describe(self.cloud, members, area_per_point)
             .into_iter()
             .filter(|c| c.area_mm2 >= min_area)
             .collect()
@@ -330,10 +353,11 @@ impl<'a> Context<'a> {
             .then(|| CameraGrid::for_camera(camera))
     }
 
-    /// Section 5.1: the weld from `s0` to `s1` sampled into base-frame
-    /// waypoints (Eq. 42), checked against the robot's reach, and the plan.
+    /// Section 5.1 for the paper's method: the one weld from `s0` to `s1`
+    /// sampled into base-frame waypoints (Eq. 42), checked against the
+    /// robot's reach, and the plan.
     pub(super) fn finish(
-        mut self,
+        self,
         method: Method,
         weld: SeamCurve,
         span: (f64, f64),
@@ -341,32 +365,81 @@ impl<'a> Context<'a> {
         fits: &[CurveFit; 2],
         assessment: SeamAssessment,
     ) -> Result<Plan, PlanError> {
-        let seam = self.seam(&weld, span, &normal, &normal, EdgeFigures::of(fits), assessment)?;
+        let joint = self.joint()?;
+        self.finish_several(
+            method,
+            vec![PlannedWeld::new(joint, weld, span, normal, EdgeFigures::of(fits), assessment)],
+            Vec::new(),
+        )
+    }
+
+    /// Section 5.1 for every weld of the frame, in the order
+    /// [`trajectory::seam_order`] gives (one weld: the end
+    /// [`trajectory::travel_order`] picks first, as always): each sampled
+    /// into base-frame waypoints (Eq. 42) and checked against the robot's
+    /// reach. With several, a seam beyond the reach joins `unplanned`, and
+    /// `request.one_seam` keeps the first seam only. A frame whose every
+    /// workpiece was refused is an error naming each.
+    pub(super) fn finish_several(
+        mut self,
+        method: Method,
+        welds: Vec<PlannedWeld>,
+        mut unplanned: Vec<Unplanned>,
+    ) -> Result<Plan, PlanError> {
+        let base_from_camera = self.base_from_camera();
+        let request = self.request;
+        let order: Vec<(usize, bool)> = if welds.len() == 1 {
+            let w = &welds[0];
+            let (start, _) =
+                trajectory::travel_order(&w.curve, w.span.0, w.span.1, &base_from_camera, request.start_near);
+            vec![(0, start == w.span.0)]
+        } else {
+            let ends: Vec<[Vec3; 2]> = welds
+                .iter()
+                .map(|w| [w.span.0, w.span.1].map(|s| (base_from_camera * Point3::from(w.curve.at(s))).coords))
+                .collect();
+            trajectory::seam_order(&ends, request.start_near)
+        };
+        let several = welds.len() + unplanned.len() > 1;
+        let mut seams = Vec::with_capacity(welds.len());
+        for (k, forward) in order {
+            let weld = &welds[k];
+            let (s0, s1) = weld.span;
+            let ends = if forward { (s0, s1) } else { (s1, s0) };
+            match self.seam(weld, ends, &base_from_camera) {
+                Ok(seam) => seams.push(seam),
+                Err(reason) if several => unplanned.push(Unplanned {
+                    joint: Some(weld.joint),
+                    near_camera: Some(weld.curve.at(0.5 * (s0 + s1))),
+                    reason,
+                }),
+                Err(reason) => return Err(reason),
+            }
+            if request.one_seam && !seams.is_empty() {
+                break;
+            }
+        }
         self.clock.lap(Stage::Trajectory);
-        Ok(self.plan_of(method, vec![seam], Vec::new()))
+        if seams.is_empty() {
+            return Err(none_planned(&unplanned));
+        }
+        Ok(Plan { method, seams, unplanned, stats: self.stats, timings: self.clock.timings })
     }
 
-    /// The plan of the seams and the joints seen but not planned.
-    pub(super) fn plan_of(self, method: Method, seams: Vec<Seam>, unplanned: Vec<Unplanned>) -> Plan {
-        Plan { method, seams, unplanned, stats: self.stats, timings: self.clock.timings }
-    }
-
-    /// One seam: the weld from `s0` to `s1` sampled into base-frame
-    /// waypoints (Eq. 42) with the torch along `torch_axis` (the plate
-    /// normal, or a fillet's axis) before the work and travel angles,
-    /// checked against the robot's reach. `normal` is the plate normal the
-    /// seam reports.
-    pub(super) fn seam(
-        &mut self,
-        weld: &SeamCurve,
-        (s0, s1): (f64, f64),
-        normal: &Vec3,
-        torch_axis: &Vec3,
-        edges: EdgeFigures,
-        assessment: SeamAssessment,
-    ) -> Result<Seam, PlanError> {
+    /// `Base_T_End · End_T_Camera` at capture (Eq. 42).
+    fn base_from_camera(&self) -> Isometry3<f64> {
         let hand_eye = self.request.hand_eye.unwrap_or(self.config.hand_eye);
-        let base_from_camera = self.request.pose.to_isometry(self.config.euler) * hand_eye;
+        self.request.pose.to_isometry(self.config.euler) * hand_eye
+    }
+
+    /// One weld sampled from `start` to `end` into base-frame waypoints,
+    /// checked against the robot's reach: the seam.
+    fn seam(
+        &mut self,
+        weld: &PlannedWeld,
+        (start, end): (f64, f64),
+        base_from_camera: &Isometry3<f64>,
+    ) -> Result<Seam, PlanError> {
         let t = &self.config.trajectory;
         let params = trajectory::TrajectoryParams {
             step_mm: self.request.step_mm.unwrap_or(t.step_mm),
@@ -374,26 +447,28 @@ impl<'a> Context<'a> {
             travel_angle_deg: self.request.travel_angle_deg.unwrap_or(t.travel_angle_deg),
             fillet_work_angle_deg: t.fillet_work_angle_deg,
         };
-        let (start, end) = trajectory::travel_order(weld, s0, s1, &base_from_camera, self.request.start_near);
-        let waypoints = trajectory::waypoints(weld, start, end, torch_axis, &base_from_camera, &params);
-        self.trace.record(|t| {
-            let to_camera = |w: &Waypoint| base_from_camera.inverse_transform_point(&w.position.into()).coords;
-            (t.waypoints_camera, t.base_from_camera) =
-                (waypoints.iter().map(to_camera).collect(), Some(base_from_camera));
-        });
+        let waypoints = trajectory::waypoints(&weld.curve, start, end, &weld.torch_axis, base_from_camera, &params);
+        if weld.traced {
+            self.trace.record(|t| {
+                let to_camera = |w: &Waypoint| base_from_camera.inverse_transform_point(&w.position.into()).coords;
+                (t.waypoints_camera, t.base_from_camera) =
+                    (waypoints.iter().map(to_camera).collect(), Some(*base_from_camera));
+            });
+        }
         self.check_reach(&waypoints)?;
         let length_mm = waypoints.windows(2).map(|w| (w[1].position - w[0].position).norm()).sum();
+        let assessment = weld.assessment.clone();
         Ok(Seam {
-            joint: self.joint()?,
+            joint: weld.joint,
             joint_evidence: assessment.joint_evidence,
-            start_camera: weld.at(start),
-            end_camera: weld.at(end),
-            normal_camera: *normal,
+            start_camera: weld.curve.at(start),
+            end_camera: weld.curve.at(end),
+            normal_camera: weld.normal,
             length_mm,
             waypoints,
-            edge_fit_rms_mm: edges.rms_mm,
-            edge_samples: edges.samples,
-            edge_samples_dropped: edges.dropped,
+            edge_fit_rms_mm: weld.edges.rms_mm,
+            edge_samples: weld.edges.samples,
+            edge_samples_dropped: weld.edges.dropped,
             coverage: assessment.coverage,
             quality: assessment.quality,
             warnings: assessment.warnings,
@@ -419,6 +494,72 @@ impl<'a> Context<'a> {
                 ),
             )),
         }
+    }
+}
+
+/// A workpiece's weld, checked, before its waypoints: the seams of a frame
+/// are ordered first, and the order decides where each one starts.
+#[derive(Debug, Clone)]
+pub(super) struct PlannedWeld {
+    joint: JointType,
+    curve: SeamCurve,
+    span: (f64, f64),
+    /// The plate normal the seam reports (a fillet's: the flange's).
+    normal: Vec3,
+    /// Tool z before the work and travel angles: the plate normal, or a
+    /// fillet's axis between web and flange.
+    torch_axis: Vec3,
+    edges: EdgeFigures,
+    assessment: SeamAssessment,
+    /// Whether the trace records this weld's waypoints (the trace holds
+    /// one workpiece's stages).
+    traced: bool,
+}
+
+impl PlannedWeld {
+    pub(super) fn new(
+        joint: JointType,
+        curve: SeamCurve,
+        span: (f64, f64),
+        normal: Vec3,
+        edges: EdgeFigures,
+        assessment: SeamAssessment,
+    ) -> Self {
+        PlannedWeld { joint, curve, span, normal, torch_axis: normal, edges, assessment, traced: true }
+    }
+
+    /// This weld with the torch along `axis` instead of the plate normal
+    /// (a fillet's, between the web and the flange).
+    pub(super) fn with_torch_axis(self, torch_axis: Vec3) -> Self {
+        PlannedWeld { torch_axis, ..self }
+    }
+
+    /// This weld, its waypoints traced or not.
+    pub(super) fn traced(self, traced: bool) -> Self {
+        PlannedWeld { traced, ..self }
+    }
+}
+
+/// The refusal of a frame none of whose workpieces could be planned: the
+/// first one's stage and gate, and every workpiece's reason.
+fn none_planned(unplanned: &[Unplanned]) -> PlanError {
+    let Some(first) = unplanned.first() else {
+        return PlanError::at(Stage::Background, "no workpiece was found in the frame");
+    };
+    let each: Vec<String> = unplanned
+        .iter()
+        .enumerate()
+        .map(|(k, u)| {
+            let place =
+                u.near_camera.map_or(String::new(), |p| format!(" near ({:.0}, {:.0}, {:.0}) mm", p.x, p.y, p.z));
+            let joint = u.joint.map_or(String::new(), |j| format!(" ({j})"));
+            format!("workpiece {}{joint}{place}: {}", k + 1, u.reason)
+        })
+        .collect();
+    PlanError {
+        stage: first.reason.stage,
+        reason: format!("none of the {} workpieces in view could be planned: {}", unplanned.len(), each.join("; ")),
+        gate: first.reason.gate,
     }
 }
 

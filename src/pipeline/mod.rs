@@ -55,6 +55,7 @@ pub mod trace;
 pub mod trajectory;
 pub mod weld_edges;
 pub mod weld_equation;
+pub mod workpieces;
 
 use std::borrow::Cow;
 use std::fmt;
@@ -92,8 +93,16 @@ pub struct PlanRequest {
     pub work_angle_deg: Option<f64>,
     pub travel_angle_deg: Option<f64>,
     /// The waypoints start at the seam's end nearest this point (robot
-    /// base frame, mm); else by [`trajectory::travel_order`]'s default.
+    /// base frame, mm); else by [`trajectory::travel_order`]'s default. On
+    /// a frame of several seams, the seam nearest it comes first, then
+    /// each next the nearest to where the last one ends
+    /// ([`trajectory::seam_order`]).
     pub start_near: Option<Vec3>,
+    /// Return one seam only: the first of the order, which is the seam
+    /// nearest `start_near` when it is given. The frame's other workpieces
+    /// are still planned (so a refused nearest one does not hide the next)
+    /// and their seams dropped; the unplanned ones are still named.
+    pub one_seam: bool,
     /// The cloud's units: millimetres unless the caller says otherwise.
     pub units: Units,
     /// The cloud's frame; the camera's by default.
@@ -115,6 +124,7 @@ impl PlanRequest {
             work_angle_deg: None,
             travel_angle_deg: None,
             start_near: None,
+            one_seam: false,
             units: Units::Millimetres,
             cloud_frame: CloudFrame::Camera,
             roi: None,
@@ -415,7 +425,9 @@ impl Planner {
             }
             None => &self.config,
         };
-        let ctx = Context::sanitise(config, input.cloud, request, clock, tracer)?;
+        let mut tracer = tracer;
+        let (frame, valid_points) = context::sanitise(config, input.cloud, request, &mut tracer)?;
+        let ctx = Context::new(config, &frame, request, clock, tracer, valid_points);
         match self.config.pipeline.method {
             Method::Paper => paper::plan(ctx),
             Method::Robust => robust::plan(ctx),

@@ -36,7 +36,7 @@ use crate::geometry::Vec3;
 pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
     let config = ctx.config;
     let camera = &config.camera;
-    let cloud = &*ctx.cloud;
+    let cloud = ctx.cloud;
     let search = NeighbourSearch::new(cloud, camera, config.pipeline.neighbour_radius_mm);
     ctx.clock.lap(Stage::NeighbourIndex);
 

@@ -24,17 +24,19 @@ use crate::config::Method;
 use crate::geometry::Vec3;
 use crate::joint::JointType;
 
-use super::background::Layout;
+use super::background::{Layout, PlaneCluster};
 use super::boundary::{self, Boundary, BoundaryParams, CoarseEdge};
-use super::context::{self, Context, MIN_CLUSTER_POINTS};
+use super::context::{self, Context, EdgeFigures, MIN_CLUSTER_POINTS, PlannedWeld};
 use super::edge_points::{EdgeCriterion, FullCount};
 use super::neighbours::NeighbourSearch;
+use super::plane_points::PlanePoints;
 use super::ransac::EdgeLine;
 use super::refit::{self, SeamAxes};
-use super::trace::TracedWeld;
-use super::{Plan, PlanError, SeamAssessment, SeamCoverage, Stage};
+use super::trace::{TracedWeld, Tracer};
+use super::{Plan, PlanError, SeamAssessment, SeamCoverage, Stage, Unplanned};
 use super::{
     background, clustering, groove, orientation, plane_points, quality, ransac, tee, weld_edges, weld_equation,
+    workpieces,
 };
 
 /// How far, in degrees, a sampled local normal may lie from the most common
@@ -61,7 +63,7 @@ pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
     // cloud's own spacing (Eq. 4 to 14 hold for one camera only).
     let measured = ctx.measure_scale()?;
     let scale = ctx.scale;
-    let cloud = &*ctx.cloud;
+    let cloud = ctx.cloud;
     let search = {
         let mut search = NeighbourSearch::new(cloud, camera, scale.radius_mm);
         if measured {
@@ -114,6 +116,88 @@ pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
     let planes = ctx.planes_of(std::mem::take(&mut clusters.members), |c, n| search.area_per_point(c, n));
     ctx.stats.clusters = planes.len();
     ctx.trace.record(|t| t.planes = planes.clone());
+
+    // Several workpieces: the clusters grouped so that plates of different
+    // workpieces are never paired across the table; a frame of one is one
+    // group holding every cluster, as it always was.
+    let middle = planes.iter().fold(Vec3::zeros(), |m, c| m + c.centroid) / planes.len().max(1) as f64;
+    let grouping = workpieces::GroupSettings {
+        normal: dominant,
+        max_tilt_deg: cfg.plane_max_normal_angle_deg,
+        coplanar_tolerance_mm: cfg.coplanar_tolerance_mm,
+        point_spacing_mm: scale.measured.map_or_else(|| camera.pixel_footprint_at(&middle), |m| m.spacing_mm),
+    };
+    let mut groups = workpieces::group(cloud, planes, &grouping);
+    let front = Front { search: &search, plane: &plane, dominant };
+    if groups.len() == 1 {
+        let planes = groups.pop().map(|g| g.planes).unwrap_or_default();
+        let (welds, unplanned) = plan_workpiece(&mut ctx, &front, clusters.labels, planes)?;
+        return ctx.finish_several(Method::Robust, welds, unplanned);
+    }
+
+    // Each workpiece in turn: its seam, or why not. The trace keeps the
+    // first workpiece's stages; the counts are the first's too.
+    let count = groups.len();
+    let mut labels = clusters.labels;
+    let (mut welds, mut unplanned) = (Vec::new(), Vec::new());
+    let mut tracer = None;
+    let mut first_stats = None;
+    for (k, group) in groups.into_iter().enumerate() {
+        ctx.joint = ctx.request.joint.given();
+        let own_labels = if k + 1 == count { std::mem::take(&mut labels) } else { labels.clone() };
+        match plan_workpiece(&mut ctx, &front, own_labels, group.planes) {
+            Ok((planned, seen)) => {
+                welds.extend(planned.into_iter().map(|weld| weld.traced(k == 0)));
+                unplanned.extend(seen);
+            }
+            Err(reason) => {
+                tracing::info!(workpiece = k + 1, near_camera = ?group.near_camera.as_slice(), "workpiece not planned: {reason}");
+                // The joint requested is no workpiece's joint when it
+                // does not match; otherwise the one planned or seen.
+                let mismatch = reason.gate == Some(quality::Gate::JointMismatch);
+                let joint = ctx.joint.filter(|j| !(mismatch && ctx.request.joint.given() == Some(*j)));
+                unplanned.push(Unplanned { joint, near_camera: Some(group.near_camera), reason });
+            }
+        }
+        if k == 0 {
+            tracer = Some(std::mem::replace(&mut ctx.trace, Tracer::off()));
+            first_stats = Some(ctx.stats.clone());
+        }
+    }
+    if let Some(tracer) = tracer {
+        ctx.trace = tracer;
+    }
+    if let Some(stats) = first_stats {
+        ctx.stats = stats;
+    }
+    ctx.finish_several(Method::Robust, welds, unplanned)
+}
+
+/// What the workpieces of a frame share from the frame's front stages.
+struct Front<'f> {
+    search: &'f NeighbourSearch<'f>,
+    plane: &'f PlanePoints,
+    dominant: Vec3,
+}
+
+/// Plans one workpiece from its plane clusters (and the table's) to its
+/// checked welds: the plates and how they lie, then edge points through
+/// the quality gates (3.3 to 4.3), or for a tee its fillet roots (each
+/// root seen a weld, a root hidden named in the second list). `labels`
+/// are the frame's cluster labels, which the edge stage renumbers for this
+/// workpiece's plates.
+fn plan_workpiece(
+    ctx: &mut Context,
+    front: &Front,
+    labels: Vec<u32>,
+    planes: Vec<PlaneCluster>,
+) -> Result<(Vec<PlannedWeld>, Vec<Unplanned>), PlanError> {
+    let config = ctx.config;
+    let cfg = &config.pipeline;
+    let camera = &config.camera;
+    let scale = ctx.scale;
+    let cloud = ctx.cloud;
+    let (search, plane, dominant) = (front.search, front.plane, front.dominant);
     let selection = background::Selection {
         joint: ctx.request.joint.given(),
         normal: dominant,
@@ -163,7 +247,7 @@ pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
     // 3.4.1: edge points, at most `pipeline.edge_max_neighbour_ratio` of a
     // tilted plane's count (Eq. 15's rule).
     let criterion = EdgeCriterion { full: FullCount::Plane, ratio: cfg.edge_max_neighbour_ratio };
-    let edges = context::plate_edge_points(clusters.labels, &workpiece, &search, &plane, &criterion);
+    let edges = context::plate_edge_points(labels, &workpiece, search, plane, &criterion);
     ctx.stats.edge_points = [edges[0].len(), edges[1].len()];
     ctx.trace.record(|t| t.edge_points = edges.clone());
     ctx.clock.lap(Stage::EdgePoints);
@@ -295,7 +379,12 @@ pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
             },
         );
         tracing::debug!(verdict = ?profile.verdict(), "{}", profile.describe());
-        let joint = groove::judge(ctx.joint, &profile).map_err(|e| {
+        let judged = groove::judge(ctx.joint, &profile);
+        if let Err(groove::GrooveError::LooksLikeTee { .. }) = judged {
+            // What was seen, for a workpiece of several named unplanned.
+            ctx.joint = Some(JointType::TFillet);
+        }
+        let joint = judged.map_err(|e| {
             let gate = if e.is_unknown() { quality::Gate::JointUnknown } else { quality::Gate::JointMismatch };
             PlanError { gate: Some(gate), ..PlanError::at(Stage::Groove, e) }
         })?;
@@ -489,8 +578,9 @@ pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
     }
     ctx.clock.lap(Stage::Quality);
 
-    // 5.1: the waypoints in the robot's base frame.
+    // 5.1 follows once every workpiece is planned: the seams' order
+    // decides where each one's waypoints start.
     let assessment =
         SeamAssessment { joint_evidence: Some(joint_evidence), coverage, quality: Some(quality), warnings };
-    ctx.finish(Method::Robust, weld, (s0, s1), normal, &fits, assessment)
+    Ok((vec![PlannedWeld::new(joint, weld, (s0, s1), normal, EdgeFigures::of(&fits), assessment)], Vec::new()))
 }

@@ -17,19 +17,23 @@
 //! refused by a gate is a joint seen but not planned ([`Unplanned`]),
 //! beside the root that was; with no root planned the plan is refused.
 
-use crate::config::Method;
 use crate::joint::JointType;
 
 use super::background::{PlaneCluster, Workpiece};
-use super::context::{Context, EdgeFigures};
+use super::context::{Context, EdgeFigures, PlannedWeld};
 use super::fillet::{self, Root, TeeView};
 use super::trace::TracedWeld;
-use super::{Plan, PlanError, SeamAssessment, SeamCoverage, Stage, Unplanned, boundary, quality, trajectory};
+use super::{PlanError, SeamAssessment, SeamCoverage, Stage, Unplanned, boundary, quality, trajectory};
 
 /// Plans the seen roots of the tee in `workpiece` (the web's top and the
-/// largest flange piece, the flange's other pieces its layer mates);
-/// `layers` says in words what the background stage saw.
-pub(super) fn plan(mut ctx: Context, workpiece: Workpiece, layers: String) -> Result<Plan, PlanError> {
+/// largest flange piece, the flange's other pieces its layer mates) as
+/// welds, and names the roots not planned; `layers` says in words what the
+/// background stage saw.
+pub(super) fn plan(
+    ctx: &mut Context,
+    workpiece: Workpiece,
+    layers: String,
+) -> Result<(Vec<PlannedWeld>, Vec<Unplanned>), PlanError> {
     let config = ctx.config;
     let cfg = &config.pipeline;
     ctx.joint = Some(JointType::TFillet);
@@ -38,7 +42,7 @@ pub(super) fn plan(mut ctx: Context, workpiece: Workpiece, layers: String) -> Re
     let pieces: Vec<&PlaneCluster> = std::iter::once(flange).chain(&workpiece.layer_mates[1]).collect();
     let spacing = ctx.spacing_at(&web_top.centroid);
     let view = TeeView {
-        cloud: &ctx.cloud,
+        cloud: ctx.cloud,
         web_top,
         flange_pieces: &pieces,
         point_spacing_mm: spacing,
@@ -93,6 +97,9 @@ pub(super) fn plan(mut ctx: Context, workpiece: Workpiece, layers: String) -> Re
             edge_fit_rms_mm: [root.face_rms_mm, root.flange_rms_mm],
             edge_coverage: Some(root.coverage),
             coverage: Some(&coverage),
+            // The root's stretch is where the face's foot and the flange
+            // are both seen: nothing of the joint lies beyond it.
+            joint_beyond_ends_mm: None,
             length_mm: root.line.s_max - root.line.s_min,
             given_groove_depth_mm: None,
         };
@@ -133,24 +140,27 @@ pub(super) fn plan(mut ctx: Context, workpiece: Workpiece, layers: String) -> Re
         }));
     }
 
-    // 5.1: each root its own seam, the torch between the flange and the web.
+    // 5.1 (sampled with the frame's other welds): each root its own seam,
+    // the torch between the flange and the web.
     ctx.trace.record(|t| {
         let (root, _) = &planned[0];
         let normal = root.flange.normal;
         t.weld = Some(TracedWeld { curve: root.line.clone(), span: root.span(), normal });
     });
-    let mut seams = Vec::with_capacity(planned.len());
-    for (root, assessment) in planned {
-        let normal = root.flange.normal;
-        let axis =
-            trajectory::fillet_torch_axis(&normal, &root.away_from_web(), config.trajectory.fillet_work_angle_deg);
-        let edges = EdgeFigures {
-            rms_mm: [root.face_rms_mm, root.flange_rms_mm],
-            samples: [root.face_points, root.flange_points],
-            dropped: [root.face_dropped, 0],
-        };
-        seams.push(ctx.seam(&root.line, root.span(), &normal, &axis, edges, assessment)?);
-    }
-    ctx.clock.lap(Stage::Trajectory);
-    Ok(ctx.plan_of(Method::Robust, seams, unplanned))
+    let welds = planned
+        .into_iter()
+        .map(|(root, assessment)| {
+            let normal = root.flange.normal;
+            let axis =
+                trajectory::fillet_torch_axis(&normal, &root.away_from_web(), config.trajectory.fillet_work_angle_deg);
+            let edges = EdgeFigures {
+                rms_mm: [root.face_rms_mm, root.flange_rms_mm],
+                samples: [root.face_points, root.flange_points],
+                dropped: [root.face_dropped, 0],
+            };
+            PlannedWeld::new(JointType::TFillet, root.line.clone(), root.span(), normal, edges, assessment)
+                .with_torch_axis(axis)
+        })
+        .collect();
+    Ok((welds, unplanned))
 }

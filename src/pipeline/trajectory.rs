@@ -90,6 +90,43 @@ pub fn travel_order(
     if forward { (s0, s1) } else { (s1, s0) }
 }
 
+/// The order of a frame's seams, given each one's ends in the base frame:
+/// `(index, forward)` pairs, a seam forward when it runs from its first
+/// end to its second. See the module's documentation for the rule.
+pub fn seam_order(ends: &[[Vec3; 2]], start_near: Option<Vec3>) -> Vec<(usize, bool)> {
+    match start_near {
+        Some(p) => {
+            let mut left: Vec<usize> = (0..ends.len()).collect();
+            let mut at = p;
+            let mut order = Vec::with_capacity(ends.len());
+            while !left.is_empty() {
+                let distance = |k: usize| (ends[k][0] - at).norm().min((ends[k][1] - at).norm());
+                let Some(pos) = (0..left.len()).min_by(|a, b| distance(left[*a]).total_cmp(&distance(left[*b]))) else {
+                    break;
+                };
+                let k = left.remove(pos);
+                let forward = (ends[k][0] - at).norm() <= (ends[k][1] - at).norm();
+                at = if forward { ends[k][1] } else { ends[k][0] };
+                order.push((k, forward));
+            }
+            order
+        }
+        None => {
+            let along_first = |d: Vec3| if d.x.abs() >= d.y.abs() { d.x >= 0.0 } else { d.y >= 0.0 };
+            let forward: Vec<bool> = ends.iter().map(|[a, b]| along_first(b - a)).collect();
+            let starts: Vec<Vec3> = (0..ends.len()).map(|k| if forward[k] { ends[k][0] } else { ends[k][1] }).collect();
+            let spread = |axis: usize| {
+                let values = starts.iter().map(|s| s[axis]);
+                values.clone().fold(f64::NEG_INFINITY, f64::max) - values.fold(f64::INFINITY, f64::min)
+            };
+            let axis = if spread(0) >= spread(1) { 0 } else { 1 };
+            let mut order: Vec<usize> = (0..ends.len()).collect();
+            order.sort_by(|a, b| starts[*a][axis].total_cmp(&starts[*b][axis]));
+            order.into_iter().map(|k| (k, forward[k])).collect()
+        }
+    }
+}
+
 /// The torch orientation for travel direction `travel` and plate normal
 /// `into` (both in one frame), with work and travel angles in degrees.
 pub fn torch_orientation(travel: &Vec3, into: &Vec3, work_deg: f64, travel_deg: f64) -> Rotation3<f64> {
@@ -199,6 +236,23 @@ mod tests {
         // As tool z, a work angle tilts it further about the travel axis.
         let r = torch_orientation(&Vec3::y(), &axis, 10.0, 0.0);
         assert!(((r * Vec3::z()).dot(&axis) - 10f64.to_radians().cos()).abs() < 1e-12);
+    }
+
+    #[test]
+    fn seams_follow_from_the_start_point_each_to_the_nearest_next() {
+        // Three seams along base y, at x = 0, 100 and 300 mm.
+        let seam = |x: f64, flip: bool| {
+            let (a, b) = (Vec3::new(x, 0.0, 0.0), Vec3::new(x, 50.0, 0.0));
+            if flip { [b, a] } else { [a, b] }
+        };
+        let ends = [seam(300.0, false), seam(0.0, true), seam(100.0, false)];
+        // From near the third seam's far end: it first, backwards, then the
+        // one at x = 0 from y = 0, then x = 300 from its end nearer (0, 50).
+        let order = seam_order(&ends, Some(Vec3::new(110.0, 60.0, 0.0)));
+        assert_eq!(order, vec![(2, false), (1, false), (0, false)]);
+        // Without a point: each seam from its smaller base y, by base x.
+        assert_eq!(seam_order(&ends, None), vec![(1, false), (2, true), (0, true)]);
+        assert_eq!(seam_order(&[], None), vec![]);
     }
 
     #[test]

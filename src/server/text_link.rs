@@ -427,6 +427,11 @@ impl Session {
                     Ok(formatted) => {
                         let count = formatted.len() as u64;
                         self.pending = formatted;
+                        // The ok line counts the seams planned; WHY names
+                        // the workpieces in view that were not.
+                        if !plan.unplanned.is_empty() {
+                            self.last_error = Some(not_planned(&plan));
+                        }
                         Reply::Ok(plan.seams.len() as u64, count)
                     }
                     Err(e) => error(
@@ -439,6 +444,23 @@ impl Session {
             Err(Failure { code, text }) => error(code, text, OK_NUMBERS),
         })
     }
+}
+
+/// What `WHY` answers after a plan that left joints in view unplanned:
+/// how many, and each one's joint, place (camera frame) and error code.
+fn not_planned(plan: &crate::pipeline::Plan) -> String {
+    let each: Vec<String> = plan
+        .unplanned
+        .iter()
+        .map(|u| {
+            let joint = u.joint.map_or("a joint".to_string(), |j| j.name().to_string());
+            let place = u.near_camera.map_or(String::new(), |p| format!(" at ({:.0} {:.0} {:.0}) mm", p.x, p.y, p.z));
+            let code = u16::from(crate::convert::to_proto::plan_error_code(&u.reason));
+            format!("{joint}{place} (-{code}): {}", u.reason.reason)
+        })
+        .collect();
+    // No commas: a text line's commas would split it for the robot.
+    format!("{} seams planned; {} not: {}", plan.seams.len(), plan.unplanned.len(), each.join("; "))
 }
 
 #[cfg(test)]

@@ -7,13 +7,16 @@
 //! tools or a merge of views leave it (unorganized, about a point per
 //! voxel). And the variants of the per-variant table: the nearest V-butt
 //! frame as real tools hand it over (`sim::variants`), each measured for
-//! plan time and peak memory against the size of its raw points.
+//! plan time and peak memory against the size of its raw points. And the
+//! frame of several workpieces (issue 15's speed target and the demo's
+//! frame with several parts): three parts side by side, and the first of
+//! them alone in the same view.
 
 use crate::camera::CameraModel;
 use crate::cloud::PointCloud;
 use crate::joint::JointType;
 use crate::sim::variants::{Variant, VariantError, voxel_grid};
-use crate::sim::{SceneSpec, Simulation, demo_scene, simulate};
+use crate::sim::{JointGeometry, PlateExtent, SceneSpec, Simulation, Workpiece, demo_scene, simulate};
 
 /// The frame sizes of the scaling table: the paper's 1920 x 1200 sensor
 /// (2.3 MP) and smaller and larger ones of the same 16:10 shape, all with
@@ -73,6 +76,40 @@ pub const VARIANTS: [&str; 7] =
 /// [`VARIANTS`], parsed.
 pub fn variants() -> Result<Vec<Variant>, VariantError> {
     VARIANTS.iter().map(|text| Variant::parse(text)).collect()
+}
+
+/// The standoff of the several-workpiece frame, mm: three parts of 110 mm
+/// across with 30 mm between them fit the paper's view there.
+pub const SEVERAL_DISTANCE_MM: f64 = 800.0;
+
+/// A frame of `count` workpieces (1 to 3) side by side on one table: a
+/// V-butt in the middle, an I-butt to one side and a lap, turned 15
+/// degrees, to the other; each 110 mm across and 160 mm long, 30 mm or
+/// more apart, the camera over the middle one at [`SEVERAL_DISTANCE_MM`].
+/// One is the V-butt alone, seen the same way: the yardstick of issue 15's
+/// "three workpieces in under 1.5 times the time of one".
+pub fn several_workpieces(count: usize) -> SceneSpec {
+    let plate = PlateExtent { width_mm: 55.0, length_mm: 160.0, offset_mm: 0.0 };
+    let mut spec = demo_scene(JointType::VButt);
+    spec.plate_a = plate;
+    spec.plate_b = plate;
+    spec.placement.distance_mm = SEVERAL_DISTANCE_MM;
+    let i_butt = Workpiece {
+        joint: JointGeometry::IButt { thickness_mm: 6.0, gap_mm: 1.5 },
+        plate_a: plate,
+        plate_b: plate,
+        at_mm: [140.0, 0.0],
+        yaw_deg: 0.0,
+    };
+    let lap = Workpiece {
+        joint: JointGeometry::Lap { lower_thickness_mm: 6.0, upper_thickness_mm: 5.0, overlap_mm: 30.0 },
+        plate_a: plate,
+        plate_b: plate,
+        at_mm: [-150.0, 10.0],
+        yaw_deg: 15.0,
+    };
+    spec.others = [i_butt, lap].into_iter().take(count.clamp(1, 3) - 1).collect();
+    spec
 }
 
 /// One simulated capture to plan: the demo scene of `joint` seen from
@@ -171,6 +208,18 @@ mod tests {
         let (frame, cloud) = (raw.simulate().cloud, voxel.simulate().cloud);
         assert!(frame.is_organized() && !cloud.is_organized());
         assert!(cloud.valid_count() > 1000 && cloud.valid_count() < frame.valid_count() / 2, "{}", cloud.valid_count());
+    }
+
+    #[test]
+    fn the_several_workpiece_frame_shows_every_part_and_one_is_the_first_alone() {
+        let camera = CameraModel::default();
+        for count in 1..=3 {
+            let spec = several_workpieces(count);
+            assert_eq!(spec.validate(), Ok(()), "{count}");
+            assert_eq!(spec.workpieces().len(), count);
+            assert!(crate::sim::tee_multi::multi_framing_ok(&spec, &camera), "{count} parts in view");
+        }
+        assert_eq!(several_workpieces(1).first_workpiece(), several_workpieces(3).first_workpiece());
     }
 
     #[test]

@@ -3,7 +3,8 @@
 //! the nearest frames voxel-downsampled (a measured cloud), the
 //! scaling with frame size, loading and decoding a frame, the peak memory
 //! of `weldseam plan`, every variant of a cloud as real tools write it
-//! (plan time and peak memory against its raw size), the daemon's
+//! (plan time and peak memory against its raw size), a frame of three
+//! workpieces against the same view of one (issue 15), the daemon's
 //! trigger-to-reply latency, and its reply times and service order under
 //! load.
 
@@ -16,14 +17,15 @@ use anyhow::{Context, bail};
 use weldseam::camera::CameraModel;
 use weldseam::cloud::{self, PointCloud, pcd};
 use weldseam::joint::JointType;
+use weldseam::joint::RequestedJoint;
 use weldseam::mock::load::{self as daemon_load, frame_message, quantile};
-use weldseam::pipeline::Planner;
-use weldseam::sim::Simulation;
+use weldseam::pipeline::{PlanRequest, Planner};
 use weldseam::sim::scenarios::{
-    DISTANCES_MM, FRAME_SIZES, MEASURED_VOXEL_MM, Scenario, TILT_DEG, VARIANT_JOINT, camera_with_size, megapixels,
-    raw_cloud_bytes, raw_frame_bytes, variants,
+    DISTANCES_MM, FRAME_SIZES, MEASURED_VOXEL_MM, SEVERAL_DISTANCE_MM, Scenario, TILT_DEG, VARIANT_JOINT,
+    camera_with_size, megapixels, raw_cloud_bytes, raw_frame_bytes, several_workpieces, variants,
 };
 use weldseam::sim::variants::Variant;
+use weldseam::sim::{Simulation, simulate};
 
 use crate::cli::memory;
 use crate::cli::table::Table;
@@ -197,6 +199,53 @@ impl Printer {
         out.flush()?;
         Ok(())
     }
+}
+
+/// Issue 15's speed target: the frame of three workpieces planned against
+/// the same view of the first alone (`sim::scenarios::several_workpieces`),
+/// each with `auto`, and the ratio of their median plan times.
+fn several_workpieces_table(camera: CameraModel, runs: usize) -> Table {
+    let scenario = Scenario::new(JointType::VButt, SEVERAL_DISTANCE_MM, camera);
+    let mut table = Table::new(
+        format!(
+            "Several workpieces per frame: three parts and the first alone, {} x {} at {SEVERAL_DISTANCE_MM:.0} mm",
+            camera.width_px, camera.height_px
+        ),
+        &["frame", "seams", "not planned", "total ms", "x one part", "stages (median ms)"],
+    );
+    let mut one_part_ms = None;
+    for count in [1, 3] {
+        let sim = simulate(&several_workpieces(count), &camera);
+        let request = PlanRequest::new(RequestedJoint::Auto, None, sim.pose);
+        let outcome = Planner::new(config_for(&scenario)).plan(&sim.cloud, &request);
+        let timings = measure::time_request(&scenario, &sim.cloud, &request, runs);
+        let total = timings.total();
+        let median = total.map(|t| t.median);
+        if count == 1 {
+            one_part_ms = median;
+        }
+        let ratio = match (median, one_part_ms) {
+            (Some(m), Some(one)) if one > 0.0 => format!("{:.2}", m / one),
+            _ => "-".into(),
+        };
+        let (seams, unplanned) = match &outcome {
+            Ok(plan) => (plan.seams.len().to_string(), plan.unplanned.len().to_string()),
+            Err(e) => ("refused".into(), e.to_string()),
+        };
+        let cell = total.map(|t| t.cell(1)).unwrap_or_else(|| "-".into());
+        let stages: Vec<String> = timings
+            .stages
+            .iter()
+            .filter_map(|(stage, _)| Some(format!("{} {:.1}", stage.name(), timings.stage(*stage)?.median)))
+            .collect();
+        let label = format!("{count} part{}", if count == 1 { "" } else { "s" });
+        table.push(vec![label, seams, unplanned, cell, ratio, stages.join(", ")]);
+    }
+    table.notes.push(format!(
+        "median (min-max) of {runs} runs after a discarded warm-up, `auto`; the workpieces are planned in turn after \
+         the frame's shared stages (issue 15's target: three in under 1.5 times one)"
+    ));
+    table
 }
 
 fn progress(what: &str) {
@@ -375,6 +424,9 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
         camera.width_px, camera.height_px
     );
     printer.table(&measure::stage_table(title, &measure::bench_all(&voxelized, runs)))?;
+
+    progress("several workpieces in one frame");
+    printer.table(&several_workpieces_table(camera, runs))?;
 
     if args.stages_only {
         return Ok(());

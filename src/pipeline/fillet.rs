@@ -63,9 +63,14 @@ pub const MIN_FACE_POINTS: usize = 30;
 /// at a grazing angle spread its points a little across.
 const FACE_REACH_SPACINGS: f64 = 6.0;
 
-/// The margins, in point spacings, that keep the flange's and the web
-/// top's own points (and their noise) out of the face.
-const HEIGHT_MARGIN_SPACINGS: f64 = 2.0;
+/// The margins, in point spacings (and at least the on-plane tolerance),
+/// that keep the flange's and the web top's own points (and their noise)
+/// out of the face, and the face's foot out of the flange beside it. No
+/// wider: where an image border or a dropout crosses the root obliquely,
+/// the evidence a margin off the root stops that much times the slant
+/// before or after the root does (two spacings cost 1 to 2 mm at the ends
+/// of 1 mm voxel clouds).
+const HEIGHT_MARGIN_SPACINGS: f64 = 1.0;
 
 /// The face's foot: its points up to this many spacings above the lowest
 /// face height.

@@ -3,7 +3,9 @@
 //! and a part abutting a V-butt plate are refused for what they are, a lap
 //! whose upper plate a specular streak cut in two is refused for covering
 //! part of the joint (and not taken for an I-butt under `auto`), and a
-//! V-groove leaving the image at a grazing angle is planned to the border.
+//! V-groove leaving the image at a grazing angle is planned to the border,
+//! and an I-butt whose edge a streak hides over the joint's last stretch is
+//! refused for stopping short of where both plates are still seen.
 //! Each scene is planned as `weldseam eval --suite faults` plans it.
 
 use weldseam::camera::CameraModel;
@@ -52,4 +54,10 @@ fn a_lap_plate_cut_by_a_streak_is_refused_for_coverage_and_not_found_as_a_butt_j
 fn a_groove_leaving_the_image_at_a_grazing_angle_is_planned_to_the_border() {
     let outcome = planned("fault-barely-in-view-v-butt-01-d1000-t10", JointAsk::AsScene);
     assert_eq!(outcome.verdict, Verdict::WithinBar, "{:?}", outcome.result.as_ref().map(|(e, _)| e));
+}
+
+#[test]
+fn an_edge_lost_under_a_streak_while_both_plates_go_on_is_refused_not_cut_short() {
+    let reason = refusal(&planned("fault-streaks-i-butt-00-d1000-t20", JointAsk::AsScene)).to_string();
+    assert!(reason.contains("beyond the seam's") && reason.contains("a weld edge was lost there"), "{reason}");
 }

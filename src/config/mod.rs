@@ -255,6 +255,12 @@ pub struct QualityParams {
     /// The least fraction of the visible joint (where both plates are seen
     /// beside it) the seam must span.
     pub min_joint_coverage: f64,
+    /// The longest stretch, mm, beyond either end of the seam along which
+    /// both plates are still seen beside the weld (issue 11: the seam
+    /// covers the visible joint to within 2 mm of where both plates'
+    /// evidence ends). Longer, an edge was lost there while its plate
+    /// goes on: a streak or spatter over the edge.
+    pub max_joint_beyond_seam_mm: f64,
     /// Butt joints: the largest high-low misalignment of the plates, mm,
     /// and as a fraction of their thickness t (ISO 5817 quality level C:
     /// 0.15 t, at most 4 mm); the smaller limit applies. The camera sees
@@ -287,6 +293,7 @@ impl Default for QualityParams {
             max_edge_fit_rms_spacings: 2.0,
             min_edge_coverage: 0.5,
             min_joint_coverage: 0.8,
+            max_joint_beyond_seam_mm: 2.0,
             max_misalignment_mm: 4.0,
             max_misalignment_of_thickness: 0.15,
             max_gap_mm: 4.0,
@@ -311,6 +318,7 @@ impl QualityParams {
         in_range("quality.max_edge_fit_rms_spacings", self.max_edge_fit_rms_spacings, 0.05, 100.0)?;
         in_range("quality.min_edge_coverage", self.min_edge_coverage, 0.0, 1.0)?;
         in_range("quality.min_joint_coverage", self.min_joint_coverage, 0.0, 1.0)?;
+        in_range("quality.max_joint_beyond_seam_mm", self.max_joint_beyond_seam_mm, 0.0, 1000.0)?;
         in_range("quality.max_misalignment_mm", self.max_misalignment_mm, 0.0, 50.0)?;
         in_range("quality.max_misalignment_of_thickness", self.max_misalignment_of_thickness, 0.0, 1.0)?;
         in_range("quality.max_gap_mm", self.max_gap_mm, 0.0, 50.0)?;

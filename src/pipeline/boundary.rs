@@ -291,6 +291,68 @@ pub(super) fn reach_image_border(
     (reach(lo, -1.0), reach(hi, 1.0))
 }
 
+/// How far inside each weld edge, in point spacings, the plates' surfaces
+/// are read beyond the seam's ends: past the rim the plane criterion trims,
+/// and at three depths so a streak running along the edge does not hide
+/// the plate from all of them.
+const SURFACE_INSET_SPACINGS: [f64; 3] = [2.0, 4.0, 6.0];
+/// The farthest beyond a seam's end the plates' surfaces are followed, mm.
+const MAX_SURFACE_FOLLOW_MM: f64 = 400.0;
+
+/// How far beyond each end of the span `(s0, s1)` both plates' surfaces
+/// are seen beside their weld edges, on the camera's grid: the joint goes
+/// on there, though its edges were not found (a streak or spatter hiding
+/// one edge while the plate is still seen). Each plate is read just inside
+/// its fitted edge, on its plane; a break along the weld no longer than
+/// [`JOINT_BREAK_SPACINGS`] is crossed, as the coverage report crosses it.
+/// Zero where a plate ends with the seam, or the view does.
+pub(super) fn surfaces_beyond(
+    cloud: &PointCloud,
+    grid: &CameraGrid,
+    edges: [&SeamCurve; 2],
+    planes: [&Plane; 2],
+    inwards: [Vec3; 2],
+    spacing_mm: f64,
+    (s0, s1): (f64, f64),
+) -> [f64; 2] {
+    if !(spacing_mm.is_finite() && spacing_mm > 0.0) {
+        return [0.0; 2];
+    }
+    let step = 0.5 * spacing_mm;
+    let max_break = JOINT_BREAK_SPACINGS * spacing_mm;
+    // Plate k's surface just inside its edge at `s`: None out of view.
+    let seen = |k: usize, s: f64| -> Option<bool> {
+        let at = edges[k].at(s);
+        let mut in_view = false;
+        for d in SURFACE_INSET_SPACINGS.map(|n| n * spacing_mm) {
+            if let Some(i) = grid.pixel_of(&(at + inwards[k] * d)) {
+                in_view = true;
+                let q = cloud.points()[i];
+                if is_valid_point(&q) && planes[k].signed_distance(&vec3(&q)).abs() <= ON_PLATE_MM {
+                    return Some(true);
+                }
+            }
+        }
+        in_view.then_some(false)
+    };
+    let follow = |end: f64, outward: f64| -> f64 {
+        let mut last_both = 0.0;
+        let steps = (MAX_SURFACE_FOLLOW_MM / step) as usize;
+        for n in 1..=steps {
+            let beyond = n as f64 * step;
+            let s = end + outward * beyond;
+            match (seen(0, s), seen(1, s)) {
+                (Some(true), Some(true)) => last_both = beyond,
+                (None, _) | (_, None) => break,
+                _ if beyond - last_both > max_break => break,
+                _ => {}
+            }
+        }
+        last_both
+    };
+    [follow(s0, -1.0), follow(s1, 1.0)]
+}
+
 /// The longest break along the weld, in point spacings, across which a
 /// piece of a plate in its plane is taken for the same plate seen through a
 /// narrow gap in the cloud: a streak or a stripe of dropouts a few pixels

@@ -286,6 +286,9 @@ pub struct SeamEvidence<'a> {
     /// How much of the visible joint the seam spans, when both plates are
     /// seen beside it.
     pub coverage: Option<&'a SeamCoverage>,
+    /// How far beyond the seam's first and last end both plates are still
+    /// seen beside the weld, mm (on the camera's grid).
+    pub joint_beyond_ends_mm: Option<[f64; 2]>,
     /// The planned seam's length along its feature axis, mm.
     pub length_mm: f64,
     /// V-butt joints: the groove depth the request gave, if it gave one.
@@ -368,6 +371,23 @@ pub fn check(seam: &SeamEvidence, limits: &QualityParams) -> Vec<GateFailure> {
                 100.0 * limits.min_joint_coverage,
             ),
         );
+    }
+
+    if let Some(beyond) = seam.joint_beyond_ends_mm {
+        let (end, mm) = if beyond[0] >= beyond[1] { ("first", beyond[0]) } else { ("last", beyond[1]) };
+        if mm > limits.max_joint_beyond_seam_mm {
+            fail(
+                Gate::JointCoverage,
+                mm,
+                limits.max_joint_beyond_seam_mm,
+                format!(
+                    "both plates are seen beside the joint for {mm:.1} mm beyond the seam's {end} end, more than \
+                     {:.1} mm: a weld edge was lost there while its plate goes on (a streak, spatter or a \
+                     reflection over the edge); the seam would stop short of the joint",
+                    limits.max_joint_beyond_seam_mm
+                ),
+            );
+        }
     }
 
     if let Some(h) = q.misalignment_mm {
@@ -505,6 +525,7 @@ mod tests {
             edge_fit_rms_mm: rms,
             edge_coverage: None,
             coverage: None,
+            joint_beyond_ends_mm: None,
             length_mm: 100.0,
             given_groove_depth_mm: None,
         }
@@ -583,6 +604,17 @@ mod tests {
         let failed = check(&seam, &limits);
         assert_eq!(failed.iter().map(|f| f.gate).collect::<Vec<_>>(), vec![Gate::EdgeCoverage, Gate::JointCoverage]);
         assert!(failed[0].message.starts_with("weld edge 2 is seen along 30 %"), "{}", failed[0].message);
+
+        // The plates still seen side by side 28 mm beyond the last end:
+        // refused; a millimetre beyond the first is the rim, not a joint.
+        let seam =
+            SeamEvidence { joint_beyond_ends_mm: Some([1.0, 28.0]), ..evidence(JointType::IButt, &q, [0.05, 0.05]) };
+        let failed = check(&seam, &limits);
+        assert_eq!(failed.iter().map(|f| f.gate).collect::<Vec<_>>(), vec![Gate::JointCoverage]);
+        assert!(failed[0].message.contains("28.0 mm beyond the seam's last end"), "{}", failed[0].message);
+        let seam =
+            SeamEvidence { joint_beyond_ends_mm: Some([1.0, 1.9]), ..evidence(JointType::IButt, &q, [0.05, 0.05]) };
+        assert!(check(&seam, &limits).is_empty());
     }
 
     #[test]

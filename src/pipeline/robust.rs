@@ -432,6 +432,27 @@ pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
         }
         _ => None,
     };
+    // Where the plates go on side by side beyond the seam's ends, the
+    // joint does too: an edge lost under a streak, not a plate's end.
+    let joint_beyond_ends_mm = ctx.camera_grid().map(|grid| {
+        let [before, after] = boundary::surfaces_beyond(
+            cloud,
+            &grid,
+            [&fits[0].curve, &fits[1].curve],
+            [&plates[0].plane, &plates[1].plane],
+            [0, 1].map(|k| -fitted_edge(k).outward),
+            spacing_at(&axes.origin),
+            (s0, s1),
+        );
+        if layout == Layout::Lap {
+            // A lap's joint goes on only as far as its root is in view.
+            let (v0, v1) = ctx.clip_to_view(&weld, s0 - before, s1 + after);
+            [(s0 - v0).max(0.0), (v1 - s1).max(0.0)]
+        } else {
+            [before, after]
+        }
+    });
+    tracing::debug!(?joint_beyond_ends_mm, "plates seen beside the joint beyond the seam's ends");
     ctx.clock.lap(Stage::WeldEquation);
 
     // What the fits say about the seam, against the configured gates: a
@@ -453,6 +474,7 @@ pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
         edge_fit_rms_mm: fits.each_ref().map(|f| f.rms_mm),
         edge_coverage: Some(edge_coverage),
         coverage: coverage.as_ref(),
+        joint_beyond_ends_mm,
         length_mm: s1 - s0,
         given_groove_depth_mm: ctx.request.groove_depth_mm.filter(|_| joint == JointType::VButt),
     };

@@ -35,6 +35,12 @@ pub enum WeldEdgeError {
     NotParallel { max_angle_deg: f64 },
 }
 
+/// The least stretch two weld edges must share along the seam, as a
+/// fraction of the shorter one's: facing edges share most of theirs (a
+/// streak or a clamp may cut one into pieces, each still beside the
+/// other edge), edges meeting end to end share none.
+const MIN_SHARED_SPAN: f64 = 0.25;
+
 /// The paper's selection: of all lines, the two with the most inliers that
 /// separate the centroids in the xoy plane. `owner(line)` tells which
 /// plate (0 or 1) most of a line's inliers belong to; the result is
@@ -83,11 +89,31 @@ pub fn robust_select(
         let sum: Vec3 = l.inliers.iter().map(|&i| points[plate][i]).sum();
         sum / l.inliers.len().max(1) as f64
     };
+    // Where each line's inliers run along its direction, from its point.
+    let span = |plate: usize, k: usize, along: &Vec3| -> (f64, f64) {
+        let l = &lines[plate][k];
+        l.inliers
+            .iter()
+            .map(|&i| along.dot(&(points[plate][i] - l.point)))
+            .fold((f64::MAX, f64::MIN), |(lo, hi), t| (lo.min(t), hi.max(t)))
+    };
     let mut best: Option<(f64, [usize; 2])> = None;
     for &a in &sep_a {
         for &b in &sep_b {
             let (la, lb) = (&lines[0][a], &lines[1][b]);
             if la.direction.dot(&lb.direction).abs() < cos_max {
+                continue;
+            }
+            // Weld edges face each other across the joint: their inliers
+            // run side by side. Two plates' outer edges meeting end to
+            // end at a corner (a lap's upper plate ending on the lower
+            // plate's outline) are collinear, nearer than any facing
+            // pair, and share no stretch.
+            let (along, offset) = (la.direction, la.direction.dot(&(lb.point - la.point)));
+            let ((a0, a1), (b0, b1)) = (span(0, a, &along), span(1, b, &along));
+            let (b0, b1) = (b0.min(b1) + offset, b0.max(b1) + offset);
+            let shared = a1.min(b1) - a0.max(b0);
+            if shared < MIN_SHARED_SPAN * (a1 - a0).min(b1 - b0) {
                 continue;
             }
             // How far apart the two edges run: the facing pair is closest.
@@ -120,6 +146,26 @@ mod tests {
         let centroids = [Vec3::new(-50.0, 30.0, 600.0), Vec3::new(50.0, 30.0, 600.0)];
         let pick = robust_select([&a_lines, &b_lines], [&a_pts, &b_pts], centroids, &Vec3::z(), 10.0).unwrap();
         assert_eq!(pick, [1, 1]);
+    }
+
+    #[test]
+    fn edges_meeting_end_to_end_are_not_a_facing_pair() {
+        // Plate A's edge along y at x = -1 (y 0 to 100) faces plate B's at
+        // x = +1; A also has an edge at x = +1 further down (y -100 to -5),
+        // collinear with B's: nearer than any facing pair, sharing nothing.
+        let run = |x: f64, y0: f64| (0..50).map(|i| Vec3::new(x, y0 + 2.0 * i as f64, 600.0)).collect::<Vec<_>>();
+        let a_pts: Vec<Vec3> = [run(-1.0, 0.0), run(1.0, -100.0)].concat();
+        let b_pts = run(1.0, 0.0);
+        let along_y = |x: f64, inliers: std::ops::Range<usize>| EdgeLine {
+            point: Vec3::new(x, 0.0, 600.0),
+            direction: Vec3::y(),
+            inliers: inliers.collect(),
+        };
+        let a_lines = vec![along_y(1.0, 50..100), along_y(-1.0, 0..50)];
+        let b_lines = vec![along_y(1.0, 0..50)];
+        let centroids = [Vec3::new(-50.0, 0.0, 600.0), Vec3::new(50.0, 50.0, 600.0)];
+        let pick = robust_select([&a_lines, &b_lines], [&a_pts, &b_pts], centroids, &Vec3::z(), 10.0).unwrap();
+        assert_eq!(pick, [1, 0]);
     }
 
     #[test]

@@ -47,8 +47,8 @@
 //! [`super::quality`] (a spacing over √12) for the sampling.
 
 use crate::cloud::PointCloud;
-use crate::geometry::Vec3;
 use crate::geometry::fit::{Moments, Plane};
+use crate::geometry::{Vec3, vec3};
 
 use super::background::PlaneCluster;
 use super::boundary::JOINT_BREAK_SPACINGS;
@@ -63,9 +63,14 @@ pub const MIN_FACE_POINTS: usize = 30;
 /// at a grazing angle spread its points a little across.
 const FACE_REACH_SPACINGS: f64 = 6.0;
 
-/// The margins, in point spacings, that keep the flange's and the web
-/// top's own points (and their noise) out of the face.
-const HEIGHT_MARGIN_SPACINGS: f64 = 2.0;
+/// The margins, in point spacings (and at least the on-plane tolerance),
+/// that keep the flange's and the web top's own points (and their noise)
+/// out of the face, and the face's foot out of the flange beside it. No
+/// wider: where an image border or a dropout crosses the root obliquely,
+/// the evidence a margin off the root stops that much times the slant
+/// before or after the root does (two spacings cost 1 to 2 mm at the ends
+/// of 1 mm voxel clouds).
+const HEIGHT_MARGIN_SPACINGS: f64 = 1.0;
 
 /// The face's foot: its points up to this many spacings above the lowest
 /// face height.
@@ -235,23 +240,19 @@ pub fn find_roots(view: &TeeView) -> [Result<Root, RootNotSeen>; 2] {
             Err(RootNotSeen { side: Side::Above, sign, reason: format!("no root is seen: {why}"), near_camera: near })
         });
     };
-    let points: Vec<Vec3> = view
-        .cloud
-        .points()
-        .iter()
-        .filter(|p| p[0].is_finite() && p[1].is_finite() && p[2].is_finite())
-        .map(|p| Vec3::new(p[0] as f64, p[1] as f64, p[2] as f64))
-        .collect();
-    [-1.0, 1.0].map(|sign| find_root(view, &frame, &points, sign))
+    [-1.0, 1.0].map(|sign| find_root(view, &frame, sign))
+}
+
+/// The cloud's valid points, read as they are needed: a frame of millions
+/// of points is not copied.
+fn valid_points(cloud: &PointCloud) -> impl Iterator<Item = Vec3> + '_ {
+    cloud.points().iter().filter(|p| p.iter().all(|c| c.is_finite())).map(vec3)
 }
 
 /// The web's frame from its top and the flange pieces.
 fn web_frame(view: &TeeView) -> Option<WebFrame> {
     let points = view.cloud.points();
-    let member = |&i: &u32| {
-        let p = points[i as usize];
-        Vec3::new(p[0] as f64, p[1] as f64, p[2] as f64)
-    };
+    let member = |&i: &u32| vec3(&points[i as usize]);
     // The flange's plane from all its pieces (one plate on both sides).
     let flange_points: Vec<Vec3> = view
         .flange_pieces
@@ -302,7 +303,7 @@ fn side_seen(frame: &WebFrame, sign: f64) -> Side {
     }
 }
 
-fn find_root(view: &TeeView, frame: &WebFrame, points: &[Vec3], sign: f64) -> Result<Root, RootNotSeen> {
+fn find_root(view: &TeeView, frame: &WebFrame, sign: f64) -> Result<Root, RootNotSeen> {
     let side = side_seen(frame, sign);
     let spacing = view.point_spacing_mm;
     let margin = view.on_plane_mm.max(HEIGHT_MARGIN_SPACINGS * spacing);
@@ -327,14 +328,12 @@ fn find_root(view: &TeeView, frame: &WebFrame, points: &[Vec3], sign: f64) -> Re
     if pieces.is_empty() {
         return Err(not_seen("the flange on this side is not seen (hidden by the web)".into()));
     }
-    let face_points: Vec<Vec3> = points
-        .iter()
+    let face_points: Vec<Vec3> = valid_points(view.cloud)
         .filter(|p| {
             let h = frame.height_of(p);
             let off = sign * (frame.across(p) - frame.middle);
             (h_lo..=h_hi).contains(&h) && (0.0..=reach).contains(&off)
         })
-        .copied()
         .collect();
     let hidden = if side == Side::Far { ", hidden by the web" } else { "" };
     if face_points.len() < MIN_FACE_POINTS {
@@ -394,10 +393,9 @@ fn find_root(view: &TeeView, frame: &WebFrame, points: &[Vec3], sign: f64) -> Re
     // too, where the web overhangs the flange's end) by the same margin
     // that keeps the flange out of the face.
     let flange_reach = margin + FLANGE_REACH_SPACINGS * spacing;
-    let beside: Vec<&Vec3> = points
-        .iter()
+    let beside: Vec<Vec3> = valid_points(view.cloud)
         .filter(|p| {
-            let out = (*p - p0).dot(&w);
+            let out = (p - p0).dot(&w);
             frame.height_of(p).abs() <= view.on_plane_mm && (margin..=flange_reach).contains(&out)
         })
         .collect();
@@ -410,7 +408,7 @@ fn find_root(view: &TeeView, frame: &WebFrame, points: &[Vec3], sign: f64) -> Re
             if side == Side::Far { " (the web hides it)" } else { " (in the web's shadow)" }
         )));
     }
-    let flange_along: Vec<f64> = beside.iter().map(|p| along(p)).collect();
+    let flange_along: Vec<f64> = beside.iter().map(along).collect();
     let Some(run) = seen_run(&foot, &flange_along, spacing) else {
         return Err(not_seen(
             "the web's face and the flange up to it are not seen together anywhere along the root".into(),
@@ -418,7 +416,7 @@ fn find_root(view: &TeeView, frame: &WebFrame, points: &[Vec3], sign: f64) -> Re
     };
     // The flange near the root: its points beside the run, against the
     // plane of all its pieces.
-    let near_flange: Vec<&Vec3> = beside.iter().copied().filter(|p| (run.s0..=run.s1).contains(&along(p))).collect();
+    let near_flange: Vec<&Vec3> = beside.iter().filter(|p| (run.s0..=run.s1).contains(&along(p))).collect();
     let flange_plane = Plane { normal: n, offset: frame.flange_offset };
     let flange_rms_mm = rms(near_flange.iter().map(|p| flange_plane.signed_distance(p)));
 

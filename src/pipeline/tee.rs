@@ -97,8 +97,8 @@ pub(super) fn plan(
             edge_fit_rms_mm: [root.face_rms_mm, root.flange_rms_mm],
             edge_coverage: Some(root.coverage),
             coverage: Some(&coverage),
-            // The root's stretch is where the face's foot and the flange
-            // are both seen: nothing of the joint lies beyond it.
+            // The root's ends are where its evidence ends: nothing is seen
+            // of it beyond them.
             joint_beyond_ends_mm: None,
             length_mm: root.line.s_max - root.line.s_min,
             given_groove_depth_mm: None,

@@ -130,21 +130,18 @@ pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
     let front = Front { search: &search, plane: &plane, dominant };
     if groups.len() == 1 {
         let planes = groups.pop().map(|g| g.planes).unwrap_or_default();
-        let weld = plan_workpiece(&mut ctx, &front, clusters.labels, planes)?;
+        let weld = plan_workpiece(&mut ctx, &front, &clusters.labels, planes)?;
         return ctx.finish_several(Method::Robust, vec![weld], Vec::new());
     }
 
     // Each workpiece in turn: its seam, or why not. The trace keeps the
     // first workpiece's stages; the counts are the first's too.
-    let count = groups.len();
-    let mut labels = clusters.labels;
     let (mut welds, mut unplanned) = (Vec::new(), Vec::new());
     let mut tracer = None;
     let mut first_stats = None;
     for (k, group) in groups.into_iter().enumerate() {
         ctx.joint = ctx.request.joint.given();
-        let own_labels = if k + 1 == count { std::mem::take(&mut labels) } else { labels.clone() };
-        match plan_workpiece(&mut ctx, &front, own_labels, group.planes) {
+        match plan_workpiece(&mut ctx, &front, &clusters.labels, group.planes) {
             Ok(weld) => welds.push(weld.traced(k == 0)),
             Err(reason) => {
                 tracing::info!(workpiece = k + 1, near_camera = ?group.near_camera.as_slice(), "workpiece not planned: {reason}");
@@ -179,11 +176,11 @@ struct Front<'f> {
 /// Plans one workpiece from its plane clusters (and the table's) to its
 /// checked weld: the plates and how they lie, then edge points through the
 /// quality gates (3.3 to 4.3). `labels` are the frame's cluster labels,
-/// which the edge stage renumbers for this workpiece's plates.
+/// which the edge stage reads for this workpiece's plates.
 fn plan_workpiece(
     ctx: &mut Context,
     front: &Front,
-    labels: Vec<u32>,
+    labels: &[u32],
     planes: Vec<PlaneCluster>,
 ) -> Result<PlannedWeld, PlanError> {
     let config = ctx.config;

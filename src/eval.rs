@@ -139,6 +139,12 @@ pub enum JointAsk {
     /// The type `k` places after the scene's in [`JointType::ALL`] (1 or
     /// 2): the wrong joint, whose only right answer is a refusal.
     Wrong(usize),
+    /// This type for every scene, and every workpiece of a frame of
+    /// several (issue 15: a type requested applies to each), the groove
+    /// depth left to be measured: a scene of another type is only to be
+    /// refused, and on several workpieces only the seams of this type
+    /// are to be found.
+    Type(JointType),
 }
 
 /// The groove depth a V-butt request gives.
@@ -161,6 +167,7 @@ impl EvalRequest {
                 let own = JointType::ALL.iter().position(|j| *j == spec.joint.joint_type()).unwrap_or(0);
                 JointType::ALL[(own + k) % JointType::ALL.len()].into()
             }
+            JointAsk::Type(joint) => joint.into(),
         }
     }
 
@@ -168,6 +175,7 @@ impl EvalRequest {
     pub fn groove_depth_for(&self, spec: &SceneSpec) -> Option<f64> {
         match (self.groove_depth, self.joint_for(spec)) {
             (DepthAsk::Measured, _) | (_, RequestedJoint::Auto) => None,
+            _ if matches!(self.joint, JointAsk::Type(_)) => None,
             (DepthAsk::Given, RequestedJoint::Type(joint)) => spec.groove_depth_requested_as(joint),
         }
     }
@@ -178,6 +186,7 @@ impl EvalRequest {
         let mut answer = ScoredAnswer::of(spec, sim);
         match self.joint {
             JointAsk::Wrong(_) => answer.refuse = true,
+            JointAsk::Type(joint) if joint != spec.joint.joint_type() => answer.refuse = true,
             JointAsk::Auto if spec.faults.iter().all(|f| f.kind() == crate::sim::faults::FaultKind::WrongJoint) => {
                 answer.refuse = false;
                 answer.whole_allowed = true;
@@ -823,5 +832,15 @@ mod tests {
         assert!(wrong_by(&verdict) < 1e-9);
         let reason = "the requested lap joint does not fit: plates coplanar";
         assert_eq!(classify(&wrong_joint, Err(reason)), Verdict::Refused { reason: reason.into() });
+    }
+
+    #[test]
+    fn a_type_asked_of_every_scene_is_that_type_with_the_depth_measured() {
+        let ask = EvalRequest { joint: JointAsk::Type(JointType::VButt), groove_depth: DepthAsk::Given };
+        for joint in JointType::ALL {
+            let spec = crate::sim::demo_scene(joint);
+            assert_eq!(ask.joint_for(&spec), RequestedJoint::Type(JointType::VButt));
+            assert_eq!(ask.groove_depth_for(&spec), None, "{joint}: the depth is measured");
+        }
     }
 }

@@ -143,7 +143,9 @@ fn demo_runs_and_meets_the_bar() {
     let out = weldseam(&["demo", "--brief"]);
     let text = String::from_utf8_lossy(&out.stdout);
     assert!(out.status.success(), "{text}\n{}", String::from_utf8_lossy(&out.stderr));
-    assert_eq!(text.matches("within the 1 mm bar").count(), 3, "{text}");
+    // One seam of each joint, then the three of the frame of several parts.
+    assert_eq!(text.matches("within the 1 mm bar").count(), 6, "{text}");
+    assert!(text.contains("3 seams, 0 not planned"), "{text}");
 }
 
 #[test]

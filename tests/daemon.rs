@@ -311,7 +311,7 @@ async fn bad_controller_input_gets_typed_errors() {
 
     let mut raw = Raw::connect(&cell.controller).await;
     let mut bad = hello.clone();
-    bad[4] = 7;
+    bad[4] = PROTOCOL_VERSION as u8 + 1;
     raw.write(&bad).await;
     raw.expect_error(ErrorCode::UnsupportedVersion).await;
     raw.expect_closed().await;

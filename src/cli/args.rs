@@ -87,6 +87,15 @@ pub enum JointRequestArg {
     /// The type after that: only a refusal is right.
     #[value(name = "wrong-2")]
     Wrong2,
+    /// V-butt for every scene (and every workpiece of a frame of
+    /// several), the groove depth measured.
+    #[value(name = "v-butt")]
+    VButt,
+    /// I-butt for every scene and workpiece.
+    #[value(name = "i-butt")]
+    IButt,
+    /// Lap for every scene and workpiece.
+    Lap,
 }
 
 /// `--groove-depth` of `eval`: what a V-butt request says of the depth.

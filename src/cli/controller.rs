@@ -259,6 +259,13 @@ async fn exchange(args: &ControllerArgs) -> anyhow::Result<()> {
             );
         }
     }
+    for u in &r.unplanned {
+        let joint = u.joint.as_deref().unwrap_or("joint");
+        let place = u
+            .near_camera_mm
+            .map_or(String::new(), |p| format!(" near ({:.0}, {:.0}, {:.0}) mm in the camera frame", p[0], p[1], p[2]));
+        println!("not planned: {joint}{place}: error {} ({}): {}", u.code, u.refusal.code, u.refusal.message);
+    }
     if let Some(total) = r.timing_ms.get("total") {
         println!("pipeline {total:.0} ms");
     }

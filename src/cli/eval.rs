@@ -60,8 +60,11 @@ pub struct EvalArgs {
     pub variant: Option<Variant>,
     /// How each plan names its joint: `scene` (its own type), `auto` (the
     /// planner decides; a seam of another type is a confident wrong one),
-    /// or `wrong-1` / `wrong-2` (a wrong type on purpose: only a refusal
-    /// is right). `auto` and `wrong-*` need the robust method alone.
+    /// `wrong-1` / `wrong-2` (a wrong type on purpose: only a refusal
+    /// is right), or `v-butt`, `i-butt`, `lap` (that type for every scene
+    /// and every workpiece, the groove depth measured: a scene of another
+    /// type is only to be refused). All but `scene` need the robust
+    /// method alone.
     #[arg(long, value_enum, default_value_t)]
     pub joint_request: JointRequestArg,
     /// What a V-butt request says of the groove depth: `given` (the
@@ -141,6 +144,9 @@ pub fn run(args: &EvalArgs) -> anyhow::Result<()> {
             JointRequestArg::Auto => JointAsk::Auto,
             JointRequestArg::Wrong1 => JointAsk::Wrong(1),
             JointRequestArg::Wrong2 => JointAsk::Wrong(2),
+            JointRequestArg::VButt => JointAsk::Type(JointType::VButt),
+            JointRequestArg::IButt => JointAsk::Type(JointType::IButt),
+            JointRequestArg::Lap => JointAsk::Type(JointType::Lap),
         },
         groove_depth: match args.groove_depth {
             GrooveDepthArg::Given => DepthAsk::Given,
@@ -164,7 +170,7 @@ pub fn run(args: &EvalArgs) -> anyhow::Result<()> {
     // seam fails them.
     let judged = matches!(args.suite, SuiteArg::Faults | SuiteArg::Hard)
         || several_seams
-        || matches!(ask.joint, JointAsk::Wrong(_));
+        || matches!(ask.joint, JointAsk::Wrong(_) | JointAsk::Type(_));
     if let Some(f) = &args.filter {
         scenes.retain(|(name, _)| name.contains(f.as_str()));
     }

@@ -33,6 +33,13 @@ pub struct PlaneCluster {
     pub elongation: f64,
 }
 
+impl PlaneCluster {
+    /// The cluster's plane, place and shape without its points.
+    pub fn clone_shape(&self) -> PlaneCluster {
+        PlaneCluster { members: Vec::new(), ..*self }
+    }
+}
+
 /// The two workpiece plates. For a lap joint `plates[0]` is the upper
 /// plate and `plates[1]` the lower one (robust method; the paper's method
 /// sorts them later by the depth of their edges).

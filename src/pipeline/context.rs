@@ -19,7 +19,6 @@ use crate::geometry::{Vec3, vec3};
 use crate::joint::JointType;
 
 use super::background::{self, PlaneCluster, Workpiece};
-use super::clustering::UNCLUSTERED;
 use super::edge_points::{self, EdgeCriterion};
 use super::input::{self, ViewCounts, ViewLimit};
 use super::neighbours::NeighbourSearch;
@@ -563,28 +562,29 @@ fn none_planned(unplanned: &[Unplanned]) -> PlanError {
     }
 }
 
-/// The edge points of both plates (Eq. 15 by `criterion`): the cluster
-/// labels renumbered so that plate k is label k, then each plate's members
-/// classified. Both methods take this step alike; only the criterion
-/// differs.
+/// The edge points of both plates (Eq. 15 by `criterion`): each plate's
+/// members classified against its neighbours of its own cluster label.
+/// The frame's labels are read, not renumbered, so every workpiece of a
+/// frame reads the same ones. Both methods take this step alike; only the
+/// criterion differs.
 pub(super) fn plate_edge_points(
-    mut labels: Vec<u32>,
+    labels: &[u32],
     workpiece: &Workpiece,
     search: &NeighbourSearch,
     plane: &PlanePoints,
     criterion: &EdgeCriterion,
 ) -> [Vec<u32>; 2] {
-    label_plates(&mut labels, workpiece);
     let plates = std::array::from_fn(|k| edge_points::Plate {
-        labels: &labels,
-        label: k as u32,
+        labels,
+        label: workpiece.plates[k].label,
         members: &workpiece.plates[k].members,
     });
     let mut edges = edge_points::edge_points_of_plates(search, plane, plates, criterion);
     if search.measured().is_some() {
         for (k, edge) in edges.iter_mut().enumerate() {
             let before = edge.len();
-            keep_one_sided(edge, &labels, k as u32, &workpiece.plates[k].plane.normal, search);
+            let plate = &workpiece.plates[k];
+            keep_one_sided(edge, labels, plate.label, &plate.plane.normal, search);
             tracing::debug!(plate = k + 1, before, after = edge.len(), "edge points one-sided");
         }
     }
@@ -606,18 +606,6 @@ fn keep_one_sided(edge: &mut Vec<u32>, labels: &[u32], label: u32, normal: &Vec3
         .copied()
         .filter(|&i| !scale::surrounded_by(search, i as usize, normal, |j| labels[j] == label))
         .collect();
-}
-
-/// The cluster labels renumbered in place so that plate k is label k and
-/// every other point is [`UNCLUSTERED`], as the edge criterion reads them.
-fn label_plates(labels: &mut [u32], workpiece: &Workpiece) {
-    let plate_labels = workpiece.plates.each_ref().map(|p| p.label);
-    labels.par_iter_mut().for_each(|l| {
-        *l = match plate_labels.iter().position(|p| p == l) {
-            Some(k) => k as u32,
-            None => UNCLUSTERED,
-        }
-    });
 }
 
 /// The valid points of a frame and, among them, those the camera cannot

@@ -71,7 +71,7 @@ pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
     // 3.4.1: an edge point has at most `paper.edge_ratio` of a frontal
     // plane's neighbour count (Eq. 15).
     let criterion = EdgeCriterion { full: FullCount::Frontal, ratio: config.paper.edge_ratio };
-    let edges = context::plate_edge_points(clusters.labels, &workpiece, &search, &plane, &criterion);
+    let edges = context::plate_edge_points(&clusters.labels, &workpiece, &search, &plane, &criterion);
     ctx.stats.edge_points = [edges[0].len(), edges[1].len()];
     ctx.trace.record(|t| t.edge_points = edges.clone());
     ctx.clock.lap(Stage::EdgePoints);

@@ -131,21 +131,18 @@ pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
     let front = Front { search: &search, plane: &plane, dominant };
     if groups.len() == 1 {
         let planes = groups.pop().map(|g| g.planes).unwrap_or_default();
-        let (welds, unplanned) = plan_workpiece(&mut ctx, &front, clusters.labels, planes)?;
+        let (welds, unplanned) = plan_workpiece(&mut ctx, &front, &clusters.labels, planes)?;
         return ctx.finish_several(Method::Robust, welds, unplanned);
     }
 
     // Each workpiece in turn: its seam, or why not. The trace keeps the
     // first workpiece's stages; the counts are the first's too.
-    let count = groups.len();
-    let mut labels = clusters.labels;
     let (mut welds, mut unplanned) = (Vec::new(), Vec::new());
     let mut tracer = None;
     let mut first_stats = None;
     for (k, group) in groups.into_iter().enumerate() {
         ctx.joint = ctx.request.joint.given();
-        let own_labels = if k + 1 == count { std::mem::take(&mut labels) } else { labels.clone() };
-        match plan_workpiece(&mut ctx, &front, own_labels, group.planes) {
+        match plan_workpiece(&mut ctx, &front, &clusters.labels, group.planes) {
             Ok((planned, seen)) => {
                 welds.extend(planned.into_iter().map(|weld| weld.traced(k == 0)));
                 unplanned.extend(seen);
@@ -184,12 +181,12 @@ struct Front<'f> {
 /// checked welds: the plates and how they lie, then edge points through
 /// the quality gates (3.3 to 4.3), or for a tee its fillet roots (each
 /// root seen a weld, a root hidden named in the second list). `labels`
-/// are the frame's cluster labels, which the edge stage renumbers for this
+/// are the frame's cluster labels, which the edge stage reads for this
 /// workpiece's plates.
 fn plan_workpiece(
     ctx: &mut Context,
     front: &Front,
-    labels: Vec<u32>,
+    labels: &[u32],
     planes: Vec<PlaneCluster>,
 ) -> Result<(Vec<PlannedWeld>, Vec<Unplanned>), PlanError> {
     let config = ctx.config;

@@ -13,7 +13,7 @@
 //! a coarse occupancy grid in the plane: each cluster's cells grow, a cell
 //! at a time, over cells no cluster and no table point holds, and two
 //! clusters whose growths meet within [`MAX_JOINT_OPENING_MM`] of each
-//! other belong to one workpiece. The cells are a couple of point spacings
+//! other belong to one workpiece. The cells are a few point spacings
 //! wide, so the measure follows the cloud, not one camera.
 //!
 //! A frame splits into workpieces only where the table, taken away, leaves
@@ -40,7 +40,7 @@ pub const MAX_JOINT_OPENING_MM: f64 = 25.0;
 
 /// A grid cell in point spacings: wide enough that a plate's points leave
 /// no cell of it empty, fine enough that a gap of a few spacings shows.
-const CELL_SPACINGS: f64 = 2.0;
+const CELL_SPACINGS: f64 = 4.0;
 
 /// The most cells the grid may have; a coarser cell is taken beyond it,
 /// so a wide, fine frame costs no more than this.
@@ -48,6 +48,12 @@ const MAX_CELLS: f64 = 4.0e6;
 
 /// Every how many points the clusters' extent is taken.
 const BOUNDS_STRIDE: usize = 8;
+
+/// Every how many of a cluster's points marks its cell: a cell
+/// [`CELL_SPACINGS`] wide holds about its square in points, so every
+/// fourth leaves about four in each (a cell left empty inside a plate is
+/// crossed in one step; a wall of table cells many cells thick is not).
+const MARK_STRIDE: usize = 4;
 
 /// The fewest clusters a frame of two workpieces shows: two plates each
 /// and the table.
@@ -69,7 +75,8 @@ pub struct GroupSettings {
 }
 
 /// One workpiece's clusters, with the table's beside them for the layer
-/// rule (the table is the surface the plates rest on), and where it lies.
+/// rule (the table is the surface the plates rest on; on a frame of
+/// several, without its points), and where it lies.
 #[derive(Debug, Clone)]
 pub struct WorkpieceGroup {
     pub planes: Vec<PlaneCluster>,
@@ -92,7 +99,11 @@ pub fn group(cloud: &PointCloud, planes: Vec<PlaneCluster>, s: &GroupSettings) -
                 .into_iter()
                 .map(|members| {
                     let near_camera = middle(members.iter().map(|&k| &planes[k]));
-                    let planes = members.iter().chain(&table).map(|&k| planes[k].clone()).collect();
+                    // The layer rule reads the table's plane, place and
+                    // area, not its points: a frame's largest cluster is
+                    // not copied for every workpiece.
+                    let table = table.iter().map(|&k| planes[k].clone_shape());
+                    let planes = members.iter().map(|&k| planes[k].clone()).chain(table).collect();
                     WorkpieceGroup { planes, near_camera }
                 })
                 .collect();
@@ -208,7 +219,7 @@ impl OccupancyGrid {
         let mut grid = vec![EMPTY; width * height];
         let owners = table.iter().map(|&k| (k, TABLE)).chain(others.iter().enumerate().map(|(n, &k)| (k, n as u32)));
         for (k, owner) in owners {
-            for &i in &planes[k].members {
+            for &i in planes[k].members.iter().step_by(MARK_STRIDE) {
                 if let Some(c) = cell_of(i) {
                     grid[c] = owner;
                 }

@@ -130,8 +130,8 @@ pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
     let front = Front { search: &search, plane: &plane, dominant };
     if groups.len() == 1 {
         let planes = groups.pop().map(|g| g.planes).unwrap_or_default();
-        let weld = plan_workpiece(&mut ctx, &front, &clusters.labels, planes)?;
-        return ctx.finish_several(Method::Robust, vec![weld], Vec::new());
+        let welds = plan_workpiece(&mut ctx, &front, &clusters.labels, planes)?;
+        return ctx.finish_several(Method::Robust, welds, Vec::new());
     }
 
     // Each workpiece in turn: its seam, or why not. The trace keeps the
@@ -142,7 +142,7 @@ pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
     for (k, group) in groups.into_iter().enumerate() {
         ctx.joint = ctx.request.joint.given();
         match plan_workpiece(&mut ctx, &front, &clusters.labels, group.planes) {
-            Ok(weld) => welds.push(weld.traced(k == 0)),
+            Ok(planned) => welds.extend(planned.into_iter().map(|w| w.traced(k == 0))),
             Err(reason) => {
                 tracing::info!(workpiece = k + 1, near_camera = ?group.near_camera.as_slice(), "workpiece not planned: {reason}");
                 // The joint requested is no workpiece's joint when it
@@ -174,14 +174,47 @@ struct Front<'f> {
 }
 
 /// Plans one workpiece from its plane clusters (and the table's) to its
-/// checked weld: the plates and how they lie, then edge points through the
-/// quality gates (3.3 to 4.3). `labels` are the frame's cluster labels,
-/// which the edge stage reads for this workpiece's plates.
+/// checked welds: the plates and how they lie (3.3), then the path of
+/// that layout. `labels` are the frame's cluster labels, which the edge
+/// stage reads for this workpiece's plates.
 fn plan_workpiece(
     ctx: &mut Context,
     front: &Front,
     labels: &[u32],
     planes: Vec<PlaneCluster>,
+) -> Result<Vec<PlannedWeld>, PlanError> {
+    let cfg = &ctx.config.pipeline;
+    let selection = background::Selection {
+        joint: ctx.request.joint.given(),
+        normal: front.dominant,
+        coplanar_tolerance_mm: cfg.coplanar_tolerance_mm,
+        lap_step_min_mm: cfg.lap_step_min_mm,
+        lap_step_max_mm: cfg.lap_step_max_mm,
+        max_tilt_deg: cfg.plane_max_normal_angle_deg,
+    };
+    let selected = background::robust_select(planes, &selection).map_err(|e| {
+        let gate = if e.is_joint_mismatch() {
+            Some(quality::Gate::JointMismatch)
+        } else if e.is_unrecognised() {
+            Some(quality::Gate::JointUnknown)
+        } else {
+            None
+        };
+        PlanError { gate, ..PlanError::at(Stage::Background, e) }
+    })?;
+    // One path per layout: each returns the workpiece's welds.
+    match selected.layout {
+        Layout::Butt | Layout::Lap => plan_plates(ctx, front, labels, selected).map(|weld| vec![weld]),
+    }
+}
+
+/// A butt joint's or a lap's weld from its two plates: edge points through
+/// the quality gates (3.4 to 4.3).
+fn plan_plates(
+    ctx: &mut Context,
+    front: &Front,
+    labels: &[u32],
+    selected: background::Selected,
 ) -> Result<PlannedWeld, PlanError> {
     let config = ctx.config;
     let cfg = &config.pipeline;
@@ -189,25 +222,7 @@ fn plan_workpiece(
     let scale = ctx.scale;
     let cloud = ctx.cloud;
     let (search, plane, dominant) = (front.search, front.plane, front.dominant);
-    let selection = background::Selection {
-        joint: ctx.request.joint.given(),
-        normal: dominant,
-        coplanar_tolerance_mm: cfg.coplanar_tolerance_mm,
-        lap_step_min_mm: cfg.lap_step_min_mm,
-        lap_step_max_mm: cfg.lap_step_max_mm,
-        max_tilt_deg: cfg.plane_max_normal_angle_deg,
-    };
-    let background::Selected { workpiece, layout, evidence: layers } = background::robust_select(planes, &selection)
-        .map_err(|e| {
-            let gate = if e.is_joint_mismatch() {
-                Some(quality::Gate::JointMismatch)
-            } else if e.is_unrecognised() {
-                Some(quality::Gate::JointUnknown)
-            } else {
-                None
-            };
-            PlanError { gate, ..PlanError::at(Stage::Background, e) }
-        })?;
+    let background::Selected { workpiece, layout, evidence: layers } = selected;
     if layout == Layout::Lap {
         ctx.joint = Some(JointType::Lap);
         ctx.trace.record(|t| t.joint = Some(JointType::Lap));

@@ -178,26 +178,21 @@ struct Front<'f> {
 }
 
 /// Plans one workpiece from its plane clusters (and the table's) to its
-/// checked welds: the plates and how they lie, then edge points through
-/// the quality gates (3.3 to 4.3), or for a tee its fillet roots (each
-/// root seen a weld, a root hidden named in the second list). `labels`
-/// are the frame's cluster labels, which the edge stage reads for this
-/// workpiece's plates.
+/// checked welds: the plates and how they lie (3.3), then the path of
+/// that layout: a butt joint's or a lap's edges through the quality gates,
+/// or a tee's fillet roots (each root seen a weld, a root hidden named in
+/// the second list). `labels` are the frame's cluster labels, which the
+/// edge stage reads for this workpiece's plates.
 fn plan_workpiece(
     ctx: &mut Context,
     front: &Front,
     labels: &[u32],
     planes: Vec<PlaneCluster>,
 ) -> Result<(Vec<PlannedWeld>, Vec<Unplanned>), PlanError> {
-    let config = ctx.config;
-    let cfg = &config.pipeline;
-    let camera = &config.camera;
-    let scale = ctx.scale;
-    let cloud = ctx.cloud;
-    let (search, plane, dominant) = (front.search, front.plane, front.dominant);
+    let cfg = &ctx.config.pipeline;
     let selection = background::Selection {
         joint: ctx.request.joint.given(),
-        normal: dominant,
+        normal: front.dominant,
         coplanar_tolerance_mm: cfg.coplanar_tolerance_mm,
         lap_step_min_mm: cfg.lap_step_min_mm,
         lap_step_max_mm: cfg.lap_step_max_mm,
@@ -235,10 +230,32 @@ fn plan_workpiece(
         );
     }
     ctx.clock.lap(Stage::Background);
-    if layout == Layout::Tee {
+    // One path per layout: each returns the workpiece's welds.
+    match layout {
+        Layout::Butt | Layout::Lap => {
+            plan_plates(ctx, front, labels, workpiece, layout, layers).map(|weld| (vec![weld], Vec::new()))
+        }
         // A web on its flange: its fillet roots, not two plates' edges.
-        return tee::plan(ctx, workpiece, layers);
+        Layout::Tee => tee::plan(ctx, workpiece, layers),
     }
+}
+
+/// A butt joint's or a lap's weld from its two plates: edge points through
+/// the quality gates (3.4 to 4.3).
+fn plan_plates(
+    ctx: &mut Context,
+    front: &Front,
+    labels: &[u32],
+    workpiece: background::Workpiece,
+    layout: Layout,
+    layers: String,
+) -> Result<PlannedWeld, PlanError> {
+    let config = ctx.config;
+    let cfg = &config.pipeline;
+    let camera = &config.camera;
+    let scale = ctx.scale;
+    let cloud = ctx.cloud;
+    let (search, plane, dominant) = (front.search, front.plane, front.dominant);
     ctx.check_groove_depth(&workpiece)?;
 
     // 3.4.1: edge points, at most `pipeline.edge_max_neighbour_ratio` of a
@@ -579,5 +596,5 @@ fn plan_workpiece(
     // decides where each one's waypoints start.
     let assessment =
         SeamAssessment { joint_evidence: Some(joint_evidence), coverage, quality: Some(quality), warnings };
-    Ok((vec![PlannedWeld::new(joint, weld, (s0, s1), normal, EdgeFigures::of(&fits), assessment)], Vec::new()))
+    Ok(PlannedWeld::new(joint, weld, (s0, s1), normal, EdgeFigures::of(&fits), assessment))
 }

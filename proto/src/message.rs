@@ -234,9 +234,8 @@ pub mod joint_code {
     /// The daemon decides the type from the frame (version 5); the reply's
     /// seam names the type found and the evidence.
     pub const AUTO: u32 = 3;
-    /// A tee joint's fillet welds (version 6): named so a request for it
-    /// is refused by name ("t_fillet planning is not built yet"), not as
-    /// an unknown code.
+    /// A tee joint's fillet welds (named in version 6, planned from
+    /// version 7): each root the camera sees is a seam.
     pub const T_FILLET: u32 = 4;
 }
 

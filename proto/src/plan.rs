@@ -7,7 +7,7 @@ use std::collections::BTreeMap;
 use serde::{Deserialize, Serialize};
 
 /// A plane weld joint type; JSON and wire names are `v_butt`, `i_butt`,
-/// `lap`, `t_fillet` (version 6: named, not planned yet).
+/// `lap`, `t_fillet` (version 6: named; version 7: planned).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Joint {

@@ -129,6 +129,10 @@ fn solve_spheres(
             }
             Ok(fit_spheres(cloud.points(), radii, i as u64)?)
         })
+        // Every capture's outcome in order, so the error reported is the
+        // first capture's that failed, not whichever thread failed first.
+        .collect::<Vec<Result<_>>>()
+        .into_iter()
         .collect::<Result<Vec<_>>>()?;
     let found: Vec<usize> = fitted.iter().map(Vec::len).collect();
     let named = identify(&fitted, radii);

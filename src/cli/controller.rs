@@ -32,8 +32,8 @@ pub struct ControllerArgs {
     /// --pose is converted into its convention and units.
     #[arg(long, value_parser = dialect)]
     pub dialect: Option<Dialect>,
-    /// Joint type: v-butt, i-butt or lap (t-fillet is named, and refused
-    /// by the daemon as not planned yet).
+    /// Joint type: v-butt, i-butt, lap or t-fillet (a tee joint's fillet
+    /// roots).
     #[arg(long, required_unless_present = "ping")]
     pub joint: Option<JointType>,
     /// Robot pose at capture: x,y,z,rx,ry,rz (mm, degrees).

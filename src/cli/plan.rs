@@ -22,9 +22,9 @@ pub struct PlanArgs {
     pub cloud: PathBuf,
     #[command(flatten)]
     pub input: args::CloudInputArgs,
-    /// Joint type: v-butt, i-butt or lap (underscores work too), or auto
-    /// to have the planner decide it from the cloud and say why
-    /// (t-fillet, a tee joint, is named and refused as not planned yet).
+    /// Joint type: v-butt, i-butt, lap or t-fillet (a tee joint's fillet
+    /// roots; underscores work too), or auto to have the planner decide it
+    /// from the cloud and say why.
     #[arg(long)]
     pub joint: RequestedJoint,
     /// Robot pose at capture: x,y,z,rx,ry,rz (mm, degrees).

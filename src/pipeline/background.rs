@@ -107,7 +107,7 @@ pub enum BackgroundError {
     #[error(
         "a long plane of {top_mm2:.0} mm², {above_mm:.1} mm nearer the camera, lies across the plane under it, \
          which is seen on both of its sides ({first_mm2:.0} and {second_mm2:.0} mm²): the web of a tee joint \
-         standing on its flange (tee joints are not planned), or an object lying on the workpiece (a clamp or a \
+         standing on its flange, no taller than a lap's step (too low to be told from a bar), or an object lying on the workpiece (a clamp or a \
          bar) over the joint; a lap's upper plate ends on its lower plate, and butt plates are not one plane cut \
          in two; for a clamp, clear the joint or set a region of interest beside it"
     )]

@@ -340,7 +340,7 @@ impl<'a> Context<'a> {
     /// The point spacing near `p`, mm: measured from the cloud, or the
     /// camera's pixel footprint there.
     pub(super) fn spacing_at(&self, p: &Vec3) -> f64 {
-        self.scale.measured.map_or_else(|| self.config.camera.pixel_footprint_at(p), |m| m.spacing_mm)
+        self.scale.spacing_at(&self.config.camera, p)
     }
 
     /// The configured camera's pixel grid, when the frame lies on it (a raw

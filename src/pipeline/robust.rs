@@ -125,7 +125,7 @@ pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
         normal: dominant,
         max_tilt_deg: cfg.plane_max_normal_angle_deg,
         coplanar_tolerance_mm: cfg.coplanar_tolerance_mm,
-        point_spacing_mm: scale.measured.map_or_else(|| camera.pixel_footprint_at(&middle), |m| m.spacing_mm),
+        point_spacing_mm: scale.spacing_at(camera, &middle),
     };
     let mut groups = workpieces::group(cloud, planes, &grouping);
     let front = Front { search: &search, plane: &plane, dominant };
@@ -315,7 +315,7 @@ fn plan_plates(
     // refitted along the samples' principal direction with outliers
     // trimmed (Eq. 17 to 25).
     // The point spacing near `p`: measured, or the camera's pixel footprint.
-    let spacing_at = |p: &Vec3| scale.measured.map_or_else(|| camera.pixel_footprint_at(p), |m| m.spacing_mm);
+    let spacing_at = |p: &Vec3| scale.spacing_at(camera, p);
     let params = BoundaryParams { band_mm: scale.band(cfg.boundary_band_mm), on_plane_mm: cfg.on_plane_tolerance_mm };
     // The edge through `point` along `direction`, laid in plate k's plane,
     // its outward side towards the other plate.

@@ -334,6 +334,12 @@ impl Scale {
         configured_mm * self.radius_mm / self.configured_radius_mm
     }
 
+    /// The point spacing near `p`, mm: measured from the cloud, or the
+    /// `camera`'s pixel footprint there.
+    pub(crate) fn spacing_at(&self, camera: &crate::camera::CameraModel, p: &Vec3) -> f64 {
+        self.measured.map_or_else(|| camera.pixel_footprint_at(p), |m| m.spacing_mm)
+    }
+
     /// A tolerance between neighbouring points, at least `per_spacing`
     /// spacings where the spacing was measured.
     pub(crate) fn at_least_spacings(&self, configured_mm: f64, per_spacing: f64) -> f64 {

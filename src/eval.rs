@@ -29,7 +29,7 @@
 
 use crate::camera::CameraModel;
 use crate::config::{Config, Method};
-use crate::geometry::{Vec3, distance_to_polyline, distance_to_segment};
+use crate::geometry::{Vec3, distance_to_polyline};
 use crate::joint::{JointType, RequestedJoint};
 use crate::pipeline::input::{CloudFrame, Units};
 use crate::pipeline::{Plan, PlanError, PlanRequest, Planner, Seam};
@@ -49,8 +49,9 @@ pub struct SeamError {
     /// true seam ends (matched in whichever order is closer).
     pub start_mm: f64,
     pub end_mm: f64,
-    /// The largest distance of a waypoint from the true stretch: how far
-    /// across it the trajectory strays, whatever its ends.
+    /// The largest distance of a waypoint from the true stretch's line: how
+    /// far across it the trajectory strays, whatever its ends (a waypoint
+    /// past an end is judged by the end's error, not counted again here).
     pub across_mm: f64,
 }
 
@@ -114,8 +115,20 @@ pub fn segment_error(ends: &[Vec3; 2], path: &[Vec3]) -> Option<SeamError> {
         mean_mm: distances.iter().sum::<f64>() / REFERENCE_POINTS as f64,
         start_mm,
         end_mm,
-        across_mm: path.iter().map(|p| distance_to_segment(p, start, end)).fold(0.0, f64::max),
+        across_mm: path.iter().map(|p| distance_to_line(p, start, end)).fold(0.0, f64::max),
     })
+}
+
+/// The distance of `p` from the line through `a` and `b` (from `a` when
+/// they coincide).
+fn distance_to_line(p: &Vec3, a: &Vec3, b: &Vec3) -> f64 {
+    match (b - a).try_normalize(1e-12) {
+        Some(u) => {
+            let v = p - a;
+            (v - u * v.dot(&u)).norm()
+        }
+        None => (p - a).norm(),
+    }
 }
 
 /// How each scene's plan is requested: its own joint type (as a person
@@ -785,6 +798,10 @@ mod tests {
         assert!(matches!(verdict, Verdict::ConfidentWrong { error: Some(e), .. } if e.across_mm > 0.5), "{verdict:?}");
         assert!(matches!(classify_tee(&roots, Ok(&[path(0.0, 98.5, 8.0)])), Verdict::ConfidentWrong { .. }));
         assert_eq!(classify_tee(&roots, Ok(&[path(0.0, 99.5, 8.0)])), Verdict::WithinBar);
+        // 0.7 mm past the root's end, on its line: an end's error within
+        // its bar, not an error across.
+        assert_eq!(classify_tee(&roots, Ok(&[path(0.0, 100.7, 8.0)])), Verdict::WithinBar);
+        assert!(matches!(classify_tee(&roots, Ok(&[path(0.0, 101.5, 8.0)])), Verdict::ConfidentWrong { .. }));
         // Between the roots (on the web's foot, a 'butt joint's midline').
         let verdict = classify_tee(&roots, Ok(&[path(0.0, 100.0, 4.0)]));
         assert!((wrong_by(&verdict) - 4.0).abs() < 1e-9, "{verdict:?}");

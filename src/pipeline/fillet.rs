@@ -34,6 +34,19 @@
 //! - the torch ([`super::trajectory::fillet_torch_axis`]) leans from the
 //!   flange towards the web in the plane across the root.
 //!
+//! - a face turned edge-on to the camera returns no points (or only the
+//!   mixed returns along the rays) although its root is in plain view: the
+//!   flange is then seen right up to the root. The root is read from the
+//!   flange's edge against the web instead: at each station the innermost
+//!   flange point and the outermost point of the web's top, a line fitted
+//!   to each, the root on the first. A flange also ends at the edge of the
+//!   web's shadow, from the camera or from the projector; the face the two
+//!   edges imply then holds the ray that grazes the top's edge, so it is
+//!   turned towards the shadowing eye by nothing. The root is taken only
+//!   when that face is turned towards both the camera and the projector by
+//!   more than the angle the two edges' sampling could fake (a few
+//!   spacings over the web's height), and is otherwise refused saying so;
+//!
 //! One view sees at most one root: the web's faces are steep, so the web
 //! hides the face on its far side and the flange beside it from the
 //! camera or the projector. A root whose face is not seen, or whose flange
@@ -45,6 +58,8 @@
 //! t̄)²/var t)` for a face fitted over N points at mean height h̄ and
 //! along-root spread var t, the root lying at h = 0, with the floor of
 //! [`super::quality`] (a spacing over √12) for the sampling.
+
+use std::collections::HashSet;
 
 use crate::cloud::PointCloud;
 use crate::geometry::fit::{Moments, Plane};
@@ -90,6 +105,19 @@ const STATION_SPACINGS: f64 = 4.0;
 /// lies behind), not a face.
 const MIN_FACE_VIEW_DEG: f64 = 5.0;
 
+/// A root read from the flange's edge: each edge's sampling may move the
+/// face the edges imply by a spacing, both towards a face seen; the face
+/// must be turned towards the camera and the projector by more than this
+/// many spacings over the web's height to tell it from a shadow's edge.
+const EDGE_VIEW_SPACINGS: f64 = 4.0;
+
+/// A station's edge sample belongs to the edge's line within this many
+/// spacings (or `trim_sigma` residuals, if more).
+const EDGE_TOLERANCE_SPACINGS: f64 = 1.5;
+
+/// The fewest stations that make an edge line.
+const MIN_EDGE_STATIONS: usize = 8;
+
 /// Refits of the face after trimming its outliers.
 const FACE_REFITS: usize = 4;
 
@@ -115,6 +143,10 @@ pub struct TeeView<'a> {
     /// Face points further than this many residuals from the fit are
     /// dropped and the face refitted.
     pub trim_sigma: f64,
+    /// Where the structured-light projector sits in the camera frame (the
+    /// camera's origin for a sensor without one): a flange it does not
+    /// light ends in the web's shadow, not at the root.
+    pub projector: Vec3,
 }
 
 /// Which side of the web a root lies on, as the camera sees it.
@@ -140,17 +172,33 @@ impl Side {
     }
 }
 
+/// What a root was read from.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum RootEvidence {
+    /// The web's side face fitted to its points, met with the flange.
+    Face,
+    /// The face turned too nearly edge-on to return points: the flange's
+    /// edge against the web, under the web top's edge. The face the two
+    /// edges imply is turned `view_margin_deg` towards both the camera and
+    /// the projector, more than `least_margin_deg`, which tells it from a
+    /// shadow's edge (where the margin is nil).
+    FlangeEdge { view_margin_deg: f64, least_margin_deg: f64 },
+}
+
 /// A root seen and fitted.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Root {
     pub side: Side,
+    pub evidence: RootEvidence,
     /// +1 or −1: the side of the web along `u = n × e`.
     pub sign: f64,
     /// The root line over the stretch seen: `axes.e` along the root, `a`
     /// outward along the flange, away from the web, `b` the flange normal.
     pub line: SeamCurve,
     /// The web's side face, its fit's RMS residual, the points kept and
-    /// the points the trimming dropped.
+    /// the points the trimming dropped (for a root read from the flange's
+    /// edge: the face the edges imply, and the flange edge's line fit
+    /// across its stations).
     pub face: Plane,
     pub face_rms_mm: f64,
     pub face_points: usize,
@@ -183,6 +231,23 @@ impl Root {
     /// The stretch planned, along `line`'s feature axis.
     pub fn span(&self) -> (f64, f64) {
         (self.line.s_min, self.line.s_max)
+    }
+
+    /// What the root was read from, in words.
+    pub fn describe(&self) -> String {
+        match self.evidence {
+            RootEvidence::Face => format!(
+                "the web's side face fitted to {} points (rms {:.2} mm), meeting the flange at {:.1}°",
+                self.face_points, self.face_rms_mm, self.web_angle_deg
+            ),
+            RootEvidence::FlangeEdge { view_margin_deg, least_margin_deg } => format!(
+                "the web's side face returns no points, turned edge-on to the camera; the root is the flange's \
+                 edge against the web, a line through {} stations (rms {:.2} mm), under the web top's edge: the \
+                 face they imply meets the flange at {:.1}° and is turned {view_margin_deg:.1}° towards the camera \
+                 and the projector (a shadow's edge would be turned 0°; at least {least_margin_deg:.1}° is asked)",
+                self.face_points, self.face_rms_mm, self.web_angle_deg
+            ),
+        }
     }
 
     /// The unit direction in the flange's plane, across the root, away from
@@ -305,10 +370,6 @@ fn side_seen(frame: &WebFrame, sign: f64) -> Side {
 
 fn find_root(view: &TeeView, frame: &WebFrame, sign: f64) -> Result<Root, RootNotSeen> {
     let side = side_seen(frame, sign);
-    let spacing = view.point_spacing_mm;
-    let margin = view.on_plane_mm.max(HEIGHT_MARGIN_SPACINGS * spacing);
-    let (h_lo, h_hi) = (margin, frame.height - margin);
-    let reach = frame.half_width + view.rim_mm + FACE_REACH_SPACINGS * spacing;
     // The web's foot on this side, where its root would lie.
     let foot_at =
         frame.origin + frame.u * (frame.middle + sign * (frame.half_width + view.rim_mm)) + frame.n * frame.height;
@@ -318,16 +379,36 @@ fn find_root(view: &TeeView, frame: &WebFrame, sign: f64) -> Result<Root, RootNo
         reason: format!("{} is not planned: {why}", side.root_name(sign)),
         near_camera: foot_at,
     };
-    // The flange pieces on this side of the web.
-    let pieces: Vec<&PlaneCluster> = view
-        .flange_pieces
-        .iter()
-        .copied()
-        .filter(|c| sign * (frame.across(&c.centroid) - frame.middle) > 0.0)
-        .collect();
-    if pieces.is_empty() {
+    // The flange on this side of the web.
+    if !view.flange_pieces.iter().any(|c| sign * (frame.across(&c.centroid) - frame.middle) > 0.0) {
         return Err(not_seen("the flange on this side is not seen (hidden by the web)".into()));
     }
+    match root_from_face(view, frame, sign, side) {
+        Ok(root) => Ok(root),
+        Err(NoFace::Refused(why)) => Err(not_seen(why)),
+        // A face turned edge-on to the camera returns nothing, or only the
+        // mixed returns along the rays: the flange's edge may still show
+        // the root.
+        Err(NoFace::NotSeen(why)) => root_from_flange_edge(view, frame, sign, side)
+            .map_err(|edge| not_seen(format!("{why}; and the flange's edge does not show it: {edge}"))),
+    }
+}
+
+/// Why a root was not read from its face.
+enum NoFace {
+    /// The face is not seen: the flange's edge may show the root.
+    NotSeen(String),
+    /// The face is seen but gives no root.
+    Refused(String),
+}
+
+/// The root where the web's side face, fitted to its points, meets the
+/// flange.
+fn root_from_face(view: &TeeView, frame: &WebFrame, sign: f64, side: Side) -> Result<Root, NoFace> {
+    let spacing = view.point_spacing_mm;
+    let margin = view.on_plane_mm.max(HEIGHT_MARGIN_SPACINGS * spacing);
+    let (h_lo, h_hi) = (margin, frame.height - margin);
+    let reach = frame.half_width + view.rim_mm + FACE_REACH_SPACINGS * spacing;
     let face_points: Vec<Vec3> = valid_points(view.cloud)
         .filter(|p| {
             let h = frame.height_of(p);
@@ -337,21 +418,21 @@ fn find_root(view: &TeeView, frame: &WebFrame, sign: f64) -> Result<Root, RootNo
         .collect();
     let hidden = if side == Side::Far { ", hidden by the web" } else { "" };
     if face_points.len() < MIN_FACE_POINTS {
-        return Err(not_seen(format!(
+        return Err(NoFace::NotSeen(format!(
             "the web's side face there is not seen{hidden} ({} points between the flange and the web's top, \
              fewer than {MIN_FACE_POINTS})",
             face_points.len()
         )));
     }
     let Some(face) = fit_face(&face_points, view.trim_sigma) else {
-        return Err(not_seen("the points on the web's side face span no plane".into()));
+        return Err(NoFace::Refused("the points on the web's side face span no plane".into()));
     };
     // The face's normal out of the web, towards this side.
     let m = if face.plane.normal.dot(&frame.u) * sign >= 0.0 { face.plane.normal } else { -face.plane.normal };
     let d_m = m.dot(&face.centroid);
     let view_deg = m.dot(&(-face.centroid).normalize()).clamp(-1.0, 1.0).asin().to_degrees();
     if view_deg < MIN_FACE_VIEW_DEG {
-        return Err(not_seen(format!(
+        return Err(NoFace::NotSeen(format!(
             "the {} points between the flange and the web's top lie along the camera's rays ({view_deg:.1}° from \
              them, below {MIN_FACE_VIEW_DEG}°): mixed returns at the web's edge, not its side face{hidden}",
             face.inliers.len()
@@ -359,7 +440,9 @@ fn find_root(view: &TeeView, frame: &WebFrame, sign: f64) -> Result<Root, RootNo
     }
     let n = frame.n;
     let Some(r) = n.cross(&m).try_normalize(1e-6) else {
-        return Err(not_seen("the points between the flange and the web's top lie parallel to the flange".into()));
+        return Err(NoFace::Refused(
+            "the points between the flange and the web's top lie parallel to the flange".into(),
+        ));
     };
     let r = if r.dot(&frame.e) >= 0.0 { r } else { -r };
     // The point on both planes nearest the web top's centroid.
@@ -400,17 +483,17 @@ fn find_root(view: &TeeView, frame: &WebFrame, sign: f64) -> Result<Root, RootNo
         })
         .collect();
     if foot.is_empty() {
-        return Err(not_seen("the web's side face is not seen down to the flange".into()));
+        return Err(NoFace::Refused("the web's side face is not seen down to the flange".into()));
     }
     if beside.is_empty() {
-        return Err(not_seen(format!(
+        return Err(NoFace::Refused(format!(
             "the flange is not seen up to the web's face{}",
             if side == Side::Far { " (the web hides it)" } else { " (in the web's shadow)" }
         )));
     }
     let flange_along: Vec<f64> = beside.iter().map(along).collect();
     let Some(run) = seen_run(&foot, &flange_along, spacing) else {
-        return Err(not_seen(
+        return Err(NoFace::Refused(
             "the web's face and the flange up to it are not seen together anywhere along the root".into(),
         ));
     };
@@ -445,6 +528,7 @@ fn find_root(view: &TeeView, frame: &WebFrame, sign: f64) -> Result<Root, RootNo
     };
     Ok(Root {
         side,
+        evidence: RootEvidence::Face,
         sign,
         line,
         face: Plane { normal: m, offset: d_m },
@@ -462,6 +546,267 @@ fn find_root(view: &TeeView, frame: &WebFrame, sign: f64) -> Result<Root, RootNo
         uncertainty_across_mm,
         uncertainty_normal_mm,
     })
+}
+
+/// The root where the flange's edge meets the web, for a side whose face
+/// is turned too nearly edge-on to return points.
+///
+/// Along the web, at each station, the innermost flange point on this side
+/// and the outermost point of the web's top are read; a line is fitted to
+/// each across its stations (trimmed). The flange's edge is the root only
+/// if nothing hides the flange there: the face the two edges imply (from
+/// the root up to the top's edge) must be turned towards the camera and
+/// the projector. Where the flange instead ends at the edge of the web's
+/// shadow (from the camera, or from the projector), that implied face
+/// holds the ray that grazes the top's edge, so it is turned from the
+/// shadowing eye by nothing; sampling moves each edge by up to a spacing,
+/// both towards calling the face seen, so the margin must exceed
+/// [`EDGE_VIEW_SPACINGS`] spacings over the web's height. A root turned
+/// less than that is refused, not guessed.
+fn root_from_flange_edge(view: &TeeView, frame: &WebFrame, sign: f64, side: Side) -> Result<Root, String> {
+    let spacing = view.point_spacing_mm;
+    let top_edge = frame.half_width + view.rim_mm;
+    // A web leaning 45° puts its root a web height outward of its top.
+    let outermost = top_edge + frame.height;
+    let top_reach = top_edge + FACE_REACH_SPACINGS * spacing;
+    let mut flange: Vec<EdgeSample> = Vec::new();
+    let mut top: Vec<EdgeSample> = Vec::new();
+    for p in valid_points(view.cloud) {
+        let off = sign * (frame.across(&p) - frame.middle);
+        if !(0.0..=outermost).contains(&off) {
+            continue;
+        }
+        let (t, h) = ((p - frame.origin).dot(&frame.e), frame.height_of(&p));
+        if h.abs() <= view.on_plane_mm {
+            flange.push(EdgeSample { t, off, h });
+        } else if off <= top_reach && view.web_top.plane.signed_distance(&p).abs() <= view.on_plane_mm {
+            top.push(EdgeSample { t, off, h });
+        }
+    }
+    let stations = Stations::over(flange.iter().chain(&top).map(|s| s.t), spacing)
+        .ok_or_else(|| "no flange point lies beside the web".to_string())?;
+    let flange_edge = stations.extremes(&flange, |a, b| a.off < b.off);
+    let top_edge_samples = stations.extremes(&top, |a, b| a.off > b.off);
+    let tolerance = |rms: f64| (view.trim_sigma * rms).max(EDGE_TOLERANCE_SPACINGS * spacing);
+    let root_line = EdgeLine::fit(&flange_edge, tolerance)
+        .ok_or_else(|| format!("the flange's edge is seen at {} stations along the web, too few", flange_edge.len()))?;
+    let top_line = EdgeLine::fit(&top_edge_samples, tolerance).ok_or_else(|| {
+        format!("the web top's edge is seen at {} stations along the web, too few", top_edge_samples.len())
+    })?;
+
+    // The implied face across the middle of the root's stations.
+    let t_mid = 0.5 * (root_line.t_range.0 + root_line.t_range.1);
+    let lean = top_line.at(t_mid) - root_line.at(t_mid);
+    let slant = lean.hypot(frame.height);
+    let (n, e, outward) = (frame.n, frame.e, frame.u * sign);
+    let root_at = |t: f64| frame.origin + e * t + frame.u * (frame.middle + sign * root_line.at(t)) + n * frame.height;
+    let root_mid = root_at(t_mid);
+    let m = ((outward * frame.height + n * lean) / slant).normalize();
+    let turned_deg = |eye: Vec3| {
+        let to_eye = eye - root_mid;
+        (m.dot(&to_eye) / to_eye.norm()).clamp(-1.0, 1.0).asin().to_degrees()
+    };
+    let view_margin_deg = turned_deg(Vec3::zeros()).min(turned_deg(view.projector));
+    let least_margin_deg = (EDGE_VIEW_SPACINGS * spacing / frame.height).atan().to_degrees();
+    if view_margin_deg < least_margin_deg {
+        return Err(format!(
+            "the face from the flange's edge up to the web top's edge is turned {view_margin_deg:.1}° towards the \
+             camera or the projector, below {least_margin_deg:.1}° ({EDGE_VIEW_SPACINGS} point spacings of \
+             {spacing:.2} mm over the web's {:.0} mm): the flange may end at the web's shadow, not at the root",
+            frame.height
+        ));
+    }
+
+    // The root line and its frame: `r` along it, `w` outward in the flange.
+    let p0 = root_at(0.0);
+    let r = (root_at(1.0) - p0).normalize();
+    let w = {
+        let w = r.cross(&n);
+        if w.dot(&outward) >= 0.0 { w } else { -w }
+    };
+    let stretch = (root_at(1.0) - p0).norm();
+    let along = |t: f64| t * stretch;
+    let kept_top: Vec<f64> = top_line.kept.iter().map(|s| along(s.t)).collect();
+    // The evidence of the root: every flange point at the edge's line (not
+    // only each station's innermost, whose place along a station would
+    // round the root's ends off by up to a station), in the stations whose
+    // innermost point lies on the line (where the flange runs on under the
+    // web, past its end, a station's innermost point leaves the line).
+    let at_edge = tolerance(root_line.rms_mm);
+    let on_line: HashSet<usize> = root_line.kept.iter().map(|s| stations.index(s.t)).collect();
+    let edge: Vec<f64> = flange
+        .iter()
+        .filter(|s| (s.off - root_line.at(s.t)).abs() <= at_edge && on_line.contains(&stations.index(s.t)))
+        .map(|s| along(s.t))
+        .collect();
+    // The root runs where the flange's edge does: the web's top, nearer
+    // the camera, may leave the image before the root does; it need only
+    // be seen above enough of the root to be judged by the coverage gate.
+    let run = seen_run(&edge, &edge, spacing)
+        .ok_or_else(|| "the flange's edge is not seen along the web anywhere".to_string())?;
+    let coverage = [covered_share(&kept_top, run.s0, run.s1, spacing), run.coverage[1]];
+    let web_angle_deg = frame.height.atan2(lean).to_degrees();
+
+    // The flange beside the root, over the run.
+    let flange_reach = FLANGE_REACH_SPACINGS * spacing;
+    let beside: Vec<f64> = flange
+        .iter()
+        .filter(|s| {
+            let out = s.off - root_line.at(s.t);
+            (0.0..=flange_reach).contains(&out) && (run.s0..=run.s1).contains(&along(s.t))
+        })
+        .map(|s| s.h)
+        .collect();
+    let floor = spacing / 12f64.sqrt();
+    let in_run = root_line.kept.iter().filter(|s| (run.s0..=run.s1).contains(&along(s.t))).count().max(1);
+    Ok(Root {
+        side,
+        evidence: RootEvidence::FlangeEdge { view_margin_deg, least_margin_deg },
+        sign,
+        line: SeamCurve {
+            axes: SeamAxes { origin: p0, e: r, a: w, b: n },
+            coef_a: vec![0.0, 0.0],
+            coef_b: vec![0.0, 0.0],
+            s_min: run.s0,
+            s_max: run.s1,
+        },
+        face: Plane { normal: m, offset: m.dot(&root_mid) },
+        face_rms_mm: root_line.rms_mm,
+        face_points: root_line.kept.len(),
+        face_dropped: root_line.dropped,
+        flange: Plane { normal: n, offset: frame.flange_offset },
+        flange_rms_mm: rms(beside.iter().copied()),
+        flange_points: beside.len(),
+        web_angle_deg,
+        web_height_mm: frame.height,
+        coverage,
+        seen_share: run.share,
+        seen_mm: run.seen_mm,
+        // The edge's line across its stations, and the sampling: the root
+        // lies within a spacing inward of the flange's last point.
+        uncertainty_across_mm: (root_line.rms_mm / (in_run as f64).sqrt()).hypot(floor),
+        uncertainty_normal_mm: floor,
+    })
+}
+
+/// The share of the stations from `s0` to `s1` holding a sample.
+fn covered_share(samples: &[f64], s0: f64, s1: f64, spacing: f64) -> f64 {
+    let width = (STATION_SPACINGS * spacing).max((s1 - s0) / MAX_STATIONS as f64).max(f64::MIN_POSITIVE);
+    let count = (((s1 - s0) / width).ceil() as usize).max(1);
+    let mut seen = vec![false; count];
+    for s in samples.iter().filter(|s| (s0..=s1).contains(*s)) {
+        seen[(((s - s0) / width) as usize).min(count - 1)] = true;
+    }
+    seen.iter().filter(|&&b| b).count() as f64 / count as f64
+}
+
+/// A point beside the web: along it from the web top's centroid, outward
+/// from the web's middle, and its height over the flange, mm.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct EdgeSample {
+    t: f64,
+    off: f64,
+    h: f64,
+}
+
+/// Stations along the web, [`STATION_SPACINGS`] long (at most
+/// [`MAX_STATIONS`] of them).
+struct Stations {
+    start: f64,
+    width: f64,
+    count: usize,
+}
+
+impl Stations {
+    fn over(ts: impl Iterator<Item = f64>, spacing: f64) -> Option<Stations> {
+        let (lo, hi) = ts.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), t| (lo.min(t), hi.max(t)));
+        if !(lo.is_finite() && hi.is_finite()) {
+            return None;
+        }
+        let width = (STATION_SPACINGS * spacing).max((hi - lo) / MAX_STATIONS as f64).max(f64::MIN_POSITIVE);
+        let count = (((hi - lo) / width).floor() as usize + 1).min(MAX_STATIONS);
+        Some(Stations { start: lo, width, count })
+    }
+
+    fn index(&self, t: f64) -> usize {
+        (((t - self.start) / self.width).floor().max(0.0) as usize).min(self.count - 1)
+    }
+
+    /// Each station's sample that `beyond` puts first: the innermost of the
+    /// flange, the outermost of the web's top.
+    fn extremes(&self, samples: &[EdgeSample], beyond: impl Fn(&EdgeSample, &EdgeSample) -> bool) -> Vec<EdgeSample> {
+        let mut best: Vec<Option<EdgeSample>> = vec![None; self.count];
+        for s in samples {
+            let k = self.index(s.t);
+            if best[k].is_none_or(|b| beyond(s, &b)) {
+                best[k] = Some(*s);
+            }
+        }
+        best.into_iter().flatten().collect()
+    }
+}
+
+/// A straight edge across its stations, `off = a + b·t`: least squares,
+/// started from the median offset and refitted without the stations
+/// further than `tolerance(rms)` from it (a dropout that cuts the flange
+/// short, or the flange running on past the web's end).
+#[derive(Debug, Clone, PartialEq)]
+struct EdgeLine {
+    a: f64,
+    b: f64,
+    rms_mm: f64,
+    kept: Vec<EdgeSample>,
+    dropped: usize,
+    t_range: (f64, f64),
+}
+
+impl EdgeLine {
+    fn at(&self, t: f64) -> f64 {
+        self.a + self.b * t
+    }
+
+    fn fit(samples: &[EdgeSample], tolerance: impl Fn(f64) -> f64) -> Option<EdgeLine> {
+        if samples.len() < MIN_EDGE_STATIONS {
+            return None;
+        }
+        let mut offs: Vec<f64> = samples.iter().map(|s| s.off).collect();
+        offs.sort_by(f64::total_cmp);
+        let mut line = EdgeLine {
+            a: offs[offs.len() / 2],
+            b: 0.0,
+            rms_mm: 0.0,
+            kept: Vec::new(),
+            dropped: 0,
+            t_range: (0.0, 0.0),
+        };
+        for _ in 0..=FACE_REFITS {
+            let limit = tolerance(line.rms_mm);
+            let kept: Vec<EdgeSample> =
+                samples.iter().filter(|s| (s.off - line.at(s.t)).abs() <= limit).copied().collect();
+            if kept.len() < MIN_EDGE_STATIONS {
+                return None;
+            }
+            let n = kept.len() as f64;
+            let (mt, mo) = (kept.iter().map(|s| s.t).sum::<f64>() / n, kept.iter().map(|s| s.off).sum::<f64>() / n);
+            let (stt, sto) =
+                kept.iter().fold((0.0, 0.0), |(tt, to), s| (tt + (s.t - mt).powi(2), to + (s.t - mt) * (s.off - mo)));
+            let b = if stt > 0.0 { sto / stt } else { 0.0 };
+            let settled = kept == line.kept;
+            line = EdgeLine {
+                a: mo - b * mt,
+                b,
+                rms_mm: 0.0,
+                t_range: kept.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), s| (lo.min(s.t), hi.max(s.t))),
+                dropped: samples.len() - kept.len(),
+                kept,
+            };
+            line.rms_mm = rms(line.kept.iter().map(|s| s.off - line.at(s.t)));
+            if settled {
+                break;
+            }
+        }
+        Some(line)
+    }
 }
 
 fn rms(values: impl Iterator<Item = f64>) -> f64 {
@@ -612,8 +957,9 @@ mod tests {
         // 4 mm either side of it (a trimmed rim of 1 mm), its +x face 5 mm
         // out, seen from y = −50 to 49; the flange seen at z = 700 from the
         // face outward, but only for y < 20 beside the face; the −x side
-        // shows the flange beyond the web's shadow from 40 mm out on, and
-        // no face.
+        // shows no face, and the flange from the edge of the web's shadow
+        // on (where the camera's ray over the top's edge lands).
+        let shadow_edge = (WEB_X - 4.0) * 700.0 / 660.0;
         let mut pts = face_points(0.0);
         for i in 0..100 {
             for j in 0..=8 {
@@ -624,41 +970,10 @@ mod tests {
                 if y < 20.0 {
                     pts.push(Vec3::new(WEB_X + 5.0 + 0.5 * j as f64, y, 700.0));
                 }
-                pts.push(Vec3::new(WEB_X - 40.0 - j as f64, y, 700.0));
+                pts.push(Vec3::new(shadow_edge - j as f64, y, 700.0));
             }
         }
-        let cloud = PointCloud::unorganized(pts.iter().map(|p| [p.x as f32, p.y as f32, p.z as f32]).collect());
-        let index = |pred: &dyn Fn(&Vec3) -> bool| {
-            pts.iter().enumerate().filter(|(_, p)| pred(p)).map(|(i, _)| i as u32).collect::<Vec<u32>>()
-        };
-        let cluster = |members: Vec<u32>| {
-            let member_points: Vec<Vec3> = members.iter().map(|&i| pts[i as usize]).collect();
-            let moments: Moments = member_points.iter().collect();
-            let (long_axis, elongation) = moments.elongation().unwrap();
-            PlaneCluster {
-                label: 0,
-                area_mm2: members.len() as f64,
-                plane: moments.plane().unwrap(),
-                centroid: moments.centroid().unwrap(),
-                members,
-                long_axis,
-                elongation,
-            }
-        };
-        let top = cluster(index(&|p| p.z == 660.0));
-        let plus = cluster(index(&|p| p.z == 700.0 && p.x > WEB_X));
-        let minus = cluster(index(&|p| p.z == 700.0 && p.x < WEB_X));
-        let pieces = [&plus, &minus];
-        let view = TeeView {
-            cloud: &cloud,
-            web_top: &top,
-            flange_pieces: &pieces,
-            point_spacing_mm: 1.0,
-            rim_mm: 1.0,
-            on_plane_mm: 0.4,
-            trim_sigma: 3.0,
-        };
-        let roots = find_roots(&view);
+        let roots = roots_of(&pts);
         let seen: Vec<&Root> = roots.iter().filter_map(|r| r.as_ref().ok()).collect();
         assert_eq!(seen.len(), 1, "{roots:?}");
         let root = seen[0];
@@ -679,6 +994,103 @@ mod tests {
         let hidden = roots.iter().find_map(|r| r.as_ref().err()).unwrap();
         assert_eq!(hidden.side, Side::Far);
         assert!(hidden.reason.contains("far side") && hidden.reason.contains("hidden by the web"), "{}", hidden.reason);
+    }
+
+    /// The roots [`find_roots`] reads from `pts`: the web's top the points
+    /// at z = 660, the flange's pieces those at z = 700 either side of
+    /// x = WEB_X, a point spacing of 1 mm.
+    fn roots_of(pts: &[Vec3]) -> [Result<Root, RootNotSeen>; 2] {
+        roots_of_web_at(pts, WEB_X)
+    }
+
+    fn roots_of_web_at(pts: &[Vec3], web_x: f64) -> [Result<Root, RootNotSeen>; 2] {
+        let cloud = PointCloud::unorganized(pts.iter().map(|p| [p.x as f32, p.y as f32, p.z as f32]).collect());
+        let cluster = |pred: &dyn Fn(&Vec3) -> bool| {
+            let members: Vec<u32> = (0..pts.len() as u32).filter(|&i| pred(&pts[i as usize])).collect();
+            let moments: Moments = members.iter().map(|&i| &pts[i as usize]).collect();
+            let (long_axis, elongation) = moments.elongation().unwrap();
+            PlaneCluster {
+                label: 0,
+                area_mm2: members.len() as f64,
+                plane: moments.plane().unwrap(),
+                centroid: moments.centroid().unwrap(),
+                members,
+                long_axis,
+                elongation,
+            }
+        };
+        let top = cluster(&|p| p.z == 660.0);
+        let plus = cluster(&|p| p.z == 700.0 && p.x > web_x);
+        let minus = cluster(&|p| p.z == 700.0 && p.x < web_x);
+        let pieces = [&plus, &minus];
+        let view = TeeView {
+            cloud: &cloud,
+            web_top: &top,
+            flange_pieces: &pieces,
+            point_spacing_mm: 1.0,
+            rim_mm: 1.0,
+            on_plane_mm: 0.4,
+            trim_sigma: 3.0,
+            projector: Vec3::new(150.0, 0.0, 0.0),
+        };
+        find_roots(&view)
+    }
+
+    #[test]
+    fn a_face_edge_on_to_the_camera_gives_its_root_from_the_flange_edge_and_a_shadow_edge_gives_none() {
+        // The web of the test above with no face points at all: its +x
+        // root at x = WEB_X + 4 is read from the flange's edge there. On
+        // the −x side the flange is seen from where the camera's ray over
+        // the top's edge (x = WEB_X − 4, z = 660) lands on it: the shadow's
+        // edge, which must not be taken for a root.
+        let shadow_edge = (WEB_X - 4.0) * 700.0 / 660.0;
+        let mut pts = Vec::new();
+        for i in 0..100 {
+            let y = -50.0 + i as f64;
+            for j in 0..=8 {
+                pts.push(Vec3::new(WEB_X - 4.0 + j as f64, y, 660.0));
+            }
+            for j in 0..30 {
+                pts.push(Vec3::new(WEB_X + 4.0 + 0.5 * j as f64 + 0.25 * (i % 2) as f64, y, 700.0));
+                pts.push(Vec3::new(shadow_edge - 0.5 * j as f64, y, 700.0));
+            }
+        }
+        let roots = roots_of(&pts);
+        let root = roots.iter().find_map(|r| r.as_ref().ok()).expect("the root facing the camera").clone();
+        let hidden = roots.iter().find_map(|r| r.as_ref().err()).expect("the shadowed root refused");
+        assert!(matches!(root.evidence, RootEvidence::FlangeEdge { view_margin_deg, .. } if view_margin_deg > 10.0));
+        for s in [root.line.s_min, root.line.s_max] {
+            let p = root.line.at(s);
+            assert!((p.x - WEB_X - 4.0).abs() < 1e-6 && (p.z - 700.0).abs() < 1e-6, "{p:?}");
+        }
+        let ends = [root.line.at(root.line.s_min).y, root.line.at(root.line.s_max).y];
+        assert!((ends[0] + 50.0).abs() < 1e-6 && (ends[1] - 49.0).abs() < 1e-6, "{ends:?}");
+        assert!((root.web_angle_deg - 90.0).abs() < 1e-6, "{}", root.web_angle_deg);
+        assert!(hidden.reason.contains("shadow"), "{}", hidden.reason);
+    }
+
+    #[test]
+    fn a_flange_ending_at_the_projectors_shadow_gives_no_root() {
+        // A web between the camera (x = 0) and the projector (x = 150),
+        // its top from x = 71 to 79 at z = 660, no face points: the camera
+        // looks at its −x face, which the projector does not light, so the
+        // flange there is seen from where the projector's ray over the
+        // top's edge lands; on the +x side, from where the camera's does.
+        let lit_from = 150.0 + (71.0 - 150.0) * 700.0 / 660.0;
+        let seen_from = 79.0 * 700.0 / 660.0;
+        let mut pts = Vec::new();
+        for i in 0..100 {
+            let y = -50.0 + i as f64;
+            pts.extend((0..=8).map(|j| Vec3::new(71.0 + j as f64, y, 660.0)));
+            for j in 0..30 {
+                pts.push(Vec3::new(lit_from - 0.5 * j as f64, y, 700.0));
+                pts.push(Vec3::new(seen_from + 0.5 * j as f64, y, 700.0));
+            }
+        }
+        for root in roots_of_web_at(&pts, 75.0) {
+            let not_seen = root.expect_err("a shadow's edge is no root");
+            assert!(not_seen.reason.contains("shadow"), "{}", not_seen.reason);
+        }
     }
 
     #[test]

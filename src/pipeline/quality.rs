@@ -293,6 +293,48 @@ pub struct SeamEvidence<'a> {
     pub length_mm: f64,
     /// V-butt joints: the groove depth the request gave, if it gave one.
     pub given_groove_depth_mm: Option<f64>,
+    /// What the two fits behind `edge_fit_rms_mm` and `edge_coverage` are.
+    pub fits: FittedEdges,
+}
+
+/// What a seam's two fits are, for the words of a refusal.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum FittedEdges {
+    /// Two weld edges, each a line through its plate's boundary samples.
+    WeldEdges,
+    /// A fillet root: the web's side face and the flange beside it.
+    WebFace,
+    /// A fillet root read from the flange's edge against the web (the face
+    /// returning no points): that edge's line, under the web top's edge,
+    /// and the flange beside it.
+    FlangeEdge,
+}
+
+impl FittedEdges {
+    /// Fit `k`'s name and what a high residual says of it.
+    fn fit(self, k: usize) -> (String, &'static str) {
+        let plane = "its points do not lie on one plane";
+        match (self, k) {
+            (FittedEdges::WeldEdges, k) => {
+                (format!("weld edge {}", k + 1), "its boundary samples do not lie on one line")
+            }
+            (FittedEdges::WebFace, 0) => ("the web's side face".into(), plane),
+            (FittedEdges::FlangeEdge, 0) => {
+                ("the flange's edge against the web".into(), "its innermost points do not lie on one line")
+            }
+            (_, _) => ("the flange beside the root".into(), plane),
+        }
+    }
+
+    /// What evidence `k` of a fillet root is, for its coverage.
+    fn fillet_evidence(self, k: usize) -> &'static str {
+        match (self, k) {
+            (FittedEdges::FlangeEdge, 0) => "the web top's edge above the root",
+            (FittedEdges::FlangeEdge, _) => "the flange's edge against the web",
+            (_, 0) => "the web's face down to the flange",
+            (_, _) => "the flange up to the web",
+        }
+    }
 }
 
 /// Every gate `seam` fails, in [`Gate::ALL`]'s order.
@@ -309,12 +351,7 @@ pub fn check(seam: &SeamEvidence, limits: &QualityParams) -> Vec<GateFailure> {
     } else {
         (1, seam.edge_fit_rms_mm[1])
     };
-    // A fillet root's two fits are the web's face and the flange beside it.
-    let (name, fitted) = match (tee, edge) {
-        (true, 0) => ("the web's side face".to_string(), "its points do not lie on one plane"),
-        (true, _) => ("the flange beside the root".to_string(), "its points do not lie on one plane"),
-        (false, k) => (format!("weld edge {}", k + 1), "its boundary samples do not lie on one line"),
-    };
+    let (name, fitted) = seam.fits.fit(edge);
     let rms_limit = limits.max_edge_fit_rms_spacings * q.point_spacing_mm;
     if rms > rms_limit {
         fail(
@@ -336,7 +373,7 @@ pub fn check(seam: &SeamEvidence, limits: &QualityParams) -> Vec<GateFailure> {
                 format!(
                     "{} is seen along {:.0} % of the root's {:.0} mm, below {:.0} %: the root is not seen along \
                      the stretch planned",
-                    if edge == 0 { "the web's face down to the flange" } else { "the flange up to the web" },
+                    seam.fits.fillet_evidence(edge),
                     100.0 * seen,
                     seam.length_mm,
                     100.0 * limits.min_edge_coverage,
@@ -528,6 +565,7 @@ mod tests {
             joint_beyond_ends_mm: None,
             length_mm: 100.0,
             given_groove_depth_mm: None,
+            fits: FittedEdges::WeldEdges,
         }
     }
 

@@ -580,6 +580,7 @@ fn plan_plates(
         joint_beyond_ends_mm,
         length_mm: s1 - s0,
         given_groove_depth_mm: ctx.request.groove_depth_mm.filter(|_| joint == JointType::VButt),
+        fits: quality::FittedEdges::WeldEdges,
     };
     let (warnings, refusals): (Vec<_>, Vec<_>) =
         quality::check(&evidence, &config.quality).into_iter().partition(|f| config.quality.warns_only(f.gate));

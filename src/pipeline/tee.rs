@@ -17,11 +17,12 @@
 //! refused by a gate is a joint seen but not planned ([`Unplanned`]),
 //! beside the root that was; with no root planned the plan is refused.
 
+use crate::geometry::Vec3;
 use crate::joint::JointType;
 
 use super::background::{PlaneCluster, Workpiece};
 use super::context::{Context, EdgeFigures, PlannedWeld};
-use super::fillet::{self, Root, TeeView};
+use super::fillet::{self, Root, RootEvidence, TeeView};
 use super::trace::TracedWeld;
 use super::{PlanError, SeamAssessment, SeamCoverage, Stage, Unplanned, boundary, quality, trajectory};
 
@@ -49,6 +50,7 @@ pub(super) fn plan(
         rim_mm: boundary::rim_trim_radii(cfg.plane_min_neighbour_ratio) * ctx.scale.radius_mm,
         on_plane_mm: cfg.on_plane_tolerance_mm,
         trim_sigma: cfg.fit_trim_sigma,
+        projector: Vec3::new(config.camera.baseline_mm, 0.0, 0.0),
     };
     let roots = fillet::find_roots(&view);
     for root in &roots {
@@ -102,6 +104,10 @@ pub(super) fn plan(
             joint_beyond_ends_mm: None,
             length_mm: root.line.s_max - root.line.s_min,
             given_groove_depth_mm: None,
+            fits: match root.evidence {
+                RootEvidence::Face => quality::FittedEdges::WebFace,
+                RootEvidence::FlangeEdge { .. } => quality::FittedEdges::FlangeEdge,
+            },
         };
         let (warnings, refusals): (Vec<_>, Vec<_>) =
             quality::check(&evidence, &config.quality).into_iter().partition(|f| config.quality.warns_only(f.gate));
@@ -114,13 +120,7 @@ pub(super) fn plan(
         for failure in &warnings {
             tracing::warn!(gate = %failure.gate, value = failure.value, limit = failure.limit, "{}", failure.message);
         }
-        let joint_evidence = format!(
-            "{layers}; {}: the web's side face fitted to {} points (rms {:.2} mm), meeting the flange at {:.1}°",
-            root.side.root_name(root.sign),
-            root.face_points,
-            root.face_rms_mm,
-            root.web_angle_deg
-        );
+        let joint_evidence = format!("{layers}; {}: {}", root.side.root_name(root.sign), root.describe());
         let assessment = SeamAssessment {
             joint_evidence: Some(joint_evidence),
             coverage: Some(coverage),

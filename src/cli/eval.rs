@@ -20,14 +20,17 @@ use std::path::PathBuf;
 use weldseam::config::{Config, Method};
 use weldseam::convert::to_proto::plan_result;
 use weldseam::eval::{
-    DepthAsk, EvalRequest, JointAsk, SceneOutcome, Verdict, count_verdicts, names_a_corner, names_a_tee, run_suite_asking, summarise,
+    DepthAsk, EvalRequest, JointAsk, SceneOutcome, Verdict, count_verdicts, names_a_corner, names_a_tee,
+    run_suite_asking, summarise,
 };
 use weldseam::geometry::pose::EulerConvention;
 use weldseam::joint::JointType;
 use weldseam::pipeline::Stage;
 use weldseam::sim::consumer::{consumer_camera, consumer_variant};
 use weldseam::sim::variants::Variant;
-use weldseam::sim::{FaultKind, consumer_suite, corner_suite, eval_suite, fault_suite, hard_suite, multi_suite, tee_suite};
+use weldseam::sim::{
+    FaultKind, consumer_suite, corner_suite, eval_suite, fault_suite, hard_suite, multi_suite, tee_suite,
+};
 
 use crate::cli::args::{GrooveDepthArg, JointRequestArg, SuiteArg};
 use crate::cli::table::Table;

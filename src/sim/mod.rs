@@ -32,9 +32,9 @@ pub use consumer::{CameraPreset, consumer_suite};
 pub use faults::{Fault, FaultKind, RightAnswer};
 pub use noise::NoiseSpec;
 pub use suite::{Framing, eval_suite, fault_suite, framing, hard_suite};
+pub use tee_multi::corner_suite;
 pub use tee_multi::{multi_suite, tee_suite};
 pub use truth::{GroundTruth, SeamTruth};
-pub use tee_multi::corner_suite;
 
 /// The joint's cross-section. Plate A is on the -x side of the seam (the
 /// upper plate of a lap), plate B on the +x side (the lower plate).
@@ -145,7 +145,9 @@ impl JointGeometry {
                     return fail("the flange and web thicknesses and the web height must be positive");
                 }
             }
-            JointGeometry::Corner { flange_thickness_mm: f, web_thickness_mm: w, web_height_mm: h, proud_mm, .. } => {
+            JointGeometry::Corner {
+                flange_thickness_mm: f, web_thickness_mm: w, web_height_mm: h, proud_mm, ..
+            } => {
                 if ![f, w, h].iter().all(|v| *v > 0.0 && v.is_finite()) {
                     return fail("the flange and web thicknesses and the web height must be positive");
                 }

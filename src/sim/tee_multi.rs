@@ -10,8 +10,8 @@ use rand_core::SeedableRng;
 use super::suite::{MIN_OBSERVED_SEAM_MM, ScenePlan, draw_tee, framing, uniform};
 use super::truth::{SeamTruth, seam_truths};
 use super::{
-    CameraPlacement, CornerKind, JointGeometry, NoiseSpec, PlateExtent, SceneSpec, Workpiece, default_base_from_workpiece,
-    paper_hand_eye,
+    CameraPlacement, CornerKind, JointGeometry, NoiseSpec, PlateExtent, SceneSpec, Workpiece,
+    default_base_from_workpiece, paper_hand_eye,
 };
 use crate::camera::CameraModel;
 use crate::geometry::pose::EulerConvention;
@@ -136,7 +136,8 @@ fn as_corner(spec: &mut SceneSpec, kind: CornerKind, proud_mm: f64) {
     let JointGeometry::Tee { flange_thickness_mm: f, web_thickness_mm: w, web_height_mm: h } = spec.joint else {
         return;
     };
-    spec.joint = JointGeometry::Corner { kind, flange_thickness_mm: f, web_thickness_mm: w, web_height_mm: h, proud_mm };
+    spec.joint =
+        JointGeometry::Corner { kind, flange_thickness_mm: f, web_thickness_mm: w, web_height_mm: h, proud_mm };
     if kind == CornerKind::Outside {
         spec.spacer_height_mm = h - f - proud_mm;
     }
@@ -284,6 +285,36 @@ pub(super) fn multi_framing_ok(spec: &SceneSpec, camera: &CameraModel) -> bool {
 mod tests {
     use super::*;
     use crate::sim::suite::MIN_PLATE_IN_VIEW_MM;
+
+    #[test]
+    fn the_corner_suite_alternates_inside_and_outside_corners_each_seen() {
+        let suite = corner_suite();
+        assert_eq!(suite.len(), CORNER_SCENES);
+        assert_eq!(suite, corner_suite(), "the suite is the same on every call");
+        assert_eq!(suite.iter().filter(|(n, _)| n.ends_with("-holdout")).count(), CORNER_HOLDOUT);
+        let cam = CameraModel::default();
+        for (k, (name, spec)) in suite.iter().enumerate() {
+            assert_eq!(spec.validate(), Ok(()), "{name}");
+            let JointGeometry::Corner { kind, flange_thickness_mm: f, web_thickness_mm: w, web_height_mm: h, proud_mm } =
+                spec.joint
+            else {
+                panic!("{name} is no corner");
+            };
+            assert_eq!(kind, if k % 2 == 0 { CornerKind::Inside } else { CornerKind::Outside }, "{name}");
+            assert!(name.starts_with(&format!("corner-{}-", kind.name())), "{name}");
+            assert!((6.0..=16.0).contains(&f) && (4.0..=12.0).contains(&w) && (40.0..=100.0).contains(&h), "{name}");
+            assert!((0.0..=CORNER_MAX_PROUD_MM).contains(&proud_mm), "{name}");
+            if kind == CornerKind::Outside {
+                // The web stands on the table.
+                assert!((spec.spacer_height_mm - (h - f - proud_mm)).abs() < 1e-9, "{name}");
+            }
+            assert!((500.0..=1000.0).contains(&spec.placement.distance_mm), "{name}");
+            assert!((0.0..=30.0).contains(&spec.placement.tilt_deg), "{name}");
+            let seams = seam_truths(spec, &cam);
+            assert_eq!(seams.len(), 1, "{name}: a corner has one weld");
+            assert!(seams[0].is_seen(), "{name}");
+        }
+    }
 
     #[test]
     fn the_tee_suite_is_stratified_framed_and_fixed() {

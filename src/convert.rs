@@ -118,6 +118,7 @@ pub mod to_proto {
             Gate::GrooveDepth => ErrorCode::GrooveDepth,
             Gate::JointMismatch => ErrorCode::JointMismatch,
             Gate::JointUnknown => ErrorCode::JointUnknown,
+            Gate::CornerJoint => ErrorCode::CornerJoint,
         }
     }
 

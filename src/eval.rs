@@ -410,6 +410,11 @@ pub fn names_a_tee(reason: &str) -> bool {
     ["tee joint", "t_fillet", "t-fillet", "t-joint"].iter().any(|name| reason.contains(name))
 }
 
+/// Whether a refusal's reason names a corner joint.
+pub fn names_a_corner(reason: &str) -> bool {
+    reason.contains("corner joint")
+}
+
 /// A tee scene's outcome: a refusal is a refusal (whether it names the tee
 /// is [`names_a_tee`]'s to say); a seam is right only within the fillet's
 /// bar on a root (the whole root, or a stretch of it the camera sees),

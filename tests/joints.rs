@@ -46,7 +46,9 @@ fn auto_names_each_joint_measures_the_groove_and_plans_it_within_the_bar() {
                 assert_eq!((q.groove_depth_mm, q.groove_angle_deg), (None, None));
             }
             JointGeometry::Lap { .. } => assert!(evidence.contains("an upper plate"), "{evidence}"),
-            JointGeometry::Tee { .. } => unreachable!("only the planned joints are planned here"),
+            JointGeometry::Tee { .. } | JointGeometry::Corner { .. } => {
+                unreachable!("only the planned joints are planned here")
+            }
         }
     }
 }

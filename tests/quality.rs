@@ -74,7 +74,9 @@ fn every_seam_carries_its_quality_figures() {
                 assert!((step - upper_thickness_mm).abs() < 0.3, "{joint}: step {step} against {upper_thickness_mm}");
                 assert!(q.gap_mm.is_none() && q.misalignment_mm.is_none());
             }
-            JointGeometry::Tee { .. } => unreachable!("only the planned joints are planned here"),
+            JointGeometry::Tee { .. } | JointGeometry::Corner { .. } => {
+                unreachable!("only the planned joints are planned here")
+            }
         }
     }
 }

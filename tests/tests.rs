@@ -5,6 +5,7 @@ mod bench;
 mod calibration;
 mod cli;
 mod consumer_camera;
+mod corners;
 mod daemon;
 mod faults;
 mod fuzz;

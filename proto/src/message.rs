@@ -473,12 +473,14 @@ pub enum ErrorCode {
     GrooveDepth,
     /// 69: refused: `auto` was asked for and the joint type cannot be told.
     JointUnknown,
+    /// 70: refused: the plates are a corner joint's, which is not planned.
+    CornerJoint,
     /// Any other number, from a newer peer.
     Other(u16),
 }
 
 impl ErrorCode {
-    pub const ALL: [ErrorCode; 31] = [
+    pub const ALL: [ErrorCode; 32] = [
         ErrorCode::BadMagic,
         ErrorCode::UnsupportedVersion,
         ErrorCode::UnknownMessage,
@@ -510,6 +512,7 @@ impl ErrorCode {
         ErrorCode::JointMismatch,
         ErrorCode::GrooveDepth,
         ErrorCode::JointUnknown,
+        ErrorCode::CornerJoint,
     ];
 
     pub fn code(self) -> u16 {
@@ -545,6 +548,7 @@ impl ErrorCode {
             ErrorCode::JointMismatch => 67,
             ErrorCode::GrooveDepth => 68,
             ErrorCode::JointUnknown => 69,
+            ErrorCode::CornerJoint => 70,
             ErrorCode::Other(n) => n,
         }
     }
@@ -583,6 +587,7 @@ impl ErrorCode {
             ErrorCode::JointMismatch => "joint_mismatch",
             ErrorCode::GrooveDepth => "groove_depth",
             ErrorCode::JointUnknown => "joint_unknown",
+            ErrorCode::CornerJoint => "corner_joint",
             ErrorCode::Other(_) => "other",
         }
     }

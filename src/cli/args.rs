@@ -70,6 +70,11 @@ pub enum SuiteArg {
     /// 12 frames of two or three workpieces, each with its own joint
     /// (`sim::multi_suite`), every seam returned matched to the nearest.
     Multi,
+    /// 20 corner joints, inside and outside in turn, at 500 to 1000 mm,
+    /// tilted up to 30 degrees (`sim::corner_suite`), judged as the tee
+    /// suite is against the corner's one weld: none is planned, so every
+    /// seam returned is a confident wrong one unless it lies on that weld.
+    Corner,
 }
 
 /// `--joint-request` of `eval`: how each scene's plan names its joint.

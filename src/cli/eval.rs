@@ -20,14 +20,17 @@ use std::path::PathBuf;
 use weldseam::config::{Config, Method};
 use weldseam::convert::to_proto::plan_result;
 use weldseam::eval::{
-    DepthAsk, EvalRequest, JointAsk, SceneOutcome, Verdict, count_verdicts, names_a_tee, run_suite_asking, summarise,
+    DepthAsk, EvalRequest, JointAsk, SceneOutcome, Verdict, count_verdicts, names_a_corner, names_a_tee,
+    run_suite_asking, summarise,
 };
 use weldseam::geometry::pose::EulerConvention;
 use weldseam::joint::JointType;
 use weldseam::pipeline::Stage;
 use weldseam::sim::consumer::{consumer_camera, consumer_variant};
 use weldseam::sim::variants::Variant;
-use weldseam::sim::{FaultKind, consumer_suite, eval_suite, fault_suite, hard_suite, multi_suite, tee_suite};
+use weldseam::sim::{
+    FaultKind, consumer_suite, corner_suite, eval_suite, fault_suite, hard_suite, multi_suite, tee_suite,
+};
 
 use crate::cli::args::{GrooveDepthArg, JointRequestArg, SuiteArg};
 use crate::cli::table::Table;
@@ -164,8 +167,9 @@ pub fn run(args: &EvalArgs) -> anyhow::Result<()> {
         SuiteArg::Hard => (hard_suite(), robust.camera, Variant::raw()),
         SuiteArg::Tee => (tee_suite(), robust.camera, Variant::raw()),
         SuiteArg::Multi => (multi_suite(), robust.camera, Variant::raw()),
+        SuiteArg::Corner => (corner_suite(), robust.camera, Variant::raw()),
     };
-    let several_seams = matches!(args.suite, SuiteArg::Tee | SuiteArg::Multi);
+    let several_seams = matches!(args.suite, SuiteArg::Tee | SuiteArg::Multi | SuiteArg::Corner);
     // Refusals are right answers on these suites; only a confident wrong
     // seam fails them.
     let judged = matches!(args.suite, SuiteArg::Faults | SuiteArg::Hard)
@@ -376,6 +380,7 @@ fn seam_tables(outcomes: &[SceneOutcome]) -> Vec<Table> {
             "reported not planned",
             "refused",
             "refusals naming a tee",
+            "refusals naming a corner",
             "confident wrong",
             "worst across mm",
             "worst end mm",
@@ -390,6 +395,7 @@ fn seam_tables(outcomes: &[SceneOutcome]) -> Vec<Table> {
         }
         let (mut seams, mut seen, mut found, mut missed, mut extra, mut wrong_type, mut unplanned, mut tee_refusals) =
             (0, 0, 0, 0, 0, 0, 0, 0);
+        let mut corner_refusals = 0;
         let (mut worst_across, mut worst_end) = (f64::NAN, f64::NAN);
         for o in &members {
             let Some((truths, matches)) = &o.seams else { continue };
@@ -404,6 +410,7 @@ fn seam_tables(outcomes: &[SceneOutcome]) -> Vec<Table> {
             }
             if let Verdict::Refused { reason } = &o.verdict {
                 tee_refusals += usize::from(names_a_tee(reason));
+                corner_refusals += usize::from(names_a_corner(reason));
             }
             let outcome = match &o.verdict {
                 Verdict::Refused { reason } => format!("refused: {reason}"),
@@ -465,6 +472,7 @@ fn seam_tables(outcomes: &[SceneOutcome]) -> Vec<Table> {
             unplanned,
             c.refused,
             tee_refusals,
+            corner_refusals,
             c.confident_wrong,
         ];
         let mut row = vec![group.to_string()];

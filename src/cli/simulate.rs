@@ -26,7 +26,7 @@ use weldseam::sim::faults::frame_barely_in_view;
 use weldseam::sim::variants::Variant;
 use weldseam::sim::{
     CameraPreset, Fault, FaultKind, JointGeometry, NoiseSpec, PlateExtent, SceneSpec, Simulation, consumer_suite,
-    demo_scene, eval_suite, fault_suite, hard_suite, multi_suite, simulate, tee_suite,
+    corner_suite, demo_scene, eval_suite, fault_suite, hard_suite, multi_suite, simulate, tee_suite,
 };
 
 use crate::cli::args::CameraArg;
@@ -222,6 +222,7 @@ fn find_suite_scene(preset: CameraPreset, key: &str) -> Result<(String, SceneSpe
             Some("hard") => Some(hard_suite()),
             Some("t") => Some(tee_suite()),
             Some("multi") => Some(multi_suite()),
+            Some("corner") => Some(corner_suite()),
             _ => None,
         };
         if let Some(found) = other.into_iter().flatten().find(|(name, _)| name == key) {
@@ -354,6 +355,13 @@ fn geometry_json(joint: &JointGeometry) -> Value {
             "flange_thickness_mm": flange_thickness_mm,
             "web_thickness_mm": web_thickness_mm,
             "web_height_mm": web_height_mm,
+        }),
+        JointGeometry::Corner { kind, flange_thickness_mm, web_thickness_mm, web_height_mm, proud_mm } => json!({
+            "corner": kind.name(),
+            "flange_thickness_mm": flange_thickness_mm,
+            "web_thickness_mm": web_thickness_mm,
+            "web_height_mm": web_height_mm,
+            "proud_mm": proud_mm,
         }),
     }
 }

@@ -12,7 +12,7 @@
 //! step, over a layer it lies across, seen on both of its sides (the
 //! flange).
 
-use crate::cloud::PointCloud;
+use crate::cloud::{Point, PointCloud};
 use crate::geometry::fit::{Moments, Plane};
 use crate::geometry::{Vec3, vec3};
 use crate::joint::JointType;
@@ -148,10 +148,35 @@ pub enum BackgroundError {
          side, or a bar standing at a plate's edge; the joint type cannot be told: name it (t_fillet) in the request"
     )]
     OneSidedWeb { top_mm2: f64, width_mm: f64, height_mm: f64, beside_mm2: f64 },
+    /// A plate stands at the end of the flange, with nothing at the
+    /// flange's level beyond it and the table far below: a corner joint,
+    /// which no joint type plans, whatever was requested.
+    #[error("this looks like a corner joint ({kind} corner): {what}; corner joints are not planned")]
+    LooksLikeCorner { kind: CornerKind, what: String },
     /// The joint type was left to the planner, and the layers fit neither
     /// layout.
     #[error("the joint type cannot be told from the plates: not a butt joint ({butt}); not a lap ({lap})")]
     Unrecognised { butt: Box<BackgroundError>, lap: Box<BackgroundError> },
+}
+
+/// The two corner joints [`find_corner`] recognises.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum CornerKind {
+    /// A web standing on the flange's end, its outer face flush with the
+    /// flange's end face (the L seen from inside).
+    Inside,
+    /// A web beside the flange's end, its top flush with the flange's top
+    /// or a little proud of it (the L seen from outside).
+    Outside,
+}
+
+impl std::fmt::Display for CornerKind {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            CornerKind::Inside => "inside",
+            CornerKind::Outside => "outside",
+        })
+    }
 }
 
 impl BackgroundError {
@@ -208,6 +233,109 @@ impl PlaneCluster {
 /// the side `normal × long axis` points to.
 fn side_of(top: &PlaneCluster, c: &PlaneCluster, normal: &Vec3) -> f64 {
     normal.cross(&top.long_axis).dot(&(c.centroid - top.centroid))
+}
+
+/// Beyond a web's top, the share of returns at the flange's or the web's
+/// level (of those far below) above which the web is no corner's: a
+/// tee's flange, a plate a clamp lies on, the rest of a streak-cut plate.
+const CORNER_LEVEL_SHARE_MAX: f64 = 0.05;
+/// Beyond a web's top, at least this many returns far below it (and a
+/// fifth of the top's own count) before it is taken for a corner's: a
+/// sliver of plate at the image border has nothing beyond it.
+const CORNER_DEEP_RETURNS_MIN: usize = 30;
+/// The widest top taken for a corner's web, mm: issue 15's webs are 4 to
+/// 12 mm thick; a wider strip of plate beside a plate (a piece a clamp or
+/// a streak cut off) is left to the butt, lap and tee rules.
+const CORNER_WEB_WIDTH_MAX_MM: f64 = 16.0;
+
+/// A corner joint, if the clusters show one: a long narrow plane (a web's
+/// top, at most `web_thickness_max_mm` and [`CORNER_WEB_WIDTH_MAX_MM`] wide) beside a plane at least four
+/// times its size (the flange) seen on one of its sides only, either flush
+/// with it or proud of it by at most a lap step (an outside corner), or a
+/// web's height over it (an inside corner); and beyond the top's far edge
+/// (away from the flange, along the top's length, a web's height at most)
+/// the cloud's returns lie far below, deeper than the flange by more than
+/// a lap step (the table past the web's outer face), none at the flange's
+/// or the top's level. `points` is the frame the clusters index.
+pub fn find_corner(planes: &[PlaneCluster], s: &Selection, points: &[Point]) -> Option<BackgroundError> {
+    let cos_tilt = s.max_tilt_deg.to_radians().cos();
+    let planes: Vec<&PlaneCluster> = planes.iter().filter(|c| c.plane.normal.dot(&s.normal) >= cos_tilt).collect();
+    let offset = |c: &PlaneCluster| s.normal.dot(&c.centroid);
+    for top in &planes {
+        if top.elongation < BAR_ELONGATION || top.width_mm() > s.web_thickness_max_mm.min(CORNER_WEB_WIDTH_MAX_MM) {
+            continue;
+        }
+        let flanges = planes.iter().filter(|c| {
+            let step = offset(c) - offset(top);
+            !std::ptr::eq::<PlaneCluster>(**c, *top)
+                && top.area_mm2 <= SIDE_BY_SIDE_AREA_RATIO * c.area_mm2
+                && step >= -s.coplanar_tolerance_mm
+                && step <= s.web_height_max_mm
+        });
+        for flange in flanges {
+            let step = offset(flange) - offset(top);
+            let kind = if step <= s.lap_step_max_mm { CornerKind::Outside } else { CornerKind::Inside };
+            if let Some(drop_mm) = drop_beyond(top, flange, step, s, points) {
+                let what = match kind {
+                    CornerKind::Outside => format!(
+                        "a plate's edge about {:.0} mm thick lies {:.1} mm over the flange's top beside it, and the \
+                         cloud drops {drop_mm:.0} mm beyond it",
+                        top.width_mm(),
+                        step.max(0.0)
+                    ),
+                    CornerKind::Inside => format!(
+                        "a plate about {:.0} mm thick stands {step:.0} mm tall at the end of the flange, seen on one \
+                         of its sides only, and the cloud drops {drop_mm:.0} mm beyond it",
+                        top.width_mm()
+                    ),
+                };
+                return Some(BackgroundError::LooksLikeCorner { kind, what });
+            }
+        }
+    }
+    None
+}
+
+/// How far below `top` the returns beyond its far edge (from `flange`) lie,
+/// their median, when they show a corner: enough of them, all deeper than
+/// the flange (`step` under the top) by more than a lap step, next to none
+/// at the flange's or the top's level.
+fn drop_beyond(top: &PlaneCluster, flange: &PlaneCluster, step: f64, s: &Selection, points: &[Point]) -> Option<f64> {
+    let side = side_of(top, flange, &s.normal);
+    if side == 0.0 {
+        return None;
+    }
+    let away = s.normal.cross(&top.long_axis) * -side.signum();
+    let finite = |i: &u32| points.get(*i as usize).map(vec3).filter(|p| p.iter().all(|v| v.is_finite()));
+    let (mut far_edge, mut along) = (f64::NEG_INFINITY, [f64::INFINITY, f64::NEG_INFINITY]);
+    for p in top.members.iter().filter_map(finite) {
+        let rel = p - top.centroid;
+        far_edge = far_edge.max(away.dot(&rel));
+        let a = top.long_axis.dot(&rel);
+        along = [along[0].min(a), along[1].max(a)];
+    }
+    let top_offset = s.normal.dot(&top.centroid);
+    let (mut level, mut deep) = (0usize, Vec::new());
+    for p in points.iter().map(vec3).filter(|p| p.iter().all(|v| v.is_finite())) {
+        let rel = p - top.centroid;
+        let across = away.dot(&rel) - far_edge;
+        let a = top.long_axis.dot(&rel);
+        if across <= 0.0 || across > s.web_height_max_mm || a < along[0] || a > along[1] {
+            continue;
+        }
+        let depth = s.normal.dot(&p) - top_offset;
+        if depth > step + s.lap_step_max_mm {
+            deep.push(depth);
+        } else if depth.abs() <= s.coplanar_tolerance_mm || (depth - step).abs() <= s.coplanar_tolerance_mm {
+            level += 1;
+        }
+    }
+    let enough = CORNER_DEEP_RETURNS_MIN.max(top.members.len() / 5);
+    if deep.len() < enough || level as f64 > CORNER_LEVEL_SHARE_MAX * deep.len() as f64 {
+        return None;
+    }
+    deep.sort_by(f64::total_cmp);
+    Some(deep[deep.len() / 2])
 }
 
 /// Fits a plane to each cluster and estimates its area from the sampling
@@ -673,6 +801,79 @@ mod tests {
             planes.push(cluster(760.2, 12_000.0, -60.0));
         }
         planes
+    }
+
+    /// A frame of 1 mm returns along y 0..200: a web's top 8 mm wide at
+    /// x -8..0 and depth `top_z`, the flange at x 0..100 and depth 760,
+    /// and beyond the web (x -60..-8) returns at depth `beyond_z`, if any.
+    /// The clusters are the top's and the flange's.
+    fn corner_frame(top_z: f64, beyond_z: Option<f64>) -> (Vec<PlaneCluster>, Vec<Point>) {
+        let mut points: Vec<Point> = Vec::new();
+        let strip = |points: &mut Vec<Point>, x0: i32, x1: i32, z: f64| {
+            let first = points.len() as u32;
+            for x in x0..x1 {
+                for y in 0..200 {
+                    points.push([x as f32 + 0.5, y as f32, z as f32]);
+                }
+            }
+            (first..points.len() as u32).collect::<Vec<u32>>()
+        };
+        let web = strip(&mut points, -8, 0, top_z);
+        let flange = strip(&mut points, 0, 100, 760.0);
+        if let Some(z) = beyond_z {
+            strip(&mut points, -60, -8, z);
+        }
+        let plane = |members: Vec<u32>, x: f64, z: f64, elongation: f64| PlaneCluster {
+            area_mm2: members.len() as f64,
+            members,
+            plane: Plane { normal: Vec3::z(), offset: z },
+            centroid: Vec3::new(x, 100.0, z),
+            label: 0,
+            long_axis: Vec3::y(),
+            elongation,
+        };
+        (vec![plane(web, -4.0, top_z, 25.0), plane(flange, 50.0, 760.0, 2.0)], points)
+    }
+
+    fn corner_kind(top_z: f64, beyond_z: Option<f64>) -> Option<CornerKind> {
+        let (planes, points) = corner_frame(top_z, beyond_z);
+        match find_corner(&planes, &auto(), &points) {
+            Some(BackgroundError::LooksLikeCorner { kind, .. }) => Some(kind),
+            _ => None,
+        }
+    }
+
+    #[test]
+    fn a_plates_edge_flush_or_proud_beside_a_flange_with_a_drop_beyond_is_an_outside_corner() {
+        assert_eq!(corner_kind(760.0, Some(830.0)), Some(CornerKind::Outside));
+        assert_eq!(corner_kind(757.0, Some(830.0)), Some(CornerKind::Outside));
+        let (planes, points) = corner_frame(760.0, Some(830.0));
+        let reason = find_corner(&planes, &auto(), &points).unwrap().to_string();
+        assert!(reason.contains("corner joint") && reason.contains("8 mm thick"), "{reason}");
+    }
+
+    #[test]
+    fn a_web_a_web_height_over_a_flange_with_a_drop_beyond_is_an_inside_corner() {
+        assert_eq!(corner_kind(700.0, Some(860.0)), Some(CornerKind::Inside));
+    }
+
+    #[test]
+    fn a_sliver_with_nothing_beyond_is_no_corner() {
+        // Butt plates, one barely in view at the image border.
+        assert_eq!(corner_kind(760.0, None), None);
+    }
+
+    #[test]
+    fn returns_at_the_flanges_level_beyond_make_it_no_corner() {
+        // A tee's flange beyond its web, a plate under a clamp, the rest of
+        // a plate a streak cut.
+        assert_eq!(corner_kind(700.0, Some(760.0)), None);
+        assert_eq!(corner_kind(760.0, Some(760.0)), None);
+    }
+
+    #[test]
+    fn a_drop_no_deeper_than_a_lap_step_is_no_corner() {
+        assert_eq!(corner_kind(760.0, Some(780.0)), None);
     }
 
     #[test]

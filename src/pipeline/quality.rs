@@ -215,10 +215,13 @@ pub enum Gate {
     JointMismatch,
     /// `auto` was asked for and the geometry does not say which joint it is.
     JointUnknown,
+    /// The plates are a corner joint's (a plate standing at the flange's
+    /// end), which no joint type plans.
+    CornerJoint,
 }
 
 impl Gate {
-    pub const ALL: [Gate; 10] = [
+    pub const ALL: [Gate; 11] = [
         Gate::EdgeFitResidual,
         Gate::EdgeCoverage,
         Gate::JointCoverage,
@@ -229,12 +232,13 @@ impl Gate {
         Gate::GrooveDepth,
         Gate::JointMismatch,
         Gate::JointUnknown,
+        Gate::CornerJoint,
     ];
 
     /// Whether `quality.warn_only` may name the gate: every gate read from
     /// a planned seam's figures.
     pub fn can_warn(self) -> bool {
-        !matches!(self, Gate::JointMismatch | Gate::JointUnknown)
+        !matches!(self, Gate::JointMismatch | Gate::JointUnknown | Gate::CornerJoint)
     }
 
     /// The gate's snake_case name, as config, logs and JSON write it.
@@ -250,6 +254,7 @@ impl Gate {
             Gate::GrooveDepth => "groove_depth",
             Gate::JointMismatch => "joint_mismatch",
             Gate::JointUnknown => "joint_unknown",
+            Gate::CornerJoint => "corner_joint",
         }
     }
 

@@ -200,6 +200,11 @@ fn plan_workpiece(
         web_thickness_max_mm: cfg.tee_web_thickness_max_mm,
         max_tilt_deg: cfg.plane_max_normal_angle_deg,
     };
+    // A corner joint is refused by name under every request: no joint
+    // type plans one, and its plates pass for a butt pair, a lap or a tee.
+    if let Some(corner) = background::find_corner(&planes, &selection, ctx.cloud.points()) {
+        return Err(PlanError { gate: Some(quality::Gate::CornerJoint), ..PlanError::at(Stage::Background, corner) });
+    }
     let background::Selected { workpiece, layout, evidence: layers } = background::robust_select(planes, &selection)
         .map_err(|e| {
             let gate = if e.is_joint_mismatch() {

@@ -214,7 +214,7 @@ impl Fault {
         let fail = |what: String| Err(InvalidScene(format!("{}: {what}", self.kind())));
         let positive = |v: f64| v > 0.0 && v.is_finite();
         let [y0, y1] = spec.seam_range();
-        if matches!(spec.joint, JointGeometry::Tee { .. }) || !spec.others.is_empty() {
+        if matches!(spec.joint, JointGeometry::Tee { .. } | JointGeometry::Corner { .. }) || !spec.others.is_empty() {
             return fail("faults are drawn on one butt or lap joint per frame only".into());
         }
         match *self {
@@ -427,6 +427,11 @@ fn tack_profile(joint: &JointGeometry, crown: f64, spread: f64) -> Vec<[f64; 2]>
         JointGeometry::Tee { flange_thickness_mm: f, web_thickness_mm: w, web_height_mm: h } => {
             let (leg, root) = (spread + crown, -w / 2.0);
             vec![[root + 0.5, f], [root - leg, f], [root + 0.5, f + leg.min(h)]]
+        }
+        // A tack on the corner's weld line (refused on corners likewise).
+        JointGeometry::Corner { flange_thickness_mm: f, .. } => {
+            let leg = spread + crown;
+            vec![[-0.5, f], [leg, f], [-0.5, f + leg]]
         }
     }
 }

@@ -32,6 +32,7 @@ pub use consumer::{CameraPreset, consumer_suite};
 pub use faults::{Fault, FaultKind, RightAnswer};
 pub use noise::NoiseSpec;
 pub use suite::{Framing, eval_suite, fault_suite, framing, hard_suite};
+pub use tee_multi::corner_suite;
 pub use tee_multi::{multi_suite, tee_suite};
 pub use truth::{GroundTruth, SeamTruth};
 
@@ -53,6 +54,35 @@ pub enum JointGeometry {
     /// roots, where the web's side faces meet the flange's top: the lines
     /// x = ∓web_thickness/2 at z = flange_thickness ([`JointGeometry::seam_lines_xz`]).
     Tee { flange_thickness_mm: f64, web_thickness_mm: f64, web_height_mm: f64 },
+    /// A corner joint: the web (plate A, x in `-web_thickness .. 0`) meets
+    /// the flange (plate B, reaching `+x`) at the flange's end; its one weld
+    /// runs along x = 0 at z = flange_thickness ([`CornerKind`] says how the
+    /// plates meet). `proud_mm` is how far an outside corner's web rises
+    /// above the flange's top (0 for an inside corner).
+    Corner { kind: CornerKind, flange_thickness_mm: f64, web_thickness_mm: f64, web_height_mm: f64, proud_mm: f64 },
+}
+
+/// The two corner joints a cell meets most, both seen from above.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum CornerKind {
+    /// An L seen from inside: the web stands on the flange at its end, the
+    /// web's outer face flush with the flange's end face; the weld is the
+    /// fillet root between the web's inner face and the flange's top.
+    Inside,
+    /// An L seen from outside: the web stands on the table beside the
+    /// flange's end, its inner face against that end face, its top flush
+    /// with the flange's top or `proud_mm` above it; the weld lies along
+    /// the outer edge where the flange's top meets the web.
+    Outside,
+}
+
+impl CornerKind {
+    pub fn name(self) -> &'static str {
+        match self {
+            CornerKind::Inside => "inside",
+            CornerKind::Outside => "outside",
+        }
+    }
 }
 
 impl JointGeometry {
@@ -61,7 +91,17 @@ impl JointGeometry {
             JointGeometry::VButt { .. } => JointType::VButt,
             JointGeometry::IButt { .. } => JointType::IButt,
             JointGeometry::Lap { .. } => JointType::Lap,
-            JointGeometry::Tee { .. } => JointType::TFillet,
+            // No joint type plans a corner; its weld is judged as a fillet
+            // root is (the tee's bar), the nearest joint the planner knows.
+            JointGeometry::Tee { .. } | JointGeometry::Corner { .. } => JointType::TFillet,
+        }
+    }
+
+    /// The corner's kind, for a corner joint.
+    pub fn corner_kind(&self) -> Option<CornerKind> {
+        match *self {
+            JointGeometry::Corner { kind, .. } => Some(kind),
+            _ => None,
         }
     }
 
@@ -103,6 +143,16 @@ impl JointGeometry {
             JointGeometry::Tee { flange_thickness_mm: f, web_thickness_mm: w, web_height_mm: h } => {
                 if ![f, w, h].iter().all(|v| *v > 0.0 && v.is_finite()) {
                     return fail("the flange and web thicknesses and the web height must be positive");
+                }
+            }
+            JointGeometry::Corner {
+                flange_thickness_mm: f, web_thickness_mm: w, web_height_mm: h, proud_mm, ..
+            } => {
+                if ![f, w, h].iter().all(|v| *v > 0.0 && v.is_finite()) {
+                    return fail("the flange and web thicknesses and the web height must be positive");
+                }
+                if !(proud_mm >= 0.0 && proud_mm < h - f) {
+                    return fail("a corner's web must rise 0 or more above the flange and reach below its top");
                 }
             }
         }

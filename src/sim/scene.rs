@@ -9,7 +9,7 @@
 
 use nalgebra::Isometry3;
 
-use super::{JointGeometry, PlateExtent, SceneSpec};
+use super::{CornerKind, JointGeometry, PlateExtent, SceneSpec};
 use crate::geometry::Vec3;
 
 /// The points `p` with `normal · p <= offset`; `normal` is the outward unit
@@ -259,6 +259,18 @@ impl JointGeometry {
             JointGeometry::Tee { flange_thickness_mm: f, web_thickness_mm: w, web_height_mm: h } => {
                 (rectangle(-w / 2.0, w / 2.0, f, f + h), rectangle(-plate_a.width_mm, plate_b.width_mm, 0.0, f))
             }
+            JointGeometry::Corner { kind, flange_thickness_mm: f, web_thickness_mm: w, web_height_mm: h, proud_mm } => {
+                match kind {
+                    // The web on the flange's end, outer faces flush.
+                    CornerKind::Inside => (rectangle(-w, 0.0, f, f + h), rectangle(-w, plate_b.width_mm, 0.0, f)),
+                    // The web beside the flange's end, reaching down from
+                    // its top (to the table when the scene's spacers are
+                    // as tall as the web's part under the flange).
+                    CornerKind::Outside => {
+                        (rectangle(-w, 0.0, f + proud_mm - h, f + proud_mm), rectangle(0.0, plate_b.width_mm, 0.0, f))
+                    }
+                }
+            }
         };
         [
             PlateShape { profile_xz: a, y_range: y_range(plate_a) },
@@ -274,7 +286,7 @@ impl JointGeometry {
             JointGeometry::VButt { groove_angle_deg, groove_depth_mm, root_gap_mm, .. } => {
                 root_gap_mm / 2.0 + groove_depth_mm * (groove_angle_deg / 2.0).to_radians().tan()
             }
-            JointGeometry::Lap { .. } => 0.0,
+            JointGeometry::Lap { .. } | JointGeometry::Corner { .. } => 0.0,
             JointGeometry::Tee { web_thickness_mm, .. } => web_thickness_mm / 2.0,
         }
     }
@@ -294,11 +306,12 @@ impl JointGeometry {
     /// The seam-side top edges whose visibility defines the observed seam,
     /// as `(x, z)` of lines along y: both plates' top edges for a butt
     /// joint; the upper plate's top edge and the root line for a lap; a
-    /// tee's two roots.
+    /// tee's two roots; a corner's weld line twice.
     pub fn seam_edges_xz(&self) -> [[f64; 2]; 2] {
         match *self {
             JointGeometry::Lap { lower_thickness_mm: t1, upper_thickness_mm: t2, .. } => [[0.0, t1 + t2], [0.0, t1]],
             JointGeometry::Tee { flange_thickness_mm: f, web_thickness_mm: w, .. } => [[-w / 2.0, f], [w / 2.0, f]],
+            JointGeometry::Corner { flange_thickness_mm: f, .. } => [[0.0, f], [0.0, f]],
             _ => {
                 let x = self.seam_edge_half_width();
                 let t = self.top_z(0.0);
@@ -311,7 +324,9 @@ impl JointGeometry {
     /// roots lie on the flange's top.
     pub fn seam_z(&self) -> f64 {
         match *self {
-            JointGeometry::Tee { flange_thickness_mm, .. } => flange_thickness_mm,
+            JointGeometry::Tee { flange_thickness_mm, .. } | JointGeometry::Corner { flange_thickness_mm, .. } => {
+                flange_thickness_mm
+            }
             JointGeometry::IButt { thickness_mm, .. } => thickness_mm,
             JointGeometry::VButt { thickness_mm, groove_depth_mm, .. } => thickness_mm - groove_depth_mm,
             JointGeometry::Lap { lower_thickness_mm, .. } => lower_thickness_mm,
@@ -325,6 +340,13 @@ impl JointGeometry {
         match *self {
             JointGeometry::Tee { flange_thickness_mm: f, web_thickness_mm: w, web_height_mm: h } => {
                 if x.abs() <= w / 2.0 { f + h } else { f }
+            }
+            JointGeometry::Corner { kind, flange_thickness_mm: f, web_thickness_mm: w, web_height_mm: h, proud_mm } => {
+                let web_top = match kind {
+                    CornerKind::Inside => f + h,
+                    CornerKind::Outside => f + proud_mm,
+                };
+                if (-w..=0.0).contains(&x) { web_top } else { f }
             }
             JointGeometry::IButt { thickness_mm, .. } | JointGeometry::VButt { thickness_mm, .. } => thickness_mm,
             JointGeometry::Lap { lower_thickness_mm, upper_thickness_mm, .. } => {
@@ -381,8 +403,9 @@ fn workpiece_solids(
             let support_end = -overlap_mm - SUPPORT_CLEARANCE_MM + SPACER_INSET_MM;
             solids.extend(spacers_under(a, [x0, support_end], table_top));
         }
-        // The web stands on the flange.
-        JointGeometry::Tee { .. } => {}
+        // The web stands on the flange (or, beside an outside corner's
+        // flange, on the table).
+        JointGeometry::Tee { .. } | JointGeometry::Corner { .. } => {}
         _ => solids.extend(spacers_under(a, a.x_range(), table_top)),
     }
     solids

@@ -141,7 +141,7 @@ fn gap_half_width(joint: &JointGeometry) -> f64 {
     match *joint {
         JointGeometry::IButt { gap_mm, .. } => gap_mm / 2.0,
         JointGeometry::VButt { root_gap_mm, .. } => root_gap_mm / 2.0,
-        JointGeometry::Lap { .. } | JointGeometry::Tee { .. } => 0.0,
+        JointGeometry::Lap { .. } | JointGeometry::Tee { .. } | JointGeometry::Corner { .. } => 0.0,
     }
 }
 
@@ -672,7 +672,9 @@ mod tests {
                         lower += 1;
                     }
                 }
-                JointGeometry::Tee { .. } => panic!("{name}: the eval suite has no tee"),
+                JointGeometry::Tee { .. } | JointGeometry::Corner { .. } => {
+                    panic!("{name}: the eval suite has no tee or corner")
+                }
             }
         }
         assert!(narrow_gaps >= 6, "{narrow_gaps} narrow gaps");

@@ -10,8 +10,8 @@ use rand_core::SeedableRng;
 use super::suite::{MIN_OBSERVED_SEAM_MM, ScenePlan, draw_tee, framing, uniform};
 use super::truth::{SeamTruth, seam_truths};
 use super::{
-    CameraPlacement, JointGeometry, NoiseSpec, PlateExtent, SceneSpec, Workpiece, default_base_from_workpiece,
-    paper_hand_eye,
+    CameraPlacement, CornerKind, JointGeometry, NoiseSpec, PlateExtent, SceneSpec, Workpiece,
+    default_base_from_workpiece, paper_hand_eye,
 };
 use crate::camera::CameraModel;
 use crate::geometry::pose::EulerConvention;
@@ -69,6 +69,78 @@ pub fn tee_suite() -> Vec<(String, SceneSpec)> {
             (format!("{}{}", plan.name(), if holdout { "-holdout" } else { "" }), spec)
         })
         .collect()
+}
+
+/// Scenes of [`corner_suite`], and how many of them (the last) are held
+/// out.
+pub const CORNER_SCENES: usize = 20;
+pub const CORNER_HOLDOUT: usize = 6;
+const CORNER_SEED: u64 = 0xc0_2026;
+const CORNER_HOLDOUT_SEED: u64 = 0xc0_0ff5;
+/// How far an outside corner's web may rise above the flange's top, mm.
+const CORNER_MAX_PROUD_MM: f64 = 4.0;
+
+/// Corner joints over the tee suite's range (issue 15 item 2): 20 scenes,
+/// inside and outside corners in turn, the camera at 500 to 1000 mm and
+/// tilted 0 to 30 degrees (each stratum once), webs 4 to 12 mm thick and
+/// 40 to 100 mm tall on flanges 6 to 16 mm thick, an outside corner's web
+/// standing on the table (the spacers as tall as its part under the
+/// flange) and flush with the flange's top or up to 4 mm proud of it.
+/// Each is framed as a tee of the same plates would be, then redrawn until
+/// the camera sees the corner's weld along half its length. Named like
+/// `corner-inside-03-d612-t14`; the last [`CORNER_HOLDOUT`] are `-holdout`.
+pub fn corner_suite() -> Vec<(String, SceneSpec)> {
+    let camera = CameraModel::default();
+    (0..CORNER_SCENES)
+        .map(|k| {
+            let kind = if k % 2 == 0 { CornerKind::Inside } else { CornerKind::Outside };
+            let plan = ScenePlan::new(JointType::TFillet, 3, k, TEE_MAX_TILT_DEG);
+            let holdout = k >= CORNER_SCENES - CORNER_HOLDOUT;
+            let base_seed = if holdout { CORNER_HOLDOUT_SEED } else { CORNER_SEED };
+            let draw = |attempt: u64| {
+                let stream = k as u64 + attempt * CORNER_SCENES as u64;
+                let mut spec = plan.draw_framed(base_seed, stream, &camera);
+                let mut rng = ChaCha8Rng::seed_from_u64(base_seed ^ stream);
+                let proud_mm = match kind {
+                    CornerKind::Inside => 0.0,
+                    CornerKind::Outside => uniform(&mut rng, 0.0, CORNER_MAX_PROUD_MM),
+                };
+                as_corner(&mut spec, kind, proud_mm);
+                spec
+            };
+            let mut spec = draw(0);
+            for attempt in 1..MAX_TEE_REDRAWS {
+                if spec.validate().is_ok() && seam_truths(&spec, &camera).iter().any(SeamTruth::is_seen) {
+                    break;
+                }
+                spec = draw(attempt);
+            }
+            let placement = &spec.placement;
+            let name = format!(
+                "corner-{}-{k:02}-d{:.0}-t{:.0}{}",
+                kind.name(),
+                placement.distance_mm,
+                placement.tilt_deg,
+                if holdout { "-holdout" } else { "" }
+            );
+            (name, spec)
+        })
+        .collect()
+}
+
+/// Makes a tee scene's plates a corner of `kind`: the same flange and web
+/// sizes, the web moved to the flange's end (whose reach on the web's side
+/// the tee's plate A gave); an outside corner's spacers are made as tall
+/// as the web's part under the flange, so the web stands on the table.
+fn as_corner(spec: &mut SceneSpec, kind: CornerKind, proud_mm: f64) {
+    let JointGeometry::Tee { flange_thickness_mm: f, web_thickness_mm: w, web_height_mm: h } = spec.joint else {
+        return;
+    };
+    spec.joint =
+        JointGeometry::Corner { kind, flange_thickness_mm: f, web_thickness_mm: w, web_height_mm: h, proud_mm };
+    if kind == CornerKind::Outside {
+        spec.spacer_height_mm = h - f - proud_mm;
+    }
 }
 
 /// Several workpieces per frame: 12 scenes of two or three parts (in
@@ -213,6 +285,36 @@ pub(super) fn multi_framing_ok(spec: &SceneSpec, camera: &CameraModel) -> bool {
 mod tests {
     use super::*;
     use crate::sim::suite::MIN_PLATE_IN_VIEW_MM;
+
+    #[test]
+    fn the_corner_suite_alternates_inside_and_outside_corners_each_seen() {
+        let suite = corner_suite();
+        assert_eq!(suite.len(), CORNER_SCENES);
+        assert_eq!(suite, corner_suite(), "the suite is the same on every call");
+        assert_eq!(suite.iter().filter(|(n, _)| n.ends_with("-holdout")).count(), CORNER_HOLDOUT);
+        let cam = CameraModel::default();
+        for (k, (name, spec)) in suite.iter().enumerate() {
+            assert_eq!(spec.validate(), Ok(()), "{name}");
+            let JointGeometry::Corner { kind, flange_thickness_mm: f, web_thickness_mm: w, web_height_mm: h, proud_mm } =
+                spec.joint
+            else {
+                panic!("{name} is no corner");
+            };
+            assert_eq!(kind, if k % 2 == 0 { CornerKind::Inside } else { CornerKind::Outside }, "{name}");
+            assert!(name.starts_with(&format!("corner-{}-", kind.name())), "{name}");
+            assert!((6.0..=16.0).contains(&f) && (4.0..=12.0).contains(&w) && (40.0..=100.0).contains(&h), "{name}");
+            assert!((0.0..=CORNER_MAX_PROUD_MM).contains(&proud_mm), "{name}");
+            if kind == CornerKind::Outside {
+                // The web stands on the table.
+                assert!((spec.spacer_height_mm - (h - f - proud_mm)).abs() < 1e-9, "{name}");
+            }
+            assert!((500.0..=1000.0).contains(&spec.placement.distance_mm), "{name}");
+            assert!((0.0..=30.0).contains(&spec.placement.tilt_deg), "{name}");
+            let seams = seam_truths(spec, &cam);
+            assert_eq!(seams.len(), 1, "{name}: a corner has one weld");
+            assert!(seams[0].is_seen(), "{name}");
+        }
+    }
 
     #[test]
     fn the_tee_suite_is_stratified_framed_and_fixed() {

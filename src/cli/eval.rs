@@ -107,6 +107,21 @@ fn cells(o: &SceneOutcome) -> Vec<String> {
     }
 }
 
+/// The error columns of a frame of several seams: its seams matched to
+/// the true ones (each seam's errors are in the table of every frame's
+/// seams; against the frame's first seam alone they would judge a tee's
+/// other root, or another workpiece's seam, as a miss).
+fn several_cells(o: &SceneOutcome) -> Vec<String> {
+    match (&o.result, &o.seams) {
+        (Ok(_), Some((_, m))) => {
+            let mut row = vec!["-".to_string(); 4];
+            row.push(format!("{} of {} seen found, {} extra", m.found.len(), m.seen, m.extra.len()));
+            row
+        }
+        _ => cells(o),
+    }
+}
+
 /// The total and the per-stage times, ms.
 fn timings(o: &SceneOutcome) -> Vec<String> {
     match &o.result {
@@ -210,7 +225,7 @@ pub fn run(args: &EvalArgs) -> anyhow::Result<()> {
             plans_written = outcomes.iter().try_for_each(|o| writeln!(file, "{}", plan_line(o, robust.euler)));
         }
         let mut row = describe(&outcomes[0]);
-        row.extend(cells(&outcomes[0]));
+        row.extend(if several_seams { several_cells(&outcomes[0]) } else { cells(&outcomes[0]) });
         row.extend(timings(&outcomes[0]));
         if let Some(p) = outcomes.get(1) {
             row.extend(cells(p));

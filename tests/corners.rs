@@ -1,43 +1,97 @@
-//! Issue 15 item 2 and issue 12 item 6 through the planner: a corner joint
-//! (inside or outside) is never planned as a butt, a lap or a tee, under
-//! any request; it is refused by name with its own gate.
+//! Issue 15 item 2 and issue 12 item 6 through the planner: an outside
+//! corner is never planned, under any request; it is refused by name with
+//! its own gate. An inside corner is a tee with a flange on one side of the
+//! web: under `t_fillet` or `auto` its one fillet root is planned within the
+//! fillet's bar, under a butt or lap request it is refused by name, with the
+//! advice to ask for a fillet.
 
 use weldseam::camera::CameraModel;
 use weldseam::config::Config;
-use weldseam::eval::names_a_corner;
+use weldseam::eval::{TrueSeam, Verdict, classify_tee, names_a_corner};
+use weldseam::geometry::Vec3;
+use weldseam::geometry::pose::RobotPose;
 use weldseam::joint::{JointType, RequestedJoint};
 use weldseam::pipeline::quality::Gate;
 use weldseam::pipeline::{PlanRequest, Planner, Stage};
 use weldseam::sim::{corner_suite, simulate};
 
-/// Corner scenes of the suite's tuning part: two inside, two outside.
-const CORNERS: [usize; 4] = [2, 3, 6, 9];
+/// Outside corners of the suite's tuning part.
+const OUTSIDE: [usize; 2] = [3, 9];
+/// Inside corners of the suite's tuning part.
+const INSIDE: [usize; 2] = [2, 6];
+
+const EVERY_REQUEST: [RequestedJoint; 5] = [
+    RequestedJoint::Auto,
+    RequestedJoint::Type(JointType::TFillet),
+    RequestedJoint::Type(JointType::VButt),
+    RequestedJoint::Type(JointType::IButt),
+    RequestedJoint::Type(JointType::Lap),
+];
+
+fn request(joint: RequestedJoint, pose: RobotPose) -> PlanRequest {
+    let depth = (joint == RequestedJoint::Type(JointType::VButt)).then_some(5.0);
+    PlanRequest::new(joint, depth, pose)
+}
 
 #[test]
-fn a_corner_is_refused_by_name_under_every_request() {
+fn an_outside_corner_is_refused_by_name_under_every_request() {
     let suite = corner_suite();
     let planner = Planner::new(Config::default());
-    let requests = [
-        RequestedJoint::Auto,
-        RequestedJoint::Type(JointType::TFillet),
-        RequestedJoint::Type(JointType::VButt),
-        RequestedJoint::Type(JointType::IButt),
-        RequestedJoint::Type(JointType::Lap),
-    ];
-    for k in CORNERS {
+    for k in OUTSIDE {
         let (name, spec) = &suite[k];
+        assert!(name.starts_with("corner-outside"), "{name}");
         let sim = simulate(spec, &CameraModel::default());
-        let kind = if name.starts_with("corner-inside") { "inside corner" } else { "outside corner" };
-        for joint in requests {
-            let depth = (joint == RequestedJoint::Type(JointType::VButt)).then_some(5.0);
+        for joint in EVERY_REQUEST {
             let refused = planner
-                .plan(&sim.cloud, &PlanRequest::new(joint, depth, sim.pose))
+                .plan(&sim.cloud, &request(joint, sim.pose))
                 .map(|plan| plan.seams.len())
-                .expect_err(&format!("{name} as {joint}: a corner is never planned"));
+                .expect_err(&format!("{name} as {joint}: an outside corner is never planned"));
             assert_eq!(refused.gate, Some(Gate::CornerJoint), "{name} as {joint}: {refused}");
             assert_eq!(refused.stage, Stage::Background, "{name} as {joint}");
             let reason = refused.to_string();
-            assert!(names_a_corner(&reason) && reason.contains(kind), "{name} as {joint}: {reason}");
+            assert!(names_a_corner(&reason) && reason.contains("outside corner"), "{name} as {joint}: {reason}");
+            assert!(reason.contains("is not planned"), "{name} as {joint}: {reason}");
+        }
+    }
+}
+
+#[test]
+fn an_inside_corner_s_root_is_planned_as_a_fillet_and_refused_as_a_butt_or_lap() {
+    let suite = corner_suite();
+    let planner = Planner::new(Config::default());
+    for k in INSIDE {
+        let (name, spec) = &suite[k];
+        assert!(name.starts_with("corner-inside"), "{name}");
+        let sim = simulate(spec, &CameraModel::default());
+        let roots: Vec<TrueSeam> = sim.seams.iter().map(|s| TrueSeam::of(spec, s)).collect();
+        for joint in EVERY_REQUEST {
+            let planned = planner.plan(&sim.cloud, &request(joint, sim.pose));
+            if matches!(joint, RequestedJoint::Auto | RequestedJoint::Type(JointType::TFillet)) {
+                let plan = planned.unwrap_or_else(|e| panic!("{name} as {joint}: {e}"));
+                assert_eq!(plan.seams.len(), 1, "{name} as {joint}");
+                let seam = &plan.seams[0];
+                assert_eq!(seam.joint, JointType::TFillet, "{name} as {joint}");
+                assert!(
+                    seam.joint_evidence.as_deref().is_some_and(|e| e.contains("inside corner")),
+                    "{name} as {joint}: {:?}",
+                    seam.joint_evidence
+                );
+                let path: Vec<Vec3> = seam.waypoints.iter().map(|w| w.position).collect();
+                let verdict = classify_tee(&roots, Ok(std::slice::from_ref(&path)));
+                assert_eq!(verdict, Verdict::WithinBar, "{name} as {joint}");
+                // A corner has a flange on one side only: there is no
+                // second root to name.
+                assert!(
+                    plan.unplanned.iter().all(|u| u.joint != Some(JointType::TFillet)),
+                    "{name}: {:?}",
+                    plan.unplanned
+                );
+            } else {
+                let refused = planned.map(|plan| plan.seams.len()).expect_err(&format!("{name} as {joint}"));
+                assert_eq!(refused.gate, Some(Gate::CornerJoint), "{name} as {joint}: {refused}");
+                let reason = refused.to_string();
+                assert!(reason.contains("inside corner") && reason.contains("t_fillet"), "{name} as {joint}: {reason}");
+            }
         }
     }
 }

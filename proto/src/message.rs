@@ -473,7 +473,8 @@ pub enum ErrorCode {
     GrooveDepth,
     /// 69: refused: `auto` was asked for and the joint type cannot be told.
     JointUnknown,
-    /// 70: refused: the plates are a corner joint's, which is not planned.
+    /// 70: refused: the plates are a corner joint's that the request does
+    /// not plan (an outside corner, or an inside one asked as a butt or lap).
     CornerJoint,
     /// Any other number, from a newer peer.
     Other(u16),

@@ -149,9 +149,10 @@ pub enum BackgroundError {
     )]
     OneSidedWeb { top_mm2: f64, width_mm: f64, height_mm: f64, beside_mm2: f64 },
     /// A plate stands at the end of the flange, with nothing at the
-    /// flange's level beyond it and the table far below: a corner joint,
-    /// which no joint type plans, whatever was requested.
-    #[error("this looks like a corner joint ({kind} corner): {what}; corner joints are not planned")]
+    /// flange's level beyond it and the table far below: a corner joint.
+    /// An outside corner is refused under every request, an inside one
+    /// under any request but `t_fillet` or `auto` (which plan its root).
+    #[error("this looks like a corner joint ({kind} corner): {what}; {}", kind.advice())]
     LooksLikeCorner { kind: CornerKind, what: String },
     /// The joint type was left to the planner, and the layers fit neither
     /// layout.
@@ -168,6 +169,18 @@ pub enum CornerKind {
     /// A web beside the flange's end, its top flush with the flange's top
     /// or a little proud of it (the L seen from outside).
     Outside,
+}
+
+impl CornerKind {
+    /// What is planned of such a corner, for its refusal.
+    pub fn advice(self) -> &'static str {
+        match self {
+            CornerKind::Inside => {
+                "its fillet root is planned as a tee's (request t_fillet or auto), not as a butt joint or a lap"
+            }
+            CornerKind::Outside => "an outside corner's weld is not planned",
+        }
+    }
 }
 
 impl std::fmt::Display for CornerKind {
@@ -257,8 +270,9 @@ const CORNER_WEB_WIDTH_MAX_MM: f64 = 16.0;
 /// the cloud's returns lie far below, deeper than the flange by more than
 /// a lap step (the table past the web's outer face), none at the flange's
 /// or the top's level. `points` is the frame the clusters index.
-pub fn find_corner(planes: &[PlaneCluster], s: &Selection, points: &[Point]) -> Option<BackgroundError> {
+pub fn find_corner(planes: &[PlaneCluster], s: &Selection, points: &[Point]) -> Option<Corner> {
     let cos_tilt = s.max_tilt_deg.to_radians().cos();
+    let planes_all = planes;
     let planes: Vec<&PlaneCluster> = planes.iter().filter(|c| c.plane.normal.dot(&s.normal) >= cos_tilt).collect();
     let offset = |c: &PlaneCluster| s.normal.dot(&c.centroid);
     for top in &planes {
@@ -289,11 +303,30 @@ pub fn find_corner(planes: &[PlaneCluster], s: &Selection, points: &[Point]) -> 
                         top.width_mm()
                     ),
                 };
-                return Some(BackgroundError::LooksLikeCorner { kind, what });
+                let index = |c: &PlaneCluster| planes_all.iter().position(|p| std::ptr::eq(p, c)).unwrap_or(0);
+                return Some(Corner { kind, what, standing: index(top), flange: index(flange) });
             }
         }
     }
     None
+}
+
+/// A corner joint seen: its kind, what was seen in words, and the plane
+/// clusters (indices into those searched) of the standing plate's top and
+/// of the flange.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Corner {
+    pub kind: CornerKind,
+    pub what: String,
+    pub standing: usize,
+    pub flange: usize,
+}
+
+impl Corner {
+    /// The refusal naming the corner.
+    pub fn refusal(&self) -> BackgroundError {
+        BackgroundError::LooksLikeCorner { kind: self.kind, what: self.what.clone() }
+    }
 }
 
 /// How far below `top` the returns beyond its far edge (from `flange`) lie,
@@ -837,10 +870,7 @@ mod tests {
 
     fn corner_kind(top_z: f64, beyond_z: Option<f64>) -> Option<CornerKind> {
         let (planes, points) = corner_frame(top_z, beyond_z);
-        match find_corner(&planes, &auto(), &points) {
-            Some(BackgroundError::LooksLikeCorner { kind, .. }) => Some(kind),
-            _ => None,
-        }
+        find_corner(&planes, &auto(), &points).map(|corner| corner.kind)
     }
 
     #[test]
@@ -848,13 +878,20 @@ mod tests {
         assert_eq!(corner_kind(760.0, Some(830.0)), Some(CornerKind::Outside));
         assert_eq!(corner_kind(757.0, Some(830.0)), Some(CornerKind::Outside));
         let (planes, points) = corner_frame(760.0, Some(830.0));
-        let reason = find_corner(&planes, &auto(), &points).unwrap().to_string();
+        let corner = find_corner(&planes, &auto(), &points).unwrap();
+        let reason = corner.refusal().to_string();
         assert!(reason.contains("corner joint") && reason.contains("8 mm thick"), "{reason}");
+        assert!(reason.contains("outside corner's weld is not planned"), "{reason}");
+        // The clusters named are the plate's edge and the flange.
+        assert_eq!((corner.standing, corner.flange), (0, 1));
     }
 
     #[test]
     fn a_web_a_web_height_over_a_flange_with_a_drop_beyond_is_an_inside_corner() {
         assert_eq!(corner_kind(700.0, Some(860.0)), Some(CornerKind::Inside));
+        let (planes, points) = corner_frame(700.0, Some(860.0));
+        let reason = find_corner(&planes, &auto(), &points).unwrap().refusal().to_string();
+        assert!(reason.contains("request t_fillet or auto"), "{reason}");
     }
 
     #[test]

@@ -127,7 +127,7 @@ const MAX_STATIONS: usize = 20_000;
 
 /// A tee as the background stage found it, and what the stage needs to
 /// read its roots from the cloud.
-#[derive(Debug, Clone, Copy)]
+#[derive(Clone, Copy)]
 pub struct TeeView<'a> {
     pub cloud: &'a PointCloud,
     /// The web's top.
@@ -147,6 +147,14 @@ pub struct TeeView<'a> {
     /// camera's origin for a sensor without one): a flange it does not
     /// light ends in the web's shadow, not at the root.
     pub projector: Vec3,
+    /// Whether a point projects inside the image, when the frame is the
+    /// configured camera's grid: a web's top cut by the image's border
+    /// does not end its root there.
+    pub in_view: Option<&'a dyn Fn(&Vec3) -> bool>,
+    /// How far the flange's edge may run on past where the web's top is
+    /// seen, mm, when nothing tells whether the image cut the top there
+    /// (`quality.max_joint_beyond_seam_mm`): further, the root is refused.
+    pub max_beyond_mm: f64,
 }
 
 /// Which side of the web a root lies on, as the camera sees it.
@@ -263,6 +271,9 @@ pub struct RootNotSeen {
     pub side: Side,
     pub sign: f64,
     pub reason: String,
+    /// Whether any of the flange lies on this side of the web (none does
+    /// beside an inside corner's outer face).
+    pub flange_seen: bool,
     /// Where the root would lie, roughly: at the web's foot on that side.
     pub near_camera: Vec3,
 }
@@ -302,7 +313,13 @@ pub fn find_roots(view: &TeeView) -> [Result<Root, RootNotSeen>; 2] {
         let why = "the flange's plane and the web's top give no frame to read the roots in".to_string();
         let near = view.web_top.centroid;
         return [-1.0, 1.0].map(|sign| {
-            Err(RootNotSeen { side: Side::Above, sign, reason: format!("no root is seen: {why}"), near_camera: near })
+            Err(RootNotSeen {
+                side: Side::Above,
+                sign,
+                reason: format!("no root is seen: {why}"),
+                near_camera: near,
+                flange_seen: true,
+            })
         });
     };
     [-1.0, 1.0].map(|sign| find_root(view, &frame, sign))
@@ -373,14 +390,16 @@ fn find_root(view: &TeeView, frame: &WebFrame, sign: f64) -> Result<Root, RootNo
     // The web's foot on this side, where its root would lie.
     let foot_at =
         frame.origin + frame.u * (frame.middle + sign * (frame.half_width + view.rim_mm)) + frame.n * frame.height;
+    // The flange on this side of the web.
+    let flange_seen = view.flange_pieces.iter().any(|c| sign * (frame.across(&c.centroid) - frame.middle) > 0.0);
     let not_seen = |why: String| RootNotSeen {
         side,
         sign,
         reason: format!("{} is not planned: {why}", side.root_name(sign)),
         near_camera: foot_at,
+        flange_seen,
     };
-    // The flange on this side of the web.
-    if !view.flange_pieces.iter().any(|c| sign * (frame.across(&c.centroid) - frame.middle) > 0.0) {
+    if !flange_seen {
         return Err(not_seen("the flange on this side is not seen (hidden by the web)".into()));
     }
     match root_from_face(view, frame, sign, side) {
@@ -644,6 +663,41 @@ fn root_from_flange_edge(view: &TeeView, frame: &WebFrame, sign: f64, side: Side
     // be seen above enough of the root to be judged by the coverage gate.
     let run = seen_run(&edge, &edge, spacing)
         .ok_or_else(|| "the flange's edge is not seen along the web anywhere".to_string())?;
+    // Only where the web stands: past the web's end the flange's edge runs
+    // on nearly straight (the web's end hides the flange behind it a little
+    // more at each step), so the root ends where the web's top does, unless
+    // the image's border cut the top there (the top, nearer the camera,
+    // leaves the image before the root does); with no grid to tell, it
+    // ends there too.
+    // The top's extent from every point at its edge's line, like the
+    // flange's evidence above (a station's outermost point would round it).
+    let top_on_line: HashSet<usize> = top_line.kept.iter().map(|s| stations.index(s.t)).collect();
+    let (top_lo, top_hi) = top
+        .iter()
+        .filter(|s| {
+            (s.off - top_line.at(s.t)).abs() <= tolerance(top_line.rms_mm) && top_on_line.contains(&stations.index(s.t))
+        })
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), s| (lo.min(s.t), hi.max(s.t)));
+    let top_at = |t: f64| frame.origin + e * t + frame.u * (frame.middle + sign * top_line.at(t));
+    let step = STATION_SPACINGS * spacing / stretch;
+    let cut_by_border = |t: f64| view.in_view.is_some_and(|in_view| !in_view(&top_at(t)));
+    let s0 = if cut_by_border(top_lo - step) { run.s0 } else { run.s0.max(along(top_lo)) };
+    let s1 = if cut_by_border(top_hi + step) { run.s1 } else { run.s1.min(along(top_hi)) };
+    if view.in_view.is_none() {
+        let past = (s0 - run.s0).max(run.s1 - s1);
+        if past > view.max_beyond_mm {
+            return Err(format!(
+                "the flange's edge runs on {past:.1} mm past where the web's top is seen, more than {:.1} mm \
+                 (quality.max_joint_beyond_seam_mm): the web may end there, or the image cut its top (the cloud \
+                 is not the configured camera's grid, which would tell)",
+                view.max_beyond_mm
+            ));
+        }
+    }
+    if s1 <= s0 {
+        return Err("the flange's edge is not seen where the web's top is".to_string());
+    }
+    let run = SeenRun { s0, s1, share: ((s1 - s0) / run.seen_mm).min(1.0), ..run };
     let coverage = [covered_share(&kept_top, run.s0, run.s1, spacing), run.coverage[1]];
     let web_angle_deg = frame.height.atan2(lean).to_degrees();
 
@@ -1032,6 +1086,8 @@ mod tests {
             on_plane_mm: 0.4,
             trim_sigma: 3.0,
             projector: Vec3::new(150.0, 0.0, 0.0),
+            in_view: None,
+            max_beyond_mm: 2.0,
         };
         find_roots(&view)
     }

@@ -216,7 +216,8 @@ pub enum Gate {
     /// `auto` was asked for and the geometry does not say which joint it is.
     JointUnknown,
     /// The plates are a corner joint's (a plate standing at the flange's
-    /// end), which no joint type plans.
+    /// end): an outside corner, or an inside one under a butt or lap
+    /// request.
     CornerJoint,
 }
 

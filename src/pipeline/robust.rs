@@ -22,9 +22,9 @@
 
 use crate::config::Method;
 use crate::geometry::Vec3;
-use crate::joint::JointType;
+use crate::joint::{JointType, RequestedJoint};
 
-use super::background::{Layout, PlaneCluster};
+use super::background::{CornerKind, Layout, PlaneCluster};
 use super::boundary::{self, Boundary, BoundaryParams, CoarseEdge};
 use super::context::{self, Context, EdgeFigures, MIN_CLUSTER_POINTS, PlannedWeld};
 use super::edge_points::{EdgeCriterion, FullCount};
@@ -200,10 +200,26 @@ fn plan_workpiece(
         web_thickness_max_mm: cfg.tee_web_thickness_max_mm,
         max_tilt_deg: cfg.plane_max_normal_angle_deg,
     };
-    // A corner joint is refused by name under every request: no joint
-    // type plans one, and its plates pass for a butt pair, a lap or a tee.
+    // A corner joint's plates pass for a butt pair, a lap or a tee. An
+    // inside corner's fillet root is a tee's root with the flange on one
+    // side: planned as one under `t_fillet` or `auto`. Any other corner,
+    // or another request, is refused by name.
     if let Some(corner) = background::find_corner(&planes, &selection, ctx.cloud.points()) {
-        return Err(PlanError { gate: Some(quality::Gate::CornerJoint), ..PlanError::at(Stage::Background, corner) });
+        let fillet = matches!(ctx.request.joint, RequestedJoint::Auto | RequestedJoint::Type(JointType::TFillet));
+        if corner.kind == CornerKind::Inside && fillet {
+            tracing::debug!("{}", corner.what);
+            let (standing, flange) = (planes[corner.standing].clone(), planes[corner.flange].clone());
+            let workpiece = background::Workpiece {
+                plates: [standing, flange],
+                depth_to_support_mm: None,
+                layer_mates: [Vec::new(), Vec::new()],
+            };
+            ctx.clock.lap(Stage::Background);
+            let layers = format!("an inside corner: {}", corner.what);
+            return tee::plan(ctx, workpiece, layers, tee::Flange::OneSide);
+        }
+        let refusal = corner.refusal();
+        return Err(PlanError { gate: Some(quality::Gate::CornerJoint), ..PlanError::at(Stage::Background, refusal) });
     }
     let background::Selected { workpiece, layout, evidence: layers } = background::robust_select(planes, &selection)
         .map_err(|e| {
@@ -241,7 +257,7 @@ fn plan_workpiece(
             plan_plates(ctx, front, labels, workpiece, layout, layers).map(|weld| (vec![weld], Vec::new()))
         }
         // A web on its flange: its fillet roots, not two plates' edges.
-        Layout::Tee => tee::plan(ctx, workpiece, layers),
+        Layout::Tee => tee::plan(ctx, workpiece, layers, tee::Flange::BothSides),
     }
 }
 

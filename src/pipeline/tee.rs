@@ -26,6 +26,14 @@ use super::fillet::{self, Root, RootEvidence, TeeView};
 use super::trace::TracedWeld;
 use super::{PlanError, SeamAssessment, SeamCoverage, Stage, Unplanned, boundary, quality, trajectory};
 
+/// Where the flange lies: either side of the web (a tee), or on one side
+/// only (an inside corner, the web standing at the flange's end).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum Flange {
+    BothSides,
+    OneSide,
+}
+
 /// Plans the seen roots of the tee in `workpiece` (the web's top and the
 /// largest flange piece, the flange's other pieces its layer mates) as
 /// welds, and names the roots not planned; `layers` says in words what the
@@ -34,6 +42,7 @@ pub(super) fn plan(
     ctx: &mut Context,
     workpiece: Workpiece,
     layers: String,
+    flange_sides: Flange,
 ) -> Result<(Vec<PlannedWeld>, Vec<Unplanned>), PlanError> {
     let config = ctx.config;
     let cfg = &config.pipeline;
@@ -42,6 +51,8 @@ pub(super) fn plan(
     let [web_top, flange] = &workpiece.plates;
     let pieces: Vec<&PlaneCluster> = std::iter::once(flange).chain(&workpiece.layer_mates[1]).collect();
     let spacing = ctx.spacing_at(&web_top.centroid);
+    let grid = ctx.camera_grid();
+    let in_view = |p: &Vec3| grid.as_ref().is_some_and(|g| g.in_view(p));
     let view = TeeView {
         cloud: ctx.cloud,
         web_top,
@@ -51,8 +62,14 @@ pub(super) fn plan(
         on_plane_mm: cfg.on_plane_tolerance_mm,
         trim_sigma: cfg.fit_trim_sigma,
         projector: Vec3::new(config.camera.baseline_mm, 0.0, 0.0),
+        in_view: grid.is_some().then_some(&in_view as &dyn Fn(&Vec3) -> bool),
+        max_beyond_mm: config.quality.max_joint_beyond_seam_mm,
     };
-    let roots = fillet::find_roots(&view);
+    let mut roots = Vec::from(fillet::find_roots(&view));
+    if flange_sides == Flange::OneSide {
+        // An inside corner: the side with no flange has no root at all.
+        roots.retain(|root| root.as_ref().map_or_else(|not| not.flange_seen, |_| true));
+    }
     for root in &roots {
         match root {
             Ok(r) => tracing::debug!(

@@ -46,7 +46,6 @@ use crate::geometry::{Vec3, vec3};
 use crate::joint::JointType;
 
 use super::context::CameraGrid;
-use super::neighbours::cells::CellIndex;
 use super::refit::SeamCurve;
 
 /// A face between these angles from the plate normal is a bevel: V-groove
@@ -638,28 +637,54 @@ fn station_share(points: &[Across]) -> f64 {
 }
 
 /// The points with at least [`MIN_SURFACE_NEIGHBOURS`] others within
-/// `radius` (in s, t, h), through the cell index the unorganized clouds'
-/// neighbour searches use: a query stops as soon as it has enough.
+/// `radius` (in s, t, h).
+///
+/// Sorted along the seam, a point's neighbours are among the points whose
+/// `s` lies within the radius of its own: a slab across the groove one
+/// diameter thick. The slab is read outward from the point, nearest in `s`
+/// first, and the reading stops once enough neighbours are found. A
+/// groove's steep faces crowd a slab's points into a narrow band across
+/// the seam, so ordering them across it as well saves little; building a
+/// cell index over the same points cost twice this
+/// ([`tests::on_surfaces_by_cells`], the reference this is checked
+/// against).
 fn on_surfaces(points: Vec<Across>, radius: f64) -> Vec<Across> {
-    use std::ops::ControlFlow;
     // Single precision: the coordinates are millimetres from the seam's
     // middle, so a hundredth of a micrometre at worst.
-    let coords: Vec<Point> = points.iter().map(|p| [p.s, p.t, p.h].map(|v| v as f32)).collect();
-    let index = CellIndex::for_radius(&coords, radius);
+    let mut sorted: Vec<(Point, u32)> =
+        points.iter().enumerate().map(|(i, p)| ([p.s, p.t, p.h].map(|v| v as f32), i as u32)).collect();
+    sorted.par_sort_unstable_by(|a, b| a.0[0].total_cmp(&b.0[0]));
     let radius_sq = (radius * radius) as f32;
-    let keep: Vec<bool> = coords
-        .par_iter()
-        .enumerate()
-        .map(|(i, p)| {
-            // The point itself is among them.
+    let keep_sorted: Vec<bool> = (0..sorted.len())
+        .into_par_iter()
+        .map(|k| {
+            let p = &sorted[k].0;
+            // A point this far along the seam alone is out of reach, and so
+            // is every point past it: the squared distance only grows with
+            // the other two terms, as it does in `within`.
+            let in_slab = |q: &&Point| (p[0] - q[0]) * (p[0] - q[0]) <= radius_sq;
+            // The next point to read below and above the point's place.
+            let (mut below, mut above) = (k, k + 1);
             let mut found = 0;
-            index.visit_within(i, p, radius_sq, radius_sq * (1.0 + 1e-5), |_| {
-                found += 1;
-                if found > MIN_SURFACE_NEIGHBOURS { ControlFlow::Break(()) } else { ControlFlow::Continue(()) }
-            });
-            found > MIN_SURFACE_NEIGHBOURS
+            loop {
+                let down = below.checked_sub(1).map(|j| &sorted[j].0).filter(in_slab);
+                let up = sorted.get(above).map(|(q, _)| q).filter(in_slab);
+                if down.is_none() && up.is_none() {
+                    return false;
+                }
+                found += down.into_iter().chain(up).filter(|q| crate::kernels::within(p, q, radius_sq)).count();
+                if found >= MIN_SURFACE_NEIGHBOURS {
+                    return true;
+                }
+                below -= usize::from(down.is_some());
+                above += usize::from(up.is_some());
+            }
         })
         .collect();
+    let mut keep = vec![false; points.len()];
+    for ((_, i), k) in sorted.iter().zip(keep_sorted) {
+        keep[*i as usize] = k;
+    }
     points.into_iter().zip(keep).filter_map(|(p, k)| k.then_some(p)).collect()
 }
 
@@ -699,8 +724,8 @@ fn fit_face(
         .enumerate()
         .filter(|(_, ts)| ts.len() >= 3)
         .map(|(k, ts)| {
-            ts.sort_by(f64::total_cmp);
-            (top_margin + (k as f64 + 0.5) * spacing, ts[ts.len() / 2])
+            let middle = ts.len() / 2;
+            (top_margin + (k as f64 + 0.5) * spacing, *ts.select_nth_unstable_by(middle, f64::total_cmp).1)
         })
         .collect();
     // Below a bevel with a root gap the root face stands along the
@@ -880,6 +905,61 @@ mod tests {
             }
         }
         PointCloud::unorganized(points)
+    }
+
+    /// The reference of [`on_surfaces`]: every point's neighbours counted
+    /// through the cell index the unorganized clouds' neighbour searches
+    /// use (a query stops as soon as it has enough).
+    pub(super) fn on_surfaces_by_cells(points: Vec<Across>, radius: f64) -> Vec<Across> {
+        use crate::pipeline::neighbours::cells::CellIndex;
+        use std::ops::ControlFlow;
+        let coords: Vec<Point> = points.iter().map(|p| [p.s, p.t, p.h].map(|v| v as f32)).collect();
+        let index = CellIndex::for_radius(&coords, radius);
+        let radius_sq = (radius * radius) as f32;
+        let keep: Vec<bool> = coords
+            .iter()
+            .enumerate()
+            .map(|(i, p)| {
+                // The point itself is among them.
+                let mut found = 0;
+                index.visit_within(i, p, radius_sq, radius_sq * (1.0 + 1e-5), |_| {
+                    found += 1;
+                    if found > MIN_SURFACE_NEIGHBOURS { ControlFlow::Break(()) } else { ControlFlow::Continue(()) }
+                });
+                found > MIN_SURFACE_NEIGHBOURS
+            })
+            .collect();
+        points.into_iter().zip(keep).filter_map(|(p, k)| k.then_some(p)).collect()
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(64))]
+
+        /// The slab reading keeps exactly the points the cell index keeps:
+        /// points on a lattice, dense or sparse, whose spacing puts many
+        /// neighbours exactly at the radius (and repeats some), and strays
+        /// among them, near the seam's middle and far along it.
+        #[test]
+        fn the_surface_filter_keeps_what_the_cell_index_keeps(
+            lattice in proptest::collection::vec((-10i32..10, -5i32..5, 0i32..4), 0..600),
+            strays in proptest::collection::vec((-10.0f64..10.0, -5.0f64..5.0, 0.0f64..4.0), 0..100),
+            step in proptest::sample::select(vec![0.25f64, 0.5, 1.0]),
+            radius_steps in proptest::sample::select(vec![1.0f64, 1.5, 2.0]),
+            along in proptest::sample::select(vec![0.0f64, -187.3, 291.9]),
+        ) {
+            let points: Vec<Across> = lattice
+                .iter()
+                .map(|&(s, t, h)| (s as f64 * step, t as f64 * step, h as f64 * step))
+                .chain(strays.iter().map(|&(s, t, h)| (s * step, t * step, h * step)))
+                .map(|(s, t, h)| Across { s: s + along, station: 0, t, h })
+                .collect();
+            let radius = radius_steps * step;
+            let key = |v: Vec<Across>| v.iter().map(|p| (p.s.to_bits(), p.t.to_bits(), p.h.to_bits())).collect::<Vec<_>>();
+            proptest::prop_assert_eq!(
+                key(on_surfaces(points.clone(), radius)),
+                key(on_surfaces_by_cells(points, radius))
+            );
+        }
     }
 
     fn probed(cloud: &PointCloud, half_opening: f64) -> GrooveProfile {

@@ -95,6 +95,10 @@ const FOOT_BAND_SPACINGS: f64 = 10.0;
 /// spacings outward of the root line.
 const FLANGE_REACH_SPACINGS: f64 = 6.0;
 
+/// How many of a flange piece's points are read to fit the flange's
+/// plane and to tell which sides of the web it lies on.
+const FLANGE_SAMPLES: usize = 20_000;
+
 /// The length of a station along the root, in point spacings.
 const STATION_SPACINGS: f64 = 4.0;
 
@@ -340,7 +344,7 @@ fn web_frame(view: &TeeView) -> Option<WebFrame> {
         .flange_pieces
         .iter()
         .flat_map(|c| {
-            let stride = (c.members.len() / 20_000).max(1);
+            let stride = (c.members.len() / FLANGE_SAMPLES).max(1);
             c.members.iter().step_by(stride).map(member)
         })
         .collect();
@@ -390,8 +394,18 @@ fn find_root(view: &TeeView, frame: &WebFrame, sign: f64) -> Result<Root, RootNo
     // The web's foot on this side, where its root would lie.
     let foot_at =
         frame.origin + frame.u * (frame.middle + sign * (frame.half_width + view.rim_mm)) + frame.n * frame.height;
-    // The flange on this side of the web.
-    let flange_seen = view.flange_pieces.iter().any(|c| sign * (frame.across(&c.centroid) - frame.middle) > 0.0);
+    // The flange on this side of the web: its points, not its pieces'
+    // centroids. A web shorter than its flange has one flange piece round
+    // its end, seen on both sides, its centroid on one.
+    let points = view.cloud.points();
+    let flange_seen = view
+        .flange_pieces
+        .iter()
+        .flat_map(|c| c.members.iter().step_by((c.members.len() / FLANGE_SAMPLES).max(1)))
+        .filter(|&&i| sign * (frame.across(&vec3(&points[i as usize])) - frame.middle) > frame.half_width + view.rim_mm)
+        .take(MIN_FACE_POINTS)
+        .count()
+        >= MIN_FACE_POINTS;
     let not_seen = |why: String| RootNotSeen {
         side,
         sign,
@@ -1050,6 +1064,49 @@ mod tests {
         assert!(hidden.reason.contains("far side") && hidden.reason.contains("hidden by the web"), "{}", hidden.reason);
     }
 
+    #[test]
+    fn a_flange_in_one_piece_round_the_webs_end_is_seen_on_both_sides() {
+        // The web of the test above, its +x face seen; the flange one plane
+        // on both sides, joined beyond the web's end (y from 50 to 60), far
+        // wider on the -x side, so the piece's centroid lies there. The +x
+        // root is still read: the flange's points lie on that side too.
+        let mut pts = face_points(0.0);
+        for i in 0..100 {
+            let y = -50.0 + i as f64;
+            for j in 0..=8 {
+                pts.push(Vec3::new(WEB_X - 4.0 + j as f64, y, 660.0));
+            }
+            for j in 0..30 {
+                pts.push(Vec3::new(WEB_X + 5.0 + 0.5 * j as f64, y, 700.0));
+            }
+            for j in 0..120 {
+                pts.push(Vec3::new(WEB_X - 30.0 - j as f64, y, 700.0));
+            }
+        }
+        for i in 0..10 {
+            for j in 0..170 {
+                pts.push(Vec3::new(WEB_X + 20.0 - j as f64, 50.0 + i as f64, 700.0));
+            }
+        }
+        let flange = |p: &Vec3| p.z == 700.0;
+        let on_flange: Vec<&Vec3> = pts.iter().filter(|p| flange(p)).collect();
+        let mean_x = on_flange.iter().map(|p| p.x).sum::<f64>() / on_flange.len() as f64;
+        assert!(mean_x < WEB_X - 4.0, "the piece's centroid lies on the -x side: {mean_x}");
+        let roots = roots_with_flange_pieces(&pts, &[&flange]);
+        let seen: Vec<&Root> = roots.iter().filter_map(|r| r.as_ref().ok()).collect();
+        assert_eq!(seen.len(), 1, "{roots:?}");
+        let root = seen[0];
+        assert_eq!(root.side, Side::Near);
+        assert!((root.line.at(root.line.s_min).x - WEB_X - 5.0).abs() < 1e-6);
+        let ends = [root.line.at(root.line.s_min).y, root.line.at(root.line.s_max).y];
+        assert!((ends[0] + 50.0).abs() < 1e-6 && (ends[1] - 49.0).abs() < 1e-6, "{ends:?}");
+        // The -x side shows no face, and its flange stops short of the web:
+        // not planned, and not for want of a flange on that side.
+        let hidden = roots.iter().find_map(|r| r.as_ref().err()).unwrap();
+        assert_eq!(hidden.side, Side::Far);
+        assert!(hidden.flange_seen, "{}", hidden.reason);
+    }
+
     /// The roots [`find_roots`] reads from `pts`: the web's top the points
     /// at z = 660, the flange's pieces those at z = 700 either side of
     /// x = WEB_X, a point spacing of 1 mm.
@@ -1058,6 +1115,16 @@ mod tests {
     }
 
     fn roots_of_web_at(pts: &[Vec3], web_x: f64) -> [Result<Root, RootNotSeen>; 2] {
+        roots_with_flange_pieces(
+            pts,
+            &[&|p: &Vec3| p.z == 700.0 && p.x > web_x, &|p: &Vec3| p.z == 700.0 && p.x < web_x],
+        )
+    }
+
+    /// The roots [`find_roots`] reads from `pts` with the web's top the
+    /// points at z = 660 and a flange piece of the points each of `pieces`
+    /// picks.
+    fn roots_with_flange_pieces(pts: &[Vec3], pieces: &[&dyn Fn(&Vec3) -> bool]) -> [Result<Root, RootNotSeen>; 2] {
         let cloud = PointCloud::unorganized(pts.iter().map(|p| [p.x as f32, p.y as f32, p.z as f32]).collect());
         let cluster = |pred: &dyn Fn(&Vec3) -> bool| {
             let members: Vec<u32> = (0..pts.len() as u32).filter(|&i| pred(&pts[i as usize])).collect();
@@ -1074,9 +1141,8 @@ mod tests {
             }
         };
         let top = cluster(&|p| p.z == 660.0);
-        let plus = cluster(&|p| p.z == 700.0 && p.x > web_x);
-        let minus = cluster(&|p| p.z == 700.0 && p.x < web_x);
-        let pieces = [&plus, &minus];
+        let clusters: Vec<PlaneCluster> = pieces.iter().map(|pick| cluster(pick)).collect();
+        let pieces: Vec<&PlaneCluster> = clusters.iter().collect();
         let view = TeeView {
             cloud: &cloud,
             web_top: &top,

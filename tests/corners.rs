@@ -13,7 +13,7 @@ use weldseam::geometry::pose::RobotPose;
 use weldseam::joint::{JointType, RequestedJoint};
 use weldseam::pipeline::quality::Gate;
 use weldseam::pipeline::{PlanRequest, Planner, Stage};
-use weldseam::sim::{corner_suite, simulate};
+use weldseam::sim::{SceneSpec, Simulation, corner_suite, simulate};
 
 /// Outside corners of the suite's tuning part.
 const OUTSIDE: [usize; 2] = [3, 9];
@@ -28,6 +28,18 @@ const EVERY_REQUEST: [RequestedJoint; 5] = [
     RequestedJoint::Type(JointType::Lap),
 ];
 
+/// The suite's scenes at `indices`, each checked to be of `kind`, with its
+/// simulated frame.
+fn corner_scenes(indices: [usize; 2], kind: &str) -> impl Iterator<Item = (String, SceneSpec, Simulation)> {
+    let suite = corner_suite();
+    indices.into_iter().map(move |k| {
+        let (name, spec) = suite[k].clone();
+        assert!(name.starts_with(kind), "{name}");
+        let sim = simulate(&spec, &CameraModel::default());
+        (name, spec, sim)
+    })
+}
+
 fn request(joint: RequestedJoint, pose: RobotPose) -> PlanRequest {
     let depth = (joint == RequestedJoint::Type(JointType::VButt)).then_some(5.0);
     PlanRequest::new(joint, depth, pose)
@@ -35,12 +47,8 @@ fn request(joint: RequestedJoint, pose: RobotPose) -> PlanRequest {
 
 #[test]
 fn an_outside_corner_is_refused_by_name_under_every_request() {
-    let suite = corner_suite();
     let planner = Planner::new(Config::default());
-    for k in OUTSIDE {
-        let (name, spec) = &suite[k];
-        assert!(name.starts_with("corner-outside"), "{name}");
-        let sim = simulate(spec, &CameraModel::default());
+    for (name, _, sim) in corner_scenes(OUTSIDE, "corner-outside") {
         for joint in EVERY_REQUEST {
             let refused = planner
                 .plan(&sim.cloud, &request(joint, sim.pose))
@@ -57,13 +65,9 @@ fn an_outside_corner_is_refused_by_name_under_every_request() {
 
 #[test]
 fn an_inside_corner_s_root_is_planned_as_a_fillet_and_refused_as_a_butt_or_lap() {
-    let suite = corner_suite();
     let planner = Planner::new(Config::default());
-    for k in INSIDE {
-        let (name, spec) = &suite[k];
-        assert!(name.starts_with("corner-inside"), "{name}");
-        let sim = simulate(spec, &CameraModel::default());
-        let roots: Vec<TrueSeam> = sim.seams.iter().map(|s| TrueSeam::of(spec, s)).collect();
+    for (name, spec, sim) in corner_scenes(INSIDE, "corner-inside") {
+        let roots: Vec<TrueSeam> = sim.seams.iter().map(|s| TrueSeam::of(&spec, s)).collect();
         for joint in EVERY_REQUEST {
             let planned = planner.plan(&sim.cloud, &request(joint, sim.pose));
             if matches!(joint, RequestedJoint::Auto | RequestedJoint::Type(JointType::TFillet)) {

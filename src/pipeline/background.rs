@@ -272,21 +272,22 @@ const CORNER_WEB_WIDTH_MAX_MM: f64 = 16.0;
 /// or the top's level. `points` is the frame the clusters index.
 pub fn find_corner(planes: &[PlaneCluster], s: &Selection, points: &[Point]) -> Option<Corner> {
     let cos_tilt = s.max_tilt_deg.to_radians().cos();
-    let planes_all = planes;
-    let planes: Vec<&PlaneCluster> = planes.iter().filter(|c| c.plane.normal.dot(&s.normal) >= cos_tilt).collect();
+    // Each plane facing the camera with its index among those searched.
+    let planes: Vec<(usize, &PlaneCluster)> =
+        planes.iter().enumerate().filter(|(_, c)| c.plane.normal.dot(&s.normal) >= cos_tilt).collect();
     let offset = |c: &PlaneCluster| s.normal.dot(&c.centroid);
-    for top in &planes {
+    for &(top_index, top) in &planes {
         if top.elongation < BAR_ELONGATION || top.width_mm() > s.web_thickness_max_mm.min(CORNER_WEB_WIDTH_MAX_MM) {
             continue;
         }
-        let flanges = planes.iter().filter(|c| {
+        let flanges = planes.iter().filter(|&&(index, c)| {
             let step = offset(c) - offset(top);
-            !std::ptr::eq::<PlaneCluster>(**c, *top)
+            index != top_index
                 && top.area_mm2 <= SIDE_BY_SIDE_AREA_RATIO * c.area_mm2
                 && step >= -s.coplanar_tolerance_mm
                 && step <= s.web_height_max_mm
         });
-        for flange in flanges {
+        for &(flange_index, flange) in flanges {
             let step = offset(flange) - offset(top);
             let kind = if step <= s.lap_step_max_mm { CornerKind::Outside } else { CornerKind::Inside };
             if let Some(drop_mm) = drop_beyond(top, flange, step, s, points) {
@@ -303,8 +304,7 @@ pub fn find_corner(planes: &[PlaneCluster], s: &Selection, points: &[Point]) -> 
                         top.width_mm()
                     ),
                 };
-                let index = |c: &PlaneCluster| planes_all.iter().position(|p| std::ptr::eq(p, c)).unwrap_or(0);
-                return Some(Corner { kind, what, standing: index(top), flange: index(flange) });
+                return Some(Corner { kind, what, standing: top_index, flange: flange_index });
             }
         }
     }

@@ -298,9 +298,16 @@ struct WebFrame {
     middle: f64,
     half_width: f64,
     height: f64,
+    /// Whether the flange lies on the web's −u and +u sides.
+    flange_sides: [bool; 2],
 }
 
 impl WebFrame {
+    /// Whether the flange lies on the web's side `sign`.
+    fn flange_on(&self, sign: f64) -> bool {
+        self.flange_sides[usize::from(sign > 0.0)]
+    }
+
     fn height_of(&self, p: &Vec3) -> f64 {
         self.flange_offset - self.n.dot(p)
     }
@@ -364,15 +371,24 @@ fn web_frame(view: &TeeView) -> Option<WebFrame> {
     let k = across.len() / 100;
     let (lo, hi) = (across[k], across[across.len() - 1 - k]);
     let height = flange.offset - n.dot(&origin);
+    let (middle, half_width) = (0.5 * (lo + hi), 0.5 * (hi - lo));
+    // Which sides of the web the flange lies on, from its points, not its
+    // pieces' centroids: a web shorter than its flange has one flange
+    // piece round its end, seen on both sides, its centroid on one.
+    let flange_on = |sign: f64| {
+        let beyond_rim = |p: &&Vec3| sign * ((*p - origin).dot(&u) - middle) > half_width + view.rim_mm;
+        flange_points.iter().filter(beyond_rim).take(MIN_FACE_POINTS).count() >= MIN_FACE_POINTS
+    };
     (height > 0.0).then_some(WebFrame {
         n,
         e,
         u,
         origin,
         flange_offset: flange.offset,
-        middle: 0.5 * (lo + hi),
-        half_width: 0.5 * (hi - lo),
+        middle,
+        half_width,
         height,
+        flange_sides: [flange_on(-1.0), flange_on(1.0)],
     })
 }
 
@@ -394,18 +410,7 @@ fn find_root(view: &TeeView, frame: &WebFrame, sign: f64) -> Result<Root, RootNo
     // The web's foot on this side, where its root would lie.
     let foot_at =
         frame.origin + frame.u * (frame.middle + sign * (frame.half_width + view.rim_mm)) + frame.n * frame.height;
-    // The flange on this side of the web: its points, not its pieces'
-    // centroids. A web shorter than its flange has one flange piece round
-    // its end, seen on both sides, its centroid on one.
-    let points = view.cloud.points();
-    let flange_seen = view
-        .flange_pieces
-        .iter()
-        .flat_map(|c| c.members.iter().step_by((c.members.len() / FLANGE_SAMPLES).max(1)))
-        .filter(|&&i| sign * (frame.across(&vec3(&points[i as usize])) - frame.middle) > frame.half_width + view.rim_mm)
-        .take(MIN_FACE_POINTS)
-        .count()
-        >= MIN_FACE_POINTS;
+    let flange_seen = frame.flange_on(sign);
     let not_seen = |why: String| RootNotSeen {
         side,
         sign,

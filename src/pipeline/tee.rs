@@ -52,7 +52,7 @@ pub(super) fn plan(
     let pieces: Vec<&PlaneCluster> = std::iter::once(flange).chain(&workpiece.layer_mates[1]).collect();
     let spacing = ctx.spacing_at(&web_top.centroid);
     let grid = ctx.camera_grid();
-    let in_view = |p: &Vec3| grid.as_ref().is_some_and(|g| g.in_view(p));
+    let in_view = grid.as_ref().map(|g| move |p: &Vec3| g.in_view(p));
     let view = TeeView {
         cloud: ctx.cloud,
         web_top,
@@ -62,7 +62,7 @@ pub(super) fn plan(
         on_plane_mm: cfg.on_plane_tolerance_mm,
         trim_sigma: cfg.fit_trim_sigma,
         projector: Vec3::new(config.camera.baseline_mm, 0.0, 0.0),
-        in_view: grid.is_some().then_some(&in_view as &dyn Fn(&Vec3) -> bool),
+        in_view: in_view.as_ref().map(|f| f as &dyn Fn(&Vec3) -> bool),
         max_beyond_mm: config.quality.max_joint_beyond_seam_mm,
     };
     let mut roots = Vec::from(fillet::find_roots(&view));

@@ -72,8 +72,9 @@ pub enum SuiteArg {
     Multi,
     /// 20 corner joints, inside and outside in turn, at 500 to 1000 mm,
     /// tilted up to 30 degrees (`sim::corner_suite`), judged as the tee
-    /// suite is against the corner's one weld: none is planned, so every
-    /// seam returned is a confident wrong one unless it lies on that weld.
+    /// suite is against the corner's one weld: an inside corner's root is
+    /// planned under `t_fillet` or `auto`, an outside corner is refused, and
+    /// a seam returned off that weld is a confident wrong one.
     Corner,
 }
 

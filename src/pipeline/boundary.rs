@@ -201,10 +201,26 @@ pub fn coverage(boundary: &Boundary, along: impl Fn(&BoundarySample) -> f64, s0:
     covered / (s1 - s0)
 }
 
+/// The members within `band_mm` of `edge` on either side, in their order:
+/// all [`sample_boundary`] and [`members_along`] read of a plate. A plate
+/// of a raw frame has about a million members and the band a few
+/// thousand, so the pass over the members is made once and the two read
+/// the band.
+pub fn band_members(cloud: &PointCloud, members: &[u32], edge: &CoarseEdge, band_mm: f64) -> Vec<u32> {
+    use rayon::prelude::*;
+    let points = cloud.points();
+    members
+        .par_iter()
+        .copied()
+        .filter(|&i| (vec3(&points[i as usize]) - edge.point).dot(&edge.outward).abs() <= band_mm)
+        .collect()
+}
+
 /// The plate's members in the band inside `edge` (between the band's
 /// inner side and the coarse edge) that lie farthest back and farthest
 /// forward along it: where the plate is seen beside the weld. `None`
-/// when no member lies there.
+/// when no member lies there. `members` may be all the plate's or only
+/// those [`band_members`] keeps.
 pub fn members_along(cloud: &PointCloud, members: &[u32], edge: &CoarseEdge, band_mm: f64) -> Option<[Vec3; 2]> {
     use rayon::prelude::*;
     let points = cloud.points();
@@ -408,7 +424,8 @@ pub fn rim_trim_radii(min_ratio: f64) -> f64 {
 }
 
 /// Samples the boundary of the plate whose member pixels are `members`
-/// beside `edge`. Organized clouds only.
+/// beside `edge`: all of them, or only those [`band_members`] keeps, which
+/// give the same samples. Organized clouds only.
 pub fn sample_boundary(
     cloud: &PointCloud,
     members: &[u32],
@@ -827,6 +844,28 @@ mod tests {
         let worst = samples.iter().map(|s| offset(&s.position).abs()).fold(0.0, f64::max);
         assert!(mean.abs() < 0.1 * pixel, "mean offset {mean} mm");
         assert!(worst < 0.6 * pixel, "worst offset {worst} mm");
+    }
+
+    #[test]
+    fn the_band_alone_gives_the_plates_samples_and_extremes() {
+        let (cloud, members) = frame(3.1, 2.0);
+        let plane = Plane { normal: Vec3::z(), offset: 700.0 };
+        let direction = Vec3::new(SLOPE, 1.0, 0.0).normalize();
+        let outward = Vec3::new(1.0, -SLOPE, 0.0).normalize();
+        let edge = CoarseEdge { point: Vec3::new(2.0, 0.0, 700.0), direction, outward };
+        let params = BoundaryParams { band_mm: 3.0, on_plane_mm: 0.4 };
+        let near = band_members(&cloud, &members, &edge, params.band_mm);
+        assert!(!near.is_empty() && near.len() < members.len() / 2, "{} of {}", near.len(), members.len());
+        assert!(near.windows(2).all(|w| w[0] < w[1]), "the band keeps the members' order");
+        let all = sample_boundary(&cloud, &members, &plane, &edge, &params);
+        let band = sample_boundary(&cloud, &near, &plane, &edge, &params);
+        assert_eq!(all.samples.len(), band.samples.len());
+        assert!(all.samples.iter().zip(&band.samples).all(|(a, b)| a.position == b.position));
+        assert_eq!(all.line_spacing_mm, band.line_spacing_mm);
+        assert_eq!(
+            members_along(&cloud, &members, &edge, params.band_mm),
+            members_along(&cloud, &near, &edge, params.band_mm)
+        );
     }
 
     #[test]

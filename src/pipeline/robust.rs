@@ -356,9 +356,11 @@ fn plan_plates(
         // Where the plate is seen beside the weld, for the coverage report.
         let along = |members: &[u32]| boundary::members_along(cloud, members, &edge, params.band_mm);
         let mates = workpiece.layer_mates[k].iter().filter_map(|c| along(&c.members)).collect::<Vec<_>>();
-        let seen_beside = (along(&plates[k].members), mates);
+        // Both read only the plate's members near the edge.
+        let near = boundary::band_members(cloud, &plates[k].members, &edge, params.band_mm);
+        let seen_beside = (along(&near), mates);
         if cloud.is_organized() {
-            return (boundary::sample_boundary(cloud, &plates[k].members, plane, &edge, &params), seen_beside);
+            return (boundary::sample_boundary(cloud, &near, plane, &edge, &params), seen_beside);
         }
         // Without a pixel grid: strips a few spacings wide, each ending
         // where its points stop.

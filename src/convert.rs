@@ -243,6 +243,9 @@ pub mod to_proto {
             joint: match request.joint {
                 RequestedJoint::Auto => message::joint_code::AUTO,
                 RequestedJoint::Type(j) => message::PlanRequest::joint_code(joint(j)),
+                RequestedJoint::OneOf(set) => {
+                    message::PlanRequest::joint_set_code(&set.iter().map(joint).collect::<Vec<_>>())
+                }
             },
             groove_depth_mm: request.groove_depth_mm,
             pose: [x, y, z, rx, ry, rz],
@@ -510,7 +513,10 @@ pub mod from_proto {
         let joint = match r.joint_type() {
             Some(joint) => RequestedJoint::Type(self::joint(joint)),
             None if r.is_auto_joint() => RequestedJoint::Auto,
-            None => return Err(RequestError::UnknownJoint(r.joint)),
+            None => r
+                .joint_set()
+                .and_then(|joints| RequestedJoint::one_of(joints.into_iter().map(self::joint).collect()))
+                .ok_or(RequestError::UnknownJoint(r.joint))?,
         };
         let pose = match &r.pose_in {
             Some(p) => pose_convention(p)?.to_robot_pose(&p.values, euler)?,
@@ -585,6 +591,29 @@ mod tests {
         let from_text =
             from_proto::text_plan_request(&line, weldseam_proto::text::Dialect::Kuka, EulerConvention::Zyx).unwrap();
         assert_eq!(from_text.joint, tee.joint);
+
+        // A set of types: SET plus a bit per type's code, on the wire and
+        // as `+`-joined names on the text link.
+        let set: RequestedJoint = "lap+v-butt".parse().unwrap();
+        let set_request = PlanRequest { joint: set, groove_depth_mm: None, ..request.clone() };
+        let set_wire = to_proto::plan_request(10, &set_request, FrameSelect::NextFrame);
+        assert_eq!(set_wire.joint, 0x105);
+        assert_eq!(from_proto::plan_request(&set_wire, EulerConvention::Zyx).unwrap().joint, set);
+        let line =
+            weldseam_proto::text::PlanLine { joint: "v_butt+lap".into(), pose: vec![0.0; 6], groove_depth: None };
+        let from_text =
+            from_proto::text_plan_request(&line, weldseam_proto::text::Dialect::Kuka, EulerConvention::Zyx).unwrap();
+        assert_eq!(from_text.joint, set);
+        // A set of one type is that type's request; a set naming no type,
+        // `auto`'s code or bits beyond the types is an unknown joint.
+        let mut one = set_wire.clone();
+        one.joint = 0x100 | 1 << 4;
+        assert_eq!(from_proto::plan_request(&one, EulerConvention::Zyx).unwrap().joint, JointType::TFillet.into());
+        for code in [0x100, 0x100 | 1 << 3, 0x100 | 1 << 5, 0x300 | 1, 0xff] {
+            one.joint = code;
+            let error = from_proto::plan_request(&one, EulerConvention::Zyx).unwrap_err().to_string();
+            assert!(error.contains(&format!("joint code {code}")), "{code:#x}: {error}");
+        }
 
         let mut unknown = wire.clone();
         unknown.joint = 9;

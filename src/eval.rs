@@ -30,7 +30,7 @@
 use crate::camera::CameraModel;
 use crate::config::{Config, Method};
 use crate::geometry::{Vec3, distance_to_polyline};
-use crate::joint::{JointType, RequestedJoint};
+use crate::joint::{JointSet, JointType, RequestedJoint};
 use crate::pipeline::input::{CloudFrame, Units};
 use crate::pipeline::{Plan, PlanError, PlanRequest, Planner, Seam};
 use crate::sim::variants::Variant;
@@ -158,6 +158,10 @@ pub enum JointAsk {
     /// refused, and on several workpieces only the seams of this type
     /// are to be found.
     Type(JointType),
+    /// These types for every scene, decided among by the planner (a
+    /// fixture's list): as [`JointAsk::Type`], with every type of the set
+    /// to be found and a scene of a type outside it only to be refused.
+    Set(JointSet),
 }
 
 /// The groove depth a V-butt request gives.
@@ -181,14 +185,15 @@ impl EvalRequest {
                 JointType::ALL[(own + k) % JointType::ALL.len()].into()
             }
             JointAsk::Type(joint) => joint.into(),
+            JointAsk::Set(set) => RequestedJoint::one_of(set).unwrap_or(RequestedJoint::Auto),
         }
     }
 
     /// The groove depth requested for `spec`.
     pub fn groove_depth_for(&self, spec: &SceneSpec) -> Option<f64> {
         match (self.groove_depth, self.joint_for(spec)) {
-            (DepthAsk::Measured, _) | (_, RequestedJoint::Auto) => None,
-            _ if matches!(self.joint, JointAsk::Type(_)) => None,
+            (DepthAsk::Measured, _) | (_, RequestedJoint::Auto | RequestedJoint::OneOf(_)) => None,
+            _ if matches!(self.joint, JointAsk::Type(_) | JointAsk::Set(_)) => None,
             (DepthAsk::Given, RequestedJoint::Type(joint)) => spec.groove_depth_requested_as(joint),
         }
     }
@@ -200,6 +205,7 @@ impl EvalRequest {
         match self.joint {
             JointAsk::Wrong(_) => answer.refuse = true,
             JointAsk::Type(joint) if joint != spec.joint.joint_type() => answer.refuse = true,
+            JointAsk::Set(set) if !set.contains(spec.joint.joint_type()) => answer.refuse = true,
             JointAsk::Auto if spec.faults.iter().all(|f| f.kind() == crate::sim::faults::FaultKind::WrongJoint) => {
                 answer.refuse = false;
                 answer.whole_allowed = true;

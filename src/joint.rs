@@ -61,34 +61,108 @@ impl fmt::Display for JointType {
 }
 
 /// The joint name was not one of `v-butt`, `i-butt`, `lap`, `t-fillet`
-/// (or `auto` where a request may leave the type to the planner).
+/// (or `auto`, or a list of types joined by `+`, where a request may leave
+/// the type to the planner).
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
-#[error("unknown joint type {0:?} (expected v-butt, i-butt, lap, t-fillet or auto)")]
+#[error(
+    "unknown joint type {0:?} (expected v-butt, i-butt, lap, t-fillet, auto, or types joined by + such as v-butt+lap)"
+)]
 pub struct UnknownJoint(pub String);
 
-/// The joint a plan request names: one type, or `auto` to have the planner
+/// A set of joint types: the types a fixture holds, of which the planner
+/// decides each workpiece's.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+pub struct JointSet(u8);
+
+impl JointSet {
+    fn bit(joint: JointType) -> u8 {
+        1 << JointType::NAMED.iter().position(|&j| j == joint).unwrap_or_default()
+    }
+
+    /// The set with `joint` added.
+    pub fn with(self, joint: JointType) -> JointSet {
+        JointSet(self.0 | JointSet::bit(joint))
+    }
+
+    pub fn contains(self, joint: JointType) -> bool {
+        self.0 & JointSet::bit(joint) != 0
+    }
+
+    /// The types in the set, in [`JointType::NAMED`]'s order.
+    pub fn iter(self) -> impl Iterator<Item = JointType> {
+        JointType::NAMED.into_iter().filter(move |&j| self.contains(j))
+    }
+
+    pub fn len(self) -> usize {
+        self.0.count_ones() as usize
+    }
+
+    pub fn is_empty(self) -> bool {
+        self.0 == 0
+    }
+}
+
+impl FromIterator<JointType> for JointSet {
+    fn from_iter<I: IntoIterator<Item = JointType>>(joints: I) -> Self {
+        joints.into_iter().fold(JointSet::default(), JointSet::with)
+    }
+}
+
+impl fmt::Display for JointSet {
+    /// The canonical names joined by `+`: `v_butt+lap`.
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let names: Vec<&str> = self.iter().map(JointType::name).collect();
+        f.write_str(&names.join("+"))
+    }
+}
+
+/// The joint a plan request names: one type; `auto`, to have the planner
 /// decide it from the geometry (the plates' layers, then the groove faces
-/// between the weld edges) and say on what evidence.
+/// between the weld edges) and say on what evidence; or a set of types,
+/// decided as with `auto`, where a workpiece of a type outside the set is
+/// refused as a joint that does not match.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum RequestedJoint {
     Auto,
     Type(JointType),
+    /// Two or more types (a set of one is that type's request).
+    OneOf(JointSet),
 }
 
 impl RequestedJoint {
-    /// The type requested, or None for `auto`.
+    /// The type requested, or None when the planner decides it (`auto` or
+    /// a set of types).
     pub fn given(self) -> Option<JointType> {
         match self {
-            RequestedJoint::Auto => None,
+            RequestedJoint::Auto | RequestedJoint::OneOf(_) => None,
             RequestedJoint::Type(joint) => Some(joint),
         }
     }
 
-    /// The canonical name: a type's, or `auto`.
-    pub fn name(self) -> &'static str {
+    /// Whether a workpiece found to be `joint` answers the request.
+    pub fn admits(self, joint: JointType) -> bool {
         match self {
-            RequestedJoint::Auto => "auto",
-            RequestedJoint::Type(joint) => joint.name(),
+            RequestedJoint::Auto => true,
+            RequestedJoint::Type(requested) => requested == joint,
+            RequestedJoint::OneOf(set) => set.contains(joint),
+        }
+    }
+
+    /// The request for the types of `set`: a set of one is that type's.
+    pub fn one_of(set: JointSet) -> Option<RequestedJoint> {
+        match set.len() {
+            0 => None,
+            1 => set.iter().next().map(RequestedJoint::Type),
+            _ => Some(RequestedJoint::OneOf(set)),
+        }
+    }
+
+    /// The canonical name: a type's, `auto`, or a set's (`v_butt+lap`).
+    pub fn name(self) -> std::borrow::Cow<'static, str> {
+        match self {
+            RequestedJoint::Auto => "auto".into(),
+            RequestedJoint::Type(joint) => joint.name().into(),
+            RequestedJoint::OneOf(set) => set.to_string().into(),
         }
     }
 }
@@ -101,19 +175,25 @@ impl From<JointType> for RequestedJoint {
 
 impl fmt::Display for RequestedJoint {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.name())
+        f.write_str(&self.name())
     }
 }
 
 impl FromStr for RequestedJoint {
     type Err = UnknownJoint;
 
-    /// A joint type's name, or `auto` in any case.
+    /// A joint type's name, `auto` in any case, or types' names joined by
+    /// `+` (`v-butt+lap`; `+` because the text link's fields are separated
+    /// by commas).
     fn from_str(s: &str) -> Result<Self, Self::Err> {
         if s.trim().eq_ignore_ascii_case("auto") {
             return Ok(RequestedJoint::Auto);
         }
-        s.parse().map(RequestedJoint::Type)
+        if !s.contains('+') {
+            return s.parse().map(RequestedJoint::Type);
+        }
+        let set = s.split('+').map(str::parse).collect::<Result<JointSet, _>>().map_err(|_| UnknownJoint(s.into()))?;
+        RequestedJoint::one_of(set).ok_or_else(|| UnknownJoint(s.into()))
     }
 }
 
@@ -164,5 +244,28 @@ mod tests {
         assert_eq!("lap".parse(), Ok(RequestedJoint::Type(JointType::Lap)));
         assert!("tee".parse::<RequestedJoint>().is_err());
         assert_eq!(RequestedJoint::Auto.name().parse(), Ok(RequestedJoint::Auto));
+    }
+
+    #[test]
+    fn a_request_may_name_the_types_a_fixture_holds() {
+        let set: JointSet = [JointType::Lap, JointType::VButt].into_iter().collect();
+        assert_eq!("v-butt+lap".parse(), Ok(RequestedJoint::OneOf(set)));
+        assert_eq!(" LAP + v_butt ".parse(), Ok(RequestedJoint::OneOf(set)));
+        assert_eq!(RequestedJoint::OneOf(set).name(), "v_butt+lap");
+        assert_eq!(RequestedJoint::OneOf(set).name().parse(), Ok(RequestedJoint::OneOf(set)));
+        // A set of one is that type's request; a repeated type counts once.
+        assert_eq!("lap+lap".parse(), Ok(RequestedJoint::Type(JointType::Lap)));
+        for bad in ["v-butt+", "+lap", "lap+auto", "lap+tee", "+"] {
+            assert_eq!(bad.parse::<RequestedJoint>(), Err(UnknownJoint(bad.into())), "{bad}");
+        }
+        let request = RequestedJoint::OneOf(set);
+        assert!(request.admits(JointType::Lap) && request.admits(JointType::VButt));
+        assert!(!request.admits(JointType::IButt) && !request.admits(JointType::TFillet));
+        assert_eq!(request.given(), None);
+        assert!(RequestedJoint::Auto.admits(JointType::TFillet));
+        assert!(!RequestedJoint::Type(JointType::Lap).admits(JointType::VButt));
+        let all: JointSet = JointType::NAMED.into_iter().collect();
+        assert_eq!(all.len(), 4);
+        assert_eq!(all.iter().collect::<Vec<_>>(), JointType::NAMED);
     }
 }

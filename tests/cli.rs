@@ -112,6 +112,17 @@ fn failures_exit_non_zero_and_say_why() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("background stage failed") && err.contains("looks like a lap joint"), "{err}");
 
+    // The same frame under a set of types without the lap: decided as a
+    // lap, and refused for not being one of them.
+    let set = weldseam(&["plan", "--cloud", &pcd, "--joint", "v-butt+i-butt", &pose, "--json"]);
+    assert!(!set.status.success());
+    let refusal: serde_json::Value = serde_json::from_slice(&set.stdout).expect("one JSON object on stdout");
+    assert_eq!(refusal["error"]["code"].as_str(), Some("joint_mismatch"), "{refusal}");
+    let err = String::from_utf8_lossy(&set.stderr);
+    assert!(err.contains("a lap joint, not one of the joints requested (v_butt+i_butt)"), "{err}");
+    let with_lap = weldseam(&["plan", "--cloud", &pcd, "--joint", "v-butt+lap", &pose, "--json"]);
+    assert!(with_lap.status.success(), "{}", String::from_utf8_lossy(&with_lap.stderr));
+
     let missing = weldseam(&["plan", "--cloud", "no-such.pcd", "--joint", "lap", "--pose=0,0,0,0,0,0"]);
     assert!(!missing.status.success());
     assert!(String::from_utf8_lossy(&missing.stderr).contains("no-such.pcd"));
@@ -119,6 +130,9 @@ fn failures_exit_non_zero_and_say_why() {
     let bad_joint = weldseam(&["plan", "--cloud", &pcd, "--joint", "fillet", "--pose=0,0,0,0,0,0"]);
     assert!(!bad_joint.status.success());
     assert!(String::from_utf8_lossy(&bad_joint.stderr).contains("unknown joint type"));
+    let bad_set = weldseam(&["plan", "--cloud", &pcd, "--joint", "lap+auto", "--pose=0,0,0,0,0,0"]);
+    assert!(!bad_set.status.success());
+    assert!(String::from_utf8_lossy(&bad_set.stderr).contains("types joined by + such as v-butt+lap"));
 
     let bad_matrix = weldseam(&[
         "plan",

@@ -239,6 +239,31 @@ fn seams_start_nearest_the_point_given_and_each_next_is_the_nearest() {
 }
 
 #[test]
+fn a_set_of_joint_types_plans_the_workpieces_of_those_types_and_names_the_others() {
+    // A tee, a V-butt and an I-butt: the butt joints asked for. Each is
+    // decided as under `auto`; the tee is named, for what makes it a tee.
+    let butts: RequestedJoint = "v-butt+i-butt".parse().unwrap();
+    let (name, plan, truths) = plan_multi("multi-03", butts, None, false);
+    let plan = plan.unwrap_or_else(|e| panic!("{name}: {e}"));
+    let (_, auto, _) = plan_multi("multi-03", RequestedJoint::Auto, None, false);
+    let auto = auto.unwrap();
+    let butt_seams = |p: &Plan| p.seams.iter().filter(|s| s.joint != JointType::TFillet).cloned().collect::<Vec<_>>();
+    assert_eq!(plan.seams, butt_seams(&auto), "{name}: the butt seams, as `auto` plans them");
+    let m = match_seams(&truths, &paths(&plan));
+    assert_eq!((m.found.len(), m.extra.len(), m.wrong_type.len()), (2, 0, 0), "{name}: {m:?}");
+    let [tee] = &plan.unplanned[..] else { panic!("{name}: {:?}", plan.unplanned) };
+    assert_eq!((tee.joint, tee.reason.gate), (Some(JointType::TFillet), Some(Gate::JointMismatch)), "{name}");
+    assert!(tee.reason.reason.contains("not one of the joints requested (v_butt+i_butt)"), "{name}: {}", tee.reason);
+    // The lap and the tee asked of a frame with neither: every workpiece
+    // refused, each butt pair for being one.
+    let others: RequestedJoint = "lap+t-fillet".parse().unwrap();
+    let (name, err, _) = plan_multi("multi-04", others, None, false);
+    let err = err.map(|p| p.seams.len()).unwrap_err();
+    assert_eq!(err.gate, Some(Gate::JointMismatch), "{name}: {err}");
+    assert!(err.reason.contains("this looks like a butt joint, not one of the joints requested"), "{name}: {err}");
+}
+
+#[test]
 fn a_requested_joint_applies_to_every_workpiece() {
     // V-butt and I-butt parts, I-butt asked for: the V-butt is named as
     // not planned, for its groove faces, and the I-butt planned.

@@ -237,6 +237,13 @@ pub mod joint_code {
     /// A tee joint's fillet welds (named in version 6, planned from
     /// version 7): each root the camera sees is a seam.
     pub const T_FILLET: u32 = 4;
+    /// A set of types the daemon decides among, as with [`AUTO`]: `SET`
+    /// plus, for each type in it, one shifted left by the type's code
+    /// (`SET | 1 << V_BUTT | 1 << LAP` is `0x105`, V-butt or lap). A
+    /// workpiece of a type outside the set is refused with 67
+    /// `joint_mismatch`. Added within version 7; an older daemon answers 41
+    /// `unknown_joint`.
+    pub const SET: u32 = 0x100;
 }
 
 /// A controller's request for a trajectory.
@@ -364,6 +371,22 @@ impl PlanRequest {
     /// Whether the request leaves the joint type to the daemon.
     pub fn is_auto_joint(&self) -> bool {
         self.joint == joint_code::AUTO
+    }
+
+    /// The types of a [`joint_code::SET`] value, or None when
+    /// [`PlanRequest::joint`] is not one (or names an unknown type, or
+    /// none).
+    pub fn joint_set(&self) -> Option<Vec<Joint>> {
+        let bits = self.joint.checked_sub(joint_code::SET).filter(|b| *b < joint_code::SET && *b != 0)?;
+        let known = [Joint::VButt, Joint::IButt, Joint::Lap, Joint::TFillet];
+        let mask: u32 = known.iter().map(|&j| 1 << PlanRequest::joint_code(j)).sum();
+        (bits & !mask == 0)
+            .then(|| known.into_iter().filter(|&j| bits & 1 << PlanRequest::joint_code(j) != 0).collect())
+    }
+
+    /// The [`joint_code::SET`] value of `joints`.
+    pub fn joint_set_code(joints: &[Joint]) -> u32 {
+        joints.iter().fold(joint_code::SET, |code, &j| code | 1 << PlanRequest::joint_code(j))
     }
 
     pub fn joint_code(joint: Joint) -> u32 {

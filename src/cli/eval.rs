@@ -24,7 +24,7 @@ use weldseam::eval::{
     run_suite_asking, summarise,
 };
 use weldseam::geometry::pose::EulerConvention;
-use weldseam::joint::JointType;
+use weldseam::joint::{JointSet, JointType, RequestedJoint};
 use weldseam::pipeline::Stage;
 use weldseam::sim::consumer::{consumer_camera, consumer_variant};
 use weldseam::sim::variants::Variant;
@@ -70,6 +70,11 @@ pub struct EvalArgs {
     /// method alone.
     #[arg(long, value_enum, default_value_t)]
     pub joint_request: JointRequestArg,
+    /// Name these joint types, joined by `+` (e.g. `v-butt+lap`), in
+    /// every plan instead: the planner decides among them, a workpiece of
+    /// another type is to be refused. The robust method alone.
+    #[arg(long, value_name = "TYPES", conflicts_with = "joint_request", value_parser = joint_set)]
+    pub joint_set: Option<JointSet>,
     /// What a V-butt request says of the groove depth: `given` (the
     /// scene's) or `measured` (nothing: the planner measures it).
     #[arg(long, value_enum, default_value_t)]
@@ -151,20 +156,32 @@ fn plan_line(o: &SceneOutcome, euler: EulerConvention) -> serde_json::Value {
     serde_json::json!({ "scene": o.name, "method": o.method.name(), "plan": outcome })
 }
 
+/// `--joint-set`: two or more joint types joined by `+`.
+fn joint_set(text: &str) -> Result<JointSet, String> {
+    match text.parse::<RequestedJoint>() {
+        Ok(RequestedJoint::OneOf(set)) => Ok(set),
+        Ok(_) => {
+            Err(format!("{text:?} names one joint type; --joint-request asks for one, --joint-set for two or more"))
+        }
+        Err(e) => Err(e.to_string()),
+    }
+}
+
 pub fn run(args: &EvalArgs) -> anyhow::Result<()> {
     let mut robust = Config::load_or_default(args.config.as_deref())?;
     robust.pipeline.method = Method::Robust;
     let mut paper = robust.clone();
     paper.pipeline.method = Method::Paper;
     let ask = EvalRequest {
-        joint: match args.joint_request {
-            JointRequestArg::Scene => JointAsk::AsScene,
-            JointRequestArg::Auto => JointAsk::Auto,
-            JointRequestArg::Wrong1 => JointAsk::Wrong(1),
-            JointRequestArg::Wrong2 => JointAsk::Wrong(2),
-            JointRequestArg::VButt => JointAsk::Type(JointType::VButt),
-            JointRequestArg::IButt => JointAsk::Type(JointType::IButt),
-            JointRequestArg::Lap => JointAsk::Type(JointType::Lap),
+        joint: match (args.joint_set, args.joint_request) {
+            (Some(set), _) => JointAsk::Set(set),
+            (None, JointRequestArg::Scene) => JointAsk::AsScene,
+            (None, JointRequestArg::Auto) => JointAsk::Auto,
+            (None, JointRequestArg::Wrong1) => JointAsk::Wrong(1),
+            (None, JointRequestArg::Wrong2) => JointAsk::Wrong(2),
+            (None, JointRequestArg::VButt) => JointAsk::Type(JointType::VButt),
+            (None, JointRequestArg::IButt) => JointAsk::Type(JointType::IButt),
+            (None, JointRequestArg::Lap) => JointAsk::Type(JointType::Lap),
         },
         groove_depth: match args.groove_depth {
             GrooveDepthArg::Given => DepthAsk::Given,
@@ -189,7 +206,7 @@ pub fn run(args: &EvalArgs) -> anyhow::Result<()> {
     // seam fails them.
     let judged = matches!(args.suite, SuiteArg::Faults | SuiteArg::Hard)
         || several_seams
-        || matches!(ask.joint, JointAsk::Wrong(_) | JointAsk::Type(_));
+        || matches!(ask.joint, JointAsk::Wrong(_) | JointAsk::Type(_) | JointAsk::Set(_));
     if let Some(f) = &args.filter {
         scenes.retain(|(name, _)| name.contains(f.as_str()));
     }
@@ -339,7 +356,8 @@ fn joint_table(outcomes: &[SceneOutcome]) -> Table {
         if group.is_empty() {
             continue;
         }
-        let requested: std::collections::BTreeSet<&str> = group.iter().map(|o| o.requested.name()).collect();
+        let requested: std::collections::BTreeSet<std::borrow::Cow<str>> =
+            group.iter().map(|o| o.requested.name()).collect();
         let seams: Vec<&weldseam::pipeline::Seam> =
             group.iter().filter_map(|o| o.result.as_ref().ok()).filter_map(|(_, plan)| plan.seams.first()).collect();
         let right = seams.iter().filter(|s| s.joint == joint).count();

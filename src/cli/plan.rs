@@ -23,8 +23,10 @@ pub struct PlanArgs {
     #[command(flatten)]
     pub input: args::CloudInputArgs,
     /// Joint type: v-butt, i-butt, lap or t-fillet (a tee joint's fillet
-    /// roots; underscores work too), or auto to have the planner decide it
-    /// from the cloud and say why.
+    /// roots; underscores work too); auto to have the planner decide it
+    /// from the cloud and say why; or the types a fixture holds joined by
+    /// a plus sign, such as v-butt+lap: decided as with auto, a workpiece
+    /// of another type named as not planned.
     #[arg(long)]
     pub joint: RequestedJoint,
     /// Robot pose at capture: x,y,z,rx,ry,rz (mm, degrees).
@@ -174,7 +176,7 @@ fn write_seam(
         seam.edge_fit_rms_mm[0], seam.edge_fit_rms_mm[1], seam.edge_samples[0], seam.edge_samples[1]
     )?;
     if let Some(evidence) = &seam.joint_evidence {
-        let found = if requested == RequestedJoint::Auto { "found" } else { "checked" };
+        let found = if requested.given().is_none() { "found" } else { "checked" };
         writeln!(out, "joint {found}: {evidence}")?;
     }
     if let Some(c) = &seam.coverage {

@@ -505,10 +505,11 @@ fn validate(r: &PlanRequest, config: &Config) -> Result<(), PlanError> {
                  need pipeline.method = \"robust\""
             ));
         }
-        (RequestedJoint::Auto, _) if paper => {
-            return bad(
-                "the paper's method plans the joint type it is given; `auto` needs pipeline.method = \"robust\"".into(),
-            );
+        (RequestedJoint::Auto | RequestedJoint::OneOf(_), _) if paper => {
+            return bad(format!(
+                "the paper's method plans the joint type it is given; `{}` needs pipeline.method = \"robust\"",
+                r.joint
+            ));
         }
         (RequestedJoint::Type(JointType::VButt), None) if paper => {
             return bad("the paper's method needs a V-butt joint's groove depth (the robust method measures it)".into());

@@ -22,7 +22,7 @@
 
 use crate::config::Method;
 use crate::geometry::Vec3;
-use crate::joint::{JointType, RequestedJoint};
+use crate::joint::JointType;
 
 use super::background::{CornerKind, Layout, PlaneCluster};
 use super::boundary::{self, Boundary, BoundaryParams, CoarseEdge};
@@ -170,6 +170,25 @@ pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
     ctx.finish_several(Method::Robust, welds, unplanned)
 }
 
+/// Refuses a workpiece found to be `joint` when the request does not admit
+/// it (a set of types, [`crate::joint::RequestedJoint::OneOf`]), saying what was seen:
+/// `seen`, the evidence that decided the type. `ctx.joint` names what was
+/// seen, for the workpiece's entry among the unplanned.
+fn admit(ctx: &mut Context, joint: JointType, stage: Stage, seen: &str) -> Result<(), PlanError> {
+    ctx.joint = Some(joint);
+    if ctx.request.joint.admits(joint) {
+        return Ok(());
+    }
+    Err(joint_mismatch(ctx, &format!("a {joint} joint"), stage, seen))
+}
+
+/// The refusal of a workpiece that is `what` (found from `seen`) under a
+/// request that does not admit it.
+fn joint_mismatch(ctx: &Context, what: &str, stage: Stage, seen: &str) -> PlanError {
+    let message = format!("{seen}: this looks like {what}, not one of the joints requested ({})", ctx.request.joint);
+    PlanError { gate: Some(quality::Gate::JointMismatch), ..PlanError::at(stage, message) }
+}
+
 /// What the workpieces of a frame share from the frame's front stages.
 struct Front<'f> {
     search: &'f NeighbourSearch<'f>,
@@ -205,7 +224,7 @@ fn plan_workpiece(
     // side: planned as one under `t_fillet` or `auto`. Any other corner,
     // or another request, is refused by name.
     if let Some(corner) = background::find_corner(&planes, &selection, ctx.cloud.points()) {
-        let fillet = matches!(ctx.request.joint, RequestedJoint::Auto | RequestedJoint::Type(JointType::TFillet));
+        let fillet = ctx.request.joint.admits(JointType::TFillet);
         if corner.kind == CornerKind::Inside && fillet {
             tracing::debug!("{}", corner.what);
             let (standing, flange) = (planes[corner.standing].clone(), planes[corner.flange].clone());
@@ -235,6 +254,19 @@ fn plan_workpiece(
     if layout == Layout::Lap {
         ctx.joint = Some(JointType::Lap);
         ctx.trace.record(|t| t.joint = Some(JointType::Lap));
+    }
+    // A set of types requested: the layers decide a lap or a tee; a butt
+    // pair is one of the two butt joints, which the groove probe tells.
+    let found = match layout {
+        Layout::Lap => Some(JointType::Lap),
+        Layout::Tee => Some(JointType::TFillet),
+        Layout::Butt => None,
+    };
+    let butt_admitted = [JointType::VButt, JointType::IButt].into_iter().any(|j| ctx.request.joint.admits(j));
+    if let Some(joint) = found {
+        admit(ctx, joint, Stage::Background, &layers)?;
+    } else if !butt_admitted {
+        return Err(joint_mismatch(ctx, "a butt joint", Stage::Background, &layers));
     }
     tracing::debug!(?layout, "{layers}");
     ctx.stats.plate_points = workpiece.plates.each_ref().map(|p| p.members.len());
@@ -427,6 +459,7 @@ fn plan_plates(
         })?;
         ctx.joint = Some(joint);
         ctx.trace.record(|t| t.joint = Some(joint));
+        admit(ctx, joint, Stage::Groove, &profile.describe())?;
         let depth = match (joint, ctx.request.groove_depth_mm, profile.depth_mm()) {
             (JointType::VButt, Some(given), _) => given,
             (JointType::VButt, None, Some(measured)) => measured,

@@ -210,7 +210,7 @@ pub(crate) async fn fulfil_traced(
 #[derive(Default)]
 struct PlanLog<'a> {
     request_id: u64,
-    joint: &'static str,
+    joint: std::borrow::Cow<'static, str>,
     frame: Option<Arc<StoredFrame>>,
     frame_wait: Duration,
     times: JobTimes,
@@ -245,7 +245,7 @@ impl PlanLog<'_> {
         if self.failure.is_some() {
             warn!(
                 request_id = self.request_id,
-                joint = self.joint,
+                joint = &*self.joint,
                 frame_id,
                 camera,
                 frame_age_ms,
@@ -258,7 +258,7 @@ impl PlanLog<'_> {
         } else {
             info!(
                 request_id = self.request_id,
-                joint = self.joint,
+                joint = &*self.joint,
                 frame_id,
                 camera,
                 frame_age_ms,

@@ -1129,5 +1129,18 @@ async fn a_frame_of_several_workpieces_replies_with_every_seam_and_the_unplanned
     assert_eq!(tee.refusal.code, tee.refusal.gate.clone().unwrap_or_default(), "{name}: {tee:?}");
     assert_ne!(tee.code, u16::from(ErrorCode::PlanFailed), "{name}: {tee:?}");
     assert!(tee.near_camera_mm.is_some());
+
+    // The same frame asked for the I-butts and tees a fixture holds: the
+    // I-butt planned as before, the lap named as a joint not asked for.
+    let mut set = sim_request(10, JointType::Lap, &sim, FrameSelect::FrameId(5));
+    set.joint = joint_code::SET | 1 << joint_code::I_BUTT | 1 << joint_code::T_FILLET;
+    ctl.send(&Message::PlanRequest(set)).await;
+    let Some(Message::PlanReply(answer)) = ctl.recv().await else { panic!("{name}: no plan reply to the set") };
+    let i_butt: Vec<_> = reply.result.seams.iter().filter(|s| s.joint == weldseam_proto::plan::Joint::IButt).collect();
+    assert_eq!(answer.result.seams.iter().collect::<Vec<_>>(), i_butt, "{name}");
+    let lap = answer.result.unplanned.iter().find(|u| u.joint.as_deref() == Some("lap"));
+    let lap = lap.unwrap_or_else(|| panic!("{name}: {:?}", answer.result.unplanned));
+    assert_eq!(lap.code, u16::from(ErrorCode::JointMismatch), "{name}: {lap:?}");
+    assert!(lap.refusal.message.contains("not one of the joints requested (i_butt+t_fillet)"), "{name}: {lap:?}");
     assert_eq!(cell.shutdown().await, Stopped::Clean);
 }

@@ -128,8 +128,18 @@ pub(crate) fn edge_points(
             .filter(|&i| counted_edge_up_to_threshold(search, plane, plate, criterion, i))
             .collect();
     }
-    let [edges] = on_grid(search, plane, plate.labels, [plate.label], criterion);
+    let rows = member_rows(search, [plate.members]);
+    let [edges] = on_grid(search, plane, plate.labels, [plate.label], rows, criterion);
     edges
+}
+
+/// The rows of the frame holding any of `members`: all a plate's edge
+/// points lie in them, and a workpiece of several in a frame spans a few
+/// of its rows.
+fn member_rows<const N: usize>(search: &NeighbourSearch, members: [&[u32]; N]) -> std::ops::Range<usize> {
+    let width = search.cloud().width().max(1);
+    let (lo, hi) = members.iter().flat_map(|m| m.iter()).fold((u32::MAX, 0), |(lo, hi), &i| (lo.min(i), hi.max(i)));
+    if lo > hi { 0..0 } else { lo as usize / width..hi as usize / width + 1 }
 }
 
 /// [`edge_points`] of plates without a pixel grid, with distinct labels,
@@ -178,13 +188,16 @@ fn on_grid<const N: usize>(
     plane: &PlanePoints,
     labels: &[u32],
     plate_labels: [u32; N],
+    rows: std::ops::Range<usize>,
     criterion: &EdgeCriterion,
 ) -> [Vec<u32>; N] {
     let ratio = criterion.ratio;
     let counts = &plane.counts;
     match criterion.full {
-        FullCount::Frontal => grid::edge_points(search, counts, labels, plate_labels, ratio, &Frontal(search)),
-        FullCount::Plane => grid::edge_points(search, counts, labels, plate_labels, ratio, &Measured(&plane.full)),
+        FullCount::Frontal => grid::edge_points(search, counts, labels, plate_labels, rows, ratio, &Frontal(search)),
+        FullCount::Plane => {
+            grid::edge_points(search, counts, labels, plate_labels, rows, ratio, &Measured(&plane.full))
+        }
     }
 }
 
@@ -204,7 +217,8 @@ pub(crate) fn edge_points_of_plates(
         return by_cell(search, plane, plates, criterion)
             .unwrap_or_else(|| plates.map(|p| edge_points(search, plane, p, criterion)));
     }
-    on_grid(search, plane, a.labels, [a.label, b.label], criterion)
+    let rows = member_rows(search, [a.members, b.members]);
+    on_grid(search, plane, a.labels, [a.label, b.label], rows, criterion)
 }
 
 /// The straightforward form: every member counted. Kept as the reference.
@@ -340,6 +354,35 @@ pub(super) mod tests {
             let mut fast = edge_points(&search, &plane, plate, &criterion);
             fast.sort();
             assert_eq!(fast, reference(&tree, &plane, plate, &criterion));
+        }
+    }
+
+    #[test]
+    fn plates_spanning_some_rows_give_the_reference_s_edges() {
+        // The plate cut into two across its rows, 17 rows above and 13
+        // below: each plate's rows are read alone, and together.
+        let camera = CameraModel::default();
+        let cloud = plate();
+        let search = NeighbourSearch::new(&cloud, &camera, 1.0);
+        let tree = NeighbourSearch::kdtree(&cloud, &camera, 1.0);
+        let (plane, mut labels, members) = setup(&cloud, &search);
+        let width = cloud.width() as u32;
+        for &i in &members {
+            labels[i as usize] = u32::from(i / width >= 17);
+        }
+        let of = |label: u32| members.iter().copied().filter(|&i| labels[i as usize] == label).collect::<Vec<_>>();
+        let (upper, lower) = (of(0), of(1));
+        let plates = [
+            Plate { labels: &labels, label: 0, members: &upper },
+            Plate { labels: &labels, label: 1, members: &lower },
+        ];
+        let criterion = EdgeCriterion { full: FullCount::Plane, ratio: 0.75 };
+        let together = edge_points_of_plates(&search, &plane, plates, &criterion);
+        for (k, plate) in plates.into_iter().enumerate() {
+            let expected = reference(&tree, &plane, plate, &criterion);
+            assert!(!expected.is_empty(), "plate {k}");
+            assert_eq!(edge_points(&search, &plane, plate, &criterion), expected, "plate {k} alone");
+            assert_eq!(together[k], expected, "plate {k} beside the other");
         }
     }
 

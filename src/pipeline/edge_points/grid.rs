@@ -21,8 +21,8 @@ use crate::pipeline::neighbours::NeighbourSearch;
 const BAND_ROWS: usize = 32;
 
 /// The edge points of `N` (1 or 2) plates: the members of plate `k` are
-/// the pixels labelled `plate_labels[k]`, taken row by row, so in index
-/// order. A member is an edge point when it has at most `ratio · N`
+/// the pixels labelled `plate_labels[k]`, all in `rows`, taken row by row,
+/// so in index order. A member is an edge point when it has at most `ratio · N`
 /// same-plate neighbours, `N` from `full`; `lower_bounds` holds a lower
 /// bound of each point's neighbours of any label.
 pub(super) fn edge_points<const N: usize, F: FullPlaneCount>(
@@ -30,20 +30,24 @@ pub(super) fn edge_points<const N: usize, F: FullPlaneCount>(
     lower_bounds: &[u16],
     labels: &[u32],
     plate_labels: [u32; N],
+    rows: std::ops::Range<usize>,
     ratio: f64,
     full: &F,
 ) -> [Vec<u32>; N] {
     let criterion = Limits { lower_bounds, ratio, full };
     let cloud = search.cloud();
     let (w, h) = (cloud.width(), cloud.height());
+    let rows = rows.start.min(h)..rows.end.min(h);
     let grid = GridCount::new(search, labels);
-    let bands: Vec<[Vec<u32>; N]> = (0..h.div_ceil(BAND_ROWS))
+    // Bands stay on multiples of BAND_ROWS: the rows outside `rows` hold
+    // no member, so the edge points are those of the whole frame.
+    let bands: Vec<[Vec<u32>; N]> = (rows.start / BAND_ROWS..rows.end.div_ceil(BAND_ROWS))
         .into_par_iter()
         .map_init(
             || Band::<N>::new(w, plate_labels),
             |band, b| {
                 let mut edges: [Vec<u32>; N] = std::array::from_fn(|_| Vec::new());
-                for row in b * BAND_ROWS..((b + 1) * BAND_ROWS).min(h) {
+                for row in (b * BAND_ROWS).max(rows.start)..((b + 1) * BAND_ROWS).min(rows.end) {
                     band.row(&grid, &criterion, row, &mut edges);
                 }
                 band.count_pending(&grid, &criterion, usize::MAX, &mut edges);

@@ -257,16 +257,14 @@ fn plan_workpiece(
     }
     // A set of types requested: the layers decide a lap or a tee; a butt
     // pair is one of the two butt joints, which the groove probe tells.
-    let found = match layout {
-        Layout::Lap => Some(JointType::Lap),
-        Layout::Tee => Some(JointType::TFillet),
-        Layout::Butt => None,
-    };
-    let butt_admitted = [JointType::VButt, JointType::IButt].into_iter().any(|j| ctx.request.joint.admits(j));
-    if let Some(joint) = found {
-        admit(ctx, joint, Stage::Background, &layers)?;
-    } else if !butt_admitted {
-        return Err(joint_mismatch(ctx, "a butt joint", Stage::Background, &layers));
+    match layout {
+        Layout::Lap => admit(ctx, JointType::Lap, Stage::Background, &layers)?,
+        Layout::Tee => admit(ctx, JointType::TFillet, Stage::Background, &layers)?,
+        Layout::Butt => {
+            if ![JointType::VButt, JointType::IButt].into_iter().any(|j| ctx.request.joint.admits(j)) {
+                return Err(joint_mismatch(ctx, "a butt joint", Stage::Background, &layers));
+            }
+        }
     }
     tracing::debug!(?layout, "{layers}");
     ctx.stats.plate_points = workpiece.plates.each_ref().map(|p| p.members.len());

@@ -12,9 +12,13 @@ use weldseam::sim::suite::eval_suite;
 use weldseam::sim::variants::Variant;
 
 fn plan_at_one_mm_voxels(names: &[&str]) -> Vec<SceneOutcome> {
+    plan_as("voxel:1", names)
+}
+
+fn plan_as(variant: &str, names: &[&str]) -> Vec<SceneOutcome> {
     let scenes: Vec<_> = eval_suite().into_iter().filter(|(n, _)| names.iter().any(|w| n.starts_with(w))).collect();
     assert_eq!(scenes.len(), names.len(), "every named scene is in the suite");
-    let variant = Variant::parse("voxel:1").unwrap();
+    let variant = Variant::parse(variant).unwrap();
     let config = Config::default();
     run_suite(&scenes, &CameraModel::default(), &variant, &[config], |_, _| {}).remove(0)
 }
@@ -73,4 +77,25 @@ fn seams_the_image_border_cuts_end_where_it_cuts_them() {
             err.end_mm
         );
     }
+}
+
+#[test]
+fn a_cropped_lap_ends_at_its_lower_plate_not_at_the_lattice_or_the_upper_plate() {
+    // Cropped 25 mm around the seam at 1 mm voxels, lap-13's lower plate
+    // ends inside the crop at both ends of the seam. The rows the rim
+    // follows held no voxel row for 2 mm before one end (the seam stopped
+    // 1.7 mm short there), and past the other the upper plate's face
+    // grazes the lower plate's plane along the edge line, which one strip
+    // took for the plate (1.7 mm past it).
+    let outcomes = plan_as("cropped:25,voxel:1,metres", &["lap-13"]);
+    let o = &outcomes[0];
+    let (err, _) = o.result.as_ref().unwrap_or_else(|e| panic!("{} refused: {e:?}", o.name));
+    assert!(
+        err.max_mm < 1.0 && err.start_mm < 1.5 && err.end_mm < 1.5,
+        "{}: planned with max {:.2} mm, ends {:.2} and {:.2} mm off",
+        o.name,
+        err.max_mm,
+        err.start_mm,
+        err.end_mm
+    );
 }

@@ -558,7 +558,21 @@ pub fn sample_scattered(
             let row = strip[..=last].iter().filter(|(out, _)| *out >= last_out - spacing_mm / 2.0).count();
             let beyond = spacing_mm / (row + 1) as f64;
             let position = plane.project(&last_point) + edge.outward * beyond;
-            Some(BoundarySample { position, along: (position - edge.point).dot(&edge.direction) })
+            // The walk may end on a point past the plate's end along the
+            // edge, where only the foot of a steep face grazes the plane
+            // (a lap's upper plate running on beyond the lower plate): it
+            // lies on the edge's line, so it places the edge across
+            // rightly, but not where the plate is. The strip's points
+            // inside the coarse edge are the plate's, and bound the
+            // sample along the edge.
+            let along = |p: &Vec3| (p - edge.point).dot(&edge.direction);
+            let (lo, hi) = strip[..=last]
+                .iter()
+                .filter(|(out, _)| *out <= 0.0)
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), (_, p)| (lo.min(along(p)), hi.max(along(p))));
+            let shift = along(&position).clamp(lo, hi) - along(&position);
+            let position = position + edge.direction * shift;
+            Some(BoundarySample { position, along: along(&position) })
         })
         .collect();
     Boundary { samples, line_spacing_mm: strip_mm, extent_rule: ExtentRule::LongestStretch }
@@ -579,14 +593,18 @@ pub fn sample_scattered(
 /// the plane) lies in them. Each end walks along the rim's on-plane
 /// points from a point well inside the strips' extent for as long as they
 /// follow one another within [`RIM_BREAK_SPACINGS`] (or the rim's own
-/// steps); the plate ends half a spacing beyond the last.
+/// steps), and across a stretch the rows miss where the plate is seen on
+/// both sides of them ([`RimBands::reach`]); the plate ends half a spacing
+/// beyond the last point.
 ///
 /// The rim's end is taken only where the cloud itself ends there: where
 /// no point of any depth, carried along its line of sight onto the
 /// plate's plane, lies in the rows beyond it ([`RIM_AT_BORDER_SPACINGS`]).
 /// Elsewhere the table or a shadow lies beyond a plate's own end, and the
-/// strips read that end. Where the edge's fit scatters too much to place
-/// the rows ([`MAX_RIM_EDGE_RMS_SPACINGS`]), the extent stays.
+/// strips read that end. A rim that stops more than a spacing short of
+/// the rows' last points moves an end in only where the strips run past
+/// all of them. Where the edge's fit scatters too much to place the rows
+/// ([`MAX_RIM_EDGE_RMS_SPACINGS`]), the extent stays.
 #[allow(clippy::too_many_arguments)]
 pub fn rim_refined_extent(
     cloud: &PointCloud,
@@ -612,29 +630,37 @@ pub fn rim_refined_extent(
         return (lo, hi);
     }
     let [inner, outer] = RIM_ROWS_SPACINGS.map(|rows| -rows * spacing_mm);
-    let in_rows = |q: &Vec3| (outer..=inner).contains(&(q - edge.point).dot(&edge.outward));
-    // (along, on the plate) of every point whose line of sight crosses the
-    // plate's plane in the rows.
-    let mut rows: Vec<(f64, bool)> = cloud
+    let beside = RIM_BESIDE_SPACINGS * spacing_mm;
+    let offset = |q: &Vec3| (q - edge.point).dot(&edge.outward);
+    // Every on-plane point of the rows and of the bands beside them, and
+    // every other point whose line of sight crosses the plate's plane in
+    // the rows (the plane n·x = offset meets the line of sight t v at
+    // t = offset / n·v), by where it lies along the edge.
+    let classified: Vec<(f64, RimBand)> = cloud
         .points()
         .par_iter()
         .filter(|p| p[0].is_finite())
         .filter_map(|p| {
             let v = vec3(p);
             if plane.signed_distance(&v).abs() <= params.on_plane_mm {
-                return in_rows(&v).then(|| (along(&v), true));
+                let band = RimBand::of(offset(&v), [inner, outer], beside)?;
+                return Some((along(&v), band));
             }
-            // The plane n·x = offset meets the line of sight t v at t = offset / n·v.
             let t = plane.offset / plane.normal.dot(&v);
             let q = v * t;
-            (t.is_finite() && t > 0.0 && in_rows(&q)).then(|| (along(&q), false))
+            let crosses = t.is_finite() && t > 0.0 && (outer..=inner).contains(&offset(&q));
+            crosses.then(|| (along(&q), RimBand::SightLine))
         })
         .collect();
-    rows.sort_unstable_by(|a, b| a.0.total_cmp(&b.0));
-    let rim: Vec<f64> = rows.iter().filter(|r| r.1).map(|r| r.0).collect();
-    let (Some(&(view_lo, _)), Some(&(view_hi, _))) = (rows.first(), rows.last()) else {
-        return (lo, hi);
+    let sorted = |wanted: RimBand| {
+        let mut at: Vec<f64> = classified.iter().filter(|c| c.1 == wanted).map(|c| c.0).collect();
+        at.sort_unstable_by(f64::total_cmp);
+        at
     };
+    let [rim, near, deep] = [RimBand::Rows, RimBand::Near, RimBand::Deep].map(sorted);
+    // The rows' extent as the cloud shows it, whatever lies in them.
+    let in_view = classified.iter().filter(|c| matches!(c.1, RimBand::Rows | RimBand::SightLine)).map(|c| c.0);
+    let (view_lo, view_hi) = in_view.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), a| (lo.min(a), hi.max(a)));
     if rim.is_empty() {
         return (lo, hi);
     }
@@ -646,23 +672,153 @@ pub fn rim_refined_extent(
     let break_mm = (RIM_BREAK_SPACINGS * spacing_mm).max(HOLE_OVER_INTERIOR * typical);
     let half = spacing_mm / 2.0;
     let border_mm = RIM_AT_BORDER_SPACINGS * spacing_mm;
+    let bands = RimBands { rim: &rim, near: &near, deep: &deep, break_mm };
+    // A rim that runs to within a spacing of the rows' last points has
+    // seen the plate go on until the cloud ends. One that stops further
+    // short, with points off the plane beyond it in the rows, may have
+    // lost the plate's last points to noise rather than seen its end: it
+    // moves an end in only where the strips read past everything the rows
+    // show by more than a strip (their extent adds half of one), taking
+    // the border for the edge.
+    let strip_mm = STRIP_SPACINGS * spacing_mm;
     let end = match rim.iter().rposition(|&a| a <= hi - inside) {
         Some(from) => {
-            let run = rim[from..].windows(2).position(|w| w[1] - w[0] > break_mm).unwrap_or(rim.len() - 1 - from);
-            let rim_end = rim[from + run];
-            if view_hi - rim_end <= border_mm { rim_end + half } else { hi }
+            let rim_end = bands.reach(rim[from], Sense::Up);
+            let at_border = view_hi - rim_end <= border_mm;
+            let (refined, kept) = (rim_end + half, hi);
+            let trusted = refined >= kept || view_hi - rim_end <= spacing_mm || kept > view_hi + strip_mm;
+            if at_border && trusted { refined } else { kept }
         }
         None => hi,
     };
     let start = match rim.iter().position(|&a| a >= lo + inside) {
         Some(from) => {
-            let run = rim[..=from].windows(2).rev().position(|w| w[1] - w[0] > break_mm).unwrap_or(from);
-            let rim_start = rim[from - run];
-            if rim_start - view_lo <= border_mm { rim_start - half } else { lo }
+            let rim_start = bands.reach(rim[from], Sense::Down);
+            let at_border = rim_start - view_lo <= border_mm;
+            let (refined, kept) = (rim_start - half, lo);
+            let trusted = refined <= kept || rim_start - view_lo <= spacing_mm || kept < view_lo - strip_mm;
+            if at_border && trusted { refined } else { kept }
         }
         None => lo,
     };
     (start, end)
+}
+
+/// Where a point read by [`rim_refined_extent`] lies across the edge.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum RimBand {
+    /// On the plate's plane, in the rows the rim follows.
+    Rows,
+    /// On the plane, between the rows and the fitted edge.
+    Near,
+    /// On the plane, deeper into the plate than the rows.
+    Deep,
+    /// Off the plane, its line of sight crossing the plane in the rows.
+    SightLine,
+}
+
+impl RimBand {
+    /// The band of an on-plane point `offset` mm outward of the fitted
+    /// edge, with the rows `[inner, outer]` (both negative, inside the
+    /// plate) and bands `beside` mm wide on either side of them.
+    fn of(offset: f64, [inner, outer]: [f64; 2], beside: f64) -> Option<Self> {
+        if (outer..=inner).contains(&offset) {
+            Some(Self::Rows)
+        } else if (inner..=(inner + beside).min(0.0)).contains(&offset) {
+            Some(Self::Near)
+        } else if ((outer - beside)..outer).contains(&offset) {
+            Some(Self::Deep)
+        } else {
+            None
+        }
+    }
+}
+
+/// Which way along the edge a rim walk goes.
+#[derive(Debug, Clone, Copy)]
+enum Sense {
+    Up,
+    Down,
+}
+
+/// The along-edge positions (sorted) of the on-plane points of the rim's
+/// rows and of the bands beside them, and the widest step that continues
+/// a walk.
+struct RimBands<'a> {
+    rim: &'a [f64],
+    near: &'a [f64],
+    deep: &'a [f64],
+    break_mm: f64,
+}
+
+impl RimBands<'_> {
+    /// How far the plate runs beside the weld from `from`, a point of the
+    /// rows, in `sense`. The rows are one point spacing wide, and the rows
+    /// of a lattice (voxel centroids) can run along them a little further
+    /// apart than that: where the last lattice row leaves them and the
+    /// next has not yet come in, the rows hold no point for a stretch
+    /// although the plate goes on. Such a stretch has the plate on both
+    /// sides of the rows, nearer the edge and deeper in; where a border
+    /// cuts the plate obliquely, or the plate ends, one side stops with
+    /// the rows. So the walk follows the rows, then goes on as far as both
+    /// bands beside them go on together, and from there along the rows
+    /// again.
+    fn reach(&self, from: f64, sense: Sense) -> f64 {
+        let mut at = from;
+        // Each round moves `at` on to a further point, so the rounds are
+        // at most the points there are.
+        for _ in 0..=self.rim.len() + self.near.len() + self.deep.len() {
+            let along_rows = walk(self.rim, at, self.break_mm, sense);
+            let bracketed = match sense {
+                Sense::Up => walk(self.near, along_rows, self.break_mm, sense).min(walk(
+                    self.deep,
+                    along_rows,
+                    self.break_mm,
+                    sense,
+                )),
+                Sense::Down => walk(self.near, along_rows, self.break_mm, sense).max(walk(
+                    self.deep,
+                    along_rows,
+                    self.break_mm,
+                    sense,
+                )),
+            };
+            let further = match sense {
+                Sense::Up => bracketed > along_rows,
+                Sense::Down => bracketed < along_rows,
+            };
+            if !further {
+                return along_rows;
+            }
+            at = bracketed;
+        }
+        at
+    }
+}
+
+/// The furthest of the sorted positions `at` reached from `from` in
+/// `sense` by steps of at most `break_mm`; `from` when none is.
+fn walk(at: &[f64], from: f64, break_mm: f64, sense: Sense) -> f64 {
+    let mut reached = from;
+    match sense {
+        Sense::Up => {
+            for &a in &at[at.partition_point(|&a| a <= from)..] {
+                if a - reached > break_mm {
+                    break;
+                }
+                reached = a;
+            }
+        }
+        Sense::Down => {
+            for &a in at[..at.partition_point(|&a| a < from)].iter().rev() {
+                if reached - a > break_mm {
+                    break;
+                }
+                reached = a;
+            }
+        }
+    }
+    reached
 }
 
 /// How close to the cloud's end along the rim's rows, in point spacings,
@@ -683,6 +839,12 @@ const MAX_RIM_EDGE_RMS_SPACINGS: f64 = 0.25;
 /// along the plate, and is half a spacing clear of the edge, where the
 /// foot of a face or the noise of the edge's fit could put points.
 const RIM_ROWS_SPACINGS: [f64; 2] = [0.5, 1.5];
+
+/// The width, in point spacings, of the bands on either side of the rim's
+/// rows that show the plate going on where the rows hold no point
+/// ([`RimBands::reach`]): the one nearer the edge is the half spacing the
+/// rows keep clear of it, the deeper one as wide as the rows.
+const RIM_BESIDE_SPACINGS: f64 = 1.0;
 
 /// The widest step along the rim, in point spacings, that still continues
 /// it: a point every spacing on average, so three is a dropout or two.
@@ -799,6 +961,7 @@ fn extend_past_ends(walker: &Walker, found: &mut Vec<(usize, isize, BoundarySamp
 mod tests {
     use super::*;
     use crate::camera::CameraModel;
+    use nalgebra::Vector2;
 
     /// Slope of the test edge: slanted so the rows see every sub-pixel phase.
     const SLOPE: f64 = 0.1;
@@ -1069,6 +1232,79 @@ mod tests {
         // The same plate with nothing beyond: the cloud ends with it.
         let (strips_end, rim_end) = strip_and_rim_ends(&plate, edge_x);
         assert!((rim_end - 20.0).abs() < 0.5 && rim_end != strips_end, "rim {rim_end}, strips {strips_end}");
+    }
+
+    /// A square lattice of points `pitch` apart (voxel centroids of a
+    /// plate), its rows turned `turn` radians from the test edge and
+    /// shifted `shift` of a pitch across it, kept where `keep(x, y)`.
+    fn lattice_where(pitch: f64, turn: f64, shift: f64, keep: impl Fn(f64, f64) -> bool) -> PointCloud {
+        let angle = SLOPE.atan() + turn;
+        let (along, across) = (Vector2::new(angle.sin(), angle.cos()), Vector2::new(angle.cos(), -angle.sin()));
+        let n = (80.0 / pitch) as i64;
+        let points = (-n..=n)
+            .flat_map(|i| (-n..=n).map(move |j| (i, j)))
+            .map(|(i, j)| across * ((i as f64 + shift) * pitch) + along * (j as f64 * pitch))
+            .filter(|p| keep(p.x, p.y))
+            .map(|p| [p.x as f32, p.y as f32, 700.0])
+            .collect();
+        PointCloud::unorganized(points)
+    }
+
+    #[test]
+    fn the_rim_reaches_the_end_of_a_lattice_whose_rows_miss_the_rim_rows() {
+        // Voxel centroids lie on a lattice whose pitch can exceed the
+        // measured spacing: with the spacing taken as 1 mm and a pitch of
+        // 1.15 mm, the rim's rows (0.5 to 1.5 mm inside the edge) hold no
+        // lattice row for a stretch wherever two rows straddle them. The
+        // plate ends at y = 20 with nothing beyond: wherever its rows lie,
+        // the rim reads that end within the lattice's pitch.
+        let edge_x = 3.3;
+        let mut worst: f64 = 0.0;
+        for turn in [0.01, 0.03, -0.02] {
+            for k in 0..8 {
+                let cloud = lattice_where(1.15, turn, k as f64 / 8.0, |x, y| x < edge_x + SLOPE * y && y < 20.0);
+                let (_, rim) = strip_and_rim_ends(&cloud, edge_x);
+                worst = worst.max((rim - 20.0).abs());
+            }
+        }
+        assert!(worst < 0.8, "the rim's end is {worst:.2} mm from the plate's");
+    }
+
+    #[test]
+    fn a_rim_that_loses_its_points_to_noise_short_of_the_border_keeps_the_strips_end() {
+        // The cloud ends at y = 20 across the whole band, but the last
+        // 2.5 mm of the rows lie off the plane (a noisy camera near its
+        // image border): the rows' points stop short of the cloud's end,
+        // and the strips, which read every row, see the end itself.
+        let edge_x = 3.3;
+        let plate = scattered_where(1.0, |x, y| x < edge_x + SLOPE * y && y < 20.0);
+        let noisy = |p: &[f32; 3]| {
+            let inside = f64::from(p[0]) - edge_x - SLOPE * f64::from(p[1]);
+            f64::from(p[1]) > 17.5 && (-2.0..=0.0).contains(&inside)
+        };
+        let points = plate.points().iter().map(|p| if noisy(p) { [p[0], p[1], 699.0] } else { *p }).collect();
+        let (strips, rim) = strip_and_rim_ends(&PointCloud::unorganized(points), edge_x);
+        assert_eq!(rim, strips, "the rim's end replaced the strips' at {strips}");
+        assert!((strips - 20.0).abs() < 1.1, "the strips end at {strips}, the cloud at 20");
+    }
+
+    #[test]
+    fn a_strip_holding_the_plate_corner_and_a_face_foot_beyond_ends_at_the_corner() {
+        // The foot of a lap's upper plate runs on along the edge line past
+        // the lower plate's end, its points on the line itself,
+        // outermost in the corner strip: the sample keeps to where the
+        // plate is.
+        // Wherever the plate's end falls in its strip.
+        let edge_x = 3.3;
+        let (plane, coarse, params) = test_edge(edge_x);
+        for end_y in (0..20).map(|k| 18.0 + 0.1 * k as f64) {
+            let plate = scattered_where(1.0, |x, y| x < edge_x + SLOPE * y && y < end_y);
+            let foot = (0..80).map(|k| end_y + 0.25 * k as f64).map(|y| [(edge_x + SLOPE * y) as f32, y as f32, 700.0]);
+            let cloud = PointCloud::unorganized(plate.points().iter().copied().chain(foot).collect());
+            let boundary = sample_scattered(&cloud, &plane, &coarse, &params, 1.0);
+            let beyond = boundary.samples.iter().map(|s| s.position.y).fold(f64::MIN, f64::max);
+            assert!(beyond < end_y + 0.1, "a boundary sample at y = {beyond} mm, past the plate's end at {end_y}");
+        }
     }
 
     #[test]

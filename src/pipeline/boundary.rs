@@ -741,6 +741,24 @@ enum Sense {
     Down,
 }
 
+impl Sense {
+    /// The nearer of two positions to where a walk this way started.
+    fn nearer(self, a: f64, b: f64) -> f64 {
+        match self {
+            Sense::Up => a.min(b),
+            Sense::Down => a.max(b),
+        }
+    }
+
+    /// Whether `a` lies beyond `b`, going this way.
+    fn beyond(self, a: f64, b: f64) -> bool {
+        match self {
+            Sense::Up => a > b,
+            Sense::Down => a < b,
+        }
+    }
+}
+
 /// The along-edge positions (sorted) of the on-plane points of the rim's
 /// rows and of the bands beside them, and the widest step that continues
 /// a walk.
@@ -769,25 +787,9 @@ impl RimBands<'_> {
         // at most the points there are.
         for _ in 0..=self.rim.len() + self.near.len() + self.deep.len() {
             let along_rows = walk(self.rim, at, self.break_mm, sense);
-            let bracketed = match sense {
-                Sense::Up => walk(self.near, along_rows, self.break_mm, sense).min(walk(
-                    self.deep,
-                    along_rows,
-                    self.break_mm,
-                    sense,
-                )),
-                Sense::Down => walk(self.near, along_rows, self.break_mm, sense).max(walk(
-                    self.deep,
-                    along_rows,
-                    self.break_mm,
-                    sense,
-                )),
-            };
-            let further = match sense {
-                Sense::Up => bracketed > along_rows,
-                Sense::Down => bracketed < along_rows,
-            };
-            if !further {
+            let [near, deep] = [self.near, self.deep].map(|band| walk(band, along_rows, self.break_mm, sense));
+            let bracketed = sense.nearer(near, deep);
+            if !sense.beyond(bracketed, along_rows) {
                 return along_rows;
             }
             at = bracketed;

@@ -75,8 +75,10 @@ pub struct UnknownJoint(pub String);
 pub struct JointSet(u8);
 
 impl JointSet {
+    /// One bit per type, by its place in the declaration (which
+    /// [`JointType::NAMED`] follows).
     fn bit(joint: JointType) -> u8 {
-        1 << JointType::NAMED.iter().position(|&j| j == joint).unwrap_or_default()
+        1 << joint as u8
     }
 
     /// The set with `joint` added.

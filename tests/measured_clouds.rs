@@ -7,12 +7,24 @@
 
 use weldseam::camera::CameraModel;
 use weldseam::config::Config;
-use weldseam::eval::{SceneOutcome, run_suite};
+use weldseam::eval::{SceneOutcome, SeamError, run_suite};
 use weldseam::sim::suite::eval_suite;
 use weldseam::sim::variants::Variant;
 
 fn plan_at_one_mm_voxels(names: &[&str]) -> Vec<SceneOutcome> {
     plan_as("voxel:1", names)
+}
+
+/// Asserts `err`, scene `name`'s error, within 1 mm and its ends within
+/// `ends_mm`.
+fn assert_within(name: &str, err: &SeamError, ends_mm: f64) {
+    assert!(
+        err.max_mm < 1.0 && err.start_mm < ends_mm && err.end_mm < ends_mm,
+        "{name}: planned with max {:.2} mm, ends {:.2} and {:.2} mm off",
+        err.max_mm,
+        err.start_mm,
+        err.end_mm
+    );
 }
 
 fn plan_as(variant: &str, names: &[&str]) -> Vec<SceneOutcome> {
@@ -29,14 +41,7 @@ fn voxel_clouds_plan_their_seam_where_it_is_or_say_why_not() {
     for o in &outcomes {
         match &o.result {
             Ok((err, plan)) => {
-                assert!(
-                    err.max_mm < 1.0 && err.start_mm < 2.0 && err.end_mm < 2.0,
-                    "{}: planned with max {:.2} mm, ends {:.2} and {:.2} mm off",
-                    o.name,
-                    err.max_mm,
-                    err.start_mm,
-                    err.end_mm
-                );
+                assert_within(&o.name, err, 2.0);
                 // The seam spans the joint both plates are seen beside and
                 // says so: within 2 mm of the evidence's ends, none beyond.
                 let c = plan.seams[0].coverage.expect("the robust method reports coverage");
@@ -68,14 +73,7 @@ fn seams_the_image_border_cuts_end_where_it_cuts_them() {
     let outcomes = plan_at_one_mm_voxels(&["v-butt-06", "i-butt-08", "lap-06"]);
     for o in &outcomes {
         let (err, _) = o.result.as_ref().unwrap_or_else(|e| panic!("{} refused: {e:?}", o.name));
-        assert!(
-            err.max_mm < 1.0 && err.start_mm < 1.5 && err.end_mm < 1.5,
-            "{}: planned with max {:.2} mm, ends {:.2} and {:.2} mm off",
-            o.name,
-            err.max_mm,
-            err.start_mm,
-            err.end_mm
-        );
+        assert_within(&o.name, err, 1.5);
     }
 }
 
@@ -90,12 +88,5 @@ fn a_cropped_lap_ends_at_its_lower_plate_not_at_the_lattice_or_the_upper_plate()
     let outcomes = plan_as("cropped:25,voxel:1,metres", &["lap-13"]);
     let o = &outcomes[0];
     let (err, _) = o.result.as_ref().unwrap_or_else(|e| panic!("{} refused: {e:?}", o.name));
-    assert!(
-        err.max_mm < 1.0 && err.start_mm < 1.5 && err.end_mm < 1.5,
-        "{}: planned with max {:.2} mm, ends {:.2} and {:.2} mm off",
-        o.name,
-        err.max_mm,
-        err.start_mm,
-        err.end_mm
-    );
+    assert_within(&o.name, err, 1.5);
 }

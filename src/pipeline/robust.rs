@@ -455,7 +455,6 @@ fn plan_plates(
             let gate = if e.is_unknown() { quality::Gate::JointUnknown } else { quality::Gate::JointMismatch };
             PlanError { gate: Some(gate), ..PlanError::at(Stage::Groove, e) }
         })?;
-        ctx.joint = Some(joint);
         ctx.trace.record(|t| t.joint = Some(joint));
         admit(ctx, joint, Stage::Groove, &profile.describe())?;
         let depth = match (joint, ctx.request.groove_depth_mm, profile.depth_mm()) {

@@ -126,6 +126,18 @@ impl<'a> FromIterator<&'a Vec3> for Moments {
     }
 }
 
+/// Points made on the fly (converted from the cloud's `f32`, say) are
+/// summed as they come, with no vector of them in between.
+impl FromIterator<Vec3> for Moments {
+    fn from_iter<I: IntoIterator<Item = Vec3>>(iter: I) -> Self {
+        let mut m = Moments::default();
+        for p in iter {
+            m.add(&p);
+        }
+        m
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -141,6 +153,17 @@ mod tests {
         assert!((plane.normal - n).norm() < 1e-9);
         assert!(plane.signed_distance(&origin).abs() < 1e-9);
         assert!(plane.normal.z > 0.0);
+    }
+
+    #[test]
+    fn points_summed_as_they_come_give_the_moments_of_the_same_points_borrowed() {
+        let pts: Vec<Vec3> =
+            (0..200).map(|i| Vec3::new(i as f64 * 0.7, (i % 13) as f64, 900.0 + (i % 7) as f64)).collect();
+        let borrowed: Moments = pts.iter().collect();
+        let owned: Moments = pts.iter().copied().collect();
+        assert_eq!(owned.count(), borrowed.count());
+        assert_eq!(owned.centroid(), borrowed.centroid());
+        assert_eq!(owned.plane().map(|p| (p.normal, p.offset)), borrowed.plane().map(|p| (p.normal, p.offset)));
     }
 
     #[test]

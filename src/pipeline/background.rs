@@ -385,8 +385,7 @@ pub fn describe(
         .filter_map(|(label, m)| {
             // A fixed stride keeps the fit cheap on million-point plates.
             let stride = (m.len() / 50_000).max(1);
-            let moments: Moments =
-                m.iter().step_by(stride).map(|&i| vec3(&points[i as usize])).collect::<Vec<_>>().iter().collect();
+            let moments: Moments = m.iter().step_by(stride).map(|&i| vec3(&points[i as usize])).collect();
             let plane = moments.plane()?;
             let centroid = moments.centroid()?;
             let area_mm2 = m.len() as f64 * area_per_point(&centroid, &plane.normal);

@@ -92,7 +92,7 @@ fn best_line(points: &[Vec3], remaining: &[usize], params: &RansacParams, rng: &
     let mut inliers = inliers_of(&a, &dir);
     let (mut point, mut direction) = (a, dir);
     // One least-squares polish of the hypothesis on its inliers.
-    if let Some((c, d)) = inliers.iter().map(|&i| points[i]).collect::<Vec<_>>().iter().collect::<Moments>().line() {
+    if let Some((c, d)) = inliers.iter().map(|&i| &points[i]).collect::<Moments>().line() {
         let polished = inliers_of(&c, &d);
         if polished.len() >= inliers.len() {
             (point, direction, inliers) = (c, d, polished);

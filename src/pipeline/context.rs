@@ -6,6 +6,7 @@
 //! the plate labels, the weld per joint type and the trajectory at the end.
 
 use std::borrow::Cow;
+use std::sync::OnceLock;
 use std::time::Instant;
 
 use nalgebra::{Isometry3, Point3};
@@ -28,6 +29,7 @@ use super::refit::{CurveFit, SeamCurve};
 use super::scale::{self, Scale};
 use super::trace::Tracer;
 use super::trajectory::{self, Waypoint};
+use super::view_border::ViewBorder;
 use super::weld_equation;
 use super::{Plan, PlanError, PlanRequest, PlanStats, Seam, SeamAssessment, Stage, StageTimings, Unplanned};
 
@@ -108,6 +110,9 @@ pub(super) struct Context<'a> {
     pub joint: Option<JointType>,
     /// What each stage found, when the caller asked for it.
     pub trace: Tracer<'a>,
+    /// The image's border as the cloud's rays show it, read the first time
+    /// a stage asks ([`Context::view_border`]).
+    view_border: OnceLock<Option<ViewBorder>>,
 }
 
 /// Sanitises the cloud, in camera-frame millimetres
@@ -201,6 +206,7 @@ impl<'a> Context<'a> {
             scale: Scale::of_camera(config.pipeline.neighbour_radius_mm),
             joint: request.joint.given(),
             trace,
+            view_border: OnceLock::new(),
         };
         ctx.clock.lap(Stage::Input);
         ctx
@@ -341,6 +347,12 @@ impl<'a> Context<'a> {
     /// camera's pixel footprint there.
     pub(super) fn spacing_at(&self, p: &Vec3) -> f64 {
         self.scale.spacing_at(&self.config.camera, p)
+    }
+
+    /// The image's border the frame's points span, read once per frame
+    /// however many workpieces ask; `None` for a frame of too few points.
+    pub(super) fn view_border(&self) -> Option<&ViewBorder> {
+        self.view_border.get_or_init(|| ViewBorder::of_cloud(self.cloud)).as_ref()
     }
 
     /// The configured camera's pixel grid, when the frame lies on it (a raw

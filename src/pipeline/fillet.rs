@@ -28,7 +28,12 @@
 //!   web overhangs the flange's end, its foot lies at the flange's height
 //!   with no flange beside it). The longest run of seen stations (across breaks no longer
 //!   than [`super::boundary::JOINT_BREAK_SPACINGS`]) is the root planned,
-//!   from the last evidence inward at each end: never extrapolated;
+//!   from the last evidence inward at each end, except where both kinds
+//!   of evidence run up to the image's border
+//!   ([`super::view_border`]): the root then ends where the border crosses
+//!   the root itself, at most a station from the evidence's end (the
+//!   evidence lies a spacing or more off the root, and a border crossing
+//!   it obliquely cuts it before or after the root);
 //! - the web-to-flange angle: between the face's upward direction and the
 //!   flange's outward one, both across the root (90° for a square tee);
 //! - the torch ([`super::trajectory::fillet_torch_axis`]) leans from the
@@ -68,6 +73,7 @@ use crate::geometry::{Vec3, vec3};
 use super::background::PlaneCluster;
 use super::boundary::JOINT_BREAK_SPACINGS;
 use super::refit::{SeamAxes, SeamCurve};
+use super::view_border::{SpanEnd, ViewBorder};
 
 /// The fewest face points that make a face: a handful of returns on a web
 /// face seen edge-on fix no plane.
@@ -101,6 +107,11 @@ const FLANGE_SAMPLES: usize = 20_000;
 
 /// The length of a station along the root, in point spacings.
 const STATION_SPACINGS: f64 = 4.0;
+
+/// Evidence reaches the image's border when a point of it lies within
+/// this many spacings inside it: a voxel's centroid lies up to half a
+/// voxel inside, and the voxels nearest the border a little more.
+const BORDER_REACH_SPACINGS: f64 = 1.5;
 
 /// The least angle, degrees, between a face and the camera's ray to it: a
 /// face turned further from the camera is not seen at all (or only as
@@ -155,6 +166,9 @@ pub struct TeeView<'a> {
     /// configured camera's grid: a web's top cut by the image's border
     /// does not end its root there.
     pub in_view: Option<&'a dyn Fn(&Vec3) -> bool>,
+    /// The image's border as the cloud's rays show it: a root whose
+    /// evidence reaches it ends where the root itself crosses it.
+    pub border: Option<&'a ViewBorder>,
     /// How far the flange's edge may run on past where the web's top is
     /// seen, mm, when nothing tells whether the image cut the top there
     /// (`quality.max_joint_beyond_seam_mm`): further, the root is refused.
@@ -504,12 +518,9 @@ fn root_from_face(view: &TeeView, frame: &WebFrame, sign: f64, side: Side) -> Re
     // The evidence along the root: the face's foot and the flange up to it.
     let along = |p: &Vec3| (p - p0).dot(&r);
     let lowest = face.inliers.iter().map(|p| frame.height_of(p)).fold(f64::INFINITY, f64::min);
-    let foot: Vec<f64> = face
-        .inliers
-        .iter()
-        .filter(|p| frame.height_of(p) <= lowest + FOOT_BAND_SPACINGS * spacing)
-        .map(along)
-        .collect();
+    let foot_points: Vec<Vec3> =
+        face.inliers.iter().copied().filter(|p| frame.height_of(p) <= lowest + FOOT_BAND_SPACINGS * spacing).collect();
+    let foot: Vec<f64> = foot_points.iter().map(along).collect();
     // Outward of the face's own foot (which lies at the flange's height
     // too, where the web overhangs the flange's end) by the same margin
     // that keeps the flange out of the face.
@@ -534,6 +545,10 @@ fn root_from_face(view: &TeeView, frame: &WebFrame, sign: f64, side: Side) -> Re
         return Err(NoFace::Refused(
             "the web's face and the flange up to it are not seen together anywhere along the root".into(),
         ));
+    };
+    let run = match view.border {
+        Some(border) => ends_at_border(border, &p0, &r, run, [&foot_points, &beside], spacing),
+        None => run,
     };
     // The flange near the root: its points beside the run, against the
     // plane of all its pieces.
@@ -699,16 +714,23 @@ fn root_from_flange_edge(view: &TeeView, frame: &WebFrame, sign: f64, side: Side
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), s| (lo.min(s.t), hi.max(s.t)));
     let top_at = |t: f64| frame.origin + e * t + frame.u * (frame.middle + sign * top_line.at(t));
     let step = STATION_SPACINGS * spacing / stretch;
-    let cut_by_border = |t: f64| view.in_view.is_some_and(|in_view| !in_view(&top_at(t)));
+    // Past the top's end: off the configured camera's grid, or where no
+    // ray of the cloud reaches (within the sampling's reach of its border).
+    let reach = BORDER_REACH_SPACINGS * spacing;
+    let cut_by_border = |t: f64| match (view.in_view, view.border) {
+        (Some(in_view), _) => !in_view(&top_at(t)),
+        (None, Some(border)) => border.outside_mm(&top_at(t)) > -reach,
+        (None, None) => false,
+    };
     let s0 = if cut_by_border(top_lo - step) { run.s0 } else { run.s0.max(along(top_lo)) };
     let s1 = if cut_by_border(top_hi + step) { run.s1 } else { run.s1.min(along(top_hi)) };
-    if view.in_view.is_none() {
+    if view.in_view.is_none() && view.border.is_none() {
         let past = (s0 - run.s0).max(run.s1 - s1);
         if past > view.max_beyond_mm {
             return Err(format!(
                 "the flange's edge runs on {past:.1} mm past where the web's top is seen, more than {:.1} mm \
-                 (quality.max_joint_beyond_seam_mm): the web may end there, or the image cut its top (the cloud \
-                 is not the configured camera's grid, which would tell)",
+                 (quality.max_joint_beyond_seam_mm): the web may end there, or the image cut its top (neither \
+                 the camera's grid nor the cloud's rays show where the image ends)",
                 view.max_beyond_mm
             ));
         }
@@ -760,6 +782,40 @@ fn root_from_flange_edge(view: &TeeView, frame: &WebFrame, sign: f64, side: Side
         uncertainty_across_mm: (root_line.rms_mm / (in_run as f64).sqrt()).hypot(floor),
         uncertainty_normal_mm: floor,
     })
+}
+
+/// The run's ends moved to where the root crosses the image's border,
+/// each where the face's foot and the flange beside the root (`evidence`,
+/// along the root `origin + t · r`) both reach that border within its last
+/// station ([`ViewBorder::end_at_border`]): a border crossing the root
+/// obliquely cuts the evidence, which lies a spacing or more off the root,
+/// before or after it cuts the root. An end moves at most a station, in
+/// either direction; one that the evidence does not carry to the border
+/// stays where the evidence puts it.
+fn ends_at_border(
+    border: &ViewBorder,
+    origin: &Vec3,
+    r: &Vec3,
+    run: SeenRun,
+    evidence: [&[Vec3]; 2],
+    spacing: f64,
+) -> SeenRun {
+    let station = STATION_SPACINGS * spacing;
+    let reach = BORDER_REACH_SPACINGS * spacing;
+    let along = |p: &Vec3| (p - origin).dot(r);
+    let near = |at: f64| {
+        evidence.map(|set| set.iter().copied().filter(|p| (along(p) - at).abs() <= station).collect::<Vec<Vec3>>())
+    };
+    let moved = |end: SpanEnd, at: f64| {
+        let sets = near(at);
+        let sets: [&[Vec3]; 2] = [&sets[0], &sets[1]];
+        border.end_at_border(origin, r, end, at, &sets, reach, station).unwrap_or(at)
+    };
+    let (s0, s1) = (moved(SpanEnd::Start, run.s0), moved(SpanEnd::End, run.s1));
+    if s1 <= s0 {
+        return run;
+    }
+    SeenRun { s0, s1, share: ((s1 - s0) / run.seen_mm).min(1.0), ..run }
 }
 
 /// The share of the stations from `s0` to `s1` holding a sample.
@@ -1158,6 +1214,7 @@ mod tests {
             trim_sigma: 3.0,
             projector: Vec3::new(150.0, 0.0, 0.0),
             in_view: None,
+            border: None,
             max_beyond_mm: 2.0,
         };
         find_roots(&view)

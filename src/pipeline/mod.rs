@@ -53,6 +53,7 @@ pub mod survey;
 mod tee;
 pub mod trace;
 pub mod trajectory;
+pub mod view_border;
 pub mod weld_edges;
 pub mod weld_equation;
 pub mod workpieces;

@@ -63,6 +63,7 @@ pub(super) fn plan(
         trim_sigma: cfg.fit_trim_sigma,
         projector: Vec3::new(config.camera.baseline_mm, 0.0, 0.0),
         in_view: in_view.as_ref().map(|f| f as &dyn Fn(&Vec3) -> bool),
+        border: ctx.view_border(),
         max_beyond_mm: config.quality.max_joint_beyond_seam_mm,
     };
     let mut roots = Vec::from(fillet::find_roots(&view));

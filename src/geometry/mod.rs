@@ -41,6 +41,13 @@ pub fn round_i64(x: f64) -> i64 {
     if x >= 0.0 { floor_i64(x + 0.5) } else { -floor_i64(-x + 0.5) }
 }
 
+/// The least and greatest of `values`, NaNs skipped (as `f64::min` and
+/// `f64::max` skip them); `(∞, −∞)`, a range that holds nothing, when
+/// there are none.
+pub fn extent(values: impl IntoIterator<Item = f64>) -> (f64, f64) {
+    values.into_iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| (lo.min(v), hi.max(v)))
+}
+
 /// Distance from `p` to the segment `a..b`.
 pub fn distance_to_segment(p: &Vec3, a: &Vec3, b: &Vec3) -> f64 {
     let ab = b - a;
@@ -64,6 +71,14 @@ pub fn distance_to_polyline(p: &Vec3, polyline: &[Vec3]) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_extent_of_values_skips_nans_and_of_none_holds_nothing() {
+        assert_eq!(extent([3.0, -1.5, f64::NAN, 7.25, 0.0]), (-1.5, 7.25));
+        let (lo, hi) = extent(std::iter::empty());
+        assert!(lo > hi, "{lo} {hi}");
+        assert_eq!(extent([f64::NAN]), (f64::INFINITY, f64::NEG_INFINITY));
+    }
 
     #[test]
     fn fast_rounding_matches_the_standard_functions() {

@@ -29,7 +29,7 @@ use crate::geometry::fit::Plane;
 
 use super::context::CameraGrid;
 use super::refit::SeamCurve;
-use crate::geometry::{Vec3, vec3};
+use crate::geometry::{Vec3, extent, vec3};
 
 /// One sample of a plate's boundary: a point on the plate's plane and its
 /// coordinate along the coarse edge.
@@ -566,10 +566,7 @@ pub fn sample_scattered(
             // inside the coarse edge are the plate's, and bound the
             // sample along the edge.
             let along = |p: &Vec3| (p - edge.point).dot(&edge.direction);
-            let (lo, hi) = strip[..=last]
-                .iter()
-                .filter(|(out, _)| *out <= 0.0)
-                .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), (_, p)| (lo.min(along(p)), hi.max(along(p))));
+            let (lo, hi) = extent(strip[..=last].iter().filter(|(out, _)| *out <= 0.0).map(|(_, p)| along(p)));
             let shift = along(&position).clamp(lo, hi) - along(&position);
             let position = position + edge.direction * shift;
             Some(BoundarySample { position, along: along(&position) })
@@ -660,7 +657,7 @@ pub fn rim_refined_extent(
     let [rim, near, deep] = [RimBand::Rows, RimBand::Near, RimBand::Deep].map(sorted);
     // The rows' extent as the cloud shows it, whatever lies in them.
     let in_view = classified.iter().filter(|c| matches!(c.1, RimBand::Rows | RimBand::SightLine)).map(|c| c.0);
-    let (view_lo, view_hi) = in_view.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), a| (lo.min(a), hi.max(a)));
+    let (view_lo, view_hi) = extent(in_view);
     if rim.is_empty() {
         return (lo, hi);
     }

@@ -68,7 +68,7 @@ use std::collections::HashSet;
 
 use crate::cloud::PointCloud;
 use crate::geometry::fit::{Moments, Plane};
-use crate::geometry::{Vec3, vec3};
+use crate::geometry::{Vec3, extent, vec3};
 
 use super::background::PlaneCluster;
 use super::boundary::JOINT_BREAK_SPACINGS;
@@ -706,12 +706,14 @@ fn root_from_flange_edge(view: &TeeView, frame: &WebFrame, sign: f64, side: Side
     // The top's extent from every point at its edge's line, like the
     // flange's evidence above (a station's outermost point would round it).
     let top_on_line: HashSet<usize> = top_line.kept.iter().map(|s| stations.index(s.t)).collect();
-    let (top_lo, top_hi) = top
-        .iter()
-        .filter(|s| {
-            (s.off - top_line.at(s.t)).abs() <= tolerance(top_line.rms_mm) && top_on_line.contains(&stations.index(s.t))
-        })
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), s| (lo.min(s.t), hi.max(s.t)));
+    let (top_lo, top_hi) = extent(
+        top.iter()
+            .filter(|s| {
+                (s.off - top_line.at(s.t)).abs() <= tolerance(top_line.rms_mm)
+                    && top_on_line.contains(&stations.index(s.t))
+            })
+            .map(|s| s.t),
+    );
     let top_at = |t: f64| frame.origin + e * t + frame.u * (frame.middle + sign * top_line.at(t));
     let step = STATION_SPACINGS * spacing / stretch;
     // Past the top's end: off the configured camera's grid, or where no
@@ -848,7 +850,7 @@ struct Stations {
 
 impl Stations {
     fn over(ts: impl Iterator<Item = f64>, spacing: f64) -> Option<Stations> {
-        let (lo, hi) = ts.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), t| (lo.min(t), hi.max(t)));
+        let (lo, hi) = extent(ts);
         if !(lo.is_finite() && hi.is_finite()) {
             return None;
         }
@@ -925,7 +927,7 @@ impl EdgeLine {
                 a: mo - b * mt,
                 b,
                 rms_mm: 0.0,
-                t_range: kept.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), s| (lo.min(s.t), hi.max(s.t))),
+                t_range: extent(kept.iter().map(|s| s.t)),
                 dropped: samples.len() - kept.len(),
                 kept,
             };
@@ -1007,8 +1009,7 @@ struct SeenRun {
 }
 
 fn seen_run(foot: &[f64], flange: &[f64], spacing: f64) -> Option<SeenRun> {
-    let lo = foot.iter().chain(flange).copied().fold(f64::INFINITY, f64::min);
-    let hi = foot.iter().chain(flange).copied().fold(f64::NEG_INFINITY, f64::max);
+    let (lo, hi) = extent(foot.iter().chain(flange).copied());
     if !(lo.is_finite() && hi.is_finite()) {
         return None;
     }

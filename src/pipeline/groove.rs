@@ -42,7 +42,7 @@
 use rayon::prelude::*;
 
 use crate::cloud::{Point, PointCloud, is_valid_point};
-use crate::geometry::{Vec3, vec3};
+use crate::geometry::{Vec3, extent, vec3};
 use crate::joint::JointType;
 
 use super::context::CameraGrid;
@@ -587,8 +587,7 @@ fn rows_under(grid: &CameraGrid, corners: &[Vec3]) -> Option<Vec<(usize, usize, 
         .iter()
         .map(|c| if c.z > MIN_PROJECTED_DEPTH_MM { grid.project(c) } else { None })
         .collect::<Option<_>>()?;
-    let (v_lo, v_hi) =
-        projected.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| (lo.min(p.1), hi.max(p.1)));
+    let (v_lo, v_hi) = extent(projected.iter().map(|p| p.1));
     let first = (v_lo - PIXEL_MARGIN).floor().max(0.0) as usize;
     let last = ((v_hi + PIXEL_MARGIN).ceil().min(height as f64 - 1.0)).max(-1.0);
     if last < first as f64 {

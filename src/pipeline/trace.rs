@@ -14,7 +14,7 @@ use nalgebra::Isometry3;
 use crate::camera::CameraModel;
 use crate::cloud::PointCloud;
 use crate::config::Method;
-use crate::geometry::Vec3;
+use crate::geometry::{Vec3, extent};
 use crate::joint::JointType;
 
 use super::PlanError;
@@ -130,11 +130,7 @@ impl PlanTrace {
     pub(super) fn add_lines(&mut self, lines: &[EdgeLine], points: &[Vec3], plate: impl Fn(&EdgeLine) -> usize) {
         self.edge_lines.extend(lines.iter().enumerate().map(|(rank, line)| {
             let along = |&i: &usize| (points[i] - line.point).dot(&line.direction);
-            let (lo, hi) = line
-                .inliers
-                .iter()
-                .map(along)
-                .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), t| (lo.min(t), hi.max(t)));
+            let (lo, hi) = extent(line.inliers.iter().map(along));
             let (lo, hi) = if lo <= hi { (lo, hi) } else { (0.0, 0.0) };
             TracedLine {
                 plate: plate(line),

@@ -24,7 +24,7 @@
 
 use nalgebra::{Isometry3, Matrix3, Point3, Rotation3, Unit};
 
-use crate::geometry::Vec3;
+use crate::geometry::{Vec3, extent};
 
 use super::refit::SeamCurve;
 
@@ -116,8 +116,8 @@ pub fn seam_order(ends: &[[Vec3; 2]], start_near: Option<Vec3>) -> Vec<(usize, b
             let forward: Vec<bool> = ends.iter().map(|[a, b]| along_first(b - a)).collect();
             let starts: Vec<Vec3> = (0..ends.len()).map(|k| if forward[k] { ends[k][0] } else { ends[k][1] }).collect();
             let spread = |axis: usize| {
-                let values = starts.iter().map(|s| s[axis]);
-                values.clone().fold(f64::NEG_INFINITY, f64::max) - values.fold(f64::INFINITY, f64::min)
+                let (lo, hi) = extent(starts.iter().map(|s| s[axis]));
+                hi - lo
             };
             let axis = if spread(0) >= spread(1) { 0 } else { 1 };
             let mut order: Vec<usize> = (0..ends.len()).collect();

@@ -159,8 +159,7 @@ fn panel(trace: &PlanTrace, classes: &[PointClass], name: char, s: f64) -> Canva
     // The heights shown: the slab's, without its strays, and every marker.
     let mut markers = vec![(0.0, 0.0), edge_at[0], edge_at[1]];
     markers.extend(deepest);
-    let (m_lo, m_hi) =
-        markers.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), m| (lo.min(m.1), hi.max(m.1)));
+    let (m_lo, m_hi) = crate::geometry::extent(markers.iter().map(|m| m.1));
     let mut heights: Vec<f64> = points.iter().map(|(p, _)| p.1).collect();
     heights.sort_unstable_by(f64::total_cmp);
     let pick = |q: f64| heights.get(((heights.len() as f64 - 1.0) * q).round() as usize).copied();

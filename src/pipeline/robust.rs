@@ -544,7 +544,9 @@ fn plan_plates(
     let (mut s0, mut s1) = (a0.max(b0), a1.min(b1));
     if layout == Layout::Lap {
         // The root lies a plate thickness below the edges the samples
-        // saw; never plan a stretch of it the camera did not see.
+        // saw; never plan a stretch of it the camera did not see (where
+        // the image's border cuts the edges obliquely, the root leaves the
+        // image before they do).
         (s0, s1) = ctx.clip_to_view(&weld, s0, s1);
     }
     ctx.trace.record(|t| t.weld = Some(TracedWeld { curve: weld.clone(), span: (s0, s1), normal }));

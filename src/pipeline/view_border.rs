@@ -19,7 +19,10 @@
 //! seam itself when the border runs obliquely across it (a spacing off
 //! the seam, times the slant). Where every kind of evidence near an end
 //! reaches the border, the seam is seen up to the border and ends where
-//! it crosses it ([`ViewBorder::end_at_border`]).
+//! it crosses it ([`ViewBorder::end_at_border`]). A lap's root, a plate
+//! thickness below the edges read, is clipped to the view the same way
+//! where the frame has no grid to project it onto
+//! ([`ViewBorder::outside_mm`], from `Context::clip_to_view`).
 //!
 //! A cloud that is not one camera's view (cropped, or merged from several)
 //! has extremes that are no border: its evidence then does not lie on the
@@ -176,8 +179,8 @@ impl ViewBorder {
         max_move_mm: f64,
     ) -> Option<f64> {
         let heading = *direction * end.outward();
-        // The plane the line leaves by: the nearest crossing ahead of the
-        // other end's side, among the planes the line heads out of.
+        // The plane the line leaves by: of those it heads out through
+        // from this end, the one it crosses first going outward.
         let (plane, t) = self
             .outward
             .iter()

@@ -110,7 +110,7 @@ fn line_ends<'p>(mut line: impl DoubleEndedIterator<Item = &'p Point>) -> Extrem
 
 impl ViewBorder {
     /// The border of the view the cloud's valid points in front of the
-    /// camera span; `None` for fewer than [`MIN_POINTS`] of them.
+    /// camera span; `None` for fewer than 100 of them (`MIN_POINTS`).
     ///
     /// On a pixel grid only the first and last valid pixel of every row
     /// and column are read: along a row `x / z` grows with the column (a

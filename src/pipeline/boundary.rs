@@ -1327,10 +1327,9 @@ mod tests {
     #[test]
     fn a_strip_holding_the_plate_corner_and_a_face_foot_beyond_ends_at_the_corner() {
         // The foot of a lap's upper plate runs on along the edge line past
-        // the lower plate's end, its points on the line itself,
-        // outermost in the corner strip: the sample keeps to where the
-        // plate is.
-        // Wherever the plate's end falls in its strip.
+        // the lower plate's end, its points on the line itself, outermost
+        // in the corner strip: the sample keeps to where the plate is,
+        // wherever the plate's end falls in its strip.
         let edge_x = 3.3;
         let (plane, coarse, params) = test_edge(edge_x);
         for end_y in (0..20).map(|k| 18.0 + 0.1 * k as f64) {

@@ -333,19 +333,15 @@ impl<'a> Context<'a> {
     /// within the border the cloud's rays span ([`ViewBorder`]). A frame of
     /// too few points to show a border is left as it is.
     pub(super) fn clip_to_view(&self, curve: &SeamCurve, s0: f64, s1: f64) -> (f64, f64) {
-        let grid = self.camera_grid();
-        let border = if grid.is_none() { self.view_border() } else { None };
-        if grid.is_none() && border.is_none() {
-            return (s0, s1);
-        }
-        let inside = |s: f64| {
-            let p = curve.at(s);
-            match (&grid, border) {
-                (Some(grid), _) => grid.in_view(&p),
-                (None, Some(border)) => border.outside_mm(&p) <= 0.0,
-                (None, None) => true,
-            }
+        // The border is read only for a frame without the grid.
+        let in_view: Box<dyn Fn(&Vec3) -> bool + '_> = match self.camera_grid() {
+            Some(grid) => Box::new(move |p| grid.in_view(p)),
+            None => match self.view_border() {
+                Some(border) => Box::new(|p| border.outside_mm(p) <= 0.0),
+                None => return (s0, s1),
+            },
         };
+        let inside = |s: f64| in_view(&curve.at(s));
         let steps = ((s1 - s0) / VIEW_CLIP_STEP_MM).ceil().max(1.0) as usize;
         let ss: Vec<f64> = (0..=steps).map(|k| s0 + (s1 - s0) * k as f64 / steps as f64).collect();
         match (ss.iter().position(|&s| inside(s)), ss.iter().rposition(|&s| inside(s))) {

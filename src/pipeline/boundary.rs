@@ -28,6 +28,7 @@ use crate::cloud::{PointCloud, is_valid_point};
 use crate::geometry::fit::Plane;
 
 use super::context::CameraGrid;
+use super::gather::gather_filter_map;
 use super::refit::SeamCurve;
 use crate::geometry::{Vec3, extent, vec3};
 
@@ -650,8 +651,6 @@ pub fn rim_refined_extent(
     along: impl Fn(&Vec3) -> f64 + Sync,
     (lo, hi): (f64, f64),
 ) -> (f64, f64) {
-    use rayon::prelude::*;
-
     // The rows keep half a spacing clear of the fitted edge: an edge whose
     // samples scatter by more than a quarter spacing (two RMS past the
     // clearance) wanders in and out of them, and its rim says nothing.
@@ -670,22 +669,20 @@ pub fn rim_refined_extent(
     // every other point whose line of sight crosses the plate's plane in
     // the rows (the plane n·x = offset meets the line of sight t v at
     // t = offset / n·v), by where it lies along the edge.
-    let classified: Vec<(f64, RimBand)> = cloud
-        .points()
-        .par_iter()
-        .filter(|p| p[0].is_finite())
-        .filter_map(|p| {
-            let v = vec3(p);
-            if plane.signed_distance(&v).abs() <= params.on_plane_mm {
-                let band = RimBand::of(offset(&v), [inner, outer], beside)?;
-                return Some((along(&v), band));
-            }
-            let t = plane.offset / plane.normal.dot(&v);
-            let q = v * t;
-            let crosses = t.is_finite() && t > 0.0 && (outer..=inner).contains(&offset(&q));
-            crosses.then(|| (along(&q), RimBand::SightLine))
-        })
-        .collect();
+    let classified: Vec<(f64, RimBand)> = gather_filter_map(cloud.points(), |_, p| {
+        if !p[0].is_finite() {
+            return None;
+        }
+        let v = vec3(p);
+        if plane.signed_distance(&v).abs() <= params.on_plane_mm {
+            let band = RimBand::of(offset(&v), [inner, outer], beside)?;
+            return Some((along(&v), band));
+        }
+        let t = plane.offset / plane.normal.dot(&v);
+        let q = v * t;
+        let crosses = t.is_finite() && t > 0.0 && (outer..=inner).contains(&offset(&q));
+        crosses.then(|| (along(&q), RimBand::SightLine))
+    });
     let sorted = |wanted: RimBand| {
         let mut at: Vec<f64> = classified.iter().filter(|c| c.1 == wanted).map(|c| c.0).collect();
         at.sort_unstable_by(f64::total_cmp);
@@ -738,10 +735,13 @@ pub fn rim_refined_extent(
     (start, end)
 }
 
-/// Where a point read by [`rim_refined_extent`] lies across the edge.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+/// Where a point read by [`rim_refined_extent`] lies across the edge. (Its
+/// default only fills the slots of a gathered vector before they are
+/// written.)
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 enum RimBand {
     /// On the plate's plane, in the rows the rim follows.
+    #[default]
     Rows,
     /// On the plane, between the rows and the fitted edge.
     Near,

@@ -19,6 +19,7 @@ use std::collections::HashMap;
 
 use rayon::prelude::*;
 
+use super::gather::try_gather;
 use crate::cloud::PointCloud;
 // Two points are close when within the tolerance by the kernels' one
 // predicate, the neighbour counts' own.
@@ -354,9 +355,6 @@ const LATER_COLUMNS: [(i64, i64, i64); 13] = [
 /// (about a hundred kilobytes).
 const VOXELS_PER_JOB: usize = 1024;
 
-/// The points of a parallel chunk when the selected points are gathered.
-const POINTS_PER_CHUNK: usize = 1 << 14;
-
 /// Exact Euclidean clustering of the points selected by `mask`.
 ///
 /// The same clusters as [`euclidean_reference`], which they are tested
@@ -397,11 +395,15 @@ pub(crate) fn euclidean(cloud: &PointCloud, mask: &[bool], tolerance_mm: f64, mi
     if bits.iter().sum::<u32>() <= u32::BITS {
         let layout = VoxelLayout { y_shift: bits[2], x_shift: bits[1] + bits[2] };
         let field = |k: usize, c: i64| (c - low[k] + VOXEL_REACH) as u64;
-        let packed = gather_selected(mask, |i| {
-            let c = voxel_of(i);
-            let key = (field(0, c[0]) << layout.x_shift) | (field(1, c[1]) << layout.y_shift) | field(2, c[2]);
-            Some(PackedEntry((key << u32::BITS) | i as u64))
-        });
+        let packed = try_gather(
+            mask,
+            |_, &m| m,
+            |i, _| {
+                let c = voxel_of(i);
+                let key = (field(0, c[0]) << layout.x_shift) | (field(1, c[1]) << layout.y_shift) | field(2, c[2]);
+                Some(PackedEntry((key << u32::BITS) | i as u64))
+            },
+        );
         if let Some(entries) = packed {
             return join_voxels(entries, points, mask, tolerance_mm, layout, min_points);
         }
@@ -410,16 +412,20 @@ pub(crate) fn euclidean(cloud: &PointCloud, mask: &[bool], tolerance_mm: f64, mi
     // one leaves room for the reach on either side.
     let half = 1i64 << (VOXEL_AXIS_BITS - 1);
     let layout = VoxelLayout { y_shift: VOXEL_AXIS_BITS, x_shift: 2 * VOXEL_AXIS_BITS };
-    let wide = gather_selected(mask, |i| {
-        let mut key = 0u64;
-        for c in voxel_of(i) {
-            if c.abs() >= half - VOXEL_REACH {
-                return None;
+    let wide = try_gather(
+        mask,
+        |_, &m| m,
+        |i, _| {
+            let mut key = 0u64;
+            for c in voxel_of(i) {
+                if c.abs() >= half - VOXEL_REACH {
+                    return None;
+                }
+                key = (key << VOXEL_AXIS_BITS) | (c + half) as u64;
             }
-            key = (key << VOXEL_AXIS_BITS) | (c + half) as u64;
-        }
-        Some((key, i as u32))
-    });
+            Some((key, i as u32))
+        },
+    );
     match wide {
         Some(entries) => join_voxels(entries, points, mask, tolerance_mm, layout, min_points),
         None => euclidean_reference(cloud, mask, tolerance_mm, min_points),
@@ -544,37 +550,6 @@ fn join_voxels<E: VoxelEntry>(
     drop(keyed);
     drop(starts);
     collect(parent, |i| mask[i], min_points)
-}
-
-/// `item(i)` for every index `i` that `mask` selects, in index order, in
-/// one vector of exactly their number (rayon's collect of a filter would
-/// gather per-job pieces and then copy them into a vector grown by
-/// doubling); `None` if any item is.
-fn gather_selected<T: Copy + Default + Send>(
-    mask: &[bool],
-    item: impl Fn(usize) -> Option<T> + Sync,
-) -> Option<Vec<T>> {
-    let counts: Vec<usize> = mask.par_chunks(POINTS_PER_CHUNK).map(|c| c.iter().filter(|&&m| m).count()).collect();
-    let mut gathered = vec![T::default(); counts.iter().sum()];
-    let mut pieces = Vec::with_capacity(counts.len());
-    let mut rest = gathered.as_mut_slice();
-    for &count in &counts {
-        let (piece, tail) = rest.split_at_mut(count);
-        pieces.push(piece);
-        rest = tail;
-    }
-    let complete =
-        pieces.into_par_iter().zip(mask.par_chunks(POINTS_PER_CHUNK)).enumerate().all(|(k, (piece, chunk))| {
-            let selected = chunk.iter().enumerate().filter(|(_, m)| **m).map(|(j, _)| k * POINTS_PER_CHUNK + j);
-            for (slot, i) in piece.iter_mut().zip(selected) {
-                match item(i) {
-                    Some(value) => *slot = value,
-                    None => return false,
-                }
-            }
-            true
-        });
-    complete.then_some(gathered)
 }
 
 /// The straightforward form of [`euclidean`]: voxels in a hash map, each

@@ -46,6 +46,7 @@ use crate::geometry::{Vec3, extent, vec3};
 use crate::joint::JointType;
 
 use super::context::CameraGrid;
+use super::gather::gather_filter_map;
 use super::refit::SeamCurve;
 
 /// A face between these angles from the plate normal is a bevel: V-groove
@@ -448,7 +449,7 @@ pub fn judge(requested: Option<JointType>, profile: &GrooveProfile) -> Result<Jo
 }
 
 /// A point between the edges in the seam's axes.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone, Copy, Default)]
 struct Across {
     /// Along the seam, mm.
     s: f64,
@@ -539,7 +540,7 @@ pub fn probe(cloud: &PointCloud, setting: &ProbeSetting) -> GrooveProfile {
                 .flat_map_iter(|&(v, u0, u1)| points[v * width + u0..=v * width + u1].iter().filter_map(read))
                 .collect()
         }
-        None => points.par_iter().filter_map(read).collect(),
+        None => gather_filter_map(points, |_, p| read(p)),
     };
     let collected = on_surfaces(collected, SURFACE_RADIUS_SPACINGS * spacing);
 

@@ -35,6 +35,7 @@ pub mod clustering;
 mod context;
 pub mod edge_points;
 pub mod fillet;
+mod gather;
 pub mod grid_search;
 pub mod groove;
 pub mod input;

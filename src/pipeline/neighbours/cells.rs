@@ -26,6 +26,7 @@ use rayon::prelude::*;
 use crate::cloud::Point;
 #[cfg(doc)]
 use crate::kernels::within;
+use crate::pipeline::gather::gather;
 
 /// Cell coordinates are packed into 21 bits each. Sanitised clouds lie
 /// within 3 m of the camera and 80° of its axis (17 m across at most), so
@@ -234,12 +235,8 @@ impl CellIndex {
     /// rounding.
     pub(crate) fn for_radius(cloud_points: &[Point], radius_mm: f64) -> CellIndex {
         let inverse = 1.0 / (radius_mm * CELL_MARGIN);
-        let mut keyed: Vec<(u64, u32)> = cloud_points
-            .par_iter()
-            .enumerate()
-            .filter(|(_, p)| p[0].is_finite())
-            .map(|(i, p)| (cell_key(p, inverse), i as u32))
-            .collect();
+        let mut keyed: Vec<(u64, u32)> =
+            gather(cloud_points, |_, p| p[0].is_finite(), |i, p| (cell_key(p, inverse), i as u32));
         keyed.par_sort_unstable();
 
         // Each axis ends in a lane block's worth of padding, so that a

@@ -175,8 +175,8 @@ fn by_cell<const N: usize>(
         },
     )?;
     let mut is_edge = vec![false; n];
-    for (i, edge) in answers {
-        is_edge[i as usize] = edge;
+    for (i, edge) in answers.into_points() {
+        is_edge[i] = edge;
     }
     Some(plates.map(|plate| plate.members.iter().copied().filter(|&i| is_edge[i as usize]).collect()))
 }

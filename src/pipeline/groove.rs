@@ -918,11 +918,10 @@ mod tests {
         let radius_sq = (radius * radius) as f32;
         let keep: Vec<bool> = coords
             .iter()
-            .enumerate()
-            .map(|(i, p)| {
+            .map(|p| {
                 // The point itself is among them.
                 let mut found = 0;
-                index.visit_within(i, p, radius_sq, radius_sq * (1.0 + 1e-5), |_| {
+                index.visit_within(p, radius_sq, radius_sq * (1.0 + 1e-5), |_| {
                     found += 1;
                     if found > MIN_SURFACE_NEIGHBOURS { ControlFlow::Break(()) } else { ControlFlow::Continue(()) }
                 });

@@ -24,8 +24,8 @@ use crate::geometry::{Vec3, ceil_i64, floor_i64};
 use super::grid_search::{LANES, Span};
 use super::scale::DensityMap;
 use crate::kernels::{self, TileScales, within};
-use cells::CellIndex;
 pub(crate) use cells::Neighbourhood;
+use cells::{CellAnswers, CellIndex};
 
 /// The most neighbours of one point a sampled visit reads: more than any
 /// frame of the paper's camera gives within its field of view at its
@@ -39,19 +39,19 @@ pub struct NeighbourSearch<'a> {
     camera: &'a CameraModel,
     radius: f32,
     radius_sq: f32,
-    index: Index,
+    index: Index<'a>,
     /// The full-plane counts measured from the cloud itself, when they
     /// replace the camera's ([`super::scale`]).
     measured: Option<DensityMap>,
 }
 
 /// How the neighbours of a point are found.
-enum Index {
+enum Index<'a> {
     /// An organized cloud: its pixel window.
     Grid,
     /// An unorganized cloud: cells as wide as the radius, whose queries
     /// stop early.
-    Cells(CellIndex),
+    Cells(CellIndex<'a>),
     /// The kiddo KD-tree of the reference search.
     #[cfg(test)]
     KdTree(KdIndex),
@@ -156,7 +156,7 @@ impl<'a> NeighbourSearch<'a> {
             }
             Index::Cells(cells) => {
                 // The cells give candidates; the shared predicate decides.
-                cells.visit_within(i, p, self.radius_sq, self.radius_sq * (1.0 + 1e-5), visit);
+                cells.visit_within(p, self.radius_sq, self.radius_sq * (1.0 + 1e-5), visit);
             }
             #[cfg(test)]
             Index::KdTree(index) => {
@@ -230,16 +230,16 @@ impl NeighbourSearch<'_> {
     /// neighbours read from candidates gathered once per cell
     /// ([`CellIndex::query_by_cell`]): the same neighbours in the same
     /// order as [`NeighbourSearch::visit_until`], for less work when every
-    /// point is queried. The answers come with their points' indices, in
-    /// no particular order; `None` on a pixel grid, which is searched by
-    /// window.
-    pub(crate) fn query_by_cell<S, T: Send + Clone + Default>(
+    /// point is queried. The answers come in the cells' order, each point's
+    /// index found again as they are read ([`CellAnswers::into_points`]);
+    /// `None` on a pixel grid, which is searched by window.
+    pub(crate) fn query_by_cell<S, T: Send + Clone + Default, W: Fn(usize) -> bool + Sync>(
         &self,
         init: impl Fn() -> S + Sync,
-        wanted: impl Fn(usize) -> bool + Sync,
+        wanted: W,
         prepare: impl Fn(&mut S, &Neighbourhood) + Sync,
         query: impl Fn(&mut S, usize, &PointNeighbours) -> T + Sync,
-    ) -> Option<Vec<(u32, T)>> {
+    ) -> Option<CellAnswers<'_, T, W>> {
         let Index::Cells(cells) = &self.index else { return None };
         let points = self.cloud.points();
         Some(cells.query_by_cell(init, wanted, prepare, |state, hood, i| {

@@ -241,7 +241,7 @@ fn count_within(index: &CellIndex, points: &[Point], i: usize, radius_mm: f64, c
     let p = points[i];
     let r_sq = (radius_mm * radius_mm) as f32;
     let mut n = 0;
-    index.visit_near(i, &p, r_sq, |_, q| {
+    index.visit_near(&p, r_sq, |_, q| {
         n += crate::kernels::within(&p, q, r_sq) as u32;
         if n >= cap { ControlFlow::Break(()) } else { ControlFlow::Continue(()) }
     });

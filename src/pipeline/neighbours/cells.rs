@@ -2,18 +2,25 @@
 //! without a pixel grid.
 //!
 //! With cells as wide as the search radius, every neighbour of a point lies
-//! in its own cell or one of the 26 around it. The points are stored in
-//! cell order, so a cell's points are one contiguous run, and each occupied
-//! cell keeps the list of its occupied neighbour cells, found once when the
-//! index is built rather than once per query. A query therefore costs a
-//! scan of at most 27 runs, stopping as soon as its visitor has what it
-//! needs (a count up to a threshold, a bounded sample for a normal); each
-//! cell also keeps the bounding box of its points, so a dense clump just
-//! out of reach costs one box test, not a scan.
+//! in its own cell or one of the 26 around it. The points' indices are
+//! stored in cell order, so a cell's points are one contiguous run, and
+//! each occupied cell keeps the list of its occupied neighbour cells, found
+//! once when the index is built rather than once per query. A query
+//! therefore costs a scan of at most 27 runs, stopping as soon as its
+//! visitor has what it needs (a count up to a threshold, a bounded sample
+//! for a normal); each cell also keeps the bounding box of its points, so a
+//! dense clump just out of reach costs one box test, not a scan.
 //!
 //! Building sorts the points by cell, on rayon, and the order is fixed by
 //! (cell, cloud index), so queries visit neighbours in the same order on
 //! every run and every machine.
+//!
+//! The index reads the cloud's own coordinates through those indices and
+//! keeps no copy of them: a copy in cell order, one array per axis, made a
+//! point query's loads contiguous, but it was as large as the cloud itself,
+//! and it was the largest part of the index. The queries that read every
+//! point ([`CellIndex::query_by_cell`]) gather each cell's candidates into
+//! such arrays once for the cell's points anyway ([`Neighbourhood`]).
 //!
 //! For a few thousand queries (the spacing measurement) no index of the
 //! cloud pays: [`counts_around`] lists the few thousand query points by
@@ -49,18 +56,19 @@ struct Cell {
     max: [f32; 3],
 }
 
-/// The index: points in cell order, the occupied cells and their
-/// neighbourhoods.
-pub(crate) struct CellIndex {
-    /// The points' coordinates in cell order, one array per axis, so a
-    /// cell's distances are computed lanes at a time.
-    xs: Vec<f32>,
-    ys: Vec<f32>,
-    zs: Vec<f32>,
+/// The index: the points' indices in cell order, the occupied cells and
+/// their neighbourhoods.
+pub(crate) struct CellIndex<'a> {
+    /// The cloud's points, as given.
+    points: &'a [Point],
     /// Cell-ordered position → cloud point index.
     index_of: Vec<u32>,
-    /// Cloud point index → its cell (`u32::MAX` for invalid points).
-    cell_of_point: Vec<u32>,
+    /// The occupied cells' packed keys, ascending: a point's cell is found
+    /// by its key, which costs a few comparisons per query but no array
+    /// the size of the cloud.
+    keys: Vec<u64>,
+    /// The inverse of the cells' width, which gives a point its key.
+    inverse_cell_mm: f64,
     cells: Vec<Cell>,
     /// The occupied cells among each cell's 27 (itself first), as ranges
     /// of `neighbour_cells` given by `neighbour_start`.
@@ -228,28 +236,23 @@ pub(crate) fn counts_around(points: &[Point], samples: &[Point], radius_mm: f64,
     counts.into_iter().map(|n| n.min(cap)).collect()
 }
 
-impl CellIndex {
+impl<'a> CellIndex<'a> {
     /// Indexes the valid (finite) points of `cloud_points` for queries
     /// within `radius_mm`: cells a hair wider than the radius, so that a
     /// neighbour exactly at the radius never falls two cells away through
     /// rounding.
-    pub(crate) fn for_radius(cloud_points: &[Point], radius_mm: f64) -> CellIndex {
+    pub(crate) fn for_radius(cloud_points: &'a [Point], radius_mm: f64) -> CellIndex<'a> {
         let inverse = 1.0 / (radius_mm * CELL_MARGIN);
         let mut keyed: Vec<(u64, u32)> =
             gather(cloud_points, |_, p| p[0].is_finite(), |i, p| (cell_key(p, inverse), i as u32));
         keyed.par_sort_unstable();
 
-        // Each axis ends in a lane block's worth of padding, so that a
-        // block starting at any point's position can be read whole
-        // (`visit_within`); the padding is never within any radius.
-        let axis = |a: usize| -> Vec<f32> { keyed.par_iter().map(|&(_, i)| cloud_points[i as usize][a]).collect() };
-        let (xs, ys, zs) = (axis(0), axis(1), axis(2));
         let index_of: Vec<u32> = keyed.par_iter().map(|&(_, i)| i).collect();
         // Sized once: the cells are counted before they are listed.
         let occupied = if keyed.is_empty() { 0 } else { 1 + keyed.par_windows(2).filter(|w| w[0].0 != w[1].0).count() };
         let mut keys: Vec<u64> = Vec::with_capacity(occupied);
         let mut cells: Vec<Cell> = Vec::with_capacity(occupied);
-        for (position, &(key, _)) in keyed.iter().enumerate() {
+        for (position, &(key, i)) in keyed.iter().enumerate() {
             if keys.last() != Some(&key) {
                 keys.push(key);
                 cells.push(Cell {
@@ -261,34 +264,42 @@ impl CellIndex {
             }
             let cell = cells.last_mut().expect("a cell was just pushed");
             cell.end = position as u32 + 1;
-            let p = [xs[position], ys[position], zs[position]];
-            for ((lo, hi), v) in cell.min.iter_mut().zip(cell.max.iter_mut()).zip(p) {
+            for ((lo, hi), &v) in cell.min.iter_mut().zip(cell.max.iter_mut()).zip(&cloud_points[i as usize]) {
                 *lo = lo.min(v);
                 *hi = hi.max(v);
             }
         }
         drop(keyed);
 
-        let mut cell_of_point = vec![u32::MAX; cloud_points.len()];
-        for (c, cell) in cells.iter().enumerate() {
-            for &i in &index_of[cell.start as usize..cell.end as usize] {
-                cell_of_point[i as usize] = c as u32;
-            }
-        }
-
         let (neighbour_start, neighbour_cells) = neighbourhoods(&keys);
-        CellIndex { xs, ys, zs, index_of, cell_of_point, cells, neighbour_start, neighbour_cells }
+        CellIndex {
+            points: cloud_points,
+            index_of,
+            keys,
+            inverse_cell_mm: inverse,
+            cells,
+            neighbour_start,
+            neighbour_cells,
+        }
     }
 
-    /// The runs of the cell-ordered arrays of the cells around cloud point
-    /// `i` (at `p`) whose boxes come within `reach_sq` of it, its own cell
-    /// first; none for an invalid point, which has no cell.
+    /// The cell of `p`, one of the indexed points; `None` for an invalid
+    /// point, which has no cell.
     #[inline]
-    fn runs_in_reach<'s>(&'s self, i: usize, p: &'s Point, reach_sq: f32) -> impl Iterator<Item = Range<usize>> + 's {
-        let around = match self.cell_of_point.get(i).filter(|&&c| c != u32::MAX) {
-            Some(&cell) => {
-                self.neighbour_start[cell as usize] as usize..self.neighbour_start[cell as usize + 1] as usize
-            }
+    fn cell_of(&self, p: &Point) -> Option<usize> {
+        if !p[0].is_finite() {
+            return None;
+        }
+        self.keys.binary_search(&cell_key(p, self.inverse_cell_mm)).ok()
+    }
+
+    /// The runs of the cell-ordered arrays of the cells around `p`, one of
+    /// the indexed points, whose boxes come within `reach_sq` of it, its
+    /// own cell first; none for an invalid point.
+    #[inline]
+    fn runs_in_reach<'s>(&'s self, p: &'s Point, reach_sq: f32) -> impl Iterator<Item = Range<usize>> + 's {
+        let around = match self.cell_of(p) {
+            Some(cell) => self.neighbour_start[cell] as usize..self.neighbour_start[cell + 1] as usize,
             None => 0..0,
         };
         self.neighbour_cells[around]
@@ -299,31 +310,25 @@ impl CellIndex {
     }
 
     /// Calls `visit(j, q)` for candidates `q` (cloud index `j`) of every
-    /// point within `reach_sq` of cloud point `i` (at `p`), nearest cells
-    /// first, until it breaks. Candidates are a superset of the points
+    /// point within `reach_sq` of `p`, one of the indexed points, nearest
+    /// cells first, until it breaks. Candidates are a superset of the points
     /// within the reach: the caller applies its own predicate. An invalid
     /// point has no cell and no neighbours. The reference of
     /// [`CellIndex::visit_within`]'s order.
     #[cfg(test)]
-    pub(crate) fn visit_near(
-        &self,
-        i: usize,
-        p: &Point,
-        reach_sq: f32,
-        mut visit: impl FnMut(usize, &Point) -> ControlFlow<()>,
-    ) {
-        for run in self.runs_in_reach(i, p, reach_sq) {
-            for k in run {
-                let q = [self.xs[k], self.ys[k], self.zs[k]];
-                if visit(self.index_of[k] as usize, &q).is_break() {
+    pub(crate) fn visit_near(&self, p: &Point, reach_sq: f32, mut visit: impl FnMut(usize, &Point) -> ControlFlow<()>) {
+        for run in self.runs_in_reach(p, reach_sq) {
+            for &j in &self.index_of[run] {
+                if visit(j as usize, &self.points[j as usize]).is_break() {
                     return;
                 }
             }
         }
     }
 
-    /// Calls `visit(j)` for every point `j` within `radius_sq` of cloud
-    /// point `i` (at `p`) by the kernels' predicate ([`within`]), nearest
+    /// Calls `visit(j)` for every point `j` within `radius_sq` of `p`, one
+    /// of the indexed points (a point elsewhere may lie in no cell, and then
+    /// has no neighbours), by the kernels' predicate ([`within`]), nearest
     /// cells first, until it breaks: the same visits as `visit_near` (the
     /// tests' candidates) with that predicate in the visitor, with the
     /// distances of a cell's points computed [`LANES_PER_TEST`] at a time.
@@ -331,19 +336,17 @@ impl CellIndex {
     #[inline]
     pub(crate) fn visit_within(
         &self,
-        i: usize,
         p: &Point,
         radius_sq: f32,
         reach_sq: f32,
         mut visit: impl FnMut(usize) -> ControlFlow<()>,
     ) {
-        for run in self.runs_in_reach(i, p, reach_sq) {
+        for run in self.runs_in_reach(p, reach_sq) {
             let (start, end) = (run.start, run.end);
             let mut block = start;
             while block < end {
                 let stop = (block + LANES_PER_TEST).min(end);
-                let mut inside =
-                    within_mask(p, &self.xs[block..stop], &self.ys[block..stop], &self.zs[block..stop], radius_sq);
+                let mut inside = within_mask_of(p, &self.index_of[block..stop], self.points, radius_sq);
                 while inside != 0 {
                     let lane = inside.trailing_zeros() as usize;
                     inside &= inside - 1;
@@ -357,35 +360,36 @@ impl CellIndex {
     }
 }
 
-impl CellIndex {
+impl CellIndex<'_> {
     /// Runs `query(state, hood, i)` for every point `i` of the index for
     /// which `wanted(i)` holds, cell by cell on rayon, `hood` holding the
     /// candidates of the cell's points ([`Neighbourhood`]), after
-    /// `prepare(state, hood)` has seen them once; returns each
-    /// point's answer with its cloud index, in no particular order. A
+    /// `prepare(state, hood)` has seen them once; returns the answers. A
     /// query per point then reads one contiguous run of candidates instead
     /// of up to 27 cells, and the run is gathered once for the cell's
     /// points. Cells without a wanted point are skipped.
     ///
     /// The answers go straight into one vector of exactly their number,
-    /// each cell's into its own part: collected from rayon's per-job
-    /// pieces, they took twice their size at the plane criterion, the
-    /// measured path's peak.
-    pub(crate) fn query_by_cell<S, T: Send + Clone + Default>(
+    /// each cell's into its own part, in cell order: collected from rayon's
+    /// per-job pieces, they took twice their size at the plane criterion,
+    /// and each answer carried its point's index (four bytes beside the
+    /// edge criterion's one-byte answer), which the cell order gives again
+    /// ([`CellAnswers::into_points`]).
+    pub(crate) fn query_by_cell<S, T: Send + Clone + Default, W: Fn(usize) -> bool + Sync>(
         &self,
         init: impl Fn() -> S + Sync,
-        wanted: impl Fn(usize) -> bool + Sync,
+        wanted: W,
         prepare: impl Fn(&mut S, &Neighbourhood) + Sync,
         query: impl Fn(&mut S, &Neighbourhood, usize) -> T + Sync,
-    ) -> Vec<(u32, T)> {
+    ) -> CellAnswers<'_, T, W> {
         let members = |cell: &Cell| &self.index_of[cell.start as usize..cell.end as usize];
         let wanted_in: Vec<u32> = self
             .cells
             .par_iter()
             .map(|cell| members(cell).iter().filter(|&&i| wanted(i as usize)).count() as u32)
             .collect();
-        let mut answers = vec![(0u32, T::default()); wanted_in.iter().map(|&n| n as usize).sum()];
-        let mut parts: Vec<&mut [(u32, T)]> = Vec::with_capacity(self.cells.len());
+        let mut answers = vec![T::default(); wanted_in.iter().map(|&n| n as usize).sum()];
+        let mut parts: Vec<&mut [T]> = Vec::with_capacity(self.cells.len());
         let mut rest = answers.as_mut_slice();
         for &n in &wanted_in {
             let (part, tail) = rest.split_at_mut(n as usize);
@@ -402,11 +406,28 @@ impl CellIndex {
                 prepare(state, hood);
                 let cell_wanted = members(cell).iter().filter(|&&i| wanted(i as usize));
                 for (slot, &i) in part.iter_mut().zip(cell_wanted) {
-                    *slot = (i, query(state, hood, i as usize));
+                    *slot = query(state, hood, i as usize);
                 }
             },
         );
-        answers
+        CellAnswers { index: self, wanted, answers }
+    }
+}
+
+/// The answers of [`CellIndex::query_by_cell`], one per wanted point, in
+/// the index's cell order.
+pub(crate) struct CellAnswers<'i, T, W> {
+    index: &'i CellIndex<'i>,
+    wanted: W,
+    answers: Vec<T>,
+}
+
+impl<'i, T: 'i, W: Fn(usize) -> bool + 'i> CellAnswers<'i, T, W> {
+    /// Each wanted point's cloud index with its answer, in cell order: the
+    /// wanted points found again by walking the cells as the query did.
+    pub(crate) fn into_points(self) -> impl Iterator<Item = (usize, T)> + 'i {
+        let CellAnswers { index, wanted, answers } = self;
+        index.index_of.iter().map(|&i| i as usize).filter(move |&i| wanted(i)).zip(answers)
     }
 }
 
@@ -430,24 +451,21 @@ impl Neighbourhood {
     /// Fills this with the candidates of the points of cell `c`.
     fn gather(&mut self, index: &CellIndex, c: usize) {
         let (xs, ys, zs, index_of) = (&mut self.xs, &mut self.ys, &mut self.zs, &mut self.index_of);
-        for v in [&mut *xs, &mut *ys, &mut *zs] {
-            v.clear();
-        }
         index_of.clear();
         let around = index.neighbour_start[c] as usize..index.neighbour_start[c + 1] as usize;
         for &n in &index.neighbour_cells[around] {
             let cell = &index.cells[n as usize];
-            let run = cell.start as usize..cell.end as usize;
-            xs.extend_from_slice(&index.xs[run.clone()]);
-            ys.extend_from_slice(&index.ys[run.clone()]);
-            zs.extend_from_slice(&index.zs[run.clone()]);
-            index_of.extend_from_slice(&index.index_of[run]);
+            index_of.extend_from_slice(&index.index_of[cell.start as usize..cell.end as usize]);
         }
         // Whole blocks: the padding's distance from any finite point is
         // infinite, so never within a radius.
         let padded = index_of.len().next_multiple_of(HOOD_LANES);
-        for v in [xs, ys, zs] {
+        for v in [&mut *xs, &mut *ys, &mut *zs] {
+            v.clear();
             v.resize(padded, f32::INFINITY);
+        }
+        for (((x, y), z), &j) in xs.iter_mut().zip(ys.iter_mut()).zip(zs.iter_mut()).zip(index_of.iter()) {
+            [*x, *y, *z] = index.points[j as usize];
         }
         index_of.resize(padded, 0);
     }
@@ -573,6 +591,19 @@ pub(crate) const HOOD_LANES: usize = 16;
 /// together.
 const LANES_PER_TEST: usize = 16;
 
+/// [`within_mask`] of the points `indices` of `points`: bit `l` set when
+/// point `indices[l]` is within `radius_sq` of `p`, by the same arithmetic.
+#[inline(always)]
+fn within_mask_of(p: &Point, indices: &[u32], points: &[Point], radius_sq: f32) -> u32 {
+    let mut mask = 0u32;
+    for (lane, &j) in indices.iter().enumerate() {
+        let q = &points[j as usize];
+        let (dx, dy, dz) = (p[0] - q[0], p[1] - q[1], p[2] - q[2]);
+        mask |= ((dx * dx + dy * dy + dz * dz <= radius_sq) as u32) << lane;
+    }
+    mask
+}
+
 /// Bit `l` set when point `l` of the coordinate slices is within
 /// `radius_sq` of `p`, by [`within`]'s arithmetic term for term (so the
 /// same answer), written as a loop the compiler runs in vector lanes.
@@ -637,10 +668,10 @@ mod tests {
             let points = scattered(n);
             for radius in [0.3f32, 0.8, 2.5] {
                 let index = CellIndex::for_radius(&points, radius as f64);
-                for (i, p) in points.iter().enumerate().filter(|(_, p)| p[0].is_finite()).take(200) {
+                for p in points.iter().filter(|p| p[0].is_finite()).take(200) {
                     let r_sq = radius * radius;
                     let mut found = Vec::new();
-                    index.visit_near(i, p, r_sq * (1.0 + 1e-5), |j, q| {
+                    index.visit_near(p, r_sq * (1.0 + 1e-5), |j, q| {
                         assert_eq!(*q, points[j]);
                         let d = [q[0] - p[0], q[1] - p[1], q[2] - p[2]];
                         if d[0] * d[0] + d[1] * d[1] + d[2] * d[2] <= r_sq {
@@ -649,7 +680,7 @@ mod tests {
                         ControlFlow::Continue(())
                     });
                     let mut within_order = Vec::new();
-                    index.visit_within(i, p, r_sq, r_sq * (1.0 + 1e-5), |j| {
+                    index.visit_within(p, r_sq, r_sq * (1.0 + 1e-5), |j| {
                         within_order.push(j);
                         ControlFlow::Continue(())
                     });
@@ -693,15 +724,15 @@ mod tests {
                         (order, counts, flagged, samples)
                     },
                 );
-                let mut answered: Vec<u32> = answers.iter().map(|(i, _)| *i).collect();
+                let answers: Vec<_> = answers.into_points().collect();
+                let mut answered: Vec<usize> = answers.iter().map(|(i, _)| *i).collect();
                 answered.sort_unstable();
-                let wanted: Vec<u32> =
-                    (0..n as u32).filter(|&i| i % 5 != 2 && points[i as usize][0].is_finite()).collect();
+                let wanted: Vec<usize> = (0..n).filter(|&i| i % 5 != 2 && points[i][0].is_finite()).collect();
                 assert_eq!(answered, wanted, "every wanted valid point once");
                 for (i, (order, counts, flagged, samples)) in answers {
-                    let (i, p) = (i as usize, &points[i as usize]);
+                    let p = &points[i];
                     let mut expected = Vec::new();
-                    index.visit_within(i, p, r_sq, reach, |j| {
+                    index.visit_within(p, r_sq, reach, |j| {
                         expected.push(j);
                         ControlFlow::Continue(())
                     });
@@ -754,7 +785,7 @@ mod tests {
         points.push([0.9, 0.1, 500.1]);
         let index = CellIndex::for_radius(&points, 1.0);
         let mut visited = Vec::new();
-        index.visit_near(0, &points[0], 1.0, |j, _| {
+        index.visit_near(&points[0], 1.0, |j, _| {
             visited.push(j);
             if visited.len() == 10 { ControlFlow::Break(()) } else { ControlFlow::Continue(()) }
         });
@@ -768,7 +799,7 @@ mod tests {
         points.push([0.4, 0.5, 500.5]);
         let index = CellIndex::for_radius(&points, 1.0);
         let mut candidates = 0;
-        index.visit_near(20_000, &points[20_000], 1.0, |_, _| {
+        index.visit_near(&points[20_000], 1.0, |_, _| {
             candidates += 1;
             ControlFlow::Continue(())
         });
@@ -781,7 +812,7 @@ mod tests {
         let points = vec![[1.0e9f32, 0.0, 500.0], [-1.0e9, 0.0, 500.0], [0.0, 0.0, 500.0]];
         let index = CellIndex::for_radius(&points, 0.05);
         let mut seen = 0;
-        index.visit_near(2, &points[2], 0.0025, |_, _| {
+        index.visit_near(&points[2], 0.0025, |_, _| {
             seen += 1;
             ControlFlow::Continue(())
         });

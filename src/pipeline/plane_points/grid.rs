@@ -253,8 +253,7 @@ pub(super) fn classify<T: BlockThreshold>(search: &NeighbourSearch, threshold: &
         |cache, i, neighbours| decide(threshold.needed_and_count_of(search, i, neighbours, cache, &cap_of)),
     );
     if let Some(answers) = by_cell {
-        for (i, (m, c, f)) in answers {
-            let i = i as usize;
+        for (i, (m, c, f)) in answers.into_points() {
             (mask[i], counts[i], full[i]) = (m, c, f);
         }
         return PlanePoints { mask, counts, full };

@@ -554,7 +554,6 @@ pub fn sample_scattered(
     spacing_mm: f64,
 ) -> Boundary {
     use rayon::prelude::*;
-    use std::collections::BTreeMap;
 
     if !(spacing_mm.is_finite() && spacing_mm > 0.0) {
         return Boundary::default();
@@ -563,37 +562,39 @@ pub fn sample_scattered(
     // point about as often as it holds it, and its outermost point is then
     // a row in; at two the row is nearly always there.
     let strip_mm = STRIP_SPACINGS * spacing_mm;
-    // (strip, outward offset, point) of every on-plane point in the band.
-    let in_band: Vec<(i64, f64, Vec3)> = cloud
-        .points()
-        .par_iter()
-        .filter(|p| p[0].is_finite())
-        .filter_map(|p| {
-            let v = vec3(p);
-            let d = v - edge.point;
-            let out = d.dot(&edge.outward);
-            let on_plane = plane.signed_distance(&v).abs() <= params.on_plane_mm;
-            (on_plane && out.abs() <= params.band_mm)
-                .then(|| (crate::geometry::floor_i64(d.dot(&edge.direction) / strip_mm), out, v))
+    let points = cloud.points();
+    let mut in_band: Vec<BandPoint> = gather_filter_map(points, |i, p| {
+        if !p[0].is_finite() {
+            return None;
+        }
+        let v = vec3(p);
+        let d = v - edge.point;
+        let out = d.dot(&edge.outward);
+        let on_plane = plane.signed_distance(&v).abs() <= params.on_plane_mm;
+        (on_plane && out.abs() <= params.band_mm).then(|| BandPoint {
+            // A cloud spans a few thousand strips; clamping could only
+            // join strips far past any plate.
+            strip: crate::geometry::floor_i64(d.dot(&edge.direction) / strip_mm).clamp(i32::MIN.into(), i32::MAX.into())
+                as i32,
+            out,
+            index: i as u32,
         })
-        .collect();
-    let mut strips: BTreeMap<i64, Vec<(f64, Vec3)>> = BTreeMap::new();
-    for (strip, out, v) in in_band {
-        strips.entry(strip).or_default().push((out, v));
-    }
-    for strip in strips.values_mut() {
-        strip.sort_unstable_by(|a, b| a.0.total_cmp(&b.0));
-    }
-    let hole_mm = hole_threshold(strips.values().map(Vec::as_slice), params.band_mm, spacing_mm);
-    let samples = strips
-        .values()
+    });
+    // Strip by strip, each walked outward; the index settles a tie, so the
+    // order does not depend on the sort.
+    in_band
+        .par_sort_unstable_by(|a, b| a.strip.cmp(&b.strip).then(a.out.total_cmp(&b.out)).then(a.index.cmp(&b.index)));
+    let strips = || in_band.chunk_by(|a, b| a.strip == b.strip);
+    let point = |b: &BandPoint| vec3(&points[b.index as usize]);
+    let hole_mm = hole_threshold(strips(), params.band_mm, spacing_mm);
+    let samples = strips()
         .filter_map(|strip| {
             let last = strip_boundary(strip, hole_mm, params.band_mm)?;
-            let (last_out, last_point) = strip[last];
+            let (last_out, last_point) = (strip[last].out, point(&strip[last]));
             // The k points of the strip's last row (within half a spacing
             // of the outermost) split the spacing beyond the row into k + 1
             // gaps on average: the plate ends one gap beyond the outermost.
-            let row = strip[..=last].iter().filter(|(out, _)| *out >= last_out - spacing_mm / 2.0).count();
+            let row = strip[..=last].iter().filter(|b| b.out >= last_out - spacing_mm / 2.0).count();
             let beyond = spacing_mm / (row + 1) as f64;
             let position = plane.project(&last_point) + edge.outward * beyond;
             // The walk may end on a point past the plate's end along the
@@ -604,7 +605,7 @@ pub fn sample_scattered(
             // inside the coarse edge are the plate's, and bound the
             // sample along the edge.
             let along = |p: &Vec3| (p - edge.point).dot(&edge.direction);
-            let (lo, hi) = extent(strip[..=last].iter().filter(|(out, _)| *out <= 0.0).map(|(_, p)| along(p)));
+            let (lo, hi) = extent(strip[..=last].iter().filter(|b| b.out <= 0.0).map(|b| along(&point(b))));
             let shift = along(&position).clamp(lo, hi) - along(&position);
             let position = position + edge.direction * shift;
             Some(BoundarySample { position, along: along(&position) })
@@ -698,8 +699,7 @@ pub fn rim_refined_extent(
     // A tilted plate's voxel centroids, or a camera's anisotropic grid,
     // leave wider steps along the rim than the mean spacing says: the
     // rim's own steps set the break, as the plate's do for the strips.
-    let mut steps: Vec<f64> = rim.windows(2).map(|w| w[1] - w[0]).collect();
-    let typical = percentile_99(&mut steps).unwrap_or(0.0);
+    let typical = percentile_99(rim.windows(2).map(|w| w[1] - w[0])).unwrap_or(0.0);
     let break_mm = (RIM_BREAK_SPACINGS * spacing_mm).max(HOLE_OVER_INTERIOR * typical);
     let half = spacing_mm / 2.0;
     let border_mm = RIM_AT_BORDER_SPACINGS * spacing_mm;
@@ -908,18 +908,58 @@ const HOLE_OVER_INTERIOR: f64 = 1.25;
 /// error), and never under [`MIN_HOLE_SPACINGS`] spacings. Voxel centroids
 /// of a tilted plate, or a camera's anisotropic grid, leave wider gaps
 /// than the mean spacing says; this keeps them from ending the plate.
-fn hole_threshold<'a>(strips: impl Iterator<Item = &'a [(f64, Vec3)]>, band_mm: f64, spacing_mm: f64) -> f64 {
+fn hole_threshold<'a>(strips: impl Iterator<Item = &'a [BandPoint]> + Clone, band_mm: f64, spacing_mm: f64) -> f64 {
     let inner = -band_mm / 3.0;
-    let mut gaps: Vec<f64> =
-        strips.flat_map(|strip| strip.windows(2).filter(move |w| w[1].0 <= inner).map(|w| w[1].0 - w[0].0)).collect();
+    let gaps =
+        strips.flat_map(|strip| strip.windows(2).filter(move |w| w[1].out <= inner).map(|w| w[1].out - w[0].out));
     let floor = MIN_HOLE_SPACINGS * spacing_mm;
-    percentile_99(&mut gaps).map_or(floor, |q99| floor.max(HOLE_OVER_INTERIOR * q99))
+    percentile_99(gaps).map_or(floor, |q99| floor.max(HOLE_OVER_INTERIOR * q99))
 }
 
-/// The 99th percentile of `values` (reordered in place), `None` when empty.
-fn percentile_99(values: &mut [f64]) -> Option<f64> {
-    let k = (values.len() * 99 / 100).min(values.len().checked_sub(1)?);
-    Some(*values.select_nth_unstable_by(k, f64::total_cmp).1)
+/// The 99th percentile of `values`, the value a sort puts at rank
+/// ⌊0.99 n⌋ (the last for fewer than a hundred); `None` when there are
+/// none. The values are read twice, counted and then scanned keeping the
+/// largest hundredth, so a band's thousands of gaps are never held.
+fn percentile_99(values: impl Iterator<Item = f64> + Clone) -> Option<f64> {
+    use std::cmp::Reverse;
+    use std::collections::BinaryHeap;
+
+    let n = values.clone().count();
+    let rank = (n * 99 / 100).min(n.checked_sub(1)?);
+    // The values from the rank up: the rank's is the least of them.
+    let kept = n - rank;
+    let mut largest = BinaryHeap::with_capacity(kept + 1);
+    for v in values {
+        largest.push(Reverse(TotalOrder(v)));
+        if largest.len() > kept {
+            largest.pop();
+        }
+    }
+    largest.peek().map(|Reverse(TotalOrder(v))| *v)
+}
+
+/// An `f64` ordered by [`f64::total_cmp`].
+#[derive(Debug, Clone, Copy)]
+struct TotalOrder(f64);
+
+impl PartialEq for TotalOrder {
+    fn eq(&self, other: &Self) -> bool {
+        self.cmp(other).is_eq()
+    }
+}
+
+impl Eq for TotalOrder {}
+
+impl PartialOrd for TotalOrder {
+    fn partial_cmp(&self, other: &Self) -> Option<std::cmp::Ordering> {
+        Some(self.cmp(other))
+    }
+}
+
+impl Ord for TotalOrder {
+    fn cmp(&self, other: &Self) -> std::cmp::Ordering {
+        self.0.total_cmp(&other.0)
+    }
 }
 
 /// The index of a strip's last point before the plate ends, walking
@@ -933,14 +973,26 @@ fn percentile_99(values: &mut [f64]) -> Option<f64> {
 /// border cuts the band this also drops the strips that see only the
 /// plate's outer rim, and the seam stops up to a millimetre or two short
 /// of the border: short, never beyond. `strip` is sorted by outward offset.
-fn strip_boundary(strip: &[(f64, Vec3)], hole_mm: f64, band_mm: f64) -> Option<usize> {
-    if strip.first()?.0 > 0.0 {
+fn strip_boundary(strip: &[BandPoint], hole_mm: f64, band_mm: f64) -> Option<usize> {
+    if strip.first()?.out > 0.0 {
         return None;
     }
-    strip.windows(2).position(|w| w[1].0 - w[0].0 > hole_mm).or_else(|| {
+    strip.windows(2).position(|w| w[1].out - w[0].out > hole_mm).or_else(|| {
         let last = strip.len() - 1;
-        (band_mm - strip[last].0 > hole_mm).then_some(last)
+        (band_mm - strip[last].out > hole_mm).then_some(last)
     })
+}
+
+/// An on-plane point of the band beside an edge in a cloud without a
+/// pixel grid ([`sample_scattered`]): the strip along the edge it falls
+/// in, its offset outward across the edge, and its index in the cloud,
+/// which gives the point itself when a strip's sample needs it (16 bytes,
+/// where the strip, the offset and the point took 40).
+#[derive(Debug, Clone, Copy, Default)]
+struct BandPoint {
+    out: f64,
+    strip: i32,
+    index: u32,
 }
 
 /// The median distance along the edge from one scan line's sample to the
@@ -1409,5 +1461,19 @@ mod tests {
         let band = band_members(&cloud, &members, &edge, 1.0);
         let expected: Vec<u32> = (0..n as u32).filter(|&i| pts[i as usize][0].abs() <= 1.0).collect();
         assert_eq!(band, expected);
+    }
+
+    #[test]
+    fn the_99th_percentile_is_the_value_a_sort_ranks_there() {
+        assert_eq!(percentile_99(std::iter::empty()), None);
+        for n in [1usize, 2, 99, 100, 101, 250, 4321] {
+            // Repeats and a spread of magnitudes, in no order.
+            let values: Vec<f64> =
+                (0..n).map(|i| ((i * 7919) % 613) as f64 * if i % 5 == 0 { 10.0 } else { 0.01 }).collect();
+            let mut sorted = values.clone();
+            sorted.sort_by(f64::total_cmp);
+            let rank = (n * 99 / 100).min(n - 1);
+            assert_eq!(percentile_99(values.iter().copied()), Some(sorted[rank]), "{n} values");
+        }
     }
 }

@@ -350,10 +350,14 @@ const LATER_COLUMNS: [(i64, i64, i64); 13] = [
     (2, 2, -VOXEL_REACH),
 ];
 
-/// Voxels of a parallel job: enough to amortise its binary searches, few
-/// enough that the pairs a job holds until it joins them stay small
-/// (about a hundred kilobytes).
+/// Voxels of a parallel job: enough to amortise its binary searches.
 const VOXELS_PER_JOB: usize = 1024;
+
+/// The connected pairs a job holds before it joins them (8 kB): a job's
+/// thousand voxels find several thousand pairs, and held until the job's
+/// end they were a tenth of a small cloud's own size per thread. The sets
+/// do not depend on the order of the unions.
+const PAIRS_PER_JOIN: usize = 1024;
 
 /// Exact Euclidean clustering of the points selected by `mask`.
 ///
@@ -505,9 +509,17 @@ fn join_voxels<E: VoxelEntry>(
     // Every pair of voxels within reach whose points connect, found in
     // parallel over jobs of consecutive voxels and joined job by job.
     let sets = std::sync::Mutex::new(sets);
+    // A poisoned lock means a panic elsewhere, which unwinds the whole plan
+    // anyway; the sets themselves are never left half-set.
+    let join = |found: &mut Vec<(u32, u32)>| {
+        let mut sets = sets.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
+        for (a, b) in found.drain(..) {
+            sets.union(a, b);
+        }
+    };
     (0..voxels.div_ceil(VOXELS_PER_JOB)).into_par_iter().for_each(|job| {
         let range = job * VOXELS_PER_JOB..((job + 1) * VOXELS_PER_JOB).min(voxels);
-        let mut found: Vec<(u32, u32)> = Vec::new();
+        let mut found: Vec<(u32, u32)> = Vec::with_capacity(PAIRS_PER_JOIN);
         // One cursor per column: for consecutive voxels the wanted
         // keys of a column only grow, so each walks forward.
         let mut cursors = [usize::MAX; LATER_COLUMNS.len()];
@@ -535,17 +547,15 @@ fn join_voxels<E: VoxelEntry>(
                     });
                     if connected {
                         found.push((run(v)[0].index(), run(w)[0].index()));
+                        if found.len() == PAIRS_PER_JOIN {
+                            join(&mut found);
+                        }
                     }
                     w += 1;
                 }
             }
         }
-        // A poisoned lock means a panic elsewhere, which unwinds the
-        // whole plan anyway; the sets themselves are never left half-set.
-        let mut sets = sets.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
-        for (a, b) in found {
-            sets.union(a, b);
-        }
+        join(&mut found);
     });
     drop(keyed);
     drop(starts);

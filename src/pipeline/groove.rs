@@ -542,7 +542,7 @@ pub fn probe(cloud: &PointCloud, setting: &ProbeSetting) -> GrooveProfile {
         }
         None => gather_filter_map(points, |_, p| read(p)),
     };
-    let collected = on_surfaces(collected, SURFACE_RADIUS_SPACINGS * spacing);
+    let mut collected = on_surfaces(collected, SURFACE_RADIUS_SPACINGS * spacing);
 
     // The camera's rays at the seam's middle, as a slope across the seam
     // (dt/dh): the camera sits at the frame's origin.
@@ -556,26 +556,27 @@ pub fn probe(cloud: &PointCloud, setting: &ProbeSetting) -> GrooveProfile {
     let view = Views { camera: slope_from(Vec3::zeros()), projector: slope_from(setting.projector) };
     let half_opening = 0.5 * (q2 - q1).dot(&axes.a).abs();
 
-    let (above, below): (Vec<Across>, Vec<Across>) = collected.into_iter().partition(|p| p.h < 0.0);
+    // The points above the edges, taken out in their order.
+    let above: Vec<Across> = collected.extract_if(.., |p| p.h < 0.0).collect();
     let standing = (!above.is_empty()).then(|| Standing {
         points: above.len(),
         height_mm: above.iter().map(|p| -p.h).fold(0.0, f64::max),
         station_share: station_share(&above),
     });
+    drop(above);
+    let points_below = collected.len();
     let faces = [-1i8, 1]
         .into_iter()
         .filter_map(|side| {
-            let points: Vec<Across> = below.iter().filter(|p| p.t.signum() as i8 == side).copied().collect();
+            // The side's points, by reference: a copy of each side cost
+            // the groove's points over again.
+            let on_side = |p: &&Across| p.t.signum() as i8 == side;
+            let mut points: Vec<&Across> = Vec::with_capacity(collected.iter().filter(on_side).count());
+            points.extend(collected.iter().filter(on_side));
             fit_face(&points, side, spacing, (top_margin, bottom), &view, half_opening)
         })
         .collect();
-    GrooveProfile {
-        point_spacing_mm: spacing,
-        opening_mm: 2.0 * half_opening,
-        points_below: below.len(),
-        faces,
-        standing,
-    }
+    GrooveProfile { point_spacing_mm: spacing, opening_mm: 2.0 * half_opening, points_below, faces, standing }
 }
 
 /// The image rows the convex hull of `corners` projects onto, each with
@@ -628,7 +629,7 @@ fn rows_under(grid: &CameraGrid, corners: &[Vec3]) -> Option<Vec<(usize, usize, 
 }
 
 /// The share of the stations at least one of `points` lies at.
-fn station_share(points: &[Across]) -> f64 {
+fn station_share<'p>(points: impl IntoIterator<Item = &'p Across>) -> f64 {
     let mut seen = [false; STATIONS];
     for p in points {
         seen[p.station] = true;
@@ -648,7 +649,7 @@ fn station_share(points: &[Across]) -> f64 {
 /// cell index over the same points cost twice this
 /// ([`tests::on_surfaces_by_cells`], the reference this is checked
 /// against).
-fn on_surfaces(points: Vec<Across>, radius: f64) -> Vec<Across> {
+fn on_surfaces(mut points: Vec<Across>, radius: f64) -> Vec<Across> {
     // Single precision: the coordinates are millimetres from the seam's
     // middle, so a hundredth of a micrometre at worst.
     let mut sorted: Vec<(Point, u32)> =
@@ -685,7 +686,11 @@ fn on_surfaces(points: Vec<Across>, radius: f64) -> Vec<Across> {
     for ((_, i), k) in sorted.iter().zip(keep_sorted) {
         keep[*i as usize] = k;
     }
-    points.into_iter().zip(keep).filter_map(|(p, k)| k.then_some(p)).collect()
+    drop(sorted);
+    // In place: `retain` reads the points once each, in order.
+    let mut kept = keep.into_iter();
+    points.retain(|_| kept.next().unwrap_or(false));
+    points
 }
 
 /// The slopes `dt/dh` of the camera's and the projector's rays at the
@@ -699,7 +704,7 @@ struct Views {
 /// Fits one side's points as `|t| = c - h tan α`; `half_opening` is half
 /// the distance between the weld edges.
 fn fit_face(
-    points: &[Across],
+    points: &[&Across],
     side: i8,
     spacing: f64,
     (top_margin, bottom): (f64, f64),
@@ -715,39 +720,44 @@ fn fit_face(
     // the line.
     let bin_of = |h: f64| ((h - top_margin) / spacing).max(0.0) as usize;
     let bins = points.iter().map(|p| bin_of(p.h)).max()? + 1;
-    let mut by_bin: Vec<Vec<f64>> = vec![Vec::new(); bins];
-    for p in points {
-        by_bin[bin_of(p.h)].push(p.t.abs());
-    }
-    let medians: Vec<(f64, f64)> = by_bin
-        .iter_mut()
-        .enumerate()
-        .filter(|(_, ts)| ts.len() >= 3)
-        .map(|(k, ts)| {
-            let middle = ts.len() / 2;
-            (top_margin + (k as f64 + 0.5) * spacing, *ts.select_nth_unstable_by(middle, f64::total_cmp).1)
-        })
-        .collect();
+    let medians: Vec<(f64, f64)> = {
+        let mut by_bin: Vec<Vec<f64>> = vec![Vec::new(); bins];
+        for p in points {
+            by_bin[bin_of(p.h)].push(p.t.abs());
+        }
+        by_bin
+            .iter_mut()
+            .enumerate()
+            .filter(|(_, ts)| ts.len() >= 3)
+            .map(|(k, ts)| {
+                let middle = ts.len() / 2;
+                (top_margin + (k as f64 + 0.5) * spacing, *ts.select_nth_unstable_by(middle, f64::total_cmp).1)
+            })
+            .collect()
+    };
     // Below a bevel with a root gap the root face stands along the
     // normal: fit the bevel above that hinge only, and read the depth
     // where the two meet.
     let hinge = root_hinge(&medians, spacing);
-    let above: Vec<Across> = match hinge {
+    let above: std::borrow::Cow<[&Across]> = match hinge {
         Some(h) => points.iter().filter(|p| p.h < h.depth_mm).copied().collect(),
-        None => points.to_vec(),
+        None => points.into(),
     };
     let start = &medians[..hinge.map_or(medians.len(), |h| h.bins_above)];
     let mut line = fit_line(start.iter().copied())?;
     // Then all points within a band of the line, twice.
-    let mut kept: Vec<&Across> = above.iter().collect();
+    let mut kept: Vec<&Across> = above.to_vec();
+    let mut residuals: Vec<f64> = Vec::with_capacity(above.len());
     for _ in 0..2 {
         // The residuals' spread by their median, which the outliers do not
         // move (1.4826 MAD is one sigma of a normal spread).
-        let mut residuals: Vec<f64> = above.iter().map(|p| (p.t.abs() - line.at(p.h)).abs()).collect();
+        residuals.clear();
+        residuals.extend(above.iter().map(|p| (p.t.abs() - line.at(p.h)).abs()));
         let middle = residuals.len() / 2;
         let mad = *residuals.select_nth_unstable_by(middle, f64::total_cmp).1;
         let band = (TRIM_SIGMA * 1.4826 * mad).max(MIN_BAND_SPACINGS * spacing);
-        kept = above.iter().filter(|p| (p.t.abs() - line.at(p.h)).abs() <= band).collect();
+        kept.clear();
+        kept.extend(above.iter().filter(|p| (p.t.abs() - line.at(p.h)).abs() <= band).copied());
         line = fit_line(kept.iter().map(|p| (p.h, p.t.abs())))?;
     }
     let depth_mm = match hinge {
@@ -785,7 +795,6 @@ fn fit_face(
         towards.abs() > f64::EPSILON && h_occ > 0.0 && h_occ <= depth_mm + OCCLUSION_MARGIN_MM
     };
     let foot_hidden = hidden_below(view.camera) || hidden_below(view.projector);
-    let kept_points: Vec<Across> = kept.iter().map(|p| **p).collect();
     Some(Face {
         side,
         points: kept.len(),
@@ -794,7 +803,7 @@ fn fit_face(
         rms_mm: line.rms * angle.cos(),
         depth_mm,
         foot_mm: line.at(depth_mm),
-        station_share: station_share(&kept_points),
+        station_share: station_share(kept.iter().copied()),
         along_rays,
         foot_hidden,
         foot_at_probe_bottom: depth_mm >= bottom - BOTTOM_MARGIN_SPACINGS * spacing,

@@ -435,18 +435,23 @@ pub fn dominant_normal(cloud: &PointCloud, search: &NeighbourSearch, fx: f64, ag
     // The stride is odd so it does not run down one image column.
     let stride = ((cloud.len() / SAMPLES).max(1)) | 1;
     // On rayon: a cloud without a grid fits a plane per sample. Collected
-    // in sample order, so the sums below add up as a serial loop's would.
-    let sampled: Vec<usize> = (0..cloud.len()).step_by(stride).collect();
-    let normals: Vec<Vec3> = sampled
-        .par_iter()
-        .filter_map(|&i| {
+    // in sample order, so the sums below add up as a serial loop's would:
+    // a slot per sample, NaN where there is no normal, then those removed
+    // in place (a filtered collect would gather rayon's pieces and copy
+    // them, twice the normals at once).
+    let mut normals: Vec<Vec3> = (0..cloud.len().div_ceil(stride))
+        .into_par_iter()
+        .map(|k| {
+            let i = k * stride;
             let p = cloud.points()[i];
+            let none = Vec3::repeat(f64::NAN);
             if !p[0].is_finite() {
-                return None;
+                return none;
             }
-            local_normal(cloud, search, i, normal_step(fx, p[2] as f64, search.radius_mm() * 2.0))
+            local_normal(cloud, search, i, normal_step(fx, p[2] as f64, search.radius_mm() * 2.0)).unwrap_or(none)
         })
         .collect();
+    normals.retain(|n| !n.x.is_nan());
     if normals.is_empty() {
         return None;
     }

@@ -393,7 +393,10 @@ fn plan_plates(
             return (boundary::sample_boundary(cloud, &near, plane, &edge, &params), seen_beside);
         }
         // Without a pixel grid: strips a few spacings wide, each ending
-        // where its points stop.
+        // where its points stop, read from the whole cloud (both plates'
+        // boundaries are read at once, so what one no longer needs is
+        // freed first).
+        drop(near);
         let spacing = spacing_at(&edge.point);
         (boundary::sample_scattered(cloud, plane, &edge, &params, spacing), seen_beside)
     };

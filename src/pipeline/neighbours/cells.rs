@@ -23,7 +23,7 @@
 //! such arrays once for the cell's points anyway ([`Neighbourhood`]).
 //!
 //! For a few thousand queries (the spacing measurement) no index of the
-//! cloud pays: [`counts_around`] lists the few thousand query points by
+//! cloud pays: [`counts_around`] sorts the few thousand query points by
 //! cell and reads the cloud once against them.
 
 use std::ops::{ControlFlow, Range};
@@ -178,48 +178,45 @@ const COUNT_CHUNK: usize = 1 << 14;
 /// included if it is one of the points, read up to `cap`.
 ///
 /// For a few thousand samples (the spacing measurement), in one pass over
-/// the cloud and nothing the cloud's size: each sample is listed under the
-/// cells its disc reaches (at most eight), and each point of the cloud is
-/// tested against the samples listed under its own cell. Sorting the
-/// whole cloud into cells instead (as [`CellIndex`] does for a query per
-/// point) cost several times the cloud's own memory for 4096 counts.
+/// the cloud and nothing the cloud's size: the samples are sorted by the
+/// cell they lie in, and each point of the cloud is tested against the
+/// samples of the block of two cells by two by two from the lowest cell
+/// its disc reaches (a sample within the radius of a point lies there, as
+/// the point lies within the sample's). The block's cells of one column
+/// along z are neighbours in key order, so a block is four runs of the
+/// sorted samples, looked up once for the points that share it. Sorting
+/// the whole cloud into cells instead (as [`CellIndex`] does for a query
+/// per point) cost several times the cloud's own memory for 4096 counts;
+/// listing each sample under every cell its disc reaches cost up to eight
+/// entries a sample, half a megabyte, more than a small cloud itself.
 pub(crate) fn counts_around(points: &[Point], samples: &[Point], radius_mm: f64, cap: u32) -> Vec<u32> {
     let inverse_cell_mm = 1.0 / (SAMPLE_CELL_RADII * radius_mm);
     let reach = radius_mm * (1.0 + SAMPLE_REACH_MARGIN);
-    // At most two cells an axis (see SAMPLE_CELL_RADII): sized once.
-    let mut listed: Vec<(u64, u32)> = Vec::with_capacity(8 * samples.len());
-    for (s, p) in samples.iter().enumerate() {
-        let span = |a: usize| {
-            let v = f64::from(p[a]);
-            cell_coordinate(v - reach, inverse_cell_mm)..=cell_coordinate(v + reach, inverse_cell_mm)
-        };
-        for x in span(0) {
-            for y in span(1) {
-                listed.extend(span(2).map(|z| (pack([x, y, z]), s as u32)));
-            }
-        }
-    }
-    listed.sort_unstable();
+    let mut homed: Vec<(u64, u32)> =
+        samples.iter().enumerate().map(|(s, p)| (cell_key(p, inverse_cell_mm), s as u32)).collect();
+    homed.sort_unstable();
+    let run_between = |(first, last): (u64, u64)| {
+        let start = homed.partition_point(|&(k, _)| k < first);
+        start..start + homed[start..].iter().take_while(|&&(k, _)| k <= last).count()
+    };
     let radius_sq = (radius_mm * radius_mm) as f32;
     let counts = points
         .par_chunks(COUNT_CHUNK)
         .map(|chunk| {
             let mut counts = vec![0u32; samples.len()];
-            // Neighbouring points mostly share a cell: its samples are
-            // looked up once for the run.
-            let mut cached: Option<(u64, Range<usize>)> = None;
+            // Neighbouring points mostly share their block: its runs of
+            // samples are looked up once for the stretch.
+            let mut cached: Option<([i64; 3], [Range<usize>; 4])> = None;
             for q in chunk.iter().filter(|q| q[0].is_finite()) {
-                let key = cell_key(q, inverse_cell_mm);
-                let run = match &cached {
-                    Some((k, run)) if *k == key => run.clone(),
-                    _ => {
-                        let start = listed.partition_point(|&(k, _)| k < key);
-                        let run = start..start + listed[start..].iter().take_while(|&&(k, _)| k == key).count();
-                        cached.insert((key, run)).1.clone()
-                    }
+                let low = std::array::from_fn(|a| cell_coordinate(f64::from(q[a]) - reach, inverse_cell_mm));
+                let runs = match &cached {
+                    Some((cached_low, runs)) if *cached_low == low => runs,
+                    _ => &cached.insert((low, block_columns(low).map(|column| column.map_or(0..0, run_between)))).1,
                 };
-                for &(_, s) in &listed[run] {
-                    counts[s as usize] += crate::kernels::within(&samples[s as usize], q, radius_sq) as u32;
+                for run in runs {
+                    for &(_, s) in &homed[run.clone()] {
+                        counts[s as usize] += crate::kernels::within(&samples[s as usize], q, radius_sq) as u32;
+                    }
                 }
             }
             counts
@@ -234,6 +231,18 @@ pub(crate) fn counts_around(points: &[Point], samples: &[Point], radius_mm: f64,
             },
         );
     counts.into_iter().map(|n| n.min(cap)).collect()
+}
+
+/// The four columns of the block of [`counts_around`] whose lowest cell is
+/// `low`, each as the first and last key of its cells along z; `None` for a
+/// column past the packed range (its cells would clamp onto the column
+/// before it, and be counted twice).
+fn block_columns(low: [i64; 3]) -> [Option<(u64, u64)>; 4] {
+    let top = AXIS_HALF_RANGE - 1;
+    std::array::from_fn(|c| {
+        let (x, y) = (low[0] + (c & 1) as i64, low[1] + (c >> 1) as i64);
+        (x <= top && y <= top).then(|| (pack([x, y, low[2]]), pack([x, y, (low[2] + 1).min(top)])))
+    })
 }
 
 impl<'a> CellIndex<'a> {

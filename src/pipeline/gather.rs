@@ -76,19 +76,26 @@ fn fill_counted<E: Sync, T: Copy + Default + Send>(
     let counts: Vec<usize> =
         elements.par_chunks(ELEMENTS_PER_CHUNK).enumerate().map(|(k, chunk)| count(k, chunk)).collect();
     let mut gathered = vec![T::default(); counts.iter().sum()];
-    let mut parts = Vec::with_capacity(counts.len());
-    let mut rest = gathered.as_mut_slice();
-    for &n in &counts {
-        let (part, tail) = rest.split_at_mut(n);
-        parts.push(part);
-        rest = tail;
-    }
-    let complete = parts
+    let complete = split_into_parts(&mut gathered, counts)
         .into_par_iter()
         .zip(elements.par_chunks(ELEMENTS_PER_CHUNK))
         .enumerate()
         .all(|(k, (part, chunk))| fill(k, chunk, part).is_some());
     complete.then_some(gathered)
+}
+
+/// `all` split into consecutive parts of the lengths `counts` gives, each
+/// for one parallel job to fill; `counts` must sum to `all`'s length.
+pub(crate) fn split_into_parts<T>(all: &mut [T], counts: impl IntoIterator<Item = usize>) -> Vec<&mut [T]> {
+    let counts = counts.into_iter();
+    let mut parts = Vec::with_capacity(counts.size_hint().0);
+    let mut rest = all;
+    for n in counts {
+        let (part, tail) = rest.split_at_mut(n);
+        parts.push(part);
+        rest = tail;
+    }
+    parts
 }
 
 #[cfg(test)]

@@ -33,7 +33,7 @@ use rayon::prelude::*;
 use crate::cloud::Point;
 #[cfg(doc)]
 use crate::kernels::within;
-use crate::pipeline::gather::gather;
+use crate::pipeline::gather::{gather, split_into_parts};
 
 /// Cell coordinates are packed into 21 bits each. Sanitised clouds lie
 /// within 3 m of the camera and 80° of its axis (17 m across at most), so
@@ -398,13 +398,7 @@ impl CellIndex<'_> {
             .map(|cell| members(cell).iter().filter(|&&i| wanted(i as usize)).count() as u32)
             .collect();
         let mut answers = vec![T::default(); wanted_in.iter().map(|&n| n as usize).sum()];
-        let mut parts: Vec<&mut [T]> = Vec::with_capacity(self.cells.len());
-        let mut rest = answers.as_mut_slice();
-        for &n in &wanted_in {
-            let (part, tail) = rest.split_at_mut(n as usize);
-            parts.push(part);
-            rest = tail;
-        }
+        let parts = split_into_parts(&mut answers, wanted_in.iter().map(|&n| n as usize));
         self.cells.par_iter().zip(parts).enumerate().for_each_init(
             || (init(), Neighbourhood::default()),
             |(state, hood), (c, (cell, part))| {

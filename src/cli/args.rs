@@ -57,6 +57,10 @@ pub enum SuiteArg {
     /// 20 scans of a RealSense-class camera at 200 to 500 mm, made into
     /// cropped:40,voxel:1,metres (`sim::consumer_suite`).
     Consumer,
+    /// 24 scans of the same camera at 430 to 500 mm, where its depth noise
+    /// is as large as the voxels, handed over the same way
+    /// (`sim::consumer::consumer_far_suite`).
+    ConsumerFar,
     /// Every fault on every joint type (`sim::fault_suite`): a wrong joint
     /// requested, dropouts along the seam, a clamp, tack welds, spatter,
     /// specular streaks, a plate barely in view, a touching part.

@@ -26,7 +26,7 @@ use weldseam::eval::{
 use weldseam::geometry::pose::EulerConvention;
 use weldseam::joint::{JointSet, JointType, RequestedJoint};
 use weldseam::pipeline::Stage;
-use weldseam::sim::consumer::{consumer_camera, consumer_variant};
+use weldseam::sim::consumer::{consumer_camera, consumer_far_suite, consumer_variant};
 use weldseam::sim::variants::Variant;
 use weldseam::sim::{
     FaultKind, consumer_suite, corner_suite, eval_suite, fault_suite, hard_suite, multi_suite, tee_suite,
@@ -43,7 +43,8 @@ pub struct EvalArgs {
     /// Which suite: `industrial` (the default: the 66 scenes of the
     /// paper's camera, rendered with the config's camera), `consumer` (20
     /// scans of a RealSense-class camera at 200 to 500 mm, each made into
-    /// cropped:40,voxel:1,metres unless --variant says otherwise), `faults`
+    /// cropped:40,voxel:1,metres unless --variant says otherwise),
+    /// `consumer-far` (24 more of them at 430 to 500 mm), `faults`
     /// (each fault on each joint type, scored as within the bar, refused or
     /// confident wrong) or `hard` (the industrial suite tilted up to 45
     /// degrees, noisier, with up to 5 % dropouts). Every suite runs the
@@ -195,6 +196,7 @@ pub fn run(args: &EvalArgs) -> anyhow::Result<()> {
     let (mut scenes, camera, suite_variant) = match args.suite {
         SuiteArg::Industrial => (eval_suite(), robust.camera, Variant::raw()),
         SuiteArg::Consumer => (consumer_suite(), consumer_camera(), consumer_variant()),
+        SuiteArg::ConsumerFar => (consumer_far_suite(), consumer_camera(), consumer_variant()),
         SuiteArg::Faults => (fault_suite(), robust.camera, Variant::raw()),
         SuiteArg::Hard => (hard_suite(), robust.camera, Variant::raw()),
         SuiteArg::Tee => (tee_suite(), robust.camera, Variant::raw()),

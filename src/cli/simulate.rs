@@ -21,7 +21,7 @@ use weldseam::camera::CameraModel;
 use weldseam::cloud::{PointCloud, pcd, ply};
 use weldseam::geometry::Vec3;
 use weldseam::joint::JointType;
-use weldseam::sim::consumer::consumer_demo_scene;
+use weldseam::sim::consumer::{consumer_demo_scene, consumer_far_suite};
 use weldseam::sim::faults::frame_barely_in_view;
 use weldseam::sim::variants::Variant;
 use weldseam::sim::{
@@ -57,7 +57,8 @@ pub struct SimulateArgs {
     /// default) or `consumer` (RealSense-class, 1280 x 720 px, 87 x 58
     /// degrees, with its noise). With `consumer`, --joint starts from a
     /// scene at 375 mm (for v-butt, a groove 30 mm wide and 10 mm deep) and
-    /// --suite-scene looks in the consumer suite of `eval --suite consumer`.
+    /// --suite-scene looks in the consumer suites of `eval --suite
+    /// consumer` and `--suite consumer-far` (its names start `consumer-far`).
     #[arg(long, value_enum, default_value_t)]
     pub camera: CameraArg,
     /// Start from a scene of the evaluation suite, by name or index, or of
@@ -214,6 +215,7 @@ fn scene_from_args(args: &SimulateArgs) -> Result<(Option<String>, SceneSpec)> {
 fn find_suite_scene(preset: CameraPreset, key: &str) -> Result<(String, SceneSpec)> {
     let mut suite = match preset {
         CameraPreset::Industrial => eval_suite(),
+        CameraPreset::Consumer if key.starts_with("consumer-far") => consumer_far_suite(),
         CameraPreset::Consumer => consumer_suite(),
     };
     if preset == CameraPreset::Industrial {

@@ -262,6 +262,19 @@ struct SuiteDraw {
     holdout_seed: u64,
 }
 
+/// The stride that permutes `count` tilts: 3 (the consumer suite's), or
+/// the next odd number sharing no factor with `count`, so that every tilt
+/// of the range is drawn once.
+fn tilt_stride(count: usize) -> usize {
+    let gcd = |mut a: usize, mut b: usize| {
+        while b != 0 {
+            (a, b) = (b, a % b);
+        }
+        a
+    };
+    (3..).step_by(2).find(|&stride| gcd(stride, count) == 1).unwrap_or(1)
+}
+
 fn stratified_suite(draw: &SuiteDraw) -> Vec<(String, SceneSpec)> {
     let camera = consumer_camera();
     let mut suite = Vec::new();
@@ -270,7 +283,7 @@ fn stratified_suite(draw: &SuiteDraw) -> Vec<(String, SceneSpec)> {
         for k in 0..count {
             // Distances in order, tilts permuted, so each joint spans both.
             let distance_mm = draw.distance_mm[0] + (draw.distance_mm[1] - draw.distance_mm[0]) * k as f64 / steps;
-            let tilt_step = (k * 3 + j) % count;
+            let tilt_step = (k * tilt_stride(count) + j) % count;
             let tilt_deg = CONSUMER_TILT_DEG[1] * tilt_step as f64 / steps;
             let holdout = k >= count - CONSUMER_HOLDOUT_PER_JOINT;
             let stream = (j * 100 + k) as u64;
@@ -349,7 +362,11 @@ mod tests {
             assert_eq!(holdouts, CONSUMER_HOLDOUT_PER_JOINT);
             let distances: Vec<f64> = scenes.iter().map(|(_, s)| s.placement.distance_mm).collect();
             assert!(distances.contains(&near) && distances.contains(&far), "{joint}: {distances:?}");
-            assert!(scenes.iter().any(|(_, s)| s.placement.tilt_deg == 30.0), "{joint}");
+            let mut tilts: Vec<f64> = scenes.iter().map(|(_, s)| s.placement.tilt_deg).collect();
+            tilts.sort_by(f64::total_cmp);
+            tilts.dedup();
+            assert_eq!(tilts.len(), count, "{joint}: every tilt once, {tilts:?}");
+            assert!(tilts.contains(&0.0) && tilts.contains(&30.0), "{joint}: {tilts:?}");
         }
         for (name, spec) in suite {
             assert_eq!(spec.validate(), Ok(()), "{name}");

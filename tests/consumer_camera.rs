@@ -9,22 +9,30 @@ use weldseam::config::Config;
 use weldseam::eval::seam_error;
 use weldseam::joint::JointType;
 use weldseam::pipeline::input::Units;
-use weldseam::pipeline::{PlanRequest, Planner};
-use weldseam::sim::consumer::{consumer_camera, consumer_demo_scene, consumer_variant};
-use weldseam::sim::{SceneSpec, consumer_suite, simulate};
+use weldseam::pipeline::{Plan, PlanError, PlanRequest, Planner};
+use weldseam::sim::consumer::{consumer_camera, consumer_demo_scene, consumer_far_suite, consumer_variant};
+use weldseam::sim::{SceneSpec, Simulation, consumer_suite, simulate};
 
 /// Simulates `spec` with the consumer camera, makes the strip and plans it
-/// at the default config; panics with the stage and reason if refused.
-fn plan_strip(name: &str, spec: &SceneSpec) {
+/// at the default config.
+fn try_plan_strip(name: &str, spec: &SceneSpec) -> (Result<Plan, PlanError>, Simulation) {
     let sim = consumer_variant().apply(&simulate(spec, &consumer_camera()), spec.seed);
     assert!(!sim.cloud.is_organized(), "{name}: the strip is unorganized");
     assert!(sim.cloud.points().iter().all(|p| p[2] < 1.0), "{name}: the strip is in metres");
     let planner = Planner::new(Config::default());
     let mut request = PlanRequest::new(spec.joint.joint_type(), spec.joint.groove_depth_mm(), sim.pose);
     request.units = Units::Auto;
-    let plan = planner.plan(&sim.cloud, &request).unwrap_or_else(|e| panic!("{name}: refused: {e}"));
+    (planner.plan(&sim.cloud, &request), sim)
+}
+
+/// [`try_plan_strip`], which must give a seam within `bar_mm` of the truth
+/// spanning the visible seam to within 2 mm at both ends; panics with the
+/// stage and reason if refused.
+fn plan_strip_within(name: &str, spec: &SceneSpec, bar_mm: f64) {
+    let (plan, sim) = try_plan_strip(name, spec);
+    let plan = plan.unwrap_or_else(|e| panic!("{name}: refused: {e}"));
     let err = seam_error(&sim.truth, &plan.seams[0]).expect("waypoints");
-    assert!(err.max_mm < 1.0, "{name}: max error {:.3} mm", err.max_mm);
+    assert!(err.max_mm < bar_mm, "{name}: max error {:.3} mm", err.max_mm);
     assert!(
         err.start_mm < 2.0 && err.end_mm < 2.0,
         "{name}: ends {:.2} and {:.2} mm from the visible seam's ({:.0} mm long)",
@@ -34,8 +42,18 @@ fn plan_strip(name: &str, spec: &SceneSpec) {
     );
 }
 
+/// [`plan_strip_within`] the bar of 1 mm.
+fn plan_strip(name: &str, spec: &SceneSpec) {
+    plan_strip_within(name, spec, 1.0);
+}
+
 fn suite_scene(name: &str) -> SceneSpec {
-    consumer_suite().into_iter().find(|(n, _)| n == name).unwrap_or_else(|| panic!("no consumer scene {name}")).1
+    consumer_suite()
+        .into_iter()
+        .chain(consumer_far_suite())
+        .find(|(n, _)| n == name)
+        .unwrap_or_else(|| panic!("no consumer scene {name}"))
+        .1
 }
 
 #[test]
@@ -50,4 +68,28 @@ fn the_issues_v_groove_strip_plans_at_the_default_settings() {
 fn close_and_steep_v_groove_strips_plan_at_the_default_settings() {
     plan_strip("200 mm, square on", &suite_scene("consumer-v-butt-00-d200-t0"));
     plan_strip("300 mm, tilted 30 degrees", &suite_scene("consumer-v-butt-03-d300-t30"));
+}
+
+#[test]
+fn a_far_lap_strip_s_root_lies_under_the_upper_plate_s_edge() {
+    // At 380 to 580 mm the depth noise (0.6 to 1.3 mm) thins the points the
+    // 0.4 mm on-plane tolerance keeps near the upper plate's edge, and its
+    // edge was read up to 0.9 mm inside the plate (a max error of
+    // 0.896 mm); measuring the plate's own noise takes most of that back
+    // (0.2 mm at that end, 0.202 mm max).
+    plan_strip_within("a lap at 470 mm, tilted 26 degrees", &suite_scene("consumer-far-lap-04-d470-t26"), 0.5);
+}
+
+#[test]
+fn a_far_i_butt_strip_whose_edge_is_lost_short_of_an_end_is_refused_not_cut_short() {
+    // The far suite's I-butt at 444 mm, tilted 24 degrees instead of
+    // square on: one plate's edge is found along the seam but for its last
+    // 30 mm, where both plates' points go on side by side. A seam ending
+    // there would leave 30 mm of the visible joint unwelded.
+    let name = "consumer-far-i-butt-01-d444-t0 at 24 degrees";
+    let mut spec = suite_scene("consumer-far-i-butt-01-d444-t0");
+    spec.placement.tilt_deg = 24.0;
+    let (plan, _) = try_plan_strip(name, &spec);
+    let err = plan.err().unwrap_or_else(|| panic!("{name}: planned"));
+    assert!(err.to_string().contains("beyond the seam's last end"), "{name}: {err}");
 }

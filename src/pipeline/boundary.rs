@@ -16,11 +16,16 @@
 //! interior ever shows, or the band's end); the plate ends on average one
 //! gap beyond the last point, where the k points of the strip's last row
 //! split the spacing into k + 1 gaps (one point: half a spacing, as on the
-//! grid). A strip whose points never stop sees no edge, as a scan line
-//! whose walk leaves the band still on the plane does. The strips cover
-//! every on-plane point of the band, so they too reach the plate's corners,
-//! but only to a strip's width, and where the cloud's border cuts the
-//! band a strip sees part of the plate and misses or mistakes its end;
+//! grid). Where a plate's points scatter about its plane by more than the
+//! on-plane tolerance (a consumer camera's depth noise in a 1 mm voxel
+//! cloud), the tolerance keeps only some of them and the outermost one
+//! kept lies further in; that shortfall is measured on the plate's
+//! interior and added (`Thinning`). A strip whose points never stop sees
+//! no edge, as a scan line whose walk leaves the band still on the plane
+//! does. The strips cover every on-plane point of the band, so they too
+//! reach the plate's corners, but only to a strip's width, and where the
+//! cloud's border cuts the band a strip sees part of the plate and misses
+//! or mistakes its end;
 //! [`rim_refined_extent`] reads the ends again from the plate's last rows
 //! along the fitted edge.
 
@@ -552,6 +557,7 @@ pub fn sample_scattered(
     edge: &CoarseEdge,
     params: &BoundaryParams,
     spacing_mm: f64,
+    scatter_mm: Option<f64>,
 ) -> Boundary {
     use rayon::prelude::*;
 
@@ -572,10 +578,7 @@ pub fn sample_scattered(
         let out = d.dot(&edge.outward);
         let on_plane = plane.signed_distance(&v).abs() <= params.on_plane_mm;
         (on_plane && out.abs() <= params.band_mm).then(|| BandPoint {
-            // A cloud spans a few thousand strips; clamping could only
-            // join strips far past any plate.
-            strip: crate::geometry::floor_i64(d.dot(&edge.direction) / strip_mm).clamp(i32::MIN.into(), i32::MAX.into())
-                as i32,
+            strip: strip_of(d.dot(&edge.direction), strip_mm),
             out,
             index: i as u32,
         })
@@ -587,6 +590,7 @@ pub fn sample_scattered(
     let strips = || in_band.chunk_by(|a, b| a.strip == b.strip);
     let point = |b: &BandPoint| vec3(&points[b.index as usize]);
     let hole_mm = hole_threshold(strips(), params.band_mm, spacing_mm);
+    let thinning = Thinning::measure(cloud, plane, edge, params, strip_mm, scatter_mm, strips());
     let samples = strips()
         .filter_map(|strip| {
             let last = strip_boundary(strip, hole_mm, params.band_mm)?;
@@ -595,7 +599,7 @@ pub fn sample_scattered(
             // of the outermost) split the spacing beyond the row into k + 1
             // gaps on average: the plate ends one gap beyond the outermost.
             let row = strip[..=last].iter().filter(|b| b.out >= last_out - spacing_mm / 2.0).count();
-            let beyond = spacing_mm / (row + 1) as f64;
+            let beyond = spacing_mm / (row + 1) as f64 + thinning.shortfall_mm(strip[last].strip);
             let position = plane.project(&last_point) + edge.outward * beyond;
             // The walk may end on a point past the plate's end along the
             // edge, where only the foot of a steep face grazes the plane
@@ -612,6 +616,183 @@ pub fn sample_scattered(
         })
         .collect();
     Boundary { samples, line_spacing_mm: strip_mm, extent_rule: ExtentRule::LongestStretch }
+}
+
+/// How far off its plane, in sigmas of its own scatter about it, a point
+/// of a plate without a pixel grid still counts as on it
+/// ([`on_plane_for_scatter`]): 2.5 keeps 98.8 % of a plate's points under
+/// normal noise.
+const ON_PLANE_SIGMAS: f64 = 2.5;
+
+/// The fewest points of a band's inner third [`plane_scatter`] measures
+/// a sigma from.
+const MIN_SCATTER_POINTS: usize = 30;
+
+/// The median absolute deviation of normal noise over its sigma.
+const MAD_PER_SIGMA: f64 = 0.674_489_750_196_081_7;
+
+/// How far the points of a plate scatter about its plane, one sigma (mm),
+/// measured in a cloud without a pixel grid on the points of the inner
+/// third of the band beside `edge` (a robust sigma: the median absolute
+/// distance over that of normal noise), from the points within `window_mm`
+/// of the plane and again within four of the sigmas found. The inner third
+/// lies well inside the plate whatever the coarse edge's error, so the
+/// lower plate of a lap, a groove's bevel or a web standing beside it do
+/// not enter. `None` below [`MIN_SCATTER_POINTS`] points.
+pub fn plane_scatter(
+    cloud: &PointCloud,
+    plane: &Plane,
+    edge: &CoarseEdge,
+    band_mm: f64,
+    window_mm: f64,
+) -> Option<f64> {
+    let inner = -band_mm..=-band_mm / 3.0;
+    let distances: Vec<f64> = gather_filter_map(cloud.points(), |_, p| {
+        if !p[0].is_finite() {
+            return None;
+        }
+        let v = vec3(p);
+        let d = plane.signed_distance(&v);
+        (d.abs() <= window_mm && inner.contains(&(v - edge.point).dot(&edge.outward))).then_some(d.abs())
+    });
+    let sigma_within = |window: f64| {
+        let mut within: Vec<f64> = distances.iter().copied().filter(|d| *d <= window).collect();
+        if within.len() < MIN_SCATTER_POINTS {
+            return None;
+        }
+        let mid = within.len() / 2;
+        Some(*within.select_nth_unstable_by(mid, f64::total_cmp).1 / MAD_PER_SIGMA)
+    };
+    let first = sigma_within(window_mm)?;
+    // A window much wider than the noise takes in more than the plate's
+    // points; one much narrower cuts its tails and reads too small a sigma.
+    sigma_within((4.0 * first).min(window_mm)).or(Some(first))
+}
+
+/// The on-plane tolerance for a plate whose points scatter `sigma_mm`
+/// about its plane: the configured one, or [`ON_PLANE_SIGMAS`] sigmas
+/// where the noise is larger. A tolerance a camera's noise exceeds keeps a
+/// fraction of the plate's points, the strips' outermost kept point then
+/// lies rows inside the plate's end, and the edge is read inside the plate
+/// (by 0.5 sigma² mm at a consumer camera's 1 mm voxels: 0.9 mm at
+/// 1.3 mm of depth noise).
+fn on_plane_for_scatter(configured_mm: f64, sigma_mm: Option<f64>) -> f64 {
+    sigma_mm.map_or(configured_mm, |s| configured_mm.max(ON_PLANE_SIGMAS * s))
+}
+
+/// How far further inside a plate's end its strips' outermost on-plane
+/// point lies because the on-plane tolerance keeps only a fraction of its
+/// points ([`sample_scattered`]), strip by strip.
+///
+/// The plate ends, on average, as far beyond its outermost point as a
+/// position taken at random inside the plate lies beyond the nearest
+/// point on its inner side: for gaps g between consecutive points across
+/// a strip, Σg² / 2Σg (half a pitch for rows at a fixed pitch, one mean
+/// gap for points strewn at random). The difference between that mean for
+/// the on-plane points and for all of the plate's points (within
+/// [`ON_PLANE_SIGMAS`] of its measured noise) is what the tolerance's
+/// thinning adds to the gap at the end; the row rule of
+/// [`sample_scattered`] accounts for the rest. Both are read from the
+/// band's inner third, where nothing but the plate lies near its plane
+/// (not a groove's bevel, which the wider tolerance would take for the
+/// plate beyond its edge), and pooled over [`THINNING_POOL_STRIPS`] strips
+/// either side, since the noise changes with depth along the edge.
+struct Thinning {
+    /// Per strip with points in the inner third, ascending: the strip and
+    /// the running sums, from the first strip through this one, of Σg and
+    /// Σg² over the on-plane points' gaps and over all the plate's points'.
+    running: Vec<(i32, [f64; 4])>,
+}
+
+/// How many strips either side of a strip [`Thinning`] pools its gaps
+/// over: ten spacings along the edge, over which the noise hardly changes.
+const THINNING_POOL_STRIPS: i32 = 5;
+
+impl Thinning {
+    /// None where the plate's noise is within the tolerance (every point
+    /// of the plate is on its plane), or unknown.
+    fn none() -> Self {
+        Thinning { running: Vec::new() }
+    }
+
+    fn measure<'a>(
+        cloud: &PointCloud,
+        plane: &Plane,
+        edge: &CoarseEdge,
+        params: &BoundaryParams,
+        strip_mm: f64,
+        scatter_mm: Option<f64>,
+        on_plane: impl Iterator<Item = &'a [BandPoint]>,
+    ) -> Self {
+        let all_mm = on_plane_for_scatter(params.on_plane_mm, scatter_mm);
+        if all_mm <= params.on_plane_mm {
+            return Thinning::none();
+        }
+        let inner = -params.band_mm..=-params.band_mm / 3.0;
+        let mut all: Vec<(i32, f64)> = gather_filter_map(cloud.points(), |_, p| {
+            if !p[0].is_finite() {
+                return None;
+            }
+            let v = vec3(p);
+            let d = v - edge.point;
+            let out = d.dot(&edge.outward);
+            let near_plane = plane.signed_distance(&v).abs() <= all_mm;
+            (near_plane && inner.contains(&out)).then(|| (strip_of(d.dot(&edge.direction), strip_mm), out))
+        });
+        all.sort_unstable_by(|a, b| a.0.cmp(&b.0).then(a.1.total_cmp(&b.1)));
+        let gap_sums = |outs: &mut dyn Iterator<Item = f64>| {
+            let mut previous: Option<f64> = None;
+            let mut sums = [0.0; 2];
+            for out in outs {
+                if let Some(before) = previous {
+                    let gap = out - before;
+                    sums[0] += gap;
+                    sums[1] += gap * gap;
+                }
+                previous = Some(out);
+            }
+            sums
+        };
+        let mut per_strip: std::collections::BTreeMap<i32, [f64; 4]> = std::collections::BTreeMap::new();
+        for strip in on_plane {
+            let [s1, s2] = gap_sums(&mut strip.iter().map(|b| b.out).filter(|out| inner.contains(out)));
+            let entry = per_strip.entry(strip[0].strip).or_default();
+            (entry[0], entry[1]) = (s1, s2);
+        }
+        for strip in all.chunk_by(|a, b| a.0 == b.0) {
+            let [s1, s2] = gap_sums(&mut strip.iter().map(|a| a.1));
+            let entry = per_strip.entry(strip[0].0).or_default();
+            (entry[2], entry[3]) = (s1, s2);
+        }
+        let mut total = [0.0; 4];
+        let running = per_strip
+            .into_iter()
+            .map(|(strip, sums)| {
+                for (t, s) in total.iter_mut().zip(sums) {
+                    *t += s;
+                }
+                (strip, total)
+            })
+            .collect();
+        Thinning { running }
+    }
+
+    /// How much further in than the row rule says strip `strip`'s
+    /// outermost on-plane point lies, mm; zero where nothing was thinned.
+    fn shortfall_mm(&self, strip: i32) -> f64 {
+        let upto = |s: i32| {
+            let n = self.running.partition_point(|(k, _)| *k <= s);
+            n.checked_sub(1).map_or([0.0; 4], |i| self.running[i].1)
+        };
+        let (hi, lo) =
+            (upto(strip.saturating_add(THINNING_POOL_STRIPS)), upto(strip.saturating_sub(THINNING_POOL_STRIPS + 1)));
+        let sums: Vec<f64> = hi.iter().zip(lo).map(|(h, l)| h - l).collect();
+        let empty_space = |s1: f64, s2: f64| (s1 > 0.0).then(|| s2 / (2.0 * s1));
+        match (empty_space(sums[0], sums[1]), empty_space(sums[2], sums[3])) {
+            (Some(on_plane), Some(all)) => (on_plane - all).max(0.0),
+            _ => 0.0,
+        }
+    }
 }
 
 /// Refines the ends of a weld edge's extent `(lo, hi)`, read from strips
@@ -983,6 +1164,13 @@ fn strip_boundary(strip: &[BandPoint], hole_mm: f64, band_mm: f64) -> Option<usi
     })
 }
 
+/// The strip `along_mm` along an edge falls in, for strips `strip_mm`
+/// wide. A cloud spans a few thousand strips; clamping could only join
+/// strips far past any plate.
+fn strip_of(along_mm: f64, strip_mm: f64) -> i32 {
+    crate::geometry::floor_i64(along_mm / strip_mm).clamp(i32::MIN.into(), i32::MAX.into()) as i32
+}
+
 /// An on-plane point of the band beside an edge in a cloud without a
 /// pixel grid ([`sample_scattered`]): the strip along the edge it falls
 /// in, its offset outward across the edge, and its index in the cloud,
@@ -1178,7 +1366,7 @@ mod tests {
         let outward = Vec3::new(1.0, -SLOPE, 0.0).normalize();
         let edge = CoarseEdge { point: Vec3::new(edge_x - 2.0, 0.0, 700.0), direction, outward };
         let params = BoundaryParams { band_mm: 6.0, on_plane_mm: 0.4 };
-        let boundary = sample_scattered(&cloud, &plane, &edge, &params, spacing);
+        let boundary = sample_scattered(&cloud, &plane, &edge, &params, spacing, None);
         assert!(boundary.samples.len() > 50, "{} samples", boundary.samples.len());
         let offset = |p: &Vec3| (p.x - edge_x - SLOPE * p.y) * outward.x;
         // Away from the plate's ends, where the last strips hold only part
@@ -1191,6 +1379,63 @@ mod tests {
         assert!(worst < spacing, "a sample {worst} mm off the edge");
     }
 
+    /// [`scattered`] with depth noise of `sigma` mm (normal, from a fixed
+    /// seed) on every point, as a consumer depth camera's voxel clouds have.
+    fn noisy_scattered(spacing: f64, edge_x: f64, gap: f64, sigma: f64) -> PointCloud {
+        use rand_chacha::ChaCha8Rng;
+        use rand_core::{Rng, SeedableRng};
+        let mut rng = ChaCha8Rng::seed_from_u64(0x5ca7);
+        let mut uniform = || (rng.next_u64() >> 11) as f64 / (1u64 << 53) as f64;
+        let points = scattered(spacing, edge_x, gap)
+            .points()
+            .iter()
+            .map(|p| {
+                let normal = (-2.0 * (1.0 - uniform()).ln()).sqrt() * (std::f64::consts::TAU * uniform()).cos();
+                [p[0], p[1], (f64::from(p[2]) + sigma * normal) as f32]
+            })
+            .collect();
+        PointCloud::unorganized(points)
+    }
+
+    #[test]
+    fn a_noisy_plate_s_edge_is_read_further_out_once_its_noise_is_measured() {
+        // Noise of 0.8 mm against the 0.4 mm tolerance keeps 38 % of the
+        // plate's points, and its outermost kept point lies rows in.
+        let (spacing, edge_x, sigma) = (1.0, 3.3, 0.8);
+        let cloud = noisy_scattered(spacing, edge_x, 4.0, sigma);
+        let plane = Plane { normal: Vec3::z(), offset: 700.0 };
+        let direction = Vec3::new(SLOPE, 1.0, 0.0).normalize();
+        let outward = Vec3::new(1.0, -SLOPE, 0.0).normalize();
+        let edge = CoarseEdge { point: Vec3::new(edge_x - 2.0, 0.0, 700.0), direction, outward };
+        let params = BoundaryParams { band_mm: 6.0, on_plane_mm: 0.4 };
+        let scatter = plane_scatter(&cloud, &plane, &edge, params.band_mm, 3.0 * spacing).unwrap();
+        assert!((scatter - sigma).abs() < 0.1 * sigma, "measured {scatter} mm, made {sigma} mm");
+        let mean_offset = |scatter: Option<f64>| {
+            let boundary = sample_scattered(&cloud, &plane, &edge, &params, spacing, scatter);
+            let offsets: Vec<f64> = boundary
+                .samples
+                .iter()
+                .filter(|s| s.position.y.abs() < 50.0)
+                .map(|s| (s.position.x - edge_x - SLOPE * s.position.y) * outward.x)
+                .collect();
+            assert!(offsets.len() > 30, "{} samples", offsets.len());
+            offsets.iter().sum::<f64>() / offsets.len() as f64
+        };
+        let thinned = mean_offset(None);
+        assert!(thinned < -0.6 * spacing, "unmeasured, the edge is read {thinned} mm out");
+        // The correction takes back what thinning adds to the last gap
+        // (0.86 to 0.51 mm here); the rest is the strips' walk stopping
+        // at holes the thinned interior makes common, which it leaves.
+        let measured = mean_offset(Some(scatter));
+        assert!(measured > thinned + 0.25 * spacing && measured < 0.1 * spacing, "measured, read {measured} mm out");
+        // Noise within the tolerance thins nothing: the samples stay put.
+        assert_eq!(on_plane_for_scatter(0.4, Some(0.1)), 0.4);
+        let quiet = scattered(spacing, edge_x, 4.0);
+        let at = |scatter| sample_scattered(&quiet, &plane, &edge, &params, spacing, scatter).samples;
+        let (known, unknown) = (at(Some(0.1)), at(None));
+        assert!(known.iter().zip(&unknown).all(|(a, b)| a.position == b.position) && known.len() == unknown.len());
+    }
+
     #[test]
     fn scattered_samples_never_cross_to_the_plate_beyond_the_gap() {
         let cloud = scattered(1.0, 3.3, 1.5);
@@ -1199,10 +1444,10 @@ mod tests {
         let outward = Vec3::new(1.0, -SLOPE, 0.0).normalize();
         let edge = CoarseEdge { point: Vec3::new(1.3, 0.0, 700.0), direction, outward };
         let params = BoundaryParams { band_mm: 6.0, on_plane_mm: 0.4 };
-        let boundary = sample_scattered(&cloud, &plane, &edge, &params, 1.0);
+        let boundary = sample_scattered(&cloud, &plane, &edge, &params, 1.0, None);
         let beyond = boundary.samples.iter().filter(|s| (s.position.x - 3.3 - SLOPE * s.position.y) > 1.0).count();
         assert_eq!(beyond, 0);
-        assert!(!sample_scattered(&cloud, &plane, &edge, &params, f64::NAN).samples.iter().any(|_| true));
+        assert!(!sample_scattered(&cloud, &plane, &edge, &params, f64::NAN, None).samples.iter().any(|_| true));
     }
 
     /// The band beside the test edge, and the edge 2 mm inside the plate.
@@ -1221,7 +1466,7 @@ mod tests {
         let edge_x = 3.3;
         let cloud = scattered_where(1.0, |x, y| y > 0.0 || x < edge_x + SLOPE * y || x > edge_x + SLOPE * y + 20.0);
         let (plane, edge, params) = test_edge(edge_x);
-        let boundary = sample_scattered(&cloud, &plane, &edge, &params, 1.0);
+        let boundary = sample_scattered(&cloud, &plane, &edge, &params, 1.0, None);
         assert!(boundary.samples.len() > 20, "{} samples", boundary.samples.len());
         let (_, end) = boundary.extent(|s| s.position.y).unwrap();
         assert!(end < 2.5, "the edge is seen up to y = {end} mm, where the plate runs on");
@@ -1237,12 +1482,12 @@ mod tests {
         // loses it, and leaves a chance hole here and there; the edge is
         // seen along a small part of the plate only, which is what the
         // planner's coverage gate refuses.
-        let boundary = sample_scattered(&cloud, &plane, &edge, &params, 1.0);
+        let boundary = sample_scattered(&cloud, &plane, &edge, &params, 1.0, None);
         let seen = coverage(&boundary, |s| s.along, -55.0, 55.0);
         assert!(seen < 0.5, "the edge is claimed along {:.0} % of the plate across a 0.3 mm gap", 100.0 * seen);
         // The same plates 2 mm apart: the edge is seen nearly everywhere.
         let cloud = scattered(1.0, 3.3, 2.0);
-        let seen = coverage(&sample_scattered(&cloud, &plane, &edge, &params, 1.0), |s| s.along, -55.0, 55.0);
+        let seen = coverage(&sample_scattered(&cloud, &plane, &edge, &params, 1.0, None), |s| s.along, -55.0, 55.0);
         assert!(seen > 0.9, "the edge of a 2 mm gap is seen along {:.0} % of the plate", 100.0 * seen);
     }
 
@@ -1251,7 +1496,7 @@ mod tests {
     /// (the line a fit of the samples gives).
     fn strip_and_rim_ends(cloud: &PointCloud, edge_x: f64) -> (f64, f64) {
         let (plane, coarse, params) = test_edge(edge_x);
-        let strips = sample_scattered(cloud, &plane, &coarse, &params, 1.0).extent(|s| s.position.y).unwrap();
+        let strips = sample_scattered(cloud, &plane, &coarse, &params, 1.0, None).extent(|s| s.position.y).unwrap();
         let fitted = CoarseEdge { point: Vec3::new(edge_x, 0.0, 700.0), ..coarse };
         let rim = rim_refined_extent(cloud, &plane, &fitted, &params, 1.0, 0.0, |p: &Vec3| p.y, strips);
         (strips.1, rim.1)
@@ -1313,7 +1558,7 @@ mod tests {
         points.extend(table.points().iter().map(|p| [p[0] * 740.0 / 700.0, p[1] * 740.0 / 700.0, 740.0]));
         let cloud = PointCloud::unorganized(points);
         let (plane, coarse, params) = test_edge(edge_x);
-        let strips = sample_scattered(&cloud, &plane, &coarse, &params, 1.0).extent(|s| s.position.y).unwrap();
+        let strips = sample_scattered(&cloud, &plane, &coarse, &params, 1.0, None).extent(|s| s.position.y).unwrap();
         let fitted = CoarseEdge { point: Vec3::new(edge_x, 0.0, 700.0), ..coarse };
         let refined = rim_refined_extent(&cloud, &plane, &fitted, &params, 1.0, 0.0, |p: &Vec3| p.y, strips);
         assert_eq!(refined.1, strips.1);
@@ -1388,7 +1633,7 @@ mod tests {
             let plate = scattered_where(1.0, |x, y| x < edge_x + SLOPE * y && y < end_y);
             let foot = (0..80).map(|k| end_y + 0.25 * k as f64).map(|y| [(edge_x + SLOPE * y) as f32, y as f32, 700.0]);
             let cloud = PointCloud::unorganized(plate.points().iter().copied().chain(foot).collect());
-            let boundary = sample_scattered(&cloud, &plane, &coarse, &params, 1.0);
+            let boundary = sample_scattered(&cloud, &plane, &coarse, &params, 1.0, None);
             let beyond = boundary.samples.iter().map(|s| s.position.y).fold(f64::MIN, f64::max);
             assert!(beyond < end_y + 0.1, "a boundary sample at y = {beyond} mm, past the plate's end at {end_y}");
         }
@@ -1398,7 +1643,7 @@ mod tests {
     fn an_edge_fitted_to_noisy_samples_keeps_the_strips_ends() {
         let cloud = plate_cut_by_a_border(3.3, 2.0);
         let (plane, coarse, params) = test_edge(3.3);
-        let strips = sample_scattered(&cloud, &plane, &coarse, &params, 1.0).extent(|s| s.position.y).unwrap();
+        let strips = sample_scattered(&cloud, &plane, &coarse, &params, 1.0, None).extent(|s| s.position.y).unwrap();
         let fitted = CoarseEdge { point: Vec3::new(3.3, 0.0, 700.0), ..coarse };
         let noisy = rim_refined_extent(&cloud, &plane, &fitted, &params, 1.0, 0.3, |p: &Vec3| p.y, strips);
         assert_eq!(noisy, strips);

@@ -54,6 +54,12 @@ const MIN_DIRECTION_NORM: f64 = 1e-9;
 /// apart, and the plane criterion leaves the odd hole.
 const CLUSTER_SPACINGS: f64 = 2.5;
 
+/// How far off a plate's plane, in point spacings (or on-plane
+/// tolerances, where larger), its noise is first measured
+/// ([`boundary::plane_scatter`]): wider than any camera's depth noise at
+/// its own spacing, narrower than the step to another surface.
+const SCATTER_WINDOW_SPACINGS: f64 = 3.0;
+
 /// Plans one frame by the robust method.
 pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
     let config = ctx.config;
@@ -395,10 +401,14 @@ fn plan_plates(
         // Without a pixel grid: strips a few spacings wide, each ending
         // where its points stop, read from the whole cloud (both plates'
         // boundaries are read at once, so what one no longer needs is
-        // freed first).
+        // freed first). Where the plate's noise exceeds the on-plane
+        // tolerance, the strips' ends are moved out by what it thins.
         drop(near);
         let spacing = spacing_at(&edge.point);
-        (boundary::sample_scattered(cloud, plane, &edge, &params, spacing), seen_beside)
+        let window = SCATTER_WINDOW_SPACINGS * spacing.max(params.on_plane_mm);
+        let scatter = boundary::plane_scatter(cloud, plane, &edge, params.band_mm, window);
+        tracing::debug!(plate = k + 1, scatter_mm = ?scatter, "plate noise");
+        (boundary::sample_scattered(cloud, plane, &edge, &params, spacing, scatter), seen_beside)
     };
     let ((boundary_a, beside_a), (boundary_b, beside_b)) = rayon::join(|| boundary_of(0), || boundary_of(1));
     let boundaries: [Boundary; 2] = [boundary_a, boundary_b];
@@ -578,24 +588,24 @@ fn plan_plates(
         let mates: Vec<(f64, f64)> = mates.into_iter().map(interval).collect();
         own.map(|ends| boundary::joined_extent(interval(ends), &mates, max_break))
     });
-    let coverage = match beside {
+    let visible_joint = match beside {
         [Some((a0, a1)), Some((b0, b1))] => {
-            let (mut v0, mut v1) = (a0.max(b0), a1.min(b1));
-            if layout == Layout::Lap {
-                (v0, v1) = ctx.clip_to_view(&weld, v0, v1);
-            }
-            let visible_joint_mm = (v1 - v0).max(0.0);
-            let spanned = (s1.min(v1) - s0.max(v0)).max(0.0);
-            let joint = if visible_joint_mm > 0.0 { spanned / visible_joint_mm } else { 0.0 };
-            let beyond_mm = (s1 - s0) - spanned;
-            tracing::debug!(joint_coverage = joint, visible_joint_mm, beyond_mm, "seam coverage");
-            Some(SeamCoverage { edge: edge_coverage, joint, visible_joint_mm, beyond_mm })
+            let (v0, v1) = (a0.max(b0), a1.min(b1));
+            Some(if layout == Layout::Lap { ctx.clip_to_view(&weld, v0, v1) } else { (v0, v1) })
         }
         _ => None,
     };
+    let coverage = visible_joint.map(|(v0, v1)| {
+        let visible_joint_mm = (v1 - v0).max(0.0);
+        let spanned = (s1.min(v1) - s0.max(v0)).max(0.0);
+        let joint = if visible_joint_mm > 0.0 { spanned / visible_joint_mm } else { 0.0 };
+        let beyond_mm = (s1 - s0) - spanned;
+        tracing::debug!(joint_coverage = joint, visible_joint_mm, beyond_mm, "seam coverage");
+        SeamCoverage { edge: edge_coverage, joint, visible_joint_mm, beyond_mm }
+    });
     // Where the plates go on side by side beyond the seam's ends, the
     // joint does too: an edge lost under a streak, not a plate's end.
-    let joint_beyond_ends_mm = ctx.camera_grid().map(|grid| {
+    let followed_beyond = ctx.camera_grid().map(|grid| {
         let [before, after] = boundary::surfaces_beyond(
             cloud,
             &grid,
@@ -613,6 +623,11 @@ fn plan_plates(
             [before, after]
         }
     });
+    // Without a grid, the plates' members themselves (not widened by the
+    // rim the criterion trimmed, which is an estimate) lying beside each
+    // other beyond an end: an edge lost there while both plates go on.
+    let members_beyond = || visible_joint.map(|(v0, v1)| [(s0 - v0 - trim).max(0.0), (v1 - trim - s1).max(0.0)]);
+    let joint_beyond_ends_mm = followed_beyond.or_else(members_beyond);
     tracing::debug!(?joint_beyond_ends_mm, "plates seen beside the joint beyond the seam's ends");
     ctx.clock.lap(Stage::WeldEquation);
 

@@ -55,6 +55,13 @@ use super::refit::SeamCurve;
 const MIN_BEVEL_DEG: f64 = 10.0;
 const MAX_BEVEL_DEG: f64 = 60.0;
 
+/// The flattest face whose top line places a groove's edge, degrees from
+/// the plate normal ([`GrooveProfile::bevel_midline_offset`]): a groove
+/// judged a V may still have bevels past [`MAX_BEVEL_DEG`] (a 124° groove
+/// is 62° a side); one within 15° of the plates' own plane is hardly a
+/// face beside their noise.
+const MAX_SLOPED_FACE_DEG: f64 = 75.0;
+
 /// The fewest points a face is fitted from, and the least share of the
 /// seam's stations it must be seen at: a face is seen along the seam, not
 /// in one spot, as spatter or a tack is.
@@ -195,6 +202,28 @@ pub struct Face {
     /// parts may be another part's plate): its foot is the probe's, not
     /// the root.
     pub foot_at_probe_bottom: bool,
+    /// Where the face meets the plates' top (`h = 0`), as a line along the
+    /// seam: its `|t|` at the span's middle and its change per mm along.
+    pub top: TopLine,
+}
+
+/// A line along the seam in the probe's `(s, |t|)`: `|t|` at the span's
+/// middle, mm, and its change per mm along the seam.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TopLine {
+    pub at_middle_mm: f64,
+    pub per_mm: f64,
+}
+
+/// How far, across the seam towards the second weld edge, the midline of
+/// the two bevels' top lines lies from the midline of the weld edges
+/// ([`GrooveProfile::bevel_midline_offset`]): at the span's middle `s`,
+/// mm, and per mm along the seam.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MidlineOffset {
+    pub middle_s: f64,
+    pub at_middle_mm: f64,
+    pub per_mm: f64,
 }
 
 impl Face {
@@ -249,6 +278,8 @@ pub struct GrooveProfile {
     pub faces: Vec<Face>,
     /// A plate standing between the edges, when one does.
     pub standing: Option<Standing>,
+    /// The middle of the span probed along the seam, mm.
+    pub middle_s: f64,
 }
 
 /// What the profile says the joint is.
@@ -280,6 +311,28 @@ impl GrooveProfile {
         // Walls, veils along the rays, or too little to be a face.
         let not_a_face = |f: &Face| !f.is_seen() || f.is_wall(self.point_spacing_mm);
         if self.faces.iter().all(not_a_face) { Between::SquareGap } else { Between::Unclear }
+    }
+
+    /// Where a V-groove's edges are, read from its bevels rather than from
+    /// where the plates' points stop: each bevel's fitted line, carried up
+    /// to the plates' top, meets it at the groove's true edge, however far
+    /// the strips walked onto the bevel's first millimetres (a bevel 30°
+    /// off the plates' plane stays within a 0.4 mm tolerance of it for
+    /// 0.7 mm, more under noise, and the face turned to the camera, seen
+    /// more densely, loses more). The offset of their midline from the
+    /// weld edges' midline; None unless both sides show a sloped face.
+    pub fn bevel_midline_offset(&self) -> Option<MidlineOffset> {
+        let sloped = |f: &&Face| {
+            (MIN_BEVEL_DEG..=MAX_SLOPED_FACE_DEG).contains(&f.angle_deg) && f.is_plane(self.point_spacing_mm)
+        };
+        let top = |side: i8| self.faces.iter().filter(sloped).find(|f| f.side == side).map(|f| f.top);
+        let (first, second) = (top(-1)?, top(1)?);
+        // t runs towards the second edge: its top at +|t|, the first's at -|t|.
+        Some(MidlineOffset {
+            middle_s: self.middle_s,
+            at_middle_mm: 0.5 * (second.at_middle_mm - first.at_middle_mm),
+            per_mm: 0.5 * (second.per_mm - first.per_mm),
+        })
     }
 
     /// The groove's angle: both bevels' angles, or twice the one seen.
@@ -573,10 +626,17 @@ pub fn probe(cloud: &PointCloud, setting: &ProbeSetting) -> GrooveProfile {
             let on_side = |p: &&Across| p.t.signum() as i8 == side;
             let mut points: Vec<&Across> = Vec::with_capacity(collected.iter().filter(on_side).count());
             points.extend(collected.iter().filter(on_side));
-            fit_face(&points, side, spacing, (top_margin, bottom), &view, half_opening)
+            fit_face(&points, side, spacing, (top_margin, bottom), &view, half_opening, middle)
         })
         .collect();
-    GrooveProfile { point_spacing_mm: spacing, opening_mm: 2.0 * half_opening, points_below, faces, standing }
+    GrooveProfile {
+        point_spacing_mm: spacing,
+        opening_mm: 2.0 * half_opening,
+        points_below,
+        faces,
+        standing,
+        middle_s: middle,
+    }
 }
 
 /// The image rows the convex hull of `corners` projects onto, each with
@@ -710,6 +770,7 @@ fn fit_face(
     (top_margin, bottom): (f64, f64),
     view: &Views,
     half_opening: f64,
+    middle_s: f64,
 ) -> Option<Face> {
     if points.len() < 3 {
         return None;
@@ -795,6 +856,12 @@ fn fit_face(
         towards.abs() > f64::EPSILON && h_occ > 0.0 && h_occ <= depth_mm + OCCLUSION_MARGIN_MM
     };
     let foot_hidden = hidden_below(view.camera) || hidden_below(view.projector);
+    // Each kept point carried up the face's slope to the plates' top,
+    // |t| - (d|t|/dh) h, then a line along the seam through them.
+    let top = fit_line(kept.iter().map(|p| (p.s - middle_s, p.t.abs() - line.slope * p.h))).map_or(
+        TopLine { at_middle_mm: line.intercept, per_mm: 0.0 },
+        |l| TopLine { at_middle_mm: l.intercept, per_mm: l.slope },
+    );
     Some(Face {
         side,
         points: kept.len(),
@@ -807,6 +874,7 @@ fn fit_face(
         along_rays,
         foot_hidden,
         foot_at_probe_bottom: depth_mm >= bottom - BOTTOM_MARGIN_SPACINGS * spacing,
+        top,
     })
 }
 
@@ -971,11 +1039,14 @@ mod tests {
     }
 
     fn probed(cloud: &PointCloud, half_opening: f64) -> GrooveProfile {
-        let (e1, e2) = (edge(-half_opening), edge(half_opening));
+        probed_between(cloud, &edge(-half_opening), &edge(half_opening))
+    }
+
+    fn probed_between(cloud: &PointCloud, e1: &SeamCurve, e2: &SeamCurve) -> GrooveProfile {
         probe(
             cloud,
             &ProbeSetting {
-                edges: [&e1, &e2],
+                edges: [e1, e2],
                 span: (-45.0, 45.0),
                 point_spacing_mm: 0.2,
                 depth_to_support_mm: Some(20.0),
@@ -983,6 +1054,23 @@ mod tests {
                 projector: Vec3::zeros(),
             },
         )
+    }
+
+    /// A 60 degree V-groove 5 mm deep with a 1 mm root gap, whose bevels
+    /// reach x = ±0.5, and its half opening at the top.
+    fn v_groove_cloud() -> (PointCloud, f64) {
+        let tan = 30f64.to_radians().tan();
+        let w = 0.5 + 5.0 * tan;
+        let v = |x: f64| {
+            if x.abs() >= w {
+                Some(0.0)
+            } else if x.abs() >= 0.5 {
+                Some((w - x.abs()) / tan)
+            } else {
+                None
+            }
+        };
+        (cloud_of(v, 10.0, 0.2), w)
     }
 
     #[test]
@@ -1050,19 +1138,8 @@ mod tests {
 
     #[test]
     fn a_v_groove_shows_two_bevels_its_angle_and_depth() {
-        // 60 degrees, 5 mm deep, root gap 1 mm: the bevels reach x = ±0.5.
-        let tan = 30f64.to_radians().tan();
-        let w = 0.5 + 5.0 * tan;
-        let v = |x: f64| {
-            if x.abs() >= w {
-                Some(0.0)
-            } else if x.abs() >= 0.5 {
-                Some((w - x.abs()) / tan)
-            } else {
-                None
-            }
-        };
-        let profile = probed(&cloud_of(v, 10.0, 0.2), w);
+        let (cloud, w) = v_groove_cloud();
+        let profile = probed(&cloud, w);
         assert_eq!(profile.verdict(), Between::Groove, "{}", profile.describe());
         assert!((profile.groove_angle_deg().unwrap() - 60.0).abs() < 1.0, "{}", profile.describe());
         assert!((profile.depth_mm().unwrap() - 5.0).abs() < 0.2, "{}", profile.describe());
@@ -1076,6 +1153,31 @@ mod tests {
         let far_apart = GrooveProfile { opening_mm: 40.0, ..profile.clone() };
         let refusal = far_apart.check_opening(5.0).unwrap_err();
         assert!(refusal.to_string().contains("40.0 mm apart"), "{refusal}");
+    }
+
+    #[test]
+    fn a_v_groove_s_bevels_place_its_edges_where_the_edges_given_are_read_inside_it() {
+        // The groove of [`v_groove_cloud`], its edges given 0.3 mm inside
+        // it on one side and 0.9 to 1.3 mm along the seam on the other, as
+        // the strips read a noisy groove: their midline lies 0.4 mm off
+        // the groove's at the middle, 0.29 and 0.51 mm at the ends.
+        let (cloud, w) = v_groove_cloud();
+        let e1 = edge(-(w - 0.3));
+        let e2 = SeamCurve { coef_a: vec![w - 1.1, 0.005], ..edge(0.0) };
+        let profile = probed_between(&cloud, &e1, &e2);
+        let offset = profile.bevel_midline_offset().unwrap_or_else(|| panic!("{}", profile.describe()));
+        let midline = e1.midline(&e2).unwrap();
+        let moved = crate::pipeline::weld_equation::moved_towards(&midline, &e1, &e2, &offset);
+        for s in [-45.0, 0.0, 45.0] {
+            let (before, after) = (midline.at(s).x, moved.at(s).x);
+            assert!(after.abs() < 0.05, "at s = {s}: the midline {before:.3} mm off, moved to {after:.3} mm");
+        }
+        // Edges given where the groove is: nothing to move.
+        let offset = probed(&cloud, w).bevel_midline_offset().unwrap();
+        assert!(offset.at_middle_mm.abs() < 0.02 && offset.per_mm.abs() < 1e-3, "{offset:?}");
+        // A square gap has no sloped face to place an edge.
+        let gap = |x: f64| if x.abs() >= 1.5 { Some(0.0) } else { None };
+        assert_eq!(probed(&cloud_of(gap, 10.0, 0.2), 1.5).bevel_midline_offset(), None);
     }
 
     #[test]

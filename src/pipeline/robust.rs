@@ -505,6 +505,16 @@ fn plan_plates(
     let (e1, e2) = (&fits[0].curve, &fits[1].curve);
     let step = plates[1].plane.offset - plates[0].plane.offset;
     let weld = ctx.weld(e1, e2, &normal, groove_depth_mm, || weld_equation::lap_root(e1, step, &normal))?;
+    // A V-groove's midline between its edges as its two bevels place them,
+    // not as far as the strips walked onto each bevel.
+    let bevels_offset = profile.as_ref().and_then(|p| p.bevel_midline_offset());
+    let weld = match (ctx.joint, bevels_offset) {
+        (Some(JointType::VButt), Some(offset)) => {
+            tracing::debug!(?offset, "the V-groove's midline from its bevels");
+            weld_equation::moved_towards(&weld, e1, e2, &offset)
+        }
+        _ => weld,
+    };
     let extent = |k: usize| {
         boundaries[k]
             .extent(|s| axes.feature(&s.position))

@@ -2,7 +2,12 @@
 //! weld edges `f_E1` and `f_E2`.
 //!
 //! - V-butt: the midline shifted by the groove depth along the plate
-//!   normal, `f_V = (f_E1 + f_E2) / 2 + d n_V` (Eq. 32).
+//!   normal, `f_V = (f_E1 + f_E2) / 2 + d n_V` (Eq. 32). The edges are
+//!   where the plates' points stop, and a shallow bevel's first
+//!   millimetres lie within the on-plane tolerance of its plate, so each
+//!   edge is read somewhat inside the groove, one side more than the
+//!   other; where both bevels are seen, the midline is moved to where
+//!   their faces meet the plates' top ([`moved_towards`]).
 //! - I-butt: the midline, `f_I = (f_E1 + f_E2) / 2` (Eq. 36).
 //! - Lap, as the paper has it: the lower plate's edge, `f_D = f_E1`
 //!   (Eq. 38). But the lower plate's visible edge is not the weld root:
@@ -14,6 +19,7 @@
 
 use crate::geometry::Vec3;
 
+use super::groove::MidlineOffset;
 use super::refit::SeamCurve;
 
 /// The plate normal of Eq. 33 and 34: from two points of `f_E1` and one of
@@ -35,6 +41,22 @@ pub fn v_butt(e1: &SeamCurve, e2: &SeamCurve, groove_depth_mm: f64, n_v: &Vec3) 
 /// Eq. 36: the I-butt weld, the midline of the two edges.
 pub fn i_butt(e1: &SeamCurve, e2: &SeamCurve) -> Option<SeamCurve> {
     e1.midline(e2)
+}
+
+/// `weld` moved across the seam, towards the second weld edge `e2` from
+/// the first `e1`, by `offset` (mm at its middle, and per mm along): where
+/// a V-groove's bevels say its edges' midline lies
+/// ([`super::groove::GrooveProfile::bevel_midline_offset`]). The curves share their axes.
+pub fn moved_towards(weld: &SeamCurve, e1: &SeamCurve, e2: &SeamCurve, offset: &MidlineOffset) -> SeamCurve {
+    let middle = offset.middle_s;
+    let sign = (e2.at(middle) - e1.at(middle)).dot(&weld.axes.a).signum();
+    let mut moved = weld.clone();
+    if moved.coef_a.len() < 2 {
+        moved.coef_a.resize(2, 0.0);
+    }
+    moved.coef_a[0] += sign * (offset.at_middle_mm - offset.per_mm * middle);
+    moved.coef_a[1] += sign * offset.per_mm;
+    moved
 }
 
 /// Eq. 38 as the paper applies it: of the two edges, the lower plate's is

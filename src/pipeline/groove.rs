@@ -62,6 +62,12 @@ const MAX_BEVEL_DEG: f64 = 60.0;
 /// face beside their noise.
 const MAX_SLOPED_FACE_DEG: f64 = 75.0;
 
+/// How far inside the probe's cut at the edges given, in sigmas of a
+/// face's fit across the seam, its points must lie to place its top
+/// ([`Face::top`]): nearer the cut, noise has taken out the points it
+/// moved outward and left those it moved in.
+const TOP_CUT_SIGMAS: f64 = 2.5;
+
 /// The fewest points a face is fitted from, and the least share of the
 /// seam's stations it must be seen at: a face is seen along the seam, not
 /// in one spot, as spatter or a tack is.
@@ -857,8 +863,16 @@ fn fit_face(
     };
     let foot_hidden = hidden_below(view.camera) || hidden_below(view.projector);
     // Each kept point carried up the face's slope to the plates' top,
-    // |t| - (d|t|/dh) h, then a line along the seam through them.
-    let top = fit_line(kept.iter().map(|p| (p.s - middle_s, p.t.abs() - line.slope * p.h))).map_or(
+    // |t| - (d|t|/dh) h, then a line along the seam through them. Only
+    // from the points whose face lies well inside the edges given: the
+    // probe reads nothing past them, so near the top it keeps only the
+    // points noise moved in, and a slope fitted there reads flatter than
+    // the face.
+    let cut = half_opening - 0.5 * spacing - TOP_CUT_SIGMAS * line.rms;
+    let deep: Vec<&Across> = kept.iter().copied().filter(|p| line.at(p.h) <= cut).collect();
+    let enough = deep.len() >= MIN_FACE_POINTS;
+    let slope = fit_line(deep.iter().map(|p| (p.h, p.t.abs()))).filter(|_| enough).map_or(line.slope, |l| l.slope);
+    let top = fit_line(deep.iter().map(|p| (p.s - middle_s, p.t.abs() - slope * p.h))).filter(|_| enough).map_or(
         TopLine { at_middle_mm: line.intercept, per_mm: 0.0 },
         |l| TopLine { at_middle_mm: l.intercept, per_mm: l.slope },
     );

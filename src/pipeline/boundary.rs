@@ -631,11 +631,18 @@ const MIN_SCATTER_POINTS: usize = 30;
 /// The median absolute deviation of normal noise over its sigma.
 const MAD_PER_SIGMA: f64 = 0.674_489_750_196_081_7;
 
+/// How far off a plate's plane, in point spacings (or on-plane
+/// tolerances, where larger), [`plane_scatter`] first reads its points:
+/// wider than any camera's depth noise at its own spacing, narrower than
+/// the step to another surface.
+const SCATTER_WINDOW_SPACINGS: f64 = 3.0;
+
 /// How far the points of a plate scatter about its plane, one sigma (mm),
-/// measured in a cloud without a pixel grid on the points of the inner
-/// third of the band beside `edge` (a robust sigma: the median absolute
-/// distance over that of normal noise), from the points within `window_mm`
-/// of the plane and again within four of the sigmas found. The inner third
+/// measured in a cloud without a pixel grid whose points lie about
+/// `spacing_mm` apart, on the points of the inner third of the band beside
+/// `edge` (a robust sigma: the median absolute distance over that of
+/// normal noise), from the points within [`SCATTER_WINDOW_SPACINGS`] of
+/// the plane and again within four of the sigmas found. The inner third
 /// lies well inside the plate whatever the coarse edge's error, so the
 /// lower plate of a lap, a groove's bevel or a web standing beside it do
 /// not enter. `None` below [`MIN_SCATTER_POINTS`] points.
@@ -643,10 +650,11 @@ pub fn plane_scatter(
     cloud: &PointCloud,
     plane: &Plane,
     edge: &CoarseEdge,
-    band_mm: f64,
-    window_mm: f64,
+    params: &BoundaryParams,
+    spacing_mm: f64,
 ) -> Option<f64> {
-    let inner = -band_mm..=-band_mm / 3.0;
+    let window_mm = SCATTER_WINDOW_SPACINGS * spacing_mm.max(params.on_plane_mm);
+    let inner = -params.band_mm..=-params.band_mm / 3.0;
     let distances: Vec<f64> = gather_filter_map(cloud.points(), |_, p| {
         if !p[0].is_finite() {
             return None;
@@ -674,7 +682,7 @@ pub fn plane_scatter(
 /// where the noise is larger. A tolerance a camera's noise exceeds keeps a
 /// fraction of the plate's points, the strips' outermost kept point then
 /// lies rows inside the plate's end, and the edge is read inside the plate
-/// (by 0.5 sigma² mm at a consumer camera's 1 mm voxels: 0.9 mm at
+/// (by about 0.5 sigma² mm at a consumer camera's 1 mm voxels: 0.9 mm at
 /// 1.3 mm of depth noise).
 fn on_plane_for_scatter(configured_mm: f64, sigma_mm: Option<f64>) -> f64 {
     sigma_mm.map_or(configured_mm, |s| configured_mm.max(ON_PLANE_SIGMAS * s))
@@ -740,27 +748,14 @@ impl Thinning {
             (near_plane && inner.contains(&out)).then(|| (strip_of(d.dot(&edge.direction), strip_mm), out))
         });
         all.sort_unstable_by(|a, b| a.0.cmp(&b.0).then(a.1.total_cmp(&b.1)));
-        let gap_sums = |outs: &mut dyn Iterator<Item = f64>| {
-            let mut previous: Option<f64> = None;
-            let mut sums = [0.0; 2];
-            for out in outs {
-                if let Some(before) = previous {
-                    let gap = out - before;
-                    sums[0] += gap;
-                    sums[1] += gap * gap;
-                }
-                previous = Some(out);
-            }
-            sums
-        };
         let mut per_strip: std::collections::BTreeMap<i32, [f64; 4]> = std::collections::BTreeMap::new();
         for strip in on_plane {
-            let [s1, s2] = gap_sums(&mut strip.iter().map(|b| b.out).filter(|out| inner.contains(out)));
+            let [s1, s2] = gap_sums(strip.iter().map(|b| b.out).filter(|out| inner.contains(out)));
             let entry = per_strip.entry(strip[0].strip).or_default();
             (entry[0], entry[1]) = (s1, s2);
         }
         for strip in all.chunk_by(|a, b| a.0 == b.0) {
-            let [s1, s2] = gap_sums(&mut strip.iter().map(|a| a.1));
+            let [s1, s2] = gap_sums(strip.iter().map(|a| a.1));
             let entry = per_strip.entry(strip[0].0).or_default();
             (entry[2], entry[3]) = (s1, s2);
         }
@@ -786,13 +781,29 @@ impl Thinning {
         };
         let (hi, lo) =
             (upto(strip.saturating_add(THINNING_POOL_STRIPS)), upto(strip.saturating_sub(THINNING_POOL_STRIPS + 1)));
-        let sums: Vec<f64> = hi.iter().zip(lo).map(|(h, l)| h - l).collect();
+        let sums: [f64; 4] = std::array::from_fn(|i| hi[i] - lo[i]);
         let empty_space = |s1: f64, s2: f64| (s1 > 0.0).then(|| s2 / (2.0 * s1));
         match (empty_space(sums[0], sums[1]), empty_space(sums[2], sums[3])) {
             (Some(on_plane), Some(all)) => (on_plane - all).max(0.0),
             _ => 0.0,
         }
     }
+}
+
+/// Σg and Σg² over the gaps g between consecutive values of `outs`
+/// (ascending).
+fn gap_sums(outs: impl Iterator<Item = f64>) -> [f64; 2] {
+    let mut previous: Option<f64> = None;
+    let mut sums = [0.0; 2];
+    for out in outs {
+        if let Some(before) = previous {
+            let gap = out - before;
+            sums[0] += gap;
+            sums[1] += gap * gap;
+        }
+        previous = Some(out);
+    }
+    sums
 }
 
 /// Refines the ends of a weld edge's extent `(lo, hi)`, read from strips
@@ -1408,7 +1419,7 @@ mod tests {
         let outward = Vec3::new(1.0, -SLOPE, 0.0).normalize();
         let edge = CoarseEdge { point: Vec3::new(edge_x - 2.0, 0.0, 700.0), direction, outward };
         let params = BoundaryParams { band_mm: 6.0, on_plane_mm: 0.4 };
-        let scatter = plane_scatter(&cloud, &plane, &edge, params.band_mm, 3.0 * spacing).unwrap();
+        let scatter = plane_scatter(&cloud, &plane, &edge, &params, spacing).unwrap();
         assert!((scatter - sigma).abs() < 0.1 * sigma, "measured {scatter} mm, made {sigma} mm");
         let mean_offset = |scatter: Option<f64>| {
             let boundary = sample_scattered(&cloud, &plane, &edge, &params, spacing, scatter);

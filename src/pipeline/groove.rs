@@ -208,28 +208,29 @@ pub struct Face {
     /// parts may be another part's plate): its foot is the probe's, not
     /// the root.
     pub foot_at_probe_bottom: bool,
-    /// Where the face meets the plates' top (`h = 0`), as a line along the
-    /// seam: its `|t|` at the span's middle and its change per mm along.
-    pub top: TopLine,
+    /// Where the face meets the plates' top (`h = 0`), as a line of `|t|`
+    /// along the seam.
+    pub top: LineAlong,
 }
 
-/// A line along the seam in the probe's `(s, |t|)`: `|t|` at the span's
-/// middle, mm, and its change per mm along the seam.
+/// A distance across the seam that changes linearly along it: a bevel's
+/// top ([`Face::top`]) or how far the bevels' midline lies from the weld
+/// edges' ([`GrooveProfile::bevel_midline_offset`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct TopLine {
-    pub at_middle_mm: f64,
-    pub per_mm: f64,
-}
-
-/// How far, across the seam towards the second weld edge, the midline of
-/// the two bevels' top lines lies from the midline of the weld edges
-/// ([`GrooveProfile::bevel_midline_offset`]): at the span's middle `s`,
-/// mm, and per mm along the seam.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct MidlineOffset {
+pub struct LineAlong {
+    /// The middle of the span probed along the seam, mm.
     pub middle_s: f64,
+    /// The distance there, mm.
     pub at_middle_mm: f64,
+    /// Its change per mm along the seam.
     pub per_mm: f64,
+}
+
+impl LineAlong {
+    /// The distance at `s` mm along the seam.
+    pub fn at(&self, s: f64) -> f64 {
+        self.at_middle_mm + self.per_mm * (s - self.middle_s)
+    }
 }
 
 impl Face {
@@ -284,8 +285,6 @@ pub struct GrooveProfile {
     pub faces: Vec<Face>,
     /// A plate standing between the edges, when one does.
     pub standing: Option<Standing>,
-    /// The middle of the span probed along the seam, mm.
-    pub middle_s: f64,
 }
 
 /// What the profile says the joint is.
@@ -326,16 +325,17 @@ impl GrooveProfile {
     /// off the plates' plane stays within a 0.4 mm tolerance of it for
     /// 0.7 mm, more under noise, and the face turned to the camera, seen
     /// more densely, loses more). The offset of their midline from the
-    /// weld edges' midline; None unless both sides show a sloped face.
-    pub fn bevel_midline_offset(&self) -> Option<MidlineOffset> {
+    /// weld edges' midline, towards the second edge; None unless both
+    /// sides show a sloped face.
+    pub fn bevel_midline_offset(&self) -> Option<LineAlong> {
         let sloped = |f: &&Face| {
             (MIN_BEVEL_DEG..=MAX_SLOPED_FACE_DEG).contains(&f.angle_deg) && f.is_plane(self.point_spacing_mm)
         };
         let top = |side: i8| self.faces.iter().filter(sloped).find(|f| f.side == side).map(|f| f.top);
         let (first, second) = (top(-1)?, top(1)?);
         // t runs towards the second edge: its top at +|t|, the first's at -|t|.
-        Some(MidlineOffset {
-            middle_s: self.middle_s,
+        Some(LineAlong {
+            middle_s: second.middle_s,
             at_middle_mm: 0.5 * (second.at_middle_mm - first.at_middle_mm),
             per_mm: 0.5 * (second.per_mm - first.per_mm),
         })
@@ -635,14 +635,7 @@ pub fn probe(cloud: &PointCloud, setting: &ProbeSetting) -> GrooveProfile {
             fit_face(&points, side, spacing, (top_margin, bottom), &view, half_opening, middle)
         })
         .collect();
-    GrooveProfile {
-        point_spacing_mm: spacing,
-        opening_mm: 2.0 * half_opening,
-        points_below,
-        faces,
-        standing,
-        middle_s: middle,
-    }
+    GrooveProfile { point_spacing_mm: spacing, opening_mm: 2.0 * half_opening, points_below, faces, standing }
 }
 
 /// The image rows the convex hull of `corners` projects onto, each with
@@ -862,20 +855,7 @@ fn fit_face(
         towards.abs() > f64::EPSILON && h_occ > 0.0 && h_occ <= depth_mm + OCCLUSION_MARGIN_MM
     };
     let foot_hidden = hidden_below(view.camera) || hidden_below(view.projector);
-    // Each kept point carried up the face's slope to the plates' top,
-    // |t| - (d|t|/dh) h, then a line along the seam through them. Only
-    // from the points whose face lies well inside the edges given: the
-    // probe reads nothing past them, so near the top it keeps only the
-    // points noise moved in, and a slope fitted there reads flatter than
-    // the face.
-    let cut = half_opening - 0.5 * spacing - TOP_CUT_SIGMAS * line.rms;
-    let deep: Vec<&Across> = kept.iter().copied().filter(|p| line.at(p.h) <= cut).collect();
-    let enough = deep.len() >= MIN_FACE_POINTS;
-    let slope = fit_line(deep.iter().map(|p| (p.h, p.t.abs()))).filter(|_| enough).map_or(line.slope, |l| l.slope);
-    let top = fit_line(deep.iter().map(|p| (p.s - middle_s, p.t.abs() - slope * p.h))).filter(|_| enough).map_or(
-        TopLine { at_middle_mm: line.intercept, per_mm: 0.0 },
-        |l| TopLine { at_middle_mm: l.intercept, per_mm: l.slope },
-    );
+    let top = top_line(&kept, &line, half_opening - 0.5 * spacing, middle_s);
     Some(Face {
         side,
         points: kept.len(),
@@ -890,6 +870,26 @@ fn fit_face(
         foot_at_probe_bottom: depth_mm >= bottom - BOTTOM_MARGIN_SPACINGS * spacing,
         top,
     })
+}
+
+/// Where a face fitted as `line` meets the plates' top: each of its `kept`
+/// points carried up the face's slope to `h = 0`, `|t| - (d|t|/dh) h`,
+/// then a line along the seam through them. Only from the points whose
+/// face lies [`TOP_CUT_SIGMAS`] inside `cut`, the `|t|` past which the
+/// probe reads nothing: near it, it keeps only the points noise moved in,
+/// and a slope fitted there reads flatter than the face. Too few such
+/// points: the face's own intercept, the same all along.
+fn top_line(kept: &[&Across], line: &Line, cut: f64, middle_s: f64) -> LineAlong {
+    let inside = cut - TOP_CUT_SIGMAS * line.rms;
+    let deep: Vec<&Across> = kept.iter().copied().filter(|p| line.at(p.h) <= inside).collect();
+    let fitted = (deep.len() >= MIN_FACE_POINTS).then(|| {
+        let slope = fit_line(deep.iter().map(|p| (p.h, p.t.abs()))).map_or(line.slope, |l| l.slope);
+        fit_line(deep.iter().map(|p| (p.s - middle_s, p.t.abs() - slope * p.h)))
+    });
+    match fitted.flatten() {
+        Some(l) => LineAlong { middle_s, at_middle_mm: l.intercept, per_mm: l.slope },
+        None => LineAlong { middle_s, at_middle_mm: line.intercept, per_mm: 0.0 },
+    }
 }
 
 /// Where a bevel meets the root face below it.

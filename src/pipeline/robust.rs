@@ -54,12 +54,6 @@ const MIN_DIRECTION_NORM: f64 = 1e-9;
 /// apart, and the plane criterion leaves the odd hole.
 const CLUSTER_SPACINGS: f64 = 2.5;
 
-/// How far off a plate's plane, in point spacings (or on-plane
-/// tolerances, where larger), its noise is first measured
-/// ([`boundary::plane_scatter`]): wider than any camera's depth noise at
-/// its own spacing, narrower than the step to another surface.
-const SCATTER_WINDOW_SPACINGS: f64 = 3.0;
-
 /// Plans one frame by the robust method.
 pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
     let config = ctx.config;
@@ -405,8 +399,7 @@ fn plan_plates(
         // tolerance, the strips' ends are moved out by what it thins.
         drop(near);
         let spacing = spacing_at(&edge.point);
-        let window = SCATTER_WINDOW_SPACINGS * spacing.max(params.on_plane_mm);
-        let scatter = boundary::plane_scatter(cloud, plane, &edge, params.band_mm, window);
+        let scatter = boundary::plane_scatter(cloud, plane, &edge, &params, spacing);
         tracing::debug!(plate = k + 1, scatter_mm = ?scatter, "plate noise");
         (boundary::sample_scattered(cloud, plane, &edge, &params, spacing, scatter), seen_beside)
     };

@@ -19,7 +19,7 @@
 
 use crate::geometry::Vec3;
 
-use super::groove::MidlineOffset;
+use super::groove::LineAlong;
 use super::refit::SeamCurve;
 
 /// The plate normal of Eq. 33 and 34: from two points of `f_E1` and one of
@@ -44,17 +44,19 @@ pub fn i_butt(e1: &SeamCurve, e2: &SeamCurve) -> Option<SeamCurve> {
 }
 
 /// `weld` moved across the seam, towards the second weld edge `e2` from
-/// the first `e1`, by `offset` (mm at its middle, and per mm along): where
-/// a V-groove's bevels say its edges' midline lies
-/// ([`super::groove::GrooveProfile::bevel_midline_offset`]). The curves share their axes.
-pub fn moved_towards(weld: &SeamCurve, e1: &SeamCurve, e2: &SeamCurve, offset: &MidlineOffset) -> SeamCurve {
+/// the first `e1`, by `offset` at each point along it: where a V-groove's
+/// bevels say its edges' midline lies
+/// ([`super::groove::GrooveProfile::bevel_midline_offset`]). The curves
+/// share their axes; a line in `s` adds to the first two coefficients of
+/// `h_a` (Eq. 20).
+pub fn moved_towards(weld: &SeamCurve, e1: &SeamCurve, e2: &SeamCurve, offset: &LineAlong) -> SeamCurve {
     let middle = offset.middle_s;
     let sign = (e2.at(middle) - e1.at(middle)).dot(&weld.axes.a).signum();
     let mut moved = weld.clone();
     if moved.coef_a.len() < 2 {
         moved.coef_a.resize(2, 0.0);
     }
-    moved.coef_a[0] += sign * (offset.at_middle_mm - offset.per_mm * middle);
+    moved.coef_a[0] += sign * offset.at(0.0);
     moved.coef_a[1] += sign * offset.per_mm;
     moved
 }

@@ -93,3 +93,18 @@ fn a_far_i_butt_strip_whose_edge_is_lost_short_of_an_end_is_refused_not_cut_shor
     let err = plan.err().unwrap_or_else(|| panic!("{name}: planned"));
     assert!(err.to_string().contains("beyond the seam's last end"), "{name}: {err}");
 }
+
+#[test]
+fn a_v_groove_strip_requested_as_a_tee_is_refused_not_planned_along_its_root_land() {
+    // Its root land, 3 mm wide and 9 mm under the plates, lies 37 mm over
+    // the table beyond the plates' end: long, narrow and a web's height
+    // over a plane, but under the workpiece's top.
+    let name = "consumer-v-butt-05-d367-t17";
+    let spec = suite_scene(name);
+    let sim = consumer_variant().apply(&simulate(&spec, &consumer_camera()), spec.seed);
+    let mut request = PlanRequest::new(JointType::TFillet, None, sim.pose);
+    request.units = Units::Auto;
+    let plan = Planner::new(Config::default()).plan(&sim.cloud, &request);
+    let err = plan.map(|p| format!("{} seams", p.seams.len())).unwrap_err();
+    assert!(err.reason.contains("no long narrow one"), "{name}: {err}");
+}

@@ -106,6 +106,10 @@ pub enum JointRequestArg {
     IButt,
     /// Lap for every scene and workpiece.
     Lap,
+    /// T-fillet for every scene and workpiece: on butt and lap scenes only
+    /// a refusal is right.
+    #[value(name = "t-fillet")]
+    TFillet,
 }
 
 /// `--groove-depth` of `eval`: what a V-butt request says of the depth.

@@ -183,6 +183,7 @@ pub fn run(args: &EvalArgs) -> anyhow::Result<()> {
             (None, JointRequestArg::VButt) => JointAsk::Type(JointType::VButt),
             (None, JointRequestArg::IButt) => JointAsk::Type(JointType::IButt),
             (None, JointRequestArg::Lap) => JointAsk::Type(JointType::Lap),
+            (None, JointRequestArg::TFillet) => JointAsk::Type(JointType::TFillet),
         },
         groove_depth: match args.groove_depth {
             GrooveDepthArg::Given => DepthAsk::Given,

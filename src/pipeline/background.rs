@@ -563,13 +563,21 @@ impl TeeLayers {
 /// no web), at most a web's thickness wide, whose nearest lower layer lies
 /// a web's height under it (more than a lap's step: a clamp on a plate is
 /// no taller than that, and a lap's upper plate lies on its lower one)
-/// and holds a plane beside it. A web seen over its flange on both sides
-/// first; else one over a plane on one side.
+/// and holds a plane beside it, with no larger plane nearer the camera
+/// (a V-groove's root land under its plates is narrow and long too). A
+/// web seen over its flange on both sides first; else one over a plane on
+/// one side.
 fn find_tee(l: &Layers, s: &Selection) -> Option<TeeLayers> {
     let mut one_sided = None;
     for (upper, layer) in l.layers.iter().enumerate() {
         let top = &layer[0];
         if top.elongation < BAR_ELONGATION || top.width_mm() > s.web_thickness_max_mm || upper + 1 >= l.layers.len() {
+            continue;
+        }
+        // A web's top is its workpiece's nearest surface: a narrow plane
+        // under a larger one lies below the workpiece's top (a V-groove's
+        // root land between its plates), not on top of a web.
+        if l.layers[..upper].iter().any(|nearer| nearer[0].area_mm2 > top.area_mm2) {
             continue;
         }
         let flange = upper + 1;
@@ -945,6 +953,21 @@ mod tests {
         wide[0].area_mm2 = 11_000.0;
         assert_ne!(robust_select(wide.clone(), &auto()).map(|s| s.layout).ok(), Some(Layout::Tee));
         assert!(matches!(robust_select(wide, &selection(JointType::TFillet)), Err(BackgroundError::NoWeb { .. })));
+    }
+
+    #[test]
+    fn a_v_groove_s_root_land_under_its_plates_is_no_web_s_top() {
+        // A V-butt cropped round its seam: its plates either side at 360,
+        // the groove's root land 3 mm wide 9 mm under them, and the table
+        // beyond the plates' end 37 mm under the land: the land is long,
+        // narrow and a web's height over a plane, but it lies under the
+        // workpiece's top.
+        let land = PlaneCluster { elongation: 80.0, ..cluster(369.0, 1_200.0, 0.0) };
+        let planes =
+            vec![cluster(360.0, 11_000.0, -25.0), cluster(360.1, 11_500.0, 25.0), land, cluster(406.0, 2_000.0, 40.0)];
+        let err = robust_select(planes.clone(), &selection(JointType::TFillet)).unwrap_err();
+        assert!(matches!(err, BackgroundError::NoWeb { .. }), "{err}");
+        assert_eq!(robust_select(planes, &auto()).unwrap().layout, Layout::Butt);
     }
 
     #[test]

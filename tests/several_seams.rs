@@ -105,6 +105,63 @@ fn a_tee_root_in_a_cloud_without_a_grid_ends_where_the_image_border_crosses_it()
     }
 }
 
+/// Tee scenes of the suite's tuning part that show the face on the
+/// camera's side, cropped 25 mm round that root as a user crops a scan to
+/// its joint: the web's top (40 to 100 mm up) lies outside the crop.
+const CROPPED_TEES: [usize; 3] = [2, 8, 13];
+
+fn cropped(spec: &SceneSpec) -> weldseam::sim::Simulation {
+    let variant = weldseam::sim::variants::Variant::parse("cropped:25,voxel:1,metres").unwrap();
+    variant.apply(&simulate(spec, &CameraModel::default()), spec.seed)
+}
+
+fn plan_cropped(spec: &SceneSpec, joint: RequestedJoint) -> (Result<Plan, PlanError>, Vec<TrueSeam>) {
+    let sim = cropped(spec);
+    let roots = sim.seams.iter().map(|s| TrueSeam::of(spec, s)).collect();
+    let mut request = PlanRequest::new(joint, None, sim.pose);
+    request.units = weldseam::pipeline::input::Units::Auto;
+    (Planner::new(Config::default()).plan(&sim.cloud, &request), roots)
+}
+
+#[test]
+fn a_tee_cropped_round_its_root_is_planned_from_its_face_alone() {
+    let suite = tee_suite();
+    for k in CROPPED_TEES {
+        let (name, spec) = &suite[k];
+        let (plan, roots) = plan_cropped(spec, JointType::TFillet.into());
+        let plan = plan.unwrap_or_else(|e| panic!("{name}: {e}"));
+        assert_eq!(plan.seams.len(), 1, "{name}");
+        let seam = &plan.seams[0];
+        assert!(seam.joint_evidence.as_deref().is_some_and(|e| e.contains("no web's top is in view")), "{seam:?}");
+        let path: Vec<Vec3> = seam.waypoints.iter().map(|w| w.position).collect();
+        assert_eq!(classify_tee(&roots, Ok(std::slice::from_ref(&path))), Verdict::WithinBar, "{name}");
+        // The web's other side: named, not looked for.
+        assert_eq!(plan.unplanned.len(), 1, "{name}");
+        assert!(plan.unplanned[0].reason.reason.contains("top is out of view"), "{name}: {}", plan.unplanned[0].reason);
+        // `auto` does not decide a tee from a face alone (an inside
+        // corner's plate or a fixture's side stands too): refused, saying
+        // what to ask for.
+        let err = plan_cropped(spec, RequestedJoint::Auto).0.map(|p| format!("{} seams", p.seams.len())).unwrap_err();
+        assert_eq!(err.gate, Some(Gate::JointUnknown), "{name}: {err}");
+        assert!(err.reason.contains("request t_fillet"), "{name}: {err}");
+    }
+    // Scene 0's face is edge-on to the camera: with the web's top cropped
+    // away nothing shows where its root is.
+    let (name, spec) = &suite[0];
+    let err = plan_cropped(spec, JointType::TFillet.into()).0.unwrap_err();
+    assert!(err.reason.contains("nothing in view stands on the flange"), "{name}: {err}");
+}
+
+#[test]
+fn butt_and_lap_joints_cropped_round_their_seams_are_not_planned_as_tees() {
+    for joint in [JointType::VButt, JointType::IButt, JointType::Lap] {
+        let spec = demo_scene(joint);
+        let (plan, _) = plan_cropped(&spec, JointType::TFillet.into());
+        let err = plan.map(|p| format!("{} seams", p.seams.len())).unwrap_err();
+        assert_eq!(err.stage, Stage::Background, "{joint}: {err}");
+    }
+}
+
 #[test]
 fn a_tee_whose_roots_are_not_seen_is_refused_saying_why() {
     // Suite tee 10: the far side's face is a veil along the rays, the

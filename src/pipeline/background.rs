@@ -40,6 +40,27 @@ impl PlaneCluster {
     }
 }
 
+#[cfg(test)]
+impl PlaneCluster {
+    /// The cluster of the points of `points` that `pick` keeps, each
+    /// standing for a square millimetre: unit tests' planes.
+    pub(crate) fn of_points(points: &[Vec3], pick: impl Fn(&Vec3) -> bool) -> PlaneCluster {
+        use crate::geometry::fit::Moments;
+        let members: Vec<u32> = (0..points.len() as u32).filter(|&i| pick(&points[i as usize])).collect();
+        let moments: Moments = members.iter().map(|&i| &points[i as usize]).collect();
+        let (long_axis, elongation) = moments.elongation().expect("two distinct points");
+        PlaneCluster {
+            label: 0,
+            area_mm2: members.len() as f64,
+            plane: moments.plane().expect("points spanning a plane"),
+            centroid: moments.centroid().expect("points"),
+            members,
+            long_axis,
+            elongation,
+        }
+    }
+}
+
 /// The two workpiece plates. For a lap joint `plates[0]` is the upper
 /// plate and `plates[1]` the lower one (robust method; the paper's method
 /// sorts them later by the depth of their edges).
@@ -271,10 +292,8 @@ const CORNER_WEB_WIDTH_MAX_MM: f64 = 16.0;
 /// a lap step (the table past the web's outer face), none at the flange's
 /// or the top's level. `points` is the frame the clusters index.
 pub fn find_corner(planes: &[PlaneCluster], s: &Selection, points: &[Point]) -> Option<Corner> {
-    let cos_tilt = s.max_tilt_deg.to_radians().cos();
     // Each plane facing the camera with its index among those searched.
-    let planes: Vec<(usize, &PlaneCluster)> =
-        planes.iter().enumerate().filter(|(_, c)| c.plane.normal.dot(&s.normal) >= cos_tilt).collect();
+    let planes: Vec<(usize, &PlaneCluster)> = planes.iter().enumerate().filter(|(_, c)| s.faces_camera(c)).collect();
     let offset = |c: &PlaneCluster| s.normal.dot(&c.centroid);
     for &(top_index, top) in &planes {
         if top.elongation < BAR_ELONGATION || top.width_mm() > s.web_thickness_max_mm.min(CORNER_WEB_WIDTH_MAX_MM) {
@@ -467,6 +486,15 @@ pub struct Selection {
     pub max_tilt_deg: f64,
 }
 
+impl Selection {
+    /// Whether `c` faces the camera as the workpiece does: within
+    /// `max_tilt_deg` of its dominant normal. Other clusters are no
+    /// workpiece planes.
+    pub fn faces_camera(&self, c: &PlaneCluster) -> bool {
+        c.plane.normal.dot(&self.normal) >= self.max_tilt_deg.to_radians().cos()
+    }
+}
+
 /// The two plates the robust rule chose, how they lie, and in words why.
 #[derive(Debug, Clone)]
 pub struct Selected {
@@ -603,6 +631,22 @@ fn find_tee(l: &Layers, s: &Selection) -> Option<TeeLayers> {
     one_sided
 }
 
+/// The nearest layer of workpiece planes, its clusters largest first
+/// (None when no plane faces the camera): where no web's top is found,
+/// the flange of a tee whose top is out of view (a crop round its root),
+/// for [`super::web_face`] to find the web's face standing on.
+pub fn nearest_layer(planes: &[PlaneCluster], s: &Selection) -> Option<Vec<PlaneCluster>> {
+    let offset = |c: &PlaneCluster| s.normal.dot(&c.centroid);
+    let mut facing: Vec<&PlaneCluster> = planes.iter().filter(|c| s.faces_camera(c)).collect();
+    facing.sort_by(|a, b| offset(a).total_cmp(&offset(b)));
+    // Chained as `robust_select` chains its layers: from the nearest one.
+    let first = offset(facing.first()?);
+    let mut layer: Vec<&PlaneCluster> =
+        facing.into_iter().take_while(|c| offset(c) - first <= s.coplanar_tolerance_mm).collect();
+    layer.sort_by(|a, b| b.area_mm2.total_cmp(&a.area_mm2));
+    Some(layer.into_iter().cloned().collect())
+}
+
 /// Where a lap's plates are: the upper and the lower layer.
 fn find_lap(l: &Layers, s: &Selection) -> Result<(usize, usize), BackgroundError> {
     for upper in 0..l.layers.len() {
@@ -655,9 +699,7 @@ fn find_lap(l: &Layers, s: &Selection) -> Result<(usize, usize), BackgroundError
 /// one whose top plate is nearer the camera (the workpiece's top) unless
 /// that top is too small beside the butt plates to be a plate (a clamp).
 pub fn robust_select(planes: Vec<PlaneCluster>, s: &Selection) -> Result<Selected, BackgroundError> {
-    let cos_tilt = s.max_tilt_deg.to_radians().cos();
-    let mut planes: Vec<PlaneCluster> =
-        planes.into_iter().filter(|c| c.plane.normal.dot(&s.normal) >= cos_tilt).collect();
+    let mut planes: Vec<PlaneCluster> = planes.into_iter().filter(|c| s.faces_camera(c)).collect();
     let found = planes.len();
     if found < 2 {
         return Err(BackgroundError::TooFewPlanes { found });

@@ -74,6 +74,7 @@ use super::background::PlaneCluster;
 use super::boundary::JOINT_BREAK_SPACINGS;
 use super::refit::{SeamAxes, SeamCurve};
 use super::view_border::{SpanEnd, ViewBorder};
+use super::web_face::StandingFace;
 
 /// The fewest face points that make a face: a handful of returns on a web
 /// face seen edge-on fix no plane.
@@ -118,7 +119,7 @@ const BORDER_REACH_SPACINGS: f64 = 1.5;
 /// noise), and points lying along the rays are the mixed returns a depth
 /// jump leaves at the web's edge (a veil from its top down to whatever
 /// lies behind), not a face.
-const MIN_FACE_VIEW_DEG: f64 = 5.0;
+pub const MIN_FACE_VIEW_DEG: f64 = 5.0;
 
 /// A root read from the flange's edge: each edge's sampling may move the
 /// face the edges imply by a spacing, both towards a face seen; the face
@@ -145,8 +146,8 @@ const MAX_STATIONS: usize = 20_000;
 #[derive(Clone, Copy)]
 pub struct TeeView<'a> {
     pub cloud: &'a PointCloud,
-    /// The web's top.
-    pub web_top: &'a PlaneCluster,
+    /// What is seen of the web: its top, or one side face.
+    pub web: Web<'a>,
     /// Every cluster of the flange's layer.
     pub flange_pieces: &'a [&'a PlaneCluster],
     /// The cloud's point spacing at the web, mm.
@@ -173,6 +174,26 @@ pub struct TeeView<'a> {
     /// seen, mm, when nothing tells whether the image cut the top there
     /// (`quality.max_joint_beyond_seam_mm`): further, the root is refused.
     pub max_beyond_mm: f64,
+}
+
+/// What the camera sees of the web that tells where it stands.
+#[derive(Clone, Copy)]
+pub enum Web<'a> {
+    /// Its top, a plane cluster a web's height over the flange.
+    Top(&'a PlaneCluster),
+    /// One side face standing on the flange, the top out of view (a crop
+    /// round the root): that face's root is the only one to read.
+    Face(&'a StandingFace),
+}
+
+impl Web<'_> {
+    /// A point on the web, for naming where a root not seen lies.
+    pub fn centroid(&self) -> Vec3 {
+        match self {
+            Web::Top(top) => top.centroid,
+            Web::Face(face) => face.centroid,
+        }
+    }
 }
 
 /// Which side of the web a root lies on, as the camera sees it.
@@ -237,7 +258,8 @@ pub struct Root {
     /// The angle between the web's face and the flange on the open side,
     /// degrees (90 for a square tee).
     pub web_angle_deg: f64,
-    /// The web's height over the flange, mm.
+    /// The web's height over the flange, mm (with its top out of view, the
+    /// height its face is seen to: it stands at least that tall).
     pub web_height_mm: f64,
     /// The fraction of the stations of the stretch planned with the face's
     /// foot seen, and with the flange seen up to the root.
@@ -314,6 +336,9 @@ struct WebFrame {
     height: f64,
     /// Whether the flange lies on the web's −u and +u sides.
     flange_sides: [bool; 2],
+    /// The side (`sign`) of the one face seen, when the web's top is not:
+    /// `middle` and `half_width` then place that face, not the top.
+    face_only: Option<f64>,
 }
 
 impl WebFrame {
@@ -329,14 +354,29 @@ impl WebFrame {
     fn across(&self, p: &Vec3) -> f64 {
         (p - self.origin).dot(&self.u)
     }
+
+    /// Where a face point on side `sign` may lie, outward of the web's
+    /// middle, mm, and up to which height over the flange: from the web's
+    /// middle to a little beyond the top's trimmed edge, below the top's
+    /// own points; or round the one face seen, up to where it is seen.
+    fn face_band(&self, view: &TeeView, sign: f64, margin: f64) -> ((f64, f64), f64) {
+        let spacing = view.point_spacing_mm;
+        match self.face_only {
+            Some(seen) if seen == sign => {
+                let reach = FACE_REACH_SPACINGS * spacing;
+                ((self.half_width - reach, self.half_width + reach), self.height)
+            }
+            _ => ((0.0, self.half_width + view.rim_mm + FACE_REACH_SPACINGS * spacing), self.height - margin),
+        }
+    }
 }
 
 /// Finds both roots of the tee in `view`: `[−u side, +u side]`, each
 /// fitted or said not to be seen.
 pub fn find_roots(view: &TeeView) -> [Result<Root, RootNotSeen>; 2] {
     let Some(frame) = web_frame(view) else {
-        let why = "the flange's plane and the web's top give no frame to read the roots in".to_string();
-        let near = view.web_top.centroid;
+        let why = "the flange's plane and the web give no frame to read the roots in".to_string();
+        let near = view.web.centroid();
         return [-1.0, 1.0].map(|sign| {
             Err(RootNotSeen {
                 side: Side::Above,
@@ -347,35 +387,79 @@ pub fn find_roots(view: &TeeView) -> [Result<Root, RootNotSeen>; 2] {
             })
         });
     };
-    [-1.0, 1.0].map(|sign| find_root(view, &frame, sign))
+    [-1.0, 1.0].map(|sign| match frame.face_only {
+        Some(seen) if seen != sign => Err(RootNotSeen {
+            side: side_seen(&frame, sign),
+            sign,
+            reason: format!(
+                "{} is not planned: the web's top is out of view and its other side face is the one seen; the web \
+                 hides this one",
+                side_seen(&frame, sign).root_name(sign)
+            ),
+            near_camera: frame.origin + frame.n * frame.height_of(&frame.origin),
+            flange_seen: frame.flange_on(sign),
+        }),
+        _ => find_root(view, &frame, sign),
+    })
+}
+
+/// The flange's plane from all its pieces (one plate on both sides of the
+/// web), fitted to a sample of their points, and those points.
+pub(super) fn flange_plane(cloud: &PointCloud, pieces: &[&PlaneCluster]) -> Option<(Plane, Vec<Vec3>)> {
+    let points = cloud.points();
+    let flange_points: Vec<Vec3> = pieces
+        .iter()
+        .flat_map(|c| {
+            let stride = (c.members.len() / FLANGE_SAMPLES).max(1);
+            c.members.iter().step_by(stride).map(|&i| vec3(&points[i as usize]))
+        })
+        .collect();
+    let flange = flange_points.iter().collect::<Moments>().plane()?;
+    Some((flange, flange_points))
+}
+
+/// The margin, mm, that keeps a plane's own points (and their noise) out
+/// of a face standing on it: [`HEIGHT_MARGIN_SPACINGS`] spacings, and at
+/// least the on-plane tolerance.
+pub(super) fn height_margin(on_plane_mm: f64, spacing: f64) -> f64 {
+    on_plane_mm.max(HEIGHT_MARGIN_SPACINGS * spacing)
 }
 
 /// The cloud's valid points, read as they are needed: a frame of millions
 /// of points is not copied.
-fn valid_points(cloud: &PointCloud) -> impl Iterator<Item = Vec3> + '_ {
+pub(super) fn valid_points(cloud: &PointCloud) -> impl Iterator<Item = Vec3> + '_ {
     cloud.points().iter().filter(|p| p.iter().all(|c| c.is_finite())).map(vec3)
 }
 
-/// The web's frame from its top and the flange pieces.
+/// The web's frame from the flange pieces and its top, or its one face
+/// seen.
 fn web_frame(view: &TeeView) -> Option<WebFrame> {
-    let points = view.cloud.points();
-    let member = |&i: &u32| vec3(&points[i as usize]);
-    // The flange's plane from all its pieces (one plate on both sides).
-    let flange_points: Vec<Vec3> = view
-        .flange_pieces
-        .iter()
-        .flat_map(|c| {
-            let stride = (c.members.len() / FLANGE_SAMPLES).max(1);
-            c.members.iter().step_by(stride).map(member)
-        })
-        .collect();
-    let flange = flange_points.iter().collect::<Moments>().plane()?;
+    let (flange, flange_points) = flange_plane(view.cloud, view.flange_pieces)?;
+    let frame = match view.web {
+        Web::Top(top) => frame_from_top(view.cloud, top, &flange)?,
+        Web::Face(face) => frame_from_face(face, &flange)?,
+    };
+    // Which sides of the web the flange lies on, from its points, not its
+    // pieces' centroids: a web shorter than its flange has one flange
+    // piece round its end, seen on both sides, its centroid on one.
+    let rim = if frame.face_only.is_some() { 0.0 } else { view.rim_mm };
+    let flange_on = |sign: f64| {
+        let beyond_rim = |p: &&Vec3| sign * (frame.across(p) - frame.middle) > frame.half_width + rim;
+        flange_points.iter().filter(beyond_rim).take(MIN_FACE_POINTS).count() >= MIN_FACE_POINTS
+    };
+    let flange_sides = [flange_on(-1.0), flange_on(1.0)];
+    (frame.height > 0.0).then_some(WebFrame { flange_sides, ..frame })
+}
+
+/// The web's frame from its top: along its long axis, its middle and half
+/// width from its points' spread across it.
+fn frame_from_top(cloud: &PointCloud, top: &PlaneCluster, flange: &Plane) -> Option<WebFrame> {
+    let points = cloud.points();
     let n = flange.normal;
-    let top = view.web_top;
     let e = (top.long_axis - n * top.long_axis.dot(&n)).try_normalize(1e-9)?;
     let u = n.cross(&e);
     let origin = top.centroid;
-    let mut across: Vec<f64> = top.members.iter().map(|i| (member(i) - origin).dot(&u)).collect();
+    let mut across: Vec<f64> = top.members.iter().map(|&i| (vec3(&points[i as usize]) - origin).dot(&u)).collect();
     if across.len() < 2 {
         return None;
     }
@@ -384,25 +468,40 @@ fn web_frame(view: &TeeView) -> Option<WebFrame> {
     // stray point does not widen it.
     let k = across.len() / 100;
     let (lo, hi) = (across[k], across[across.len() - 1 - k]);
-    let height = flange.offset - n.dot(&origin);
-    let (middle, half_width) = (0.5 * (lo + hi), 0.5 * (hi - lo));
-    // Which sides of the web the flange lies on, from its points, not its
-    // pieces' centroids: a web shorter than its flange has one flange
-    // piece round its end, seen on both sides, its centroid on one.
-    let flange_on = |sign: f64| {
-        let beyond_rim = |p: &&Vec3| sign * ((*p - origin).dot(&u) - middle) > half_width + view.rim_mm;
-        flange_points.iter().filter(beyond_rim).take(MIN_FACE_POINTS).count() >= MIN_FACE_POINTS
-    };
-    (height > 0.0).then_some(WebFrame {
+    Some(WebFrame {
         n,
         e,
         u,
         origin,
         flange_offset: flange.offset,
-        middle,
-        half_width,
-        height,
-        flange_sides: [flange_on(-1.0), flange_on(1.0)],
+        middle: 0.5 * (lo + hi),
+        half_width: 0.5 * (hi - lo),
+        height: flange.offset - n.dot(&origin),
+        flange_sides: [false; 2],
+        face_only: None,
+    })
+}
+
+/// The web's frame from its one face seen: along the line where the face
+/// meets the flange, the origin on the face (so `middle` and `half_width`
+/// are nil), the face's side the sign of `u` along its normal out of the
+/// web; the web's height the height the face is seen to.
+fn frame_from_face(face: &StandingFace, flange: &Plane) -> Option<WebFrame> {
+    let n = flange.normal;
+    let e = n.cross(&face.plane.normal).try_normalize(1e-6)?;
+    let u = n.cross(&e);
+    let sign = if u.dot(&face.plane.normal) >= 0.0 { 1.0 } else { -1.0 };
+    Some(WebFrame {
+        n,
+        e,
+        u,
+        origin: face.centroid,
+        flange_offset: flange.offset,
+        middle: 0.0,
+        half_width: 0.0,
+        height: face.seen_height_mm,
+        flange_sides: [false; 2],
+        face_only: Some(sign),
     })
 }
 
@@ -422,8 +521,9 @@ fn side_seen(frame: &WebFrame, sign: f64) -> Side {
 fn find_root(view: &TeeView, frame: &WebFrame, sign: f64) -> Result<Root, RootNotSeen> {
     let side = side_seen(frame, sign);
     // The web's foot on this side, where its root would lie.
-    let foot_at =
-        frame.origin + frame.u * (frame.middle + sign * (frame.half_width + view.rim_mm)) + frame.n * frame.height;
+    let foot_at = frame.origin
+        + frame.u * (frame.middle + sign * (frame.half_width + view.rim_mm))
+        + frame.n * frame.height_of(&frame.origin);
     let flange_seen = frame.flange_on(sign);
     let not_seen = |why: String| RootNotSeen {
         side,
@@ -458,14 +558,13 @@ enum NoFace {
 /// flange.
 fn root_from_face(view: &TeeView, frame: &WebFrame, sign: f64, side: Side) -> Result<Root, NoFace> {
     let spacing = view.point_spacing_mm;
-    let margin = view.on_plane_mm.max(HEIGHT_MARGIN_SPACINGS * spacing);
-    let (h_lo, h_hi) = (margin, frame.height - margin);
-    let reach = frame.half_width + view.rim_mm + FACE_REACH_SPACINGS * spacing;
+    let margin = height_margin(view.on_plane_mm, spacing);
+    let ((inner, reach), h_hi) = frame.face_band(view, sign, margin);
     let face_points: Vec<Vec3> = valid_points(view.cloud)
         .filter(|p| {
             let h = frame.height_of(p);
             let off = sign * (frame.across(p) - frame.middle);
-            (h_lo..=h_hi).contains(&h) && (0.0..=reach).contains(&off)
+            (margin..=h_hi).contains(&h) && (inner..=reach).contains(&off)
         })
         .collect();
     let hidden = if side == Side::Far { ", hidden by the web" } else { "" };
@@ -497,7 +596,7 @@ fn root_from_face(view: &TeeView, frame: &WebFrame, sign: f64, side: Side) -> Re
         ));
     };
     let r = if r.dot(&frame.e) >= 0.0 { r } else { -r };
-    // The point on both planes nearest the web top's centroid.
+    // The point on both planes nearest the web's origin.
     let o = frame.origin;
     let nm = n.dot(&m);
     let det = 1.0 - nm * nm;
@@ -617,6 +716,9 @@ fn root_from_face(view: &TeeView, frame: &WebFrame, sign: f64, side: Side) -> Re
 /// [`EDGE_VIEW_SPACINGS`] spacings over the web's height. A root turned
 /// less than that is refused, not guessed.
 fn root_from_flange_edge(view: &TeeView, frame: &WebFrame, sign: f64, side: Side) -> Result<Root, String> {
+    let Web::Top(web_top) = view.web else {
+        return Err("the web's top is out of view, so its edge cannot stand in for the face".into());
+    };
     let spacing = view.point_spacing_mm;
     let top_edge = frame.half_width + view.rim_mm;
     // A web leaning 45° puts its root a web height outward of its top.
@@ -632,7 +734,7 @@ fn root_from_flange_edge(view: &TeeView, frame: &WebFrame, sign: f64, side: Side
         let (t, h) = ((p - frame.origin).dot(&frame.e), frame.height_of(&p));
         if h.abs() <= view.on_plane_mm {
             flange.push(EdgeSample { t, off, h });
-        } else if off <= top_reach && view.web_top.plane.signed_distance(&p).abs() <= view.on_plane_mm {
+        } else if off <= top_reach && web_top.plane.signed_distance(&p).abs() <= view.on_plane_mm {
             top.push(EdgeSample { t, off, h });
         }
     }
@@ -947,17 +1049,17 @@ fn rms(values: impl Iterator<Item = f64>) -> f64 {
 
 /// A plane fitted to a face's points, refitted without its outliers.
 #[derive(Debug, Clone)]
-struct FaceFit {
-    plane: Plane,
-    centroid: Vec3,
-    inliers: Vec<Vec3>,
-    rms_mm: f64,
-    dropped: usize,
+pub(super) struct FaceFit {
+    pub plane: Plane,
+    pub centroid: Vec3,
+    pub inliers: Vec<Vec3>,
+    pub rms_mm: f64,
+    pub dropped: usize,
 }
 
 /// Least squares (the scatter's least axis), then refits without the
 /// points further than `trim_sigma` residuals from the plane.
-fn fit_face(points: &[Vec3], trim_sigma: f64) -> Option<FaceFit> {
+pub(super) fn fit_face(points: &[Vec3], trim_sigma: f64) -> Option<FaceFit> {
     let mut inliers: Vec<Vec3> = points.to_vec();
     let mut fit = None;
     for _ in 0..=FACE_REFITS {
@@ -1169,6 +1271,46 @@ mod tests {
         assert!(hidden.flange_seen, "{}", hidden.reason);
     }
 
+    #[test]
+    fn a_web_seen_by_one_face_only_gives_that_face_s_root_and_names_the_other() {
+        // The face of the tests above, x = WEB_X + 5, seen from 1 to 39 mm
+        // over the flange; no web's top; the flange seen on both sides.
+        let mut pts = face_points(0.0);
+        for i in 0..100 {
+            let y = -50.0 + i as f64;
+            pts.extend((0..30).map(|j| Vec3::new(WEB_X + 5.5 + 0.5 * j as f64, y, 700.0)));
+            pts.extend((0..30).map(|j| Vec3::new(WEB_X - 10.0 - j as f64, y, 700.0)));
+        }
+        let cloud = cloud_of(&pts);
+        let flange = PlaneCluster::of_points(&pts, |p| p.z == 700.0);
+        let face = StandingFace {
+            plane: Plane { normal: Vec3::x(), offset: WEB_X + 5.0 },
+            centroid: Vec3::new(WEB_X + 5.0, 0.0, 680.0),
+            flange: flange.plane,
+            points: 2000,
+            seen_height_mm: 39.0,
+        };
+        let roots = find_roots(&test_view(&cloud, Web::Face(&face), &[&flange]));
+        let seen: Vec<&Root> = roots.iter().filter_map(|r| r.as_ref().ok()).collect();
+        assert_eq!(seen.len(), 1, "{roots:?}");
+        let root = seen[0];
+        assert_eq!((root.side, root.evidence), (Side::Near, RootEvidence::Face));
+        for s in [root.line.s_min, root.line.s_max] {
+            let p = root.line.at(s);
+            assert!((p.x - WEB_X - 5.0).abs() < 1e-6 && (p.z - 700.0).abs() < 1e-6, "{p:?}");
+        }
+        let ends = [root.line.at(root.line.s_min).y, root.line.at(root.line.s_max).y];
+        assert!((ends[0] + 50.0).abs() < 1e-6 && (ends[1] - 49.0).abs() < 1e-6, "{ends:?}");
+        assert!(root.away_from_web().x > 0.99);
+        assert!((root.web_height_mm - 39.0).abs() < 1e-9);
+        // The other face is not looked for: with the top out of view
+        // nothing places it, and the web hides it.
+        let other = roots.iter().find_map(|r| r.as_ref().err()).unwrap();
+        assert_eq!(other.side, Side::Far);
+        assert!(other.flange_seen);
+        assert!(other.reason.contains("top is out of view"), "{}", other.reason);
+    }
+
     /// The roots [`find_roots`] reads from `pts`: the web's top the points
     /// at z = 660, the flange's pieces those at z = 700 either side of
     /// x = WEB_X, a point spacing of 1 mm.
@@ -1187,28 +1329,24 @@ mod tests {
     /// points at z = 660 and a flange piece of the points each of `pieces`
     /// picks.
     fn roots_with_flange_pieces(pts: &[Vec3], pieces: &[&dyn Fn(&Vec3) -> bool]) -> [Result<Root, RootNotSeen>; 2] {
-        let cloud = PointCloud::unorganized(pts.iter().map(|p| [p.x as f32, p.y as f32, p.z as f32]).collect());
-        let cluster = |pred: &dyn Fn(&Vec3) -> bool| {
-            let members: Vec<u32> = (0..pts.len() as u32).filter(|&i| pred(&pts[i as usize])).collect();
-            let moments: Moments = members.iter().map(|&i| &pts[i as usize]).collect();
-            let (long_axis, elongation) = moments.elongation().unwrap();
-            PlaneCluster {
-                label: 0,
-                area_mm2: members.len() as f64,
-                plane: moments.plane().unwrap(),
-                centroid: moments.centroid().unwrap(),
-                members,
-                long_axis,
-                elongation,
-            }
-        };
-        let top = cluster(&|p| p.z == 660.0);
-        let clusters: Vec<PlaneCluster> = pieces.iter().map(|pick| cluster(pick)).collect();
+        let cloud = cloud_of(pts);
+        let top = PlaneCluster::of_points(pts, |p| p.z == 660.0);
+        let clusters: Vec<PlaneCluster> = pieces.iter().map(|pick| PlaneCluster::of_points(pts, pick)).collect();
         let pieces: Vec<&PlaneCluster> = clusters.iter().collect();
-        let view = TeeView {
-            cloud: &cloud,
-            web_top: &top,
-            flange_pieces: &pieces,
+        find_roots(&test_view(&cloud, Web::Top(&top), &pieces))
+    }
+
+    fn cloud_of(pts: &[Vec3]) -> PointCloud {
+        PointCloud::unorganized(pts.iter().map(|p| [p.x as f32, p.y as f32, p.z as f32]).collect())
+    }
+
+    /// The tee of `web` on `flange_pieces` in `cloud`: a point spacing of
+    /// 1 mm, a 1 mm rim trimmed, the default tolerances, no image border.
+    fn test_view<'a>(cloud: &'a PointCloud, web: Web<'a>, flange_pieces: &'a [&'a PlaneCluster]) -> TeeView<'a> {
+        TeeView {
+            cloud,
+            web,
+            flange_pieces,
             point_spacing_mm: 1.0,
             rim_mm: 1.0,
             on_plane_mm: 0.4,
@@ -1217,8 +1355,7 @@ mod tests {
             in_view: None,
             border: None,
             max_beyond_mm: 2.0,
-        };
-        find_roots(&view)
+        }
     }
 
     #[test]

@@ -55,6 +55,7 @@ mod tee;
 pub mod trace;
 pub mod trajectory;
 pub mod view_border;
+pub mod web_face;
 pub mod weld_edges;
 pub mod weld_equation;
 pub mod workpieces;

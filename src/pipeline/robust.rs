@@ -24,10 +24,11 @@ use crate::config::Method;
 use crate::geometry::Vec3;
 use crate::joint::JointType;
 
-use super::background::{CornerKind, Layout, PlaneCluster};
+use super::background::{BackgroundError, CornerKind, Layout, PlaneCluster};
 use super::boundary::{self, Boundary, BoundaryParams, CoarseEdge};
 use super::context::{self, Context, EdgeFigures, MIN_CLUSTER_POINTS, PlannedWeld};
 use super::edge_points::{EdgeCriterion, FullCount};
+use super::fillet::Web;
 use super::neighbours::NeighbourSearch;
 use super::plane_points::PlanePoints;
 use super::ransac::EdgeLine;
@@ -35,8 +36,8 @@ use super::refit::{self, SeamAxes};
 use super::trace::{TracedWeld, Tracer};
 use super::{Plan, PlanError, SeamAssessment, SeamCoverage, Stage, Unplanned};
 use super::{
-    background, clustering, groove, orientation, plane_points, quality, ransac, tee, weld_edges, weld_equation,
-    workpieces,
+    background, clustering, groove, orientation, plane_points, quality, ransac, tee, web_face, weld_edges,
+    weld_equation, workpieces,
 };
 
 /// How far, in degrees, a sampled local normal may lie from the most common
@@ -235,22 +236,29 @@ fn plan_workpiece(
             };
             ctx.clock.lap(Stage::Background);
             let layers = format!("an inside corner: {}", corner.what);
-            return tee::plan(ctx, workpiece, layers, tee::Flange::OneSide);
+            return tee::plan(ctx, tee::SeenTee::of(&workpiece, tee::Flange::OneSide), layers);
         }
         let refusal = corner.refusal();
         return Err(PlanError { gate: Some(quality::Gate::CornerJoint), ..PlanError::at(Stage::Background, refusal) });
     }
-    let background::Selected { workpiece, layout, evidence: layers } = background::robust_select(planes, &selection)
-        .map_err(|e| {
-            let gate = if e.is_joint_mismatch() {
-                Some(quality::Gate::JointMismatch)
-            } else if e.is_unrecognised() {
-                Some(quality::Gate::JointUnknown)
-            } else {
-                None
-            };
-            PlanError { gate, ..PlanError::at(Stage::Background, e) }
-        })?;
+    // A tee whose web's top is not found may have it out of view (a crop
+    // round its root): its face standing on the nearest layer of planes,
+    // planned under `t_fillet`; under `auto`, named when too few planes
+    // are seen for any other joint.
+    let face_may_stand = match selection.joint {
+        Some(JointType::TFillet) => true,
+        None => planes.iter().filter(|c| selection.faces_camera(c)).count() < 2,
+        Some(_) => false,
+    };
+    let bare_flange = face_may_stand.then(|| background::nearest_layer(&planes, &selection)).flatten();
+    let selected = match (background::robust_select(planes, &selection), bare_flange) {
+        (Err(e @ (BackgroundError::NoWeb { .. } | BackgroundError::TooFewPlanes { .. })), Some(flange)) => {
+            return plan_topless_tee(ctx, flange, e);
+        }
+        (selected, _) => selected,
+    };
+    let background::Selected { workpiece, layout, evidence: layers } =
+        selected.map_err(|e| background_refusal(&e, e.to_string()))?;
     if layout == Layout::Lap {
         ctx.joint = Some(JointType::Lap);
         ctx.trace.record(|t| t.joint = Some(JointType::Lap));
@@ -287,8 +295,72 @@ fn plan_workpiece(
             plan_plates(ctx, front, labels, workpiece, layout, layers).map(|weld| (vec![weld], Vec::new()))
         }
         // A web on its flange: its fillet roots, not two plates' edges.
-        Layout::Tee => tee::plan(ctx, workpiece, layers, tee::Flange::BothSides),
+        Layout::Tee => tee::plan(ctx, tee::SeenTee::of(&workpiece, tee::Flange::BothSides), layers),
     }
+}
+
+/// The refusal of a workpiece the background rule found no joint in,
+/// saying `reason`, under the gate `e` falls under (a joint other than the
+/// one requested, or none that `auto` can name; else no gate).
+fn background_refusal(e: &BackgroundError, reason: String) -> PlanError {
+    let gate = if e.is_joint_mismatch() {
+        Some(quality::Gate::JointMismatch)
+    } else if e.is_unrecognised() {
+        Some(quality::Gate::JointUnknown)
+    } else {
+        None
+    };
+    PlanError { gate, ..PlanError::at(Stage::Background, reason) }
+}
+
+/// A tee's root from its web's one face seen standing on `flange` (the
+/// nearest layer of planes), the web's top out of view; refused with
+/// `not_found` (why no web's top was found) and why no face was either.
+/// Under `auto` the face is named, not planned: a face alone does not
+/// tell a tee's web from an inside corner's plate or a fixture's side.
+fn plan_topless_tee(
+    ctx: &mut Context,
+    flange: Vec<PlaneCluster>,
+    not_found: BackgroundError,
+) -> Result<(Vec<PlannedWeld>, Vec<Unplanned>), PlanError> {
+    let cfg = &ctx.config.pipeline;
+    let pieces: Vec<&PlaneCluster> = flange.iter().collect();
+    let search = web_face::FaceSearch {
+        point_spacing_mm: ctx.spacing_at(&flange[0].centroid),
+        on_plane_mm: cfg.on_plane_tolerance_mm,
+        web_height_max_mm: cfg.tee_web_height_max_mm,
+        trim_sigma: cfg.fit_trim_sigma,
+    };
+    let face = web_face::find(ctx.cloud, &pieces, &search).map_err(|why| {
+        background_refusal(
+            &not_found,
+            format!("{not_found}; nor does a web's side face stand on the nearest plane: {why}"),
+        )
+    })?;
+    let layers = format!(
+        "no web's top is in view; a side face of {} points stands on the nearest plane ({:.0} mm² in {} piece(s)), \
+         seen {:.0} mm tall",
+        face.points,
+        flange.iter().map(|c| c.area_mm2).sum::<f64>(),
+        flange.len(),
+        face.seen_height_mm
+    );
+    tracing::debug!("{layers}");
+    if ctx.request.joint.given() != Some(JointType::TFillet) {
+        let reason = format!(
+            "{not_found}; {layers}: this may be a tee's web (or an inside corner's standing plate) cropped below its \
+             top; request t_fillet to plan its root"
+        );
+        return Err(PlanError { gate: Some(quality::Gate::JointUnknown), ..PlanError::at(Stage::Background, reason) });
+    }
+    ctx.clock.lap(Stage::Background);
+    let tee = tee::SeenTee {
+        web: Web::Face(&face),
+        flange_pieces: pieces,
+        flange_sides: tee::Flange::BothSides,
+        depth_to_support_mm: None,
+    };
+    tee::plan(ctx, tee, layers)
 }
 
 /// A butt joint's or a lap's weld from its two plates: edge points through

@@ -22,7 +22,7 @@ use crate::joint::JointType;
 
 use super::background::{PlaneCluster, Workpiece};
 use super::context::{Context, EdgeFigures, PlannedWeld};
-use super::fillet::{self, Root, RootEvidence, TeeView};
+use super::fillet::{self, Root, RootEvidence, TeeView, Web};
 use super::trace::TracedWeld;
 use super::{PlanError, SeamAssessment, SeamCoverage, Stage, Unplanned, boundary, quality, trajectory};
 
@@ -34,29 +34,47 @@ pub(super) enum Flange {
     OneSide,
 }
 
-/// Plans the seen roots of the tee in `workpiece` (the web's top and the
-/// largest flange piece, the flange's other pieces its layer mates) as
-/// welds, and names the roots not planned; `layers` says in words what the
-/// background stage saw.
+/// A tee as the background stage found it: what is seen of its web, every
+/// piece of its flange, and what lies behind the flange.
+pub(super) struct SeenTee<'w> {
+    pub web: Web<'w>,
+    pub flange_pieces: Vec<&'w PlaneCluster>,
+    pub flange_sides: Flange,
+    pub depth_to_support_mm: Option<f64>,
+}
+
+impl<'w> SeenTee<'w> {
+    /// The tee in `workpiece`: the web's top and the largest flange piece,
+    /// the flange's other pieces its layer mates.
+    pub fn of(workpiece: &'w Workpiece, flange_sides: Flange) -> SeenTee<'w> {
+        let [web_top, flange] = &workpiece.plates;
+        SeenTee {
+            web: Web::Top(web_top),
+            flange_pieces: std::iter::once(flange).chain(&workpiece.layer_mates[1]).collect(),
+            flange_sides,
+            depth_to_support_mm: workpiece.depth_to_support_mm,
+        }
+    }
+}
+
+/// Plans the seen roots of `tee` as welds, and names the roots not
+/// planned; `layers` says in words what the background stage saw.
 pub(super) fn plan(
     ctx: &mut Context,
-    workpiece: Workpiece,
+    tee: SeenTee,
     layers: String,
-    flange_sides: Flange,
 ) -> Result<(Vec<PlannedWeld>, Vec<Unplanned>), PlanError> {
     let config = ctx.config;
     let cfg = &config.pipeline;
     ctx.joint = Some(JointType::TFillet);
     ctx.trace.record(|t| t.joint = Some(JointType::TFillet));
-    let [web_top, flange] = &workpiece.plates;
-    let pieces: Vec<&PlaneCluster> = std::iter::once(flange).chain(&workpiece.layer_mates[1]).collect();
-    let spacing = ctx.spacing_at(&web_top.centroid);
+    let spacing = ctx.spacing_at(&tee.web.centroid());
     let grid = ctx.camera_grid();
     let in_view = grid.as_ref().map(|g| move |p: &Vec3| g.in_view(p));
     let view = TeeView {
         cloud: ctx.cloud,
-        web_top,
-        flange_pieces: &pieces,
+        web: tee.web,
+        flange_pieces: &tee.flange_pieces,
         point_spacing_mm: spacing,
         rim_mm: boundary::rim_trim_radii(cfg.plane_min_neighbour_ratio) * ctx.scale.radius_mm,
         on_plane_mm: cfg.on_plane_tolerance_mm,
@@ -67,7 +85,7 @@ pub(super) fn plan(
         max_beyond_mm: config.quality.max_joint_beyond_seam_mm,
     };
     let mut roots = Vec::from(fillet::find_roots(&view));
-    if flange_sides == Flange::OneSide {
+    if tee.flange_sides == Flange::OneSide {
         // An inside corner: the side with no flange has no root at all.
         roots.retain(|root| root.as_ref().map_or_else(|not| not.flange_seen, |_| true));
     }
@@ -104,7 +122,7 @@ pub(super) fn plan(
             }
         };
         let near_camera = root.line.at(0.5 * (root.line.s_min + root.line.s_max));
-        let quality = quality::measure_fillet(&root, spacing, workpiece.depth_to_support_mm);
+        let quality = quality::measure_fillet(&root, spacing, tee.depth_to_support_mm);
         let coverage = SeamCoverage {
             edge: root.coverage,
             joint: root.seen_share,

@@ -1,0 +1,349 @@
+//! A tee whose web's top is out of view (issue 15 with issue 11's crops):
+//! a cloud cropped a few centimetres round a fillet root keeps the flange
+//! and the web's side face up to the crop, but not the web's top, which is
+//! what [`super::background`] finds a tee by. The face itself is the
+//! evidence then: a steep plane standing on the flange.
+//!
+//! With `n` the flange's unit normal into the workpiece and `h(p) = d_f −
+//! n·p` the height over the flange (as in [`super::fillet`]), the face is
+//! searched among the points at `margin ≤ h ≤ web_height_max` over the
+//! flange's footprint, by RANSAC over planes that are
+//!
+//! - steep: the face's normal `m` within [`MAX_FACE_LEAN_DEG`] of the
+//!   flange's plane, `|m·n| ≤ sin(lean)` (a web leans a few degrees; the
+//!   quality gate `quality.max_web_tilt_deg` judges the fitted face);
+//! - seen: turned at least [`super::fillet::MIN_FACE_VIEW_DEG`] towards the
+//!   camera's ray to them, so the veil of mixed returns a depth jump hangs
+//!   along the rays is never taken for a face;
+//!
+//! then refitted by least squares with outliers trimmed (the fillet
+//! stage's face fit). The face is taken only when it stands on the flange
+//! (its foot within a few spacings of the flange's plane) and rises a
+//! useful height above it; otherwise there is no tee to plan, and the
+//! reason says which.
+//!
+//! Only one face of a web is ever seen (the faces are steep), so a web
+//! found this way gives at most one root: the one on the face's side.
+
+use rand_chacha::ChaCha8Rng;
+use rand_core::{Rng, SeedableRng};
+
+use crate::cloud::PointCloud;
+use crate::geometry::Vec3;
+use crate::geometry::fit::Plane;
+
+use super::background::PlaneCluster;
+use super::fillet::{self, MIN_FACE_POINTS, MIN_FACE_VIEW_DEG};
+
+/// How far a face may lean from standing square on the flange and still
+/// be searched for, degrees: wide enough for any web the quality gate
+/// could accept and a margin over it, so that the gate, not the search,
+/// is what refuses a leaning one.
+pub const MAX_FACE_LEAN_DEG: f64 = 30.0;
+
+/// Planes tried. The face holds most of the points over the flange in a
+/// crop round its root, so a few hundred draws find it with certainty.
+const RANSAC_DRAWS: usize = 400;
+
+/// Points scored per draw, at most: the face's share of the candidates is
+/// what is compared, and a few thousand estimate it well.
+const SCORED_POINTS: usize = 4_000;
+
+/// Candidate points kept, at most (a regular stride over the rest): the
+/// search's cost is bounded whatever the cloud holds over its flange.
+const MAX_CANDIDATES: usize = 200_000;
+
+/// A point lies on a candidate face within this many point spacings (or
+/// the on-plane tolerance, if more).
+const FACE_TOLERANCE_SPACINGS: f64 = 1.5;
+
+/// The face's foot must come within this many spacings of the flange's
+/// plane (above the margin that keeps the flange's own points out): a
+/// face that stops higher stands over the flange, not on it.
+const FOOT_REACH_SPACINGS: f64 = 4.0;
+
+/// The least height a face must be seen to, in point spacings: a face a
+/// few spacings tall is a plate's edge or a ridge of noise, and its tilt
+/// (and so its root) is poorly fixed.
+const MIN_FACE_HEIGHT_SPACINGS: f64 = 10.0;
+
+/// The fewest points per square point spacing a face must hold over the
+/// rectangle its points span (along the root by up the face): a face
+/// turned the least angle seen ([`MIN_FACE_VIEW_DEG`]) to the rays is
+/// sampled at about sin 5° ≈ 0.09 per spacing², and half of that allows
+/// for dropouts. Stray returns that happen to lie on one plane over a
+/// large flange are far sparser.
+const MIN_FACE_FILL: f64 = 0.04;
+
+/// The seed of the search's generator: the same cloud always gives the
+/// same face.
+const SEED: u64 = 0x5eed_face;
+
+/// A web's side face seen standing on the flange, its top not in view.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StandingFace {
+    /// The face's plane, its normal out of the web towards the side it is
+    /// seen from.
+    pub plane: Plane,
+    pub centroid: Vec3,
+    /// The flange's plane, its normal into the workpiece.
+    pub flange: Plane,
+    /// The points on the face.
+    pub points: usize,
+    /// How high over the flange the face is seen, mm: the web stands at
+    /// least this tall.
+    pub seen_height_mm: f64,
+}
+
+/// The settings of the search.
+#[derive(Debug, Clone, Copy)]
+pub struct FaceSearch {
+    /// The cloud's point spacing near the flange, mm.
+    pub point_spacing_mm: f64,
+    /// A point lies on a plane within this distance, mm.
+    pub on_plane_mm: f64,
+    /// How tall a web may stand, mm (`pipeline.tee_web_height_max_mm`).
+    pub web_height_max_mm: f64,
+    /// Face points further than this many residuals from the fit are
+    /// dropped and the face refitted.
+    pub trim_sigma: f64,
+}
+
+/// The web's side face standing on the flange made of `flange_pieces`, or
+/// why none is seen.
+pub fn find(cloud: &PointCloud, flange_pieces: &[&PlaneCluster], s: &FaceSearch) -> Result<StandingFace, String> {
+    let (flange, flange_points) =
+        fillet::flange_plane(cloud, flange_pieces).ok_or_else(|| "the flange's points span no plane".to_string())?;
+    let n = flange.normal;
+    let height = |p: &Vec3| flange.offset - n.dot(p);
+    let spacing = s.point_spacing_mm;
+    let margin = fillet::height_margin(s.on_plane_mm, spacing);
+    let over_flange = Footprint::of(&flange_points, &n, FOOT_REACH_SPACINGS * spacing);
+    let mut candidates: Vec<Vec3> = fillet::valid_points(cloud)
+        .filter(|p| (margin..=s.web_height_max_mm).contains(&height(p)) && over_flange.holds(p))
+        .collect();
+    if candidates.len() > MAX_CANDIDATES {
+        let stride = candidates.len().div_ceil(MAX_CANDIDATES);
+        candidates = candidates.into_iter().step_by(stride).collect();
+    }
+    if candidates.len() < MIN_FACE_POINTS {
+        return Err(format!(
+            "nothing in view stands on the flange: {} points lie {margin:.1} to {:.0} mm over it, fewer than \
+             {MIN_FACE_POINTS} (a web's face turned edge-on to the camera returns none, and with the web's top out \
+             of view nothing else shows where its root is)",
+            candidates.len(),
+            s.web_height_max_mm
+        ));
+    }
+    let tolerance = s.on_plane_mm.max(FACE_TOLERANCE_SPACINGS * spacing);
+    let plane = best_steep_plane(&candidates, &n, tolerance).ok_or_else(|| {
+        format!(
+            "the {} points over the flange lie on no face standing within {MAX_FACE_LEAN_DEG}° of square on it \
+             and turned {MIN_FACE_VIEW_DEG}° or more towards the camera",
+            candidates.len()
+        )
+    })?;
+    let on_face: Vec<Vec3> =
+        candidates.iter().copied().filter(|p| plane.signed_distance(p).abs() <= tolerance).collect();
+    let fit = fillet::fit_face(&on_face, s.trim_sigma)
+        .ok_or_else(|| "the points on the face standing on the flange span no plane".to_string())?;
+    // Out of the web: towards the camera, which sees this face.
+    let normal = if fit.plane.normal.dot(&fit.centroid) <= 0.0 { fit.plane.normal } else { -fit.plane.normal };
+    let face = Plane { normal, offset: normal.dot(&fit.centroid) };
+    // The draws were turned towards the camera; the refit may still settle
+    // on the veil of mixed returns if that is most of what stands there.
+    let view_deg = normal.dot(&(-fit.centroid).normalize()).clamp(-1.0, 1.0).asin().to_degrees();
+    if view_deg < MIN_FACE_VIEW_DEG {
+        return Err(format!(
+            "the {} points standing on the flange lie along the camera's rays ({view_deg:.1}° from them, below \
+             {MIN_FACE_VIEW_DEG}°): mixed returns at a depth jump, not a web's face",
+            fit.inliers.len()
+        ));
+    }
+    let (lowest, highest) = crate::geometry::extent(fit.inliers.iter().map(height));
+    let foot_reach = margin + FOOT_REACH_SPACINGS * spacing;
+    if lowest > foot_reach {
+        return Err(format!(
+            "the face over the flange ({} points) is seen no lower than {lowest:.1} mm over it, above {foot_reach:.1} \
+             mm: it stands over the flange, not on it",
+            fit.inliers.len()
+        ));
+    }
+    let along_root = n.cross(&normal);
+    let (first, last) = crate::geometry::extent(fit.inliers.iter().map(|p| along_root.dot(p)));
+    let spanned_mm2 = (last - first) * (highest - lowest);
+    let fill = fit.inliers.len() as f64 * spacing * spacing / spanned_mm2.max(f64::MIN_POSITIVE);
+    if fill < MIN_FACE_FILL {
+        return Err(format!(
+            "the {} points on a plane standing on the flange are strewn over {spanned_mm2:.0} mm² ({fill:.3} per \
+             square point spacing, below {MIN_FACE_FILL}): stray returns, not a face",
+            fit.inliers.len()
+        ));
+    }
+    let least_height = MIN_FACE_HEIGHT_SPACINGS * spacing;
+    if highest < least_height {
+        return Err(format!(
+            "the face on the flange ({} points) is seen only {highest:.1} mm tall, below {least_height:.1} mm \
+             ({MIN_FACE_HEIGHT_SPACINGS} point spacings of {spacing:.2} mm): a plate's edge or noise, not a web",
+            fit.inliers.len()
+        ));
+    }
+    Ok(StandingFace { plane: face, centroid: fit.centroid, flange, points: fit.inliers.len(), seen_height_mm: highest })
+}
+
+/// The plane through three of `points` that holds the most of them within
+/// `tolerance`, among the planes steep to the flange (normal `n`) and
+/// turned towards the camera; None when no draw gives one.
+fn best_steep_plane(points: &[Vec3], n: &Vec3, tolerance: f64) -> Option<Plane> {
+    let max_cos_to_flange_normal = MAX_FACE_LEAN_DEG.to_radians().sin();
+    let min_sin_to_ray = MIN_FACE_VIEW_DEG.to_radians().sin();
+    let stride = points.len().div_ceil(SCORED_POINTS).max(1);
+    let scored: Vec<&Vec3> = points.iter().step_by(stride).collect();
+    let mut rng = ChaCha8Rng::seed_from_u64(SEED);
+    let mut best: Option<(usize, Plane)> = None;
+    for _ in 0..RANSAC_DRAWS {
+        let [a, b, c] = [0; 3].map(|_| &points[(rng.next_u64() % points.len() as u64) as usize]);
+        let Some(normal) = (b - a).cross(&(c - a)).try_normalize(1e-9) else {
+            continue;
+        };
+        let middle = (a + b + c) / 3.0;
+        let ray = middle.normalize();
+        if normal.dot(n).abs() > max_cos_to_flange_normal || normal.dot(&ray).abs() < min_sin_to_ray {
+            continue;
+        }
+        let plane = Plane { normal, offset: normal.dot(&middle) };
+        let support = scored.iter().filter(|p| plane.signed_distance(p).abs() <= tolerance).count();
+        if best.as_ref().is_none_or(|(most, _)| support > *most) {
+            best = Some((support, plane));
+        }
+    }
+    best.map(|(_, plane)| plane)
+}
+
+/// A rectangle in the flange's plane round its points, widened by a
+/// margin: where a web standing on the flange may stand.
+struct Footprint {
+    axes: [Vec3; 2],
+    low: [f64; 2],
+    high: [f64; 2],
+}
+
+impl Footprint {
+    fn of(points: &[Vec3], n: &Vec3, margin: f64) -> Footprint {
+        // Any two directions across the normal span the plane.
+        let helper = if n.x.abs() < 0.9 { Vec3::x() } else { Vec3::y() };
+        let first = n.cross(&helper).normalize();
+        let axes = [first, n.cross(&first)];
+        let mut low = [f64::INFINITY; 2];
+        let mut high = [f64::NEG_INFINITY; 2];
+        for p in points {
+            for k in 0..2 {
+                let t = axes[k].dot(p);
+                low[k] = low[k].min(t - margin);
+                high[k] = high[k].max(t + margin);
+            }
+        }
+        Footprint { axes, low, high }
+    }
+
+    /// Whether `p`, seen along the flange's normal, lies over the rectangle.
+    fn holds(&self, p: &Vec3) -> bool {
+        (0..2).all(|k| (self.low[k]..=self.high[k]).contains(&self.axes[k].dot(p)))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Where the web's face stands across the camera's x: the camera, at
+    /// the origin looking down +z, sees it turned 16° towards itself.
+    const FACE_X: f64 = -200.0;
+
+    /// The flange: z = 700, x from the face out to 55 mm beyond it, y from
+    /// −50 to 49, a point spacing of 1 mm.
+    fn flange() -> Vec<Vec3> {
+        (0..100).flat_map(|i| (1..=55).map(move |j| Vec3::new(FACE_X + j as f64, -50.0 + i as f64, 700.0))).collect()
+    }
+
+    /// The web's face x = FACE_X from `from` to `to` mm over the flange:
+    /// its points in steps of a millimetre up it, 0.1 mm of noise across.
+    fn face(from: f64, to: f64) -> Vec<Vec3> {
+        let rows = (to - from) as usize;
+        (0..100)
+            .flat_map(|i| {
+                (0..=rows).map(move |j| {
+                    let jitter = 0.1 * (((i * 7 + j * 13) % 11) as f64 / 5.0 - 1.0);
+                    Vec3::new(FACE_X + jitter, -50.0 + i as f64, 700.0 - from - j as f64)
+                })
+            })
+            .collect()
+    }
+
+    fn search(points: &[Vec3]) -> Result<StandingFace, String> {
+        let cloud = PointCloud::unorganized(points.iter().map(|p| [p.x as f32, p.y as f32, p.z as f32]).collect());
+        let piece = PlaneCluster::of_points(points, |p| p.z == 700.0);
+        let settings =
+            FaceSearch { point_spacing_mm: 1.0, on_plane_mm: 0.4, web_height_max_mm: 250.0, trim_sigma: 3.0 };
+        find(&cloud, &[&piece], &settings)
+    }
+
+    #[test]
+    fn a_face_standing_on_the_flange_is_found_through_a_veil_of_mixed_returns() {
+        let mut points = flange();
+        points.extend(face(1.0, 25.0));
+        // A veil along the camera's rays from a depth jump beside the web,
+        // as many points as a fifth of the face: a plane too, but not one
+        // the camera could see as a surface.
+        for i in 0..100 {
+            for j in 1..=6 {
+                let p = Vec3::new(FACE_X + 30.0, -50.0 + i as f64, 700.0) * (1.0 - 0.004 * j as f64);
+                points.push(p);
+            }
+        }
+        let face = search(&points).unwrap();
+        // Its normal out of the web towards the camera's side: +x.
+        assert!(face.plane.normal.x > 0.999, "{:?}", face.plane.normal);
+        assert!((face.plane.signed_distance(&Vec3::new(FACE_X, 0.0, 690.0))).abs() < 0.05, "{face:?}");
+        assert!((face.seen_height_mm - 25.0).abs() < 0.01, "{}", face.seen_height_mm);
+        assert!((face.flange.offset - 700.0).abs() < 1e-6 && face.flange.normal.z > 0.999);
+    }
+
+    #[test]
+    fn a_flange_with_nothing_standing_on_it_or_a_face_too_low_or_over_it_gives_no_face() {
+        let err = search(&flange()).unwrap_err();
+        assert!(err.contains("nothing in view stands on the flange"), "{err}");
+        // A plate's edge 6 mm tall: below ten spacings.
+        let mut low = flange();
+        low.extend(face(1.0, 6.0));
+        let err = search(&low).unwrap_err();
+        assert!(err.contains("seen only 6.0 mm tall"), "{err}");
+        // A face from 12 to 40 mm over the flange: something held over it.
+        let mut hovering = flange();
+        hovering.extend(face(12.0, 40.0));
+        let err = search(&hovering).unwrap_err();
+        assert!(err.contains("not on it"), "{err}");
+    }
+
+    #[test]
+    fn stray_returns_on_one_plane_over_a_wide_flange_are_no_face() {
+        // Forty returns, one every 2.5 mm along y and 25 mm up: on one
+        // steep plane, standing on the flange, but a face they are not.
+        let mut points = flange();
+        points.extend((0..40).map(|k| Vec3::new(FACE_X, -50.0 + 2.5 * k as f64, 699.0 - (k % 2) as f64 * 25.0)));
+        let err = search(&points).unwrap_err();
+        assert!(err.contains("stray returns, not a face"), "{err}");
+    }
+
+    #[test]
+    fn mixed_returns_alone_are_no_face() {
+        let mut points = flange();
+        for i in 0..100 {
+            for j in 1..=30 {
+                points.push(Vec3::new(FACE_X + 20.0, -50.0 + i as f64, 700.0) * (1.0 - 0.001 * j as f64));
+            }
+        }
+        let err = search(&points).unwrap_err();
+        assert!(err.contains("no face standing") || err.contains("along the camera's rays"), "{err}");
+    }
+}

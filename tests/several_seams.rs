@@ -1,6 +1,8 @@
 //! Issue 15's frames through the planner: a tee joint's roots the camera
 //! sees are planned within the fillet's bar, the one the web hides is
-//! named as not planned, never invented; a tee requested as a butt or lap
+//! named as not planned, never invented; a tee cropped below its web's
+//! top is planned from the face seen, and butt and lap joints cropped the
+//! same way are not taken for tees; a tee requested as a butt or lap
 //! joint is refused by name; the fault suite's clamps are not taken for a
 //! web; a frame of several workpieces carries the truth of every seam, and
 //! the planner returns a seam for each workpiece it can plan, matched to

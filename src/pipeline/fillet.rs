@@ -2,7 +2,9 @@
 //! web meets the flange's top. The paper plans butt and lap joints only and
 //! has no fillet; this stage is ours, built from the planes the robust
 //! method already found (the web's top and the flange pieces either side
-//! of it, [`super::background`]).
+//! of it, [`super::background`]), or, where the web's top is out of view,
+//! from the one side face [`super::web_face`] finds standing on the
+//! flange ([`Web::Face`]: that face's root is the only one read).
 //!
 //! The geometry, in the camera frame, with `n` the flange's unit normal
 //! into the workpiece (away from the camera), `e` the web top's long axis

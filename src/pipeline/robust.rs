@@ -331,11 +331,16 @@ fn plan_topless_tee(
         web_height_max_mm: cfg.tee_web_height_max_mm,
         trim_sigma: cfg.fit_trim_sigma,
     };
+    let fillet_asked = ctx.request.joint.given() == Some(JointType::TFillet);
     let face = web_face::find(ctx.cloud, &pieces, &search).map_err(|why| {
-        background_refusal(
-            &not_found,
-            format!("{not_found}; nor does a web's side face stand on the nearest plane: {why}"),
-        )
+        // Under `auto` the search was a guess at a cropped tee: its failure
+        // says nothing about the joint the cloud holds.
+        let reason = if fillet_asked {
+            format!("{not_found}; nor does a web's side face stand on the nearest plane: {why}")
+        } else {
+            not_found.to_string()
+        };
+        background_refusal(&not_found, reason)
     })?;
     let layers = format!(
         "no web's top is in view; a side face of {} points stands on the nearest plane ({:.0} mm² in {} piece(s)), \
@@ -346,7 +351,7 @@ fn plan_topless_tee(
         face.seen_height_mm
     );
     tracing::debug!("{layers}");
-    if ctx.request.joint.given() != Some(JointType::TFillet) {
+    if !fillet_asked {
         let reason = format!(
             "{not_found}; {layers}: this may be a tee's web (or an inside corner's standing plate) cropped below its \
              top; request t_fillet to plan its root"

@@ -107,27 +107,28 @@ pub fn degrade(exact: &[f64], camera: &CameraModel, spec: &NoiseSpec, seed: u64)
     out
 }
 
-/// One row's random numbers: its own stream of the seeded generator.
-struct RowRandom {
+/// One row's random numbers: its own stream of the seeded generator (also
+/// the crate's unit tests' seeded draws).
+pub(crate) struct RowRandom {
     rng: ChaCha8Rng,
     /// Box-Muller yields normals in pairs; the second waits here.
     spare_normal: Option<f64>,
 }
 
 impl RowRandom {
-    fn new(seed: u64, row: usize) -> Self {
+    pub(crate) fn new(seed: u64, row: usize) -> Self {
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
         rng.set_stream(row as u64);
         RowRandom { rng, spare_normal: None }
     }
 
     /// Uniform in `[0, 1)` with 53 random bits.
-    fn uniform(&mut self) -> f64 {
+    pub(crate) fn uniform(&mut self) -> f64 {
         (self.rng.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
     }
 
     /// Standard normal.
-    fn gaussian(&mut self) -> f64 {
+    pub(crate) fn gaussian(&mut self) -> f64 {
         if let Some(z) = self.spare_normal.take() {
             return z;
         }

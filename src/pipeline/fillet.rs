@@ -390,17 +390,20 @@ pub fn find_roots(view: &TeeView) -> [Result<Root, RootNotSeen>; 2] {
         });
     };
     [-1.0, 1.0].map(|sign| match frame.face_only {
-        Some(seen) if seen != sign => Err(RootNotSeen {
-            side: side_seen(&frame, sign),
-            sign,
-            reason: format!(
-                "{} is not planned: the web's top is out of view and its other side face is the one seen; the web \
-                 hides this one",
-                side_seen(&frame, sign).root_name(sign)
-            ),
-            near_camera: frame.origin + frame.n * frame.height_of(&frame.origin),
-            flange_seen: frame.flange_on(sign),
-        }),
+        Some(seen) if seen != sign => {
+            let side = side_seen(&frame, sign);
+            Err(RootNotSeen {
+                side,
+                sign,
+                reason: format!(
+                    "{} is not planned: the web's top is out of view and its other side face is the one seen; the \
+                     web hides this one",
+                    side.root_name(sign)
+                ),
+                near_camera: frame.origin + frame.n * frame.height_of(&frame.origin),
+                flange_seen: frame.flange_on(sign),
+            })
+        }
         _ => find_root(view, &frame, sign),
     })
 }

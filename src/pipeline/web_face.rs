@@ -29,8 +29,8 @@ use rand_chacha::ChaCha8Rng;
 use rand_core::{Rng, SeedableRng};
 
 use crate::cloud::PointCloud;
-use crate::geometry::Vec3;
 use crate::geometry::fit::Plane;
+use crate::geometry::{Vec3, extent};
 
 use super::background::PlaneCluster;
 use super::fillet::{self, MIN_FACE_POINTS, MIN_FACE_VIEW_DEG};
@@ -160,7 +160,7 @@ pub fn find(cloud: &PointCloud, flange_pieces: &[&PlaneCluster], s: &FaceSearch)
             fit.inliers.len()
         ));
     }
-    let (lowest, highest) = crate::geometry::extent(fit.inliers.iter().map(height));
+    let (lowest, highest) = extent(fit.inliers.iter().map(height));
     let foot_reach = margin + FOOT_REACH_SPACINGS * spacing;
     if lowest > foot_reach {
         return Err(format!(
@@ -170,7 +170,7 @@ pub fn find(cloud: &PointCloud, flange_pieces: &[&PlaneCluster], s: &FaceSearch)
         ));
     }
     let along_root = n.cross(&normal);
-    let (first, last) = crate::geometry::extent(fit.inliers.iter().map(|p| along_root.dot(p)));
+    let (first, last) = extent(fit.inliers.iter().map(|p| along_root.dot(p)));
     let spanned_mm2 = (last - first) * (highest - lowest);
     let fill = fit.inliers.len() as f64 * spacing * spacing / spanned_mm2.max(f64::MIN_POSITIVE);
     if fill < MIN_FACE_FILL {

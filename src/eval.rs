@@ -22,7 +22,10 @@
 //! across, its ends within 1 mm of the root's, or of a stretch of it the
 //! camera sees), else it is confident wrong; a root the camera sees along
 //! half its length and no seam found is missed, and one it does not see
-//! is to be reported as not planned, never invented ([`classify_tee`]);
+//! is to be reported as not planned, never invented ([`classify_tee`]); a
+//! seam named another joint than the scene's, or any seam on an outside
+//! corner (whose weld is refused by name), is confident wrong wherever it
+//! lies ([`classify_one_workpiece`]);
 //! on several workpieces each seam returned is matched to the nearest true
 //! seam, and the seams seen are counted found, missed or extra
 //! ([`match_seams`], [`classify_several`]).
@@ -34,7 +37,7 @@ use crate::joint::{JointSet, JointType, RequestedJoint};
 use crate::pipeline::input::{CloudFrame, Units};
 use crate::pipeline::{Plan, PlanError, PlanRequest, Planner, Seam};
 use crate::sim::variants::Variant;
-use crate::sim::{GroundTruth, SceneSpec, SeamTruth, Simulation, simulate};
+use crate::sim::{CornerKind, GroundTruth, SceneSpec, SeamTruth, Simulation, simulate};
 
 /// The number of reference points on the true seam (the paper's 12).
 pub const REFERENCE_POINTS: usize = 12;
@@ -572,21 +575,19 @@ pub fn evaluate_variant(
         Ok((err, plan))
     });
     let several_seams = spec.joint.joint_type() == JointType::TFillet || !spec.others.is_empty();
+    let returned: Vec<(Vec<Vec3>, JointType)> = match &result {
+        Ok((_, plan)) => plan.seams.iter().map(|s| (trajectory(s), s.joint)).collect(),
+        Err(_) => Vec::new(),
+    };
     let seams = several_seams.then(|| {
         let truths: Vec<TrueSeam> = sim.seams.iter().map(|s| TrueSeam::of(spec, s)).collect();
-        let returned: Vec<(Vec<Vec3>, JointType)> = match &result {
-            Ok((_, plan)) => plan.seams.iter().map(|s| (trajectory(s), s.joint)).collect(),
-            Err(_) => Vec::new(),
-        };
         let matches = match_seams(&truths, &returned);
         (truths, matches)
     });
     let answer = ask.right_answer(spec, sim);
     let verdict = match (&result, &seams) {
         (Err(e), Some(_)) => Verdict::Refused { reason: e.to_string() },
-        (Ok((_, plan)), Some((truths, _))) if spec.others.is_empty() => {
-            classify_tee(truths, Ok(&plan.seams.iter().map(trajectory).collect::<Vec<_>>()))
-        }
+        (Ok(_), Some((truths, _))) if spec.others.is_empty() => classify_one_workpiece(spec, truths, &returned),
         (Ok(_), Some((truths, matches))) => classify_several(Ok(matches), truths),
         (result, None) => plain_verdict(result, spec, sim, &answer),
     };
@@ -600,6 +601,27 @@ pub fn evaluate_variant(
         verdict,
         seams,
     }
+}
+
+/// A tee's or a corner's outcome, from the seams returned and their joint
+/// types: a seam named another joint type is welded with the wrong torch
+/// path wherever it lies, and an outside corner's weld is one the planner
+/// does not plan (it is refused by name), so any seam returned on one is
+/// confident wrong; else [`classify_tee`].
+pub fn classify_one_workpiece(spec: &SceneSpec, truths: &[TrueSeam], returned: &[(Vec<Vec3>, JointType)]) -> Verdict {
+    let scene_joint = spec.joint.joint_type();
+    let wrong = |path: &[Vec3], why: String| Verdict::ConfidentWrong {
+        error: TrueSeam::nearest(truths, path).map(|(_, error)| error),
+        why,
+    };
+    if let (Some((path, joint)), Some(CornerKind::Outside)) = (returned.first(), spec.joint.corner_kind()) {
+        return wrong(path, format!("a seam named {joint} returned for an outside corner, whose weld is not planned"));
+    }
+    if let Some((path, joint)) = returned.iter().find(|(_, joint)| *joint != scene_joint) {
+        return wrong(path, format!("a seam named {joint} returned for a {scene_joint} joint"));
+    }
+    let paths: Vec<Vec<Vec3>> = returned.iter().map(|(path, _)| path.clone()).collect();
+    classify_tee(truths, Ok(&paths))
 }
 
 /// A scene of one seam's outcome against its right answer.
@@ -618,7 +640,7 @@ fn plain_verdict(
                 // torch path, wherever it lies.
                 Some(other) if !answer.refuse => Verdict::ConfidentWrong {
                     error: seam_error(&sim.truth, other),
-                    why: format!("a {} seam returned for a {scene_joint} joint", other.joint),
+                    why: format!("a seam named {} returned for a {scene_joint} joint", other.joint),
                 },
                 _ => classify(answer, Ok(&paths)),
             }
@@ -823,6 +845,30 @@ mod tests {
         assert_eq!(classify_tee(&roots, Err(reason)), Verdict::Refused { reason: reason.into() });
         assert!(names_a_tee(reason) && names_a_tee("t_fillet planning is not built yet"));
         assert!(!names_a_tee("background stage failed: no two layers 1 to 30 mm apart for a lap joint"));
+    }
+
+    #[test]
+    fn on_a_corner_a_seam_must_name_a_fillet_and_on_an_outside_corner_none_is_right() {
+        let corners = crate::sim::corner_suite();
+        let (inside, outside) = (&corners[0].1, &corners[1].1);
+        assert_eq!(inside.joint.corner_kind(), Some(CornerKind::Inside));
+        assert_eq!(outside.joint.corner_kind(), Some(CornerKind::Outside));
+        let root = [true_seam(0.0, JointType::TFillet, 100.0)];
+        let on_root = |joint| vec![(path(0.0, 100.0, 0.1), joint)];
+        assert_eq!(classify_one_workpiece(inside, &root, &on_root(JointType::TFillet)), Verdict::WithinBar);
+        // On the root, but named a lap: a lap's torch path on a fillet.
+        let verdict = classify_one_workpiece(inside, &root, &on_root(JointType::Lap));
+        assert!(
+            matches!(&verdict, Verdict::ConfidentWrong { error: Some(e), why } if e.max_mm < 0.2 && why.contains("lap")),
+            "{verdict:?}"
+        );
+        // An outside corner is refused by name; a seam on its weld, of any
+        // type, is a weld the planner does not plan.
+        for joint in [JointType::TFillet, JointType::IButt, JointType::Lap] {
+            let verdict = classify_one_workpiece(outside, &root, &on_root(joint));
+            assert!(matches!(verdict, Verdict::ConfidentWrong { .. }), "{joint}: {verdict:?}");
+        }
+        assert!(matches!(classify_one_workpiece(outside, &root, &[]), Verdict::Refused { .. }));
     }
 
     #[test]

@@ -78,7 +78,8 @@ pub enum SuiteArg {
     /// tilted up to 30 degrees (`sim::corner_suite`), judged as the tee
     /// suite is against the corner's one weld: an inside corner's root is
     /// planned under `t_fillet` or `auto`, an outside corner is refused, and
-    /// a seam returned off that weld is a confident wrong one.
+    /// a seam returned off that weld, named another joint than `t_fillet`,
+    /// or on an outside corner is a confident wrong one.
     Corner,
 }
 

@@ -12,10 +12,15 @@
 //! step, over a layer it lies across, seen on both of its sides (the
 //! flange).
 
+use std::collections::BTreeMap;
+
 use crate::cloud::{Point, PointCloud};
 use crate::geometry::fit::{Moments, Plane};
 use crate::geometry::{Vec3, vec3};
 use crate::joint::JointType;
+
+use super::view_border::ViewBorder;
+use super::web_face::MAX_FACE_LEAN_DEG;
 
 /// A cluster of plane points with its fitted plane.
 #[derive(Debug, Clone)]
@@ -170,7 +175,9 @@ pub enum BackgroundError {
     )]
     OneSidedWeb { top_mm2: f64, width_mm: f64, height_mm: f64, beside_mm2: f64 },
     /// A plate stands at the end of the flange, with nothing at the
-    /// flange's level beyond it and the table far below: a corner joint.
+    /// flange's level beyond it and the table far below (or, beside an
+    /// outside corner's edge in a cloud cropped round it, the plate's outer
+    /// face going down, or nothing): a corner joint.
     /// An outside corner is refused under every request, an inside one
     /// under any request but `t_fillet` or `auto` (which plan its root).
     #[error("this looks like a corner joint ({kind} corner): {what}; {}", kind.advice())]
@@ -283,15 +290,34 @@ const CORNER_DEEP_RETURNS_MIN: usize = 30;
 const CORNER_WEB_WIDTH_MAX_MM: f64 = 16.0;
 
 /// A corner joint, if the clusters show one: a long narrow plane (a web's
-/// top, at most `web_thickness_max_mm` and [`CORNER_WEB_WIDTH_MAX_MM`] wide) beside a plane at least four
-/// times its size (the flange) seen on one of its sides only, either flush
-/// with it or proud of it by at most a lap step (an outside corner), or a
-/// web's height over it (an inside corner); and beyond the top's far edge
-/// (away from the flange, along the top's length, a web's height at most)
-/// the cloud's returns lie far below, deeper than the flange by more than
-/// a lap step (the table past the web's outer face), none at the flange's
-/// or the top's level. `points` is the frame the clusters index.
-pub fn find_corner(planes: &[PlaneCluster], s: &Selection, points: &[Point]) -> Option<Corner> {
+/// top, at most `web_thickness_max_mm` and [`CORNER_WEB_WIDTH_MAX_MM`]
+/// wide) beside a larger plane (the flange) seen on one of its sides only,
+/// either flush with it or proud of it by at most a lap step (an outside
+/// corner), or a web's height over it (an inside corner); and beyond the
+/// top's far edge (away from the flange, past the top's rim, along its
+/// length, a web's height at most) nothing at the flange's or the top's
+/// level nor over them ([`what_lies_beyond`]), and either
+/// - the cloud's returns there lie far below, deeper than the flange by
+///   more than a lap step (the table past the web's outer face), with the
+///   flange at least four times the top's size; or, beside an outside
+///   corner's edge only,
+/// - they go down a steep face from the edge and the table is not in the
+///   cloud (a crop took it): the plate's outer face; or
+/// - there are next to none, and the edge does not run along the view's
+///   border: the outer face is turned from the camera and the table is
+///   out of the cloud. Such an edge cannot be told from a butt or a lap
+///   plate a crop cut as narrow, and is refused with that said.
+///
+/// `points` is the frame the clusters index; `view_border` gives the border
+/// its rays span ([`ViewBorder::of_cloud`], read only when asked), where a plate the image cuts ends
+/// with nothing beyond it (a butt plate barely in view). A crop's border
+/// runs along an edge only where the crop was cut along the edge.
+pub fn find_corner<'v>(
+    planes: &[PlaneCluster],
+    s: &Selection,
+    points: &[Point],
+    view_border: impl Fn() -> Option<&'v ViewBorder>,
+) -> Option<Corner> {
     // Each plane facing the camera with its index among those searched.
     let planes: Vec<(usize, &PlaneCluster)> = planes.iter().enumerate().filter(|(_, c)| s.faces_camera(c)).collect();
     let offset = |c: &PlaneCluster| s.normal.dot(&c.centroid);
@@ -302,29 +328,47 @@ pub fn find_corner(planes: &[PlaneCluster], s: &Selection, points: &[Point]) -> 
         let flanges = planes.iter().filter(|&&(index, c)| {
             let step = offset(c) - offset(top);
             index != top_index
-                && top.area_mm2 <= SIDE_BY_SIDE_AREA_RATIO * c.area_mm2
+                && top.area_mm2 < c.area_mm2
                 && step >= -s.coplanar_tolerance_mm
                 && step <= s.web_height_max_mm
         });
         for &(flange_index, flange) in flanges {
             let step = offset(flange) - offset(top);
             let kind = if step <= s.lap_step_max_mm { CornerKind::Outside } else { CornerKind::Inside };
-            if let Some(drop_mm) = drop_beyond(top, flange, step, s, points) {
-                let what = match kind {
-                    CornerKind::Outside => format!(
-                        "a plate's edge about {:.0} mm thick lies {:.1} mm over the flange's top beside it, and the \
-                         cloud drops {drop_mm:.0} mm beyond it",
-                        top.width_mm(),
+            let width_mm = top.width_mm();
+            // Where the table is seen, the flange is seen whole beside the
+            // edge; a crop that took the table may leave less of it.
+            let beyond = what_lies_beyond(top, flange, step, s, points)
+                .filter(|b| top.area_mm2 <= SIDE_BY_SIDE_AREA_RATIO * flange.area_mm2 || !b.is_drop());
+            let what = match (beyond, kind) {
+                (Some(Beyond::Drop { median_mm }), CornerKind::Outside) => format!(
+                    "a plate's edge about {width_mm:.0} mm thick lies {:.1} mm over the flange's top beside it, and \
+                     the cloud drops {median_mm:.0} mm beyond it",
+                    step.max(0.0)
+                ),
+                (Some(Beyond::Drop { median_mm }), CornerKind::Inside) => format!(
+                    "a plate about {width_mm:.0} mm thick stands {step:.0} mm tall at the end of the flange, seen on \
+                     one of its sides only, and the cloud drops {median_mm:.0} mm beyond it"
+                ),
+                (Some(Beyond::Face { deepest_mm }), CornerKind::Outside) => format!(
+                    "a plate's edge about {width_mm:.0} mm thick lies {:.1} mm over the flange's top beside it, and \
+                     beyond it the cloud goes down a steep face, seen {deepest_mm:.0} mm deep to where the cloud ends",
+                    step.max(0.0)
+                ),
+                (Some(Beyond::Nothing { far_edge }), CornerKind::Outside)
+                    if !view_border().is_some_and(|border| runs_along(border, &far_edge, top, s)) =>
+                {
+                    format!(
+                        "a plate's edge about {width_mm:.0} mm wide lies {:.1} mm over the flange's top beside it, \
+                         and the cloud shows nothing beyond it, inside the view: an outside corner's plate whose \
+                         outer face is turned from the camera and whose table is out of the cloud, or a plate a crop \
+                         cut {width_mm:.0} mm wide (widen the crop to plan a butt joint or a lap)",
                         step.max(0.0)
-                    ),
-                    CornerKind::Inside => format!(
-                        "a plate about {:.0} mm thick stands {step:.0} mm tall at the end of the flange, seen on one \
-                         of its sides only, and the cloud drops {drop_mm:.0} mm beyond it",
-                        top.width_mm()
-                    ),
-                };
-                return Some(Corner { kind, what, standing: top_index, flange: flange_index });
-            }
+                    )
+                }
+                _ => continue,
+            };
+            return Some(Corner { kind, what, standing: top_index, flange: flange_index });
         }
     }
     None
@@ -348,46 +392,197 @@ impl Corner {
     }
 }
 
-/// How far below `top` the returns beyond its far edge (from `flange`) lie,
-/// their median, when they show a corner: enough of them, all deeper than
-/// the flange (`step` under the top) by more than a lap step, next to none
-/// at the flange's or the top's level.
-fn drop_beyond(top: &PlaneCluster, flange: &PlaneCluster, step: f64, s: &Selection, points: &[Point]) -> Option<f64> {
+/// What the cloud shows beyond a plate's edge, away from the flange
+/// beside it, when nothing there lies at the flange's or the edge's level
+/// or stands over them.
+#[derive(Debug, Clone, PartialEq)]
+enum Beyond {
+    /// Enough returns, all deeper than the flange by more than a lap step:
+    /// their median depth under the edge, mm.
+    Drop { median_mm: f64 },
+    /// Returns below the edge on a face going steeply down from it, and no
+    /// table: the plate's outer face seen to where the cloud ends (a crop
+    /// took the table). The deepest return, mm under the edge.
+    Face { deepest_mm: f64 },
+    /// Next to no returns at all: the edge's outermost point at each
+    /// station along it, for where the view ends.
+    Nothing { far_edge: Vec<Vec3> },
+}
+
+impl Beyond {
+    fn is_drop(&self) -> bool {
+        matches!(self, Beyond::Drop { .. })
+    }
+}
+
+/// The least share of the returns below an edge that must lie on a face
+/// going down from it (within [`MAX_FACE_LEAN_DEG`] of square to the
+/// plate) for them to show the plate's outer face rather than a surface
+/// below (a lap's other plate, a fixture).
+const FACE_SHARE_MIN: f64 = 0.8;
+
+/// What lies beyond `top`'s far edge (from `flange`, which lies `step`
+/// under it), past its rim, over a web's height across and along the
+/// top's length. `None` when something is there: returns at the flange's
+/// or the top's level, or standing over them, more than next to none (a
+/// tee's flange past its web, a plate a clamp lies on, the clamp, the rest
+/// of a streak-cut plate), against the returns deeper than the flange by
+/// more than a lap step or, where there are too few of those to show a
+/// drop, against the top's own count; or returns below that lie on no
+/// face going down from the edge (a surface a lap step under it).
+fn what_lies_beyond(
+    top: &PlaneCluster,
+    flange: &PlaneCluster,
+    step: f64,
+    s: &Selection,
+    points: &[Point],
+) -> Option<Beyond> {
     let side = side_of(top, flange, &s.normal);
     if side == 0.0 {
         return None;
     }
     let away = s.normal.cross(&top.long_axis) * -side.signum();
-    let finite = |i: &u32| points.get(*i as usize).map(vec3).filter(|p| p.iter().all(|v| v.is_finite()));
     let (mut far_edge, mut along) = (f64::NEG_INFINITY, [f64::INFINITY, f64::NEG_INFINITY]);
-    for p in top.members.iter().filter_map(finite) {
+    for p in member_points(&top.members, points) {
         let rel = p - top.centroid;
         far_edge = far_edge.max(away.dot(&rel));
         let a = top.long_axis.dot(&rel);
         along = [along[0].min(a), along[1].max(a)];
     }
     let top_offset = s.normal.dot(&top.centroid);
-    let (mut level, mut deep) = (0usize, Vec::new());
+    let max_lean = MAX_FACE_LEAN_DEG.to_radians().tan();
+    let (mut level, mut over, mut on_face, mut deep, mut below) = (0usize, 0usize, 0usize, Vec::new(), 0usize);
+    let mut deepest = 0.0_f64;
     for p in points.iter().map(vec3).filter(|p| p.iter().all(|v| v.is_finite())) {
         let rel = p - top.centroid;
-        let across = away.dot(&rel) - far_edge;
+        // Past the rim of the plate's own points the criterion left out.
+        let across = away.dot(&rel) - far_edge - s.neighbour_radius_mm;
         let a = top.long_axis.dot(&rel);
         if across <= 0.0 || across > s.web_height_max_mm || a < along[0] || a > along[1] {
             continue;
         }
         let depth = s.normal.dot(&p) - top_offset;
-        if depth > step + s.lap_step_max_mm {
-            deep.push(depth);
-        } else if depth.abs() <= s.coplanar_tolerance_mm || (depth - step).abs() <= s.coplanar_tolerance_mm {
+        if depth.abs() <= s.coplanar_tolerance_mm || (depth - step).abs() <= s.coplanar_tolerance_mm {
             level += 1;
+        } else if depth < 0.0 {
+            over += 1;
+        } else {
+            below += 1;
+            deepest = deepest.max(depth);
+            // Within the lean of a face down from the edge's rim.
+            on_face += usize::from(across <= depth * max_lean);
+            if depth > step + s.lap_step_max_mm {
+                deep.push(depth);
+            }
         }
     }
     let enough = CORNER_DEEP_RETURNS_MIN.max(top.members.len() / 5);
-    if deep.len() < enough || level as f64 > CORNER_LEVEL_SHARE_MAX * deep.len() as f64 {
+    if deep.len() >= enough {
+        if level as f64 > CORNER_LEVEL_SHARE_MAX * deep.len() as f64 {
+            return None;
+        }
+        deep.sort_by(f64::total_cmp);
+        return Some(Beyond::Drop { median_mm: deep[deep.len() / 2] });
+    }
+    if (level + over) as f64 > CORNER_LEVEL_SHARE_MAX * top.members.len() as f64 {
         return None;
     }
-    deep.sort_by(f64::total_cmp);
-    Some(deep[deep.len() / 2])
+    // Without the table, only an edge that touches the flange is taken for
+    // a corner's (a tee's flange on the web's far side lies a web's
+    // thickness off, a V-groove's other plate a groove's width).
+    let gap_mm = gap_between(top, flange, &away, s.neighbour_radius_mm, points);
+    let touching_mm = s.neighbour_radius_mm + 2.0 * spacing_of(top);
+    tracing::debug!(
+        level,
+        over,
+        below,
+        on_face,
+        deep = deep.len(),
+        enough,
+        gap_mm,
+        "no drop to a table beyond a plate's edge"
+    );
+    if !gap_mm.is_some_and(|gap| gap <= touching_mm) {
+        return None;
+    }
+    if below >= CORNER_DEEP_RETURNS_MIN {
+        return (on_face as f64 >= FACE_SHARE_MIN * below as f64).then_some(Beyond::Face { deepest_mm: deepest });
+    }
+    Some(Beyond::Nothing { far_edge: outermost_along(top, &away, s.neighbour_radius_mm, points) })
+}
+
+/// A plane cluster's mean point spacing, mm, from its area and count.
+fn spacing_of(c: &PlaneCluster) -> f64 {
+    (c.area_mm2 / c.members.len().max(1) as f64).sqrt()
+}
+
+/// Where a point lies against a long narrow cluster: the station along
+/// its long axis (stations `station_mm` long) and how far out towards
+/// `away`, mm from its centroid.
+fn station_of(top: &PlaneCluster, away: &Vec3, station_mm: f64, p: &Vec3) -> (i64, f64) {
+    let rel = p - top.centroid;
+    ((top.long_axis.dot(&rel) / station_mm.max(1e-3)).floor() as i64, away.dot(&rel))
+}
+
+/// The finite points of `members`.
+fn member_points<'p>(members: &'p [u32], points: &'p [Point]) -> impl Iterator<Item = Vec3> + 'p {
+    members.iter().filter_map(|&i| points.get(i as usize)).map(vec3).filter(|p| p.iter().all(|v| v.is_finite()))
+}
+
+/// How far apart `top`'s edge towards `flange` (against `away`) and the
+/// flange's edge towards it lie, mm: the median over stations
+/// `station_mm` long along the top where both have points (the flange's
+/// on its own side of the top's edge). `None` where they share no
+/// station.
+fn gap_between(
+    top: &PlaneCluster,
+    flange: &PlaneCluster,
+    away: &Vec3,
+    station_mm: f64,
+    points: &[Point],
+) -> Option<f64> {
+    let mut inner: BTreeMap<i64, f64> = BTreeMap::new();
+    for (station, out) in member_points(&top.members, points).map(|p| station_of(top, away, station_mm, &p)) {
+        let edge = inner.entry(station).or_insert(out);
+        *edge = edge.min(out);
+    }
+    let mut flange_edge: BTreeMap<i64, f64> = BTreeMap::new();
+    for (station, out) in member_points(&flange.members, points).map(|p| station_of(top, away, station_mm, &p)) {
+        if inner.get(&station).is_some_and(|&edge| out <= edge) {
+            let edge = flange_edge.entry(station).or_insert(out);
+            *edge = edge.max(out);
+        }
+    }
+    let mut gaps: Vec<f64> = flange_edge.iter().map(|(station, out)| inner[station] - out).collect();
+    gaps.sort_by(f64::total_cmp);
+    gaps.get(gaps.len() / 2).copied()
+}
+
+/// A plate's outermost point towards `away` at each station along it,
+/// stations `station_mm` long: its edge on that side, point by point.
+fn outermost_along(top: &PlaneCluster, away: &Vec3, station_mm: f64, points: &[Point]) -> Vec<Vec3> {
+    let mut outermost: BTreeMap<i64, (f64, Vec3)> = BTreeMap::new();
+    for p in member_points(&top.members, points) {
+        let (station, out) = station_of(top, away, station_mm, &p);
+        let slot = outermost.entry(station).or_insert((out, p));
+        if out > slot.0 {
+            *slot = (out, p);
+        }
+    }
+    outermost.into_values().map(|(_, p)| p).collect()
+}
+
+/// Whether a plate's far edge (its outermost points along it) runs along
+/// the view's border: at least half of them within a rim and two spacings
+/// of it. The plate's cluster ends up to a neighbour radius inside the
+/// plate (the rim the plane criterion trims), and the plate's own last
+/// returns lie on the border where the border cuts it. An edge that only
+/// touches the border (at a corner of the image, or of a crop) does not
+/// run along it.
+fn runs_along(border: &ViewBorder, far_edge: &[Vec3], top: &PlaneCluster, s: &Selection) -> bool {
+    let reach = s.neighbour_radius_mm + 2.0 * spacing_of(top);
+    let on_border = far_edge.iter().filter(|p| border.outside_mm(p) >= -reach).count();
+    !far_edge.is_empty() && 2 * on_border >= far_edge.len()
 }
 
 /// Fits a plane to each cluster and estimates its area from the sampling
@@ -484,6 +679,11 @@ pub struct Selection {
     /// Clusters whose normal is further than this from `normal` are not
     /// workpiece planes.
     pub max_tilt_deg: f64,
+    /// The plane criterion's neighbour radius (Eq. 6): a plate's points
+    /// within it of the plate's edge may fail the criterion (their disc
+    /// reaches past the edge), so a cluster can end up to this far inside
+    /// its plate, and what lies beyond a plate is read past that rim.
+    pub neighbour_radius_mm: f64,
 }
 
 impl Selection {
@@ -870,6 +1070,7 @@ mod tests {
             web_height_max_mm: 250.0,
             web_thickness_max_mm: 30.0,
             max_tilt_deg: 10.0,
+            neighbour_radius_mm: 1.0,
         }
     }
 
@@ -890,6 +1091,12 @@ mod tests {
     /// and beyond the web (x -60..-8) returns at depth `beyond_z`, if any.
     /// The clusters are the top's and the flange's.
     fn corner_frame(top_z: f64, beyond_z: Option<f64>) -> (Vec<PlaneCluster>, Vec<Point>) {
+        corner_frame_apart(top_z, beyond_z, 0)
+    }
+
+    /// [`corner_frame`] with the flange starting `gap` mm off the top's
+    /// edge, at x = gap..100.
+    fn corner_frame_apart(top_z: f64, beyond_z: Option<f64>, gap: i32) -> (Vec<PlaneCluster>, Vec<Point>) {
         let mut points: Vec<Point> = Vec::new();
         let strip = |points: &mut Vec<Point>, x0: i32, x1: i32, z: f64| {
             let first = points.len() as u32;
@@ -901,7 +1108,7 @@ mod tests {
             (first..points.len() as u32).collect::<Vec<u32>>()
         };
         let web = strip(&mut points, -8, 0, top_z);
-        let flange = strip(&mut points, 0, 100, 760.0);
+        let flange = strip(&mut points, gap, 100, 760.0);
         if let Some(z) = beyond_z {
             strip(&mut points, -60, -8, z);
         }
@@ -919,7 +1126,7 @@ mod tests {
 
     fn corner_kind(top_z: f64, beyond_z: Option<f64>) -> Option<CornerKind> {
         let (planes, points) = corner_frame(top_z, beyond_z);
-        find_corner(&planes, &auto(), &points).map(|corner| corner.kind)
+        find_corner(&planes, &auto(), &points, || None).map(|corner| corner.kind)
     }
 
     #[test]
@@ -927,7 +1134,7 @@ mod tests {
         assert_eq!(corner_kind(760.0, Some(830.0)), Some(CornerKind::Outside));
         assert_eq!(corner_kind(757.0, Some(830.0)), Some(CornerKind::Outside));
         let (planes, points) = corner_frame(760.0, Some(830.0));
-        let corner = find_corner(&planes, &auto(), &points).unwrap();
+        let corner = find_corner(&planes, &auto(), &points, || None).unwrap();
         let reason = corner.refusal().to_string();
         assert!(reason.contains("corner joint") && reason.contains("8 mm thick"), "{reason}");
         assert!(reason.contains("outside corner's weld is not planned"), "{reason}");
@@ -939,14 +1146,63 @@ mod tests {
     fn a_web_a_web_height_over_a_flange_with_a_drop_beyond_is_an_inside_corner() {
         assert_eq!(corner_kind(700.0, Some(860.0)), Some(CornerKind::Inside));
         let (planes, points) = corner_frame(700.0, Some(860.0));
-        let reason = find_corner(&planes, &auto(), &points).unwrap().refusal().to_string();
+        let reason = find_corner(&planes, &auto(), &points, || None).unwrap().refusal().to_string();
         assert!(reason.contains("request t_fillet or auto"), "{reason}");
     }
 
     #[test]
-    fn a_sliver_with_nothing_beyond_is_no_corner() {
-        // Butt plates, one barely in view at the image border.
-        assert_eq!(corner_kind(760.0, None), None);
+    fn an_edge_with_its_outer_face_going_down_to_where_the_cloud_ends_is_an_outside_corner() {
+        // A crop 25 mm deep took the table; the plate's outer face is seen
+        // from under the edge's rim (beyond the flange's level) down to the
+        // crop.
+        let (planes, mut points) = corner_frame(758.0, None);
+        for z in 764..783 {
+            for y in 0..200 {
+                points.push([-9.0, y as f32, z as f32]);
+            }
+        }
+        let corner = find_corner(&planes, &auto(), &points, || None).expect("refused");
+        assert_eq!(corner.kind, CornerKind::Outside);
+        let reason = corner.refusal().to_string();
+        assert!(reason.contains("steep face") && reason.contains("24 mm deep"), "{reason}");
+    }
+
+    #[test]
+    fn a_sliver_cut_by_the_image_border_is_no_corner() {
+        // Butt plates, one barely in view: the image's border runs along
+        // the sliver's far edge (x = -7.5 at 760 mm).
+        let (planes, points) = corner_frame(760.0, None);
+        let border = ViewBorder::from_tangents([-7.5 / 760.0, 1.0, -1.0, 1.0]);
+        assert_eq!(find_corner(&planes, &auto(), &points, || Some(&border)), None);
+    }
+
+    #[test]
+    fn an_edge_with_nothing_beyond_inside_the_view_or_in_a_cloud_without_a_grid_is_refused() {
+        // An outside corner's plate whose outer face is turned from the
+        // camera and whose table a crop took: nothing at a plate's level
+        // beyond its edge, and no drop to show. Without the image's border
+        // (a cropped or merged cloud) a plate cut as narrow looks the same.
+        let (planes, points) = corner_frame(758.0, None);
+        let corner = find_corner(&planes, &auto(), &points, || None).expect("refused");
+        assert_eq!(corner.kind, CornerKind::Outside);
+        let reason = corner.refusal().to_string();
+        assert!(reason.contains("8 mm wide") && reason.contains("2.0 mm over"), "{reason}");
+        assert!(reason.contains("widen the crop") && reason.contains("not planned"), "{reason}");
+        // In a grid whose border touches the edge only at the image's
+        // corner (y = 0), the edge is in view: still refused.
+        let corner_of_image = ViewBorder::from_tangents([-1.0, 1.0, 0.0, 1.0]);
+        assert!(find_corner(&planes, &auto(), &points, || Some(&corner_of_image)).is_some());
+        // Off the flange by a web's thickness (a cropped tee's flange on
+        // the far side of its web) or a groove's width, the edge is no
+        // corner's.
+        let (planes, points) = corner_frame_apart(758.0, None, 8);
+        assert_eq!(find_corner(&planes, &auto(), &points, || None), None);
+        // The rest of a plate at either level beyond is a plate.
+        assert_eq!(corner_kind(758.0, Some(758.0)), None);
+        assert_eq!(corner_kind(758.0, Some(760.0)), None);
+        // A web's top a web's height over the flange, nothing beyond: a
+        // tee whose far side is out of the cloud as much as a corner.
+        assert_eq!(corner_kind(700.0, None), None);
     }
 
     #[test]

@@ -219,12 +219,13 @@ fn plan_workpiece(
         web_height_max_mm: cfg.tee_web_height_max_mm,
         web_thickness_max_mm: cfg.tee_web_thickness_max_mm,
         max_tilt_deg: cfg.plane_max_normal_angle_deg,
+        neighbour_radius_mm: ctx.scale.radius_mm,
     };
     // A corner joint's plates pass for a butt pair, a lap or a tee. An
     // inside corner's fillet root is a tee's root with the flange on one
     // side: planned as one under `t_fillet` or `auto`. Any other corner,
     // or another request, is refused by name.
-    if let Some(corner) = background::find_corner(&planes, &selection, ctx.cloud.points()) {
+    if let Some(corner) = background::find_corner(&planes, &selection, ctx.cloud.points(), || ctx.view_border()) {
         let fillet = ctx.request.joint.admits(JointType::TFillet);
         if corner.kind == CornerKind::Inside && fillet {
             tracing::debug!("{}", corner.what);

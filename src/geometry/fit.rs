@@ -157,7 +157,7 @@ mod tests {
     #[test]
     fn plane_fit_recovers_a_tilted_plane_far_from_the_origin() {
         let n = Vec3::new(0.3, -0.2, 1.0).normalize();
-        let (u, v) = (n.cross(&Vec3::x()).normalize(), n.cross(&n.cross(&Vec3::x())).normalize());
+        let [u, v] = crate::geometry::plane_axes(&n).unwrap();
         let origin = Vec3::new(120.0, -40.0, 950.0);
         let pts: Vec<Vec3> =
             (0..400).map(|i| origin + u * ((i % 20) as f64 * 3.0) + v * ((i / 20) as f64 * 2.0)).collect();

@@ -41,6 +41,16 @@ pub fn round_i64(x: f64) -> i64 {
     if x >= 0.0 { floor_i64(x + 0.5) } else { -floor_i64(-x + 0.5) }
 }
 
+/// Two unit directions spanning the plane across the unit `normal`: `u`
+/// square to the normal and to whichever of x and y lies further from it
+/// (so the cross product never nears zero), and `v = normal × u`, so that
+/// `u × v` is the normal. `None` for a normal that is not finite.
+pub fn plane_axes(normal: &Vec3) -> Option<[Vec3; 2]> {
+    let helper = if normal.x.abs() < 0.9 { Vec3::x() } else { Vec3::y() };
+    let u = normal.cross(&helper).try_normalize(1e-12).filter(|u| u.iter().all(|c| c.is_finite()))?;
+    Some([u, normal.cross(&u)])
+}
+
 /// The least and greatest of `values`, NaNs skipped (as `f64::min` and
 /// `f64::max` skip them); `(∞, −∞)`, a range that holds nothing, when
 /// there are none.
@@ -71,6 +81,17 @@ pub fn distance_to_polyline(p: &Vec3, polyline: &[Vec3]) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn plane_axes_span_the_plane_across_any_normal() {
+        for normal in [Vec3::z(), Vec3::x(), -Vec3::y(), Vec3::new(0.95, 0.1, 0.3).normalize()] {
+            let [u, v] = plane_axes(&normal).unwrap();
+            assert!((u.norm() - 1.0).abs() < 1e-12 && (v.norm() - 1.0).abs() < 1e-12, "{normal:?}");
+            assert!(u.dot(&normal).abs() < 1e-12 && v.dot(&normal).abs() < 1e-12 && u.dot(&v).abs() < 1e-12);
+            assert!((u.cross(&v) - normal).norm() < 1e-12, "{normal:?}");
+        }
+        assert_eq!(plane_axes(&Vec3::new(f64::NAN, 0.0, 1.0)), None);
+    }
 
     #[test]
     fn the_extent_of_values_skips_nans_and_of_none_holds_nothing() {

@@ -30,7 +30,7 @@ use rand_core::{Rng, SeedableRng};
 
 use crate::cloud::PointCloud;
 use crate::geometry::fit::Plane;
-use crate::geometry::{Vec3, extent};
+use crate::geometry::{Vec3, extent, plane_axes};
 
 use super::background::PlaneCluster;
 use super::fillet::{self, MIN_FACE_POINTS, MIN_FACE_VIEW_DEG};
@@ -231,9 +231,7 @@ struct Footprint {
 impl Footprint {
     fn of(points: &[Vec3], n: &Vec3, margin: f64) -> Footprint {
         // Any two directions across the normal span the plane.
-        let helper = if n.x.abs() < 0.9 { Vec3::x() } else { Vec3::y() };
-        let first = n.cross(&helper).normalize();
-        let axes = [first, n.cross(&first)];
+        let axes = plane_axes(n).unwrap_or([Vec3::x(), Vec3::y()]);
         let mut low = [f64::INFINITY; 2];
         let mut high = [f64::NEG_INFINITY; 2];
         for p in points {

@@ -26,7 +26,7 @@
 use std::collections::BTreeSet;
 
 use crate::cloud::PointCloud;
-use crate::geometry::{Vec3, vec3};
+use crate::geometry::{Vec3, plane_axes, vec3};
 
 use super::background::PlaneCluster;
 
@@ -180,12 +180,7 @@ impl OccupancyGrid {
         others: &[usize],
         s: &GroupSettings,
     ) -> Option<Self> {
-        let u_axis = s
-            .normal
-            .cross(&Vec3::x())
-            .try_normalize(1e-6)
-            .or_else(|| s.normal.cross(&Vec3::y()).try_normalize(1e-6))?;
-        let v_axis = s.normal.cross(&u_axis);
+        let [u_axis, v_axis] = plane_axes(&s.normal)?;
         let points = cloud.points();
         let project = |i: u32| {
             let p = vec3(&points[i as usize]);

@@ -12,11 +12,9 @@
 //! step, over a layer it lies across, seen on both of its sides (the
 //! flange).
 
-use std::collections::BTreeMap;
-
 use crate::cloud::{Point, PointCloud};
 use crate::geometry::fit::{Moments, Plane};
-use crate::geometry::{Vec3, vec3};
+use crate::geometry::{Vec3, extent, vec3};
 use crate::joint::JointType;
 
 use super::view_border::ViewBorder;
@@ -336,11 +334,7 @@ pub fn find_corner<'v>(
             let step = offset(flange) - offset(top);
             let kind = if step <= s.lap_step_max_mm { CornerKind::Outside } else { CornerKind::Inside };
             let width_mm = top.width_mm();
-            // Where the table is seen, the flange is seen whole beside the
-            // edge; a crop that took the table may leave less of it.
-            let beyond = what_lies_beyond(top, flange, step, s, points)
-                .filter(|b| top.area_mm2 <= SIDE_BY_SIDE_AREA_RATIO * flange.area_mm2 || !b.is_drop());
-            let what = match (beyond, kind) {
+            let what = match (what_lies_beyond(top, flange, step, s, points), kind) {
                 (Some(Beyond::Drop { median_mm }), CornerKind::Outside) => format!(
                     "a plate's edge about {width_mm:.0} mm thick lies {:.1} mm over the flange's top beside it, and \
                      the cloud drops {median_mm:.0} mm beyond it",
@@ -409,12 +403,6 @@ enum Beyond {
     Nothing { far_edge: Vec<Vec3> },
 }
 
-impl Beyond {
-    fn is_drop(&self) -> bool {
-        matches!(self, Beyond::Drop { .. })
-    }
-}
-
 /// The least share of the returns below an edge that must lie on a face
 /// going down from it (within [`MAX_FACE_LEAN_DEG`] of square to the
 /// plate) for them to show the plate's outer face rather than a surface
@@ -423,7 +411,9 @@ const FACE_SHARE_MIN: f64 = 0.8;
 
 /// What lies beyond `top`'s far edge (from `flange`, which lies `step`
 /// under it), past its rim, over a web's height across and along the
-/// top's length. `None` when something is there: returns at the flange's
+/// top's length. `None` for a drop beside a flange less than four times
+/// the top's size, for anything but a drop beside a flange the top does
+/// not touch, and when something is there: returns at the flange's
 /// or the top's level, or standing over them, more than next to none (a
 /// tee's flange past its web, a plate a clamp lies on, the clamp, the rest
 /// of a streak-cut plate), against the returns deeper than the flange by
@@ -442,6 +432,19 @@ fn what_lies_beyond(
         return None;
     }
     let away = s.normal.cross(&top.long_axis) * -side.signum();
+    // Where the table is seen, the flange is seen whole beside the edge, at
+    // least four times its size; a crop that took the table may leave less.
+    let seen_whole = top.area_mm2 <= SIDE_BY_SIDE_AREA_RATIO * flange.area_mm2;
+    // Without the table, only an edge that touches the flange is taken for
+    // a corner's (a tee's flange on the web's far side lies a web's
+    // thickness off, a V-groove's other plate a groove's width). Read from
+    // the clusters' own points, before the pass over the whole cloud.
+    let stations = Stations::along(top, away, s.neighbour_radius_mm, points);
+    let gap_mm = || gap_between(&stations, flange, points);
+    let touches = |gap_mm: Option<f64>| gap_mm.is_some_and(|gap| gap <= s.neighbour_radius_mm + 2.0 * spacing_of(top));
+    if !seen_whole && !touches(gap_mm()) {
+        return None;
+    }
     let (mut far_edge, mut along) = (f64::NEG_INFINITY, [f64::INFINITY, f64::NEG_INFINITY]);
     for p in member_points(&top.members, points) {
         let rel = p - top.centroid;
@@ -478,7 +481,7 @@ fn what_lies_beyond(
     }
     let enough = CORNER_DEEP_RETURNS_MIN.max(top.members.len() / 5);
     if deep.len() >= enough {
-        if level as f64 > CORNER_LEVEL_SHARE_MAX * deep.len() as f64 {
+        if !seen_whole || level as f64 > CORNER_LEVEL_SHARE_MAX * deep.len() as f64 {
             return None;
         }
         deep.sort_by(f64::total_cmp);
@@ -487,11 +490,7 @@ fn what_lies_beyond(
     if (level + over) as f64 > CORNER_LEVEL_SHARE_MAX * top.members.len() as f64 {
         return None;
     }
-    // Without the table, only an edge that touches the flange is taken for
-    // a corner's (a tee's flange on the web's far side lies a web's
-    // thickness off, a V-groove's other plate a groove's width).
-    let gap_mm = gap_between(top, flange, &away, s.neighbour_radius_mm, points);
-    let touching_mm = s.neighbour_radius_mm + 2.0 * spacing_of(top);
+    let gap_mm = gap_mm();
     tracing::debug!(
         level,
         over,
@@ -502,13 +501,13 @@ fn what_lies_beyond(
         gap_mm,
         "no drop to a table beyond a plate's edge"
     );
-    if !gap_mm.is_some_and(|gap| gap <= touching_mm) {
+    if !touches(gap_mm) {
         return None;
     }
     if below >= CORNER_DEEP_RETURNS_MIN {
         return (on_face as f64 >= FACE_SHARE_MIN * below as f64).then_some(Beyond::Face { deepest_mm: deepest });
     }
-    Some(Beyond::Nothing { far_edge: outermost_along(top, &away, s.neighbour_radius_mm, points) })
+    Some(Beyond::Nothing { far_edge: outermost_along(&stations, points) })
 }
 
 /// A plane cluster's mean point spacing, mm, from its area and count.
@@ -516,12 +515,39 @@ fn spacing_of(c: &PlaneCluster) -> f64 {
     (c.area_mm2 / c.members.len().max(1) as f64).sqrt()
 }
 
-/// Where a point lies against a long narrow cluster: the station along
-/// its long axis (stations `station_mm` long) and how far out towards
-/// `away`, mm from its centroid.
-fn station_of(top: &PlaneCluster, away: &Vec3, station_mm: f64, p: &Vec3) -> (i64, f64) {
-    let rel = p - top.centroid;
-    ((top.long_axis.dot(&rel) / station_mm.max(1e-3)).floor() as i64, away.dot(&rel))
+/// The shortest station read along a plate's edge, mm: a bound on the
+/// stations a long edge is cut into, whatever radius is configured.
+const MIN_STATION_MM: f64 = 0.1;
+
+/// A long narrow cluster cut into stations `station_mm` long along its
+/// long axis, from its first point to its last, and how far out towards
+/// `away` a point lies: each station's edge on that side is read from the
+/// points in it.
+struct Stations<'c> {
+    top: &'c PlaneCluster,
+    away: Vec3,
+    station_mm: f64,
+    first_mm: f64,
+    count: usize,
+}
+
+impl<'c> Stations<'c> {
+    fn along(top: &'c PlaneCluster, away: Vec3, station_mm: f64, points: &[Point]) -> Stations<'c> {
+        let station_mm = station_mm.max(MIN_STATION_MM);
+        let (first_mm, last_mm) =
+            extent(member_points(&top.members, points).map(|p| top.long_axis.dot(&(p - top.centroid))));
+        let count = if last_mm >= first_mm { ((last_mm - first_mm) / station_mm) as usize + 1 } else { 0 };
+        Stations { top, away, station_mm, first_mm, count }
+    }
+
+    /// The station `p` lies at, if any, and how far out it lies, mm from
+    /// the cluster's centroid.
+    fn place(&self, p: &Vec3) -> (Option<usize>, f64) {
+        let rel = p - self.top.centroid;
+        let at = (self.top.long_axis.dot(&rel) - self.first_mm) / self.station_mm;
+        let station = (at >= 0.0 && at < self.count as f64).then_some(at as usize);
+        (station, self.away.dot(&rel))
+    }
 }
 
 /// The finite points of `members`.
@@ -529,47 +555,41 @@ fn member_points<'p>(members: &'p [u32], points: &'p [Point]) -> impl Iterator<I
     members.iter().filter_map(|&i| points.get(i as usize)).map(vec3).filter(|p| p.iter().all(|v| v.is_finite()))
 }
 
-/// How far apart `top`'s edge towards `flange` (against `away`) and the
-/// flange's edge towards it lie, mm: the median over stations
-/// `station_mm` long along the top where both have points (the flange's
-/// on its own side of the top's edge). `None` where they share no
-/// station.
-fn gap_between(
-    top: &PlaneCluster,
-    flange: &PlaneCluster,
-    away: &Vec3,
-    station_mm: f64,
-    points: &[Point],
-) -> Option<f64> {
-    let mut inner: BTreeMap<i64, f64> = BTreeMap::new();
-    for (station, out) in member_points(&top.members, points).map(|p| station_of(top, away, station_mm, &p)) {
-        let edge = inner.entry(station).or_insert(out);
-        *edge = edge.min(out);
-    }
-    let mut flange_edge: BTreeMap<i64, f64> = BTreeMap::new();
-    for (station, out) in member_points(&flange.members, points).map(|p| station_of(top, away, station_mm, &p)) {
-        if inner.get(&station).is_some_and(|&edge| out <= edge) {
-            let edge = flange_edge.entry(station).or_insert(out);
-            *edge = edge.max(out);
+/// How far apart the top's edge towards `flange` (against the stations'
+/// `away`) and the flange's edge towards it lie, mm: the median over the
+/// stations where both have points (the flange's on its own side of the
+/// top's edge). `None` where they share no station.
+fn gap_between(stations: &Stations, flange: &PlaneCluster, points: &[Point]) -> Option<f64> {
+    let mut inner = vec![f64::INFINITY; stations.count];
+    for (station, out) in member_points(&stations.top.members, points).map(|p| stations.place(&p)) {
+        if let Some(k) = station {
+            inner[k] = inner[k].min(out);
         }
     }
-    let mut gaps: Vec<f64> = flange_edge.iter().map(|(station, out)| inner[station] - out).collect();
+    let mut flange_edge = vec![f64::NEG_INFINITY; stations.count];
+    for (station, out) in member_points(&flange.members, points).map(|p| stations.place(&p)) {
+        if let Some(k) = station.filter(|&k| out <= inner[k]) {
+            flange_edge[k] = flange_edge[k].max(out);
+        }
+    }
+    let mut gaps: Vec<f64> =
+        inner.iter().zip(&flange_edge).filter(|(_, f)| f.is_finite()).map(|(edge, f)| edge - f).collect();
     gaps.sort_by(f64::total_cmp);
     gaps.get(gaps.len() / 2).copied()
 }
 
-/// A plate's outermost point towards `away` at each station along it,
-/// stations `station_mm` long: its edge on that side, point by point.
-fn outermost_along(top: &PlaneCluster, away: &Vec3, station_mm: f64, points: &[Point]) -> Vec<Vec3> {
-    let mut outermost: BTreeMap<i64, (f64, Vec3)> = BTreeMap::new();
-    for p in member_points(&top.members, points) {
-        let (station, out) = station_of(top, away, station_mm, &p);
-        let slot = outermost.entry(station).or_insert((out, p));
-        if out > slot.0 {
-            *slot = (out, p);
+/// The top's outermost point towards the stations' `away` at each station:
+/// its edge on that side, point by point.
+fn outermost_along(stations: &Stations, points: &[Point]) -> Vec<Vec3> {
+    let mut outermost: Vec<Option<(f64, Vec3)>> = vec![None; stations.count];
+    for p in member_points(&stations.top.members, points) {
+        if let (Some(k), out) = stations.place(&p)
+            && outermost[k].is_none_or(|(best, _)| out > best)
+        {
+            outermost[k] = Some((out, p));
         }
     }
-    outermost.into_values().map(|(_, p)| p).collect()
+    outermost.into_iter().flatten().map(|(_, p)| p).collect()
 }
 
 /// Whether a plate's far edge (its outermost points along it) runs along

@@ -288,13 +288,13 @@ const CORNER_DEEP_RETURNS_MIN: usize = 30;
 const CORNER_WEB_WIDTH_MAX_MM: f64 = 16.0;
 
 /// A corner joint, if the clusters show one: a long narrow plane (a web's
-/// top, at most `web_thickness_max_mm` and [`CORNER_WEB_WIDTH_MAX_MM`]
+/// top, at most `web_thickness_max_mm` and `CORNER_WEB_WIDTH_MAX_MM`
 /// wide) beside a larger plane (the flange) seen on one of its sides only,
 /// either flush with it or proud of it by at most a lap step (an outside
 /// corner), or a web's height over it (an inside corner); and beyond the
 /// top's far edge (away from the flange, past the top's rim, along its
 /// length, a web's height at most) nothing at the flange's or the top's
-/// level nor over them ([`what_lies_beyond`]), and either
+/// level nor over them (`what_lies_beyond`), and either
 /// - the cloud's returns there lie far below, deeper than the flange by
 ///   more than a lap step (the table past the web's outer face), with the
 ///   flange at least four times the top's size; or, beside an outside
@@ -306,10 +306,11 @@ const CORNER_WEB_WIDTH_MAX_MM: f64 = 16.0;
 ///   out of the cloud. Such an edge cannot be told from a butt or a lap
 ///   plate a crop cut as narrow, and is refused with that said.
 ///
-/// `points` is the frame the clusters index; `view_border` gives the border
-/// its rays span ([`ViewBorder::of_cloud`], read only when asked), where a plate the image cuts ends
-/// with nothing beyond it (a butt plate barely in view). A crop's border
-/// runs along an edge only where the crop was cut along the edge.
+/// `points` is the frame the clusters index; `view_border` gives the
+/// border its rays span ([`ViewBorder::of_cloud`], read only when asked),
+/// where a plate the image cuts ends with nothing beyond it (a butt plate
+/// barely in view). A crop's border runs along an edge only where the crop
+/// was cut along the edge.
 pub fn find_corner<'v>(
     planes: &[PlaneCluster],
     s: &Selection,
@@ -410,16 +411,16 @@ enum Beyond {
 const FACE_SHARE_MIN: f64 = 0.8;
 
 /// What lies beyond `top`'s far edge (from `flange`, which lies `step`
-/// under it), past its rim, over a web's height across and along the
-/// top's length. `None` for a drop beside a flange less than four times
-/// the top's size, for anything but a drop beside a flange the top does
-/// not touch, and when something is there: returns at the flange's
-/// or the top's level, or standing over them, more than next to none (a
-/// tee's flange past its web, a plate a clamp lies on, the clamp, the rest
-/// of a streak-cut plate), against the returns deeper than the flange by
-/// more than a lap step or, where there are too few of those to show a
-/// drop, against the top's own count; or returns below that lie on no
-/// face going down from the edge (a surface a lap step under it).
+/// under it): past the top's rim, along its length, a web's height across
+/// at most. `None` where that shows no corner:
+/// - returns at the flange's or the top's level, or over them, are more
+///   than next to none (a tee's flange past its web, a plate a clamp lies
+///   on, the clamp, the rest of a streak-cut plate): against the returns
+///   far below where those show a drop, else against the top's own count;
+/// - a drop beside a flange under four times the top's size;
+/// - no drop, and the top does not touch the flange, or the returns below
+///   lie on no face going down from the edge (a surface a lap step under
+///   it).
 fn what_lies_beyond(
     top: &PlaneCluster,
     flange: &PlaneCluster,

@@ -446,13 +446,9 @@ fn what_lies_beyond(
     if !seen_whole && !touches(gap_mm()) {
         return None;
     }
-    let (mut far_edge, mut along) = (f64::NEG_INFINITY, [f64::INFINITY, f64::NEG_INFINITY]);
-    for p in member_points(&top.members, points) {
-        let rel = p - top.centroid;
-        far_edge = far_edge.max(away.dot(&rel));
-        let a = top.long_axis.dot(&rel);
-        along = [along[0].min(a), along[1].max(a)];
-    }
+    let far_edge =
+        member_points(&top.members, points).map(|p| away.dot(&(p - top.centroid))).fold(f64::NEG_INFINITY, f64::max);
+    let along = [stations.first_mm, stations.last_mm];
     let top_offset = s.normal.dot(&top.centroid);
     let max_lean = MAX_FACE_LEAN_DEG.to_radians().tan();
     let (mut level, mut over, mut on_face, mut deep, mut below) = (0usize, 0usize, 0usize, Vec::new(), 0usize);
@@ -528,7 +524,9 @@ struct Stations<'c> {
     top: &'c PlaneCluster,
     away: Vec3,
     station_mm: f64,
+    /// The cluster's extent along its long axis, mm from its centroid.
     first_mm: f64,
+    last_mm: f64,
     count: usize,
 }
 
@@ -538,7 +536,7 @@ impl<'c> Stations<'c> {
         let (first_mm, last_mm) =
             extent(member_points(&top.members, points).map(|p| top.long_axis.dot(&(p - top.centroid))));
         let count = if last_mm >= first_mm { ((last_mm - first_mm) / station_mm) as usize + 1 } else { 0 };
-        Stations { top, away, station_mm, first_mm, count }
+        Stations { top, away, station_mm, first_mm, last_mm, count }
     }
 
     /// The station `p` lies at, if any, and how far out it lies, mm from

@@ -409,18 +409,25 @@ pub fn find_roots(view: &TeeView) -> [Result<Root, RootNotSeen>; 2] {
 }
 
 /// The flange's plane from all its pieces (one plate on both sides of the
-/// web), fitted to a sample of their points, and those points.
+/// web), fitted to a sample of their points ([`flange_samples`]), and
+/// those points.
 pub(super) fn flange_plane(cloud: &PointCloud, pieces: &[&PlaneCluster]) -> Option<(Plane, Vec<Vec3>)> {
+    let flange_points = flange_samples(cloud, pieces);
+    let flange = flange_points.iter().collect::<Moments>().plane()?;
+    Some((flange, flange_points))
+}
+
+/// A sample of the flange pieces' points, at most about [`FLANGE_SAMPLES`]
+/// of each piece.
+fn flange_samples(cloud: &PointCloud, pieces: &[&PlaneCluster]) -> Vec<Vec3> {
     let points = cloud.points();
-    let flange_points: Vec<Vec3> = pieces
+    pieces
         .iter()
         .flat_map(|c| {
             let stride = (c.members.len() / FLANGE_SAMPLES).max(1);
             c.members.iter().step_by(stride).map(|&i| vec3(&points[i as usize]))
         })
-        .collect();
-    let flange = flange_points.iter().collect::<Moments>().plane()?;
-    Some((flange, flange_points))
+        .collect()
 }
 
 /// The margin, mm, that keeps a plane's own points (and their noise) out
@@ -439,10 +446,11 @@ pub(super) fn valid_points(cloud: &PointCloud) -> impl Iterator<Item = Vec3> + '
 /// The web's frame from the flange pieces and its top, or its one face
 /// seen.
 fn web_frame(view: &TeeView) -> Option<WebFrame> {
-    let (flange, flange_points) = flange_plane(view.cloud, view.flange_pieces)?;
+    let flange_points = flange_samples(view.cloud, view.flange_pieces);
     let frame = match view.web {
-        Web::Top(top) => frame_from_top(view.cloud, top, &flange)?,
-        Web::Face(face) => frame_from_face(face, &flange)?,
+        Web::Top(top) => frame_from_top(view.cloud, top, &flange_points.iter().collect::<Moments>().plane()?)?,
+        // The face search fitted the flange's plane to these same pieces.
+        Web::Face(face) => frame_from_face(face, &face.flange)?,
     };
     // Which sides of the web the flange lies on, from its points, not its
     // pieces' centroids: a web shorter than its flange has one flange

@@ -41,18 +41,20 @@
 //! - the torch ([`super::trajectory::fillet_torch_axis`]) leans from the
 //!   flange towards the web in the plane across the root.
 //!
-//! - a face turned edge-on to the camera returns no points (or only the
-//!   mixed returns along the rays) although its root is in plain view: the
-//!   flange is then seen right up to the root. The root is read from the
-//!   flange's edge against the web instead: at each station the innermost
-//!   flange point and the outermost point of the web's top, a line fitted
-//!   to each, the root on the first. A flange also ends at the edge of the
-//!   web's shadow, from the camera or from the projector; the face the two
-//!   edges imply then holds the ray that grazes the top's edge, so it is
-//!   turned towards the shadowing eye by nothing. The root is taken only
-//!   when that face is turned towards both the camera and the projector by
-//!   more than the angle the two edges' sampling could fake (a few
-//!   spacings over the web's height), and is otherwise refused saying so;
+//! - a face turned edge-on to the camera returns no points (or only the mixed
+//!   returns along the rays) although its root is in plain view: the flange is
+//!   then seen right up to the root. The root is read from the flange's edge
+//!   against the web instead: at each station the innermost flange point and
+//!   the outermost point of the web's top, a line fitted to each, the root on
+//!   the first. The flange's edge is read too where the points standing on that
+//!   side are the web's end face (their foot runs across the web, not along
+//!   it). A flange also ends at the edge of the web's shadow, from the camera
+//!   or from the projector; the face the two edges imply then holds the ray
+//!   that grazes the top's edge, so it is turned towards the shadowing eye by
+//!   nothing. The root is taken only when that face is turned towards both the
+//!   camera and the projector by more than the angle the two edges' sampling
+//!   could fake (a few spacings over the web's height), and is otherwise
+//!   refused saying so;
 //!
 //! One view sees at most one root: the web's faces are steep, so the web
 //! hides the face on its far side and the flange beside it from the
@@ -122,6 +124,13 @@ const BORDER_REACH_SPACINGS: f64 = 1.5;
 /// jump leaves at the web's edge (a veil from its top down to whatever
 /// lies behind), not a face.
 pub const MIN_FACE_VIEW_DEG: f64 = 5.0;
+
+/// The most a face's foot may turn from the web top's long axis, degrees,
+/// and still be the web's side face. A side face runs along the top
+/// (square or leaning, the two share the web's length); the web's end
+/// face stands at 90° to it. The top's long axis, from the spread of a
+/// top many times longer than wide, is good to a degree or two.
+const MAX_ROOT_SKEW_DEG: f64 = 20.0;
 
 /// A root read from the flange's edge: each edge's sampling may move the
 /// face the edges imply by a spacing, both towards a face seen; the face
@@ -591,6 +600,23 @@ fn root_from_face(view: &TeeView, frame: &WebFrame, sign: f64, side: Side) -> Re
     let Some(face) = fit_face(&face_points, view.trim_sigma) else {
         return Err(NoFace::Refused("the points on the web's side face span no plane".into()));
     };
+    // A side face runs the web's length. Where the side face is turned
+    // edge-on and returns nothing, the points between the flange and the
+    // web's top on this side can be the web's end face, standing across
+    // the web: its "root" would be a few millimetres of the web's
+    // thickness. (A face lying parallel to the flange is refused below.)
+    let foot = frame.n.cross(&face.plane.normal).try_normalize(1e-6);
+    if let (None, Some(foot)) = (frame.face_only, foot) {
+        let skew_deg = foot.dot(&frame.e).abs().clamp(0.0, 1.0).acos().to_degrees();
+        if skew_deg > MAX_ROOT_SKEW_DEG {
+            return Err(NoFace::NotSeen(format!(
+                "the {} points between the flange and the web's top stand across the web (their foot \
+                 {skew_deg:.0}° from the top's long axis, over {MAX_ROOT_SKEW_DEG}°): the web's end, not its \
+                 side face{hidden}",
+                face.inliers.len()
+            )));
+        }
+    }
     // The face's normal out of the web, towards this side.
     let m = if face.plane.normal.dot(&frame.u) * sign >= 0.0 { face.plane.normal } else { -face.plane.normal };
     let d_m = m.dot(&face.centroid);
@@ -799,12 +825,18 @@ fn root_from_flange_edge(view: &TeeView, frame: &WebFrame, sign: f64, side: Side
     // only each station's innermost, whose place along a station would
     // round the root's ends off by up to a station), in the stations whose
     // innermost point lies on the line (where the flange runs on under the
-    // web, past its end, a station's innermost point leaves the line).
+    // web, past its end, a station's innermost point leaves the line) and
+    // the stations next to them. The station holding the web's end holds
+    // the flange past it too, so its innermost point leaves the line; its
+    // points at the line still show the root up to the web's end, and the
+    // web top's extent (below) ends the root there, not a station short.
     let at_edge = tolerance(root_line.rms_mm);
     let on_line: HashSet<usize> = root_line.kept.iter().map(|s| stations.index(s.t)).collect();
+    let beside_line =
+        |k: usize| [k.checked_sub(1), Some(k), k.checked_add(1)].into_iter().flatten().any(|j| on_line.contains(&j));
     let edge: Vec<f64> = flange
         .iter()
-        .filter(|s| (s.off - root_line.at(s.t)).abs() <= at_edge && on_line.contains(&stations.index(s.t)))
+        .filter(|s| (s.off - root_line.at(s.t)).abs() <= at_edge && beside_line(stations.index(s.t)))
         .map(|s| along(s.t))
         .collect();
     // The root runs where the flange's edge does: the web's top, nearer
@@ -1402,6 +1434,41 @@ mod tests {
         assert!((ends[0] + 50.0).abs() < 1e-6 && (ends[1] - 49.0).abs() < 1e-6, "{ends:?}");
         assert!((root.web_angle_deg - 90.0).abs() < 1e-6, "{}", root.web_angle_deg);
         assert!(hidden.reason.contains("shadow"), "{}", hidden.reason);
+    }
+
+    #[test]
+    fn the_webs_end_face_is_no_side_face_and_the_root_runs_to_the_webs_end() {
+        // The web of the test above, its top from y = −50 to 47 and its
+        // +x root at x = WEB_X + 4 seen only on the flange's edge (the side
+        // face edge-on). Its end face, across the web at y = 47.5, returns
+        // points on both sides of its middle; past it the flange runs on
+        // under where the web would stand, so the station holding the
+        // web's end holds flange points off the root's line.
+        let mut pts = Vec::new();
+        for i in 0..110 {
+            let y = -50.0 + i as f64;
+            if y <= 47.0 {
+                pts.extend((0..=8).map(|j| Vec3::new(WEB_X - 4.0 + j as f64, y, 660.0)));
+            } else {
+                pts.extend((0..14).map(|j| Vec3::new(WEB_X - 10.0 + j as f64, y, 700.0)));
+            }
+            pts.extend((0..30).map(|j| Vec3::new(WEB_X + 4.0 + 0.5 * j as f64 + 0.25 * (i % 2) as f64, y, 700.0)));
+        }
+        // The end cut 17° off square, so that the camera sees it.
+        for h in 1..40 {
+            pts.extend((0..=8).map(|j| Vec3::new(WEB_X - 4.0 + j as f64, 47.5 + 0.3 * j as f64, 700.0 - h as f64)));
+        }
+        let roots = roots_of(&pts);
+        let root = roots.iter().find_map(|r| r.as_ref().ok()).expect("the root facing the camera");
+        assert!(matches!(root.evidence, RootEvidence::FlangeEdge { .. }), "{:?}", root.evidence);
+        for s in [root.line.s_min, root.line.s_max] {
+            let p = root.line.at(s);
+            assert!((p.x - WEB_X - 4.0).abs() < 1e-6 && (p.z - 700.0).abs() < 1e-6, "{p:?}");
+        }
+        // From the flange's first point to the web top's last: not a
+        // station (4 mm) short of the web's end.
+        let ends = [root.line.at(root.line.s_min).y, root.line.at(root.line.s_max).y];
+        assert!((ends[0] + 50.0).abs() < 1e-6 && (ends[1] - 47.0).abs() < 1e-6, "{ends:?}");
     }
 
     #[test]

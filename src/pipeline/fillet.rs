@@ -820,7 +820,6 @@ fn root_from_flange_edge(view: &TeeView, frame: &WebFrame, sign: f64, side: Side
     };
     let stretch = (root_at(1.0) - p0).norm();
     let along = |t: f64| t * stretch;
-    let kept_top: Vec<f64> = top_line.kept.iter().map(|s| along(s.t)).collect();
     // The evidence of the root: every flange point at the edge's line (not
     // only each station's innermost, whose place along a station would
     // round the root's ends off by up to a station), in the stations whose
@@ -850,17 +849,19 @@ fn root_from_flange_edge(view: &TeeView, frame: &WebFrame, sign: f64, side: Side
     // the image's border cut the top there (the top, nearer the camera,
     // leaves the image before the root does); with no grid to tell, it
     // ends there too.
-    // The top's extent from every point at its edge's line, like the
-    // flange's evidence above (a station's outermost point would round it).
+    // The top's edge from every point at its line, like the flange's
+    // evidence above: a station's outermost point would round its extent
+    // off, and, one to a station at a place of its own along it, would
+    // leave every third or so of the coverage gate's stations empty.
     let top_on_line: HashSet<usize> = top_line.kept.iter().map(|s| stations.index(s.t)).collect();
-    let (top_lo, top_hi) = extent(
-        top.iter()
-            .filter(|s| {
-                (s.off - top_line.at(s.t)).abs() <= tolerance(top_line.rms_mm)
-                    && top_on_line.contains(&stations.index(s.t))
-            })
-            .map(|s| s.t),
-    );
+    let top_at_line: Vec<f64> = top
+        .iter()
+        .filter(|s| {
+            (s.off - top_line.at(s.t)).abs() <= tolerance(top_line.rms_mm) && top_on_line.contains(&stations.index(s.t))
+        })
+        .map(|s| s.t)
+        .collect();
+    let (top_lo, top_hi) = extent(top_at_line.iter().copied());
     let top_at = |t: f64| frame.origin + e * t + frame.u * (frame.middle + sign * top_line.at(t));
     let step = STATION_SPACINGS * spacing / stretch;
     // Past the top's end: off the configured camera's grid, or where no
@@ -888,7 +889,8 @@ fn root_from_flange_edge(view: &TeeView, frame: &WebFrame, sign: f64, side: Side
         return Err("the flange's edge is not seen where the web's top is".to_string());
     }
     let run = SeenRun { s0, s1, share: ((s1 - s0) / run.seen_mm).min(1.0), ..run };
-    let coverage = [covered_share(&kept_top, run.s0, run.s1, spacing), run.coverage[1]];
+    let top_seen: Vec<f64> = top_at_line.iter().map(|&t| along(t)).collect();
+    let coverage = [covered_share(&top_seen, run.s0, run.s1, spacing), run.coverage[1]];
     let web_angle_deg = frame.height.atan2(lean).to_degrees();
 
     // The flange beside the root, over the run.
@@ -1469,6 +1471,31 @@ mod tests {
         // station (4 mm) short of the web's end.
         let ends = [root.line.at(root.line.s_min).y, root.line.at(root.line.s_max).y];
         assert!((ends[0] + 50.0).abs() < 1e-6 && (ends[1] - 47.0).abs() < 1e-6, "{ends:?}");
+    }
+
+    #[test]
+    fn a_web_top_seen_all_along_the_root_covers_it_whatever_its_stations() {
+        // The edge-on web of the test before last, its top seen every
+        // 0.5 mm from y = −50, its edge's points a few hundredths of a
+        // millimetre in or out, the flange from y = −48: the top's edge
+        // covers the root all along, though its outermost point in each
+        // station, one to a station at a place of its own, left some of
+        // the coverage gate's stations (as wide, from the root's start)
+        // empty.
+        let mut pts = Vec::new();
+        for i in 0..200 {
+            let y = -50.0 + 0.5 * i as f64;
+            pts.extend((0..8).map(|j| Vec3::new(WEB_X - 4.0 + j as f64, y, 660.0)));
+            pts.push(Vec3::new(WEB_X + 4.0 - 0.01 * ((i * 37) % 11) as f64, y, 660.0));
+            if y >= -48.0 {
+                pts.extend((0..30).map(|j| Vec3::new(WEB_X + 4.0 + 0.5 * j as f64, y, 700.0)));
+            }
+            pts.extend((0..30).map(|j| Vec3::new(WEB_X - 30.0 - 0.5 * j as f64, y, 700.0)));
+        }
+        let roots = roots_of(&pts);
+        let root = roots.iter().find_map(|r| r.as_ref().ok()).expect("the root facing the camera");
+        assert!(matches!(root.evidence, RootEvidence::FlangeEdge { .. }), "{:?}", root.evidence);
+        assert!(root.coverage.iter().all(|c| *c > 0.99), "{:?}", root.coverage);
     }
 
     #[test]

@@ -418,9 +418,10 @@ async fn a_plan_line_may_leave_the_joint_to_the_daemon() {
 }
 
 /// A frame of three workpieces (an I-butt, a lap and a tee): the ok line
-/// counts the two seams planned, the waypoint lines carry seam numbers 1
-/// and 2, each seam from approach to retract, and WHY names the tee not
-/// planned.
+/// counts the three seams planned (the tee's root facing the camera among
+/// them), the waypoint lines carry seam numbers 1 to 3, each seam from
+/// approach to retract, and WHY names the tee's root not planned (the one
+/// its web hides).
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn several_seams_are_served_seam_by_seam_and_why_names_the_unplanned() {
     let (name, spec) =
@@ -435,7 +436,7 @@ async fn several_seams_are_served_seam_by_seam_and_why_names_the_unplanned() {
     let auto = trigger_line(Dialect::Kuka, &sim).replacen("TRIGGER,lap,", "TRIGGER,auto,", 1);
     let ok = robot.ask(&auto).await.unwrap();
     let status = numbers(&ok);
-    assert_eq!(&status[..2], &[0.0, 2.0], "{name}: two seams planned: {ok}");
+    assert_eq!(&status[..2], &[0.0, 3.0], "{name}: three seams planned: {ok}");
     let mut kinds_by_seam: Vec<(u32, Vec<u8>)> = Vec::new();
     for _ in 0..status[2] as usize {
         let line = numbers(&robot.ask("NEXT").await.unwrap());
@@ -445,13 +446,13 @@ async fn several_seams_are_served_seam_by_seam_and_why_names_the_unplanned() {
             _ => kinds_by_seam.push((seam, vec![kind])),
         }
     }
-    assert_eq!(kinds_by_seam.iter().map(|(s, _)| *s).collect::<Vec<_>>(), [1, 2], "{name}");
+    assert_eq!(kinds_by_seam.iter().map(|(s, _)| *s).collect::<Vec<_>>(), [1, 2, 3], "{name}");
     for (seam, kinds) in &kinds_by_seam {
         assert!(kinds.len() >= 3 && kinds[0] == 1 && kinds[kinds.len() - 1] == 3, "seam {seam}: {kinds:?}");
         assert!(kinds[1..kinds.len() - 1].iter().all(|k| *k == 2), "seam {seam}: {kinds:?}");
     }
     let why = robot.ask("WHY").await.unwrap();
-    assert!(why.starts_with("2 seams planned; 1 not: t_fillet at ("), "{name}: {why}");
+    assert!(why.starts_with("3 seams planned; 1 not: t_fillet at ("), "{name}: {why}");
     drop(robot);
     let _ = stop_camera.send(());
     camera.await.unwrap();

@@ -48,13 +48,14 @@
 //!   the outermost point of the web's top, a line fitted to each, the root on
 //!   the first. The flange's edge is read too where the points standing on that
 //!   side are the web's end face (their foot runs across the web, not along
-//!   it). A flange also ends at the edge of the web's shadow, from the camera
-//!   or from the projector; the face the two edges imply then holds the ray
-//!   that grazes the top's edge, so it is turned towards the shadowing eye by
-//!   nothing. The root is taken only when that face is turned towards both the
-//!   camera and the projector by more than the angle the two edges' sampling
-//!   could fake (a few spacings over the web's height), and is otherwise
-//!   refused saying so;
+//!   it), and where the face is seen along less than half the web's top and the
+//!   edge shows a longer root. A flange also ends at the edge of the web's
+//!   shadow, from the camera or from the projector; the face the two edges
+//!   imply then holds the ray that grazes the top's edge, so it is turned
+//!   towards the shadowing eye by nothing. The root is taken only when that
+//!   face is turned towards both the camera and the projector by more than the
+//!   angle the two edges' sampling could fake (a few spacings over the web's
+//!   height), and is otherwise refused saying so;
 //!
 //! One view sees at most one root: the web's faces are steep, so the web
 //! hides the face on its far side and the flange beside it from the
@@ -124,6 +125,10 @@ const BORDER_REACH_SPACINGS: f64 = 1.5;
 /// jump leaves at the web's edge (a veil from its top down to whatever
 /// lies behind), not a face.
 pub const MIN_FACE_VIEW_DEG: f64 = 5.0;
+
+/// The least share of the web top's length a root read from the web's
+/// face must run for the flange's edge not to be tried instead.
+const MIN_FACE_RUN_SHARE: f64 = 0.5;
 
 /// The most a face's foot may turn from the web top's long axis, degrees,
 /// and still be the web's side face. A side face runs along the top
@@ -558,13 +563,45 @@ fn find_root(view: &TeeView, frame: &WebFrame, sign: f64) -> Result<Root, RootNo
         return Err(not_seen("the flange on this side is not seen (hidden by the web)".into()));
     }
     match root_from_face(view, frame, sign, side) {
-        Ok(root) => Ok(root),
+        Ok(root) => Ok(face_or_flange_edge(view, frame, sign, side, root)),
         Err(NoFace::Refused(why)) => Err(not_seen(why)),
         // A face turned edge-on to the camera returns nothing, or only the
         // mixed returns along the rays: the flange's edge may still show
         // the root.
         Err(NoFace::NotSeen(why)) => root_from_flange_edge(view, frame, sign, side)
             .map_err(|edge| not_seen(format!("{why}; and the flange's edge does not show it: {edge}"))),
+    }
+}
+
+/// The root from the face, or from the flange's edge where the face is
+/// seen along less than [`MIN_FACE_RUN_SHARE`] of the web's top and the
+/// flange's edge shows a longer root. A face turned nearly edge-on returns
+/// points along a few millimetres of the web only (where a gap in the
+/// flange or the web's end lets the camera see it), and their root, read
+/// over that stretch, is refused by the coverage gate or, mixed with the
+/// web's end face, by the fit's residual; the flange's edge beside the
+/// same face runs the web's length.
+fn face_or_flange_edge(view: &TeeView, frame: &WebFrame, sign: f64, side: Side, root: Root) -> Root {
+    let Web::Top(top) = view.web else {
+        return root;
+    };
+    let points = view.cloud.points();
+    let (lo, hi) = extent(top.members.iter().map(|&i| (vec3(&points[i as usize]) - frame.origin).dot(&frame.e)));
+    let span = |r: &Root| r.line.s_max - r.line.s_min;
+    // (A top without members spans minus infinity: the face's root stays.)
+    if span(&root) >= MIN_FACE_RUN_SHARE * (hi - lo) {
+        return root;
+    }
+    match root_from_flange_edge(view, frame, sign, side) {
+        Ok(edge) if span(&edge) > span(&root) => {
+            tracing::debug!(
+                face_mm = span(&root),
+                edge_mm = span(&edge),
+                "a face seen along a short stretch: the root from the flange's edge"
+            );
+            edge
+        }
+        _ => root,
     }
 }
 
@@ -1496,6 +1533,29 @@ mod tests {
         let root = roots.iter().find_map(|r| r.as_ref().ok()).expect("the root facing the camera");
         assert!(matches!(root.evidence, RootEvidence::FlangeEdge { .. }), "{:?}", root.evidence);
         assert!(root.coverage.iter().all(|c| *c > 0.99), "{:?}", root.coverage);
+    }
+
+    #[test]
+    fn a_face_seen_along_a_few_millimetres_gives_way_to_the_flanges_edge() {
+        // The edge-on web of the tests above, its +x face (x = WEB_X + 4)
+        // returning points only from y = 44 to 49, its flange seen up to
+        // the root all along: the root runs the web's length, from the
+        // flange's edge, not the face's 5 mm.
+        let mut pts = Vec::new();
+        for i in 0..100 {
+            let y = -50.0 + i as f64;
+            pts.extend((0..=8).map(|j| Vec3::new(WEB_X - 4.0 + j as f64, y, 660.0)));
+            pts.extend((0..30).map(|j| Vec3::new(WEB_X + 4.0 + 0.5 * j as f64 + 0.25 * (i % 2) as f64, y, 700.0)));
+            pts.extend((0..30).map(|j| Vec3::new(WEB_X - 30.0 - 0.5 * j as f64, y, 700.0)));
+            if y >= 44.0 {
+                pts.extend((0..20).map(|j| Vec3::new(WEB_X + 4.0, y, 699.0 - 2.0 * j as f64)));
+            }
+        }
+        let roots = roots_of(&pts);
+        let root = roots.iter().find_map(|r| r.as_ref().ok()).expect("the root facing the camera");
+        assert!(matches!(root.evidence, RootEvidence::FlangeEdge { .. }), "{:?}", root.evidence);
+        let ends = [root.line.at(root.line.s_min).y, root.line.at(root.line.s_max).y];
+        assert!((ends[0] + 50.0).abs() < 1e-6 && (ends[1] - 49.0).abs() < 1e-6, "{ends:?}");
     }
 
     #[test]

@@ -48,14 +48,15 @@
 //!   the outermost point of the web's top, a line fitted to each, the root on
 //!   the first. The flange's edge is read too where the points standing on that
 //!   side are the web's end face (their foot runs across the web, not along
-//!   it), and where the face is seen along less than half the web's top and the
-//!   edge shows a longer root. A flange also ends at the edge of the web's
-//!   shadow, from the camera or from the projector; the face the two edges
-//!   imply then holds the ray that grazes the top's edge, so it is turned
-//!   towards the shadowing eye by nothing. The root is taken only when that
-//!   face is turned towards both the camera and the projector by more than the
-//!   angle the two edges' sampling could fake (a few spacings over the web's
-//!   height), and is otherwise refused saying so;
+//!   it), where the face gives no root (its foot and the flange up to it seen
+//!   together nowhere), and where the face is seen along less than half the
+//!   web's top and the edge shows a longer root. A flange also ends at the edge
+//!   of the web's shadow, from the camera or from the projector; the face the
+//!   two edges imply then holds the ray that grazes the top's edge, so it is
+//!   turned towards the shadowing eye by nothing. The root is taken only when
+//!   that face is turned towards both the camera and the projector by more than
+//!   the angle the two edges' sampling could fake (a few spacings over the
+//!   web's height), and is otherwise refused saying so;
 //!
 //! One view sees at most one root: the web's faces are steep, so the web
 //! hides the face on its far side and the flange beside it from the
@@ -564,11 +565,12 @@ fn find_root(view: &TeeView, frame: &WebFrame, sign: f64) -> Result<Root, RootNo
     }
     match root_from_face(view, frame, sign, side) {
         Ok(root) => Ok(face_or_flange_edge(view, frame, sign, side, root)),
-        Err(NoFace::Refused(why)) => Err(not_seen(why)),
         // A face turned edge-on to the camera returns nothing, or only the
-        // mixed returns along the rays: the flange's edge may still show
-        // the root.
-        Err(NoFace::NotSeen(why)) => root_from_flange_edge(view, frame, sign, side)
+        // mixed returns along the rays; one glimpsed where the flange
+        // beside it is not seen gives no root either. The flange's edge may
+        // still show the root; where it ends at a shadow's edge instead,
+        // the edge's own test refuses it.
+        Err(why) => root_from_flange_edge(view, frame, sign, side)
             .map_err(|edge| not_seen(format!("{why}; and the flange's edge does not show it: {edge}"))),
     }
 }
@@ -605,17 +607,9 @@ fn face_or_flange_edge(view: &TeeView, frame: &WebFrame, sign: f64, side: Side, 
     }
 }
 
-/// Why a root was not read from its face.
-enum NoFace {
-    /// The face is not seen: the flange's edge may show the root.
-    NotSeen(String),
-    /// The face is seen but gives no root.
-    Refused(String),
-}
-
 /// The root where the web's side face, fitted to its points, meets the
 /// flange.
-fn root_from_face(view: &TeeView, frame: &WebFrame, sign: f64, side: Side) -> Result<Root, NoFace> {
+fn root_from_face(view: &TeeView, frame: &WebFrame, sign: f64, side: Side) -> Result<Root, String> {
     let spacing = view.point_spacing_mm;
     let margin = height_margin(view.on_plane_mm, spacing);
     let ((inner, reach), h_hi) = frame.face_band(view, sign, margin);
@@ -628,14 +622,14 @@ fn root_from_face(view: &TeeView, frame: &WebFrame, sign: f64, side: Side) -> Re
         .collect();
     let hidden = if side == Side::Far { ", hidden by the web" } else { "" };
     if face_points.len() < MIN_FACE_POINTS {
-        return Err(NoFace::NotSeen(format!(
+        return Err(format!(
             "the web's side face there is not seen{hidden} ({} points between the flange and the web's top, \
              fewer than {MIN_FACE_POINTS})",
             face_points.len()
-        )));
+        ));
     }
     let Some(face) = fit_face(&face_points, view.trim_sigma) else {
-        return Err(NoFace::Refused("the points on the web's side face span no plane".into()));
+        return Err("the points on the web's side face span no plane".into());
     };
     // A side face runs the web's length. Where the side face is turned
     // edge-on and returns nothing, the points between the flange and the
@@ -646,12 +640,12 @@ fn root_from_face(view: &TeeView, frame: &WebFrame, sign: f64, side: Side) -> Re
     if let (None, Some(foot)) = (frame.face_only, foot) {
         let skew_deg = foot.dot(&frame.e).abs().clamp(0.0, 1.0).acos().to_degrees();
         if skew_deg > MAX_ROOT_SKEW_DEG {
-            return Err(NoFace::NotSeen(format!(
+            return Err(format!(
                 "the {} points between the flange and the web's top stand across the web (their foot \
                  {skew_deg:.0}° from the top's long axis, over {MAX_ROOT_SKEW_DEG}°): the web's end, not its \
                  side face{hidden}",
                 face.inliers.len()
-            )));
+            ));
         }
     }
     // The face's normal out of the web, towards this side.
@@ -659,17 +653,15 @@ fn root_from_face(view: &TeeView, frame: &WebFrame, sign: f64, side: Side) -> Re
     let d_m = m.dot(&face.centroid);
     let view_deg = m.dot(&(-face.centroid).normalize()).clamp(-1.0, 1.0).asin().to_degrees();
     if view_deg < MIN_FACE_VIEW_DEG {
-        return Err(NoFace::NotSeen(format!(
+        return Err(format!(
             "the {} points between the flange and the web's top lie along the camera's rays ({view_deg:.1}° from \
              them, below {MIN_FACE_VIEW_DEG}°): mixed returns at the web's edge, not its side face{hidden}",
             face.inliers.len()
-        )));
+        ));
     }
     let n = frame.n;
     let Some(r) = n.cross(&m).try_normalize(1e-6) else {
-        return Err(NoFace::Refused(
-            "the points between the flange and the web's top lie parallel to the flange".into(),
-        ));
+        return Err("the points between the flange and the web's top lie parallel to the flange".into());
     };
     let r = if r.dot(&frame.e) >= 0.0 { r } else { -r };
     // The point on both planes nearest the web's origin.
@@ -707,19 +699,17 @@ fn root_from_face(view: &TeeView, frame: &WebFrame, sign: f64, side: Side) -> Re
         })
         .collect();
     if foot.is_empty() {
-        return Err(NoFace::Refused("the web's side face is not seen down to the flange".into()));
+        return Err("the web's side face is not seen down to the flange".into());
     }
     if beside.is_empty() {
-        return Err(NoFace::Refused(format!(
+        return Err(format!(
             "the flange is not seen up to the web's face{}",
             if side == Side::Far { " (the web hides it)" } else { " (in the web's shadow)" }
-        )));
+        ));
     }
     let flange_along: Vec<f64> = beside.iter().map(along).collect();
     let Some(run) = seen_run(&foot, &flange_along, spacing) else {
-        return Err(NoFace::Refused(
-            "the web's face and the flange up to it are not seen together anywhere along the root".into(),
-        ));
+        return Err("the web's face and the flange up to it are not seen together anywhere along the root".into());
     };
     let run = match view.border {
         Some(border) => ends_at_border(border, &p0, &r, run, [&foot_points, &beside], spacing),
@@ -1556,6 +1546,35 @@ mod tests {
         assert!(matches!(root.evidence, RootEvidence::FlangeEdge { .. }), "{:?}", root.evidence);
         let ends = [root.line.at(root.line.s_min).y, root.line.at(root.line.s_max).y];
         assert!((ends[0] + 50.0).abs() < 1e-6 && (ends[1] - 49.0).abs() < 1e-6, "{ends:?}");
+    }
+
+    #[test]
+    fn a_face_that_gives_no_root_leaves_it_to_the_flanges_edge() {
+        // The edge-on web of the tests above, its +x face (x = WEB_X + 4)
+        // returning points only from y = −50 to −30, where a dropout takes
+        // the flange's first 10 mm beside the root: the face's foot and the
+        // flange up to it are seen together nowhere, and the root is read
+        // from the flange's edge where that is seen, from y = −28 on.
+        let mut pts = Vec::new();
+        for i in 0..100 {
+            let y = -50.0 + i as f64;
+            pts.extend((0..=8).map(|j| Vec3::new(WEB_X - 4.0 + j as f64, y, 660.0)));
+            let from = if y < -28.0 { WEB_X + 14.0 } else { WEB_X + 4.0 };
+            pts.extend((0..30).map(|j| Vec3::new(from + 0.5 * j as f64 + 0.25 * (i % 2) as f64, y, 700.0)));
+            pts.extend((0..30).map(|j| Vec3::new(WEB_X - 30.0 - 0.5 * j as f64, y, 700.0)));
+            if y <= -30.0 {
+                pts.extend((0..20).map(|j| Vec3::new(WEB_X + 4.0, y, 699.0 - 2.0 * j as f64)));
+            }
+        }
+        let roots = roots_of(&pts);
+        let root = roots.iter().find_map(|r| r.as_ref().ok()).expect("the root facing the camera");
+        assert!(matches!(root.evidence, RootEvidence::FlangeEdge { .. }), "{:?}", root.evidence);
+        for s in [root.line.s_min, root.line.s_max] {
+            let p = root.line.at(s);
+            assert!((p.x - WEB_X - 4.0).abs() < 1e-6 && (p.z - 700.0).abs() < 1e-6, "{p:?}");
+        }
+        let ends = [root.line.at(root.line.s_min).y, root.line.at(root.line.s_max).y];
+        assert!((ends[0] + 28.0).abs() < 1e-6 && (ends[1] - 49.0).abs() < 1e-6, "{ends:?}");
     }
 
     #[test]

@@ -1465,6 +1465,20 @@ mod tests {
         assert!(hidden.reason.contains("shadow"), "{}", hidden.reason);
     }
 
+    /// The ends (y) of the root [`roots_of`] reads from `pts` on the web's
+    /// camera side, which must come from the flange's edge and lie on the
+    /// line x = WEB_X + 4, z = 700 (the edge-on web of the tests below).
+    fn flange_edge_root_ends(pts: &[Vec3]) -> [f64; 2] {
+        let roots = roots_of(pts);
+        let root = roots.iter().find_map(|r| r.as_ref().ok()).expect("the root facing the camera");
+        assert!(matches!(root.evidence, RootEvidence::FlangeEdge { .. }), "{:?}", root.evidence);
+        [root.line.s_min, root.line.s_max].map(|s| {
+            let p = root.line.at(s);
+            assert!((p.x - WEB_X - 4.0).abs() < 1e-6 && (p.z - 700.0).abs() < 1e-6, "{p:?}");
+            p.y
+        })
+    }
+
     #[test]
     fn the_webs_end_face_is_no_side_face_and_the_root_runs_to_the_webs_end() {
         // The web of the test above, its top from y = −50 to 47 and its
@@ -1487,16 +1501,9 @@ mod tests {
         for h in 1..40 {
             pts.extend((0..=8).map(|j| Vec3::new(WEB_X - 4.0 + j as f64, 47.5 + 0.3 * j as f64, 700.0 - h as f64)));
         }
-        let roots = roots_of(&pts);
-        let root = roots.iter().find_map(|r| r.as_ref().ok()).expect("the root facing the camera");
-        assert!(matches!(root.evidence, RootEvidence::FlangeEdge { .. }), "{:?}", root.evidence);
-        for s in [root.line.s_min, root.line.s_max] {
-            let p = root.line.at(s);
-            assert!((p.x - WEB_X - 4.0).abs() < 1e-6 && (p.z - 700.0).abs() < 1e-6, "{p:?}");
-        }
         // From the flange's first point to the web top's last: not a
         // station (4 mm) short of the web's end.
-        let ends = [root.line.at(root.line.s_min).y, root.line.at(root.line.s_max).y];
+        let ends = flange_edge_root_ends(&pts);
         assert!((ends[0] + 50.0).abs() < 1e-6 && (ends[1] - 47.0).abs() < 1e-6, "{ends:?}");
     }
 
@@ -1541,10 +1548,7 @@ mod tests {
                 pts.extend((0..20).map(|j| Vec3::new(WEB_X + 4.0, y, 699.0 - 2.0 * j as f64)));
             }
         }
-        let roots = roots_of(&pts);
-        let root = roots.iter().find_map(|r| r.as_ref().ok()).expect("the root facing the camera");
-        assert!(matches!(root.evidence, RootEvidence::FlangeEdge { .. }), "{:?}", root.evidence);
-        let ends = [root.line.at(root.line.s_min).y, root.line.at(root.line.s_max).y];
+        let ends = flange_edge_root_ends(&pts);
         assert!((ends[0] + 50.0).abs() < 1e-6 && (ends[1] - 49.0).abs() < 1e-6, "{ends:?}");
     }
 
@@ -1566,14 +1570,7 @@ mod tests {
                 pts.extend((0..20).map(|j| Vec3::new(WEB_X + 4.0, y, 699.0 - 2.0 * j as f64)));
             }
         }
-        let roots = roots_of(&pts);
-        let root = roots.iter().find_map(|r| r.as_ref().ok()).expect("the root facing the camera");
-        assert!(matches!(root.evidence, RootEvidence::FlangeEdge { .. }), "{:?}", root.evidence);
-        for s in [root.line.s_min, root.line.s_max] {
-            let p = root.line.at(s);
-            assert!((p.x - WEB_X - 4.0).abs() < 1e-6 && (p.z - 700.0).abs() < 1e-6, "{p:?}");
-        }
-        let ends = [root.line.at(root.line.s_min).y, root.line.at(root.line.s_max).y];
+        let ends = flange_edge_root_ends(&pts);
         assert!((ends[0] + 28.0).abs() < 1e-6 && (ends[1] - 49.0).abs() < 1e-6, "{ends:?}");
     }
 

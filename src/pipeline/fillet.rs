@@ -128,7 +128,10 @@ const BORDER_REACH_SPACINGS: f64 = 1.5;
 pub const MIN_FACE_VIEW_DEG: f64 = 5.0;
 
 /// The least share of the web top's length a root read from the web's
-/// face must run for the flange's edge not to be tried instead.
+/// face must run for the flange's edge not to be tried instead. A face
+/// seen along most of the web places its root from thousands of points,
+/// better than the flange's edge does; one seen along a few millimetres
+/// places only those.
 const MIN_FACE_RUN_SHARE: f64 = 0.5;
 
 /// The most a face's foot may turn from the web top's long axis, degrees,
@@ -608,7 +611,7 @@ fn face_or_flange_edge(view: &TeeView, frame: &WebFrame, sign: f64, side: Side, 
 }
 
 /// The root where the web's side face, fitted to its points, meets the
-/// flange.
+/// flange, or why the face gives none.
 fn root_from_face(view: &TeeView, frame: &WebFrame, sign: f64, side: Side) -> Result<Root, String> {
     let spacing = view.point_spacing_mm;
     let margin = height_margin(view.on_plane_mm, spacing);
@@ -636,9 +639,9 @@ fn root_from_face(view: &TeeView, frame: &WebFrame, sign: f64, side: Side) -> Re
     // web's top on this side can be the web's end face, standing across
     // the web: its "root" would be a few millimetres of the web's
     // thickness. (A face lying parallel to the flange is refused below.)
-    let foot = frame.n.cross(&face.plane.normal).try_normalize(1e-6);
-    if let (None, Some(foot)) = (frame.face_only, foot) {
-        let skew_deg = foot.dot(&frame.e).abs().clamp(0.0, 1.0).acos().to_degrees();
+    let foot_line = frame.n.cross(&face.plane.normal).try_normalize(1e-6);
+    if let (None, Some(foot_line)) = (frame.face_only, foot_line) {
+        let skew_deg = foot_line.dot(&frame.e).abs().clamp(0.0, 1.0).acos().to_degrees();
         if skew_deg > MAX_ROOT_SKEW_DEG {
             return Err(format!(
                 "the {} points between the flange and the web's top stand across the web (their foot \

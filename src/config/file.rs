@@ -1,10 +1,10 @@
 //! The on-disk schema of config/weldseam.toml. Sections whose values keep
 //! their type (camera, pipeline, paper, trajectory, quality, debug) are the library's own
 //! parameter structs, deserialized directly; only the three whose type
-//! changes on the way in have a schema of their own here: [camera] (the
+//! changes on the way in have a schema of their own here: `[camera]` (the
 //! field of view or the intrinsics, either of which may be left out),
-//! [robot] (an Euler convention by name, the hand-eye as 16 numbers) and
-//! [server] and [text_link] (addresses as text, durations in ms). Every struct denies unknown keys,
+//! `[robot]` (an Euler convention by name, the hand-eye as 16 numbers) and
+//! `[server]` and `[text_link]` (addresses as text, durations in ms). Every struct denies unknown keys,
 //! so a misspelt key is an error rather than a silently ignored setting.
 //! Nothing here is validated; see [`super::Config::from_file`] for that.
 
@@ -29,7 +29,7 @@ pub struct ConfigFile {
     pub debug: DebugParams,
 }
 
-/// [camera]: the camera model's keys, with the field of view and the
+/// `[camera]`: the camera model's keys, with the field of view and the
 /// intrinsics each optional (a key left out is `None`; the defaults the
 /// shipped file shows are the paper's field of view and no intrinsics).
 #[derive(Debug, Clone, Deserialize, PartialEq)]
@@ -92,7 +92,7 @@ impl Default for CameraSection {
     }
 }
 
-/// [robot]: the convention is named, the hand-eye a row-major 4x4 list.
+/// `[robot]`: the convention is named, the hand-eye a row-major 4x4 list.
 #[derive(Debug, Clone, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields, default)]
 pub struct RobotSection {
@@ -114,7 +114,7 @@ impl Default for RobotSection {
     }
 }
 
-/// [server]: addresses as text, durations in whole milliseconds.
+/// `[server]`: addresses as text, durations in whole milliseconds.
 #[derive(Debug, Clone, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields, default)]
 pub struct ServerSection {
@@ -180,7 +180,7 @@ impl Default for ServerSection {
     }
 }
 
-/// [text_link]: the address as text (empty is off), the dialect by name
+/// `[text_link]`: the address as text (empty is off), the dialect by name
 /// (empty: the robot names it), durations in whole milliseconds.
 #[derive(Debug, Clone, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields, default)]

@@ -97,7 +97,7 @@ impl RoiFrame {
     }
 }
 
-/// Parameters of the seam pipeline's stages: the [pipeline] section.
+/// Parameters of the seam pipeline's stages: the `[pipeline]` section.
 #[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct PipelineParams {
@@ -199,7 +199,7 @@ impl Default for PipelineParams {
 }
 
 /// The paper's own numbers where they differ from the robust method's:
-/// the [paper] section.
+/// the `[paper]` section.
 #[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct PaperParams {
@@ -215,7 +215,7 @@ impl Default for PaperParams {
     }
 }
 
-/// Sampling and torch orientation of the trajectory: the [trajectory]
+/// Sampling and torch orientation of the trajectory: the `[trajectory]`
 /// section, and what a request's own step and angles override.
 #[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields, default)]
@@ -240,7 +240,7 @@ impl Default for TrajectoryParams {
     }
 }
 
-/// The limits a planned seam must meet (issue 12): the [quality] section.
+/// The limits a planned seam must meet (issue 12): the `[quality]` section.
 /// A seam that breaks one is refused with the figure, its value and the
 /// limit, unless the gate is named in `warn_only`; see
 /// [`crate::pipeline::quality`] for how each figure is measured.
@@ -312,7 +312,7 @@ impl QualityParams {
         self.warn_only.iter().any(|name| name == gate.name())
     }
 
-    /// Checks the [quality] section.
+    /// Checks the `[quality]` section.
     pub fn validate(&self) -> Result<(), ConfigError> {
         use crate::pipeline::quality::Gate;
         in_range("quality.max_edge_fit_rms_spacings", self.max_edge_fit_rms_spacings, 0.05, 100.0)?;
@@ -336,7 +336,7 @@ impl QualityParams {
     }
 }
 
-/// The pictures and figures of the daemon's last plans: the [debug]
+/// The pictures and figures of the daemon's last plans: the `[debug]`
 /// section. Each plan's set (what `weldseam plan --debug DIR` writes: the
 /// camera view, the cross-sections and `trace.json`) goes into a directory
 /// of its own under `dir`, the oldest beyond `keep_last` deleted. An empty
@@ -368,7 +368,7 @@ impl DebugParams {
         (!self.dir.is_empty()).then(|| Path::new(&self.dir))
     }
 
-    /// Checks the [debug] section.
+    /// Checks the `[debug]` section.
     pub fn validate(&self) -> Result<(), ConfigError> {
         count_in("debug.keep_last", self.keep_last.into(), 1, MAX_DEBUG_KEEP_LAST.into())?;
         check("debug.dir", !self.dir.contains('\0'), || "must not contain a NUL character".into())
@@ -631,7 +631,7 @@ const INTRINSICS_AGREEMENT: f64 = 1e-3;
 const MAX_DISTORTION: f64 = 10.0;
 
 impl file::CameraSection {
-    /// Checks the [camera] section and builds the camera model: the field
+    /// Checks the `[camera]` section and builds the camera model: the field
     /// of view or the intrinsics (all four), or both when they agree.
     pub fn validate(&self) -> Result<CameraModel, ConfigError> {
         let c = self;
@@ -734,7 +734,7 @@ impl file::CameraSection {
 }
 
 impl file::RobotSection {
-    /// Checks the [robot] section and builds its typed values.
+    /// Checks the `[robot]` section and builds its typed values.
     pub fn validate(&self) -> Result<(EulerConvention, Isometry3<f64>, RobotLimits), ConfigError> {
         let r = self;
         let euler = EulerConvention::from_name(&r.euler_convention).ok_or_else(|| ConfigError::Invalid {
@@ -767,7 +767,7 @@ impl file::RobotSection {
 }
 
 impl PipelineParams {
-    /// Checks the [pipeline] section.
+    /// Checks the `[pipeline]` section.
     pub fn validate(&self) -> Result<(), ConfigError> {
         let p = self;
         in_range("pipeline.neighbour_radius_mm", p.neighbour_radius_mm, 0.05, 10.0)?;
@@ -834,7 +834,7 @@ impl PipelineParams {
 }
 
 impl PaperParams {
-    /// Checks the [paper] section.
+    /// Checks the `[paper]` section.
     pub fn validate(&self) -> Result<(), ConfigError> {
         in_range("paper.edge_ratio", self.edge_ratio, 0.01, 1.0)?;
         in_range("paper.cluster_tolerance_mm", self.cluster_tolerance_mm, 0.05, 20.0)
@@ -842,7 +842,7 @@ impl PaperParams {
 }
 
 impl TrajectoryParams {
-    /// Checks the [trajectory] section, against the same limits a
+    /// Checks the `[trajectory]` section, against the same limits a
     /// request's own step and angles are held to.
     pub fn validate(&self) -> Result<(), ConfigError> {
         in_range("trajectory.step_mm", self.step_mm, MIN_STEP_MM, MAX_STEP_MM)?;
@@ -874,7 +874,7 @@ fn ip_list(key: &'static str, list: &[String]) -> Result<Vec<IpAddr>, ConfigErro
 }
 
 impl file::ServerSection {
-    /// Checks the [server] section and builds its typed values.
+    /// Checks the `[server]` section and builds its typed values.
     pub fn validate(&self) -> Result<ServerConfig, ConfigError> {
         let s = self;
         const MAX_CONNECTIONS: u32 = 1024;

@@ -1,4 +1,4 @@
-//! The [text_link] section: the text controller link that robot programs
+//! The `[text_link]` section: the text controller link that robot programs
 //! speak directly (see ROBOTS.md), its address, who may connect, the
 //! dialect a session starts in, and the bounds on a line and a session.
 
@@ -56,7 +56,7 @@ pub const MIN_LINE_BYTES: u64 = 80;
 pub const MAX_LINE_BYTES: u64 = 4096;
 
 impl file::TextLinkSection {
-    /// Checks the [text_link] section and builds its typed values.
+    /// Checks the `[text_link]` section and builds its typed values.
     pub fn validate(&self) -> Result<TextLinkConfig, ConfigError> {
         let t = self;
         let listen = match t.listen.as_str() {

@@ -103,7 +103,7 @@ impl Isa {
 /// The level chosen once for the process; see the module documentation.
 static CHOSEN: OnceLock<Isa> = OnceLock::new();
 
-/// A level forced by [`with_isa`], as its index in [`Isa::ALL`] plus one;
+/// A level forced by `with_isa` (in tests), as its index in [`Isa::ALL`] plus one;
 /// zero when none is.
 static FORCED: AtomicU8 = AtomicU8::new(0);
 

@@ -12,8 +12,8 @@
 //!   plates always leaves a line of non-plane pixels, so plates separate
 //!   even when their gap is far below the tolerance (the paper's 2 mm
 //!   merges I-butt plates closer than about 1 mm). It joins whole runs of
-//!   pixels at a time and gives exactly the clusters of [`reference()`],
-//!   which joins pixel by pixel.
+//!   pixels at a time and gives exactly the clusters of `reference()`
+//!   (kept beside it for the tests), which joins pixel by pixel.
 
 use std::collections::HashMap;
 

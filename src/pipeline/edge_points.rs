@@ -246,7 +246,7 @@ fn counted_edge(
     search.count(i, |j| plate.labels[j] == plate.label) as f64 <= criterion.ratio * n
 }
 
-/// [`counted_edge`], counting only until the count passes `ratio · N`:
+/// `counted_edge` (the tests' reference), counting only until the count passes `ratio · N`:
 /// the same answer, and no more neighbours than that however dense the
 /// cloud.
 fn counted_edge_up_to_threshold(

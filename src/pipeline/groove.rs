@@ -706,7 +706,7 @@ fn station_share<'p>(points: impl IntoIterator<Item = &'p Across>) -> f64 {
 /// groove's steep faces crowd a slab's points into a narrow band across
 /// the seam, so ordering them across it as well saves little; building a
 /// cell index over the same points cost twice this
-/// ([`tests::on_surfaces_by_cells`], the reference this is checked
+/// (`tests::on_surfaces_by_cells`, the reference this is checked
 /// against).
 fn on_surfaces(mut points: Vec<Across>, radius: f64) -> Vec<Across> {
     // Single precision: the coordinates are millimetres from the seam's

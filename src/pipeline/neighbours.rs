@@ -181,7 +181,7 @@ impl<'a> NeighbourSearch<'a> {
         n
     }
 
-    /// [`NeighbourSearch::count`] when it is below `cap`, else `cap`: a
+    /// `count` (the tests' reference) when it is below `cap`, else `cap`: a
     /// criterion comparing the count with a threshold needs no more, and
     /// stops there.
     #[inline]

@@ -265,7 +265,7 @@ pub(crate) fn scatter_facing_and_count(
     )
 }
 
-/// [`scatter_facing_and_count`] with point `i`'s neighbours read through
+/// `scatter_facing_and_count` (the tests' reference) with point `i`'s neighbours read through
 /// `neighbours`, which must give them as `search` does, in its order (the
 /// normal's sample is the first of them).
 pub(crate) fn scatter_facing_and_count_of(

@@ -288,7 +288,7 @@ impl<'a> GridCount<'a> {
     }
 
     /// True when point `i` has at most `threshold` neighbours labelled
-    /// `label`: the count of [`NeighbourSearch::count`] over the same
+    /// `label`: the count of `NeighbourSearch::count` (the tests' reference) over the same
     /// window with the same predicate, stopped once it exceeds the
     /// threshold.
     fn is_edge(&self, i: usize, label: u32, threshold: f64) -> bool {

@@ -441,7 +441,10 @@ fn what_lies_beyond(
     // thickness off, a V-groove's other plate a groove's width). Read from
     // the clusters' own points, before the pass over the whole cloud.
     let stations = Stations::along(top, away, s.neighbour_radius_mm, points);
-    let gap_mm = || gap_between(&stations, flange, points);
+    // Read once, when first asked: here, without the table, or after the
+    // pass over the cloud when no drop is found.
+    let gap = std::cell::OnceCell::new();
+    let gap_mm = || *gap.get_or_init(|| gap_between(&stations, flange, points));
     let touches = |gap_mm: Option<f64>| gap_mm.is_some_and(|gap| gap <= s.neighbour_radius_mm + 2.0 * spacing_of(top));
     if !seen_whole && !touches(gap_mm()) {
         return None;

@@ -232,16 +232,8 @@ impl Footprint {
     fn of(points: &[Vec3], n: &Vec3, margin: f64) -> Footprint {
         // Any two directions across the normal span the plane.
         let axes = plane_axes(n).unwrap_or([Vec3::x(), Vec3::y()]);
-        let mut low = [f64::INFINITY; 2];
-        let mut high = [f64::NEG_INFINITY; 2];
-        for p in points {
-            for k in 0..2 {
-                let t = axes[k].dot(p);
-                low[k] = low[k].min(t - margin);
-                high[k] = high[k].max(t + margin);
-            }
-        }
-        Footprint { axes, low, high }
+        let spans = axes.map(|axis| extent(points.iter().map(|p| axis.dot(p))));
+        Footprint { axes, low: spans.map(|(lo, _)| lo - margin), high: spans.map(|(_, hi)| hi + margin) }
     }
 
     /// Whether `p`, seen along the flange's normal, lies over the rectangle.

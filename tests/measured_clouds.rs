@@ -8,7 +8,8 @@
 use weldseam::camera::CameraModel;
 use weldseam::config::Config;
 use weldseam::eval::{SceneOutcome, SeamError, run_suite};
-use weldseam::sim::suite::eval_suite;
+use weldseam::sim::SceneSpec;
+use weldseam::sim::suite::{eval_suite, fault_suite};
 use weldseam::sim::variants::Variant;
 
 fn plan_at_one_mm_voxels(names: &[&str]) -> Vec<SceneOutcome> {
@@ -28,7 +29,11 @@ fn assert_within(name: &str, err: &SeamError, ends_mm: f64) {
 }
 
 fn plan_as(variant: &str, names: &[&str]) -> Vec<SceneOutcome> {
-    let scenes: Vec<_> = eval_suite().into_iter().filter(|(n, _)| names.iter().any(|w| n.starts_with(w))).collect();
+    plan_from(eval_suite(), variant, names)
+}
+
+fn plan_from(suite: Vec<(String, SceneSpec)>, variant: &str, names: &[&str]) -> Vec<SceneOutcome> {
+    let scenes: Vec<_> = suite.into_iter().filter(|(n, _)| names.iter().any(|w| n.starts_with(w))).collect();
     assert_eq!(scenes.len(), names.len(), "every named scene is in the suite");
     let variant = Variant::parse(variant).unwrap();
     let config = Config::default();
@@ -105,4 +110,23 @@ fn a_lap_seen_from_its_upper_plate_s_side_ends_where_its_root_leaves_the_image()
         let (err, _) = o.result.as_ref().unwrap_or_else(|e| panic!("{} as {variant} refused: {e:?}", o.name));
         assert_within(&format!("{} as {variant}", o.name), err, 1.0);
     }
+}
+
+#[test]
+fn a_lap_step_is_read_at_the_seam_whatever_tilts_the_lower_plate() {
+    // fault-touching-part-lap-02's lower plate merges at 1 mm voxels with
+    // the part touching it, a millimetre lower, into one plane half a
+    // degree off. The plate step was read as the difference of the two
+    // planes' offsets, which are distances from the camera's centre: the
+    // root came out 2.8 mm too deep, a confident wrong seam.
+    let outcomes = plan_from(fault_suite(), "voxel:1", &["fault-touching-part-lap-02"]);
+    let o = &outcomes[0];
+    let (err, _) = o.result.as_ref().unwrap_or_else(|e| panic!("{} refused: {e:?}", o.name));
+    assert_within(&o.name, err, 1.0);
+    // In the raw frame too the touching part tilts the lower plate's
+    // plane: the offsets put lap-00's root 0.93 mm off.
+    let outcomes = plan_from(fault_suite(), "raw", &["fault-touching-part-lap-00"]);
+    let o = &outcomes[0];
+    let (err, _) = o.result.as_ref().unwrap_or_else(|e| panic!("{} refused: {e:?}", o.name));
+    assert!(err.max_mm < 0.5, "{}: max {:.2} mm", o.name, err.max_mm);
 }

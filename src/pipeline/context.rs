@@ -314,12 +314,12 @@ impl<'a> Context<'a> {
         e2: &SeamCurve,
         normal: &Vec3,
         groove_depth_mm: f64,
-        lap: impl FnOnce() -> SeamCurve,
+        lap: impl FnOnce() -> Result<SeamCurve, PlanError>,
     ) -> Result<SeamCurve, PlanError> {
         match self.joint()? {
             JointType::VButt => weld_equation::v_butt(e1, e2, groove_depth_mm, normal),
             JointType::IButt => weld_equation::i_butt(e1, e2),
-            JointType::Lap => Some(lap()),
+            JointType::Lap => return lap(),
             // A tee's roots are the fillet stage's, not two edges' weld.
             JointType::TFillet => {
                 return Err(PlanError::at(Stage::WeldEquation, "a tee's fillet roots are not planned from two edges"));

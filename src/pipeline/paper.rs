@@ -117,7 +117,7 @@ pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
     let normal = weld_equation::paper_normal(e1, e2)
         .ok_or_else(|| PlanError::at(Stage::WeldEquation, "the weld edges are collinear; no plate normal"))?;
     let depth = ctx.request.groove_depth_mm.unwrap_or(0.0);
-    let weld = ctx.weld(e1, e2, &normal, depth, || weld_equation::lap_paper(e1, e2))?;
+    let weld = ctx.weld(e1, e2, &normal, depth, || Ok(weld_equation::lap_paper(e1, e2)))?;
     let span = (weld.s_min, weld.s_max);
     ctx.trace.record(|t| t.weld = Some(TracedWeld { curve: weld.clone(), span, normal }));
     ctx.clock.lap(Stage::WeldEquation);

@@ -126,6 +126,9 @@ pub struct SeamFits<'a> {
     pub span: (f64, f64),
     pub point_spacing_mm: f64,
     pub depth_to_support_mm: Option<f64>,
+    /// Lap joints: the plate step at the seam
+    /// ([`super::weld_equation::lap_step`]).
+    pub lap_step_mm: Option<f64>,
     /// What lies between a butt joint's edges, when it was probed.
     pub groove: Option<&'a GrooveProfile>,
 }
@@ -141,7 +144,7 @@ pub fn measure(seam: &SeamFits) -> SeamQuality {
     let v_butt = seam.joint == JointType::VButt;
     let gap_mm = if butt { Spread::of(offsets.iter().map(|d| d.dot(&axes.a).abs())) } else { None };
     let misalignment_mm = if butt { offsets.iter().map(|d| d.dot(&axes.b).abs()).reduce(f64::max) } else { None };
-    let lap_step_mm = (!butt).then(|| seam.planes[1].offset - seam.planes[0].offset);
+    let lap_step_mm = seam.lap_step_mm.filter(|_| !butt);
     let cos = seam.planes[0].normal.dot(&seam.planes[1].normal).clamp(-1.0, 1.0);
 
     // One sigma at an end of each edge's fit, with the boundary's floor.
@@ -557,6 +560,7 @@ mod tests {
             span: (-50.0, 50.0),
             point_spacing_mm: 0.3,
             depth_to_support_mm: Some(10.0),
+            lap_step_mm: crate::pipeline::weld_equation::lap_step(&fits[0].curve, planes[1], &planes[0].normal, 0.0),
             groove: None,
         })
     }
@@ -577,7 +581,8 @@ mod tests {
 
     #[test]
     fn the_gap_and_the_misalignment_are_read_across_and_along_the_normal() {
-        let (flat, high) = (plane(0.0, 500.0), plane(0.0, 501.5));
+        // The first edge lies on the flat plate, the second on the high one.
+        let (flat, high) = (plane(0.0, 0.0), plane(0.0, 1.5));
         let fits = [edge(-1.0, 0.0, 0.05, 300), edge(1.5, 1.5, 0.05, 300)];
         let q = measured(JointType::IButt, &fits, [&flat, &high]);
         let gap = q.gap_mm.unwrap();

@@ -574,8 +574,14 @@ fn plan_plates(
     // plate step below the upper edge (Eq. 38), planned only where both
     // plates were seen and, for a lap, where the root is in view.
     let (e1, e2) = (&fits[0].curve, &fits[1].curve);
-    let step = plates[1].plane.offset - plates[0].plane.offset;
-    let weld = ctx.weld(e1, e2, &normal, groove_depth_mm, || weld_equation::lap_root(e1, step, &normal))?;
+    let middle = 0.5 * (e1.s_min.max(e2.s_min) + e1.s_max.min(e2.s_max));
+    let lap_step = weld_equation::lap_step(e1, &plates[1].plane, &normal, middle);
+    let weld = ctx.weld(e1, e2, &normal, groove_depth_mm, || {
+        let step = lap_step.ok_or_else(|| {
+            PlanError::at(Stage::WeldEquation, "the lower plate's plane runs along the plate normal: no lap step")
+        })?;
+        Ok(weld_equation::lap_root(e1, step, &normal))
+    })?;
     // A V-groove's midline between its edges as its two bevels place them,
     // not as far as the strips walked onto each bevel.
     let bevels_offset = profile.as_ref().and_then(|p| p.bevel_midline_offset());
@@ -722,6 +728,7 @@ fn plan_plates(
         span: (s0, s1),
         point_spacing_mm: spacing_at(&axes.origin),
         depth_to_support_mm: workpiece.depth_to_support_mm,
+        lap_step_mm: lap_step.filter(|_| joint == JointType::Lap),
         groove: profile.as_ref(),
     });
     tracing::debug!(?quality, "seam quality");

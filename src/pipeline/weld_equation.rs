@@ -18,6 +18,7 @@
 //!   normal.
 
 use crate::geometry::Vec3;
+use crate::geometry::fit::Plane;
 
 use super::groove::LineAlong;
 use super::refit::SeamCurve;
@@ -68,9 +69,31 @@ pub fn lap_paper(e1: &SeamCurve, e2: &SeamCurve) -> SeamCurve {
     if e1.at(s).z >= e2.at(s).z { e1.clone() } else { e2.clone() }
 }
 
+/// The lap's plate step at `s` along the upper plate's edge: how far the
+/// lower plate's plane lies beyond that edge along `n`, the plate normal
+/// pointing away from the camera. `None` where `n` runs along the lower
+/// plane.
+///
+/// Read at the seam, not as the difference of the two planes' offsets:
+/// an offset is a plane's distance from the camera's centre, so planes a
+/// fraction of a degree apart differ in offset by that angle times the
+/// camera's distance (0.5° at 700 mm: 6 mm) however close they run at
+/// the seam. Plates parallel to well within that give the same step
+/// either way.
+pub fn lap_step(upper_edge: &SeamCurve, lower: &Plane, n: &Vec3, s: f64) -> Option<f64> {
+    let along = lower.normal.dot(n);
+    (along.abs() > MIN_STEP_COSINE).then(|| -lower.signed_distance(&upper_edge.at(s)) / along)
+}
+
+/// The least cosine between the plate normal and the lower plate's normal
+/// for a lap step to be read along it: plates this far apart (84°) are no
+/// lap, and the plate-angle gate refuses them long before.
+const MIN_STEP_COSINE: f64 = 0.1;
+
 /// The lap root: the upper plate's edge moved down the plate step.
-/// `step_mm` is the distance between the two plates' top surfaces and `n`
-/// the plate normal pointing away from the camera.
+/// `step_mm` is the distance from the upper plate's edge to the lower
+/// plate's top surface ([`lap_step`]) and `n` the plate normal pointing
+/// away from the camera.
 pub fn lap_root(upper_edge: &SeamCurve, step_mm: f64, n: &Vec3) -> SeamCurve {
     upper_edge.shifted(&(n * step_mm))
 }
@@ -111,5 +134,28 @@ mod tests {
         assert_eq!(lap_paper(&upper, &lower), lower);
         let root = lap_root(&upper, 6.0, &Vec3::z());
         assert!((root.at(0.0) - Vec3::new(0.0, 0.0, 700.0)).norm() < 1e-12);
+    }
+
+    #[test]
+    fn the_lap_step_is_read_at_the_seam_not_from_the_planes_offsets() {
+        // The upper edge runs along x at z = 694, 100 mm off the optical
+        // axis; the lower plate's plane passes 6 mm beyond it at the seam,
+        // turned half a degree about the seam's line, as a plate fitted
+        // over a part touching it is.
+        let upper = edge(100.0, 694.0);
+        let turn = 0.5f64.to_radians();
+        let normal = Vec3::new(0.0, -turn.sin(), turn.cos());
+        let lower = Plane { normal, offset: normal.dot(&Vec3::new(0.0, 100.0, 700.0)) };
+        let step = lap_step(&upper, &lower, &Vec3::z(), 0.0).unwrap();
+        assert!((step - 6.0).abs() < 1e-9, "{step}");
+        // The offsets' difference is 0.9 mm off: each offset is measured
+        // from the camera's centre, not at the seam.
+        let upper_plane = Plane { normal: Vec3::z(), offset: 694.0 };
+        assert!((lower.offset - upper_plane.offset - step).abs() > 0.8);
+        // Along the plate normal, however the lower plate is turned.
+        let lifted = Plane { normal, offset: lower.offset + 1.0 };
+        let moved = lap_step(&upper, &lifted, &Vec3::z(), 10.0).unwrap();
+        assert!((moved - (6.0 + 1.0 / turn.cos())).abs() < 1e-9, "{moved}");
+        assert_eq!(lap_step(&upper, &Plane { normal: Vec3::x(), offset: 0.0 }, &Vec3::z(), 0.0), None);
     }
 }

@@ -927,6 +927,37 @@ pub fn rim_refined_extent(
     (start, end)
 }
 
+/// The plate's on-plane points in its rim (the rows [`rim_refined_extent`]
+/// follows and the band as wide again deeper in: half a spacing to two
+/// and a half inside the fitted `edge`, clear of whatever lies beyond
+/// it) within `near_mm` along the edge of either end of `(lo, hi)`, as
+/// `along` reads a point: where the plate's last rows run at each end of
+/// its edge, to tell whether the image's border cut them there.
+#[allow(clippy::too_many_arguments)]
+pub fn rim_points_at_ends(
+    cloud: &PointCloud,
+    plane: &Plane,
+    edge: &CoarseEdge,
+    params: &BoundaryParams,
+    spacing_mm: f64,
+    along: impl Fn(&Vec3) -> f64 + Sync,
+    (lo, hi): (f64, f64),
+    near_mm: f64,
+) -> Vec<Vec3> {
+    let [inner, outer] = RIM_ROWS_SPACINGS.map(|rows| -rows * spacing_mm);
+    let rim = (outer - RIM_BESIDE_SPACINGS * spacing_mm)..=inner;
+    gather_filter_map(cloud.points(), |_, p| {
+        if !p[0].is_finite() {
+            return None;
+        }
+        let v = vec3(p);
+        let at = along(&v);
+        let at_an_end = (at - lo).abs() <= near_mm || (at - hi).abs() <= near_mm;
+        let in_rim = || rim.contains(&(v - edge.point).dot(&edge.outward));
+        (at_an_end && plane.signed_distance(&v).abs() <= params.on_plane_mm && in_rim()).then_some(v)
+    })
+}
+
 /// Where a point read by [`rim_refined_extent`] lies across the edge. (Its
 /// default only fills the slots of a gathered vector before they are
 /// written.)

@@ -79,7 +79,7 @@ use crate::geometry::{Vec3, extent, vec3};
 use super::background::PlaneCluster;
 use super::boundary::JOINT_BREAK_SPACINGS;
 use super::refit::{SeamAxes, SeamCurve};
-use super::view_border::{SpanEnd, ViewBorder};
+use super::view_border::{BORDER_REACH_SPACINGS, SpanEnd, ViewBorder};
 use super::web_face::StandingFace;
 
 /// The fewest face points that make a face: a handful of returns on a web
@@ -114,11 +114,6 @@ const FLANGE_SAMPLES: usize = 20_000;
 
 /// The length of a station along the root, in point spacings.
 const STATION_SPACINGS: f64 = 4.0;
-
-/// Evidence reaches the image's border when a point of it lies within
-/// this many spacings inside it: a voxel's centroid lies up to half a
-/// voxel inside, and the voxels nearest the border a little more.
-const BORDER_REACH_SPACINGS: f64 = 1.5;
 
 /// The least angle, degrees, between a face and the camera's ray to it: a
 /// face turned further from the camera is not seen at all (or only as

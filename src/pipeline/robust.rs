@@ -34,6 +34,7 @@ use super::plane_points::PlanePoints;
 use super::ransac::EdgeLine;
 use super::refit::{self, SeamAxes};
 use super::trace::{TracedWeld, Tracer};
+use super::view_border;
 use super::{Plan, PlanError, SeamAssessment, SeamCoverage, Stage, Unplanned};
 use super::{
     background, clustering, groove, orientation, plane_points, quality, ransac, tee, web_face, weld_edges,
@@ -637,6 +638,26 @@ fn plan_plates(
         };
         let reached = [reach(0), reach(1)];
         tracing::debug!(samples = ?extents, borders = ?reached, "weld edge ends carried to the image border");
+        extents = reached;
+    }
+    if ctx.camera_grid().is_none()
+        && let Some(border) = ctx.view_border()
+    {
+        // Without a grid to carry each edge to the image's border, an edge
+        // the border crosses obliquely stops short of it, the strips' last
+        // one cut part way; where the plate's rim runs on to the border,
+        // so does the edge.
+        let spacing = spacing_at(&axes.origin);
+        let along = |p: &Vec3| axes.feature(p);
+        let near = view_border::END_EVIDENCE_SPACINGS * spacing;
+        let reach = |k: usize| {
+            let edge = fitted_edge(k);
+            let rim =
+                boundary::rim_points_at_ends(cloud, &plates[k].plane, &edge, &params, spacing, along, extents[k], near);
+            border.edge_extent_at_border(&fits[k].curve, extents[k], &rim, along, spacing)
+        };
+        let reached = [reach(0), reach(1)];
+        tracing::debug!(edges = ?extents, at_border = ?reached, "weld edge ends carried to the image's border");
         extents = reached;
     }
     let [(a0, a1), (b0, b1)] = extents;

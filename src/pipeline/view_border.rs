@@ -19,9 +19,12 @@
 //! seam itself when the border runs obliquely across it (a spacing off
 //! the seam, times the slant). Where every kind of evidence near an end
 //! reaches the border, the seam is seen up to the border and ends where
-//! it crosses it ([`ViewBorder::end_at_border`]). A lap's root, a plate
-//! thickness below the edges read, is clipped to the view the same way
-//! where the frame has no grid to project it onto
+//! it crosses it ([`ViewBorder::end_at_border`]). A butt or lap plate's
+//! weld edge, read in strips two spacings wide that a border crossing it
+//! obliquely cuts part way, runs on to the border where the plate's rim
+//! beside it does ([`ViewBorder::edge_extent_at_border`]). A lap's root,
+//! a plate thickness below the edges read, is clipped to the view the
+//! same way where the frame has no grid to project it onto
 //! ([`ViewBorder::outside_mm`], from `Context::clip_to_view`).
 //!
 //! A cloud that is not one camera's view (cropped, or merged from several)
@@ -33,6 +36,8 @@ use rayon::prelude::*;
 
 use crate::cloud::{Point, PointCloud, is_valid_point};
 use crate::geometry::Vec3;
+
+use super::refit::SeamCurve;
 
 /// The four planes bounding the view, each as its unit normal out of the
 /// view: a point `p` lies inside when `normal · p ≤ 0` for all four.
@@ -197,6 +202,61 @@ impl ViewBorder {
 /// spreads far along the line.
 pub const MIN_CROSSING_SIN: f64 = 0.17;
 
+/// Evidence reaches the image's border when a point of it lies within
+/// this many spacings inside it: a voxel's centroid lies up to half a
+/// voxel inside, and the voxels nearest the border a little more.
+pub const BORDER_REACH_SPACINGS: f64 = 1.5;
+
+/// An edge's evidence at its end: its rim's points within this many
+/// spacings of the end along the seam (two of the strips a boundary is
+/// read in); and the most the end moves to the border.
+pub const END_EVIDENCE_SPACINGS: f64 = 4.0;
+
+impl ViewBorder {
+    /// The extent `(lo, hi)` of a plate's weld `edge` (along the seam's
+    /// feature axis, as `along` reads a point), each end moved to where
+    /// the edge crosses the image's border when the plate's `rim` (its
+    /// points beside the edge) runs up to that border near the end: a point
+    /// of it within a reach of the plane the edge crosses
+    /// ([`Self::end_at_border`]).
+    ///
+    /// Without a pixel grid an edge's extent is read from strips two
+    /// spacings wide, and a border crossing the edge obliquely cuts the
+    /// last strip part way: its point stops short of where the edge
+    /// leaves the view, by up to a strip and more where the edge's samples
+    /// scatter too much for the rim's rows to be read. The rim itself
+    /// shows whether the plate runs on to the border; if it does, so does
+    /// its edge. An end moves at most [`END_EVIDENCE_SPACINGS`] spacings,
+    /// either way; an end the rim does not carry to the border (the
+    /// plate's own end, a shadow) stays.
+    pub fn edge_extent_at_border(
+        &self,
+        edge: &SeamCurve,
+        (lo, hi): (f64, f64),
+        rim: &[Vec3],
+        along: impl Fn(&Vec3) -> f64,
+        spacing_mm: f64,
+    ) -> (f64, f64) {
+        let reach = BORDER_REACH_SPACINGS * spacing_mm;
+        let near = END_EVIDENCE_SPACINGS * spacing_mm;
+        let moved = |end: SpanEnd, at: f64| {
+            let evidence: Vec<Vec3> = rim.iter().copied().filter(|p| (along(p) - at).abs() <= near).collect();
+            // The edge as a line at this end, `t` mm along it from `at`;
+            // the feature coordinate grows by `per_t` a millimetre.
+            let direction = edge.tangent(at);
+            let per_t = direction.dot(&edge.axes.e);
+            // An edge nearly across its feature axis has no ends along it.
+            if per_t <= MIN_CROSSING_SIN {
+                return at;
+            }
+            self.end_at_border(&edge.at(at), &direction, end, 0.0, &[&evidence], reach, near / per_t)
+                .map_or(at, |t| at + t * per_t)
+        };
+        let (moved_lo, moved_hi) = (moved(SpanEnd::Start, lo), moved(SpanEnd::End, hi));
+        if moved_hi > moved_lo { (moved_lo, moved_hi) } else { (lo, hi) }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -284,6 +344,37 @@ mod tests {
         let sets: [&[Vec3]; 2] = [&flange, &foot];
         let moved = border().end_at_border(&origin, &direction, SpanEnd::End, 66.5, &sets, 1.0, 4.0).unwrap();
         assert!((moved - crossing).abs() < 1e-9, "{moved} against {crossing}");
+    }
+
+    /// The edge of [`oblique_seam`] as a fitted curve, its feature axis
+    /// along the edge.
+    fn oblique_edge() -> SeamCurve {
+        let (origin, direction) = oblique_seam();
+        let axes =
+            crate::pipeline::refit::SeamAxes { origin, e: direction, a: Vec3::new(0.8, -0.6, 0.0), b: Vec3::z() };
+        SeamCurve { axes, coef_a: vec![0.0, 0.0], coef_b: vec![0.0, 0.0], s_min: -100.0, s_max: 60.0 }
+    }
+
+    #[test]
+    fn an_edge_read_short_of_an_oblique_border_runs_on_to_it_where_its_plate_does() {
+        let edge = oblique_edge();
+        let along = |p: &Vec3| edge.axes.feature(p);
+        // The edge leaves the view at 67.5 mm; its strips stopped at 64.
+        let crossing = (0.22 * 700.0 - 100.0) / 0.8;
+        let rim_point = |t: f64, inside: f64| edge.at(t) - edge.axes.a * inside;
+        // The plate's rim, a spacing inside the edge, runs to within 0.3
+        // mm of the border: the edge is seen up to it.
+        let to_border: Vec<Vec3> = (0..12).map(|k| rim_point(60.0 + 0.6 * k as f64, 1.0)).collect();
+        let to_border: Vec<Vec3> = to_border.into_iter().filter(|p| border().outside_mm(p) <= -0.3).collect();
+        let (lo, hi) = border().edge_extent_at_border(&edge, (-50.0, 64.0), &to_border, along, 1.0);
+        assert_eq!(lo, -50.0, "the start's rim is nowhere near a border");
+        assert!((hi - crossing).abs() < 1e-9, "{hi} against {crossing}");
+        // A plate that ends 3 mm before the border (its own end, a
+        // shadow) keeps the end its strips read.
+        let short: Vec<Vec3> = (0..8).map(|k| rim_point(58.0 + 0.6 * k as f64, 1.0)).collect();
+        assert_eq!(border().edge_extent_at_border(&edge, (-50.0, 62.5), &short, along, 1.0), (-50.0, 62.5));
+        // Nor does an end move further than the evidence's reach along it.
+        assert_eq!(border().edge_extent_at_border(&edge, (-50.0, 60.0), &to_border, along, 1.0), (-50.0, 60.0));
     }
 
     #[test]

@@ -6,6 +6,9 @@
 //! V-groove leaving the image at a grazing angle is planned to the border,
 //! and an I-butt whose edge a streak hides over the joint's last stretch is
 //! refused for stopping short of where both plates are still seen.
+//! Dropout bands wider than the suite's, over 30 to 80 % of a seam, are
+//! either fitted on the edge that is left or refused for the samples left
+//! beyond the line the rest fit.
 //! Each scene is planned as `weldseam eval --suite faults` plans it.
 
 use weldseam::camera::CameraModel;
@@ -13,13 +16,26 @@ use weldseam::config::Config;
 use weldseam::eval::{EvalRequest, JointAsk, SceneOutcome, Verdict, evaluate_variant};
 use weldseam::pipeline::Planner;
 use weldseam::sim::variants::Variant;
-use weldseam::sim::{fault_suite, simulate};
+use weldseam::sim::{Fault, fault_suite, simulate};
 
 fn planned(name: &str, joint: JointAsk) -> SceneOutcome {
     let (_, spec) = fault_suite().into_iter().find(|(n, _)| n == name).unwrap_or_else(|| panic!("no scene {name}"));
     let sim = simulate(&spec, &CameraModel::default());
     let request = EvalRequest { joint, ..EvalRequest::default() };
     evaluate_variant(&Planner::new(Config::default()), name, &spec, &sim, &Variant::default(), &request)
+}
+
+/// A seam-dropout scene of the fault suite with its band widened to
+/// `fraction` of the seam, starting `at` of the way along what is left.
+fn planned_with_band(name: &str, fraction: f64, at: f64) -> SceneOutcome {
+    let (_, mut spec) = fault_suite().into_iter().find(|(n, _)| n == name).unwrap_or_else(|| panic!("no scene {name}"));
+    let [y0, y1] = spec.seam_range();
+    let start = y0 + at * (1.0 - fraction) * (y1 - y0);
+    spec.faults = vec![Fault::SeamDropout { along_mm: [start, start + fraction * (y1 - y0)], margin_mm: 2.0 }];
+    let sim = simulate(&spec, &CameraModel::default());
+    let request = EvalRequest { joint: JointAsk::AsScene, ..EvalRequest::default() };
+    let name = format!("{name} with a dropout over {:.0} % of its seam", 100.0 * fraction);
+    evaluate_variant(&Planner::new(Config::default()), &name, &spec, &sim, &Variant::default(), &request)
 }
 
 fn refusal(outcome: &SceneOutcome) -> &str {
@@ -60,4 +76,75 @@ fn a_groove_leaving_the_image_at_a_grazing_angle_is_planned_to_the_border() {
 fn an_edge_lost_under_a_streak_while_both_plates_go_on_is_refused_not_cut_short() {
     let reason = refusal(&planned("fault-streaks-i-butt-00-d1000-t20", JointAsk::AsScene)).to_string();
     assert!(reason.contains("beyond the seam's") && reason.contains("a weld edge was lost there"), "{reason}");
+}
+
+#[test]
+fn a_lap_whose_edge_a_dropout_cuts_short_along_most_of_its_seam_is_refused_not_planned_2_mm_off() {
+    // The upper plate's edge 2 mm short along 70 to 80 % of the seam: its
+    // samples lie on the receded line mostly. Least squares planned two of
+    // these 2.0 and 2.7 mm off; a fit that trims the minority planned all
+    // three 2 mm off, along the receded line.
+    for (name, fraction, at) in [
+        ("fault-seam-dropout-lap-02-d1000-t10", 0.7, 0.0),
+        ("fault-seam-dropout-lap-01-d833-t20", 0.7, 0.5),
+        ("fault-seam-dropout-lap-00-d667-t30", 0.8, 0.0),
+    ] {
+        let outcome = planned_with_band(name, fraction, at);
+        let reason = refusal(&outcome);
+        assert!(reason.contains("lie beyond the line the rest fit"), "{}: {reason}", outcome.name);
+    }
+}
+
+#[test]
+fn a_dropout_over_a_third_of_a_seam_is_fitted_on_the_edge_left() {
+    // Least squares averaged the cut-short third in and the residual gate
+    // refused both.
+    for (name, at) in [("fault-seam-dropout-lap-00-d667-t30", 0.0), ("fault-seam-dropout-v-butt-01-d833-t0", 0.5)] {
+        let outcome = planned_with_band(name, 0.3, at);
+        assert_eq!(
+            outcome.verdict,
+            Verdict::WithinBar,
+            "{}: {:?}",
+            outcome.name,
+            outcome.result.as_ref().map(|(e, _)| e)
+        );
+    }
+}
+
+/// Every seam-dropout tuning scene with its band widened to 30 to 90 % of
+/// the seam, in the middle or from the start, planned from raw frames:
+/// no confident wrong seam but the two named. About a minute in release;
+/// run with `cargo test --release --test tests faults::dropout_bands --
+/// --ignored --nocapture`, which prints each outcome (docs/ACCURACY.md,
+/// "Dropout bands wider than the suite's").
+#[test]
+#[ignore = "72 scenes: run in release by hand"]
+fn dropout_bands_of_every_width_give_no_confident_wrong_seam_but_two_known() {
+    // Half the upper edge cut short from the start, and a band over 90 %
+    // of it: which line is the plate's edge is not decided by its samples.
+    let known = [("fault-seam-dropout-lap-01-d833-t20", 0.5, 0.0), ("fault-seam-dropout-lap-01-d833-t20", 0.9, 0.5)];
+    let scenes = [
+        "lap-00-d667-t30",
+        "lap-01-d833-t20",
+        "lap-02-d1000-t10",
+        "v-butt-01-d833-t0",
+        "i-butt-00-d1000-t20",
+        "i-butt-01-d500-t10",
+    ];
+    let mut wrong = Vec::new();
+    for scene in scenes {
+        let name = format!("fault-seam-dropout-{scene}");
+        for fraction in [0.3, 0.5, 0.6, 0.7, 0.8, 0.9] {
+            for at in [0.5, 0.0] {
+                let outcome = planned_with_band(&name, fraction, at);
+                println!("{} from {at}: {:?}", outcome.name, outcome.verdict);
+                if matches!(outcome.verdict, Verdict::ConfidentWrong { .. })
+                    && !known.contains(&(name.as_str(), fraction, at))
+                {
+                    wrong.push(outcome.name);
+                }
+            }
+        }
+    }
+    assert!(wrong.is_empty(), "confident wrong: {wrong:?}");
 }

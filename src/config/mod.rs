@@ -156,7 +156,8 @@ pub struct PipelineParams {
     /// Degree n of the least-squares polynomial (Eq. 17); 1 for straight seams.
     pub fit_degree: u32,
     /// Boundary samples further than this many sigmas from the fit are
-    /// dropped and the fit repeated.
+    /// dropped and the fit repeated (sigma: the median residual taken as a
+    /// standard deviation, so a run of cut-short samples cannot widen it).
     pub fit_trim_sigma: f64,
     /// Region of interest of every plan whose request names none:
     /// `[xmin, ymin, zmin, xmax, ymax, zmax]`, mm; empty for the whole cloud.

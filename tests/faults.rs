@@ -81,9 +81,9 @@ fn an_edge_lost_under_a_streak_while_both_plates_go_on_is_refused_not_cut_short(
 #[test]
 fn a_lap_whose_edge_a_dropout_cuts_short_along_most_of_its_seam_is_refused_not_planned_2_mm_off() {
     // The upper plate's edge 2 mm short along 70 to 80 % of the seam: its
-    // samples lie on the receded line mostly. Least squares planned two of
-    // these 2.0 and 2.7 mm off; a fit that trims the minority planned all
-    // three 2 mm off, along the receded line.
+    // samples lie on the receded line mostly. Least squares planned the
+    // first 2.7 mm off (its residual refused the others); a fit that trims
+    // the minority planned all three 2.0 to 2.7 mm off.
     for (name, fraction, at) in [
         ("fault-seam-dropout-lap-02-d1000-t10", 0.7, 0.0),
         ("fault-seam-dropout-lap-01-d833-t20", 0.7, 0.5),
@@ -113,7 +113,7 @@ fn a_dropout_over_a_third_of_a_seam_is_fitted_on_the_edge_left() {
 
 /// Every seam-dropout tuning scene with its band widened to 30 to 90 % of
 /// the seam, in the middle or from the start, planned from raw frames:
-/// no confident wrong seam but the two named. About a minute in release;
+/// no confident wrong seam but the two named. Under a minute in release;
 /// run with `cargo test --release --test tests faults::dropout_bands --
 /// --ignored --nocapture`, which prints each outcome (docs/ACCURACY.md,
 /// "Dropout bands wider than the suite's").

@@ -51,6 +51,11 @@ pub fn plane_axes(normal: &Vec3) -> Option<[Vec3; 2]> {
     Some([u, normal.cross(&u)])
 }
 
+/// The median absolute deviation of normally spread values over their
+/// standard deviation: a median residual divided by it is a sigma that a
+/// minority of outliers cannot widen.
+pub const MAD_PER_SIGMA: f64 = 0.674_489_750_196_081_7;
+
 /// The least and greatest of `values`, NaNs skipped (as `f64::min` and
 /// `f64::max` skip them); `(∞, −∞)`, a range that holds nothing, when
 /// there are none.

@@ -35,7 +35,7 @@ use crate::geometry::fit::Plane;
 use super::context::CameraGrid;
 use super::gather::gather_filter_map;
 use super::refit::SeamCurve;
-use crate::geometry::{Vec3, extent, vec3};
+use crate::geometry::{MAD_PER_SIGMA, Vec3, extent, vec3};
 
 /// One sample of a plate's boundary: a point on the plate's plane and its
 /// coordinate along the coarse edge.
@@ -627,9 +627,6 @@ const ON_PLANE_SIGMAS: f64 = 2.5;
 /// The fewest points of a band's inner third [`plane_scatter`] measures
 /// a sigma from.
 const MIN_SCATTER_POINTS: usize = 30;
-
-/// The median absolute deviation of normal noise over its sigma.
-const MAD_PER_SIGMA: f64 = 0.674_489_750_196_081_7;
 
 /// How far off a plate's plane, in point spacings (or on-plane
 /// tolerances, where larger), [`plane_scatter`] first reads its points:

@@ -16,14 +16,13 @@
 //! The paper fits every edge point. The robust method fits the points
 //! within a few deviations of their own fit ([`fit_trimmed`]), found from a
 //! start that fewer than half the samples cannot move (the least median of
-//! squares line),
-//! so a run of samples a dropout or a sliver of plate cuts short is left
-//! out rather than averaged in.
+//! squares line), so a run of samples a dropout or a sliver of plate cuts
+//! short is left out rather than averaged in.
 
 use nalgebra::{DMatrix, DVector};
 
-use crate::geometry::Vec3;
 use crate::geometry::fit::Moments;
+use crate::geometry::{MAD_PER_SIGMA, Vec3, extent};
 
 /// The axes a weld edge is fitted on: the feature axis `e` the
 /// polynomials run along and the observation axes `a` and `b` (Eq. 17),
@@ -197,7 +196,7 @@ pub fn fit(points: &[Vec3], axes: &SeamAxes, degree: usize) -> Option<CurveFit> 
 /// early can come back. Two things keep a run of outliers as long as a
 /// third of the edge from pulling the fit its way:
 /// - the scale is the median residual over all the points (as a standard
-///   deviation, [`MAD_TO_SIGMA`]), which the run cannot inflate as it does
+///   deviation, [`MAD_PER_SIGMA`]), which the run cannot inflate as it does
 ///   an RMS: a 40 mm dropout band 2 mm deep on a 120 mm edge leaves a
 ///   least-squares RMS near 1 mm, and 3 RMS reach every sample of it;
 /// - a straight edge starts from the line that fewer than half its samples
@@ -227,7 +226,7 @@ pub fn fit_trimmed(
     for _ in 0..TRIM_ROUNDS {
         let residuals: Vec<f64> = points.iter().map(|p| reference.residual(p)).collect();
         let Some(median_residual) = median(&mut residuals.clone()) else { break };
-        let limit_mm = (trim_sigma * MAD_TO_SIGMA * median_residual).max(floor_mm);
+        let limit_mm = (trim_sigma * median_residual / MAD_PER_SIGMA).max(floor_mm);
         let keep: Vec<bool> = residuals.iter().map(|&r| r <= limit_mm).collect();
         if kept_before.as_ref() == Some(&keep) {
             break;
@@ -272,10 +271,6 @@ const QUANTUM_SPACINGS: f64 = 1.0;
 /// fit does not trim honest samples.
 const MIN_TRIM_MM: f64 = 0.05;
 
-/// The median of the absolute deviations of normal residuals is 0.6745
-/// of their standard deviation.
-const MAD_TO_SIGMA: f64 = 1.4826;
-
 /// Samples the least-median line is drawn through, at most: lines through
 /// every pair of an evenly strided subset of them are tried.
 const LINE_CANDIDATE_SAMPLES: usize = 48;
@@ -296,7 +291,7 @@ const MIN_PAIR_BASE: f64 = 0.25;
 /// even a median of pairwise slopes, lean towards the run.
 fn least_median_line(points: &[Vec3], axes: &SeamAxes) -> Option<SeamCurve> {
     let coords: Vec<(f64, f64, f64)> = points.iter().map(|p| axes.coordinates(p)).collect();
-    let (s_min, s_max) = coords.iter().fold((f64::MAX, f64::MIN), |(l, h), c| (l.min(c.0), h.max(c.0)));
+    let (s_min, s_max) = extent(coords.iter().map(|c| c.0));
     if coords.len() < 3 || s_max - s_min <= 0.0 {
         return None;
     }

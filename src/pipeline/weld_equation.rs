@@ -75,11 +75,11 @@ pub fn lap_paper(e1: &SeamCurve, e2: &SeamCurve) -> SeamCurve {
 /// plane.
 ///
 /// Read at the seam, not as the difference of the two planes' offsets:
-/// an offset is a plane's distance from the camera's centre, so planes a
-/// fraction of a degree apart differ in offset by that angle times the
-/// camera's distance (0.5° at 700 mm: 6 mm) however close they run at
-/// the seam. Plates parallel to well within that give the same step
-/// either way.
+/// an offset is a plane's distance from the camera's centre, so two planes
+/// meeting along the seam at a fraction of a degree differ in offset by
+/// that angle times how far the seam lies from the camera's centre across
+/// it, in the plates' plane (0.5° at 300 mm: 2.6 mm). Plates parallel to
+/// well within that give the same step either way.
 pub fn lap_step(upper_edge: &SeamCurve, lower: &Plane, n: &Vec3, s: f64) -> Option<f64> {
     let along = lower.normal.dot(n);
     (along.abs() > MIN_STEP_COSINE).then(|| -lower.signed_distance(&upper_edge.at(s)) / along)

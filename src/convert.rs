@@ -108,6 +108,7 @@ pub mod to_proto {
 
     pub fn gate_code(gate: Gate) -> ErrorCode {
         match gate {
+            Gate::EdgeCutShort => ErrorCode::EdgeCutShort,
             Gate::EdgeFitResidual => ErrorCode::EdgeFitResidual,
             Gate::EdgeCoverage => ErrorCode::EdgeCoverage,
             Gate::JointCoverage => ErrorCode::JointCoverage,

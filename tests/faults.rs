@@ -8,13 +8,14 @@
 //! refused for stopping short of where both plates are still seen.
 //! Dropout bands wider than the suite's, over 30 to 80 % of a seam, are
 //! either fitted on the edge that is left or refused for the samples left
-//! beyond the line the rest fit.
+//! beyond the line the rest fit (the `edge_cut_short` gate).
 //! Each scene is planned as `weldseam eval --suite faults` plans it.
 
 use weldseam::camera::CameraModel;
 use weldseam::config::Config;
 use weldseam::eval::{EvalRequest, JointAsk, SceneOutcome, Verdict, evaluate_variant};
 use weldseam::pipeline::Planner;
+use weldseam::pipeline::quality::Gate;
 use weldseam::sim::variants::Variant;
 use weldseam::sim::{Fault, fault_suite, simulate};
 
@@ -28,6 +29,10 @@ fn planned(name: &str, joint: JointAsk) -> SceneOutcome {
 /// A seam-dropout scene of the fault suite with its band widened to
 /// `fraction` of the seam, starting `at` of the way along what is left.
 fn planned_with_band(name: &str, fraction: f64, at: f64) -> SceneOutcome {
+    planned_with_band_by(&Planner::new(Config::default()), name, fraction, at)
+}
+
+fn planned_with_band_by(planner: &Planner, name: &str, fraction: f64, at: f64) -> SceneOutcome {
     let (_, mut spec) = fault_suite().into_iter().find(|(n, _)| n == name).unwrap_or_else(|| panic!("no scene {name}"));
     let [y0, y1] = spec.seam_range();
     let start = y0 + at * (1.0 - fraction) * (y1 - y0);
@@ -35,7 +40,7 @@ fn planned_with_band(name: &str, fraction: f64, at: f64) -> SceneOutcome {
     let sim = simulate(&spec, &CameraModel::default());
     let request = EvalRequest { joint: JointAsk::AsScene, ..EvalRequest::default() };
     let name = format!("{name} with a dropout over {:.0} % of its seam", 100.0 * fraction);
-    evaluate_variant(&Planner::new(Config::default()), &name, &spec, &sim, &Variant::default(), &request)
+    evaluate_variant(planner, &name, &spec, &sim, &Variant::default(), &request)
 }
 
 fn refusal(outcome: &SceneOutcome) -> &str {
@@ -92,7 +97,23 @@ fn a_lap_whose_edge_a_dropout_cuts_short_along_most_of_its_seam_is_refused_not_p
         let outcome = planned_with_band(name, fraction, at);
         let reason = refusal(&outcome);
         assert!(reason.contains("lie beyond the line the rest fit"), "{}: {reason}", outcome.name);
+        let gate = outcome.result.as_ref().err().and_then(|e| e.gate);
+        assert_eq!(gate, Some(Gate::EdgeCutShort), "{}: {reason}", outcome.name);
     }
+}
+
+#[test]
+fn a_cut_short_edge_named_in_warn_only_is_planned_with_the_warning_on_its_seam() {
+    // The gate is a figure of the seam like the others: a cell that would
+    // rather have the seam and a warning can say so, and the warning
+    // carries the share and the limit.
+    let mut config = Config::default();
+    config.quality.warn_only = vec!["edge_cut_short".into()];
+    let outcome = planned_with_band_by(&Planner::new(config), "fault-seam-dropout-lap-02-d1000-t10", 0.7, 0.0);
+    let (_, plan) = outcome.result.as_ref().unwrap_or_else(|e| panic!("{}: {e}", outcome.name));
+    let warnings: Vec<_> = plan.seams.iter().flat_map(|s| &s.warnings).collect();
+    assert_eq!(warnings.iter().map(|w| w.gate).collect::<Vec<_>>(), vec![Gate::EdgeCutShort], "{warnings:?}");
+    assert!(warnings[0].value > warnings[0].limit && warnings[0].limit == 0.1, "{warnings:?}");
 }
 
 #[test]

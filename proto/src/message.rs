@@ -499,12 +499,17 @@ pub enum ErrorCode {
     /// 70: refused: the plates are a corner joint's that the request does
     /// not plan (an outside corner, or an inside one asked as a butt or lap).
     CornerJoint,
+    /// 71: refused: a weld edge's boundary samples lie beyond its fitted
+    /// line, towards the other plate, in a larger share than
+    /// `quality.max_edge_samples_beyond`: the edge was cut short along the
+    /// rest, and which line is the plate's edge is not clear.
+    EdgeCutShort,
     /// Any other number, from a newer peer.
     Other(u16),
 }
 
 impl ErrorCode {
-    pub const ALL: [ErrorCode; 32] = [
+    pub const ALL: [ErrorCode; 33] = [
         ErrorCode::BadMagic,
         ErrorCode::UnsupportedVersion,
         ErrorCode::UnknownMessage,
@@ -537,6 +542,7 @@ impl ErrorCode {
         ErrorCode::GrooveDepth,
         ErrorCode::JointUnknown,
         ErrorCode::CornerJoint,
+        ErrorCode::EdgeCutShort,
     ];
 
     pub fn code(self) -> u16 {
@@ -573,6 +579,7 @@ impl ErrorCode {
             ErrorCode::GrooveDepth => 68,
             ErrorCode::JointUnknown => 69,
             ErrorCode::CornerJoint => 70,
+            ErrorCode::EdgeCutShort => 71,
             ErrorCode::Other(n) => n,
         }
     }
@@ -612,6 +619,7 @@ impl ErrorCode {
             ErrorCode::GrooveDepth => "groove_depth",
             ErrorCode::JointUnknown => "joint_unknown",
             ErrorCode::CornerJoint => "corner_joint",
+            ErrorCode::EdgeCutShort => "edge_cut_short",
             ErrorCode::Other(_) => "other",
         }
     }

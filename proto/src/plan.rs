@@ -97,7 +97,7 @@ pub struct SeamQuality {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct GateWarning {
     /// The gate's name, as `quality.warn_only` and the error codes 60 to
-    /// 66 name it (e.g. `joint_coverage`).
+    /// 66, 68 and 71 name it (e.g. `joint_coverage`).
     pub gate: String,
     pub value: f64,
     pub limit: f64,

@@ -251,6 +251,12 @@ pub struct QualityParams {
     /// The largest RMS residual of a weld edge's fit, in point spacings at
     /// the seam (the boundary is sampled to about a third of one).
     pub max_edge_fit_rms_spacings: f64,
+    /// The largest fraction of a weld edge's boundary samples that may lie
+    /// beyond its fitted line towards the other plate (by more than the
+    /// fit's trimming limit). A plate's points stop at its edge: beyond the
+    /// line lies the edge itself where a dropout or a shadow cut the rest
+    /// of it short.
+    pub max_edge_samples_beyond: f64,
     /// The least fraction of the seam each weld edge must be seen along.
     pub min_edge_coverage: f64,
     /// The least fraction of the visible joint (where both plates are seen
@@ -292,6 +298,7 @@ impl Default for QualityParams {
     fn default() -> Self {
         QualityParams {
             max_edge_fit_rms_spacings: 2.0,
+            max_edge_samples_beyond: 0.1,
             min_edge_coverage: 0.5,
             min_joint_coverage: 0.8,
             max_joint_beyond_seam_mm: 2.0,
@@ -317,6 +324,7 @@ impl QualityParams {
     pub fn validate(&self) -> Result<(), ConfigError> {
         use crate::pipeline::quality::Gate;
         in_range("quality.max_edge_fit_rms_spacings", self.max_edge_fit_rms_spacings, 0.05, 100.0)?;
+        in_range("quality.max_edge_samples_beyond", self.max_edge_samples_beyond, 0.0, 1.0)?;
         in_range("quality.min_edge_coverage", self.min_edge_coverage, 0.0, 1.0)?;
         in_range("quality.min_joint_coverage", self.min_joint_coverage, 0.0, 1.0)?;
         in_range("quality.max_joint_beyond_seam_mm", self.max_joint_beyond_seam_mm, 0.0, 1000.0)?;

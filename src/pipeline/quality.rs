@@ -7,7 +7,9 @@
 //! pipeline already made:
 //!
 //! - each weld edge's least-squares residual (Eq. 17 to 25) and the
-//!   samples behind it;
+//!   samples behind it, and the share of them left beyond the fitted line
+//!   towards the other plate (a plate's points stop at its edge, so those
+//!   samples are the edge itself where the rest was cut short);
 //! - the distance between the two weld edges across the seam at stations
 //!   along it (the gap of an I-butt joint, the top of a V-groove), and
 //!   their height difference along the normal (the high-low misalignment
@@ -49,7 +51,7 @@ use crate::joint::JointType;
 use super::SeamCoverage;
 use super::fillet::Root;
 use super::groove::GrooveProfile;
-use super::refit::CurveFit;
+use super::refit::{Beyond, CurveFit};
 
 /// How many stations along the seam the gap and the misalignment are read
 /// at: enough to see a gap that opens towards one end, few enough to cost
@@ -193,6 +195,10 @@ pub fn measure_fillet(root: &Root, point_spacing_mm: f64, depth_to_support_mm: O
 /// them.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum Gate {
+    /// More of a weld edge's boundary samples than
+    /// `quality.max_edge_samples_beyond` lie beyond its fitted line towards
+    /// the other plate: the edge was cut short along most of its length.
+    EdgeCutShort,
     /// A weld edge's fit residual is above `quality.max_edge_fit_rms_spacings`.
     EdgeFitResidual,
     /// A weld edge was seen along less of the seam than `quality.min_edge_coverage`.
@@ -225,7 +231,8 @@ pub enum Gate {
 }
 
 impl Gate {
-    pub const ALL: [Gate; 11] = [
+    pub const ALL: [Gate; 12] = [
+        Gate::EdgeCutShort,
         Gate::EdgeFitResidual,
         Gate::EdgeCoverage,
         Gate::JointCoverage,
@@ -248,6 +255,7 @@ impl Gate {
     /// The gate's snake_case name, as config, logs and JSON write it.
     pub fn name(self) -> &'static str {
         match self {
+            Gate::EdgeCutShort => "edge_cut_short",
             Gate::EdgeFitResidual => "edge_fit_residual",
             Gate::EdgeCoverage => "edge_coverage",
             Gate::JointCoverage => "joint_coverage",
@@ -289,6 +297,10 @@ pub struct SeamEvidence<'a> {
     pub joint: JointType,
     pub quality: &'a SeamQuality,
     pub edge_fit_rms_mm: [f64; 2],
+    /// Each weld edge's boundary samples beyond its fitted line, towards
+    /// the other plate, by more than the fit's trimming limit (weld edges
+    /// only: a fillet root's fits are faces).
+    pub edge_beyond: Option<[Beyond; 2]>,
     /// The fraction of the seam each weld edge was seen along (robust
     /// method).
     pub edge_coverage: Option<[f64; 2]>,
@@ -355,6 +367,29 @@ pub fn check(seam: &SeamEvidence, limits: &QualityParams) -> Vec<GateFailure> {
     };
 
     let tee = seam.joint == JointType::TFillet;
+    if let Some(beyond) = seam.edge_beyond {
+        let edge = if beyond[0].share() >= beyond[1].share() { 0 } else { 1 };
+        let b = beyond[edge];
+        if b.share() > limits.max_edge_samples_beyond {
+            fail(
+                Gate::EdgeCutShort,
+                b.share(),
+                limits.max_edge_samples_beyond,
+                format!(
+                    "weld edge {}: {} of its {} boundary samples ({:.0} %, above {:.0} %) lie beyond the line the \
+                     rest fit, {:.1} mm on average towards the other plate: the edge may be cut short along the \
+                     rest (a dropout or a shadow over the joint), and which line is the plate's edge is not clear",
+                    edge + 1,
+                    b.count,
+                    b.of,
+                    100.0 * b.share(),
+                    100.0 * limits.max_edge_samples_beyond,
+                    b.mean_mm,
+                ),
+            );
+        }
+    }
+
     let (edge, rms) = if seam.edge_fit_rms_mm[0] >= seam.edge_fit_rms_mm[1] {
         (0, seam.edge_fit_rms_mm[0])
     } else {
@@ -570,6 +605,7 @@ mod tests {
             joint,
             quality: q,
             edge_fit_rms_mm: rms,
+            edge_beyond: None,
             edge_coverage: None,
             coverage: None,
             joint_beyond_ends_mm: None,
@@ -663,6 +699,25 @@ mod tests {
         assert!(failed[0].message.contains("28.0 mm beyond the seam's last end"), "{}", failed[0].message);
         let seam =
             SeamEvidence { joint_beyond_ends_mm: Some([1.0, 1.9]), ..evidence(JointType::IButt, &q, [0.05, 0.05]) };
+        assert!(check(&seam, &limits).is_empty());
+
+        // A lap's upper edge with 30 of its 200 samples 2 mm beyond the
+        // line the rest fit: cut short along the rest. 19 of 200 pass.
+        let beyond = |count| Beyond { count, of: 200, mean_mm: 2.04 };
+        let seam = SeamEvidence {
+            edge_beyond: Some([Beyond { count: 0, of: 180, mean_mm: 0.0 }, beyond(30)]),
+            ..evidence(JointType::Lap, &q, [0.05, 0.05])
+        };
+        let failed = check(&seam, &limits);
+        assert_eq!(failed.iter().map(|f| f.gate).collect::<Vec<_>>(), vec![Gate::EdgeCutShort]);
+        assert_eq!((failed[0].value, failed[0].limit), (0.15, 0.1));
+        assert!(
+            failed[0].message.starts_with("weld edge 2: 30 of its 200 boundary samples (15 %, above 10 %)")
+                && failed[0].message.contains("2.0 mm on average"),
+            "{}",
+            failed[0].message
+        );
+        let seam = SeamEvidence { edge_beyond: Some([beyond(19), beyond(0)]), ..seam };
         assert!(check(&seam, &limits).is_empty());
     }
 

@@ -245,8 +245,17 @@ pub fn fit_trimmed(
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Beyond {
     pub count: usize,
+    /// How many points were looked at.
+    pub of: usize,
     /// Their mean distance past the curve along `side`, mm (0 if none).
     pub mean_mm: f64,
+}
+
+impl Beyond {
+    /// The fraction of the points looked at that lie beyond (0 of none).
+    pub fn share(&self) -> f64 {
+        self.count as f64 / self.of.max(1) as f64
+    }
 }
 
 /// The `points` further than `limit_mm` past `curve` along the unit vector
@@ -257,7 +266,7 @@ pub fn beyond_curve(points: &[Vec3], curve: &SeamCurve, side: &Vec3, limit_mm: f
         .map(|p| (p - curve.at(curve.axes.feature(p))).dot(side))
         .filter(|&d| d > limit_mm)
         .fold((0, 0.0), |(n, sum), d| (n + 1, sum + d));
-    Beyond { count, mean_mm: if count == 0 { 0.0 } else { sum / count as f64 } }
+    Beyond { count, of: points.len(), mean_mm: if count == 0 { 0.0 } else { sum / count as f64 } }
 }
 
 /// Rounds of trimming at most; the kept set settles in two or three.
@@ -494,9 +503,12 @@ mod tests {
         }
         let outward = -Vec3::x();
         let beyond = beyond_curve(&points, &f.curve, &outward, 1.0);
-        assert_eq!(beyond.count, 10);
+        assert_eq!((beyond.count, beyond.of), (10, points.len()));
+        assert!((beyond.share() - 10.0 / points.len() as f64).abs() < 1e-12);
         assert!((beyond.mean_mm - 2.0).abs() < 0.2, "{beyond:?}");
-        assert_eq!(beyond_curve(&points, &f.curve, &Vec3::x(), 1.0), Beyond { count: 0, mean_mm: 0.0 });
+        let other_side = beyond_curve(&points, &f.curve, &Vec3::x(), 1.0);
+        assert_eq!(other_side, Beyond { count: 0, of: points.len(), mean_mm: 0.0 });
+        assert_eq!(beyond_curve(&[], &f.curve, &Vec3::x(), 1.0).share(), 0.0);
     }
 
     #[test]

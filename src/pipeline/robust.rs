@@ -56,15 +56,6 @@ const MIN_DIRECTION_NORM: f64 = 1e-9;
 /// apart, and the plane criterion leaves the odd hole.
 const CLUSTER_SPACINGS: f64 = 2.5;
 
-/// The largest share of a weld edge's boundary samples that may lie beyond
-/// its fitted line (towards the other plate, by more than three RMS of the
-/// fit or a point spacing). A plate's points stop at its edge, so beyond
-/// the line lies the edge itself where the rest was cut short. No edge of
-/// the suites' scenes comes near it (docs/ACCURACY.md, "Edges a dropout
-/// cuts short"); a dropout band over 90 % of a lap's seam leaves about
-/// 10 %.
-const MAX_SAMPLES_BEYOND_EDGE: f64 = 0.1;
-
 /// Plans one frame by the robust method.
 pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
     let config = ctx.config;
@@ -514,42 +505,26 @@ fn plan_plates(
     ctx.trace.record(|t| t.weld_edges = Some(fits.clone()));
     // A plate's points stop at its edge: a share of the samples beyond the
     // fitted line, towards the other plate, is the edge itself where a
-    // dropout or a shadow cut the rest of it short. The side is the one
-    // the other plate's centroid lies on, which a lap's nearly coincident
-    // edges would not tell.
+    // dropout or a shadow cut the rest of it short (the `edge_cut_short`
+    // gate reads it). The side is the one the other plate's centroid lies
+    // on, which a lap's nearly coincident edges would not tell. The limit
+    // is the trimming's, three RMS of the fit, or a spacing at least.
+    let limits_mm = fits.each_ref().map(|f| (cfg.fit_trim_sigma * f.rms_mm).max(seam_spacing));
     let beyond = [0, 1].map(|k| {
         let outward = axes.a * (centroids[1 - k] - centroids[k]).dot(&axes.a).signum();
-        let limit_mm = (cfg.fit_trim_sigma * fits[k].rms_mm).max(seam_spacing);
-        refit::beyond_curve(&samples[k], &fits[k].curve, &outward, limit_mm)
+        refit::beyond_curve(&samples[k], &fits[k].curve, &outward, limits_mm[k])
     });
-    let share = |k: usize| beyond[k].count as f64 / samples[k].len().max(1) as f64;
     for (k, f) in fits.iter().enumerate() {
         tracing::debug!(
             edge = k + 1,
             samples = samples[k].len(),
             dropped = f.points_dropped,
-            beyond = share(k),
+            beyond = beyond[k].share(),
             rms_mm = f.rms_mm,
             from_mm = f.curve.s_min,
             to_mm = f.curve.s_max,
             "weld edge refitted"
         );
-    }
-    if let Some(k) = (0..2).find(|&k| share(k) > MAX_SAMPLES_BEYOND_EDGE) {
-        return Err(PlanError::at(
-            Stage::Refit,
-            format!(
-                "weld edge {}: {} of its {} boundary samples ({:.0} %, above {:.0} %) lie beyond the line the \
-                 rest fit, {:.1} mm on average towards the other plate: the edge may be cut short along the rest \
-                 (a dropout or a shadow over the joint), and which line is the plate's edge is not clear",
-                k + 1,
-                beyond[k].count,
-                samples[k].len(),
-                100.0 * share(k),
-                100.0 * MAX_SAMPLES_BEYOND_EDGE,
-                beyond[k].mean_mm,
-            ),
-        ));
     }
     ctx.clock.lap(Stage::Refit);
 
@@ -797,6 +772,7 @@ fn plan_plates(
         joint,
         quality: &quality,
         edge_fit_rms_mm: fits.each_ref().map(|f| f.rms_mm),
+        edge_beyond: Some(beyond),
         edge_coverage: Some(edge_coverage),
         coverage: coverage.as_ref(),
         joint_beyond_ends_mm,

@@ -560,6 +560,8 @@ pub fn evaluate_variant(
     variant: &Variant,
     ask: &EvalRequest,
 ) -> SceneOutcome {
+    // The planner's log lines name the scene they are about.
+    let _scene = tracing::info_span!("scene", name).entered();
     let requested = ask.joint_for(spec);
     let mut request = PlanRequest::new(requested, ask.groove_depth_for(spec), sim.pose);
     if !variant.is_raw() {

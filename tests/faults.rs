@@ -6,9 +6,10 @@
 //! V-groove leaving the image at a grazing angle is planned to the border,
 //! and an I-butt whose edge a streak hides over the joint's last stretch is
 //! refused for stopping short of where both plates are still seen.
-//! Dropout bands wider than the suite's, over 30 to 80 % of a seam, are
-//! either fitted on the edge that is left or refused for the samples left
-//! beyond the line the rest fit (the `edge_cut_short` gate).
+//! Dropout bands wider than the suite's, over 30 to 90 % of a seam, are
+//! either fitted on the edge that is left or refused (the `edge_cut_short`
+//! gate) for the samples left beyond the line the rest fit, or for samples
+//! on two lines.
 //! Each scene is planned as `weldseam eval --suite faults` plans it.
 
 use weldseam::camera::CameraModel;
@@ -132,18 +133,31 @@ fn a_dropout_over_a_third_of_a_seam_is_fitted_on_the_edge_left() {
     }
 }
 
+#[test]
+fn a_lap_edge_on_two_lines_is_refused_whether_the_fit_runs_between_them_or_follows_one() {
+    // The upper plate's edge 2 mm short along the first half of the seam:
+    // the fit ran between the two runs, its residual under the gate's
+    // limit, and planned the seam 2 mm off. Along 90 % of it from 5 %: the
+    // fit followed the cut-short run, with the true edge's 5 % at each end
+    // beyond it, 9 % in all, just inside the share the gate allows.
+    for (fraction, at) in [(0.5, 0.0), (0.9, 0.5)] {
+        let outcome = planned_with_band("fault-seam-dropout-lap-01-d833-t20", fraction, at);
+        let reason = refusal(&outcome);
+        assert!(reason.contains("boundary samples lie on two lines"), "{}: {reason}", outcome.name);
+        let gate = outcome.result.as_ref().err().and_then(|e| e.gate);
+        assert_eq!(gate, Some(Gate::EdgeCutShort), "{}: {reason}", outcome.name);
+    }
+}
+
 /// Every seam-dropout tuning scene with its band widened to 30 to 90 % of
 /// the seam, in the middle or from the start, planned from raw frames:
-/// no confident wrong seam but the two named. Under a minute in release;
+/// no confident wrong seam. Under a minute in release;
 /// run with `cargo test --release --test tests faults::dropout_bands --
 /// --ignored --nocapture`, which prints each outcome (docs/ACCURACY.md,
 /// "Dropout bands wider than the suite's").
 #[test]
 #[ignore = "72 scenes: run in release by hand"]
-fn dropout_bands_of_every_width_give_no_confident_wrong_seam_but_two_known() {
-    // Half the upper edge cut short from the start, and a band over 90 %
-    // of it: which line is the plate's edge is not decided by its samples.
-    let known = [("fault-seam-dropout-lap-01-d833-t20", 0.5, 0.0), ("fault-seam-dropout-lap-01-d833-t20", 0.9, 0.5)];
+fn dropout_bands_of_every_width_give_no_confident_wrong_seam() {
     let scenes = [
         "lap-00-d667-t30",
         "lap-01-d833-t20",
@@ -152,6 +166,10 @@ fn dropout_bands_of_every_width_give_no_confident_wrong_seam_but_two_known() {
         "i-butt-00-d1000-t20",
         "i-butt-01-d500-t10",
     ];
+    let _ = tracing_subscriber::fmt()
+        .with_env_filter(tracing_subscriber::EnvFilter::from_default_env())
+        .with_test_writer()
+        .try_init();
     let mut wrong = Vec::new();
     for scene in scenes {
         let name = format!("fault-seam-dropout-{scene}");
@@ -159,9 +177,7 @@ fn dropout_bands_of_every_width_give_no_confident_wrong_seam_but_two_known() {
             for at in [0.5, 0.0] {
                 let outcome = planned_with_band(&name, fraction, at);
                 println!("{} from {at}: {:?}", outcome.name, outcome.verdict);
-                if matches!(outcome.verdict, Verdict::ConfidentWrong { .. })
-                    && !known.contains(&(name.as_str(), fraction, at))
-                {
+                if matches!(outcome.verdict, Verdict::ConfidentWrong { .. }) {
                     wrong.push(outcome.name);
                 }
             }

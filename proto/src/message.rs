@@ -501,8 +501,9 @@ pub enum ErrorCode {
     CornerJoint,
     /// 71: refused: a weld edge's boundary samples lie beyond its fitted
     /// line, towards the other plate, in a larger share than
-    /// `quality.max_edge_samples_beyond`: the edge was cut short along the
-    /// rest, and which line is the plate's edge is not clear.
+    /// `quality.max_edge_samples_beyond`, or on two lines further apart
+    /// than `quality.max_edge_step_spacings`: the edge was cut short along
+    /// part of it, and which line is the plate's edge is not clear.
     EdgeCutShort,
     /// Any other number, from a newer peer.
     Other(u16),

@@ -257,6 +257,12 @@ pub struct QualityParams {
     /// line lies the edge itself where a dropout or a shadow cut the rest
     /// of it short.
     pub max_edge_samples_beyond: f64,
+    /// The largest step between two runs of a weld edge's samples, each
+    /// along a tenth of the edge at least, in point spacings at the seam:
+    /// a plate's edge is one line, and two are an edge cut short along one
+    /// of them. Read on the edges that place the weld: both of a butt
+    /// joint, a lap's upper one.
+    pub max_edge_step_spacings: f64,
     /// The least fraction of the seam each weld edge must be seen along.
     pub min_edge_coverage: f64,
     /// The least fraction of the visible joint (where both plates are seen
@@ -299,6 +305,7 @@ impl Default for QualityParams {
         QualityParams {
             max_edge_fit_rms_spacings: 2.0,
             max_edge_samples_beyond: 0.1,
+            max_edge_step_spacings: 2.0,
             min_edge_coverage: 0.5,
             min_joint_coverage: 0.8,
             max_joint_beyond_seam_mm: 2.0,
@@ -325,6 +332,7 @@ impl QualityParams {
         use crate::pipeline::quality::Gate;
         in_range("quality.max_edge_fit_rms_spacings", self.max_edge_fit_rms_spacings, 0.05, 100.0)?;
         in_range("quality.max_edge_samples_beyond", self.max_edge_samples_beyond, 0.0, 1.0)?;
+        in_range("quality.max_edge_step_spacings", self.max_edge_step_spacings, 0.5, 100.0)?;
         in_range("quality.min_edge_coverage", self.min_edge_coverage, 0.0, 1.0)?;
         in_range("quality.min_joint_coverage", self.min_joint_coverage, 0.0, 1.0)?;
         in_range("quality.max_joint_beyond_seam_mm", self.max_joint_beyond_seam_mm, 0.0, 1000.0)?;

@@ -7,9 +7,11 @@
 //! pipeline already made:
 //!
 //! - each weld edge's least-squares residual (Eq. 17 to 25) and the
-//!   samples behind it, and the share of them left beyond the fitted line
+//!   samples behind it, the share of them left beyond the fitted line
 //!   towards the other plate (a plate's points stop at its edge, so those
-//!   samples are the edge itself where the rest was cut short);
+//!   samples are the edge itself where the rest was cut short), and the
+//!   largest step between two runs of them along the edge (a plate's edge
+//!   is one line: on two, one run was cut short);
 //! - the distance between the two weld edges across the seam at stations
 //!   along it (the gap of an I-butt joint, the top of a V-groove), and
 //!   their height difference along the normal (the high-low misalignment
@@ -51,7 +53,7 @@ use crate::joint::JointType;
 use super::SeamCoverage;
 use super::fillet::Root;
 use super::groove::GrooveProfile;
-use super::refit::{Beyond, CurveFit};
+use super::refit::{Beyond, CurveFit, Step};
 
 /// How many stations along the seam the gap and the misalignment are read
 /// at: enough to see a gap that opens towards one end, few enough to cost
@@ -197,7 +199,9 @@ pub fn measure_fillet(root: &Root, point_spacing_mm: f64, depth_to_support_mm: O
 pub enum Gate {
     /// More of a weld edge's boundary samples than
     /// `quality.max_edge_samples_beyond` lie beyond its fitted line towards
-    /// the other plate: the edge was cut short along most of its length.
+    /// the other plate, or its samples run on two lines further apart than
+    /// `quality.max_edge_step_spacings`: the edge was cut short along
+    /// much of its length.
     EdgeCutShort,
     /// A weld edge's fit residual is above `quality.max_edge_fit_rms_spacings`.
     EdgeFitResidual,
@@ -301,6 +305,10 @@ pub struct SeamEvidence<'a> {
     /// the other plate, by more than the fit's trimming limit (weld edges
     /// only: a fillet root's fits are faces).
     pub edge_beyond: Option<[Beyond; 2]>,
+    /// Each weld edge's largest step between two runs of its samples
+    /// ([`super::refit::largest_step`]), where it has samples enough and
+    /// the edge places the weld (both of a butt joint, a lap's upper one).
+    pub edge_steps: Option<[Option<Step>; 2]>,
     /// The fraction of the seam each weld edge was seen along (robust
     /// method).
     pub edge_coverage: Option<[f64; 2]>,
@@ -358,6 +366,57 @@ impl FittedEdges {
     }
 }
 
+/// The `edge_cut_short` gate: the share of an edge's samples beyond its
+/// line first (the edge's true line where most of it was cut short), then
+/// a step between two runs of them (a fit between the two lines, or
+/// following one with the other's run just inside that share).
+fn cut_short(seam: &SeamEvidence, limits: &QualityParams) -> Option<GateFailure> {
+    let unclear = "(a dropout or a shadow over the joint), and which line is the plate's edge is not clear";
+    if let Some(beyond) = seam.edge_beyond {
+        let edge = if beyond[0].share() >= beyond[1].share() { 0 } else { 1 };
+        let b = beyond[edge];
+        if b.share() > limits.max_edge_samples_beyond {
+            return Some(GateFailure {
+                gate: Gate::EdgeCutShort,
+                value: b.share(),
+                limit: limits.max_edge_samples_beyond,
+                message: format!(
+                    "weld edge {}: {} of its {} boundary samples ({:.0} %, above {:.0} %) lie beyond the line the \
+                     rest fit, {:.1} mm on average towards the other plate: the edge may be cut short along the \
+                     rest {unclear}",
+                    edge + 1,
+                    b.count,
+                    b.of,
+                    100.0 * b.share(),
+                    100.0 * limits.max_edge_samples_beyond,
+                    b.mean_mm,
+                ),
+            });
+        }
+    }
+    let spacing = seam.quality.point_spacing_mm;
+    let steps = seam.edge_steps?;
+    let size = |k: usize| steps[k].map_or(0.0, |s| s.size_mm.abs());
+    let edge = if size(0) >= size(1) { 0 } else { 1 };
+    let step = steps[edge]?;
+    let spacings = step.size_mm.abs() / spacing;
+    (spacings > limits.max_edge_step_spacings).then(|| GateFailure {
+        gate: Gate::EdgeCutShort,
+        value: spacings,
+        limit: limits.max_edge_step_spacings,
+        message: format!(
+            "weld edge {}'s boundary samples lie on two lines {:.2} mm apart ({spacings:.1} point spacings of \
+             {spacing:.2} mm, above {:.1}), {:.0} % of them on the shorter, split {:+.0} mm from the middle of the edge: the edge \
+             may be cut short along one of them {unclear}",
+            edge + 1,
+            step.size_mm.abs(),
+            limits.max_edge_step_spacings,
+            100.0 * step.shorter_share,
+            step.at_mm,
+        ),
+    })
+}
+
 /// Every gate `seam` fails, in [`Gate::ALL`]'s order.
 pub fn check(seam: &SeamEvidence, limits: &QualityParams) -> Vec<GateFailure> {
     let q = seam.quality;
@@ -367,27 +426,8 @@ pub fn check(seam: &SeamEvidence, limits: &QualityParams) -> Vec<GateFailure> {
     };
 
     let tee = seam.joint == JointType::TFillet;
-    if let Some(beyond) = seam.edge_beyond {
-        let edge = if beyond[0].share() >= beyond[1].share() { 0 } else { 1 };
-        let b = beyond[edge];
-        if b.share() > limits.max_edge_samples_beyond {
-            fail(
-                Gate::EdgeCutShort,
-                b.share(),
-                limits.max_edge_samples_beyond,
-                format!(
-                    "weld edge {}: {} of its {} boundary samples ({:.0} %, above {:.0} %) lie beyond the line the \
-                     rest fit, {:.1} mm on average towards the other plate: the edge may be cut short along the \
-                     rest (a dropout or a shadow over the joint), and which line is the plate's edge is not clear",
-                    edge + 1,
-                    b.count,
-                    b.of,
-                    100.0 * b.share(),
-                    100.0 * limits.max_edge_samples_beyond,
-                    b.mean_mm,
-                ),
-            );
-        }
+    if let Some(f) = cut_short(seam, limits) {
+        fail(f.gate, f.value, f.limit, f.message);
     }
 
     let (edge, rms) = if seam.edge_fit_rms_mm[0] >= seam.edge_fit_rms_mm[1] {
@@ -606,6 +646,7 @@ mod tests {
             quality: q,
             edge_fit_rms_mm: rms,
             edge_beyond: None,
+            edge_steps: None,
             edge_coverage: None,
             coverage: None,
             joint_beyond_ends_mm: None,
@@ -718,6 +759,23 @@ mod tests {
             failed[0].message
         );
         let seam = SeamEvidence { edge_beyond: Some([beyond(19), beyond(0)]), ..seam };
+        assert!(check(&seam, &limits).is_empty());
+
+        // Its samples on two lines 1.2 mm apart (4 spacings of 0.3 mm),
+        // split half and half: the fit runs between them. 0.5 mm apart
+        // (1.7 spacings) passes.
+        let step = |size_mm| Some(Step { size_mm, at_mm: -12.0, shorter_share: 0.48 });
+        let seam = SeamEvidence { edge_steps: Some([None, step(-1.2)]), ..seam };
+        let failed = check(&seam, &limits);
+        assert_eq!(failed.iter().map(|f| f.gate).collect::<Vec<_>>(), vec![Gate::EdgeCutShort]);
+        assert!((failed[0].value - 4.0).abs() < 1e-9 && failed[0].limit == 2.0, "{failed:?}");
+        assert!(
+            failed[0].message.starts_with("weld edge 2's boundary samples lie on two lines 1.20 mm apart")
+                && failed[0].message.contains("48 % of them on the shorter, split -12 mm from the middle of the edge"),
+            "{}",
+            failed[0].message
+        );
+        let seam = SeamEvidence { edge_steps: Some([step(0.5), step(-0.3)]), ..seam };
         assert!(check(&seam, &limits).is_empty());
     }
 

@@ -269,6 +269,86 @@ pub fn beyond_curve(points: &[Vec3], curve: &SeamCurve, side: &Vec3, limit_mm: f
     Beyond { count, of: points.len(), mean_mm: if count == 0 { 0.0 } else { sum / count as f64 } }
 }
 
+/// Where a fitted edge's samples step from one line to another beside it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Step {
+    /// How far the samples after the split lie from those before it,
+    /// along `side`, mm (signed).
+    pub size_mm: f64,
+    /// Where along the feature axis, mm.
+    pub at_mm: f64,
+    /// The share of the samples on the split's shorter side.
+    pub shorter_share: f64,
+}
+
+/// The largest step in the residuals along the unit vector `side` of the
+/// `points` from `inside_mm` before `curve` to `outside_mm` past it, with
+/// at least `min_share` of them on either side of the step.
+///
+/// Each split along the feature axis is judged by the least squares fit
+/// of a line plus a step to the residuals. A line alone would tilt to run
+/// between two offset halves and leave a quarter of the offset in the
+/// difference of their mean residuals; the step's coefficient is the
+/// offset itself. Running sums make every split cost the same: sorting
+/// the samples is the cost, O(n log n).
+pub fn largest_step(
+    points: &[Vec3],
+    curve: &SeamCurve,
+    side: &Vec3,
+    [inside_mm, outside_mm]: [f64; 2],
+    min_share: f64,
+) -> Option<Step> {
+    let mut samples: Vec<(f64, f64)> = points
+        .iter()
+        .map(|p| {
+            let s = curve.axes.feature(p);
+            (s, (p - curve.at(s)).dot(side))
+        })
+        .filter(|&(_, r)| (-inside_mm..=outside_mm).contains(&r))
+        .collect();
+    samples.sort_by(|x, y| x.0.total_cmp(&y.0));
+    let n = samples.len();
+    let least = ((min_share * n as f64).ceil() as usize).max(2);
+    if n < 2 * least {
+        return None;
+    }
+    // Centred and scaled along the feature, for the 3x3 solve.
+    let (s_lo, s_hi) = (samples[0].0, samples[n - 1].0);
+    let half = 0.5 * (s_hi - s_lo).max(f64::EPSILON);
+    let x = |s: f64| (s - 0.5 * (s_lo + s_hi)) / half;
+    let (sum_x, sum_xx, sum_r, sum_xr) = samples.iter().fold((0.0, 0.0, 0.0, 0.0), |(a, b, c, d), &(s, r)| {
+        let x = x(s);
+        (a + x, b + x * x, c + r, d + x * r)
+    });
+    // Sums over the samples from the split on, for splits from the last
+    // back: the step's column is 1 there and 0 before.
+    let (mut after, mut after_x, mut after_r) = (0usize, 0.0, 0.0);
+    let mut best: Option<Step> = None;
+    for k in (least..=n - least).rev() {
+        while after < n - k {
+            let (s, r) = samples[n - 1 - after];
+            after += 1;
+            after_x += x(s);
+            after_r += r;
+        }
+        let after_n = after as f64;
+        let normal = nalgebra::Matrix3::new(
+            n as f64, sum_x, after_n, //
+            sum_x, sum_xx, after_x, //
+            after_n, after_x, after_n,
+        );
+        let Some(coefficients) = normal.lu().solve(&nalgebra::Vector3::new(sum_r, sum_xr, after_r)) else {
+            continue;
+        };
+        let size_mm = coefficients[2];
+        if best.is_none_or(|b| size_mm.abs() > b.size_mm.abs()) {
+            let at_mm = 0.5 * (samples[k - 1].0 + samples[k].0);
+            best = Some(Step { size_mm, at_mm, shorter_share: k.min(n - k) as f64 / n as f64 });
+        }
+    }
+    best
+}
+
 /// Rounds of trimming at most; the kept set settles in two or three.
 const TRIM_ROUNDS: usize = 6;
 
@@ -509,6 +589,25 @@ mod tests {
         let other_side = beyond_curve(&points, &f.curve, &Vec3::x(), 1.0);
         assert_eq!(other_side, Beyond { count: 0, of: points.len(), mean_mm: 0.0 });
         assert_eq!(beyond_curve(&[], &f.curve, &Vec3::x(), 1.0).share(), 0.0);
+    }
+
+    #[test]
+    fn a_step_between_two_runs_of_an_edge_is_measured_whatever_the_fit_between_them() {
+        // An edge whose first 54 of 121 samples are cut 2 mm short, fitted
+        // by least squares (which runs tilted between the two runs): the
+        // step is 2 mm, where the cut ends.
+        let (points, axes) = edge_with_a_run_cut_short(-60.0, 54.0, 2.0);
+        let f = fit(&points, &axes, 1).unwrap();
+        let step = largest_step(&points, &f.curve, &Vec3::x(), [10.0, 10.0], 0.2).unwrap();
+        assert!((step.size_mm - 2.0).abs() < 0.05, "{step:?}");
+        assert!((step.at_mm + 6.5).abs() < 1e-6 && (step.shorter_share - 54.0 / 121.0).abs() < 1e-12, "{step:?}");
+        // Samples outside the range given are not looked at (the cut-short
+        // run, 2 mm inside), and a straight edge has no step to speak of.
+        let (straight, axes) = edge_with_a_run_cut_short(0.0, 0.0, 0.0);
+        let f = fit(&straight, &axes, 1).unwrap();
+        assert!(largest_step(&straight, &f.curve, &Vec3::x(), [10.0, 10.0], 0.2).unwrap().size_mm.abs() < 0.05);
+        assert!(largest_step(&points, &f.curve, &Vec3::x(), [1.0, 10.0], 0.2).unwrap().size_mm.abs() < 0.05);
+        assert_eq!(largest_step(&straight[..3], &f.curve, &Vec3::x(), [10.0, 10.0], 0.2), None);
     }
 
     #[test]

@@ -56,6 +56,11 @@ const MIN_DIRECTION_NORM: f64 = 1e-9;
 /// apart, and the plane criterion leaves the odd hole.
 const CLUSTER_SPACINGS: f64 = 2.5;
 
+/// The shortest run of a weld edge's samples, as a share of them, that a
+/// step between two lines is read across: shorter runs are a tack weld's
+/// or a spatter's, and the share of samples beyond the line judges them.
+const MIN_STEP_RUN_SHARE: f64 = 0.1;
+
 /// Plans one frame by the robust method.
 pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
     let config = ctx.config;
@@ -510,9 +515,21 @@ fn plan_plates(
     // on, which a lap's nearly coincident edges would not tell. The limit
     // is the trimming's, three RMS of the fit, or a spacing at least.
     let limits_mm = fits.each_ref().map(|f| (cfg.fit_trim_sigma * f.rms_mm).max(seam_spacing));
-    let beyond = [0, 1].map(|k| {
-        let outward = axes.a * (centroids[1 - k] - centroids[k]).dot(&axes.a).signum();
-        refit::beyond_curve(&samples[k], &fits[k].curve, &outward, limits_mm[k])
+    let outward = [0, 1].map(|k| axes.a * (centroids[1 - k] - centroids[k]).dot(&axes.a).signum());
+    let beyond = [0, 1].map(|k| refit::beyond_curve(&samples[k], &fits[k].curve, &outward[k], limits_mm[k]));
+    // Where the samples run on two lines, each along a tenth of the edge
+    // at least, the fit may run between them (a band over half the seam)
+    // or follow one with the other's tenth just inside the share above.
+    // Samples trimmed inside the line are a receded run left out, not
+    // one of the two. Read on the edges that place the weld: a lap's root
+    // is under the upper plate's edge (Eq. 38), and of the lower plate only
+    // its plane counts.
+    let places_weld = |k: usize| layout == Layout::Butt || k == 0;
+    let steps = [0, 1].map(|k| {
+        let range = [limits_mm[k], f64::INFINITY];
+        places_weld(k)
+            .then(|| refit::largest_step(&samples[k], &fits[k].curve, &outward[k], range, MIN_STEP_RUN_SHARE))
+            .flatten()
     });
     for (k, f) in fits.iter().enumerate() {
         tracing::debug!(
@@ -520,6 +537,8 @@ fn plan_plates(
             samples = samples[k].len(),
             dropped = f.points_dropped,
             beyond = beyond[k].share(),
+            step_mm = steps[k].map(|s| s.size_mm),
+            step_share = steps[k].map(|s| s.shorter_share),
             rms_mm = f.rms_mm,
             from_mm = f.curve.s_min,
             to_mm = f.curve.s_max,
@@ -773,6 +792,7 @@ fn plan_plates(
         quality: &quality,
         edge_fit_rms_mm: fits.each_ref().map(|f| f.rms_mm),
         edge_beyond: Some(beyond),
+        edge_steps: Some(steps),
         edge_coverage: Some(edge_coverage),
         coverage: coverage.as_ref(),
         joint_beyond_ends_mm,

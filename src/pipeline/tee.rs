@@ -134,6 +134,7 @@ pub(super) fn plan(
             quality: &quality,
             edge_fit_rms_mm: [root.face_rms_mm, root.flange_rms_mm],
             edge_beyond: None,
+            edge_steps: None,
             edge_coverage: Some(root.coverage),
             coverage: Some(&coverage),
             // The root's ends are where its evidence ends: nothing is seen

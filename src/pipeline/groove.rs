@@ -42,7 +42,7 @@
 use rayon::prelude::*;
 
 use crate::cloud::{Point, PointCloud, is_valid_point};
-use crate::geometry::{Vec3, extent, vec3};
+use crate::geometry::{MAD_PER_SIGMA, Vec3, extent, vec3};
 use crate::joint::JointType;
 
 use super::context::CameraGrid;
@@ -810,12 +810,13 @@ fn fit_face(
     let mut residuals: Vec<f64> = Vec::with_capacity(above.len());
     for _ in 0..2 {
         // The residuals' spread by their median, which the outliers do not
-        // move (1.4826 MAD is one sigma of a normal spread).
+        // move (the median over MAD_PER_SIGMA is one sigma of a normal
+        // spread).
         residuals.clear();
         residuals.extend(above.iter().map(|p| (p.t.abs() - line.at(p.h)).abs()));
         let middle = residuals.len() / 2;
         let mad = *residuals.select_nth_unstable_by(middle, f64::total_cmp).1;
-        let band = (TRIM_SIGMA * 1.4826 * mad).max(MIN_BAND_SPACINGS * spacing);
+        let band = (TRIM_SIGMA * mad / MAD_PER_SIGMA).max(MIN_BAND_SPACINGS * spacing);
         kept.clear();
         kept.extend(above.iter().filter(|p| (p.t.abs() - line.at(p.h)).abs() <= band).copied());
         line = fit_line(kept.iter().map(|p| (p.h, p.t.abs())))?;

@@ -366,6 +366,12 @@ impl FittedEdges {
     }
 }
 
+/// Which of two edges' figures is the larger (the first on a tie): the
+/// one a gate names.
+fn larger(values: [f64; 2]) -> usize {
+    if values[0] >= values[1] { 0 } else { 1 }
+}
+
 /// The `edge_cut_short` gate: the share of an edge's samples beyond its
 /// line first (the edge's true line where most of it was cut short), then
 /// a step between two runs of them (a fit between the two lines, or
@@ -373,7 +379,7 @@ impl FittedEdges {
 fn cut_short(seam: &SeamEvidence, limits: &QualityParams) -> Option<GateFailure> {
     let unclear = "(a dropout or a shadow over the joint), and which line is the plate's edge is not clear";
     if let Some(beyond) = seam.edge_beyond {
-        let edge = if beyond[0].share() >= beyond[1].share() { 0 } else { 1 };
+        let edge = larger(beyond.map(|b| b.share()));
         let b = beyond[edge];
         if b.share() > limits.max_edge_samples_beyond {
             return Some(GateFailure {
@@ -396,8 +402,7 @@ fn cut_short(seam: &SeamEvidence, limits: &QualityParams) -> Option<GateFailure>
     }
     let spacing = seam.quality.point_spacing_mm;
     let steps = seam.edge_steps?;
-    let size = |k: usize| steps[k].map_or(0.0, |s| s.size_mm.abs());
-    let edge = if size(0) >= size(1) { 0 } else { 1 };
+    let edge = larger(steps.map(|s| s.map_or(0.0, |s| s.size_mm.abs())));
     let step = steps[edge]?;
     let spacings = step.size_mm.abs() / spacing;
     (spacings > limits.max_edge_step_spacings).then(|| GateFailure {
@@ -406,8 +411,8 @@ fn cut_short(seam: &SeamEvidence, limits: &QualityParams) -> Option<GateFailure>
         limit: limits.max_edge_step_spacings,
         message: format!(
             "weld edge {}'s boundary samples lie on two lines {:.2} mm apart ({spacings:.1} point spacings of \
-             {spacing:.2} mm, above {:.1}), {:.0} % of them on the shorter, split {:+.0} mm from the middle of the edge: the edge \
-             may be cut short along one of them {unclear}",
+             {spacing:.2} mm, above {:.1}), {:.0} % of them on the shorter, split {:+.0} mm from the middle of \
+             the edge: the edge may be cut short along one of them {unclear}",
             edge + 1,
             step.size_mm.abs(),
             limits.max_edge_step_spacings,
@@ -430,11 +435,8 @@ pub fn check(seam: &SeamEvidence, limits: &QualityParams) -> Vec<GateFailure> {
         fail(f.gate, f.value, f.limit, f.message);
     }
 
-    let (edge, rms) = if seam.edge_fit_rms_mm[0] >= seam.edge_fit_rms_mm[1] {
-        (0, seam.edge_fit_rms_mm[0])
-    } else {
-        (1, seam.edge_fit_rms_mm[1])
-    };
+    let edge = larger(seam.edge_fit_rms_mm);
+    let rms = seam.edge_fit_rms_mm[edge];
     let (name, fitted) = seam.fits.fit(edge);
     let rms_limit = limits.max_edge_fit_rms_spacings * q.point_spacing_mm;
     if rms > rms_limit {

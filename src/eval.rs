@@ -851,7 +851,7 @@ mod tests {
 
     #[test]
     fn on_a_corner_a_seam_must_name_a_fillet_and_on_an_outside_corner_none_is_right() {
-        let corners = crate::sim::corner_suite();
+        let corners = crate::sim::corner_suite(crate::sim::Draw::Documented);
         let (inside, outside) = (&corners[0].1, &corners[1].1);
         assert_eq!(inside.joint.corner_kind(), Some(CornerKind::Inside));
         assert_eq!(outside.joint.corner_kind(), Some(CornerKind::Outside));

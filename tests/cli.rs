@@ -589,10 +589,14 @@ fn simulate_writes_fault_and_hard_scenes_with_their_right_answer() {
     let wrong = write(&["--joint", "i-butt", "--fault", "wrong-joint"], "wrong");
     assert_eq!(wrong["right_answer"]["refuse"], true);
     assert!(wrong["plan_args"].as_str().unwrap().starts_with("--joint lap "), "{wrong}");
-    let fault_name = weldseam::sim::fault_suite().into_iter().find(|(n, _)| n.contains("streaks")).unwrap().0;
+    let fault_name = weldseam::sim::fault_suite(weldseam::sim::Draw::Documented)
+        .into_iter()
+        .find(|(n, _)| n.contains("streaks"))
+        .unwrap()
+        .0;
     let streaks = write(&["--suite-scene", &fault_name], "streaks");
     assert_eq!(streaks["scene"], fault_name.as_str());
-    let hard_name = weldseam::sim::hard_suite().swap_remove(30).0;
+    let hard_name = weldseam::sim::hard_suite(weldseam::sim::Draw::Documented).swap_remove(30).0;
     let hard = write(&["--suite-scene", &hard_name], "hard");
     assert!(hard["parameters"]["noise"]["depth_noise_scale"].as_f64().unwrap() > 1.0, "{hard}");
     let out = weldseam(&["simulate", "--joint", "lap", "--fault", "rust", "--out", "x.pcd"]);

@@ -11,7 +11,7 @@ use weldseam::joint::JointType;
 use weldseam::pipeline::input::Units;
 use weldseam::pipeline::{Plan, PlanError, PlanRequest, Planner};
 use weldseam::sim::consumer::{consumer_camera, consumer_demo_scene, consumer_far_suite, consumer_variant};
-use weldseam::sim::{SceneSpec, Simulation, consumer_suite, simulate};
+use weldseam::sim::{Draw, SceneSpec, Simulation, consumer_suite, simulate};
 
 /// Simulates `spec` with the consumer camera, makes the strip and plans it
 /// at the default config.
@@ -48,9 +48,9 @@ fn plan_strip(name: &str, spec: &SceneSpec) {
 }
 
 fn suite_scene(name: &str) -> SceneSpec {
-    consumer_suite()
+    consumer_suite(Draw::Documented)
         .into_iter()
-        .chain(consumer_far_suite())
+        .chain(consumer_far_suite(Draw::Documented))
         .find(|(n, _)| n == name)
         .unwrap_or_else(|| panic!("no consumer scene {name}"))
         .1

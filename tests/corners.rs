@@ -15,7 +15,7 @@ use weldseam::pipeline::input::Units;
 use weldseam::pipeline::quality::Gate;
 use weldseam::pipeline::{PlanRequest, Planner, Stage};
 use weldseam::sim::variants::Variant;
-use weldseam::sim::{SceneSpec, Simulation, corner_suite, simulate};
+use weldseam::sim::{Draw, SceneSpec, Simulation, corner_suite, simulate};
 
 /// Outside corners of the suite's tuning part.
 const OUTSIDE: [usize; 2] = [3, 9];
@@ -33,7 +33,7 @@ const EVERY_REQUEST: [RequestedJoint; 5] = [
 /// The suite's scenes at `indices`, each checked to be of `kind`, with its
 /// simulated frame.
 fn corner_scenes(indices: [usize; 2], kind: &str) -> impl Iterator<Item = (String, SceneSpec, Simulation)> {
-    let suite = corner_suite();
+    let suite = corner_suite(Draw::Documented);
     indices.into_iter().map(move |k| {
         let (name, spec) = suite[k].clone();
         assert!(name.starts_with(kind), "{name}");

@@ -19,7 +19,7 @@ use weldseam::mock::controller::ControllerClient;
 use weldseam::server::Stopped;
 
 use crate::util::Cell;
-use weldseam::sim::{Simulation, demo_scene, simulate};
+use weldseam::sim::{Draw, Simulation, demo_scene, simulate};
 use weldseam_proto::frame::{self, HEADER_BYTES, Header};
 use weldseam_proto::message::{FrameSelect, Hello, PlanReply, PlanRequest, PoseIn, Role, Tag, Trigger, joint_code};
 use weldseam_proto::{ErrorCode, Message, PROTOCOL_VERSION};
@@ -1092,8 +1092,10 @@ async fn a_region_of_interest_travels_in_the_request_and_bad_ones_are_refused() 
 /// types, the workpiece of another type is named with the set's gate.
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn a_frame_of_several_workpieces_replies_with_every_seam_and_the_unplanned_joint() {
-    let (name, spec) =
-        weldseam::sim::multi_suite().into_iter().find(|(n, _)| n.starts_with("multi-01")).expect("the scene");
+    let (name, spec) = weldseam::sim::multi_suite(Draw::Documented)
+        .into_iter()
+        .find(|(n, _)| n.starts_with("multi-01"))
+        .expect("the scene");
     let sim = simulate(&spec, &CameraModel::default());
     let cell = Cell::start(config()).await;
     let mut cam = Raw::hello(&cell.camera, Role::Camera).await;

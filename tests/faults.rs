@@ -18,10 +18,11 @@ use weldseam::eval::{EvalRequest, JointAsk, SceneOutcome, Verdict, evaluate_vari
 use weldseam::pipeline::Planner;
 use weldseam::pipeline::quality::Gate;
 use weldseam::sim::variants::Variant;
-use weldseam::sim::{Fault, fault_suite, simulate};
+use weldseam::sim::{Draw, Fault, fault_suite, simulate};
 
 fn planned(name: &str, joint: JointAsk) -> SceneOutcome {
-    let (_, spec) = fault_suite().into_iter().find(|(n, _)| n == name).unwrap_or_else(|| panic!("no scene {name}"));
+    let (_, spec) =
+        fault_suite(Draw::Documented).into_iter().find(|(n, _)| n == name).unwrap_or_else(|| panic!("no scene {name}"));
     let sim = simulate(&spec, &CameraModel::default());
     let request = EvalRequest { joint, ..EvalRequest::default() };
     evaluate_variant(&Planner::new(Config::default()), name, &spec, &sim, &Variant::default(), &request)
@@ -34,7 +35,8 @@ fn planned_with_band(name: &str, fraction: f64, at: f64) -> SceneOutcome {
 }
 
 fn planned_with_band_by(planner: &Planner, name: &str, fraction: f64, at: f64) -> SceneOutcome {
-    let (_, mut spec) = fault_suite().into_iter().find(|(n, _)| n == name).unwrap_or_else(|| panic!("no scene {name}"));
+    let (_, mut spec) =
+        fault_suite(Draw::Documented).into_iter().find(|(n, _)| n == name).unwrap_or_else(|| panic!("no scene {name}"));
     let [y0, y1] = spec.seam_range();
     let start = y0 + at * (1.0 - fraction) * (y1 - y0);
     spec.faults = vec![Fault::SeamDropout { along_mm: [start, start + fraction * (y1 - y0)], margin_mm: 2.0 }];

@@ -8,9 +8,9 @@
 use weldseam::camera::CameraModel;
 use weldseam::config::Config;
 use weldseam::eval::{SceneOutcome, SeamError, run_suite};
-use weldseam::sim::SceneSpec;
 use weldseam::sim::suite::{eval_suite, fault_suite};
 use weldseam::sim::variants::Variant;
+use weldseam::sim::{Draw, SceneSpec};
 
 fn plan_at_one_mm_voxels(names: &[&str]) -> Vec<SceneOutcome> {
     plan_as("voxel:1", names)
@@ -34,7 +34,7 @@ fn planned(o: &SceneOutcome) -> &SeamError {
 }
 
 fn plan_as(variant: &str, names: &[&str]) -> Vec<SceneOutcome> {
-    plan_from(eval_suite(), variant, names)
+    plan_from(eval_suite(Draw::Documented), variant, names)
 }
 
 fn plan_from(suite: Vec<(String, SceneSpec)>, variant: &str, names: &[&str]) -> Vec<SceneOutcome> {
@@ -124,11 +124,11 @@ fn a_lap_step_is_read_at_the_seam_whatever_tilts_the_lower_plate() {
     // degree off. The plate step was read as the difference of the two
     // planes' offsets, which are distances from the camera's centre: the
     // root came out 2.8 mm too deep, a confident wrong seam.
-    let o = &plan_from(fault_suite(), "voxel:1", &["fault-touching-part-lap-02"])[0];
+    let o = &plan_from(fault_suite(Draw::Documented), "voxel:1", &["fault-touching-part-lap-02"])[0];
     assert_within(&o.name, planned(o), 1.0);
     // In the raw frame too the touching part tilts the lower plate's
     // plane: the offsets put lap-00's root 0.93 mm off.
-    let o = &plan_from(fault_suite(), "raw", &["fault-touching-part-lap-00"])[0];
+    let o = &plan_from(fault_suite(Draw::Documented), "raw", &["fault-touching-part-lap-00"])[0];
     assert!(planned(o).max_mm < 0.5, "{}: max {:.2} mm", o.name, planned(o).max_mm);
 }
 
@@ -139,7 +139,7 @@ fn an_edge_the_border_cuts_obliquely_runs_on_to_it_where_its_plate_does() {
     // border crosses one plate's edge obliquely, that edge's strips
     // stopped 3 mm before it, and the rim's rows were not read, the
     // edge's samples scattering more than a quarter spacing.
-    let o = &plan_from(fault_suite(), "voxel:1", &["fault-seam-dropout-v-butt-00"])[0];
+    let o = &plan_from(fault_suite(Draw::Documented), "voxel:1", &["fault-seam-dropout-v-butt-00"])[0];
     assert_within(&o.name, planned(o), 1.0);
 }
 
@@ -151,8 +151,11 @@ fn an_edge_a_dropout_or_a_sliver_cuts_short_along_a_third_of_it_is_fitted_on_the
     // squares followed it (1.12 mm RMS, none trimmed) and the start missed
     // by 1.35 mm across. fault-barely-in-view-v-butt-02: samples of a
     // sliver of plate at the image's border pulled an edge 1.17 mm off.
-    let outcomes =
-        plan_from(fault_suite(), "voxel:1", &["fault-seam-dropout-lap-01", "fault-barely-in-view-v-butt-02"]);
+    let outcomes = plan_from(
+        fault_suite(Draw::Documented),
+        "voxel:1",
+        &["fault-seam-dropout-lap-01", "fault-barely-in-view-v-butt-02"],
+    );
     for o in &outcomes {
         assert_within(&o.name, planned(o), 2.0);
     }

@@ -8,10 +8,10 @@ use weldseam::config::{Config, Method};
 use weldseam::eval::{evaluate_simulation, seam_error};
 use weldseam::joint::JointType;
 use weldseam::pipeline::{PlanRequest, Planner, Stage};
-use weldseam::sim::{SceneSpec, demo_scene, eval_suite, simulate};
+use weldseam::sim::{Draw, SceneSpec, demo_scene, eval_suite, simulate};
 
 fn suite_scene(name_prefix: &str) -> (String, SceneSpec) {
-    eval_suite()
+    eval_suite(Draw::Documented)
         .into_iter()
         .find(|(name, _)| name.starts_with(name_prefix))
         .unwrap_or_else(|| panic!("the eval suite has a scene starting with {name_prefix}"))
@@ -44,14 +44,14 @@ fn steep_tilt_near_and_far_is_planned_within_a_millimetre() {
 
 #[test]
 fn narrow_i_butt_gaps_and_plates_filling_the_view_are_handled() {
-    let narrow = eval_suite()
+    let narrow = eval_suite(Draw::Documented)
         .into_iter()
         .filter(|(name, s)| {
             name.starts_with("i-butt")
                 && matches!(s.joint, weldseam::sim::JointGeometry::IButt { gap_mm, .. } if gap_mm < 0.8)
         })
         .take(2);
-    let filling = eval_suite().into_iter().filter(|(name, _)| name.ends_with("-fill")).take(2);
+    let filling = eval_suite(Draw::Documented).into_iter().filter(|(name, _)| name.ends_with("-fill")).take(2);
     for (name, spec) in narrow.chain(filling) {
         assert_meets_the_bar(&name, &spec);
     }
@@ -60,7 +60,7 @@ fn narrow_i_butt_gaps_and_plates_filling_the_view_are_handled() {
 #[test]
 fn lap_is_planned_at_the_root_from_either_side() {
     for side in ["-upper-side", "-lower-side"] {
-        let (name, spec) = eval_suite()
+        let (name, spec) = eval_suite(Draw::Documented)
             .into_iter()
             .find(|(n, _)| n.starts_with("lap") && n.ends_with(side) && !n.contains("clipped"))
             .expect("a lap scene from this side");

@@ -15,7 +15,9 @@ use weldseam::geometry::Vec3;
 use weldseam::joint::{JointType, RequestedJoint};
 use weldseam::pipeline::quality::Gate;
 use weldseam::pipeline::{Plan, PlanError, PlanRequest, Planner, Stage};
-use weldseam::sim::{FaultKind, JointGeometry, SceneSpec, demo_scene, fault_suite, multi_suite, simulate, tee_suite};
+use weldseam::sim::{
+    Draw, FaultKind, JointGeometry, SceneSpec, demo_scene, fault_suite, multi_suite, simulate, tee_suite,
+};
 
 fn plan_tee(spec: &SceneSpec, joint: RequestedJoint) -> Result<Plan, PlanError> {
     let sim = simulate(spec, &CameraModel::default());
@@ -31,7 +33,7 @@ const PLANNED_TEES: [usize; 6] = [0, 2, 3, 8, 9, 15];
 
 #[test]
 fn a_tee_s_seen_root_is_planned_within_the_fillet_bar_and_the_hidden_one_named() {
-    let suite = tee_suite();
+    let suite = tee_suite(Draw::Documented);
     for k in PLANNED_TEES {
         let (name, spec) = &suite[k];
         let sim = simulate(spec, &CameraModel::default());
@@ -93,7 +95,7 @@ const VOXEL_TEES: [usize; 4] = [0, 3, 6, 8];
 
 #[test]
 fn a_tee_root_in_a_cloud_without_a_grid_ends_where_the_image_border_crosses_it() {
-    let suite = tee_suite();
+    let suite = tee_suite(Draw::Documented);
     let variant = weldseam::sim::variants::Variant::parse("voxel:1").unwrap();
     for k in VOXEL_TEES {
         let (name, spec) = &suite[k];
@@ -128,7 +130,7 @@ fn plan_cropped(spec: &SceneSpec, joint: RequestedJoint) -> (Result<Plan, PlanEr
 
 #[test]
 fn a_tee_cropped_round_its_root_is_planned_from_its_face_alone() {
-    let suite = tee_suite();
+    let suite = tee_suite(Draw::Documented);
     for k in CROPPED_TEES {
         let (name, spec) = &suite[k];
         let (plan, roots) = plan_cropped(spec, JointType::TFillet.into());
@@ -170,7 +172,7 @@ fn a_tee_whose_roots_are_not_seen_is_refused_saying_why() {
     // Suite tee 10: the far side's face is a veil along the rays, the
     // camera's side edge-on, its flange's edge turned from an eye as a
     // shadow's edge may be.
-    let (name, spec) = &tee_suite()[10];
+    let (name, spec) = &tee_suite(Draw::Documented)[10];
     let err = plan_tee(spec, JointType::TFillet.into()).unwrap_err();
     assert!(err.reason.contains("no fillet root of the tee joint is seen"), "{name}: {err}");
     assert!(err.reason.contains("far side") && err.reason.contains("facing the camera"), "{name}: {err}");
@@ -183,7 +185,7 @@ fn a_webs_end_face_is_not_taken_for_its_side_face() {
     // nothing; what stands on that side of the web's middle is the web's
     // end face, across the web, whose "root" was 3 mm of the web's
     // thickness. The root is the flange's edge, up to the web's end.
-    let (name, spec) = &tee_suite()[7];
+    let (name, spec) = &tee_suite(Draw::Documented)[7];
     let sim = simulate(spec, &CameraModel::default());
     let roots: Vec<TrueSeam> = sim.seams.iter().map(|s| TrueSeam::of(spec, s)).collect();
     let plan = plan_tee(spec, JointType::TFillet.into()).unwrap_or_else(|e| panic!("{name}: {e}"));
@@ -204,7 +206,7 @@ fn a_webs_end_face_is_not_taken_for_its_side_face() {
 #[test]
 fn a_tee_requested_as_a_butt_or_lap_joint_is_refused_by_name() {
     // The demo tee and three suite tees the camera sees from either side.
-    let suite = tee_suite();
+    let suite = tee_suite(Draw::Documented);
     let scenes = [("demo", demo_scene(JointType::TFillet)), ("suite 0", suite[0].1.clone())]
         .into_iter()
         .chain([9, 14].map(|k| (suite[k].0.as_str(), suite[k].1.clone())));
@@ -220,7 +222,7 @@ fn a_tee_requested_as_a_butt_or_lap_joint_is_refused_by_name() {
 #[test]
 fn the_fault_suite_s_clamps_are_not_taken_for_a_web() {
     let clamps: Vec<(String, SceneSpec)> =
-        fault_suite().into_iter().filter(|(_, s)| s.fault_kind() == Some(FaultKind::Clamp)).collect();
+        fault_suite(Draw::Documented).into_iter().filter(|(_, s)| s.fault_kind() == Some(FaultKind::Clamp)).collect();
     assert!(!clamps.is_empty());
     for (name, spec) in clamps.iter().take(4) {
         match plan_tee(spec, RequestedJoint::Auto) {
@@ -233,7 +235,8 @@ fn the_fault_suite_s_clamps_are_not_taken_for_a_web() {
 #[test]
 fn a_frame_of_several_workpieces_shows_every_seam_its_truth_sees() {
     let camera = CameraModel { width_px: 960, height_px: 600, ..CameraModel::default() };
-    let (name, spec) = multi_suite().into_iter().find(|(_, s)| s.others.len() == 2).expect("a frame of three parts");
+    let (name, spec) =
+        multi_suite(Draw::Documented).into_iter().find(|(_, s)| s.others.len() == 2).expect("a frame of three parts");
     let sim = simulate(&spec, &camera);
     let tees = spec.workpieces().iter().filter(|w| matches!(w.joint, JointGeometry::Tee { .. })).count();
     assert_eq!(sim.seams.len(), 3 + tees, "{name}");
@@ -278,7 +281,8 @@ fn plan_multi(
     start_near: Option<Vec3>,
     one_seam: bool,
 ) -> (String, Result<Plan, PlanError>, Vec<TrueSeam>) {
-    let (name, spec) = multi_suite().into_iter().find(|(n, _)| n.starts_with(prefix)).expect("the scene");
+    let (name, spec) =
+        multi_suite(Draw::Documented).into_iter().find(|(n, _)| n.starts_with(prefix)).expect("the scene");
     let sim = simulate(&spec, &CameraModel::default());
     let request = PlanRequest { start_near, one_seam, ..PlanRequest::new(joint, None, sim.pose) };
     let plan = Planner::new(Config::default()).plan(&sim.cloud, &request);

@@ -24,7 +24,7 @@ use weldseam::mock::camera::CameraOptions;
 use weldseam::mock::controller::{ControllerClient, request_for_simulation};
 use weldseam::mock::text_robot::{TextRobot, rapid_num, ur_read_ascii_float};
 use weldseam::server::Stopped;
-use weldseam::sim::{Simulation, demo_scene, simulate};
+use weldseam::sim::{Draw, Simulation, demo_scene, simulate};
 use weldseam_proto::message::{FrameSelect, PlanReply};
 use weldseam_proto::text::{ABB_MAX_LINE, Dialect, MAX_ERROR_LINE, UR_MAX_NUMBERS};
 
@@ -424,8 +424,10 @@ async fn a_plan_line_may_leave_the_joint_to_the_daemon() {
 /// its web hides).
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn several_seams_are_served_seam_by_seam_and_why_names_the_unplanned() {
-    let (name, spec) =
-        weldseam::sim::multi_suite().into_iter().find(|(n, _)| n.starts_with("multi-01")).expect("the scene");
+    let (name, spec) = weldseam::sim::multi_suite(Draw::Documented)
+        .into_iter()
+        .find(|(n, _)| n.starts_with("multi-01"))
+        .expect("the scene");
     let sim = simulate(&spec, &CameraModel::default());
     let cell = Cell::start(config()).await;
     let (stop_camera, camera) = cell.camera(vec![Arc::new(sim.cloud.clone())], CameraOptions::default());

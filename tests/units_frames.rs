@@ -9,7 +9,7 @@ use weldseam::config::Config;
 use weldseam::geometry::pose::RobotPose;
 use weldseam::pipeline::input::guess_units;
 use weldseam::pipeline::{CloudFrame, Plan, PlanRequest, Planner, Stage, Units};
-use weldseam::sim::{eval_suite, simulate};
+use weldseam::sim::{Draw, eval_suite, simulate};
 
 fn mapped(cloud: &PointCloud, f: impl Fn(Point) -> Point) -> PointCloud {
     let points = cloud.points().iter().map(|&p| if p[0].is_finite() { f(p) } else { p }).collect();
@@ -19,7 +19,7 @@ fn mapped(cloud: &PointCloud, f: impl Fn(Point) -> Point) -> PointCloud {
 #[test]
 fn units_are_guessed_right_on_the_suite_in_millimetres_and_in_metres() {
     let camera = weldseam::camera::CameraModel::default();
-    for (name, spec) in eval_suite().into_iter().step_by(3) {
+    for (name, spec) in eval_suite(Draw::Documented).into_iter().step_by(3) {
         let sim = simulate(&spec, &camera);
         let mm = guess_units(&sim.cloud);
         assert!(!mm.metres, "{name}: millimetres taken for metres (median {})", mm.median_distance);
@@ -43,7 +43,7 @@ fn first_seam_ends(plan: &Plan) -> [nalgebra::Vector3<f64>; 2] {
 
 #[test]
 fn a_cloud_in_metres_plans_like_the_millimetre_one() {
-    let (name, spec) = eval_suite().swap_remove(0);
+    let (name, spec) = eval_suite(Draw::Documented).swap_remove(0);
     let config = Config::default();
     let sim = simulate(&spec, &config.camera);
     let planner = Planner::new(config);
@@ -62,7 +62,7 @@ fn a_cloud_in_metres_plans_like_the_millimetre_one() {
 
 #[test]
 fn a_base_frame_cloud_plans_the_seam_of_the_camera_frame_one() {
-    let (name, spec) = eval_suite().swap_remove(1);
+    let (name, spec) = eval_suite(Draw::Documented).swap_remove(1);
     let config = Config::default();
     let sim = simulate(&spec, &config.camera);
     // Coordinates on a 1/1024 mm lattice, a pose turned by right angles and
@@ -98,7 +98,7 @@ fn a_base_frame_cloud_plans_the_seam_of_the_camera_frame_one() {
 
 #[test]
 fn clouds_no_camera_could_see_are_refused_with_the_reason() {
-    let (_, spec) = eval_suite().swap_remove(0);
+    let (_, spec) = eval_suite(Draw::Documented).swap_remove(0);
     let config = Config::default();
     let sim = simulate(&spec, &config.camera);
     let planner = Planner::new(config);

@@ -10,7 +10,7 @@ use weldseam::config::Config;
 use weldseam::eval::seam_error;
 use weldseam::joint::JointType;
 use weldseam::pipeline::{PlanRequest, Planner};
-use weldseam::sim::{demo_scene, simulate};
+use weldseam::sim::{Draw, demo_scene, simulate};
 
 /// The valid points of a window of `cloud` around the true seam, `margin`
 /// pixels beyond the seam's ends on every side, as a bag of points.
@@ -82,7 +82,7 @@ fn every_eval_scene_exported_without_its_grid_plans_digit_for_digit_as_the_frame
     // Every sixth scene: each joint at near, middle and far standoffs and
     // several tilts, within the suite's time budget; the whole suite is
     // planned this way by `weldseam eval --variant unorganized`.
-    for (k, (name, spec)) in weldseam::sim::suite::eval_suite().into_iter().enumerate().step_by(6) {
+    for (k, (name, spec)) in weldseam::sim::suite::eval_suite(Draw::Documented).into_iter().enumerate().step_by(6) {
         let sim = simulate(&spec, &camera);
         let export = shuffled_export(&sim.cloud, k as u64);
         let (grid, _) = weldseam::pipeline::regrid::regrid(&export, &camera).expect("a raw export is re-gridded");

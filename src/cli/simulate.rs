@@ -25,7 +25,7 @@ use weldseam::sim::consumer::{consumer_demo_scene, consumer_far_suite};
 use weldseam::sim::faults::frame_barely_in_view;
 use weldseam::sim::variants::Variant;
 use weldseam::sim::{
-    CameraPreset, Fault, FaultKind, JointGeometry, NoiseSpec, PlateExtent, SceneSpec, Simulation, consumer_suite,
+    CameraPreset, Draw, Fault, FaultKind, JointGeometry, NoiseSpec, PlateExtent, SceneSpec, Simulation, consumer_suite,
     corner_suite, demo_scene, eval_suite, fault_suite, hard_suite, multi_suite, simulate, tee_suite,
 };
 
@@ -213,18 +213,21 @@ fn scene_from_args(args: &SimulateArgs) -> Result<(Option<String>, SceneSpec)> {
 }
 
 fn find_suite_scene(preset: CameraPreset, key: &str) -> Result<(String, SceneSpec)> {
+    // A fresh draw's scene names its draw (`-freshN`); an index is the
+    // documented suite's.
+    let draw = Draw::of_scene(key);
     let mut suite = match preset {
-        CameraPreset::Industrial => eval_suite(),
-        CameraPreset::Consumer if key.starts_with("consumer-far") => consumer_far_suite(),
-        CameraPreset::Consumer => consumer_suite(),
+        CameraPreset::Industrial => eval_suite(draw),
+        CameraPreset::Consumer if key.starts_with("consumer-far") => consumer_far_suite(draw),
+        CameraPreset::Consumer => consumer_suite(draw),
     };
     if preset == CameraPreset::Industrial {
         let other = match key.split('-').next() {
-            Some("fault") => Some(fault_suite()),
-            Some("hard") => Some(hard_suite()),
-            Some("t") => Some(tee_suite()),
-            Some("multi") => Some(multi_suite()),
-            Some("corner") => Some(corner_suite()),
+            Some("fault") => Some(fault_suite(draw)),
+            Some("hard") => Some(hard_suite(draw)),
+            Some("t") => Some(tee_suite(draw)),
+            Some("multi") => Some(multi_suite(draw)),
+            Some("corner") => Some(corner_suite(draw)),
             _ => None,
         };
         if let Some(found) = other.into_iter().flatten().find(|(name, _)| name == key) {
@@ -519,7 +522,7 @@ mod tests {
         assert_eq!(seams[1]["label"], "workpiece 1 t-fillet root +x");
         assert!(seams[1]["seen_share"].as_f64().unwrap() > 0.99);
         // A suite scene of several workpieces is found by its name.
-        let name = weldseam::sim::multi_suite()[0].0.clone();
+        let name = weldseam::sim::multi_suite(Draw::Documented)[0].0.clone();
         assert_eq!(find_suite_scene(CameraPreset::Industrial, &name).unwrap().0, name);
     }
 

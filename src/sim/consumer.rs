@@ -12,6 +12,7 @@
 use rand_chacha::ChaCha8Rng;
 use rand_core::{Rng, SeedableRng};
 
+use super::draw::Draw;
 use super::suite::framing;
 use super::variants::{Step, Variant};
 use super::{
@@ -216,14 +217,17 @@ fn draw_scene(joint: JointType, distance_mm: f64, tilt_deg: f64, seed: u64, rng:
 /// and [`CONSUMER_TILT_DEG`], each scene showing at least
 /// [`CONSUMER_MIN_SEAM_MM`] of seam and [`CONSUMER_MIN_PLATE_IN_VIEW_MM`]
 /// of both plates. The same list on every call.
-pub fn consumer_suite() -> Vec<(String, SceneSpec)> {
-    stratified_suite(&SuiteDraw {
-        prefix: "consumer",
-        scenes: CONSUMER_SCENES,
-        distance_mm: CONSUMER_DISTANCE_MM,
-        seed: CONSUMER_SEED,
-        holdout_seed: CONSUMER_HOLDOUT_SEED,
-    })
+pub fn consumer_suite(draw: Draw) -> Vec<(String, SceneSpec)> {
+    stratified_suite(
+        draw,
+        &Strata {
+            prefix: "consumer",
+            scenes: CONSUMER_SCENES,
+            distance_mm: CONSUMER_DISTANCE_MM,
+            seed: CONSUMER_SEED,
+            holdout_seed: CONSUMER_HOLDOUT_SEED,
+        },
+    )
 }
 
 /// Scenes of each joint type in [`consumer_far_suite`].
@@ -243,18 +247,21 @@ const CONSUMER_FAR_HOLDOUT_SEED: u64 = 0xfa12_401d;
 /// are the two farthest of each joint type, so without this suite the
 /// noisiest scans were seen only held out. The last two of each joint
 /// type are held out here too.
-pub fn consumer_far_suite() -> Vec<(String, SceneSpec)> {
-    stratified_suite(&SuiteDraw {
-        prefix: "consumer-far",
-        scenes: CONSUMER_FAR_SCENES,
-        distance_mm: CONSUMER_FAR_DISTANCE_MM,
-        seed: CONSUMER_FAR_SEED,
-        holdout_seed: CONSUMER_FAR_HOLDOUT_SEED,
-    })
+pub fn consumer_far_suite(draw: Draw) -> Vec<(String, SceneSpec)> {
+    stratified_suite(
+        draw,
+        &Strata {
+            prefix: "consumer-far",
+            scenes: CONSUMER_FAR_SCENES,
+            distance_mm: CONSUMER_FAR_DISTANCE_MM,
+            seed: CONSUMER_FAR_SEED,
+            holdout_seed: CONSUMER_FAR_HOLDOUT_SEED,
+        },
+    )
 }
 
 /// What a stratified consumer suite is drawn from.
-struct SuiteDraw {
+struct Strata {
     prefix: &'static str,
     scenes: [(JointType, usize); 3],
     distance_mm: [f64; 2],
@@ -275,22 +282,23 @@ fn tilt_stride(count: usize) -> usize {
     (3..).step_by(2).find(|&stride| gcd(stride, count) == 1).unwrap_or(1)
 }
 
-fn stratified_suite(draw: &SuiteDraw) -> Vec<(String, SceneSpec)> {
+fn stratified_suite(draw: Draw, strata: &Strata) -> Vec<(String, SceneSpec)> {
     let camera = consumer_camera();
     let mut suite = Vec::new();
-    for (j, (joint, count)) in draw.scenes.into_iter().enumerate() {
+    for (j, (joint, count)) in strata.scenes.into_iter().enumerate() {
         let steps = (count - 1).max(1) as f64;
         for k in 0..count {
             // Distances in order, tilts permuted, so each joint spans both.
-            let distance_mm = draw.distance_mm[0] + (draw.distance_mm[1] - draw.distance_mm[0]) * k as f64 / steps;
+            let distance_mm =
+                strata.distance_mm[0] + (strata.distance_mm[1] - strata.distance_mm[0]) * k as f64 / steps;
             let tilt_step = (k * tilt_stride(count) + j) % count;
             let tilt_deg = CONSUMER_TILT_DEG[1] * tilt_step as f64 / steps;
             let holdout = k >= count - CONSUMER_HOLDOUT_PER_JOINT;
             let stream = (j * 100 + k) as u64;
-            let base_seed = if holdout { draw.holdout_seed } else { draw.seed };
+            let base_seed = draw.seed(if holdout { strata.holdout_seed } else { strata.seed });
             let mut rng = ChaCha8Rng::seed_from_u64(base_seed);
             rng.set_stream(stream);
-            let seed = base_seed + stream;
+            let seed = base_seed.wrapping_add(stream);
             let mut spec = draw_scene(joint, distance_mm, tilt_deg, seed, &mut rng);
             for _ in 1..MAX_DRAWS {
                 let f = framing(&spec, &camera);
@@ -303,9 +311,9 @@ fn stratified_suite(draw: &SuiteDraw) -> Vec<(String, SceneSpec)> {
             }
             let name = format!(
                 "{}-{}-{k:02}-d{distance_mm:.0}-t{tilt_deg:.0}{}",
-                draw.prefix,
+                strata.prefix,
                 joint.dashed_name(),
-                if holdout { "-holdout" } else { "" }
+                draw.suffix(holdout)
             );
             suite.push((name, spec));
         }
@@ -336,21 +344,30 @@ mod tests {
     #[test]
     fn the_consumer_suites_are_fixed_stratified_and_framed() {
         for (suite, scenes, [near, far]) in [
-            (consumer_suite(), CONSUMER_SCENES, CONSUMER_DISTANCE_MM),
-            (consumer_far_suite(), CONSUMER_FAR_SCENES, CONSUMER_FAR_DISTANCE_MM),
+            (consumer_suite(Draw::Documented), CONSUMER_SCENES, CONSUMER_DISTANCE_MM),
+            (consumer_far_suite(Draw::Documented), CONSUMER_FAR_SCENES, CONSUMER_FAR_DISTANCE_MM),
         ] {
-            a_consumer_suite_is_fixed_stratified_and_framed(&suite, scenes, [near, far]);
+            a_consumer_suite_is_fixed_stratified_and_framed(
+                &suite,
+                scenes,
+                [near, far],
+                Some(CONSUMER_HOLDOUT_PER_JOINT),
+            );
         }
-        assert_eq!(consumer_suite(), consumer_suite());
-        assert_eq!(consumer_far_suite(), consumer_far_suite());
-        let far_names: Vec<String> = consumer_far_suite().into_iter().map(|(n, _)| n).collect();
-        assert!(consumer_suite().iter().all(|(n, _)| !far_names.contains(n)), "the suites share no name");
+        assert_eq!(consumer_suite(Draw::Documented), consumer_suite(Draw::Documented));
+        assert_eq!(consumer_far_suite(Draw::Documented), consumer_far_suite(Draw::Documented));
+        let far_names: Vec<String> = consumer_far_suite(Draw::Documented).into_iter().map(|(n, _)| n).collect();
+        assert!(
+            consumer_suite(Draw::Documented).iter().all(|(n, _)| !far_names.contains(n)),
+            "the suites share no name"
+        );
     }
 
     fn a_consumer_suite_is_fixed_stratified_and_framed(
         suite: &[(String, SceneSpec)],
         scenes: [(JointType, usize); 3],
         [near, far]: [f64; 2],
+        unseen_per_joint: Option<usize>,
     ) {
         let expected: usize = scenes.iter().map(|(_, n)| n).sum();
         assert_eq!(suite.len(), expected);
@@ -358,8 +375,8 @@ mod tests {
         for (joint, count) in scenes {
             let scenes: Vec<_> = suite.iter().filter(|(_, s)| s.joint.joint_type() == joint).collect();
             assert_eq!(scenes.len(), count);
-            let holdouts = scenes.iter().filter(|(n, _)| n.ends_with("-holdout")).count();
-            assert_eq!(holdouts, CONSUMER_HOLDOUT_PER_JOINT);
+            let holdouts = scenes.iter().filter(|(n, _)| crate::sim::draw::is_unseen(n)).count();
+            assert_eq!(holdouts, unseen_per_joint.unwrap_or(count), "{joint}");
             let distances: Vec<f64> = scenes.iter().map(|(_, s)| s.placement.distance_mm).collect();
             assert!(distances.contains(&near) && distances.contains(&far), "{joint}: {distances:?}");
             let mut tilts: Vec<f64> = scenes.iter().map(|(_, s)| s.placement.tilt_deg).collect();
@@ -377,6 +394,25 @@ mod tests {
                 let width = 2.0 * spec.joint.seam_edge_half_width();
                 assert!((23.9..=32.1).contains(&width), "{name}: groove {width} mm wide");
             }
+        }
+    }
+
+    #[test]
+    fn a_fresh_draw_keeps_the_strata_and_framing_and_redraws_every_scene() {
+        let documented = consumer_far_suite(Draw::Documented);
+        let fresh = consumer_far_suite(Draw::Fresh(1));
+        // Every scene of a fresh draw is unseen.
+        a_consumer_suite_is_fixed_stratified_and_framed(&fresh, CONSUMER_FAR_SCENES, CONSUMER_FAR_DISTANCE_MM, None);
+        assert_eq!(fresh, consumer_far_suite(Draw::Fresh(1)), "a fresh draw is the same on every call");
+        assert_ne!(fresh, consumer_far_suite(Draw::Fresh(2)));
+        for ((name, spec), (documented_name, documented_spec)) in fresh.iter().zip(&documented) {
+            let stem = documented_name.trim_end_matches("-holdout");
+            assert_eq!(name, &format!("{stem}-fresh1"));
+            assert_eq!(spec.joint.joint_type(), documented_spec.joint.joint_type(), "{name}");
+            assert_eq!(spec.placement.distance_mm, documented_spec.placement.distance_mm, "{name}");
+            assert_eq!(spec.placement.tilt_deg, documented_spec.placement.tilt_deg, "{name}");
+            assert_ne!(spec.seed, documented_spec.seed, "{name}: the noise is redrawn");
+            assert_ne!(spec.joint, documented_spec.joint, "{name}: so is the joint");
         }
     }
 

@@ -11,6 +11,7 @@
 use rand_chacha::ChaCha8Rng;
 use rand_core::{Rng, SeedableRng};
 
+use super::draw::Draw;
 use super::faults::{self, Fault, FaultKind, PlateSide};
 use super::render::CameraView;
 use super::scene::{SurfaceKind, build_scene};
@@ -349,7 +350,7 @@ impl ScenePlan {
     pub(super) fn draw_framed(&self, base_seed: u64, stream: u64, camera: &CameraModel) -> SceneSpec {
         let mut rng = ChaCha8Rng::seed_from_u64(base_seed);
         rng.set_stream(stream);
-        let seed = base_seed + stream;
+        let seed = base_seed.wrapping_add(stream);
         let mut spec = self.draw(seed, &mut rng);
         for _ in 1..MAX_DRAWS {
             let probe_background = self.goal == Goal::FillView;
@@ -381,14 +382,15 @@ pub(super) fn uniform(rng: &mut ChaCha8Rng, lo: f64, hi: f64) -> f64 {
 /// The evaluation scenes, named like `lap-07-d612-t18-lower-side`: joint,
 /// index, distance, tilt, the framing asked for and, for laps, the side
 /// the camera looks from. The same list on every call.
-pub fn eval_suite() -> Vec<(String, SceneSpec)> {
+pub fn eval_suite(draw: Draw) -> Vec<(String, SceneSpec)> {
     let camera = CameraModel::default();
     let mut suite = Vec::with_capacity(3 * SCENES_PER_JOINT);
     for (j, joint) in JointType::ALL.into_iter().enumerate() {
         for k in 0..SCENES_PER_JOINT {
             let plan = ScenePlan::new(joint, j, k, MAX_TILT_DEG);
             let stream = (j * SCENES_PER_JOINT + k) as u64;
-            suite.push((plan.name(), plan.draw_framed(SUITE_SEED, stream, &camera)));
+            let name = format!("{}{}", plan.name(), draw.suffix(false));
+            suite.push((name, plan.draw_framed(draw.seed(SUITE_SEED), stream, &camera)));
         }
     }
     suite
@@ -415,7 +417,7 @@ const HARD_HOLDOUT_SEED: u64 = 0x4a2d_0ff5;
 /// [`HARD_HOLDOUT_PER_JOINT`] of each joint are drawn from their own seed
 /// and named `-holdout`: nothing in the planner or its gates is to be
 /// chosen by looking at them.
-pub fn hard_suite() -> Vec<(String, SceneSpec)> {
+pub fn hard_suite(draw: Draw) -> Vec<(String, SceneSpec)> {
     let camera = CameraModel::default();
     let steps = (SCENES_PER_JOINT - 1) as f64;
     let mut suite = Vec::with_capacity(3 * SCENES_PER_JOINT);
@@ -423,7 +425,7 @@ pub fn hard_suite() -> Vec<(String, SceneSpec)> {
         for k in 0..SCENES_PER_JOINT {
             let plan = ScenePlan::new(joint, j, k, HARD_MAX_TILT_DEG);
             let holdout = k >= SCENES_PER_JOINT - HARD_HOLDOUT_PER_JOINT;
-            let base_seed = if holdout { HARD_HOLDOUT_SEED } else { HARD_SEED };
+            let base_seed = draw.seed(if holdout { HARD_HOLDOUT_SEED } else { HARD_SEED });
             let mut spec = plan.draw_framed(base_seed, (j * SCENES_PER_JOINT + k) as u64, &camera);
             // Steps coprime with 22 visit every stratum once.
             let sigma_step = ((k * 3 + j * 5) % SCENES_PER_JOINT) as f64 / steps;
@@ -437,7 +439,7 @@ pub fn hard_suite() -> Vec<(String, SceneSpec)> {
                 "hard-{}-s{sigma:.2}-dr{:.1}{}",
                 plan.name(),
                 spec.noise.dropout_rate * 100.0,
-                if holdout { "-holdout" } else { "" }
+                draw.suffix(holdout)
             );
             suite.push((name, spec));
         }
@@ -462,14 +464,14 @@ const FAULT_HOLDOUT_SEED: u64 = 0xfa17_0ff5;
 /// request names). The last [`FAULT_HOLDOUT_PER_JOINT`] of each fault and
 /// joint are drawn from their own seed and named `-holdout`: nothing in
 /// the planner or its gates is to be chosen by looking at them.
-pub fn fault_suite() -> Vec<(String, SceneSpec)> {
+pub fn fault_suite(draw: Draw) -> Vec<(String, SceneSpec)> {
     let camera = CameraModel::default();
     let mut suite = Vec::new();
     for (f, kind) in FaultKind::ALL.into_iter().enumerate() {
         for (j, joint) in JointType::ALL.into_iter().enumerate() {
             for s in 0..FAULT_SCENES_PER_JOINT {
                 let holdout = s >= FAULT_SCENES_PER_JOINT - FAULT_HOLDOUT_PER_JOINT;
-                let base_seed = if holdout { FAULT_HOLDOUT_SEED } else { FAULT_SEED };
+                let base_seed = draw.seed(if holdout { FAULT_HOLDOUT_SEED } else { FAULT_SEED });
                 let stream = ((f * 3 + j) * FAULT_SCENES_PER_JOINT + s) as u64;
                 let last = (FAULT_SCENES_PER_JOINT - 1) as f64;
                 let mut plan = ScenePlan::new(joint, j, SCENES_PER_JOINT - 1 - s, MAX_TILT_DEG);
@@ -488,7 +490,7 @@ pub fn fault_suite() -> Vec<(String, SceneSpec)> {
                     joint.dashed_name(),
                     plan.distance_mm,
                     plan.tilt_deg,
-                    if holdout { "-holdout" } else { "" }
+                    draw.suffix(holdout)
                 );
                 suite.push((name, spec));
             }
@@ -509,7 +511,7 @@ fn draw_faulted(
 ) -> SceneSpec {
     let mut rng = ChaCha8Rng::seed_from_u64(base_seed);
     rng.set_stream(stream);
-    let seed = base_seed + stream;
+    let seed = base_seed.wrapping_add(stream);
     let mut spec = plan.draw(seed, &mut rng);
     for _ in 0..MAX_DRAWS {
         spec = plan.draw(seed, &mut rng);
@@ -610,9 +612,9 @@ mod tests {
 
     #[test]
     fn the_suite_is_stratified_fair_and_fixed() {
-        let suite = eval_suite();
+        let suite = eval_suite(Draw::Documented);
         assert_eq!(suite.len(), 3 * SCENES_PER_JOINT);
-        assert_eq!(suite, eval_suite(), "the suite is the same on every call");
+        assert_eq!(suite, eval_suite(Draw::Documented), "the suite is the same on every call");
         let names: std::collections::HashSet<_> = suite.iter().map(|(n, _)| n).collect();
         assert_eq!(names.len(), suite.len(), "scene names are unique");
         let cam = CameraModel::default();
@@ -685,14 +687,33 @@ mod tests {
     }
 
     #[test]
+    fn a_fresh_draw_of_the_suite_keeps_its_strata_and_framing() {
+        let cam = CameraModel::default();
+        let documented = eval_suite(Draw::Documented);
+        let fresh = eval_suite(Draw::Fresh(1));
+        assert_eq!(fresh.len(), documented.len());
+        for ((name, spec), (documented_name, documented_spec)) in fresh.iter().zip(&documented) {
+            // The name holds the joint, stratum and framing asked for.
+            assert_eq!(name, &format!("{documented_name}-fresh1"));
+            assert_eq!(spec.placement.distance_mm, documented_spec.placement.distance_mm, "{name}");
+            assert_eq!(spec.placement.tilt_deg, documented_spec.placement.tilt_deg, "{name}");
+            assert_ne!(spec.joint, documented_spec.joint, "{name}: the joint is redrawn");
+            assert_eq!(spec.validate(), Ok(()), "{name}");
+            let f = framing(spec, &cam);
+            assert!(f.observed_seam_mm >= MIN_OBSERVED_SEAM_MM, "{name}: {f:?}");
+            assert!(f.plate_in_view_mm.iter().all(|w| *w >= MIN_PLATE_IN_VIEW_MM), "{name}: {f:?}");
+        }
+    }
+
+    #[test]
     fn the_hard_suite_is_stratified_noisy_and_fixed() {
-        let suite = hard_suite();
+        let suite = hard_suite(Draw::Documented);
         assert_eq!(suite.len(), 3 * SCENES_PER_JOINT);
-        assert_eq!(suite, hard_suite(), "the suite is the same on every call");
+        assert_eq!(suite, hard_suite(Draw::Documented), "the suite is the same on every call");
         let names: std::collections::HashSet<_> = suite.iter().map(|(n, _)| n).collect();
         assert_eq!(names.len(), suite.len(), "scene names are unique");
         let cam = CameraModel::default();
-        let eval_names: Vec<String> = eval_suite().into_iter().map(|(n, _)| n).collect();
+        let eval_names: Vec<String> = eval_suite(Draw::Documented).into_iter().map(|(n, _)| n).collect();
         for joint in JointType::ALL {
             let scenes: Vec<_> = suite.iter().filter(|(_, s)| s.joint.joint_type() == joint).collect();
             assert_eq!(scenes.len(), SCENES_PER_JOINT);
@@ -726,9 +747,9 @@ mod tests {
 
     #[test]
     fn the_fault_suite_has_every_fault_on_every_joint_fair_and_fixed() {
-        let suite = fault_suite();
+        let suite = fault_suite(Draw::Documented);
         assert_eq!(suite.len(), FaultKind::ALL.len() * 3 * FAULT_SCENES_PER_JOINT);
-        assert_eq!(suite, fault_suite(), "the suite is the same on every call");
+        assert_eq!(suite, fault_suite(Draw::Documented), "the suite is the same on every call");
         let names: std::collections::HashSet<_> = suite.iter().map(|(n, _)| n).collect();
         assert_eq!(names.len(), suite.len(), "scene names are unique");
         let cam = CameraModel::default();

@@ -7,6 +7,7 @@
 use rand_chacha::ChaCha8Rng;
 use rand_core::SeedableRng;
 
+use super::draw::Draw;
 use super::suite::{MIN_OBSERVED_SEAM_MM, ScenePlan, draw_tee, framing, uniform};
 use super::truth::{SeamTruth, seam_truths};
 use super::{
@@ -52,13 +53,13 @@ const MULTI_MAX_DRAWS: usize = 4000;
 /// One view sees one root at most: the web's side faces are vertical, so
 /// the camera (and the projector beside it) sees the root on its own side
 /// and the web hides the other.
-pub fn tee_suite() -> Vec<(String, SceneSpec)> {
+pub fn tee_suite(draw: Draw) -> Vec<(String, SceneSpec)> {
     let camera = CameraModel::default();
     (0..TEE_SCENES)
         .map(|k| {
             let plan = ScenePlan::new(JointType::TFillet, 3, k, TEE_MAX_TILT_DEG);
             let holdout = k >= TEE_SCENES - TEE_HOLDOUT;
-            let base_seed = if holdout { TEE_HOLDOUT_SEED } else { TEE_SEED };
+            let base_seed = draw.seed(if holdout { TEE_HOLDOUT_SEED } else { TEE_SEED });
             let mut spec = plan.draw_framed(base_seed, k as u64, &camera);
             for attempt in 1..MAX_TEE_REDRAWS {
                 if seam_truths(&spec, &camera).iter().any(SeamTruth::is_seen) {
@@ -66,7 +67,7 @@ pub fn tee_suite() -> Vec<(String, SceneSpec)> {
                 }
                 spec = plan.draw_framed(base_seed, k as u64 + attempt * TEE_SCENES as u64, &camera);
             }
-            (format!("{}{}", plan.name(), if holdout { "-holdout" } else { "" }), spec)
+            (format!("{}{}", plan.name(), draw.suffix(holdout)), spec)
         })
         .collect()
 }
@@ -89,15 +90,15 @@ const CORNER_MAX_PROUD_MM: f64 = 4.0;
 /// Each is framed as a tee of the same plates would be, then redrawn until
 /// the camera sees the corner's weld along half its length. Named like
 /// `corner-inside-03-d612-t14`; the last [`CORNER_HOLDOUT`] are `-holdout`.
-pub fn corner_suite() -> Vec<(String, SceneSpec)> {
+pub fn corner_suite(draw: Draw) -> Vec<(String, SceneSpec)> {
     let camera = CameraModel::default();
     (0..CORNER_SCENES)
         .map(|k| {
             let kind = if k % 2 == 0 { CornerKind::Inside } else { CornerKind::Outside };
             let plan = ScenePlan::new(JointType::TFillet, 3, k, TEE_MAX_TILT_DEG);
             let holdout = k >= CORNER_SCENES - CORNER_HOLDOUT;
-            let base_seed = if holdout { CORNER_HOLDOUT_SEED } else { CORNER_SEED };
-            let draw = |attempt: u64| {
+            let base_seed = draw.seed(if holdout { CORNER_HOLDOUT_SEED } else { CORNER_SEED });
+            let attempt_at = |attempt: u64| {
                 let stream = k as u64 + attempt * CORNER_SCENES as u64;
                 let mut spec = plan.draw_framed(base_seed, stream, &camera);
                 let mut rng = ChaCha8Rng::seed_from_u64(base_seed ^ stream);
@@ -108,12 +109,12 @@ pub fn corner_suite() -> Vec<(String, SceneSpec)> {
                 as_corner(&mut spec, kind, proud_mm);
                 spec
             };
-            let mut spec = draw(0);
+            let mut spec = attempt_at(0);
             for attempt in 1..MAX_TEE_REDRAWS {
                 if spec.validate().is_ok() && seam_truths(&spec, &camera).iter().any(SeamTruth::is_seen) {
                     break;
                 }
-                spec = draw(attempt);
+                spec = attempt_at(attempt);
             }
             let placement = &spec.placement;
             let name = format!(
@@ -121,7 +122,7 @@ pub fn corner_suite() -> Vec<(String, SceneSpec)> {
                 kind.name(),
                 placement.distance_mm,
                 placement.tilt_deg,
-                if holdout { "-holdout" } else { "" }
+                draw.suffix(holdout)
             );
             (name, spec)
         })
@@ -150,13 +151,13 @@ fn as_corner(spec: &mut SceneSpec, kind: CornerKind, proud_mm: f64) {
 /// at least 80 % in the image and at least one seam of every part seen
 /// along half its length. Named like `multi-04-3-lap+t-fillet+v-butt-d841-t8`;
 /// the last [`MULTI_HOLDOUT`] are `-holdout`.
-pub fn multi_suite() -> Vec<(String, SceneSpec)> {
+pub fn multi_suite(draw: Draw) -> Vec<(String, SceneSpec)> {
     let camera = CameraModel::default();
     let last = (MULTI_SCENES - 1) as f64;
     (0..MULTI_SCENES)
         .map(|k| {
             let holdout = k >= MULTI_SCENES - MULTI_HOLDOUT;
-            let base_seed = if holdout { MULTI_HOLDOUT_SEED } else { MULTI_SEED };
+            let base_seed = draw.seed(if holdout { MULTI_HOLDOUT_SEED } else { MULTI_SEED });
             let count = 2 + k % 2;
             let joints: Vec<JointType> = (0..count).map(|w| MULTI_JOINTS[(k + w) % MULTI_JOINTS.len()]).collect();
             let [d0, d1] = MULTI_DISTANCE_MM;
@@ -164,11 +165,8 @@ pub fn multi_suite() -> Vec<(String, SceneSpec)> {
             let tilt = MULTI_MAX_TILT_DEG * ((k * 7) % MULTI_SCENES) as f64 / last;
             let spec = draw_multi(&joints, distance, tilt, base_seed, k as u64, &camera);
             let names: Vec<&str> = joints.iter().map(|j| j.dashed_name()).collect();
-            let name = format!(
-                "multi-{k:02}-{count}-{}-d{distance:.0}-t{tilt:.0}{}",
-                names.join("+"),
-                if holdout { "-holdout" } else { "" }
-            );
+            let name =
+                format!("multi-{k:02}-{count}-{}-d{distance:.0}-t{tilt:.0}{}", names.join("+"), draw.suffix(holdout));
             (name, spec)
         })
         .collect()
@@ -199,7 +197,7 @@ fn draw_multi(
 ) -> SceneSpec {
     let mut rng = ChaCha8Rng::seed_from_u64(base_seed);
     rng.set_stream(stream);
-    let seed = base_seed + stream;
+    let seed = base_seed.wrapping_add(stream);
     let mut spec = draw_multi_once(joints, distance_mm, tilt_deg, seed, &mut rng);
     for _ in 1..MULTI_MAX_DRAWS {
         if spec.validate().is_ok() && multi_framing_ok(&spec, camera) {
@@ -288,9 +286,9 @@ mod tests {
 
     #[test]
     fn the_corner_suite_alternates_inside_and_outside_corners_each_seen() {
-        let suite = corner_suite();
+        let suite = corner_suite(Draw::Documented);
         assert_eq!(suite.len(), CORNER_SCENES);
-        assert_eq!(suite, corner_suite(), "the suite is the same on every call");
+        assert_eq!(suite, corner_suite(Draw::Documented), "the suite is the same on every call");
         assert_eq!(suite.iter().filter(|(n, _)| n.ends_with("-holdout")).count(), CORNER_HOLDOUT);
         let cam = CameraModel::default();
         for (k, (name, spec)) in suite.iter().enumerate() {
@@ -318,9 +316,9 @@ mod tests {
 
     #[test]
     fn the_tee_suite_is_stratified_framed_and_fixed() {
-        let suite = tee_suite();
+        let suite = tee_suite(Draw::Documented);
         assert_eq!(suite.len(), TEE_SCENES);
-        assert_eq!(suite, tee_suite(), "the suite is the same on every call");
+        assert_eq!(suite, tee_suite(Draw::Documented), "the suite is the same on every call");
         let names: std::collections::HashSet<_> = suite.iter().map(|(n, _)| n).collect();
         assert_eq!(names.len(), suite.len());
         assert_eq!(suite.iter().filter(|(n, _)| n.ends_with("-holdout")).count(), TEE_HOLDOUT);
@@ -351,9 +349,9 @@ mod tests {
 
     #[test]
     fn the_multi_suite_has_two_or_three_parts_apart_and_in_view() {
-        let suite = multi_suite();
+        let suite = multi_suite(Draw::Documented);
         assert_eq!(suite.len(), MULTI_SCENES);
-        assert_eq!(suite, multi_suite(), "the suite is the same on every call");
+        assert_eq!(suite, multi_suite(Draw::Documented), "the suite is the same on every call");
         assert_eq!(suite.iter().filter(|(n, _)| n.ends_with("-holdout")).count(), MULTI_HOLDOUT);
         let cam = CameraModel::default();
         let mut joints = std::collections::HashSet::new();

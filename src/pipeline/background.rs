@@ -136,6 +136,16 @@ pub enum BackgroundError {
          in two; for a clamp, clear the joint or set a region of interest beside it"
     )]
     LiesAcross { top_mm2: f64, above_mm: f64, first_mm2: f64, second_mm2: f64 },
+    /// A butt joint's layer holds a third plate as large as a plate, lying
+    /// beside the pair across their seam rather than along it (a piece a
+    /// clamp or a streak cut off a plate lies along it): three plates side
+    /// by side meet at two joints, and the request names one.
+    #[error(
+        "three plates lie side by side in one plane ({first_mm2:.0}, {second_mm2:.0} and {third_mm2:.0} mm²), the \
+         third beyond the pair across their seam: they meet at two joints and the {joint} joint requested is either; \
+         set a region of interest round the one to weld"
+    )]
+    ThreeSideBySide { joint: JointType, first_mm2: f64, second_mm2: f64, third_mm2: f64 },
     /// The joint type was left to the planner, and the nearest layer holds
     /// a plate and a piece too small to be a plate beside it, over a lower
     /// plane one plate thickness behind: butt plates, one barely seen, or a
@@ -776,7 +786,43 @@ fn find_butt(l: &Layers, s: &Selection, joint: JointType) -> Result<usize, Backg
             smaller_mm2,
         });
     }
+    let [first, second, rest @ ..] = l.layers[pos].as_slice() else { return Ok(pos) };
+    if let Some(third) = rest
+        .iter()
+        .find(|c| c.area_mm2 >= SIDE_BY_SIDE_AREA_RATIO * smaller_mm2 && lies_beyond_pair(first, second, c, &l.normal))
+    {
+        return Err(BackgroundError::ThreeSideBySide {
+            joint,
+            first_mm2: first.area_mm2,
+            second_mm2: second.area_mm2,
+            third_mm2: third.area_mm2,
+        });
+    }
     Ok(pos)
+}
+
+/// How far beyond a butt pair, across their seam, a third plate's centroid
+/// must lie to be a plate beside them: in units of the distance between
+/// the pair's centroids, counted from the nearer of the two. A piece a
+/// clamp or a streak cut off one of the pair has that plate's centroid
+/// across the seam (it runs on along the seam, not beside it), moved at
+/// most by how differently the image border cuts the two pieces; a plate
+/// abutting one of the pair lies a plate's width further out.
+const BEYOND_PAIR_SPACINGS: f64 = 0.5;
+
+/// Whether `c` lies beside the pair `a`, `b` across their seam, beyond
+/// either: its centroid's place on the line through theirs, in the plane
+/// of the layer, is more than [`BEYOND_PAIR_SPACINGS`] of their distance
+/// outside the pair.
+fn lies_beyond_pair(a: &PlaneCluster, b: &PlaneCluster, c: &PlaneCluster, normal: &Vec3) -> bool {
+    let in_plane = |v: Vec3| v - normal * normal.dot(&v);
+    let across = in_plane(b.centroid - a.centroid);
+    let spacing = across.norm();
+    if spacing <= 0.0 {
+        return false;
+    }
+    let t = in_plane(c.centroid - a.centroid).dot(&across) / (spacing * spacing);
+    !(-BEYOND_PAIR_SPACINGS..=1.0 + BEYOND_PAIR_SPACINGS).contains(&t)
 }
 
 /// A tee's web top over its flange: the top's place in the layers, the
@@ -1076,6 +1122,30 @@ mod tests {
     /// A bar along y, five times longer than wide.
     fn bar(offset: f64, area: f64, centre_x: f64) -> PlaneCluster {
         PlaneCluster { elongation: 5.0, ..cluster(offset, area, centre_x) }
+    }
+
+    #[test]
+    fn a_third_plate_beside_a_butt_pair_is_refused_and_a_piece_along_it_is_not() {
+        // Plates of 100 mm side by side at x = 0 and 100, a third abutting
+        // the second at x = 190: two joints in one plane.
+        let pair = [cluster(700.0, 20_000.0, 0.0), cluster(700.5, 18_000.0, 100.0)];
+        let beside = [pair.as_slice(), &[cluster(699.5, 12_000.0, 190.0)]].concat();
+        let err = robust_select(beside.clone(), &selection(JointType::IButt)).unwrap_err();
+        assert!(matches!(err, BackgroundError::ThreeSideBySide { .. }), "{err}");
+        assert!(err.to_string().contains("region of interest"), "{err}");
+        // On the other side of the pair too, and under auto.
+        let before = [pair.as_slice(), &[cluster(699.5, 12_000.0, -95.0)]].concat();
+        assert!(matches!(robust_select(before, &auto()), Err(BackgroundError::Unrecognised { .. })));
+        // A piece of the second plate a clamp cut off lies along the seam,
+        // across it where that plate lies: the pair is planned.
+        let mut piece = cluster(700.5, 9_000.0, 104.0);
+        piece.centroid.y = 150.0;
+        let cut = [pair.as_slice(), &[piece]].concat();
+        assert_eq!(robust_select(cut, &selection(JointType::IButt)).unwrap().layout, Layout::Butt);
+        // So is a third plane too small to be a plate (a spatter bead, a
+        // tack).
+        let bead = [pair.as_slice(), &[cluster(700.0, 300.0, 190.0)]].concat();
+        assert_eq!(robust_select(bead, &selection(JointType::IButt)).unwrap().layout, Layout::Butt);
     }
 
     fn selection(joint: JointType) -> Selection {

@@ -10,6 +10,10 @@
 //! either fitted on the edge that is left or refused (the `edge_cut_short`
 //! gate) for the samples left beyond the line the rest fit, or for samples
 //! on two lines.
+//! Two came from fresh draws of the suite (`eval --fresh`): a part
+//! abutting an I-butt plate, larger in view than the other plate, and a
+//! clamp whose end over a lap's upper plate was planned as the lap's edge;
+//! both are refused for what the layers and the edges cannot decide.
 //! Each scene is planned as `weldseam eval --suite faults` plans it.
 
 use weldseam::camera::CameraModel;
@@ -21,8 +25,10 @@ use weldseam::sim::variants::Variant;
 use weldseam::sim::{Draw, Fault, fault_suite, simulate};
 
 fn planned(name: &str, joint: JointAsk) -> SceneOutcome {
-    let (_, spec) =
-        fault_suite(Draw::Documented).into_iter().find(|(n, _)| n == name).unwrap_or_else(|| panic!("no scene {name}"));
+    let (_, spec) = fault_suite(Draw::of_scene(name))
+        .into_iter()
+        .find(|(n, _)| n == name)
+        .unwrap_or_else(|| panic!("no scene {name}"));
     let sim = simulate(&spec, &CameraModel::default());
     let request = EvalRequest { joint, ..EvalRequest::default() };
     evaluate_variant(&Planner::new(Config::default()), name, &spec, &sim, &Variant::default(), &request)
@@ -63,6 +69,18 @@ fn a_clamp_lying_across_a_laps_plate_is_refused_as_an_object_on_the_workpiece() 
 fn a_part_abutting_a_v_butt_plate_is_refused_for_an_opening_the_groove_cannot_have() {
     let reason = refusal(&planned("fault-touching-part-v-butt-00-d1000-t30", JointAsk::AsScene)).to_string();
     assert!(reason.contains("mm apart, but a V-groove") && reason.contains("not this groove's"), "{reason}");
+}
+
+#[test]
+fn a_part_abutting_an_i_butt_plate_larger_than_the_other_plate_is_refused_as_a_third_plate() {
+    let reason = refusal(&planned("fault-touching-part-i-butt-00-d667-t0-fresh1", JointAsk::AsScene)).to_string();
+    assert!(reason.contains("three plates lie side by side") && reason.contains("region of interest"), "{reason}");
+}
+
+#[test]
+fn a_clamps_end_over_a_laps_upper_plate_is_refused_beside_the_longer_stretch_its_side_faces() {
+    let reason = refusal(&planned("fault-clamp-lap-00-d833-t0-fresh1", JointAsk::AsScene)).to_string();
+    assert!(reason.contains("face each other along two edges"), "{reason}");
 }
 
 #[test]

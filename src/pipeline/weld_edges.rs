@@ -7,6 +7,13 @@
 //! takes one line from each plate, requires the two to be parallel, and
 //! among the candidates keeps the pair facing each other most closely, so
 //! a stray line through a hole or along the image border is not chosen.
+//! Where the plates also face each other along another edge, turned from
+//! that pair as a part's end is from its side, for a longer stretch, the
+//! nearest pair is no answer: an object lying on a plate (a clamp over a
+//! lap's upper plate) faces the plane under it along its end and along
+//! its sides, a lap's upper plate may end on its lower plate, and the
+//! longer stretch is as likely the joint as the nearer one. That is
+//! refused.
 
 use crate::geometry::Vec3;
 
@@ -33,7 +40,24 @@ pub enum WeldEdgeError {
     /// Separating lines exist but no pair of them is parallel.
     #[error("no separating edge line of one plate is within {max_angle_deg}° of one of the other plate")]
     NotParallel { max_angle_deg: f64 },
+    /// The nearest facing pair shares a shorter stretch than another
+    /// facing pair along another edge.
+    #[error(
+        "the two plates face each other along two edges {angle_deg:.0}° apart: the nearest pair for {nearest_mm:.0} \
+         mm, the other for {longer_mm:.0} mm; an object lying on a plate (a clamp) faces the plane under it along \
+         its end and its sides, and a lap's upper plate may end on its lower plate: which edge is the joint is not \
+         clear"
+    )]
+    TwoFacingEdges { nearest_mm: f64, longer_mm: f64, angle_deg: f64 },
 }
+
+/// How far from the nearest pair another facing pair must turn to be
+/// another edge of the plates rather than a stray line: a part's end
+/// meets its side at a right angle, and a line through a corner of the
+/// plate's outline, or along the image border where it cuts the plates,
+/// runs at any angle (31° on the hard suite's lap-10, whose seam the
+/// nearest pair is).
+const OTHER_EDGE_MIN_ANGLE_DEG: f64 = 60.0;
 
 /// The least stretch two weld edges must share along the seam, as a
 /// fraction of the shorter one's: facing edges share most of theirs (a
@@ -97,7 +121,8 @@ pub fn robust_select(
             .map(|&i| along.dot(&(points[plate][i] - l.point)))
             .fold((f64::MAX, f64::MIN), |(lo, hi), t| (lo.min(t), hi.max(t)))
     };
-    let mut best: Option<(f64, [usize; 2])> = None;
+    // Every facing pair: how far apart, which lines, the stretch shared.
+    let mut facing: Vec<(f64, [usize; 2], f64)> = Vec::new();
     for &a in &sep_a {
         for &b in &sep_b {
             let (la, lb) = (&lines[0][a], &lines[1][b]);
@@ -118,12 +143,26 @@ pub fn robust_select(
             }
             // How far apart the two edges run: the facing pair is closest.
             let gap = la.distance(&mid(1, b)) + lb.distance(&mid(0, a));
-            if best.as_ref().is_none_or(|(g, _)| gap < *g) {
-                best = Some((gap, [a, b]));
-            }
+            facing.push((gap, [a, b], shared));
         }
     }
-    best.map(|(_, pair)| pair).ok_or(WeldEdgeError::NotParallel { max_angle_deg })
+    let &(_, best, shared) =
+        facing.iter().min_by(|x, y| x.0.total_cmp(&y.0)).ok_or(WeldEdgeError::NotParallel { max_angle_deg })?;
+    let direction = lines[0][best[0]].direction;
+    let cos_other = OTHER_EDGE_MIN_ANGLE_DEG.to_radians().cos();
+    let other_edge = facing
+        .iter()
+        .filter(|(_, [a, _], other)| *other > shared && lines[0][*a].direction.dot(&direction).abs() <= cos_other)
+        .max_by(|x, y| x.2.total_cmp(&y.2));
+    if let Some(&(_, [a, _], longer_mm)) = other_edge {
+        let cos = lines[0][a].direction.dot(&direction).abs().min(1.0);
+        return Err(WeldEdgeError::TwoFacingEdges {
+            nearest_mm: shared,
+            longer_mm,
+            angle_deg: cos.acos().to_degrees(),
+        });
+    }
+    Ok(best)
 }
 
 #[cfg(test)]
@@ -166,6 +205,43 @@ mod tests {
         let centroids = [Vec3::new(-50.0, 0.0, 600.0), Vec3::new(50.0, 50.0, 600.0)];
         let pick = robust_select([&a_lines, &b_lines], [&a_pts, &b_pts], centroids, &Vec3::z(), 10.0).unwrap();
         assert_eq!(pick, [1, 0]);
+    }
+
+    #[test]
+    fn a_longer_facing_stretch_along_another_edge_is_refused() {
+        // Plate A's end runs along x at y = 0 (x 0 to 30) and its side
+        // along y at x = 30 (y 0 to 60); plate B faces the end 1 mm off
+        // and the side 2 mm off, along as much of each: the end pair is
+        // nearer, the side pair twice as long.
+        let along = |from: Vec3, step: Vec3| (0..31).map(|i| from + step * i as f64).collect::<Vec<_>>();
+        let a_pts = [along(Vec3::new(0.0, 0.0, 600.0), Vec3::x()), along(Vec3::new(30.0, 0.0, 600.0), Vec3::y() * 2.0)]
+            .concat();
+        let b_pts =
+            [along(Vec3::new(0.0, -1.0, 600.0), Vec3::x()), along(Vec3::new(32.0, 0.0, 600.0), Vec3::y() * 2.0)]
+                .concat();
+        let line = |point: Vec3, direction: Vec3, inliers: std::ops::Range<usize>| EdgeLine {
+            point,
+            direction,
+            inliers: inliers.collect(),
+        };
+        let a_lines = vec![
+            line(Vec3::new(0.0, 0.0, 600.0), Vec3::x(), 0..31),
+            line(Vec3::new(30.0, 0.0, 600.0), Vec3::y(), 31..62),
+        ];
+        let b_lines = vec![
+            line(Vec3::new(0.0, -1.0, 600.0), Vec3::x(), 0..31),
+            line(Vec3::new(32.0, 0.0, 600.0), Vec3::y(), 31..62),
+        ];
+        let centroids = [Vec3::new(15.0, 30.0, 600.0), Vec3::new(45.0, -30.0, 600.0)];
+        let err = robust_select([&a_lines, &b_lines], [&a_pts, &b_pts], centroids, &Vec3::z(), 10.0).unwrap_err();
+        let WeldEdgeError::TwoFacingEdges { nearest_mm, longer_mm, angle_deg } = err else { panic!("{err}") };
+        assert!((nearest_mm - 30.0).abs() < 1e-9 && (longer_mm - 60.0).abs() < 1e-9, "{err}");
+        assert!((angle_deg - 90.0).abs() < 1e-6, "{err}");
+        // With the side as short as the end, the nearer pair is the answer.
+        let short_side: Vec<EdgeLine> = vec![a_lines[0].clone(), line(a_lines[1].point, Vec3::y(), 31..46)];
+        let short_b: Vec<EdgeLine> = vec![b_lines[0].clone(), line(b_lines[1].point, Vec3::y(), 31..46)];
+        let pick = robust_select([&short_side, &short_b], [&a_pts, &b_pts], centroids, &Vec3::z(), 10.0).unwrap();
+        assert_eq!(pick, [0, 0]);
     }
 
     #[test]

@@ -48,9 +48,10 @@ fn plan_strip(name: &str, spec: &SceneSpec) {
 }
 
 fn suite_scene(name: &str) -> SceneSpec {
-    consumer_suite(Draw::Documented)
+    let draw = Draw::of_scene(name);
+    consumer_suite(draw)
         .into_iter()
-        .chain(consumer_far_suite(Draw::Documented))
+        .chain(consumer_far_suite(draw))
         .find(|(n, _)| n == name)
         .unwrap_or_else(|| panic!("no consumer scene {name}"))
         .1
@@ -62,6 +63,14 @@ fn the_issues_v_groove_strip_plans_at_the_default_settings() {
     // seam are in view, and the plan must span them to within 2 mm.
     let spec = consumer_demo_scene(JointType::VButt);
     plan_strip("the issue's V-groove", &spec);
+}
+
+#[test]
+fn a_groove_whose_apex_the_voxels_flatten_into_a_plane_is_not_refused_as_deeper_than_the_plates() {
+    // In the strip the only layer behind the plates is a narrow plane at
+    // the V's apex, 7.6 mm under their top for a groove 8.07 mm deep: the
+    // joint's own floor, not what the plates rest on.
+    plan_strip("233 mm, tilted 10 degrees", &suite_scene("consumer-v-butt-01-d233-t10-fresh1"));
 }
 
 #[test]

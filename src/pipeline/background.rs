@@ -75,6 +75,13 @@ pub struct Workpiece {
     /// table or fixture they rest on, when the camera sees it. The plates
     /// are no thicker than this, so neither is a groove (robust method).
     pub depth_to_support_mm: Option<f64>,
+    /// Whether that surface is only a strip between butt plates, along
+    /// their seam (robust method): the joint's own floor (a V-groove's
+    /// apex in a noisy cloud, the table seen through a gap), whose depth
+    /// measures the groove rather than bounding it. A requested groove
+    /// depth is then judged by the groove-depth gate against the measured
+    /// one, not refused against this depth.
+    pub support_between_plates: bool,
     /// The other clusters of each plate's layer (robust method): pieces
     /// of a plate a streak or a dropout split off, or whatever else lies
     /// in its plane. The coverage report joins those beside the weld that
@@ -666,9 +673,12 @@ fn take_two(planes: Vec<PlaneCluster>) -> Result<Workpiece, BackgroundError> {
     let found = planes.len();
     let mut it = planes.into_iter();
     match (it.next(), it.next()) {
-        (Some(a), Some(b)) => {
-            Ok(Workpiece { plates: [a, b], depth_to_support_mm: None, layer_mates: Default::default() })
-        }
+        (Some(a), Some(b)) => Ok(Workpiece {
+            plates: [a, b],
+            depth_to_support_mm: None,
+            support_between_plates: false,
+            layer_mates: Default::default(),
+        }),
         _ => Err(BackgroundError::TooFewPlanes { found }),
     }
 }
@@ -810,19 +820,32 @@ fn find_butt(l: &Layers, s: &Selection, joint: JointType) -> Result<usize, Backg
 /// abutting one of the pair lies a plate's width further out.
 const BEYOND_PAIR_SPACINGS: f64 = 0.5;
 
-/// Whether `c` lies beside the pair `a`, `b` across their seam, beyond
-/// either: its centroid's place on the line through theirs, in the plane
-/// of the layer, is more than [`BEYOND_PAIR_SPACINGS`] of their distance
-/// outside the pair.
-fn lies_beyond_pair(a: &PlaneCluster, b: &PlaneCluster, c: &PlaneCluster, normal: &Vec3) -> bool {
+/// Where `c`'s centroid lies across the pair `a`, `b`: its place on the
+/// line through theirs, in the plane of the layer (0 at `a`'s, 1 at
+/// `b`'s); None for a pair whose centroids coincide.
+fn across_pair(a: &PlaneCluster, b: &PlaneCluster, c: &PlaneCluster, normal: &Vec3) -> Option<f64> {
     let in_plane = |v: Vec3| v - normal * normal.dot(&v);
     let across = in_plane(b.centroid - a.centroid);
     let spacing = across.norm();
-    if spacing <= 0.0 {
-        return false;
-    }
-    let t = in_plane(c.centroid - a.centroid).dot(&across) / (spacing * spacing);
-    !(-BEYOND_PAIR_SPACINGS..=1.0 + BEYOND_PAIR_SPACINGS).contains(&t)
+    (spacing > 0.0).then(|| in_plane(c.centroid - a.centroid).dot(&across) / (spacing * spacing))
+}
+
+/// Whether `c` lies beside the pair `a`, `b` across their seam, beyond
+/// either: its centroid more than [`BEYOND_PAIR_SPACINGS`] of their
+/// distance outside the pair.
+fn lies_beyond_pair(a: &PlaneCluster, b: &PlaneCluster, c: &PlaneCluster, normal: &Vec3) -> bool {
+    across_pair(a, b, c, normal).is_some_and(|t| !(-BEYOND_PAIR_SPACINGS..=1.0 + BEYOND_PAIR_SPACINGS).contains(&t))
+}
+
+/// Whether `c` is a strip between the pair `a`, `b`: its centroid between
+/// theirs, and it is a bar ([`BAR_ELONGATION`]) narrower than either
+/// plate. A V-groove's apex, which the voxels of a noisy cloud flatten
+/// into a narrow plane, or the table a gap shows lie so; what the plates
+/// rest on reaches out under and beside them.
+fn lies_between_pair(a: &PlaneCluster, b: &PlaneCluster, c: &PlaneCluster, normal: &Vec3) -> bool {
+    across_pair(a, b, c, normal).is_some_and(|t| {
+        (0.0..=1.0).contains(&t) && c.elongation >= BAR_ELONGATION && c.width_mm() < a.width_mm().min(b.width_mm())
+    })
 }
 
 /// A tee's web top over its flange: the top's place in the layers, the
@@ -1092,13 +1115,19 @@ pub fn robust_select(planes: Vec<PlaneCluster>, s: &Selection) -> Result<Selecte
             }
         },
     };
+    let [(pair_layer, first_k), (second_layer, second_k)] = picks;
+    let support_between_plates = layout == Layout::Butt
+        && l.layers.get(pair_layer + 1).is_some_and(|behind| {
+            let (a, b) = (&l.layers[pair_layer][first_k], &l.layers[second_layer][second_k]);
+            behind.iter().all(|c| lies_between_pair(a, b, c, &l.normal))
+        });
     // Take the two plates out of their layers, the later pick first so the
     // earlier one's place does not move.
     let mut layers = l.layers;
     let mut take = |(layer, k): (usize, usize)| layers[layer].swap_remove(k);
     let (second, first) = (take(picks[1]), take(picks[0]));
     let layer_mates = [layers[picks[0].0].clone(), std::mem::take(&mut layers[picks[1].0])];
-    let workpiece = Workpiece { plates: [first, second], depth_to_support_mm, layer_mates };
+    let workpiece = Workpiece { plates: [first, second], depth_to_support_mm, support_between_plates, layer_mates };
     Ok(Selected { workpiece, layout, evidence })
 }
 
@@ -1146,6 +1175,22 @@ mod tests {
         // tack).
         let bead = [pair.as_slice(), &[cluster(700.0, 300.0, 190.0)]].concat();
         assert_eq!(robust_select(bead, &selection(JointType::IButt)).unwrap().layout, Layout::Butt);
+    }
+
+    #[test]
+    fn a_narrow_strip_between_butt_plates_is_their_floor_and_a_wide_plane_their_support() {
+        // Butt plates 100 mm wide at x = 0 and 100; behind them a strip 3 mm
+        // wide along the seam (a V's apex in a noisy cloud), or the table.
+        let plate = |x: f64| PlaneCluster { elongation: 3.0, ..cluster(700.0, 30_000.0, x) };
+        let strip = PlaneCluster { elongation: 100.0, ..cluster(707.6, 900.0, 50.0) };
+        let pair = [plate(0.0), plate(100.0)];
+        let floor = robust_select([pair.as_slice(), &[strip]].concat(), &selection(JointType::VButt)).unwrap();
+        assert!(floor.workpiece.depth_to_support_mm.is_some_and(|d| (d - 7.6).abs() < 1e-9));
+        assert!(floor.workpiece.support_between_plates);
+        let table = cluster(740.0, 200_000.0, 50.0);
+        let rest = robust_select([pair.as_slice(), &[table]].concat(), &selection(JointType::VButt)).unwrap();
+        assert_eq!(rest.workpiece.depth_to_support_mm, Some(40.0));
+        assert!(!rest.workpiece.support_between_plates);
     }
 
     fn selection(joint: JointType) -> Selection {

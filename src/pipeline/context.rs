@@ -259,10 +259,13 @@ impl<'a> Context<'a> {
 
     /// A groove cannot be deeper than the plates: where the surface they
     /// rest on is seen, the depth to it bounds the requested groove depth
-    /// (which moves every waypoint along the normal, Eq. 32).
+    /// (which moves every waypoint along the normal, Eq. 32). A surface
+    /// seen only between the plates is the joint's own floor, no bound:
+    /// the groove-depth gate judges the request against the groove
+    /// measured.
     pub(super) fn check_groove_depth(&self, workpiece: &Workpiece) -> Result<(), PlanError> {
-        let (Some(JointType::VButt), Some(depth), Some(support)) =
-            (self.joint, self.request.groove_depth_mm, workpiece.depth_to_support_mm)
+        let (Some(JointType::VButt), Some(depth), Some(support), false) =
+            (self.joint, self.request.groove_depth_mm, workpiece.depth_to_support_mm, workpiece.support_between_plates)
         else {
             return Ok(());
         };

@@ -239,6 +239,7 @@ fn plan_workpiece(
             let workpiece = background::Workpiece {
                 plates: [standing, flange],
                 depth_to_support_mm: None,
+                support_between_plates: false,
                 layer_mates: [Vec::new(), Vec::new()],
             };
             ctx.clock.lap(Stage::Background);

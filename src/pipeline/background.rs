@@ -75,10 +75,10 @@ pub struct Workpiece {
     /// table or fixture they rest on, when the camera sees it. The plates
     /// are no thicker than this, so neither is a groove (robust method).
     pub depth_to_support_mm: Option<f64>,
-    /// Whether that surface is only a strip between butt plates, along
-    /// their seam (robust method): the joint's own floor (a V-groove's
-    /// apex in a noisy cloud, the table seen through a gap), whose depth
-    /// measures the groove rather than bounding it. A requested groove
+    /// Whether that surface is only a narrow strip between butt plates
+    /// (robust method): the joint's own floor (a V-groove's apex in a
+    /// noisy cloud, the table seen through a gap), whose depth measures
+    /// the groove rather than bounding it. A requested groove
     /// depth is then judged by the groove-depth gate against the measured
     /// one, not refused against this depth.
     pub support_between_plates: bool,

@@ -425,15 +425,12 @@ fn cut_short(seam: &SeamEvidence, limits: &QualityParams) -> Option<GateFailure>
 /// Every gate `seam` fails, in [`Gate::ALL`]'s order.
 pub fn check(seam: &SeamEvidence, limits: &QualityParams) -> Vec<GateFailure> {
     let q = seam.quality;
-    let mut failed = Vec::new();
+    let mut failed: Vec<GateFailure> = cut_short(seam, limits).into_iter().collect();
     let mut fail = |gate, value: f64, limit: f64, message: String| {
         failed.push(GateFailure { gate, value, limit, message });
     };
 
     let tee = seam.joint == JointType::TFillet;
-    if let Some(f) = cut_short(seam, limits) {
-        fail(f.gate, f.value, f.limit, f.message);
-    }
 
     let edge = larger(seam.edge_fit_rms_mm);
     let rms = seam.edge_fit_rms_mm[edge];

@@ -277,6 +277,39 @@ fn lies_across(top: &PlaneCluster, a: &PlaneCluster, b: &PlaneCluster, normal: &
     side_of(top, a, normal) * side_of(top, b, normal) < 0.0
 }
 
+/// How much of `under` is seen beside `top` on each side of it, mm²: its
+/// points between `top`'s ends along its long axis and beyond its sides
+/// across it, each standing for an equal share of `under`'s area. A bar
+/// lying across a plate leaves the plate seen on both of its sides, also
+/// where the plate is one cluster round the bar's end; a lap's upper plate
+/// ends on its lower plate, seen beside one of its sides only. Counting
+/// only past the top's own reach across keeps a plate the image border
+/// cuts slantwise, whose long axis runs askew of its edges, to one side.
+fn seen_beside(top: &PlaneCluster, under: &PlaneCluster, normal: &Vec3, points: &[Point]) -> [f64; 2] {
+    let across_axis = normal.cross(&top.long_axis);
+    let place = |p: Vec3| {
+        let d = p - top.centroid;
+        (top.long_axis.dot(&d), across_axis.dot(&d))
+    };
+    let ([along_lo, along_hi], [across_lo, across_hi]) = member_points(&top.members, points).map(place).fold(
+        ([f64::INFINITY, f64::NEG_INFINITY], [f64::INFINITY, f64::NEG_INFINITY]),
+        |([a0, a1], [c0, c1]), (a, c)| ([a0.min(a), a1.max(a)], [c0.min(c), c1.max(c)]),
+    );
+    let mut counts = [0usize; 2];
+    for (along, across) in member_points(&under.members, points).map(place) {
+        if !(along_lo..=along_hi).contains(&along) {
+            continue;
+        }
+        if across < across_lo {
+            counts[0] += 1;
+        } else if across > across_hi {
+            counts[1] += 1;
+        }
+    }
+    let per_point_mm2 = under.area_mm2 / under.members.len().max(1) as f64;
+    counts.map(|n| n as f64 * per_point_mm2)
+}
+
 impl PlaneCluster {
     /// How wide a long narrow cluster is, mm: a rectangle L by W covers
     /// L W and spreads L / W times further along than across.
@@ -939,7 +972,7 @@ pub fn nearest_layer(planes: &[PlaneCluster], s: &Selection) -> Option<Vec<Plane
 }
 
 /// Where a lap's plates are: the upper and the lower layer.
-fn find_lap(l: &Layers, s: &Selection) -> Result<(usize, usize), BackgroundError> {
+fn find_lap(l: &Layers, s: &Selection, points: &[Point]) -> Result<(usize, usize), BackgroundError> {
     for upper in 0..l.layers.len() {
         for lower in upper + 1..l.layers.len() {
             let step = l.depth(lower) - l.depth(upper);
@@ -958,18 +991,28 @@ fn find_lap(l: &Layers, s: &Selection) -> Result<(usize, usize), BackgroundError
                     });
                 }
                 // The lower plate seen on both sides of the upper one: the
-                // upper one lies across it.
+                // upper one lies across it. Split into two clusters by it,
+                // or one cluster round its end (a clamp shorter than the
+                // plate is wide).
                 let (top, under) = (&l.layers[upper][0], &l.layers[lower]);
+                let across = |first_mm2: f64, second_mm2: f64| BackgroundError::LiesAcross {
+                    top_mm2: top.area_mm2,
+                    above_mm: step,
+                    first_mm2,
+                    second_mm2,
+                };
                 if let Some(piece) = under[1..].iter().find(|c| {
                     c.area_mm2 >= SIDE_BY_SIDE_AREA_RATIO * under[0].area_mm2
                         && lies_across(top, &under[0], c, &l.normal)
                 }) {
-                    return Err(BackgroundError::LiesAcross {
-                        top_mm2: top.area_mm2,
-                        above_mm: step,
-                        first_mm2: under[0].area_mm2,
-                        second_mm2: piece.area_mm2,
-                    });
+                    return Err(across(under[0].area_mm2, piece.area_mm2));
+                }
+                if top.elongation >= BAR_ELONGATION {
+                    let [one, other] = seen_beside(top, &under[0], &l.normal, points);
+                    let (larger, smaller) = (one.max(other), one.min(other));
+                    if smaller > 0.0 && smaller >= SIDE_BY_SIDE_AREA_RATIO * larger {
+                        return Err(across(larger, smaller));
+                    }
                 }
                 return Ok((upper, lower));
             }
@@ -989,7 +1032,8 @@ fn find_lap(l: &Layers, s: &Selection) -> Result<(usize, usize), BackgroundError
 /// thickness apart with one plate on top a lap, and where both fit, the
 /// one whose top plate is nearer the camera (the workpiece's top) unless
 /// that top is too small beside the butt plates to be a plate (a clamp).
-pub fn robust_select(planes: Vec<PlaneCluster>, s: &Selection) -> Result<Selected, BackgroundError> {
+/// `points` is the frame the clusters index.
+pub fn robust_select(planes: Vec<PlaneCluster>, s: &Selection, points: &[Point]) -> Result<Selected, BackgroundError> {
     let mut planes: Vec<PlaneCluster> = planes.into_iter().filter(|c| s.faces_camera(c)).collect();
     let found = planes.len();
     if found < 2 {
@@ -1075,8 +1119,8 @@ pub fn robust_select(planes: Vec<PlaneCluster>, s: &Selection) -> Result<Selecte
         }
         (None, Some(t)) if t.two_sided() => tee(&l, &t),
         (Some(joint), _) if Layout::of(joint) == Layout::Butt => butt(&l, find_butt(&l, s, joint)?, String::new()),
-        (Some(_), _) => lap(&l, find_lap(&l, s)?, String::new()),
-        (None, _) => match (find_butt(&l, s, JointType::IButt), find_lap(&l, s)) {
+        (Some(_), _) => lap(&l, find_lap(&l, s, points)?, String::new()),
+        (None, _) => match (find_butt(&l, s, JointType::IButt), find_lap(&l, s, points)) {
             // A plate over the pair, not a clamp: as large as a plate beside
             // it, and over a lower plate of its own, not lying across the
             // pair (a clamp or a fixture over a butt joint's gap).
@@ -1134,6 +1178,12 @@ pub fn robust_select(planes: Vec<PlaneCluster>, s: &Selection) -> Result<Selecte
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The robust rule over clusters that index no frame: what only
+    /// their points show is not seen.
+    fn robust_select(planes: Vec<PlaneCluster>, s: &Selection) -> Result<Selected, BackgroundError> {
+        super::robust_select(planes, s, &[])
+    }
 
     /// A plate as long along y as it is wide across x.
     fn cluster(offset: f64, area: f64, centre_x: f64) -> PlaneCluster {
@@ -1481,6 +1531,55 @@ mod tests {
         let butt = robust_select(planes(), &selection(JointType::IButt)).unwrap();
         assert_eq!(butt.workpiece.plates.each_ref().map(|p| p.plane.offset), [700.0, 700.0]);
         assert_eq!(robust_select(planes(), &auto()).unwrap().layout, Layout::Butt);
+    }
+
+    /// Points on a 1 mm grid over the rectangle `x`, `y` (mm, ends
+    /// excluded) at depth `z`, leaving out those `hidden` keeps.
+    fn grid(x: [i32; 2], y: [i32; 2], z: f64, hidden: impl Fn(f64, f64) -> bool) -> Vec<Vec3> {
+        (x[0]..x[1])
+            .flat_map(|i| (y[0]..y[1]).map(move |j| Vec3::new(i as f64 + 0.5, j as f64 + 0.5, z)))
+            .filter(|p| !hidden(p.x, p.y))
+            .collect()
+    }
+
+    /// A plane cluster of each group of points (each at its own depth),
+    /// indexing the frame of all of them, returned with them.
+    fn frame_of(groups: &[Vec<Vec3>]) -> (Vec<PlaneCluster>, Vec<Point>) {
+        let all: Vec<Vec3> = groups.concat();
+        let clusters = groups.iter().map(|g| PlaneCluster::of_points(&all, |p| p.z == g[0].z)).collect();
+        (clusters, all.iter().map(|p| [p.x as f32, p.y as f32, p.z as f32]).collect())
+    }
+
+    #[test]
+    fn a_bar_across_a_plate_seen_round_its_end_is_no_lap() {
+        // A clamp 30 mm wide, 15 mm over a plate 120 mm wide, from 10 mm
+        // inside the plate's one side onto the lower plate past its
+        // other: the plate is seen on both of the clamp's sides, one
+        // cluster round its end. The lower plate lies 7 mm under it.
+        let clamp = |x: f64, y: f64| (-50.0..70.0).contains(&x) && y.abs() < 15.0;
+        let (planes, points) = frame_of(&[
+            grid([-50, 70], [-15, 15], 685.0, |_, _| false),
+            grid([-60, 60], [-100, 100], 700.0, clamp),
+            grid([60, 160], [-100, 100], 707.0, clamp),
+        ]);
+        let err = super::robust_select(planes.clone(), &selection(JointType::Lap), &points).unwrap_err();
+        let BackgroundError::LiesAcross { first_mm2, second_mm2, .. } = err else { panic!("{err}") };
+        // Beside the clamp, 85 by 110 mm of the plate on either side.
+        assert!((first_mm2 - 9_350.0).abs() < 200.0 && (second_mm2 - 9_350.0).abs() < 200.0, "{err}");
+        // Without the points, the clusters alone do not show it.
+        assert!(robust_select(planes, &selection(JointType::Lap)).is_ok());
+    }
+
+    #[test]
+    fn a_lap_whose_lower_plate_runs_on_past_the_upper_plates_end_is_kept() {
+        // The upper plate 100 by 300 mm; the lower one, 6 mm under it,
+        // reaches 20 mm under it and runs on 50 mm past its end, where
+        // it is seen on both sides of the upper plate's long axis.
+        let upper = |x: f64, y: f64| (-100.0..0.0).contains(&x) && (-150.0..150.0).contains(&y);
+        let (planes, points) =
+            frame_of(&[grid([-100, 0], [-150, 150], 700.0, |_, _| false), grid([-20, 100], [-150, 200], 706.0, upper)]);
+        let chosen = super::robust_select(planes, &selection(JointType::Lap), &points).unwrap();
+        assert_eq!(chosen.workpiece.plates.each_ref().map(|p| p.centroid.z), [700.0, 706.0]);
     }
 
     #[test]

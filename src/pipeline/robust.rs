@@ -259,7 +259,7 @@ fn plan_workpiece(
         Some(_) => false,
     };
     let bare_flange = face_may_stand.then(|| background::nearest_layer(&planes, &selection)).flatten();
-    let selected = match (background::robust_select(planes, &selection), bare_flange) {
+    let selected = match (background::robust_select(planes, &selection, ctx.cloud.points()), bare_flange) {
         (Err(e @ (BackgroundError::NoWeb { .. } | BackgroundError::TooFewPlanes { .. })), Some(flange)) => {
             return plan_topless_tee(ctx, flange, e);
         }

@@ -96,6 +96,14 @@ fn a_clamp_over_a_laps_plate_seen_round_its_end_is_refused_as_lying_across_it() 
 }
 
 #[test]
+fn a_laps_lower_plate_seen_past_the_upper_plates_end_and_as_a_sliver_beside_it_is_refused() {
+    // The sliver's lines separate no centroids, and the upper plate's end
+    // was planned as the lap's edge, 91 mm off.
+    let reason = refusal(&planned("fault-barely-in-view-lap-02-d500-t20-fresh2", JointAsk::AsScene)).to_string();
+    assert!(reason.contains("face each other along two edges"), "{reason}");
+}
+
+#[test]
 fn a_lap_plate_cut_by_a_streak_is_refused_for_coverage_and_not_found_as_a_butt_joint() {
     let name = "fault-streaks-lap-01-d833-t20";
     let reason = refusal(&planned(name, JointAsk::AsScene)).to_string();

@@ -284,6 +284,78 @@ pub fn members_along(cloud: &PointCloud, members: &[u32], edge: &CoarseEdge, ban
     Some([reach.back?.1, reach.forward?.1])
 }
 
+/// A plate's edge and the stretch along it its edge points span, mm from
+/// `edge.point` along `edge.direction`.
+#[derive(Debug, Clone, Copy)]
+pub struct SpannedEdge {
+    pub edge: CoarseEdge,
+    pub span: [f64; 2],
+}
+
+/// The most bins an edge's stretch is cut into: a span longer than this
+/// many bins is read in coarser bins, so a wild line cannot ask for an
+/// unbounded count.
+const MAX_STRETCH_BINS: usize = 1 << 14;
+
+/// How many points of a plate, spread at its point spacing, a bin beside
+/// an edge must expect before the plate's points are read one in several:
+/// enough that a bin the plate covers is never left empty by the
+/// thinning.
+const POINTS_PER_BIN_READ: f64 = 16.0;
+
+/// How long a stretch of each edge the points of `members` are seen
+/// beside, mm: each edge's span cut into bins of `bin_mm`, a bin counted
+/// where a point lies in it within `band_mm` beyond the edge (on its
+/// outward side). A plate seen beside another's edge along its whole
+/// length fills every bin; one seen only at a corner, or beyond the
+/// image border, few or none. Where a bin holds far more points than it
+/// takes to see it covered (`spacing_mm` apart), one point in several is
+/// read: a dense frame's plate is millions of points, read here for a
+/// yes or no per bin.
+pub fn stretch_seen_beside(
+    cloud: &PointCloud,
+    members: &[&[u32]],
+    edges: &[SpannedEdge],
+    [band_mm, bin_mm, spacing_mm]: [f64; 3],
+) -> Vec<f64> {
+    use rayon::prelude::*;
+    let points = cloud.points();
+    let per_bin = band_mm * bin_mm / (spacing_mm * spacing_mm).max(f64::MIN_POSITIVE);
+    let stride = (per_bin / POINTS_PER_BIN_READ).floor().clamp(1.0, u16::MAX as f64) as usize;
+    let bins: Vec<(usize, f64)> = edges
+        .iter()
+        .map(|e| {
+            let length = (e.span[1] - e.span[0]).max(0.0);
+            let count = ((length / bin_mm).ceil() as usize).clamp(1, MAX_STRETCH_BINS);
+            (count, (length / count as f64).max(f64::MIN_POSITIVE))
+        })
+        .collect();
+    let empty = || bins.iter().map(|&(count, _)| vec![false; count]).collect::<Vec<_>>();
+    let chunks: Vec<&[u32]> = members.iter().flat_map(|m| m.chunks(MEMBERS_PER_CHUNK)).collect();
+    let seen = chunks
+        .into_par_iter()
+        .map(|chunk| {
+            let mut seen = empty();
+            for &i in chunk.iter().step_by(stride) {
+                let v = vec3(&points[i as usize]);
+                for ((e, &(count, width)), seen) in edges.iter().zip(&bins).zip(&mut seen) {
+                    let d = v - e.edge.point;
+                    let out = d.dot(&e.edge.outward);
+                    let along = d.dot(&e.edge.direction) - e.span[0];
+                    if out > 0.0 && out <= band_mm && along >= 0.0 && along < count as f64 * width {
+                        seen[(along / width) as usize] = true;
+                    }
+                }
+            }
+            seen
+        })
+        .reduce(empty, |mut a, b| {
+            a.iter_mut().zip(b).for_each(|(a, b)| a.iter_mut().zip(b).for_each(|(a, b)| *a |= b));
+            a
+        });
+    seen.iter().zip(&bins).map(|(s, &(_, width))| s.iter().filter(|&&b| b).count() as f64 * width).collect()
+}
+
 /// How far past a weld edge's end, along the seam, the image border may lie
 /// for the end to be taken for the border's: a seam leaving the image at a
 /// grazing angle runs this far inside the rim the plane criterion trims
@@ -1275,6 +1347,32 @@ fn extend_past_ends(walker: &Walker, found: &mut Vec<(usize, isize, BoundarySamp
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_plate_is_seen_beside_an_edge_along_the_stretch_its_points_reach() {
+        // Points on a 1 mm grid beside an edge along x at y = 0 (outward
+        // +y), from x = 10 to 40 and 3 to 6 mm out; others farther out,
+        // behind the edge, or past its span.
+        let mut points: Vec<crate::cloud::Point> = Vec::new();
+        for x in 0..60 {
+            for y in -5..20 {
+                points.push([x as f32 + 0.5, y as f32 + 0.5, 600.0]);
+            }
+        }
+        let members: Vec<u32> = (0..points.len() as u32)
+            .filter(|&i| {
+                let [x, y, _] = points[i as usize];
+                ((10.0..40.0).contains(&x) && (3.0..6.0).contains(&y)) || !(0.0..=12.0).contains(&y)
+            })
+            .collect();
+        let cloud = PointCloud::unorganized(points);
+        let edge = CoarseEdge { point: Vec3::new(0.0, 0.0, 600.0), direction: Vec3::x(), outward: Vec3::y() };
+        let spanned = SpannedEdge { edge, span: [0.0, 50.0] };
+        let seen = stretch_seen_beside(&cloud, &[&members], &[spanned], [8.0, 2.0, 1.0]);
+        assert_eq!(seen, vec![30.0]);
+        // None within a band too narrow to reach them.
+        assert_eq!(stretch_seen_beside(&cloud, &[&members], &[spanned], [2.0, 2.0, 1.0]), vec![0.0]);
+    }
     use crate::camera::CameraModel;
     use nalgebra::Vector2;
 

@@ -307,6 +307,44 @@ fn plan_workpiece(
     }
 }
 
+/// A lap's weld edge checked against the upper plate's other edges
+/// (`lines`, fitted to `edge_points`; `chosen` the weld edge's): the
+/// lower plate, with the pieces of its layer, must not be seen beside one
+/// turned from it for longer ([`weld_edges::check_lap_edge`]). The lower
+/// plate's points begin past the upper plate's edge points by up to two
+/// neighbour radii (the rims the plane criterion trims off both plates)
+/// and what the upper plate's thickness, a lap step, hides or shades.
+fn check_lap_edge(
+    ctx: &Context,
+    workpiece: &background::Workpiece,
+    lines: &[EdgeLine],
+    edge_points: &[Vec3],
+    chosen: usize,
+) -> Result<(), PlanError> {
+    let turned = weld_edges::turned_from(lines, chosen);
+    if turned.is_empty() {
+        return Ok(());
+    }
+    let [upper, lower] = &workpiece.plates;
+    let step_mm = upper.plane.normal.dot(&(lower.centroid - upper.centroid)).abs();
+    let band_mm = step_mm + 2.0 * ctx.scale.radius_mm + ctx.scale.band(ctx.config.pipeline.boundary_band_mm);
+    let spacing_mm = ctx.scale.spacing_at(&ctx.config.camera, &upper.centroid);
+    let bin_mm = (2.0 * spacing_mm).max(LAP_EDGE_BIN_MIN_MM);
+    let measured: Vec<usize> = std::iter::once(chosen).chain(turned.iter().copied()).collect();
+    let edges = weld_edges::plate_edges(lines, &measured, edge_points, &upper.centroid, &upper.plane.normal);
+    let beside: Vec<&[u32]> =
+        std::iter::once(lower).chain(&workpiece.layer_mates[1]).map(|c| c.members.as_slice()).collect();
+    let seen_mm = boundary::stretch_seen_beside(ctx.cloud, &beside, &edges, [band_mm, bin_mm, spacing_mm]);
+    tracing::debug!(?measured, ?seen_mm, band_mm, "lower plate beside the upper plate's edges");
+    let turned_mm: Vec<(usize, f64)> = turned.into_iter().zip(seen_mm[1..].iter().copied()).collect();
+    weld_edges::check_lap_edge(lines, chosen, seen_mm[0], &turned_mm).map_err(|e| PlanError::at(Stage::WeldEdges, e))
+}
+
+/// The least bin, mm, in which the lower plate is looked for beside an
+/// upper plate's edge; two point spacings where they are wider, so a bin
+/// that falls between two points' places is not read as a break.
+const LAP_EDGE_BIN_MIN_MM: f64 = 2.0;
+
 /// The refusal of a workpiece the background rule found no joint in,
 /// saying `reason`, under the gate `e` falls under (a joint other than the
 /// one requested, or none that `auto` can name; else no gate).
@@ -445,6 +483,9 @@ fn plan_plates(
     )
     .map_err(|e| PlanError::at(Stage::WeldEdges, e))?;
     ctx.trace.record(|t| t.pick_lines(|l| l.rank == pick[l.plate]));
+    if layout == Layout::Lap {
+        check_lap_edge(ctx, &workpiece, &lines[0], &edge_points[0], pick[0])?;
+    }
     ctx.clock.lap(Stage::WeldEdges);
 
     // 4.2: each weld edge resampled along its plate's boundary, then

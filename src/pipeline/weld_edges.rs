@@ -13,10 +13,15 @@
 //! lap's upper plate) faces the plane under it along its end and along
 //! its sides, a lap's upper plate may end on its lower plate, and the
 //! longer stretch is as likely the joint as the nearer one. That is
-//! refused.
+//! refused. A lap's lower plate may show beside its upper plate's side
+//! only as a sliver (barely in view) whose lines separate no centroids,
+//! so no pair stands for the side: for a lap the stretch the lower plate
+//! is seen beside each of the upper plate's edges is read from its points
+//! ([`check_lap_edge`]) and refused the same way.
 
 use crate::geometry::Vec3;
 
+use super::boundary::{CoarseEdge, SpannedEdge};
 use super::ransac::EdgeLine;
 
 /// Eq. 16's edge function in the xoy projection: the signed area of the
@@ -165,6 +170,70 @@ pub fn robust_select(
     Ok(best)
 }
 
+/// Lines `which` of a plate as edges of the plate: laid in its plane
+/// (`normal`), the outward side away from the plate's `centroid`, the
+/// span the reach of the line's inliers (in `points`) along it.
+pub fn plate_edges(
+    lines: &[EdgeLine],
+    which: &[usize],
+    points: &[Vec3],
+    centroid: &Vec3,
+    normal: &Vec3,
+) -> Vec<SpannedEdge> {
+    which
+        .iter()
+        .map(|&k| {
+            let l = &lines[k];
+            let direction = (l.direction - normal * normal.dot(&l.direction)).normalize();
+            let mut outward = normal.cross(&direction);
+            if outward.dot(&(centroid - l.point)) > 0.0 {
+                outward = -outward;
+            }
+            let span = l
+                .inliers
+                .iter()
+                .map(|&i| direction.dot(&(points[i] - l.point)))
+                .fold([f64::MAX, f64::MIN], |[lo, hi], t| [lo.min(t), hi.max(t)]);
+            SpannedEdge { edge: CoarseEdge { point: l.point, direction, outward }, span }
+        })
+        .collect()
+}
+
+/// The lines of a plate turned from line `chosen` as a part's end is from
+/// its side ([`OTHER_EDGE_MIN_ANGLE_DEG`] or more).
+pub fn turned_from(lines: &[EdgeLine], chosen: usize) -> Vec<usize> {
+    let cos_other = OTHER_EDGE_MIN_ANGLE_DEG.to_radians().cos();
+    let direction = lines[chosen].direction;
+    (0..lines.len()).filter(|&k| lines[k].direction.dot(&direction).abs() <= cos_other).collect()
+}
+
+/// A lap's weld edge against the upper plate's other edges: the lower
+/// plate is seen beside line `chosen` for `chosen_mm`, and beside each
+/// line of `turned` ([`turned_from`] `chosen`) for the stretch given. A
+/// lap's upper plate may end on its lower plate, which is then seen
+/// beside its end as well as its side; where the lower plate shows only
+/// as a sliver along the side (barely in view), the side's lines do not
+/// separate the centroids and the end's pair is the only candidate. Where
+/// the lower plate runs beside a turned edge for longer than beside the
+/// chosen one, which is the joint is not clear: refused as two facing
+/// edges.
+pub fn check_lap_edge(
+    lines: &[EdgeLine],
+    chosen: usize,
+    chosen_mm: f64,
+    turned: &[(usize, f64)],
+) -> Result<(), WeldEdgeError> {
+    let direction = lines[chosen].direction;
+    match turned.iter().filter(|(_, mm)| *mm > chosen_mm).max_by(|a, b| a.1.total_cmp(&b.1)) {
+        Some(&(k, longer_mm)) => Err(WeldEdgeError::TwoFacingEdges {
+            nearest_mm: chosen_mm,
+            longer_mm,
+            angle_deg: lines[k].direction.dot(&direction).abs().min(1.0).acos().to_degrees(),
+        }),
+        None => Ok(()),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -242,6 +311,33 @@ mod tests {
         let short_b: Vec<EdgeLine> = vec![b_lines[0].clone(), line(b_lines[1].point, Vec3::y(), 31..46)];
         let pick = robust_select([&short_side, &short_b], [&a_pts, &b_pts], centroids, &Vec3::z(), 10.0).unwrap();
         assert_eq!(pick, [0, 0]);
+    }
+
+    #[test]
+    fn a_lap_s_lower_plate_seen_longer_beside_another_edge_is_refused() {
+        // An upper plate's side along y, its end along x, and a line 27°
+        // off the side (where the image border cuts the plate).
+        let side = EdgeLine { point: Vec3::new(0.0, 0.0, 600.0), direction: Vec3::y(), inliers: vec![] };
+        let end = EdgeLine { direction: Vec3::x(), ..side.clone() };
+        let askew = EdgeLine { direction: Vec3::new(1.0, 2.0, 0.0).normalize(), ..side.clone() };
+        let lines = [side, end, askew];
+        assert_eq!(turned_from(&lines, 0), vec![1]);
+        // Beside the end for longer than beside the chosen side: refused.
+        let err = check_lap_edge(&lines, 0, 40.0, &[(1, 90.0)]).unwrap_err();
+        assert_eq!(err, WeldEdgeError::TwoFacingEdges { nearest_mm: 40.0, longer_mm: 90.0, angle_deg: 90.0 });
+        // Shorter beside the end: kept.
+        assert!(check_lap_edge(&lines, 0, 90.0, &[(1, 40.0)]).is_ok());
+    }
+
+    #[test]
+    fn a_plate_s_edges_face_away_from_it_over_their_inliers_reach() {
+        // A plate round the origin; a line along its edge at x = 50,
+        // inliers from y = -20 to 30.
+        let points: Vec<Vec3> = (-20..=30).map(|y| Vec3::new(50.0, y as f64, 600.0)).collect();
+        let line = EdgeLine { point: Vec3::new(50.0, 0.0, 600.0), direction: -Vec3::y(), inliers: (0..51).collect() };
+        let [edge] = plate_edges(&[line], &[0], &points, &Vec3::new(0.0, 0.0, 600.0), &Vec3::z())[..] else { panic!() };
+        assert!((edge.edge.outward - Vec3::x()).norm() < 1e-12);
+        assert_eq!(edge.span, [-30.0, 20.0]);
     }
 
     #[test]

@@ -343,7 +343,8 @@ pub fn stretch_seen_beside(
                     let out = d.dot(&e.edge.outward);
                     let along = d.dot(&e.edge.direction) - e.span[0];
                     if out > 0.0 && out <= band_mm && along >= 0.0 && along < count as f64 * width {
-                        seen[(along / width) as usize] = true;
+                        // The quotient may round up to `count` at the span's end.
+                        seen[((along / width) as usize).min(count - 1)] = true;
                     }
                 }
             }
@@ -1348,6 +1349,9 @@ fn extend_past_ends(walker: &Walker, found: &mut Vec<(usize, isize, BoundarySamp
 mod tests {
     use super::*;
 
+    use crate::camera::CameraModel;
+    use nalgebra::Vector2;
+
     #[test]
     fn a_plate_is_seen_beside_an_edge_along_the_stretch_its_points_reach() {
         // Points on a 1 mm grid beside an edge along x at y = 0 (outward
@@ -1373,8 +1377,6 @@ mod tests {
         // None within a band too narrow to reach them.
         assert_eq!(stretch_seen_beside(&cloud, &[&members], &[spanned], [2.0, 2.0, 1.0]), vec![0.0]);
     }
-    use crate::camera::CameraModel;
-    use nalgebra::Vector2;
 
     /// Slope of the test edge: slanted so the rows see every sub-pixel phase.
     const SLOPE: f64 = 0.1;

@@ -184,7 +184,8 @@ pub fn plate_edges(
         .iter()
         .map(|&k| {
             let l = &lines[k];
-            let direction = (l.direction - normal * normal.dot(&l.direction)).normalize();
+            let direction =
+                (l.direction - normal * normal.dot(&l.direction)).try_normalize(f64::EPSILON).unwrap_or(l.direction);
             let mut outward = normal.cross(&direction);
             if outward.dot(&(centroid - l.point)) > 0.0 {
                 outward = -outward;

@@ -100,7 +100,7 @@ fn a_laps_lower_plate_seen_past_the_upper_plates_end_and_as_a_sliver_beside_it_i
     // The sliver's lines separate no centroids, and the upper plate's end
     // was planned as the lap's edge, 91 mm off.
     let reason = refusal(&planned("fault-barely-in-view-lap-02-d500-t20-fresh2", JointAsk::AsScene)).to_string();
-    assert!(reason.contains("face each other along two edges"), "{reason}");
+    assert!(reason.contains("lower plate is seen beside the upper plate's chosen edge"), "{reason}");
 }
 
 #[test]

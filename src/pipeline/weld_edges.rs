@@ -54,6 +54,14 @@ pub enum WeldEdgeError {
          clear"
     )]
     TwoFacingEdges { nearest_mm: f64, longer_mm: f64, angle_deg: f64 },
+    /// A lap's lower plate is seen beside another edge of the upper
+    /// plate, turned from the chosen one, for longer than beside it.
+    #[error(
+        "the lap's lower plate is seen beside the upper plate's chosen edge for {chosen_mm:.0} mm and beside \
+         another of its edges, {angle_deg:.0}° from it, for {longer_mm:.0} mm: the upper plate may end on the lower \
+         plate, or the lower plate may be seen only as a sliver along the joint; which edge is the joint is not clear"
+    )]
+    LowerPlateBesideOtherEdge { chosen_mm: f64, longer_mm: f64, angle_deg: f64 },
 }
 
 /// How far from the nearest pair another facing pair must turn to be
@@ -216,8 +224,8 @@ pub fn turned_from(lines: &[EdgeLine], chosen: usize) -> Vec<usize> {
 /// as a sliver along the side (barely in view), the side's lines do not
 /// separate the centroids and the end's pair is the only candidate. Where
 /// the lower plate runs beside a turned edge for longer than beside the
-/// chosen one, which is the joint is not clear: refused as two facing
-/// edges.
+/// chosen one, which is the joint is not clear: refused, as two facing
+/// edges are.
 pub fn check_lap_edge(
     lines: &[EdgeLine],
     chosen: usize,
@@ -226,8 +234,8 @@ pub fn check_lap_edge(
 ) -> Result<(), WeldEdgeError> {
     let direction = lines[chosen].direction;
     match turned.iter().filter(|(_, mm)| *mm > chosen_mm).max_by(|a, b| a.1.total_cmp(&b.1)) {
-        Some(&(k, longer_mm)) => Err(WeldEdgeError::TwoFacingEdges {
-            nearest_mm: chosen_mm,
+        Some(&(k, longer_mm)) => Err(WeldEdgeError::LowerPlateBesideOtherEdge {
+            chosen_mm,
             longer_mm,
             angle_deg: lines[k].direction.dot(&direction).abs().min(1.0).acos().to_degrees(),
         }),
@@ -325,7 +333,7 @@ mod tests {
         assert_eq!(turned_from(&lines, 0), vec![1]);
         // Beside the end for longer than beside the chosen side: refused.
         let err = check_lap_edge(&lines, 0, 40.0, &[(1, 90.0)]).unwrap_err();
-        assert_eq!(err, WeldEdgeError::TwoFacingEdges { nearest_mm: 40.0, longer_mm: 90.0, angle_deg: 90.0 });
+        assert_eq!(err, WeldEdgeError::LowerPlateBesideOtherEdge { chosen_mm: 40.0, longer_mm: 90.0, angle_deg: 90.0 });
         // Shorter beside the end: kept.
         assert!(check_lap_edge(&lines, 0, 90.0, &[(1, 40.0)]).is_ok());
     }

@@ -59,10 +59,16 @@ fn refusal(outcome: &SceneOutcome) -> &str {
     }
 }
 
+/// Asserts that `name`, planned as its scene's joint, is refused for a
+/// plane lying across the plate under it, named a clamp among its causes.
+fn assert_refused_as_lying_across(name: &str) {
+    let reason = refusal(&planned(name, JointAsk::AsScene)).to_string();
+    assert!(reason.contains("lies across the plane under it") && reason.contains("clamp"), "{reason}");
+}
+
 #[test]
 fn a_clamp_lying_across_a_laps_plate_is_refused_as_an_object_on_the_workpiece() {
-    let reason = refusal(&planned("fault-clamp-lap-02-d500-t20", JointAsk::AsScene)).to_string();
-    assert!(reason.contains("lies across the plane under it") && reason.contains("clamp"), "{reason}");
+    assert_refused_as_lying_across("fault-clamp-lap-02-d500-t20");
 }
 
 #[test]
@@ -83,16 +89,14 @@ fn a_clamps_end_over_a_laps_upper_plate_is_refused_as_lying_across_it() {
     // stage refuses it too (its side faces the plate for longer than its
     // end); the background stage, which sees the plate on both of its
     // sides, says so first.
-    let reason = refusal(&planned("fault-clamp-lap-00-d833-t0-fresh1", JointAsk::AsScene)).to_string();
-    assert!(reason.contains("lies across the plane under it") && reason.contains("clamp"), "{reason}");
+    assert_refused_as_lying_across("fault-clamp-lap-00-d833-t0-fresh1");
 }
 
 #[test]
 fn a_clamp_over_a_laps_plate_seen_round_its_end_is_refused_as_lying_across_it() {
     // The plate the clamp lies on is one cluster round the clamp's end,
     // and the clamp's side was planned as a lap's edge, 164 mm off.
-    let reason = refusal(&planned("fault-clamp-lap-00-d833-t0-fresh2", JointAsk::AsScene)).to_string();
-    assert!(reason.contains("lies across the plane under it") && reason.contains("clamp"), "{reason}");
+    assert_refused_as_lying_across("fault-clamp-lap-00-d833-t0-fresh2");
 }
 
 #[test]

@@ -291,10 +291,9 @@ fn seen_beside(top: &PlaneCluster, under: &PlaneCluster, normal: &Vec3, points: 
         let d = p - top.centroid;
         (top.long_axis.dot(&d), across_axis.dot(&d))
     };
-    let ([along_lo, along_hi], [across_lo, across_hi]) = member_points(&top.members, points).map(place).fold(
-        ([f64::INFINITY, f64::NEG_INFINITY], [f64::INFINITY, f64::NEG_INFINITY]),
-        |([a0, a1], [c0, c1]), (a, c)| ([a0.min(a), a1.max(a)], [c0.min(c), c1.max(c)]),
-    );
+    let reach: Vec<(f64, f64)> = member_points(&top.members, points).map(place).collect();
+    let (along_lo, along_hi) = extent(reach.iter().map(|r| r.0));
+    let (across_lo, across_hi) = extent(reach.iter().map(|r| r.1));
     let mut counts = [0usize; 2];
     for (along, across) in member_points(&under.members, points).map(place) {
         if !(along_lo..=along_hi).contains(&along) {

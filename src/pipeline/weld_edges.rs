@@ -19,7 +19,7 @@
 //! is seen beside each of the upper plate's edges is read from its points
 //! ([`check_lap_edge`]) and refused the same way.
 
-use crate::geometry::Vec3;
+use crate::geometry::{Vec3, extent};
 
 use super::boundary::{CoarseEdge, SpannedEdge};
 use super::ransac::EdgeLine;
@@ -161,18 +161,16 @@ pub fn robust_select(
     }
     let &(_, best, shared) =
         facing.iter().min_by(|x, y| x.0.total_cmp(&y.0)).ok_or(WeldEdgeError::NotParallel { max_angle_deg })?;
-    let direction = lines[0][best[0]].direction;
-    let cos_other = OTHER_EDGE_MIN_ANGLE_DEG.to_radians().cos();
+    let turned = turned_from(lines[0], best[0]);
     let other_edge = facing
         .iter()
-        .filter(|(_, [a, _], other)| *other > shared && lines[0][*a].direction.dot(&direction).abs() <= cos_other)
+        .filter(|(_, [a, _], other)| *other > shared && turned.contains(a))
         .max_by(|x, y| x.2.total_cmp(&y.2));
     if let Some(&(_, [a, _], longer_mm)) = other_edge {
-        let cos = lines[0][a].direction.dot(&direction).abs().min(1.0);
         return Err(WeldEdgeError::TwoFacingEdges {
             nearest_mm: shared,
             longer_mm,
-            angle_deg: cos.acos().to_degrees(),
+            angle_deg: turn_deg(&lines[0][a], &lines[0][best[0]]),
         });
     }
     Ok(best)
@@ -198,14 +196,15 @@ pub fn plate_edges(
             if outward.dot(&(centroid - l.point)) > 0.0 {
                 outward = -outward;
             }
-            let span = l
-                .inliers
-                .iter()
-                .map(|&i| direction.dot(&(points[i] - l.point)))
-                .fold([f64::MAX, f64::MIN], |[lo, hi], t| [lo.min(t), hi.max(t)]);
-            SpannedEdge { edge: CoarseEdge { point: l.point, direction, outward }, span }
+            let (lo, hi) = extent(l.inliers.iter().map(|&i| direction.dot(&(points[i] - l.point))));
+            SpannedEdge { edge: CoarseEdge { point: l.point, direction, outward }, span: [lo, hi] }
         })
         .collect()
+}
+
+/// The angle between two lines, 0 to 90°.
+fn turn_deg(a: &EdgeLine, b: &EdgeLine) -> f64 {
+    a.direction.dot(&b.direction).abs().min(1.0).acos().to_degrees()
 }
 
 /// The lines of a plate turned from line `chosen` as a part's end is from
@@ -232,12 +231,11 @@ pub fn check_lap_edge(
     chosen_mm: f64,
     turned: &[(usize, f64)],
 ) -> Result<(), WeldEdgeError> {
-    let direction = lines[chosen].direction;
     match turned.iter().filter(|(_, mm)| *mm > chosen_mm).max_by(|a, b| a.1.total_cmp(&b.1)) {
         Some(&(k, longer_mm)) => Err(WeldEdgeError::LowerPlateBesideOtherEdge {
             chosen_mm,
             longer_mm,
-            angle_deg: lines[k].direction.dot(&direction).abs().min(1.0).acos().to_degrees(),
+            angle_deg: turn_deg(&lines[k], &lines[chosen]),
         }),
         None => Ok(()),
     }

@@ -282,6 +282,78 @@ fn touch(top: &[[f32; 3]], bottom: &[[f32; 3]], a: PixelRun, b: PixelRun, tol_sq
     })
 }
 
+/// The least share of a cluster's points its plate-sized pieces must hold
+/// for [`split_narrow_gaps`] to split it. Plates a narrow gap separates
+/// hold all of it but a rim or a sliver (0.99 and more at 1 mm voxels). A
+/// surface sparser than the tight tolerance (a consumer camera's table
+/// twice as far as its plates) crumbles into dozens of pieces, the
+/// plate-sized ones holding 0.62 to 0.89 of it: one surface, not plates.
+pub(crate) const MIN_SPLIT_SHARE: f64 = 0.95;
+
+/// The clusters `loose` holds, each split where it is two plates or more
+/// joined only across a gap narrower than its tolerance. `tight` clusters
+/// the same points at a tolerance that still joins a lattice's
+/// neighbours; a loose cluster that holds two tight clusters or more that
+/// pass `is_plate` (each large enough to be a plate on its own) becomes
+/// those, and its other points (a rim, a sliver the tight tolerance cut
+/// off) join no cluster. A loose cluster holding one such piece stays
+/// whole, so a plate whose thin rim or tip the tight tolerance would cut
+/// off keeps it; so does one whose plate-sized pieces hold less than
+/// [`MIN_SPLIT_SHARE`] of its points. Largest first, as [`euclidean`]
+/// gives them.
+///
+/// Why both: a voxel cloud's plates lie a spacing or two apart across an
+/// I-butt gap, within the tolerance that keeps a plate's own sparse rims
+/// joined (diagonal neighbours and the plane criterion's odd holes).
+pub(crate) fn split_narrow_gaps(loose: Clusters, tight: &Clusters, is_plate: impl Fn(&[u32]) -> bool) -> Clusters {
+    // Each tight cluster lies within one loose cluster: points joined at the
+    // tight tolerance are joined at the loose one.
+    let mut pieces: Vec<Vec<usize>> = vec![Vec::new(); loose.members.len()];
+    for (t, members) in tight.members.iter().enumerate() {
+        let Some(&first) = members.first() else { continue };
+        if let Some(owner) = pieces.get_mut(loose.labels[first as usize] as usize) {
+            owner.push(t);
+        }
+    }
+    // Plate-sized pieces are looked for only in clusters of two or more,
+    // and taken only where they hold next to all of it.
+    let plates: Vec<Vec<usize>> = pieces
+        .into_iter()
+        .zip(&loose.members)
+        .map(|(ts, whole)| {
+            if ts.len() < 2 {
+                return Vec::new();
+            }
+            let plates: Vec<usize> = ts.into_iter().filter(|&t| is_plate(&tight.members[t])).collect();
+            let held: usize = plates.iter().map(|&t| tight.members[t].len()).sum();
+            if (held as f64) < MIN_SPLIT_SHARE * whole.len() as f64 { Vec::new() } else { plates }
+        })
+        .collect();
+    if plates.iter().all(|ts| ts.len() < 2) {
+        return loose;
+    }
+    let Clusters { mut labels, members: loose_members } = loose;
+    let mut members: Vec<Vec<u32>> = Vec::with_capacity(loose_members.len());
+    for (whole, ts) in loose_members.into_iter().zip(plates) {
+        if ts.len() < 2 {
+            members.push(whole);
+            continue;
+        }
+        for &i in &whole {
+            labels[i as usize] = UNCLUSTERED;
+        }
+        members.extend(ts.into_iter().map(|t| tight.members[t].clone()));
+    }
+    // Largest first; ties by the smallest member, as `collect` orders them.
+    members.sort_by(|a, b| b.len().cmp(&a.len()).then(a.first().cmp(&b.first())));
+    for (label, m) in members.iter().enumerate() {
+        for &i in m {
+            labels[i as usize] = label as u32;
+        }
+    }
+    Clusters { labels, members }
+}
+
 /// The straightforward form of [`grid`]: one pass over the frame joining
 /// each selected pixel to its right and three lower neighbours, one pixel
 /// pair at a time, then members grouped by their root in a map. Kept as
@@ -891,5 +963,82 @@ mod tests {
         let c = grid(&cloud, &mask, 2.0, 201);
         assert!(c.members.is_empty());
         assert!(c.labels.iter().all(|&l| l == UNCLUSTERED));
+    }
+
+    /// A 1 mm lattice of rectangles `[x0, x1) x [0, rows)`, each a list of
+    /// columns, as an unorganized cloud with every point selected.
+    fn lattice(columns: &[std::ops::Range<i32>], rows: i32) -> (PointCloud, Vec<bool>) {
+        let pts: Vec<[f32; 3]> = columns
+            .iter()
+            .flat_map(|cols| cols.clone().flat_map(move |x| (0..rows).map(move |y| [x as f32, y as f32, 700.0])))
+            .collect();
+        let mask = vec![true; pts.len()];
+        (PointCloud::unorganized(pts), mask)
+    }
+
+    /// Each cluster's label is its place in the list, and no other point
+    /// has one.
+    fn assert_labels_match_members(c: &Clusters) {
+        let labelled = c.labels.iter().filter(|&&l| l != UNCLUSTERED).count();
+        assert_eq!(labelled, c.members.iter().map(Vec::len).sum::<usize>());
+        for (label, m) in c.members.iter().enumerate() {
+            assert!(m.iter().all(|&i| c.labels[i as usize] == label as u32), "cluster {label}");
+        }
+        assert!(c.members.windows(2).all(|w| w[0].len() >= w[1].len()), "largest first");
+    }
+
+    #[test]
+    fn plates_a_gap_narrower_than_the_loose_tolerance_joins_are_split() {
+        // Two plates of a 1 mm lattice, 2 mm apart: the 2.5 mm tolerance
+        // joins them, 1.6 mm does not.
+        let (cloud, mask) = lattice(&[0..40, 41..70], 20);
+        let loose = euclidean(&cloud, &mask, 2.5, 1);
+        let tight = euclidean(&cloud, &mask, 1.6, 1);
+        assert_eq!((loose.members.len(), tight.members.len()), (1, 2));
+        let split = split_narrow_gaps(loose, &tight, |m| m.len() >= 100);
+        assert_eq!(split.members.iter().map(Vec::len).collect::<Vec<_>>(), vec![800, 580]);
+        assert_labels_match_members(&split);
+    }
+
+    #[test]
+    fn a_plate_keeps_a_tip_the_tight_tolerance_cuts_off() {
+        // A plate and a tip of 2 columns beyond a 2 mm break: one plate.
+        let (cloud, mask) = lattice(&[0..40, 41..43], 20);
+        let loose = euclidean(&cloud, &mask, 2.5, 1);
+        let tight = euclidean(&cloud, &mask, 1.6, 1);
+        assert_eq!(tight.members.len(), 2);
+        let split = split_narrow_gaps(loose.clone(), &tight, |m| m.len() >= 100);
+        assert_eq!(split.members, loose.members);
+        assert_eq!(split.labels, loose.labels);
+    }
+
+    #[test]
+    fn a_surface_that_crumbles_at_the_tight_tolerance_stays_whole() {
+        // Two plate-sized pieces and five slivers, each 2 mm from the next:
+        // the pieces hold 600 of 800 points, under the share a gap leaves.
+        let slivers = [32..34, 35..37, 38..40, 41..43, 44..46];
+        let columns: Vec<_> = [0..15, 16..31].into_iter().chain(slivers).collect();
+        let (cloud, mask) = lattice(&columns, 20);
+        let loose = euclidean(&cloud, &mask, 2.5, 1);
+        let tight = euclidean(&cloud, &mask, 1.6, 1);
+        assert_eq!((loose.members.len(), tight.members.len()), (1, 7));
+        let split = split_narrow_gaps(loose.clone(), &tight, |m| m.len() >= 300);
+        assert_eq!(split.members, loose.members);
+    }
+
+    #[test]
+    fn pieces_too_small_for_a_plate_join_no_cluster_where_the_plates_split() {
+        // Two plates with a sliver between them, each 2 mm from the next,
+        // and a separate patch far off that needs no split.
+        let (cloud, mask) = lattice(&[0..40, 41..43, 44..80, 200..230], 20);
+        let loose = euclidean(&cloud, &mask, 2.5, 1);
+        let tight = euclidean(&cloud, &mask, 1.6, 1);
+        assert_eq!((loose.members.len(), tight.members.len()), (2, 4));
+        let split = split_narrow_gaps(loose, &tight, |m| m.len() >= 100);
+        assert_eq!(split.members.iter().map(Vec::len).collect::<Vec<_>>(), vec![800, 720, 600]);
+        assert_labels_match_members(&split);
+        // The sliver's 40 points are no cluster's.
+        let unclustered = split.labels.iter().filter(|&&l| l == UNCLUSTERED).count();
+        assert_eq!(unclustered, 40);
     }
 }

@@ -56,6 +56,13 @@ const MIN_DIRECTION_NORM: f64 = 1e-9;
 /// apart, and the plane criterion leaves the odd hole.
 const CLUSTER_SPACINGS: f64 = 2.5;
 
+/// The tightest clustering tolerance in point spacings that still joins a
+/// measured cloud's lattice: past its diagonal neighbours (1.41 spacings),
+/// with a little room for a voxel grid's uneven rows. Clusters the loose
+/// tolerance joins are split at it only into pieces each large enough to
+/// be a plate ([`clustering::split_narrow_gaps`]).
+const TIGHT_CLUSTER_SPACINGS: f64 = 1.6;
+
 /// The shortest run of a weld edge's samples, as a share of them, that a
 /// step between two lines is read across: shorter runs are a tack weld's
 /// or a spatter's, and the share of samples beyond the line judges them.
@@ -111,7 +118,20 @@ pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
         // A plate's points connect through neighbours about a spacing
         // apart, diagonals and the criterion's gaps included.
         let tolerance = scale.at_least_spacings(cfg.cluster_tolerance_mm, CLUSTER_SPACINGS);
-        clustering::euclidean(cloud, &plane.mask, tolerance, MIN_CLUSTER_POINTS)
+        let loose = clustering::euclidean(cloud, &plane.mask, tolerance, MIN_CLUSTER_POINTS);
+        // Plates a gap narrower than that apart (an I-butt's in a voxel
+        // cloud) are told apart at the tightest tolerance that still
+        // joins a lattice's neighbours.
+        let tight_tolerance = scale.at_least_spacings(cfg.cluster_tolerance_mm, TIGHT_CLUSTER_SPACINGS);
+        if tight_tolerance < tolerance {
+            let tight = clustering::euclidean(cloud, &plane.mask, tight_tolerance, MIN_CLUSTER_POINTS);
+            let area = |c: &Vec3, n: &Vec3| search.area_per_point(c, n);
+            clustering::split_narrow_gaps(loose, &tight, |members| {
+                !ctx.planes_of(vec![members.to_vec()], area).is_empty()
+            })
+        } else {
+            loose
+        }
     };
     // The edge criterion needs the counts, not the mask: free it early,
     // as the frame-sized arrays of the coming stages add up.

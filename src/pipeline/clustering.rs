@@ -14,6 +14,11 @@
 //!   merges I-butt plates closer than about 1 mm). It joins whole runs of
 //!   pixels at a time and gives exactly the clusters of `reference()`
 //!   (kept beside it for the tests), which joins pixel by pixel.
+//!
+//! Without a grid nothing marks a gap but its width, so a cloud whose
+//! tolerance is measured in point spacings is clustered twice, and
+//! [`split_narrow_gaps`] splits the clusters of the looser pass that hold
+//! two plates the tighter one tells apart.
 
 use std::collections::HashMap;
 

@@ -111,6 +111,10 @@ pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
         return Err(PlanError::at(Stage::PlanePoints, "no point passed the plane point criterion"));
     }
 
+    // A point stands for a tilted pixel's area: what a cluster's area, and
+    // so whether it is large enough to be a plate, is read with.
+    let area_per_point = |c: &Vec3, n: &Vec3| search.area_per_point(c, n);
+
     // 3.3: clustering, on the pixel grid where the frame has one.
     let mut clusters = if cloud.is_organized() {
         clustering::grid(cloud, &plane.mask, cfg.cluster_tolerance_mm, MIN_CLUSTER_POINTS)
@@ -125,9 +129,8 @@ pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
         let tight_tolerance = scale.at_least_spacings(cfg.cluster_tolerance_mm, TIGHT_CLUSTER_SPACINGS);
         if tight_tolerance < tolerance {
             let tight = clustering::euclidean(cloud, &plane.mask, tight_tolerance, MIN_CLUSTER_POINTS);
-            let area = |c: &Vec3, n: &Vec3| search.area_per_point(c, n);
             clustering::split_narrow_gaps(loose, &tight, |members| {
-                !ctx.planes_of(vec![members.to_vec()], area).is_empty()
+                !ctx.planes_of(vec![members.to_vec()], area_per_point).is_empty()
             })
         } else {
             loose
@@ -139,8 +142,8 @@ pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
     ctx.clock.lap(Stage::Clustering);
 
     // 3.3: the plates are the nearest parallel planes (a lap: two layers a
-    // plate thickness apart); a point stands for a tilted pixel's area.
-    let planes = ctx.planes_of(std::mem::take(&mut clusters.members), |c, n| search.area_per_point(c, n));
+    // plate thickness apart).
+    let planes = ctx.planes_of(std::mem::take(&mut clusters.members), area_per_point);
     ctx.stats.clusters = planes.len();
     ctx.trace.record(|t| t.planes = planes.clone());
 

@@ -7,7 +7,7 @@
 
 use weldseam::camera::CameraModel;
 use weldseam::config::Config;
-use weldseam::eval::{SceneOutcome, SeamError, run_suite};
+use weldseam::eval::{EvalRequest, JointAsk, SceneOutcome, SeamError, run_suite, run_suite_asking};
 use weldseam::sim::suite::{eval_suite, fault_suite};
 use weldseam::sim::variants::Variant;
 use weldseam::sim::{Draw, SceneSpec};
@@ -84,6 +84,49 @@ fn i_butt_plates_two_spacings_apart_at_one_mm_voxels_are_told_apart() {
     for o in &plan_at_one_mm_voxels(&["i-butt-17", "i-butt-20"]) {
         assert_within(&o.name, planned(o), 2.0);
     }
+}
+
+/// The outcome of planning the one scene of `suite` whose name starts
+/// with `name`, from a `variant` cloud, under `--joint auto`.
+fn plan_auto(suite: Vec<(String, SceneSpec)>, variant: &str, name: &str) -> SceneOutcome {
+    let scenes: Vec<_> = suite.into_iter().filter(|(n, _)| n.starts_with(name)).collect();
+    assert_eq!(scenes.len(), 1, "{name} names one scene of the suite");
+    let ask = EvalRequest { joint: JointAsk::Auto, ..EvalRequest::default() };
+    let variant = Variant::parse(variant).unwrap();
+    run_suite_asking(&scenes, &CameraModel::default(), &variant, &[Config::default()], &ask, |_, _| {})
+        .remove(0)
+        .remove(0)
+}
+
+/// The reason `o` was refused; a panic if it was planned.
+fn refusal(o: &SceneOutcome) -> &str {
+    match &o.result {
+        Ok((err, _)) => panic!("{}: planned {:.1} mm off", o.name, err.max_mm),
+        Err(e) => &e.reason,
+    }
+}
+
+#[test]
+fn plates_seen_as_one_on_the_table_are_no_lap_s_upper_plate() {
+    // i-butt-06 at 1 mm voxels: its plates, 0.78 mm apart at 1000 mm,
+    // are one plane 29 mm over the table, within a lap's step. Under
+    // `auto` that plane was taken for a lap's upper plate and a lap seam
+    // planned along its edge, 391 mm off. The table is seen beside both
+    // of the plane's ends along all of them: no lap's upper plate, which
+    // reaches past its lower plate's edge.
+    let o = plan_auto(eval_suite(Draw::Documented), "voxel:1", "i-butt-06");
+    assert!(refusal(&o).contains("far edge into view"), "{}: {}", o.name, refusal(&o));
+}
+
+#[test]
+fn a_clamp_across_the_smaller_plate_is_no_lap_s_upper_plate() {
+    // fault-clamp-i-butt-02 at 1 mm voxels: a clamp lies across the
+    // smaller plate, cutting it in two pieces each far smaller than the
+    // other plate, and ends on the larger one. Under `auto` it was taken
+    // for a lap's upper plate over the larger plate, 62 mm off. The
+    // plane under it is seen on both of its sides.
+    let o = plan_auto(fault_suite(Draw::Documented), "voxel:1", "fault-clamp-i-butt-02");
+    assert!(refusal(&o).contains("lies across the plane under it"), "{}: {}", o.name, refusal(&o));
 }
 
 #[test]

@@ -1006,8 +1006,15 @@ fn find_lap(l: &Layers, s: &Selection, points: &[Point]) -> Result<(usize, usize
                 }) {
                     return Err(across(under[0].area_mm2, piece.area_mm2));
                 }
+                // The whole layer under it: a bar lying across a plate can
+                // cut it into pieces each smaller than a quarter of the
+                // plate beside them (fault-clamp-i-butt-02, whose clamp
+                // over an I-butt joint was planned as a lap 62 mm off).
                 if top.elongation >= BAR_ELONGATION {
-                    let [one, other] = seen_beside(top, &under[0], &l.normal, points);
+                    let [one, other] = under
+                        .iter()
+                        .map(|c| seen_beside(top, c, &l.normal, points))
+                        .fold([0.0, 0.0], |[a, b], [one, other]| [a + one, b + other]);
                     let (larger, smaller) = (one.max(other), one.min(other));
                     if smaller > 0.0 && smaller >= SIDE_BY_SIDE_AREA_RATIO * larger {
                         return Err(across(larger, smaller));
@@ -1567,6 +1574,33 @@ mod tests {
         assert!((first_mm2 - 9_350.0).abs() < 200.0 && (second_mm2 - 9_350.0).abs() < 200.0, "{err}");
         // Without the points, the clusters alone do not show it.
         assert!(robust_select(planes, &selection(JointType::Lap)).is_ok());
+    }
+
+    #[test]
+    fn a_bar_across_a_small_plate_beside_a_large_one_is_no_lap() {
+        // Butt plates at 700: A 200 by 200 mm, B 58 mm wide beside it. A
+        // clamp 24 mm wide lies across B, 21 mm over it, and stops short
+        // of A: B is seen in two pieces, one on each side of the clamp,
+        // each far smaller than A. The layer under the clamp, not its
+        // largest piece, is what it lies across.
+        let clamp = |p: &Vec3| (-70.0..-3.0).contains(&p.x) && (90.0..114.0).contains(&p.y);
+        let all: Vec<Vec3> = [
+            grid([-70, -3], [90, 114], 679.0, |_, _| false),
+            grid([0, 200], [0, 200], 700.0, |_, _| false),
+            grid([-60, -2], [0, 200], 700.0, |x, y| clamp(&Vec3::new(x, y, 0.0))),
+        ]
+        .concat();
+        let planes = vec![
+            PlaneCluster::of_points(&all, |p| p.z < 690.0),
+            PlaneCluster::of_points(&all, |p| p.z > 690.0 && p.x > 0.0),
+            PlaneCluster::of_points(&all, |p| p.z > 690.0 && p.x < 0.0 && p.y < 90.0),
+            PlaneCluster::of_points(&all, |p| p.z > 690.0 && p.x < 0.0 && p.y > 114.0),
+        ];
+        let points: Vec<Point> = all.iter().map(|p| [p.x as f32, p.y as f32, p.z as f32]).collect();
+        let err = super::robust_select(planes, &selection(JointType::Lap), &points).unwrap_err();
+        let BackgroundError::LiesAcross { first_mm2, second_mm2, .. } = err else { panic!("{err}") };
+        // Beside the clamp, B's two pieces: 58 by 90 and 58 by 86 mm.
+        assert!((first_mm2 - 5_220.0).abs() < 100.0 && (second_mm2 - 4_988.0).abs() < 100.0, "{err}");
     }
 
     #[test]

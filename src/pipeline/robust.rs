@@ -333,7 +333,8 @@ fn plan_workpiece(
 /// A lap's weld edge checked against the upper plate's other edges
 /// (`lines`, fitted to `edge_points`; `chosen` the weld edge's): the
 /// lower plate, with the pieces of its layer, must not be seen beside one
-/// turned from it for longer ([`weld_edges::check_lap_edge`]). The lower
+/// turned from it for longer, nor beside all of one (the upper plate's
+/// end; [`weld_edges::check_lap_edge`]). The lower
 /// plate's points begin past the upper plate's edge points by up to two
 /// neighbour radii (the rims the plane criterion trims off both plates)
 /// and what the upper plate's thickness, a lap step, hides or shades.
@@ -359,8 +360,17 @@ fn check_lap_edge(
         std::iter::once(lower).chain(&workpiece.layer_mates[1]).map(|c| c.members.as_slice()).collect();
     let seen_mm = boundary::stretch_seen_beside(ctx.cloud, &beside, &edges, [band_mm, bin_mm, spacing_mm]);
     tracing::debug!(?measured, ?seen_mm, band_mm, "lower plate beside the upper plate's edges");
-    let turned_mm: Vec<(usize, f64)> = turned.into_iter().zip(seen_mm[1..].iter().copied()).collect();
-    weld_edges::check_lap_edge(lines, chosen, seen_mm[0], &turned_mm).map_err(|e| PlanError::at(Stage::WeldEdges, e))
+    let turned: Vec<weld_edges::TurnedEdge> = turned
+        .into_iter()
+        .zip(&edges[1..])
+        .zip(&seen_mm[1..])
+        .map(|((line, edge), &seen_mm)| weld_edges::TurnedEdge {
+            line,
+            length_mm: edge.span[1] - edge.span[0],
+            seen_mm,
+        })
+        .collect();
+    weld_edges::check_lap_edge(lines, chosen, seen_mm[0], &turned).map_err(|e| PlanError::at(Stage::WeldEdges, e))
 }
 
 /// The least bin, mm, in which the lower plate is looked for beside an

@@ -70,7 +70,10 @@ pub enum WeldEdgeError {
     /// all of it: the upper plate does not reach past the lower plate's
     /// edge anywhere in view, as a lap's upper plate does.
     #[error(
-        "the lap's lower plate is seen beside the upper plate's end ({angle_deg:.0}° from the chosen edge) along          {seen_mm:.0} of its {end_mm:.0} mm: a lap's upper plate reaches past its lower plate's edge, and this one          does not anywhere in view; it may lie wholly on the plane under it (a part on the table, or butt plates          seen as one across a gap the cloud does not resolve); bring the upper plate's far edge into view"
+        "the lap's lower plate is seen beside the upper plate's end ({angle_deg:.0}° from the chosen edge) along \
+         {seen_mm:.0} of its {end_mm:.0} mm: a lap's upper plate reaches past its lower plate's edge, and this one \
+         does not anywhere in view; it may lie wholly on the plane under it (a part on the table, or butt plates \
+         seen as one across a gap the cloud does not resolve); bring the upper plate's far edge into view"
     )]
     UpperPlateOnLowerPlane { seen_mm: f64, end_mm: f64, angle_deg: f64 },
 }
@@ -398,7 +401,7 @@ mod tests {
         // Beside all of it: the upper plate lies on the plane under it.
         let err = check_lap_edge(&lines, 0, 330.0, &beside_end(290.0)).unwrap_err();
         assert_eq!(err, WeldEdgeError::UpperPlateOnLowerPlane { seen_mm: 290.0, end_mm: 300.0, angle_deg: 90.0 });
-        assert!(err.to_string().contains("far edge into view"), "{err}");
+        assert!(err.to_string().contains("far edge into view") && !err.to_string().contains("  "), "{err}");
         // An end of no length (a line of one inlier) says nothing.
         let point = [TurnedEdge { line: 1, length_mm: 0.0, seen_mm: 0.0 }];
         assert!(check_lap_edge(&lines, 0, 330.0, &point).is_ok());

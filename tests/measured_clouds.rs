@@ -130,6 +130,16 @@ fn a_clamp_across_the_smaller_plate_is_no_lap_s_upper_plate() {
 }
 
 #[test]
+fn stray_returns_under_a_groove_do_not_set_its_depth() {
+    // fault-streaks-v-butt-00 at 1 mm voxels, under `auto`: a groove
+    // 9.6 mm deep, one bevel seen. Returns 13 to 16 mm down, past a run
+    // of depths with none, were read as the bevel's root face, and the
+    // depth measured as 5.25 mm: the seam planned 4.35 mm off the root.
+    let o = plan_auto(fault_suite(Draw::Documented), "voxel:1", "fault-streaks-v-butt-00");
+    assert_within(&o.name, planned(&o), 2.0);
+}
+
+#[test]
 fn a_part_touching_a_plate_is_no_joint_where_the_plates_merged() {
     // fault-touching-part-i-butt-01 at 0.5 mm voxels: the I-butt's plates
     // merged across their gap, and the part touching one of them (0.8 mm

@@ -798,13 +798,13 @@ fn fit_face(
         for p in points {
             by_bin[bin_of(p.h)].push(p.t.abs());
         }
-        let mut medians: Vec<(usize, f64, f64)> = by_bin
+        let mut medians: Vec<(usize, f64)> = by_bin
             .iter_mut()
             .enumerate()
             .filter(|(_, ts)| ts.len() >= 3)
             .map(|(k, ts)| {
                 let middle = ts.len() / 2;
-                (k, top_margin + (k as f64 + 0.5) * spacing, *ts.select_nth_unstable_by(middle, f64::total_cmp).1)
+                (k, *ts.select_nth_unstable_by(middle, f64::total_cmp).1)
             })
             .collect();
         // A face is seen down its whole height: bins past a run of empty
@@ -813,7 +813,7 @@ fn fit_face(
         if let Some(break_at) = medians.windows(2).position(|w| w[1].0 - w[0].0 > MAX_EMPTY_BINS + 1) {
             medians.truncate(break_at + 1);
         }
-        medians.into_iter().map(|(_, h, t)| (h, t)).collect()
+        medians.into_iter().map(|(k, t)| (top_margin + (k as f64 + 0.5) * spacing, t)).collect()
     };
     // Below a bevel with a root gap the root face stands along the
     // normal: fit the bevel above that hinge only, and read the depth

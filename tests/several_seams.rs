@@ -110,6 +110,37 @@ fn a_tee_root_in_a_cloud_without_a_grid_ends_where_the_image_border_crosses_it()
     }
 }
 
+/// Tees of fresh draw 2 whose face on the camera's side turns nearly
+/// edge-on to the projector: it returns points only above a line slanting
+/// along the web (7: from 30 mm over the flange up, at 881 mm), or along
+/// part of the web only (0, at 500 mm tilted 30°), while the web's top and
+/// the flange up to the root are seen all along. Their roots were planned
+/// along 137 of 289 mm (7) and 127 of 255 mm (0 at 1 mm voxels): seams that
+/// stopped far short of the root. By variant: `None` for the raw frame.
+const FACES_TURNED_NEARLY_EDGE_ON: [(usize, Option<&str>); 3] = [(7, None), (0, None), (0, Some("voxel:1"))];
+
+#[test]
+fn a_root_whose_face_is_seen_only_part_way_down_is_planned_along_the_whole_root() {
+    let suite = tee_suite(Draw::Fresh(2));
+    for (k, variant) in FACES_TURNED_NEARLY_EDGE_ON {
+        let (name, spec) = &suite[k];
+        let sim = simulate(spec, &CameraModel::default());
+        let sim = match variant {
+            Some(v) => weldseam::sim::variants::Variant::parse(v).unwrap().apply(&sim, spec.seed),
+            None => sim,
+        };
+        let roots: Vec<TrueSeam> = sim.seams.iter().map(|s| TrueSeam::of(spec, s)).collect();
+        let request = PlanRequest::new(RequestedJoint::Type(JointType::TFillet), None, sim.pose);
+        let plan = Planner::new(Config::default())
+            .plan(&sim.cloud, &request)
+            .unwrap_or_else(|e| panic!("{name} {variant:?}: {e}"));
+        let paths: Vec<Vec<Vec3>> =
+            plan.seams.iter().map(|s| s.waypoints.iter().map(|w| w.position).collect()).collect();
+        assert_eq!(paths.len(), 1, "{name} {variant:?}");
+        assert_eq!(classify_tee(&roots, Ok(&paths)), Verdict::WithinBar, "{name} {variant:?}");
+    }
+}
+
 /// Tee scenes of the suite's tuning part that show the face on the
 /// camera's side, cropped 25 mm round that root as a user crops a scan to
 /// its joint: the web's top (40 to 100 mm up) lies outside the crop.

@@ -272,7 +272,9 @@ pub struct QualityParams {
     /// both plates are still seen beside the weld (issue 11: the seam
     /// covers the visible joint to within 2 mm of where both plates'
     /// evidence ends). Longer, an edge was lost there while its plate
-    /// goes on: a streak or spatter over the edge.
+    /// goes on: a streak or spatter over the edge. For a fillet root, how
+    /// far the web's top and the flange up to the root may be seen past
+    /// its ends, where its face is not seen down to the flange.
     pub max_joint_beyond_seam_mm: f64,
     /// Butt joints: the largest high-low misalignment of the plates, mm,
     /// and as a fraction of their thickness t (ISO 5817 quality level C:

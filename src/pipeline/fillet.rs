@@ -24,18 +24,27 @@
 //!   direction `r = n × m`, through the point of both planes nearest the
 //!   web top's centroid (a 2 × 2 solve in the span of `n` and `m`);
 //! - the stretch planned: stations a few spacings long along the root,
-//!   each seen when it holds both a point of the face's foot (the lowest
-//!   band of the face) and a flange point a few spacings outward of the
-//!   root (beyond the margin that keeps the face's own foot out: where the
-//!   web overhangs the flange's end, its foot lies at the flange's height
-//!   with no flange beside it). The longest run of seen stations (across breaks no longer
-//!   than [`super::boundary::JOINT_BREAK_SPACINGS`]) is the root planned,
-//!   from the last evidence inward at each end, except where both kinds
-//!   of evidence run up to the image's border
-//!   ([`super::view_border`]): the root then ends where the border crosses
-//!   the root itself, at most a station from the evidence's end (the
-//!   evidence lies a spacing or more off the root, and a border crossing
-//!   it obliquely cuts it before or after the root);
+//!   each seen when it holds both a point of the face's foot (the face's
+//!   lowest band at that station: a face turned nearly edge-on is seen
+//!   only above a line slanting along it) and a flange point a few
+//!   spacings outward of the root (beyond the margin that keeps the face's
+//!   own foot out: where the web overhangs the flange's end, its foot lies
+//!   at the flange's height with no flange beside it). The longest run of
+//!   seen stations (across breaks no longer than
+//!   [`super::boundary::JOINT_BREAK_SPACINGS`]) is the root planned, from
+//!   the last evidence inward at each end, except where both kinds of
+//!   evidence run up to the image's border ([`super::view_border`]): the
+//!   root then ends where the border crosses the root itself, at most a
+//!   station from the evidence's end (the evidence lies a spacing or more
+//!   off the root, and a border crossing it obliquely cuts it before or
+//!   after the root). Where the border cuts a foot seen well up the face,
+//!   the root runs on along the flange seen up to it, to where the root
+//!   leaves the view;
+//! - the joint beyond the stretch: where the web's top and the flange up to
+//!   the root go on past an end, the face is not seen there, and the root
+//!   would stop short. That length is reported, for the coverage gate
+//!   (`quality.max_joint_beyond_seam_mm`), and the flange's edge is read
+//!   instead where it shows a longer root;
 //! - the web-to-flange angle: between the face's upward direction and the
 //!   flange's outward one, both across the root (90° for a square tee);
 //! - the torch ([`super::trajectory::fillet_torch_axis`]) leans from the
@@ -70,7 +79,7 @@
 //! along-root spread var t, the root lying at h = 0, with the floor of
 //! [`super::quality`] (a spacing over √12) for the sampling.
 
-use std::collections::HashSet;
+use std::collections::{HashMap, HashSet};
 
 use crate::cloud::PointCloud;
 use crate::geometry::fit::{Moments, Plane};
@@ -101,7 +110,7 @@ const FACE_REACH_SPACINGS: f64 = 6.0;
 const HEIGHT_MARGIN_SPACINGS: f64 = 1.0;
 
 /// The face's foot: its points up to this many spacings above the lowest
-/// face height.
+/// face point of their station along the root.
 const FOOT_BAND_SPACINGS: f64 = 10.0;
 
 /// The flange seen up to the root: a flange point within this many
@@ -284,6 +293,12 @@ pub struct Root {
     pub seen_share: f64,
     /// The root's length seen anywhere, mm.
     pub seen_mm: f64,
+    /// How far beyond the stretch's first and last end the web's top and
+    /// the flange up to the root are still seen together, mm: the joint
+    /// going on where the face's foot is not seen. `None` where it is not
+    /// measured (no top in view, or a root read from the flange's edge,
+    /// which is clipped to the top's extent).
+    pub joint_beyond_ends_mm: Option<[f64; 2]>,
     /// One-sigma position uncertainty across the root (in the flange's
     /// plane) and along the flange normal, mm.
     pub uncertainty_across_mm: f64,
@@ -574,13 +589,15 @@ fn find_root(view: &TeeView, frame: &WebFrame, sign: f64) -> Result<Root, RootNo
 }
 
 /// The root from the face, or from the flange's edge where the face is
-/// seen along less than [`MIN_FACE_RUN_SHARE`] of the web's top and the
-/// flange's edge shows a longer root. A face turned nearly edge-on returns
-/// points along a few millimetres of the web only (where a gap in the
-/// flange or the web's end lets the camera see it), and their root, read
-/// over that stretch, is refused by the coverage gate or, mixed with the
-/// web's end face, by the fit's residual; the flange's edge beside the
-/// same face runs the web's length.
+/// seen along less than [`MIN_FACE_RUN_SHARE`] of the web's top, or where
+/// the web's top and the flange up to the root go on past the face's root
+/// by more than the coverage gate allows, and the flange's edge shows a
+/// longer root. A face turned nearly edge-on returns points along part of
+/// the web only (a few millimetres where a gap in the flange or the web's
+/// end lets the camera see it, or the stretch where it is turned a little
+/// less), and their root, read over that stretch, is refused by the
+/// coverage gates or, mixed with the web's end face, by the fit's
+/// residual; the flange's edge beside the same face runs the web's length.
 fn face_or_flange_edge(view: &TeeView, frame: &WebFrame, sign: f64, side: Side, root: Root) -> Root {
     let Web::Top(top) = view.web else {
         return root;
@@ -588,8 +605,9 @@ fn face_or_flange_edge(view: &TeeView, frame: &WebFrame, sign: f64, side: Side, 
     let points = view.cloud.points();
     let (lo, hi) = extent(top.members.iter().map(|&i| (vec3(&points[i as usize]) - frame.origin).dot(&frame.e)));
     let span = |r: &Root| r.line.s_max - r.line.s_min;
+    let beyond = root.joint_beyond_ends_mm.map_or(0.0, |[before, after]| before.max(after));
     // (A top without members spans minus infinity: the face's root stays.)
-    if span(&root) >= MIN_FACE_RUN_SHARE * (hi - lo) {
+    if span(&root) >= MIN_FACE_RUN_SHARE * (hi - lo) && beyond <= view.max_beyond_mm {
         return root;
     }
     match root_from_flange_edge(view, frame, sign, side) {
@@ -682,20 +700,25 @@ fn root_from_face(view: &TeeView, frame: &WebFrame, sign: f64, side: Side) -> Re
 
     // The evidence along the root: the face's foot and the flange up to it.
     let along = |p: &Vec3| (p - p0).dot(&r);
-    let lowest = face.inliers.iter().map(|p| frame.height_of(p)).fold(f64::INFINITY, f64::min);
-    let foot_points: Vec<Vec3> =
-        face.inliers.iter().copied().filter(|p| frame.height_of(p) <= lowest + FOOT_BAND_SPACINGS * spacing).collect();
+    let foot_points = station_feet(&face.inliers, along, |p| frame.height_of(p), spacing);
     let foot: Vec<f64> = foot_points.iter().map(along).collect();
     // Outward of the face's own foot (which lies at the flange's height
     // too, where the web overhangs the flange's end) by the same margin
     // that keeps the flange out of the face.
     let flange_reach = margin + FLANGE_REACH_SPACINGS * spacing;
-    let beside: Vec<Vec3> = valid_points(view.cloud)
-        .filter(|p| {
-            let out = (p - p0).dot(&w);
-            frame.height_of(p).abs() <= view.on_plane_mm && (margin..=flange_reach).contains(&out)
-        })
-        .collect();
+    // And the flange seen under where the web stands, inward of the root:
+    // past the web's end.
+    let web_width = 2.0 * frame.half_width;
+    let mut beside: Vec<Vec3> = Vec::new();
+    let mut under_web: Vec<f64> = Vec::new();
+    for p in valid_points(view.cloud).filter(|p| frame.height_of(p).abs() <= view.on_plane_mm) {
+        let out = (p - p0).dot(&w);
+        if (margin..=flange_reach).contains(&out) {
+            beside.push(p);
+        } else if (-web_width..=-margin).contains(&out) {
+            under_web.push(along(&p));
+        }
+    }
     if foot.is_empty() {
         return Err("the web's side face is not seen down to the flange".into());
     }
@@ -712,6 +735,19 @@ fn root_from_face(view: &TeeView, frame: &WebFrame, sign: f64, side: Side) -> Re
     let run = match view.border {
         Some(border) => ends_at_border(border, &p0, &r, run, [&foot_points, &beside], spacing),
         None => run,
+    };
+    let run = ends_past_cut_foot(view, &p0, &r, run, &foot_points, &beside, &under_web, spacing);
+    // Where the web's top stands over the root and the flange is seen up
+    // to it beyond the stretch, the joint goes on though the face's foot
+    // is not seen there (turned nearly edge-on, or covered): the quality
+    // gate refuses a root stopping short of it.
+    let joint_beyond_ends_mm = match view.web {
+        Web::Top(top) => {
+            let points = view.cloud.points();
+            let top_along: Vec<f64> = top.members.iter().map(|&i| along(&vec3(&points[i as usize]))).collect();
+            Some(joint_beyond_run(&top_along, &flange_along, (run.s0, run.s1), spacing))
+        }
+        Web::Face(_) => None,
     };
     // The flange near the root: its points beside the run, against the
     // plane of all its pieces.
@@ -759,6 +795,7 @@ fn root_from_face(view: &TeeView, frame: &WebFrame, sign: f64, side: Side) -> Re
         coverage: run.coverage,
         seen_share: run.share,
         seen_mm: run.seen_mm,
+        joint_beyond_ends_mm,
         uncertainty_across_mm,
         uncertainty_normal_mm,
     })
@@ -953,6 +990,8 @@ fn root_from_flange_edge(view: &TeeView, frame: &WebFrame, sign: f64, side: Side
         coverage,
         seen_share: run.share,
         seen_mm: run.seen_mm,
+        // Clipped to where the web's top is seen, above.
+        joint_beyond_ends_mm: None,
         // The edge's line across its stations, and the sampling: the root
         // lies within a spacing inward of the flange's last point.
         uncertainty_across_mm: (root_line.rms_mm / (in_run as f64).sqrt()).hypot(floor),
@@ -992,6 +1031,93 @@ fn ends_at_border(
         return run;
     }
     SeenRun { s0, s1, share: ((s1 - s0) / run.seen_mm).min(1.0), ..run }
+}
+
+/// The run's ends carried on past where the image's border, not the web,
+/// ends the face's foot. A face seen only well above the flange (its lower
+/// part turned nearly edge-on) has its foot up the face, and where the
+/// border crosses the web that foot leaves the view before the root does:
+/// the camera is tilted, and what stands higher is seen further in. When
+/// the foot's last point lies at the border (within the sampling's reach
+/// of it: past the camera's grid a reach on, or by the border the cloud's
+/// rays show), the root runs on as far as the flange is seen up to it
+/// (across breaks no longer than [`JOINT_BREAK_SPACINGS`]), short of any
+/// flange seen under where the web would stand (`under_web`: the web
+/// ended there). Where that flange runs to the border too, the end moves
+/// on to where the root itself leaves the view, at most a station on; it
+/// never lies out of view. An end the border does not cut (the web's end,
+/// its shadow, something covering the foot) stays where the evidence puts
+/// it.
+#[allow(clippy::too_many_arguments)]
+fn ends_past_cut_foot(
+    view: &TeeView,
+    origin: &Vec3,
+    r: &Vec3,
+    run: SeenRun,
+    foot: &[Vec3],
+    beside: &[Vec3],
+    under_web: &[f64],
+    spacing: f64,
+) -> SeenRun {
+    let station = STATION_SPACINGS * spacing;
+    let reach = BORDER_REACH_SPACINGS * spacing;
+    let max_break = JOINT_BREAK_SPACINGS * spacing;
+    let step = 0.25 * spacing;
+    let along = |p: &Vec3| (p - origin).dot(r);
+    let at_border = |p: &Vec3, outward: f64| match (view.in_view, view.border) {
+        (Some(in_view), _) => !in_view(&(p + r * (outward * reach))),
+        (None, Some(border)) => border.outside_mm(p) > -reach,
+        (None, None) => false,
+    };
+    let root_in_view = |s: f64| {
+        let p = origin + r * s;
+        match (view.in_view, view.border) {
+            (Some(in_view), _) => in_view(&p),
+            (None, Some(border)) => border.outside_mm(&p) <= 0.0,
+            (None, None) => true,
+        }
+    };
+    let carried = |end: f64, outward: f64| {
+        let ahead_of_end = |s: f64| outward * (s - end);
+        let Some(last_foot) = foot.iter().max_by(|a, b| ahead_of_end(along(a)).total_cmp(&ahead_of_end(along(b))))
+        else {
+            return end;
+        };
+        if !at_border(last_foot, outward) {
+            return end;
+        }
+        let web_ends = under_web.iter().map(|&s| ahead_of_end(s)).filter(|&d| d > 0.0).fold(f64::INFINITY, f64::min);
+        let mut ahead: Vec<(f64, &Vec3)> =
+            beside.iter().map(|p| (ahead_of_end(along(p)), p)).filter(|&(d, _)| d > 0.0 && d < web_ends).collect();
+        ahead.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let mut reached: Option<(f64, &Vec3)> = None;
+        for (d, p) in ahead {
+            if d - reached.map_or(0.0, |(r, _)| r) > max_break {
+                break;
+            }
+            reached = Some((d, p));
+        }
+        let Some((mut to, last_flange)) = reached else {
+            return end;
+        };
+        if at_border(last_flange, outward) {
+            let limit = (to + station).min(web_ends);
+            while to + step <= limit && root_in_view(end + outward * (to + step)) {
+                to += step;
+            }
+        }
+        while to > 0.0 && !root_in_view(end + outward * to) {
+            to = (to - step).max(0.0);
+        }
+        end + outward * to
+    };
+    let (s0, s1) = (carried(run.s0, -1.0), carried(run.s1, 1.0));
+    if (s0, s1) == (run.s0, run.s1) {
+        return run;
+    }
+    // The face's foot is not seen along what was added.
+    let foot_share = run.coverage[0] * (run.s1 - run.s0) / (s1 - s0);
+    SeenRun { s0, s1, coverage: [foot_share, run.coverage[1]], share: ((s1 - s0) / run.seen_mm).min(1.0), ..run }
 }
 
 /// The share of the stations from `s0` to `s1` holding a sample.
@@ -1180,6 +1306,66 @@ struct SeenRun {
     coverage: [f64; 2],
     share: f64,
     seen_mm: f64,
+}
+
+/// The face's foot at each station along the root (`along`, stations of
+/// [`STATION_SPACINGS`]): the face points up to [`FOOT_BAND_SPACINGS`]
+/// above the lowest face point of their own station. A face turned nearly
+/// edge-on to the camera or the projector returns points only where it is
+/// turned a little less, above a line slanting along the root (the angle
+/// of incidence changes along it): under the face's single lowest point
+/// the foot would hold part of the root only.
+fn station_feet(
+    points: &[Vec3],
+    along: impl Fn(&Vec3) -> f64,
+    height: impl Fn(&Vec3) -> f64,
+    spacing: f64,
+) -> Vec<Vec3> {
+    let width = STATION_SPACINGS * spacing;
+    let station = |p: &Vec3| (along(p) / width).floor() as i64;
+    let mut lowest: HashMap<i64, f64> = HashMap::new();
+    for p in points {
+        let h = height(p);
+        lowest.entry(station(p)).and_modify(|low| *low = low.min(h)).or_insert(h);
+    }
+    let band = FOOT_BAND_SPACINGS * spacing;
+    points.iter().copied().filter(|p| lowest.get(&station(p)).is_some_and(|&low| height(p) <= low + band)).collect()
+}
+
+/// How far beyond each end of the stretch `(s0, s1)` the joint is still
+/// seen, mm: over the stations on from each end (across breaks no longer
+/// than [`JOINT_BREAK_SPACINGS`]) holding both a point of the web's top
+/// (`top`, along the root) and a flange point beside the root (`flange`),
+/// to the outermost place both reach.
+fn joint_beyond_run(top: &[f64], flange: &[f64], (s0, s1): (f64, f64), spacing: f64) -> [f64; 2] {
+    let width = STATION_SPACINGS * spacing;
+    let station = |s: f64| (s / width).floor() as i64;
+    let extents = |samples: &[f64]| {
+        let mut at: HashMap<i64, (f64, f64)> = HashMap::new();
+        for &s in samples {
+            at.entry(station(s)).and_modify(|(lo, hi)| (*lo, *hi) = (lo.min(s), hi.max(s))).or_insert((s, s));
+        }
+        at
+    };
+    let (top_at, flange_at) = (extents(top), extents(flange));
+    let both = |k: i64| top_at.get(&k).zip(flange_at.get(&k));
+    let max_break = (JOINT_BREAK_SPACINGS * spacing / width).floor() as i64;
+    // The outermost station seen from `from` on in direction `step`.
+    let outermost = |from: i64, step: i64| {
+        let (mut k, mut last, mut missed) = (from, None, 0);
+        while missed <= max_break {
+            if both(k).is_some() {
+                (last, missed) = (Some(k), 0);
+            } else {
+                missed += 1;
+            }
+            k += step;
+        }
+        last.and_then(both)
+    };
+    let before = outermost(station(s0), -1).map_or(0.0, |(t, f)| (s0 - t.0.max(f.0)).max(0.0));
+    let after = outermost(station(s1), 1).map_or(0.0, |(t, f)| (t.1.min(f.1) - s1).max(0.0));
+    [before, after]
 }
 
 fn seen_run(foot: &[f64], flange: &[f64], spacing: f64) -> Option<SeenRun> {
@@ -1383,6 +1569,112 @@ mod tests {
         assert!(other.reason.contains("top is out of view"), "{}", other.reason);
     }
 
+    /// A tee whose +x face (x = WEB_X + 5) returns points only from
+    /// `lowest(y)` up to 39 mm over the flange, along y from −50 to 49;
+    /// its top (z = 660) and the flange up to the root (z = 700) seen on
+    /// both sides along the same stretch, every point `keep` keeps.
+    fn tee_with_face_seen_above(lowest: impl Fn(f64) -> f64, keep: impl Fn(&Vec3) -> bool) -> Vec<Vec3> {
+        let mut pts = Vec::new();
+        for i in 0..100 {
+            let y = -50.0 + i as f64;
+            pts.extend((0..=8).map(|j| Vec3::new(WEB_X - 4.0 + j as f64, y, 660.0)));
+            pts.extend((0..30).map(|j| Vec3::new(WEB_X + 5.5 + 0.5 * j as f64, y, 700.0)));
+            pts.extend((0..30).map(|j| Vec3::new(WEB_X - 30.0 - 0.5 * j as f64, y, 700.0)));
+            pts.extend(
+                (0..20)
+                    .map(|j| 1.0 + 2.0 * j as f64)
+                    .filter(|&h| h >= lowest(y))
+                    .map(|h| Vec3::new(WEB_X + 5.0, y, 700.0 - h)),
+            );
+        }
+        pts.retain(keep);
+        pts
+    }
+
+    /// The tee of `pts` to read roots in: the web's top the points at
+    /// z = 660, the flange's pieces those at z = 700 either side of WEB_X.
+    fn tee_parts(pts: &[Vec3]) -> (PointCloud, PlaneCluster, [PlaneCluster; 2]) {
+        let sides = [
+            PlaneCluster::of_points(pts, |p| p.z == 700.0 && p.x > WEB_X),
+            PlaneCluster::of_points(pts, |p| p.z == 700.0 && p.x < WEB_X),
+        ];
+        (cloud_of(pts), PlaneCluster::of_points(pts, |p| p.z == 660.0), sides)
+    }
+
+    /// The root of `roots` on the web's +x face, read from that face: on
+    /// the face's line x = WEB_X + 5, z = 700.
+    fn plus_x_face_root(roots: &[Result<Root, RootNotSeen>]) -> Root {
+        let root = roots.iter().find_map(|r| r.as_ref().ok()).expect("the root facing the camera").clone();
+        assert_eq!(root.evidence, RootEvidence::Face);
+        for s in [root.line.s_min, root.line.s_max] {
+            let p = root.line.at(s);
+            assert!((p.x - WEB_X - 5.0).abs() < 1e-6 && (p.z - 700.0).abs() < 1e-6, "{p:?}");
+        }
+        root
+    }
+
+    fn ends_y(root: &Root) -> [f64; 2] {
+        [root.line.s_min, root.line.s_max].map(|s| root.line.at(s).y)
+    }
+
+    #[test]
+    fn a_face_seen_higher_up_along_the_web_gives_its_root_all_along() {
+        // The face's lowest return rises from 1 mm over the flange (y < 0)
+        // to 25 mm (y = 49), as where the face turns past the grazing angle
+        // the sensor returns: the root runs the web's length, not only
+        // where the face is seen within its foot's band of its lowest point.
+        let pts = tee_with_face_seen_above(|y| if y < 0.0 { 1.0 } else { 1.0 + 0.5 * y }, |_| true);
+        let (cloud, top, [plus, minus]) = tee_parts(&pts);
+        let root = plus_x_face_root(&find_roots(&test_view(&cloud, Web::Top(&top), &[&plus, &minus])));
+        let ends = ends_y(&root);
+        assert!((ends[0] + 50.0).abs() < 1e-6 && (ends[1] - 49.0).abs() < 1e-6, "{ends:?}");
+        assert_eq!(root.joint_beyond_ends_mm, Some([0.0, 0.0]));
+    }
+
+    #[test]
+    fn the_web_and_the_flange_seen_past_the_face_s_end_are_reported_beyond_the_root() {
+        // The face returns nothing for y > 20 while the web's top and the
+        // flange up to the root go on to y = 49: the face's root is read
+        // where the face is seen, and the 29 mm of joint beyond it reported
+        // (for the flange's edge to be read instead, and the quality gate
+        // to refuse a root stopping short).
+        let pts = tee_with_face_seen_above(|y| if y <= 20.0 { 1.0 } else { f64::INFINITY }, |_| true);
+        let (cloud, top, [plus, minus]) = tee_parts(&pts);
+        let pieces = [&plus, &minus];
+        let view = test_view(&cloud, Web::Top(&top), &pieces);
+        let frame = web_frame(&view).expect("the web's frame");
+        let sign = frame.u.x.signum();
+        let root = root_from_face(&view, &frame, sign, side_seen(&frame, sign)).expect("the +x face's root");
+        let root = plus_x_face_root(&[Ok(root)]);
+        let ends = ends_y(&root);
+        assert!((ends[0] + 50.0).abs() < 1e-6 && (ends[1] - 20.0).abs() < 1e-6, "{ends:?}");
+        let [before, after] = root.joint_beyond_ends_mm.expect("measured under a web's top");
+        assert_eq!(before, 0.0);
+        assert!((after - 29.0).abs() < 1e-6, "{after}");
+    }
+
+    #[test]
+    fn a_root_runs_to_the_image_border_past_where_the_border_cuts_its_face() {
+        // The face seen from 20 mm over the flange up; the image's border
+        // slanting so that what stands higher leaves the view sooner: the
+        // root (z = 700) is in view for y < 45, the face's lowest returns
+        // (z = 680) for y < 35, the web's top for y < 25. The root runs on
+        // along the flange up to it, to within a step of where it leaves
+        // the view.
+        let in_view = |p: &Vec3| p.y < 45.0 + 0.5 * (p.z - 700.0);
+        let pts = tee_with_face_seen_above(|_| 20.0, in_view);
+        let (cloud, top, [plus, minus]) = tee_parts(&pts);
+        let pieces = [&plus, &minus];
+        let view = test_view(&cloud, Web::Top(&top), &pieces);
+        let ends = ends_y(&plus_x_face_root(&find_roots(&TeeView { in_view: Some(&in_view), ..view })));
+        assert!((ends[0] + 50.0).abs() < 1e-6, "{ends:?}");
+        assert!((44.5..45.0).contains(&ends[1]), "{ends:?}");
+        // Without the grid nothing says the border cut the face: the root
+        // ends where its face's foot is seen.
+        let ends = ends_y(&plus_x_face_root(&find_roots(&view)));
+        assert!((ends[1] - 34.0).abs() < 1e-6, "{ends:?}");
+    }
+
     /// The roots [`find_roots`] reads from `pts`: the web's top the points
     /// at z = 660, the flange's pieces those at z = 700 either side of
     /// x = WEB_X, a point spacing of 1 mm.
@@ -1531,23 +1823,27 @@ mod tests {
     }
 
     #[test]
-    fn a_face_seen_along_a_few_millimetres_gives_way_to_the_flanges_edge() {
+    fn a_face_seen_along_part_of_the_web_gives_way_to_the_flanges_edge() {
         // The edge-on web of the tests above, its +x face (x = WEB_X + 4)
-        // returning points only from y = 44 to 49, its flange seen up to
-        // the root all along: the root runs the web's length, from the
-        // flange's edge, not the face's 5 mm.
-        let mut pts = Vec::new();
-        for i in 0..100 {
-            let y = -50.0 + i as f64;
-            pts.extend((0..=8).map(|j| Vec3::new(WEB_X - 4.0 + j as f64, y, 660.0)));
-            pts.extend((0..30).map(|j| Vec3::new(WEB_X + 4.0 + 0.5 * j as f64 + 0.25 * (i % 2) as f64, y, 700.0)));
-            pts.extend((0..30).map(|j| Vec3::new(WEB_X - 30.0 - 0.5 * j as f64, y, 700.0)));
-            if y >= 44.0 {
-                pts.extend((0..20).map(|j| Vec3::new(WEB_X + 4.0, y, 699.0 - 2.0 * j as f64)));
+        // returning points only along part of the web, its flange seen up
+        // to the root all along: the root runs the web's length, from the
+        // flange's edge. Seen from y = 44 to 49, the face's root is 5 mm
+        // long; seen from y = −50 to 20 (71 % of the web's top), the web's
+        // top and the flange up to the root go on 29 mm past it.
+        for face_seen in [44.0..=49.0, -50.0..=20.0] {
+            let mut pts = Vec::new();
+            for i in 0..100 {
+                let y = -50.0 + i as f64;
+                pts.extend((0..=8).map(|j| Vec3::new(WEB_X - 4.0 + j as f64, y, 660.0)));
+                pts.extend((0..30).map(|j| Vec3::new(WEB_X + 4.0 + 0.5 * j as f64 + 0.25 * (i % 2) as f64, y, 700.0)));
+                pts.extend((0..30).map(|j| Vec3::new(WEB_X - 30.0 - 0.5 * j as f64, y, 700.0)));
+                if face_seen.contains(&y) {
+                    pts.extend((0..20).map(|j| Vec3::new(WEB_X + 4.0, y, 699.0 - 2.0 * j as f64)));
+                }
             }
+            let ends = flange_edge_root_ends(&pts);
+            assert!((ends[0] + 50.0).abs() < 1e-6 && (ends[1] - 49.0).abs() < 1e-6, "{face_seen:?}: {ends:?}");
         }
-        let ends = flange_edge_root_ends(&pts);
-        assert!((ends[0] + 50.0).abs() < 1e-6 && (ends[1] - 49.0).abs() < 1e-6, "{ends:?}");
     }
 
     #[test]

@@ -496,17 +496,22 @@ pub fn check(seam: &SeamEvidence, limits: &QualityParams) -> Vec<GateFailure> {
     if let Some(beyond) = seam.joint_beyond_ends_mm {
         let (end, mm) = if beyond[0] >= beyond[1] { ("first", beyond[0]) } else { ("last", beyond[1]) };
         if mm > limits.max_joint_beyond_seam_mm {
-            fail(
-                Gate::JointCoverage,
-                mm,
-                limits.max_joint_beyond_seam_mm,
+            let limit = limits.max_joint_beyond_seam_mm;
+            let message = if seam.joint == JointType::TFillet {
+                format!(
+                    "the web's top and the flange up to the root are seen for {mm:.1} mm beyond the root's {end} \
+                     end, more than {limit:.1} mm, where the web's side face is not seen down to the flange \
+                     (turned nearly edge-on to the camera or the projector, or covered); the seam would stop \
+                     short of the root"
+                )
+            } else {
                 format!(
                     "both plates are seen beside the joint for {mm:.1} mm beyond the seam's {end} end, more than \
-                     {:.1} mm: a weld edge was lost there while its plate goes on (a streak, spatter or a \
-                     reflection over the edge); the seam would stop short of the joint",
-                    limits.max_joint_beyond_seam_mm
-                ),
-            );
+                     {limit:.1} mm: a weld edge was lost there while its plate goes on (a streak, spatter or a \
+                     reflection over the edge); the seam would stop short of the joint"
+                )
+            };
+            fail(Gate::JointCoverage, mm, limit, message);
         }
     }
 
@@ -740,6 +745,23 @@ mod tests {
         let seam =
             SeamEvidence { joint_beyond_ends_mm: Some([1.0, 1.9]), ..evidence(JointType::IButt, &q, [0.05, 0.05]) };
         assert!(check(&seam, &limits).is_empty());
+        // A fillet root: the web and the flange go on past it, its face
+        // not seen there; the refusal says so, not that a plate goes on.
+        let seam = SeamEvidence {
+            joint_beyond_ends_mm: Some([38.9, 0.0]),
+            fits: FittedEdges::WebFace,
+            ..evidence(JointType::TFillet, &q, [0.05, 0.05])
+        };
+        // (The butt joint's figures fail the web's angle too.)
+        let failed: Vec<_> = check(&seam, &limits).into_iter().filter(|f| f.gate == Gate::JointCoverage).collect();
+        assert_eq!(failed.len(), 1);
+        assert!(
+            failed[0].message.starts_with(
+                "the web's top and the flange up to the root are seen for 38.9 mm beyond the root's first end"
+            ) && failed[0].message.contains("side face is not seen down to the flange"),
+            "{}",
+            failed[0].message
+        );
 
         // A lap's upper edge with 30 of its 200 samples 2 mm beyond the
         // line the rest fit: cut short along the rest. 19 of 200 pass.

@@ -137,9 +137,9 @@ pub(super) fn plan(
             edge_steps: None,
             edge_coverage: Some(root.coverage),
             coverage: Some(&coverage),
-            // The root's ends are where its evidence ends: nothing is seen
-            // of it beyond them.
-            joint_beyond_ends_mm: None,
+            // The web's top and the flange up to the root seen beyond
+            // the root's ends: the joint goes on where its face is not seen.
+            joint_beyond_ends_mm: root.joint_beyond_ends_mm,
             length_mm: root.line.s_max - root.line.s_min,
             given_groove_depth_mm: None,
             fits: match root.evidence {

@@ -89,9 +89,15 @@ fn i_butt_plates_two_spacings_apart_at_one_mm_voxels_are_told_apart() {
 /// The outcome of planning the one scene of `suite` whose name starts
 /// with `name`, from a `variant` cloud, under `--joint auto`.
 fn plan_auto(suite: Vec<(String, SceneSpec)>, variant: &str, name: &str) -> SceneOutcome {
+    plan_asking(suite, variant, name, JointAsk::Auto)
+}
+
+/// Scene `name` of `suite` made into `variant`, planned with the joint
+/// `joint` asks for, as `weldseam eval` plans it.
+fn plan_asking(suite: Vec<(String, SceneSpec)>, variant: &str, name: &str, joint: JointAsk) -> SceneOutcome {
     let scenes: Vec<_> = suite.into_iter().filter(|(n, _)| n.starts_with(name)).collect();
     assert_eq!(scenes.len(), 1, "{name} names one scene of the suite");
-    let ask = EvalRequest { joint: JointAsk::Auto, ..EvalRequest::default() };
+    let ask = EvalRequest { joint, ..EvalRequest::default() };
     let variant = Variant::parse(variant).unwrap();
     run_suite_asking(&scenes, &CameraModel::default(), &variant, &[Config::default()], &ask, |_, _| {})
         .remove(0)
@@ -116,6 +122,18 @@ fn plates_seen_as_one_on_the_table_are_no_lap_s_upper_plate() {
     // reaches past its lower plate's edge.
     let o = plan_auto(eval_suite(Draw::Documented), "voxel:1", "i-butt-06");
     assert!(refusal(&o).contains("far edge into view"), "{}: {}", o.name, refusal(&o));
+}
+
+#[test]
+fn plates_seen_as_one_with_the_table_all_round_are_no_lap_s_upper_plate() {
+    // Fresh draw 7's wrong-joint I-butt at 667 mm, asked for as a lap, at
+    // 1 mm voxels: its plates are one plane 25 mm over the table and
+    // wholly in view. The table beside one of its sides passed for a lap's
+    // lower plate, and a lap seam was planned along that side, 291 mm off
+    // the butt joint. The table is seen beside the far side too, along all
+    // of it: the plane lies on it whole.
+    let o = plan_asking(fault_suite(Draw::Fresh(7)), "voxel:1", "fault-wrong-joint-i-butt-03", JointAsk::AsScene);
+    assert!(refusal(&o).contains("seen beside its far edge too"), "{}: {}", o.name, refusal(&o));
 }
 
 #[test]

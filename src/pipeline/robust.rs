@@ -334,10 +334,12 @@ fn plan_workpiece(
 /// (`lines`, fitted to `edge_points`; `chosen` the weld edge's): the
 /// lower plate, with the pieces of its layer, must not be seen beside one
 /// turned from it for longer, nor beside all of one (the upper plate's
-/// end; [`weld_edges::check_lap_edge`]). The lower
-/// plate's points begin past the upper plate's edge points by up to two
-/// neighbour radii (the rims the plane criterion trims off both plates)
-/// and what the upper plate's thickness, a lap step, hides or shades.
+/// end), nor beside most of the edge across the plate from it (the upper
+/// plate lying on the layer whole; [`weld_edges::check_lap_edge`]). The
+/// lower plate's points begin past the upper plate's edge points by up to
+/// two neighbour radii (the rims the plane criterion trims off both
+/// plates) and what the upper plate's thickness, a lap step, hides or
+/// shades.
 fn check_lap_edge(
     ctx: &Context,
     workpiece: &background::Workpiece,
@@ -346,7 +348,8 @@ fn check_lap_edge(
     chosen: usize,
 ) -> Result<(), PlanError> {
     let turned = weld_edges::turned_from(lines, chosen);
-    if turned.is_empty() {
+    let parallel: Vec<usize> = (0..lines.len()).filter(|k| *k != chosen && !turned.contains(k)).collect();
+    if turned.is_empty() && parallel.is_empty() {
         return Ok(());
     }
     let [upper, lower] = &workpiece.plates;
@@ -354,24 +357,33 @@ fn check_lap_edge(
     let band_mm = step_mm + 2.0 * ctx.scale.radius_mm + ctx.scale.band(ctx.config.pipeline.boundary_band_mm);
     let spacing_mm = ctx.scale.spacing_at(&ctx.config.camera, &upper.centroid);
     let bin_mm = (2.0 * spacing_mm).max(LAP_EDGE_BIN_MIN_MM);
-    let measured: Vec<usize> = std::iter::once(chosen).chain(turned.iter().copied()).collect();
+    let measured: Vec<usize> = std::iter::once(chosen).chain(turned.iter().copied()).chain(parallel).collect();
     let edges = weld_edges::plate_edges(lines, &measured, edge_points, &upper.centroid, &upper.plane.normal);
     let beside: Vec<&[u32]> =
         std::iter::once(lower).chain(&workpiece.layer_mates[1]).map(|c| c.members.as_slice()).collect();
     let seen_mm = boundary::stretch_seen_beside(ctx.cloud, &beside, &edges, [band_mm, bin_mm, spacing_mm]);
     tracing::debug!(?measured, ?seen_mm, band_mm, "lower plate beside the upper plate's edges");
-    let turned: Vec<weld_edges::TurnedEdge> = turned
-        .into_iter()
-        .zip(&edges[1..])
-        .zip(&seen_mm[1..])
-        .map(|((line, edge), &seen_mm)| weld_edges::TurnedEdge {
-            line,
-            length_mm: edge.span[1] - edge.span[0],
-            seen_mm,
-        })
+    let other = |k: usize| weld_edges::OtherEdge {
+        line: measured[k],
+        length_mm: edges[k].span[1] - edges[k].span[0],
+        seen_mm: seen_mm[k],
+    };
+    let (turned_at, parallel_at) = (1..1 + turned.len(), 1 + turned.len()..measured.len());
+    let turned: Vec<weld_edges::OtherEdge> = turned_at.map(other).collect();
+    // The parallel edges facing away from the chosen one: across the plate.
+    let far: Vec<weld_edges::OtherEdge> = parallel_at
+        .filter(|&k| edges[k].edge.outward.dot(&edges[0].edge.outward) < -FAR_EDGE_MIN_COS)
+        .map(other)
         .collect();
-    weld_edges::check_lap_edge(lines, chosen, seen_mm[0], &turned).map_err(|e| PlanError::at(Stage::WeldEdges, e))
+    weld_edges::check_lap_edge(lines, chosen, seen_mm[0], &turned, &far).map_err(|e| PlanError::at(Stage::WeldEdges, e))
 }
+
+/// Of an upper plate's edges not turned from the lap's weld edge (under
+/// 60°, [`weld_edges::turned_from`]), one lies across the plate from it
+/// when their outward directions are within about 25° of opposite (a
+/// cosine of 0.9); nearer alike, it is another line along the weld edge's
+/// own side.
+const FAR_EDGE_MIN_COS: f64 = 0.9;
 
 /// The least bin, mm, in which the lower plate is looked for beside an
 /// upper plate's edge; two point spacings where they are wider, so a bin

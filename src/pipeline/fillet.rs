@@ -495,20 +495,11 @@ fn web_frame(view: &TeeView) -> Option<WebFrame> {
 /// The web's frame from its top: along its long axis, its middle and half
 /// width from its points' spread across it.
 fn frame_from_top(cloud: &PointCloud, top: &PlaneCluster, flange: &Plane) -> Option<WebFrame> {
-    let points = cloud.points();
     let n = flange.normal;
     let e = (top.long_axis - n * top.long_axis.dot(&n)).try_normalize(1e-9)?;
     let u = n.cross(&e);
     let origin = top.centroid;
-    let mut across: Vec<f64> = top.members.iter().map(|&i| (vec3(&points[i as usize]) - origin).dot(&u)).collect();
-    if across.len() < 2 {
-        return None;
-    }
-    across.sort_by(f64::total_cmp);
-    // The top's edges, a hundredth of its points in from either side, so a
-    // stray point does not widen it.
-    let k = across.len() / 100;
-    let (lo, hi) = (across[k], across[across.len() - 1 - k]);
+    let (lo, hi) = top_edges_across(cloud, top, &origin, &u)?;
     Some(WebFrame {
         n,
         e,
@@ -817,6 +808,58 @@ fn root_from_face(view: &TeeView, frame: &WebFrame, sign: f64, side: Side) -> Re
 /// [`EDGE_VIEW_SPACINGS`] spacings over the web's height. A root turned
 /// less than that is refused, not guessed.
 fn root_from_flange_edge(view: &TeeView, frame: &WebFrame, sign: f64, side: Side) -> Result<Root, String> {
+    let root = flange_edge_root(view, frame, sign, side)?;
+    // The web's axis from its top's spread lies off the web where the
+    // image's border cuts the top obliquely: the edge, looked for outward
+    // of the web's middle line along that axis, then runs into the
+    // search's bound before the web ends. Read again along the edge's own
+    // direction.
+    let Web::Top(top) = view.web else {
+        return Ok(root);
+    };
+    let along_edge = root.line.axes.e;
+    if along_edge.dot(&frame.e).abs() >= MAX_AXIS_TURN_DEG.to_radians().cos() {
+        return Ok(root);
+    }
+    match frame_along(view.cloud, top, frame, &along_edge) {
+        Some(turned) => flange_edge_root(view, &turned, sign, side).or(Ok(root)),
+        None => Ok(root),
+    }
+}
+
+/// How far, degrees, the flange's edge may run from the web's axis before
+/// the edge is read again along its own direction: a degree moves the edge
+/// by a spacing every 20 to 60 mm along a root (spacings of 0.3 to 1 mm).
+const MAX_AXIS_TURN_DEG: f64 = 1.0;
+
+/// `frame` with the web's axis along `e` (laid in the flange's plane), the
+/// middle and half-width of the web's `top` read across it.
+fn frame_along(cloud: &PointCloud, top: &PlaneCluster, frame: &WebFrame, e: &Vec3) -> Option<WebFrame> {
+    let n = frame.n;
+    let e = (e - n * e.dot(&n)).try_normalize(1e-9)?;
+    let e = if e.dot(&frame.e) >= 0.0 { e } else { -e };
+    let u = n.cross(&e);
+    let (lo, hi) = top_edges_across(cloud, top, &frame.origin, &u)?;
+    Some(WebFrame { e, u, middle: 0.5 * (lo + hi), half_width: 0.5 * (hi - lo), ..*frame })
+}
+
+/// Where the web's `top` ends on either side across `u`, mm from
+/// `origin`: a hundredth of its points in from either side, so a stray
+/// point does not widen it.
+fn top_edges_across(cloud: &PointCloud, top: &PlaneCluster, origin: &Vec3, u: &Vec3) -> Option<(f64, f64)> {
+    let points = cloud.points();
+    let mut across: Vec<f64> = top.members.iter().map(|&i| (vec3(&points[i as usize]) - origin).dot(u)).collect();
+    if across.len() < 2 {
+        return None;
+    }
+    across.sort_by(f64::total_cmp);
+    let k = across.len() / 100;
+    Some((across[k], across[across.len() - 1 - k]))
+}
+
+/// The root from the flange's edge in the web's frame `frame`
+/// ([`root_from_flange_edge`]).
+fn flange_edge_root(view: &TeeView, frame: &WebFrame, sign: f64, side: Side) -> Result<Root, String> {
     let Web::Top(web_top) = view.web else {
         return Err("the web's top is out of view, so its edge cannot stand in for the face".into());
     };
@@ -1822,6 +1865,18 @@ mod tests {
         assert!(root.coverage.iter().all(|c| *c > 0.99), "{:?}", root.coverage);
     }
 
+    /// Row `i` (y = −50 + i) of an edge-on web: its top (z = 660) 8 mm
+    /// wide round WEB_X, the flange (z = 700) from its +x root at
+    /// x = WEB_X + 4 outward, every other row's points half a step out, and
+    /// from 26 mm off on its −x side.
+    fn edge_on_web_row(i: usize) -> impl Iterator<Item = Vec3> {
+        let y = -50.0 + i as f64;
+        let top = (0..=8).map(move |j| Vec3::new(WEB_X - 4.0 + j as f64, y, 660.0));
+        let plus = (0..30).map(move |j| Vec3::new(WEB_X + 4.0 + 0.5 * j as f64 + 0.25 * (i % 2) as f64, y, 700.0));
+        let minus = (0..30).map(move |j| Vec3::new(WEB_X - 30.0 - 0.5 * j as f64, y, 700.0));
+        top.chain(plus).chain(minus)
+    }
+
     #[test]
     fn a_face_seen_along_part_of_the_web_gives_way_to_the_flanges_edge() {
         // The edge-on web of the tests above, its +x face (x = WEB_X + 4)
@@ -1834,9 +1889,7 @@ mod tests {
             let mut pts = Vec::new();
             for i in 0..100 {
                 let y = -50.0 + i as f64;
-                pts.extend((0..=8).map(|j| Vec3::new(WEB_X - 4.0 + j as f64, y, 660.0)));
-                pts.extend((0..30).map(|j| Vec3::new(WEB_X + 4.0 + 0.5 * j as f64 + 0.25 * (i % 2) as f64, y, 700.0)));
-                pts.extend((0..30).map(|j| Vec3::new(WEB_X - 30.0 - 0.5 * j as f64, y, 700.0)));
+                pts.extend(edge_on_web_row(i));
                 if face_seen.contains(&y) {
                     pts.extend((0..20).map(|j| Vec3::new(WEB_X + 4.0, y, 699.0 - 2.0 * j as f64)));
                 }
@@ -1844,6 +1897,39 @@ mod tests {
             let ends = flange_edge_root_ends(&pts);
             assert!((ends[0] + 50.0).abs() < 1e-6 && (ends[1] - 49.0).abs() < 1e-6, "{face_seen:?}: {ends:?}");
         }
+    }
+
+    #[test]
+    fn a_web_axis_off_the_web_is_read_again_along_the_flange_s_edge() {
+        // The edge-on web of the tests above, 200 mm long (y from −50 to
+        // 149), the image's border cutting its top (z = 660) at y = 20 but
+        // the flange (z = 700) only past the web's end. The top's long axis
+        // is taken 3° off the web, as from a top the border cuts
+        // obliquely: the flange's edge at x = WEB_X + 4, looked for outward
+        // of the web's middle line along that axis, crosses that line about
+        // 75 mm past the top's middle. Read again along the edge's own
+        // line, the root runs the web's length on the edge.
+        let in_view = |p: &Vec3| p.y < 20.0 + 4.0 * (p.z - 660.0);
+        let mut pts = Vec::new();
+        for i in 0..200 {
+            pts.extend(edge_on_web_row(i));
+        }
+        pts.retain(in_view);
+        let (cloud, mut top, [plus, minus]) = tee_parts(&pts);
+        let skew = 3f64.to_radians();
+        top.long_axis = Vec3::new(skew.sin(), skew.cos(), 0.0);
+        let pieces = [&plus, &minus];
+        let view = TeeView { in_view: Some(&in_view), ..test_view(&cloud, Web::Top(&top), &pieces) };
+        let roots = find_roots(&view);
+        let root = roots.iter().find_map(|r| r.as_ref().ok()).unwrap_or_else(|| panic!("{roots:?}"));
+        assert!(matches!(root.evidence, RootEvidence::FlangeEdge { .. }), "{:?}", root.evidence);
+        for s in [root.line.s_min, root.line.s_max] {
+            let p = root.line.at(s);
+            assert!((p.x - WEB_X - 4.0).abs() < 1e-6 && (p.z - 700.0).abs() < 1e-6, "{p:?}");
+        }
+        // (Along the edge's fitted line: its ends to a few hundredths.)
+        let ends = ends_y(root);
+        assert!((ends[0] + 50.0).abs() < 0.05 && (ends[1] - 149.0).abs() < 0.05, "{ends:?}");
     }
 
     #[test]

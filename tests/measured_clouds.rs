@@ -104,11 +104,12 @@ fn plan_asking(suite: Vec<(String, SceneSpec)>, variant: &str, name: &str, joint
         .remove(0)
 }
 
-/// The reason `o` was refused; a panic if it was planned.
-fn refusal(o: &SceneOutcome) -> &str {
+/// Asserts `o` was refused with a reason that says `why`; a panic naming
+/// the scene and how far off it was if it was planned.
+fn assert_refused_saying(o: &SceneOutcome, why: &str) {
     match &o.result {
         Ok((err, _)) => panic!("{}: planned {:.1} mm off", o.name, err.max_mm),
-        Err(e) => &e.reason,
+        Err(e) => assert!(e.reason.contains(why), "{}: {}", o.name, e.reason),
     }
 }
 
@@ -121,7 +122,7 @@ fn plates_seen_as_one_on_the_table_are_no_lap_s_upper_plate() {
     // of the plane's ends along all of them: no lap's upper plate, which
     // reaches past its lower plate's edge.
     let o = plan_auto(eval_suite(Draw::Documented), "voxel:1", "i-butt-06");
-    assert!(refusal(&o).contains("far edge into view"), "{}: {}", o.name, refusal(&o));
+    assert_refused_saying(&o, "far edge into view");
 }
 
 #[test]
@@ -133,7 +134,7 @@ fn plates_seen_as_one_with_the_table_all_round_are_no_lap_s_upper_plate() {
     // the butt joint. The table is seen beside the far side too, along all
     // of it: the plane lies on it whole.
     let o = plan_asking(fault_suite(Draw::Fresh(7)), "voxel:1", "fault-wrong-joint-i-butt-03", JointAsk::AsScene);
-    assert!(refusal(&o).contains("seen beside its far edge too"), "{}: {}", o.name, refusal(&o));
+    assert_refused_saying(&o, "seen beside its far edge too");
 }
 
 #[test]
@@ -144,7 +145,7 @@ fn a_clamp_across_the_smaller_plate_is_no_lap_s_upper_plate() {
     // for a lap's upper plate over the larger plate, 62 mm off. The
     // plane under it is seen on both of its sides.
     let o = plan_auto(fault_suite(Draw::Documented), "voxel:1", "fault-clamp-i-butt-02");
-    assert!(refusal(&o).contains("lies across the plane under it"), "{}: {}", o.name, refusal(&o));
+    assert_refused_saying(&o, "lies across the plane under it");
 }
 
 #[test]

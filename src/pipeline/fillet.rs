@@ -1644,16 +1644,21 @@ mod tests {
         (cloud_of(pts), PlaneCluster::of_points(pts, |p| p.z == 660.0), sides)
     }
 
-    /// The root of `roots` on the web's +x face, read from that face: on
-    /// the face's line x = WEB_X + 5, z = 700.
+    /// The root of `roots` on the web's +x face ([`assert_on_plus_x_face`]).
     fn plus_x_face_root(roots: &[Result<Root, RootNotSeen>]) -> Root {
         let root = roots.iter().find_map(|r| r.as_ref().ok()).expect("the root facing the camera").clone();
+        assert_on_plus_x_face(&root);
+        root
+    }
+
+    /// Asserts `root` is read from the web's +x face and lies on the
+    /// face's line x = WEB_X + 5, z = 700.
+    fn assert_on_plus_x_face(root: &Root) {
         assert_eq!(root.evidence, RootEvidence::Face);
         for s in [root.line.s_min, root.line.s_max] {
             let p = root.line.at(s);
             assert!((p.x - WEB_X - 5.0).abs() < 1e-6 && (p.z - 700.0).abs() < 1e-6, "{p:?}");
         }
-        root
     }
 
     fn ends_y(root: &Root) -> [f64; 2] {
@@ -1688,7 +1693,7 @@ mod tests {
         let frame = web_frame(&view).expect("the web's frame");
         let sign = frame.u.x.signum();
         let root = root_from_face(&view, &frame, sign, side_seen(&frame, sign)).expect("the +x face's root");
-        let root = plus_x_face_root(&[Ok(root)]);
+        assert_on_plus_x_face(&root);
         let ends = ends_y(&root);
         assert!((ends[0] + 50.0).abs() < 1e-6 && (ends[1] - 20.0).abs() < 1e-6, "{ends:?}");
         let [before, after] = root.joint_beyond_ends_mm.expect("measured under a web's top");

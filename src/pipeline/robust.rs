@@ -348,17 +348,28 @@ fn check_lap_edge(
     chosen: usize,
 ) -> Result<(), PlanError> {
     let turned = weld_edges::turned_from(lines, chosen);
-    let parallel: Vec<usize> = (0..lines.len()).filter(|k| *k != chosen && !turned.contains(k)).collect();
-    if turned.is_empty() && parallel.is_empty() {
+    let [upper, lower] = &workpiece.plates;
+    // The chosen edge, the turned ones (the plate's ends), then the lines
+    // parallel to it that face away from it: across the plate.
+    let candidates: Vec<usize> = std::iter::once(chosen)
+        .chain(turned.iter().copied())
+        .chain((0..lines.len()).filter(|k| *k != chosen && !turned.contains(k)))
+        .collect();
+    let spanned = weld_edges::plate_edges(lines, &candidates, edge_points, &upper.centroid, &upper.plane.normal);
+    let (measured, edges): (Vec<usize>, Vec<boundary::SpannedEdge>) = candidates
+        .iter()
+        .zip(&spanned)
+        .enumerate()
+        .filter(|(k, (_, e))| *k <= turned.len() || e.edge.outward.dot(&spanned[0].edge.outward) < -FAR_EDGE_MIN_COS)
+        .map(|(_, (&line, &e))| (line, e))
+        .unzip();
+    if measured.len() == 1 {
         return Ok(());
     }
-    let [upper, lower] = &workpiece.plates;
     let step_mm = upper.plane.normal.dot(&(lower.centroid - upper.centroid)).abs();
     let band_mm = step_mm + 2.0 * ctx.scale.radius_mm + ctx.scale.band(ctx.config.pipeline.boundary_band_mm);
     let spacing_mm = ctx.scale.spacing_at(&ctx.config.camera, &upper.centroid);
     let bin_mm = (2.0 * spacing_mm).max(LAP_EDGE_BIN_MIN_MM);
-    let measured: Vec<usize> = std::iter::once(chosen).chain(turned.iter().copied()).chain(parallel).collect();
-    let edges = weld_edges::plate_edges(lines, &measured, edge_points, &upper.centroid, &upper.plane.normal);
     let beside: Vec<&[u32]> =
         std::iter::once(lower).chain(&workpiece.layer_mates[1]).map(|c| c.members.as_slice()).collect();
     let seen_mm = boundary::stretch_seen_beside(ctx.cloud, &beside, &edges, [band_mm, bin_mm, spacing_mm]);
@@ -368,14 +379,9 @@ fn check_lap_edge(
         length_mm: edges[k].span[1] - edges[k].span[0],
         seen_mm: seen_mm[k],
     };
-    let (turned_at, parallel_at) = (1..1 + turned.len(), 1 + turned.len()..measured.len());
-    let turned: Vec<weld_edges::OtherEdge> = turned_at.map(other).collect();
-    // The parallel edges facing away from the chosen one: across the plate.
-    let far: Vec<weld_edges::OtherEdge> = parallel_at
-        .filter(|&k| edges[k].edge.outward.dot(&edges[0].edge.outward) < -FAR_EDGE_MIN_COS)
-        .map(other)
-        .collect();
-    weld_edges::check_lap_edge(lines, chosen, seen_mm[0], &turned, &far).map_err(|e| PlanError::at(Stage::WeldEdges, e))
+    let ends: Vec<weld_edges::OtherEdge> = (1..=turned.len()).map(other).collect();
+    let far: Vec<weld_edges::OtherEdge> = (1 + turned.len()..measured.len()).map(other).collect();
+    weld_edges::check_lap_edge(lines, chosen, seen_mm[0], &ends, &far).map_err(|e| PlanError::at(Stage::WeldEdges, e))
 }
 
 /// Of an upper plate's edges not turned from the lap's weld edge (under

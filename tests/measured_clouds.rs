@@ -8,6 +8,7 @@
 use weldseam::camera::CameraModel;
 use weldseam::config::Config;
 use weldseam::eval::{EvalRequest, JointAsk, SceneOutcome, SeamError, run_suite, run_suite_asking};
+use weldseam::pipeline::quality::Gate;
 use weldseam::sim::suite::{eval_suite, fault_suite};
 use weldseam::sim::variants::Variant;
 use weldseam::sim::{Draw, SceneSpec};
@@ -135,6 +136,26 @@ fn plates_seen_as_one_with_the_table_all_round_are_no_lap_s_upper_plate() {
     // of it: the plane lies on it whole.
     let o = plan_asking(fault_suite(Draw::Fresh(7)), "voxel:1", "fault-wrong-joint-i-butt-03", JointAsk::AsScene);
     assert_refused_saying(&o, "seen beside its far edge too");
+}
+
+#[test]
+fn a_step_across_the_view_and_nothing_else_is_named_by_the_request_not_by_auto() {
+    // fault-tack-welds-i-butt-00 at 1 mm voxels: the I-butt's plates,
+    // 0.5 mm apart at 667 mm, are one plane that fills the view 27 mm
+    // over a strip of table. Under `auto` a lap seam was planned along
+    // its edge, 380 mm off the joint: the plane's ends and far side lie
+    // along the image's border, so nothing shows whether the plane under
+    // it is a lap's lower plate or the table.
+    let o = plan_auto(fault_suite(Draw::Documented), "voxel:1", "fault-tack-welds-i-butt-00");
+    assert_refused_saying(&o, "seen to end only along the chosen edge (3 other edge(s) lie along the image's border)");
+    assert_eq!(o.result.as_ref().unwrap_err().gate, Some(Gate::JointUnknown));
+    // A lap whose plates fill the view shows the same: refused under
+    // `auto`, planned where a lap is asked for.
+    let fill = "lap-00-d500-t20-fill-upper-side";
+    let o = plan_auto(eval_suite(Draw::Documented), "unorganized", fill);
+    assert_refused_saying(&o, "request lap to plan it as a lap");
+    let o = plan_asking(eval_suite(Draw::Documented), "unorganized", fill, JointAsk::AsScene);
+    assert_within(&o.name, planned(&o), 2.0);
 }
 
 #[test]

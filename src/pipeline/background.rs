@@ -644,16 +644,10 @@ fn outermost_along(stations: &Stations, points: &[Point]) -> Vec<Vec3> {
 }
 
 /// Whether a plate's far edge (its outermost points along it) runs along
-/// the view's border: at least half of them within a rim and two spacings
-/// of it. The plate's cluster ends up to a neighbour radius inside the
-/// plate (the rim the plane criterion trims), and the plate's own last
-/// returns lie on the border where the border cuts it. An edge that only
-/// touches the border (at a corner of the image, or of a crop) does not
-/// run along it.
+/// the view's border ([`ViewBorder::runs_along`]), within the plate's rim
+/// (a neighbour radius) and two spacings of it.
 fn runs_along(border: &ViewBorder, far_edge: &[Vec3], top: &PlaneCluster, s: &Selection) -> bool {
-    let reach = s.neighbour_radius_mm + 2.0 * spacing_of(top);
-    let on_border = far_edge.iter().filter(|p| border.outside_mm(p) >= -reach).count();
-    !far_edge.is_empty() && 2 * on_border >= far_edge.len()
+    border.runs_along(far_edge, s.neighbour_radius_mm + 2.0 * spacing_of(top))
 }
 
 /// Fits a plane to each cluster and estimates its area from the sampling

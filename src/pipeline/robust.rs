@@ -335,11 +335,12 @@ fn plan_workpiece(
 /// lower plate, with the pieces of its layer, must not be seen beside one
 /// turned from it for longer, nor beside all of one (the upper plate's
 /// end), nor beside most of the edge across the plate from it (the upper
-/// plate lying on the layer whole; [`weld_edges::check_lap_edge`]). The
-/// lower plate's points begin past the upper plate's edge points by up to
-/// two neighbour radii (the rims the plane criterion trims off both
-/// plates) and what the upper plate's thickness, a lap step, hides or
-/// shades.
+/// plate lying on the layer whole), and under a request that leaves a
+/// butt joint open the upper plate must be seen to end somewhere else in
+/// view ([`weld_edges::check_lap_edge`]). The lower plate's points begin
+/// past the upper plate's edge points by up to two neighbour radii (the
+/// rims the plane criterion trims off both plates) and what the upper
+/// plate's thickness, a lap step, hides or shades.
 fn check_lap_edge(
     ctx: &Context,
     workpiece: &background::Workpiece,
@@ -363,9 +364,6 @@ fn check_lap_edge(
         .filter(|(k, (_, e))| *k <= turned.len() || e.edge.outward.dot(&spanned[0].edge.outward) < -FAR_EDGE_MIN_COS)
         .map(|(_, (&line, &e))| (line, e))
         .unzip();
-    if measured.len() == 1 {
-        return Ok(());
-    }
     let step_mm = upper.plane.normal.dot(&(lower.centroid - upper.centroid)).abs();
     let band_mm = step_mm + 2.0 * ctx.scale.radius_mm + ctx.scale.band(ctx.config.pipeline.boundary_band_mm);
     let spacing_mm = ctx.scale.spacing_at(&ctx.config.camera, &upper.centroid);
@@ -373,16 +371,79 @@ fn check_lap_edge(
     let beside: Vec<&[u32]> =
         std::iter::once(lower).chain(&workpiece.layer_mates[1]).map(|c| c.members.as_slice()).collect();
     let seen_mm = boundary::stretch_seen_beside(ctx.cloud, &beside, &edges, [band_mm, bin_mm, spacing_mm]);
-    tracing::debug!(?measured, ?seen_mm, band_mm, "lower plate beside the upper plate's edges");
+    let lies = edges_lie(ctx, upper, lines, &measured, edge_points, &edges, [band_mm, bin_mm, spacing_mm]);
+    tracing::debug!(?measured, ?seen_mm, ?lies, band_mm, "lower plate beside the upper plate's edges");
     let other = |k: usize| weld_edges::OtherEdge {
         line: measured[k],
         length_mm: edges[k].span[1] - edges[k].span[0],
         seen_mm: seen_mm[k],
+        lies: lies[k],
     };
     let ends: Vec<weld_edges::OtherEdge> = (1..=turned.len()).map(other).collect();
     let far: Vec<weld_edges::OtherEdge> = (1 + turned.len()..measured.len()).map(other).collect();
-    weld_edges::check_lap_edge(lines, chosen, seen_mm[0], &ends, &far).map_err(|e| PlanError::at(Stage::WeldEdges, e))
+    let butt_admitted = [JointType::VButt, JointType::IButt].into_iter().any(|j| ctx.request.joint.admits(j));
+    weld_edges::check_lap_edge(lines, chosen, seen_mm[0], &ends, &far, butt_admitted).map_err(|e| {
+        let gate = e.is_unknown().then_some(quality::Gate::JointUnknown);
+        PlanError { gate, ..PlanError::at(Stage::WeldEdges, e) }
+    })
 }
+
+/// Where each of a plate's `edges` lies (line `measured[k]` of `lines`,
+/// fitted to `edge_points`): along the view's border where most of the
+/// line's inliers lie within the plate's rim (a neighbour radius) and two
+/// spacings of it ([`view_border::ViewBorder::runs_along`]); within the
+/// plate where the plate's own points are seen past the line's scatter
+/// (two spacings) and within `band_mm` beyond it along most of its span;
+/// else in view, where the plate ends.
+fn edges_lie(
+    ctx: &Context,
+    plate: &PlaneCluster,
+    lines: &[EdgeLine],
+    measured: &[usize],
+    edge_points: &[Vec3],
+    edges: &[boundary::SpannedEdge],
+    [band_mm, bin_mm, spacing_mm]: [f64; 3],
+) -> Vec<weld_edges::EdgeLies> {
+    use weld_edges::EdgeLies;
+    let scatter_mm = 2.0 * spacing_mm;
+    let past_scatter: Vec<boundary::SpannedEdge> = edges
+        .iter()
+        .map(|e| {
+            let mut past = *e;
+            past.edge.point += e.edge.outward * scatter_mm;
+            past
+        })
+        .collect();
+    let plate_beyond = boundary::stretch_seen_beside(
+        ctx.cloud,
+        &[&plate.members],
+        &past_scatter,
+        [band_mm - scatter_mm, bin_mm, spacing_mm],
+    );
+    let reach_mm = ctx.scale.radius_mm + 2.0 * spacing_mm;
+    measured
+        .iter()
+        .zip(edges)
+        .zip(plate_beyond)
+        .map(|((&line, e), beyond_mm)| {
+            let inliers: Vec<Vec3> = lines[line].inliers.iter().map(|&i| edge_points[i]).collect();
+            if ctx.view_border().is_some_and(|border| border.runs_along(&inliers, reach_mm)) {
+                EdgeLies::AlongBorder
+            } else if beyond_mm > PLATE_BEYOND_SLIT_SHARE * (e.span[1] - e.span[0]) {
+                EdgeLies::WithinPlate
+            } else {
+                EdgeLies::InView
+            }
+        })
+        .collect()
+}
+
+/// The share of an edge line's span beyond which a plate's own points are
+/// seen for the line to be a slit through the plate rather than its end:
+/// beyond a plate's end nothing of it lies, and beyond one side of a slit
+/// (a butt joint's gap the cloud resolves along part of its length, in a
+/// workpiece it otherwise sees as one) the other side runs all along.
+const PLATE_BEYOND_SLIT_SHARE: f64 = 0.5;
 
 /// Of an upper plate's edges not turned from the lap's weld edge (under
 /// 60°, [`weld_edges::turned_from`]), one lies across the plate from it

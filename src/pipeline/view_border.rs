@@ -162,6 +162,19 @@ impl ViewBorder {
         self.outward.iter().map(|n| n.dot(p)).fold(f64::NEG_INFINITY, f64::max)
     }
 
+    /// Whether a plate's edge, given by its outermost points, runs along
+    /// the border: at least half of them within `reach_mm` of it. A
+    /// plate's cluster ends up to a neighbour radius inside its last
+    /// returns (the rim the plane criterion trims), and those lie on the
+    /// border where the border cuts the plate, so the caller's reach is
+    /// that rim and a spacing or two. An edge that only touches the
+    /// border (at a corner of the image, or of a crop) does not run along
+    /// it; no points say nothing.
+    pub fn runs_along(&self, edge: &[Vec3], reach_mm: f64) -> bool {
+        let on_border = edge.iter().filter(|p| self.outside_mm(p) >= -reach_mm).count();
+        !edge.is_empty() && 2 * on_border >= edge.len()
+    }
+
     /// Where the line `origin + t · direction` (unit `direction`) leaves
     /// the view going out of its span at `end` from `at` (the span's end
     /// parameter there), when every evidence set holds a point within

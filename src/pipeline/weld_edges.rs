@@ -86,6 +86,25 @@ pub enum WeldEdgeError {
          does not resolve, or a plate lapped on a larger one all round, whose weld edge the frame does not tell)"
     )]
     UpperPlateWithinLowerLayer { seen_mm: f64, far_mm: f64 },
+    /// Under a request that leaves a butt joint open, a lap's upper plate
+    /// seen to end nowhere but along the chosen edge: the frame shows one
+    /// step between two planes, and what the lower one is does not show.
+    #[error(
+        "the joint type cannot be told: the lap's upper plate is seen to end only along the chosen edge ({edges}), \
+         so the frame shows one step between two planes and nothing else; a lap's plates show that, and so does a \
+         workpiece seen as one plane over what it rests on (a plate on the table, or butt plates closer together \
+         than the cloud resolves); request lap to plan it as a lap, or bring an end or the far edge of the upper \
+         plate into view"
+    )]
+    StepAlone { edges: String },
+}
+
+impl WeldEdgeError {
+    /// Whether the weld edges were chosen but the joint they make cannot be
+    /// told from the frame (for `auto`, the `joint_unknown` gate).
+    pub fn is_unknown(&self) -> bool {
+        matches!(self, WeldEdgeError::StepAlone { .. })
+    }
 }
 
 /// One of the upper plate's other edges (turned from the lap's weld edge,
@@ -99,6 +118,22 @@ pub struct OtherEdge {
     pub length_mm: f64,
     /// How much of that the lower plate is seen beside, mm.
     pub seen_mm: f64,
+    /// Where the line lies: the plate seen to end there, or where the
+    /// cloud stops showing it.
+    pub lies: EdgeLies,
+}
+
+/// What an edge line of a plate is: where the plate ends, or only where
+/// it stops being seen.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum EdgeLies {
+    /// The plate ends there, inside the view.
+    InView,
+    /// Along the view's border: the plate runs on out of the image.
+    AlongBorder,
+    /// With the plate seen again beyond it (a slit through the plate, such
+    /// as a butt joint's gap the cloud resolves along part of it).
+    WithinPlate,
 }
 
 /// The share of an end of a lap's upper plate beside which the lower
@@ -297,12 +332,22 @@ pub fn turned_from(lines: &[EdgeLine], chosen: usize) -> Vec<usize> {
 /// is refused. Where the lower plate's layer runs beside the far edge
 /// too ([`LOWER_LAYER_BESIDE_FAR_EDGE_SHARE`]), the plate lies on it
 /// whole, with its far edge in view: refused.
+///
+/// Each of those rules reads an edge where the upper plate ends in view.
+/// Where it ends nowhere else (its other lines lie along the image's
+/// border, or have the plate beyond them), nothing in the frame says the
+/// lower plane is a plate ending under the upper one: a plate or a
+/// workpiece seen as one, lying on the table with its far edge out of
+/// view, shows the same step. With a butt joint among those the request
+/// admits (`butt_admitted`, as under `auto`), that is refused as not
+/// told; a request for a lap says what the lower plane is.
 pub fn check_lap_edge(
     lines: &[EdgeLine],
     chosen: usize,
     chosen_mm: f64,
     turned: &[OtherEdge],
     far: &[OtherEdge],
+    butt_admitted: bool,
 ) -> Result<(), WeldEdgeError> {
     let angle_deg = |e: &OtherEdge| turn_deg(&lines[e.line], &lines[chosen]);
     if let Some(longer) = turned.iter().filter(|e| e.seen_mm > chosen_mm).max_by(|a, b| a.seen_mm.total_cmp(&b.seen_mm))
@@ -322,10 +367,25 @@ pub fn check_lap_edge(
             angle_deg: angle_deg(end),
         });
     }
-    match far.iter().find(|e| e.length_mm > 0.0 && e.seen_mm >= LOWER_LAYER_BESIDE_FAR_EDGE_SHARE * e.length_mm) {
-        Some(edge) => Err(WeldEdgeError::UpperPlateWithinLowerLayer { seen_mm: edge.seen_mm, far_mm: edge.length_mm }),
-        None => Ok(()),
+    if let Some(edge) =
+        far.iter().find(|e| e.length_mm > 0.0 && e.seen_mm >= LOWER_LAYER_BESIDE_FAR_EDGE_SHARE * e.length_mm)
+    {
+        return Err(WeldEdgeError::UpperPlateWithinLowerLayer { seen_mm: edge.seen_mm, far_mm: edge.length_mm });
     }
+    let others = || turned.iter().chain(far);
+    if butt_admitted && !others().any(|e| e.lies == EdgeLies::InView && e.length_mm > 0.0) {
+        let count = |lies: EdgeLies| others().filter(|e| e.lies == lies).count();
+        let edges = match (count(EdgeLies::AlongBorder), count(EdgeLies::WithinPlate)) {
+            (0, 0) => "no other edge of it is in view".to_string(),
+            (border, 0) => format!("{border} other edge(s) lie along the image's border"),
+            (0, within) => format!("{within} other edge line(s) have the plate beyond them"),
+            (border, within) => format!(
+                "{border} other edge(s) lie along the image's border and {within} edge line(s) have the plate beyond them"
+            ),
+        };
+        return Err(WeldEdgeError::StepAlone { edges });
+    }
+    Ok(())
 }
 
 #[cfg(test)]
@@ -416,12 +476,12 @@ mod tests {
         let askew = EdgeLine { direction: Vec3::new(1.0, 2.0, 0.0).normalize(), ..side.clone() };
         let lines = [side, end, askew];
         assert_eq!(turned_from(&lines, 0), vec![1]);
-        let beside_end = |seen_mm: f64| [OtherEdge { line: 1, length_mm: 200.0, seen_mm }];
+        let beside_end = |seen_mm: f64| [OtherEdge { line: 1, length_mm: 200.0, seen_mm, lies: EdgeLies::InView }];
         // Beside the end for longer than beside the chosen side: refused.
-        let err = check_lap_edge(&lines, 0, 40.0, &beside_end(90.0), &[]).unwrap_err();
+        let err = check_lap_edge(&lines, 0, 40.0, &beside_end(90.0), &[], true).unwrap_err();
         assert_eq!(err, WeldEdgeError::LowerPlateBesideOtherEdge { chosen_mm: 40.0, longer_mm: 90.0, angle_deg: 90.0 });
         // Shorter beside the end: kept.
-        assert!(check_lap_edge(&lines, 0, 90.0, &beside_end(40.0), &[]).is_ok());
+        assert!(check_lap_edge(&lines, 0, 90.0, &beside_end(40.0), &[], true).is_ok());
     }
 
     #[test]
@@ -429,17 +489,17 @@ mod tests {
         let side = EdgeLine { point: Vec3::new(0.0, 0.0, 600.0), direction: Vec3::y(), inliers: vec![] };
         let end = EdgeLine { direction: Vec3::x(), ..side.clone() };
         let lines = [side, end];
-        let beside_end = |seen_mm: f64| [OtherEdge { line: 1, length_mm: 300.0, seen_mm }];
+        let beside_end = |seen_mm: f64| [OtherEdge { line: 1, length_mm: 300.0, seen_mm, lies: EdgeLies::InView }];
         // The lower plate beside the end as far as the plates overlap: a lap.
-        assert!(check_lap_edge(&lines, 0, 330.0, &beside_end(60.0), &[]).is_ok());
-        assert!(check_lap_edge(&lines, 0, 330.0, &beside_end(260.0), &[]).is_ok());
+        assert!(check_lap_edge(&lines, 0, 330.0, &beside_end(60.0), &[], true).is_ok());
+        assert!(check_lap_edge(&lines, 0, 330.0, &beside_end(260.0), &[], true).is_ok());
         // Beside all of it: the upper plate lies on the plane under it.
-        let err = check_lap_edge(&lines, 0, 330.0, &beside_end(290.0), &[]).unwrap_err();
+        let err = check_lap_edge(&lines, 0, 330.0, &beside_end(290.0), &[], true).unwrap_err();
         assert_eq!(err, WeldEdgeError::UpperPlateOnLowerPlane { seen_mm: 290.0, end_mm: 300.0, angle_deg: 90.0 });
         assert!(err.to_string().contains("far edge into view") && !err.to_string().contains("  "), "{err}");
         // An end of no length (a line of one inlier) says nothing.
-        let point = [OtherEdge { line: 1, length_mm: 0.0, seen_mm: 0.0 }];
-        assert!(check_lap_edge(&lines, 0, 330.0, &point, &[]).is_ok());
+        let point = [OtherEdge { line: 1, length_mm: 0.0, seen_mm: 0.0, lies: EdgeLies::InView }];
+        assert!(check_lap_edge(&lines, 0, 330.0, &point, &[], false).is_ok());
     }
 
     #[test]
@@ -447,15 +507,53 @@ mod tests {
         let side = EdgeLine { point: Vec3::new(0.0, 0.0, 600.0), direction: Vec3::y(), inliers: vec![] };
         let far_side = EdgeLine { point: Vec3::new(200.0, 0.0, 600.0), ..side.clone() };
         let lines = [side, far_side];
-        let beside_far = |seen_mm: f64| [OtherEdge { line: 1, length_mm: 260.0, seen_mm }];
+        let beside_far = |seen_mm: f64| [OtherEdge { line: 1, length_mm: 260.0, seen_mm, lies: EdgeLies::InView }];
         // Beyond the far edge lies what the lower plate rests on: a lap.
-        assert!(check_lap_edge(&lines, 0, 250.0, &[], &beside_far(0.0)).is_ok());
-        assert!(check_lap_edge(&lines, 0, 250.0, &[], &beside_far(120.0)).is_ok());
+        assert!(check_lap_edge(&lines, 0, 250.0, &[], &beside_far(0.0), true).is_ok());
+        assert!(check_lap_edge(&lines, 0, 250.0, &[], &beside_far(120.0), true).is_ok());
         // The lower plate's layer beside most of the far edge too: the
         // upper plate lies on it whole.
-        let err = check_lap_edge(&lines, 0, 250.0, &[], &beside_far(210.0)).unwrap_err();
+        let err = check_lap_edge(&lines, 0, 250.0, &[], &beside_far(210.0), true).unwrap_err();
         assert_eq!(err, WeldEdgeError::UpperPlateWithinLowerLayer { seen_mm: 210.0, far_mm: 260.0 });
         assert!(err.to_string().contains("210 of its 260 mm") && !err.to_string().contains("  "), "{err}");
+    }
+
+    #[test]
+    fn a_step_and_nothing_else_is_a_lap_only_where_a_lap_was_asked_for() {
+        // The upper plate's side along y, its ends along x, its far side
+        // at x = 200; the lower plate beside none of them.
+        let side = EdgeLine { point: Vec3::new(0.0, 0.0, 600.0), direction: Vec3::y(), inliers: vec![] };
+        let end = EdgeLine { direction: Vec3::x(), ..side.clone() };
+        let far_side = EdgeLine { point: Vec3::new(200.0, 0.0, 600.0), ..side.clone() };
+        let lines = [side, end.clone(), end, far_side];
+        let edge = |line: usize, length_mm: f64, lies: EdgeLies| OtherEdge { line, length_mm, seen_mm: 0.0, lies };
+        let ends = |lies: EdgeLies| [edge(1, 200.0, lies), edge(2, 200.0, lies)];
+        let far = |lies: EdgeLies| [edge(3, 300.0, lies)];
+        use EdgeLies::{AlongBorder, InView, WithinPlate};
+        // Ends and far side all along the image's border, or none in view:
+        // a lap's plates, or a plate on the table, as a request admitting
+        // a butt joint leaves open.
+        for (turned, far) in [(&ends(AlongBorder)[..], &far(AlongBorder)[..]), (&[][..], &[][..])] {
+            let err = check_lap_edge(&lines, 0, 300.0, turned, far, true).unwrap_err();
+            assert!(err.is_unknown(), "{err}");
+            assert!(check_lap_edge(&lines, 0, 300.0, turned, far, false).is_ok());
+        }
+        let err = check_lap_edge(&lines, 0, 300.0, &ends(AlongBorder), &far(WithinPlate), true).unwrap_err();
+        assert_eq!(
+            err,
+            WeldEdgeError::StepAlone {
+                edges: "2 other edge(s) lie along the image's border and 1 edge line(s) have the plate beyond them"
+                    .into()
+            }
+        );
+        assert!(err.to_string().contains("request lap") && !err.to_string().contains("  "), "{err}");
+        // One end in view, the lower plate not beside it (the table beyond
+        // it): the upper plate is seen to end there, off the lower plate.
+        let one_end = [edge(1, 200.0, InView), edge(2, 200.0, AlongBorder)];
+        assert!(check_lap_edge(&lines, 0, 300.0, &one_end, &far(AlongBorder), true).is_ok());
+        // An end in view but of no length says nothing.
+        let no_length = [edge(1, 0.0, InView)];
+        assert!(check_lap_edge(&lines, 0, 300.0, &no_length, &far(AlongBorder), true).unwrap_err().is_unknown());
     }
 
     #[test]

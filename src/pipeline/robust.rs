@@ -20,8 +20,11 @@
 //!   the root (Eq. 38), over the stretch both edges were seen;
 //! - 5.1: base-frame waypoints (Eq. 39 to 42).
 
+use rayon::prelude::*;
+
+use crate::cloud::is_valid_point;
 use crate::config::Method;
-use crate::geometry::Vec3;
+use crate::geometry::{Vec3, vec3};
 use crate::joint::JointType;
 
 use super::background::{BackgroundError, CornerKind, Layout, PlaneCluster};
@@ -371,21 +374,62 @@ fn check_lap_edge(
     let beside: Vec<&[u32]> =
         std::iter::once(lower).chain(&workpiece.layer_mates[1]).map(|c| c.members.as_slice()).collect();
     let seen_mm = boundary::stretch_seen_beside(ctx.cloud, &beside, &edges, [band_mm, bin_mm, spacing_mm]);
-    let lies = edges_lie(ctx, upper, lines, &measured, edge_points, &edges, [band_mm, bin_mm, spacing_mm]);
-    tracing::debug!(?measured, ?seen_mm, ?lies, band_mm, "lower plate beside the upper plate's edges");
+    tracing::debug!(?measured, ?seen_mm, band_mm, "lower plate beside the upper plate's edges");
     let other = |k: usize| weld_edges::OtherEdge {
         line: measured[k],
         length_mm: edges[k].span[1] - edges[k].span[0],
         seen_mm: seen_mm[k],
-        lies: lies[k],
     };
     let ends: Vec<weld_edges::OtherEdge> = (1..=turned.len()).map(other).collect();
     let far: Vec<weld_edges::OtherEdge> = (1 + turned.len()..measured.len()).map(other).collect();
-    let butt_admitted = [JointType::VButt, JointType::IButt].into_iter().any(|j| ctx.request.joint.admits(j));
-    weld_edges::check_lap_edge(lines, chosen, seen_mm[0], &ends, &far, butt_admitted).map_err(|e| {
-        let gate = e.is_unknown().then_some(quality::Gate::JointUnknown);
-        PlanError { gate, ..PlanError::at(Stage::WeldEdges, e) }
-    })
+    weld_edges::check_lap_edge(lines, chosen, seen_mm[0], &ends, &far)
+        .map_err(|e| PlanError::at(Stage::WeldEdges, e))?;
+    // A lap request says what the plane under the upper plate is; one that
+    // leaves a butt joint open asks the frame.
+    if ![JointType::VButt, JointType::IButt].into_iter().any(|j| ctx.request.joint.admits(j)) {
+        return Ok(());
+    }
+    let (measured, edges) = (&measured[1..], &edges[1..]);
+    let lies = edges_lie(ctx, upper, lines, measured, edge_points, edges, [band_mm, bin_mm, spacing_mm]);
+    let plane_beside_mm = lower_plane_beside(ctx, lower, &beside, edges, [band_mm, bin_mm, spacing_mm]);
+    tracing::debug!(?lies, ?plane_beside_mm, "where the upper plate's other edges lie");
+    let seen: Vec<weld_edges::EdgeSeen> = edges
+        .iter()
+        .zip(lies)
+        .zip(plane_beside_mm)
+        .map(|((e, lies), plane_beside_mm)| weld_edges::EdgeSeen {
+            length_mm: e.span[1] - e.span[0],
+            lies,
+            plane_beside_mm,
+        })
+        .collect();
+    weld_edges::check_lap_ends_off_lower_plane(&seen)
+        .map_err(|e| PlanError { gate: Some(quality::Gate::JointUnknown), ..PlanError::at(Stage::WeldEdges, e) })
+}
+
+/// How long a stretch of each of `edges` the plane of `lower` is seen
+/// beside, read from the layer's clusters (`clusters`) and every other
+/// point within `pipeline.on_plane_tolerance_mm` of that plane: returns
+/// too few to make a cluster (a corner of the table between the image's
+/// border and a plate) count too.
+fn lower_plane_beside(
+    ctx: &Context,
+    lower: &PlaneCluster,
+    clusters: &[&[u32]],
+    edges: &[boundary::SpannedEdge],
+    figures: [f64; 3],
+) -> Vec<f64> {
+    let tolerance_mm = ctx.config.pipeline.on_plane_tolerance_mm;
+    let on_plane: Vec<u32> = ctx
+        .cloud
+        .points()
+        .par_iter()
+        .enumerate()
+        .filter(|(_, p)| is_valid_point(p) && lower.plane.signed_distance(&vec3(p)).abs() <= tolerance_mm)
+        .map(|(i, _)| i as u32)
+        .collect();
+    let all: Vec<&[u32]> = clusters.iter().copied().chain(std::iter::once(on_plane.as_slice())).collect();
+    boundary::stretch_seen_beside(ctx.cloud, &all, edges, figures)
 }
 
 /// Where each of a plate's `edges` lies (line `measured[k]` of `lines`,

@@ -87,11 +87,12 @@ pub enum WeldEdgeError {
     )]
     UpperPlateWithinLowerLayer { seen_mm: f64, far_mm: f64 },
     /// Under a request that leaves a butt joint open, a lap's upper plate
-    /// seen to end nowhere but along the chosen edge: the frame shows one
-    /// step between two planes, and what the lower one is does not show.
+    /// seen to end off the plane under it nowhere but along the chosen
+    /// edge: the frame shows one step between two planes, and what the
+    /// lower one is does not show.
     #[error(
-        "the joint type cannot be told: the lap's upper plate is seen to end only along the chosen edge ({edges}), \
-         so the frame shows one step between two planes and nothing else; a lap's plates show that, and so does a \
+        "the joint type cannot be told: the lap's upper plate is seen to end off the plane under it only along the \
+         chosen edge ({edges}), so the frame shows one step between two planes and nothing else; a lap's plates show that, and so does a \
          workpiece seen as one plane over what it rests on (a plate on the table, or butt plates closer together \
          than the cloud resolves); request lap to plan it as a lap, or bring an end or the far edge of the upper \
          plate into view"
@@ -118,9 +119,19 @@ pub struct OtherEdge {
     pub length_mm: f64,
     /// How much of that the lower plate is seen beside, mm.
     pub seen_mm: f64,
-    /// Where the line lies: the plate seen to end there, or where the
-    /// cloud stops showing it.
+}
+
+/// One of a lap's upper plate's other edges, as
+/// [`check_lap_ends_off_lower_plane`] reads it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct EdgeSeen {
+    /// How long the line's inliers reach along it, mm.
+    pub length_mm: f64,
+    /// Where the line lies.
     pub lies: EdgeLies,
+    /// How much of it the plane under the plate is seen beside, read from
+    /// every point on that plane, mm.
+    pub plane_beside_mm: f64,
 }
 
 /// What an edge line of a plate is: where the plate ends, or only where
@@ -332,22 +343,12 @@ pub fn turned_from(lines: &[EdgeLine], chosen: usize) -> Vec<usize> {
 /// is refused. Where the lower plate's layer runs beside the far edge
 /// too ([`LOWER_LAYER_BESIDE_FAR_EDGE_SHARE`]), the plate lies on it
 /// whole, with its far edge in view: refused.
-///
-/// Each of those rules reads an edge where the upper plate ends in view.
-/// Where it ends nowhere else (its other lines lie along the image's
-/// border, or have the plate beyond them), nothing in the frame says the
-/// lower plane is a plate ending under the upper one: a plate or a
-/// workpiece seen as one, lying on the table with its far edge out of
-/// view, shows the same step. With a butt joint among those the request
-/// admits (`butt_admitted`, as under `auto`), that is refused as not
-/// told; a request for a lap says what the lower plane is.
 pub fn check_lap_edge(
     lines: &[EdgeLine],
     chosen: usize,
     chosen_mm: f64,
     turned: &[OtherEdge],
     far: &[OtherEdge],
-    butt_admitted: bool,
 ) -> Result<(), WeldEdgeError> {
     let angle_deg = |e: &OtherEdge| turn_deg(&lines[e.line], &lines[chosen]);
     if let Some(longer) = turned.iter().filter(|e| e.seen_mm > chosen_mm).max_by(|a, b| a.seen_mm.total_cmp(&b.seen_mm))
@@ -372,21 +373,58 @@ pub fn check_lap_edge(
     {
         return Err(WeldEdgeError::UpperPlateWithinLowerLayer { seen_mm: edge.seen_mm, far_mm: edge.length_mm });
     }
-    let others = || turned.iter().chain(far);
-    if butt_admitted && !others().any(|e| e.lies == EdgeLies::InView && e.length_mm > 0.0) {
-        let count = |lies: EdgeLies| others().filter(|e| e.lies == lies).count();
-        let edges = match (count(EdgeLies::AlongBorder), count(EdgeLies::WithinPlate)) {
-            (0, 0) => "no other edge of it is in view".to_string(),
-            (border, 0) => format!("{border} other edge(s) lie along the image's border"),
-            (0, within) => format!("{within} other edge line(s) have the plate beyond them"),
-            (border, within) => format!(
-                "{border} other edge(s) lie along the image's border and {within} edge line(s) have the plate beyond them"
-            ),
-        };
-        return Err(WeldEdgeError::StepAlone { edges });
-    }
     Ok(())
 }
+
+/// A lap's upper plate must be seen to end off the plane under it
+/// somewhere besides its weld edge, where the request leaves a butt joint
+/// open (as `auto` does). Each of `others` (the plate's ends and far
+/// edges) comes with where it lies and the stretch of it beside which
+/// the lower plane is seen, read from every point on that plane, not from
+/// its clusters alone: the evidence must stand against the most the
+/// cloud shows of that plane. An edge in view beside which the plane runs along half of
+/// it or more ([`LOWER_PLANE_OFF_EDGE_SHARE`]) is the plate lying on it
+/// there. Where no edge is left, the frame shows one step between two
+/// planes and nothing else: a lap's plates, or a plate or a workpiece
+/// seen as one lying on the table with its other edges out of view. That
+/// is refused as not told; a request for a lap says what the lower plane
+/// is, and does not ask this.
+pub fn check_lap_ends_off_lower_plane(others: &[EdgeSeen]) -> Result<(), WeldEdgeError> {
+    let off_plane = |e: &EdgeSeen| {
+        e.lies == EdgeLies::InView && e.length_mm > 0.0 && e.plane_beside_mm < LOWER_PLANE_OFF_EDGE_SHARE * e.length_mm
+    };
+    if others.iter().any(off_plane) {
+        return Ok(());
+    }
+    let count = |lies: EdgeLies| others.iter().filter(|e| e.lies == lies && e.length_mm > 0.0).count();
+    let mut told: Vec<String> = Vec::new();
+    if count(EdgeLies::AlongBorder) > 0 {
+        told.push(format!("{} along the image's border", count(EdgeLies::AlongBorder)));
+    }
+    if count(EdgeLies::WithinPlate) > 0 {
+        told.push(format!("{} with the plate seen beyond", count(EdgeLies::WithinPlate)));
+    }
+    if count(EdgeLies::InView) > 0 {
+        told.push(format!("{} in view with the plane under it beside", count(EdgeLies::InView)));
+    }
+    let edges = match told.as_slice() {
+        [] => "no other edge of it is in view".to_string(),
+        _ => format!("its other edges: {}", told.join(", ")),
+    };
+    Err(WeldEdgeError::StepAlone { edges })
+}
+
+/// The share of an upper plate's edge in view beside which the plane
+/// under it, read from every point on it, shows the plate lying on it
+/// there rather than ending off it. A lap's lower plate ends under its
+/// upper plate: beyond the far edge it is not seen at all, and beside an
+/// end only where the two overlap (at most 47 % of an edge in view on
+/// the laps of the eval, fault, hard, consumer, consumer-far and
+/// several-workpiece suites, organized and at 1 and 0.5 mm voxels, and
+/// of the eval suite cropped). A plane lying on the table whole, its
+/// corner in view, has the table beside 73 % of that corner's edge (the
+/// rest cut by the image's border).
+const LOWER_PLANE_OFF_EDGE_SHARE: f64 = 0.5;
 
 #[cfg(test)]
 mod tests {
@@ -476,12 +514,12 @@ mod tests {
         let askew = EdgeLine { direction: Vec3::new(1.0, 2.0, 0.0).normalize(), ..side.clone() };
         let lines = [side, end, askew];
         assert_eq!(turned_from(&lines, 0), vec![1]);
-        let beside_end = |seen_mm: f64| [OtherEdge { line: 1, length_mm: 200.0, seen_mm, lies: EdgeLies::InView }];
+        let beside_end = |seen_mm: f64| [OtherEdge { line: 1, length_mm: 200.0, seen_mm }];
         // Beside the end for longer than beside the chosen side: refused.
-        let err = check_lap_edge(&lines, 0, 40.0, &beside_end(90.0), &[], true).unwrap_err();
+        let err = check_lap_edge(&lines, 0, 40.0, &beside_end(90.0), &[]).unwrap_err();
         assert_eq!(err, WeldEdgeError::LowerPlateBesideOtherEdge { chosen_mm: 40.0, longer_mm: 90.0, angle_deg: 90.0 });
         // Shorter beside the end: kept.
-        assert!(check_lap_edge(&lines, 0, 90.0, &beside_end(40.0), &[], true).is_ok());
+        assert!(check_lap_edge(&lines, 0, 90.0, &beside_end(40.0), &[]).is_ok());
     }
 
     #[test]
@@ -489,17 +527,17 @@ mod tests {
         let side = EdgeLine { point: Vec3::new(0.0, 0.0, 600.0), direction: Vec3::y(), inliers: vec![] };
         let end = EdgeLine { direction: Vec3::x(), ..side.clone() };
         let lines = [side, end];
-        let beside_end = |seen_mm: f64| [OtherEdge { line: 1, length_mm: 300.0, seen_mm, lies: EdgeLies::InView }];
+        let beside_end = |seen_mm: f64| [OtherEdge { line: 1, length_mm: 300.0, seen_mm }];
         // The lower plate beside the end as far as the plates overlap: a lap.
-        assert!(check_lap_edge(&lines, 0, 330.0, &beside_end(60.0), &[], true).is_ok());
-        assert!(check_lap_edge(&lines, 0, 330.0, &beside_end(260.0), &[], true).is_ok());
+        assert!(check_lap_edge(&lines, 0, 330.0, &beside_end(60.0), &[]).is_ok());
+        assert!(check_lap_edge(&lines, 0, 330.0, &beside_end(260.0), &[]).is_ok());
         // Beside all of it: the upper plate lies on the plane under it.
-        let err = check_lap_edge(&lines, 0, 330.0, &beside_end(290.0), &[], true).unwrap_err();
+        let err = check_lap_edge(&lines, 0, 330.0, &beside_end(290.0), &[]).unwrap_err();
         assert_eq!(err, WeldEdgeError::UpperPlateOnLowerPlane { seen_mm: 290.0, end_mm: 300.0, angle_deg: 90.0 });
         assert!(err.to_string().contains("far edge into view") && !err.to_string().contains("  "), "{err}");
         // An end of no length (a line of one inlier) says nothing.
-        let point = [OtherEdge { line: 1, length_mm: 0.0, seen_mm: 0.0, lies: EdgeLies::InView }];
-        assert!(check_lap_edge(&lines, 0, 330.0, &point, &[], false).is_ok());
+        let point = [OtherEdge { line: 1, length_mm: 0.0, seen_mm: 0.0 }];
+        assert!(check_lap_edge(&lines, 0, 330.0, &point, &[]).is_ok());
     }
 
     #[test]
@@ -507,53 +545,45 @@ mod tests {
         let side = EdgeLine { point: Vec3::new(0.0, 0.0, 600.0), direction: Vec3::y(), inliers: vec![] };
         let far_side = EdgeLine { point: Vec3::new(200.0, 0.0, 600.0), ..side.clone() };
         let lines = [side, far_side];
-        let beside_far = |seen_mm: f64| [OtherEdge { line: 1, length_mm: 260.0, seen_mm, lies: EdgeLies::InView }];
+        let beside_far = |seen_mm: f64| [OtherEdge { line: 1, length_mm: 260.0, seen_mm }];
         // Beyond the far edge lies what the lower plate rests on: a lap.
-        assert!(check_lap_edge(&lines, 0, 250.0, &[], &beside_far(0.0), true).is_ok());
-        assert!(check_lap_edge(&lines, 0, 250.0, &[], &beside_far(120.0), true).is_ok());
+        assert!(check_lap_edge(&lines, 0, 250.0, &[], &beside_far(0.0)).is_ok());
+        assert!(check_lap_edge(&lines, 0, 250.0, &[], &beside_far(120.0)).is_ok());
         // The lower plate's layer beside most of the far edge too: the
         // upper plate lies on it whole.
-        let err = check_lap_edge(&lines, 0, 250.0, &[], &beside_far(210.0), true).unwrap_err();
+        let err = check_lap_edge(&lines, 0, 250.0, &[], &beside_far(210.0)).unwrap_err();
         assert_eq!(err, WeldEdgeError::UpperPlateWithinLowerLayer { seen_mm: 210.0, far_mm: 260.0 });
         assert!(err.to_string().contains("210 of its 260 mm") && !err.to_string().contains("  "), "{err}");
     }
 
     #[test]
-    fn a_step_and_nothing_else_is_a_lap_only_where_a_lap_was_asked_for() {
-        // The upper plate's side along y, its ends along x, its far side
-        // at x = 200; the lower plate beside none of them.
-        let side = EdgeLine { point: Vec3::new(0.0, 0.0, 600.0), direction: Vec3::y(), inliers: vec![] };
-        let end = EdgeLine { direction: Vec3::x(), ..side.clone() };
-        let far_side = EdgeLine { point: Vec3::new(200.0, 0.0, 600.0), ..side.clone() };
-        let lines = [side, end.clone(), end, far_side];
-        let edge = |line: usize, length_mm: f64, lies: EdgeLies| OtherEdge { line, length_mm, seen_mm: 0.0, lies };
-        let ends = |lies: EdgeLies| [edge(1, 200.0, lies), edge(2, 200.0, lies)];
-        let far = |lies: EdgeLies| [edge(3, 300.0, lies)];
+    fn a_lap_s_upper_plate_must_be_seen_to_end_off_the_plane_under_it() {
         use EdgeLies::{AlongBorder, InView, WithinPlate};
-        // Ends and far side all along the image's border, or none in view:
-        // a lap's plates, or a plate on the table, as a request admitting
-        // a butt joint leaves open.
-        for (turned, far) in [(&ends(AlongBorder)[..], &far(AlongBorder)[..]), (&[][..], &[][..])] {
-            let err = check_lap_edge(&lines, 0, 300.0, turned, far, true).unwrap_err();
-            assert!(err.is_unknown(), "{err}");
-            assert!(check_lap_edge(&lines, 0, 300.0, turned, far, false).is_ok());
+        let edge = |length_mm: f64, lies: EdgeLies, plane_beside_mm: f64| EdgeSeen { length_mm, lies, plane_beside_mm };
+        // Ends and far side along the image's border, or no other edge:
+        // a step and nothing else.
+        let border = [edge(200.0, AlongBorder, 0.0), edge(200.0, AlongBorder, 0.0), edge(300.0, AlongBorder, 0.0)];
+        for others in [&border[..], &[]] {
+            assert!(check_lap_ends_off_lower_plane(others).unwrap_err().is_unknown());
         }
-        let err = check_lap_edge(&lines, 0, 300.0, &ends(AlongBorder), &far(WithinPlate), true).unwrap_err();
+        // One end in view with the table beyond it, off the lower plane.
+        let one_end = [edge(200.0, InView, 0.0), edge(200.0, AlongBorder, 0.0)];
+        assert!(check_lap_ends_off_lower_plane(&one_end).is_ok());
+        // An end in view beside the lower plate where they overlap, less
+        // than half of it: the rest reaches past the lower plate.
+        assert!(check_lap_ends_off_lower_plane(&[edge(100.0, InView, 45.0)]).is_ok());
+        // A corner in view with the plane under it beside most of it, a
+        // slit's side, an end of no length: none is where the plate ends
+        // off that plane.
+        let none = [edge(28.0, InView, 20.0), edge(320.0, WithinPlate, 0.0), edge(0.0, InView, 0.0)];
+        let err = check_lap_ends_off_lower_plane(&none).unwrap_err();
         assert_eq!(
             err,
             WeldEdgeError::StepAlone {
-                edges: "2 other edge(s) lie along the image's border and 1 edge line(s) have the plate beyond them"
-                    .into()
+                edges: "its other edges: 1 with the plate seen beyond, 1 in view with the plane under it beside".into()
             }
         );
         assert!(err.to_string().contains("request lap") && !err.to_string().contains("  "), "{err}");
-        // One end in view, the lower plate not beside it (the table beyond
-        // it): the upper plate is seen to end there, off the lower plate.
-        let one_end = [edge(1, 200.0, InView), edge(2, 200.0, AlongBorder)];
-        assert!(check_lap_edge(&lines, 0, 300.0, &one_end, &far(AlongBorder), true).is_ok());
-        // An end in view but of no length says nothing.
-        let no_length = [edge(1, 0.0, InView)];
-        assert!(check_lap_edge(&lines, 0, 300.0, &no_length, &far(AlongBorder), true).unwrap_err().is_unknown());
     }
 
     #[test]

@@ -338,12 +338,13 @@ fn plan_workpiece(
 /// lower plate, with the pieces of its layer, must not be seen beside one
 /// turned from it for longer, nor beside all of one (the upper plate's
 /// end), nor beside most of the edge across the plate from it (the upper
-/// plate lying on the layer whole), and under a request that leaves a
-/// butt joint open the upper plate must be seen to end somewhere else in
-/// view ([`weld_edges::check_lap_edge`]). The lower plate's points begin
-/// past the upper plate's edge points by up to two neighbour radii (the
-/// rims the plane criterion trims off both plates) and what the upper
-/// plate's thickness, a lap step, hides or shades.
+/// plate lying on the layer whole; [`weld_edges::check_lap_edge`]), and
+/// under a request that leaves a butt joint open the upper plate must be
+/// seen to end off the plane under it somewhere besides that edge
+/// ([`weld_edges::check_lap_ends_off_lower_plane`]). The lower plate's
+/// points begin past the upper plate's edge points by up to two neighbour
+/// radii (the rims the plane criterion trims off both plates) and what
+/// the upper plate's thickness, a lap step, hides or shades.
 fn check_lap_edge(
     ctx: &Context,
     workpiece: &background::Workpiece,

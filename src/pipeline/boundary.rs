@@ -316,12 +316,31 @@ pub fn stretch_seen_beside(
     cloud: &PointCloud,
     members: &[&[u32]],
     edges: &[SpannedEdge],
-    [band_mm, bin_mm, spacing_mm]: [f64; 3],
+    figures: [f64; 3],
+) -> Vec<f64> {
+    stretch_seen_beside_reading(cloud, members, edges, figures, read_stride(figures))
+}
+
+/// One point in how many [`stretch_seen_beside`] reads of a set spread at
+/// `spacing_mm` to see bins of `bin_mm` by `band_mm` covered: a caller
+/// that gathers the points itself (from the whole cloud) gathers that
+/// share only.
+pub fn read_stride([band_mm, bin_mm, spacing_mm]: [f64; 3]) -> usize {
+    let per_bin = band_mm * bin_mm / (spacing_mm * spacing_mm).max(f64::MIN_POSITIVE);
+    (per_bin / POINTS_PER_BIN_READ).floor().clamp(1.0, u16::MAX as f64) as usize
+}
+
+/// [`stretch_seen_beside`], reading one member in `stride`: 1 for
+/// members already thinned by [`read_stride`].
+pub fn stretch_seen_beside_reading(
+    cloud: &PointCloud,
+    members: &[&[u32]],
+    edges: &[SpannedEdge],
+    [band_mm, bin_mm, _]: [f64; 3],
+    stride: usize,
 ) -> Vec<f64> {
     use rayon::prelude::*;
     let points = cloud.points();
-    let per_bin = band_mm * bin_mm / (spacing_mm * spacing_mm).max(f64::MIN_POSITIVE);
-    let stride = (per_bin / POINTS_PER_BIN_READ).floor().clamp(1.0, u16::MAX as f64) as usize;
     let bins: Vec<(usize, f64)> = edges
         .iter()
         .map(|e| {

@@ -412,7 +412,9 @@ fn check_lap_edge(
 /// beside, read from the layer's clusters (`clusters`) and every other
 /// point within `pipeline.on_plane_tolerance_mm` of that plane: returns
 /// too few to make a cluster (a corner of the table between the image's
-/// border and a plate) count too.
+/// border and a plate) count too. The cloud is read one point in as many
+/// as the bins need ([`boundary::read_stride`]), so a frame of millions
+/// of points costs a tenth of a pass or less.
 fn lower_plane_beside(
     ctx: &Context,
     lower: &PlaneCluster,
@@ -421,16 +423,19 @@ fn lower_plane_beside(
     figures: [f64; 3],
 ) -> Vec<f64> {
     let tolerance_mm = ctx.config.pipeline.on_plane_tolerance_mm;
-    let on_plane: Vec<u32> = ctx
-        .cloud
-        .points()
-        .par_iter()
-        .enumerate()
-        .filter(|(_, p)| is_valid_point(p) && lower.plane.signed_distance(&vec3(p)).abs() <= tolerance_mm)
-        .map(|(i, _)| i as u32)
+    let stride = boundary::read_stride(figures);
+    let points = ctx.cloud.points();
+    let mut on_plane: Vec<u32> = (0..points.len())
+        .into_par_iter()
+        .step_by(stride)
+        .filter(|&i| {
+            let p = &points[i];
+            is_valid_point(p) && lower.plane.signed_distance(&vec3(p)).abs() <= tolerance_mm
+        })
+        .map(|i| i as u32)
         .collect();
-    let all: Vec<&[u32]> = clusters.iter().copied().chain(std::iter::once(on_plane.as_slice())).collect();
-    boundary::stretch_seen_beside(ctx.cloud, &all, edges, figures)
+    on_plane.extend(clusters.iter().flat_map(|members| members.iter().step_by(stride)));
+    boundary::stretch_seen_beside_reading(ctx.cloud, &[&on_plane], edges, figures, 1)
 }
 
 /// Where each of a plate's `edges` lies (line `measured[k]` of `lines`,

@@ -374,17 +374,21 @@ fn check_lap_edge(
     let bin_mm = (2.0 * spacing_mm).max(LAP_EDGE_BIN_MIN_MM);
     let beside: Vec<&[u32]> =
         std::iter::once(lower).chain(&workpiece.layer_mates[1]).map(|c| c.members.as_slice()).collect();
-    let seen_mm = boundary::stretch_seen_beside(ctx.cloud, &beside, &edges, [band_mm, bin_mm, spacing_mm]);
-    tracing::debug!(?measured, ?seen_mm, band_mm, "lower plate beside the upper plate's edges");
-    let other = |k: usize| weld_edges::OtherEdge {
-        line: measured[k],
-        length_mm: edges[k].span[1] - edges[k].span[0],
-        seen_mm: seen_mm[k],
-    };
-    let ends: Vec<weld_edges::OtherEdge> = (1..=turned.len()).map(other).collect();
-    let far: Vec<weld_edges::OtherEdge> = (1 + turned.len()..measured.len()).map(other).collect();
-    weld_edges::check_lap_edge(lines, chosen, seen_mm[0], &ends, &far)
-        .map_err(|e| PlanError::at(Stage::WeldEdges, e))?;
+    // The refusal rules judge the other edges against the chosen one: with
+    // none, they have nothing to read.
+    if measured.len() > 1 {
+        let seen_mm = boundary::stretch_seen_beside(ctx.cloud, &beside, &edges, [band_mm, bin_mm, spacing_mm]);
+        tracing::debug!(?measured, ?seen_mm, band_mm, "lower plate beside the upper plate's edges");
+        let other = |k: usize| weld_edges::OtherEdge {
+            line: measured[k],
+            length_mm: edges[k].span[1] - edges[k].span[0],
+            seen_mm: seen_mm[k],
+        };
+        let ends: Vec<weld_edges::OtherEdge> = (1..=turned.len()).map(other).collect();
+        let far: Vec<weld_edges::OtherEdge> = (1 + turned.len()..measured.len()).map(other).collect();
+        weld_edges::check_lap_edge(lines, chosen, seen_mm[0], &ends, &far)
+            .map_err(|e| PlanError::at(Stage::WeldEdges, e))?;
+    }
     // A lap request says what the plane under the upper plate is; one that
     // leaves a butt joint open asks the frame.
     if ![JointType::VButt, JointType::IButt].into_iter().any(|j| ctx.request.joint.admits(j)) {
@@ -404,8 +408,10 @@ fn check_lap_edge(
             plane_beside_mm,
         })
         .collect();
-    weld_edges::check_lap_ends_off_lower_plane(&seen)
-        .map_err(|e| PlanError { gate: Some(quality::Gate::JointUnknown), ..PlanError::at(Stage::WeldEdges, e) })
+    weld_edges::check_lap_ends_off_lower_plane(&seen).map_err(|e| PlanError {
+        gate: e.is_unknown().then_some(quality::Gate::JointUnknown),
+        ..PlanError::at(Stage::WeldEdges, e)
+    })
 }
 
 /// How long a stretch of each of `edges` the plane of `lower` is seen

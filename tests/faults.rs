@@ -13,7 +13,10 @@
 //! Two came from fresh draws of the suite (`eval --fresh`): a part
 //! abutting an I-butt plate, larger in view than the other plate, and a
 //! clamp whose end over a lap's upper plate was planned as the lap's edge;
-//! both are refused for what the layers and the edges cannot decide.
+//! both are refused for what the layers and the edges cannot decide. A
+//! third, a part touching a lap's lower plate a little lower, put the
+//! root under that plate's top, and is now planned on the plate the upper
+//! plate stands beside.
 //! Each scene is planned as `weldseam eval --suite faults` plans it.
 
 use weldseam::camera::CameraModel;
@@ -25,13 +28,19 @@ use weldseam::sim::variants::Variant;
 use weldseam::sim::{Draw, Fault, fault_suite, simulate};
 
 fn planned(name: &str, joint: JointAsk) -> SceneOutcome {
+    planned_as(name, joint, "raw")
+}
+
+/// `name` made into `variant` and planned as `eval --variant` plans it.
+fn planned_as(name: &str, joint: JointAsk, variant: &str) -> SceneOutcome {
     let (_, spec) = fault_suite(Draw::of_scene(name))
         .into_iter()
         .find(|(n, _)| n == name)
         .unwrap_or_else(|| panic!("no scene {name}"));
     let sim = simulate(&spec, &CameraModel::default());
     let request = EvalRequest { joint, ..EvalRequest::default() };
-    evaluate_variant(&Planner::new(Config::default()), name, &spec, &sim, &Variant::default(), &request)
+    let variant = Variant::parse(variant).expect("a variant");
+    evaluate_variant(&Planner::new(Config::default()), name, &spec, &sim, &variant, &request)
 }
 
 /// A seam-dropout scene of the fault suite with its band widened to
@@ -81,6 +90,23 @@ fn a_part_abutting_a_v_butt_plate_is_refused_for_an_opening_the_groove_cannot_ha
 fn a_part_abutting_an_i_butt_plate_larger_than_the_other_plate_is_refused_as_a_third_plate() {
     let reason = refusal(&planned("fault-touching-part-i-butt-00-d667-t0-fresh1", JointAsk::AsScene)).to_string();
     assert!(reason.contains("three plates lie side by side") && reason.contains("region of interest"), "{reason}");
+}
+
+#[test]
+fn a_part_touching_a_laps_lower_plate_a_little_lower_is_not_taken_for_that_plate() {
+    // Fresh draw 7: the part, 78 mm wide and 1.79 mm under the lower
+    // plate's top, lies in the lower plate's layer and was the larger of
+    // the two. Taken for the lower plate, it put the root 1.79 mm under
+    // the lower plate's top all along the seam. The lower plate is the one
+    // the upper plate stands beside.
+    for variant in ["raw", "voxel:1"] {
+        let outcome = planned_as("fault-touching-part-lap-00-d1000-t10-fresh7", JointAsk::AsScene, variant);
+        let (err, plan) = outcome.result.as_ref().unwrap_or_else(|e| panic!("{variant}: refused: {e:?}"));
+        assert_eq!(outcome.verdict, Verdict::WithinBar, "{variant}: {err:?}");
+        // The plate under the upper one is 4.06 mm thick (the truth's).
+        let step = plan.seams[0].quality.as_ref().and_then(|q| q.lap_step_mm).expect("a lap's step");
+        assert!((step - 4.06).abs() < 0.1, "{variant}: lap step {step:.2} mm");
+    }
 }
 
 #[test]

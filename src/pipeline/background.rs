@@ -14,11 +14,12 @@
 
 use crate::cloud::{Point, PointCloud};
 use crate::geometry::fit::{Moments, Plane};
-use crate::geometry::{Vec3, extent, vec3};
+use crate::geometry::{Vec3, extent, plane_axes, vec3};
 use crate::joint::JointType;
 
 use super::view_border::ViewBorder;
 use super::web_face::MAX_FACE_LEAN_DEG;
+use super::workpieces::MAX_JOINT_OPENING_MM;
 
 /// A cluster of plane points with its fitted plane.
 #[derive(Debug, Clone)]
@@ -912,7 +913,7 @@ impl TeeLayers {
 /// (a V-groove's root land under its plates is narrow and long too). A
 /// web seen over its flange on both sides first; else one over a plane on
 /// one side.
-fn find_tee(l: &Layers, s: &Selection) -> Option<TeeLayers> {
+fn find_tee(l: &Layers, s: &Selection, points: &[Point]) -> Option<TeeLayers> {
     let mut one_sided = None;
     for (upper, layer) in l.layers.iter().enumerate() {
         let top = &layer[0];
@@ -930,12 +931,20 @@ fn find_tee(l: &Layers, s: &Selection) -> Option<TeeLayers> {
         if height <= s.lap_step_max_mm || height > s.web_height_max_mm {
             continue;
         }
-        // The largest piece on each side (the layer is sorted largest first).
+        // On each side the piece the web's top stands beside, else the
+        // largest: a plate of another workpiece grouped with the tee can
+        // lie in the flange's layer, larger than the flange's piece
+        // (multi-05 of the several-workpiece suite's draw 2, whose I-butt
+        // plate 2.5 mm over the flange was taken for it).
         let on_side = |positive: bool| {
-            l.layers[flange].iter().position(|c| {
-                let side = side_of(top, c, &l.normal);
-                if positive { side > 0.0 } else { side < 0.0 }
-            })
+            let side: Vec<usize> = (0..l.layers[flange].len())
+                .filter(|&k| {
+                    let side = side_of(top, &l.layers[flange][k], &l.normal);
+                    if positive { side > 0.0 } else { side < 0.0 }
+                })
+                .collect();
+            let pieces: Vec<&PlaneCluster> = side.iter().map(|&k| &l.layers[flange][k]).collect();
+            side.get(standing_beside(top, &pieces, &l.normal, points)).copied()
         };
         let found = TeeLayers { top: (upper, 0), flange, sides: [on_side(false), on_side(true)] };
         if found.two_sided() {
@@ -1026,6 +1035,140 @@ fn find_lap(l: &Layers, s: &Selection, points: &[Point]) -> Result<(usize, usize
     })
 }
 
+/// A lap's lower plate is the plane its upper plate's edge stands on,
+/// which is not always the largest of the layer under it: a part touching
+/// the lower plate a millimetre or two lower lies in the same layer (within
+/// the coplanar tolerance), and can be the larger of the two
+/// (fault-touching-part-lap-00 of fault draw 7: the part, 33 mm beyond the
+/// strip of lower plate beside the upper plate's edge and 1.79 mm lower,
+/// was taken for the lower plate, and the root was planned 1.79 mm under
+/// the lower plate's top). The index into `l.layers[lower]` of the plate
+/// [`standing_beside`] the upper plate.
+fn lower_plate_of(l: &Layers, upper: usize, lower: usize, points: &[Point]) -> usize {
+    let under: Vec<&PlaneCluster> = l.layers[lower].iter().collect();
+    standing_beside(&l.layers[upper][0], &under, &l.normal, points)
+}
+
+/// Of `pieces` (largest first), the one `top` stands beside: of those at
+/// least [`SIDE_BY_SIDE_AREA_RATIO`] of the largest, the ones nearest
+/// `top` across the plane, within [`BESIDE_TOLERANCE_CELLS`] of the
+/// nearest, and of them the largest (two pieces of one plate a streak
+/// splits along the seam stand beside it alike). The largest, 0, where
+/// only one piece is that large, or none lies within a joint's opening of
+/// `top` (the band a tall web hides on its far side can be wider), or no
+/// points are given.
+fn standing_beside(top: &PlaneCluster, pieces: &[&PlaneCluster], normal: &Vec3, points: &[Point]) -> usize {
+    let Some(largest) = pieces.first() else {
+        return 0;
+    };
+    let plates = pieces.iter().take_while(|c| c.area_mm2 >= SIDE_BY_SIDE_AREA_RATIO * largest.area_mm2).count();
+    if plates < 2 {
+        return 0;
+    }
+    let Some(gaps) = gaps_across(top, &pieces[..plates], normal, points) else {
+        return 0;
+    };
+    let nearest = gaps.iter().flatten().fold(f64::INFINITY, |a, &b| a.min(b));
+    let tolerance = BESIDE_TOLERANCE_CELLS * BESIDE_CELL_SPACINGS * spacing_of(top);
+    gaps.iter().position(|g| g.is_some_and(|g| g <= nearest + tolerance)).unwrap_or(0)
+}
+
+/// The cells of [`gaps_across`], in point spacings of the upper plane: a
+/// cell that wide holds about nine of a plate's points, so every second
+/// point leaves hardly a cell of a plate empty.
+const BESIDE_CELL_SPACINGS: f64 = 3.0;
+
+/// Every how many of a cluster's points [`gaps_across`] marks a cell with.
+const BESIDE_MARK_STRIDE: usize = 2;
+
+/// Every how many of the clusters' points [`gaps_across`] takes their
+/// extent from.
+const BESIDE_BOUNDS_STRIDE: usize = 8;
+
+/// How many cells further from a lap's upper plate (or a web's top) than
+/// the nearest plate of the layer under it another plate of that layer may
+/// lie and still stand beside it: each plate's nearest point is read to a
+/// cell, and the cells count steps along the diagonal as one.
+const BESIDE_TOLERANCE_CELLS: f64 = 2.0;
+
+/// The most cells the grid of [`gaps_across`] may hold; a coarser cell is
+/// taken beyond it.
+const BESIDE_MAX_CELLS: f64 = 4.0e6;
+
+/// How far across the plane each of `others` lies from `top`, mm: steps of
+/// a grid of cells [`BESIDE_CELL_SPACINGS`] wide from the cells `top`'s
+/// points mark to the nearest cell the other's points mark, each step a
+/// cell (also along the diagonal). `None` for one further than
+/// [`MAX_JOINT_OPENING_MM`], beyond what a joint opens between its
+/// plates; `None` for all where the points give no extent.
+fn gaps_across(
+    top: &PlaneCluster,
+    others: &[&PlaneCluster],
+    normal: &Vec3,
+    points: &[Point],
+) -> Option<Vec<Option<f64>>> {
+    let [u_axis, v_axis] = plane_axes(normal)?;
+    let project = |p: Vec3| (p.dot(&u_axis), p.dot(&v_axis));
+    // The extent from every few points, widened by a cell: a point the
+    // sample misses lies in the border cells it is clamped into.
+    let [u0, v0, u1, v1] = std::iter::once(top)
+        .chain(others.iter().copied())
+        .flat_map(|c| member_points(&c.members, points).step_by(BESIDE_BOUNDS_STRIDE))
+        .map(project)
+        .fold([f64::INFINITY, f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY], |[u0, v0, u1, v1], (u, v)| {
+            [u0.min(u), v0.min(v), u1.max(u), v1.max(v)]
+        });
+    if !(u1 > u0 && v1 > v0) {
+        return None;
+    }
+    let fine = (BESIDE_CELL_SPACINGS * spacing_of(top)).max(f64::EPSILON);
+    let [u0, v0, u1, v1] = [u0 - fine, v0 - fine, u1 + fine, v1 + fine];
+    let cell_mm = fine.max(((u1 - u0) * (v1 - v0) / BESIDE_MAX_CELLS).sqrt());
+    let (width, height) = (((u1 - u0) / cell_mm) as usize + 1, ((v1 - v0) / cell_mm) as usize + 1);
+    let cell_of = |p: Vec3| {
+        let (u, v) = project(p);
+        let (x, y) = (((u - u0) / cell_mm) as usize, ((v - v0) / cell_mm) as usize);
+        y.min(height - 1) * width + x.min(width - 1)
+    };
+    let cells_of = |c: &PlaneCluster| -> Vec<usize> {
+        member_points(&c.members, points).step_by(BESIDE_MARK_STRIDE).map(cell_of).collect()
+    };
+    // Steps from the top's cells, a ring at a time, out to the widest
+    // opening of a joint.
+    let reach = (MAX_JOINT_OPENING_MM / cell_mm).ceil() as u32;
+    let mut steps = vec![u32::MAX; width * height];
+    let mut front: Vec<usize> = Vec::new();
+    for c in cells_of(top) {
+        if steps[c] != 0 {
+            steps[c] = 0;
+            front.push(c);
+        }
+    }
+    for step in 1..=reach {
+        let mut next = Vec::new();
+        for &c in &front {
+            let (x, y) = (c % width, c / width);
+            for ny in y.saturating_sub(1)..=(y + 1).min(height - 1) {
+                for nx in x.saturating_sub(1)..=(x + 1).min(width - 1) {
+                    let n = ny * width + nx;
+                    if steps[n] == u32::MAX {
+                        steps[n] = step;
+                        next.push(n);
+                    }
+                }
+            }
+        }
+        front = next;
+    }
+    let gaps = others
+        .iter()
+        .map(|c| {
+            cells_of(c).into_iter().map(|cell| steps[cell]).min().filter(|&s| s != u32::MAX).map(|s| s as f64 * cell_mm)
+        })
+        .collect();
+    Some(gaps)
+}
+
 /// The robust rule: plates are the nearest parallel layers that fit the
 /// joint type; with no type given, the layers decide: two plates side by
 /// side in the nearest such layer make a butt joint, two layers a plate
@@ -1067,15 +1210,17 @@ pub fn robust_select(planes: Vec<PlaneCluster>, s: &Selection, points: &[Point])
         (Layout::Butt, [(pos, 0), (pos, 1)], l.depth_behind(pos), evidence)
     };
     let lap = |l: &Layers, (upper, lower): (usize, usize), why: String| {
+        let k = lower_plate_of(l, upper, lower, points);
+        let (top, under) = (&l.layers[upper][0], &l.layers[lower][k]);
         let evidence = format!(
             "an upper plate of {:.0} mm² {:.1} mm over a lower one of {:.0} mm²{why}",
-            l.layers[upper][0].area_mm2,
-            l.depth(lower) - l.depth(upper),
-            l.layers[lower][0].area_mm2
+            top.area_mm2,
+            l.offset(under) - l.offset(top),
+            under.area_mm2
         );
-        (Layout::Lap, [(upper, 0), (lower, 0)], l.depth_behind(lower), evidence)
+        (Layout::Lap, [(upper, 0), (lower, k)], l.depth_behind(lower), evidence)
     };
-    let tee_found = find_tee(&l, s);
+    let tee_found = find_tee(&l, s, points);
     let tee = |l: &Layers, t: &TeeLayers| {
         let top = t.top(l);
         let sides = match t.sides {
@@ -1624,6 +1769,58 @@ mod tests {
         let w = robust_select(planes, &selection(JointType::Lap)).unwrap().workpiece;
         assert_eq!(w.plates[0].plane.offset, 700.0);
         assert_eq!(w.plates[1].area_mm2, 15_000.0);
+    }
+
+    #[test]
+    fn a_lap_s_lower_plate_is_the_plane_its_upper_plate_stands_beside_not_the_largest_of_its_layer() {
+        // The upper plate over x < 0 at 700; the lower plate 6 mm under it
+        // from x = -20, seen from x = 0 to 30; a larger part touching it
+        // from x = 30 on lies 1.8 mm lower, in the same layer (3 mm).
+        let upper = |x: f64, _: f64| x < 0.0;
+        let (planes, points) = frame_of(&[
+            grid([-100, 0], [-100, 100], 700.0, |_, _| false),
+            grid([-20, 30], [-100, 100], 706.0, upper),
+            grid([30, 110], [-100, 100], 707.8, |_, _| false),
+        ]);
+        let chosen = super::robust_select(planes.clone(), &selection(JointType::Lap), &points).unwrap();
+        assert_eq!(chosen.workpiece.plates.each_ref().map(|p| p.centroid.z), [700.0, 706.0]);
+        assert_eq!(chosen.workpiece.layer_mates[1].iter().map(|c| c.centroid.z).collect::<Vec<_>>(), [707.8]);
+        assert!(chosen.evidence.contains("6.0 mm over a lower one of 6000 mm²"), "{}", chosen.evidence);
+        // Without the points nothing says which stands beside it: the
+        // largest, as before.
+        let unread = robust_select(planes, &selection(JointType::Lap)).unwrap();
+        assert_eq!(unread.workpiece.plates[1].centroid.z, 707.8);
+        // Two pieces of the lower plate a streak splits along the seam
+        // both stand beside the upper plate: the larger is taken.
+        let (planes, points) = frame_of(&[
+            grid([-100, 0], [-100, 100], 700.0, |_, _| false),
+            grid([-20, 30], [-100, 10], 706.0, upper),
+            grid([-20, 30], [12, 100], 706.5, upper),
+        ]);
+        let split = super::robust_select(planes, &selection(JointType::Lap), &points).unwrap();
+        assert_eq!(split.workpiece.plates[1].centroid.z, 706.0);
+    }
+
+    #[test]
+    fn a_tee_s_flange_is_the_plane_its_web_stands_beside_not_a_larger_plate_in_its_layer() {
+        // A web 8 mm thick along y, its top 80 mm over a flange seen on
+        // both of its sides; 30 mm beyond the flange's +x piece, a larger
+        // plate of another workpiece lies 2 mm higher, in the flange's
+        // layer.
+        let (planes, points) = frame_of(&[
+            grid([-4, 4], [-100, 100], 680.0, |_, _| false),
+            grid([4, 60], [-100, 100], 760.0, |_, _| false),
+            grid([-40, -4], [-100, 100], 760.5, |_, _| false),
+            grid([90, 200], [-100, 100], 758.0, |_, _| false),
+        ]);
+        let chosen = super::robust_select(planes.clone(), &selection(JointType::TFillet), &points).unwrap();
+        assert_eq!(chosen.layout, Layout::Tee);
+        assert_eq!(chosen.workpiece.plates.each_ref().map(|p| p.centroid.z), [680.0, 760.0]);
+        let e = &chosen.evidence;
+        assert!(e.contains("both of its sides") && e.contains("11200") && !e.contains("22000"), "{e}");
+        // Without the points, the largest on each side, as before.
+        let unread = robust_select(planes, &selection(JointType::TFillet)).unwrap();
+        assert_eq!(unread.workpiece.plates[1].centroid.z, 758.0);
     }
 
     #[test]

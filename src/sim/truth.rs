@@ -16,6 +16,7 @@
 
 use nalgebra::Isometry3;
 
+use super::JointGeometry;
 use super::scene::{ConvexSolid, build_scene};
 use super::{SceneSpec, Workpiece};
 use crate::camera::CameraModel;
@@ -274,9 +275,21 @@ fn seam_truth(
     let in_base = |y: f64| base_from_own.transform_point(&point(y).into()).coords;
     let physical = workpiece.seam_range();
     let along = camera_from_own.rotation * Vec3::y();
-    let observed = visible_interval(camera, &in_camera(0.0), &along)
-        .map(|[lo, hi]| [physical[0].max(lo), physical[1].min(hi)])
-        .filter(|[lo, hi]| lo <= hi);
+    // Clipped as a frame's one seam is (`observed_seam_range`): to where
+    // every seam-side edge is in the image, so that a butt joint whose
+    // plates the image border cuts slantwise ends where the plate cut
+    // first still shows its edge, not where the seam's own line leaves the
+    // image (a V-groove 14 mm open, cut at 45°, 7 mm further). A tee's
+    // root is its own edge.
+    let edges = match workpiece.joint {
+        JointGeometry::Tee { .. } => vec![line_xz],
+        joint => joint.seam_edges_xz().to_vec(),
+    };
+    let observed = edges.iter().try_fold(physical, |[lo, hi], &[ex, ez]| {
+        let edge = camera_from_own.transform_point(&Vec3::new(ex, 0.0, ez).into()).coords;
+        let [a, b] = visible_interval(camera, &edge, &along)?;
+        Some([lo.max(a), hi.min(b)]).filter(|[lo, hi]| lo <= hi)
+    });
     let [y0, y1] = observed.unwrap_or_else(|| [(physical[0] + physical[1]) / 2.0; 2]);
     let seen_mm = match observed {
         Some(range) => unhidden_stretches(range, |y| sight.hides(&in_camera(y)), MIN_SEEN_STRETCH_MM),
@@ -429,6 +442,30 @@ mod tests {
         // Moved onto the first one, the second is refused.
         spec.others[0].at_mm = [120.0, 150.0];
         assert!(spec.validate().unwrap_err().to_string().contains("closer than 10 mm"));
+    }
+
+    #[test]
+    fn a_seam_whose_plates_the_border_cuts_slantwise_ends_where_an_edge_leaves_the_image() {
+        // The demo's V-groove, 400 mm long, seen from 500 mm rolled 40
+        // degrees: each image border crosses the groove's two top edges
+        // at different places along it.
+        let mut spec = demo_scene(JointType::VButt);
+        spec.plate_a = PlateExtent { width_mm: 120.0, length_mm: 400.0, offset_mm: 0.0 };
+        spec.plate_b = spec.plate_a;
+        spec.placement = CameraPlacement { roll_deg: 40.0, ..CameraPlacement::straight(500.0, 0.0) };
+        spec.noise = NoiseSpec::none();
+        let cam = CameraModel::default();
+        let one = ground_truth(&spec, &cam);
+        assert!(one.clipped_start && one.clipped_end);
+        // A frame's seams are clipped as its one seam is.
+        assert_eq!(seam_truths(&spec, &cam)[0].truth, one);
+        // The groove's centre line runs on into the image past where an
+        // edge has left it: that is no seam a planner can be asked for.
+        let camera_from_workpiece = spec.workpiece_from_camera().inverse();
+        let [x, z] = spec.joint.seam_lines_xz()[0];
+        let on_line = camera_from_workpiece.transform_point(&Vec3::new(x, 0.0, z).into()).coords;
+        let [lo, hi] = visible_interval(&cam, &on_line, &(camera_from_workpiece.rotation * Vec3::y())).unwrap();
+        assert!(hi - lo > one.length_mm + 2.0, "{} against {}", hi - lo, one.length_mm);
     }
 
     fn frontal_i_butt_at(distance_mm: f64) -> SceneSpec {

@@ -66,8 +66,9 @@ pub struct EvalArgs {
     #[arg(long)]
     pub limit: Option<usize>,
     /// Plan each scene as this variant of its frame: unorganized,
-    /// voxel:MM, metres, base, cropped:MM, or several joined by commas
-    /// (e.g. cropped:25,voxel:1,metres). Scored against the same truth.
+    /// voxel:MM, metres, base, cropped:MM, compressed (written as PCD
+    /// binary_compressed and read back), or several joined by commas (e.g.
+    /// cropped:25,voxel:1,metres). Scored against the same truth.
     #[arg(long, value_name = "VARIANT")]
     pub variant: Option<Variant>,
     /// How each plan names its joint: `scene` (its own type), `auto` (the

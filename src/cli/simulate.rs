@@ -1,7 +1,8 @@
 //! `weldseam simulate`: renders a simulated capture to an organized PCD
 //! file (or, with `--variant`, the capture as a real tool would write it:
 //! unorganized, downsampled, cropped, in metres or in the base frame, as
-//! PCD or PLY) and writes its ground truth, pose and scene as JSON, with
+//! PCD, PCL's compressed PCD, or PLY) and writes its ground truth, pose
+//! and scene as JSON, with
 //! the arguments that run the planner on it. `--camera consumer` renders
 //! with a RealSense-class depth camera instead of the paper's. `--fault`
 //! adds one of the fault suite's faults to the scene, and `--suite-scene`
@@ -76,13 +77,15 @@ pub struct SimulateArgs {
     #[arg(long)]
     pub no_noise: bool,
     /// Write the capture as this variant: unorganized, voxel:MM, metres,
-    /// base, cropped:MM, or several joined by commas (e.g.
-    /// cropped:25,voxel:1,metres). The truth stays in the camera frame, mm.
+    /// base, cropped:MM, compressed (PCD DATA binary_compressed), or
+    /// several joined by commas (e.g. cropped:25,voxel:1,metres). The truth
+    /// stays in the camera frame, mm.
     #[arg(long, value_name = "VARIANT")]
     pub variant: Option<Variant>,
     /// The cloud file to write: binary PCD (`.pcd`, organized unless the
-    /// variant drops the grid) or binary little-endian PLY (`.ply`); with
-    /// --calibration, the capture file (`.json`).
+    /// variant drops the grid; LZF-compressed with the `compressed`
+    /// variant) or binary little-endian PLY (`.ply`); with --calibration,
+    /// the capture file (`.json`).
     #[arg(long, value_name = "FILE.pcd|FILE.ply")]
     pub out: PathBuf,
     /// The ground-truth JSON file to write.
@@ -130,11 +133,11 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
         return crate::cli::simulate_calibration::run(args, target);
     }
     let (name, spec) = scene_from_args(args)?;
-    let format = CloudFormat::of(&args.out)?;
+    let variant = args.variant.clone().unwrap_or_default();
+    let format = CloudFormat::of(&args.out, variant.is_compressed())?;
     let camera = CameraPreset::from(args.camera).camera();
     let started = Instant::now();
     let rendered = simulate(&spec, &camera);
-    let variant = args.variant.clone().unwrap_or_default();
     let sim = variant.apply(&rendered, spec.seed);
     let elapsed = started.elapsed();
     write_cloud(&sim.cloud, format, &args.out)?;
@@ -253,17 +256,26 @@ fn find_suite_scene(preset: CameraPreset, key: &str) -> Result<(String, SceneSpe
 pub(super) enum CloudFormat {
     /// PCD, DATA binary.
     PcdBinary,
-    // PCD DATA binary_compressed (LZF) goes here once `cloud::pcd` writes
-    // it, chosen by a flag (the extension is `.pcd` either way).
+    /// PCD, DATA binary_compressed (LZF), as PCL's tools write it.
+    PcdBinaryCompressed,
     /// PLY, binary little endian.
     PlyBinary,
 }
 
 impl CloudFormat {
-    fn of(path: &Path) -> Result<CloudFormat> {
-        match path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref() {
-            Some("pcd") => Ok(CloudFormat::PcdBinary),
-            Some("ply") => Ok(CloudFormat::PlyBinary),
+    /// The format of a file named `path`; `compressed` (the `compressed`
+    /// variant) asks for PCD's compressed data, which PLY has no form of.
+    fn of(path: &Path, compressed: bool) -> Result<CloudFormat> {
+        match (path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref(), compressed) {
+            (Some("pcd"), false) => Ok(CloudFormat::PcdBinary),
+            (Some("pcd"), true) => Ok(CloudFormat::PcdBinaryCompressed),
+            (Some("ply"), false) => Ok(CloudFormat::PlyBinary),
+            (Some("ply"), true) => {
+                bail!(
+                    "{}: the compressed variant is PCD's binary_compressed data; give a .pcd file name",
+                    path.display()
+                )
+            }
             _ => bail!("{}: give a .pcd or .ply file name to write", path.display()),
         }
     }
@@ -274,6 +286,7 @@ pub(super) fn write_cloud(cloud: &PointCloud, format: CloudFormat, path: &Path) 
     let out = BufWriter::new(file);
     match format {
         CloudFormat::PcdBinary => pcd::write_binary(cloud, out),
+        CloudFormat::PcdBinaryCompressed => pcd::write_binary_compressed(cloud, out),
         CloudFormat::PlyBinary => ply::write_binary_le(cloud, out),
     }
     .with_context(|| format!("cannot write the point cloud to {}", path.display()))
@@ -571,6 +584,24 @@ mod tests {
         assert!(cloud.points().iter().all(|p| p[2] > 0.3 && p[2] < 1.0), "depths in metres");
         let err = run(&args(dir.path().join("frame.xyz"), None)).unwrap_err().to_string();
         assert!(err.contains(".pcd or .ply"), "{err}");
+    }
+
+    #[test]
+    fn the_compressed_variant_is_written_as_pcl_writes_compressed_pcd() {
+        let dir = tempfile::tempdir().unwrap();
+        let (out, truth) = (dir.path().join("frame.pcd"), dir.path().join("truth.json"));
+        let mut a = args(out.clone(), Some(truth.clone()));
+        a.variant = Some(Variant::parse("compressed,metres").unwrap());
+        run(&a).unwrap();
+        let bytes = std::fs::read(&out).unwrap();
+        assert!(bytes.windows(23).any(|w| w == b"DATA binary_compressed\n"), "a compressed PCD");
+        let cloud = weldseam::cloud::load(&out).unwrap();
+        let json: Value = serde_json::from_slice(&std::fs::read(&truth).unwrap()).unwrap();
+        assert_eq!(json["variant"]["name"], "metres,compressed");
+        assert!(cloud.is_organized() && cloud.points().iter().filter(|p| p[2].is_finite()).all(|p| p[2] < 1.0));
+        a.out = dir.path().join("frame.ply");
+        let err = run(&a).unwrap_err().to_string();
+        assert!(err.contains("give a .pcd file name"), "{err}");
     }
 
     #[test]

@@ -1,17 +1,19 @@
 //! The same simulated capture as real cameras and real tools hand it
 //! over: without its pixel grid, voxel-downsampled, in metres, in the robot
-//! base frame, cropped around the seam, or several of these at once.
+//! base frame, cropped around the seam, written as PCL's tools write PCD
+//! (`DATA binary_compressed`), or several of these at once.
 //!
 //! Each variant is a pure transform of a simulated frame. None of them
 //! moves the seam out of the cloud, so the ground truth stays what it was:
 //! in the camera frame, in millimetres (and in the base frame), where the
 //! plan is scored. A [`Variant`] is written as on the command line:
-//! `unorganized`, `voxel:1.0`, `metres`, `base`, `cropped:25`, or a
-//! comma-separated combination such as `cropped:25,voxel:1,metres`. The
-//! steps always run in one order, whatever order they are written in:
-//! crop (in the camera frame, where the truth is), drop the grid, voxel
-//! downsampling, the base frame, metres, the order a tool chain would
-//! take them in.
+//! `unorganized`, `voxel:1.0`, `metres`, `base`, `cropped:25`,
+//! `compressed`, or a comma-separated combination such as
+//! `cropped:25,voxel:1,metres`. The steps always run in one order,
+//! whatever order they are written in: crop (in the camera frame, where
+//! the truth is), drop the grid, voxel downsampling, the base frame,
+//! metres, the order a tool chain would take them in, and last the file
+//! it writes.
 
 use std::collections::HashMap;
 use std::fmt;
@@ -19,7 +21,7 @@ use std::fmt;
 use rand_chacha::ChaCha8Rng;
 use rand_core::{Rng, SeedableRng};
 
-use crate::cloud::{Point, PointCloud, is_valid_point};
+use crate::cloud::{Point, PointCloud, is_valid_point, pcd};
 use crate::geometry::Vec3;
 use crate::sim::{GroundTruth, Simulation};
 
@@ -46,6 +48,11 @@ pub enum Step {
     Base,
     /// Coordinates in metres.
     Metres,
+    /// Written as PCD `DATA binary_compressed` (LZF, field by field, as
+    /// PCL's tools write it) and read back by the reader `plan` loads
+    /// files with: lossless, so the cloud plans as it did, through the
+    /// codec a real file goes through.
+    Compressed,
 }
 
 impl Step {
@@ -57,6 +64,7 @@ impl Step {
             Step::Voxel { .. } => 2,
             Step::Base => 3,
             Step::Metres => 4,
+            Step::Compressed => 5,
         }
     }
 
@@ -67,6 +75,7 @@ impl Step {
             Step::Voxel { .. } => "voxel",
             Step::Base => "base",
             Step::Metres => "metres",
+            Step::Compressed => "compressed",
         }
     }
 }
@@ -91,9 +100,9 @@ pub struct Variant {
 /// Why a variant's text was refused.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum VariantError {
-    #[error("no variant given: name one of raw, unorganized, voxel:MM, metres, base, cropped:MM")]
+    #[error("no variant given: name one of raw, unorganized, voxel:MM, metres, base, cropped:MM, compressed")]
     Empty,
-    #[error("unknown variant {0:?}: the variants are raw, unorganized, voxel:MM, metres, base, cropped:MM")]
+    #[error("unknown variant {0:?}: the variants are raw, unorganized, voxel:MM, metres, base, cropped:MM, compressed")]
     Unknown(String),
     #[error("{name} needs a size in mm, as in {name}:{example}")]
     MissingSize { name: &'static str, example: &'static str },
@@ -125,6 +134,11 @@ impl Variant {
     /// True when the cloud comes out in metres.
     pub fn in_metres(&self) -> bool {
         self.steps.contains(&Step::Metres)
+    }
+
+    /// True when the cloud comes out as PCD `DATA binary_compressed`.
+    pub fn is_compressed(&self) -> bool {
+        self.steps.contains(&Step::Compressed)
     }
 
     /// True when the cloud comes out in the robot base frame.
@@ -172,6 +186,7 @@ impl Variant {
                 Step::Voxel { size_mm } => voxel_grid(&cloud, size_mm),
                 Step::Base => transformed(&cloud, |p| sim.base_from_camera * p),
                 Step::Metres => to_metres(&cloud),
+                Step::Compressed => through_compressed_pcd(&cloud),
             };
         }
         Simulation { cloud, ..sim.clone() }
@@ -217,6 +232,7 @@ fn parse_step(part: &str) -> Result<Step, VariantError> {
         "unorganized" | "unorganised" => plain(Step::Unorganized),
         "metres" | "meters" => plain(Step::Metres),
         "base" => plain(Step::Base),
+        "compressed" => plain(Step::Compressed),
         "voxel" => Ok(Step::Voxel { size_mm: sized("voxel", "1.0", VOXEL_MM)? }),
         "cropped" => Ok(Step::Cropped { width_mm: sized("cropped", "25", CROP_WIDTH_MM)? }),
         "" => Err(VariantError::Empty),
@@ -296,6 +312,16 @@ fn transformed(cloud: &PointCloud, f: impl Fn(nalgebra::Point3<f64>) -> nalgebra
 /// The same cloud, coordinates divided by 1000.
 pub fn to_metres(cloud: &PointCloud) -> PointCloud {
     transformed(cloud, |p| p / 1000.0)
+}
+
+/// `cloud` written as PCD `DATA binary_compressed` and read back by
+/// [`pcd::parse`], as `plan` reads a file a PCL tool wrote.
+pub fn through_compressed_pcd(cloud: &PointCloud) -> PointCloud {
+    let mut bytes = Vec::new();
+    pcd::write_binary_compressed(cloud, &mut bytes)
+        .unwrap_or_else(|e| unreachable!("writing a cloud into memory does not fail: {e}"));
+    pcd::parse(&bytes, std::path::Path::new("compressed.pcd"))
+        .unwrap_or_else(|e| unreachable!("the PCD reader reads what its writer wrote: {e}"))
 }
 
 /// `points` with `like`'s layout: organized of its size, or unorganized.
@@ -421,6 +447,30 @@ mod tests {
         assert_ne!(a.points(), unorganized(&sim.cloud, 8).points(), "another seed, another order");
         let in_pixel_order: Vec<Point> = sim.cloud.points().iter().copied().filter(is_valid_point).collect();
         assert_ne!(a.points(), &in_pixel_order[..], "not in pixel order");
+    }
+
+    #[test]
+    fn a_compressed_pcd_gives_back_every_point_and_the_grid() {
+        let sim = small_sim(JointType::VButt);
+        for text in ["compressed", "voxel:1,metres,compressed"] {
+            let variant = Variant::parse(text).unwrap();
+            assert!(variant.is_compressed());
+            let plain = Variant::from_steps(&variant.steps()[..variant.steps().len() - 1]).unwrap().apply(&sim, 3);
+            let read = variant.apply(&sim, 3);
+            assert_eq!(
+                (read.cloud.width(), read.cloud.height()),
+                (plain.cloud.width(), plain.cloud.height()),
+                "{text}"
+            );
+            assert_eq!(read.cloud.is_organized(), plain.cloud.is_organized(), "{text}");
+            for (r, p) in read.cloud.points().iter().zip(plain.cloud.points()) {
+                assert_eq!(is_valid_point(r), is_valid_point(p), "{text}");
+                if is_valid_point(p) {
+                    assert_eq!(r.map(f32::to_bits), p.map(f32::to_bits), "{text}: every bit of every point");
+                }
+            }
+        }
+        assert_eq!(Variant::parse("compressed,cropped:25").unwrap().to_string(), "cropped:25,compressed");
     }
 
     #[test]

@@ -944,7 +944,7 @@ fn find_tee(l: &Layers, s: &Selection, points: &[Point]) -> Option<TeeLayers> {
                 })
                 .collect();
             let pieces: Vec<&PlaneCluster> = side.iter().map(|&k| &l.layers[flange][k]).collect();
-            side.get(standing_beside(top, &pieces, &l.normal, points)).copied()
+            side.get(standing_beside(top, &pieces, &l.normal, points, MAX_JOINT_OPENING_MM)).copied()
         };
         let found = TeeLayers { top: (upper, 0), flange, sides: [on_side(false), on_side(true)] };
         if found.two_sided() {
@@ -1044,9 +1044,21 @@ fn find_lap(l: &Layers, s: &Selection, points: &[Point]) -> Result<(usize, usize
 /// was taken for the lower plate, and the root was planned 1.79 mm under
 /// the lower plate's top). The index into `l.layers[lower]` of the plate
 /// [`standing_beside`] the upper plate.
-fn lower_plate_of(l: &Layers, upper: usize, lower: usize, points: &[Point]) -> usize {
+///
+/// Between a lap's upper plate and its lower plate only the band the step
+/// hides from the camera lies unseen (the step times the tangent of the
+/// view's slant, taken at most 45 degrees here), with the rim the plane
+/// criterion trims off each plate (a neighbour radius). A plate of the
+/// layer further across than that is no lower plate the upper one stands
+/// on, however near: at 1 mm voxels multi-03's I-butt, its plates seen as
+/// one plane, stands 16 mm from a V-butt plate 3.8 mm lower, of another
+/// workpiece the table between them did not set apart.
+fn lower_plate_of(l: &Layers, upper: usize, lower: usize, s: &Selection, points: &[Point]) -> usize {
+    let top = &l.layers[upper][0];
     let under: Vec<&PlaneCluster> = l.layers[lower].iter().collect();
-    standing_beside(&l.layers[upper][0], &under, &l.normal, points)
+    let step = l.depth(lower) - l.offset(top);
+    let hidden_mm = step.max(0.0) + 2.0 * s.neighbour_radius_mm;
+    standing_beside(top, &under, &l.normal, points, hidden_mm.min(MAX_JOINT_OPENING_MM))
 }
 
 /// Of `pieces` (largest first), the one `top` stands beside: of those at
@@ -1054,10 +1066,15 @@ fn lower_plate_of(l: &Layers, upper: usize, lower: usize, points: &[Point]) -> u
 /// `top` across the plane, within [`BESIDE_TOLERANCE_CELLS`] of the
 /// nearest, and of them the largest (two pieces of one plate a streak
 /// splits along the seam stand beside it alike). The largest, 0, where
-/// only one piece is that large, or none lies within a joint's opening of
-/// `top` (the band a tall web hides on its far side can be wider), or no
-/// points are given.
-fn standing_beside(top: &PlaneCluster, pieces: &[&PlaneCluster], normal: &Vec3, points: &[Point]) -> usize {
+/// only one piece is that large, or none lies within `reach_mm` of `top`
+/// (read to a cell), or no points are given.
+fn standing_beside(
+    top: &PlaneCluster,
+    pieces: &[&PlaneCluster],
+    normal: &Vec3,
+    points: &[Point],
+    reach_mm: f64,
+) -> usize {
     let Some(largest) = pieces.first() else {
         return 0;
     };
@@ -1065,7 +1082,7 @@ fn standing_beside(top: &PlaneCluster, pieces: &[&PlaneCluster], normal: &Vec3, 
     if plates < 2 {
         return 0;
     }
-    let Some(gaps) = gaps_across(top, &pieces[..plates], normal, points) else {
+    let Some(gaps) = gaps_across(top, &pieces[..plates], normal, points, reach_mm) else {
         return 0;
     };
     let nearest = gaps.iter().flatten().fold(f64::INFINITY, |a, &b| a.min(b));
@@ -1098,14 +1115,15 @@ const BESIDE_MAX_CELLS: f64 = 4.0e6;
 /// How far across the plane each of `others` lies from `top`, mm: steps of
 /// a grid of cells [`BESIDE_CELL_SPACINGS`] wide from the cells `top`'s
 /// points mark to the nearest cell the other's points mark, each step a
-/// cell (also along the diagonal). `None` for one further than
-/// [`MAX_JOINT_OPENING_MM`], beyond what a joint opens between its
-/// plates; `None` for all where the points give no extent.
+/// cell (also along the diagonal). `None` for one further than `reach_mm`
+/// and a cell (a gap is read to a cell); `None` for all where the points
+/// give no extent.
 fn gaps_across(
     top: &PlaneCluster,
     others: &[&PlaneCluster],
     normal: &Vec3,
     points: &[Point],
+    reach_mm: f64,
 ) -> Option<Vec<Option<f64>>> {
     let [u_axis, v_axis] = plane_axes(normal)?;
     let project = |p: Vec3| (p.dot(&u_axis), p.dot(&v_axis));
@@ -1133,9 +1151,9 @@ fn gaps_across(
     let cells_of = |c: &PlaneCluster| -> Vec<usize> {
         member_points(&c.members, points).step_by(BESIDE_MARK_STRIDE).map(cell_of).collect()
     };
-    // Steps from the top's cells, a ring at a time, out to the widest
-    // opening of a joint.
-    let reach = (MAX_JOINT_OPENING_MM / cell_mm).ceil() as u32;
+    // Steps from the top's cells, a ring at a time, out to the reach and
+    // the cell it is read to.
+    let reach = (reach_mm / cell_mm).ceil() as u32 + 1;
     let mut steps = vec![u32::MAX; width * height];
     let mut front: Vec<usize> = Vec::new();
     for c in cells_of(top) {
@@ -1163,7 +1181,8 @@ fn gaps_across(
     let gaps = others
         .iter()
         .map(|c| {
-            cells_of(c).into_iter().map(|cell| steps[cell]).min().filter(|&s| s != u32::MAX).map(|s| s as f64 * cell_mm)
+            let nearest = cells_of(c).into_iter().map(|cell| steps[cell]).min().filter(|&s| s != u32::MAX);
+            nearest.map(|s| s as f64 * cell_mm).filter(|&gap| gap <= reach_mm + cell_mm)
         })
         .collect();
     Some(gaps)
@@ -1210,7 +1229,7 @@ pub fn robust_select(planes: Vec<PlaneCluster>, s: &Selection, points: &[Point])
         (Layout::Butt, [(pos, 0), (pos, 1)], l.depth_behind(pos), evidence)
     };
     let lap = |l: &Layers, (upper, lower): (usize, usize), why: String| {
-        let k = lower_plate_of(l, upper, lower, points);
+        let k = lower_plate_of(l, upper, lower, s, points);
         let (top, under) = (&l.layers[upper][0], &l.layers[lower][k]);
         let evidence = format!(
             "an upper plate of {:.0} mm² {:.1} mm over a lower one of {:.0} mm²{why}",
@@ -1799,6 +1818,17 @@ mod tests {
         ]);
         let split = super::robust_select(planes, &selection(JointType::Lap), &points).unwrap();
         assert_eq!(split.workpiece.plates[1].centroid.z, 706.0);
+        // A plate 3.8 mm lower but 16 mm across, with the table between
+        // (another workpiece): further than the band a 3.8 mm step hides
+        // and the plates' rims, so it is not taken for the lower plate
+        // because it is the nearer.
+        let (planes, points) = frame_of(&[
+            grid([-100, 0], [-100, 100], 700.0, |_, _| false),
+            grid([16, 60], [-100, 100], 703.8, |_, _| false),
+            grid([80, 200], [-100, 100], 704.0, |_, _| false),
+        ]);
+        let apart = super::robust_select(planes, &selection(JointType::Lap), &points).unwrap();
+        assert_eq!(apart.workpiece.plates[1].centroid.z, 704.0);
     }
 
     #[test]

@@ -604,7 +604,18 @@ impl<'c> Stations<'c> {
 
 /// The finite points of `members`.
 fn member_points<'p>(members: &'p [u32], points: &'p [Point]) -> impl Iterator<Item = Vec3> + 'p {
-    members.iter().filter_map(|&i| points.get(i as usize)).map(vec3).filter(|p| p.iter().all(|v| v.is_finite()))
+    every_member_point(members, 1, points)
+}
+
+/// The finite points of every `every`-th member: a sample read without
+/// reading the members skipped.
+fn every_member_point<'p>(members: &'p [u32], every: usize, points: &'p [Point]) -> impl Iterator<Item = Vec3> + 'p {
+    members
+        .iter()
+        .step_by(every)
+        .filter_map(|&i| points.get(i as usize))
+        .map(vec3)
+        .filter(|p| p.iter().all(|v| v.is_finite()))
 }
 
 /// How far apart the top's edge towards `flange` (against the stations'
@@ -1091,12 +1102,19 @@ fn standing_beside(
 }
 
 /// The cells of [`gaps_across`], in point spacings of the upper plane: a
-/// cell that wide holds about nine of a plate's points, so every second
-/// point leaves hardly a cell of a plate empty.
+/// cell that wide holds about nine of a plate's points, so every fourth
+/// marks it about twice (in a frame's pixel order, in three of its four
+/// rows), and a cell left empty inside a plate is crossed in one step.
 const BESIDE_CELL_SPACINGS: f64 = 3.0;
 
 /// Every how many of a cluster's points [`gaps_across`] marks a cell with.
-const BESIDE_MARK_STRIDE: usize = 2;
+const BESIDE_MARK_STRIDE: usize = 4;
+
+/// Every how many of the upper plane's points [`gaps_across`] marks a cell
+/// with: it is the largest plane of a lap, and its nearest cells to each
+/// other plate are all that is read of it, so a cell it leaves empty here
+/// and there moves the gap by a cell at most where the edge is read best.
+const BESIDE_TOP_MARK_STRIDE: usize = 8;
 
 /// Every how many of the clusters' points [`gaps_across`] takes their
 /// extent from.
@@ -1131,7 +1149,7 @@ fn gaps_across(
     // sample misses lies in the border cells it is clamped into.
     let [u0, v0, u1, v1] = std::iter::once(top)
         .chain(others.iter().copied())
-        .flat_map(|c| member_points(&c.members, points).step_by(BESIDE_BOUNDS_STRIDE))
+        .flat_map(|c| every_member_point(&c.members, BESIDE_BOUNDS_STRIDE, points))
         .map(project)
         .fold([f64::INFINITY, f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY], |[u0, v0, u1, v1], (u, v)| {
             [u0.min(u), v0.min(v), u1.max(u), v1.max(v)]
@@ -1148,15 +1166,15 @@ fn gaps_across(
         let (x, y) = (((u - u0) / cell_mm) as usize, ((v - v0) / cell_mm) as usize);
         y.min(height - 1) * width + x.min(width - 1)
     };
-    let cells_of = |c: &PlaneCluster| -> Vec<usize> {
-        member_points(&c.members, points).step_by(BESIDE_MARK_STRIDE).map(cell_of).collect()
+    let cells_of = |c: &PlaneCluster, every: usize| -> Vec<usize> {
+        every_member_point(&c.members, every, points).map(cell_of).collect()
     };
     // Steps from the top's cells, a ring at a time, out to the reach and
     // the cell it is read to.
     let reach = (reach_mm / cell_mm).ceil() as u32 + 1;
     let mut steps = vec![u32::MAX; width * height];
     let mut front: Vec<usize> = Vec::new();
-    for c in cells_of(top) {
+    for c in cells_of(top, BESIDE_TOP_MARK_STRIDE) {
         if steps[c] != 0 {
             steps[c] = 0;
             front.push(c);
@@ -1181,7 +1199,8 @@ fn gaps_across(
     let gaps = others
         .iter()
         .map(|c| {
-            let nearest = cells_of(c).into_iter().map(|cell| steps[cell]).min().filter(|&s| s != u32::MAX);
+            let nearest =
+                cells_of(c, BESIDE_MARK_STRIDE).into_iter().map(|cell| steps[cell]).min().filter(|&s| s != u32::MAX);
             nearest.map(|s| s as f64 * cell_mm).filter(|&gap| gap <= reach_mm + cell_mm)
         })
         .collect();

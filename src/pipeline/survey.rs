@@ -161,4 +161,32 @@ mod tests {
         let bands = &seen.bands;
         assert!(bands.len() >= 2 && bands.windows(2).all(|b| b[0].to_mm <= b[1].from_mm), "{bands:?}");
     }
+
+    #[test]
+    fn every_variant_of_a_capture_is_surveyed_as_what_it_is() {
+        use crate::sim::variants::Variant;
+        let config = Config::default();
+        let sim = simulate(&demo_scene(crate::joint::JointType::VButt), &CameraModel::default());
+        let of = |text: &str| survey(&Variant::parse(text).unwrap().apply(&sim, 5).cloud, &config);
+        let raw = of("raw");
+        assert_eq!(of("compressed"), raw, "a compressed PCD is the frame itself");
+        // Without its grid, the raw frame is put back on the camera's.
+        let unorganized = of("unorganized");
+        assert!(unorganized.grid.is_none() && matches!(unorganized.regrid, Some(Ok(_))));
+        assert!(!unorganized.measured_density && unorganized.depth_mm == raw.depth_mm);
+        // In metres, guessed so; in the base frame, no camera's view.
+        let metres = of("metres");
+        assert!(metres.units.metres && !raw.units.metres && metres.grid == raw.grid);
+        let base = of("base");
+        assert!(base.view.behind + base.view.beyond_any_view > base.valid / 2, "{:?}", base.view);
+        assert!(raw.view.behind == 0 && raw.view.beyond_any_view == 0);
+        // Downsampled or cropped: measured from the cloud's own spacing.
+        for text in ["voxel:1", "cropped:25,voxel:1,metres"] {
+            let measured = of(text);
+            let spacing = measured.spacing_mm.unwrap();
+            assert!(measured.measured_density && measured.grid.is_none(), "{text}");
+            assert!((0.7..1.4).contains(&spacing) && measured.radius_mm > raw.radius_mm, "{text}: {spacing} mm");
+        }
+        assert!(of("cropped:25").valid < raw.valid / 4);
+    }
 }

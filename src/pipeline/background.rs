@@ -1166,15 +1166,12 @@ fn gaps_across(
         let (x, y) = (((u - u0) / cell_mm) as usize, ((v - v0) / cell_mm) as usize);
         y.min(height - 1) * width + x.min(width - 1)
     };
-    let cells_of = |c: &PlaneCluster, every: usize| -> Vec<usize> {
-        every_member_point(&c.members, every, points).map(cell_of).collect()
-    };
     // Steps from the top's cells, a ring at a time, out to the reach and
     // the cell it is read to.
     let reach = (reach_mm / cell_mm).ceil() as u32 + 1;
     let mut steps = vec![u32::MAX; width * height];
     let mut front: Vec<usize> = Vec::new();
-    for c in cells_of(top, BESIDE_TOP_MARK_STRIDE) {
+    for c in every_member_point(&top.members, BESIDE_TOP_MARK_STRIDE, points).map(cell_of) {
         if steps[c] != 0 {
             steps[c] = 0;
             front.push(c);
@@ -1199,8 +1196,10 @@ fn gaps_across(
     let gaps = others
         .iter()
         .map(|c| {
-            let nearest =
-                cells_of(c, BESIDE_MARK_STRIDE).into_iter().map(|cell| steps[cell]).min().filter(|&s| s != u32::MAX);
+            let nearest = every_member_point(&c.members, BESIDE_MARK_STRIDE, points)
+                .map(|p| steps[cell_of(p)])
+                .min()
+                .filter(|&s| s != u32::MAX);
             nearest.map(|s| s as f64 * cell_mm).filter(|&gap| gap <= reach_mm + cell_mm)
         })
         .collect();

@@ -6,7 +6,8 @@
 //! joint is refused by name; the fault suite's clamps are not taken for a
 //! web; a frame of several workpieces carries the truth of every seam, and
 //! the planner returns a seam for each workpiece it can plan, matched to
-//! its own workpiece, in the documented order, and names the others.
+//! its own workpiece, in the documented order, and names the others,
+//! whether its workpieces are planned on one thread or side by side.
 
 use weldseam::camera::CameraModel;
 use weldseam::config::Config;
@@ -418,4 +419,34 @@ fn a_requested_joint_applies_to_every_workpiece() {
     let (name, err, _) = plan_multi("multi-04", JointType::Lap.into(), None, false);
     let err = err.map(|p| p.seams.len()).unwrap_err();
     assert!(err.reason.contains("none of the 2 workpieces") && err.reason.contains("workpiece 2"), "{name}: {err}");
+}
+
+#[test]
+fn workpieces_planned_side_by_side_plan_as_on_one_thread() {
+    // Three parts under `auto` (a tee's hidden root named), and a tee
+    // refused among butt joints: the seams, what is not planned, the
+    // counts and what the trace keeps (the first workpiece's) are the same
+    // whether one thread plans the workpieces in turn or several share them.
+    for (prefix, joint) in [("multi-01", RequestedJoint::Auto), ("multi-03", "v-butt+i-butt".parse().unwrap())] {
+        let (name, spec) =
+            multi_suite(Draw::Documented).into_iter().find(|(n, _)| n.starts_with(prefix)).expect("the scene");
+        let sim = simulate(&spec, &CameraModel::default());
+        let request = PlanRequest::new(joint, None, sim.pose);
+        let planner = Planner::new(Config::default());
+        let on_threads = |threads: usize| {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().expect("a thread pool");
+            let (plan, trace) = pool.install(|| planner.plan_traced(&sim.cloud, &request));
+            (plan.unwrap_or_else(|e| panic!("{name}: {e}")), trace)
+        };
+        let (alone, alone_trace) = on_threads(1);
+        assert!(alone.seams.len() >= 2 && !alone.unplanned.is_empty(), "{name}: {alone:?}");
+        let (shared, shared_trace) = on_threads(3);
+        assert_eq!(shared.seams, alone.seams, "{name}");
+        assert_eq!(shared.unplanned, alone.unplanned, "{name}");
+        assert_eq!(shared.stats, alone.stats, "{name}");
+        assert!(alone_trace.plate_labels.is_some(), "{name}");
+        assert_eq!(shared_trace.plate_labels, alone_trace.plate_labels, "{name}");
+        assert_eq!(shared_trace.edge_points, alone_trace.edge_points, "{name}");
+        assert_eq!(shared_trace.weld, alone_trace.weld, "{name}");
+    }
 }

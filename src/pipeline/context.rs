@@ -82,14 +82,64 @@ impl Clock {
 
     pub(super) fn lap(&mut self, stage: Stage) {
         let now = Instant::now();
-        let ms = (now - self.last).as_secs_f64() * 1e3;
-        // A stage that runs once per workpiece is charged their sum.
+        self.charge(stage, (now - self.last).as_secs_f64() * 1e3);
+        self.last = now;
+    }
+
+    /// What each stage was charged.
+    pub(super) fn into_timings(self) -> StageTimings {
+        self.timings
+    }
+
+    /// Starts the next lap now: a workpiece's clock is made before its
+    /// work is scheduled, and must not charge the wait to its first stage.
+    pub(super) fn restart(&mut self) {
+        self.last = Instant::now();
+    }
+
+    /// Ends the lap of the workpieces planned side by side, whose own
+    /// clocks timed `beside`: the wall time since the last lap is shared
+    /// among their stages ([`share_wall_time`]).
+    pub(super) fn lap_beside<'t>(&mut self, beside: impl IntoIterator<Item = &'t StageTimings>) {
+        let now = Instant::now();
+        let wall = (now - self.last).as_secs_f64() * 1e3;
+        for (stage, ms) in share_wall_time(wall, beside).stages {
+            self.charge(stage, ms);
+        }
+        self.last = now;
+    }
+
+    /// Adds `ms` to `stage`: a stage that runs once per workpiece is
+    /// charged their sum.
+    fn charge(&mut self, stage: Stage, ms: f64) {
         match self.timings.stages.iter_mut().find(|(s, _)| *s == stage) {
             Some((_, total)) => *total += ms,
             None => self.timings.stages.push((stage, ms)),
         }
-        self.last = now;
     }
+}
+
+/// `wall_ms` of work done side by side, shared among the stages of
+/// `beside` in proportion to each stage's time summed over them: the
+/// shares add up to the wall time, and each says where the cores' time
+/// went. With no stage timed, the time is the background stage's, where
+/// each workpiece's planning starts.
+fn share_wall_time<'t>(wall_ms: f64, beside: impl IntoIterator<Item = &'t StageTimings>) -> StageTimings {
+    let mut summed = StageTimings::default();
+    for (stage, ms) in beside.into_iter().flat_map(|t| &t.stages) {
+        match summed.stages.iter_mut().find(|(s, _)| s == stage) {
+            Some((_, total)) => *total += ms,
+            None => summed.stages.push((*stage, *ms)),
+        }
+    }
+    let cpu_ms = summed.total_ms();
+    if cpu_ms <= 0.0 {
+        return StageTimings { stages: vec![(Stage::Background, wall_ms)] };
+    }
+    for (_, ms) in &mut summed.stages {
+        *ms *= wall_ms / cpu_ms;
+    }
+    summed
 }
 
 /// One frame being planned: the inputs and what both methods record.
@@ -111,8 +161,9 @@ pub(super) struct Context<'a> {
     /// What each stage found, when the caller asked for it.
     pub trace: Tracer<'a>,
     /// The image's border as the cloud's rays show it, read the first time
-    /// a stage asks ([`Context::view_border`]).
-    view_border: OnceLock<Option<ViewBorder>>,
+    /// a stage asks ([`Context::view_border`]). Held by the planner, so
+    /// every workpiece's context of one frame shares it.
+    view_border: &'a OnceLock<Option<ViewBorder>>,
 }
 
 /// Sanitises the cloud, in camera-frame millimetres
@@ -195,6 +246,7 @@ impl<'a> Context<'a> {
         request: &'a PlanRequest,
         clock: Clock,
         trace: Tracer<'a>,
+        view_border: &'a OnceLock<Option<ViewBorder>>,
         valid_points: usize,
     ) -> Self {
         let mut ctx = Context {
@@ -206,7 +258,7 @@ impl<'a> Context<'a> {
             scale: Scale::of_camera(config.pipeline.neighbour_radius_mm),
             joint: request.joint.given(),
             trace,
-            view_border: OnceLock::new(),
+            view_border,
         };
         ctx.clock.lap(Stage::Input);
         ctx
@@ -357,6 +409,27 @@ impl<'a> Context<'a> {
     /// camera's pixel footprint there.
     pub(super) fn spacing_at(&self, p: &Vec3) -> f64 {
         self.scale.spacing_at(&self.config.camera, p)
+    }
+
+    /// One context per workpiece of the frame, for planning them side by
+    /// side: each starts from the frame's counts and the joint requested,
+    /// with a clock of its own. The first records into the frame's trace,
+    /// which keeps the first workpiece's stages; the others record nothing.
+    pub(super) fn per_workpiece(&mut self, count: usize) -> Vec<Context<'_>> {
+        let mut first_trace = Some(self.trace.reborrow());
+        (0..count)
+            .map(|_| Context {
+                config: self.config,
+                request: self.request,
+                cloud: self.cloud,
+                clock: Clock::start(),
+                stats: self.stats.clone(),
+                scale: self.scale,
+                joint: self.request.joint.given(),
+                trace: first_trace.take().unwrap_or_else(Tracer::off),
+                view_border: self.view_border,
+            })
+            .collect()
     }
 
     /// The image's border the frame's points span, read once per frame
@@ -740,6 +813,23 @@ mod tests {
     use super::*;
     use crate::camera::CameraModel;
     use crate::cloud::INVALID_POINT;
+
+    #[test]
+    fn side_by_side_wall_time_is_shared_by_each_stage_s_summed_time() {
+        let timings = |stages: &[(Stage, f64)]| StageTimings { stages: stages.to_vec() };
+        let beside = [
+            timings(&[(Stage::Background, 1.0), (Stage::EdgePoints, 3.0)]),
+            timings(&[(Stage::Background, 2.0), (Stage::EdgePoints, 1.0), (Stage::Refit, 3.0)]),
+        ];
+        // 10 ms of the cores' time done in 5 ms of wall time: each stage
+        // charged half its summed time, in the order the stages first ran.
+        let shared = share_wall_time(5.0, &beside);
+        assert_eq!(shared.stages, [(Stage::Background, 1.5), (Stage::EdgePoints, 2.0), (Stage::Refit, 1.5)]);
+        assert!((shared.total_ms() - 5.0).abs() < 1e-12);
+        // Workpieces refused before any stage timed: the wait is the
+        // background stage's.
+        assert_eq!(share_wall_time(2.0, &[StageTimings::default()]).stages, [(Stage::Background, 2.0)]);
+    }
 
     #[test]
     fn one_pass_counts_what_the_view_check_and_the_volume_count_alone() {

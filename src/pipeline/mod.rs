@@ -62,6 +62,7 @@ pub mod workpieces;
 
 use std::borrow::Cow;
 use std::fmt;
+use std::sync::OnceLock;
 
 use nalgebra::Isometry3;
 
@@ -430,7 +431,8 @@ impl Planner {
         };
         let mut tracer = tracer;
         let (frame, valid_points) = context::sanitise(config, input.cloud, request, &mut tracer)?;
-        let ctx = Context::new(config, &frame, request, clock, tracer, valid_points);
+        let view_border = OnceLock::new();
+        let ctx = Context::new(config, &frame, request, clock, tracer, &view_border, valid_points);
         match self.config.pipeline.method {
             Method::Paper => paper::plan(ctx),
             Method::Robust => robust::plan(ctx),

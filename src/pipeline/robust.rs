@@ -36,9 +36,9 @@ use super::neighbours::NeighbourSearch;
 use super::plane_points::PlanePoints;
 use super::ransac::EdgeLine;
 use super::refit::{self, SeamAxes};
-use super::trace::{TracedWeld, Tracer};
+use super::trace::TracedWeld;
 use super::view_border;
-use super::{Plan, PlanError, SeamAssessment, SeamCoverage, Stage, Unplanned};
+use super::{Plan, PlanError, PlanStats, SeamAssessment, SeamCoverage, Stage, StageTimings, Unplanned};
 use super::{
     background, clustering, groove, orientation, plane_points, quality, ransac, tee, web_face, weld_edges,
     weld_equation, workpieces,
@@ -168,39 +168,66 @@ pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
         return ctx.finish_several(Method::Robust, welds, unplanned);
     }
 
-    // Each workpiece in turn: its seam, or why not. The trace keeps the
-    // first workpiece's stages; the counts are the first's too.
+    // Each workpiece side by side: its seams, or why not. They share the
+    // frame's stages, read nothing another writes, and each has its own
+    // context; the trace keeps the first workpiece's stages and the
+    // counts are the first's too.
+    ctx.clock.lap(Stage::Background);
+    let outcomes: Vec<Outcome> = ctx
+        .per_workpiece(groups.len())
+        .into_par_iter()
+        .zip(groups)
+        .enumerate()
+        .map(|(k, (mut piece, group))| {
+            let _span = tracing::debug_span!("workpiece", number = k + 1).entered();
+            piece.clock.restart();
+            let result = plan_workpiece(&mut piece, &front, &clusters.labels, group.planes);
+            if let Err(refusal) = &result {
+                // The refusing stage's own work, up to the refusal.
+                piece.clock.lap(refusal.stage);
+            }
+            Outcome {
+                result,
+                joint: piece.joint,
+                near_camera: group.near_camera,
+                stats: piece.stats,
+                timings: piece.clock.into_timings(),
+            }
+        })
+        .collect();
+    ctx.clock.lap_beside(outcomes.iter().map(|o| &o.timings));
+    if let Some(first) = outcomes.first() {
+        ctx.stats = first.stats.clone();
+    }
     let (mut welds, mut unplanned) = (Vec::new(), Vec::new());
-    let mut tracer = None;
-    let mut first_stats = None;
-    for (k, group) in groups.into_iter().enumerate() {
-        ctx.joint = ctx.request.joint.given();
-        match plan_workpiece(&mut ctx, &front, &clusters.labels, group.planes) {
+    for (k, outcome) in outcomes.into_iter().enumerate() {
+        match outcome.result {
             Ok((planned, seen)) => {
                 welds.extend(planned.into_iter().map(|weld| weld.traced(k == 0)));
                 unplanned.extend(seen);
             }
             Err(reason) => {
-                tracing::info!(workpiece = k + 1, near_camera = ?group.near_camera.as_slice(), "workpiece not planned: {reason}");
+                tracing::info!(workpiece = k + 1, near_camera = ?outcome.near_camera.as_slice(), "workpiece not planned: {reason}");
                 // The joint requested is no workpiece's joint when it
                 // does not match; otherwise the one planned or seen.
                 let mismatch = reason.gate == Some(quality::Gate::JointMismatch);
-                let joint = ctx.joint.filter(|j| !(mismatch && ctx.request.joint.given() == Some(*j)));
-                unplanned.push(Unplanned { joint, near_camera: Some(group.near_camera), reason });
+                let joint = outcome.joint.filter(|j| !(mismatch && ctx.request.joint.given() == Some(*j)));
+                unplanned.push(Unplanned { joint, near_camera: Some(outcome.near_camera), reason });
             }
         }
-        if k == 0 {
-            tracer = Some(std::mem::replace(&mut ctx.trace, Tracer::off()));
-            first_stats = Some(ctx.stats.clone());
-        }
-    }
-    if let Some(tracer) = tracer {
-        ctx.trace = tracer;
-    }
-    if let Some(stats) = first_stats {
-        ctx.stats = stats;
     }
     ctx.finish_several(Method::Robust, welds, unplanned)
+}
+
+/// What planning one workpiece of several gave, and what its context
+/// recorded on the way.
+struct Outcome {
+    result: Result<(Vec<PlannedWeld>, Vec<Unplanned>), PlanError>,
+    /// The joint planned or seen, for a workpiece refused.
+    joint: Option<JointType>,
+    near_camera: Vec3,
+    stats: PlanStats,
+    timings: StageTimings,
 }
 
 /// Refuses a workpiece found to be `joint` when the request does not admit

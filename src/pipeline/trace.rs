@@ -175,6 +175,12 @@ impl<'a> Tracer<'a> {
         Tracer(Some(trace))
     }
 
+    /// The same trace, lent for a shorter while: to the first workpiece of
+    /// a frame, whose stages it keeps.
+    pub(super) fn reborrow(&mut self) -> Tracer<'_> {
+        Tracer(self.0.as_deref_mut())
+    }
+
     /// Runs `record` on the trace, if there is one.
     pub(super) fn record(&mut self, record: impl FnOnce(&mut PlanTrace)) {
         if let Some(trace) = self.0.as_deref_mut() {

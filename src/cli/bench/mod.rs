@@ -242,8 +242,8 @@ fn several_workpieces_table(camera: CameraModel, runs: usize) -> Table {
         table.push(vec![label, seams, unplanned, cell, ratio, stages.join(", ")]);
     }
     table.notes.push(format!(
-        "median (min-max) of {runs} runs after a discarded warm-up, `auto`; the workpieces are planned in turn after \
-         the frame's shared stages (issue 15's target: three in under 1.5 times one)"
+        "median (min-max) of {runs} runs after a discarded warm-up, `auto`; the workpieces are planned side by side \
+         after the frame's shared stages (issue 15's target: three in under 1.5 times one)"
     ));
     table
 }

@@ -114,6 +114,7 @@ pub mod to_proto {
             Gate::JointCoverage => ErrorCode::JointCoverage,
             Gate::Misalignment => ErrorCode::Misalignment,
             Gate::GapWidth => ErrorCode::GapWidth,
+            Gate::GapUnresolved => ErrorCode::GapUnresolved,
             Gate::PlateAngle => ErrorCode::PlateAngle,
             Gate::PositionUncertainty => ErrorCode::PositionUncertainty,
             Gate::GrooveDepth => ErrorCode::GrooveDepth,

@@ -505,12 +505,16 @@ pub enum ErrorCode {
     /// than `quality.max_edge_step_spacings`: the edge was cut short along
     /// part of it, and which line is the plate's edge is not clear.
     EdgeCutShort,
+    /// 72: refused: the I-butt gap, at its widest, is narrower than
+    /// `quality.min_gap_spacings` point spacings: narrower than the cloud
+    /// resolves.
+    GapUnresolved,
     /// Any other number, from a newer peer.
     Other(u16),
 }
 
 impl ErrorCode {
-    pub const ALL: [ErrorCode; 33] = [
+    pub const ALL: [ErrorCode; 34] = [
         ErrorCode::BadMagic,
         ErrorCode::UnsupportedVersion,
         ErrorCode::UnknownMessage,
@@ -544,6 +548,7 @@ impl ErrorCode {
         ErrorCode::JointUnknown,
         ErrorCode::CornerJoint,
         ErrorCode::EdgeCutShort,
+        ErrorCode::GapUnresolved,
     ];
 
     pub fn code(self) -> u16 {
@@ -581,6 +586,7 @@ impl ErrorCode {
             ErrorCode::JointUnknown => 69,
             ErrorCode::CornerJoint => 70,
             ErrorCode::EdgeCutShort => 71,
+            ErrorCode::GapUnresolved => 72,
             ErrorCode::Other(n) => n,
         }
     }
@@ -621,6 +627,7 @@ impl ErrorCode {
             ErrorCode::JointUnknown => "joint_unknown",
             ErrorCode::CornerJoint => "corner_joint",
             ErrorCode::EdgeCutShort => "edge_cut_short",
+            ErrorCode::GapUnresolved => "gap_unresolved",
             ErrorCode::Other(_) => "other",
         }
     }

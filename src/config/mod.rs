@@ -285,6 +285,11 @@ pub struct QualityParams {
     pub max_misalignment_of_thickness: f64,
     /// I-butt joints: the widest root gap, mm.
     pub max_gap_mm: f64,
+    /// I-butt joints: the narrowest gap, at its widest along the seam, in
+    /// point spacings at the seam. A gap under one spacing is below what
+    /// the cloud resolves: the plates may touch, and two plates elsewhere
+    /// with a gap as narrow are seen as one.
+    pub min_gap_spacings: f64,
     /// The largest angle between the two plates' planes, degrees.
     pub max_plate_angle_deg: f64,
     /// Tee joints: how far the web's side face may lie off square to the
@@ -314,6 +319,7 @@ impl Default for QualityParams {
             max_misalignment_mm: 4.0,
             max_misalignment_of_thickness: 0.15,
             max_gap_mm: 4.0,
+            min_gap_spacings: 1.0,
             max_plate_angle_deg: 5.0,
             max_web_tilt_deg: 10.0,
             max_position_uncertainty_mm: 0.5,
@@ -341,6 +347,7 @@ impl QualityParams {
         in_range("quality.max_misalignment_mm", self.max_misalignment_mm, 0.0, 50.0)?;
         in_range("quality.max_misalignment_of_thickness", self.max_misalignment_of_thickness, 0.0, 1.0)?;
         in_range("quality.max_gap_mm", self.max_gap_mm, 0.0, 50.0)?;
+        in_range("quality.min_gap_spacings", self.min_gap_spacings, 0.0, 10.0)?;
         in_range("quality.max_plate_angle_deg", self.max_plate_angle_deg, 0.0, 90.0)?;
         in_range("quality.max_web_tilt_deg", self.max_web_tilt_deg, 0.0, 80.0)?;
         in_range("quality.max_position_uncertainty_mm", self.max_position_uncertainty_mm, 0.001, 100.0)?;

@@ -213,6 +213,11 @@ pub enum Gate {
     Misalignment,
     /// An I-butt joint's gap is wider than `quality.max_gap_mm`.
     GapWidth,
+    /// An I-butt joint's gap, at its widest, is narrower than
+    /// `quality.min_gap_spacings` point spacings: narrower than the cloud
+    /// resolves, so the cloud cannot show where plates part, here or
+    /// across a plate it sees whole.
+    GapUnresolved,
     /// The two plates' planes meet at more than `quality.max_plate_angle_deg`.
     PlateAngle,
     /// The seam's position is known less well than `quality.max_position_uncertainty_mm`.
@@ -235,13 +240,14 @@ pub enum Gate {
 }
 
 impl Gate {
-    pub const ALL: [Gate; 12] = [
+    pub const ALL: [Gate; 13] = [
         Gate::EdgeCutShort,
         Gate::EdgeFitResidual,
         Gate::EdgeCoverage,
         Gate::JointCoverage,
         Gate::Misalignment,
         Gate::GapWidth,
+        Gate::GapUnresolved,
         Gate::PlateAngle,
         Gate::PositionUncertainty,
         Gate::GrooveDepth,
@@ -265,6 +271,7 @@ impl Gate {
             Gate::JointCoverage => "joint_coverage",
             Gate::Misalignment => "misalignment",
             Gate::GapWidth => "gap_width",
+            Gate::GapUnresolved => "gap_unresolved",
             Gate::PlateAngle => "plate_angle",
             Gate::PositionUncertainty => "position_uncertainty",
             Gate::GrooveDepth => "groove_depth",
@@ -553,6 +560,29 @@ pub fn check(seam: &SeamEvidence, limits: &QualityParams) -> Vec<GateFailure> {
         );
     }
 
+    // A gap is measured between two fitted edges, each a plate's last
+    // points, a spacing or so short of where the plate ends: a gap under
+    // a spacing is not measured but guessed (plates touching measure a
+    // few tenths), and a joint as narrow elsewhere would leave its two
+    // plates one cluster, so the plates paired here may not be the joint's.
+    if let (JointType::IButt, Some(gap)) = (seam.joint, q.gap_mm) {
+        let limit = limits.min_gap_spacings * q.point_spacing_mm;
+        if gap.max < limit {
+            fail(
+                Gate::GapUnresolved,
+                gap.max,
+                limit,
+                format!(
+                    "the gap between the plates measures {:.2} mm at its widest, under {limit:.2} mm, {} times \
+                     the cloud's {:.2} mm point spacing (quality.min_gap_spacings): the cloud does not resolve a \
+                     gap this narrow, so it cannot show where plates part, here or across a plate it sees whole; \
+                     plan from a finer cloud (voxels under half the narrowest gap)",
+                    gap.max, limits.min_gap_spacings, q.point_spacing_mm
+                ),
+            );
+        }
+    }
+
     if seam.joint == JointType::TFillet {
         let tilt = (q.plate_angle_deg - 90.0).abs();
         if tilt > limits.max_web_tilt_deg {
@@ -694,6 +724,29 @@ mod tests {
         let fits = [edge(-1.0, 0.0, 0.05, 300), edge(1.0, 0.1, 0.06, 300)];
         let q = measured(JointType::IButt, &fits, [&flat, &flat]);
         assert_eq!(check(&evidence(JointType::IButt, &q, [0.05, 0.06]), &QualityParams::default()), vec![]);
+    }
+
+    #[test]
+    fn an_i_butt_gap_under_a_point_spacing_is_not_resolved() {
+        // The points lie 0.3 mm apart (`measured`).
+        let flat = plane(0.0, 500.0);
+        let gates = |gap: f64, joint: JointType, limits: &QualityParams| {
+            let fits = [edge(-gap / 2.0, 0.0, 0.05, 300), edge(gap / 2.0, 0.0, 0.05, 300)];
+            let q = measured(joint, &fits, [&flat, &flat]);
+            check(&evidence(joint, &q, [0.05, 0.05]), limits)
+        };
+        let limits = QualityParams::default();
+        let failed = gates(0.2, JointType::IButt, &limits);
+        assert_eq!(failed.iter().map(|f| f.gate).collect::<Vec<_>>(), vec![Gate::GapUnresolved]);
+        let message = &failed[0].message;
+        assert!(message.contains("0.20 mm at its widest, under 0.30 mm"), "{message}");
+        assert!((failed[0].value - 0.2).abs() < 1e-9 && (failed[0].limit - 0.3).abs() < 1e-9);
+        // A gap of a spacing and more is resolved.
+        assert_eq!(gates(0.31, JointType::IButt, &limits), vec![]);
+        // A V-groove's edges are its top, not a root gap.
+        assert_eq!(gates(0.2, JointType::VButt, &limits), vec![]);
+        // Turned off.
+        assert_eq!(gates(0.2, JointType::IButt, &QualityParams { min_gap_spacings: 0.0, ..limits }), vec![]);
     }
 
     #[test]

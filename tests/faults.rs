@@ -25,7 +25,7 @@ use weldseam::eval::{EvalRequest, JointAsk, SceneOutcome, Verdict, evaluate_vari
 use weldseam::pipeline::Planner;
 use weldseam::pipeline::quality::Gate;
 use weldseam::sim::variants::Variant;
-use weldseam::sim::{Draw, Fault, fault_suite, simulate};
+use weldseam::sim::{Draw, Fault, fault_suite, hard_suite, simulate};
 
 fn planned(name: &str, joint: JointAsk) -> SceneOutcome {
     planned_as(name, joint, "raw")
@@ -130,6 +130,26 @@ fn a_part_touching_an_i_butt_whose_gap_voxels_close_is_not_taken_for_its_second_
     assert!(reason.contains("0.84 mm point spacing"), "{reason}");
     let raw = planned_as(name, JointAsk::AsScene, "raw");
     assert!(refusal(&raw).contains("three plates lie side by side"), "raw: {}", refusal(&raw));
+}
+
+#[test]
+fn a_laps_seam_ends_where_its_lower_plate_ends_not_where_its_upper_plate_does() {
+    // Hard draw 13: a lap seen at 41° whose upper plate runs on past the
+    // lower plate's end, over the table. The foot of the upper plate's side
+    // face lies in the lower plate's plane and was taken for the lower
+    // plate's edge 9.9 mm past its end: the seam started 9.32 mm early.
+    // Beside that stretch the pixels just inside the lower edge, in view,
+    // see no lower plate (its shadow on the table, far below), and the
+    // seam ends where the lower plate was last seen.
+    let name = "hard-lap-01-d524-t41-fill-lower-side-s0.11-dr1.4-fresh13";
+    let (_, spec) =
+        hard_suite(Draw::of_scene(name)).into_iter().find(|(n, _)| n == name).unwrap_or_else(|| panic!("no {name}"));
+    let sim = simulate(&spec, &CameraModel::default());
+    let planner = Planner::new(Config::default());
+    let outcome = evaluate_variant(&planner, name, &spec, &sim, &Variant::default(), &EvalRequest::default());
+    let (err, _) = outcome.result.as_ref().unwrap_or_else(|e| panic!("refused: {e}"));
+    assert_eq!(outcome.verdict, Verdict::WithinBar, "{err:?}");
+    assert!(err.start_mm < 0.5 && err.end_mm < 0.5, "{err:?}");
 }
 
 #[test]

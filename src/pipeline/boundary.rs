@@ -504,6 +504,49 @@ pub(super) fn surfaces_beyond(
     [follow(s0, -1.0), follow(s1, 1.0)]
 }
 
+/// Whether the cloud, on the camera's grid, shows `plate` not to be beside
+/// its fitted edge `edge` anywhere from `from` to `to` along the weld: just
+/// inside the edge (`inward`, on the plate's plane, past the rim the plane
+/// criterion trims, at [`SURFACE_INSET_SPACINGS`]), no pixel in view sees a
+/// point on the plane, at any station half a spacing apart, though the
+/// pixels are in view. Along the rest of the edge those pixels see the
+/// plate: where they do not, what was taken for its edge is not its edge
+/// (the foot of the face of a plate above it, running on past its end).
+pub(super) fn plate_unseen_beside(
+    cloud: &PointCloud,
+    grid: &CameraGrid,
+    edge: &SeamCurve,
+    plate: &Plane,
+    inward: Vec3,
+    spacing_mm: f64,
+    (from, to): (f64, f64),
+) -> bool {
+    if !(spacing_mm.is_finite() && spacing_mm > 0.0) {
+        return false;
+    }
+    let step = 0.5 * spacing_mm;
+    let stations = ((to - from).abs() / step).floor() as usize;
+    let direction = (to - from).signum();
+    let mut in_view = 0;
+    for n in 1..=stations {
+        let at = edge.at(from + direction * n as f64 * step);
+        for d in SURFACE_INSET_SPACINGS.map(|k| k * spacing_mm) {
+            let Some(i) = grid.pixel_of(&(at + inward * d)) else { continue };
+            in_view += 1;
+            let q = cloud.points()[i];
+            if is_valid_point(&q) && plate.signed_distance(&vec3(&q)).abs() <= ON_PLATE_MM {
+                return false;
+            }
+        }
+    }
+    in_view >= MIN_STATIONS_UNSEEN * SURFACE_INSET_SPACINGS.len()
+}
+
+/// The fewest stations whose pixels must all be in view before a plate is
+/// taken as not beside its edge there: a stretch of a spacing or two is the
+/// rim the plane criterion trims.
+const MIN_STATIONS_UNSEEN: usize = 4;
+
 /// The longest break along the weld, in point spacings, across which a
 /// piece of a plate in its plane is taken for the same plate seen through a
 /// narrow gap in the cloud: a streak or a stripe of dropouts a few pixels

@@ -941,15 +941,6 @@ fn plan_plates(
         // image before they do).
         (s0, s1) = ctx.clip_to_view(&weld, s0, s1);
     }
-    ctx.trace.record(|t| t.weld = Some(TracedWeld { curve: weld.clone(), span: (s0, s1), normal }));
-    if s1 - s0 <= 0.0 {
-        return Err(PlanError::at(Stage::WeldEquation, "the two weld edges do not overlap along the seam"));
-    }
-    // Both edges must have been seen along the seam, not glimpsed here and
-    // there: a gap the cloud cannot resolve still leaves the odd chance
-    // hole, and a seam through those is a guess (the edge coverage gate).
-    let edge_coverage = boundaries.each_ref().map(|b| boundary::coverage(b, |s| axes.feature(&s.position), s0, s1));
-    tracing::debug!(coverage = ?edge_coverage, length_mm = s1 - s0, "weld edge coverage");
     // The visible joint: where both plates are seen beside the weld, their
     // members widened by the rim the plane criterion trimmed (for a lap,
     // where the root is also in view). The seam should span all of it.
@@ -974,6 +965,42 @@ fn plan_plates(
         }
         _ => None,
     };
+    // A lap's lower edge can run on along the foot of the upper plate's
+    // side face past where the lower plate ends (the face's lowest pixels
+    // lie in the lower plate's plane). Where the cloud, in view beside that
+    // stretch, shows no lower plate inside its edge, the plate has ended,
+    // and the seam ends where the plate was last seen.
+    if layout == Layout::Lap
+        && let (Some(grid), Some((v0, v1))) = (ctx.camera_grid(), visible_joint)
+    {
+        let unseen = |from: f64, to: f64| {
+            let inward = -fitted_edge(1).outward;
+            boundary::plate_unseen_beside(
+                cloud,
+                &grid,
+                &fits[1].curve,
+                &plates[1].plane,
+                inward,
+                seam_spacing,
+                (from, to),
+            )
+        };
+        let start = if s0 < v0 && unseen(v0, s0) { v0 } else { s0 };
+        let end = if s1 > v1 && unseen(v1, s1) { v1 } else { s1 };
+        if (start, end) != (s0, s1) {
+            tracing::debug!(seam = ?(s0, s1), lower_plate_seen = ?(v0, v1), "the lap's seam ends where its lower plate ends");
+            (s0, s1) = (start, end);
+        }
+    }
+    ctx.trace.record(|t| t.weld = Some(TracedWeld { curve: weld.clone(), span: (s0, s1), normal }));
+    if s1 - s0 <= 0.0 {
+        return Err(PlanError::at(Stage::WeldEquation, "the two weld edges do not overlap along the seam"));
+    }
+    // Both edges must have been seen along the seam, not glimpsed here and
+    // there: a gap the cloud cannot resolve still leaves the odd chance
+    // hole, and a seam through those is a guess (the edge coverage gate).
+    let edge_coverage = boundaries.each_ref().map(|b| boundary::coverage(b, |s| axes.feature(&s.position), s0, s1));
+    tracing::debug!(coverage = ?edge_coverage, length_mm = s1 - s0, "weld edge coverage");
     let coverage = visible_joint.map(|(v0, v1)| {
         let visible_joint_mm = (v1 - v0).max(0.0);
         let spanned = (s1.min(v1) - s0.max(v0)).max(0.0);

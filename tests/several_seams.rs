@@ -450,3 +450,27 @@ fn workpieces_planned_side_by_side_plan_as_on_one_thread() {
         assert_eq!(shared_trace.weld, alone_trace.weld, "{name}");
     }
 }
+
+#[test]
+fn two_workpieces_whose_corners_meet_across_a_shadow_are_planned_apart() {
+    // Fresh draw 2's multi-05: a corner of the I-butt's plate comes within
+    // the grouping's reach of the tee's flange across the web's shadow, and
+    // the two were one workpiece: the tee was planned, the I-butt silently
+    // not, and the tee's root read from the flange's edge stopped 54 mm
+    // short. Their growths meet a dozen times at the corner, beside the
+    // hundreds along each joint: no joint, so two workpieces.
+    let name = "multi-05-3-i-butt+lap+t-fillet-d773-t30-fresh2";
+    let (_, spec) = multi_suite(Draw::of_scene(name)).into_iter().find(|(n, _)| n == name).expect("the scene");
+    let sim = simulate(&spec, &CameraModel::default());
+    let plan = Planner::new(Config::default())
+        .plan(&sim.cloud, &PlanRequest::new(RequestedJoint::Auto, None, sim.pose))
+        .unwrap_or_else(|e| panic!("{name}: {e}"));
+    let truths: Vec<TrueSeam> = sim.seams.iter().map(|s| TrueSeam::of(&spec, s)).collect();
+    let m = match_seams(&truths, &paths(&plan));
+    assert!(m.extra.is_empty() && m.wrong_type.is_empty(), "{name}: {m:?}");
+    // The I-butt, the lap and the tee's root facing the camera; the root
+    // the web hides is named.
+    assert_eq!(m.found.len(), 3, "{name}: {m:?}");
+    let [hidden] = &plan.unplanned[..] else { panic!("{name}: {:?}", plan.unplanned) };
+    assert_eq!(hidden.joint, Some(JointType::TFillet), "{name}: {}", hidden.reason);
+}

@@ -67,11 +67,12 @@ const MARK_STRIDE: usize = 4;
 /// plate across a shadow meets it a dozen times (12 there). A contact weak
 /// beside both clusters' own joints is not one: two workpieces set corner
 /// to corner stay two. A joint's plates are each other's strongest
-/// contact, or close to it, so no joint is cut by this. Where the cells
-/// are coarse beside the reach (4 mm cells), a corner's growths across an
-/// open shadow race along each other for several steps and meet more
-/// often (32 against a 100 mm joint's 152 in a unit scene): such corners
-/// still join.
+/// contact, or close to it, so no joint is cut by this. Where the corners
+/// lie in a wide open shadow, their growths race along each other for
+/// many steps and meet far more often: in a scene of two butt pairs with
+/// 100 mm joints, corners 14 mm apart in an 18 mm square without table,
+/// 122 times against each joint's 608 (1 mm cells), 32 against 152
+/// (4 mm cells). Such corners still join.
 const MIN_CONTACT_SHARE: f64 = 0.1;
 
 /// The fewest clusters a frame of two workpieces shows: two plates each

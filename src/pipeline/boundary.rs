@@ -473,18 +473,8 @@ pub(super) fn surfaces_beyond(
     let max_break = JOINT_BREAK_SPACINGS * spacing_mm;
     // Plate k's surface just inside its edge at `s`: None out of view.
     let seen = |k: usize, s: f64| -> Option<bool> {
-        let at = edges[k].at(s);
-        let mut in_view = false;
-        for d in SURFACE_INSET_SPACINGS.map(|n| n * spacing_mm) {
-            if let Some(i) = grid.pixel_of(&(at + inwards[k] * d)) {
-                in_view = true;
-                let q = cloud.points()[i];
-                if is_valid_point(&q) && planes[k].signed_distance(&vec3(&q)).abs() <= ON_PLATE_MM {
-                    return Some(true);
-                }
-            }
-        }
-        in_view.then_some(false)
+        let inside = inside_edge(cloud, grid, edges[k], planes[k], inwards[k], spacing_mm, s);
+        if inside.on_plate { Some(true) } else { (inside.in_view > 0).then_some(false) }
     };
     let follow = |end: f64, outward: f64| -> f64 {
         let mut last_both = 0.0;
@@ -529,15 +519,11 @@ pub(super) fn plate_unseen_beside(
     let direction = (to - from).signum();
     let mut in_view = 0;
     for n in 1..=stations {
-        let at = edge.at(from + direction * n as f64 * step);
-        for d in SURFACE_INSET_SPACINGS.map(|k| k * spacing_mm) {
-            let Some(i) = grid.pixel_of(&(at + inward * d)) else { continue };
-            in_view += 1;
-            let q = cloud.points()[i];
-            if is_valid_point(&q) && plate.signed_distance(&vec3(&q)).abs() <= ON_PLATE_MM {
-                return false;
-            }
+        let inside = inside_edge(cloud, grid, edge, plate, inward, spacing_mm, from + direction * n as f64 * step);
+        if inside.on_plate {
+            return false;
         }
+        in_view += inside.in_view;
     }
     in_view >= MIN_STATIONS_UNSEEN * SURFACE_INSET_SPACINGS.len()
 }
@@ -546,6 +532,38 @@ pub(super) fn plate_unseen_beside(
 /// taken as not beside its edge there: a stretch of a spacing or two is the
 /// rim the plane criterion trims.
 const MIN_STATIONS_UNSEEN: usize = 4;
+
+/// What the pixels just inside a plate's edge see at one station.
+struct InsideEdge {
+    /// How many of them are in view.
+    in_view: usize,
+    /// Whether any sees a point on the plate's plane.
+    on_plate: bool,
+}
+
+/// The pixels just inside `edge` at `s` along it (`inward`, on `plate`'s
+/// plane, past the rim the plane criterion trims, at
+/// [`SURFACE_INSET_SPACINGS`]), read on the camera's grid.
+fn inside_edge(
+    cloud: &PointCloud,
+    grid: &CameraGrid,
+    edge: &SeamCurve,
+    plate: &Plane,
+    inward: Vec3,
+    spacing_mm: f64,
+    s: f64,
+) -> InsideEdge {
+    let at = edge.at(s);
+    let mut inside = InsideEdge { in_view: 0, on_plate: false };
+    for d in SURFACE_INSET_SPACINGS.map(|n| n * spacing_mm) {
+        if let Some(i) = grid.pixel_of(&(at + inward * d)) {
+            inside.in_view += 1;
+            let q = cloud.points()[i];
+            inside.on_plate |= is_valid_point(&q) && plate.signed_distance(&vec3(&q)).abs() <= ON_PLATE_MM;
+        }
+    }
+    inside
+}
 
 /// The longest break along the weld, in point spacings, across which a
 /// piece of a plate in its plane is taken for the same plate seen through a

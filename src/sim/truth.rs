@@ -99,10 +99,23 @@ pub fn visible_interval(camera: &CameraModel, origin: &Vec3, along: &Vec3) -> Op
 /// or `None` when the camera sees no part of it.
 pub fn observed_seam_range(spec: &SceneSpec, camera: &CameraModel) -> Option<[f64; 2]> {
     let camera_from_workpiece = spec.workpiece_from_camera().inverse();
-    let along = camera_from_workpiece.rotation * Vec3::y();
-    let mut range = spec.seam_range();
-    for [x, z] in spec.joint.seam_edges_xz() {
-        let origin = camera_from_workpiece.transform_point(&Vec3::new(x, 0.0, z).into()).coords;
+    range_in_view(camera, &camera_from_workpiece, spec.seam_range(), &spec.joint.seam_edges_xz())
+}
+
+/// The part of `range` (a workpiece's y) along which every line of
+/// `edges_xz` (at its x and z, along y) is in view of `camera`, which sees
+/// the workpiece through `camera_from_own`; `None` when some edge is not
+/// in view along any of it.
+fn range_in_view(
+    camera: &CameraModel,
+    camera_from_own: &Isometry3<f64>,
+    range: [f64; 2],
+    edges_xz: &[[f64; 2]],
+) -> Option<[f64; 2]> {
+    let along = camera_from_own.rotation * Vec3::y();
+    let mut range = range;
+    for &[x, z] in edges_xz {
+        let origin = camera_from_own.transform_point(&Vec3::new(x, 0.0, z).into()).coords;
         let [lo, hi] = visible_interval(camera, &origin, &along)?;
         range = [range[0].max(lo), range[1].min(hi)];
     }
@@ -274,7 +287,6 @@ fn seam_truth(
     let in_camera = |y: f64| camera_from_own.transform_point(&point(y).into()).coords;
     let in_base = |y: f64| base_from_own.transform_point(&point(y).into()).coords;
     let physical = workpiece.seam_range();
-    let along = camera_from_own.rotation * Vec3::y();
     // Clipped as a frame's one seam is (`observed_seam_range`): to where
     // every seam-side edge is in the image, so that a butt joint whose
     // plates the image border cuts slantwise ends where the plate cut
@@ -285,11 +297,7 @@ fn seam_truth(
         JointGeometry::Tee { .. } => vec![line_xz],
         joint => joint.seam_edges_xz().to_vec(),
     };
-    let observed = edges.iter().try_fold(physical, |[lo, hi], &[ex, ez]| {
-        let edge = camera_from_own.transform_point(&Vec3::new(ex, 0.0, ez).into()).coords;
-        let [a, b] = visible_interval(camera, &edge, &along)?;
-        Some([lo.max(a), hi.min(b)]).filter(|[lo, hi]| lo <= hi)
-    });
+    let observed = range_in_view(camera, &camera_from_own, physical, &edges);
     let [y0, y1] = observed.unwrap_or_else(|| [(physical[0] + physical[1]) / 2.0; 2]);
     let seen_mm = match observed {
         Some(range) => unhidden_stretches(range, |y| sight.hides(&in_camera(y)), MIN_SEEN_STRETCH_MM),

@@ -1,0 +1,10 @@
+//! The shipped robot programs of deploy/robots/, each run statement by
+//! statement on an emulation of its controller's documented primitives
+//! against `weldseam serve` on loopback, through the scenarios of
+//! [`harness::Scenario`].
+
+mod harness;
+mod transcription;
+mod ur;
+mod ur_runs;
+mod urscript;

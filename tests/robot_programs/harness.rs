@@ -63,7 +63,7 @@ pub enum Scenario {
     /// The daemon stops when the program sends its first CHECK: the whole
     /// plan fetched, the arc not yet on.
     StopBeforeArc,
-    /// The daemon stops when the program pulls its fifth line.
+    /// The daemon stops when the program sends its fifth NEXT.
     StopDuringFetch,
 }
 
@@ -80,7 +80,7 @@ impl Scenario {
         match self {
             Scenario::SeveralSeams => "auto",
             Scenario::Refusal => "t_fillet",
-            Scenario::TooLongLine => "v_butt+lap",
+            Scenario::TooLongLine => "v_butt+i_butt+lap",
             _ => "lap",
         }
     }
@@ -100,12 +100,12 @@ impl Scenario {
         c
     }
 
-    /// Whether the daemon stops when the program sends `line`, the `sent`th
-    /// line of its session (from 1).
-    pub fn stops_at(self, line: &str, sent: usize) -> bool {
+    /// Whether the daemon stops when the program sends `line` (without its
+    /// line end), its `nexts`th NEXT when it is one.
+    pub fn stops_at(self, line: &str, nexts: usize) -> bool {
         match self {
             Scenario::StopBeforeArc => line.starts_with("CHECK"),
-            Scenario::StopDuringFetch => line == "NEXT" && sent == 7,
+            Scenario::StopDuringFetch => line == "NEXT" && nexts == 5,
             _ => false,
         }
     }
@@ -137,10 +137,13 @@ impl Daemon {
     pub fn stopper(&self, scenario: Scenario) -> SendHook {
         let cell = Arc::clone(&self.cell);
         let runtime = tokio::runtime::Handle::current();
-        let mut sent = 0;
-        Box::new(move |line: &str| {
-            sent += 1;
-            if scenario.stops_at(line, sent) {
+        let mut nexts = 0;
+        Box::new(move |sent: &str| {
+            // A piece of a line (RAPID sends a long one in pieces) or a
+            // whole line with or without its end.
+            let line = sent.trim_end_matches(['\r', '\n']);
+            nexts += usize::from(line == "NEXT");
+            if scenario.stops_at(line, nexts) {
                 let taken = cell.lock().unwrap().take();
                 if let Some(cell) = taken {
                     runtime.block_on(cell.shutdown());

@@ -3,7 +3,10 @@
 //! against `weldseam serve` on loopback, through the scenarios of
 //! [`harness::Scenario`].
 
+mod abb;
+mod abb_runs;
 mod harness;
+mod rapid;
 mod transcription;
 mod ur;
 mod ur_runs;

@@ -14,20 +14,22 @@ pub fn program(relative: &str) -> (PathBuf, String) {
     (path, text)
 }
 
-/// The `(line, text)` tags in a transcription's source.
+/// The `(line, text)` tags in a transcription's source: `at(<line>,
+/// r#"<text>"#)`, spaces and line breaks (rustfmt's) allowed between the
+/// parts.
 pub fn tags(source: &str) -> Vec<(usize, String)> {
-    const OPEN: &str = "at(";
-    const TEXT: &str = ", r#\"";
     let mut found = Vec::new();
     let mut rest = source;
-    while let Some(at) = rest.find(OPEN) {
-        rest = &rest[at + OPEN.len()..];
-        let Some(comma) = rest.find(TEXT) else { break };
-        let Ok(line) = rest[..comma].trim().parse::<usize>() else { continue };
-        let start = comma + TEXT.len();
-        let Some(end) = rest[start..].find("\"#)") else { break };
-        found.push((line, rest[start..start + end].to_string()));
-        rest = &rest[start + end..];
+    while let Some(at) = rest.find("at(") {
+        rest = &rest[at + "at(".len()..];
+        let after_digits = rest.trim_start();
+        let digits: String = after_digits.chars().take_while(char::is_ascii_digit).collect();
+        let Ok(line) = digits.parse::<usize>() else { continue };
+        let Some(text) = after_digits[digits.len()..].trim_start().strip_prefix(',') else { continue };
+        let Some(text) = text.trim_start().strip_prefix("r#\"") else { continue };
+        let Some(end) = text.find("\"#") else { break };
+        found.push((line, text[..end].to_string()));
+        rest = &text[end..];
     }
     found
 }
@@ -74,6 +76,6 @@ fn a_changed_or_untranscribed_line_is_caught() {
     assert_eq!(check_text("p", program, whole, statement), Ok(3));
     let changed = whole.replace("c = 2", "c = 3");
     assert!(check_text("p", program, &changed, statement).unwrap_err().contains("p:4 reads \"c = 2\""));
-    let missing = "u.at(3, r#\"b = 1\"#); u.at(4, r#\"c = 2\"#);";
+    let missing = "u.at(3, r#\"b = 1\"#); u.at(\n    4,\n    r#\"c = 2\"#,\n);";
     assert!(check_text("p", program, missing, statement).unwrap_err().contains("p:1 is not transcribed"));
 }

@@ -19,6 +19,7 @@ mod pictures;
 mod pipeline;
 mod quality;
 mod requests;
+mod robot_programs;
 mod roi;
 mod several_seams;
 mod text_link;

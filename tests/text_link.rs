@@ -22,7 +22,7 @@ use weldseam::geometry::Isometry3;
 use weldseam::joint::JointType;
 use weldseam::mock::camera::CameraOptions;
 use weldseam::mock::controller::{ControllerClient, request_for_simulation};
-use weldseam::mock::text_robot::{TextRobot, rapid_num, ur_read_ascii_float};
+use weldseam::mock::text_robot::{SeamTally, TextRobot, rapid_num, ur_read_ascii_float};
 use weldseam::server::Stopped;
 use weldseam::sim::{Draw, Simulation, demo_scene, simulate};
 use weldseam_proto::message::{FrameSelect, PlanReply};
@@ -73,9 +73,10 @@ fn numbers(reply: &str) -> Vec<f64> {
     reply.trim().trim_matches(['(', ')']).split(',').map(|f| f.parse().unwrap()).collect()
 }
 
-/// One robot session as the example programs run it: hello, trigger, the
-/// first waypoint, the trigger again before the rest is pulled (refused),
-/// every other waypoint, one pull too many (refused) and its reason.
+/// One robot session: hello, trigger, the first waypoint, the trigger
+/// again before the rest is pulled (refused), every other waypoint, the
+/// seam's check (held against the lines pulled), one pull too many
+/// (refused) and its reason.
 async fn session(robot: &mut TextRobot, dialect: Dialect, trigger: &str) -> Vec<(String, String)> {
     let mut lines = Vec::new();
     let mut say = async |line: &str| {
@@ -89,12 +90,19 @@ async fn session(robot: &mut TextRobot, dialect: Dialect, trigger: &str) -> Vec<
     let status = numbers(&ok);
     assert_eq!(&status[..2], &[0.0, 1.0], "one seam planned: {ok}");
     let count = status[2] as usize;
-    say("NEXT").await;
+    let mut tally = SeamTally::default();
+    let mut count_in = |reply: &str| {
+        let n = numbers(reply);
+        tally.add([n[3], n[4], n[5]]);
+    };
+    count_in(&say("NEXT").await);
     let refused = say(trigger).await;
     assert!(refused.trim_start_matches('(').starts_with("-6,"), "{refused}");
     for _ in 1..count {
-        say("NEXT").await;
+        count_in(&say("NEXT").await);
     }
+    let check = say("CHECK,1").await;
+    tally.agrees(&numbers(&check), dialect).unwrap_or_else(|e| panic!("{dialect:?}: {e}: {check}"));
     let over = say("NEXT").await;
     assert!(over.trim_start_matches('(').starts_with("-6"), "{over}");
     say("WHY").await;
@@ -231,7 +239,11 @@ async fn every_dialect_pulls_the_binary_links_waypoints_as_robots_md_shows() {
         for (sent, reply) in &lines {
             match dialect {
                 Dialect::Ur if sent != "WHY" => {
-                    let n = if sent == "NEXT" { 9 } else { 3 };
+                    let n = match sent.as_str() {
+                        "NEXT" => 9,
+                        s if s.starts_with("CHECK") => 5,
+                        _ => 3,
+                    };
                     let read = ur_read_ascii_float(reply, n);
                     assert_eq!(read[0] as usize, n, "socket_read_ascii_float({n}) fails on {reply:?}");
                     assert!(read.len() - 1 <= UR_MAX_NUMBERS);
@@ -251,6 +263,8 @@ async fn every_dialect_pulls_the_binary_links_waypoints_as_robots_md_shows() {
             if reply.trim_start_matches('(').starts_with('-') {
                 assert!(reply.len() <= MAX_ERROR_LINE, "{reply:?}");
             }
+            assert!(reply.ends_with(dialect.terminator()), "{dialect:?}: {reply:?}");
+            assert!(!reply[..reply.len() - dialect.terminator().len()].contains(['\r', '\n']), "{reply:?}");
         }
 
         // The session ROBOTS.md shows for this dialect.
@@ -278,8 +292,8 @@ async fn every_dialect_pulls_the_binary_links_waypoints_as_robots_md_shows() {
     leaving.ask("NEXT").await.unwrap();
     drop(leaving);
     let mut next = robot(&cell).await;
-    assert_eq!(next.ask("HELLO,fanuc").await.unwrap(), "0,1,0\r\n");
-    assert_eq!(next.ask("PING").await.unwrap(), "0,1,0\r\n", "one camera, an empty queue");
+    assert_eq!(next.ask("HELLO,fanuc").await.unwrap(), "0,2,0\n");
+    assert_eq!(next.ask("PING").await.unwrap(), "0,1,0\n", "one camera, an empty queue");
     drop(next);
     let _ = stop_camera.send(());
     camera.await.unwrap();
@@ -328,12 +342,12 @@ async fn malformed_lines_get_an_error_line_and_the_session_goes_on() {
     let cell = Cell::start(config()).await;
     // Another robot's session, open all along, is not disturbed.
     let mut bystander = robot(&cell).await;
-    assert_eq!(bystander.ask("HELLO,abb").await.unwrap(), "0,1,0\r\n");
+    assert_eq!(bystander.ask("HELLO,abb").await.unwrap(), "0,2,0\r\n");
     let mut robot = robot(&cell).await;
     let code = |reply: &str| reply.split(',').next().unwrap().trim_start_matches('(').to_string();
     // Before the dialect: a plan line is refused, in the neutral form.
     assert_eq!(code(&robot.ask("PLAN,lap,1,2,3,4,5,6").await.unwrap()), "-6");
-    assert_eq!(robot.ask("HELLO,kuka").await.unwrap(), "0,1,0\r\n");
+    assert_eq!(robot.ask("HELLO,kuka").await.unwrap(), "0,2,0\r\n");
     let long = format!("PLAN,lap,{}", "1,".repeat(200));
     for (line, expected) in [
         ("FETCH,1", "-3"),                        // unknown command
@@ -343,6 +357,8 @@ async fn malformed_lines_get_an_error_line_and_the_session_goes_on() {
         ("PLAN,fillet,800,0,500,180,0,0", "-41"), // unknown joint
         ("PLAN,lap,99999,0,500,180,0,0", "-40"),  // beyond the reach
         ("NEXT", "-6"),                           // nothing to pull
+        ("CHECK,1", "-6"),                        // no plan to check
+        ("CHECK,one", "-4"),                      // not a seam number
         (long.as_str(), "-5"),                    // too long
     ] {
         let reply = robot.ask(line).await.unwrap();
@@ -355,8 +371,9 @@ async fn malformed_lines_get_an_error_line_and_the_session_goes_on() {
     assert_eq!(code(&robot.ask("TRIGGER,lap,800,0,500,180,0,0").await.unwrap()), "-43");
     assert_eq!(robot.ask("PING").await.unwrap(), "0,0,0\r\n");
     // UR replies keep their shape: a waypoint's nine numbers, code first.
-    assert_eq!(robot.ask("HELLO,ur").await.unwrap(), "(0,1,0)\n");
+    assert_eq!(robot.ask("HELLO,ur").await.unwrap(), "(0,2,0)\n");
     assert_eq!(robot.ask("NEXT").await.unwrap(), "(-6,0,0,0,0,0,0,0,0)\n");
+    assert_eq!(robot.ask("CHECK,1").await.unwrap(), "(-6,0,0,0,0)\n");
     assert_eq!(ur_read_ascii_float(&robot.ask("PLAN,lap,1").await.unwrap(), 3), vec![3.0, -4.0, 0.0, 0.0]);
     // A line without its end: an error line within the line time, then on.
     robot.send("PING", "").await.unwrap();
@@ -374,7 +391,7 @@ async fn a_full_link_says_busy_and_a_freed_slot_serves_again() {
     c.text_link.dialect = Some(Dialect::Fanuc);
     let cell = Cell::start(c).await;
     let mut first = robot(&cell).await;
-    assert_eq!(first.ask("PING").await.unwrap(), "0,0,0\r\n", "the configured dialect applies");
+    assert_eq!(first.ask("PING").await.unwrap(), "0,0,0\n", "the configured dialect applies");
     let mut second = TcpStream::connect(text_addr(&cell)).await.unwrap();
     let mut refusal = String::new();
     second.read_to_string(&mut refusal).await.unwrap();
@@ -385,7 +402,7 @@ async fn a_full_link_says_busy_and_a_freed_slot_serves_again() {
     for _ in 0..100 {
         let mut robot = robot(&cell).await;
         match robot.ask("PING").await {
-            Ok(reply) if reply == "0,0,0\r\n" => {
+            Ok(reply) if reply == "0,0,0\n" => {
                 third = Some(robot);
                 break;
             }
@@ -411,6 +428,23 @@ async fn a_plan_line_may_leave_the_joint_to_the_daemon() {
     assert!(auto.starts_with("TRIGGER,auto,"), "{auto}");
     let ok = robot.ask(&auto).await.unwrap();
     assert_eq!(&numbers(&ok)[..2], &[0.0, 1.0], "the lap found and planned: {ok}");
+    // The plan's check stays until the next plan line, pulled or not.
+    let check = numbers(&robot.ask("CHECK,1").await.unwrap());
+    assert_eq!(&check[..2], &[0.0, numbers(&ok)[2]], "{check:?}");
+    let beyond = robot.ask("CHECK,2").await.unwrap();
+    assert!(beyond.starts_with("-40,seam 2 out of range"), "{beyond}");
+    assert_eq!(robot.ask("DROP").await.unwrap(), format!("0,{},0\r\n", check[1]));
+    assert_eq!(numbers(&robot.ask("CHECK,1").await.unwrap()), check);
+    // A refused plan: the error line leads with the cause, not the frame
+    // and stage, which WHY's text puts last; no plan is left to check.
+    let tee = trigger_line(Dialect::Kuka, &sim).replacen("TRIGGER,lap,", "TRIGGER,t_fillet,", 1);
+    let refused = robot.ask(&tee).await.unwrap();
+    assert!(refused.starts_with('-') && !refused.contains("frame") && !refused.contains("stage failed"), "{refused}");
+    assert!(refused.len() <= MAX_ERROR_LINE && !refused.ends_with(" \r\n"), "{refused:?}");
+    let why = robot.ask("WHY").await.unwrap();
+    let cause = refused.split_once(',').unwrap().1.trim_end();
+    assert!(why.starts_with(cause), "the pendant line {refused:?} is the start of WHY's {why:?}");
+    assert!(robot.ask("CHECK,1").await.unwrap().starts_with("-6,"));
     drop(robot);
     let _ = stop_camera.send(());
     camera.await.unwrap();

@@ -7,14 +7,15 @@
 //! with fixed decimals. ROBOTS.md documents the sessions.
 //!
 //! Every request line gets exactly one reply line, so a robot that reads
-//! one line per line it sends never loses step.
+//! one line per line it sends never loses step. Every length limit here
+//! counts the line's terminator.
 
 use std::fmt::Write as _;
 
 use crate::ErrorCode;
 
 /// The text link's version, sent in the reply to `HELLO`.
-pub const TEXT_PROTOCOL_VERSION: u32 = 1;
+pub const TEXT_PROTOCOL_VERSION: u32 = 2;
 
 /// The most numbers one `socket_read_ascii_float` reads (URScript).
 pub const UR_MAX_NUMBERS: usize = 30;
@@ -33,6 +34,14 @@ pub const MAX_ERROR_LINE: usize = 80;
 
 /// The most numbers a request line may carry (a pose of 7 and a depth).
 pub const MAX_REQUEST_NUMBERS: usize = 8;
+
+/// How far a robot's own mean of a seam's written positions may lie from
+/// the `CHECK` reply's, per axis, in mm (UR: this over 1000, in metres):
+/// the reply's rounding to the position decimals (at most 0.005 mm) plus
+/// what summing up to a few thousand positions in 32-bit REALs (KRL,
+/// KAREL) may lose. A line lost, repeated or read into the wrong field
+/// moves a mean by far more on any seam the dialects can store.
+pub const CHECK_TOLERANCE_MM: f64 = 0.1;
 
 /// A robot language, which fixes the pose convention, the units, the
 /// decimals and the line framing of the replies.
@@ -94,12 +103,15 @@ impl Dialect {
         }
     }
 
-    /// What ends a reply line: UR reads up to the closing parenthesis and
-    /// its string reads stop at a newline; the others expect CR LF.
+    /// What ends a reply line: LF for UR (its number read stops at the
+    /// closing parenthesis, its line read at LF) and for FANUC (a KAREL
+    /// `READ` of a string ends at LF and would keep a CR in the string);
+    /// CR LF for ABB and KUKA (a RAPID string and an EKI stream element
+    /// ending at CR LF).
     pub fn terminator(self) -> &'static str {
         match self {
-            Dialect::Ur => "\n",
-            _ => "\r\n",
+            Dialect::Ur | Dialect::Fanuc => "\n",
+            Dialect::Abb | Dialect::Kuka => "\r\n",
         }
     }
 }
@@ -129,6 +141,9 @@ pub enum Request {
     Trigger(PlanLine),
     /// `NEXT`: the next waypoint of the plan.
     Next,
+    /// `CHECK,<seam>`: the number of waypoint lines of seam `<seam>` (from
+    /// 1) of the session's last plan and the means of their positions.
+    Check(u32),
     /// `DROP`: forget the waypoints not yet pulled.
     Drop,
     /// `WHY`: the last error line's reason, as text.
@@ -152,7 +167,7 @@ pub struct PlanLine {
 /// goes on.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum LineError {
-    #[error("unknown command {0:?}: expected HELLO, PLAN, TRIGGER, NEXT, DROP, WHY or PING")]
+    #[error("unknown command {0:?}: expected HELLO, PLAN, TRIGGER, NEXT, CHECK, DROP, WHY or PING")]
     UnknownCommand(String),
     #[error("unknown dialect {0:?}: expected ur, abb, kuka or fanuc")]
     UnknownDialect(String),
@@ -162,6 +177,8 @@ pub enum LineError {
     NotANumber { index: usize, text: String },
     #[error("field {index} is not finite")]
     NotFinite { index: usize },
+    #[error("the seam number {0:?} is not a whole number from 1")]
+    NotASeam(String),
     #[error("name the dialect first: HELLO,ur|abb|kuka|fanuc")]
     NoDialect,
 }
@@ -243,6 +260,13 @@ pub fn parse_request(line: &str, dialect: Option<Dialect>) -> Result<Request, Li
             Ok(if name == "PLAN" { Request::Plan(plan) } else { Request::Trigger(plan) })
         }
         "NEXT" => bare("NEXT", Request::Next),
+        "CHECK" => match rest.as_slice() {
+            [seam] => match seam.parse::<u32>() {
+                Ok(number) if seam.bytes().all(|b| b.is_ascii_digit()) => Ok(Request::Check(number)),
+                _ => Err(LineError::NotASeam(printable(seam, 12))),
+            },
+            _ => Err(LineError::FieldCount { command: "CHECK", expected: "1".into(), got: rest.len() }),
+        },
         "DROP" => bare("DROP", Request::Drop),
         "WHY" => bare("WHY", Request::Why),
         "PING" => bare("PING", Request::Ping),
@@ -258,6 +282,10 @@ pub enum Reply {
     /// `PING`: the cameras connected and the requests in the plan queue;
     /// after `DROP`: the waypoint lines dropped and 0.
     Ok(u64, u64),
+    /// `0,n,cx,cy,cz`: the answer to `CHECK`: the seam's waypoint lines
+    /// (approach, weld waypoints, retract) and the means of the x, y, z
+    /// positions as written on them, written with the position decimals.
+    Check { lines: u64, mean: [f64; 3] },
     /// `kind,seam,remaining,pose...`: one point of a plan.
     Waypoint {
         kind: PointKind,
@@ -268,10 +296,12 @@ pub enum Reply {
         /// The pose in the dialect's convention and units.
         pose: Vec<f64>,
     },
-    /// `-code,reason`: the request failed; the session goes on. In the UR
-    /// dialect there is no reason (read it with `WHY`), and the line has
-    /// as many numbers as the reply it stands for, `numbers`, zeros after
-    /// the code, so the robot's `socket_read_ascii_float(n)` reads it.
+    /// `-code,reason`: the request failed; the session goes on. The reason
+    /// leads with the cause and is cut at a word boundary to fit
+    /// [`MAX_ERROR_LINE`]. In the UR dialect there is no reason (read it
+    /// with `WHY`), and the line has as many numbers as the reply it
+    /// stands for, `numbers`, zeros after the code, so the robot's
+    /// `socket_read_ascii_float(n)` reads it.
     Error { code: u16, reason: String, numbers: usize },
     /// The answer to `WHY`: text only, not a number list.
     Text(String),
@@ -279,6 +309,30 @@ pub enum Reply {
 
 /// How many numbers an ok line has.
 pub const OK_NUMBERS: usize = 3;
+
+/// How many numbers a `CHECK` reply has.
+pub const CHECK_NUMBERS: usize = 5;
+
+/// The `CHECK` replies of a plan's waypoint lines, one per seam in seam
+/// order: each seam's line count and the means of the positions as the
+/// lines write them (rounded to the dialect's position decimals), so a
+/// robot that stored the lines it read can compare its own sums.
+pub fn seam_checks(lines: &[Reply], dialect: Dialect) -> Vec<Reply> {
+    let (position, _) = dialect.decimals();
+    let mut checks: Vec<(u32, u64, [f64; 3])> = Vec::new();
+    for line in lines {
+        let Reply::Waypoint { seam, pose, .. } = line else { continue };
+        if checks.last().is_none_or(|(s, _, _)| s != seam) {
+            checks.push((*seam, 0, [0.0; 3]));
+        }
+        let (_, count, sums) = checks.last_mut().expect("pushed above");
+        *count += 1;
+        for (sum, v) in sums.iter_mut().zip(pose) {
+            *sum += fixed(*v, position).parse::<f64>().unwrap_or(f64::NAN);
+        }
+    }
+    checks.into_iter().map(|(_, lines, sums)| Reply::Check { lines, mean: sums.map(|s| s / lines as f64) }).collect()
+}
 
 /// How many numbers a waypoint line has in `dialect`.
 pub fn waypoint_numbers(dialect: Dialect) -> usize {
@@ -319,6 +373,23 @@ pub fn printable(text: &str, max: usize) -> String {
         .collect()
 }
 
+/// `text` as [`printable`], cut at the last word boundary within `max`
+/// characters when it is longer, so a pendant shows whole words (a word
+/// longer than half the room is cut inside).
+pub fn printable_words(text: &str, max: usize) -> String {
+    let whole = printable(text, usize::MAX);
+    if whole.len() <= max {
+        return whole;
+    }
+    let cut = &whole[..max];
+    let at_word = match whole.as_bytes()[max] {
+        b' ' => Some(max),
+        _ => cut.rfind(' ').filter(|at| *at >= max / 2),
+    };
+    let kept = at_word.map_or(cut, |at| &cut[..at]);
+    kept.trim_end_matches([' ', ';', ':', '(']).to_string()
+}
+
 impl Reply {
     /// The line in `dialect`, terminator included.
     pub fn format(&self, dialect: Dialect) -> Result<String, FormatError> {
@@ -341,13 +412,29 @@ impl Reply {
                         .collect(),
                     _ => {
                         let room = MAX_ERROR_LINE.min(dialect.max_line()) - code.len() - 1 - dialect.terminator().len();
-                        vec![code, printable(reason, room)]
+                        vec![code, printable_words(reason, room)]
                     }
                 }
             }
             Reply::Text(text) => {
                 let room = MAX_ERROR_LINE.min(dialect.max_line()) - dialect.terminator().len();
-                return Ok(format!("{}{}", printable(text, room), dialect.terminator()));
+                let text = match printable_words(text, room) {
+                    // A robot that reads lines until a non-empty one (UR,
+                    // after a number list's LF) never waits for ever.
+                    empty if empty.is_empty() => "no reason".to_string(),
+                    text => text,
+                };
+                return Ok(format!("{text}{}", dialect.terminator()));
+            }
+            Reply::Check { lines, mean } => {
+                if mean.iter().any(|v| !v.is_finite()) {
+                    return Err(FormatError::NotFinite { what: "check's mean" });
+                }
+                let (position, _) = dialect.decimals();
+                std::iter::once("0".to_string())
+                    .chain(std::iter::once(lines.to_string()))
+                    .chain(mean.iter().map(|v| fixed(*v, position)))
+                    .collect()
             }
         };
         let mut line = String::with_capacity(96);
@@ -435,7 +522,48 @@ mod tests {
             assert!(line.len() <= MAX_ERROR_LINE, "{dialect:?} {line:?}");
         }
         assert_eq!(long.format(Dialect::Ur).unwrap(), "(-46,0,0)\n");
+        // Cut at a word boundary, the terminator counted.
+        let abb = long.format(Dialect::Abb).unwrap();
+        assert!(abb.ends_with("no seam\r\n") && abb.len() <= MAX_ERROR_LINE, "{abb:?}");
+        let fanuc = long.format(Dialect::Fanuc).unwrap();
+        assert!(fanuc.ends_with("no seam\n") && !fanuc.contains('\r'), "{fanuc:?}");
         let kuka = long.format(Dialect::Kuka).unwrap();
         assert!(kuka.starts_with("-46,frame 7; no seam") && kuka.matches(',').count() == 1, "{kuka}");
+    }
+
+    #[test]
+    fn check_lines_count_a_seams_lines_and_average_their_written_positions() {
+        assert_eq!(parse_request("CHECK,2", Some(Dialect::Abb)), Ok(Request::Check(2)));
+        assert_eq!(parse_request("check, 1 ", None), Ok(Request::Check(1)));
+        for bad in ["CHECK,1.5", "CHECK,-1", "CHECK,x", "CHECK,"] {
+            assert!(matches!(parse_request(bad, None), Err(LineError::NotASeam(_))), "{bad}");
+        }
+        assert!(matches!(parse_request("CHECK", None), Err(LineError::FieldCount { .. })));
+        assert!(matches!(parse_request("CHECK,1,2", None), Err(LineError::FieldCount { .. })));
+        let point = |seam, x: f64| Reply::Waypoint {
+            kind: PointKind::Weld,
+            seam,
+            remaining: 0,
+            pose: vec![x, 2.0 * x, -x, 0.0, 0.0, 0.0, 1.0],
+        };
+        // As written with two decimals: 1.00 and 2.00 average 1.50; the
+        // unrounded 1.004 and 1.996 would too, 1.006 rounds up.
+        let lines = [point(1, 1.004), point(1, 1.996), point(2, 1.006)];
+        let checks = seam_checks(&lines, Dialect::Abb);
+        assert_eq!(checks.len(), 2);
+        assert_eq!(checks[0].format(Dialect::Abb).unwrap(), "0,2,1.50,3.00,-1.50\r\n");
+        assert_eq!(checks[1].format(Dialect::Abb).unwrap(), "0,1,1.01,2.01,-1.01\r\n");
+        let ur = Reply::Check { lines: 3, mean: [0.5, -0.25, 1.0] };
+        assert_eq!(ur.format(Dialect::Ur).unwrap(), "(0,3,0.500000,-0.250000,1.000000)\n");
+        assert_eq!(ur.format(Dialect::Kuka).unwrap(), "0,3,0.500,-0.250,1.000\r\n");
+    }
+
+    #[test]
+    fn a_reason_is_cut_at_a_word_and_never_empty() {
+        assert_eq!(printable_words("a plate stands between", 14), "a plate stands");
+        assert_eq!(printable_words("a plate stands between", 13), "a plate");
+        assert_eq!(printable_words("abcdefghij", 4), "abcd");
+        assert_eq!(printable_words("x, y", 80), "x; y");
+        assert_eq!(Reply::Text(String::new()).format(Dialect::Ur).unwrap(), "no reason\n");
     }
 }

@@ -2,8 +2,9 @@
 //! (or a ping) and prints the reply as a table or JSON; an error reply
 //! exits non-zero with its code and message. With `--text --dialect`, it
 //! plays a robot program on the text link instead, for commissioning: the
-//! hello, a trigger (or plan) line, every waypoint pulled, and the reason
-//! of an error line, each line printed as sent (`>`) and received (`<`).
+//! hello, a trigger (or plan) line, every waypoint pulled, each seam's
+//! CHECK held against the lines pulled, and the reason of an error line,
+//! each line printed as sent (`>`) and received (`<`).
 
 use std::time::Duration;
 
@@ -13,7 +14,7 @@ use weldseam::geometry::pose::{EulerConvention, RobotPose};
 use weldseam::joint::JointType;
 use weldseam::mock::ClientError;
 use weldseam::mock::controller::ControllerClient;
-use weldseam::mock::text_robot::TextRobot;
+use weldseam::mock::text_robot::{SeamTally, TextRobot};
 use weldseam_proto::message::{FrameSelect, PlanRequest};
 use weldseam_proto::text::Dialect;
 
@@ -167,8 +168,36 @@ async fn text_session(args: &ControllerArgs, dialect: Dialect) -> anyhow::Result
         .nth(2)
         .and_then(|n| n.parse().ok())
         .context("the ok line has no waypoint count")?;
+    // Store every line and tally each seam, then hold each tally against
+    // the daemon's CHECK, as a robot program does before it moves.
+    let mut tallies: Vec<SeamTally> = Vec::new();
     for _ in 0..lines {
-        say("NEXT".into()).await?;
+        let line = say("NEXT".into()).await?;
+        let numbers: Vec<f64> =
+            line.trim().trim_matches(['(', ')']).split(',').filter_map(|n| n.trim().parse().ok()).collect();
+        let [kind, seam, _, x, y, z, ..] = numbers[..] else {
+            anyhow::bail!("a waypoint line has too few numbers: {line:?}");
+        };
+        if kind < 0.0 {
+            say("WHY".into()).await?;
+            anyhow::bail!("the daemon answered an error line to NEXT");
+        }
+        let seam = seam as usize;
+        if seam == 0 || seam > tallies.len() + 1 {
+            anyhow::bail!("seam {seam} out of order in {line:?}");
+        }
+        if seam > tallies.len() {
+            tallies.push(SeamTally::default());
+        }
+        tallies[seam - 1].add([x, y, z]);
+    }
+    for (k, tally) in tallies.iter().enumerate() {
+        let check = say(format!("CHECK,{}", k + 1)).await?;
+        let numbers: Vec<f64> =
+            check.trim().trim_matches(['(', ')']).split(',').filter_map(|n| n.trim().parse().ok()).collect();
+        if let Err(e) = tally.agrees(&numbers, dialect) {
+            anyhow::bail!("seam {} does not check: {e}", k + 1);
+        }
     }
     Ok(())
 }

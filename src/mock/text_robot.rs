@@ -2,13 +2,16 @@
 //! does and reads one reply line for each, for `weldseam controller
 //! --text` and the tests. It also reads replies the way the robot
 //! languages do ([`ur_read_ascii_float`]), so a test can hold the daemon's
-//! lines to what a robot can parse.
+//! lines to what a robot can parse, and tallies a seam's lines as a robot
+//! program does to compare them with the daemon's `CHECK` ([`SeamTally`]).
 
 use std::time::Duration;
 
 use tokio::io::{AsyncBufReadExt, AsyncReadExt, AsyncWriteExt, BufReader};
 use tokio::net::TcpStream;
 use tokio::net::tcp::{OwnedReadHalf, OwnedWriteHalf};
+
+use weldseam_proto::text::{CHECK_TOLERANCE_MM, Dialect};
 
 use super::ClientError;
 
@@ -85,4 +88,48 @@ pub fn rapid_num(field: &str) -> bool {
         && !fraction.is_empty()
         && whole.bytes().all(|b| b.is_ascii_digit())
         && fraction.bytes().all(|b| b.is_ascii_digit())
+}
+
+/// A robot program's own count of one seam's waypoint lines and sums of
+/// their positions, to hold against the daemon's `CHECK` reply.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct SeamTally {
+    pub lines: u64,
+    sums: [f64; 3],
+}
+
+impl SeamTally {
+    /// Counts one waypoint line's position (its first three pose numbers).
+    pub fn add(&mut self, position: [f64; 3]) {
+        self.lines += 1;
+        for (sum, v) in self.sums.iter_mut().zip(position) {
+            *sum += v;
+        }
+    }
+
+    /// Whether the `CHECK` reply's numbers `[0, n, cx, cy, cz]` agree: the
+    /// same count and each mean within ROBOTS.md's tolerance (0.1 mm, UR
+    /// in metres). Err names the first difference.
+    pub fn agrees(&self, check: &[f64], dialect: Dialect) -> Result<(), String> {
+        let [status, lines, means @ ..] = check else {
+            return Err(format!("a check reply has five numbers, got {check:?}"));
+        };
+        if *status != 0.0 || means.len() != 3 {
+            return Err(format!("the check was refused or malformed: {check:?}"));
+        }
+        if *lines != self.lines as f64 {
+            return Err(format!("the daemon counts {lines} lines, the robot stored {}", self.lines));
+        }
+        let tolerance = match dialect {
+            Dialect::Ur => CHECK_TOLERANCE_MM / 1000.0,
+            _ => CHECK_TOLERANCE_MM,
+        };
+        for (axis, (sum, mean)) in self.sums.iter().zip(means).enumerate() {
+            let own = sum / self.lines.max(1) as f64;
+            if (own - mean).abs() > tolerance {
+                return Err(format!("mean {axis} is {own} here, {mean} at the daemon (tolerance {tolerance})"));
+            }
+        }
+        Ok(())
+    }
 }

@@ -147,7 +147,7 @@ async fn plan(request_id: u64, accepted: Accepted, state: Arc<ServerState>, writ
             reported = traced.is_some().then(|| result.clone());
             Message::PlanReply(PlanReply { request_id, frame_id, result })
         }
-        Err(Failure { code, text }) => Message::error(code, Some(request_id), text),
+        Err(Failure { code, text, .. }) => Message::error(code, Some(request_id), text),
     };
     if let Err(e) = writer.lock().await.send(&reply).await {
         warn!(request_id, "cannot send the reply: {e}");

@@ -126,7 +126,32 @@ fn frame_error_code(e: &FrameError) -> ErrorCode {
 #[derive(Debug)]
 pub(crate) struct Failure {
     pub code: ErrorCode,
+    /// The whole message, as the binary link sends it: where, then why.
     pub text: String,
+    /// Where the failure arose (the frame and the pipeline stage), when
+    /// `text` leads with it; a robot's pendant line leads with the cause
+    /// instead ([`Failure::cause_first`]).
+    pub place: Option<String>,
+}
+
+impl Failure {
+    fn new(code: ErrorCode, text: impl Into<String>) -> Self {
+        Failure { code, text: text.into(), place: None }
+    }
+
+    /// The message with the cause first and where it arose after it, in
+    /// parentheses: what a pendant's few characters should show first.
+    pub fn cause_first(&self) -> String {
+        match &self.place {
+            Some(place) => {
+                let cause = self.text.strip_prefix(place.as_str()).unwrap_or(&self.text);
+                // "frame 3: groove stage failed:" is said "(frame 3; groove stage)".
+                let label = place.trim_end_matches(" failed:").replace(": ", "; ");
+                format!("{} ({label})", cause.trim_start())
+            }
+            None => self.text.clone(),
+        }
+    }
 }
 
 /// A plan and the frame it was computed from.
@@ -160,11 +185,11 @@ pub(crate) async fn fulfil_traced(
     let mut traced = None;
     let outcome = match fetched {
         // A camera link closed by the shutdown is not a camera that left.
-        Err(_) if stop.is_stopping() => Err(Failure {
-            code: ErrorCode::ShuttingDown,
-            text: "the daemon is shutting down; no frame will be planned for this request".into(),
-        }),
-        Err(e) => Err(Failure { code: frame_error_code(&e), text: e.to_string() }),
+        Err(_) if stop.is_stopping() => Err(Failure::new(
+            ErrorCode::ShuttingDown,
+            "the daemon is shutting down; no frame will be planned for this request",
+        )),
+        Err(e) => Err(Failure::new(frame_error_code(&e), e.to_string())),
         Ok(frame) => {
             log.frame = Some(Arc::clone(&frame));
             state.idle.touch();
@@ -187,18 +212,21 @@ pub(crate) async fn fulfil_traced(
                     Ok(Planned { frame_id: frame.frame_id, plan })
                 }
                 Err(JobError::Plan(e)) => {
-                    Err(Failure { code: plan_error_code(&e), text: format!("frame {}: {e}", frame.frame_id) })
+                    let place = format!("frame {}: {} stage failed:", frame.frame_id, e.stage);
+                    let text = format!("frame {}: {e}", frame.frame_id);
+                    let place = text.starts_with(&place).then_some(place);
+                    Err(Failure { code: plan_error_code(&e), text, place })
                 }
                 Err(e @ JobError::Panicked) => {
                     error!(request_id, frame_id = frame.frame_id, "{e}");
-                    Err(Failure { code: ErrorCode::Internal, text: e.to_string() })
+                    Err(Failure::new(ErrorCode::Internal, e.to_string()))
                 }
             }
         }
     };
     match &outcome {
         Ok(planned) => log.plan = Some(&planned.plan),
-        Err(Failure { code, text }) => log.failure = Some((*code, text.clone())),
+        Err(Failure { code, text, .. }) => log.failure = Some((*code, text.clone())),
     }
     log.latency = arrived.elapsed();
     log.emit();

@@ -11,7 +11,10 @@
 //! on. A session without a whole line for `text_link.idle_timeout_ms` is
 //! closed. Plan and trigger lines go the binary controller link's plan
 //! path ([`super::planning`]), one request at a time per session; a robot
-//! that disconnects while its plan runs cancels it.
+//! that disconnects while its plan runs cancels it. The session keeps its
+//! last plan's per-seam check values for `CHECK` until its next plan line.
+//! An error line leads with its cause; where it arose (frame, stage) comes
+//! after it, where a pendant's 80 characters may cut it off.
 
 use std::collections::VecDeque;
 use std::sync::Arc;
@@ -25,11 +28,12 @@ use tokio_util::codec::{AnyDelimiterCodec, Decoder};
 use tracing::{Instrument, info, warn};
 use weldseam_proto::ErrorCode;
 use weldseam_proto::text::{
-    self, Dialect, LineError, OK_NUMBERS, PlanLine, Reply, Request, TEXT_PROTOCOL_VERSION, parse_request,
+    self, CHECK_NUMBERS, Dialect, LineError, OK_NUMBERS, PlanLine, Reply, Request, TEXT_PROTOCOL_VERSION,
+    parse_request, seam_checks,
 };
 
 use super::frames::Wanted;
-use super::planning::{Ask, Failure, Planned, accept, fulfil, refused};
+use super::planning::{Ask, Planned, accept, fulfil, refused};
 use super::shutdown::{Shutdown, ShutdownController};
 use super::{ServerError, ServerState, Throttle, accept_with_backoff, allowed};
 use crate::config::TextLinkConfig;
@@ -209,6 +213,9 @@ struct Session {
     dialect: Option<Dialect>,
     /// The waypoint lines of the last plan not yet pulled, formatted.
     pending: VecDeque<String>,
+    /// The last plan's `CHECK` replies, one per seam; None before a plan,
+    /// after a failed one and from a plan line on until its answer.
+    checks: Option<Vec<Reply>>,
     /// The last error line's whole reason, for `WHY`.
     last_error: Option<String>,
     /// One request at a time: the robot waits for each reply.
@@ -243,6 +250,7 @@ async fn serve(stream: TcpStream, state: Arc<ServerState>, mut shutdown: Shutdow
     let mut session = Session {
         dialect: config.dialect,
         pending: VecDeque::new(),
+        checks: None,
         last_error: None,
         places: Arc::new(Semaphore::new(1)),
         requests: 0,
@@ -328,9 +336,10 @@ impl Session {
 
     /// How many numbers the reply to `line` has in the session's dialect.
     fn reply_numbers(&self, line: &str) -> usize {
-        let next = line.trim().split(',').next().is_some_and(|c| c.trim().eq_ignore_ascii_case("NEXT"));
-        match (next, self.dialect) {
-            (true, Some(dialect)) => text::waypoint_numbers(dialect),
+        let command = line.trim().split(',').next().unwrap_or("").trim().to_ascii_uppercase();
+        match (command.as_str(), self.dialect) {
+            ("NEXT", Some(dialect)) => text::waypoint_numbers(dialect),
+            ("CHECK", _) => CHECK_NUMBERS,
             _ => OK_NUMBERS,
         }
     }
@@ -360,6 +369,8 @@ impl Session {
             }
             Request::Hello(dialect) => {
                 self.dialect = Some(dialect);
+                // Check values are written in the dialect of their plan.
+                self.checks = None;
                 info!(dialect = dialect.name(), "robot named its dialect");
                 Reply::Ok(TEXT_PROTOCOL_VERSION.into(), 0)
             }
@@ -368,6 +379,21 @@ impl Session {
             Request::Next => match self.pending.pop_front() {
                 Some(line) => return Outcome::Line(line),
                 None => error(ErrorCode::UnexpectedMessage, "nothing to pull: send PLAN or TRIGGER first", numbers),
+            },
+            Request::Check(seam) => match &self.checks {
+                None => error(
+                    ErrorCode::UnexpectedMessage,
+                    "no plan to check: CHECK follows a plan's ok line until the next plan line",
+                    numbers,
+                ),
+                Some(checks) => match checks.get((seam as usize).wrapping_sub(1)) {
+                    Some(check) => check.clone(),
+                    None => error(
+                        ErrorCode::BadRequest,
+                        format!("seam {seam} out of range: the last plan has seams 1 to {}", checks.len()),
+                        numbers,
+                    ),
+                },
             },
             Request::Drop => {
                 let dropped = self.pending.len() as u64;
@@ -397,6 +423,7 @@ impl Session {
             return Outcome::Reply(error(LineError::NoDialect.code(), LineError::NoDialect.to_string(), OK_NUMBERS));
         };
         let arrived = Instant::now();
+        self.checks = None;
         self.requests += 1;
         let request_id = self.requests;
         let request = match text_plan_request(&line, dialect, state.config.euler) {
@@ -427,6 +454,7 @@ impl Session {
                     Ok(formatted) => {
                         let count = formatted.len() as u64;
                         self.pending = formatted;
+                        self.checks = Some(seam_checks(&replies, dialect));
                         // The ok line counts the seams planned; WHY names
                         // the workpieces in view that were not.
                         if !plan.unplanned.is_empty() {
@@ -436,12 +464,12 @@ impl Session {
                     }
                     Err(e) => error(
                         ErrorCode::PlanFailed,
-                        format!("frame {frame_id}: a waypoint cannot be sent: {e}"),
+                        format!("a waypoint cannot be sent: {e} (frame {frame_id})"),
                         OK_NUMBERS,
                     ),
                 }
             }
-            Err(Failure { code, text }) => error(code, text, OK_NUMBERS),
+            Err(failure) => error(failure.code, failure.cause_first(), OK_NUMBERS),
         })
     }
 }

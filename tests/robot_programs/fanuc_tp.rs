@@ -5,14 +5,13 @@
 
 use super::fanuc::{Helper, weldseam};
 use super::karel::{Controller, Register};
-use super::listing::program_path;
 use super::robot::Event;
 
 const FILE: &str = "fanuc/WELD_SEAM.LS";
 
 /// The TP line number of `LBL[n]`, as the TP interpreter finds it.
 fn lbl(n: usize) -> usize {
-    let text = std::fs::read_to_string(program_path(FILE)).unwrap();
+    let (_, text) = super::transcription::program(FILE);
     let label = format!(":  LBL[{n}] ;");
     let line = text.lines().find(|l| l.trim_start().ends_with(&label)).unwrap_or_else(|| panic!("no LBL[{n}]"));
     line.trim_start().split(':').next().unwrap().parse().unwrap()
@@ -22,8 +21,9 @@ fn r(tp: &Controller, n: usize) -> i32 {
     tp.r[n].int()
 }
 
-/// Runs WELD_SEAM from its first line to its end.
-pub fn weld_seam(tp: &mut Controller, h: &mut Helper) {
+/// Runs WELD_SEAM from its first line to its end; `dry_run` as the
+/// integrator sets R[23] in the settings block.
+pub fn weld_seam(tp: &mut Controller, h: &mut Helper, dry_run: bool) {
     let mut pc = 1;
     while pc <= 69 {
         let mut next = pc + 1;
@@ -42,7 +42,7 @@ pub fn weld_seam(tp: &mut Controller, h: &mut Helper) {
             }
             6 => {
                 tp.at(10, r#"6:  R[23:ws dry run]=0    ;"#);
-                tp.r[23] = Register::Int(0);
+                tp.r[23] = Register::Int(i32::from(dry_run));
             }
             12 => {
                 tp.at(16, r#"12:  UTOOL_NUM=1 ;"#);
@@ -237,7 +237,7 @@ fn the_transcription_follows_weld_seam_ls_line_by_line() {
         let body = parts.next().unwrap_or("").trim_start();
         !number.is_empty() && number.chars().all(|c| c.is_ascii_digit()) && !body.starts_with('!')
     };
-    if let Err(e) = super::listing::check(FILE, include_str!("fanuc_tp.rs"), "tp", statement) {
+    if let Err(e) = super::transcription::check(FILE, include_str!("fanuc_tp.rs"), statement) {
         panic!("{e}");
     }
 }

@@ -41,7 +41,8 @@ use std::time::Duration;
 use weldseam::geometry::Isometry3;
 use weldseam::geometry::conventions::PoseConvention;
 
-use super::robot::{Event, SendHook, Trace};
+use super::harness::SendHook;
+use super::robot::{Event, Trace};
 
 /// KAREL's XYZWPR: X, Y, Z (mm), W, P, R (deg), REALs.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]

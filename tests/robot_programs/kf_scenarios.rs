@@ -1,32 +1,25 @@
-//! The KUKA and FANUC programs, run on their emulations against `weldseam
-//! serve` on loopback: a 250-waypoint seam moved where `plan --json` puts
-//! it, with the flange pose sent whatever the torch, one bead per seam
-//! without a stop and without a network read under the arc; several
-//! seams; a refusal and a too-long line read and branched on; the daemon
-//! stopped during the fetch and before the arc (the torch never moves).
+//! The KUKA and FANUC programs through every scenario of
+//! [`Scenario`], each on its emulation against the daemon: the flange
+//! pose sent whatever the torch; every seam fetched and checked before the
+//! first motion; one move per waypoint line, where `plan --json` puts it
+//! (0.01 mm, 0.01°), the approach and retract 50 mm back along the torch;
+//! each seam one bead at weld speed that blends to its end (C_DIS in the
+//! advance run, CNT) with nothing sent or read under the arc; a refusal, a
+//! too-long line and a daemon stopped during the fetch or before the arc
+//! leave the torch at the capture pose with a code the program branches
+//! on and the cause shown.
 
-use std::sync::Arc;
-use std::time::Duration;
-
-use nalgebra::{Translation3, UnitQuaternion};
-use weldseam::camera::CameraModel;
-use weldseam::config::Config;
-use weldseam::convert::to_proto::plan_result;
+use nalgebra::{Translation3, UnitQuaternion, Vector3};
 use weldseam::geometry::Isometry3;
 use weldseam::geometry::conventions::PoseConvention;
-use weldseam::joint::{JointType, RequestedJoint};
-use weldseam::mock::camera::CameraOptions;
-use weldseam::mock::controller::ControllerClient;
-use weldseam::pipeline::{PlanRequest, Planner};
-use weldseam::sim::{Draw, Simulation, demo_scene, simulate};
+use weldseam::geometry::pose::EulerConvention;
+use weldseam_proto::text::Dialect;
 
+use super::harness::{Daemon, Scenario, reference, same_pose};
 use super::karel::Controller;
 use super::krl::Krl;
-use super::robot::{Event, Trace};
-use super::{fanuc, fanuc_tp, kuka};
-use crate::util::Cell;
-
-use super::robot::SendHook as Hook;
+use super::robot::{Event, Move, Trace};
+use super::{fanuc, fanuc_tp, kuka, kuka_dat};
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 enum Vendor {
@@ -34,125 +27,94 @@ enum Vendor {
     Fanuc,
 }
 
-/// One run of a program: its result code, the record, the pendant's
-/// messages and the flange pose when it sent the plan line.
+impl Vendor {
+    fn dialect(self) -> Dialect {
+        match self {
+            Vendor::Kuka => Dialect::Kuka,
+            Vendor::Fanuc => Dialect::Fanuc,
+        }
+    }
+
+    fn convention(self) -> PoseConvention {
+        weldseam::convert::to_text::convention(self.dialect())
+    }
+}
+
+/// The joint the program's setting names: the scenario's, but for the
+/// too-long line a set long enough that this dialect's plan line passes
+/// the 80 bytes the scenario's daemon takes.
+fn joint(scenario: Scenario) -> &'static str {
+    match scenario {
+        Scenario::TooLongLine => "v_butt+i_butt+lap+t_fillet",
+        _ => scenario.joint(),
+    }
+}
+
+/// A torch 350 mm out from the flange, tilted: a program that sent the
+/// TCP's pose would be 350 mm off.
+fn torch() -> Isometry3<f64> {
+    Isometry3::from_parts(Translation3::new(12.0, -30.0, 350.0), UnitQuaternion::from_euler_angles(0.0, 0.35, 0.2))
+}
+
+/// One run: the program's result code, the record, the pendant's
+/// messages, the TP alarms, the flange at capture.
 struct Run {
     result: i32,
     trace: Trace,
     messages: Vec<String>,
     alarms: Vec<usize>,
-    capture_flange: Isometry3<f64>,
+    capture: Isometry3<f64>,
 }
 
-/// A torch 350 mm out, tilted: a pose sent with it in is 350 mm off.
-fn torch() -> Isometry3<f64> {
-    Isometry3::from_parts(Translation3::new(12.0, -30.0, 350.0), UnitQuaternion::from_euler_angles(0.0, 0.35, 0.2))
-}
-
-fn convention(vendor: Vendor) -> PoseConvention {
-    match vendor {
-        Vendor::Kuka => PoseConvention::KUKA,
-        Vendor::Fanuc => PoseConvention::FANUC,
-    }
-}
-
-/// Runs the vendor's program (blocking) with the robot at `flange`.
-fn run(vendor: Vendor, address: &str, flange: Isometry3<f64>, joint: &str, hook: Option<Hook>) -> Run {
-    match vendor {
+async fn run(vendor: Vendor, scenario: Scenario, dry_run: bool) -> Run {
+    let daemon = Daemon::start(scenario).await;
+    let capture = scenario.scene().pose.to_isometry(EulerConvention::default());
+    let hook = daemon.stopper(scenario);
+    let address = daemon.text_addr.to_string();
+    let joint = joint(scenario).to_string();
+    let run = tokio::task::spawn_blocking(move || match vendor {
         Vendor::Kuka => {
-            let xml = std::fs::read_to_string(super::listing::program_path("kuka/WeldSeam.xml")).unwrap();
-            let mut k = Krl::new(&xml, address, flange, torch());
-            k.on_send = hook;
-            let mut dat = kuka::data_list(&mut k);
-            let ov = kuka::Overrides { joint: Some(joint.into()), reply_timeout_ms: None };
+            let (_, xml) = super::transcription::program("kuka/WeldSeam.xml");
+            let mut k = Krl::new(&xml, &address, capture, torch());
+            k.on_send = Some(hook);
+            let mut dat = kuka_dat::data_list(&mut k);
+            let ov = kuka::Overrides { joint: Some(joint), reply_timeout_ms: None, dry_run: Some(dry_run) };
             let result = kuka::weld_seam(&mut k, &mut dat, &ov);
-            Run { result, trace: k.trace, messages: k.messages, alarms: Vec::new(), capture_flange: flange }
+            Run { result, trace: k.trace, messages: k.messages, alarms: Vec::new(), capture }
         }
         Vendor::Fanuc => {
-            let mut tp = Controller::new(address, flange, torch());
-            tp.on_send = hook;
-            let mut helper =
-                fanuc::load_program(&mut tp, &fanuc::Overrides { joint: Some(joint.into()), reply_ms: None });
-            fanuc_tp::weld_seam(&mut tp, &mut helper);
+            let mut tp = Controller::new(&address, capture, torch());
+            tp.on_send = Some(hook);
+            let mut helper = fanuc::load_program(&mut tp, &fanuc::Overrides { joint: Some(joint), reply_ms: None });
+            fanuc_tp::weld_seam(&mut tp, &mut helper, dry_run);
             let result = tp.r[9].int();
-            Run { result, trace: tp.trace, messages: tp.tperror, alarms: tp.alarms, capture_flange: flange }
+            Run { result, trace: tp.trace, messages: tp.tperror, alarms: tp.alarms, capture }
         }
-    }
+    })
+    .await
+    .unwrap();
+    daemon.stop().await;
+    run
 }
 
-async fn run_async(vendor: Vendor, address: String, sim: &Simulation, joint: &str, hook: Option<Hook>) -> Run {
-    let flange = sim.pose.to_isometry(Default::default());
-    let joint = joint.to_string();
-    tokio::task::spawn_blocking(move || run(vendor, &address, flange, &joint, hook)).await.unwrap()
+/// The pose numbers of the plan line sent, checked to be the flange's (to
+/// the line's decimals) and not the torch's.
+fn sent_pose(vendor: Vendor, run: &Run) -> Vec<f64> {
+    let line = run.trace.sent().into_iter().find(|l| l.starts_with("TRIGGER,")).expect("a plan line sent");
+    let numbers: Vec<f64> = line.trim_end().split(',').skip(2).map(|f| f.trim().parse().unwrap()).collect();
+    let sent = vendor.convention().to_isometry(&numbers).unwrap();
+    same_pose(&sent, &run.capture).unwrap_or_else(|e| panic!("{vendor:?}: the pose sent is not the flange's: {e}"));
+    numbers
 }
 
-fn config(step_mm: f64) -> Config {
-    let mut c = Config::default();
-    c.server.fresh_frame_timeout = Duration::from_secs(10);
-    c.server.pipeline_threads = 2;
-    c.server.shutdown_grace = Duration::from_secs(5);
-    c.trajectory.step_mm = step_mm;
-    c.text_link.max_line_bytes = 80;
-    c
+/// The pose a move's six numbers stand for.
+fn target(vendor: Vendor, m: &Move) -> Isometry3<f64> {
+    vendor.convention().to_isometry(&m.pose).unwrap()
 }
 
-/// A cell with a camera that serves `sim`'s frame.
-async fn cell_for(c: Config, sim: &Simulation) -> (Cell, tokio::sync::oneshot::Sender<()>) {
-    let cell = Cell::start(c).await;
-    let (stop_camera, _camera) = cell.camera(vec![Arc::new(sim.cloud.clone())], CameraOptions::default());
-    let mut ctl = ControllerClient::connect(&cell.controller, "test").await.unwrap();
-    ctl.wait_for_camera(Duration::from_secs(5)).await.unwrap();
-    (cell, stop_camera)
-}
-
-/// The plan line's pose, as the daemon reads it.
-fn sent_pose(vendor: Vendor, trace: &Trace) -> Vec<f64> {
-    let line = trace.sent().into_iter().find(|l| l.starts_with("TRIGGER")).expect("a plan line").to_string();
-    line.trim_end()
-        .split(',')
-        .skip(2)
-        .map(|f| f.trim().parse().unwrap())
-        .take(convention(vendor).numbers_len())
-        .collect()
-}
-
-/// Where the program must move, line by line: what `plan --json` prints
-/// for the frame at the pose the program sent (the same planner call and
-/// report), each seam's first and last waypoint backed off along the
-/// torch axis for approach and retract.
-fn planned_lines(c: &Config, sim: &Simulation, joint: &str, sent: &[f64], vendor: Vendor) -> Vec<(u8, Isometry3<f64>)> {
-    let euler = c.euler;
-    let pose = convention(vendor).to_robot_pose(sent, euler).unwrap();
-    let requested: RequestedJoint = joint.parse().unwrap();
-    let request = PlanRequest::new(requested, None, pose);
-    let plan = Planner::new(c.clone()).plan_owned(sim.cloud.clone(), &request).expect("the frame plans");
-    let report = plan_result(&plan, euler);
-    let offset = c.text_link.approach_offset_mm;
-    let mut lines = Vec::new();
-    for seam in &report.seams {
-        let isos: Vec<Isometry3<f64>> = seam
-            .waypoints
-            .iter()
-            .map(|w| weldseam::geometry::pose::RobotPose { xyz_mm: w.xyz, angles_deg: w.rpy_deg }.to_isometry(euler))
-            .collect();
-        let back = |iso: &Isometry3<f64>| {
-            Isometry3::from_parts(
-                Translation3::from(iso.translation.vector - iso.rotation * nalgebra::Vector3::z() * offset),
-                iso.rotation,
-            )
-        };
-        lines.push((1, back(&isos[0])));
-        lines.extend(isos.iter().map(|i| (2, *i)));
-        lines.push((3, back(isos.last().unwrap())));
-    }
-    lines
-}
-
-/// The checks every welding run must pass: result 0, the flange pose sent
-/// (to the line's decimals), one move per planned line to its pose within
-/// 0.01 mm and 0.01 degree, each seam one bead without a stop and without
-/// a network line, and nothing left on.
-fn assert_welded_as_planned(vendor: Vendor, run: &Run, planned: &[(u8, Isometry3<f64>)], seams: usize) {
+/// A run that welded `seams` seams where `plan --json` puts them, one
+/// bead each, nothing on the network once the torch moved.
+fn welded(vendor: Vendor, scenario: Scenario, run: &Run, seams: usize, arc: bool) {
     assert_eq!(
         run.result,
         0,
@@ -160,143 +122,118 @@ fn assert_welded_as_planned(vendor: Vendor, run: &Run, planned: &[(u8, Isometry3
         run.messages,
         run.trace.reads().iter().rev().take(3).collect::<Vec<_>>()
     );
-    let sent = convention(vendor).to_isometry(&sent_pose(vendor, &run.trace)).unwrap();
-    let off = sent.inverse() * run.capture_flange;
-    assert!(off.translation.vector.norm() < 0.002, "{vendor:?}: sent {sent} for the flange {}", run.capture_flange);
-    assert!(off.rotation.angle().to_degrees() < 0.0002, "{vendor:?}: sent {sent}");
+    let expected = reference(scenario, vendor.dialect(), &sent_pose(vendor, run));
+    assert_eq!(expected.len(), seams, "{vendor:?} {scenario:?}: seams planned");
+    let checks = run.trace.sent().iter().filter(|l| l.starts_with("CHECK,")).count();
+    assert_eq!(checks, seams, "{vendor:?}: every seam checked");
+    let first_motion = run.trace.events.iter().position(|e| matches!(e, Event::Move(_))).expect("a motion");
+    let network_after = run.trace.events[first_motion..].iter().any(|e| matches!(e, Event::Sent(_) | Event::Read(_)));
+    assert!(!network_after, "{vendor:?}: the network was used after the torch moved");
     let moves = run.trace.moves();
-    assert_eq!(moves.len(), planned.len(), "{vendor:?}: one move per line");
-    for (k, (m, (kind, iso))) in moves.iter().zip(planned).enumerate() {
-        let at = convention(vendor).to_isometry(&m.pose).unwrap();
-        let d = at.inverse() * iso;
-        let mm = (at.translation.vector - iso.translation.vector).norm();
-        assert!(mm <= 0.01, "{vendor:?}: line {k} (kind {kind}) {mm:.4} mm off");
-        assert!(
-            d.rotation.angle().to_degrees() <= 0.01,
-            "{vendor:?}: line {k} turned {:.4} deg",
-            d.rotation.angle().to_degrees()
-        );
+    let mut at = 0;
+    for (s, waypoints) in expected.iter().enumerate() {
+        let seam = &moves[at..at + waypoints.len() + 2];
+        at += waypoints.len() + 2;
+        let back = |w: &Isometry3<f64>| {
+            Isometry3::from_parts(
+                Translation3::from(w.translation.vector - w.rotation * Vector3::z() * 50.0),
+                w.rotation,
+            )
+        };
+        same_pose(&target(vendor, seam[0]), &back(&waypoints[0]))
+            .unwrap_or_else(|e| panic!("{vendor:?} seam {s} approach: {e}"));
+        let last = seam.len() - 1;
+        same_pose(&target(vendor, seam[last]), &back(waypoints.last().unwrap()))
+            .unwrap_or_else(|e| panic!("{vendor:?} seam {s} retract: {e}"));
+        for (j, (m, w)) in seam[1..last].iter().zip(waypoints).enumerate() {
+            same_pose(&target(vendor, m), w).unwrap_or_else(|e| panic!("{vendor:?} seam {s} waypoint {j}: {e}"));
+        }
+        // From the seam's start: weld speed, blended but the last.
+        for (j, m) in seam[2..last].iter().enumerate() {
+            assert!((m.speed_mm_s - 8.0).abs() < 1e-3, "{vendor:?} seam {s} move {j}: {m:?}");
+            assert_eq!(m.blended, j + 3 < last, "{vendor:?} seam {s} move {j} of {}: {m:?}", last - 2);
+        }
     }
+    assert_eq!(at, moves.len(), "{vendor:?}: no motion beyond the seams'");
     let welds = run.trace.welds().unwrap_or_else(|e| panic!("{vendor:?}: {e}"));
-    assert_eq!(welds.len(), seams, "{vendor:?}: one arc per seam");
-    for w in &welds {
-        assert_eq!(w.network, 0, "{vendor:?}: a network line under the arc");
+    assert_eq!(welds.len(), if arc { seams } else { 0 }, "{vendor:?}: arcs struck");
+    for (w, waypoints) in welds.iter().zip(&expected) {
+        assert_eq!(w.network, 0, "{vendor:?}: a line sent or read under the arc");
         assert!(
             w.continuous(),
             "{vendor:?}: the bead stops: {:?}",
             w.moves.iter().map(|m| m.blended).collect::<Vec<_>>()
         );
-        assert!(w.moves.iter().all(|m| (m.speed_mm_s - 8.0).abs() < 1e-3), "{vendor:?}: weld speed");
+        assert_eq!(w.moves.len(), waypoints.len() - 1, "{vendor:?}: the arc burns from the seam's start to its end");
     }
 }
 
-/// A refused run: the code, nothing moved, the arc never on.
-fn assert_refused(vendor: Vendor, run: &Run, code: i32) {
-    assert_eq!(run.result, code, "{vendor:?}: {:?}", run.messages);
+/// A run that stopped before any motion with one of `codes`, the TP
+/// program branching on it, and a reason on the pendant.
+fn stopped(vendor: Vendor, run: &Run, codes: &[i32]) -> String {
+    assert!(codes.contains(&run.result), "{vendor:?}: result {} not one of {codes:?}: {:?}", run.result, run.messages);
     assert!(run.trace.moves().is_empty(), "{vendor:?}: the torch moved");
     assert!(!run.trace.events.contains(&Event::ArcOn), "{vendor:?}: the arc went on");
     if vendor == Vendor::Fanuc {
-        assert_eq!(run.alarms, [if code < 0 { 1 } else { 2 }], "the TP program branched on R[9]");
+        assert_eq!(run.alarms, [if run.result < 0 { 1 } else { 2 }], "the TP program branched on R[9]");
     }
+    run.messages.last().cloned().expect("a reason on the pendant")
 }
 
-/// One seam of 250 waypoints and more (1 mm step), both vendors: welded
-/// where `plan --json` says; then a refused joint and a line longer than
-/// the daemon takes, each read and branched on.
+const VENDORS: [Vendor; 2] = [Vendor::Kuka, Vendor::Fanuc];
+
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
-async fn kuka_and_fanuc_weld_a_long_seam_where_the_plan_says_and_branch_on_refusals() {
-    let c = config(0.9);
-    let sim = simulate(&demo_scene(JointType::Lap), &CameraModel::default());
-    let (cell, stop_camera) = cell_for(c.clone(), &sim).await;
-    for vendor in [Vendor::Kuka, Vendor::Fanuc] {
-        let done = run_async(vendor, cell.daemon.text_addr.to_string(), &sim, "lap", None).await;
-        let planned = planned_lines(&c, &sim, "lap", &sent_pose(vendor, &done.trace), vendor);
-        assert!(planned.len() >= 252, "{} lines: 250 waypoints and more", planned.len());
-        assert_welded_as_planned(vendor, &done, &planned, 1);
-        assert!(done.trace.reads().iter().any(|r| r.starts_with("0,1,")), "{vendor:?}: CHECK answered");
-
-        let refused = run_async(vendor, cell.daemon.text_addr.to_string(), &sim, "v_butt", None).await;
-        assert!(refused.result < 0, "{vendor:?}: {:?}", refused.messages);
-        assert_refused(vendor, &refused, refused.result);
-        let reason = refused.messages.last().expect("the reason on the pendant");
-        assert!(!reason.starts_with('-') || vendor == Vendor::Kuka, "{vendor:?}: the cause first: {reason}");
-
-        let long = run_async(vendor, cell.daemon.text_addr.to_string(), &sim, "v_butt+i_butt+lap+t_fillet", None).await;
-        assert_refused(vendor, &long, -5);
+async fn kuka_and_fanuc_weld_one_seam_in_one_blended_bead() {
+    for vendor in VENDORS {
+        welded(vendor, Scenario::OneSeam, &run(vendor, Scenario::OneSeam, false).await, 1, true);
+        // The dry run: the same motion, no arc.
+        welded(vendor, Scenario::OneSeam, &run(vendor, Scenario::OneSeam, true).await, 1, false);
     }
-    let _ = stop_camera.send(());
-    cell.shutdown().await;
 }
 
-/// Three workpieces in view, `auto`: every seam fetched and checked, then
-/// welded seam by seam, each one bead.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn kuka_and_fanuc_store_check_and_weld_a_250_waypoint_seam() {
+    for vendor in VENDORS {
+        let done = run(vendor, Scenario::LongSeam, false).await;
+        welded(vendor, Scenario::LongSeam, &done, 1, true);
+        assert!(done.trace.moves().len() >= 252, "{vendor:?}: {} moves", done.trace.moves().len());
+    }
+}
+
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn kuka_and_fanuc_weld_several_seams_one_bead_each() {
-    let (_, spec) = weldseam::sim::multi_suite(Draw::Documented)
-        .into_iter()
-        .find(|(n, _)| n.starts_with("multi-01"))
-        .expect("the scene");
-    let sim = simulate(&spec, &CameraModel::default());
-    let c = config(25.0);
-    let (cell, stop_camera) = cell_for(c.clone(), &sim).await;
-    for vendor in [Vendor::Kuka, Vendor::Fanuc] {
-        let done = run_async(vendor, cell.daemon.text_addr.to_string(), &sim, "auto", None).await;
-        let planned = planned_lines(&c, &sim, "auto", &sent_pose(vendor, &done.trace), vendor);
-        assert_welded_as_planned(vendor, &done, &planned, 3);
-        assert_eq!(done.trace.sent().iter().filter(|l| l.starts_with("CHECK,")).count(), 3, "{vendor:?}");
+    for vendor in VENDORS {
+        welded(vendor, Scenario::SeveralSeams, &run(vendor, Scenario::SeveralSeams, false).await, 3, true);
     }
-    let _ = stop_camera.send(());
-    cell.shutdown().await;
 }
 
-/// A hook that, at the first line `when` accepts, stops the daemon and
-/// waits until it is down before the line goes out.
-fn stop_at(when: fn(&str, usize) -> bool) -> (Hook, tokio::sync::oneshot::Receiver<()>, std::sync::mpsc::Sender<()>) {
-    let (hit_tx, hit_rx) = tokio::sync::oneshot::channel();
-    let (ack_tx, ack_rx) = std::sync::mpsc::channel::<()>();
-    let mut hit_tx = Some(hit_tx);
-    let mut nexts = 0;
-    let hook: Hook = Box::new(move |line: &str| {
-        if line.starts_with("NEXT") {
-            nexts += 1;
-        }
-        if hit_tx.is_some() && when(line, nexts) {
-            let _ = hit_tx.take().unwrap().send(());
-            let _ = ack_rx.recv_timeout(Duration::from_secs(60));
-        }
-    });
-    (hook, hit_rx, ack_tx)
-}
-
-/// The daemon stopped during the fetch (at the 40th NEXT) and before the
-/// arc (at the first CHECK, the last line before motion): the program
-/// reads the lost link, branches on its code and the torch never moves.
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
-async fn kuka_and_fanuc_stay_off_the_seam_when_the_daemon_stops_before_the_arc() {
-    let c = config(5.0);
-    let sim = simulate(&demo_scene(JointType::Lap), &CameraModel::default());
-    let during_fetch: fn(&str, usize) -> bool = |line, nexts| line.starts_with("NEXT") && nexts == 40;
-    let before_arc: fn(&str, usize) -> bool = |line, _| line.starts_with("CHECK");
-    for vendor in [Vendor::Kuka, Vendor::Fanuc] {
-        for when in [during_fetch, before_arc] {
-            let (cell, stop_camera) = cell_for(c.clone(), &sim).await;
-            let (hook, hit, ack) = stop_at(when);
-            let running = run_async(vendor, cell.daemon.text_addr.to_string(), &sim, "lap", Some(hook));
-            let stopping = async {
-                hit.await.expect("the program reached the line");
-                let _ = stop_camera.send(());
-                cell.shutdown().await;
-                ack.send(()).unwrap();
-            };
-            let (stopped, ()) = tokio::join!(running, stopping);
-            assert!(
-                stopped.result == 2 || stopped.result == -47,
-                "{vendor:?}: {} {:?}",
-                stopped.result,
-                stopped.messages
-            );
-            assert_refused(vendor, &stopped, stopped.result);
-            assert!(!stopped.messages.is_empty(), "{vendor:?}: a reason on the pendant");
+async fn kuka_and_fanuc_show_a_refusals_cause_and_the_torch_stays() {
+    for vendor in VENDORS {
+        let refused = run(vendor, Scenario::Refusal, false).await;
+        sent_pose(vendor, &refused);
+        let reason = stopped(vendor, &refused, &[-40, -46, -60, -61, -62, -63, -64, -65, -66, -67, -68, -69]);
+        // KUKA shows the error line as it came (-code,cause); FANUC its
+        // cause alone.
+        let cause = reason.split_once(',').map_or(reason.as_str(), |(code, cause)| {
+            assert!(vendor == Vendor::Kuka && code.starts_with('-'), "{vendor:?}: {reason}");
+            cause
+        });
+        assert!(!cause.is_empty() && !cause.starts_with("frame"), "{vendor:?}: the cause first: {reason:?}");
+        let too_long = run(vendor, Scenario::TooLongLine, false).await;
+        let reason = stopped(vendor, &too_long, &[-5]);
+        assert!(reason.contains("max_line_bytes"), "{vendor:?}: {reason}");
+    }
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn kuka_and_fanuc_leave_the_torch_at_the_capture_pose_when_the_daemon_stops_before_the_arc() {
+    for vendor in VENDORS {
+        for scenario in [Scenario::StopDuringFetch, Scenario::StopBeforeArc] {
+            let gone = run(vendor, scenario, false).await;
+            stopped(vendor, &gone, &[2, 3, -47]);
+            let checks = gone.trace.sent().iter().filter(|l| l.starts_with("CHECK")).count();
+            assert_eq!(checks, usize::from(scenario == Scenario::StopBeforeArc), "{vendor:?} {scenario:?}");
         }
     }
 }

@@ -36,7 +36,8 @@ use std::time::{Duration, Instant};
 use weldseam::geometry::Isometry3;
 use weldseam::geometry::conventions::PoseConvention;
 
-use super::robot::{Event, SendHook, Trace};
+use super::harness::SendHook;
+use super::robot::{Event, Trace};
 
 /// The interpolation cycle: how often a WAIT FOR condition is looked at.
 const IPO_CYCLE: Duration = Duration::from_millis(12);

@@ -4,6 +4,7 @@
 //! the program file (`listing.rs` holds the tags to the files).
 
 use super::krl::{Arg, Chars, E6Pos, Krl, int, real, sread, swrite};
+use super::kuka_dat::DataList;
 
 /// What a scenario sets in the program's settings block, as an integrator
 /// would edit it; `None` keeps the shipped value.
@@ -11,33 +12,7 @@ use super::krl::{Arg, Chars, E6Pos, Krl, int, real, sread, swrite};
 pub struct Overrides {
     pub joint: Option<String>,
     pub reply_timeout_ms: Option<i32>,
-}
-
-/// The data list `WeldSeam.dat`.
-pub struct DataList {
-    pub ws_max_lines: i32,
-    pub ws_path: Vec<E6Pos>,
-    pub ws_kind: Vec<i32>,
-    pub ws_seam: Vec<i32>,
-    pub ws_result: i32,
-}
-
-pub fn data_list(d: &mut Krl) -> DataList {
-    d.at(1, r#"&ACCESS RVP"#);
-    d.at(2, r#"DEFDAT WeldSeam"#);
-    d.at(7, r#"DECL CONST INT WS_MAX_LINES = 2000"#);
-    d.at(8, r#"DECL E6POS WsPath[2000]"#);
-    d.at(9, r#"DECL INT WsKind[2000]"#);
-    d.at(10, r#"DECL INT WsSeam[2000]"#);
-    d.at(14, r#"DECL INT WsResult = 0"#);
-    // KRL arrays count from 1: element 0 is never used.
-    DataList {
-        ws_max_lines: 2000,
-        ws_path: vec![E6Pos::default(); 2001],
-        ws_kind: vec![0; 2001],
-        ws_seam: vec![0; 2001],
-        ws_result: 0,
-    }
+    pub dry_run: Option<bool>,
 }
 
 /// The local variables of `WeldSeam()`.
@@ -47,6 +22,7 @@ struct Locals {
     reply: Chars,
     joint: Chars,
     capture: E6Pos,
+    first: E6Pos,
     kind: i32,
     seam: i32,
     remaining: i32,
@@ -90,7 +66,7 @@ pub fn weld_seam(k: &mut Krl, dat: &mut DataList, ov: &Overrides) -> i32 {
     k.at(2, r#"DEF WeldSeam()"#);
     k.at(20, r#"DECL EKI_STATUS RET"#);
     k.at(21, r#"DECL CHAR Line[254], Reply[254], Joint[32]"#);
-    k.at(22, r#"DECL E6POS Capture"#);
+    k.at(22, r#"DECL E6POS Capture, First"#);
     k.at(23, r#"DECL INT Kind, Seam, Remaining, Code, Offset, Seams, Count, I, K, N, Lines"#);
     k.at(24, r#"DECL REAL X, Y, Z, A, B, C, SumX, SumY, SumZ"#);
     k.at(25, r#"DECL STATE_T St"#);
@@ -114,7 +90,7 @@ pub fn weld_seam(k: &mut Krl, dat: &mut DataList, ov: &Overrides) -> i32 {
     k.at(39, r#"ArcOut = 33           ; welder's arc-on output without ArcTech"#);
     v.arc_out = 33;
     k.at(40, r#"DryRun = FALSE        ; TRUE: move along the seam without the arc (first runs)"#);
-    v.dry_run = false;
+    v.dry_run = ov.dry_run.unwrap_or(false);
     k.at(42, r#"$TOOL = TOOL_DATA[1]   ; the torch"#);
     k.tool = Some(1);
     k.at(43, r#"$BASE = BASE_DATA[0]   ; the robot base: the daemon's waypoints are in it"#);
@@ -274,305 +250,307 @@ pub fn weld_seam(k: &mut Krl, dat: &mut DataList, ov: &Overrides) -> i32 {
         }
     }
 
-    k.at(127, r#"K = 0"#);
+    k.at(128, r#"K = 0"#);
     v.kk = 0;
-    k.at(128, r#"WHILE (WsResult == 0) AND (K < Seams)"#);
+    k.at(129, r#"WHILE (WsResult == 0) AND (K < Seams)"#);
     while dat.ws_result == 0 && v.kk < v.seams {
-        k.at(129, r#"K = K + 1"#);
+        k.at(130, r#"K = K + 1"#);
         v.kk += 1;
-        k.at(130, r#"Offset = 0"#);
+        k.at(131, r#"Offset = 0"#);
         v.offset = 0;
-        k.at(131, r#"StrClear(Line[])"#);
+        k.at(132, r#"StrClear(Line[])"#);
         v.line.clear();
-        k.at(132, r#"SWRITE(Line[], St, Offset, "CHECK,%d", K)"#);
+        k.at(133, r#"SWRITE(Line[], St, Offset, "CHECK,%d", K)"#);
         swrite(&mut v.line, &mut v.offset, "CHECK,%d", &[Arg::Int(v.kk)]);
-        k.at(133, r#"Ask(Line[], Reply[], ReplyTimeout)"#);
+        k.at(134, r#"Ask(Line[], Reply[], ReplyTimeout)"#);
         ask(k, dat, &v.line, &mut v.reply, v.reply_timeout);
-        k.at(134, r#"IF WsResult == 0 THEN"#);
+        k.at(135, r#"IF WsResult == 0 THEN"#);
         if dat.ws_result == 0 {
-            k.at(135, r#"Offset = 0"#);
+            k.at(136, r#"Offset = 0"#);
             v.offset = 0;
-            k.at(136, r#"SREAD(Reply[], St, Offset, "%d,%d,%f,%f,%f", Code, N, X, Y, Z)"#);
+            k.at(137, r#"SREAD(Reply[], St, Offset, "%d,%d,%f,%f,%f", Code, N, X, Y, Z)"#);
             let (st, r) = sread(&v.reply, &mut v.offset, "%d,%d,%f,%f,%f");
             (v.code, v.n, v.hits) = (int(&r, 0, v.code), int(&r, 1, v.n), st.hits);
             (v.x, v.y, v.z) = (real(&r, 2, v.x), real(&r, 3, v.y), real(&r, 4, v.z));
-            k.at(137, r#"IF St.HITS <> 5 THEN"#);
+            k.at(138, r#"IF St.HITS <> 5 THEN"#);
             if v.hits != 5 {
-                k.at(138, r#"WsResult = 4"#);
+                k.at(139, r#"WsResult = 4"#);
                 dat.ws_result = 4;
             }
         }
-        k.at(141, r#"IF WsResult == 0 THEN"#);
+        k.at(142, r#"IF WsResult == 0 THEN"#);
         if dat.ws_result == 0 {
-            k.at(142, r#"SumX = 0.0"#);
+            k.at(143, r#"SumX = 0.0"#);
             v.sum_x = 0.0;
-            k.at(143, r#"SumY = 0.0"#);
+            k.at(144, r#"SumY = 0.0"#);
             v.sum_y = 0.0;
-            k.at(144, r#"SumZ = 0.0"#);
+            k.at(145, r#"SumZ = 0.0"#);
             v.sum_z = 0.0;
-            k.at(145, r#"Lines = 0"#);
+            k.at(146, r#"Lines = 0"#);
             v.lines = 0;
-            k.at(146, r#"FOR I = 1 TO Count"#);
+            k.at(147, r#"FOR I = 1 TO Count"#);
             for i in 1..=v.count as usize {
-                k.at(147, r#"IF WsSeam[I] == K THEN"#);
+                k.at(148, r#"IF WsSeam[I] == K THEN"#);
                 if dat.ws_seam[i] == v.kk {
-                    k.at(148, r#"Lines = Lines + 1"#);
+                    k.at(149, r#"IF Lines == 0 THEN"#);
+                    if v.lines == 0 {
+                        k.at(150, r#"First = WsPath[I]"#);
+                        v.first = dat.ws_path[i];
+                    }
+                    k.at(152, r#"Lines = Lines + 1"#);
                     v.lines += 1;
-                    k.at(149, r#"SumX = SumX + WsPath[I].X"#);
-                    v.sum_x += dat.ws_path[i].x;
-                    k.at(150, r#"SumY = SumY + WsPath[I].Y"#);
-                    v.sum_y += dat.ws_path[i].y;
-                    k.at(151, r#"SumZ = SumZ + WsPath[I].Z"#);
-                    v.sum_z += dat.ws_path[i].z;
+                    k.at(153, r#"SumX = SumX + (WsPath[I].X - First.X)"#);
+                    v.sum_x += dat.ws_path[i].x - v.first.x;
+                    k.at(154, r#"SumY = SumY + (WsPath[I].Y - First.Y)"#);
+                    v.sum_y += dat.ws_path[i].y - v.first.y;
+                    k.at(155, r#"SumZ = SumZ + (WsPath[I].Z - First.Z)"#);
+                    v.sum_z += dat.ws_path[i].z - v.first.z;
                 }
             }
-            k.at(154, r#"IF (Lines <> N) OR (N < 3) THEN"#);
+            k.at(158, r#"IF (Lines <> N) OR (N < 3) THEN"#);
             if v.lines != v.n || v.n < 3 {
-                k.at(155, r#"WsResult = 6"#);
+                k.at(159, r#"WsResult = 6"#);
                 dat.ws_result = 6;
             } else {
-                k.at(156, r#"ELSE"#);
+                k.at(160, r#"ELSE"#);
                 let n = v.n as f32;
-                k.at(
-                    157,
-                    r#"IF (ABS(SumX / N - X) > 0.05) OR (ABS(SumY / N - Y) > 0.05) OR (ABS(SumZ / N - Z) > 0.05) THEN"#,
-                );
-                if (v.sum_x / n - v.x).abs() > 0.05
-                    || (v.sum_y / n - v.y).abs() > 0.05
-                    || (v.sum_z / n - v.z).abs() > 0.05
+                k.at(161, r#"IF (ABS(First.X + SumX / N - X) > 0.1) OR (ABS(First.Y + SumY / N - Y) > 0.1) OR (ABS(First.Z + SumZ / N - Z) > 0.1) THEN"#);
+                let f = v.first;
+                if (f.x + v.sum_x / n - v.x).abs() > 0.1
+                    || (f.y + v.sum_y / n - v.y).abs() > 0.1
+                    || (f.z + v.sum_z / n - v.z).abs() > 0.1
                 {
-                    k.at(158, r#"WsResult = 6"#);
+                    k.at(162, r#"WsResult = 6"#);
                     dat.ws_result = 6;
                 }
             }
         }
     }
-    k.at(163, r#"RET = EKI_Close("WeldSeam")"#);
+    k.at(167, r#"RET = EKI_Close("WeldSeam")"#);
     k.eki_close("WeldSeam");
-    k.at(164, r#"RET = EKI_Clear("WeldSeam")"#);
+    k.at(168, r#"RET = EKI_Clear("WeldSeam")"#);
     k.eki_close("WeldSeam");
 
-    k.at(166, r#"IF WsResult <> 0 THEN"#);
+    k.at(170, r#"IF WsResult <> 0 THEN"#);
     if dat.ws_result != 0 {
-        k.at(167, r#"Report(WsResult, Reply[])"#);
+        k.at(171, r#"Report(WsResult, Reply[])"#);
         report(k, dat.ws_result, &v.reply);
-        k.at(168, r#"RETURN"#);
+        k.at(172, r#"RETURN"#);
         return dat.ws_result;
     }
 
-    k.at(174, r#"$ADVANCE = 3"#);
+    k.at(178, r#"$ADVANCE = 3"#);
     k.advance = 3;
-    k.at(175, r#"$APO.CDIS = BlendDist"#);
+    k.at(179, r#"$APO.CDIS = BlendDist"#);
     k.apo_cdis = v.blend_dist;
-    k.at(176, r#"ArcOn = FALSE"#);
+    k.at(180, r#"ArcOn = FALSE"#);
     v.arc_on = false;
-    k.at(177, r#"FOR I = 1 TO Count"#);
+    k.at(181, r#"FOR I = 1 TO Count"#);
     for i in 1..=v.count as usize {
-        k.at(178, r#"SWITCH WsKind[I]"#);
+        k.at(182, r#"SWITCH WsKind[I]"#);
         match dat.ws_kind[i] {
             1 => {
-                k.at(179, r#"CASE 1"#);
-                k.at(180, r#"$VEL.CP = ApproachVel"#);
+                k.at(183, r#"CASE 1"#);
+                k.at(184, r#"$VEL.CP = ApproachVel"#);
                 k.vel_cp = v.approach_vel;
-                k.at(181, r#"LIN WsPath[I]"#);
+                k.at(185, r#"LIN WsPath[I]"#);
                 k.lin(181, &dat.ws_path[i], false);
             }
             2 => {
-                k.at(182, r#"CASE 2"#);
-                k.at(183, r#"IF NOT ArcOn THEN"#);
+                k.at(186, r#"CASE 2"#);
+                k.at(187, r#"IF NOT ArcOn THEN"#);
                 if !v.arc_on {
-                    k.at(184, r#"$VEL.CP = ApproachVel"#);
+                    k.at(188, r#"$VEL.CP = ApproachVel"#);
                     k.vel_cp = v.approach_vel;
-                    k.at(185, r#"LIN WsPath[I]"#);
+                    k.at(189, r#"LIN WsPath[I]"#);
                     k.lin(185, &dat.ws_path[i], false);
-                    k.at(187, r#"IF NOT DryRun THEN"#);
+                    k.at(191, r#"IF NOT DryRun THEN"#);
                     if !v.dry_run {
-                        k.at(188, r#"$OUT[ArcOut] = TRUE"#);
+                        k.at(192, r#"$OUT[ArcOut] = TRUE"#);
                         k.set_output(v.arc_out, true);
                     }
-                    k.at(190, r#"ArcOn = TRUE"#);
+                    k.at(194, r#"ArcOn = TRUE"#);
                     v.arc_on = true;
-                    k.at(191, r#"$VEL.CP = WeldVel"#);
+                    k.at(195, r#"$VEL.CP = WeldVel"#);
                     k.vel_cp = v.weld_vel;
                 } else {
-                    k.at(192, r#"ELSE"#);
-                    k.at(193, r#"IF WsKind[I + 1] == 2 THEN"#);
+                    k.at(196, r#"ELSE"#);
+                    k.at(197, r#"IF WsKind[I + 1] == 2 THEN"#);
                     if dat.ws_kind[i + 1] == 2 {
-                        k.at(195, r#"LIN WsPath[I] C_DIS"#);
+                        k.at(199, r#"LIN WsPath[I] C_DIS"#);
                         k.lin(195, &dat.ws_path[i], true);
                     } else {
-                        k.at(196, r#"ELSE"#);
-                        k.at(197, r#"LIN WsPath[I]"#);
+                        k.at(200, r#"ELSE"#);
+                        k.at(201, r#"LIN WsPath[I]"#);
                         k.lin(197, &dat.ws_path[i], false);
-                        k.at(199, r#"IF NOT DryRun THEN"#);
+                        k.at(203, r#"IF NOT DryRun THEN"#);
                         if !v.dry_run {
-                            k.at(200, r#"$OUT[ArcOut] = FALSE"#);
+                            k.at(204, r#"$OUT[ArcOut] = FALSE"#);
                             k.set_output(v.arc_out, false);
                         }
-                        k.at(202, r#"ArcOn = FALSE"#);
+                        k.at(206, r#"ArcOn = FALSE"#);
                         v.arc_on = false;
                     }
                 }
             }
             3 => {
-                k.at(205, r#"CASE 3"#);
-                k.at(206, r#"IF ArcOn THEN"#);
+                k.at(209, r#"CASE 3"#);
+                k.at(210, r#"IF ArcOn THEN"#);
                 if v.arc_on {
-                    k.at(208, r#"IF NOT DryRun THEN"#);
+                    k.at(212, r#"IF NOT DryRun THEN"#);
                     if !v.dry_run {
-                        k.at(209, r#"$OUT[ArcOut] = FALSE"#);
+                        k.at(213, r#"$OUT[ArcOut] = FALSE"#);
                         k.set_output(v.arc_out, false);
                     }
-                    k.at(211, r#"ArcOn = FALSE"#);
+                    k.at(215, r#"ArcOn = FALSE"#);
                     v.arc_on = false;
                 }
-                k.at(213, r#"$VEL.CP = ApproachVel"#);
+                k.at(217, r#"$VEL.CP = ApproachVel"#);
                 k.vel_cp = v.approach_vel;
-                k.at(214, r#"LIN WsPath[I]"#);
+                k.at(218, r#"LIN WsPath[I]"#);
                 k.lin(214, &dat.ws_path[i], false);
             }
             other => panic!("SWITCH without a CASE for {other}: KRL stops with an error"),
         }
     }
-    k.at(217, r#"END"#);
+    k.at(221, r#"END"#);
     k.trace.advance_stop();
     dat.ws_result
 }
 
 /// `Ask(Request[], Answer[], Timeout)`.
 fn ask(k: &mut Krl, dat: &mut DataList, request: &Chars, answer: &mut Chars, timeout: i32) {
-    k.at(223, r#"DEF Ask(Request[]:OUT, Answer[]:OUT, Timeout:IN)"#);
-    k.at(224, r#"DECL CHAR Request[], Answer[]"#);
-    k.at(225, r#"DECL INT Timeout, Offset, Code"#);
-    k.at(226, r#"DECL EKI_STATUS RET"#);
-    k.at(227, r#"DECL CHAR Sent[256]"#);
+    k.at(227, r#"DEF Ask(Request[]:OUT, Answer[]:OUT, Timeout:IN)"#);
+    k.at(228, r#"DECL CHAR Request[], Answer[]"#);
+    k.at(229, r#"DECL INT Timeout, Offset, Code"#);
+    k.at(230, r#"DECL EKI_STATUS RET"#);
+    k.at(231, r#"DECL CHAR Sent[256]"#);
     let mut sent = Chars::new(256);
-    k.at(228, r#"DECL STATE_T St"#);
-    k.at(229, r#"$FLAG[1] = FALSE"#);
+    k.at(232, r#"DECL STATE_T St"#);
+    k.at(233, r#"$FLAG[1] = FALSE"#);
     k.set_flag(1, false);
-    k.at(230, r#"StrClear(Sent[])"#);
+    k.at(234, r#"StrClear(Sent[])"#);
     sent.clear();
-    k.at(231, r#"Offset = 0"#);
+    k.at(235, r#"Offset = 0"#);
     let mut offset = 0;
-    k.at(232, r#"SWRITE(Sent[], St, Offset, "%s%c%c", Request[], 13, 10)"#);
+    k.at(236, r#"SWRITE(Sent[], St, Offset, "%s%c%c", Request[], 13, 10)"#);
     swrite(&mut sent, &mut offset, "%s%c%c", &[Arg::Text(request), Arg::Int(13), Arg::Int(10)]);
-    k.at(233, r#"RET = EKI_Send("WeldSeam", Sent[])"#);
+    k.at(237, r#"RET = EKI_Send("WeldSeam", Sent[])"#);
     k.eki_send("WeldSeam", &sent);
-    k.at(234, r#"$TIMER_STOP[1] = TRUE"#);
-    k.set_timer_stop(1, true);
-    k.at(235, r#"$TIMER[1] = -Timeout"#);
-    k.set_timer(1, -i64::from(timeout));
-    k.at(236, r#"$TIMER_STOP[1] = FALSE"#);
-    k.set_timer_stop(1, false);
-    k.at(237, r#"WAIT FOR $FLAG[1] OR $TIMER_FLAG[1] OR NOT $FLAG[2]"#);
-    k.wait_for(|k| k.flag(1) || k.timer_flag(1) || !k.flag(2));
     k.at(238, r#"$TIMER_STOP[1] = TRUE"#);
     k.set_timer_stop(1, true);
-    k.at(239, r#"IF NOT $FLAG[1] THEN"#);
+    k.at(239, r#"$TIMER[1] = -Timeout"#);
+    k.set_timer(1, -i64::from(timeout));
+    k.at(240, r#"$TIMER_STOP[1] = FALSE"#);
+    k.set_timer_stop(1, false);
+    k.at(241, r#"WAIT FOR $FLAG[1] OR $TIMER_FLAG[1] OR NOT $FLAG[2]"#);
+    k.wait_for(|k| k.flag(1) || k.timer_flag(1) || !k.flag(2));
+    k.at(242, r#"$TIMER_STOP[1] = TRUE"#);
+    k.set_timer_stop(1, true);
+    k.at(243, r#"IF NOT $FLAG[1] THEN"#);
     if !k.flag(1) {
-        k.at(240, r#"IF $FLAG[2] THEN"#);
+        k.at(244, r#"IF $FLAG[2] THEN"#);
         if k.flag(2) {
-            k.at(241, r#"WsResult = 3"#);
+            k.at(245, r#"WsResult = 3"#);
             dat.ws_result = 3;
         } else {
-            k.at(242, r#"ELSE"#);
-            k.at(243, r#"WsResult = 2"#);
+            k.at(246, r#"ELSE"#);
+            k.at(247, r#"WsResult = 2"#);
             dat.ws_result = 2;
         }
-        k.at(245, r#"RETURN"#);
+        k.at(249, r#"RETURN"#);
         return;
     }
-    k.at(247, r#"$FLAG[1] = FALSE"#);
+    k.at(251, r#"$FLAG[1] = FALSE"#);
     k.set_flag(1, false);
-    k.at(248, r#"StrClear(Answer[])"#);
+    k.at(252, r#"StrClear(Answer[])"#);
     answer.clear();
-    k.at(249, r#"RET = EKI_GetString("WeldSeam", "Line", Answer[])"#);
+    k.at(253, r#"RET = EKI_GetString("WeldSeam", "Line", Answer[])"#);
     let ret = k.eki_get_string("WeldSeam", "Line", answer);
-    k.at(250, r#"IF RET.Msg_No <> 0 THEN"#);
+    k.at(254, r#"IF RET.Msg_No <> 0 THEN"#);
     if ret.msg_no != 0 {
-        k.at(251, r#"WsResult = 2"#);
+        k.at(255, r#"WsResult = 2"#);
         dat.ws_result = 2;
-        k.at(252, r#"RETURN"#);
+        k.at(256, r#"RETURN"#);
         return;
     }
-    k.at(254, r#"IF Answer[1] == "-" THEN"#);
+    k.at(258, r#"IF Answer[1] == "-" THEN"#);
     if answer.0[0] == b'-' {
-        k.at(255, r#"Offset = 0"#);
+        k.at(259, r#"Offset = 0"#);
         offset = 0;
-        k.at(256, r#"SREAD(Answer[], St, Offset, "%d", Code)"#);
+        k.at(260, r#"SREAD(Answer[], St, Offset, "%d", Code)"#);
         let (st, r) = sread(answer, &mut offset, "%d");
         let code = int(&r, 0, 0);
-        k.at(257, r#"WsResult = Code"#);
+        k.at(261, r#"WsResult = Code"#);
         dat.ws_result = code;
-        k.at(258, r#"IF (St.HITS <> 1) OR (Code >= 0) THEN"#);
+        k.at(262, r#"IF (St.HITS <> 1) OR (Code >= 0) THEN"#);
         if st.hits != 1 || code >= 0 {
-            k.at(259, r#"WsResult = 4"#);
+            k.at(263, r#"WsResult = 4"#);
             dat.ws_result = 4;
         }
     }
-    k.at(262, r#"END"#);
+    k.at(266, r#"END"#);
 }
 
 /// `Report(Result, Answer[])`.
 fn report(k: &mut Krl, result: i32, answer: &Chars) {
-    k.at(266, r#"DEF Report(Result:IN, Answer[]:OUT)"#);
-    k.at(267, r#"DECL INT Result"#);
-    k.at(268, r#"DECL CHAR Answer[]"#);
-    k.at(269, r#"SWITCH Result"#);
+    k.at(270, r#"DEF Report(Result:IN, Answer[]:OUT)"#);
+    k.at(271, r#"DECL INT Result"#);
+    k.at(272, r#"DECL CHAR Answer[]"#);
+    k.at(273, r#"SWITCH Result"#);
     match result {
         1 => {
-            k.at(270, r#"CASE 1"#);
-            k.at(271, r#"MsgNotify("EKI channel WeldSeam did not open: check WeldSeam.xml and the daemon's address", "weldseam")"#);
+            k.at(274, r#"CASE 1"#);
+            k.at(275, r#"MsgNotify("EKI channel WeldSeam did not open: check WeldSeam.xml and the daemon's address", "weldseam")"#);
             k.msg_notify("EKI channel WeldSeam did not open: check WeldSeam.xml and the daemon's address");
         }
         2 => {
-            k.at(272, r#"CASE 2"#);
-            k.at(273, r#"MsgNotify("link to the daemon lost before the weld: the torch did not move", "weldseam")"#);
+            k.at(276, r#"CASE 2"#);
+            k.at(277, r#"MsgNotify("link to the daemon lost before the weld: the torch did not move", "weldseam")"#);
             k.msg_notify("link to the daemon lost before the weld: the torch did not move");
         }
         3 => {
-            k.at(274, r#"CASE 3"#);
-            k.at(275, r#"MsgNotify("no reply from the daemon in time: the torch did not move", "weldseam")"#);
+            k.at(278, r#"CASE 3"#);
+            k.at(279, r#"MsgNotify("no reply from the daemon in time: the torch did not move", "weldseam")"#);
             k.msg_notify("no reply from the daemon in time: the torch did not move");
         }
         4 | 7 => {
-            k.at(276, r#"CASE 4, 7"#);
-            k.at(277, r#"MsgNotify("a reply from the daemon not understood: the torch did not move", "weldseam")"#);
+            k.at(280, r#"CASE 4, 7"#);
+            k.at(281, r#"MsgNotify("a reply from the daemon not understood: the torch did not move", "weldseam")"#);
             k.msg_notify("a reply from the daemon not understood: the torch did not move");
         }
         5 => {
-            k.at(278, r#"CASE 5"#);
+            k.at(282, r#"CASE 5"#);
             k.at(
-                279,
+                283,
                 r#"MsgNotify("plan too long for WS_MAX_LINES in WeldSeam.dat: the torch did not move", "weldseam")"#,
             );
             k.msg_notify("plan too long for WS_MAX_LINES in WeldSeam.dat: the torch did not move");
         }
         6 => {
-            k.at(280, r#"CASE 6"#);
-            k.at(281, r#"MsgNotify("a seam failed CHECK (count or means): the torch did not move", "weldseam")"#);
+            k.at(284, r#"CASE 6"#);
+            k.at(285, r#"MsgNotify("a seam failed CHECK (count or means): the torch did not move", "weldseam")"#);
             k.msg_notify("a seam failed CHECK (count or means): the torch did not move");
         }
         8 => {
-            k.at(282, r#"CASE 8"#);
-            k.at(283, r#"MsgNotify("the daemon speaks another text link version (2 expected)", "weldseam")"#);
+            k.at(286, r#"CASE 8"#);
+            k.at(287, r#"MsgNotify("the daemon speaks another text link version (2 expected)", "weldseam")"#);
             k.msg_notify("the daemon speaks another text link version (2 expected)");
         }
         _ => {
-            k.at(284, r#"DEFAULT"#);
-            k.at(285, r#"MsgNotify(Answer[], "weldseam")"#);
+            k.at(288, r#"DEFAULT"#);
+            k.at(289, r#"MsgNotify(Answer[], "weldseam")"#);
             k.msg_notify(&answer.text());
         }
     }
-    k.at(287, r#"END"#);
+    k.at(291, r#"END"#);
 }
 
-/// The tags of this file against the shipped KRL files.
+/// The tags of this file against the shipped KRL program.
 #[test]
-fn the_transcription_follows_weld_seam_src_and_dat_line_by_line() {
-    let source = include_str!("kuka.rs");
-    let statement = |line: &str| !line.is_empty() && !line.starts_with(';') && !super::listing::is_closer(line);
-    let src = super::listing::check("kuka/WeldSeam.src", source, "k", statement);
-    let dat = super::listing::check("kuka/WeldSeam.dat", source, "d", statement);
-    assert!(src.is_ok() && dat.is_ok(), "{}\n{}", src.err().unwrap_or_default(), dat.err().unwrap_or_default());
+fn the_transcription_follows_weld_seam_src_line_by_line() {
+    let statement = |line: &str| !line.is_empty() && !line.starts_with(';') && !super::robot::is_closer(line);
+    if let Err(e) = super::transcription::check("kuka/WeldSeam.src", include_str!("kuka.rs"), statement) {
+        panic!("{e}");
+    }
 }

@@ -3,9 +3,17 @@
 //! commanded (with whether each blends into the next) and the arc's
 //! switching; and the checks the scenarios make on that record.
 
-/// Called with each line a program sends, before it goes out: how a
-/// scenario stops the daemon at a chosen point of the session.
-pub type SendHook = Box<dyn FnMut(&str) + Send>;
+/// A KRL or KAREL line that closes a block or opens a section
+/// (`ENDIF`, `ENDWHILE`, `BEGIN`, `VAR`...): no behaviour of its own, so
+/// a transcription need not tag it (a line added or removed around it
+/// moves every tag after it all the same).
+pub fn is_closer(line: &str) -> bool {
+    let word = line.split([' ', ';', '(']).next().unwrap_or("");
+    matches!(
+        word.to_ascii_uppercase().as_str(),
+        "ENDIF" | "ENDWHILE" | "ENDFOR" | "ENDSWITCH" | "ENDSELECT" | "BEGIN" | "VAR" | "CONST" | "ENDDAT"
+    )
+}
 
 /// One thing the program did, in order.
 #[derive(Debug, Clone, PartialEq)]

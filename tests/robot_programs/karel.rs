@@ -328,3 +328,16 @@ pub fn index(s: &str, pattern: &str) -> i32 {
 pub fn str_len(s: &str) -> i32 {
     s.chars().count() as i32
 }
+
+/// The conversions as documented: a CR left by a CR LF line end makes the
+/// last field no REAL (the failure of a CR LF reply), a plain number is
+/// read, a field width pads on the left.
+#[test]
+fn karel_conversions_refuse_a_stray_cr() {
+    assert_eq!(cnv_str_real("13\r"), None);
+    assert_eq!(cnv_str_real("-244.000"), Some(-244.0));
+    assert_eq!(cnv_str_int("44"), Some(44));
+    assert_eq!(cnv_str_int("4x"), None);
+    assert_eq!(cnv_real_str(-1.5, 1, 3), "-1.500");
+    assert_eq!(sub_str("-44,no frame", 2, index("-44,no frame", ",") - 2), "44");
+}

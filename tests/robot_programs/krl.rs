@@ -498,3 +498,25 @@ pub fn swrite(text: &mut Chars, offset: &mut usize, format: &str, args: &[Arg]) 
     }
     State { hits }
 }
+
+/// SREAD counts the items it read and stops at the first that does not
+/// match; SWRITE writes REALs to the decimals asked and INTs as characters
+/// with `%c`.
+#[test]
+fn sread_and_swrite_as_documented() {
+    let mut line = Chars::new(254);
+    line.assign("2,1,11,850.032,-150.072,-244.000,114.9999,0.0000,-179.9998");
+    let mut offset = 0;
+    let (state, values) = sread(&line, &mut offset, "%d,%d,%d,%f,%f,%f,%f,%f,%f");
+    assert_eq!(state.hits, 9);
+    assert_eq!((int(&values, 2, 0), real(&values, 3, 0.0)), (11, 850.032));
+    let mut error = Chars::new(254);
+    error.assign("-44,no fresh frame in 5000 ms");
+    offset = 0;
+    let (state, values) = sread(&error, &mut offset, "%d,%d,%d");
+    assert_eq!((state.hits, int(&values, 0, 0)), (1, -44));
+    let mut out = Chars::new(16);
+    offset = 0;
+    swrite(&mut out, &mut offset, "%.3f%c%c", &[Arg::Real(1.25), Arg::Int(13), Arg::Int(10)]);
+    assert_eq!(out.text(), "1.250\r\n");
+}

@@ -138,3 +138,16 @@ impl Weld {
         n >= 1 && self.moves[..n - 1].iter().all(|m| m.blended) && !self.moves[n - 1].blend_asked
     }
 }
+
+/// A blend asked for is granted only when nothing stopped the advance
+/// run before the next motion.
+#[test]
+fn an_advance_stop_between_two_motions_makes_an_exact_stop() {
+    let mut trace = Trace { look_ahead: true, ..Trace::default() };
+    trace.motion(1, [0.0; 6], 8.0, true);
+    trace.motion(2, [1.0; 6], 8.0, true);
+    trace.advance_stop();
+    trace.motion(3, [2.0; 6], 8.0, false);
+    let moves = trace.moves();
+    assert_eq!(moves.iter().map(|m| m.blended).collect::<Vec<_>>(), [true, false, false]);
+}

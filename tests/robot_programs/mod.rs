@@ -5,8 +5,16 @@
 
 mod abb;
 mod abb_runs;
+mod fanuc;
+mod fanuc_tp;
 mod harness;
+mod karel;
+mod kf_scenarios;
+mod krl;
+mod kuka;
+mod kuka_dat;
 mod rapid;
+mod robot;
 mod transcription;
 mod ur;
 mod ur_runs;

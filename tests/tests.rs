@@ -22,6 +22,7 @@ mod requests;
 mod roi;
 mod several_seams;
 mod text_link;
+mod transcript;
 mod units_frames;
 mod unorganized;
 mod util;

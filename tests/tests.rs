@@ -26,3 +26,4 @@ mod transcript;
 mod units_frames;
 mod unorganized;
 mod util;
+mod versions;

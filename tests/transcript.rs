@@ -98,12 +98,9 @@ fn config() -> Config {
     c
 }
 
-/// A version 7 message as its client wrote it: today's encoding of the
-/// message with the version 7 header and Hello.
+/// A version 7 message as its client wrote it.
 fn v7(message: &Message) -> Vec<u8> {
-    let mut bytes = weldseam_proto::frame::encode(message).unwrap();
-    bytes[4..6].copy_from_slice(&V7.to_le_bytes());
-    bytes
+    weldseam_proto::frame::encode_in(weldseam_proto::Session::V7, message).unwrap()
 }
 
 /// A session's messages from the peer, each with how many messages the
@@ -140,7 +137,8 @@ fn sessions() -> [(&'static str, Session); 2] {
             points: vec![point; 2],
         })
     };
-    let hello = |role, name: &str| Message::Hello(Hello { protocol_version: V7, role, name: name.into() });
+    let hello =
+        |role, name: &str| Message::Hello(Hello { protocol_version: V7, role, name: name.into(), capabilities: 0 });
     let camera_session = vec![
         (v7(&hello(Role::Camera, "cam-1")), 1),
         (v7(&Message::Ping), 1),

@@ -27,6 +27,26 @@ pub mod to_proto {
     use crate::pipeline::trace::TracedLine;
     use crate::pipeline::{CloudFrame, Plan, PlanError, PlanRequest, PlanTrace, Seam, Stage, Unplanned};
 
+    /// The daemon's limits as a HelloAck carries them (capability
+    /// `limits`). A count or time past the wire field's range is sent as
+    /// the field's largest value, which no client can exceed anyway.
+    pub fn limits(s: &crate::config::ServerConfig) -> message::DaemonLimits {
+        let ms = |d: std::time::Duration| u64::try_from(d.as_millis()).unwrap_or(u64::MAX);
+        let count = |n: usize| u32::try_from(n).unwrap_or(u32::MAX);
+        message::DaemonLimits {
+            max_frame_bytes: s.max_frame_bytes,
+            max_message_bytes: weldseam_proto::MAX_CONTROL_MESSAGE_BYTES as u64,
+            plan_queue_depth: count(s.plan_queue_depth),
+            max_requests_per_connection: count(s.max_requests_per_connection),
+            fresh_frame_timeout_ms: ms(s.fresh_frame_timeout),
+            max_request_timeout_ms: ms(s.max_request_timeout),
+            capture_time_tolerance_ms: ms(s.capture_time_tolerance),
+            frame_history: count(s.frame_history),
+            frame_history_bytes: s.frame_history_bytes,
+            stall_timeout_ms: ms(s.stall_timeout),
+        }
+    }
+
     pub fn joint(j: JointType) -> proto::Joint {
         match j {
             JointType::VButt => proto::Joint::VButt,

@@ -136,8 +136,18 @@ fn valid_messages() -> Vec<Vec<u8>> {
         FrameMeta { frame_id: 7, trigger_id: 1, capture_time_us: 5, width: 4, height: 3, units: 1, cloud_frame: 1 };
     let points = (0..12).map(|i| [i as f32, 0.5, 0.7]).collect();
     let messages = [
-        Message::Hello(Hello { protocol_version: PROTOCOL_VERSION, role: Role::Camera, name: "cam-01".into() }),
-        Message::HelloAck(HelloAck { protocol_version: PROTOCOL_VERSION, server: "weldseam".into() }),
+        Message::Hello(Hello {
+            protocol_version: PROTOCOL_VERSION,
+            role: Role::Camera,
+            name: "cam-01".into(),
+            capabilities: 0,
+        }),
+        Message::HelloAck(HelloAck {
+            protocol_version: PROTOCOL_VERSION,
+            server: "weldseam".into(),
+            capabilities: 0,
+            limits: None,
+        }),
         Message::error(ErrorCode::Busy, Some(3), "busy"),
         Message::Ping,
         Message::Status(Status {

@@ -28,7 +28,13 @@ fn config() -> Config {
 }
 
 fn hello(role: Role) -> Vec<u8> {
-    frame::encode(&Message::Hello(Hello { protocol_version: PROTOCOL_VERSION, role, name: "peer".into() })).unwrap()
+    frame::encode(&Message::Hello(Hello {
+        protocol_version: PROTOCOL_VERSION,
+        role,
+        name: "peer".into(),
+        capabilities: 0,
+    }))
+    .unwrap()
 }
 
 /// Reads one message, or None when the daemon closed the connection.

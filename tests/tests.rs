@@ -23,6 +23,8 @@ mod robot_programs;
 mod roi;
 mod several_seams;
 mod text_link;
+mod transcript;
 mod units_frames;
 mod unorganized;
 mod util;
+mod versions;

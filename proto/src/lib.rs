@@ -8,6 +8,7 @@
 //!   tags and error codes.
 //! - [`frame`]: the message header, the bincode configuration and the
 //!   encoding of bodies; see PROTOCOL.md for every byte.
+//! - [`session`]: version and capability negotiation, the versions served.
 //! - [`text`]: the text controller link's lines, which robot programs
 //!   read with their own primitives; see ROBOTS.md.
 //! - [`calibration`]: hand-eye calibration's capture files, its report
@@ -19,8 +20,10 @@ pub mod calibration;
 pub mod frame;
 pub mod message;
 pub mod plan;
+pub mod session;
 pub mod text;
 pub mod trace;
 
-pub use frame::{MAX_CONTROL_MESSAGE_BYTES, PROTOCOL_VERSION};
+pub use frame::MAX_CONTROL_MESSAGE_BYTES;
 pub use message::{ErrorCode, Message};
+pub use session::{OLDEST_SERVED_VERSION, PROTOCOL_VERSION, Session};

@@ -79,22 +79,69 @@ impl Role {
     }
 }
 
-/// The first message on every connection, from the connecting peer.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+/// The first message on every connection, from the connecting peer. Its
+/// layout depends on its header's version (see [`crate::session`]):
+/// version 7 ends after `name`; version 8 adds `capabilities`.
+#[derive(Debug, Clone, PartialEq)]
 pub struct Hello {
+    /// The newest version the peer speaks; the header carries the same.
     pub protocol_version: u16,
     pub role: Role,
     /// The peer's name. A camera's name is how a plan request names it
     /// (see [`PlanRequest::camera`]); a controller's is for logs.
     pub name: String,
+    /// The [`crate::session::capability`] bits the peer asks for (version
+    /// 8 on; 0 in a version 7 Hello, which has no such field).
+    pub capabilities: u64,
 }
 
-/// The daemon's answer to an accepted [`Hello`].
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+impl Hello {
+    /// A Hello of this crate's newest version, asking for `capabilities`.
+    pub fn new(role: Role, name: impl Into<String>, capabilities: u64) -> Hello {
+        Hello { protocol_version: crate::session::PROTOCOL_VERSION, role, name: name.into(), capabilities }
+    }
+}
+
+/// The daemon's answer to an accepted [`Hello`]: the version the
+/// connection speaks from now on and the capabilities granted.
+#[derive(Debug, Clone, PartialEq)]
 pub struct HelloAck {
+    /// The version both speak: the lower of the peer's and the daemon's.
     pub protocol_version: u16,
     /// The daemon's name and version, for logs.
     pub server: String,
+    /// The capabilities granted: those asked that the daemon has (version
+    /// 8 on; 0 for version 7, whose HelloAck ends after `server`).
+    pub capabilities: u64,
+    /// Present exactly when [`crate::session::capability::LIMITS`] is
+    /// granted.
+    pub limits: Option<DaemonLimits>,
+}
+
+/// The daemon's limits a client must keep to, as configured (capability
+/// `limits`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub struct DaemonLimits {
+    /// The largest Frame payload on the camera link (`server.max_frame_bytes`).
+    pub max_frame_bytes: u64,
+    /// The largest payload of any other message ([`crate::MAX_CONTROL_MESSAGE_BYTES`]).
+    pub max_message_bytes: u64,
+    /// Requests waiting or planning in all (`server.plan_queue_depth`).
+    pub plan_queue_depth: u32,
+    /// Of those, per controller connection (`server.max_requests_per_connection`).
+    pub max_requests_per_connection: u32,
+    /// The frame wait of a request whose `timeout_ms` is 0 (`server.fresh_frame_timeout_ms`).
+    pub fresh_frame_timeout_ms: u64,
+    /// The longest `timeout_ms` accepted (`server.max_request_timeout_ms`).
+    pub max_request_timeout_ms: u64,
+    /// The camera clock's allowed difference (`server.capture_time_tolerance_ms`).
+    pub capture_time_tolerance_ms: u64,
+    /// Frames held for requests naming an id, at most (`server.frame_history`).
+    pub frame_history: u32,
+    /// Bytes of points those frames may hold (`server.frame_history_bytes`).
+    pub frame_history_bytes: u64,
+    /// Silence allowed in the middle of a message (`server.stall_timeout_ms`).
+    pub stall_timeout_ms: u64,
 }
 
 /// The unit of a frame's coordinates.

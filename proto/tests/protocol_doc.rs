@@ -1,11 +1,18 @@
 //! PROTOCOL.md's hex examples are the encodings this crate produces: the
 //! document cannot drift from the code.
 
-use weldseam_proto::frame::encode;
+use std::collections::BTreeMap;
+
+use weldseam_proto::frame::{encode, encode_in};
 use weldseam_proto::message::{
-    CloudFrame, ErrorCode, Frame, FrameAck, FrameMeta, FrameSelect, Hello, Message, PlanRequest, Roi, Role, Status,
-    Trigger, Units, joint_code,
+    CloudFrame, DaemonLimits, ErrorCode, Frame, FrameAck, FrameMeta, FrameSelect, Hello, HelloAck, Message, PlanReply,
+    PlanRequest, Roi, Role, Status, Trigger, Units, joint_code,
 };
+use weldseam_proto::plan::{
+    GateWarning, Joint, PlanResult, PointCounts, Refusal, Seam, SeamCoverage, SeamQuality, UnplannedJoint, Waypoint,
+};
+use weldseam_proto::session::capability;
+use weldseam_proto::{PROTOCOL_VERSION, Session};
 
 fn hex_dump(bytes: &[u8]) -> String {
     bytes
@@ -18,14 +25,128 @@ fn hex_dump(bytes: &[u8]) -> String {
         .collect()
 }
 
-fn examples() -> Vec<(&'static str, Message)> {
-    vec![
+/// A lap seam of two waypoints with its quality figures and one warning,
+/// beside a tee root left unplanned.
+fn plan_reply() -> PlanReply {
+    let seam = Seam {
+        joint: Joint::Lap,
+        joint_evidence: Some("lap".into()),
+        waypoints: vec![
+            Waypoint { xyz: [800.0, -100.0, 20.0], rpy_deg: [180.0, 0.0, 90.0] },
+            Waypoint { xyz: [800.0, 100.0, 20.0], rpy_deg: [180.0, 0.0, 90.0] },
+        ],
+        start_camera: [-100.0, 0.0, 480.0],
+        end_camera: [100.0, 0.0, 480.0],
+        normal_camera: [0.0, 0.0, 1.0],
+        length_mm: 200.0,
+        edge_fit_rms_mm: [0.25, 0.5],
+        edge_samples: [400, 380],
+        edge_samples_dropped: [2, 4],
+        coverage: Some(SeamCoverage { edge: [1.0, 0.75], joint: 1.0, visible_joint_mm: 200.0, beyond_mm: 0.0 }),
+        quality: Some(SeamQuality {
+            point_spacing_mm: 0.5,
+            gap_mm: None,
+            misalignment_mm: None,
+            lap_step_mm: Some(5.0),
+            depth_to_support_mm: None,
+            plate_angle_deg: 0.5,
+            uncertainty_across_mm: 0.625,
+            uncertainty_normal_mm: 0.625,
+            groove_angle_deg: None,
+            groove_depth_mm: None,
+        }),
+        warnings: vec![GateWarning {
+            gate: "position_uncertainty".into(),
+            value: 0.625,
+            limit: 0.5,
+            message: "0.625 > 0.5 mm".into(),
+        }],
+    };
+    let unplanned = UnplannedJoint {
+        joint: Some("t_fillet".into()),
+        near_camera_mm: Some([0.0, 150.0, 500.0]),
+        code: ErrorCode::PlanFailed.code(),
+        refusal: Refusal {
+            stage: "fillet".into(),
+            code: "plan_failed".into(),
+            gate: None,
+            message: "the web hides the root".into(),
+        },
+    };
+    PlanReply {
+        request_id: 5,
+        frame_id: 7,
+        result: PlanResult {
+            seams: vec![seam],
+            unplanned: vec![unplanned],
+            timing_ms: BTreeMap::from([("total".to_string(), 250.0)]),
+            method: "robust".into(),
+            euler_convention: "zyx".into(),
+            points: PointCounts {
+                valid: 100_000,
+                plane: 60_000,
+                clusters: 3,
+                plates: [30_000, 25_000],
+                edges: [400, 380],
+                edge_lines: 2,
+            },
+        },
+    }
+}
+
+/// The daemon's limits as its default configuration sets them.
+fn default_limits() -> DaemonLimits {
+    DaemonLimits {
+        max_frame_bytes: 128 << 20,
+        max_message_bytes: 4 << 20,
+        plan_queue_depth: 4,
+        max_requests_per_connection: 2,
+        fresh_frame_timeout_ms: 5_000,
+        max_request_timeout_ms: 30_000,
+        capture_time_tolerance_ms: 200,
+        frame_history: 8,
+        frame_history_bytes: 128 << 20,
+        stall_timeout_ms: 5_000,
+    }
+}
+
+fn examples() -> Vec<(&'static str, Vec<u8>)> {
+    let v7 = |m: &Message| encode_in(Session::V7, m).unwrap();
+    let mut examples: Vec<(&'static str, Vec<u8>)> =
+        messages().into_iter().map(|(n, m)| (n, encode(&m).unwrap())).collect();
+    examples.extend([
         (
-            "hello",
-            Message::Hello(Hello {
-                protocol_version: weldseam_proto::PROTOCOL_VERSION,
+            "hello_v7",
+            v7(&Message::Hello(Hello {
+                protocol_version: 7,
                 role: Role::Camera,
                 name: "cam-1".into(),
+                capabilities: 0,
+            })),
+        ),
+        (
+            "hello_ack_v7",
+            v7(&Message::HelloAck(HelloAck {
+                protocol_version: 7,
+                server: "weldseam 0.1.0".into(),
+                capabilities: 0,
+                limits: None,
+            })),
+        ),
+    ]);
+    examples
+}
+
+fn messages() -> Vec<(&'static str, Message)> {
+    vec![
+        ("hello", Message::Hello(Hello::new(Role::Camera, "cam-1", capability::LIMITS))),
+        (
+            "hello_ack",
+            Message::HelloAck(HelloAck {
+                protocol_version: PROTOCOL_VERSION,
+                server: "weldseam 0.1.0".into(),
+                capabilities: capability::LIMITS,
+                limits: Some(default_limits()),
             }),
         ),
         (
@@ -106,6 +227,7 @@ fn examples() -> Vec<(&'static str, Message)> {
                 one_seam: false,
             }),
         ),
+        ("plan_reply", Message::PlanReply(plan_reply())),
         ("error", Message::error(ErrorCode::Busy, Some(5), "busy")),
     ]
 }
@@ -122,8 +244,8 @@ fn block<'a>(doc: &'a str, name: &str) -> Option<&'a str> {
 fn protocol_md_hex_examples_match_the_encoder() {
     let doc = include_str!("../PROTOCOL.md");
     let mut wrong = String::new();
-    for (name, message) in examples() {
-        let dump = hex_dump(&encode(&message).unwrap());
+    for (name, bytes) in examples() {
+        let dump = hex_dump(&bytes);
         if block(doc, name) != Some(dump.as_str()) {
             wrong.push_str(&format!("<!-- hex:{name} -->\n```text\n{dump}```\n"));
         }
@@ -140,6 +262,15 @@ fn protocol_md_lists_every_error_code_and_the_frame_header_size() {
     }
     let header = format!("a {}-byte frame header", weldseam_proto::message::FRAME_META_BYTES);
     assert!(doc.contains(&header), "PROTOCOL.md does not say {header:?}");
-    let version = format!("# The weldseam wire protocol, version {}", weldseam_proto::PROTOCOL_VERSION);
+    let version = format!("# The weldseam wire protocol, version {PROTOCOL_VERSION}");
     assert!(doc.starts_with(&version), "PROTOCOL.md's title is not {version:?}");
+}
+
+#[test]
+fn protocol_md_lists_every_capability_by_bit_and_name() {
+    let doc = include_str!("../PROTOCOL.md");
+    for (bit, name) in capability::ALL {
+        let row = format!("| {} | `{name}` |", bit.trailing_zeros());
+        assert!(doc.contains(&row), "PROTOCOL.md's capability table lacks {row}");
+    }
 }

@@ -12,9 +12,9 @@ use std::time::{Duration, SystemTime, UNIX_EPOCH};
 use tokio::net::TcpStream;
 use tokio::sync::mpsc;
 use tracing::{info, warn};
+use weldseam_proto::Message;
 use weldseam_proto::frame::DEFAULT_MAX_FRAME_BYTES;
 use weldseam_proto::message::{Hello, Role};
-use weldseam_proto::{Message, PROTOCOL_VERSION};
 
 use super::ClientError;
 use crate::cloud::PointCloud;
@@ -127,7 +127,7 @@ impl MockCamera {
             Err(source) => return Ended::Lost(ClientError::Connect { addr: self.addr.clone(), source }),
         };
         let Connection { mut reader, mut writer, .. } = Connection::new(stream, peer, STALL, DEFAULT_MAX_FRAME_BYTES);
-        let hello = Hello { protocol_version: PROTOCOL_VERSION, role: Role::Camera, name: self.options.name.clone() };
+        let hello = Hello::new(Role::Camera, self.options.name.clone(), 0);
         if let Err(e) = writer.send(&Message::Hello(hello)).await {
             return Ended::Lost(e.into());
         }

@@ -4,9 +4,9 @@
 use std::time::Duration;
 
 use tokio::net::TcpStream;
+use weldseam_proto::Message;
 use weldseam_proto::frame::DEFAULT_MAX_FRAME_BYTES;
 use weldseam_proto::message::{Hello, PlanReply, PlanRequest, Role, Status};
-use weldseam_proto::{Message, PROTOCOL_VERSION};
 
 use super::ClientError;
 use crate::server::connection::Connection;
@@ -29,7 +29,7 @@ impl ControllerClient {
             TcpStream::connect(addr).await.map_err(|source| ClientError::Connect { addr: addr.to_string(), source })?;
         let peer = stream.peer_addr().map_err(|source| ClientError::Connect { addr: addr.to_string(), source })?;
         let mut conn = Connection::new(stream, peer, STALL, DEFAULT_MAX_FRAME_BYTES);
-        let hello = Hello { protocol_version: PROTOCOL_VERSION, role: Role::Controller, name: name.to_string() };
+        let hello = Hello::new(Role::Controller, name, 0);
         conn.writer.send(&Message::Hello(hello)).await?;
         match conn.reader.read().await? {
             Some(r) => match r.message {

@@ -14,9 +14,9 @@ use std::time::{Duration, Instant};
 use tokio::io::AsyncWriteExt;
 use tokio::net::TcpStream;
 use tokio::sync::mpsc;
+use weldseam_proto::Message;
 use weldseam_proto::frame::{self, DEFAULT_MAX_FRAME_BYTES};
 use weldseam_proto::message::{FrameSelect, Hello, Role};
-use weldseam_proto::{Message, PROTOCOL_VERSION};
 
 use crate::cloud::PointCloud;
 use crate::config::Config;
@@ -68,7 +68,7 @@ async fn raw_camera(
     stream.set_nodelay(true)?;
     let (read, mut write) = stream.into_split();
     let mut reader = MessageReader::new(read, Duration::from_secs(30), DEFAULT_MAX_FRAME_BYTES);
-    let hello = Hello { protocol_version: PROTOCOL_VERSION, role: Role::Camera, name: "bench-camera".into() };
+    let hello = Hello::new(Role::Camera, "bench-camera", 0);
     let hello = frame::encode(&Message::Hello(hello)).map_err(|e| DriveError::Camera(e.to_string()))?;
     write.write_all(&hello).await?;
     let mut frame_id = 0u64;
@@ -301,7 +301,7 @@ async fn streaming_camera(addr: String, mut message: Vec<u8>, hz: f64) -> Result
     let stream = TcpStream::connect(&addr).await?;
     stream.set_nodelay(true)?;
     let (read, mut write) = stream.into_split();
-    let hello = Hello { protocol_version: PROTOCOL_VERSION, role: Role::Camera, name: "bench-camera".into() };
+    let hello = Hello::new(Role::Camera, "bench-camera", 0);
     let hello = frame::encode(&Message::Hello(hello)).map_err(|e| DriveError::Camera(e.to_string()))?;
     write.write_all(&hello).await?;
     let (trigger_tx, mut triggers) = mpsc::unbounded_channel();

@@ -9,15 +9,16 @@ use std::time::Instant;
 
 use tokio::sync::Mutex;
 use tracing::{Instrument, info, warn};
-use weldseam_proto::frame::{self, FramingError};
+use weldseam_proto::frame;
 use weldseam_proto::message::{FrameAck, Hello, HelloAck, Role, Trigger};
-use weldseam_proto::{ErrorCode, Message, PROTOCOL_VERSION};
+use weldseam_proto::session::capability;
+use weldseam_proto::{ErrorCode, Message};
 
 use super::ServerState;
 use super::connection::{Connection, HandshakeError, MessageWriter, ReadError, Received};
 use super::frames::{CameraRegistration, StoredFrame, wall_clock_us};
 use super::shutdown::Shutdown;
-use crate::convert::from_proto;
+use crate::convert::{from_proto, to_proto};
 
 type Writer = Arc<Mutex<MessageWriter<tokio::net::tcp::OwnedWriteHalf>>>;
 
@@ -33,18 +34,33 @@ pub(crate) fn server_name() -> String {
 /// Returns the peer's Hello and what `join` made, or None when the
 /// connection should close (dropping what `join` made). Before the Hello
 /// every error closes the connection: a peer that cannot say Hello is not
-/// speaking this protocol, and must not keep a connection slot.
+/// speaking this protocol, and must not keep a connection slot. Each
+/// refusal goes in a header of the version the peer's message came in
+/// (one this daemon knows the Error layout of), so its own decoder reads
+/// why; the ack and everything after it, in the version agreed.
 pub(crate) async fn handshake<T>(
     conn: &mut Connection,
     role: Role,
     state: &ServerState,
     join: impl FnOnce(&Hello) -> T,
 ) -> Option<(Hello, T)> {
-    match conn.expect_hello(role, state.config.server.stall_timeout).await {
-        Ok(hello) => {
-            info!(name = %hello.name, "{} connected", role.name());
+    let refuse = |conn: &Connection, refusal: &Message| {
+        let version = conn.reader.last_version().unwrap_or(weldseam_proto::PROTOCOL_VERSION);
+        frame::encode_version_refusal(version, refusal)
+    };
+    match conn.expect_hello(role, state.config.server.hello_timeout).await {
+        Ok((hello, session)) => {
+            info!(name = %hello.name, version = session.version, capabilities = session.capabilities, "{} connected", role.name());
             let joined = join(&hello);
-            let ack = Message::HelloAck(HelloAck { protocol_version: PROTOCOL_VERSION, server: server_name() });
+            let limits = session.has(capability::LIMITS).then(|| to_proto::limits(&state.config.server));
+            let ack = Message::HelloAck(HelloAck {
+                protocol_version: session.version,
+                server: server_name(),
+                capabilities: session.capabilities,
+                limits,
+            });
+            conn.writer.set_session(session);
+            conn.reader.set_session(session);
             conn.writer.send(&ack).await.is_ok().then_some((hello, joined))
         }
         Err(HandshakeError::Closed) => {
@@ -55,14 +71,7 @@ pub(crate) async fn handshake<T>(
             warn!("bad hello: {e}");
             if let Some(code) = e.reply_code() {
                 let refusal = Message::error(code, None, e.to_string());
-                // An old peer is told why in a header it can read.
-                let bytes = match &e {
-                    ReadError::Framing(FramingError::UnsupportedVersion(v)) => {
-                        frame::encode_version_refusal(*v, &refusal)
-                    }
-                    _ => frame::encode(&refusal),
-                };
-                if let Ok(bytes) = bytes {
+                if let Ok(bytes) = refuse(conn, &refusal) {
                     let _ = conn.writer.send_encoded(&bytes).await;
                 }
             }
@@ -70,7 +79,9 @@ pub(crate) async fn handshake<T>(
         }
         Err(e @ HandshakeError::Refused { code, .. }) => {
             warn!("refused: {e}");
-            let _ = conn.writer.send(&Message::error(code, None, e.to_string())).await;
+            if let Ok(bytes) = refuse(conn, &Message::error(code, None, e.to_string())) {
+                let _ = conn.writer.send_encoded(&bytes).await;
+            }
             None
         }
         Err(e @ HandshakeError::Timeout(_)) => {

@@ -24,7 +24,8 @@ use weldseam_proto::frame::{
     self, DecodeError, EncodeError, FramingError, HEADER_BYTES, Header, MAX_CONTROL_MESSAGE_BYTES,
 };
 use weldseam_proto::message::{FRAME_META_BYTES, Frame, Hello, POINT_BYTES, Point, Role, Tag};
-use weldseam_proto::{ErrorCode, Message, PROTOCOL_VERSION};
+use weldseam_proto::session::{self, Session};
+use weldseam_proto::{ErrorCode, Message};
 
 /// Point bytes read per call when receiving a frame (a multiple of 12).
 const POINT_CHUNK_BYTES: usize = POINT_BYTES * 16 * 1024;
@@ -143,11 +144,38 @@ pub struct MessageReader<R> {
     bytes_in: Option<Counter>,
     /// Receive buffer for control bodies and frame chunks; reused.
     buffer: Vec<u8>,
+    /// The version and capabilities agreed in the Hello; until then each
+    /// message is read as its header's version says.
+    session: Option<Session>,
+    /// The version of the last header read, which a refusal before the
+    /// Hello is answered in.
+    last_version: Option<u16>,
 }
 
 impl<R: AsyncRead + Unpin> MessageReader<R> {
     pub fn new(stream: R, stall: Duration, max_frame_bytes: u64) -> Self {
-        MessageReader { stream, stall, max_frame_bytes, deadline: None, due: None, bytes_in: None, buffer: Vec::new() }
+        MessageReader {
+            stream,
+            stall,
+            max_frame_bytes,
+            deadline: None,
+            due: None,
+            bytes_in: None,
+            buffer: Vec::new(),
+            session: None,
+            last_version: None,
+        }
+    }
+
+    /// From now on every message must come in `session`'s version, and is
+    /// read as its layout and capabilities say.
+    pub fn set_session(&mut self, session: Session) {
+        self.session = Some(session);
+    }
+
+    /// The version of the last header read, if any.
+    pub fn last_version(&self) -> Option<u16> {
+        self.last_version
     }
 
     /// Bounds the time of every whole message, not only the silences.
@@ -249,7 +277,14 @@ impl<R: AsyncRead + Unpin> MessageReader<R> {
         self.fill(1..HEADER_BYTES).await?;
         let mut head = [0u8; HEADER_BYTES];
         head.copy_from_slice(&self.buffer[..HEADER_BYTES]);
+        self.last_version = Some(u16::from_le_bytes([head[4], head[5]]));
         let header = Header::parse(&head, self.max_frame_bytes)?;
+        if let Some(agreed) = self.session
+            && header.version != agreed.version
+        {
+            return Err(FramingError::VersionChanged { got: header.version, agreed: agreed.version }.into());
+        }
+        let session = self.session.unwrap_or(Session::of(header.version));
         self.set_due(started, HEADER_BYTES as u64 + header.length);
         let message = if header.tag == Tag::Frame as u16 {
             self.read_frame(header.length).await?
@@ -257,7 +292,7 @@ impl<R: AsyncRead + Unpin> MessageReader<R> {
             // Header::parse bounds every non-frame payload by the control limit.
             let len = header.length.min(MAX_CONTROL_MESSAGE_BYTES as u64) as usize;
             self.fill(0..len).await?;
-            frame::decode_body(header.tag, &self.buffer[..len])?
+            frame::decode_body_in(session, header.tag, &self.buffer[..len])?
         };
         self.due = None;
         Ok(Some(Received { message, bytes: HEADER_BYTES as u64 + header.length, elapsed: started.elapsed() }))
@@ -312,11 +347,22 @@ pub struct MessageWriter<W> {
     stall: Duration,
     /// The whole-message bound of a send; None bounds only the stalls.
     deadline: Option<MessageDeadline>,
+    /// The version and capabilities messages are laid out in.
+    session: Session,
 }
 
 impl<W: AsyncWrite + Unpin> MessageWriter<W> {
     pub fn new(stream: W, stall: Duration) -> Self {
-        MessageWriter { stream, stall, deadline: None }
+        MessageWriter { stream, stall, deadline: None, session: Session::NEWEST }
+    }
+
+    /// Lays out every later message as `session` says.
+    pub fn set_session(&mut self, session: Session) {
+        self.session = session;
+    }
+
+    pub fn session(&self) -> Session {
+        self.session
     }
 
     /// Bounds the time of every whole message sent, not only the stalls.
@@ -328,7 +374,7 @@ impl<W: AsyncWrite + Unpin> MessageWriter<W> {
     /// Sends one message; the peer must accept it within the stall timeout
     /// per chunk the socket takes, and all of it within the deadline.
     pub async fn send(&mut self, message: &Message) -> Result<(), WriteError> {
-        let bytes = frame::encode(message)?;
+        let bytes = frame::encode_in(self.session, message)?;
         self.send_encoded(&bytes).await
     }
 
@@ -373,7 +419,8 @@ pub enum HandshakeError {
     /// The hello could not be read.
     #[error(transparent)]
     Read(#[from] ReadError),
-    /// The first message was not a hello, or named the wrong version or role.
+    /// The first message was not a hello, or named a version not served
+    /// or the wrong role.
     #[error("{message}")]
     Refused { code: ErrorCode, message: String },
 }
@@ -436,13 +483,14 @@ impl Connection {
         self
     }
 
-    /// Waits for the peer's hello (within `stall`), checks its version and
-    /// role and runs the admission, if any. The caller answers with an ack
-    /// or the error.
-    pub async fn expect_hello(&mut self, role: Role, stall: Duration) -> Result<Hello, HandshakeError> {
-        let received = tokio::time::timeout(stall, self.reader.read())
+    /// Waits for the peer's hello (within `wait`), checks its role,
+    /// negotiates the version and capabilities (see
+    /// [`weldseam_proto::session`]) and runs the admission, if any. The
+    /// caller answers with an ack in the session returned, or the error.
+    pub async fn expect_hello(&mut self, role: Role, wait: Duration) -> Result<(Hello, Session), HandshakeError> {
+        let received = tokio::time::timeout(wait, self.reader.read())
             .await
-            .map_err(|_| HandshakeError::Timeout(stall))??
+            .map_err(|_| HandshakeError::Timeout(wait))??
             .ok_or(HandshakeError::Closed)?;
         let hello = match received.message {
             Message::Hello(h) => h,
@@ -453,15 +501,9 @@ impl Connection {
                 });
             }
         };
-        if hello.protocol_version != PROTOCOL_VERSION {
-            return Err(HandshakeError::Refused {
-                code: ErrorCode::UnsupportedVersion,
-                message: format!(
-                    "protocol version {} is not supported; this daemon speaks version {PROTOCOL_VERSION}",
-                    hello.protocol_version
-                ),
-            });
-        }
+        let header_version = self.reader.last_version().unwrap_or(hello.protocol_version);
+        let session = session::negotiate(&hello, header_version)
+            .map_err(|e| HandshakeError::Refused { code: e.code(), message: e.to_string() })?;
         if hello.role != role {
             return Err(HandshakeError::Refused {
                 code: ErrorCode::UnexpectedMessage,
@@ -471,7 +513,7 @@ impl Connection {
         if let Some(Admission(admit)) = self.admission.take() {
             admit().map_err(|message| HandshakeError::Refused { code: ErrorCode::Busy, message })?;
         }
-        Ok(hello)
+        Ok((hello, session))
     }
 }
 

@@ -1,0 +1,179 @@
+//! Version and capability negotiation over loopback: a version 7 peer gets
+//! version 7's bytes, a version 8 peer version 8's with the capabilities it
+//! asked for that the daemon has, a newer peer the newest both speak, and
+//! a peer that leaves its agreed version, or says Hello twice, is answered
+//! as PROTOCOL.md says.
+
+use std::time::Duration;
+
+use tokio::io::{AsyncReadExt, AsyncWriteExt};
+use tokio::net::TcpStream;
+use weldseam::config::Config;
+use weldseam_proto::frame::{self, HEADER_BYTES};
+use weldseam_proto::message::{DaemonLimits, Hello, HelloAck, Role};
+use weldseam_proto::session::capability;
+use weldseam_proto::{ErrorCode, Message, PROTOCOL_VERSION, Session};
+
+use crate::util::Cell;
+
+const WAIT: Duration = Duration::from_secs(30);
+
+/// One whole message as raw bytes, and the version of its header.
+async fn read_raw(stream: &mut TcpStream) -> Option<Vec<u8>> {
+    let mut bytes = vec![0u8; HEADER_BYTES];
+    tokio::time::timeout(WAIT, stream.read_exact(&mut bytes)).await.expect("the daemon answers in time").ok()?;
+    let length = u64::from_le_bytes(bytes[8..16].try_into().unwrap()) as usize;
+    bytes.resize(HEADER_BYTES + length, 0);
+    tokio::time::timeout(WAIT, stream.read_exact(&mut bytes[HEADER_BYTES..])).await.unwrap().ok()?;
+    Some(bytes)
+}
+
+fn version_of(bytes: &[u8]) -> u16 {
+    u16::from_le_bytes([bytes[4], bytes[5]])
+}
+
+async fn closed(stream: &mut TcpStream) -> bool {
+    let mut byte = [0u8; 1];
+    matches!(tokio::time::timeout(WAIT, stream.read(&mut byte)).await, Ok(Ok(0)) | Ok(Err(_)))
+}
+
+/// Connects, sends `hello` as a peer of `session` writes it, and returns
+/// the stream and the daemon's raw answer.
+async fn say_hello(addr: &str, session: Session, hello: Hello) -> (TcpStream, Vec<u8>) {
+    let mut stream = TcpStream::connect(addr).await.unwrap();
+    stream.write_all(&frame::encode_in(session, &Message::Hello(hello)).unwrap()).await.unwrap();
+    let answer = read_raw(&mut stream).await.expect("an answer to the Hello");
+    (stream, answer)
+}
+
+fn hello(version: u16, role: Role, capabilities: u64) -> Hello {
+    Hello { protocol_version: version, role, name: "peer".into(), capabilities }
+}
+
+fn config() -> Config {
+    let mut c = Config::default();
+    c.server.pipeline_threads = 1;
+    c.server.plan_queue_depth = 3;
+    c.server.frame_history = 5;
+    c
+}
+
+#[tokio::test]
+async fn each_peer_gets_the_newest_version_both_speak_and_only_the_capabilities_it_asked_for() {
+    let cell = Cell::start(config()).await;
+    let server = format!("weldseam {}", env!("CARGO_PKG_VERSION"));
+
+    // Version 7: version 7's HelloAck, byte for byte, and every later
+    // message in a version 7 header.
+    let (mut v7, answer) = say_hello(&cell.controller, Session::V7, hello(7, Role::Controller, 0)).await;
+    let expected = HelloAck { protocol_version: 7, server: server.clone(), capabilities: 0, limits: None };
+    assert_eq!(answer, frame::encode_in(Session::V7, &Message::HelloAck(expected)).unwrap());
+    assert_eq!(answer.len(), HEADER_BYTES + 2 + 8 + server.len(), "no field of version 8");
+    v7.write_all(&frame::encode_in(Session::V7, &Message::Ping).unwrap()).await.unwrap();
+    let status = read_raw(&mut v7).await.unwrap();
+    assert_eq!(version_of(&status), 7);
+    assert!(matches!(frame::decode(&status, 1 << 20), Ok(Message::Status(_))));
+
+    // Version 8 without capabilities: granted none, no limits.
+    let (_v8, answer) = say_hello(&cell.camera, Session::NEWEST, hello(8, Role::Camera, 0)).await;
+    assert_eq!(version_of(&answer), 8);
+    let bare = HelloAck { protocol_version: 8, server: server.clone(), capabilities: 0, limits: None };
+    assert_eq!(frame::decode(&answer, 1 << 20), Ok(Message::HelloAck(bare)));
+
+    // Version 8 asking for the limits and a capability no daemon has:
+    // granted the limits only, which are the configured ones.
+    let (_asked, answer) =
+        say_hello(&cell.controller, Session::NEWEST, hello(8, Role::Controller, capability::LIMITS | 1 << 63)).await;
+    let Ok(Message::HelloAck(ack)) = frame::decode(&answer, 1 << 20) else { panic!("a HelloAck") };
+    assert_eq!(ack.capabilities, capability::LIMITS);
+    let s = &config().server;
+    let limits = ack.limits.expect("the limits granted");
+    assert_eq!(
+        limits,
+        DaemonLimits {
+            max_frame_bytes: s.max_frame_bytes,
+            max_message_bytes: weldseam_proto::MAX_CONTROL_MESSAGE_BYTES as u64,
+            plan_queue_depth: 3,
+            max_requests_per_connection: s.max_requests_per_connection as u32,
+            fresh_frame_timeout_ms: s.fresh_frame_timeout.as_millis() as u64,
+            max_request_timeout_ms: s.max_request_timeout.as_millis() as u64,
+            capture_time_tolerance_ms: s.capture_time_tolerance.as_millis() as u64,
+            frame_history: 5,
+            frame_history_bytes: s.frame_history_bytes,
+            stall_timeout_ms: s.stall_timeout.as_millis() as u64,
+        }
+    );
+
+    // A version 9 peer whose Hello has a field this daemon does not know:
+    // answered in version 8, which it may go on in (or close).
+    let mut newer = frame::encode(&Message::Hello(hello(9, Role::Controller, capability::LIMITS))).unwrap();
+    newer[4..6].copy_from_slice(&9u16.to_le_bytes());
+    newer[HEADER_BYTES..HEADER_BYTES + 2].copy_from_slice(&9u16.to_le_bytes());
+    newer.extend_from_slice(&[0xaa; 5]);
+    let length = (newer.len() - HEADER_BYTES) as u64;
+    newer[8..16].copy_from_slice(&length.to_le_bytes());
+    let mut v9 = TcpStream::connect(&cell.controller).await.unwrap();
+    v9.write_all(&newer).await.unwrap();
+    let answer = read_raw(&mut v9).await.unwrap();
+    assert_eq!(version_of(&answer), PROTOCOL_VERSION);
+    let Ok(Message::HelloAck(ack)) = frame::decode(&answer, 1 << 20) else { panic!("a HelloAck") };
+    assert_eq!((ack.protocol_version, ack.capabilities), (PROTOCOL_VERSION, capability::LIMITS));
+    v9.write_all(&frame::encode(&Message::Ping).unwrap()).await.unwrap();
+    let status = read_raw(&mut v9).await.unwrap();
+    assert!(matches!(frame::decode(&status, 1 << 20), Ok(Message::Status(_))));
+    cell.shutdown().await;
+}
+
+#[tokio::test]
+async fn a_peer_is_held_to_its_version_and_refused_in_a_header_it_can_read() {
+    let cell = Cell::start(config()).await;
+    let error_code = |bytes: &[u8]| match frame::decode(bytes, 1 << 20) {
+        Ok(Message::Error(e)) => e.code,
+        other => panic!("an Error, not {other:?}"),
+    };
+
+    // A version 7 peer on the wrong link: refused in a version 7 header.
+    let (mut wrong, answer) = say_hello(&cell.camera, Session::V7, hello(7, Role::Controller, 0)).await;
+    assert_eq!((version_of(&answer), error_code(&answer)), (7, ErrorCode::UnexpectedMessage));
+    assert!(closed(&mut wrong).await);
+
+    // A Hello whose header and body disagree on the version: 2, closed.
+    let mut torn = frame::encode_in(Session::V7, &Message::Hello(hello(7, Role::Camera, 0))).unwrap();
+    torn[HEADER_BYTES] = 8;
+    let mut stream = TcpStream::connect(&cell.camera).await.unwrap();
+    stream.write_all(&torn).await.unwrap();
+    let answer = read_raw(&mut stream).await.unwrap();
+    assert_eq!((version_of(&answer), error_code(&answer)), (7, ErrorCode::UnsupportedVersion));
+    assert!(closed(&mut stream).await);
+
+    // A second Hello is a message out of place: 6, and the connection goes on.
+    let (mut twice, _) = say_hello(&cell.camera, Session::V7, hello(7, Role::Camera, 0)).await;
+    twice.write_all(&frame::encode_in(Session::V7, &Message::Hello(hello(7, Role::Camera, 0))).unwrap()).await.unwrap();
+    let answer = read_raw(&mut twice).await.unwrap();
+    assert_eq!((version_of(&answer), error_code(&answer)), (7, ErrorCode::UnexpectedMessage));
+    twice.write_all(&frame::encode_in(Session::V7, &Message::Ping).unwrap()).await.unwrap();
+    assert!(matches!(frame::decode(&read_raw(&mut twice).await.unwrap(), 1 << 20), Ok(Message::Status(_))));
+
+    // After agreeing on version 7, a message in a version 8 header: 2 in
+    // the agreed version's header, and the connection closes.
+    twice.write_all(&frame::encode(&Message::Ping).unwrap()).await.unwrap();
+    let answer = read_raw(&mut twice).await.unwrap();
+    assert_eq!((version_of(&answer), error_code(&answer)), (7, ErrorCode::UnsupportedVersion));
+    assert!(closed(&mut twice).await);
+    cell.shutdown().await;
+}
+
+#[tokio::test]
+async fn the_hello_is_bounded_by_the_hello_timeout_not_the_stall_timeout() {
+    let mut c = config();
+    c.server.stall_timeout = Duration::from_millis(100);
+    c.server.hello_timeout = Duration::from_millis(5_000);
+    let cell = Cell::start(c).await;
+    let mut stream = TcpStream::connect(&cell.camera).await.unwrap();
+    // Silent for longer than the stall timeout, well within the Hello's.
+    tokio::time::sleep(Duration::from_millis(600)).await;
+    stream.write_all(&frame::encode(&Message::Hello(hello(8, Role::Camera, 0))).unwrap()).await.unwrap();
+    let answer = read_raw(&mut stream).await.expect("the Hello is answered");
+    assert!(matches!(frame::decode(&answer, 1 << 20), Ok(Message::HelloAck(_))));
+    cell.shutdown().await;
+}

@@ -20,6 +20,7 @@ mod pipeline;
 mod quality;
 mod requests;
 mod roi;
+mod serve_order;
 mod several_seams;
 mod text_link;
 mod units_frames;

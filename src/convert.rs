@@ -119,6 +119,9 @@ pub mod to_proto {
     /// seam a quality gate refused, `bad_request` for a request that does
     /// not fit the frame, `plan_failed` for every other stage.
     pub fn plan_error_code(e: &PlanError) -> ErrorCode {
+        if e.out_of_time {
+            return ErrorCode::PlanTimeout;
+        }
         match (e.gate, e.stage) {
             (Some(gate), _) => gate_code(gate),
             (None, Stage::Request) => ErrorCode::BadRequest,

@@ -522,6 +522,9 @@ pub enum ErrorCode {
     /// 49: the frame answering the request's trigger was not captured
     /// within the fresh window (before the request, or clock skew).
     StaleFrame,
+    /// 50: the plan ran longer than the daemon's `server.plan_timeout_ms`
+    /// and was stopped; the next plan started.
+    PlanTimeout,
     /// 60: a seam was found but refused: a weld edge's fit residual is
     /// above `quality.max_edge_fit_rms_spacings`.
     EdgeFitResidual,
@@ -561,7 +564,7 @@ pub enum ErrorCode {
 }
 
 impl ErrorCode {
-    pub const ALL: [ErrorCode; 34] = [
+    pub const ALL: [ErrorCode; 35] = [
         ErrorCode::BadMagic,
         ErrorCode::UnsupportedVersion,
         ErrorCode::UnknownMessage,
@@ -583,6 +586,7 @@ impl ErrorCode {
         ErrorCode::ShuttingDown,
         ErrorCode::Internal,
         ErrorCode::StaleFrame,
+        ErrorCode::PlanTimeout,
         ErrorCode::EdgeFitResidual,
         ErrorCode::EdgeCoverage,
         ErrorCode::JointCoverage,
@@ -621,6 +625,7 @@ impl ErrorCode {
             ErrorCode::ShuttingDown => 47,
             ErrorCode::Internal => 48,
             ErrorCode::StaleFrame => 49,
+            ErrorCode::PlanTimeout => 50,
             ErrorCode::EdgeFitResidual => 60,
             ErrorCode::EdgeCoverage => 61,
             ErrorCode::JointCoverage => 62,
@@ -662,6 +667,7 @@ impl ErrorCode {
             ErrorCode::ShuttingDown => "shutting_down",
             ErrorCode::Internal => "internal",
             ErrorCode::StaleFrame => "stale_frame",
+            ErrorCode::PlanTimeout => "plan_timeout",
             ErrorCode::EdgeFitResidual => "edge_fit_residual",
             ErrorCode::EdgeCoverage => "edge_coverage",
             ErrorCode::JointCoverage => "joint_coverage",

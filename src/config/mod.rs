@@ -378,6 +378,12 @@ pub struct DebugParams {
 /// of a busy cell, a few megabytes each.
 pub const DEFAULT_DEBUG_KEEP_LAST: u32 = 20;
 
+/// `server.plan_timeout_ms` unless configured: a 1920 x 1200 frame plans
+/// in about 130 ms and under 300 ms under load (docs/PERFORMANCE.md), a
+/// frame of several workpieces in a few times that, so a plan still
+/// running after 5 s is stuck on a frame no camera's view gives.
+pub const DEFAULT_PLAN_TIMEOUT_MS: u64 = 5_000;
+
 /// The most sets `debug.keep_last` may ask for: about a gigabyte of
 /// pictures, beyond which the directory is an archive, not a debug aid.
 pub const MAX_DEBUG_KEEP_LAST: u32 = 1000;
@@ -443,6 +449,9 @@ pub struct ServerConfig {
     pub fresh_frame_timeout: Duration,
     /// How long shutdown waits for plans in flight.
     pub shutdown_grace: Duration,
+    /// The longest one plan may run; a plan still running then is stopped
+    /// and refused (`plan_timeout`), and the next plan starts.
+    pub plan_timeout: Duration,
     /// Recent frames kept for requests that name a frame id.
     pub frame_history: usize,
     /// The most bytes of points the frame history holds; the oldest
@@ -482,6 +491,7 @@ impl Default for ServerConfig {
             pipeline_threads: 0,
             fresh_frame_timeout: Duration::from_millis(5_000),
             shutdown_grace: Duration::from_millis(10_000),
+            plan_timeout: Duration::from_millis(DEFAULT_PLAN_TIMEOUT_MS),
             frame_history: 8,
             frame_history_bytes: 128 << 20,
             capture_time_tolerance: Duration::from_millis(200),
@@ -961,6 +971,9 @@ impl file::ServerSection {
         check("server.shutdown_grace_ms", s.shutdown_grace_ms <= 3_600_000, || {
             format!("must be at most 3600000 ms, got {}", s.shutdown_grace_ms)
         })?;
+        check("server.plan_timeout_ms", (1..=600_000).contains(&s.plan_timeout_ms), || {
+            format!("must lie in [1, 600000] ms, got {}", s.plan_timeout_ms)
+        })?;
         check("server.frame_history", (1..=1024).contains(&s.frame_history), || {
             format!("must lie in [1, 1024] frames, got {}", s.frame_history)
         })?;
@@ -1019,6 +1032,7 @@ impl file::ServerSection {
             pipeline_threads: s.pipeline_threads as usize,
             fresh_frame_timeout: Duration::from_millis(s.fresh_frame_timeout_ms),
             shutdown_grace: Duration::from_millis(s.shutdown_grace_ms),
+            plan_timeout: Duration::from_millis(s.plan_timeout_ms),
             frame_history: s.frame_history as usize,
             frame_history_bytes: s.frame_history_bytes,
             capture_time_tolerance: Duration::from_millis(s.capture_time_tolerance_ms),

@@ -31,7 +31,7 @@ use super::trace::Tracer;
 use super::trajectory::{self, Waypoint};
 use super::view_border::ViewBorder;
 use super::weld_equation;
-use super::{Plan, PlanError, PlanRequest, PlanStats, Seam, SeamAssessment, Stage, StageTimings, Unplanned};
+use super::{Deadline, Plan, PlanError, PlanRequest, PlanStats, Seam, SeamAssessment, Stage, StageTimings, Unplanned};
 
 /// A seam's two fitted features as it reports them: its weld edges' fits,
 /// or a fillet root's web face and flange.
@@ -70,20 +70,27 @@ const VIEW_CLIP_STEP_MM: f64 = 0.02;
 /// Measures the wall time of each stage: every lap charges the time since
 /// the previous one to the stage just finished (added up when a stage
 /// runs again, for the next workpiece of a frame).
+///
+/// It also carries the plan's [`Deadline`]: every lap checks it, so a plan
+/// past its time limit stops at the end of the stage it was in.
 pub(super) struct Clock {
     timings: StageTimings,
     last: Instant,
+    pub(super) deadline: Deadline,
 }
 
 impl Clock {
-    pub(super) fn start() -> Self {
-        Clock { timings: StageTimings::default(), last: Instant::now() }
+    pub(super) fn start(deadline: Deadline) -> Self {
+        Clock { timings: StageTimings::default(), last: Instant::now(), deadline }
     }
 
-    pub(super) fn lap(&mut self, stage: Stage) {
+    /// Charges the time since the last lap to `stage`; the refusal of a
+    /// plan whose time limit has passed.
+    pub(super) fn lap(&mut self, stage: Stage) -> Result<(), PlanError> {
         let now = Instant::now();
         self.charge(stage, (now - self.last).as_secs_f64() * 1e3);
         self.last = now;
+        self.deadline.check(stage)
     }
 
     /// What each stage was charged.
@@ -170,7 +177,8 @@ pub(super) struct Context<'a> {
 /// ([`super::input`]): a point outside what the camera can measure is
 /// a corrupt frame's or noise, and one such point far off the axis
 /// would widen every window it is part of, so it becomes invalid
-/// before any stage runs. A frame that cannot be a camera's view, or
+/// before any stage runs. A frame that cannot be a camera's view (most
+/// of it behind or beside the camera, one point repeated, no extent), or
 /// is left without a valid point, fails here, in the [`Stage::Input`]
 /// stage. One pass over the frame counts both. Returns the frame the
 /// stages plan and how many valid points it has.
@@ -234,6 +242,7 @@ pub(super) fn sanitise<'c>(
     if valid_points == 0 {
         return Err(PlanError::at(Stage::Input, "the frame has no valid point"));
     }
+    input::check_spread(&cloud, valid_points)?;
     Ok((cloud, valid_points))
 }
 
@@ -248,7 +257,7 @@ impl<'a> Context<'a> {
         trace: Tracer<'a>,
         view_border: &'a OnceLock<Option<ViewBorder>>,
         valid_points: usize,
-    ) -> Self {
+    ) -> Result<Self, PlanError> {
         let mut ctx = Context {
             config,
             request,
@@ -260,8 +269,8 @@ impl<'a> Context<'a> {
             trace,
             view_border,
         };
-        ctx.clock.lap(Stage::Input);
-        ctx
+        ctx.clock.lap(Stage::Input)?;
+        Ok(ctx)
     }
 
     /// Decides where the full-plane count comes from
@@ -422,7 +431,7 @@ impl<'a> Context<'a> {
                 config: self.config,
                 request: self.request,
                 cloud: self.cloud,
-                clock: Clock::start(),
+                clock: Clock::start(self.clock.deadline),
                 stats: self.stats.clone(),
                 scale: self.scale,
                 joint: self.request.joint.given(),
@@ -513,7 +522,7 @@ impl<'a> Context<'a> {
                 break;
             }
         }
-        self.clock.lap(Stage::Trajectory);
+        self.clock.lap(Stage::Trajectory)?;
         if seams.is_empty() {
             return Err(none_planned(&unplanned));
         }
@@ -654,6 +663,7 @@ fn none_planned(unplanned: &[Unplanned]) -> PlanError {
         stage: first.reason.stage,
         reason: format!("none of the {} workpieces in view could be planned: {}", unplanned.len(), each.join("; ")),
         gate: first.reason.gate,
+        out_of_time: first.reason.out_of_time,
     }
 }
 

@@ -60,6 +60,27 @@ pub const MAX_PLAUSIBLE_OFF_AXIS_DEG: f64 = 80.0;
 /// camera or beyond any camera's view cannot be a camera-frame view.
 const MAX_IMPLAUSIBLE_FRACTION: f64 = 0.5;
 
+/// The least share of a frame's sampled valid points that must be
+/// distinct points. A camera measures each pixel on its own ray, so its
+/// frames (and the voxel grids and crops made of them) repeat a point
+/// hardly ever; a frame most of whose points are one and the same is a
+/// stuck sensor's or a corrupt transfer's. Such a frame is refused at
+/// once: the density measure of a cloud without a grid compares every
+/// point with every sampled point near it, which on 2.3 million copies of
+/// one point took 20 s, for a frame that shows no surface at all.
+pub const MIN_DISTINCT_SHARE: f64 = 0.5;
+
+/// The least extent of a frame's sampled valid points, mm, along the axis
+/// they spread most. Any joint's two plates span several millimetres
+/// each; points that all lie within a box this wide show no surface a
+/// seam could be planned on (and make the same worst case of the density
+/// measure as repeated points do).
+pub const MIN_VIEW_EXTENT_MM: f64 = 5.0;
+
+/// The valid points [`check_spread`] looks at, evenly spread over the
+/// frame: enough to tell a share to a few percent, a millisecond to read.
+const SPREAD_SAMPLE_POINTS: usize = 4096;
+
 /// What the units guess saw and concluded.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct UnitsGuess {
@@ -271,6 +292,55 @@ impl ViewCounts {
             View::Camera
         }
     }
+}
+
+/// Refuses a frame of `valid_points` valid points that are nearly all one
+/// point ([`MIN_DISTINCT_SHARE`]) or all lie within a few millimetres
+/// ([`MIN_VIEW_EXTENT_MM`]), judged on points sampled evenly over it: no
+/// camera's view of a workpiece looks like that, and planning it would
+/// only spend the planner's time.
+pub(super) fn check_spread(cloud: &PointCloud, valid_points: usize) -> Result<(), PlanError> {
+    let stride = (valid_points / SPREAD_SAMPLE_POINTS).max(1);
+    let mut sample: Vec<[u32; 3]> =
+        cloud.points().iter().filter(|p| p[0].is_finite()).step_by(stride).map(|p| p.map(f32::to_bits)).collect();
+    let sampled = sample.len();
+    if sampled == 0 {
+        return Ok(());
+    }
+    let (mut low, mut high) = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);
+    for p in &sample {
+        for a in 0..3 {
+            let c = f32::from_bits(p[a]);
+            (low[a], high[a]) = (low[a].min(c), high[a].max(c));
+        }
+    }
+    let extent_mm = (0..3).map(|a| f64::from(high[a]) - f64::from(low[a])).fold(0.0, f64::max);
+    sample.sort_unstable();
+    sample.dedup();
+    let distinct = sample.len();
+    if (distinct as f64) < MIN_DISTINCT_SHARE * sampled as f64 && sampled > 1 {
+        return Err(PlanError::at(
+            Stage::Input,
+            format!(
+                "the frame is not a camera's view: of {sampled} points sampled evenly over its {valid_points} \
+                 valid points only {distinct} are distinct ({:.1} %, under the {:.0} % a frame needs); \
+                 a stuck sensor or a corrupt transfer repeats one point",
+                100.0 * distinct as f64 / sampled as f64,
+                100.0 * MIN_DISTINCT_SHARE
+            ),
+        ));
+    }
+    if extent_mm < MIN_VIEW_EXTENT_MM {
+        return Err(PlanError::at(
+            Stage::Input,
+            format!(
+                "the frame is not a camera's view: its {valid_points} valid points all lie within \
+                 {extent_mm:.3} mm of each other along every axis (of {sampled} sampled), under the \
+                 {MIN_VIEW_EXTENT_MM} mm any joint's plates span"
+            ),
+        ));
+    }
+    Ok(())
 }
 
 /// Refuses a cloud most of whose valid points lie behind the camera or

@@ -33,6 +33,7 @@ pub mod background;
 pub mod boundary;
 pub mod clustering;
 mod context;
+pub mod deadline;
 pub mod edge_points;
 pub mod fillet;
 mod gather;
@@ -73,6 +74,7 @@ use crate::geometry::pose::RobotPose;
 use crate::joint::{JointType, RequestedJoint};
 
 use context::Context;
+pub use deadline::Deadline;
 pub use input::{CloudFrame, Units};
 use roi::Roi;
 pub use trace::PlanTrace;
@@ -213,23 +215,26 @@ impl fmt::Display for Stage {
 
 /// Why no trajectory could be planned: the stage that failed and why and,
 /// for a seam the planner found but will not trust, the quality gate it
-/// failed.
+/// failed; or that the plan's time limit ran out ([`Deadline`]).
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[error("{stage} stage failed: {reason}")]
 pub struct PlanError {
     pub stage: Stage,
     pub reason: String,
     pub gate: Option<quality::Gate>,
+    /// The plan was stopped at its [`Deadline`]: no finding about the
+    /// frame, which may plan within a longer limit.
+    pub out_of_time: bool,
 }
 
 impl PlanError {
     pub fn at(stage: Stage, reason: impl fmt::Display) -> Self {
-        PlanError { stage, reason: reason.to_string(), gate: None }
+        PlanError { stage, reason: reason.to_string(), gate: None, out_of_time: false }
     }
 
     /// A refusal by a quality gate.
     fn refused(failure: &quality::GateFailure) -> Self {
-        PlanError { stage: Stage::Quality, reason: failure.message.clone(), gate: Some(failure.gate) }
+        PlanError { gate: Some(failure.gate), ..PlanError::at(Stage::Quality, &failure.message) }
     }
 }
 
@@ -383,7 +388,20 @@ impl Planner {
     /// The method is chosen here, once: `paper.rs` and `robust.rs` each
     /// run the whole way through.
     pub fn plan(&self, cloud: &PointCloud, request: &PlanRequest) -> Result<Plan, PlanError> {
-        self.run(Cow::Borrowed(cloud), request, Tracer::off())
+        self.run(Cow::Borrowed(cloud), request, Tracer::off(), Deadline::NONE)
+    }
+
+    /// [`Planner::plan`] (of a borrowed cloud) or [`Planner::plan_owned`]
+    /// (of an owned one), stopped and refused once `deadline` passes
+    /// ([`PlanError::out_of_time`]). A plan that ends in time is the same,
+    /// byte for byte.
+    pub fn plan_until(
+        &self,
+        cloud: Cow<'_, PointCloud>,
+        request: &PlanRequest,
+        deadline: Deadline,
+    ) -> Result<Plan, PlanError> {
+        self.run(cloud, request, Tracer::off(), deadline)
     }
 
     /// [`Planner::plan`] of a cloud the caller no longer needs: it is
@@ -393,23 +411,40 @@ impl Planner {
     /// 3.7 times its raw size with its copy). The plan is the same, byte
     /// for byte.
     pub fn plan_owned(&self, cloud: PointCloud, request: &PlanRequest) -> Result<Plan, PlanError> {
-        self.run(Cow::Owned(cloud), request, Tracer::off())
+        self.run(Cow::Owned(cloud), request, Tracer::off(), Deadline::NONE)
     }
 
     /// [`Planner::plan`], recording what each stage found ([`PlanTrace`]),
     /// and on a refusal the stage and reason beside everything gathered
     /// up to it.
     pub fn plan_traced(&self, cloud: &PointCloud, request: &PlanRequest) -> (Result<Plan, PlanError>, PlanTrace) {
+        self.plan_traced_until(cloud, request, Deadline::NONE)
+    }
+
+    /// [`Planner::plan_traced`] within `deadline`, as [`Planner::plan_until`].
+    pub fn plan_traced_until(
+        &self,
+        cloud: &PointCloud,
+        request: &PlanRequest,
+        deadline: Deadline,
+    ) -> (Result<Plan, PlanError>, PlanTrace) {
         let mut trace = PlanTrace::new(request.joint.given(), request.groove_depth_mm, self.config.pipeline.method);
-        let result = self.run(Cow::Borrowed(cloud), request, Tracer::on(&mut trace));
+        let result = self.run(Cow::Borrowed(cloud), request, Tracer::on(&mut trace), deadline);
         trace.refusal = result.as_ref().err().cloned();
         (result, trace)
     }
 
-    fn run(&self, cloud: Cow<'_, PointCloud>, request: &PlanRequest, tracer: Tracer) -> Result<Plan, PlanError> {
+    fn run(
+        &self,
+        cloud: Cow<'_, PointCloud>,
+        request: &PlanRequest,
+        tracer: Tracer,
+        deadline: Deadline,
+    ) -> Result<Plan, PlanError> {
         validate(request, &self.config)?;
-        let clock = context::Clock::start();
+        let clock = context::Clock::start(deadline);
         let converted = input::prepare(cloud, request, &self.config)?;
+        deadline.check(Stage::Input)?;
         let cropped = match self.region_of_interest(request)? {
             Some(roi) => {
                 let kept = roi::crop(&converted, &roi, self.box_from_camera(request, &roi).as_ref())
@@ -421,6 +456,7 @@ impl Planner {
             None => converted,
         };
         let input = regrid::prepare(&self.config.camera, cropped);
+        deadline.check(Stage::Input)?;
         let other_camera;
         let config = match input.camera {
             Some(camera) => {
@@ -432,7 +468,7 @@ impl Planner {
         let mut tracer = tracer;
         let (frame, valid_points) = context::sanitise(config, input.cloud, request, &mut tracer)?;
         let view_border = OnceLock::new();
-        let ctx = Context::new(config, &frame, request, clock, tracer, &view_border, valid_points);
+        let ctx = Context::new(config, &frame, request, clock, tracer, &view_border, valid_points)?;
         match self.config.pipeline.method {
             Method::Paper => paper::plan(ctx),
             Method::Robust => robust::plan(ctx),

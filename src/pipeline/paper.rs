@@ -38,14 +38,14 @@ pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
     let camera = &config.camera;
     let cloud = ctx.cloud;
     let search = NeighbourSearch::new(cloud, camera, config.pipeline.neighbour_radius_mm);
-    ctx.clock.lap(Stage::NeighbourIndex);
+    ctx.clock.lap(Stage::NeighbourIndex)?;
 
     // 3.2: a point is a plane point when its neighbour count reaches the
     // least a frontal plane at its depth can have (Eq. 14).
     let mut plane = plane_points::paper_criterion(cloud, camera, &search);
     ctx.stats.plane_points = plane.len();
     ctx.trace.record(|t| t.plane_points = plane.mask.clone());
-    ctx.clock.lap(Stage::PlanePoints);
+    ctx.clock.lap(Stage::PlanePoints)?;
     if ctx.stats.plane_points == 0 {
         return Err(PlanError::at(Stage::PlanePoints, "no point passed the plane point criterion"));
     }
@@ -55,7 +55,7 @@ pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
     // The edge criterion needs the counts, not the mask: free it early,
     // as the frame-sized arrays of the coming stages add up.
     plane.mask = Vec::new();
-    ctx.clock.lap(Stage::Clustering);
+    ctx.clock.lap(Stage::Clustering)?;
 
     // 3.3: the plane with the largest xy bounding box is the background;
     // a point stands for the area of a frontal plane's pixel (Eq. 4).
@@ -65,7 +65,7 @@ pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
     let workpiece = background::paper_select(cloud, planes).map_err(|e| PlanError::at(Stage::Background, e))?;
     ctx.stats.plate_points = workpiece.plates.each_ref().map(|p| p.members.len());
     ctx.trace.record(|t| t.plate_labels = Some(workpiece.plates.each_ref().map(|p| p.label)));
-    ctx.clock.lap(Stage::Background);
+    ctx.clock.lap(Stage::Background)?;
     ctx.check_groove_depth(&workpiece)?;
 
     // 3.4.1: an edge point has at most `paper.edge_ratio` of a frontal
@@ -74,7 +74,7 @@ pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
     let edges = context::plate_edge_points(&clusters.labels, &workpiece, &search, &plane, &criterion);
     ctx.stats.edge_points = [edges[0].len(), edges[1].len()];
     ctx.trace.record(|t| t.edge_points = edges.clone());
-    ctx.clock.lap(Stage::EdgePoints);
+    ctx.clock.lap(Stage::EdgePoints)?;
 
     // 3.4.2: iterative RANSAC over both plates' edge points together; a
     // line belongs to the plate most of its inliers come from.
@@ -83,7 +83,7 @@ pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
     all.extend(ctx.points_of(&edges[1]));
     let lines = ransac::segment_lines(&all, &ctx.ransac_params(0));
     ctx.stats.edge_lines = lines.len();
-    ctx.clock.lap(Stage::Ransac);
+    ctx.clock.lap(Stage::Ransac)?;
 
     // 4.1: the weld edges are the lines with the two plate centroids on
     // either side (Eq. 16).
@@ -93,7 +93,7 @@ pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
     ctx.trace.record(|t| t.add_lines(&lines, &all, owner));
     let pick = weld_edges::paper_select(&lines, centroids, owner).map_err(|e| PlanError::at(Stage::WeldEdges, e))?;
     ctx.trace.record(|t| t.pick_lines(|l| pick.contains(&l.rank)));
-    ctx.clock.lap(Stage::WeldEdges);
+    ctx.clock.lap(Stage::WeldEdges)?;
 
     // 4.2: each edge's RANSAC inliers refitted by least squares, the
     // feature along camera x or y (Eq. 17 to 25).
@@ -108,7 +108,7 @@ pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
         .and_then(|v| v.try_into().ok())
         .ok_or_else(|| PlanError::at(Stage::Refit, "a weld edge has too few points for a least-squares fit"))?;
     ctx.trace.record(|t| (t.weld_edges, t.fit_samples) = (Some(fits.clone()), inliers.clone()));
-    ctx.clock.lap(Stage::Refit);
+    ctx.clock.lap(Stage::Refit)?;
 
     // 4.3: the normal from the edges' end points (Eq. 33, 34), then the
     // weld per joint type (Eq. 32, 36; Eq. 38 for a lap), over its own
@@ -120,7 +120,7 @@ pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
     let weld = ctx.weld(e1, e2, &normal, depth, || Ok(weld_equation::lap_paper(e1, e2)))?;
     let span = (weld.s_min, weld.s_max);
     ctx.trace.record(|t| t.weld = Some(TracedWeld { curve: weld.clone(), span, normal }));
-    ctx.clock.lap(Stage::WeldEquation);
+    ctx.clock.lap(Stage::WeldEquation)?;
 
     // 5.1: the waypoints in the robot's base frame.
     ctx.finish(Method::Paper, weld, span, normal, &fits, SeamAssessment::default())

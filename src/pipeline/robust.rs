@@ -89,13 +89,13 @@ pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
         }
         search
     };
-    ctx.clock.lap(Stage::NeighbourIndex);
+    ctx.clock.lap(Stage::NeighbourIndex)?;
 
     // Plates, table and fixture lie parallel: one normal describes them.
     let dominant = orientation::dominant_normal(cloud, &search, camera.fx(), DOMINANT_NORMAL_AGREEMENT_DEG)
         .ok_or_else(|| PlanError::at(Stage::Orientation, "no surface normal could be estimated"))?;
     ctx.trace.record(|t| t.dominant_normal = Some(dominant));
-    ctx.clock.lap(Stage::Orientation);
+    ctx.clock.lap(Stage::Orientation)?;
 
     // 3.2: plane points against the count of a plane tilted to the
     // dominant normal (Eq. 6 and 14, foreshortened), facing it.
@@ -109,7 +109,7 @@ pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
     );
     ctx.stats.plane_points = plane.len();
     ctx.trace.record(|t| t.plane_points = plane.mask.clone());
-    ctx.clock.lap(Stage::PlanePoints);
+    ctx.clock.lap(Stage::PlanePoints)?;
     if ctx.stats.plane_points == 0 {
         return Err(PlanError::at(Stage::PlanePoints, "no point passed the plane point criterion"));
     }
@@ -142,7 +142,7 @@ pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
     // The edge criterion needs the counts, not the mask: free it early,
     // as the frame-sized arrays of the coming stages add up.
     plane.mask = Vec::new();
-    ctx.clock.lap(Stage::Clustering);
+    ctx.clock.lap(Stage::Clustering)?;
 
     // 3.3: the plates are the nearest parallel planes (a lap: two layers a
     // plate thickness apart).
@@ -172,7 +172,7 @@ pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
     // frame's stages, read nothing another writes, and each has its own
     // context; the trace keeps the first workpiece's stages and the
     // counts are the first's too.
-    ctx.clock.lap(Stage::Background);
+    ctx.clock.lap(Stage::Background)?;
     let outcomes: Vec<Outcome> = ctx
         .per_workpiece(groups.len())
         .into_par_iter()
@@ -184,7 +184,8 @@ pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
             let result = plan_workpiece(&mut piece, &front, &clusters.labels, group.planes);
             if let Err(refusal) = &result {
                 // The refusing stage's own work, up to the refusal.
-                piece.clock.lap(refusal.stage);
+                // The refusal stands; the time limit is the plan's to check.
+                let _ = piece.clock.lap(refusal.stage);
             }
             Outcome {
                 result,
@@ -199,6 +200,12 @@ pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
     if let Some(first) = outcomes.first() {
         ctx.stats = first.stats.clone();
     }
+    // A workpiece stopped by the time limit says nothing about the frame:
+    // the plan as a whole ran out of time.
+    if let Some(stopped) = outcomes.iter().find_map(|o| o.result.as_ref().err().filter(|e| e.out_of_time)) {
+        return Err(stopped.clone());
+    }
+    ctx.clock.deadline.check(Stage::Background)?;
     let (mut welds, mut unplanned) = (Vec::new(), Vec::new());
     for (k, outcome) in outcomes.into_iter().enumerate() {
         match outcome.result {
@@ -295,7 +302,7 @@ fn plan_workpiece(
                 support_between_plates: false,
                 layer_mates: [Vec::new(), Vec::new()],
             };
-            ctx.clock.lap(Stage::Background);
+            ctx.clock.lap(Stage::Background)?;
             let layers = format!("an inside corner: {}", corner.what);
             return tee::plan(ctx, tee::SeenTee::of(&workpiece, tee::Flange::OneSide), layers);
         }
@@ -349,7 +356,7 @@ fn plan_workpiece(
             "plate"
         );
     }
-    ctx.clock.lap(Stage::Background);
+    ctx.clock.lap(Stage::Background)?;
     // One path per layout: each returns the workpiece's welds.
     match layout {
         Layout::Butt | Layout::Lap => {
@@ -599,7 +606,7 @@ fn plan_topless_tee(
         );
         return Err(PlanError { gate: Some(quality::Gate::JointUnknown), ..PlanError::at(Stage::Background, reason) });
     }
-    ctx.clock.lap(Stage::Background);
+    ctx.clock.lap(Stage::Background)?;
     let tee = tee::SeenTee {
         web: Web::Face(&face),
         flange_pieces: pieces,
@@ -633,7 +640,7 @@ fn plan_plates(
     let edges = context::plate_edge_points(labels, &workpiece, search, plane, &criterion);
     ctx.stats.edge_points = [edges[0].len(), edges[1].len()];
     ctx.trace.record(|t| t.edge_points = edges.clone());
-    ctx.clock.lap(Stage::EdgePoints);
+    ctx.clock.lap(Stage::EdgePoints)?;
 
     // The plates' least-squares planes fix the normal far better than the
     // sampled dominant one: the groove depth (Eq. 32) and the lap step are
@@ -663,7 +670,7 @@ fn plan_plates(
             );
         }
     }
-    ctx.clock.lap(Stage::Ransac);
+    ctx.clock.lap(Stage::Ransac)?;
 
     // 4.1: one line per plate, the centroids on either side (Eq. 16) and
     // the two lines facing each other across the gap.
@@ -681,7 +688,7 @@ fn plan_plates(
     if layout == Layout::Lap {
         check_lap_edge(ctx, &workpiece, &lines[0], &edge_points[0], pick[0])?;
     }
-    ctx.clock.lap(Stage::WeldEdges);
+    ctx.clock.lap(Stage::WeldEdges)?;
 
     // 4.2: each weld edge resampled along its plate's boundary, then
     // refitted along the samples' principal direction with outliers
@@ -782,7 +789,7 @@ fn plan_plates(
             "weld edge refitted"
         );
     }
-    ctx.clock.lap(Stage::Refit);
+    ctx.clock.lap(Stage::Refit)?;
 
     // Between a butt joint's edges: a V-groove's bevels (and how deep it
     // is), a square gap, or a plate standing there. It decides V or I for
@@ -840,7 +847,7 @@ fn plan_plates(
         Some(p) => format!("{layers}; between the edges: {}", p.verdict_sentence()),
         None => layers,
     };
-    ctx.clock.lap(Stage::Groove);
+    ctx.clock.lap(Stage::Groove)?;
 
     // 4.3: the weld per joint type (Eq. 32, 36), a lap weld at the root a
     // plate step below the upper edge (Eq. 38), planned only where both
@@ -1035,7 +1042,7 @@ fn plan_plates(
     let members_beyond = || visible_joint.map(|(v0, v1)| [(s0 - v0 - trim).max(0.0), (v1 - trim - s1).max(0.0)]);
     let joint_beyond_ends_mm = followed_beyond.or_else(members_beyond);
     tracing::debug!(?joint_beyond_ends_mm, "plates seen beside the joint beyond the seam's ends");
-    ctx.clock.lap(Stage::WeldEquation);
+    ctx.clock.lap(Stage::WeldEquation)?;
 
     // What the fits say about the seam, against the configured gates: a
     // seam that fails one is refused, unless the gate only warns.
@@ -1073,7 +1080,7 @@ fn plan_plates(
     if let Some(first) = refusals.first() {
         return Err(PlanError::refused(first));
     }
-    ctx.clock.lap(Stage::Quality);
+    ctx.clock.lap(Stage::Quality)?;
 
     // 5.1 follows once every workpiece is planned: the seams' order
     // decides where each one's waypoints start.

@@ -103,7 +103,7 @@ pub(super) fn plan(
             Err(not) => tracing::debug!(side = ?not.side, "{}", not.reason),
         }
     }
-    ctx.clock.lap(Stage::Refit);
+    ctx.clock.lap(Stage::Refit)?;
 
     // Each root's figures against the gates; a root refused or not seen
     // is named beside the ones planned.
@@ -167,7 +167,7 @@ pub(super) fn plan(
         };
         planned.push((root, assessment));
     }
-    ctx.clock.lap(Stage::Quality);
+    ctx.clock.lap(Stage::Quality)?;
     if planned.is_empty() {
         // Nothing to weld: the gate that refused a root seen, else why
         // neither was seen.

@@ -1,8 +1,10 @@
 //! The camera link's handler: the hello, then frames in and triggers out.
-//! Each frame is checked (size, at least one valid point, a capture time
-//! the daemon's clock can believe), stored in the history, handed to the
-//! requests waiting for it, and acknowledged to the camera with a
-//! FrameAck: held, or refused with its error code.
+//! Each frame is checked (size, at least one valid point the camera can
+//! measure, a capture time the daemon's clock can believe), stored in the
+//! history, handed to the requests waiting for it, and acknowledged to the
+//! camera with a FrameAck: held, or refused with its error code. A frame
+//! refused here is never handed to a request, which goes on waiting for a
+//! usable one.
 
 use std::sync::Arc;
 use std::time::Instant;
@@ -18,7 +20,12 @@ use super::ServerState;
 use super::connection::{Connection, HandshakeError, MessageWriter, ReadError, Received};
 use super::frames::{CameraRegistration, StoredFrame, wall_clock_us};
 use super::shutdown::Shutdown;
-use crate::convert::{from_proto, to_proto};
+use crate::camera::{CameraModel, Unmeasurable};
+use crate::cloud::PointCloud;
+use crate::convert::from_proto::{self, FrameInput};
+use crate::convert::to_proto;
+use crate::pipeline::input::guess_units;
+use crate::pipeline::{CloudFrame, Units};
 
 type Writer = Arc<Mutex<MessageWriter<tokio::net::tcp::OwnedWriteHalf>>>;
 
@@ -161,6 +168,48 @@ pub async fn serve(mut conn: Connection, state: Arc<ServerState>, mut shutdown: 
     writer.lock().await.shutdown().await;
 }
 
+/// Why a camera-frame cloud holds no point the camera can measure, if it
+/// holds none: every valid point nearer than `camera.min_depth_mm`,
+/// farther than `camera.max_depth_mm` or farther off the axis than
+/// `camera.max_off_axis_deg` (in millimetres, the units guessed as the
+/// planner guesses them when the frame leaves them open). The planner
+/// drops such points before any stage, so every plan of the frame would
+/// fail. The test is never stricter than the planner's: the field of
+/// view of the frame's pixel grid, which the planner may estimate from
+/// the frame, is left to it. A base-frame cloud's depths depend on the
+/// request's pose, so only the planner can judge them.
+fn nothing_measurable(cloud: &PointCloud, input: FrameInput, camera: &CameraModel) -> Option<String> {
+    if input.cloud_frame != CloudFrame::Camera {
+        return None;
+    }
+    let metres = match input.units {
+        Units::Millimetres => false,
+        Units::Metres => true,
+        Units::Auto => guess_units(cloud).metres,
+    };
+    let scale = if metres { 1000.0 } else { 1.0 };
+    let volume = camera.measurable_volume(cloud.width(), cloud.height(), false);
+    let (mut near, mut far, mut off_view) = (0usize, 0usize, 0usize);
+    for p in cloud.points().iter().filter(|p| p[0].is_finite()) {
+        match volume.reject(&p.map(|c| c * scale)) {
+            None => return None,
+            Some(Unmeasurable::Near) => near += 1,
+            Some(Unmeasurable::Far) => far += 1,
+            Some(Unmeasurable::OffView) => off_view += 1,
+        }
+    }
+    Some(format!(
+        "of its {} points none is one the camera can measure: {near} lie nearer than camera.min_depth_mm \
+         ({} mm), {far} farther than camera.max_depth_mm ({} mm) and {off_view} farther off the axis than \
+         camera.max_off_axis_deg ({}°){}",
+        near + far + off_view,
+        camera.min_depth_mm,
+        camera.max_depth_mm,
+        camera.max_off_axis_deg,
+        if metres { ", read in metres" } else { "" }
+    ))
+}
+
 fn refusal(frame_id: u64, trigger_id: u64, code: ErrorCode, message: String) -> Message {
     Message::FrameAck(FrameAck { frame_id, trigger_id, code: code.code(), requests: 0, message })
 }
@@ -196,6 +245,11 @@ fn on_message(received: Received, camera: &CameraRegistration, state: &ServerSta
     if valid == 0 {
         let text = format!("frame {frame_id} has no valid point; it was discarded");
         warn!("{text}");
+        return Some(refusal(frame_id, trigger_id, ErrorCode::EmptyFrame, text));
+    }
+    if let Some(problem) = nothing_measurable(&cloud, input, &state.config.camera) {
+        let text = format!("frame {frame_id} has no valid point: {problem}; it was discarded");
+        warn!(frame_id, trigger_id, "{text}");
         return Some(refusal(frame_id, trigger_id, ErrorCode::EmptyFrame, text));
     }
     if let Some(problem) = state.frames.capture_time_problem(meta.capture_time_us, upload_started_us) {

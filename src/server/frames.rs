@@ -16,6 +16,11 @@
 //! frame wins); a request naming a camera goes to the cameras with that
 //! Hello name only. Old frames are reachable by id alone. The history is
 //! bounded in frames and in bytes.
+//!
+//! Each request is handed its frame with its place in the serve order
+//! ([`super::serve_order`]): frames in the order they became ready, the
+//! requests one frame answers in the order they arrived (waiters are kept
+//! in arrival order and never reordered).
 
 use std::collections::VecDeque;
 use std::sync::{Arc, Mutex, MutexGuard};
@@ -23,6 +28,7 @@ use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
 
 use tokio::sync::{mpsc, oneshot};
 
+use super::serve_order::{ServeOrder, Ticket};
 use crate::cloud::PointCloud;
 use crate::convert::from_proto::FrameInput;
 
@@ -124,7 +130,15 @@ impl FrameRequest {
     }
 }
 
-type Reply = oneshot::Sender<Result<Arc<StoredFrame>, FrameError>>;
+/// A frame handed to a request, with the request's place in the serve
+/// order.
+#[derive(Debug)]
+pub struct Handed {
+    pub frame: Arc<StoredFrame>,
+    pub ticket: Ticket,
+}
+
+type Reply = oneshot::Sender<Result<Handed, FrameError>>;
 
 #[derive(Debug)]
 enum WaitKind {
@@ -209,6 +223,8 @@ pub struct Delivery {
 pub struct FrameStore {
     limits: FrameLimits,
     inner: Mutex<Inner>,
+    /// Tickets are issued under `inner`'s lock, in hand-over order.
+    order: Arc<ServeOrder>,
 }
 
 /// Keeps a camera registered for triggers while it lives.
@@ -261,7 +277,7 @@ impl Drop for CameraRegistration {
 impl FrameStore {
     pub fn new(limits: FrameLimits) -> Arc<Self> {
         let limits = FrameLimits { count: limits.count.max(1), ..limits };
-        Arc::new(FrameStore { limits, inner: Mutex::new(Inner::default()) })
+        Arc::new(FrameStore { limits, inner: Mutex::new(Inner::default()), order: ServeOrder::new() })
     }
 
     fn lock(&self) -> MutexGuard<'_, Inner> {
@@ -348,6 +364,7 @@ impl FrameStore {
             c.latest_frame_id = Some(frame.frame_id);
         }
         let mut delivery = Delivery::default();
+        // In arrival order: each ticket is issued as the frame is handed.
         let mut waiters = std::mem::take(&mut inner.waiters);
         waiters.retain_mut(|w| {
             if w.reply.is_closed() {
@@ -381,7 +398,10 @@ impl FrameStore {
             match verdict {
                 Some(None) => {
                     let (reply, _) = oneshot::channel();
-                    let _ = std::mem::replace(&mut w.reply, reply).send(Ok(Arc::clone(&frame)));
+                    let handed = Handed { frame: Arc::clone(&frame), ticket: self.order.issue() };
+                    // A request gone meanwhile drops its ticket with the
+                    // message, giving its turn up.
+                    let _ = std::mem::replace(&mut w.reply, reply).send(Ok(handed));
                     delivery.requests += 1;
                     false
                 }
@@ -443,7 +463,8 @@ impl FrameStore {
                 let held =
                     inner.history.iter().rev().find(|f| f.frame_id == id && name.is_none_or(|n| *f.camera == *n));
                 if let Some(frame) = held {
-                    return Ok(FrameWait::ready(Arc::clone(frame)));
+                    let frame = Arc::clone(frame);
+                    return Ok(FrameWait::ready(Handed { frame, ticket: self.order.issue() }));
                 }
                 // A frame newer than every one a matching camera has sent
                 // may be on its way (still uploading): wait for it.
@@ -501,7 +522,8 @@ impl FrameStore {
     fn cancel(&self, waiter: u64) -> Option<String> {
         let mut inner = self.lock();
         let at = inner.waiters.iter().position(|w| w.id == waiter)?;
-        inner.waiters.swap_remove(at).skipped
+        // `remove`, not `swap_remove`: the others keep their arrival order.
+        inner.waiters.remove(at).skipped
     }
 
     /// Requests waiting for a frame.
@@ -512,8 +534,8 @@ impl FrameStore {
 
 #[derive(Debug)]
 enum WaitState {
-    Ready(Arc<StoredFrame>),
-    Pending { rx: oneshot::Receiver<Result<Arc<StoredFrame>, FrameError>>, store: Arc<FrameStore>, waiter: u64 },
+    Ready(Handed),
+    Pending { rx: oneshot::Receiver<Result<Handed, FrameError>>, store: Arc<FrameStore>, waiter: u64 },
     Done,
 }
 
@@ -528,14 +550,15 @@ pub struct FrameWait {
 }
 
 impl FrameWait {
-    fn ready(frame: Arc<StoredFrame>) -> Self {
-        FrameWait { state: WaitState::Ready(frame), trigger_id: None, frame_id: None }
+    fn ready(handed: Handed) -> Self {
+        FrameWait { state: WaitState::Ready(handed), trigger_id: None, frame_id: None }
     }
 
-    /// The frame, or why none came within `timeout`.
-    pub async fn wait(mut self, timeout: Duration) -> Result<Arc<StoredFrame>, FrameError> {
+    /// The frame and the request's place in the serve order, or why no
+    /// frame came within `timeout`.
+    pub async fn wait(mut self, timeout: Duration) -> Result<Handed, FrameError> {
         match std::mem::replace(&mut self.state, WaitState::Done) {
-            WaitState::Ready(frame) => Ok(frame),
+            WaitState::Ready(handed) => Ok(handed),
             WaitState::Done => Err(FrameError::CameraGone),
             WaitState::Pending { rx, store, waiter } => match tokio::time::timeout(timeout, rx).await {
                 Ok(Ok(result)) => result,
@@ -595,7 +618,7 @@ mod tests {
         store.insert(cam.id(), frame(1, 0));
         let wait = store.request(&FrameRequest::now(Wanted::NextFrame, None)).unwrap();
         store.insert(cam.id(), frame(2, 0));
-        assert_eq!(wait.wait(SECOND).await.unwrap().frame_id, 2);
+        assert_eq!(wait.wait(SECOND).await.unwrap().frame.frame_id, 2);
     }
 
     #[tokio::test]
@@ -630,7 +653,7 @@ mod tests {
         let wait = store.request(&FrameRequest::now(Wanted::Trigger, None)).unwrap();
         let trigger = rx.recv().await.unwrap();
         store.insert(cam.id(), frame_at(9, trigger, 1, Instant::now(), wall_clock_us() - 150_000));
-        assert_eq!(wait.wait(SECOND).await.unwrap().frame_id, 9);
+        assert_eq!(wait.wait(SECOND).await.unwrap().frame.frame_id, 9);
     }
 
     #[tokio::test]
@@ -641,7 +664,7 @@ mod tests {
         let id = rx.recv().await.unwrap();
         store.insert(cam.id(), frame(5, 0));
         store.insert(cam.id(), frame(6, id));
-        assert_eq!(wait.wait(SECOND).await.unwrap().frame_id, 6);
+        assert_eq!(wait.wait(SECOND).await.unwrap().frame.frame_id, 6);
     }
 
     #[tokio::test]
@@ -653,7 +676,7 @@ mod tests {
         let t = left_rx.recv().await.unwrap();
         assert_eq!(right_rx.recv().await.unwrap(), t, "both cameras got the trigger");
         store.insert(left.id(), frame(1, t));
-        assert_eq!(wait.wait(SECOND).await.unwrap().frame_id, 1);
+        assert_eq!(wait.wait(SECOND).await.unwrap().frame.frame_id, 1);
 
         let named = store.request(&FrameRequest::now(Wanted::Trigger, Some("right".into()))).unwrap();
         assert!(right_rx.recv().await.is_some());
@@ -672,7 +695,7 @@ mod tests {
         let t = a_rx.recv().await.unwrap();
         drop(b);
         store.insert(a.id(), frame(3, t));
-        assert_eq!(wait.wait(SECOND).await.unwrap().frame_id, 3);
+        assert_eq!(wait.wait(SECOND).await.unwrap().frame.frame_id, 3);
         let wait = store.request(&FrameRequest::now(Wanted::Trigger, None)).unwrap();
         drop(a);
         assert_eq!(wait.wait(SECOND).await.unwrap_err(), FrameError::CameraGone);
@@ -690,11 +713,11 @@ mod tests {
         assert_eq!(store.held().0, 2);
         let by_id = |id| store.request(&FrameRequest::now(Wanted::FrameId(id), None));
         assert_eq!(by_id(1).unwrap_err(), FrameError::UnknownFrame(1));
-        assert_eq!(by_id(3).unwrap().wait(SECOND).await.unwrap().frame_id, 3);
+        assert_eq!(by_id(3).unwrap().wait(SECOND).await.unwrap().frame.frame_id, 3);
         // A newer id than the camera has sent is awaited.
         let later = by_id(4).unwrap();
         store.insert(cam.id(), frame(4, 0));
-        assert_eq!(later.wait(SECOND).await.unwrap().frame_id, 4);
+        assert_eq!(later.wait(SECOND).await.unwrap().frame.frame_id, 4);
         // 40,000 points of 12 bytes: 480 kB each, two of them fill 1 MiB.
         for id in 5..=7 {
             store.insert(cam.id(), frame_at(id, 0, 40_000, Instant::now(), wall_clock_us()));

@@ -4,7 +4,10 @@
 //! at once rather than after the frame wait.
 //!
 //! Fair order: plans run one at a time on the whole pool, in the order
-//! their frames became ready (first in, first out). Handing every ready
+//! their frames became ready (first in, first out), and the requests one
+//! frame answers in the order they arrived: each job waits for its
+//! [`Ticket`]'s turn, the place the frame store gave it when it handed
+//! the frame over ([`super::serve_order`]). Handing every ready
 //! plan to the pool at once starved old requests: the pipeline's own
 //! parallel loops make a pool thread wait for its helpers, and a waiting
 //! rayon thread runs any other job meanwhile, including a younger plan
@@ -16,14 +19,16 @@
 //! request waits for at most the plans whose frames were ready before its
 //! own: no more than `server.plan_queue_depth - 1` of them.
 
+use std::borrow::Cow;
 use std::panic::AssertUnwindSafe;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use tokio::sync::{OwnedSemaphorePermit, Semaphore, oneshot};
 
+use super::serve_order::Ticket;
 use crate::cloud::PointCloud;
-use crate::pipeline::{Plan, PlanError, PlanRequest, PlanTrace, Planner};
+use crate::pipeline::{Deadline, Plan, PlanError, PlanRequest, PlanTrace, Planner};
 
 /// Why a plan job did not produce a plan.
 #[derive(Debug, thiserror::Error)]
@@ -54,9 +59,6 @@ pub struct Jobs {
     pool: Arc<rayon::ThreadPool>,
     planner: Arc<Planner>,
     slots: Arc<Semaphore>,
-    /// One permit: the plan on the pool. Tokio's semaphore hands permits
-    /// out in the order they were asked for, which is the fair order.
-    turn: Arc<Semaphore>,
     depth: usize,
 }
 
@@ -66,7 +68,6 @@ pub struct JobSlot {
     permit: OwnedSemaphorePermit,
     pool: Arc<rayon::ThreadPool>,
     planner: Arc<Planner>,
-    turn: Arc<Semaphore>,
 }
 
 /// How long a job waited for its turn and how long it ran.
@@ -87,24 +88,13 @@ impl Jobs {
             .build()
             .map_err(|e| PoolError(e.to_string()))?;
         let depth = depth.max(1);
-        Ok(Jobs {
-            pool: Arc::new(pool),
-            planner: Arc::new(planner),
-            slots: Arc::new(Semaphore::new(depth)),
-            turn: Arc::new(Semaphore::new(1)),
-            depth,
-        })
+        Ok(Jobs { pool: Arc::new(pool), planner: Arc::new(planner), slots: Arc::new(Semaphore::new(depth)), depth })
     }
 
     /// Reserves a slot, or says the queue is full.
     pub fn reserve(&self) -> Result<JobSlot, Busy> {
         let permit = Arc::clone(&self.slots).try_acquire_owned().map_err(|_| Busy { depth: self.depth })?;
-        Ok(JobSlot {
-            permit,
-            pool: Arc::clone(&self.pool),
-            planner: Arc::clone(&self.planner),
-            turn: Arc::clone(&self.turn),
-        })
+        Ok(JobSlot { permit, pool: Arc::clone(&self.pool), planner: Arc::clone(&self.planner) })
     }
 
     /// The queue's depth.
@@ -127,20 +117,26 @@ impl Jobs {
 }
 
 impl JobSlot {
-    /// Plans `cloud` on the pool once every plan whose frame was ready
-    /// earlier has run; the slot is freed when the plan is done. Once
+    /// Plans `cloud` on the pool at `ticket`'s turn, once every plan
+    /// before it in the serve order has run; the slot is freed when the
+    /// plan is done. Once
     /// started the job holds its slot itself, so it stays taken while the
     /// pipeline runs even if the caller stops waiting; a caller that stops
     /// waiting before the job's turn frees the slot at once. A frame only
     /// this job still holds is planned by value, converted in place
     /// ([`Planner::plan_owned`]); one the frame store keeps is borrowed.
-    pub async fn run(self, cloud: Arc<PointCloud>, request: PlanRequest) -> (Result<Plan, JobError>, JobTimes) {
+    pub async fn run(
+        self,
+        ticket: Ticket,
+        cloud: Arc<PointCloud>,
+        request: PlanRequest,
+    ) -> (Result<Plan, JobError>, JobTimes) {
         let planner = Arc::clone(&self.planner);
-        let plan = move || match Arc::try_unwrap(cloud) {
-            Ok(owned) => planner.plan_owned(owned, &request),
-            Err(shared) => planner.plan(&shared, &request),
+        let plan = move |deadline| match Arc::try_unwrap(cloud) {
+            Ok(owned) => planner.plan_until(Cow::Owned(owned), &request, deadline),
+            Err(shared) => planner.plan_until(Cow::Borrowed(&*shared), &request, deadline),
         };
-        let (outcome, times) = self.execute(plan).await;
+        let (outcome, times) = self.execute(ticket, plan).await;
         (outcome.and_then(|r| Ok(r?)), times)
     }
 
@@ -148,32 +144,38 @@ impl JobSlot {
     /// lost only when the pipeline panicked.
     pub async fn run_traced(
         self,
+        ticket: Ticket,
         cloud: Arc<PointCloud>,
         request: PlanRequest,
     ) -> (Result<Plan, JobError>, Option<PlanTrace>, JobTimes) {
         let planner = Arc::clone(&self.planner);
-        let (outcome, times) = self.execute(move || planner.plan_traced(&cloud, &request)).await;
+        let (outcome, times) =
+            self.execute(ticket, move |deadline| planner.plan_traced_until(&cloud, &request, deadline)).await;
         match outcome {
             Ok((result, trace)) => (result.map_err(JobError::from), Some(trace), times),
             Err(e) => (Err(e), None, times),
         }
     }
 
-    /// Runs `work` on the pool in its turn, holding the slot until done.
+    /// Runs `work` on the pool at `ticket`'s turn, holding the slot (and
+    /// the turn) until done. Its deadline, `server.plan_timeout_ms` on from
+    /// the start, is the pipeline's to keep: it stops at its next check
+    /// once the time is up, so the turn passes on without a computation
+    /// left running beside the next plan.
     async fn execute<T: Send + 'static>(
         self,
-        work: impl FnOnce() -> T + Send + 'static,
+        ticket: Ticket,
+        work: impl FnOnce(Deadline) -> T + Send + 'static,
     ) -> (Result<T, JobError>, JobTimes) {
         let ready = Instant::now();
-        let JobSlot { permit, pool, turn, .. } = self;
-        // The semaphore is never closed, so the acquire cannot fail.
-        let Ok(turn) = turn.acquire_owned().await else {
-            return (Err(JobError::Panicked), JobTimes::default());
-        };
+        let JobSlot { permit, pool, planner } = self;
+        ticket.turn().await;
+        let turn = ticket;
         let started = Instant::now();
+        let deadline = Deadline::after(planner.config().server.plan_timeout);
         let (tx, rx) = oneshot::channel();
         pool.spawn(move || {
-            let outcome = std::panic::catch_unwind(AssertUnwindSafe(work));
+            let outcome = std::panic::catch_unwind(AssertUnwindSafe(|| work(deadline)));
             drop(turn);
             drop(permit);
             let _ = tx.send(outcome);
@@ -187,12 +189,13 @@ impl JobSlot {
 mod tests {
     use super::*;
     use crate::config::Config;
+    use crate::server::serve_order::ServeOrder;
     use rayon::prelude::*;
     use std::time::Duration;
 
     /// A job that spends its time in rayon joins, as the pipeline does:
     /// its threads wait on each other and look for other work meanwhile.
-    fn parallel_work() -> u64 {
+    fn parallel_work(_: Deadline) -> u64 {
         (0..48u64)
             .into_par_iter()
             .map(|i| {
@@ -205,13 +208,15 @@ mod tests {
     #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
     async fn plans_finish_in_the_order_their_frames_became_ready() {
         let jobs = Jobs::new(Planner::new(Config::default()), 16, 2).unwrap();
+        let order = ServeOrder::new();
         let (done_tx, mut done_rx) = tokio::sync::mpsc::unbounded_channel();
         let mut tasks = Vec::new();
         for k in 0..8 {
             let slot = jobs.reserve().unwrap();
+            let ticket = order.issue();
             let done = done_tx.clone();
             tasks.push(tokio::spawn(async move {
-                slot.execute(parallel_work).await.0.unwrap();
+                slot.execute(ticket, parallel_work).await.0.unwrap();
                 let _ = done.send(k);
             }));
             // Each frame becomes ready a little after the one before.

@@ -24,6 +24,7 @@ pub mod jobs;
 pub mod local;
 pub mod metrics;
 mod planning;
+pub mod serve_order;
 pub mod shutdown;
 pub mod text_link;
 

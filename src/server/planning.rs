@@ -16,7 +16,7 @@ use tracing::{error, info, warn};
 use weldseam_proto::ErrorCode;
 
 use super::ServerState;
-use super::frames::{FrameError, FrameRequest, FrameWait, StoredFrame, Wanted, wall_clock_us};
+use super::frames::{FrameError, FrameRequest, FrameWait, Handed, StoredFrame, Wanted, wall_clock_us};
 use super::jobs::{JobError, JobSlot, JobTimes};
 use super::shutdown::StopSignal;
 use crate::convert::to_proto::plan_error_code;
@@ -190,7 +190,7 @@ pub(crate) async fn fulfil_traced(
             "the daemon is shutting down; no frame will be planned for this request",
         )),
         Err(e) => Err(Failure::new(frame_error_code(&e), e.to_string())),
-        Ok(frame) => {
+        Ok(Handed { frame, ticket }) => {
             log.frame = Some(Arc::clone(&frame));
             state.idle.touch();
             // The frame says which units and frame its points are in.
@@ -198,11 +198,11 @@ pub(crate) async fn fulfil_traced(
             let cloud = Arc::clone(&frame.cloud);
             let (outcome, times) = match &state.debug {
                 Some(debug) if debug.ready() => {
-                    let (outcome, trace, times) = slot.run_traced(cloud, request).await;
+                    let (outcome, trace, times) = slot.run_traced(ticket, cloud, request).await;
                     traced = trace;
                     (outcome, times)
                 }
-                _ => slot.run(cloud, request).await,
+                _ => slot.run(ticket, cloud, request).await,
             };
             state.idle.touch();
             log.times = times;
@@ -210,6 +210,15 @@ pub(crate) async fn fulfil_traced(
                 Ok(plan) => {
                     state.count_plan();
                     Ok(Planned { frame_id: frame.frame_id, plan })
+                }
+                Err(JobError::Plan(e)) if e.out_of_time => {
+                    let place = format!("frame {}: {} stage failed:", frame.frame_id, e.stage);
+                    let text = format!(
+                        "{place} the plan ran past server.plan_timeout_ms ({} ms) and was stopped; no trajectory \
+                         from this frame",
+                        state.config.server.plan_timeout.as_millis()
+                    );
+                    Err(Failure { code: plan_error_code(&e), text, place: Some(place) })
                 }
                 Err(JobError::Plan(e)) => {
                     let place = format!("frame {}: {} stage failed:", frame.frame_id, e.stage);

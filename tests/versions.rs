@@ -146,6 +146,16 @@ async fn a_peer_is_held_to_its_version_and_refused_in_a_header_it_can_read() {
     assert_eq!((version_of(&answer), error_code(&answer)), (7, ErrorCode::UnsupportedVersion));
     assert!(closed(&mut stream).await);
 
+    // No magic, so no version to answer in: the daemon's newest header,
+    // even where the bytes in the version's place read 7.
+    let mut foreign = frame::encode_in(Session::V7, &Message::Hello(hello(7, Role::Camera, 0))).unwrap();
+    foreign[..4].copy_from_slice(b"GET ");
+    let mut stream = TcpStream::connect(&cell.camera).await.unwrap();
+    stream.write_all(&foreign).await.unwrap();
+    let answer = read_raw(&mut stream).await.unwrap();
+    assert_eq!((version_of(&answer), error_code(&answer)), (PROTOCOL_VERSION, ErrorCode::BadMagic));
+    assert!(closed(&mut stream).await);
+
     // A second Hello is a message out of place: 6, and the connection goes on.
     let (mut twice, _) = say_hello(&cell.camera, Session::V7, hello(7, Role::Camera, 0)).await;
     twice.write_all(&frame::encode_in(Session::V7, &Message::Hello(hello(7, Role::Camera, 0))).unwrap()).await.unwrap();
@@ -175,5 +185,50 @@ async fn the_hello_is_bounded_by_the_hello_timeout_not_the_stall_timeout() {
     stream.write_all(&frame::encode(&Message::Hello(hello(8, Role::Camera, 0))).unwrap()).await.unwrap();
     let answer = read_raw(&mut stream).await.expect("the Hello is answered");
     assert!(matches!(frame::decode(&answer, 1 << 20), Ok(Message::HelloAck(_))));
+    cell.shutdown().await;
+}
+
+#[tokio::test]
+async fn a_controller_that_half_closes_is_taken_as_gone_and_its_requests_free_their_places() {
+    let cell = Cell::start(config()).await;
+    let (_camera, _) = say_hello(&cell.camera, Session::NEWEST, hello(8, Role::Camera, 0)).await;
+    let (mut controller, _) = say_hello(&cell.controller, Session::NEWEST, hello(8, Role::Controller, 0)).await;
+    let request = weldseam_proto::message::PlanRequest {
+        request_id: 1,
+        joint: weldseam_proto::message::joint_code::LAP,
+        groove_depth_mm: None,
+        pose: [800.0, 0.0, 500.0, 180.0, 0.0, 0.0],
+        step_mm: None,
+        work_angle_deg: None,
+        travel_angle_deg: None,
+        frame: weldseam_proto::message::FrameSelect::NextFrame,
+        timeout_ms: 20_000,
+        camera: None,
+        hand_eye: None,
+        start_near: None,
+        roi: None,
+        pose_in: None,
+        one_seam: false,
+    };
+    controller.write_all(&frame::encode(&Message::PlanRequest(request)).unwrap()).await.unwrap();
+    controller.shutdown().await.unwrap();
+    // No reply, the daemon's side closed, long before the request's 20 s.
+    let started = std::time::Instant::now();
+    assert!(read_raw(&mut controller).await.is_none(), "no reply after a half-close");
+    assert!(started.elapsed() < Duration::from_secs(10));
+    // The request's place is free again.
+    let (mut other, _) = say_hello(&cell.controller, Session::NEWEST, hello(8, Role::Controller, 0)).await;
+    let mut queue = u32::MAX;
+    for _ in 0..50 {
+        other.write_all(&frame::encode(&Message::Ping).unwrap()).await.unwrap();
+        if let Ok(Message::Status(s)) = frame::decode(&read_raw(&mut other).await.unwrap(), 1 << 20) {
+            queue = s.queue_length;
+        }
+        if queue == 0 {
+            break;
+        }
+        tokio::time::sleep(Duration::from_millis(50)).await;
+    }
+    assert_eq!(queue, 0, "the half-closed connection's request was cancelled");
     cell.shutdown().await;
 }

@@ -1,6 +1,7 @@
 //! The messages of the camera and controller links, their numeric tags and
 //! the error codes. Field order in each struct is the order on the wire
-//! (see PROTOCOL.md); append fields only with a protocol version bump.
+//! (see PROTOCOL.md); a field is added only with a new protocol version or
+//! behind a capability (see [`crate::session`] and PROTOCOL.md's policy).
 
 use serde::{Deserialize, Serialize};
 
@@ -478,7 +479,8 @@ pub struct Status {
 pub enum ErrorCode {
     /// 1: the header does not start with the magic bytes; the connection closes.
     BadMagic,
-    /// 2: the protocol version is not this daemon's; the connection closes.
+    /// 2: the Hello's version is older than the oldest served, or a
+    /// message after it leaves the version agreed; the connection closes.
     UnsupportedVersion,
     /// 3: the header's tag names no message type.
     UnknownMessage,

@@ -277,7 +277,10 @@ impl<R: AsyncRead + Unpin> MessageReader<R> {
         self.fill(1..HEADER_BYTES).await?;
         let mut head = [0u8; HEADER_BYTES];
         head.copy_from_slice(&self.buffer[..HEADER_BYTES]);
-        self.last_version = Some(u16::from_le_bytes([head[4], head[5]]));
+        // A header without the magic bytes has no version to speak of.
+        if head[..4] == frame::MAGIC {
+            self.last_version = Some(u16::from_le_bytes([head[4], head[5]]));
+        }
         let header = Header::parse(&head, self.max_frame_bytes)?;
         if let Some(agreed) = self.session
             && header.version != agreed.version

@@ -401,17 +401,20 @@ fn serve_camera_and_controller_run_as_processes() {
     let seam = &reply["result"]["seams"][0];
     assert_eq!(seam["joint"], "i_butt");
     assert!(seam["waypoints"].as_array().is_some_and(|w| w.len() >= 10), "{reply}");
-    // The text session: hello, trigger, and every waypoint line pulled,
-    // approach first and retract last.
+    // The text session: hello, trigger, every waypoint line pulled,
+    // approach first and retract last, and the seam's check.
     let session = String::from_utf8_lossy(&text.stdout);
     assert!(text.status.success(), "controller --text: {session}{}", String::from_utf8_lossy(&text.stderr));
     let lines: Vec<&str> = session.lines().collect();
-    assert_eq!(lines[..2], ["> HELLO,kuka", "< 0,1,0"], "{session}");
+    assert_eq!(lines[..2], ["> HELLO,kuka", "< 0,2,0"], "{session}");
     assert!(lines[2].starts_with("> TRIGGER,i_butt,") && lines[3].starts_with("< 0,1,"), "{session}");
     let pulled: Vec<&str> =
         lines.iter().filter(|l| l.starts_with("< ") && l.matches(',').count() == 8).copied().collect();
     assert_eq!(pulled.len(), seam["waypoints"].as_array().unwrap().len() + 2, "{session}");
     assert!(pulled[0].starts_with("< 1,1,") && pulled[pulled.len() - 1].starts_with("< 3,1,0,"), "{session}");
+    // The seam held against the daemon's check: its count and mean position.
+    let check = lines.iter().position(|l| *l == "> CHECK,1").expect("the seam checked");
+    assert!(lines[check + 1].starts_with(&format!("< 0,{},", pulled.len())), "{session}");
 
     let status = serve.terminate();
     assert!(status.success(), "serve exited with {status}");

@@ -287,7 +287,10 @@ impl<'a> Context<'a> {
         if !measured {
             return Ok(false);
         }
-        let spacing = scale::measure_spacing(self.cloud, cfg.neighbour_radius_mm)
+        let spacing = scale::measure_spacing_until(self.cloud, cfg.neighbour_radius_mm, self.clock.deadline);
+        // Counts cut short by the time limit mean nothing.
+        self.clock.deadline.check(Stage::NeighbourIndex)?;
+        let spacing = spacing
             .map_err(|e| PlanError::at(Stage::NeighbourIndex, format!("{e}; the point density cannot be measured")))?;
         self.scale = Scale::of_spacing(spacing, cfg.neighbour_radius_mm);
         tracing::info!(

@@ -44,6 +44,7 @@ use rayon::prelude::*;
 use crate::cloud::{Point, PointCloud};
 use crate::geometry::{Vec3, vec3};
 
+use super::Deadline;
 #[cfg(test)]
 use super::neighbours::cells::CellIndex;
 use super::neighbours::cells::counts_around;
@@ -260,12 +261,22 @@ fn lower_quartile(values: &mut [u32]) -> u32 {
 
 /// Measures the spacing of `cloud`, starting at radius `start_mm`.
 pub(crate) fn measure_spacing(cloud: &PointCloud, start_mm: f64) -> Result<Spacing, SpacingError> {
+    measure_spacing_until(cloud, start_mm, Deadline::NONE)
+}
+
+/// [`measure_spacing`] that stops counting once `deadline` has passed; its
+/// result then means nothing, and the caller refuses the plan instead.
+pub(crate) fn measure_spacing_until(
+    cloud: &PointCloud,
+    start_mm: f64,
+    deadline: Deadline,
+) -> Result<Spacing, SpacingError> {
     let points = cloud.points();
     // A few thousand counts: one pass over the cloud per radius against
     // the sample, with no index of the whole cloud.
     measure_spacing_by(cloud, start_mm, |radius, sample| {
         let centres: Vec<Point> = sample.iter().map(|&i| points[i]).collect();
-        counts_around(points, &centres, radius, MAX_MEASURED_COUNT)
+        counts_around(points, &centres, radius, MAX_MEASURED_COUNT, deadline)
     })
 }
 

@@ -33,6 +33,7 @@ use rayon::prelude::*;
 use crate::cloud::Point;
 #[cfg(doc)]
 use crate::kernels::within;
+use crate::pipeline::Deadline;
 use crate::pipeline::gather::{gather, split_into_parts};
 
 /// Cell coordinates are packed into 21 bits each. Sanitised clouds lie
@@ -189,7 +190,18 @@ const COUNT_CHUNK: usize = 1 << 14;
 /// per point) cost several times the cloud's own memory for 4096 counts;
 /// listing each sample under every cell its disc reaches cost up to eight
 /// entries a sample, half a megabyte, more than a small cloud itself.
-pub(crate) fn counts_around(points: &[Point], samples: &[Point], radius_mm: f64, cap: u32) -> Vec<u32> {
+///
+/// Its cost grows with the points times the samples near each, so a cloud
+/// whose points crowd into a few cells costs far more than its size: each
+/// chunk first checks `deadline`, and once it has passed the chunks left
+/// count nothing (the caller checks the deadline before reading counts).
+pub(crate) fn counts_around(
+    points: &[Point],
+    samples: &[Point],
+    radius_mm: f64,
+    cap: u32,
+    deadline: Deadline,
+) -> Vec<u32> {
     let inverse_cell_mm = 1.0 / (SAMPLE_CELL_RADII * radius_mm);
     let reach = radius_mm * (1.0 + SAMPLE_REACH_MARGIN);
     let mut homed: Vec<(u64, u32)> =
@@ -204,6 +216,9 @@ pub(crate) fn counts_around(points: &[Point], samples: &[Point], radius_mm: f64,
         .par_chunks(COUNT_CHUNK)
         .map(|chunk| {
             let mut counts = vec![0u32; samples.len()];
+            if deadline.passed() {
+                return counts;
+            }
             // Neighbouring points mostly share their block: its runs of
             // samples are looked up once for the stretch.
             let mut cached: Option<([i64; 3], [Range<usize>; 4])> = None;
@@ -768,18 +783,26 @@ mod tests {
             for radius in [0.3f32, 0.8, 2.5] {
                 let r_sq = radius * radius;
                 let all: Vec<u32> = samples.iter().map(|p| brute_force(&points, p, r_sq).len() as u32).collect();
-                assert_eq!(counts_around(&points, &samples, radius as f64, u32::MAX), all, "{n} points, {radius}");
+                assert_eq!(
+                    counts_around(&points, &samples, radius as f64, u32::MAX, Deadline::NONE),
+                    all,
+                    "{n} points, {radius}"
+                );
                 for cap in [1, 3, 10] {
                     let capped: Vec<u32> = all.iter().map(|&c| c.min(cap)).collect();
-                    assert_eq!(counts_around(&points, &samples, radius as f64, cap), capped, "cap {cap}");
+                    assert_eq!(
+                        counts_around(&points, &samples, radius as f64, cap, Deadline::NONE),
+                        capped,
+                        "cap {cap}"
+                    );
                 }
             }
         }
         // A sample off the cloud's points counts its neighbours, not
         // itself; far coordinates are clamped, not wrapped.
         let far = vec![[1.0e9f32, 0.0, 500.0], [-1.0e9, 0.0, 500.0], [0.0, 0.0, 500.0], [0.04, 0.0, 500.0]];
-        assert_eq!(counts_around(&far, &[far[2], [0.0, 0.02, 500.0]], 0.05, u32::MAX), vec![2, 2]);
-        assert_eq!(counts_around(&far, &[far[0]], 0.05, u32::MAX), vec![1], "clamped, not wrapped");
+        assert_eq!(counts_around(&far, &[far[2], [0.0, 0.02, 500.0]], 0.05, u32::MAX, Deadline::NONE), vec![2, 2]);
+        assert_eq!(counts_around(&far, &[far[0]], 0.05, u32::MAX, Deadline::NONE), vec![1], "clamped, not wrapped");
     }
 
     #[test]

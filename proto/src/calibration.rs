@@ -28,6 +28,11 @@ pub struct CaptureFile {
     /// Several spheres' radii, for clouds of several.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub sphere_radii_mm: Option<Vec<f64>>,
+    /// The rig's layout: the distances between the sphere centres, mm, in
+    /// the order (0,1), (0,2), ..., (0,n-1), (1,2), ...; found from the
+    /// captures when absent.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sphere_distances_mm: Option<Vec<f64>>,
     pub captures: Vec<Capture>,
 }
 
@@ -74,6 +79,35 @@ pub struct CalibrationReport {
     /// Sphere sets: the spheres found in each capture.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub spheres_found: Option<Vec<usize>>,
+    /// Sphere sets: the captures left out because their spheres could not
+    /// be named, each with the reason.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub spheres_unnamed: Vec<UnnamedCapture>,
+    /// Sphere sets: the layout the spheres were named by (distances as in
+    /// the capture file's `sphere_distances_mm`), when distances named them.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sphere_distances_mm: Option<Vec<f64>>,
+    /// The gate: whether the calibration may be written, and each limit it
+    /// failed.
+    #[serde(default)]
+    pub gate: GateReport,
+}
+
+/// A sphere capture left out of the solution.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct UnnamedCapture {
+    pub capture: usize,
+    pub reason: String,
+}
+
+/// The trust gate's verdict on a calibration.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct GateReport {
+    pub passed: bool,
+    /// Each failed limit, as a sentence naming the figure and the limit.
+    pub failures: Vec<String>,
+    /// Written with `--force` despite the failures.
+    pub forced: bool,
 }
 
 /// One capture's residual.

@@ -35,6 +35,8 @@
 
 pub mod closed_form;
 pub mod conditioning;
+pub mod gate;
+pub mod naming;
 pub mod refine;
 pub mod sphere;
 
@@ -197,6 +199,10 @@ trait Problem {
     fn starts(&self, use_: &[usize]) -> Vec<NamedStart>;
     /// Refines from `start` on `use_`; the fit can evaluate any capture.
     fn refine(&self, start: &Isometry3<f64>, use_: &[usize]) -> Result<Fit, CalibrationError>;
+    /// Capture `i`'s index as the user numbers it.
+    fn name(&self, i: usize) -> usize {
+        i
+    }
 }
 
 /// A refined solution on some captures.
@@ -230,7 +236,31 @@ pub fn calibrate_spheres(captures: &[SphereCapture], mount: Mount) -> Result<Cal
             return Err(CalibrationError::SphereUnseen { sphere, captures: seen });
         }
     }
-    solve(&Spheres { captures, mount, spheres }, mount)
+    solve(&Spheres { captures, mount, spheres, names: (0..captures.len()).collect() }, mount)
+}
+
+/// [`calibrate_spheres`] on the captures where at least one sphere was
+/// named; the others (their spheres unseen or not named) are left out, and
+/// the result's capture indices are those of `captures`.
+pub fn calibrate_named_spheres(captures: &[SphereCapture], mount: Mount) -> Result<Calibration, CalibrationError> {
+    let kept: Vec<usize> = (0..captures.len()).filter(|&i| captures[i].centres.iter().any(Option::is_some)).collect();
+    let named: Vec<SphereCapture> = kept.iter().map(|&i| captures[i].clone()).collect();
+    check_count(named.len())?;
+    let spheres = named.iter().map(|c| c.centres.len()).max().unwrap_or(0);
+    for sphere in 0..spheres {
+        let seen = named.iter().filter(|c| c.centres.get(sphere).is_some_and(Option::is_some)).count();
+        if seen < 2 {
+            return Err(CalibrationError::SphereUnseen { sphere, captures: seen });
+        }
+    }
+    let mut c = solve(&Spheres { captures: &named, mount, spheres, names: kept.clone() }, mount)?;
+    for r in &mut c.residuals {
+        r.capture = kept[r.capture];
+    }
+    for o in &mut c.outliers {
+        *o = kept[*o];
+    }
+    Ok(c)
 }
 
 fn check_count(found: usize) -> Result<(), CalibrationError> {
@@ -319,7 +349,7 @@ fn solve(problem: &dyn Problem, mount: Mount) -> Result<Calibration, Calibration
         ));
     }
     if !outliers.is_empty() {
-        let list: Vec<String> = outliers.iter().map(ToString::to_string).collect();
+        let list: Vec<String> = outliers.iter().map(|&i| problem.name(i).to_string()).collect();
         let which = match outliers.len() {
             1 => format!("capture {} looks like an outlier", list[0]),
             _ => format!("captures {} look like outliers", list.join(", ")),
@@ -525,6 +555,8 @@ struct Spheres<'a> {
     captures: &'a [SphereCapture],
     mount: Mount,
     spheres: usize,
+    /// Each capture's index in the set the user gave.
+    names: Vec<usize>,
 }
 
 impl Spheres<'_> {
@@ -638,6 +670,10 @@ impl Spheres<'_> {
 impl Problem for Spheres<'_> {
     fn len(&self) -> usize {
         self.captures.len()
+    }
+
+    fn name(&self, i: usize) -> usize {
+        self.names[i]
     }
 
     fn hands(&self) -> Vec<Isometry3<f64>> {

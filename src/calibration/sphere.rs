@@ -1,30 +1,33 @@
-//! Calibration spheres in a point cloud: each sphere's centre fitted in
-//! one capture's cloud, and the spheres named alike across captures.
+//! Calibration spheres in a point cloud: every sphere of a given radius
+//! fitted in one capture's cloud, whatever else the cloud holds (the table,
+//! the posts, fixtures, stray returns).
 //!
-//! A sphere is found by RANSAC: four points near one another give an
-//! algebraic sphere (`|p|² = 2 c·p + k`, linear in `c` and `k`), kept when
-//! its radius is within [`RADIUS_TOLERANCE`] of a given one, and scored by
-//! the points within [`inlier_band`] of its surface. The best is refined by
-//! Levenberg-Marquardt on the geometric distance `|p - c| - r` under a
-//! Huber loss, first with the radius free (to tell which sphere it is),
-//! then with the given radius (the centre of a cap seen from one side is
-//! pinned far better with the radius known). A partial view is nothing
-//! special: only the points seen count. Several spheres are found one
-//! after another, each claiming its points.
+//! A ball seen from a camera is a cap facing it, and every point of the
+//! cap lies one radius from the centre along its surface normal. So each
+//! point (a bounded random sample of [`VOTE_POINTS`]) gets a normal from
+//! the plane of its neighbours ([`NORMAL_NEIGHBOURHOOD`] of the radius
+//! around it, in the whole cloud), turned towards the camera, and votes
+//! for a centre one given radius behind it. A ball's votes pile up at its
+//! centre; a plane's spread over a plane, a post's over a half-cylinder,
+//! stray returns' anywhere, so the densest piles are the candidates (at
+//! most [`MAX_CANDIDATES_PER_RADIUS`] per radius, each at least
+//! [`MIN_VOTES`] votes). Each candidate is refined by Levenberg-Marquardt
+//! on the geometric distance `|p - c| - r` under a Huber loss, first with
+//! the radius free (a real ball measures its own radius), then with the
+//! given radius (the centre of a cap seen from one side is pinned far
+//! better with the radius known), and kept only when its points cover a
+//! cap the way a ball seen from the camera does: a cap of at least
+//! [`MIN_CAP_HALF_ANGLE_DEG`], round ([`MIN_CAP_ROUNDNESS`]: a strip of a
+//! cylinder is not), facing the camera ([`MAX_CAP_OFF_AXIS_DEG`]), its
+//! points' normals along the radius ([`MIN_NORMAL_AGREEMENT`]), the
+//! points close to the surface ([`MAX_RMS_OVER_BAND`]). A plane patch or a
+//! post fails the cap; a cluster of stray returns fails the normals.
 //!
-//! Identification: spheres whose given radii differ by at least
-//! [`MIN_RADIUS_GAP_MM`] are told apart by their measured radius alone.
-//! Spheres of equal radius are told apart by the distances between their
-//! centres, which no robot or camera motion changes: each capture's
-//! centres are matched to a reference capture's (the first that shows
-//! every sphere) by the assignment whose pairwise distances agree best,
-//! and a capture whose best and second-best assignments agree about as
-//! well is left unnamed. Distances tell spheres apart only when a capture
-//! sees three or more of them (one distance reads the same either way
-//! round), so equal spheres need at least three in the cell, each pair at
-//! its own distance.
+//! Which given sphere each fit is, is the business of
+//! [`super::naming`]: by radius when the radii differ, by the layout's
+//! distances when they do not.
 
-use nalgebra::{Matrix4, Vector4};
+use nalgebra::{Matrix2, Matrix3, SymmetricEigen};
 use rand_chacha::ChaCha8Rng;
 use rand_core::{Rng, SeedableRng};
 
@@ -34,45 +37,81 @@ use crate::geometry::{Vec3, vec3};
 /// The most spheres one capture may hold.
 pub const MAX_SPHERES: usize = 6;
 
+/// The most spheres kept from one cloud (the best supported): the given
+/// spheres and a few look-alikes for the naming to sort out.
+pub const MAX_FOUND: usize = MAX_SPHERES + 2;
+
 /// The smallest and largest sphere radius accepted, mm.
 pub const RADIUS_RANGE_MM: [f64; 2] = [2.0, 500.0];
-
-/// A hypothesis whose radius is further than this fraction from every
-/// given radius is discarded.
-pub const RADIUS_TOLERANCE: f64 = 0.1;
 
 /// Radii at least this far apart name their spheres by size.
 pub const MIN_RADIUS_GAP_MM: f64 = 3.0;
 
-/// RANSAC hypotheses tried per sphere.
-pub const RANSAC_HYPOTHESES: usize = 1000;
+/// The points that vote (a seeded random sample of the cloud); the
+/// refinement and the normals use every point.
+pub const VOTE_POINTS: usize = 40_000;
 
-/// The points RANSAC scores hypotheses on (a uniform subsample of the
-/// cloud); the refinement uses every point near the sphere found.
-pub const RANSAC_SAMPLE_POINTS: usize = 10_000;
+/// A voting point's normal comes from its neighbours within this
+/// fraction of the smallest radius (at least 1 mm): wide enough to
+/// average the sensor's noise, narrow enough to stay on a ball's cap.
+pub const NORMAL_NEIGHBOURHOOD: f64 = 0.2;
 
-/// A fit whose surface points lie further than this fraction of the
-/// inlier band from it, RMS, is not a sphere of that radius.
-pub const MAX_RMS_OVER_BAND: f64 = 0.5;
+/// The fewest neighbours a normal is estimated from.
+pub const MIN_NORMAL_NEIGHBOURS: usize = 8;
 
-/// RANSAC rounds per sphere sought, counting the rejected ones.
-pub const MAX_ATTEMPTS_PER_SPHERE: usize = 2;
+/// The votes are counted in cells of this fraction of the radius (at
+/// least 0.5 mm), each pile over the 27 cells around one.
+pub const VOTE_CELL_FRACTION: f64 = 0.05;
+
+/// The fewest votes a candidate centre needs.
+pub const MIN_VOTES: usize = 12;
+
+/// Candidate centres tried per given radius, the most voted first.
+pub const MAX_CANDIDATES_PER_RADIUS: usize = 16;
+
+/// The cap's half-angle, from the spread of its points' directions from
+/// the centre, must be at least this, degrees: a ball's visible cap is
+/// 60 to 85 degrees; a patch of plane or post inside the shell is far
+/// smaller.
+pub const MIN_CAP_HALF_ANGLE_DEG: f64 = 25.0;
+
+/// The cap's axis (the mean direction of its points from the centre)
+/// must point within this of the camera, degrees.
+pub const MAX_CAP_OFF_AXIS_DEG: f64 = 70.0;
+
+/// The cap's directions, across its axis, must spread at least this
+/// fraction as much one way as the other: a cap is round, a strip of a
+/// cylinder of about the ball's radius is not.
+pub const MIN_CAP_ROUNDNESS: f64 = 0.1;
+
+/// The fraction of the cap's voting points whose normal lies within
+/// [`NORMAL_AGREEMENT_DEG`] of the direction from the centre.
+pub const MIN_NORMAL_AGREEMENT: f64 = 0.6;
+
+/// See [`MIN_NORMAL_AGREEMENT`].
+pub const NORMAL_AGREEMENT_DEG: f64 = 20.0;
 
 /// The most points the refinement uses (a uniform subsample): the
 /// centre of twenty thousand points with the sensor's noise is already
 /// pinned to microns, and the cost stays bounded whatever the cloud.
 pub const REFINE_MAX_POINTS: usize = 20_000;
 
+/// The first fit of a candidate uses the points within this fraction of
+/// the radius of its surface (at least three bands).
+pub const WIDE_SHELL_FRACTION: f64 = 0.15;
+
+/// Fits with the radius given on the narrow shell (three bands) before
+/// the radius is measured.
+pub const NARROWING_PASSES: usize = 2;
+
 /// The fewest points on a sphere's surface for it to count as seen.
 pub const MIN_SPHERE_POINTS: usize = 150;
 
-/// Pairwise-distance mismatch, mm RMS, below which an assignment of
-/// equal spheres is accepted, and the margin by which the second best
-/// must be worse.
-pub const DISTANCE_MATCH_MM: f64 = 2.0;
+/// A fit whose surface points lie further than this fraction of the
+/// inlier band from it, RMS, is not a sphere of that radius.
+pub const MAX_RMS_OVER_BAND: f64 = 0.5;
 
-/// The half-width of the shell that counts as a sphere's surface for
-/// RANSAC, mm: 2 % of the radius, at least 0.3 mm (the sensor's noise
+/// The half-width of the shell that counts as a sphere's surface, mm: 2 % of the radius, at least 0.3 mm (the sensor's noise
 /// and a few pixels' mixing at the rim stay inside).
 pub fn inlier_band(radius_mm: f64) -> f64 {
     (0.02 * radius_mm).max(0.3)
@@ -85,12 +124,14 @@ pub struct FittedSphere {
     pub centre: Vec3,
     /// The radius the fit measured with the radius free, mm.
     pub measured_radius_mm: f64,
-    /// Which of the given radii it is (its index), when radii tell.
+    /// Which of the given radii it is (the first index of that radius).
     pub radius_index: usize,
     /// The points on its surface.
     pub points: usize,
     /// RMS of their distances to the surface, mm.
     pub rms_mm: f64,
+    /// The half-angle of the cap its points cover, degrees.
+    pub cap_half_angle_deg: f64,
 }
 
 /// Why spheres could not be fitted.
@@ -124,59 +165,60 @@ pub fn radii_distinct(radii: &[f64]) -> bool {
     radii.iter().enumerate().all(|(i, a)| radii[..i].iter().all(|b| (a - b).abs() >= MIN_RADIUS_GAP_MM))
 }
 
-/// Finds up to `radii.len()` spheres among `points` (camera frame, mm;
-/// invalid points are skipped), largest first. `seed` makes the RANSAC
-/// draws repeatable.
+/// The first index of each given radius's class (radii closer than
+/// [`MIN_RADIUS_GAP_MM`] are one class).
+pub fn radius_classes(radii: &[f64]) -> Vec<usize> {
+    (0..radii.len()).map(|k| (0..=k).find(|&j| (radii[j] - radii[k]).abs() < MIN_RADIUS_GAP_MM).unwrap_or(k)).collect()
+}
+
+/// A voting point: where it is and its surface normal, towards the camera.
+struct Oriented {
+    point: Vec3,
+    normal: Vec3,
+}
+
+/// Finds the spheres of the given radii among `points` (camera frame,
+/// mm; invalid points are skipped): every one that passes the cap's
+/// checks, the best supported first, at most [`MAX_FOUND`]. `seed` makes
+/// the voting sample repeatable.
 pub fn fit_spheres(points: &[[f32; 3]], radii: &[f64], seed: u64) -> Result<Vec<FittedSphere>, SphereError> {
     check_radii(radii)?;
     let valid: Vec<Vec3> = points.iter().filter(|p| p.iter().all(|v| v.is_finite())).map(vec3).collect();
+    if valid.len() < MIN_SPHERE_POINTS {
+        return Ok(Vec::new());
+    }
+    let smallest = radii.iter().copied().fold(f64::INFINITY, f64::min);
+    let neighbourhood = (NORMAL_NEIGHBOURHOOD * smallest).max(1.0);
+    let grid = Grid::new(&valid, neighbourhood);
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let voters: Vec<usize> = if valid.len() <= VOTE_POINTS {
+        (0..valid.len()).collect()
+    } else {
+        (0..VOTE_POINTS).map(|_| below(&mut rng, valid.len())).collect()
+    };
+    let oriented: Vec<Oriented> =
+        voters.iter().filter_map(|&i| normal_at(&valid, &grid, &valid[i], neighbourhood)).collect();
+    let classes = radius_classes(radii);
+    let mut order: Vec<usize> = (0..radii.len()).filter(|&k| classes[k] == k).collect();
+    order.sort_by(|a, b| radii[*b].total_cmp(&radii[*a]));
     let mut claimed = vec![false; valid.len()];
     let mut found: Vec<FittedSphere> = Vec::new();
-    let (smallest, largest) = radii.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), r| (lo.min(*r), hi.max(*r)));
-    // A rejected hypothesis (another object's points, a sphere hidden
-    // behind another) claims its points too, and the search goes on.
-    for _ in 0..MAX_ATTEMPTS_PER_SPHERE * radii.len() {
-        if found.len() == radii.len() {
-            break;
-        }
-        let free: Vec<usize> = (0..valid.len()).filter(|&i| !claimed[i]).collect();
-        let Some(start) = ransac(&valid, &free, radii, smallest, largest, &mut rng) else { break };
-        let sphere = refine_sphere(&valid, &free, start, radii, &found);
-        let (centre, radius) = match &sphere {
-            Some(s) => (s.centre, radii[s.radius_index]),
-            None => (start.centre, start.radius),
-        };
-        let reach = radius + 3.0 * inlier_band(radius);
-        for (i, c) in claimed.iter_mut().enumerate() {
-            if (valid[i] - centre).norm() < reach {
-                *c = true;
+    for k in order {
+        let radius = radii[k];
+        for candidate in vote_peaks(&oriented, radius) {
+            let Some(sphere) = check_candidate(&valid, &grid, &claimed, &oriented, candidate, radius, k) else {
+                continue;
+            };
+            let reach = radius + 3.0 * inlier_band(radius);
+            for i in grid.within(&valid, &sphere.centre, reach) {
+                claimed[i] = true;
             }
+            found.push(sphere);
         }
-        found.extend(sphere);
     }
+    found.sort_by_key(|s| std::cmp::Reverse(s.points));
+    found.truncate(MAX_FOUND);
     Ok(found)
-}
-
-/// A sphere hypothesis: centre and radius.
-#[derive(Debug, Clone, Copy)]
-struct Hypothesis {
-    centre: Vec3,
-    radius: f64,
-}
-
-/// The sphere through four points, if they are not coplanar.
-fn sphere_through(p: [&Vec3; 4]) -> Option<Hypothesis> {
-    let mut m = Matrix4::zeros();
-    let mut y = Vector4::zeros();
-    for (row, q) in p.iter().enumerate() {
-        m.set_row(row, &nalgebra::RowVector4::new(2.0 * q.x, 2.0 * q.y, 2.0 * q.z, 1.0));
-        y[row] = q.norm_squared();
-    }
-    let s = m.lu().solve(&y)?;
-    let centre = Vec3::new(s[0], s[1], s[2]);
-    let r2 = s[3] + centre.norm_squared();
-    (r2 > 0.0 && r2.is_finite()).then(|| Hypothesis { centre, radius: r2.sqrt() })
 }
 
 /// Uniform index below `n` (n > 0).
@@ -184,46 +226,195 @@ fn below(rng: &mut ChaCha8Rng, n: usize) -> usize {
     (rng.next_u64() % n as u64) as usize
 }
 
-/// The best-supported sphere among `free` points, radius within the
-/// given ones' range.
-fn ransac(
-    points: &[Vec3],
-    free: &[usize],
-    radii: &[f64],
-    smallest: f64,
-    largest: f64,
-    rng: &mut ChaCha8Rng,
-) -> Option<Hypothesis> {
-    if free.len() < MIN_SPHERE_POINTS {
+/// The normal of the plane through `p`'s neighbours, turned towards the
+/// camera (the origin); `None` with too few neighbours.
+fn normal_at(points: &[Vec3], grid: &Grid, p: &Vec3, reach: f64) -> Option<Oriented> {
+    let near = grid.within(points, p, reach);
+    if near.len() < MIN_NORMAL_NEIGHBOURS {
         return None;
     }
-    let stride = free.len().div_ceil(RANSAC_SAMPLE_POINTS).max(1);
-    let sample: Vec<Vec3> = free.iter().step_by(stride).map(|&i| points[i]).collect();
-    let grid = Grid::new(&sample, largest);
-    let mut best: Option<(usize, Hypothesis)> = None;
-    for _ in 0..RANSAC_HYPOTHESES {
-        let seed = below(rng, sample.len());
-        let near = grid.within(&sample, &sample[seed], 2.0 * largest);
-        if near.len() < 4 {
-            continue;
+    let n = near.len() as f64;
+    let mean = near.iter().fold(Vec3::zeros(), |s, &i| s + points[i]) / n;
+    let scatter = near.iter().fold(Matrix3::zeros(), |s, &i| {
+        let d = points[i] - mean;
+        s + d * d.transpose()
+    });
+    let eigen = SymmetricEigen::new(scatter);
+    let (smallest, _) = eigen.eigenvalues.iter().enumerate().min_by(|a, b| a.1.total_cmp(b.1))?;
+    let normal: Vec3 = eigen.eigenvectors.column(smallest).into_owned();
+    let normal = if normal.dot(p) > 0.0 { -normal } else { normal };
+    normal.iter().all(|v| v.is_finite()).then_some(Oriented { point: *p, normal })
+}
+
+/// The centres the votes for `radius` pile up at, the largest pile
+/// first; piles closer than a radius to a larger one are its part.
+fn vote_peaks(oriented: &[Oriented], radius: f64) -> Vec<Vec3> {
+    let cell = (VOTE_CELL_FRACTION * radius).max(0.5);
+    let mut cells: std::collections::HashMap<[i64; 3], (usize, Vec3)> = std::collections::HashMap::new();
+    for o in oriented {
+        let vote = o.point - radius * o.normal;
+        let entry = cells.entry(Grid::key(&vote, cell)).or_insert((0, Vec3::zeros()));
+        entry.0 += 1;
+        entry.1 += vote;
+    }
+    let pile = |key: &[i64; 3]| {
+        let mut count = 0;
+        let mut sum = Vec3::zeros();
+        for dx in -1..=1 {
+            for dy in -1..=1 {
+                for dz in -1..=1 {
+                    if let Some((c, s)) = cells.get(&[key[0] + dx, key[1] + dy, key[2] + dz]) {
+                        count += c;
+                        sum += s;
+                    }
+                }
+            }
         }
-        let pick = [0, 1, 2].map(|_| &sample[near[below(rng, near.len())]]);
-        let Some(h) = sphere_through([&sample[seed], pick[0], pick[1], pick[2]]) else { continue };
-        let fits = radii.iter().any(|r| (h.radius - r).abs() <= RADIUS_TOLERANCE * r);
-        if !fits || h.radius < smallest * (1.0 - RADIUS_TOLERANCE) {
-            continue;
+        (count, sum / count.max(1) as f64)
+    };
+    let mut piles: Vec<(usize, Vec3)> =
+        cells.iter().filter(|(_, (c, _))| *c > 0).map(|(key, _)| pile(key)).filter(|(c, _)| *c >= MIN_VOTES).collect();
+    piles.sort_by(|a, b| b.0.cmp(&a.0).then(a.1.x.total_cmp(&b.1.x)));
+    let mut peaks: Vec<Vec3> = Vec::new();
+    for (_, centre) in piles {
+        if peaks.len() == MAX_CANDIDATES_PER_RADIUS {
+            break;
         }
-        let band = inlier_band(h.radius);
-        let support = grid
-            .within(&sample, &h.centre, h.radius + band)
-            .iter()
-            .filter(|&&k| ((sample[k] - h.centre).norm() - h.radius).abs() < band)
-            .count();
-        if best.is_none_or(|(count, _)| support > count) {
-            best = Some((support, h));
+        if peaks.iter().all(|p| (p - centre).norm() >= radius) {
+            peaks.push(centre);
         }
     }
-    best.map(|(_, h)| h)
+    peaks
+}
+
+/// Refines a candidate centre and keeps it when its points form a ball's
+/// cap as the camera sees one.
+fn check_candidate(
+    points: &[Vec3],
+    grid: &Grid,
+    claimed: &[bool],
+    oriented: &[Oriented],
+    candidate: Vec3,
+    radius: f64,
+    radius_index: usize,
+) -> Option<FittedSphere> {
+    let band = inlier_band(radius);
+    // The votes place the centre to a millimetre or two: a first fit on a
+    // wide shell brings it within the band.
+    let wide = (WIDE_SHELL_FRACTION * radius).max(3.0 * band);
+    let free: Vec<usize> =
+        grid.within(points, &candidate, radius + wide + 1.0).into_iter().filter(|&i| !claimed[i]).collect();
+    let around = shell(points, &free, &candidate, radius, wide);
+    if around.len() < MIN_SPHERE_POINTS {
+        return None;
+    }
+    let around: Vec<Vec3> = around.iter().step_by(around.len().div_ceil(REFINE_MAX_POINTS)).copied().collect();
+    let coarse = refine::robust_fit(&[candidate.x, candidate.y, candidate.z], &|p| {
+        let c = Vec3::new(p[0], p[1], p[2]);
+        around.iter().map(|q| [(q - c).norm() - radius]).collect()
+    })
+    .ok()?;
+    let mut candidate = Vec3::new(coarse.params[0], coarse.params[1], coarse.params[2]);
+    // Then on the narrow shell around it, twice: each pass leaves out
+    // more of the post and the table.
+    for _ in 0..NARROWING_PASSES {
+        let near = shell(points, &free, &candidate, radius, 3.0 * band);
+        if near.len() < MIN_SPHERE_POINTS {
+            return None;
+        }
+        let near: Vec<Vec3> = near.iter().step_by(near.len().div_ceil(REFINE_MAX_POINTS)).copied().collect();
+        let fit = refine::robust_fit(&[candidate.x, candidate.y, candidate.z], &|p| {
+            let c = Vec3::new(p[0], p[1], p[2]);
+            near.iter().map(|q| [(q - c).norm() - radius]).collect()
+        })
+        .ok()?;
+        candidate = Vec3::new(fit.params[0], fit.params[1], fit.params[2]);
+    }
+    let near = shell(points, &free, &candidate, radius, 3.0 * band);
+    if near.len() < MIN_SPHERE_POINTS {
+        return None;
+    }
+    let near: Vec<Vec3> = near.iter().step_by(near.len().div_ceil(REFINE_MAX_POINTS)).copied().collect();
+    let distances = |p: &[f64], r: f64| -> Blocks {
+        let c = Vec3::new(p[0], p[1], p[2]);
+        near.iter().map(|q| [(q - c).norm() - r]).collect()
+    };
+    let c0 = [candidate.x, candidate.y, candidate.z, radius];
+    let free_fit = refine::robust_fit(&c0, &|p| distances(p, p[3])).ok()?;
+    let measured = free_fit.params[3];
+    // A real ball measures its own radius to a few hundredths of a
+    // millimetre; a patch of something else does not.
+    if (measured - radius).abs() > band {
+        return None;
+    }
+    let fixed = refine::robust_fit(&free_fit.params[..3], &|p| distances(p, radius)).ok()?;
+    let centre = Vec3::new(fixed.params[0], fixed.params[1], fixed.params[2]);
+    let on_surface = shell(points, &free, &centre, radius, band);
+    if on_surface.len() < MIN_SPHERE_POINTS {
+        return None;
+    }
+    let rms = (on_surface.iter().map(|q| ((q - centre).norm() - radius).powi(2)).sum::<f64>()
+        / on_surface.len() as f64)
+        .sqrt();
+    if rms > MAX_RMS_OVER_BAND * band {
+        return None;
+    }
+    let cap_half_angle_deg = cap_shape(&on_surface, &centre)?;
+    let agreeing = normal_agreement(oriented, &centre, radius, band)?;
+    (agreeing >= MIN_NORMAL_AGREEMENT).then_some(FittedSphere {
+        centre,
+        measured_radius_mm: measured,
+        radius_index,
+        points: on_surface.len(),
+        rms_mm: rms,
+        cap_half_angle_deg,
+    })
+}
+
+/// The cap's half-angle, degrees, when the points' directions from the
+/// centre cover a round cap facing the camera wide enough; `None`
+/// otherwise. For a cap of half-angle `a` evenly covered the mean of the
+/// unit directions is `(1 + cos a) / 2` long.
+fn cap_shape(on_surface: &[Vec3], centre: &Vec3) -> Option<f64> {
+    let n = on_surface.len() as f64;
+    let directions: Vec<Vec3> = on_surface.iter().map(|p| (p - centre).normalize()).collect();
+    let mean = directions.iter().fold(Vec3::zeros(), |s, d| s + d) / n;
+    let length = mean.norm();
+    let half_angle = (2.0 * length - 1.0).clamp(-1.0, 1.0).acos().to_degrees();
+    let axis = mean / length.max(1e-12);
+    let off_axis = axis.dot(&(-centre).normalize()).clamp(-1.0, 1.0).acos().to_degrees();
+    if half_angle < MIN_CAP_HALF_ANGLE_DEG || off_axis > MAX_CAP_OFF_AXIS_DEG {
+        return None;
+    }
+    // The directions' spread across the axis, in two directions.
+    let u = axis.cross(&if axis.x.abs() < 0.9 { Vec3::x() } else { Vec3::y() }).normalize();
+    let v = axis.cross(&u);
+    let spread = directions.iter().fold(Matrix2::zeros(), |s, d| {
+        let q = nalgebra::Vector2::new(d.dot(&u), d.dot(&v));
+        s + q * q.transpose()
+    });
+    let eigen = SymmetricEigen::new(spread).eigenvalues;
+    let (lo, hi) = (eigen.min(), eigen.max());
+    (hi > 0.0 && lo / hi >= MIN_CAP_ROUNDNESS).then_some(half_angle)
+}
+
+/// The fraction of the voting points on the sphere's surface whose
+/// normal lies along the direction from the centre; `None` when too few
+/// voting points lie there to tell.
+fn normal_agreement(oriented: &[Oriented], centre: &Vec3, radius: f64, band: f64) -> Option<f64> {
+    let limit = NORMAL_AGREEMENT_DEG.to_radians().cos();
+    let (mut on, mut agreeing) = (0usize, 0usize);
+    for o in oriented {
+        let d = o.point - centre;
+        let distance = d.norm();
+        if (distance - radius).abs() < band {
+            on += 1;
+            if o.normal.dot(&(d / distance)) >= limit {
+                agreeing += 1;
+            }
+        }
+    }
+    (on >= MIN_NORMAL_NEIGHBOURS).then(|| agreeing as f64 / on as f64)
 }
 
 /// The fit's points: those among `free` within `band` of the sphere.
@@ -231,57 +422,7 @@ fn shell(points: &[Vec3], free: &[usize], centre: &Vec3, radius: f64, band: f64)
     free.iter().map(|&i| points[i]).filter(|p| ((p - centre).norm() - radius).abs() < band).collect()
 }
 
-/// Geometric refinement of a RANSAC sphere: radius free to name it, then
-/// the given radius for the centre.
-fn refine_sphere(
-    points: &[Vec3],
-    free: &[usize],
-    start: Hypothesis,
-    radii: &[f64],
-    found: &[FittedSphere],
-) -> Option<FittedSphere> {
-    let band = inlier_band(start.radius);
-    let near = shell(points, free, &start.centre, start.radius, 3.0 * band);
-    if near.len() < MIN_SPHERE_POINTS {
-        return None;
-    }
-    let near: Vec<Vec3> = near.iter().step_by(near.len().div_ceil(REFINE_MAX_POINTS)).copied().collect();
-    let distances = |p: &[f64], radius: f64| -> Blocks {
-        let c = Vec3::new(p[0], p[1], p[2]);
-        near.iter().map(|q| [(q - c).norm() - radius]).collect()
-    };
-    let c0 = [start.centre.x, start.centre.y, start.centre.z, start.radius];
-    let free_fit = refine::robust_fit(&c0, &|p| distances(p, p[3])).ok()?;
-    let measured = free_fit.params[3];
-    // The nearest given radius not yet taken names it, when radii tell.
-    let taken = |k: usize| radii_distinct(radii) && found.iter().any(|f| f.radius_index == k);
-    let radius_index = (0..radii.len())
-        .filter(|&k| !taken(k))
-        .min_by(|&a, &b| (radii[a] - measured).abs().total_cmp(&(radii[b] - measured).abs()))?;
-    let radius = radii[radius_index];
-    // A real sphere measures its own radius to a few hundredths of a
-    // millimetre; a patch of something else that RANSAC took for one
-    // does not.
-    if (measured - radius).abs() > inlier_band(radius) {
-        return None;
-    }
-    let fixed = refine::robust_fit(&free_fit.params[..3], &|p| distances(p, radius)).ok()?;
-    let centre = Vec3::new(fixed.params[0], fixed.params[1], fixed.params[2]);
-    let on_surface = shell(points, free, &centre, radius, band);
-    if on_surface.len() < MIN_SPHERE_POINTS {
-        return None;
-    }
-    let rms = (on_surface.iter().map(|q| ((q - centre).norm() - radius).powi(2)).sum::<f64>()
-        / on_surface.len() as f64)
-        .sqrt();
-    // Points spread across the whole shell rather than on the surface.
-    if rms > MAX_RMS_OVER_BAND * band {
-        return None;
-    }
-    Some(FittedSphere { centre, measured_radius_mm: measured, radius_index, points: on_surface.len(), rms_mm: rms })
-}
-
-/// A uniform grid of point indices, cells as wide as a sphere's radius.
+/// A uniform grid of point indices.
 struct Grid {
     cell: f64,
     cells: std::collections::HashMap<[i64; 3], Vec<usize>>,
@@ -315,89 +456,6 @@ impl Grid {
             }
         }
         out
-    }
-}
-
-/// Names each capture's spheres: `result[capture][sphere]` is the centre
-/// of given sphere `sphere` in that capture, `None` where it was not seen
-/// or could not be told apart. Spheres of distinct radii are named by
-/// radius; equal ones by the distances between centres.
-pub fn identify(captures: &[Vec<FittedSphere>], radii: &[f64]) -> Vec<Vec<Option<Vec3>>> {
-    let n = radii.len();
-    let by_radius = |spheres: &[FittedSphere]| {
-        let mut named = vec![None; n];
-        for s in spheres {
-            named[s.radius_index] = Some(s.centre);
-        }
-        named
-    };
-    if radii_distinct(radii) {
-        return captures.iter().map(|c| by_radius(c)).collect();
-    }
-    let Some(reference) = captures.iter().find(|c| c.len() == n) else {
-        // No capture shows them all: only a lone sphere can be named.
-        return captures.iter().map(|c| if n == 1 { by_radius(c) } else { vec![None; n] }).collect();
-    };
-    let reference: Vec<Vec3> = reference.iter().map(|s| s.centre).collect();
-    captures.iter().map(|c| match_by_distances(c, &reference, radii)).collect()
-}
-
-/// The assignment of `spheres` to the reference's names whose pairwise
-/// distances agree best, if it is clear.
-fn match_by_distances(spheres: &[FittedSphere], reference: &[Vec3], radii: &[f64]) -> Vec<Option<Vec3>> {
-    let n = reference.len();
-    let mut assignments: Vec<(f64, Vec<usize>)> = Vec::new();
-    let mut current = Vec::with_capacity(spheres.len());
-    assign(spheres, radii, n, &mut current, &mut assignments, reference);
-    assignments.sort_by(|a, b| a.0.total_cmp(&b.0));
-    let mut named = vec![None; n];
-    let Some((best, labels)) = assignments.first() else { return named };
-    let clear = match assignments.get(1) {
-        Some((second, _)) => *best <= DISTANCE_MATCH_MM && *second > best + DISTANCE_MATCH_MM,
-        None => *best <= DISTANCE_MATCH_MM,
-    };
-    // One distance is the same read either way round: two spheres of one
-    // radius are told apart only with a third in view.
-    if clear && (spheres.len() >= 3 || n == 1) {
-        for (sphere, &label) in spheres.iter().zip(labels) {
-            named[label] = Some(sphere.centre);
-        }
-    }
-    named
-}
-
-/// Every injective naming of `spheres` compatible with their radii, with
-/// its RMS pairwise-distance mismatch against `reference`.
-fn assign(
-    spheres: &[FittedSphere],
-    radii: &[f64],
-    n: usize,
-    current: &mut Vec<usize>,
-    out: &mut Vec<(f64, Vec<usize>)>,
-    reference: &[Vec3],
-) {
-    if current.len() == spheres.len() {
-        let mut sum = 0.0;
-        let mut pairs = 0usize;
-        for a in 0..spheres.len() {
-            for b in 0..a {
-                let seen = (spheres[a].centre - spheres[b].centre).norm();
-                let expected = (reference[current[a]] - reference[current[b]]).norm();
-                sum += (seen - expected).powi(2);
-                pairs += 1;
-            }
-        }
-        out.push(((sum / pairs.max(1) as f64).sqrt(), current.clone()));
-        return;
-    }
-    let sphere = &spheres[current.len()];
-    for label in 0..n {
-        let compatible = (radii[label] - radii[sphere.radius_index]).abs() < MIN_RADIUS_GAP_MM;
-        if compatible && !current.contains(&label) {
-            current.push(label);
-            assign(spheres, radii, n, current, out, reference);
-            current.pop();
-        }
     }
 }
 
@@ -451,38 +509,36 @@ mod tests {
     }
 
     #[test]
-    fn spheres_of_different_radii_are_named_by_size() {
+    fn spheres_of_different_radii_are_fitted_each_with_its_radius() {
         let a = Vec3::new(-60.0, 0.0, 550.0);
         let b = Vec3::new(60.0, 10.0, 580.0);
         let mut points = cap(a, 15.0, 0.4);
         points.extend(cap(b, 25.0, 0.4));
         let found = fit_spheres(&points, &[15.0, 25.0], 2).unwrap();
-        let named = identify(&[found], &[15.0, 25.0]);
-        assert!((named[0][0].unwrap() - a).norm() < 0.01 && (named[0][1].unwrap() - b).norm() < 0.01, "{named:?}");
+        assert_eq!(found.len(), 2, "{found:?}");
+        let small = found.iter().find(|s| s.radius_index == 0).unwrap();
+        let large = found.iter().find(|s| s.radius_index == 1).unwrap();
+        assert!((small.centre - a).norm() < 0.01 && (large.centre - b).norm() < 0.01, "{found:?}");
     }
 
     #[test]
-    fn equal_spheres_are_named_by_their_distances() {
-        let centres = [Vec3::new(-60.0, 0.0, 550.0), Vec3::new(60.0, 10.0, 580.0), Vec3::new(0.0, 70.0, 600.0)];
-        let sphere = |c: Vec3, k: usize| FittedSphere {
-            centre: c,
-            measured_radius_mm: 20.0,
-            radius_index: k,
-            points: 500,
-            rms_mm: 0.03,
-        };
-        let reference: Vec<FittedSphere> = centres.iter().map(|c| sphere(*c, 0)).collect();
-        // The same constellation moved and listed in another order; then
-        // one sphere missing, which leaves the other two's one distance
-        // reading the same either way round.
-        let moved = |c: &Vec3| nalgebra::Rotation3::new(Vec3::new(0.1, -0.2, 0.3)) * c + Vec3::new(5.0, 3.0, -8.0);
-        let other: Vec<FittedSphere> = [2, 0, 1].iter().map(|&k| sphere(moved(&centres[k]), 0)).collect();
-        let partial = vec![sphere(moved(&centres[2]), 0), sphere(moved(&centres[0]), 0)];
-        let named = identify(&[reference, other, partial], &[20.0; 3]);
-        for k in 0..3 {
-            assert!((named[1][k].unwrap() - moved(&centres[k])).norm() < 1e-9, "{named:?}");
+    fn a_cylinder_of_the_balls_radius_and_a_plane_are_not_balls() {
+        // A pipe of the ball's radius lying across the view, and a table.
+        let mut points = Vec::new();
+        for i in 0..400 {
+            for j in 0..60 {
+                let (x, angle) = (i as f64 * 0.5 - 100.0, (j as f64 / 60.0 - 0.5) * 2.6);
+                let p = Vec3::new(x, 19.05 * angle.sin(), 560.0 - 19.05 * angle.cos());
+                points.push([p.x as f32, p.y as f32, p.z as f32]);
+            }
         }
-        assert_eq!(named[2], vec![None; 3]);
+        for i in 0..200 {
+            for j in 0..200 {
+                points.push([i as f32 - 100.0, j as f32 - 100.0, 600.0]);
+            }
+        }
+        let found = fit_spheres(&points, &[19.05; 3], 3).unwrap();
+        assert!(found.is_empty(), "{found:?}");
     }
 
     #[test]

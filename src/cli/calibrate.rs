@@ -1,17 +1,24 @@
 //! `weldseam calibrate`: reads a capture file (robot poses with target
 //! poses or sphere clouds, paths relative to the file), solves the
 //! hand-eye with `weldseam::calibration`, and prints a report a person can
-//! act on or, with `--json`, one JSON object. `--write-config` puts the
-//! result into a config file's `robot.hand_eye`, keeping every other key,
-//! comment and blank line.
+//! act on or, with `--json`, one JSON object. The result is held to the
+//! config's `[calibration]` limits (`calibration::gate`): one that fails
+//! them makes the command exit non-zero and is never written, unless
+//! `--force`. `--write-config` puts the result into a config file's
+//! `robot.hand_eye` with its record (`robot.hand_eye_calibration`), keeping
+//! every other key, comment and blank line.
 
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
 use rayon::prelude::*;
 
-use weldseam::calibration::sphere::{fit_spheres, identify};
-use weldseam::calibration::{Calibration, MAX_CAPTURES, Mount, SphereCapture, calibrate_spheres, calibrate_targets};
+use weldseam::calibration::gate::{self, CalibrationRecord};
+use weldseam::calibration::naming::name_spheres;
+use weldseam::calibration::sphere::fit_spheres;
+use weldseam::calibration::{
+    Calibration, MAX_CAPTURES, Mount, SphereCapture, calibrate_named_spheres, calibrate_targets,
+};
 use weldseam::config::Config;
 use weldseam::convert::calibration::{Captures, captures, report, rows};
 use weldseam::geometry::conventions::PoseConvention;
@@ -44,9 +51,23 @@ pub struct CalibrateArgs {
     #[arg(long, value_name = "FILE.toml")]
     pub write_config: Option<PathBuf>,
     /// The config whose robot.euler_convention reads poses when the
-    /// capture file names no pose_convention.
+    /// capture file names no pose_convention, and whose [calibration]
+    /// section holds the gate's limits (without it, the --write-config
+    /// file when it exists, else the built-in defaults).
     #[arg(long)]
     pub config: Option<PathBuf>,
+    /// Write the result even when it fails the gate's limits: the record
+    /// beside robot.hand_eye then says it failed and which limits, and the
+    /// daemon refuses to start with it unless started with --force.
+    #[arg(long)]
+    pub force: bool,
+}
+
+/// What the sphere search adds to the report.
+struct SphereSummary {
+    found: Vec<usize>,
+    unnamed: Vec<(usize, String)>,
+    distances: Option<Vec<f64>>,
 }
 
 pub fn run(args: &CalibrateArgs) -> Result<()> {
@@ -57,27 +78,68 @@ pub fn run(args: &CalibrateArgs) -> Result<()> {
              fixed camera's Base_T_Camera"
         );
     }
-    let config = Config::load_or_default(args.config.as_deref())?;
+    let config_path = args.config.as_deref().or(args.write_config.as_deref().filter(|p| p.exists()));
+    let config = Config::load_or_default(config_path)?;
     let file = read_capture_file(&args.captures)?;
     let default = PoseConvention::config(config.euler);
     let input = captures(&file, default).with_context(|| format!("{}", args.captures.display()))?;
-    let (calibration, spheres_found) = match input {
+    let (calibration, spheres) = match input {
         Captures::Targets(targets) => (calibrate_targets(&targets, mount)?, None),
-        Captures::Spheres { radii, captures } => {
+        Captures::Spheres { radii, distances, captures } => {
             let dir = args.captures.parent().unwrap_or(Path::new("."));
-            let (c, found) = solve_spheres(dir, &radii, &captures, mount)?;
-            (c, Some(found))
+            let (c, summary) = solve_spheres(dir, &radii, distances.as_deref(), &captures, mount)?;
+            (c, Some(summary))
         }
     };
+    let failures = gate::failures(&calibration, &config.calibration);
+    let record = gate::record(&calibration, &failures, args.force);
     if args.json {
-        println!("{}", serde_json::to_string_pretty(&report(&calibration, spheres_found))?);
+        let mut r = report(&calibration, spheres.as_ref().map(|s| s.found.clone()));
+        if let Some(s) = &spheres {
+            r.spheres_unnamed = s
+                .unnamed
+                .iter()
+                .map(|(capture, reason)| weldseam_proto::calibration::UnnamedCapture {
+                    capture: *capture,
+                    reason: reason.clone(),
+                })
+                .collect();
+            r.sphere_distances_mm = s.distances.clone();
+        }
+        r.gate = weldseam_proto::calibration::GateReport {
+            passed: record.passed,
+            failures: failures.clone(),
+            forced: record.forced,
+        };
+        println!("{}", serde_json::to_string_pretty(&r)?);
     } else {
-        print!("{}", readable(&calibration, spheres_found.as_deref()));
+        print!("{}", readable(&calibration, spheres.as_ref(), &failures));
+    }
+    if !failures.is_empty() && !args.force {
+        bail!(
+            "the calibration cannot be trusted: {}; {} (--force writes it anyway, recorded as failed)",
+            failures.join("; "),
+            match &args.write_config {
+                Some(path) => format!("nothing written to {}", path.display()),
+                None => "it was not written".to_string(),
+            }
+        );
+    }
+    if !failures.is_empty() {
+        eprintln!(
+            "--force: the calibration is accepted although {}; {}",
+            failures.join("; "),
+            if args.write_config.is_some() {
+                "the config records it as failed, and the daemon refuses it unless started with --force"
+            } else {
+                "nothing is written without --write-config"
+            }
+        );
     }
     if let Some(path) = &args.write_config {
-        write_config(path, &calibration)?;
+        write_config(path, &calibration, &record)?;
         if !args.json {
-            println!("robot.hand_eye written to {}", path.display());
+            println!("robot.hand_eye written to {} ({})", path.display(), record.summary());
         }
     }
     Ok(())
@@ -102,9 +164,10 @@ fn read_capture_file(path: &Path) -> Result<CaptureFile> {
 fn solve_spheres(
     dir: &Path,
     radii: &[f64],
+    distances: Option<&[f64]>,
     captures: &[(nalgebra::Isometry3<f64>, String)],
     mount: Mount,
-) -> Result<(Calibration, Vec<usize>)> {
+) -> Result<(Calibration, SphereSummary)> {
     weldseam::calibration::sphere::check_radii(radii)?;
     let fitted = captures
         .par_iter()
@@ -135,18 +198,20 @@ fn solve_spheres(
         .into_iter()
         .collect::<Result<Vec<_>>>()?;
     let found: Vec<usize> = fitted.iter().map(Vec::len).collect();
-    let named = identify(&fitted, radii);
+    let naming = name_spheres(&fitted, radii, distances)?;
     let spheres: Vec<SphereCapture> = captures
         .iter()
-        .zip(named)
+        .zip(naming.centres)
         .map(|((base_t_end, _), centres)| SphereCapture { base_t_end: *base_t_end, centres })
         .collect();
-    Ok((calibrate_spheres(&spheres, mount)?, found))
+    let calibration = calibrate_named_spheres(&spheres, mount)?;
+    Ok((calibration, SphereSummary { found, unnamed: naming.unnamed, distances: naming.distances }))
 }
 
 /// The report for a person.
-fn readable(c: &Calibration, spheres_found: Option<&[usize]>) -> String {
+fn readable(c: &Calibration, spheres: Option<&SphereSummary>, failures: &[String]) -> String {
     use std::fmt::Write as _;
+    let spheres_found = spheres.map(|s| s.found.as_slice());
     let mut s = String::new();
     let used = c.residuals.len() - c.outliers.len();
     let _ = writeln!(
@@ -208,6 +273,15 @@ fn readable(c: &Calibration, spheres_found: Option<&[usize]>) -> String {
         let flag = if c.outliers.contains(&r.capture) { "  outlier" } else { "" };
         let _ = writeln!(s, "  {:>7}  {:>13.3}  {:>12}{spheres}{flag}", r.capture, r.translation_mm, rotation);
     }
+    if let Some(summary) = spheres {
+        if let Some(d) = &summary.distances {
+            let list: Vec<String> = d.iter().map(|v| format!("{v:.2}")).collect();
+            let _ = writeln!(s, "spheres named by their distances: {} mm", list.join(", "));
+        }
+        for (capture, reason) in &summary.unnamed {
+            let _ = writeln!(s, "capture {capture} left out: {reason}");
+        }
+    }
     if c.warnings.is_empty() {
         let _ = writeln!(s, "no warnings");
     } else {
@@ -216,14 +290,22 @@ fn readable(c: &Calibration, spheres_found: Option<&[usize]>) -> String {
             let _ = writeln!(s, "  - {w}");
         }
     }
+    if failures.is_empty() {
+        let _ = writeln!(s, "gate: passed (every limit of [calibration] met)");
+    } else {
+        let _ = writeln!(s, "gate: FAILED");
+        for f in failures {
+            let _ = writeln!(s, "  - {f}");
+        }
+    }
     s
 }
 
 /// Rewrites `robot.hand_eye` of the TOML file at `path` (creating the
-/// file or the table if missing), four numbers a line, every other key
-/// and comment kept; the result is checked as a config before it
-/// replaces the file.
-fn write_config(path: &Path, c: &Calibration) -> Result<()> {
+/// file or the table if missing), four numbers a line, and its record
+/// `robot.hand_eye_calibration`, every other key and comment kept; the
+/// result is checked as a config before it replaces the file.
+fn write_config(path: &Path, c: &Calibration, record: &CalibrationRecord) -> Result<()> {
     let text = match std::fs::read_to_string(path) {
         Ok(text) => text,
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => String::new(),
@@ -253,6 +335,13 @@ fn write_config(path: &Path, c: &Calibration) -> Result<()> {
             robot.insert("hand_eye", toml_edit::value(array));
         }
     }
+    let record_value = record_table(record);
+    match robot.get_mut("hand_eye_calibration") {
+        Some(item) => *item = toml_edit::value(record_value),
+        None => {
+            robot.insert("hand_eye_calibration", toml_edit::value(record_value));
+        }
+    }
     let updated = doc.to_string();
     Config::parse(&updated, &path.display().to_string()).with_context(|| {
         format!("the config with the new robot.hand_eye is not valid; {} left as it was", path.display())
@@ -261,4 +350,31 @@ fn write_config(path: &Path, c: &Calibration) -> Result<()> {
     std::fs::write(&temporary, updated).with_context(|| format!("cannot write {}", temporary.display()))?;
     std::fs::rename(&temporary, path).with_context(|| format!("cannot replace {}", path.display()))?;
     Ok(())
+}
+
+/// The record as an inline TOML table, figures rounded to what they
+/// resolve.
+fn record_table(r: &CalibrationRecord) -> toml_edit::InlineTable {
+    let round = |v: f64, digits: f64| (v * digits).round() / digits + 0.0;
+    let mut t = toml_edit::InlineTable::new();
+    t.insert("passed", r.passed.into());
+    t.insert("forced", r.forced.into());
+    let failures: toml_edit::Array = r.failures.iter().map(String::as_str).collect();
+    t.insert("failures", failures.into());
+    let figures = [
+        ("expected_error_mm", r.expected_error_mm, 1e4),
+        ("translation_sigma_mm", r.translation_sigma_mm, 1e4),
+        ("rotation_sigma_deg", r.rotation_sigma_deg, 1e5),
+        ("worst_residual_mm", Some(r.worst_residual_mm), 1e4),
+        ("worst_residual_deg", r.worst_residual_deg, 1e5),
+        ("working_distance_mm", Some(r.working_distance_mm), 10.0),
+    ];
+    for (key, value, digits) in figures {
+        if let Some(v) = value {
+            t.insert(key, round(v, digits).into());
+        }
+    }
+    t.insert("captures", i64::from(r.captures).into());
+    t.insert("captures_used", i64::from(r.captures_used).into());
+    t
 }

@@ -26,6 +26,32 @@ pub struct ServeArgs {
     /// Text link address, overriding text_link.listen.
     #[arg(long)]
     pub text_listen: Option<SocketAddr>,
+    /// Start even when robot.hand_eye_calibration records a calibration
+    /// that failed its gate.
+    #[arg(long)]
+    pub force: bool,
+}
+
+/// Logs the hand-eye loaded and its calibration's record; refuses one the
+/// record says failed its gate, unless `force`.
+fn check_hand_eye(config: &weldseam::config::Config, origin: &str, force: bool) -> anyhow::Result<()> {
+    let rows = weldseam::convert::calibration::rows(&config.hand_eye);
+    let record = config.hand_eye_calibration.as_ref();
+    let figures = record.map_or_else(|| "no calibration record (robot.hand_eye_calibration)".into(), |r| r.summary());
+    info!(config = origin, hand_eye = ?rows, calibration = %figures, "hand-eye loaded");
+    match record {
+        Some(r) if !r.passed && !force => anyhow::bail!(
+            "{origin}: robot.hand_eye comes from a calibration that failed its gate ({}), and --force was not given;              calibrate again, or start with --force to run with it anyway",
+            r.failures.join("; ")
+        ),
+        Some(r) if !r.passed => warn!(
+            config = origin,
+            "--force: running with a hand-eye whose calibration failed: {}",
+            r.failures.join("; ")
+        ),
+        _ => {}
+    }
+    Ok(())
 }
 
 /// Completes on SIGINT or SIGTERM.
@@ -41,6 +67,8 @@ async fn termination() -> anyhow::Result<()> {
 
 pub fn run(args: &ServeArgs) -> anyhow::Result<()> {
     let mut config = args.config.load()?;
+    let origin = args.config.config.as_ref().map_or("the built-in config".to_string(), |p| p.display().to_string());
+    check_hand_eye(&config, &origin, args.force)?;
     if let Some(a) = args.camera_listen {
         config.server.camera_listen = a;
     }

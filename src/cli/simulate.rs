@@ -119,6 +119,11 @@ pub struct SimulateArgs {
     /// within 8 (a set with too little rotation).
     #[arg(long, requires = "calibration")]
     pub small_rotations: bool,
+    /// Calibration set of spheres: the tooling-ball rig (three balls of
+    /// 19.05 mm on posts over a table, the whole rig in view with stray
+    /// returns); the capture file gives the balls' distances.
+    #[arg(long, requires = "calibration")]
+    pub rig: bool,
 }
 
 /// `--calibration`: what the calibration set's camera sees.
@@ -493,6 +498,7 @@ mod tests {
             wrong_pairing: None,
             parallel_axes: false,
             small_rotations: false,
+            rig: false,
         }
     }
 

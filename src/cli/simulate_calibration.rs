@@ -15,7 +15,8 @@ use weldseam::convert::calibration::{capture_file, truth};
 use weldseam::geometry::conventions::PoseConvention;
 use weldseam::geometry::pose::EulerConvention;
 use weldseam::sim::calibration::{
-    CalibrationSpec, CalibrationTarget, DEFAULT_SPHERE_RADII_MM, SimObservation, simulate_calibration,
+    CalibrationSpec, CalibrationTarget, DEFAULT_SPHERE_RADII_MM, SimObservation, TOOLING_BALL_RADIUS_MM,
+    simulate_calibration,
 };
 
 use crate::cli::simulate::{CalibrationTargetArg, CloudFormat, SimulateArgs, write_cloud, write_truth};
@@ -24,7 +25,14 @@ pub fn run(args: &SimulateArgs, target: CalibrationTargetArg) -> Result<()> {
     if !args.out.extension().is_some_and(|e| e.eq_ignore_ascii_case("json")) {
         bail!("{}: with --calibration, --out is the capture file to write (.json)", args.out.display());
     }
-    let radii = args.sphere_radii.clone().unwrap_or_else(|| DEFAULT_SPHERE_RADII_MM.to_vec());
+    if args.rig && (target != CalibrationTargetArg::Spheres || args.sphere_radii.is_some()) {
+        bail!("--rig is a set of spheres of its own radius: give --calibration spheres without --sphere-radii");
+    }
+    let radii = match (args.rig, &args.sphere_radii) {
+        (true, _) => vec![TOOLING_BALL_RADIUS_MM; 3],
+        (false, Some(r)) => r.clone(),
+        (false, None) => DEFAULT_SPHERE_RADII_MM.to_vec(),
+    };
     let target = match target {
         CalibrationTargetArg::Board => CalibrationTarget::Board,
         CalibrationTargetArg::Spheres => CalibrationTarget::Spheres(radii.clone()),
@@ -40,6 +48,7 @@ pub fn run(args: &SimulateArgs, target: CalibrationTargetArg) -> Result<()> {
     spec.wrong_pairing = args.wrong_pairing;
     spec.parallel_axes = args.parallel_axes;
     spec.small_rotations = args.small_rotations;
+    spec.rig = args.rig;
     spec.validate()?;
     let set = simulate_calibration(&spec, &CameraModel::default());
     let dir = args.out.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
@@ -55,7 +64,16 @@ pub fn run(args: &SimulateArgs, target: CalibrationTargetArg) -> Result<()> {
     }
     let euler = EulerConvention::Zyx;
     let radii_written = matches!(target, CalibrationTarget::Spheres(_)).then_some(radii.as_slice());
-    let file = capture_file(&set, &PoseConvention::config(euler), euler.name(), radii_written, &cloud_paths);
+    let mut file = capture_file(&set, &PoseConvention::config(euler), euler.name(), radii_written, &cloud_paths);
+    if spec.rig {
+        // The rig's layout as an integrator measures it once.
+        let c = &set.sphere_centres;
+        let d = [(0, 1), (0, 2), (1, 2)].map(|(a, b)| ((c[a] - c[b]).norm() * 100.0).round() / 100.0);
+        file.sphere_distances_mm = Some(d.to_vec());
+        // As an integrator writes it: balls of one radius.
+        file.sphere_radii_mm = None;
+        file.sphere_radius_mm = Some(TOOLING_BALL_RADIUS_MM);
+    }
     let write = || -> std::io::Result<()> {
         let mut out = BufWriter::new(File::create(&args.out)?);
         serde_json::to_writer_pretty(&mut out, &file)?;
@@ -71,6 +89,8 @@ pub fn run(args: &SimulateArgs, target: CalibrationTargetArg) -> Result<()> {
         set.captures.len(),
         match target {
             CalibrationTarget::Board => "a board".to_string(),
+            CalibrationTarget::Spheres(r) if spec.rig =>
+                format!("a tooling-ball rig of {} balls, {points} points", r.len()),
             CalibrationTarget::Spheres(r) => format!("{} spheres, {points} points", r.len()),
         },
         match mount {

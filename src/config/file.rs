@@ -1,5 +1,5 @@
 //! The on-disk schema of config/weldseam.toml. Sections whose values keep
-//! their type (camera, pipeline, paper, trajectory, quality, debug) are the library's own
+//! their type (camera, pipeline, paper, trajectory, quality, debug, calibration) are the library's own
 //! parameter structs, deserialized directly; only the three whose type
 //! changes on the way in have a schema of their own here: `[camera]` (the
 //! field of view or the intrinsics, either of which may be left out),
@@ -12,6 +12,7 @@ use serde::Deserialize;
 
 use super::text_link::TextLinkConfig;
 use super::{DebugParams, PaperParams, PipelineParams, QualityParams, RobotLimits, ServerConfig, TrajectoryParams};
+use crate::calibration::gate::{CalibrationRecord, GateLimits};
 use crate::camera::CameraModel;
 use crate::geometry::pose::{EulerConvention, PAPER_HAND_EYE};
 
@@ -27,6 +28,7 @@ pub struct ConfigFile {
     pub server: ServerSection,
     pub text_link: TextLinkSection,
     pub debug: DebugParams,
+    pub calibration: GateLimits,
 }
 
 /// `[camera]`: the camera model's keys, with the field of view and the
@@ -100,6 +102,10 @@ pub struct RobotSection {
     pub hand_eye: Vec<f64>,
     pub max_reach_mm: f64,
     pub max_hand_eye_translation_mm: f64,
+    /// The figures of the calibration that gave `hand_eye`, as `weldseam
+    /// calibrate --write-config` records them.
+    #[serde(default)]
+    pub hand_eye_calibration: Option<CalibrationRecord>,
 }
 
 impl Default for RobotSection {
@@ -110,6 +116,7 @@ impl Default for RobotSection {
             hand_eye: PAPER_HAND_EYE.to_vec(),
             max_reach_mm: limits.max_reach_mm,
             max_hand_eye_translation_mm: limits.max_hand_eye_translation_mm,
+            hand_eye_calibration: None,
         }
     }
 }

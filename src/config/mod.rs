@@ -16,6 +16,7 @@ use std::time::Duration;
 use nalgebra::Isometry3;
 use serde::{Deserialize, Deserializer};
 
+use crate::calibration::gate::{CalibrationRecord, GateLimits};
 use crate::camera::{CameraModel, Distortion, Intrinsics};
 use crate::geometry::pose::{EulerConvention, HandEyeError, hand_eye_from_rows};
 use crate::pipeline::CloudFrame;
@@ -556,6 +557,11 @@ pub struct Config {
     /// The text controller link robot programs speak directly.
     pub text_link: TextLinkConfig,
     pub debug: DebugParams,
+    /// The limits `weldseam calibrate` holds a calibration to.
+    pub calibration: GateLimits,
+    /// The record of the calibration that gave `hand_eye`, when the file
+    /// has one.
+    pub hand_eye_calibration: Option<CalibrationRecord>,
 }
 
 impl Default for Config {
@@ -634,6 +640,10 @@ impl Config {
         let server = f.server.validate()?;
         let text_link = f.text_link.validate()?;
         f.debug.validate()?;
+        validate_gate(&f.calibration)?;
+        if let Some(record) = &f.robot.hand_eye_calibration {
+            validate_record(record)?;
+        }
         Ok(Config {
             camera,
             euler,
@@ -646,8 +656,39 @@ impl Config {
             server,
             text_link,
             debug: f.debug,
+            calibration: f.calibration,
+            hand_eye_calibration: f.robot.hand_eye_calibration,
         })
     }
+}
+
+/// Checks the `[calibration]` section.
+fn validate_gate(g: &GateLimits) -> Result<(), ConfigError> {
+    in_range("calibration.max_expected_error_mm", g.max_expected_error_mm, 0.001, 100.0)?;
+    in_range("calibration.max_translation_sigma_mm", g.max_translation_sigma_mm, 0.001, 100.0)?;
+    in_range("calibration.max_rotation_sigma_deg", g.max_rotation_sigma_deg, 0.0001, 10.0)?;
+    in_range("calibration.max_residual_mm", g.max_residual_mm, 0.001, 100.0)?;
+    in_range("calibration.max_residual_deg", g.max_residual_deg, 0.0001, 10.0)?;
+    in_range("calibration.min_rotation_deg", g.min_rotation_deg, 0.0, 180.0)?;
+    in_range("calibration.min_axis_spread_deg", g.min_axis_spread_deg, 0.0, 45.0)
+}
+
+/// Checks `robot.hand_eye_calibration`: its figures are numbers a
+/// calibration can give.
+fn validate_record(r: &CalibrationRecord) -> Result<(), ConfigError> {
+    let figures = [r.expected_error_mm, r.translation_sigma_mm, r.rotation_sigma_deg, r.worst_residual_deg];
+    let plausible = |v: f64| v.is_finite() && v >= 0.0;
+    check("robot.hand_eye_calibration", figures.iter().flatten().all(|v| plausible(*v)), || {
+        "its figures must be finite and not negative".to_string()
+    })?;
+    check(
+        "robot.hand_eye_calibration",
+        plausible(r.worst_residual_mm) && plausible(r.working_distance_mm) && r.captures_used <= r.captures,
+        || "its residual and working distance must be finite and not negative, captures_used at most captures".into(),
+    )?;
+    check("robot.hand_eye_calibration", r.passed == r.failures.is_empty(), || {
+        "passed must be true exactly when failures is empty".to_string()
+    })
 }
 
 // Every number has a floor and a ceiling: a value outside them is a typo

@@ -49,6 +49,8 @@ pub enum Captures {
     /// file), with the spheres' radii.
     Spheres {
         radii: Vec<f64>,
+        /// The layout's distances, when the file gives them.
+        distances: Option<Vec<f64>>,
         captures: Vec<(Isometry3<f64>, String)>,
     },
 }
@@ -100,7 +102,9 @@ pub fn captures(file: &proto::CaptureFile, default: PoseConvention) -> Result<Ca
         }
     }
     match (clouds, radii) {
-        (true, Some(radii)) => Ok(Captures::Spheres { radii, captures: spheres }),
+        (true, Some(radii)) => {
+            Ok(Captures::Spheres { radii, distances: file.sphere_distances_mm.clone(), captures: spheres })
+        }
         (true, None) => Err(CaptureFileError::Radii),
         (false, Some(_)) => Err(CaptureFileError::RadiiWithoutClouds),
         (false, None) => Ok(Captures::Targets(targets)),
@@ -141,6 +145,9 @@ pub fn report(c: &Calibration, spheres_found: Option<Vec<usize>>) -> proto::Cali
             })
             .collect(),
         spheres_found,
+        spheres_unnamed: Vec::new(),
+        sphere_distances_mm: None,
+        gate: proto::GateReport::default(),
     }
 }
 
@@ -172,6 +179,7 @@ pub fn capture_file(
         angle_unit: Some(convention.angle.name().to_string()),
         sphere_radius_mm: None,
         sphere_radii_mm: radii.map(<[f64]>::to_vec),
+        sphere_distances_mm: None,
         captures,
     }
 }
@@ -206,6 +214,7 @@ mod tests {
             angle_unit: None,
             sphere_radius_mm: None,
             sphere_radii_mm: None,
+            sphere_distances_mm: None,
             captures,
         }
     }

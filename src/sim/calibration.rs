@@ -23,6 +23,14 @@
 //! Spheres are rendered only in windows of pixels around each sphere, so a
 //! capture is about 10⁵ points rather than a whole frame.
 //!
+//! The tooling-ball rig ([`CalibrationSpec::rig`]) is what many cells
+//! mount: three balls of one radius ([`TOOLING_BALL_RADIUS_MM`]) on posts
+//! thinner than the balls above a table, rendered in one window around the
+//! whole rig with the camera binned ([`RIG_BINNING`]), so each cloud holds
+//! the balls' caps, the posts, a wide stretch of table, the sensor's noise,
+//! and stray returns ([`RIG_STRAY_FRACTION`] of the points scattered in
+//! the window's view, [`RIG_FLARE_CLUSTERS`] small clusters of flare).
+//!
 //! Three faults on request: one capture's observation taken at a pose the
 //! controller did not report (a wrong pairing), rotations all about the
 //! camera's axis (near-parallel rotation axes), and small rotations (tilts
@@ -81,6 +89,9 @@ pub struct CalibrationSpec {
     pub small_rotations: bool,
     /// The true hand-eye: `End_T_Camera`, or `Base_T_Camera`.
     pub hand_eye: Isometry3<f64>,
+    /// The tooling-ball rig: the target must be
+    /// `Spheres([TOOLING_BALL_RADIUS_MM; 3])`.
+    pub rig: bool,
 }
 
 impl CalibrationSpec {
@@ -101,6 +112,7 @@ impl CalibrationSpec {
             parallel_axes: false,
             small_rotations: false,
             hand_eye,
+            rig: false,
         }
     }
 }
@@ -144,6 +156,8 @@ pub enum CalibrationSimError {
     Distance(f64),
     #[error("give 1 to {} sphere radii of 5 to 60 mm", crate::calibration::sphere::MAX_SPHERES)]
     Radii,
+    #[error("the tooling-ball rig holds three spheres of {TOOLING_BALL_RADIUS_MM} mm, on the camera's side")]
+    Rig,
 }
 
 impl CalibrationSpec {
@@ -163,6 +177,10 @@ impl CalibrationSpec {
                 || radii.iter().any(|r| !(5.0..=60.0).contains(r)))
         {
             return Err(CalibrationSimError::Radii);
+        }
+        let rig_target = CalibrationTarget::Spheres(vec![TOOLING_BALL_RADIUS_MM; 3]);
+        if self.rig && (self.target != rig_target || self.mount != Mount::EyeInHand) {
+            return Err(CalibrationSimError::Rig);
         }
         Ok(())
     }
@@ -263,7 +281,8 @@ pub fn simulate_calibration(spec: &CalibrationSpec, camera: &CameraModel) -> Cal
             (Isometry3::new(Vec3::new(10.0, -5.0, 150.0), Vec3::new(0.0, 0.0, 0.2)), r.clone())
         }
     };
-    let sphere_centres = sphere_layout(&radii);
+    let sphere_centres =
+        if spec.rig { RIG_BALLS.iter().map(|b| Vec3::from(*b)).collect() } else { sphere_layout(&radii) };
     // One view more than captures: the spare is the wrong pairing's.
     let views: Vec<Isometry3<f64>> = (0..=spec.captures).map(|i| view(&mut draws, spec, i)).collect();
     let true_hand = |camera_t_target: &Isometry3<f64>| match spec.mount {
@@ -282,7 +301,11 @@ pub fn simulate_calibration(spec: &CalibrationSpec, camera: &CameraModel) -> Cal
                 )),
                 CalibrationTarget::Spheres(radii) => {
                     let seed = spec.seed.wrapping_mul(1_000_003).wrapping_add(i as u64);
-                    SimObservation::Cloud(render_spheres(&seen, &sphere_centres, radii, camera, seed))
+                    SimObservation::Cloud(if spec.rig {
+                        render_rig(&seen, &sphere_centres, radii[0], camera, seed)
+                    } else {
+                        render_spheres(&seen, &sphere_centres, radii, camera, seed)
+                    })
                 }
             };
             SimCapture { base_t_end: reported, observation }
@@ -420,6 +443,125 @@ fn render_spheres(
     }
     if points.is_empty() {
         points.push(INVALID_POINT);
+    }
+    PointCloud::unorganized(points)
+}
+
+/// A tooling ball's radius, mm: the 1.5-inch ball fixture makers sell.
+pub const TOOLING_BALL_RADIUS_MM: f64 = 19.05;
+/// The rig's posts' radius, mm: half-inch posts, thinner than the balls.
+pub const RIG_POST_RADIUS_MM: f64 = 6.35;
+/// The rig's ball centres in the target frame (the table at `z = 0`), mm:
+/// posts 85 to 135 mm tall, the three distances 157.7, 127.8 and 143.4 mm
+/// (all different, so balls of one radius are named by them).
+pub const RIG_BALLS: [[f64; 3]; 3] = [[-75.0, -40.0, 110.0], [80.0, -25.0, 85.0], [-15.0, 70.0, 135.0]];
+/// The rig is rendered this far around its balls and posts, mm: table
+/// all around.
+pub const RIG_MARGIN_MM: f64 = 60.0;
+/// The rig's camera is binned this many pixels a side (a capture of
+/// about 10⁵ points rather than a whole frame's).
+pub const RIG_BINNING: f64 = 3.0;
+/// Stray returns (interreflections, dust) scattered uniformly over the
+/// window's pixels, 150 mm before to 50 mm behind the table, as a
+/// fraction of the points.
+pub const RIG_STRAY_FRACTION: f64 = 0.01;
+/// Small clusters of flare: each [`RIG_FLARE_POINTS`] points within 4 mm.
+pub const RIG_FLARE_CLUSTERS: usize = 6;
+/// See [`RIG_FLARE_CLUSTERS`].
+pub const RIG_FLARE_POINTS: usize = 150;
+
+/// The tooling-ball rig's cloud for the camera at `camera_t_target`: one
+/// window around every ball and post (the table all around), the balls,
+/// posts and table rendered and degraded by the simulator's noise, then
+/// stray returns and flare added.
+fn render_rig(
+    camera_t_target: &Isometry3<f64>,
+    centres: &[Vec3],
+    radius: f64,
+    camera: &CameraModel,
+    seed: u64,
+) -> PointCloud {
+    let up = camera_t_target.rotation * Vec3::z();
+    let mut surfaces: Vec<Surface> = Vec::new();
+    let mut corners = Vec::new();
+    for c in centres {
+        let centre = (camera_t_target * Point3::from(*c)).coords;
+        let base = (camera_t_target * Point3::new(c.x, c.y, 0.0)).coords;
+        surfaces.push(Surface::Sphere { centre, radius });
+        surfaces.push(Surface::Post { base, top: centre, radius: RIG_POST_RADIUS_MM });
+        corners.push(centre);
+        corners.push(base);
+    }
+    surfaces.push(Surface::Table { point: camera_t_target.translation.vector, normal: up });
+    let binned = camera.with_pinhole(
+        (camera.width_px as f64 / RIG_BINNING) as u32,
+        (camera.height_px as f64 / RIG_BINNING) as u32,
+        Intrinsics {
+            fx: camera.fx() / RIG_BINNING,
+            fy: camera.fy() / RIG_BINNING,
+            cx: camera.cx() / RIG_BINNING,
+            cy: camera.cy() / RIG_BINNING,
+        },
+    );
+    let windows: Vec<[i64; 4]> =
+        corners.iter().filter_map(|p| pixel_window(&binned, p, radius + RIG_MARGIN_MM)).collect();
+    if windows.is_empty() {
+        return PointCloud::unorganized(vec![INVALID_POINT]);
+    }
+    let u0 = windows.iter().map(|w| w[0]).min().unwrap_or(0);
+    let v0 = windows.iter().map(|w| w[1]).min().unwrap_or(0);
+    let u1 = windows.iter().map(|w| w[0] + w[2]).max().unwrap_or(0);
+    let v1 = windows.iter().map(|w| w[1] + w[3]).max().unwrap_or(0);
+    let (w, h) = (u1 - u0, v1 - v0);
+    let sub = binned.with_pinhole(
+        w as u32,
+        h as u32,
+        Intrinsics { fx: binned.fx(), fy: binned.fy(), cx: binned.cx() - u0 as f64, cy: binned.cy() - v0 as f64 },
+    );
+    let spec = NoiseSpec::default();
+    let min_cos = spec.max_incidence_deg.to_radians().cos();
+    let projector = Vec3::new(camera.baseline_mm, 0.0, 0.0);
+    let mut exact = vec![f64::NAN; (w * h) as usize];
+    for row in 0..h {
+        for col in 0..w {
+            let ray = Vec3::from(sub.ray(col as f64, row as f64));
+            let nearest = surfaces.iter().filter_map(|s| s.hit(&ray)).min_by(|a, b| a.0.total_cmp(&b.0));
+            if let Some((depth, normal)) = nearest {
+                let p = ray * depth;
+                let facing = normal.dot(&(-p).normalize()).abs() >= min_cos
+                    && normal.dot(&(projector - p).normalize()).abs() >= min_cos;
+                if facing {
+                    exact[(row * w + col) as usize] = depth;
+                }
+            }
+        }
+    }
+    let depths = noise::degrade(&exact, &sub, &spec, seed);
+    let mut points = Vec::new();
+    for row in 0..h {
+        for col in 0..w {
+            let z = depths[(row * w + col) as usize];
+            if z.is_finite() {
+                let ray = sub.ray(col as f64, row as f64);
+                points.push([(ray[0] * z) as f32, (ray[1] * z) as f32, z as f32]);
+            }
+        }
+    }
+    let mut draws = Draws(ChaCha8Rng::seed_from_u64(seed ^ 0x005e_ed0f_57a7));
+    let table_depth = camera_t_target.translation.vector.z;
+    let stray = (points.len() as f64 * RIG_STRAY_FRACTION) as usize;
+    for _ in 0..stray {
+        let ray = sub.ray(draws.between(0.0, w as f64), draws.between(0.0, h as f64));
+        let z = draws.between(table_depth - 150.0, table_depth + 50.0);
+        points.push([(ray[0] * z) as f32, (ray[1] * z) as f32, z as f32]);
+    }
+    for _ in 0..RIG_FLARE_CLUSTERS {
+        let ray = sub.ray(draws.between(0.0, w as f64), draws.between(0.0, h as f64));
+        let centre = Vec3::from(ray) * draws.between(table_depth - 150.0, table_depth);
+        for _ in 0..RIG_FLARE_POINTS {
+            let p = centre + draws.vector(4.0 / 3f64.sqrt());
+            points.push([p.x as f32, p.y as f32, p.z as f32]);
+        }
     }
     PointCloud::unorganized(points)
 }

@@ -465,13 +465,11 @@ impl Connected {
         tokio::pin!(served, hello_deadline);
         // The admission runs inside `served`, on this task, so `admitted`
         // cannot change while a branch below is deciding.
+        // The handshake bounds its own wait for the Hello by the same
+        // time, so both can be due at once: polled first, the deadline
+        // is the one that refuses, logs and counts the late peer.
         let admitted_in_time = tokio::select! {
-            () = &mut served => false,
-            // An error means the place was given up by the admission.
-            closed = &mut evicted => {
-                // The acceptor has counted and logged the eviction.
-                closed.is_err()
-            }
+            biased;
             () = &mut hello_deadline => {
                 let late = admitted.get().is_none();
                 if late && pending.remove(ip, id) {
@@ -482,6 +480,12 @@ impl Connected {
                 }
                 !late
             }
+            // An error means the place was given up by the admission.
+            closed = &mut evicted => {
+                // The acceptor has counted and logged the eviction.
+                closed.is_err()
+            }
+            () = &mut served => false,
         };
         drop(pending_counted);
         if admitted_in_time {

@@ -50,7 +50,8 @@ fn small_cloud() -> PointCloud {
     PointCloud::organized(w, h, points).unwrap()
 }
 
-fn request(id: u64, frame: FrameSelect) -> PlanRequest {
+/// A lap request on `frame` at a fixed pose; its plan needs no seam.
+pub(crate) fn request(id: u64, frame: FrameSelect) -> PlanRequest {
     PlanRequest {
         request_id: id,
         joint: joint_code::LAP,

@@ -17,9 +17,10 @@ use weldseam::joint::JointType;
 use weldseam::mock::controller::ControllerClient;
 use weldseam::sim::{demo_scene, simulate};
 use weldseam_proto::frame::{self, HEADER_BYTES, Header};
-use weldseam_proto::message::{FrameAck, FrameSelect, Hello, PlanRequest, Role, joint_code};
+use weldseam_proto::message::{FrameAck, FrameSelect, Hello, Role};
 use weldseam_proto::{ErrorCode, Message};
 
+use crate::daemon::request;
 use crate::util::Cell;
 
 /// A hang guard: every answer here comes in well under it.
@@ -99,26 +100,6 @@ fn frame_message(frame_id: u64, trigger_id: u64, cloud: &PointCloud) -> Message 
 fn plate(width: usize, height: usize) -> PointCloud {
     let points = (0..width * height).map(|i| [(i % width) as f32 * 0.4, (i / width) as f32 * 0.4, 700.0]).collect();
     PointCloud::organized(width, height, points).unwrap()
-}
-
-fn request(id: u64, frame: FrameSelect) -> PlanRequest {
-    PlanRequest {
-        request_id: id,
-        joint: joint_code::LAP,
-        groove_depth_mm: None,
-        pose: [800.0, 0.0, 500.0, 180.0, 0.0, 0.0],
-        step_mm: None,
-        work_angle_deg: None,
-        travel_angle_deg: None,
-        frame,
-        timeout_ms: 0,
-        camera: None,
-        hand_eye: None,
-        start_near: None,
-        roi: None,
-        pose_in: None,
-        one_seam: false,
-    }
 }
 
 /// The next answer on the controller link: the request it answers, and

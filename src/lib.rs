@@ -20,5 +20,6 @@ pub(crate) mod kernels;
 pub mod mock;
 pub mod pipeline;
 pub mod report;
+pub mod rules;
 pub mod server;
 pub mod sim;

@@ -139,7 +139,7 @@ fn bad_requests_are_refused_before_any_work() {
     assert_eq!(e.stage, Stage::Request);
     let empty = weldseam::cloud::PointCloud::organized(2, 2, vec![[f32::NAN; 3]; 4]).expect("grid");
     let e = planner.plan(&empty, &PlanRequest::new(JointType::Lap, None, pose)).unwrap_err();
-    assert!(e.reason.contains("no valid point"), "{e}");
+    assert_eq!(e.rule.id, "frame.no_valid_point", "{e}");
     assert_eq!(e.stage, Stage::Input, "{e}");
 }
 
@@ -153,6 +153,7 @@ fn points_at_the_optical_centre_are_ignored_not_searched_forever() {
     let cloud = weldseam::cloud::PointCloud::organized(w, h, points).expect("grid");
     let pose = weldseam::geometry::pose::RobotPose { xyz_mm: [0.0; 3], angles_deg: [0.0; 3] };
     let err = Planner::new(Config::default()).plan(&cloud, &PlanRequest::new(JointType::Lap, None, pose)).unwrap_err();
-    assert!(err.reason.contains("no valid point") && err.reason.contains("millimetres"), "{err}");
+    assert_eq!(err.rule.id, "frame.no_valid_point", "{err}");
+    assert!(err.reason.contains("millimetres"), "{err}");
     assert_eq!(err.stage, Stage::Input, "{err}");
 }

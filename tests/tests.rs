@@ -21,6 +21,7 @@ mod quality;
 mod requests;
 mod robot_programs;
 mod roi;
+mod rules;
 mod serve_order;
 mod several_seams;
 mod text_link;

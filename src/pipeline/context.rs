@@ -31,6 +31,8 @@ use super::trace::Tracer;
 use super::trajectory::{self, Waypoint};
 use super::view_border::ViewBorder;
 use super::weld_equation;
+use crate::rules;
+
 use super::{Deadline, Plan, PlanError, PlanRequest, PlanStats, Seam, SeamAssessment, Stage, StageTimings, Unplanned};
 
 /// A seam's two fitted features as it reports them: its weld edges' fits,
@@ -212,8 +214,8 @@ pub(super) fn sanitise<'c>(
     trace.record(|t| (t.cloud, t.camera) = (Some(cloud.clone().into_owned()), Some(*camera)));
     let valid_points = counts.valid - counts.unmeasurable();
     if valid_points == 0 && counts.near > 0 && counts.near == counts.valid {
-        return Err(PlanError::at(
-            Stage::Input,
+        return Err(PlanError::by(
+            &rules::input::NO_VALID_POINT,
             format!(
                 "the frame has no valid point: all {} points lie nearer than camera.min_depth_mm ({} mm); \
                  is the cloud in millimetres and in the camera frame?",
@@ -222,8 +224,8 @@ pub(super) fn sanitise<'c>(
         ));
     }
     if valid_points == 0 && counts.unmeasurable() > 0 {
-        return Err(PlanError::at(
-            Stage::Input,
+        return Err(PlanError::by(
+            &rules::input::NO_VALID_POINT,
             format!(
                 "the frame has no valid point: of its {} points {} lie nearer than camera.min_depth_mm \
                  ({} mm), {} farther than camera.max_depth_mm ({} mm) and {} outside the view \
@@ -240,7 +242,7 @@ pub(super) fn sanitise<'c>(
         ));
     }
     if valid_points == 0 {
-        return Err(PlanError::at(Stage::Input, "the frame has no valid point"));
+        return Err(PlanError::by(&rules::input::NO_VALID_POINT, "the frame has no valid point"));
     }
     input::check_spread(&cloud, valid_points)?;
     Ok((cloud, valid_points))
@@ -664,6 +666,7 @@ fn none_planned(unplanned: &[Unplanned]) -> PlanError {
         .collect();
     PlanError {
         stage: first.reason.stage,
+        rule: first.reason.rule,
         reason: format!("none of the {} workpieces in view could be planned: {}", unplanned.len(), each.join("; ")),
         gate: first.reason.gate,
         out_of_time: first.reason.out_of_time,

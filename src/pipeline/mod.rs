@@ -81,6 +81,9 @@ pub use trace::PlanTrace;
 use trace::Tracer;
 pub use trajectory::Waypoint;
 
+pub use crate::rules::Stage;
+use crate::rules::{self, Rule};
+
 /// What the controller asks for.
 #[derive(Debug, Clone, PartialEq)]
 pub struct PlanRequest {
@@ -138,88 +141,16 @@ impl PlanRequest {
     }
 }
 
-/// A pipeline stage, for timings and error messages.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Stage {
-    Request,
-    Input,
-    NeighbourIndex,
-    Orientation,
-    PlanePoints,
-    Clustering,
-    Background,
-    EdgePoints,
-    Ransac,
-    WeldEdges,
-    Refit,
-    /// The groove probe: what lies between a butt joint's weld edges
-    /// (groove faces, a square gap, or a plate standing there).
-    Groove,
-    WeldEquation,
-    /// The seam's quality figures against the configured gates.
-    Quality,
-    Trajectory,
-}
-
-impl Stage {
-    /// The stages that do the pipeline's work, in run order (the request
-    /// check takes no measurable time and is not timed). Each is charged
-    /// the same work in both methods: [`Stage::Input`] the frame's check
-    /// against what the camera can measure, [`Stage::NeighbourIndex`] the
-    /// neighbour search's index (a point tree, or nothing to build on a
-    /// pixel grid); the paper's method has no [`Stage::Orientation`],
-    /// [`Stage::Groove`] or [`Stage::Quality`].
-    pub const IN_ORDER: [Stage; 14] = [
-        Stage::Input,
-        Stage::NeighbourIndex,
-        Stage::Orientation,
-        Stage::PlanePoints,
-        Stage::Clustering,
-        Stage::Background,
-        Stage::EdgePoints,
-        Stage::Ransac,
-        Stage::WeldEdges,
-        Stage::Refit,
-        Stage::Groove,
-        Stage::WeldEquation,
-        Stage::Quality,
-        Stage::Trajectory,
-    ];
-
-    pub fn name(self) -> &'static str {
-        match self {
-            Stage::Request => "request",
-            Stage::Input => "input",
-            Stage::NeighbourIndex => "neighbour_index",
-            Stage::Orientation => "orientation",
-            Stage::PlanePoints => "plane_points",
-            Stage::Clustering => "clustering",
-            Stage::Background => "background",
-            Stage::EdgePoints => "edge_points",
-            Stage::Ransac => "ransac",
-            Stage::WeldEdges => "weld_edges",
-            Stage::Refit => "refit",
-            Stage::Groove => "groove",
-            Stage::WeldEquation => "weld_equation",
-            Stage::Quality => "quality",
-            Stage::Trajectory => "trajectory",
-        }
-    }
-}
-
-impl fmt::Display for Stage {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.name())
-    }
-}
-
-/// Why no trajectory could be planned: the stage that failed and why and,
-/// for a seam the planner found but will not trust, the quality gate it
-/// failed; or that the plan's time limit ran out ([`Deadline`]).
+/// Why no trajectory could be planned: the rule that refused, its stage,
+/// and the reason with the figures it read; for a seam the planner found
+/// but will not trust, the quality gate (the refusal's class the protocol
+/// carries); or that the plan's time limit ran out ([`Deadline`]).
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[error("{stage} stage failed: {reason}")]
 pub struct PlanError {
     pub stage: Stage,
+    /// The decision that refused, from [`crate::rules`].
+    pub rule: &'static Rule,
     pub reason: String,
     pub gate: Option<quality::Gate>,
     /// The plan was stopped at its [`Deadline`]: no finding about the
@@ -228,13 +159,20 @@ pub struct PlanError {
 }
 
 impl PlanError {
+    /// A refusal by `rule`, at its stage, of its gate class.
+    pub fn by(rule: &'static Rule, reason: impl fmt::Display) -> Self {
+        PlanError { stage: rule.stage, rule, reason: reason.to_string(), gate: rule.gate, out_of_time: false }
+    }
+
+    /// A refusal at `stage` not yet given a rule of its own: it carries
+    /// the stage's placeholder ([`crate::rules::pending`]).
     pub fn at(stage: Stage, reason: impl fmt::Display) -> Self {
-        PlanError { stage, reason: reason.to_string(), gate: None, out_of_time: false }
+        PlanError::by(rules::pending::for_stage(stage), reason)
     }
 
     /// A refusal by a quality gate.
     fn refused(failure: &quality::GateFailure) -> Self {
-        PlanError { gate: Some(failure.gate), ..PlanError::at(Stage::Quality, &failure.message) }
+        PlanError { gate: Some(failure.gate), ..PlanError::by(failure.rule, &failure.message) }
     }
 }
 

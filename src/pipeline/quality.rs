@@ -43,12 +43,12 @@
 //! [`Gate`] code the protocol carries; `quality.warn_only` turns a gate
 //! into a warning on the seam instead.
 
-use std::fmt;
-
 use crate::config::QualityParams;
 use crate::geometry::Vec3;
 use crate::geometry::fit::Plane;
 use crate::joint::JointType;
+pub use crate::rules::Gate;
+use crate::rules::{Rule, Stage, pending};
 
 use super::SeamCoverage;
 use super::fillet::Root;
@@ -192,110 +192,12 @@ pub fn measure_fillet(root: &Root, point_spacing_mm: f64, depth_to_support_mm: O
     }
 }
 
-/// A limit a seam must meet. The names and numbers are stable: the
-/// protocol and `plan --json` carry them, and `quality.warn_only` names
-/// them.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub enum Gate {
-    /// More of a weld edge's boundary samples than
-    /// `quality.max_edge_samples_beyond` lie beyond its fitted line towards
-    /// the other plate, or its samples run on two lines further apart than
-    /// `quality.max_edge_step_spacings`: the edge was cut short along
-    /// much of its length.
-    EdgeCutShort,
-    /// A weld edge's fit residual is above `quality.max_edge_fit_rms_spacings`.
-    EdgeFitResidual,
-    /// A weld edge was seen along less of the seam than `quality.min_edge_coverage`.
-    EdgeCoverage,
-    /// The seam spans less of the visible joint than `quality.min_joint_coverage`.
-    JointCoverage,
-    /// The butt plates' high-low misalignment exceeds its limit.
-    Misalignment,
-    /// An I-butt joint's gap is wider than `quality.max_gap_mm`.
-    GapWidth,
-    /// An I-butt joint's gap, at its widest, is narrower than
-    /// `quality.min_gap_spacings` point spacings: narrower than the cloud
-    /// resolves, so the cloud cannot show where plates part, here or
-    /// across a plate it sees whole.
-    GapUnresolved,
-    /// The two plates' planes meet at more than `quality.max_plate_angle_deg`.
-    PlateAngle,
-    /// The seam's position is known less well than `quality.max_position_uncertainty_mm`.
-    PositionUncertainty,
-    /// The groove depth given differs from the one measured by more than
-    /// `quality.max_groove_depth_difference_mm`.
-    GrooveDepth,
-    /// The plates seen are not those of the joint requested (a lap's step
-    /// where a butt joint was asked for, butt plates for a lap, a square
-    /// gap for a V-groove or bevels for an I-butt joint, a plate standing
-    /// between the edges). Not a figure of a seam, so it cannot be only a
-    /// warning.
-    JointMismatch,
-    /// `auto` was asked for and the geometry does not say which joint it is.
-    JointUnknown,
-    /// The plates are a corner joint's (a plate standing at the flange's
-    /// end): an outside corner, or an inside one under a butt or lap
-    /// request.
-    CornerJoint,
-}
-
-impl Gate {
-    pub const ALL: [Gate; 13] = [
-        Gate::EdgeCutShort,
-        Gate::EdgeFitResidual,
-        Gate::EdgeCoverage,
-        Gate::JointCoverage,
-        Gate::Misalignment,
-        Gate::GapWidth,
-        Gate::GapUnresolved,
-        Gate::PlateAngle,
-        Gate::PositionUncertainty,
-        Gate::GrooveDepth,
-        Gate::JointMismatch,
-        Gate::JointUnknown,
-        Gate::CornerJoint,
-    ];
-
-    /// Whether `quality.warn_only` may name the gate: every gate read from
-    /// a planned seam's figures.
-    pub fn can_warn(self) -> bool {
-        !matches!(self, Gate::JointMismatch | Gate::JointUnknown | Gate::CornerJoint)
-    }
-
-    /// The gate's snake_case name, as config, logs and JSON write it.
-    pub fn name(self) -> &'static str {
-        match self {
-            Gate::EdgeCutShort => "edge_cut_short",
-            Gate::EdgeFitResidual => "edge_fit_residual",
-            Gate::EdgeCoverage => "edge_coverage",
-            Gate::JointCoverage => "joint_coverage",
-            Gate::Misalignment => "misalignment",
-            Gate::GapWidth => "gap_width",
-            Gate::GapUnresolved => "gap_unresolved",
-            Gate::PlateAngle => "plate_angle",
-            Gate::PositionUncertainty => "position_uncertainty",
-            Gate::GrooveDepth => "groove_depth",
-            Gate::JointMismatch => "joint_mismatch",
-            Gate::JointUnknown => "joint_unknown",
-            Gate::CornerJoint => "corner_joint",
-        }
-    }
-
-    pub fn from_name(name: &str) -> Option<Gate> {
-        Gate::ALL.into_iter().find(|g| g.name() == name)
-    }
-}
-
-impl fmt::Display for Gate {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.name())
-    }
-}
-
 /// A gate a seam failed: the figure's value, the limit it broke, and one
 /// sentence that says both and what it means.
 #[derive(Debug, Clone, PartialEq)]
 pub struct GateFailure {
+    /// The rule that failed the seam, from [`crate::rules`].
+    pub rule: &'static Rule,
     pub gate: Gate,
     pub value: f64,
     pub limit: f64,
@@ -390,6 +292,7 @@ fn cut_short(seam: &SeamEvidence, limits: &QualityParams) -> Option<GateFailure>
         let b = beyond[edge];
         if b.share() > limits.max_edge_samples_beyond {
             return Some(GateFailure {
+                rule: pending::for_stage(Stage::Quality),
                 gate: Gate::EdgeCutShort,
                 value: b.share(),
                 limit: limits.max_edge_samples_beyond,
@@ -413,6 +316,7 @@ fn cut_short(seam: &SeamEvidence, limits: &QualityParams) -> Option<GateFailure>
     let step = steps[edge]?;
     let spacings = step.size_mm.abs() / spacing;
     (spacings > limits.max_edge_step_spacings).then(|| GateFailure {
+        rule: pending::for_stage(Stage::Quality),
         gate: Gate::EdgeCutShort,
         value: spacings,
         limit: limits.max_edge_step_spacings,
@@ -434,7 +338,7 @@ pub fn check(seam: &SeamEvidence, limits: &QualityParams) -> Vec<GateFailure> {
     let q = seam.quality;
     let mut failed: Vec<GateFailure> = cut_short(seam, limits).into_iter().collect();
     let mut fail = |gate, value: f64, limit: f64, message: String| {
-        failed.push(GateFailure { gate, value, limit, message });
+        failed.push(GateFailure { rule: pending::for_stage(Stage::Quality), gate, value, limit, message });
     };
 
     let tee = seam.joint == JointType::TFillet;

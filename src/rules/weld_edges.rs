@@ -1,0 +1,7 @@
+//! The rules of the weld edges stage (`Stage::WeldEdges`).
+
+#[allow(unused_imports)]
+use super::{Effect, Gate, Parameter, Rule, Source, Stage};
+
+/// The stage's rules, in the order they apply.
+pub(super) static RULES: &[&Rule] = &[];

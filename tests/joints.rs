@@ -68,6 +68,10 @@ fn the_wrong_joint_is_refused_for_what_the_frame_shows() {
         if asked != JointType::Lap {
             assert_eq!(refused.gate, Some(Gate::JointMismatch), "{seen} asked as {asked}: {refused}");
         }
+        if seen == JointType::Lap {
+            // The plates' layers decided it, before any edge was read.
+            assert_eq!(refused.rule.id, "joint.not_requested", "{seen} asked as {asked}: {refused}");
+        }
     }
 }
 
@@ -102,12 +106,15 @@ fn the_paper_method_is_told_the_joint_and_the_depth() {
     config.pipeline.method = weldseam::config::Method::Paper;
     let planner = Planner::new(config);
     let auto = planner.check_request(&PlanRequest::new(RequestedJoint::Auto, None, sim.pose)).unwrap_err();
+    assert_eq!(auto.rule.id, "plan.joint_beyond_method", "{auto}");
     assert!(auto.reason.contains("`auto` needs pipeline.method"), "{auto}");
     let set = planner
         .check_request(&PlanRequest::new("v-butt+lap".parse::<RequestedJoint>().unwrap(), None, sim.pose))
         .unwrap_err();
+    assert_eq!(set.rule.id, "plan.joint_beyond_method", "{set}");
     assert!(set.reason.contains("`v_butt+lap` needs pipeline.method"), "{set}");
     let no_depth = planner.check_request(&PlanRequest::new(JointType::VButt, None, sim.pose)).unwrap_err();
+    assert_eq!(no_depth.rule.id, "groove.depth_not_given", "{no_depth}");
     assert!(no_depth.reason.contains("groove depth"), "{no_depth}");
 }
 

@@ -26,6 +26,7 @@ use crate::cloud::is_valid_point;
 use crate::config::Method;
 use crate::geometry::{Vec3, vec3};
 use crate::joint::JointType;
+use crate::rules::{self, Rule};
 
 use super::background::{BackgroundError, CornerKind, Layout, PlaneCluster};
 use super::boundary::{self, Boundary, BoundaryParams, CoarseEdge};
@@ -93,7 +94,9 @@ pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
 
     // Plates, table and fixture lie parallel: one normal describes them.
     let dominant = orientation::dominant_normal(cloud, &search, camera.fx(), DOMINANT_NORMAL_AGREEMENT_DEG)
-        .ok_or_else(|| PlanError::at(Stage::Orientation, "no surface normal could be estimated"))?;
+        .ok_or_else(|| {
+            PlanError::by(&rules::orientation::NO_DOMINANT_NORMAL, "no surface normal could be estimated")
+        })?;
     ctx.trace.record(|t| t.dominant_normal = Some(dominant));
     ctx.clock.lap(Stage::Orientation)?;
 
@@ -111,7 +114,7 @@ pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
     ctx.trace.record(|t| t.plane_points = plane.mask.clone());
     ctx.clock.lap(Stage::PlanePoints)?;
     if ctx.stats.plane_points == 0 {
-        return Err(PlanError::at(Stage::PlanePoints, "no point passed the plane point criterion"));
+        return Err(PlanError::by(&rules::plane_points::NO_PLANE_POINT, "no point passed the plane point criterion"));
     }
 
     // A point stands for a tilted pixel's area: what a cluster's area, and
@@ -239,21 +242,23 @@ struct Outcome {
 
 /// Refuses a workpiece found to be `joint` when the request does not admit
 /// it (a set of types, [`crate::joint::RequestedJoint::OneOf`]), saying what was seen:
-/// `seen`, the evidence that decided the type. `ctx.joint` names what was
+/// `seen`, the evidence that decided the type, by `rule` (the plates'
+/// layers, [`rules::background::JOINT_NOT_REQUESTED`], or the groove,
+/// [`rules::groove::BUTT_NOT_REQUESTED`]). `ctx.joint` names what was
 /// seen, for the workpiece's entry among the unplanned.
-fn admit(ctx: &mut Context, joint: JointType, stage: Stage, seen: &str) -> Result<(), PlanError> {
+fn admit(ctx: &mut Context, joint: JointType, rule: &'static Rule, seen: &str) -> Result<(), PlanError> {
     ctx.joint = Some(joint);
     if ctx.request.joint.admits(joint) {
         return Ok(());
     }
-    Err(joint_mismatch(ctx, &format!("a {joint} joint"), stage, seen))
+    Err(joint_mismatch(ctx, &format!("a {joint} joint"), rule, seen))
 }
 
-/// The refusal of a workpiece that is `what` (found from `seen`) under a
-/// request that does not admit it.
-fn joint_mismatch(ctx: &Context, what: &str, stage: Stage, seen: &str) -> PlanError {
+/// The refusal by `rule` of a workpiece that is `what` (found from
+/// `seen`) under a request that does not admit it.
+fn joint_mismatch(ctx: &Context, what: &str, rule: &'static Rule, seen: &str) -> PlanError {
     let message = format!("{seen}: this looks like {what}, not one of the joints requested ({})", ctx.request.joint);
-    PlanError { gate: Some(quality::Gate::JointMismatch), ..PlanError::at(stage, message) }
+    PlanError::by(rule, message)
 }
 
 /// What the workpieces of a frame share from the frame's front stages.
@@ -334,11 +339,11 @@ fn plan_workpiece(
     // A set of types requested: the layers decide a lap or a tee; a butt
     // pair is one of the two butt joints, which the groove probe tells.
     match layout {
-        Layout::Lap => admit(ctx, JointType::Lap, Stage::Background, &layers)?,
-        Layout::Tee => admit(ctx, JointType::TFillet, Stage::Background, &layers)?,
+        Layout::Lap => admit(ctx, JointType::Lap, &rules::background::JOINT_NOT_REQUESTED, &layers)?,
+        Layout::Tee => admit(ctx, JointType::TFillet, &rules::background::JOINT_NOT_REQUESTED, &layers)?,
         Layout::Butt => {
             if ![JointType::VButt, JointType::IButt].into_iter().any(|j| ctx.request.joint.admits(j)) {
-                return Err(joint_mismatch(ctx, "a butt joint", Stage::Background, &layers));
+                return Err(joint_mismatch(ctx, "a butt joint", &rules::background::JOINT_NOT_REQUESTED, &layers));
             }
         }
     }
@@ -604,7 +609,7 @@ fn plan_topless_tee(
             "{not_found}; {layers}: this may be a tee's web (or an inside corner's standing plate) cropped below its \
              top; request t_fillet to plan its root"
         );
-        return Err(PlanError { gate: Some(quality::Gate::JointUnknown), ..PlanError::at(Stage::Background, reason) });
+        return Err(PlanError::by(&rules::background::WEB_FACE_WITHOUT_TOP, reason));
     }
     ctx.clock.lap(Stage::Background)?;
     let tee = tee::SeenTee {
@@ -819,13 +824,13 @@ fn plan_plates(
             PlanError { gate: Some(gate), ..PlanError::at(Stage::Groove, e) }
         })?;
         ctx.trace.record(|t| t.joint = Some(joint));
-        admit(ctx, joint, Stage::Groove, &profile.describe())?;
+        admit(ctx, joint, &rules::groove::BUTT_NOT_REQUESTED, &profile.describe())?;
         let depth = match (joint, ctx.request.groove_depth_mm, profile.depth_mm()) {
             (JointType::VButt, Some(given), _) => given,
             (JointType::VButt, None, Some(measured)) => measured,
             (JointType::VButt, None, None) => {
-                return Err(PlanError::at(
-                    Stage::Groove,
+                return Err(PlanError::by(
+                    &rules::groove::GROOVE_DEPTH_UNMEASURED,
                     format!(
                         "no groove depth was given and none could be measured: no bevel face is seen down to the \
                          groove's root ({}); give the depth",

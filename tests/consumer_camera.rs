@@ -7,9 +7,9 @@
 
 use weldseam::config::Config;
 use weldseam::eval::seam_error;
-use weldseam::joint::JointType;
+use weldseam::joint::{JointType, RequestedJoint};
 use weldseam::pipeline::input::Units;
-use weldseam::pipeline::{Plan, PlanError, PlanRequest, Planner};
+use weldseam::pipeline::{Plan, PlanError, PlanRequest, Planner, Stage};
 use weldseam::sim::consumer::{consumer_camera, consumer_demo_scene, consumer_far_suite, consumer_variant};
 use weldseam::sim::{Draw, SceneSpec, Simulation, consumer_suite, simulate};
 
@@ -116,4 +116,23 @@ fn a_v_groove_strip_requested_as_a_tee_is_refused_not_planned_along_its_root_lan
     let plan = Planner::new(Config::default()).plan(&sim.cloud, &request);
     let err = plan.map(|p| format!("{} seams", p.seams.len())).unwrap_err();
     assert!(err.reason.contains("no long narrow one"), "{name}: {err}");
+}
+
+#[test]
+fn a_v_groove_whose_root_is_hidden_needs_its_depth() {
+    // Bevels cut through the whole plate: the probe follows each face down
+    // to the surface behind the plates and never sees where the groove's
+    // root is, so under `auto` (no depth given) the weld's height is
+    // unknown. Given the depth, the same strip plans.
+    let name = "consumer-v-butt-00-d200-t0";
+    let spec = suite_scene(name);
+    let sim = consumer_variant().apply(&simulate(&spec, &consumer_camera()), spec.seed);
+    let planner = Planner::new(Config::default());
+    let mut request = PlanRequest::new(RequestedJoint::Auto, None, sim.pose);
+    request.units = Units::Auto;
+    let err = planner.plan(&sim.cloud, &request).unwrap_err();
+    assert_eq!((err.rule.id, err.stage), ("butt.groove_depth_unmeasured", Stage::Groove), "{name}: {err}");
+    assert!(err.reason.contains("give the depth"), "{name}: {err}");
+    let (plan, _) = try_plan_strip(name, &spec);
+    assert!(plan.is_ok(), "{name}: with its depth given: {plan:?}");
 }

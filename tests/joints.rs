@@ -102,12 +102,15 @@ fn the_paper_method_is_told_the_joint_and_the_depth() {
     config.pipeline.method = weldseam::config::Method::Paper;
     let planner = Planner::new(config);
     let auto = planner.check_request(&PlanRequest::new(RequestedJoint::Auto, None, sim.pose)).unwrap_err();
+    assert_eq!(auto.rule.id, "plan.joint_beyond_method", "{auto}");
     assert!(auto.reason.contains("`auto` needs pipeline.method"), "{auto}");
     let set = planner
         .check_request(&PlanRequest::new("v-butt+lap".parse::<RequestedJoint>().unwrap(), None, sim.pose))
         .unwrap_err();
+    assert_eq!(set.rule.id, "plan.joint_beyond_method", "{set}");
     assert!(set.reason.contains("`v_butt+lap` needs pipeline.method"), "{set}");
     let no_depth = planner.check_request(&PlanRequest::new(JointType::VButt, None, sim.pose)).unwrap_err();
+    assert_eq!(no_depth.rule.id, "groove.depth_not_given", "{no_depth}");
     assert!(no_depth.reason.contains("groove depth"), "{no_depth}");
 }
 

@@ -132,15 +132,56 @@ fn bad_requests_are_refused_before_any_work() {
     let planner = Planner::new(Config::default());
     let pose = weldseam::geometry::pose::RobotPose { xyz_mm: [0.0; 3], angles_deg: [0.0; 3] };
     let too_deep = planner.plan(&cloud, &PlanRequest::new(JointType::VButt, Some(500.0), pose)).unwrap_err();
-    assert_eq!(too_deep.stage, Stage::Request);
+    assert_eq!((too_deep.rule.id, too_deep.stage), ("groove.depth_out_of_range", Stage::Request), "{too_deep}");
     assert!(too_deep.reason.contains("groove depth 500 mm is outside"), "{too_deep}");
     let nan_pose = weldseam::geometry::pose::RobotPose { xyz_mm: [f64::NAN, 0.0, 0.0], angles_deg: [0.0; 3] };
     let e = planner.plan(&cloud, &PlanRequest::new(JointType::Lap, None, nan_pose)).unwrap_err();
-    assert_eq!(e.stage, Stage::Request);
+    assert_eq!((e.rule.id, e.stage), ("reach.pose_beyond_robot", Stage::Request), "{e}");
     let empty = weldseam::cloud::PointCloud::organized(2, 2, vec![[f32::NAN; 3]; 4]).expect("grid");
     let e = planner.plan(&empty, &PlanRequest::new(JointType::Lap, None, pose)).unwrap_err();
     assert_eq!(e.rule.id, "frame.no_valid_point", "{e}");
     assert_eq!(e.stage, Stage::Input, "{e}");
+}
+
+/// Frames a camera cannot make, each refused by the rule that reads it:
+/// one point repeated, points all within a millimetre, a cloud too sparse
+/// to measure its spacing, or (read at the camera's density) to fit a
+/// normal or to pass the plane point criterion.
+#[test]
+fn frames_no_camera_makes_are_refused_by_their_rule() {
+    let pose = weldseam::geometry::pose::RobotPose { xyz_mm: [0.0; 3], angles_deg: [0.0; 3] };
+    let request = PlanRequest::new(JointType::Lap, None, pose);
+    let refused = |config: &Config, points: Vec<[f32; 3]>| {
+        let cloud = weldseam::cloud::PointCloud::unorganized(points);
+        Planner::new(config.clone()).plan(&cloud, &request).expect_err("refused")
+    };
+    let config = Config::default();
+    let repeated = refused(&config, vec![[10.0, -20.0, 700.0]; 10_000]);
+    assert_eq!((repeated.rule.id, repeated.stage), ("frame.one_point_repeated", Stage::Input), "{repeated}");
+    let speck: Vec<[f32; 3]> = (0..10_000).map(|i| [(i % 100) as f32 * 0.01, (i / 100) as f32 * 0.01, 700.0]).collect();
+    let tiny = refused(&config, speck);
+    assert_eq!((tiny.rule.id, tiny.stage), ("frame.smaller_than_a_joint", Stage::Input), "{tiny}");
+    // 11 x 11 points 40 mm apart: a few neighbours in the widest radius
+    // the spacing is measured in.
+    let sparse: Vec<[f32; 3]> =
+        (0..121).map(|i| [(i % 11) as f32 * 40.0 - 200.0, (i / 11) as f32 * 40.0 - 200.0, 700.0]).collect();
+    let unmeasured = refused(&config, sparse.clone());
+    assert_eq!((unmeasured.rule.id, unmeasured.stage), ("frame.density_unmeasurable", Stage::NeighbourIndex));
+    let camera_density = Config {
+        pipeline: weldseam::config::PipelineParams {
+            point_density: weldseam::config::PointDensity::Camera,
+            ..config.pipeline.clone()
+        },
+        ..config.clone()
+    };
+    let no_normal = refused(&camera_density, sparse.clone());
+    assert_eq!((no_normal.rule.id, no_normal.stage), ("plane.no_dominant_normal", Stage::Orientation), "{no_normal}");
+    let paper = Config {
+        pipeline: weldseam::config::PipelineParams { method: Method::Paper, ..camera_density.pipeline.clone() },
+        ..camera_density
+    };
+    let no_plane = refused(&paper, sparse);
+    assert_eq!((no_plane.rule.id, no_plane.stage), ("plane.no_plane_point", Stage::PlanePoints), "{no_plane}");
 }
 
 #[test]

@@ -115,11 +115,12 @@ fn the_configured_box_applies_unless_the_request_brings_its_own() {
     let corner = Roi::new([-1.0, -1.0, 0.0], [1.0, 1.0, 100.0], CloudFrame::Camera).unwrap();
     let request = PlanRequest { roi: Some(corner), ..PlanRequest::new(JointType::Lap, None, sim.pose) };
     let e = configured.plan(&sim.cloud, &request).unwrap_err();
-    assert_eq!(e.stage, Stage::Input);
+    assert_eq!((e.rule.id, e.stage), ("frame.too_few_points_in_region", Stage::Input), "{e}");
     assert!(e.reason.contains("x -1..1, y -1..1, z 0..100 mm (camera frame) keeps 0 of"), "{}", e.reason);
     // A configured box that is not one is refused by its key.
     config.pipeline.roi = vec![0.0, 0.0, 0.0, 1.0, 1.0];
     let e = Planner::new(config).plan(&sim.cloud, &PlanRequest::new(JointType::Lap, None, sim.pose)).unwrap_err();
+    assert_eq!(e.rule.id, "frame.region_of_interest_invalid", "{e}");
     assert!(e.reason.contains("pipeline.roi"), "{}", e.reason);
 }
 

@@ -179,7 +179,7 @@ fn a_tee_cropped_round_its_root_is_planned_from_its_face_alone() {
         // corner's plate or a fixture's side stands too): refused, saying
         // what to ask for.
         let err = plan_cropped(spec, RequestedJoint::Auto).0.map(|p| format!("{} seams", p.seams.len())).unwrap_err();
-        assert_eq!(err.gate, Some(Gate::JointUnknown), "{name}: {err}");
+        assert_eq!((err.rule.id, err.gate), ("tee.web_face_without_top", Some(Gate::JointUnknown)), "{name}: {err}");
         assert!(err.reason.contains("request t_fillet"), "{name}: {err}");
     }
     // Scene 0's face is edge-on to the camera: with the web's top cropped
@@ -393,6 +393,7 @@ fn a_set_of_joint_types_plans_the_workpieces_of_those_types_and_names_the_others
     assert_eq!((m.found.len(), m.extra.len(), m.wrong_type.len()), (2, 0, 0), "{name}: {m:?}");
     let [tee] = &plan.unplanned[..] else { panic!("{name}: {:?}", plan.unplanned) };
     assert_eq!((tee.joint, tee.reason.gate), (Some(JointType::TFillet), Some(Gate::JointMismatch)), "{name}");
+    assert_eq!(tee.reason.rule.id, "joint.not_requested", "{name}: {}", tee.reason);
     assert!(tee.reason.reason.contains("not one of the joints requested (v_butt+i_butt)"), "{name}: {}", tee.reason);
     // The lap and the tee asked of a frame with neither: every workpiece
     // refused, each butt pair for being one.
@@ -400,7 +401,17 @@ fn a_set_of_joint_types_plans_the_workpieces_of_those_types_and_names_the_others
     let (name, err, _) = plan_multi("multi-04", others, None, false);
     let err = err.map(|p| p.seams.len()).unwrap_err();
     assert_eq!(err.gate, Some(Gate::JointMismatch), "{name}: {err}");
+    assert_eq!(err.rule.id, "joint.not_requested", "{name}: {err}");
     assert!(err.reason.contains("this looks like a butt joint, not one of the joints requested"), "{name}: {err}");
+    // A set that admits one butt joint: the other is told by its groove,
+    // and named for it.
+    let i_or_lap: RequestedJoint = "i-butt+lap".parse().unwrap();
+    let (name, plan, _) = plan_multi("multi-00", i_or_lap, None, false);
+    let plan = plan.unwrap_or_else(|e| panic!("{name}: {e}"));
+    assert_eq!(plan.seams.iter().map(|s| s.joint).collect::<Vec<_>>(), [JointType::IButt], "{name}");
+    let [v_butt] = &plan.unplanned[..] else { panic!("{name}: {:?}", plan.unplanned) };
+    assert_eq!(v_butt.joint, Some(JointType::VButt), "{name}: {}", v_butt.reason);
+    assert_eq!((v_butt.reason.rule.id, v_butt.reason.stage), ("butt.groove_not_requested", Stage::Groove), "{name}");
 }
 
 #[test]

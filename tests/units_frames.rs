@@ -105,7 +105,7 @@ fn clouds_no_camera_could_see_are_refused_with_the_reason() {
     let request = PlanRequest::new(spec.joint.joint_type(), spec.joint.groove_depth_mm(), sim.pose);
     let behind = mapped(&sim.cloud, |[x, y, z]| [x, y, -z]);
     let err = planner.plan(&behind, &request).expect_err("behind the camera");
-    assert_eq!(err.stage, Stage::Input);
+    assert_eq!((err.rule.id, err.stage), ("frame.not_in_camera_frame", Stage::Input), "{err}");
     assert!(err.reason.contains("lie behind the camera (z <= 0)"), "{err}");
     assert!(err.reason.contains("--cloud-frame base"), "{err}");
     let sideways = mapped(&sim.cloud, |[x, y, z]| [x + 20.0 * z, y, z]);

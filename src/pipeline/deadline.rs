@@ -11,6 +11,7 @@
 use std::time::{Duration, Instant};
 
 use super::{PlanError, Stage};
+use crate::rules;
 
 /// The instant a plan must end by, or none.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
@@ -40,9 +41,11 @@ impl Deadline {
         if !self.passed() {
             return Ok(());
         }
+        // One rule wherever the plan stops: the refusal's stage says where.
         Err(PlanError {
             out_of_time: true,
-            ..PlanError::at(
+            ..PlanError::by_in(
+                &rules::request::TIME_LIMIT,
                 stage,
                 format!(
                     "the plan ran past its time limit of {} ms and was stopped in the {} stage",
@@ -64,6 +67,7 @@ mod tests {
         assert_eq!(Deadline::after(Duration::from_secs(3600)).check(Stage::Clustering), Ok(()));
         let e = Deadline::after(Duration::ZERO).check(Stage::Clustering).unwrap_err();
         assert!(e.out_of_time && e.stage == Stage::Clustering, "{e:?}");
+        assert_eq!(e.rule.id, "plan.time_limit");
         assert!(e.reason.contains("time limit of 0 ms") && e.reason.contains("clustering"), "{}", e.reason);
     }
 }

@@ -14,7 +14,8 @@ use rayon::prelude::*;
 use crate::cloud::{INVALID_POINT, Point, PointCloud};
 use crate::config::Config;
 
-use super::{PlanError, PlanRequest, Stage};
+use super::{PlanError, PlanRequest};
+use crate::rules;
 
 /// The units a cloud's coordinates are in.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -319,8 +320,8 @@ pub(super) fn check_spread(cloud: &PointCloud, valid_points: usize) -> Result<()
     sample.dedup();
     let distinct = sample.len();
     if (distinct as f64) < MIN_DISTINCT_SHARE * sampled as f64 && sampled > 1 {
-        return Err(PlanError::at(
-            Stage::Input,
+        return Err(PlanError::by(
+            &rules::input::ONE_POINT_REPEATED,
             format!(
                 "the frame is not a camera's view: of {sampled} points sampled evenly over its {valid_points} \
                  valid points only {distinct} are distinct ({:.1} %, under the {:.0} % a frame needs); \
@@ -331,8 +332,8 @@ pub(super) fn check_spread(cloud: &PointCloud, valid_points: usize) -> Result<()
         ));
     }
     if extent_mm < MIN_VIEW_EXTENT_MM {
-        return Err(PlanError::at(
-            Stage::Input,
+        return Err(PlanError::by(
+            &rules::input::SMALLER_THAN_A_JOINT,
             format!(
                 "the frame is not a camera's view: its {valid_points} valid points all lie within \
                  {extent_mm:.3} mm of each other along every axis (of {sampled} sampled), under the \
@@ -355,15 +356,15 @@ pub(super) fn check_camera_view(counts: &ViewCounts, request: &PlanRequest) -> R
     };
     match counts.view() {
         View::Camera => Ok(()),
-        View::MostlyBehind => Err(PlanError::at(
-            Stage::Input,
+        View::MostlyBehind => Err(PlanError::by(
+            &rules::input::NOT_IN_CAMERA_FRAME,
             format!(
                 "the cloud is not a camera-frame view: {behind} of its {valid} valid points lie behind the \
                  camera (z <= 0); {hint}"
             ),
         )),
-        View::MostlyBeyondView => Err(PlanError::at(
-            Stage::Input,
+        View::MostlyBeyondView => Err(PlanError::by(
+            &rules::input::NOT_IN_CAMERA_FRAME,
             format!(
                 "the cloud is not a camera-frame view: {} of its {valid} valid points lie behind the camera or \
                  more than {MAX_PLAUSIBLE_OFF_AXIS_DEG}° off its axis, beyond any camera's field of view; {hint} \

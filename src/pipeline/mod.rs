@@ -164,6 +164,14 @@ impl PlanError {
         PlanError { stage: rule.stage, rule, reason: reason.to_string(), gate: rule.gate, out_of_time: false }
     }
 
+    /// A refusal by `rule` found in `stage`, for the one rule checked at
+    /// every stage's end, the plan's time limit
+    /// ([`crate::rules::request::TIME_LIMIT`]): the rule is the same
+    /// wherever the plan stops, and the stage says where that was.
+    pub fn by_in(rule: &'static Rule, stage: Stage, reason: impl fmt::Display) -> Self {
+        PlanError { stage, ..PlanError::by(rule, reason) }
+    }
+
     /// A refusal at `stage` not yet given a rule of its own: it carries
     /// the stage's placeholder ([`crate::rules::pending`]).
     pub fn at(stage: Stage, reason: impl fmt::Display) -> Self {
@@ -386,7 +394,7 @@ impl Planner {
         let cropped = match self.region_of_interest(request)? {
             Some(roi) => {
                 let kept = roi::crop(&converted, &roi, self.box_from_camera(request, &roi).as_ref())
-                    .map_err(|e| PlanError::at(Stage::Input, e))?;
+                    .map_err(|e| PlanError::by(&rules::input::TOO_FEW_POINTS_IN_REGION, e))?;
                 // The whole cloud is not needed past here.
                 drop(converted);
                 Cow::Owned(kept)
@@ -419,7 +427,11 @@ impl Planner {
     fn region_of_interest(&self, request: &PlanRequest) -> Result<Option<Roi>, PlanError> {
         match request.roi {
             Some(roi) => Ok(Some(roi)),
-            None => self.config.pipeline.region_of_interest().map_err(|e| PlanError::at(Stage::Request, e)),
+            None => self
+                .config
+                .pipeline
+                .region_of_interest()
+                .map_err(|e| PlanError::by(&rules::request::REGION_OF_INTEREST_INVALID, e)),
         }
     }
 
@@ -442,72 +454,103 @@ pub const MAX_GROOVE_DEPTH_MM: f64 = 100.0;
 
 fn validate(r: &PlanRequest, config: &Config) -> Result<(), PlanError> {
     use crate::config::{MAX_POSE_ANGLE_DEG, MAX_STEP_MM, MAX_TORCH_ANGLE_DEG, MIN_STEP_MM};
-    let bad = |reason: String| Err(PlanError::at(Stage::Request, reason));
+    use rules::request::{
+        GROOVE_DEPTH_NOT_GIVEN, GROOVE_DEPTH_OUT_OF_RANGE, HAND_EYE_BEYOND_LIMIT, JOINT_BEYOND_METHOD,
+        POSE_BEYOND_ROBOT, START_BEYOND_ROBOT, STEP_OUT_OF_RANGE, TORCH_ANGLE_OUT_OF_RANGE,
+    };
+    let bad = |rule: &'static Rule, reason: String| Err(PlanError::by(rule, reason));
     let limits = &config.robot_limits;
     if !r.pose.is_finite() {
-        return bad(format!("the robot pose has a non-finite value: {:?} {:?}", r.pose.xyz_mm, r.pose.angles_deg));
+        return bad(
+            &POSE_BEYOND_ROBOT,
+            format!("the robot pose has a non-finite value: {:?} {:?}", r.pose.xyz_mm, r.pose.angles_deg),
+        );
     }
     let [x, y, z] = r.pose.xyz_mm;
     let reach = (x * x + y * y + z * z).sqrt();
     if reach > limits.max_reach_mm {
-        return bad(format!(
-            "the robot pose lies {reach:.0} mm from the base origin, beyond robot.max_reach_mm ({} mm); \
+        return bad(
+            &POSE_BEYOND_ROBOT,
+            format!(
+                "the robot pose lies {reach:.0} mm from the base origin, beyond robot.max_reach_mm ({} mm); \
              is it in millimetres?",
-            limits.max_reach_mm
-        ));
+                limits.max_reach_mm
+            ),
+        );
     }
     if let Some(a) = r.pose.angles_deg.iter().find(|a| a.abs() > MAX_POSE_ANGLE_DEG) {
-        return bad(format!("the robot pose angle {a}° is beyond ±{MAX_POSE_ANGLE_DEG}°; are the angles in degrees?"));
+        return bad(
+            &POSE_BEYOND_ROBOT,
+            format!("the robot pose angle {a}° is beyond ±{MAX_POSE_ANGLE_DEG}°; are the angles in degrees?"),
+        );
     }
     if let Some(hand_eye) = &r.hand_eye {
         let offset = hand_eye.translation.vector.norm();
         if offset > limits.max_hand_eye_translation_mm {
-            return bad(format!(
-                "the hand-eye translation is {offset:.1} mm long, beyond robot.max_hand_eye_translation_mm ({} mm)",
-                limits.max_hand_eye_translation_mm
-            ));
+            return bad(
+                &HAND_EYE_BEYOND_LIMIT,
+                format!(
+                    "the hand-eye translation is {offset:.1} mm long, beyond robot.max_hand_eye_translation_mm ({} mm)",
+                    limits.max_hand_eye_translation_mm
+                ),
+            );
         }
     }
     if let Some(p) = &r.start_near
         && !(p.iter().all(|c| c.is_finite()) && p.norm() <= limits.max_reach_mm)
     {
-        return bad(format!(
-            "start_near ({:.0}, {:.0}, {:.0}) mm lies beyond robot.max_reach_mm ({} mm)",
-            p.x, p.y, p.z, limits.max_reach_mm
-        ));
+        return bad(
+            &START_BEYOND_ROBOT,
+            format!(
+                "start_near ({:.0}, {:.0}, {:.0}) mm lies beyond robot.max_reach_mm ({} mm)",
+                p.x, p.y, p.z, limits.max_reach_mm
+            ),
+        );
     }
     let paper = config.pipeline.method == crate::config::Method::Paper;
     match (r.joint, r.groove_depth_mm) {
         (RequestedJoint::Type(joint), _) if paper && !joint.is_planned_by_the_paper() => {
-            return bad(format!(
-                "the paper's method plans butt and lap joints only, not {joint} (it has no fillet); tee joints \
+            return bad(
+                &JOINT_BEYOND_METHOD,
+                format!(
+                    "the paper's method plans butt and lap joints only, not {joint} (it has no fillet); tee joints \
                  need pipeline.method = \"robust\""
-            ));
+                ),
+            );
         }
         (RequestedJoint::Auto | RequestedJoint::OneOf(_), _) if paper => {
-            return bad(format!(
-                "the paper's method plans the joint type it is given; `{}` needs pipeline.method = \"robust\"",
-                r.joint
-            ));
+            return bad(
+                &JOINT_BEYOND_METHOD,
+                format!(
+                    "the paper's method plans the joint type it is given; `{}` needs pipeline.method = \"robust\"",
+                    r.joint
+                ),
+            );
         }
         (RequestedJoint::Type(JointType::VButt), None) if paper => {
-            return bad("the paper's method needs a V-butt joint's groove depth (the robust method measures it)".into());
+            return bad(
+                &GROOVE_DEPTH_NOT_GIVEN,
+                "the paper's method needs a V-butt joint's groove depth (the robust method measures it)".into(),
+            );
         }
         (_, Some(d)) if !(d.is_finite() && (0.0..=MAX_GROOVE_DEPTH_MM).contains(&d)) => {
-            return bad(format!("groove depth {d} mm is outside 0 to {MAX_GROOVE_DEPTH_MM} mm"));
+            return bad(
+                &GROOVE_DEPTH_OUT_OF_RANGE,
+                format!("groove depth {d} mm is outside 0 to {MAX_GROOVE_DEPTH_MM} mm"),
+            );
         }
         _ => {}
     }
     if let Some(step) = r.step_mm
         && !(step.is_finite() && (MIN_STEP_MM..=MAX_STEP_MM).contains(&step))
     {
-        return bad(format!("step {step} mm is outside {MIN_STEP_MM} to {MAX_STEP_MM} mm"));
+        return bad(&STEP_OUT_OF_RANGE, format!("step {step} mm is outside {MIN_STEP_MM} to {MAX_STEP_MM} mm"));
     }
     for (name, v) in [("work angle", r.work_angle_deg), ("travel angle", r.travel_angle_deg)] {
         if let Some(a) = v
             && !(a.is_finite() && (-MAX_TORCH_ANGLE_DEG..=MAX_TORCH_ANGLE_DEG).contains(&a))
         {
-            return bad(format!("{name} {a}° is outside ±{MAX_TORCH_ANGLE_DEG}°"));
+            return bad(&TORCH_ANGLE_OUT_OF_RANGE, format!("{name} {a}° is outside ±{MAX_TORCH_ANGLE_DEG}°"));
         }
     }
     Ok(())

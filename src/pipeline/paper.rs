@@ -31,6 +31,7 @@ use super::trace::TracedWeld;
 use super::{Plan, PlanError, SeamAssessment, Stage};
 use super::{background, clustering, plane_points, ransac, weld_edges, weld_equation};
 use crate::geometry::Vec3;
+use crate::rules;
 
 /// Plans one frame by the paper's method.
 pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
@@ -47,7 +48,7 @@ pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
     ctx.trace.record(|t| t.plane_points = plane.mask.clone());
     ctx.clock.lap(Stage::PlanePoints)?;
     if ctx.stats.plane_points == 0 {
-        return Err(PlanError::at(Stage::PlanePoints, "no point passed the plane point criterion"));
+        return Err(PlanError::by(&rules::plane_points::NO_PLANE_POINT, "no point passed the plane point criterion"));
     }
 
     // 3.3: Euclidean clustering splits the plane points into planes.

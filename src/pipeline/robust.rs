@@ -420,8 +420,7 @@ fn check_lap_edge(
         };
         let ends: Vec<weld_edges::OtherEdge> = (1..=turned.len()).map(other).collect();
         let far: Vec<weld_edges::OtherEdge> = (1 + turned.len()..measured.len()).map(other).collect();
-        weld_edges::check_lap_edge(lines, chosen, seen_mm[0], &ends, &far)
-            .map_err(|e| PlanError::at(Stage::WeldEdges, e))?;
+        weld_edges::check_lap_edge(lines, chosen, seen_mm[0], &ends, &far).map_err(|e| PlanError::by(e.rule(), e))?;
     }
     // A lap request says what the plane under the upper plate is; one that
     // leaves a butt joint open asks the frame.
@@ -442,10 +441,7 @@ fn check_lap_edge(
             plane_beside_mm,
         })
         .collect();
-    weld_edges::check_lap_ends_off_lower_plane(&seen).map_err(|e| PlanError {
-        gate: e.is_unknown().then_some(quality::Gate::JointUnknown),
-        ..PlanError::at(Stage::WeldEdges, e)
-    })
+    weld_edges::check_lap_ends_off_lower_plane(&seen).map_err(|e| PlanError::by(e.rule(), e))
 }
 
 /// How long a stretch of each of `edges` the plane of `lower` is seen
@@ -683,7 +679,7 @@ fn plan_plates(
         &normal,
         cfg.max_edge_angle_deg,
     )
-    .map_err(|e| PlanError::at(Stage::WeldEdges, e))?;
+    .map_err(|e| PlanError::by(e.rule(), e))?;
     ctx.trace.record(|t| t.pick_lines(|l| l.rank == pick[l.plate]));
     if layout == Layout::Lap {
         check_lap_edge(ctx, &workpiece, &lines[0], &edge_points[0], pick[0])?;
@@ -814,10 +810,7 @@ fn plan_plates(
             // What was seen, for a workpiece of several named unplanned.
             ctx.joint = Some(JointType::TFillet);
         }
-        let joint = judged.map_err(|e| {
-            let gate = if e.is_unknown() { quality::Gate::JointUnknown } else { quality::Gate::JointMismatch };
-            PlanError { gate: Some(gate), ..PlanError::at(Stage::Groove, e) }
-        })?;
+        let joint = judged.map_err(|e| PlanError::by(e.rule(), e))?;
         ctx.trace.record(|t| t.joint = Some(joint));
         admit(ctx, joint, Stage::Groove, &profile.describe())?;
         let depth = match (joint, ctx.request.groove_depth_mm, profile.depth_mm()) {
@@ -836,7 +829,7 @@ fn plan_plates(
             _ => 0.0,
         };
         if joint == JointType::VButt {
-            profile.check_opening(depth).map_err(|e| PlanError::at(Stage::Groove, e))?;
+            profile.check_opening(depth).map_err(|e| PlanError::by(e.rule(), e))?;
         }
         (Some(profile), depth)
     } else {

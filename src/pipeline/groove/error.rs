@@ -1,6 +1,8 @@
 //! Why the joint between a butt joint's edges is refused: not the one
 //! requested, not one the planner can name, or edges that are not the
-//! groove's.
+//! groove's. Each refusal is a rule of [`crate::rules::groove`].
+
+use crate::rules::{self, Rule};
 
 /// Why the joint between the edges is not the one requested, or cannot be
 /// told.
@@ -37,5 +39,16 @@ impl GrooveError {
     /// (every other error names what the joint looks like).
     pub fn is_unknown(&self) -> bool {
         matches!(self, GrooveError::Unclear { .. })
+    }
+
+    /// The rule that refused.
+    pub fn rule(&self) -> &'static Rule {
+        match self {
+            GrooveError::LooksLikeTee { .. } => &rules::groove::PLATE_STANDING_IN_GAP,
+            GrooveError::LooksLikeIButt { .. } => &rules::groove::NO_BEVEL_FOR_V_BUTT,
+            GrooveError::LooksLikeVButt { .. } => &rules::groove::BEVELS_IN_I_BUTT,
+            GrooveError::Unclear { .. } => &rules::groove::TYPE_UNCLEAR,
+            GrooveError::OpeningMismatch { .. } => &rules::groove::OPENING_OFF_DEPTH,
+        }
     }
 }

@@ -58,6 +58,7 @@ use rayon::prelude::*;
 use crate::cloud::{Point, PointCloud, is_valid_point};
 use crate::geometry::{Vec3, vec3};
 use crate::joint::JointType;
+use crate::rules;
 
 use super::context::CameraGrid;
 use super::gather::gather_filter_map;
@@ -117,7 +118,7 @@ pub struct ProbeSetting<'a> {
 /// decide, or when a V-groove was requested and its faces are not seen.
 pub fn judge(requested: Option<JointType>, profile: &GrooveProfile) -> Result<JointType, GrooveError> {
     let described = || profile.describe();
-    match (profile.verdict(), requested) {
+    let judged = match (profile.verdict(), requested) {
         (Between::StandingPlate(s), _) => Err(GrooveError::LooksLikeTee {
             height_mm: s.height_mm,
             share: 100.0 * s.station_share,
@@ -131,7 +132,11 @@ pub fn judge(requested: Option<JointType>, profile: &GrooveProfile) -> Result<Jo
         (Between::SquareGap, _) => Ok(JointType::IButt),
         (Between::Unclear, Some(joint)) => Ok(joint),
         (Between::Unclear, None) => Err(GrooveError::Unclear { profile: described() }),
+    };
+    if let (None, Ok(joint)) = (requested, &judged) {
+        tracing::debug!(rule = rules::groove::TYPE_FROM_GROOVE.id, %joint, "the butt joint named from its groove");
     }
+    judged
 }
 
 /// Probes the points between the two weld edges.

@@ -232,15 +232,21 @@ fn a_v_groove_shows_two_bevels_its_angle_and_depth() {
     assert_eq!(profile.verdict(), Between::Groove, "{}", profile.describe());
     assert!((profile.groove_angle_deg().unwrap() - 60.0).abs() < 1.0, "{}", profile.describe());
     assert!((profile.depth_mm().unwrap() - 5.0).abs() < 0.2, "{}", profile.describe());
-    // The bevels alone tell the joint: a V-butt, never an I-butt.
+    // The bevels alone tell the joint (`butt.type_from_groove`): a
+    // V-butt, never an I-butt.
     assert_eq!(judge(None, &profile), Ok(JointType::VButt));
-    assert!(matches!(judge(Some(JointType::IButt), &profile), Err(GrooveError::LooksLikeVButt { .. })));
+    let err = judge(Some(JointType::IButt), &profile).unwrap_err();
+    assert!(matches!(err, GrooveError::LooksLikeVButt { .. }), "{err}");
+    assert_eq!(err.rule().id, "groove.bevels_in_i_butt");
     // Its opening, 6.3 mm, fits its depth, and fits neither a groove
     // twice as deep nor the edges of a part standing 40 mm off.
     assert_eq!(profile.check_opening(5.0), Ok(()));
-    assert!(matches!(profile.check_opening(10.0), Err(GrooveError::OpeningMismatch { .. })));
+    let too_deep = profile.check_opening(10.0).unwrap_err();
+    assert!(matches!(too_deep, GrooveError::OpeningMismatch { .. }), "{too_deep}");
+    assert_eq!(too_deep.rule().id, "groove.opening_off_depth");
     let far_apart = GrooveProfile { opening_mm: 40.0, ..profile.clone() };
     let refusal = far_apart.check_opening(5.0).unwrap_err();
+    assert_eq!(refusal.rule().id, "groove.opening_off_depth");
     assert!(refusal.to_string().contains("40.0 mm apart"), "{refusal}");
 }
 
@@ -275,9 +281,12 @@ fn a_square_gap_shows_no_bevel() {
     let profile = probed(&cloud_of(gap, 10.0, 0.2), 1.5);
     assert_eq!(profile.verdict(), Between::SquareGap, "{}", profile.describe());
     assert_eq!(profile.depth_mm(), None);
+    // No bevel: an I-butt under `auto` (`butt.type_from_groove`), and
+    // no V-butt where one is requested.
     assert_eq!(judge(None, &profile), Ok(JointType::IButt));
     let err = judge(Some(JointType::VButt), &profile).unwrap_err();
-    assert!(err.to_string().contains("looks like an I-butt joint"), "{err}");
+    assert_eq!(err.rule().id, "groove.no_bevel_for_v_butt", "{err}");
+    assert_eq!(judge(Some(JointType::IButt), &profile), Ok(JointType::IButt));
 }
 
 #[test]
@@ -327,6 +336,27 @@ fn a_plate_standing_between_the_edges_is_seen() {
     assert!((profile.standing.unwrap().height_mm - 60.0).abs() < 1e-3);
     for requested in [None, Some(JointType::VButt), Some(JointType::IButt)] {
         let err = judge(requested, &profile).unwrap_err();
-        assert!(err.to_string().contains("looks like a tee joint"), "{err}");
+        assert_eq!(err.rule().id, "butt.plate_standing_in_gap", "{err}");
+        assert_eq!(err.rule().gate, Some(crate::rules::Gate::JointMismatch));
     }
+}
+
+#[test]
+fn a_face_too_flat_for_a_bevel_tells_neither_joint() {
+    // Faces 70 degrees from the normal, 1.8 mm deep: seen along the seam
+    // and flat as a plate, but too flat for a groove's bevel and far from
+    // a square gap's wall.
+    let tan = 70f64.to_radians().tan();
+    let w = 5.0;
+    let shallow = |x: f64| Some(if x.abs() >= w { 0.0 } else { (w - x.abs()) / tan });
+    let profile = probed(&cloud_of(shallow, 10.0, 0.2), w);
+    assert_eq!(profile.verdict(), Between::Unclear, "{}", profile.describe());
+    assert!(profile.faces.iter().all(|f| (f.angle_deg - 70.0).abs() < 2.0), "{}", profile.describe());
+    let err = judge(None, &profile).unwrap_err();
+    assert_eq!(err.rule().id, "groove.type_unclear", "{err}");
+    assert_eq!(err.rule().gate, Some(crate::rules::Gate::JointUnknown));
+    // Named in the request, the joint is planned as named; a V-butt
+    // still needs its bevels.
+    assert_eq!(judge(Some(JointType::IButt), &profile), Ok(JointType::IButt));
+    assert_eq!(judge(Some(JointType::VButt), &profile).unwrap_err().rule().id, "groove.no_bevel_for_v_butt");
 }

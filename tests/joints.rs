@@ -22,6 +22,8 @@ fn rendered(joint: JointType) -> (SceneSpec, Simulation) {
 
 #[test]
 fn auto_names_each_joint_measures_the_groove_and_plans_it_within_the_bar() {
+    // A butt joint's type is named by `butt.type_from_groove`: a V-butt
+    // for its bevels, an I-butt for its square gap.
     for joint in JointType::ALL {
         let (spec, sim) = rendered(joint);
         let plan = Planner::new(Config::default())
@@ -56,15 +58,19 @@ fn auto_names_each_joint_measures_the_groove_and_plans_it_within_the_bar() {
 #[test]
 fn the_wrong_joint_is_refused_for_what_the_frame_shows() {
     let planner = Planner::new(Config::default());
-    for (seen, asked, looks_like) in [
-        (JointType::VButt, JointType::IButt, "looks like a V-butt joint"),
-        (JointType::IButt, JointType::VButt, "looks like an I-butt joint"),
-        (JointType::Lap, JointType::VButt, "looks like a lap joint"),
-        (JointType::VButt, JointType::Lap, "no two layers"),
+    // The groove stage's rules by id; the layers' refusals by what they say.
+    for (seen, asked, refused_by) in [
+        (JointType::VButt, JointType::IButt, Ok("groove.bevels_in_i_butt")),
+        (JointType::IButt, JointType::VButt, Ok("groove.no_bevel_for_v_butt")),
+        (JointType::Lap, JointType::VButt, Err("looks like a lap joint")),
+        (JointType::VButt, JointType::Lap, Err("no two layers")),
     ] {
         let (_, sim) = rendered(seen);
         let refused = planner.plan(&sim.cloud, &PlanRequest::new(asked, Some(5.0), sim.pose)).unwrap_err();
-        assert!(refused.reason.contains(looks_like), "{seen} asked as {asked}: {refused}");
+        match refused_by {
+            Ok(rule) => assert_eq!(refused.rule.id, rule, "{seen} asked as {asked}: {refused}"),
+            Err(looks_like) => assert!(refused.reason.contains(looks_like), "{seen} asked as {asked}: {refused}"),
+        }
         if asked != JointType::Lap {
             assert_eq!(refused.gate, Some(Gate::JointMismatch), "{seen} asked as {asked}: {refused}");
         }

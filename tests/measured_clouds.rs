@@ -114,6 +114,15 @@ fn assert_refused_saying(o: &SceneOutcome, why: &str) {
     }
 }
 
+/// Asserts `o` was refused by the rule `id`; a panic naming the scene
+/// and how far off it was if it was planned.
+fn assert_refused_by(o: &SceneOutcome, id: &str) {
+    match &o.result {
+        Ok((err, _)) => panic!("{}: planned {:.1} mm off", o.name, err.max_mm),
+        Err(e) => assert_eq!(e.rule.id, id, "{}: {}", o.name, e.reason),
+    }
+}
+
 #[test]
 fn plates_seen_as_one_on_the_table_are_no_lap_s_upper_plate() {
     // i-butt-06 at 1 mm voxels: its plates, 0.78 mm apart at 1000 mm,
@@ -123,7 +132,7 @@ fn plates_seen_as_one_on_the_table_are_no_lap_s_upper_plate() {
     // of the plane's ends along all of them: no lap's upper plate, which
     // reaches past its lower plate's edge.
     let o = plan_auto(eval_suite(Draw::Documented), "voxel:1", "i-butt-06");
-    assert_refused_saying(&o, "far edge into view");
+    assert_refused_by(&o, "lap.upper_plate_not_past_lower");
 }
 
 #[test]
@@ -135,7 +144,7 @@ fn plates_seen_as_one_with_the_table_all_round_are_no_lap_s_upper_plate() {
     // the butt joint. The table is seen beside the far side too, along all
     // of it: the plane lies on it whole.
     let o = plan_asking(fault_suite(Draw::Fresh(7)), "voxel:1", "fault-wrong-joint-i-butt-03", JointAsk::AsScene);
-    assert_refused_saying(&o, "seen beside its far edge too");
+    assert_refused_by(&o, "lap.upper_plate_within_lower_layer");
 }
 
 #[test]
@@ -147,19 +156,21 @@ fn a_step_across_the_view_and_nothing_else_is_named_by_the_request_not_by_auto()
     // along the image's border, so nothing shows whether the plane under
     // it is a lap's lower plate or the table.
     let o = plan_auto(fault_suite(Draw::Documented), "voxel:1", "fault-tack-welds-i-butt-00");
-    assert_refused_saying(&o, "only along the chosen edge (its other edges: 3 along the image's border)");
+    assert_refused_by(&o, "lap.upper_plate_ends_off_lower");
+    assert_refused_saying(&o, "(its other edges: 3 along the image's border)");
     assert_eq!(o.result.as_ref().unwrap_err().gate, Some(Gate::JointUnknown));
     // At 0.5 mm voxels the gap shows between the tack welds, and a corner
     // of the plane is in view, the table beyond it in too few returns to
     // make a cluster: read from every point on the table's plane, it lies
     // beside most of that corner's edge.
     let o = plan_auto(fault_suite(Draw::Documented), "voxel:0.5", "fault-tack-welds-i-butt-00");
+    assert_refused_by(&o, "lap.upper_plate_ends_off_lower");
     assert_refused_saying(&o, "2 with the plate seen beyond, 1 in view with the plane under it beside");
     // A lap whose plates fill the view shows the same: refused under
     // `auto`, planned where a lap is asked for.
     let fill = "lap-00-d500-t20-fill-upper-side";
     let o = plan_auto(eval_suite(Draw::Documented), "unorganized", fill);
-    assert_refused_saying(&o, "request lap to plan it as a lap");
+    assert_refused_by(&o, "lap.upper_plate_ends_off_lower");
     let o = plan_asking(eval_suite(Draw::Documented), "unorganized", fill, JointAsk::AsScene);
     assert_within(&o.name, planned(&o), 2.0);
 }

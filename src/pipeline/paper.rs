@@ -92,7 +92,7 @@ pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
     let owner =
         |l: &ransac::EdgeLine| (l.inliers.iter().filter(|&&i| i >= split).count() * 2 > l.inliers.len()) as usize;
     ctx.trace.record(|t| t.add_lines(&lines, &all, owner));
-    let pick = weld_edges::paper_select(&lines, centroids, owner).map_err(|e| PlanError::at(Stage::WeldEdges, e))?;
+    let pick = weld_edges::paper_select(&lines, centroids, owner).map_err(|e| PlanError::by(e.rule(), e))?;
     ctx.trace.record(|t| t.pick_lines(|l| pick.contains(&l.rank)));
     ctx.clock.lap(Stage::WeldEdges)?;
 

@@ -26,8 +26,12 @@
 //! the plane under it somewhere besides the weld edge
 //! ([`check_lap_ends_off_lower_plane`]): a step between two planes and
 //! nothing else is a lap's, and a plate's lying on the table, alike.
+//!
+//! Each refusal is a rule of [`crate::rules::weld_edges`]
+//! ([`WeldEdgeError::rule`]).
 
 use crate::geometry::{Vec3, extent};
+use crate::rules::{self, Rule};
 
 use super::boundary::{CoarseEdge, SpannedEdge};
 use super::ransac::EdgeLine;
@@ -109,6 +113,19 @@ impl WeldEdgeError {
     /// told from the frame (for `auto`, the `joint_unknown` gate).
     pub fn is_unknown(&self) -> bool {
         matches!(self, WeldEdgeError::StepAlone { .. })
+    }
+
+    /// The rule that refused.
+    pub fn rule(&self) -> &'static Rule {
+        match self {
+            WeldEdgeError::TooFewSeparating { .. } => &rules::weld_edges::NO_LINE_BETWEEN_PLATES,
+            WeldEdgeError::NotParallel { .. } => &rules::weld_edges::NO_PARALLEL_PAIR,
+            WeldEdgeError::TwoFacingEdges { .. } => &rules::weld_edges::TWO_FACING_EDGES,
+            WeldEdgeError::LowerPlateBesideOtherEdge { .. } => &rules::weld_edges::LOWER_PLATE_BESIDE_OTHER_EDGE,
+            WeldEdgeError::UpperPlateOnLowerPlane { .. } => &rules::weld_edges::UPPER_PLATE_NOT_PAST_LOWER,
+            WeldEdgeError::UpperPlateWithinLowerLayer { .. } => &rules::weld_edges::UPPER_PLATE_WITHIN_LOWER_LAYER,
+            WeldEdgeError::StepAlone { .. } => &rules::weld_edges::UPPER_PLATE_ENDS_OFF_LOWER,
+        }
     }
 }
 
@@ -499,6 +516,7 @@ mod tests {
         ];
         let centroids = [Vec3::new(15.0, 30.0, 600.0), Vec3::new(45.0, -30.0, 600.0)];
         let err = robust_select([&a_lines, &b_lines], [&a_pts, &b_pts], centroids, &Vec3::z(), 10.0).unwrap_err();
+        assert_eq!(err.rule().id, "edge.two_facing_edges");
         let WeldEdgeError::TwoFacingEdges { nearest_mm, longer_mm, angle_deg } = err else { panic!("{err}") };
         assert!((nearest_mm - 30.0).abs() < 1e-9 && (longer_mm - 60.0).abs() < 1e-9, "{err}");
         assert!((angle_deg - 90.0).abs() < 1e-6, "{err}");
@@ -522,6 +540,7 @@ mod tests {
         // Beside the end for longer than beside the chosen side: refused.
         let err = check_lap_edge(&lines, 0, 40.0, &beside_end(90.0), &[]).unwrap_err();
         assert_eq!(err, WeldEdgeError::LowerPlateBesideOtherEdge { chosen_mm: 40.0, longer_mm: 90.0, angle_deg: 90.0 });
+        assert_eq!(err.rule().id, "lap.lower_plate_beside_other_edge");
         // Shorter beside the end: kept.
         assert!(check_lap_edge(&lines, 0, 90.0, &beside_end(40.0), &[]).is_ok());
     }
@@ -538,6 +557,7 @@ mod tests {
         // Beside all of it: the upper plate lies on the plane under it.
         let err = check_lap_edge(&lines, 0, 330.0, &beside_end(290.0), &[]).unwrap_err();
         assert_eq!(err, WeldEdgeError::UpperPlateOnLowerPlane { seen_mm: 290.0, end_mm: 300.0, angle_deg: 90.0 });
+        assert_eq!(err.rule().id, "lap.upper_plate_not_past_lower");
         assert!(err.to_string().contains("far edge into view") && !err.to_string().contains("  "), "{err}");
         // An end of no length (a line of one inlier) says nothing.
         let point = [OtherEdge { line: 1, length_mm: 0.0, seen_mm: 0.0 }];
@@ -557,6 +577,7 @@ mod tests {
         // upper plate lies on it whole.
         let err = check_lap_edge(&lines, 0, 250.0, &[], &beside_far(210.0)).unwrap_err();
         assert_eq!(err, WeldEdgeError::UpperPlateWithinLowerLayer { seen_mm: 210.0, far_mm: 260.0 });
+        assert_eq!(err.rule().id, "lap.upper_plate_within_lower_layer");
         assert!(err.to_string().contains("210 of its 260 mm") && !err.to_string().contains("  "), "{err}");
     }
 
@@ -568,7 +589,10 @@ mod tests {
         // a step and nothing else.
         let border = [edge(200.0, AlongBorder, 0.0), edge(200.0, AlongBorder, 0.0), edge(300.0, AlongBorder, 0.0)];
         for others in [&border[..], &[]] {
-            assert!(check_lap_ends_off_lower_plane(others).unwrap_err().is_unknown());
+            let err = check_lap_ends_off_lower_plane(others).unwrap_err();
+            assert!(err.is_unknown(), "{err}");
+            assert_eq!(err.rule().id, "lap.upper_plate_ends_off_lower");
+            assert_eq!(err.rule().gate, Some(crate::rules::Gate::JointUnknown));
         }
         // One end in view with the table beyond it, off the lower plane.
         let one_end = [edge(200.0, InView, 0.0), edge(200.0, AlongBorder, 0.0)];
@@ -607,5 +631,29 @@ mod tests {
         let centroids = [Vec3::new(-50.0, 30.0, 600.0), Vec3::new(50.0, 30.0, 600.0)];
         let err = paper_select(&lines, centroids, |_| 0).unwrap_err();
         assert_eq!(err, WeldEdgeError::TooFewSeparating { found: 1, lines: 2 });
+        assert_eq!(err.rule().id, "edge.no_line_between_plates");
+    }
+
+    #[test]
+    fn separating_lines_at_right_angles_are_no_pair() {
+        // Plate A's edge along y at x = -1 and plate B's along x at
+        // y = 1: each separates the centroids (A's at (-50, -50), B's at
+        // (50, 50)), but they meet at a right angle.
+        let a_lines = vec![line(-1.0, true, 40)];
+        let b_lines =
+            vec![EdgeLine { point: Vec3::new(0.0, 1.0, 600.0), direction: Vec3::x(), inliers: (0..40).collect() }];
+        let a_pts: Vec<Vec3> = (0..40).map(|i| Vec3::new(-1.0, i as f64, 600.0)).collect();
+        let b_pts: Vec<Vec3> = (0..40).map(|i| Vec3::new(i as f64, 1.0, 600.0)).collect();
+        let centroids = [Vec3::new(-50.0, -50.0, 600.0), Vec3::new(50.0, 50.0, 600.0)];
+        let err = robust_select([&a_lines, &b_lines], [&a_pts, &b_pts], centroids, &Vec3::z(), 10.0).unwrap_err();
+        assert_eq!(err, WeldEdgeError::NotParallel { max_angle_deg: 10.0 });
+        assert_eq!(err.rule().id, "edge.no_parallel_pair");
+        // Turned to within the limit of each other, they are a pair.
+        let turned = EdgeLine { direction: Vec3::new(0.1, 1.0, 0.0).normalize(), ..a_lines[0].clone() };
+        let b_along_y =
+            vec![EdgeLine { point: Vec3::new(1.0, 0.0, 600.0), direction: Vec3::y(), inliers: (0..40).collect() }];
+        let b_pts: Vec<Vec3> = (0..40).map(|i| Vec3::new(1.0, i as f64, 600.0)).collect();
+        let centroids = [Vec3::new(-50.0, 20.0, 600.0), Vec3::new(50.0, 20.0, 600.0)];
+        assert_eq!(robust_select([&[turned], &b_along_y], [&a_pts, &b_pts], centroids, &Vec3::z(), 10.0), Ok([0, 0]));
     }
 }

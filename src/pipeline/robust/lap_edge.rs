@@ -14,7 +14,7 @@ use super::super::background::{self, PlaneCluster};
 use super::super::boundary;
 use super::super::context::Context;
 use super::super::ransac::EdgeLine;
-use super::super::{PlanError, Stage, quality, weld_edges};
+use super::super::{PlanError, weld_edges};
 
 /// A lap's weld edge checked against the upper plate's other edges
 /// (`lines`, fitted to `edge_points`; `chosen` the weld edge's): the
@@ -69,8 +69,7 @@ pub(super) fn check_lap_edge(
         };
         let ends: Vec<weld_edges::OtherEdge> = (1..=turned.len()).map(other).collect();
         let far: Vec<weld_edges::OtherEdge> = (1 + turned.len()..measured.len()).map(other).collect();
-        weld_edges::check_lap_edge(lines, chosen, seen_mm[0], &ends, &far)
-            .map_err(|e| PlanError::at(Stage::WeldEdges, e))?;
+        weld_edges::check_lap_edge(lines, chosen, seen_mm[0], &ends, &far).map_err(|e| PlanError::by(e.rule(), e))?;
     }
     // A lap request says what the plane under the upper plate is; one that
     // leaves a butt joint open asks the frame.
@@ -91,10 +90,7 @@ pub(super) fn check_lap_edge(
             plane_beside_mm,
         })
         .collect();
-    weld_edges::check_lap_ends_off_lower_plane(&seen).map_err(|e| PlanError {
-        gate: e.is_unknown().then_some(quality::Gate::JointUnknown),
-        ..PlanError::at(Stage::WeldEdges, e)
-    })
+    weld_edges::check_lap_ends_off_lower_plane(&seen).map_err(|e| PlanError::by(e.rule(), e))
 }
 
 /// How long a stretch of each of `edges` the plane of `lower` is seen

@@ -143,7 +143,7 @@ fn pick_weld_edges(
         &normal,
         cfg.max_edge_angle_deg,
     )
-    .map_err(|e| PlanError::at(Stage::WeldEdges, e))?;
+    .map_err(|e| PlanError::by(e.rule(), e))?;
     ctx.trace.record(|t| t.pick_lines(|l| l.rank == pick[l.plate]));
     if layout == Layout::Lap {
         check_lap_edge(ctx, workpiece, &lines[0], &edge_points[0], pick[0])?;
@@ -339,10 +339,7 @@ fn judge_groove(
             // What was seen, for a workpiece of several named unplanned.
             ctx.joint = Some(JointType::TFillet);
         }
-        let joint = judged.map_err(|e| {
-            let gate = if e.is_unknown() { quality::Gate::JointUnknown } else { quality::Gate::JointMismatch };
-            PlanError { gate: Some(gate), ..PlanError::at(Stage::Groove, e) }
-        })?;
+        let joint = judged.map_err(|e| PlanError::by(e.rule(), e))?;
         ctx.trace.record(|t| t.joint = Some(joint));
         admit(ctx, joint, &rules::groove::BUTT_NOT_REQUESTED, &profile.describe())?;
         let depth = match (joint, ctx.request.groove_depth_mm, profile.depth_mm()) {
@@ -361,7 +358,7 @@ fn judge_groove(
             _ => 0.0,
         };
         if joint == JointType::VButt {
-            profile.check_opening(depth).map_err(|e| PlanError::at(Stage::Groove, e))?;
+            profile.check_opening(depth).map_err(|e| PlanError::by(e.rule(), e))?;
         }
         (Some(profile), depth)
     } else {

@@ -13,7 +13,12 @@ use crate::geometry::{Vec3, vec3};
 use super::super::refit::{SeamAxes, SeamCurve};
 use super::frame::{WebFrame, height_margin, valid_points};
 use super::stretch::{STATION_SPACINGS, ends_at_border, ends_past_cut_foot, joint_beyond_run, seen_run};
-use super::{MIN_FACE_POINTS, Root, RootEvidence, Side, TeeView, Web};
+use super::{MIN_FACE_POINTS, NotRead, Root, RootEvidence, Side, TeeView, Web};
+use crate::rules::Rule;
+use crate::rules::refit::{
+    TEE_ROOT_ENDS_AT_IMAGE_BORDER, TEE_ROOT_LONGEST_SEEN_RUN, TEE_ROOT_NOT_SEEN, TEE_ROOT_RUNS_PAST_CUT_FOOT,
+    TEE_SIDE_FACE_ALONG_CAMERA_RAYS, TEE_SIDE_FACE_IS_WEB_END,
+};
 
 /// The face's foot: its points up to this many spacings above the lowest
 /// face point of their station along the root.
@@ -42,7 +47,7 @@ pub(super) const FACE_REFITS: usize = 4;
 
 /// The root where the web's side face, fitted to its points, meets the
 /// flange, or why the face gives none.
-pub(super) fn root_from_face(view: &TeeView, frame: &WebFrame, sign: f64, side: Side) -> Result<Root, String> {
+pub(super) fn root_from_face(view: &TeeView, frame: &WebFrame, sign: f64, side: Side) -> Result<Root, NotRead> {
     let spacing = view.point_spacing_mm;
     let margin = height_margin(view.on_plane_mm, spacing);
     let ((inner, reach), h_hi) = frame.face_band(view, sign, margin);
@@ -55,14 +60,17 @@ pub(super) fn root_from_face(view: &TeeView, frame: &WebFrame, sign: f64, side: 
         .collect();
     let hidden = if side == Side::Far { ", hidden by the web" } else { "" };
     if face_points.len() < MIN_FACE_POINTS {
-        return Err(format!(
-            "the web's side face there is not seen{hidden} ({} points between the flange and the web's top, \
+        return Err(NotRead::by(
+            &TEE_ROOT_NOT_SEEN,
+            format!(
+                "the web's side face there is not seen{hidden} ({} points between the flange and the web's top, \
              fewer than {MIN_FACE_POINTS})",
-            face_points.len()
+                face_points.len()
+            ),
         ));
     }
     let Some(face) = fit_face(&face_points, view.trim_sigma) else {
-        return Err("the points on the web's side face span no plane".into());
+        return Err(NotRead::by(&TEE_ROOT_NOT_SEEN, "the points on the web's side face span no plane"));
     };
     // A side face runs the web's length. Where the side face is turned
     // edge-on and returns nothing, the points between the flange and the
@@ -73,11 +81,14 @@ pub(super) fn root_from_face(view: &TeeView, frame: &WebFrame, sign: f64, side: 
     if let (None, Some(foot_line)) = (frame.face_only, foot_line) {
         let skew_deg = foot_line.dot(&frame.e).abs().clamp(0.0, 1.0).acos().to_degrees();
         if skew_deg > MAX_ROOT_SKEW_DEG {
-            return Err(format!(
-                "the {} points between the flange and the web's top stand across the web (their foot \
+            return Err(NotRead::by(
+                &TEE_SIDE_FACE_IS_WEB_END,
+                format!(
+                    "the {} points between the flange and the web's top stand across the web (their foot \
                  {skew_deg:.0}° from the top's long axis, over {MAX_ROOT_SKEW_DEG}°): the web's end, not its \
                  side face{hidden}",
-                face.inliers.len()
+                    face.inliers.len()
+                ),
             ));
         }
     }
@@ -86,15 +97,21 @@ pub(super) fn root_from_face(view: &TeeView, frame: &WebFrame, sign: f64, side: 
     let d_m = m.dot(&face.centroid);
     let view_deg = m.dot(&(-face.centroid).normalize()).clamp(-1.0, 1.0).asin().to_degrees();
     if view_deg < MIN_FACE_VIEW_DEG {
-        return Err(format!(
-            "the {} points between the flange and the web's top lie along the camera's rays ({view_deg:.1}° from \
+        return Err(NotRead::by(
+            &TEE_SIDE_FACE_ALONG_CAMERA_RAYS,
+            format!(
+                "the {} points between the flange and the web's top lie along the camera's rays ({view_deg:.1}° from \
              them, below {MIN_FACE_VIEW_DEG}°): mixed returns at the web's edge, not its side face{hidden}",
-            face.inliers.len()
+                face.inliers.len()
+            ),
         ));
     }
     let n = frame.n;
     let Some(r) = n.cross(&m).try_normalize(1e-6) else {
-        return Err("the points between the flange and the web's top lie parallel to the flange".into());
+        return Err(NotRead::by(
+            &TEE_ROOT_NOT_SEEN,
+            "the points between the flange and the web's top lie parallel to the flange",
+        ));
     };
     let r = if r.dot(&frame.e) >= 0.0 { r } else { -r };
     // The point on both planes nearest the web's origin.
@@ -137,23 +154,41 @@ pub(super) fn root_from_face(view: &TeeView, frame: &WebFrame, sign: f64, side: 
         }
     }
     if foot.is_empty() {
-        return Err("the web's side face is not seen down to the flange".into());
+        return Err(NotRead::by(&TEE_ROOT_NOT_SEEN, "the web's side face is not seen down to the flange"));
     }
     if beside.is_empty() {
-        return Err(format!(
-            "the flange is not seen up to the web's face{}",
-            if side == Side::Far { " (the web hides it)" } else { " (in the web's shadow)" }
+        return Err(NotRead::by(
+            &TEE_ROOT_NOT_SEEN,
+            format!(
+                "the flange is not seen up to the web's face{}",
+                if side == Side::Far { " (the web hides it)" } else { " (in the web's shadow)" }
+            ),
         ));
     }
     let flange_along: Vec<f64> = beside.iter().map(along).collect();
     let Some(run) = seen_run(&foot, &flange_along, spacing) else {
-        return Err("the web's face and the flange up to it are not seen together anywhere along the root".into());
+        return Err(NotRead::by(
+            &TEE_ROOT_NOT_SEEN,
+            "the web's face and the flange up to it are not seen together anywhere along the root",
+        ));
     };
+    let mut ends_set_by: Vec<&'static Rule> = Vec::new();
+    if run.cut {
+        ends_set_by.push(&TEE_ROOT_LONGEST_SEEN_RUN);
+    }
+    let evidence_ends = (run.s0, run.s1);
     let run = match view.border {
         Some(border) => ends_at_border(border, &p0, &r, run, [&foot_points, &beside], spacing),
         None => run,
     };
+    if (run.s0, run.s1) != evidence_ends {
+        ends_set_by.push(&TEE_ROOT_ENDS_AT_IMAGE_BORDER);
+    }
+    let border_ends = (run.s0, run.s1);
     let run = ends_past_cut_foot(view, &p0, &r, run, &foot_points, &beside, &under_web, spacing);
+    if (run.s0, run.s1) != border_ends {
+        ends_set_by.push(&TEE_ROOT_RUNS_PAST_CUT_FOOT);
+    }
     // Where the web's top stands over the root and the flange is seen up
     // to it beyond the stretch, the joint goes on though the face's foot
     // is not seen there (turned nearly edge-on, or covered): the quality
@@ -215,6 +250,7 @@ pub(super) fn root_from_face(view: &TeeView, frame: &WebFrame, sign: f64, side: 
         joint_beyond_ends_mm,
         uncertainty_across_mm,
         uncertainty_normal_mm,
+        ends_set_by,
     })
 }
 

@@ -17,7 +17,12 @@ use super::super::view_border::BORDER_REACH_SPACINGS;
 use super::face::{FACE_REFITS, FLANGE_REACH_SPACINGS, rms};
 use super::frame::{FACE_REACH_SPACINGS, WebFrame, frame_along, valid_points};
 use super::stretch::{MAX_STATIONS, STATION_SPACINGS, SeenRun, covered_share, seen_run};
-use super::{Root, RootEvidence, Side, TeeView, Web};
+use super::{NotRead, Root, RootEvidence, Side, TeeView, Web};
+use crate::rules::Rule;
+use crate::rules::refit::{
+    TEE_FLANGE_EDGE_AT_SHADOW, TEE_FLANGE_EDGE_ENDS_WITH_WEB_TOP, TEE_FLANGE_EDGE_PAST_WEB_TOP,
+    TEE_FLANGE_EDGE_READ_ALONG_ITSELF, TEE_ROOT_LONGEST_SEEN_RUN, TEE_ROOT_NOT_SEEN,
+};
 
 /// A root read from the flange's edge: each edge's sampling may move the
 /// face the edges imply by a spacing, both towards a face seen; the face
@@ -47,7 +52,7 @@ const MIN_EDGE_STATIONS: usize = 8;
 /// both towards calling the face seen, so the margin must exceed
 /// [`EDGE_VIEW_SPACINGS`] spacings over the web's height. A root turned
 /// less than that is refused, not guessed.
-pub(super) fn root_from_flange_edge(view: &TeeView, frame: &WebFrame, sign: f64, side: Side) -> Result<Root, String> {
+pub(super) fn root_from_flange_edge(view: &TeeView, frame: &WebFrame, sign: f64, side: Side) -> Result<Root, NotRead> {
     let root = flange_edge_root(view, frame, sign, side)?;
     // The web's axis from its top's spread lies off the web where the
     // image's border cuts the top obliquely: the edge, looked for outward
@@ -62,7 +67,14 @@ pub(super) fn root_from_flange_edge(view: &TeeView, frame: &WebFrame, sign: f64,
         return Ok(root);
     }
     match frame_along(view.cloud, top, frame, &along_edge) {
-        Some(turned) => flange_edge_root(view, &turned, sign, side).or(Ok(root)),
+        Some(turned) => match flange_edge_root(view, &turned, sign, side) {
+            Ok(mut along_itself) => {
+                tracing::debug!(rule = TEE_FLANGE_EDGE_READ_ALONG_ITSELF.id, "the flange's edge read along itself");
+                along_itself.ends_set_by.push(&TEE_FLANGE_EDGE_READ_ALONG_ITSELF);
+                Ok(along_itself)
+            }
+            Err(_) => Ok(root),
+        },
         None => Ok(root),
     }
 }
@@ -74,9 +86,10 @@ const MAX_AXIS_TURN_DEG: f64 = 1.0;
 
 /// The root from the flange's edge in the web's frame `frame`
 /// ([`root_from_flange_edge`]).
-fn flange_edge_root(view: &TeeView, frame: &WebFrame, sign: f64, side: Side) -> Result<Root, String> {
+fn flange_edge_root(view: &TeeView, frame: &WebFrame, sign: f64, side: Side) -> Result<Root, NotRead> {
+    let not_seen = |why: String| NotRead::by(&TEE_ROOT_NOT_SEEN, why);
     let Web::Top(web_top) = view.web else {
-        return Err("the web's top is out of view, so its edge cannot stand in for the face".into());
+        return Err(not_seen("the web's top is out of view, so its edge cannot stand in for the face".into()));
     };
     let spacing = view.point_spacing_mm;
     let top_edge = frame.half_width + view.rim_mm;
@@ -98,14 +111,15 @@ fn flange_edge_root(view: &TeeView, frame: &WebFrame, sign: f64, side: Side) -> 
         }
     }
     let stations = Stations::over(flange.iter().chain(&top).map(|s| s.t), spacing)
-        .ok_or_else(|| "no flange point lies beside the web".to_string())?;
+        .ok_or_else(|| not_seen("no flange point lies beside the web".to_string()))?;
     let flange_edge = stations.extremes(&flange, |a, b| a.off < b.off);
     let top_edge_samples = stations.extremes(&top, |a, b| a.off > b.off);
     let tolerance = |rms: f64| (view.trim_sigma * rms).max(EDGE_TOLERANCE_SPACINGS * spacing);
-    let root_line = EdgeLine::fit(&flange_edge, tolerance)
-        .ok_or_else(|| format!("the flange's edge is seen at {} stations along the web, too few", flange_edge.len()))?;
+    let root_line = EdgeLine::fit(&flange_edge, tolerance).ok_or_else(|| {
+        not_seen(format!("the flange's edge is seen at {} stations along the web, too few", flange_edge.len()))
+    })?;
     let top_line = EdgeLine::fit(&top_edge_samples, tolerance).ok_or_else(|| {
-        format!("the web top's edge is seen at {} stations along the web, too few", top_edge_samples.len())
+        not_seen(format!("the web top's edge is seen at {} stations along the web, too few", top_edge_samples.len()))
     })?;
 
     // The implied face across the middle of the root's stations.
@@ -123,11 +137,14 @@ fn flange_edge_root(view: &TeeView, frame: &WebFrame, sign: f64, side: Side) -> 
     let view_margin_deg = turned_deg(Vec3::zeros()).min(turned_deg(view.projector));
     let least_margin_deg = (EDGE_VIEW_SPACINGS * spacing / frame.height).atan().to_degrees();
     if view_margin_deg < least_margin_deg {
-        return Err(format!(
-            "the face from the flange's edge up to the web top's edge is turned {view_margin_deg:.1}° towards the \
+        return Err(NotRead::by(
+            &TEE_FLANGE_EDGE_AT_SHADOW,
+            format!(
+                "the face from the flange's edge up to the web top's edge is turned {view_margin_deg:.1}° towards the \
              camera or the projector, below {least_margin_deg:.1}° ({EDGE_VIEW_SPACINGS} point spacings of \
              {spacing:.2} mm over the web's {:.0} mm): the flange may end at the web's shadow, not at the root",
-            frame.height
+                frame.height
+            ),
         ));
     }
 
@@ -162,7 +179,7 @@ fn flange_edge_root(view: &TeeView, frame: &WebFrame, sign: f64, side: Side) -> 
     // the camera, may leave the image before the root does; it need only
     // be seen above enough of the root to be judged by the coverage gate.
     let run = seen_run(&edge, &edge, spacing)
-        .ok_or_else(|| "the flange's edge is not seen along the web anywhere".to_string())?;
+        .ok_or_else(|| not_seen("the flange's edge is not seen along the web anywhere".to_string()))?;
     // Only where the web stands: past the web's end the flange's edge runs
     // on nearly straight (the web's end hides the flange behind it a little
     // more at each step), so the root ends where the web's top does, unless
@@ -197,16 +214,26 @@ fn flange_edge_root(view: &TeeView, frame: &WebFrame, sign: f64, side: Side) -> 
     if view.in_view.is_none() && view.border.is_none() {
         let past = (s0 - run.s0).max(run.s1 - s1);
         if past > view.max_beyond_mm {
-            return Err(format!(
-                "the flange's edge runs on {past:.1} mm past where the web's top is seen, more than {:.1} mm \
+            return Err(NotRead::by(
+                &TEE_FLANGE_EDGE_PAST_WEB_TOP,
+                format!(
+                    "the flange's edge runs on {past:.1} mm past where the web's top is seen, more than {:.1} mm \
                  (quality.max_joint_beyond_seam_mm): the web may end there, or the image cut its top (neither \
                  the camera's grid nor the cloud's rays show where the image ends)",
-                view.max_beyond_mm
+                    view.max_beyond_mm
+                ),
             ));
         }
     }
     if s1 <= s0 {
-        return Err("the flange's edge is not seen where the web's top is".to_string());
+        return Err(not_seen("the flange's edge is not seen where the web's top is".to_string()));
+    }
+    let mut ends_set_by: Vec<&'static Rule> = Vec::new();
+    if run.cut {
+        ends_set_by.push(&TEE_ROOT_LONGEST_SEEN_RUN);
+    }
+    if (s0, s1) != (run.s0, run.s1) {
+        ends_set_by.push(&TEE_FLANGE_EDGE_ENDS_WITH_WEB_TOP);
     }
     let run = SeenRun { s0, s1, share: ((s1 - s0) / run.seen_mm).min(1.0), ..run };
     let top_seen: Vec<f64> = top_at_line.iter().map(|&t| along(t)).collect();
@@ -254,6 +281,7 @@ fn flange_edge_root(view: &TeeView, frame: &WebFrame, sign: f64, side: Side) -> 
         // lies within a spacing inward of the flange's last point.
         uncertainty_across_mm: (root_line.rms_mm / (in_run as f64).sqrt()).hypot(floor),
         uncertainty_normal_mm: floor,
+        ends_set_by,
     })
 }
 

@@ -100,6 +100,10 @@ use super::background::PlaneCluster;
 use super::refit::SeamCurve;
 use super::view_border::ViewBorder;
 use super::web_face::StandingFace;
+use crate::rules::Rule;
+use crate::rules::refit::{
+    TEE_ROOT_HIDDEN_BY_WEB, TEE_ROOT_NOT_SEEN, TEE_SHORT_FACE_GIVES_WAY_TO_FLANGE_EDGE, TEE_WEB_NOT_OVER_FLANGE,
+};
 
 use face::root_from_face;
 use flange_edge::root_from_flange_edge;
@@ -258,6 +262,9 @@ pub struct Root {
     /// plane) and along the flange normal, mm.
     pub uncertainty_across_mm: f64,
     pub uncertainty_normal_mm: f64,
+    /// The rules that moved or cut the root's ends from where its evidence
+    /// first put them, in the order they applied.
+    pub ends_set_by: Vec<&'static Rule>,
 }
 
 impl Root {
@@ -290,11 +297,35 @@ impl Root {
     }
 }
 
+/// Why one kind of evidence gives no root (or, for [`super::web_face`],
+/// no face): the rule that decided it, and the reason in words.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("{reason}")]
+pub struct NotRead {
+    pub rule: &'static Rule,
+    pub reason: String,
+}
+
+impl NotRead {
+    pub fn by(rule: &'static Rule, reason: impl Into<String>) -> NotRead {
+        NotRead { rule, reason: reason.into() }
+    }
+
+    /// The rule that decided the evidence gives nothing.
+    pub fn rule(&self) -> &'static Rule {
+        self.rule
+    }
+}
+
 /// A root not seen, and why.
 #[derive(Debug, Clone, PartialEq)]
 pub struct RootNotSeen {
     pub side: Side,
     pub sign: f64,
+    /// The rule that left the root unplanned: where neither the face nor
+    /// the flange's edge shows it, the edge's rule when the edge was
+    /// refused for a reason of its own, else the face's.
+    pub rule: &'static Rule,
     pub reason: String,
     /// Whether any of the flange lies on this side of the web (none does
     /// beside an inside corner's outer face).
@@ -313,6 +344,7 @@ pub fn find_roots(view: &TeeView) -> [Result<Root, RootNotSeen>; 2] {
             Err(RootNotSeen {
                 side: Side::Above,
                 sign,
+                rule: &TEE_WEB_NOT_OVER_FLANGE,
                 reason: format!("no root is seen: {why}"),
                 near_camera: near,
                 flange_seen: true,
@@ -325,6 +357,7 @@ pub fn find_roots(view: &TeeView) -> [Result<Root, RootNotSeen>; 2] {
             Err(RootNotSeen {
                 side,
                 sign,
+                rule: &TEE_ROOT_HIDDEN_BY_WEB,
                 reason: format!(
                     "{} is not planned: the web's top is out of view and its other side face is the one seen; the \
                      web hides this one",
@@ -345,15 +378,19 @@ fn find_root(view: &TeeView, frame: &WebFrame, sign: f64) -> Result<Root, RootNo
         + frame.u * (frame.middle + sign * (frame.half_width + view.rim_mm))
         + frame.n * frame.height_of(&frame.origin);
     let flange_seen = frame.flange_on(sign);
-    let not_seen = |why: String| RootNotSeen {
+    let not_seen = |rule: &'static Rule, why: String| RootNotSeen {
         side,
         sign,
+        rule,
         reason: format!("{} is not planned: {why}", side.root_name(sign)),
         near_camera: foot_at,
         flange_seen,
     };
     if !flange_seen {
-        return Err(not_seen("the flange on this side is not seen (hidden by the web)".into()));
+        return Err(not_seen(
+            &TEE_ROOT_HIDDEN_BY_WEB,
+            "the flange on this side is not seen (hidden by the web)".into(),
+        ));
     }
     match root_from_face(view, frame, sign, side) {
         Ok(root) => Ok(face_or_flange_edge(view, frame, sign, side, root)),
@@ -362,8 +399,10 @@ fn find_root(view: &TeeView, frame: &WebFrame, sign: f64) -> Result<Root, RootNo
         // beside it is not seen gives no root either. The flange's edge may
         // still show the root; where it ends at a shadow's edge instead,
         // the edge's own test refuses it.
-        Err(why) => root_from_flange_edge(view, frame, sign, side)
-            .map_err(|edge| not_seen(format!("{why}; and the flange's edge does not show it: {edge}"))),
+        Err(why) => root_from_flange_edge(view, frame, sign, side).map_err(|edge| {
+            let rule = if *edge.rule == TEE_ROOT_NOT_SEEN { why.rule } else { edge.rule };
+            not_seen(rule, format!("{why}; and the flange's edge does not show it: {edge}"))
+        }),
     }
 }
 
@@ -390,8 +429,10 @@ fn face_or_flange_edge(view: &TeeView, frame: &WebFrame, sign: f64, side: Side, 
         return root;
     }
     match root_from_flange_edge(view, frame, sign, side) {
-        Ok(edge) if span(&edge) > span(&root) => {
+        Ok(mut edge) if span(&edge) > span(&root) => {
+            edge.ends_set_by.push(&TEE_SHORT_FACE_GIVES_WAY_TO_FLANGE_EDGE);
             tracing::debug!(
+                rule = TEE_SHORT_FACE_GIVES_WAY_TO_FLANGE_EDGE.id,
                 face_mm = span(&root),
                 edge_mm = span(&edge),
                 "a face seen along a short stretch: the root from the flange's edge"

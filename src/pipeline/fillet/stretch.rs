@@ -29,6 +29,9 @@ pub(super) struct SeenRun {
     pub(super) coverage: [f64; 2],
     pub(super) share: f64,
     pub(super) seen_mm: f64,
+    /// Whether stretches seen apart from the run, past a longer break,
+    /// were left out.
+    pub(super) cut: bool,
 }
 
 pub(super) fn seen_run(foot: &[f64], flange: &[f64], spacing: f64) -> Option<SeenRun> {
@@ -67,7 +70,14 @@ pub(super) fn seen_run(foot: &[f64], flange: &[f64], spacing: f64) -> Option<See
     let count = (last - first + 1) as f64;
     let share_of = |j: usize| (first..=last).filter(|&k| in_run(k) && has[k][j]).count() as f64 / count;
     let seen_mm = all_seen as f64 * width;
-    Some(SeenRun { s0, s1, coverage: [share_of(0), share_of(1)], share: ((s1 - s0) / seen_mm).min(1.0), seen_mm })
+    Some(SeenRun {
+        s0,
+        s1,
+        coverage: [share_of(0), share_of(1)],
+        share: ((s1 - s0) / seen_mm).min(1.0),
+        seen_mm,
+        cut: runs.len() > 1,
+    })
 }
 
 /// How far beyond each end of the stretch `(s0, s1)` the joint is still

@@ -6,6 +6,7 @@ use super::face::root_from_face;
 use super::frame::{side_seen, web_frame};
 use super::stretch::seen_run;
 use super::*;
+use crate::pipeline::view_border::ViewBorder;
 
 /// Where the web stands across the camera's x: 200 mm to the camera's
 /// −x, so the camera (at the origin, looking down +z) sees its +x face.
@@ -80,6 +81,8 @@ fn the_root_is_where_the_face_meets_the_flange_and_runs_where_both_are_seen() {
     let hidden = roots.iter().find_map(|r| r.as_ref().err()).unwrap();
     assert_eq!(hidden.side, Side::Far);
     assert!(hidden.reason.contains("far side") && hidden.reason.contains("hidden by the web"), "{}", hidden.reason);
+    assert_eq!(hidden.rule.id, "tee.flange_edge_at_shadow", "{}", hidden.reason);
+    assert!(root.ends_set_by.is_empty(), "{:?}", root.ends_set_by);
 }
 
 #[test]
@@ -162,6 +165,7 @@ fn a_web_seen_by_one_face_only_gives_that_face_s_root_and_names_the_other() {
     let other = roots.iter().find_map(|r| r.as_ref().err()).unwrap();
     assert_eq!(other.side, Side::Far);
     assert!(other.flange_seen);
+    assert_eq!(other.rule.id, "tee.root_hidden_by_web");
     assert!(other.reason.contains("top is out of view"), "{}", other.reason);
 }
 
@@ -212,6 +216,11 @@ fn assert_on_plus_x_face(root: &Root) {
         let p = root.line.at(s);
         assert!((p.x - WEB_X - 5.0).abs() < 1e-6 && (p.z - 700.0).abs() < 1e-6, "{p:?}");
     }
+}
+
+/// The ids of the rules that moved or cut `root`'s ends.
+fn ids(root: &Root) -> Vec<&'static str> {
+    root.ends_set_by.iter().map(|r| r.id).collect()
 }
 
 fn ends_y(root: &Root) -> [f64; 2] {
@@ -267,13 +276,16 @@ fn a_root_runs_to_the_image_border_past_where_the_border_cuts_its_face() {
     let (cloud, top, [plus, minus]) = tee_parts(&pts);
     let pieces = [&plus, &minus];
     let view = test_view(&cloud, Web::Top(&top), &pieces);
-    let ends = ends_y(&plus_x_face_root(&find_roots(&TeeView { in_view: Some(&in_view), ..view })));
+    let root = plus_x_face_root(&find_roots(&TeeView { in_view: Some(&in_view), ..view }));
+    let ends = ends_y(&root);
     assert!((ends[0] + 50.0).abs() < 1e-6, "{ends:?}");
     assert!((44.5..45.0).contains(&ends[1]), "{ends:?}");
+    assert_eq!(ids(&root), ["tee.root_runs_past_cut_foot"]);
     // Without the grid nothing says the border cut the face: the root
     // ends where its face's foot is seen.
-    let ends = ends_y(&plus_x_face_root(&find_roots(&view)));
-    assert!((ends[1] - 34.0).abs() < 1e-6, "{ends:?}");
+    let root = plus_x_face_root(&find_roots(&view));
+    assert!((ends_y(&root)[1] - 34.0).abs() < 1e-6, "{:?}", ends_y(&root));
+    assert!(root.ends_set_by.is_empty(), "{:?}", root.ends_set_by);
 }
 
 /// The roots [`find_roots`] reads from `pts`: the web's top the points
@@ -351,6 +363,7 @@ fn a_face_edge_on_to_the_camera_gives_its_root_from_the_flange_edge_and_a_shadow
     assert!((ends[0] + 50.0).abs() < 1e-6 && (ends[1] - 49.0).abs() < 1e-6, "{ends:?}");
     assert!((root.web_angle_deg - 90.0).abs() < 1e-6, "{}", root.web_angle_deg);
     assert!(hidden.reason.contains("shadow"), "{}", hidden.reason);
+    assert_eq!(hidden.rule.id, "tee.flange_edge_at_shadow");
 }
 
 /// The ends (y) of the root [`roots_of`] reads from `pts` on the web's
@@ -393,6 +406,17 @@ fn the_webs_end_face_is_no_side_face_and_the_root_runs_to_the_webs_end() {
     // station (4 mm) short of the web's end.
     let ends = flange_edge_root_ends(&pts);
     assert!((ends[0] + 50.0).abs() < 1e-6 && (ends[1] - 47.0).abs() < 1e-6, "{ends:?}");
+    let roots = roots_of(&pts);
+    let root = roots.iter().find_map(|r| r.as_ref().ok()).expect("the root facing the camera");
+    assert_eq!(ids(root), ["tee.flange_edge_ends_with_web_top"]);
+    // The end face read as a face is refused as the web's end.
+    let (cloud, top, [plus, minus]) = tee_parts(&pts);
+    let pieces = [&plus, &minus];
+    let view = test_view(&cloud, Web::Top(&top), &pieces);
+    let frame = web_frame(&view).expect("the web's frame");
+    let sign = frame.u.x.signum();
+    let end_face = root_from_face(&view, &frame, sign, side_seen(&frame, sign)).expect_err("the web's end");
+    assert_eq!(end_face.rule.id, "tee.side_face_is_web_end", "{end_face}");
 }
 
 #[test]
@@ -451,6 +475,9 @@ fn a_face_seen_along_part_of_the_web_gives_way_to_the_flanges_edge() {
         }
         let ends = flange_edge_root_ends(&pts);
         assert!((ends[0] + 50.0).abs() < 1e-6 && (ends[1] - 49.0).abs() < 1e-6, "{face_seen:?}: {ends:?}");
+        let roots = roots_of(&pts);
+        let root = roots.iter().find_map(|r| r.as_ref().ok()).expect("the root facing the camera");
+        assert!(ids(root).contains(&"tee.short_face_gives_way_to_flange_edge"), "{face_seen:?}: {:?}", ids(root));
     }
 }
 
@@ -485,6 +512,7 @@ fn a_web_axis_off_the_web_is_read_again_along_the_flange_s_edge() {
     // (Along the edge's fitted line: its ends to a few hundredths.)
     let ends = ends_y(root);
     assert!((ends[0] + 50.0).abs() < 0.05 && (ends[1] - 149.0).abs() < 0.05, "{ends:?}");
+    assert!(ids(root).contains(&"tee.flange_edge_read_along_itself"), "{:?}", ids(root));
 }
 
 #[test]
@@ -530,6 +558,7 @@ fn a_flange_ending_at_the_projectors_shadow_gives_no_root() {
     for root in roots_of_web_at(&pts, 75.0) {
         let not_seen = root.expect_err("a shadow's edge is no root");
         assert!(not_seen.reason.contains("shadow"), "{}", not_seen.reason);
+        assert_eq!(not_seen.rule.id, "tee.flange_edge_at_shadow", "{}", not_seen.reason);
     }
 }
 
@@ -545,6 +574,145 @@ fn the_run_seen_bridges_short_breaks_and_not_long_ones() {
     assert_eq!((run.s0, run.s1), (0.0, 60.0));
     assert!(run.share < 1.0 && run.share > 0.8, "{}", run.share);
     assert!(run.coverage[0] < 1.0);
+    // The 10 mm seen past the long break is left out.
+    assert!(run.cut);
     // Nothing seen together: no run.
     assert!(seen_run(&[0.0, 1.0], &[50.0, 51.0], 0.5).is_none());
+}
+
+#[test]
+fn a_web_top_under_the_flange_gives_no_root() {
+    // The web's "top" 40 mm beyond the flange, away from the camera: no
+    // web stands on that flange, and neither root is read.
+    let mut pts = face_points(0.0);
+    for i in 0..100 {
+        let y = -50.0 + i as f64;
+        pts.extend((0..=8).map(|j| Vec3::new(WEB_X - 4.0 + j as f64, y, 740.0)));
+        pts.extend((0..30).map(|j| Vec3::new(WEB_X + 5.5 + 0.5 * j as f64, y, 700.0)));
+        pts.extend((0..30).map(|j| Vec3::new(WEB_X - 30.0 - 0.5 * j as f64, y, 700.0)));
+    }
+    let cloud = cloud_of(&pts);
+    let top = PlaneCluster::of_points(&pts, |p| p.z == 740.0);
+    let flange = PlaneCluster::of_points(&pts, |p| p.z == 700.0);
+    for root in find_roots(&test_view(&cloud, Web::Top(&top), &[&flange])) {
+        let not_seen = root.expect_err("no web stands on the flange");
+        assert_eq!(not_seen.rule.id, "tee.web_not_over_flange", "{}", not_seen.reason);
+    }
+}
+
+#[test]
+fn a_flange_seen_on_one_side_only_gives_no_root_on_the_other() {
+    // The tee of the tests above, its +x face seen, its flange seen on
+    // the +x side only: the −x root is hidden, not invented.
+    let mut pts = face_points(0.0);
+    for i in 0..100 {
+        let y = -50.0 + i as f64;
+        pts.extend((0..=8).map(|j| Vec3::new(WEB_X - 4.0 + j as f64, y, 660.0)));
+        pts.extend((0..30).map(|j| Vec3::new(WEB_X + 5.5 + 0.5 * j as f64, y, 700.0)));
+    }
+    let roots = roots_with_flange_pieces(&pts, &[&|p: &Vec3| p.z == 700.0]);
+    plus_x_face_root(&roots);
+    let hidden = roots.iter().find_map(|r| r.as_ref().err()).expect("the −x root not seen");
+    assert!(!hidden.flange_seen);
+    assert_eq!(hidden.rule.id, "tee.root_hidden_by_web", "{}", hidden.reason);
+    assert!(hidden.reason.contains("the flange on this side is not seen"), "{}", hidden.reason);
+}
+
+#[test]
+fn a_face_whose_flange_is_not_seen_up_to_it_gives_no_root() {
+    // The one face of the test of a web seen by one face only, its top
+    // out of view, the flange on its side seen only from 20 mm out: the
+    // face's foot and the flange up to it are seen together nowhere, and
+    // with no top the flange's edge cannot stand in.
+    let mut pts = face_points(0.0);
+    for i in 0..100 {
+        let y = -50.0 + i as f64;
+        pts.extend((0..30).map(|j| Vec3::new(WEB_X + 25.0 + 0.5 * j as f64, y, 700.0)));
+        pts.extend((0..30).map(|j| Vec3::new(WEB_X - 10.0 - j as f64, y, 700.0)));
+    }
+    let cloud = cloud_of(&pts);
+    let flange = PlaneCluster::of_points(&pts, |p| p.z == 700.0);
+    let face = StandingFace {
+        plane: Plane { normal: Vec3::x(), offset: WEB_X + 5.0 },
+        centroid: Vec3::new(WEB_X + 5.0, 0.0, 680.0),
+        flange: flange.plane,
+        points: 2000,
+        seen_height_mm: 39.0,
+    };
+    let roots = find_roots(&test_view(&cloud, Web::Face(&face), &[&flange]));
+    let near = roots.iter().filter_map(|r| r.as_ref().err()).find(|r| r.side == Side::Near).expect("not seen");
+    assert_eq!(near.rule.id, "tee.root_not_seen", "{}", near.reason);
+    assert!(near.reason.contains("the flange is not seen up to the web's face"), "{}", near.reason);
+}
+
+#[test]
+fn mixed_returns_along_the_rays_are_no_side_face() {
+    // The tee of the tests above with, on its +x side, no face but a veil
+    // of returns along the camera's rays from the flange at the face's
+    // foot towards the camera: a plane, but one the camera cannot see as
+    // a surface.
+    let mut pts = Vec::new();
+    for i in 0..100 {
+        let y = -50.0 + i as f64;
+        pts.extend((0..=8).map(|j| Vec3::new(WEB_X - 4.0 + j as f64, y, 660.0)));
+        pts.extend((0..30).map(|j| Vec3::new(WEB_X + 5.5 + 0.5 * j as f64, y, 700.0)));
+        pts.extend((0..30).map(|j| Vec3::new(WEB_X - 30.0 - 0.5 * j as f64, y, 700.0)));
+        pts.extend((2..=40).map(|j| Vec3::new(WEB_X + 5.0, y, 700.0) * (1.0 - 0.001 * j as f64)));
+    }
+    let (cloud, top, [plus, minus]) = tee_parts(&pts);
+    let pieces = [&plus, &minus];
+    let view = test_view(&cloud, Web::Top(&top), &pieces);
+    let frame = web_frame(&view).expect("the web's frame");
+    let sign = frame.u.x.signum();
+    let veil = root_from_face(&view, &frame, sign, side_seen(&frame, sign)).expect_err("a veil is no face");
+    assert_eq!(veil.rule.id, "tee.side_face_along_camera_rays", "{veil}");
+}
+
+#[test]
+fn a_flange_edge_running_past_the_web_top_with_no_border_gives_no_root() {
+    // The edge-on web of the tests above, its top seen only for y ≤ 19
+    // while the flange's edge runs on to y = 49, and nothing (no grid, no
+    // rays) tells whether the image cut the top there or the web ends.
+    let mut pts = Vec::new();
+    for i in 0..100 {
+        pts.extend(edge_on_web_row(i).filter(|p| p.z == 700.0 || i < 70));
+    }
+    let roots = roots_of(&pts);
+    let near = roots.iter().filter_map(|r| r.as_ref().err()).find(|r| r.side == Side::Near).expect("not planned");
+    assert_eq!(near.rule.id, "tee.flange_edge_past_web_top", "{}", near.reason);
+}
+
+#[test]
+fn a_face_seen_past_a_long_break_gives_its_longest_run() {
+    // The face of the tests above returns nothing from y = 20 to 39, a
+    // break longer than a joint's: the root read from the face runs from
+    // −50 to 19, the 10 mm past the break left out.
+    let pts = tee_with_face_seen_above(|y| if (20.0..40.0).contains(&y) { f64::INFINITY } else { 1.0 }, |_| true);
+    let (cloud, top, [plus, minus]) = tee_parts(&pts);
+    let pieces = [&plus, &minus];
+    let view = test_view(&cloud, Web::Top(&top), &pieces);
+    let frame = web_frame(&view).expect("the web's frame");
+    let sign = frame.u.x.signum();
+    let root = root_from_face(&view, &frame, sign, side_seen(&frame, sign)).expect("the +x face's root");
+    assert_on_plus_x_face(&root);
+    let ends = ends_y(&root);
+    assert!((ends[0] + 50.0).abs() < 1e-6 && (ends[1] - 19.0).abs() < 1e-6, "{ends:?}");
+    assert_eq!(ids(&root), ["tee.root_longest_seen_run"]);
+}
+
+#[test]
+fn a_root_whose_evidence_reaches_the_image_border_ends_where_the_border_crosses_it() {
+    // The tee of the tests above seen up to an image border at y/z =
+    // 39.6/700: the face's foot and the flange beside the root are seen up
+    // to y = 39, the root runs on to where the border crosses it.
+    let limit = 39.6 / 700.0;
+    let pts = tee_with_face_seen_above(|_| 1.0, |p| p.y / p.z < limit);
+    let (cloud, top, [plus, minus]) = tee_parts(&pts);
+    let pieces = [&plus, &minus];
+    let border = ViewBorder::from_tangents([-1.0, 1.0, -1.0, limit]);
+    let view = TeeView { border: Some(&border), ..test_view(&cloud, Web::Top(&top), &pieces) };
+    let root = plus_x_face_root(&find_roots(&view));
+    let ends = ends_y(&root);
+    assert!((ends[0] + 50.0).abs() < 1e-6 && (ends[1] - 39.6).abs() < 1e-6, "{ends:?}");
+    assert_eq!(ids(&root), ["tee.root_ends_at_image_border"]);
 }

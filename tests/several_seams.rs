@@ -82,8 +82,9 @@ fn an_edge_on_face_gives_its_root_from_the_flange_edge_and_a_shadow_edge_none() 
     );
     let path: Vec<Vec3> = seam.waypoints.iter().map(|w| w.position).collect();
     assert_eq!(classify_tee(&roots, Ok(std::slice::from_ref(&path))), Verdict::WithinBar);
-    let far = &plan.unplanned[0].reason.reason;
-    assert!(far.contains("far side") && far.contains("shadow"), "{far}");
+    let far = &plan.unplanned[0].reason;
+    assert_eq!(far.rule.id, "tee.flange_edge_at_shadow", "{far}");
+    assert!(far.reason.contains("far side"), "{far}");
 }
 
 /// Tee scenes of the suite's tuning part planned from 1 mm voxels, where
@@ -174,7 +175,7 @@ fn a_tee_cropped_round_its_root_is_planned_from_its_face_alone() {
         assert_eq!(classify_tee(&roots, Ok(std::slice::from_ref(&path))), Verdict::WithinBar, "{name}");
         // The web's other side: named, not looked for.
         assert_eq!(plan.unplanned.len(), 1, "{name}");
-        assert!(plan.unplanned[0].reason.reason.contains("top is out of view"), "{name}: {}", plan.unplanned[0].reason);
+        assert_eq!(plan.unplanned[0].reason.rule.id, "tee.root_hidden_by_web", "{name}: {}", plan.unplanned[0].reason);
         // `auto` does not decide a tee from a face alone (an inside
         // corner's plate or a fixture's side stands too): refused, saying
         // what to ask for.
@@ -206,7 +207,7 @@ fn a_tee_whose_roots_are_not_seen_is_refused_saying_why() {
     // shadow's edge may be.
     let (name, spec) = &tee_suite(Draw::Documented)[10];
     let err = plan_tee(spec, JointType::TFillet.into()).unwrap_err();
-    assert!(err.reason.contains("no fillet root of the tee joint is seen"), "{name}: {err}");
+    assert_eq!(err.rule.id, "tee.no_root_seen", "{name}: {err}");
     assert!(err.reason.contains("far side") && err.reason.contains("facing the camera"), "{name}: {err}");
     assert!(err.reason.contains("along the camera's rays") && err.reason.contains("shadow"), "{name}: {err}");
 }

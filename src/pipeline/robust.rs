@@ -442,12 +442,13 @@ fn plan_topless_tee(
     let face = web_face::find(ctx.cloud, &pieces, &search).map_err(|why| {
         // Under `auto` the search was a guess at a cropped tee: its failure
         // says nothing about the joint the cloud holds.
-        let reason = if fillet_asked {
-            format!("{not_found}; nor does a web's side face stand on the nearest plane: {why}")
-        } else {
-            not_found.to_string()
-        };
-        background_refusal(&not_found, reason)
+        if !fillet_asked {
+            return background_refusal(&not_found, not_found.to_string());
+        }
+        // Under `t_fillet` the face search is the last reading of the
+        // frame: its rule refused, in the class the top's search gave.
+        let reason = format!("{not_found}; nor does a web's side face stand on the nearest plane: {why}");
+        PlanError { gate: background_refusal(&not_found, String::new()).gate, ..PlanError::by(why.rule(), reason) }
     })?;
     let layers = format!(
         "no web's top is in view; a side face of {} points stands on the nearest plane ({:.0} mm² in {} piece(s)), \

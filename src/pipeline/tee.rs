@@ -25,6 +25,7 @@ use super::context::{Context, EdgeFigures, PlannedWeld};
 use super::fillet::{self, Root, RootEvidence, TeeView, Web};
 use super::trace::TracedWeld;
 use super::{PlanError, SeamAssessment, SeamCoverage, Stage, Unplanned, boundary, quality, trajectory};
+use crate::rules::refit::TEE_NO_ROOT_SEEN;
 
 /// Where the flange lies: either side of the web (a tee), or on one side
 /// only (an inside corner, the web standing at the flange's end).
@@ -91,7 +92,11 @@ pub(super) fn plan(
     }
     for root in &roots {
         match root {
-            Ok(r) => tracing::debug!(
+            Ok(r) => {
+                for rule in &r.ends_set_by {
+                    tracing::debug!(rule = rule.id, side = ?r.side, "the fillet root's ends moved or cut");
+                }
+                tracing::debug!(
                 side = ?r.side,
                 face_points = r.face_points,
                 face_rms_mm = r.face_rms_mm,
@@ -99,8 +104,9 @@ pub(super) fn plan(
                 from_mm = r.line.s_min,
                 to_mm = r.line.s_max,
                 "fillet root"
-            ),
-            Err(not) => tracing::debug!(side = ?not.side, "{}", not.reason),
+                )
+            }
+            Err(not) => tracing::debug!(rule = not.rule.id, side = ?not.side, "{}", not.reason),
         }
     }
     ctx.clock.lap(Stage::Refit)?;
@@ -116,7 +122,7 @@ pub(super) fn plan(
                 unplanned.push(Unplanned {
                     joint: Some(JointType::TFillet),
                     near_camera: Some(not.near_camera),
-                    reason: PlanError::at(Stage::Refit, not.reason),
+                    reason: PlanError::by(not.rule, not.reason),
                 });
                 continue;
             }
@@ -174,7 +180,7 @@ pub(super) fn plan(
         let gated = unplanned.iter().find(|u| u.reason.gate.is_some()).map(|u| u.reason.clone());
         return Err(gated.unwrap_or_else(|| {
             let why: Vec<&str> = unplanned.iter().map(|u| u.reason.reason.as_str()).collect();
-            PlanError::at(Stage::Refit, format!("no fillet root of the tee joint is seen: {}", why.join("; ")))
+            PlanError::by(&TEE_NO_ROOT_SEEN, format!("no fillet root of the tee joint is seen: {}", why.join("; ")))
         }));
     }
 

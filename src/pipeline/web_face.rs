@@ -33,7 +33,11 @@ use crate::geometry::fit::Plane;
 use crate::geometry::{Vec3, extent, plane_axes};
 
 use super::background::PlaneCluster;
-use super::fillet::{self, MIN_FACE_POINTS, MIN_FACE_VIEW_DEG};
+use super::fillet::{self, MIN_FACE_POINTS, MIN_FACE_VIEW_DEG, NotRead};
+use crate::rules::background::{
+    TEE_FACE_FOOT_ABOVE_FLANGE, TEE_NO_FACE_STANDS_ON_FLANGE, TEE_NOTHING_STANDS_ON_FLANGE, TEE_STANDING_FACE_TOO_LOW,
+    TEE_STANDING_FACE_TOO_SPARSE,
+};
 
 /// How far a face may lean from standing square on the flange and still
 /// be searched for, degrees: wide enough for any web the quality gate
@@ -110,10 +114,10 @@ pub struct FaceSearch {
 }
 
 /// The web's side face standing on the flange made of `flange_pieces`, or
-/// why none is seen.
-pub fn find(cloud: &PointCloud, flange_pieces: &[&PlaneCluster], s: &FaceSearch) -> Result<StandingFace, String> {
-    let (flange, flange_points) =
-        fillet::flange_plane(cloud, flange_pieces).ok_or_else(|| "the flange's points span no plane".to_string())?;
+/// why none is seen (and the rule that decided it).
+pub fn find(cloud: &PointCloud, flange_pieces: &[&PlaneCluster], s: &FaceSearch) -> Result<StandingFace, NotRead> {
+    let (flange, flange_points) = fillet::flange_plane(cloud, flange_pieces)
+        .ok_or_else(|| NotRead::by(&TEE_NO_FACE_STANDS_ON_FLANGE, "the flange's points span no plane"))?;
     let n = flange.normal;
     let height = |p: &Vec3| flange.offset - n.dot(p);
     let spacing = s.point_spacing_mm;
@@ -127,26 +131,33 @@ pub fn find(cloud: &PointCloud, flange_pieces: &[&PlaneCluster], s: &FaceSearch)
         candidates = candidates.into_iter().step_by(stride).collect();
     }
     if candidates.len() < MIN_FACE_POINTS {
-        return Err(format!(
-            "nothing in view stands on the flange: {} points lie {margin:.1} to {:.0} mm over it, fewer than \
+        return Err(NotRead::by(
+            &TEE_NOTHING_STANDS_ON_FLANGE,
+            format!(
+                "nothing in view stands on the flange: {} points lie {margin:.1} to {:.0} mm over it, fewer than \
              {MIN_FACE_POINTS} (a web's face turned edge-on to the camera returns none, and with the web's top out \
              of view nothing else shows where its root is)",
-            candidates.len(),
-            s.web_height_max_mm
+                candidates.len(),
+                s.web_height_max_mm
+            ),
         ));
     }
     let tolerance = s.on_plane_mm.max(FACE_TOLERANCE_SPACINGS * spacing);
     let plane = best_steep_plane(&candidates, &n, tolerance).ok_or_else(|| {
-        format!(
-            "the {} points over the flange lie on no face standing within {MAX_FACE_LEAN_DEG}° of square on it \
+        NotRead::by(
+            &TEE_NO_FACE_STANDS_ON_FLANGE,
+            format!(
+                "the {} points over the flange lie on no face standing within {MAX_FACE_LEAN_DEG}° of square on it \
              and turned {MIN_FACE_VIEW_DEG}° or more towards the camera",
-            candidates.len()
+                candidates.len()
+            ),
         )
     })?;
     let on_face: Vec<Vec3> =
         candidates.iter().copied().filter(|p| plane.signed_distance(p).abs() <= tolerance).collect();
-    let fit = fillet::fit_face(&on_face, s.trim_sigma)
-        .ok_or_else(|| "the points on the face standing on the flange span no plane".to_string())?;
+    let fit = fillet::fit_face(&on_face, s.trim_sigma).ok_or_else(|| {
+        NotRead::by(&TEE_NO_FACE_STANDS_ON_FLANGE, "the points on the face standing on the flange span no plane")
+    })?;
     // Out of the web: towards the camera, which sees this face.
     let normal = if fit.plane.normal.dot(&fit.centroid) <= 0.0 { fit.plane.normal } else { -fit.plane.normal };
     let face = Plane { normal, offset: normal.dot(&fit.centroid) };
@@ -154,19 +165,25 @@ pub fn find(cloud: &PointCloud, flange_pieces: &[&PlaneCluster], s: &FaceSearch)
     // on the veil of mixed returns if that is most of what stands there.
     let view_deg = normal.dot(&(-fit.centroid).normalize()).clamp(-1.0, 1.0).asin().to_degrees();
     if view_deg < MIN_FACE_VIEW_DEG {
-        return Err(format!(
-            "the {} points standing on the flange lie along the camera's rays ({view_deg:.1}° from them, below \
+        return Err(NotRead::by(
+            &TEE_NO_FACE_STANDS_ON_FLANGE,
+            format!(
+                "the {} points standing on the flange lie along the camera's rays ({view_deg:.1}° from them, below \
              {MIN_FACE_VIEW_DEG}°): mixed returns at a depth jump, not a web's face",
-            fit.inliers.len()
+                fit.inliers.len()
+            ),
         ));
     }
     let (lowest, highest) = extent(fit.inliers.iter().map(height));
     let foot_reach = margin + FOOT_REACH_SPACINGS * spacing;
     if lowest > foot_reach {
-        return Err(format!(
-            "the face over the flange ({} points) is seen no lower than {lowest:.1} mm over it, above {foot_reach:.1} \
+        return Err(NotRead::by(
+            &TEE_FACE_FOOT_ABOVE_FLANGE,
+            format!(
+                "the face over the flange ({} points) is seen no lower than {lowest:.1} mm over it, above {foot_reach:.1} \
              mm: it stands over the flange, not on it",
-            fit.inliers.len()
+                fit.inliers.len()
+            ),
         ));
     }
     let along_root = n.cross(&normal);
@@ -174,18 +191,24 @@ pub fn find(cloud: &PointCloud, flange_pieces: &[&PlaneCluster], s: &FaceSearch)
     let spanned_mm2 = (last - first) * (highest - lowest);
     let fill = fit.inliers.len() as f64 * spacing * spacing / spanned_mm2.max(f64::MIN_POSITIVE);
     if fill < MIN_FACE_FILL {
-        return Err(format!(
-            "the {} points on a plane standing on the flange are strewn over {spanned_mm2:.0} mm² ({fill:.3} per \
+        return Err(NotRead::by(
+            &TEE_STANDING_FACE_TOO_SPARSE,
+            format!(
+                "the {} points on a plane standing on the flange are strewn over {spanned_mm2:.0} mm² ({fill:.3} per \
              square point spacing, below {MIN_FACE_FILL}): stray returns, not a face",
-            fit.inliers.len()
+                fit.inliers.len()
+            ),
         ));
     }
     let least_height = MIN_FACE_HEIGHT_SPACINGS * spacing;
     if highest < least_height {
-        return Err(format!(
-            "the face on the flange ({} points) is seen only {highest:.1} mm tall, below {least_height:.1} mm \
+        return Err(NotRead::by(
+            &TEE_STANDING_FACE_TOO_LOW,
+            format!(
+                "the face on the flange ({} points) is seen only {highest:.1} mm tall, below {least_height:.1} mm \
              ({MIN_FACE_HEIGHT_SPACINGS} point spacings of {spacing:.2} mm): a plate's edge or noise, not a web",
-            fit.inliers.len()
+                fit.inliers.len()
+            ),
         ));
     }
     Ok(StandingFace { plane: face, centroid: fit.centroid, flange, points: fit.inliers.len(), seen_height_mm: highest })
@@ -270,7 +293,7 @@ mod tests {
             .collect()
     }
 
-    fn search(points: &[Vec3]) -> Result<StandingFace, String> {
+    fn search(points: &[Vec3]) -> Result<StandingFace, NotRead> {
         let cloud = PointCloud::unorganized(points.iter().map(|p| [p.x as f32, p.y as f32, p.z as f32]).collect());
         let piece = PlaneCluster::of_points(points, |p| p.z == 700.0);
         let settings =
@@ -302,17 +325,20 @@ mod tests {
     #[test]
     fn a_flange_with_nothing_standing_on_it_or_a_face_too_low_or_over_it_gives_no_face() {
         let err = search(&flange()).unwrap_err();
-        assert!(err.contains("nothing in view stands on the flange"), "{err}");
+        assert_eq!(err.rule().id, "tee.nothing_stands_on_flange", "{err}");
+        assert!(err.reason.contains("nothing in view stands on the flange"), "{err}");
         // A plate's edge 6 mm tall: below ten spacings.
         let mut low = flange();
         low.extend(face(1.0, 6.0));
         let err = search(&low).unwrap_err();
-        assert!(err.contains("seen only 6.0 mm tall"), "{err}");
+        assert_eq!(err.rule().id, "tee.standing_face_too_low", "{err}");
+        assert!(err.reason.contains("seen only 6.0 mm tall"), "{err}");
         // A face from 12 to 40 mm over the flange: something held over it.
         let mut hovering = flange();
         hovering.extend(face(12.0, 40.0));
         let err = search(&hovering).unwrap_err();
-        assert!(err.contains("not on it"), "{err}");
+        assert_eq!(err.rule().id, "tee.face_foot_above_flange", "{err}");
+        assert!(err.reason.contains("not on it"), "{err}");
     }
 
     #[test]
@@ -322,7 +348,8 @@ mod tests {
         let mut points = flange();
         points.extend((0..40).map(|k| Vec3::new(FACE_X, -50.0 + 2.5 * k as f64, 699.0 - (k % 2) as f64 * 25.0)));
         let err = search(&points).unwrap_err();
-        assert!(err.contains("stray returns, not a face"), "{err}");
+        assert_eq!(err.rule().id, "tee.standing_face_too_sparse", "{err}");
+        assert!(err.reason.contains("stray returns, not a face"), "{err}");
     }
 
     #[test]
@@ -334,6 +361,7 @@ mod tests {
             }
         }
         let err = search(&points).unwrap_err();
-        assert!(err.contains("no face standing") || err.contains("along the camera's rays"), "{err}");
+        // Every plane through three of them lies along the rays.
+        assert_eq!(err.rule().id, "tee.no_face_stands_on_flange", "{err}");
     }
 }

@@ -4,4 +4,351 @@
 use super::{Effect, Gate, Parameter, Rule, Source, Stage};
 
 /// The stage's rules, in the order they apply.
-pub(super) static RULES: &[&Rule] = &[];
+pub(super) static RULES: &[&Rule] = &[
+    &TEE_WEB_NOT_OVER_FLANGE,
+    &TEE_ROOT_HIDDEN_BY_WEB,
+    &TEE_SIDE_FACE_IS_WEB_END,
+    &TEE_SIDE_FACE_ALONG_CAMERA_RAYS,
+    &TEE_FLANGE_EDGE_AT_SHADOW,
+    &TEE_FLANGE_EDGE_PAST_WEB_TOP,
+    &TEE_ROOT_NOT_SEEN,
+    &TEE_ROOT_LONGEST_SEEN_RUN,
+    &TEE_ROOT_ENDS_AT_IMAGE_BORDER,
+    &TEE_ROOT_RUNS_PAST_CUT_FOOT,
+    &TEE_SHORT_FACE_GIVES_WAY_TO_FLANGE_EDGE,
+    &TEE_FLANGE_EDGE_READ_ALONG_ITSELF,
+    &TEE_FLANGE_EDGE_ENDS_WITH_WEB_TOP,
+    &TEE_NO_ROOT_SEEN,
+];
+
+// The tee's roots (src/pipeline/fillet/ and src/pipeline/tee.rs): each
+// root is read where the web's side face meets the flange, or from the
+// flange's edge against the web; a root not read is named beside those
+// planned, and a tee with none planned is refused.
+
+const FILLET: &str = "src/pipeline/fillet/mod.rs";
+const FILLET_FACE: &str = "src/pipeline/fillet/face.rs";
+const FILLET_EDGE: &str = "src/pipeline/fillet/flange_edge.rs";
+const FILLET_STRETCH: &str = "src/pipeline/fillet/stretch.rs";
+
+const MIN_FACE_POINTS: Parameter = Parameter {
+    name: "MIN_FACE_POINTS",
+    unit: "",
+    meaning: "fewest points that make a face, or a flange seen on one side of the web",
+    source: Source::Constant { file: FILLET, name: "MIN_FACE_POINTS" },
+};
+
+const STATION_SPACINGS: Parameter = Parameter {
+    name: "STATION_SPACINGS",
+    unit: "point spacings",
+    meaning: "length of a station along the root",
+    source: Source::Constant { file: FILLET_STRETCH, name: "STATION_SPACINGS" },
+};
+
+const JOINT_BREAK_SPACINGS: Parameter = Parameter {
+    name: "JOINT_BREAK_SPACINGS",
+    unit: "point spacings",
+    meaning: "longest break along the root bridged as the same root",
+    source: Source::Constant { file: "src/pipeline/boundary.rs", name: "JOINT_BREAK_SPACINGS" },
+};
+
+const BORDER_REACH_SPACINGS: Parameter = Parameter {
+    name: "BORDER_REACH_SPACINGS",
+    unit: "point spacings",
+    meaning: "evidence this near the image's border reaches it",
+    source: Source::Constant { file: "src/pipeline/view_border.rs", name: "BORDER_REACH_SPACINGS" },
+};
+
+const MAX_JOINT_BEYOND_SEAM_MM: Parameter = Parameter {
+    name: "max_joint_beyond_seam_mm",
+    unit: "mm",
+    meaning: "how far the joint may be seen past the root's ends",
+    source: Source::Config("quality.max_joint_beyond_seam_mm"),
+};
+
+pub static TEE_WEB_NOT_OVER_FLANGE: Rule = Rule {
+    id: "tee.web_not_over_flange",
+    stage: Stage::Refit,
+    effect: Effect::LeavesUnplanned,
+    gate: None,
+    summary: "the web's top stands over the flange's plane, along a direction the flange's plane holds",
+    reason: "A fillet root lies where a web standing on a flange meets it, and is read in the web's frame: the \
+             flange's normal, the web's long axis laid in the flange's plane and the direction across it. \
+             Where the flange's points span no plane, the web's top runs along the flange's normal, its points \
+             are too few to place its edges, or it lies on the far side of the flange from the camera, no web \
+             stands on that flange, and no root is read on either side.",
+    parameters: &[],
+    fires: &["src/pipeline/fillet/tests.rs::a_web_top_under_the_flange_gives_no_root"],
+    holds: &["src/pipeline/fillet/tests.rs::the_root_is_where_the_face_meets_the_flange_and_runs_where_both_are_seen"],
+};
+
+pub static TEE_ROOT_HIDDEN_BY_WEB: Rule = Rule {
+    id: "tee.root_hidden_by_web",
+    stage: Stage::Refit,
+    effect: Effect::LeavesUnplanned,
+    gate: None,
+    summary: "a root is read only on a side of the web the camera sees: the flange seen beside the web there, and, \
+              with the web's top out of view, the side of the face seen",
+    reason: "A web stands steeply on its flange, so from one viewpoint it hides its far face and the flange \
+             beside it, from the camera or from the projector. Where fewer than a face's worth of flange points \
+             lie beyond the web's edge on one side, nothing shows where that root is. Where the web's top is out \
+             of view (a crop round one root), the one side face seen places the web; the other face, behind it, \
+             is neither seen nor placed. Such a root is named as not planned, never invented.",
+    parameters: &[MIN_FACE_POINTS],
+    fires: &[
+        "src/pipeline/fillet/tests.rs::a_web_seen_by_one_face_only_gives_that_face_s_root_and_names_the_other",
+        "src/pipeline/fillet/tests.rs::a_flange_seen_on_one_side_only_gives_no_root_on_the_other",
+    ],
+    holds: &["src/pipeline/fillet/tests.rs::a_flange_in_one_piece_round_the_webs_end_is_seen_on_both_sides"],
+};
+
+pub static TEE_SIDE_FACE_IS_WEB_END: Rule = Rule {
+    id: "tee.side_face_is_web_end",
+    stage: Stage::Refit,
+    effect: Effect::LeavesUnplanned,
+    gate: None,
+    summary: "the points standing on one side of the web run along the web's top, as its side face does",
+    reason: "A web's side face runs the web's length, its foot along the top's long axis whether the web stands \
+             square or leans. Where the side face is turned edge-on to the camera it returns nothing, and what \
+             stands on that side of the web's middle may be the web's end face, across the web: its foot is a \
+             few millimetres of the web's thickness, not the root. Points whose foot turns further from the \
+             top's long axis than the axis's own uncertainty and a lean allow are not the side face; the root \
+             is then read from the flange's edge, and left unplanned when that does not show it either.",
+    parameters: &[Parameter {
+        name: "MAX_ROOT_SKEW_DEG",
+        unit: "°",
+        meaning: "most a face's foot may turn from the web top's long axis",
+        source: Source::Constant { file: FILLET_FACE, name: "MAX_ROOT_SKEW_DEG" },
+    }],
+    fires: &["src/pipeline/fillet/tests.rs::the_webs_end_face_is_no_side_face_and_the_root_runs_to_the_webs_end"],
+    holds: &["src/pipeline/fillet/tests.rs::a_face_seen_higher_up_along_the_web_gives_its_root_all_along"],
+};
+
+pub static TEE_SIDE_FACE_ALONG_CAMERA_RAYS: Rule = Rule {
+    id: "tee.side_face_along_camera_rays",
+    stage: Stage::Refit,
+    effect: Effect::LeavesUnplanned,
+    gate: None,
+    summary: "the web's side face is turned towards the camera by more than a few degrees",
+    reason: "A structured-light camera samples a surface only where it is turned towards the camera's rays; a \
+             depth jump at the web's edge instead leaves a veil of mixed returns hanging along the rays, from \
+             the web's top down to whatever lies behind. Points between the flange and the web's top that lie \
+             along the rays are that veil, not the web's face, and their root would be invented. The root is \
+             then read from the flange's edge, and left unplanned when that does not show it either.",
+    parameters: &[Parameter {
+        name: "MIN_FACE_VIEW_DEG",
+        unit: "°",
+        meaning: "least angle between a face and the camera's ray to it",
+        source: Source::Constant { file: FILLET_FACE, name: "MIN_FACE_VIEW_DEG" },
+    }],
+    fires: &["src/pipeline/fillet/tests.rs::mixed_returns_along_the_rays_are_no_side_face"],
+    holds: &["src/pipeline/fillet/tests.rs::a_face_seen_higher_up_along_the_web_gives_its_root_all_along"],
+};
+
+pub static TEE_FLANGE_EDGE_AT_SHADOW: Rule = Rule {
+    id: "tee.flange_edge_at_shadow",
+    stage: Stage::Refit,
+    effect: Effect::LeavesUnplanned,
+    gate: None,
+    summary: "a root read from the flange's edge implies a face turned towards both the camera and the projector",
+    reason: "A face turned edge-on returns no points while its root is in plain view, and the flange's edge \
+             against the web then shows the root. A flange also ends at the edge of the web's shadow, from the \
+             camera or from the projector: there the face from the flange's edge up to the web top's edge holds \
+             the ray that grazes the top's edge, turned from the shadowing eye by nothing. Each edge's sampling \
+             may move that implied face by a spacing, so the root is taken only when the face is turned towards \
+             both eyes by more than a few spacings over the web's height; otherwise the edge may be a shadow's, \
+             and the root is not planned.",
+    parameters: &[Parameter {
+        name: "EDGE_VIEW_SPACINGS",
+        unit: "point spacings",
+        meaning: "how far, over the web's height, the implied face must turn towards both eyes",
+        source: Source::Constant { file: FILLET_EDGE, name: "EDGE_VIEW_SPACINGS" },
+    }],
+    fires: &[
+        "src/pipeline/fillet/tests.rs::a_face_edge_on_to_the_camera_gives_its_root_from_the_flange_edge_and_a_shadow_edge_gives_none",
+        "src/pipeline/fillet/tests.rs::a_flange_ending_at_the_projectors_shadow_gives_no_root",
+        "tests/several_seams.rs::an_edge_on_face_gives_its_root_from_the_flange_edge_and_a_shadow_edge_none",
+    ],
+    holds: &["src/pipeline/fillet/tests.rs::a_web_top_seen_all_along_the_root_covers_it_whatever_its_stations"],
+};
+
+pub static TEE_FLANGE_EDGE_PAST_WEB_TOP: Rule = Rule {
+    id: "tee.flange_edge_past_web_top",
+    stage: Stage::Refit,
+    effect: Effect::LeavesUnplanned,
+    gate: None,
+    summary: "a root read from the flange's edge runs no further past the web's top seen than the coverage gate \
+              allows, unless the image's border cut the top there",
+    reason: "The flange's edge runs on nearly straight past the web's end (the web's end hides the flange behind \
+             it a little more at each step), so a root read from it is clipped to where the web's top is seen. \
+             Where the edge runs on further than the coverage gate allows and neither the camera's pixel grid \
+             nor the cloud's rays show where the image ends, the web may end there or the image may have cut \
+             its top: the root's end cannot be told, and the root is not planned.",
+    parameters: &[MAX_JOINT_BEYOND_SEAM_MM],
+    fires: &["src/pipeline/fillet/tests.rs::a_flange_edge_running_past_the_web_top_with_no_border_gives_no_root"],
+    holds: &["src/pipeline/fillet/tests.rs::the_webs_end_face_is_no_side_face_and_the_root_runs_to_the_webs_end"],
+};
+
+pub static TEE_ROOT_NOT_SEEN: Rule = Rule {
+    id: "tee.root_not_seen",
+    stage: Stage::Refit,
+    effect: Effect::LeavesUnplanned,
+    gate: None,
+    summary: "a root is seen: the web's side face down to its foot and the flange up to it together somewhere \
+              along the root, or the flange's edge under the web top's edge",
+    reason: "A fillet root is the line where the web's side face meets the flange, and is read only where both \
+             are seen: the face's foot (its lowest band at each station along the root) and flange points a few \
+             spacings outward of the root, in the same station. A face turned edge-on returns nothing, and then \
+             the flange's edge against the web, seen at enough stations, stands in for it under the web top's \
+             edge. Where neither shows the root (the face too sparse to fit, seen nowhere down to the flange, the \
+             flange not seen up to it, or the edges seen at too few stations) the root is not planned.",
+    parameters: &[
+        MIN_FACE_POINTS,
+        STATION_SPACINGS,
+        Parameter {
+            name: "MIN_EDGE_STATIONS",
+            unit: "",
+            meaning: "fewest stations that make an edge's line",
+            source: Source::Constant { file: FILLET_EDGE, name: "MIN_EDGE_STATIONS" },
+        },
+        Parameter {
+            name: "FLANGE_REACH_SPACINGS",
+            unit: "point spacings",
+            meaning: "how far outward of the root a flange point shows the flange seen up to it",
+            source: Source::Constant { file: FILLET_FACE, name: "FLANGE_REACH_SPACINGS" },
+        },
+    ],
+    fires: &["src/pipeline/fillet/tests.rs::a_face_whose_flange_is_not_seen_up_to_it_gives_no_root"],
+    holds: &["src/pipeline/fillet/tests.rs::a_flange_in_one_piece_round_the_webs_end_is_seen_on_both_sides"],
+};
+
+pub static TEE_NO_ROOT_SEEN: Rule = Rule {
+    id: "tee.no_root_seen",
+    stage: Stage::Refit,
+    effect: Effect::Refuses,
+    gate: None,
+    summary: "at least one root of a tee (or of an inside corner) is read and passes the gates",
+    reason: "One view sees at most one root of a tee well, and sometimes none: the web hides its far side, its \
+             near face may be edge-on to the camera with its flange ending at a shadow. A tee with no root \
+             planned is refused, by the gate that refused a root seen where one did, else saying why each root \
+             was not read; nothing is welded on a guess.",
+    parameters: &[],
+    fires: &["tests/several_seams.rs::a_tee_whose_roots_are_not_seen_is_refused_saying_why"],
+    holds: &["tests/several_seams.rs::a_tee_s_seen_root_is_planned_within_the_fillet_bar_and_the_hidden_one_named"],
+};
+
+pub static TEE_ROOT_LONGEST_SEEN_RUN: Rule = Rule {
+    id: "tee.root_longest_seen_run",
+    stage: Stage::Refit,
+    effect: Effect::CutsSeam,
+    gate: None,
+    summary: "the root planned is the longest run of stations where it is seen, across short breaks",
+    reason: "A root is planned only where its evidence is seen together, station by station. A break no longer \
+             than a dropout or a narrow streak across the joint is bridged; beyond a longer one the root may \
+             not go on (the web ends, something stands on the flange), so only the longest run seen is planned \
+             and the rest is cut off, its share of the root reported for the coverage gate.",
+    parameters: &[STATION_SPACINGS, JOINT_BREAK_SPACINGS],
+    fires: &["src/pipeline/fillet/tests.rs::a_face_seen_past_a_long_break_gives_its_longest_run"],
+    holds: &["src/pipeline/fillet/tests.rs::the_run_seen_bridges_short_breaks_and_not_long_ones"],
+};
+
+pub static TEE_ROOT_ENDS_AT_IMAGE_BORDER: Rule = Rule {
+    id: "tee.root_ends_at_image_border",
+    stage: Stage::Refit,
+    effect: Effect::MovesEnd,
+    gate: None,
+    summary: "where a root's evidence runs up to the image's border, the root ends where the border crosses the \
+              root itself",
+    reason: "The face's foot and the flange beside the root lie a spacing or more off the root, so an image \
+             border crossing the root obliquely cuts them before or after it cuts the root. Where both run up \
+             to the border within the last station, the root's end is moved, by at most a station, to where \
+             the border crosses the root line; an end the evidence does not carry to the border stays where the \
+             evidence puts it.",
+    parameters: &[STATION_SPACINGS, BORDER_REACH_SPACINGS],
+    fires: &[
+        "src/pipeline/fillet/tests.rs::a_root_whose_evidence_reaches_the_image_border_ends_where_the_border_crosses_it",
+    ],
+    holds: &["src/pipeline/fillet/tests.rs::the_root_is_where_the_face_meets_the_flange_and_runs_where_both_are_seen"],
+};
+
+pub static TEE_ROOT_RUNS_PAST_CUT_FOOT: Rule = Rule {
+    id: "tee.root_runs_past_cut_foot",
+    stage: Stage::Refit,
+    effect: Effect::MovesEnd,
+    gate: None,
+    summary: "where the image's border, not the web, ends a face's foot seen well up the face, the root runs on \
+              along the flange seen up to it",
+    reason: "A face turned nearly edge-on is seen only well above the flange, and a tilted camera sees what \
+             stands higher further in: where the image's border crosses the web, that foot leaves the view \
+             before the root does. When the foot's last point lies at the border, the root runs on as far as \
+             the flange is seen up to it (across short breaks, short of any flange seen under where the web \
+             would stand), and never out of view.",
+    parameters: &[STATION_SPACINGS, JOINT_BREAK_SPACINGS, BORDER_REACH_SPACINGS],
+    fires: &["src/pipeline/fillet/tests.rs::a_root_runs_to_the_image_border_past_where_the_border_cuts_its_face"],
+    holds: &["src/pipeline/fillet/tests.rs::a_face_seen_higher_up_along_the_web_gives_its_root_all_along"],
+};
+
+pub static TEE_SHORT_FACE_GIVES_WAY_TO_FLANGE_EDGE: Rule = Rule {
+    id: "tee.short_face_gives_way_to_flange_edge",
+    stage: Stage::Refit,
+    effect: Effect::MovesEnd,
+    gate: None,
+    summary: "a root read from a face seen along part of the web gives way to the flange's edge where that shows \
+              a longer root",
+    reason: "A face turned nearly edge-on returns points along part of the web only (where a gap lets the camera \
+             see it, or where it turns a little less), and its root, read over that stretch, stops short of a \
+             joint that goes on. Where the face's root runs less than half the web's top, or the web's top and \
+             the flange up to the root are seen past its ends further than the coverage gate allows, the \
+             flange's edge beside the same face is read, and its root taken when it is the longer.",
+    parameters: &[
+        Parameter {
+            name: "MIN_FACE_RUN_SHARE",
+            unit: "",
+            meaning: "least share of the web top's length a face's root must run",
+            source: Source::Constant { file: FILLET, name: "MIN_FACE_RUN_SHARE" },
+        },
+        MAX_JOINT_BEYOND_SEAM_MM,
+    ],
+    fires: &["src/pipeline/fillet/tests.rs::a_face_seen_along_part_of_the_web_gives_way_to_the_flanges_edge"],
+    holds: &["src/pipeline/fillet/tests.rs::a_face_seen_higher_up_along_the_web_gives_its_root_all_along"],
+};
+
+pub static TEE_FLANGE_EDGE_READ_ALONG_ITSELF: Rule = Rule {
+    id: "tee.flange_edge_read_along_itself",
+    stage: Stage::Refit,
+    effect: Effect::MovesEnd,
+    gate: None,
+    summary: "a flange's edge turned from the web's axis by more than a degree is read again along its own line",
+    reason: "The web's long axis comes from its top's spread, and lies off the web where the image's border cuts \
+             the top obliquely. The flange's edge, looked for outward of the web's middle line along that axis, \
+             then runs into the search's bound before the web ends, and the root would stop short. An edge \
+             turned from the axis by more than a degree (a spacing every few centimetres) is read again in the \
+             web's frame turned along the edge.",
+    parameters: &[Parameter {
+        name: "MAX_AXIS_TURN_DEG",
+        unit: "°",
+        meaning: "most the flange's edge may turn from the web's axis before it is read along itself",
+        source: Source::Constant { file: FILLET_EDGE, name: "MAX_AXIS_TURN_DEG" },
+    }],
+    fires: &["src/pipeline/fillet/tests.rs::a_web_axis_off_the_web_is_read_again_along_the_flange_s_edge"],
+    holds: &[
+        "src/pipeline/fillet/tests.rs::a_face_edge_on_to_the_camera_gives_its_root_from_the_flange_edge_and_a_shadow_edge_gives_none",
+    ],
+};
+
+pub static TEE_FLANGE_EDGE_ENDS_WITH_WEB_TOP: Rule = Rule {
+    id: "tee.flange_edge_ends_with_web_top",
+    stage: Stage::Refit,
+    effect: Effect::CutsSeam,
+    gate: None,
+    summary: "a root read from the flange's edge ends where the web's top is seen, unless the image's border cut \
+              the top there",
+    reason: "Past the web's end the flange's edge runs on nearly straight, the web's end hiding the flange \
+             behind it a little more at each step, so the edge alone does not show where the web ends: the root \
+             is cut where the web's top ends. Where the image's border (the camera's grid, or the cloud's rays) \
+             cut the top instead, the top, nearer the camera, left the image before the root did, and the root \
+             runs on where the flange's edge does.",
+    parameters: &[STATION_SPACINGS, BORDER_REACH_SPACINGS],
+    fires: &["src/pipeline/fillet/tests.rs::the_webs_end_face_is_no_side_face_and_the_root_runs_to_the_webs_end"],
+    holds: &["src/pipeline/fillet/tests.rs::a_web_axis_off_the_web_is_read_again_along_the_flange_s_edge"],
+};

@@ -1,0 +1,335 @@
+//! A root from the web's side face: the points between the flange and the
+//! web's top on one side of the web, fitted to a plane (outliers trimmed),
+//! checked to be a side face seen (its foot along the web, turned towards
+//! the camera), met with the flange, and the stretch along the root where
+//! the face's foot and the flange up to it are both seen; with the face
+//! fit's prediction error at the root's ends as its uncertainty.
+
+use std::collections::HashMap;
+
+use crate::geometry::fit::{Moments, Plane};
+use crate::geometry::{Vec3, vec3};
+
+use super::super::refit::{SeamAxes, SeamCurve};
+use super::frame::{WebFrame, height_margin, valid_points};
+use super::stretch::{STATION_SPACINGS, ends_at_border, ends_past_cut_foot, joint_beyond_run, seen_run};
+use super::{MIN_FACE_POINTS, NotRead, Root, RootEvidence, Side, TeeView, Web};
+use crate::rules::Rule;
+use crate::rules::refit::{
+    TEE_ROOT_ENDS_AT_IMAGE_BORDER, TEE_ROOT_LONGEST_SEEN_RUN, TEE_ROOT_NOT_SEEN, TEE_ROOT_RUNS_PAST_CUT_FOOT,
+    TEE_SIDE_FACE_ALONG_CAMERA_RAYS, TEE_SIDE_FACE_IS_WEB_END,
+};
+
+/// The face's foot: its points up to this many spacings above the lowest
+/// face point of their station along the root.
+const FOOT_BAND_SPACINGS: f64 = 10.0;
+
+/// The flange seen up to the root: a flange point within this many
+/// spacings outward of the root line.
+pub(super) const FLANGE_REACH_SPACINGS: f64 = 6.0;
+
+/// The least angle, degrees, between a face and the camera's ray to it: a
+/// face turned further from the camera is not seen at all (or only as
+/// noise), and points lying along the rays are the mixed returns a depth
+/// jump leaves at the web's edge (a veil from its top down to whatever
+/// lies behind), not a face.
+pub const MIN_FACE_VIEW_DEG: f64 = 5.0;
+
+/// The most a face's foot may turn from the web top's long axis, degrees,
+/// and still be the web's side face. A side face runs along the top
+/// (square or leaning, the two share the web's length); the web's end
+/// face stands at 90° to it. The top's long axis, from the spread of a
+/// top many times longer than wide, is good to a degree or two.
+const MAX_ROOT_SKEW_DEG: f64 = 20.0;
+
+/// Refits of the face after trimming its outliers.
+pub(super) const FACE_REFITS: usize = 4;
+
+/// The root where the web's side face, fitted to its points, meets the
+/// flange, or why the face gives none.
+pub(super) fn root_from_face(view: &TeeView, frame: &WebFrame, sign: f64, side: Side) -> Result<Root, NotRead> {
+    let spacing = view.point_spacing_mm;
+    let margin = height_margin(view.on_plane_mm, spacing);
+    let ((inner, reach), h_hi) = frame.face_band(view, sign, margin);
+    let face_points: Vec<Vec3> = valid_points(view.cloud)
+        .filter(|p| {
+            let h = frame.height_of(p);
+            let off = sign * (frame.across(p) - frame.middle);
+            (margin..=h_hi).contains(&h) && (inner..=reach).contains(&off)
+        })
+        .collect();
+    let hidden = if side == Side::Far { ", hidden by the web" } else { "" };
+    if face_points.len() < MIN_FACE_POINTS {
+        return Err(NotRead::by(
+            &TEE_ROOT_NOT_SEEN,
+            format!(
+                "the web's side face there is not seen{hidden} ({} points between the flange and the web's top, \
+             fewer than {MIN_FACE_POINTS})",
+                face_points.len()
+            ),
+        ));
+    }
+    let Some(face) = fit_face(&face_points, view.trim_sigma) else {
+        return Err(NotRead::by(&TEE_ROOT_NOT_SEEN, "the points on the web's side face span no plane"));
+    };
+    // A side face runs the web's length. Where the side face is turned
+    // edge-on and returns nothing, the points between the flange and the
+    // web's top on this side can be the web's end face, standing across
+    // the web: its "root" would be a few millimetres of the web's
+    // thickness. (A face lying parallel to the flange is refused below.)
+    let foot_line = frame.n.cross(&face.plane.normal).try_normalize(1e-6);
+    if let (None, Some(foot_line)) = (frame.face_only, foot_line) {
+        let skew_deg = foot_line.dot(&frame.e).abs().clamp(0.0, 1.0).acos().to_degrees();
+        if skew_deg > MAX_ROOT_SKEW_DEG {
+            return Err(NotRead::by(
+                &TEE_SIDE_FACE_IS_WEB_END,
+                format!(
+                    "the {} points between the flange and the web's top stand across the web (their foot \
+                 {skew_deg:.0}° from the top's long axis, over {MAX_ROOT_SKEW_DEG}°): the web's end, not its \
+                 side face{hidden}",
+                    face.inliers.len()
+                ),
+            ));
+        }
+    }
+    // The face's normal out of the web, towards this side.
+    let m = if face.plane.normal.dot(&frame.u) * sign >= 0.0 { face.plane.normal } else { -face.plane.normal };
+    let d_m = m.dot(&face.centroid);
+    let view_deg = m.dot(&(-face.centroid).normalize()).clamp(-1.0, 1.0).asin().to_degrees();
+    if view_deg < MIN_FACE_VIEW_DEG {
+        return Err(NotRead::by(
+            &TEE_SIDE_FACE_ALONG_CAMERA_RAYS,
+            format!(
+                "the {} points between the flange and the web's top lie along the camera's rays ({view_deg:.1}° from \
+             them, below {MIN_FACE_VIEW_DEG}°): mixed returns at the web's edge, not its side face{hidden}",
+                face.inliers.len()
+            ),
+        ));
+    }
+    let n = frame.n;
+    let Some(r) = n.cross(&m).try_normalize(1e-6) else {
+        return Err(NotRead::by(
+            &TEE_ROOT_NOT_SEEN,
+            "the points between the flange and the web's top lie parallel to the flange",
+        ));
+    };
+    let r = if r.dot(&frame.e) >= 0.0 { r } else { -r };
+    // The point on both planes nearest the web's origin.
+    let o = frame.origin;
+    let nm = n.dot(&m);
+    let det = 1.0 - nm * nm;
+    let (rn, rm) = (frame.flange_offset - n.dot(&o), d_m - m.dot(&o));
+    let p0 = o + n * ((rn - nm * rm) / det) + m * ((rm - nm * rn) / det);
+    // Across the root in the flange, away from the web.
+    let w = {
+        let w = r.cross(&n);
+        if w.dot(&m) >= 0.0 { w } else { -w }
+    };
+    // Up the face from the root.
+    let up = {
+        let v = r.cross(&m);
+        if v.dot(&n) <= 0.0 { v } else { -v }
+    };
+    let web_angle_deg = up.dot(&w).clamp(-1.0, 1.0).acos().to_degrees();
+
+    // The evidence along the root: the face's foot and the flange up to it.
+    let along = |p: &Vec3| (p - p0).dot(&r);
+    let foot_points = station_feet(&face.inliers, along, |p| frame.height_of(p), spacing);
+    let foot: Vec<f64> = foot_points.iter().map(along).collect();
+    // Outward of the face's own foot (which lies at the flange's height
+    // too, where the web overhangs the flange's end) by the same margin
+    // that keeps the flange out of the face.
+    let flange_reach = margin + FLANGE_REACH_SPACINGS * spacing;
+    // And the flange seen under where the web stands, inward of the root:
+    // past the web's end.
+    let web_width = 2.0 * frame.half_width;
+    let mut beside: Vec<Vec3> = Vec::new();
+    let mut under_web: Vec<f64> = Vec::new();
+    for p in valid_points(view.cloud).filter(|p| frame.height_of(p).abs() <= view.on_plane_mm) {
+        let out = (p - p0).dot(&w);
+        if (margin..=flange_reach).contains(&out) {
+            beside.push(p);
+        } else if (-web_width..=-margin).contains(&out) {
+            under_web.push(along(&p));
+        }
+    }
+    if foot.is_empty() {
+        return Err(NotRead::by(&TEE_ROOT_NOT_SEEN, "the web's side face is not seen down to the flange"));
+    }
+    if beside.is_empty() {
+        return Err(NotRead::by(
+            &TEE_ROOT_NOT_SEEN,
+            format!(
+                "the flange is not seen up to the web's face{}",
+                if side == Side::Far { " (the web hides it)" } else { " (in the web's shadow)" }
+            ),
+        ));
+    }
+    let flange_along: Vec<f64> = beside.iter().map(along).collect();
+    let Some(run) = seen_run(&foot, &flange_along, spacing) else {
+        return Err(NotRead::by(
+            &TEE_ROOT_NOT_SEEN,
+            "the web's face and the flange up to it are not seen together anywhere along the root",
+        ));
+    };
+    let mut ends_set_by: Vec<&'static Rule> = Vec::new();
+    if run.cut {
+        ends_set_by.push(&TEE_ROOT_LONGEST_SEEN_RUN);
+    }
+    let evidence_ends = (run.s0, run.s1);
+    let run = match view.border {
+        Some(border) => ends_at_border(border, &p0, &r, run, [&foot_points, &beside], spacing),
+        None => run,
+    };
+    if (run.s0, run.s1) != evidence_ends {
+        ends_set_by.push(&TEE_ROOT_ENDS_AT_IMAGE_BORDER);
+    }
+    let border_ends = (run.s0, run.s1);
+    let run = ends_past_cut_foot(view, &p0, &r, run, &foot_points, &beside, &under_web, spacing);
+    if (run.s0, run.s1) != border_ends {
+        ends_set_by.push(&TEE_ROOT_RUNS_PAST_CUT_FOOT);
+    }
+    // Where the web's top stands over the root and the flange is seen up
+    // to it beyond the stretch, the joint goes on though the face's foot
+    // is not seen there (turned nearly edge-on, or covered): the quality
+    // gate refuses a root stopping short of it.
+    let joint_beyond_ends_mm = match view.web {
+        Web::Top(top) => {
+            let points = view.cloud.points();
+            let top_along: Vec<f64> = top.members.iter().map(|&i| along(&vec3(&points[i as usize]))).collect();
+            Some(joint_beyond_run(&top_along, &flange_along, (run.s0, run.s1), spacing))
+        }
+        Web::Face(_) => None,
+    };
+    // The flange near the root: its points beside the run, against the
+    // plane of all its pieces.
+    let near_flange: Vec<&Vec3> = beside.iter().filter(|p| (run.s0..=run.s1).contains(&along(p))).collect();
+    let flange_plane = Plane { normal: n, offset: frame.flange_offset };
+    let flange_rms_mm = rms(near_flange.iter().map(|p| flange_plane.signed_distance(p)));
+
+    // The face fit's prediction error at the root's ends (h = 0).
+    let stats = FaceSpread::of(&face.inliers, |p| frame.height_of(p), along);
+    let floor = spacing / 12f64.sqrt();
+    let at_end = |t: f64| {
+        let n = face.inliers.len() as f64;
+        let lever = 1.0 / n + stats.mean_h.powi(2) / (n * stats.var_h) + (t - stats.mean_t).powi(2) / (n * stats.var_t);
+        face.rms_mm * lever.sqrt()
+    };
+    let face_sigma = at_end(run.s0).max(at_end(run.s1));
+    // Across: the face's offset error, seen through the web's angle to the
+    // flange; along the normal: the flange's (thousands of points) and the
+    // face's share where the web is not square.
+    let sin = web_angle_deg.to_radians().sin().max(0.1);
+    let uncertainty_across_mm = (face_sigma / sin).hypot(floor);
+    let uncertainty_normal_mm = (face_sigma * web_angle_deg.to_radians().cos().abs() / sin).hypot(floor);
+
+    let line = SeamCurve {
+        axes: SeamAxes { origin: p0, e: r, a: w, b: n },
+        coef_a: vec![0.0, 0.0],
+        coef_b: vec![0.0, 0.0],
+        s_min: run.s0,
+        s_max: run.s1,
+    };
+    Ok(Root {
+        side,
+        evidence: RootEvidence::Face,
+        sign,
+        line,
+        face: Plane { normal: m, offset: d_m },
+        face_rms_mm: face.rms_mm,
+        face_points: face.inliers.len(),
+        face_dropped: face.dropped,
+        flange: flange_plane,
+        flange_rms_mm,
+        flange_points: near_flange.len(),
+        web_angle_deg,
+        web_height_mm: frame.height,
+        coverage: run.coverage,
+        seen_share: run.share,
+        seen_mm: run.seen_mm,
+        joint_beyond_ends_mm,
+        uncertainty_across_mm,
+        uncertainty_normal_mm,
+        ends_set_by,
+    })
+}
+
+/// A plane fitted to a face's points, refitted without its outliers.
+#[derive(Debug, Clone)]
+pub(in crate::pipeline) struct FaceFit {
+    pub plane: Plane,
+    pub centroid: Vec3,
+    pub inliers: Vec<Vec3>,
+    pub rms_mm: f64,
+    pub dropped: usize,
+}
+
+/// Least squares (the scatter's least axis), then refits without the
+/// points further than `trim_sigma` residuals from the plane.
+pub(in crate::pipeline) fn fit_face(points: &[Vec3], trim_sigma: f64) -> Option<FaceFit> {
+    let mut inliers: Vec<Vec3> = points.to_vec();
+    let mut fit = None;
+    for _ in 0..=FACE_REFITS {
+        let moments: Moments = inliers.iter().collect();
+        let plane = moments.plane()?;
+        let centroid = moments.centroid()?;
+        let rms_mm = rms(inliers.iter().map(|p| plane.signed_distance(p)));
+        fit =
+            Some(FaceFit { plane, centroid, inliers: inliers.clone(), rms_mm, dropped: points.len() - inliers.len() });
+        let limit = trim_sigma * rms_mm;
+        let kept: Vec<Vec3> = points.iter().filter(|p| plane.signed_distance(p).abs() <= limit).copied().collect();
+        if kept.len() == inliers.len() || kept.len() < MIN_FACE_POINTS {
+            break;
+        }
+        inliers = kept;
+    }
+    fit
+}
+
+/// The face points' spread in height and along the root.
+struct FaceSpread {
+    mean_h: f64,
+    var_h: f64,
+    mean_t: f64,
+    var_t: f64,
+}
+
+impl FaceSpread {
+    fn of(points: &[Vec3], height: impl Fn(&Vec3) -> f64, along: impl Fn(&Vec3) -> f64) -> FaceSpread {
+        let n = points.len().max(1) as f64;
+        let (hs, ts): (Vec<f64>, Vec<f64>) = points.iter().map(|p| (height(p), along(p))).unzip();
+        let mean = |v: &[f64]| v.iter().sum::<f64>() / n;
+        let var = |v: &[f64], m: f64| (v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / n).max(f64::MIN_POSITIVE);
+        let (mean_h, mean_t) = (mean(&hs), mean(&ts));
+        FaceSpread { mean_h, var_h: var(&hs, mean_h), mean_t, var_t: var(&ts, mean_t) }
+    }
+}
+
+/// The face's foot at each station along the root (`along`, stations of
+/// [`STATION_SPACINGS`]): the face points up to [`FOOT_BAND_SPACINGS`]
+/// above the lowest face point of their own station. A face turned nearly
+/// edge-on to the camera or the projector returns points only where it is
+/// turned a little less, above a line slanting along the root (the angle
+/// of incidence changes along it): under the face's single lowest point
+/// the foot would hold part of the root only.
+fn station_feet(
+    points: &[Vec3],
+    along: impl Fn(&Vec3) -> f64,
+    height: impl Fn(&Vec3) -> f64,
+    spacing: f64,
+) -> Vec<Vec3> {
+    let width = STATION_SPACINGS * spacing;
+    let station = |p: &Vec3| (along(p) / width).floor() as i64;
+    let mut lowest: HashMap<i64, f64> = HashMap::new();
+    for p in points {
+        let h = height(p);
+        lowest.entry(station(p)).and_modify(|low| *low = low.min(h)).or_insert(h);
+    }
+    let band = FOOT_BAND_SPACINGS * spacing;
+    points.iter().copied().filter(|p| lowest.get(&station(p)).is_some_and(|&low| height(p) <= low + band)).collect()
+}
+
+pub(super) fn rms(values: impl Iterator<Item = f64>) -> f64 {
+    let (sum, n) = values.fold((0.0, 0usize), |(s, n), v| (s + v * v, n + 1));
+    if n == 0 { 0.0 } else { (sum / n as f64).sqrt() }
+}

@@ -37,9 +37,9 @@ use super::{Calibration, CalibrationError, Mount, SphereCapture, calibrate_named
 use crate::geometry::Vec3;
 
 /// A found sphere is named by a prediction within this many of the
-/// prediction's sigmas: a true ball lies further out once in 1.7 million
-/// captures (a normal tail); a ball of the rig lies tens of millimetres
-/// away.
+/// prediction's sigmas: a true ball with normal errors lies further out
+/// less than once in a million captures, while another ball of the rig
+/// lies tens of millimetres away.
 pub const PREDICTION_SIGMAS: f64 = 5.0;
 
 /// The widest tolerance the prediction names by, mm: the layout itself

@@ -83,6 +83,18 @@ pub struct CalibrationReport {
     /// be named, each with the reason.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub spheres_unnamed: Vec<UnnamedCapture>,
+    /// Sphere sets: the captures whose spheres the layout's distances (or
+    /// their radii) named.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub spheres_named_by_layout: Vec<usize>,
+    /// Sphere sets: the captures the layout could not name whose spheres
+    /// were named by where the first solution (on the captures the layout
+    /// named) predicts each ball, within `sphere_prediction_tolerance_mm`.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub spheres_named_by_prediction: Vec<usize>,
+    /// Sphere sets: the tolerance of that prediction, mm, when one was made.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sphere_prediction_tolerance_mm: Option<f64>,
     /// Sphere sets: the layout the spheres were named by (distances as in
     /// the capture file's `sphere_distances_mm`), when distances named them.
     #[serde(default, skip_serializing_if = "Option::is_none")]

@@ -37,6 +37,7 @@ pub mod closed_form;
 pub mod conditioning;
 pub mod gate;
 pub mod naming;
+pub mod prediction;
 pub mod refine;
 pub mod sphere;
 

@@ -17,7 +17,9 @@
 //! given radius (the centre of a cap seen from one side is pinned far
 //! better with the radius known), and kept only when its points cover a
 //! cap the way a ball seen from the camera does: a cap of at least
-//! [`MIN_CAP_HALF_ANGLE_DEG`], round ([`MIN_CAP_ROUNDNESS`]: a strip of a
+//! [`MIN_CAP_HALF_ANGLE_DEG`] (or, for a ball partly hidden whose fit holds
+//! its radius and surface more firmly, [`MIN_PARTIAL_CAP_HALF_ANGLE_DEG`]),
+//! round ([`MIN_CAP_ROUNDNESS`]: a strip of a
 //! cylinder is not), facing the camera ([`MAX_CAP_OFF_AXIS_DEG`]), its
 //! points' normals along the radius ([`MIN_NORMAL_AGREEMENT`]), the
 //! points close to the surface ([`MAX_RMS_OVER_BAND`]). A plane patch or a
@@ -74,6 +76,25 @@ pub const MAX_CANDIDATES_PER_RADIUS: usize = 16;
 /// 60 to 85 degrees; a patch of plane or post inside the shell is far
 /// smaller.
 pub const MIN_CAP_HALF_ANGLE_DEG: f64 = 25.0;
+
+/// A ball partly hidden (cut by the view's edge, or behind another ball)
+/// shows less of its cap: it is still accepted down to this half-angle,
+/// degrees, when the fit says more firmly than usual that it is a ball of
+/// the given radius: the radius it measures with the radius free within
+/// [`PARTIAL_CAP_FIT_FRACTION`] of the inlier band, and its points' RMS
+/// distance from the surface within that fraction too. On the simulated
+/// tooling-ball rig such balls' caps measure 25.0 and 29.6 degrees with the
+/// radius within 0.02 mm and an RMS of 0.03 mm or less, while a patch of
+/// table or post does not measure the ball's radius at all (kilometres, or
+/// 20 to 33 mm for a 19.05 mm ball); 20 degrees leaves a little room below
+/// the smallest seen, and the firmer fit makes up for the smaller cap's
+/// weaker hold on the radius.
+pub const MIN_PARTIAL_CAP_HALF_ANGLE_DEG: f64 = 20.0;
+
+/// See [`MIN_PARTIAL_CAP_HALF_ANGLE_DEG`]: a quarter of the band (0.1 mm
+/// for a 19.05 mm ball), half of what any cap is allowed
+/// ([`MAX_RMS_OVER_BAND`]).
+pub const PARTIAL_CAP_FIT_FRACTION: f64 = 0.25;
 
 /// The cap's axis (the mean direction of its points from the centre)
 /// must point within this of the camera, degrees.
@@ -359,7 +380,9 @@ fn check_candidate(
     if rms > MAX_RMS_OVER_BAND * band {
         return None;
     }
-    let cap_half_angle_deg = cap_shape(&on_surface, &centre)?;
+    let firm = (measured - radius).abs() <= PARTIAL_CAP_FIT_FRACTION * band && rms <= PARTIAL_CAP_FIT_FRACTION * band;
+    let min_half_angle = if firm { MIN_PARTIAL_CAP_HALF_ANGLE_DEG } else { MIN_CAP_HALF_ANGLE_DEG };
+    let cap_half_angle_deg = cap_shape(&on_surface, &centre, min_half_angle)?;
     let agreeing = normal_agreement(oriented, &centre, radius, band)?;
     (agreeing >= MIN_NORMAL_AGREEMENT).then_some(FittedSphere {
         centre,
@@ -372,10 +395,10 @@ fn check_candidate(
 }
 
 /// The cap's half-angle, degrees, when the points' directions from the
-/// centre cover a round cap facing the camera wide enough; `None`
-/// otherwise. For a cap of half-angle `a` evenly covered the mean of the
-/// unit directions is `(1 + cos a) / 2` long.
-fn cap_shape(on_surface: &[Vec3], centre: &Vec3) -> Option<f64> {
+/// centre cover a round cap facing the camera at least `min_half_angle`
+/// wide; `None` otherwise. For a cap of half-angle `a` evenly covered the
+/// mean of the unit directions is `(1 + cos a) / 2` long.
+fn cap_shape(on_surface: &[Vec3], centre: &Vec3, min_half_angle: f64) -> Option<f64> {
     let n = on_surface.len() as f64;
     let directions: Vec<Vec3> = on_surface.iter().map(|p| (p - centre).normalize()).collect();
     let mean = directions.iter().fold(Vec3::zeros(), |s, d| s + d) / n;
@@ -383,7 +406,7 @@ fn cap_shape(on_surface: &[Vec3], centre: &Vec3) -> Option<f64> {
     let half_angle = (2.0 * length - 1.0).clamp(-1.0, 1.0).acos().to_degrees();
     let axis = mean / length.max(1e-12);
     let off_axis = axis.dot(&(-centre).normalize()).clamp(-1.0, 1.0).acos().to_degrees();
-    if half_angle < MIN_CAP_HALF_ANGLE_DEG || off_axis > MAX_CAP_OFF_AXIS_DEG {
+    if half_angle < min_half_angle || off_axis > MAX_CAP_OFF_AXIS_DEG {
         return None;
     }
     // The directions' spread across the axis, in two directions.

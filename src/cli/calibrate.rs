@@ -14,11 +14,9 @@ use anyhow::{Context, Result, bail};
 use rayon::prelude::*;
 
 use weldseam::calibration::gate::{self, CalibrationRecord};
-use weldseam::calibration::naming::name_spheres;
+use weldseam::calibration::prediction::{SphereNaming, calibrate_fitted_spheres};
 use weldseam::calibration::sphere::fit_spheres;
-use weldseam::calibration::{
-    Calibration, MAX_CAPTURES, Mount, SphereCapture, calibrate_named_spheres, calibrate_targets,
-};
+use weldseam::calibration::{Calibration, MAX_CAPTURES, Mount, calibrate_targets};
 use weldseam::config::Config;
 use weldseam::convert::calibration::{Captures, captures, report, rows};
 use weldseam::geometry::conventions::PoseConvention;
@@ -66,8 +64,7 @@ pub struct CalibrateArgs {
 /// What the sphere search adds to the report.
 struct SphereSummary {
     found: Vec<usize>,
-    unnamed: Vec<(usize, String)>,
-    distances: Option<Vec<f64>>,
+    naming: SphereNaming,
 }
 
 pub fn run(args: &CalibrateArgs) -> Result<()> {
@@ -97,14 +94,15 @@ pub fn run(args: &CalibrateArgs) -> Result<()> {
         let mut r = report(&calibration, spheres.as_ref().map(|s| s.found.clone()));
         if let Some(s) = &spheres {
             r.spheres_unnamed = s
-                .unnamed
-                .iter()
-                .map(|(capture, reason)| weldseam_proto::calibration::UnnamedCapture {
-                    capture: *capture,
-                    reason: reason.clone(),
-                })
+                .naming
+                .left_out()
+                .into_iter()
+                .map(|(capture, reason)| weldseam_proto::calibration::UnnamedCapture { capture, reason })
                 .collect();
-            r.sphere_distances_mm = s.distances.clone();
+            r.spheres_named_by_layout = s.naming.named_by_layout();
+            r.spheres_named_by_prediction = s.naming.named_by_prediction();
+            r.sphere_prediction_tolerance_mm = s.naming.tolerance_mm;
+            r.sphere_distances_mm = s.naming.distances.clone();
         }
         r.gate = weldseam_proto::calibration::GateReport {
             passed: record.passed,
@@ -160,7 +158,8 @@ fn read_capture_file(path: &Path) -> Result<CaptureFile> {
 }
 
 /// Fits the spheres in every capture's cloud (in parallel), names them
-/// across captures, and solves.
+/// across captures (by the layout, then by the first solution's
+/// prediction), and solves.
 fn solve_spheres(
     dir: &Path,
     radii: &[f64],
@@ -198,14 +197,9 @@ fn solve_spheres(
         .into_iter()
         .collect::<Result<Vec<_>>>()?;
     let found: Vec<usize> = fitted.iter().map(Vec::len).collect();
-    let naming = name_spheres(&fitted, radii, distances)?;
-    let spheres: Vec<SphereCapture> = captures
-        .iter()
-        .zip(naming.centres)
-        .map(|((base_t_end, _), centres)| SphereCapture { base_t_end: *base_t_end, centres })
-        .collect();
-    let calibration = calibrate_named_spheres(&spheres, mount)?;
-    Ok((calibration, SphereSummary { found, unnamed: naming.unnamed, distances: naming.distances }))
+    let poses: Vec<nalgebra::Isometry3<f64>> = captures.iter().map(|(pose, _)| *pose).collect();
+    let (calibration, naming) = calibrate_fitted_spheres(&poses, &fitted, radii, distances, mount)?;
+    Ok((calibration, SphereSummary { found, naming }))
 }
 
 /// The report for a person.
@@ -274,11 +268,24 @@ fn readable(c: &Calibration, spheres: Option<&SphereSummary>, failures: &[String
         let _ = writeln!(s, "  {:>7}  {:>13.3}  {:>12}{spheres}{flag}", r.capture, r.translation_mm, rotation);
     }
     if let Some(summary) = spheres {
-        if let Some(d) = &summary.distances {
+        let naming = &summary.naming;
+        if let Some(d) = &naming.distances {
             let list: Vec<String> = d.iter().map(|v| format!("{v:.2}")).collect();
             let _ = writeln!(s, "spheres named by their distances: {} mm", list.join(", "));
         }
-        for (capture, reason) in &summary.unnamed {
+        let left_out = naming.left_out();
+        let _ = writeln!(
+            s,
+            "captures named: {} by the layout, {} by the first solution's prediction{}, {} left out",
+            naming.named_by_layout().len(),
+            naming.named_by_prediction().len(),
+            naming.tolerance_mm.map_or(String::new(), |t| format!(
+                " (each ball within {t:.2} mm of where it was predicted: {} sigmas)",
+                weldseam::calibration::prediction::PREDICTION_SIGMAS
+            )),
+            left_out.len()
+        );
+        for (capture, reason) in &left_out {
             let _ = writeln!(s, "capture {capture} left out: {reason}");
         }
     }

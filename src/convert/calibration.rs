@@ -146,6 +146,9 @@ pub fn report(c: &Calibration, spheres_found: Option<Vec<usize>>) -> proto::Cali
             .collect(),
         spheres_found,
         spheres_unnamed: Vec::new(),
+        spheres_named_by_layout: Vec::new(),
+        spheres_named_by_prediction: Vec::new(),
+        sphere_prediction_tolerance_mm: None,
         sphere_distances_mm: None,
         gate: proto::GateReport::default(),
     }

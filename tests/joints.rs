@@ -56,15 +56,20 @@ fn auto_names_each_joint_measures_the_groove_and_plans_it_within_the_bar() {
 #[test]
 fn the_wrong_joint_is_refused_for_what_the_frame_shows() {
     let planner = Planner::new(Config::default());
-    for (seen, asked, looks_like) in [
-        (JointType::VButt, JointType::IButt, "looks like a V-butt joint"),
-        (JointType::IButt, JointType::VButt, "looks like an I-butt joint"),
-        (JointType::Lap, JointType::VButt, "looks like a lap joint"),
-        (JointType::VButt, JointType::Lap, "no two layers"),
+    // The background stage's rules by id; the groove probe's by what its
+    // refusal says.
+    for (seen, asked, looks_like, rule) in [
+        (JointType::VButt, JointType::IButt, "looks like a V-butt joint", None),
+        (JointType::IButt, JointType::VButt, "looks like an I-butt joint", None),
+        (JointType::Lap, JointType::VButt, "", Some("joint.looks_like_lap")),
+        (JointType::VButt, JointType::Lap, "", Some("lap.no_plate_step")),
     ] {
         let (_, sim) = rendered(seen);
         let refused = planner.plan(&sim.cloud, &PlanRequest::new(asked, Some(5.0), sim.pose)).unwrap_err();
-        assert!(refused.reason.contains(looks_like), "{seen} asked as {asked}: {refused}");
+        match rule {
+            Some(id) => assert_eq!(refused.rule.id, id, "{seen} asked as {asked}: {refused}"),
+            None => assert!(refused.reason.contains(looks_like), "{seen} asked as {asked}: {refused}"),
+        }
         if asked != JointType::Lap {
             assert_eq!(refused.gate, Some(Gate::JointMismatch), "{seen} asked as {asked}: {refused}");
         }

@@ -308,6 +308,7 @@ fn the_rim_reaches_a_border_that_cuts_the_band_inside_the_plate() {
     // the strips there start outside the coarse edge and are dropped.
     // The rim's rows, 0.5 to 1.5 mm inside the edge, meet the border
     // at y = 18.75 to 16.25: the rule reads the end to that, no better.
+    // `seam.end_read_from_plate_rim` fires: the end moves out to the rim's.
     let (strips, rim) = strip_and_rim_ends(&plate_cut_by_a_border(3.3, 2.0), 3.3);
     assert!((16.25..=19.25).contains(&rim), "the rim reaches y = {rim} mm, the plate is seen up to 20");
     assert!(20.0 - strips > 20.0 - rim + 1.0, "the strips reach y = {strips} mm, the rim {rim}");
@@ -319,6 +320,7 @@ fn the_rim_stops_where_a_border_cuts_the_edge_away() {
     // plate's inside up to y = 27.5 (the band's inner side): strips
     // that stop at the border take it for the plate's end.
     // The rim's rows meet the border at y = 20.6 to 21.9.
+    // `seam.end_read_from_plate_rim` fires: the end moves in to the rim's.
     let (strips, rim) = strip_and_rim_ends(&plate_cut_by_a_border(3.3, -1.0), 3.3);
     assert!((20.6..=22.4).contains(&rim), "the rim reaches y = {rim} mm, the edge is seen up to 20");
     assert!(strips - 20.0 > rim - 20.0 + 1.0, "the strips reach y = {strips} mm, the rim {rim}");

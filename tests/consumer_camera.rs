@@ -115,7 +115,7 @@ fn a_v_groove_strip_requested_as_a_tee_is_refused_not_planned_along_its_root_lan
     request.units = Units::Auto;
     let plan = Planner::new(Config::default()).plan(&sim.cloud, &request);
     let err = plan.map(|p| format!("{} seams", p.seams.len())).unwrap_err();
-    assert!(err.reason.contains("no long narrow one"), "{name}: {err}");
+    assert_eq!(err.rule.id, "tee.no_web_top", "{name}: {err}");
 }
 
 #[test]

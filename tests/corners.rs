@@ -58,6 +58,7 @@ fn an_outside_corner_is_refused_by_name_under_every_request() {
                 .expect_err(&format!("{name} as {joint}: an outside corner is never planned"));
             assert_eq!(refused.gate, Some(Gate::CornerJoint), "{name} as {joint}: {refused}");
             assert_eq!(refused.stage, Stage::Background, "{name} as {joint}");
+            assert_eq!(refused.rule.id, "corner.outside_not_planned", "{name} as {joint}: {refused}");
             let reason = refused.to_string();
             assert!(names_a_corner(&reason) && reason.contains("outside corner"), "{name} as {joint}: {reason}");
             assert!(reason.contains("is not planned"), "{name} as {joint}: {reason}");
@@ -125,6 +126,7 @@ fn an_inside_corner_s_root_is_planned_as_a_fillet_and_refused_as_a_butt_or_lap()
             } else {
                 let refused = planned.map(|plan| plan.seams.len()).expect_err(&format!("{name} as {joint}"));
                 assert_eq!(refused.gate, Some(Gate::CornerJoint), "{name} as {joint}: {refused}");
+                assert_eq!(refused.rule.id, "corner.inside_root_needs_fillet_request", "{name} as {joint}");
                 let reason = refused.to_string();
                 assert!(reason.contains("inside corner") && reason.contains("t_fillet"), "{name} as {joint}: {reason}");
             }

@@ -81,8 +81,11 @@ fn refusal(outcome: &SceneOutcome) -> &str {
 /// Asserts that `name`, planned as its scene's joint, is refused for a
 /// plane lying across the plate under it, named a clamp among its causes.
 fn assert_refused_as_lying_across(name: &str) {
-    let reason = refusal(&planned(name, JointAsk::AsScene)).to_string();
-    assert!(reason.contains("lies across the plane under it") && reason.contains("clamp"), "{reason}");
+    let outcome = planned(name, JointAsk::AsScene);
+    let reason = refusal(&outcome).to_string();
+    let rule = outcome.result.as_ref().err().map(|e| e.rule.id);
+    assert_eq!(rule, Some("lap.upper_plane_lies_across_lower"), "{reason}");
+    assert!(reason.contains("clamp"), "{reason}");
 }
 
 #[test]
@@ -98,8 +101,11 @@ fn a_part_abutting_a_v_butt_plate_is_refused_for_an_opening_the_groove_cannot_ha
 
 #[test]
 fn a_part_abutting_an_i_butt_plate_larger_than_the_other_plate_is_refused_as_a_third_plate() {
-    let reason = refusal(&planned("fault-touching-part-i-butt-00-d667-t0-fresh1", JointAsk::AsScene)).to_string();
-    assert!(reason.contains("three plates lie side by side") && reason.contains("region of interest"), "{reason}");
+    let outcome = planned("fault-touching-part-i-butt-00-d667-t0-fresh1", JointAsk::AsScene);
+    let reason = refusal(&outcome).to_string();
+    let rule = outcome.result.as_ref().err().map(|e| e.rule.id);
+    assert_eq!(rule, Some("butt.third_plate_beyond_pair"), "{reason}");
+    assert!(reason.contains("region of interest"), "{reason}");
 }
 
 #[test]
@@ -137,7 +143,8 @@ fn a_part_touching_an_i_butt_whose_gap_voxels_close_is_not_taken_for_its_second_
     assert_eq!(gate, Some(Gate::GapUnresolved), "{reason}");
     assert!(reason.contains("0.84 mm point spacing"), "{reason}");
     let raw = planned_as(name, JointAsk::AsScene, "raw");
-    assert!(refusal(&raw).contains("three plates lie side by side"), "raw: {}", refusal(&raw));
+    let rule = raw.result.as_ref().err().map(|e| e.rule.id);
+    assert_eq!(rule, Some("butt.third_plate_beyond_pair"), "raw: {}", refusal(&raw));
 }
 
 #[test]

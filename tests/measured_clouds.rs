@@ -107,6 +107,14 @@ fn plan_asking(suite: Vec<(String, SceneSpec)>, variant: &str, name: &str, joint
 
 /// Asserts `o` was refused with a reason that says `why`; a panic naming
 /// the scene and how far off it was if it was planned.
+/// Asserts that `o` was refused by the rule `id`.
+fn assert_refused_by(o: &SceneOutcome, id: &str) {
+    match &o.result {
+        Ok((err, _)) => panic!("{}: planned {:.1} mm off", o.name, err.max_mm),
+        Err(e) => assert_eq!(e.rule.id, id, "{}: {}", o.name, e.reason),
+    }
+}
+
 fn assert_refused_saying(o: &SceneOutcome, why: &str) {
     match &o.result {
         Ok((err, _)) => panic!("{}: planned {:.1} mm off", o.name, err.max_mm),
@@ -183,7 +191,7 @@ fn a_clamp_across_the_smaller_plate_is_no_lap_s_upper_plate() {
     // for a lap's upper plate over the larger plate, 62 mm off. The
     // plane under it is seen on both of its sides.
     let o = plan_auto(fault_suite(Draw::Documented), "voxel:1", "fault-clamp-i-butt-02");
-    assert_refused_saying(&o, "lies across the plane under it");
+    assert_refused_by(&o, "lap.upper_plane_lies_across_lower");
 }
 
 #[test]

@@ -123,7 +123,7 @@ fn a_frame_without_the_workpiece_names_the_failing_stage() {
     let err =
         Planner::new(Config::default()).plan(&cloud, &PlanRequest::new(JointType::IButt, None, pose)).unwrap_err();
     assert_eq!(err.stage, Stage::Background);
-    assert!(err.to_string().contains("found 1 workpiece plane(s), need 2"), "{err}");
+    assert_eq!(err.rule.id, "workpiece.fewer_than_two_planes", "{err}");
 }
 
 #[test]

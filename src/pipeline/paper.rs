@@ -63,7 +63,7 @@ pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
     let planes = ctx.planes_of(std::mem::take(&mut clusters.members), |c, _| 1.0 / camera.density(c.z));
     ctx.stats.clusters = planes.len();
     ctx.trace.record(|t| t.planes = planes.clone());
-    let workpiece = background::paper_select(cloud, planes).map_err(|e| PlanError::at(Stage::Background, e))?;
+    let workpiece = background::paper_select(cloud, planes).map_err(|e| PlanError::by(e.rule(), e))?;
     ctx.stats.plate_points = workpiece.plates.each_ref().map(|p| p.members.len());
     ctx.trace.record(|t| t.plate_labels = Some(workpiece.plates.each_ref().map(|p| p.label)));
     ctx.clock.lap(Stage::Background)?;

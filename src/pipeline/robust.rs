@@ -333,7 +333,7 @@ fn plan_workpiece(
     if let Some(corner) = background::find_corner(&planes, &selection, ctx.cloud.points(), || ctx.view_border()) {
         let fillet = ctx.request.joint.admits(JointType::TFillet);
         if corner.kind == CornerKind::Inside && fillet {
-            tracing::debug!("{}", corner.what);
+            tracing::debug!(rule = corner.rule(fillet).id, "{}", corner.what);
             let (standing, flange) = (planes[corner.standing].clone(), planes[corner.flange].clone());
             let workpiece = background::Workpiece {
                 plates: [standing, flange],
@@ -346,7 +346,7 @@ fn plan_workpiece(
             return tee::plan(ctx, tee::SeenTee::of(&workpiece, tee::Flange::OneSide), layers);
         }
         let refusal = corner.refusal();
-        return Err(PlanError { gate: Some(quality::Gate::CornerJoint), ..PlanError::at(Stage::Background, refusal) });
+        return Err(PlanError { gate: Some(quality::Gate::CornerJoint), ..PlanError::by(refusal.rule(), refusal) });
     }
     // A tee whose web's top is not found may have it out of view (a crop
     // round its root): its face standing on the nearest layer of planes,
@@ -417,7 +417,7 @@ fn background_refusal(e: &BackgroundError, reason: String) -> PlanError {
     } else {
         None
     };
-    PlanError { gate, ..PlanError::at(Stage::Background, reason) }
+    PlanError { gate, ..PlanError::by(e.rule(), reason) }
 }
 
 /// A tee's root from its web's one face seen standing on `flange` (the

@@ -1,0 +1,196 @@
+//! The boundary read on a pixel grid: each scan line walked outward
+//! across the coarse edge while its pixels stay on the plate's plane, and
+//! on past the coarse edge's ends to the plate's corners.
+
+use crate::cloud::PointCloud;
+use crate::geometry::fit::Plane;
+use crate::geometry::{Vec3, vec3};
+
+use super::{Boundary, BoundaryParams, BoundarySample, CoarseEdge, ExtentRule};
+
+struct Walker<'a> {
+    cloud: &'a PointCloud,
+    plane: &'a Plane,
+    edge: &'a CoarseEdge,
+    params: &'a BoundaryParams,
+    /// Walk along columns (true) or rows, and in which sense.
+    along_cols: bool,
+    sense: isize,
+}
+
+impl Walker<'_> {
+    fn index(&self, scanline: usize, k: isize) -> Option<usize> {
+        let (w, h) = (self.cloud.width() as isize, self.cloud.height() as isize);
+        let (col, row) = if self.along_cols { (k, scanline as isize) } else { (scanline as isize, k) };
+        (col >= 0 && row >= 0 && col < w && row < h).then(|| (row * w + col) as usize)
+    }
+
+    fn outward_of(&self, p: &Vec3) -> f64 {
+        (p - self.edge.point).dot(&self.edge.outward)
+    }
+
+    fn on_plate(&self, i: usize) -> Option<Vec3> {
+        let p = self.cloud.points()[i];
+        if !p[0].is_finite() {
+            return None;
+        }
+        let v = vec3(&p);
+        (self.plane.signed_distance(&v).abs() <= self.params.on_plane_mm
+            && self.outward_of(&v).abs() <= self.params.band_mm)
+            .then_some(v)
+    }
+
+    /// Walks outward from position `k` on `scanline` and returns the
+    /// boundary sample, or `None` when the walk leaves the image or the
+    /// band before the plate ends (no boundary there).
+    fn walk(&self, scanline: usize, mut k: isize, mean_step: f64) -> Option<(isize, BoundarySample)> {
+        let mut last = self.on_plate(self.index(scanline, k)?)?;
+        let mut previous: Option<Vec3> = self.index(scanline, k - self.sense).and_then(|i| self.on_plate(i));
+        loop {
+            let next_k = k + self.sense;
+            let next = self.index(scanline, next_k)?;
+            match self.on_plate(next) {
+                Some(v) => {
+                    previous = Some(last);
+                    last = v;
+                    k = next_k;
+                }
+                None => {
+                    let p = self.cloud.points()[next];
+                    // Still on the plane but outside the band: no edge here.
+                    if p[0].is_finite() && self.plane.signed_distance(&vec3(&p)).abs() <= self.params.on_plane_mm {
+                        return None;
+                    }
+                    break;
+                }
+            }
+        }
+        let step =
+            previous.map(|p| self.outward_of(&last) - self.outward_of(&p)).filter(|s| *s > 0.0).unwrap_or(mean_step);
+        let position = self.plane.project(&last) + self.edge.outward * (step / 2.0);
+        Some((k, BoundarySample { position, along: (position - self.edge.point).dot(&self.edge.direction) }))
+    }
+}
+
+/// Samples the boundary of the plate whose member pixels are `members`
+/// beside `edge`: all of them, or only those [`super::band_members`] keeps, which
+/// give the same samples. Organized clouds only.
+pub fn sample_boundary(
+    cloud: &PointCloud,
+    members: &[u32],
+    plane: &Plane,
+    edge: &CoarseEdge,
+    params: &BoundaryParams,
+) -> Boundary {
+    let points = cloud.points();
+    let w = cloud.width();
+    let near: Vec<usize> = members
+        .iter()
+        .map(|&i| i as usize)
+        .filter(|&i| (vec3(&points[i]) - edge.point).dot(&edge.outward).abs() <= params.band_mm)
+        .collect();
+    if near.is_empty() {
+        return Boundary::default();
+    }
+    // Walk along the image axis that crosses the edge most directly.
+    let mean_axis_step = |dc: usize, dr: usize| -> f64 {
+        let mut sum = 0.0;
+        let mut n = 0usize;
+        for &i in near.iter().step_by((near.len() / 500).max(1)) {
+            let (col, row) = (i % w + dc, i / w + dr);
+            if col < w && row < cloud.height() {
+                let q = points[row * w + col];
+                if q[0].is_finite() {
+                    sum += (vec3(&q) - vec3(&points[i])).dot(&edge.outward);
+                    n += 1;
+                }
+            }
+        }
+        if n == 0 { 0.0 } else { sum / n as f64 }
+    };
+    let (col_step, row_step) = (mean_axis_step(1, 0), mean_axis_step(0, 1));
+    let along_cols = col_step.abs() >= row_step.abs();
+    let axis_step = if along_cols { col_step } else { row_step };
+    if axis_step == 0.0 {
+        return Boundary::default();
+    }
+    let walker = Walker { cloud, plane, edge, params, along_cols, sense: if axis_step > 0.0 { 1 } else { -1 } };
+    let mean_step = axis_step.abs();
+
+    // The outermost member on each scan line starts that line's walk.
+    let split = |i: usize| {
+        if along_cols { (i / w, (i % w) as isize) } else { (i % w, (i / w) as isize) }
+    };
+    let mut start: std::collections::BTreeMap<usize, isize> = std::collections::BTreeMap::new();
+    for &i in &near {
+        let (line, k) = split(i);
+        let entry = start.entry(line).or_insert(k);
+        if (k - *entry) * walker.sense > 0 {
+            *entry = k;
+        }
+    }
+    let mut found: Vec<(usize, isize, BoundarySample)> = Vec::new();
+    for (&line, &k) in &start {
+        if let Some((end, s)) = walker.walk(line, k, mean_step) {
+            found.push((line, end, s));
+        }
+    }
+    extend_past_ends(&walker, &mut found, mean_step);
+    found.sort_by_key(|(line, _, _)| *line);
+    let line_spacing_mm = median_line_spacing(&found);
+    Boundary {
+        samples: found.into_iter().map(|(_, _, s)| s).collect(),
+        line_spacing_mm,
+        extent_rule: ExtentRule::AllSamples,
+    }
+}
+
+/// The median distance along the edge from one scan line's sample to the
+/// next line's, per line. `found` is sorted by line.
+fn median_line_spacing(found: &[(usize, isize, BoundarySample)]) -> f64 {
+    let mut steps: Vec<f64> = found
+        .windows(2)
+        .filter(|w| w[1].0 > w[0].0)
+        .map(|w| (w[1].2.along - w[0].2.along).abs() / (w[1].0 - w[0].0) as f64)
+        .collect();
+    if steps.is_empty() {
+        return 0.0;
+    }
+    let mid = steps.len() / 2;
+    *steps.select_nth_unstable_by(mid, f64::total_cmp).1
+}
+
+/// Continues sampling on the scan lines beyond the first and last sampled
+/// ones, each walk starting a few pixels inside the previous line's
+/// boundary pixel, for as long as the plate is there. The plane criterion
+/// trims about R off a plate's corners, so without this the seam would
+/// stop short of the plate ends. `found` holds (line, boundary pixel,
+/// sample).
+fn extend_past_ends(walker: &Walker, found: &mut Vec<(usize, isize, BoundarySample)>, mean_step: f64) {
+    if found.is_empty() {
+        return;
+    }
+    found.sort_by_key(|(line, _, _)| *line);
+    let lines = if walker.along_cols { walker.cloud.height() } else { walker.cloud.width() };
+    // Both ends are fixed before extending: extension appends to `found`.
+    let ends =
+        [(-1isize, found[0].0 as isize, found[0].1), (1, found[found.len() - 1].0 as isize, found[found.len() - 1].1)];
+    const MAX_EXTENSION_LINES: usize = 40;
+    for (direction, mut line, mut boundary) in ends {
+        for _ in 0..MAX_EXTENSION_LINES {
+            line += direction;
+            if line < 0 || line as usize >= lines {
+                break;
+            }
+            let walked =
+                (1..8).find_map(|inset| walker.walk(line as usize, boundary - inset * walker.sense, mean_step));
+            match walked {
+                Some((end, s)) => {
+                    found.push((line as usize, end, s));
+                    boundary = end;
+                }
+                None => break,
+            }
+        }
+    }
+}

@@ -78,6 +78,14 @@ fn refusal(outcome: &SceneOutcome) -> &str {
     }
 }
 
+/// The id of the rule that refused `outcome`.
+fn refusing_rule_id(outcome: &SceneOutcome) -> &'static str {
+    match &outcome.result {
+        Err(e) => e.rule.id,
+        Ok(_) => panic!("{}: planned, not refused", outcome.name),
+    }
+}
+
 /// Asserts that `name`, planned as its scene's joint, is refused for a
 /// plane lying across the plate under it, named a clamp among its causes.
 fn assert_refused_as_lying_across(name: &str) {
@@ -140,6 +148,7 @@ fn a_part_touching_an_i_butt_whose_gap_voxels_close_is_not_taken_for_its_second_
         Err(e) => (e.gate, e.reason.clone()),
         Ok((_, plan)) => panic!("voxel:1: planned {:?}", plan.seams.first().map(|s| s.start_camera)),
     };
+    assert_eq!(voxels.result.as_ref().err().map(|e| e.rule.id), Some("butt.gap_unresolved"), "{reason}");
     assert_eq!(gate, Some(Gate::GapUnresolved), "{reason}");
     assert!(reason.contains("0.84 mm point spacing"), "{reason}");
     let raw = planned_as(name, JointAsk::AsScene, "raw");
@@ -194,8 +203,8 @@ fn a_laps_lower_plate_seen_past_the_upper_plates_end_and_as_a_sliver_beside_it_i
 #[test]
 fn a_lap_plate_cut_by_a_streak_is_refused_for_coverage_and_not_found_as_a_butt_joint() {
     let name = "fault-streaks-lap-01-d833-t20";
-    let reason = refusal(&planned(name, JointAsk::AsScene)).to_string();
-    assert!(reason.contains("of joint both plates are seen beside"), "{reason}");
+    let outcome = planned(name, JointAsk::AsScene);
+    assert_eq!(refusing_rule_id(&outcome), "seam.joint_coverage", "{}", refusal(&outcome));
     let reason = refusal(&planned(name, JointAsk::Auto)).to_string();
     assert!(reason.contains("cannot be told"), "{reason}");
 }
@@ -208,8 +217,8 @@ fn a_groove_leaving_the_image_at_a_grazing_angle_is_planned_to_the_border() {
 
 #[test]
 fn an_edge_lost_under_a_streak_while_both_plates_go_on_is_refused_not_cut_short() {
-    let reason = refusal(&planned("fault-streaks-i-butt-00-d1000-t20", JointAsk::AsScene)).to_string();
-    assert!(reason.contains("beyond the seam's") && reason.contains("a weld edge was lost there"), "{reason}");
+    let outcome = planned("fault-streaks-i-butt-00-d1000-t20", JointAsk::AsScene);
+    assert_eq!(refusing_rule_id(&outcome), "seam.stops_short_of_joint", "{}", refusal(&outcome));
 }
 
 #[test]
@@ -225,7 +234,7 @@ fn a_lap_whose_edge_a_dropout_cuts_short_along_most_of_its_seam_is_refused_not_p
     ] {
         let outcome = planned_with_band(name, fraction, at);
         let reason = refusal(&outcome);
-        assert!(reason.contains("lie beyond the line the rest fit"), "{}: {reason}", outcome.name);
+        assert_eq!(refusing_rule_id(&outcome), "edge.samples_beyond_line", "{}: {reason}", outcome.name);
         let gate = outcome.result.as_ref().err().and_then(|e| e.gate);
         assert_eq!(gate, Some(Gate::EdgeCutShort), "{}: {reason}", outcome.name);
     }
@@ -241,7 +250,8 @@ fn a_cut_short_edge_named_in_warn_only_is_planned_with_the_warning_on_its_seam()
     let outcome = planned_with_band_by(&Planner::new(config), "fault-seam-dropout-lap-02-d1000-t10", 0.7, 0.0);
     let (_, plan) = outcome.result.as_ref().unwrap_or_else(|e| panic!("{}: {e}", outcome.name));
     let warnings: Vec<_> = plan.seams.iter().flat_map(|s| &s.warnings).collect();
-    assert_eq!(warnings.iter().map(|w| w.gate).collect::<Vec<_>>(), vec![Gate::EdgeCutShort], "{warnings:?}");
+    assert_eq!(warnings.iter().map(|w| w.rule.id).collect::<Vec<_>>(), ["edge.samples_beyond_line"], "{warnings:?}");
+    assert_eq!(warnings[0].gate, Gate::EdgeCutShort);
     assert!(warnings[0].value > warnings[0].limit && warnings[0].limit == 0.1, "{warnings:?}");
 }
 
@@ -271,7 +281,7 @@ fn a_lap_edge_on_two_lines_is_refused_whether_the_fit_runs_between_them_or_follo
     for (fraction, at) in [(0.5, 0.0), (0.9, 0.5)] {
         let outcome = planned_with_band("fault-seam-dropout-lap-01-d833-t20", fraction, at);
         let reason = refusal(&outcome);
-        assert!(reason.contains("boundary samples lie on two lines"), "{}: {reason}", outcome.name);
+        assert_eq!(refusing_rule_id(&outcome), "edge.samples_on_two_lines", "{}: {reason}", outcome.name);
         let gate = outcome.result.as_ref().err().and_then(|e| e.gate);
         assert_eq!(gate, Some(Gate::EdgeCutShort), "{}: {reason}", outcome.name);
     }

@@ -86,7 +86,7 @@ fn a_groove_depth_given_is_checked_against_the_one_measured() {
     // Three millimetres off: refused, with both figures and the limit.
     let refused =
         planner.plan(&sim.cloud, &PlanRequest::new(JointType::VButt, Some(truth - 3.0), sim.pose)).unwrap_err();
-    assert_eq!(refused.gate, Some(Gate::GrooveDepth), "{refused}");
+    assert_eq!((refused.rule.id, refused.gate), ("butt.groove_depth_difference", Some(Gate::GrooveDepth)), "{refused}");
     assert!(refused.reason.contains("measured") && refused.reason.contains("above 1.00 mm"), "{refused}");
     // Made a warning, the seam keeps the depth given.
     let mut config = Config::default();

@@ -85,8 +85,8 @@ fn every_seam_carries_its_quality_figures() {
 fn a_seam_that_fails_a_gate_is_refused_with_the_figure_its_value_and_the_limit() {
     let (spec, sim) = i_butt_wider_than(0.3);
     let refused = Planner::new(with_max_gap(0.3, false)).plan(&sim.cloud, &request(&spec, &sim)).unwrap_err();
+    assert_eq!(refused.rule.id, "butt.gap_width", "{refused}");
     assert_eq!((refused.stage, refused.gate), (Stage::Quality, Some(Gate::GapWidth)), "{refused}");
-    assert!(refused.reason.contains("the gap between the plates opens to"), "{refused}");
     assert!(refused.reason.contains("wider than 0.30 mm"), "{refused}");
 }
 
@@ -95,7 +95,8 @@ fn a_gate_named_in_warn_only_warns_on_the_seam_instead() {
     let (spec, sim) = i_butt_wider_than(0.3);
     let plan = Planner::new(with_max_gap(0.3, true)).plan(&sim.cloud, &request(&spec, &sim)).unwrap();
     let warnings = &plan.seams[0].warnings;
-    assert_eq!(warnings.iter().map(|w| w.gate).collect::<Vec<_>>(), vec![Gate::GapWidth]);
+    assert_eq!(warnings.iter().map(|w| w.rule.id).collect::<Vec<_>>(), ["butt.gap_width"]);
+    assert_eq!(warnings[0].gate, Gate::GapWidth);
     assert_eq!(warnings[0].limit, 0.3);
     assert!(warnings[0].value > 0.5, "{warnings:?}");
 }

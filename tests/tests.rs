@@ -12,6 +12,7 @@ mod fuzz;
 mod golden;
 mod hostile_clouds;
 mod joints;
+mod layers;
 mod measured_clouds;
 mod parsers;
 mod peers;

@@ -7,7 +7,8 @@ use std::time::Duration;
 
 use weldseam_proto::text::Dialect;
 
-use super::{ConfigError, check, count_in, file, in_range, ip_list, socket_addr};
+use super::server::{ip_list, socket_addr};
+use super::{ConfigError, check, count_in, file, in_range};
 
 /// The text controller link's settings, validated.
 #[derive(Debug, Clone, PartialEq)]

@@ -1,10 +1,12 @@
 //! Geometry shared by the pipeline, the simulator and the evaluation:
 //! rigid transforms and poses, the pose conventions of robot controllers,
-//! and least-squares plane and line fits.
+//! least-squares plane and line fits, and the region of interest a cloud
+//! is cropped to.
 
 pub mod conventions;
 pub mod fit;
 pub mod pose;
+pub mod region;
 
 pub use nalgebra::{Isometry3, Point3, Rotation3, Unit, Vector3};
 

@@ -39,7 +39,7 @@ mod vector;
 use crate::cloud::Point;
 
 #[cfg(test)]
-mod exactness;
+pub(crate) mod exactness;
 
 /// The environment variable that lowers the instruction set.
 pub const ISA_VARIABLE: &str = "WELDSEAM_ISA";
@@ -294,6 +294,7 @@ pub(crate) fn members_corner<const N: usize>(
 }
 
 pub(crate) use scalar::RowBounds;
+pub use scalar::{cross, cross_agrees};
 
 impl<const N: usize> RowBounds<'_, N> {
     /// [`RowBounds::open_members`] for the columns `cols` (a multiple of

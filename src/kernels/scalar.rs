@@ -3,7 +3,27 @@
 
 use super::{BLOCK, LabelledGrid, LabelledWindow, LaneMasks, NormalTest, Planes, TileScales, generic, within};
 use crate::cloud::Point;
-use crate::pipeline::orientation::{cross, cross_agrees};
+
+/// Whether the unnormalised normal `n` at point `p`, turned away from the
+/// camera, is within the angle whose squared cosine is `cos_sq` of the unit
+/// `reference`: `dot >= 0` and `dot² >= cos² |n|²`. Single precision in a
+/// fixed order, so the lane forms of [`super::normal_test`] decide the same.
+#[inline(always)]
+pub fn cross_agrees(n: [f32; 3], p: [f32; 3], reference: [f32; 3], cos_sq: f32) -> bool {
+    let towards = n[0] * p[0] + n[1] * p[1] + n[2] * p[2];
+    let sign = if towards < 0.0 { -1.0f32 } else { 1.0 };
+    let dot = sign * (n[0] * reference[0] + n[1] * reference[1] + n[2] * reference[2]);
+    let norm_sq = n[0] * n[0] + n[1] * n[1] + n[2] * n[2];
+    norm_sq > 1e-24 && dot >= 0.0 && dot * dot >= cos_sq * norm_sq
+}
+
+/// The cross product of central differences `du × dv`, the unnormalised
+/// grid normal, term for term as the orientation stage's grid normal test
+/// computes it.
+#[inline(always)]
+pub fn cross(du: [f32; 3], dv: [f32; 3]) -> [f32; 3] {
+    [du[1] * dv[2] - du[2] * dv[1], du[2] * dv[0] - du[0] * dv[2], du[0] * dv[1] - du[1] * dv[0]]
+}
 
 /// [`super::count_block`] one lane and one neighbour at a time.
 pub(super) fn count_block(

@@ -13,6 +13,7 @@ use rayon::prelude::*;
 
 use crate::cloud::{INVALID_POINT, Point, PointCloud};
 use crate::config::Config;
+pub use crate::geometry::region::CloudFrame;
 
 use super::{PlanError, PlanRequest};
 use crate::rules;
@@ -28,18 +29,6 @@ pub enum Units {
     Metres,
     /// Guessed from the cloud's distances by [`guess_units`].
     Auto,
-}
-
-/// The frame a cloud's coordinates are in.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub enum CloudFrame {
-    /// The camera's optical frame, as cameras deliver frames.
-    #[default]
-    Camera,
-    /// The robot base frame, as tools that merge or register scans write
-    /// them: brought into the camera frame with the request's pose and
-    /// hand-eye before planning.
-    Base,
 }
 
 /// A cloud whose valid points lie at a median distance from the origin

@@ -37,6 +37,8 @@ pub mod deadline;
 pub mod edge_points;
 pub mod fillet;
 mod gather;
+#[cfg(test)]
+mod grid_exactness;
 pub mod grid_search;
 pub mod groove;
 pub mod input;

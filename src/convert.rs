@@ -109,6 +109,7 @@ pub mod to_proto {
     pub fn warning(f: &GateFailure) -> proto::GateWarning {
         proto::GateWarning {
             gate: f.gate.name().to_string(),
+            rule: Some(f.rule.id.into()),
             value: f.value,
             limit: f.limit,
             message: f.message.clone(),
@@ -163,6 +164,7 @@ pub mod to_proto {
         proto::Refusal {
             stage: e.stage.name().into(),
             code: plan_error_code(e).name().into(),
+            rule: Some(e.rule.id.into()),
             gate: e.gate.map(|g| g.name().into()),
             message: e.reason.clone(),
         }

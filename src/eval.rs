@@ -30,6 +30,10 @@
 //! seam, and the seams seen are counted found, missed or extra
 //! ([`match_seams`], [`classify_several`]).
 
+mod rule_counts;
+
+pub use rule_counts::{RuleCounts, count_rules};
+
 use crate::camera::CameraModel;
 use crate::config::{Config, Method};
 use crate::geometry::{Vec3, distance_to_polyline};

@@ -40,6 +40,8 @@ enum Command {
     Controller(cli::controller::ControllerArgs),
     /// Measure the planner on simulated frames and print the performance tables.
     Bench(cli::bench::BenchArgs),
+    /// The planner's rules: every one, one by id in full, or docs/RULES.md's text.
+    Rules(cli::rules::RulesArgs),
 }
 
 impl Command {
@@ -53,7 +55,8 @@ impl Command {
             | Command::Inspect(_)
             | Command::Simulate(_)
             | Command::Controller(_)
-            | Command::Calibrate(_) => false,
+            | Command::Calibrate(_)
+            | Command::Rules(_) => false,
         }
     }
 
@@ -68,7 +71,8 @@ impl Command {
             | Command::Simulate(_)
             | Command::Controller(_)
             | Command::Calibrate(_)
-            | Command::Bench(_) => "warn",
+            | Command::Bench(_)
+            | Command::Rules(_) => "warn",
             Command::Serve(_) | Command::Camera(_) => "info",
         }
     }
@@ -94,6 +98,7 @@ fn main() -> std::process::ExitCode {
         Command::Camera(args) => cli::camera::run(args),
         Command::Controller(args) => cli::controller::run(args),
         Command::Bench(args) => cli::bench::run(args),
+        Command::Rules(args) => cli::rules::run(args),
     };
     match result {
         Ok(()) => std::process::ExitCode::SUCCESS,

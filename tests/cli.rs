@@ -109,8 +109,13 @@ fn failures_exit_non_zero_and_say_why() {
     assert_eq!(refusal["error"]["stage"].as_str(), Some("background"), "{refusal}");
     assert_eq!(refusal["error"]["code"].as_str(), Some("joint_mismatch"), "{refusal}");
     assert!(refusal.get("seams").is_none(), "{refusal}");
+    // The rule that refused: one of the catalogue's, of the stage that refused.
+    let rule = refusal["error"]["rule"].as_str().unwrap_or_else(|| panic!("no rule: {refusal}"));
+    let known = weldseam::rules::by_id(rule).unwrap_or_else(|| panic!("{rule}: not in the catalogue"));
+    assert_eq!(known.stage.name(), "background", "{refusal}");
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("background stage failed") && err.contains("looks like a lap joint"), "{err}");
+    assert!(err.contains(&format!("(rule {rule})")), "the error names its rule: {err}");
 
     // The same frame under a set of types without the lap: decided as a
     // lap, and refused for not being one of them.
@@ -659,4 +664,36 @@ fn plan_debug_writes_pictures_and_figures_that_match_plan_json() {
     assert!(figures["plan"].is_null() && figures["weld"].is_null());
     assert_eq!(png_size(&refused.join("camera.png")).0, 960);
     assert!(!refused.join("sections.png").exists(), "no weld, no sections");
+}
+
+#[test]
+fn rules_lists_the_catalogue_prints_one_and_refuses_an_unknown_id() {
+    let list = weldseam(&["rules"]);
+    assert!(list.status.success(), "{}", String::from_utf8_lossy(&list.stderr));
+    let text = String::from_utf8_lossy(&list.stdout);
+    let rows: Vec<&str> = text.lines().skip(1).collect();
+    assert_eq!(rows.len(), weldseam::rules::all().count(), "one line a rule:\n{text}");
+    for (row, rule) in rows.iter().zip(weldseam::rules::all()) {
+        let fields: Vec<&str> = row.split("  ").filter(|f| !f.is_empty()).map(str::trim).collect();
+        assert_eq!(fields.first(), Some(&rule.id), "{row}");
+        assert_eq!(fields.get(1), Some(&rule.stage.name()), "{row}");
+        assert!(row.ends_with(rule.summary), "{row}");
+    }
+
+    let one = weldseam(&["rules", "frame.no_valid_point"]);
+    assert!(one.status.success());
+    let text = String::from_utf8_lossy(&one.stdout);
+    let rule = weldseam::rules::by_id("frame.no_valid_point").unwrap();
+    assert!(text.starts_with("frame.no_valid_point\n"), "{text}");
+    assert!(text.contains(rule.reason) && text.contains("camera.min_depth_mm"), "{text}");
+    assert!(text.contains("tests/pipeline.rs::bad_requests_are_refused_before_any_work"), "{text}");
+
+    let markdown = weldseam(&["rules", "--markdown"]);
+    assert!(markdown.status.success());
+    assert_eq!(String::from_utf8_lossy(&markdown.stdout), weldseam::rules::markdown());
+
+    let unknown = weldseam(&["rules", "lap.no_such_rule"]);
+    assert!(!unknown.status.success());
+    assert!(unknown.stdout.is_empty());
+    assert!(String::from_utf8_lossy(&unknown.stderr).contains("\"lap.no_such_rule\""), "{unknown:?}");
 }

@@ -1168,10 +1168,13 @@ async fn a_frame_of_several_workpieces_replies_with_every_seam_and_the_unplanned
     // The same frame asked for the I-butts and tees a fixture holds: the
     // I-butt and the tee's root planned as before, the lap named as a
     // joint not asked for, with the set's gate.
+    // Asked by a controller granted rule_ids, which reads each unplanned
+    // joint's rule besides.
     let mut set = sim_request(10, JointType::Lap, &sim, FrameSelect::FrameId(5));
     set.joint = joint_code::SET | 1 << joint_code::I_BUTT | 1 << joint_code::T_FILLET;
-    ctl.send(&Message::PlanRequest(set)).await;
-    let Some(Message::PlanReply(answer)) = ctl.recv().await else { panic!("{name}: no plan reply to the set") };
+    let ids = weldseam_proto::session::capability::RULE_IDS;
+    let mut named = ControllerClient::connect_asking(&cell.controller, "ids", ids).await.unwrap();
+    let answer = named.plan(set, WAIT).await.unwrap_or_else(|e| panic!("{name}: no plan reply to the set: {e}"));
     let asked = [weldseam_proto::plan::Joint::IButt, weldseam_proto::plan::Joint::TFillet];
     let of_the_set: Vec<_> = reply.result.seams.iter().filter(|s| asked.contains(&s.joint)).collect();
     assert_eq!(answer.result.seams.iter().collect::<Vec<_>>(), of_the_set, "{name}");
@@ -1179,5 +1182,10 @@ async fn a_frame_of_several_workpieces_replies_with_every_seam_and_the_unplanned
     let lap = lap.unwrap_or_else(|| panic!("{name}: {:?}", answer.result.unplanned));
     assert_eq!(lap.code, u16::from(ErrorCode::JointMismatch), "{name}: {lap:?}");
     assert!(lap.refusal.message.contains("not one of the joints requested (i_butt+t_fillet)"), "{name}: {lap:?}");
+    for joint in &answer.result.unplanned {
+        let rule = joint.refusal.rule.as_deref().unwrap_or_else(|| panic!("{name}: no rule: {joint:?}"));
+        assert!(weldseam::rules::by_id(rule).is_some(), "{name}: {rule} is not in the catalogue");
+    }
+    assert!(reply.result.unplanned.iter().all(|u| u.refusal.rule.is_none()), "no rule unless asked for");
     assert_eq!(cell.shutdown().await, Stopped::Clean);
 }

@@ -441,6 +441,12 @@ async fn a_plan_line_may_leave_the_joint_to_the_daemon() {
     let refused = robot.ask(&tee).await.unwrap();
     assert!(refused.starts_with('-') && !refused.contains("frame") && !refused.contains("stage failed"), "{refused}");
     assert!(refused.len() <= MAX_ERROR_LINE && !refused.ends_with(" \r\n"), "{refused:?}");
+    // The reason leads with the id of the rule that refused, up to the
+    // first ": ", where a program can branch on it.
+    let reason = refused.split_once(',').unwrap().1;
+    let (rule, cause) = reason.split_once(": ").unwrap_or_else(|| panic!("no rule id first: {refused:?}"));
+    assert!(weldseam::rules::by_id(rule).is_some(), "{rule}: not in the catalogue ({refused:?})");
+    assert!(!cause.trim().is_empty(), "{refused:?}");
     let why = robot.ask("WHY").await.unwrap();
     let cause = refused.split_once(',').unwrap().1.trim_end();
     assert!(why.starts_with(cause), "the pendant line {refused:?} is the start of WHY's {why:?}");
@@ -488,7 +494,11 @@ async fn several_seams_are_served_seam_by_seam_and_why_names_the_unplanned() {
         assert!(kinds[1..kinds.len() - 1].iter().all(|k| *k == 2), "seam {seam}: {kinds:?}");
     }
     let why = robot.ask("WHY").await.unwrap();
-    assert!(why.starts_with("3 seams planned; 1 not: t_fillet at ("), "{name}: {why}");
+    // The joint, its code and the id of the rule that left it unplanned,
+    // then where it lies.
+    assert!(why.starts_with("3 seams planned; 1 not: t_fillet (-46 "), "{name}: {why}");
+    let named = why.split_once("(-46 ").and_then(|(_, rest)| rest.split_once(") at (")).map(|(rule, _)| rule);
+    assert!(named.is_some_and(|rule| weldseam::rules::by_id(rule).is_some()), "{name}: {why}");
     drop(robot);
     let _ = stop_camera.send(());
     camera.await.unwrap();

@@ -232,3 +232,65 @@ async fn a_controller_that_half_closes_is_taken_as_gone_and_its_requests_free_th
     assert_eq!(queue, 0, "the half-closed connection's request was cancelled");
     cell.shutdown().await;
 }
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_refusal_names_its_rule_only_to_a_controller_granted_rule_ids() {
+    use weldseam::cloud::PointCloud;
+    use weldseam::mock::ClientError;
+    use weldseam::mock::controller::ControllerClient;
+    use weldseam_proto::message::{FrameSelect, PlanRequest, joint_code};
+
+    // A flat plate: valid points and no seam, so a rule of the planner refuses it.
+    let (w, h) = (64, 48);
+    let points = (0..w * h).map(|i| [(i % w) as f32 * 0.4, (i / w) as f32 * 0.4, 700.0]).collect();
+    let cloud = PointCloud::organized(w, h, points).unwrap();
+    let request = |request_id| PlanRequest {
+        request_id,
+        joint: joint_code::LAP,
+        groove_depth_mm: None,
+        pose: [800.0, 0.0, 500.0, 180.0, 0.0, 0.0],
+        step_mm: None,
+        work_angle_deg: None,
+        travel_angle_deg: None,
+        frame: FrameSelect::FrameId(1),
+        timeout_ms: 0,
+        camera: None,
+        hand_eye: None,
+        start_near: None,
+        roi: None,
+        pose_in: None,
+        one_seam: false,
+    };
+    // The rule the library's planner refuses the same points and request by.
+    let library_request = weldseam::convert::from_proto::plan_request(&request(0), config().euler).unwrap();
+    let refusal = weldseam::pipeline::Planner::new(config()).plan(&cloud, &library_request).unwrap_err();
+    let rule = refusal.rule.id;
+    assert!(weldseam::rules::by_id(rule).is_some(), "{rule}: not in the catalogue");
+
+    let cell = Cell::start(config()).await;
+    let (mut camera, _) = say_hello(&cell.camera, Session::NEWEST, hello(8, Role::Camera, 0)).await;
+    let frame = Message::Frame(weldseam::convert::to_proto::frame(&cloud, 1, 0, 0));
+    camera.write_all(&frame::encode(&frame).unwrap()).await.unwrap();
+    let Ok(Message::FrameAck(ack)) = frame::decode(&read_raw(&mut camera).await.unwrap(), 1 << 30) else {
+        panic!("a FrameAck")
+    };
+    assert_eq!(ack.code, 0, "{}", ack.message);
+
+    // Granted: the Error ends with the rule.
+    let mut granted = ControllerClient::connect_asking(&cell.controller, "ids", capability::RULE_IDS).await.unwrap();
+    assert_eq!(granted.capabilities, capability::RULE_IDS);
+    let Err(ClientError::Refused(named)) = granted.plan(request(1), WAIT).await else { panic!("a refusal") };
+    assert_eq!((named.code, named.request_id), (ErrorCode::PlanFailed, Some(1)), "{}", named.message);
+    assert_eq!(named.rule.as_deref(), Some(rule), "{}", named.message);
+
+    // Not asked for (version 8 without it, and version 7): today's bytes,
+    // the same message, no rule.
+    for session in [Session::NEWEST, Session::V7] {
+        let (mut plain, _) = say_hello(&cell.controller, session, hello(session.version, Role::Controller, 0)).await;
+        plain.write_all(&frame::encode_in(session, &Message::PlanRequest(request(2))).unwrap()).await.unwrap();
+        let bytes = read_raw(&mut plain).await.unwrap();
+        let expected = Message::error(ErrorCode::PlanFailed, Some(2), named.message.clone());
+        assert_eq!(bytes, frame::encode_in(session, &expected).unwrap(), "version {}", session.version);
+    }
+    cell.shutdown().await;
+}

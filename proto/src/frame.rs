@@ -10,9 +10,10 @@
 use bincode::config::{Configuration, Fixint, Limit, LittleEndian};
 
 use crate::message::{
-    CloudFrame, DaemonLimits, ErrorReply, FRAME_META_BYTES, Frame, FrameAck, FrameMeta, Hello, HelloAck, Message,
-    POINT_BYTES, PlanReply, PlanRequest, Point, Role, Status, Tag, Trigger, Units,
+    CloudFrame, DaemonLimits, FRAME_META_BYTES, Frame, FrameAck, FrameMeta, Hello, HelloAck, Message, POINT_BYTES,
+    PlanRequest, Point, Role, Status, Tag, Trigger, Units,
 };
+use crate::rule_ids;
 pub use crate::session::PROTOCOL_VERSION;
 use crate::session::{CAPABILITIES_SINCE, OLDEST_SERVED_VERSION, Session, capability};
 
@@ -152,13 +153,13 @@ pub struct EncodeError {
     pub reason: String,
 }
 
-fn encode_struct<T: serde::Serialize>(tag: Tag, value: &T, out: &mut Vec<u8>) -> Result<(), EncodeError> {
+pub(crate) fn encode_struct<T: serde::Serialize>(tag: Tag, value: &T, out: &mut Vec<u8>) -> Result<(), EncodeError> {
     bincode::serde::encode_into_std_write(value, out, wire_config())
         .map(|_| ())
         .map_err(|e| EncodeError { tag: tag.name(), reason: e.to_string() })
 }
 
-fn decode_struct<T: serde::de::DeserializeOwned>(tag: Tag, payload: &[u8]) -> Result<T, DecodeError> {
+pub(crate) fn decode_struct<T: serde::de::DeserializeOwned>(tag: Tag, payload: &[u8]) -> Result<T, DecodeError> {
     let (value, used) = bincode::serde::decode_from_slice(payload, wire_config())
         .map_err(|e| DecodeError::Malformed { tag: tag.name(), reason: describe_bincode(&e) })?;
     if used != payload.len() {
@@ -171,13 +172,16 @@ fn decode_struct<T: serde::de::DeserializeOwned>(tag: Tag, payload: &[u8]) -> Re
 }
 
 /// Decodes a `T` at the start of `payload`; returns it and the bytes it took.
-fn decode_prefix<T: serde::de::DeserializeOwned>(tag: Tag, payload: &[u8]) -> Result<(T, usize), DecodeError> {
+pub(crate) fn decode_prefix<T: serde::de::DeserializeOwned>(
+    tag: Tag,
+    payload: &[u8],
+) -> Result<(T, usize), DecodeError> {
     bincode::serde::decode_from_slice(payload, wire_config())
         .map_err(|e| DecodeError::Malformed { tag: tag.name(), reason: describe_bincode(&e) })
 }
 
 /// Fails when `used` is not the whole payload.
-fn whole(tag: Tag, payload: &[u8], used: usize) -> Result<(), DecodeError> {
+pub(crate) fn whole(tag: Tag, payload: &[u8], used: usize) -> Result<(), DecodeError> {
     if used != payload.len() {
         return Err(DecodeError::Malformed {
             tag: tag.name(),
@@ -311,7 +315,8 @@ pub fn encode_body(msg: &Message) -> Result<Vec<u8>, EncodeError> {
 
 /// The payload of `msg` as a connection of `session` lays it out. Only the
 /// Hello and HelloAck differ between versions 7 and 8 (a HelloAck's own
-/// `capabilities` say what follows them).
+/// `capabilities` say what follows them); the Error and the PlanReply end
+/// with the rule ids on a connection granted `rule_ids` ([`rule_ids`]).
 pub fn encode_body_in(session: Session, msg: &Message) -> Result<Vec<u8>, EncodeError> {
     let tag = msg.tag();
     let mut out = Vec::new();
@@ -333,7 +338,7 @@ pub fn encode_body_in(session: Session, msg: &Message) -> Result<Vec<u8>, Encode
             }
         }
         Message::HelloAck(m) => encode_struct(tag, &(m.protocol_version, &m.server), &mut out)?,
-        Message::Error(m) => encode_struct(tag, m, &mut out)?,
+        Message::Error(m) => rule_ids::encode_error(session, m, &mut out)?,
         Message::Ping => {}
         Message::Status(m) => encode_struct(tag, m, &mut out)?,
         Message::Frame(f) => {
@@ -343,7 +348,7 @@ pub fn encode_body_in(session: Session, msg: &Message) -> Result<Vec<u8>, Encode
         Message::Trigger(m) => encode_struct(tag, m, &mut out)?,
         Message::FrameAck(m) => encode_struct(tag, m, &mut out)?,
         Message::PlanRequest(m) => encode_struct(tag, m, &mut out)?,
-        Message::PlanReply(m) => encode_struct(tag, m, &mut out)?,
+        Message::PlanReply(m) => rule_ids::encode_plan_reply(session, m, &mut out)?,
     }
     Ok(out)
 }
@@ -399,7 +404,7 @@ pub fn decode_body_in(session: Session, tag: u16, payload: &[u8]) -> Result<Mess
     Ok(match t {
         Tag::Hello => Message::Hello(decode_hello(version, payload)?),
         Tag::HelloAck => Message::HelloAck(decode_hello_ack(version, payload)?),
-        Tag::Error => Message::Error(decode_struct::<ErrorReply>(t, payload)?),
+        Tag::Error => Message::Error(rule_ids::decode_error(session, payload)?),
         Tag::Ping if payload.is_empty() => Message::Ping,
         Tag::Ping => {
             return Err(DecodeError::Malformed { tag: t.name(), reason: "a ping has an empty body".into() });
@@ -416,7 +421,7 @@ pub fn decode_body_in(session: Session, tag: u16, payload: &[u8]) -> Result<Mess
         Tag::Trigger => Message::Trigger(decode_struct::<Trigger>(t, payload)?),
         Tag::FrameAck => Message::FrameAck(decode_struct::<FrameAck>(t, payload)?),
         Tag::PlanRequest => Message::PlanRequest(decode_struct::<PlanRequest>(t, payload)?),
-        Tag::PlanReply => Message::PlanReply(decode_struct::<PlanReply>(t, payload)?),
+        Tag::PlanReply => Message::PlanReply(rule_ids::decode_plan_reply(session, payload)?),
     })
 }
 

@@ -9,6 +9,8 @@
 //! - [`frame`]: the message header, the bincode configuration and the
 //!   encoding of bodies; see PROTOCOL.md for every byte.
 //! - [`session`]: version and capability negotiation, the versions served.
+//! - [`rule_ids`]: the fields the `rule_ids` capability appends to the
+//!   Error and the PlanReply.
 //! - [`text`]: the text controller link's lines, which robot programs
 //!   read with their own primitives; see ROBOTS.md.
 //! - [`calibration`]: hand-eye calibration's capture files, its report
@@ -20,6 +22,7 @@ pub mod calibration;
 pub mod frame;
 pub mod message;
 pub mod plan;
+pub mod rule_ids;
 pub mod session;
 pub mod text;
 pub mod trace;

@@ -706,14 +706,18 @@ impl std::fmt::Display for ErrorCode {
     }
 }
 
-/// A typed error reply.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+/// A typed error reply. Its binary layout is `code`, `request_id` and
+/// `message`, then `rule` on a connection granted `rule_ids` only.
+#[derive(Debug, Clone, PartialEq)]
 pub struct ErrorReply {
     pub code: ErrorCode,
     /// The request this error answers, when it answers one.
     pub request_id: Option<u64>,
     /// One sentence a person understands.
     pub message: String,
+    /// The planner's rule that refused the request (`family.decision`),
+    /// when a rule did: sent only to a peer granted `rule_ids`.
+    pub rule: Option<String>,
 }
 
 /// Every message of the protocol.
@@ -755,6 +759,11 @@ impl Message {
 
     /// A typed error reply.
     pub fn error(code: ErrorCode, request_id: Option<u64>, message: impl Into<String>) -> Message {
-        Message::Error(ErrorReply { code, request_id, message: message.into() })
+        Message::Error(ErrorReply { code, request_id, message: message.into(), rule: None })
+    }
+
+    /// A typed error reply refusing a request by the planner's `rule`.
+    pub fn refusal(code: ErrorCode, request_id: Option<u64>, message: impl Into<String>, rule: &str) -> Message {
+        Message::Error(ErrorReply { code, request_id, message: message.into(), rule: Some(rule.into()) })
     }
 }

@@ -1,10 +1,16 @@
 //! A planning result: seams with base-frame waypoints, quality figures and
 //! per-stage timings. The JSON form is a contract for scripts calling
 //! `weldseam plan --json`; field names only ever get added, never renamed.
+//!
+//! The same types are the binary link's PlanReply, whose layout within a
+//! protocol version never changes: a field added for JSON only (a warning's
+//! or a refusal's `rule`) is skipped by the binary form, and travels on the
+//! wire behind its capability instead (`rule_ids`, see
+//! [`crate::frame::encode_body_in`]).
 
 use std::collections::BTreeMap;
 
-use serde::{Deserialize, Serialize};
+use serde::{Deserialize, Deserializer, Serialize, Serializer};
 
 /// A plane weld joint type; JSON and wire names are `v_butt`, `i_butt`,
 /// `lap`, `t_fillet` (version 6: named; version 7: planned).
@@ -94,15 +100,58 @@ pub struct SeamQuality {
 }
 
 /// A quality gate the seam failed, reported as a warning.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct GateWarning {
     /// The gate's name, as `quality.warn_only` and the error codes 60 to
     /// 66, 68 and 71 name it (e.g. `joint_coverage`).
     pub gate: String,
+    /// The planner's rule that failed the seam (`family.decision`, as
+    /// docs/RULES.md lists it). In JSON always; on the binary link only to
+    /// a peer granted `rule_ids`, and None when decoded from one that was
+    /// not.
+    pub rule: Option<String>,
     pub value: f64,
     pub limit: f64,
     /// One sentence with the figure, its value and the limit.
     pub message: String,
+}
+
+/// [`GateWarning`] as JSON has it.
+#[derive(Serialize, Deserialize)]
+#[serde(rename = "GateWarning")]
+struct GateWarningJson {
+    gate: String,
+    #[serde(default)]
+    rule: Option<String>,
+    value: f64,
+    limit: f64,
+    message: String,
+}
+
+/// [`GateWarning`]'s binary layout: every field but the rule.
+type GateWarningWire = (String, f64, f64, String);
+
+impl Serialize for GateWarning {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        let GateWarning { gate, rule, value, limit, message } = self.clone();
+        if s.is_human_readable() {
+            GateWarningJson { gate, rule, value, limit, message }.serialize(s)
+        } else {
+            (gate, value, limit, message).serialize(s)
+        }
+    }
+}
+
+impl<'de> Deserialize<'de> for GateWarning {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        if d.is_human_readable() {
+            let GateWarningJson { gate, rule, value, limit, message } = GateWarningJson::deserialize(d)?;
+            Ok(GateWarning { gate, rule, value, limit, message })
+        } else {
+            let (gate, value, limit, message) = GateWarningWire::deserialize(d)?;
+            Ok(GateWarning { gate, rule: None, value, limit, message })
+        }
+    }
 }
 
 /// A seam's coverage of the joint the camera saw.
@@ -166,14 +215,91 @@ pub struct UnplannedJoint {
 
 /// Why a plan was refused, as `weldseam plan --json` prints it under
 /// `error` and a plan's trace records it.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct Refusal {
     /// The pipeline stage that refused, e.g. `background`.
     pub stage: String,
     /// The error code a controller would get, by name.
     pub code: String,
+    /// The planner's rule that refused (`family.decision`, as
+    /// docs/RULES.md lists it). In JSON always; on the binary link only to
+    /// a peer granted `rule_ids`, and None when decoded from one that was
+    /// not.
+    pub rule: Option<String>,
     /// The quality gate that refused, when one did.
     pub gate: Option<String>,
     /// One sentence a person can act on.
     pub message: String,
+}
+
+/// [`Refusal`] as JSON has it.
+#[derive(Serialize, Deserialize)]
+#[serde(rename = "Refusal")]
+struct RefusalJson {
+    stage: String,
+    code: String,
+    #[serde(default)]
+    rule: Option<String>,
+    gate: Option<String>,
+    message: String,
+}
+
+/// [`Refusal`]'s binary layout: every field but the rule.
+type RefusalWire = (String, String, Option<String>, String);
+
+impl Serialize for Refusal {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        let Refusal { stage, code, rule, gate, message } = self.clone();
+        if s.is_human_readable() {
+            RefusalJson { stage, code, rule, gate, message }.serialize(s)
+        } else {
+            (stage, code, gate, message).serialize(s)
+        }
+    }
+}
+
+impl<'de> Deserialize<'de> for Refusal {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        if d.is_human_readable() {
+            let RefusalJson { stage, code, rule, gate, message } = RefusalJson::deserialize(d)?;
+            Ok(Refusal { stage, code, rule, gate, message })
+        } else {
+            let (stage, code, gate, message) = RefusalWire::deserialize(d)?;
+            Ok(Refusal { stage, code, rule: None, gate, message })
+        }
+    }
+}
+
+impl PlanResult {
+    /// The rule ids of every seam's warnings, seam by seam, as a PlanReply
+    /// granted `rule_ids` carries them after its result.
+    pub fn warning_rules(&self) -> Vec<Vec<String>> {
+        self.seams.iter().map(|s| s.warnings.iter().map(|w| w.rule.clone().unwrap_or_default()).collect()).collect()
+    }
+
+    /// The rule ids of the unplanned joints, in order.
+    pub fn unplanned_rules(&self) -> Vec<String> {
+        self.unplanned.iter().map(|u| u.refusal.rule.clone().unwrap_or_default()).collect()
+    }
+
+    /// Sets the rules [`PlanResult::warning_rules`] and
+    /// [`PlanResult::unplanned_rules`] give; false, and nothing set, when
+    /// their counts are not those of the seams, warnings and joints.
+    pub fn set_rules(&mut self, warnings: Vec<Vec<String>>, unplanned: Vec<String>) -> bool {
+        let fits = warnings.len() == self.seams.len()
+            && self.seams.iter().zip(&warnings).all(|(s, w)| s.warnings.len() == w.len())
+            && unplanned.len() == self.unplanned.len();
+        if !fits {
+            return false;
+        }
+        for (seam, rules) in self.seams.iter_mut().zip(warnings) {
+            for (warning, rule) in seam.warnings.iter_mut().zip(rules) {
+                warning.rule = Some(rule);
+            }
+        }
+        for (joint, rule) in self.unplanned.iter_mut().zip(unplanned) {
+            joint.refusal.rule = Some(rule);
+        }
+        true
+    }
 }

@@ -30,11 +30,17 @@ pub mod capability {
     /// client can size its frames, requests and timeouts to them.
     pub const LIMITS: u64 = 1 << 0;
 
+    /// Every refusal and warning names the planner's rule that made it
+    /// (its stable id, `family.decision`): an Error ends with the rule of
+    /// the refusal it reports, and a PlanReply with the rules of its
+    /// seams' warnings and of its unplanned joints.
+    pub const RULE_IDS: u64 = 1 << 1;
+
     /// Every capability this crate knows, with its name in PROTOCOL.md.
-    pub const ALL: [(u64, &str); 1] = [(LIMITS, "limits")];
+    pub const ALL: [(u64, &str); 2] = [(LIMITS, "limits"), (RULE_IDS, "rule_ids")];
 
     /// The bits of [`ALL`].
-    pub const KNOWN: u64 = LIMITS;
+    pub const KNOWN: u64 = LIMITS | RULE_IDS;
 }
 
 /// What a connection speaks: its version and its granted capabilities.
@@ -112,6 +118,9 @@ mod tests {
     fn the_version_is_the_newest_both_speak_and_only_known_capabilities_are_granted() {
         assert_eq!(negotiate(&hello(7, 0), 7), Ok(Session::V7));
         assert_eq!(negotiate(&hello(8, 0), 8), Ok(Session::NEWEST));
+        let both = capability::LIMITS | capability::RULE_IDS;
+        assert_eq!(negotiate(&hello(8, both | 1 << 40), 8), Ok(Session { version: 8, capabilities: both }));
+        assert_eq!(negotiate(&hello(7, both), 7), Ok(Session::V7), "version 7 has no capabilities");
         let asked = capability::LIMITS | 1 << 40;
         assert_eq!(negotiate(&hello(8, asked), 8), Ok(Session { version: 8, capabilities: capability::LIMITS }));
         // A newer peer is answered in this crate's newest version.

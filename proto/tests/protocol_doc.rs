@@ -57,6 +57,7 @@ fn plan_reply() -> PlanReply {
         }),
         warnings: vec![GateWarning {
             gate: "position_uncertainty".into(),
+            rule: Some("seam.position_uncertain".into()),
             value: 0.625,
             limit: 0.5,
             message: "0.625 > 0.5 mm".into(),
@@ -69,6 +70,7 @@ fn plan_reply() -> PlanReply {
         refusal: Refusal {
             stage: "fillet".into(),
             code: "plan_failed".into(),
+            rule: Some("tee.root_hidden_by_web".into()),
             gate: None,
             message: "the web hides the root".into(),
         },
@@ -112,6 +114,11 @@ fn default_limits() -> DaemonLimits {
 
 fn examples() -> Vec<(&'static str, Vec<u8>)> {
     let v7 = |m: &Message| encode_in(Session::V7, m).unwrap();
+    let rule_ids = Session { version: PROTOCOL_VERSION, capabilities: capability::RULE_IDS };
+    let reply = Message::PlanReply(plan_reply());
+    let plain_reply = encode(&reply).unwrap();
+    let reply_with_rules = encode_in(rule_ids, &reply).unwrap();
+    assert_eq!(&reply_with_rules[16..plain_reply.len()], &plain_reply[16..], "rule_ids only appends");
     let mut examples: Vec<(&'static str, Vec<u8>)> =
         messages().into_iter().map(|(n, m)| (n, encode(&m).unwrap())).collect();
     examples.extend([
@@ -132,6 +139,20 @@ fn examples() -> Vec<(&'static str, Vec<u8>)> {
                 capabilities: 0,
                 limits: None,
             })),
+        ),
+        ("plan_reply_rules", reply_with_rules[plain_reply.len()..].to_vec()),
+        (
+            "error_rule",
+            encode_in(
+                rule_ids,
+                &Message::refusal(
+                    ErrorCode::PlanFailed,
+                    Some(5),
+                    "frame 7: input stage failed: no valid point",
+                    "frame.no_valid_point",
+                ),
+            )
+            .unwrap(),
         ),
     ]);
     examples

@@ -16,6 +16,7 @@ use weldseam::mock::ClientError;
 use weldseam::mock::controller::ControllerClient;
 use weldseam::mock::text_robot::{SeamTally, TextRobot};
 use weldseam_proto::message::{FrameSelect, PlanRequest};
+use weldseam_proto::session::capability;
 use weldseam_proto::text::Dialect;
 
 use super::args;
@@ -204,7 +205,10 @@ async fn text_session(args: &ControllerArgs, dialect: Dialect) -> anyhow::Result
 
 async fn exchange(args: &ControllerArgs) -> anyhow::Result<()> {
     let addr = args.connect.clone().unwrap_or_else(|| "127.0.0.1:7302".into());
-    let mut client = ControllerClient::connect(&addr, "weldseam-controller").await.map_err(explain)?;
+    // The rule ids let a commissioning engineer look a refusal up
+    // (`weldseam rules ID`); a daemon without them answers as before.
+    let mut client =
+        ControllerClient::connect_asking(&addr, "weldseam-controller", capability::RULE_IDS).await.map_err(explain)?;
     if args.ping {
         let s = client.ping(Duration::from_secs(10)).await.map_err(explain)?;
         if args.json {
@@ -280,6 +284,10 @@ async fn exchange(args: &ControllerArgs) -> anyhow::Result<()> {
             seam.edge_fit_rms_mm[0],
             seam.edge_fit_rms_mm[1]
         );
+        for w in &seam.warnings {
+            let rule = w.rule.as_deref().map_or(String::new(), |r| format!(", rule {r}"));
+            println!("  warning ({}{rule}): {}", w.gate, w.message);
+        }
         println!("  {:>4}  {:>10} {:>10} {:>10}  {:>9} {:>9} {:>9}", "#", "x mm", "y mm", "z mm", "rx°", "ry°", "rz°");
         for (i, w) in seam.waypoints.iter().enumerate() {
             println!(
@@ -293,7 +301,8 @@ async fn exchange(args: &ControllerArgs) -> anyhow::Result<()> {
         let place = u
             .near_camera_mm
             .map_or(String::new(), |p| format!(" near ({:.0}, {:.0}, {:.0}) mm in the camera frame", p[0], p[1], p[2]));
-        println!("not planned: {joint}{place}: error {} ({}): {}", u.code, u.refusal.code, u.refusal.message);
+        let rule = u.refusal.rule.as_deref().map_or(String::new(), |r| format!(", rule {r}"));
+        println!("not planned: {joint}{place}: error {} ({}{rule}): {}", u.code, u.refusal.code, u.refusal.message);
     }
     if let Some(total) = r.timing_ms.get("total") {
         println!("pipeline {total:.0} ms");
@@ -301,10 +310,14 @@ async fn exchange(args: &ControllerArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// Error replies become "error CODE (name): message" for the exit report.
+/// Error replies become "error CODE (name): message" for the exit report,
+/// with ", rule ID" after the code when a rule of the planner refused.
 fn explain(e: ClientError) -> anyhow::Error {
     match e {
-        ClientError::Refused(r) => anyhow::anyhow!("error {}: {}", r.code, r.message),
+        ClientError::Refused(r) => match &r.rule {
+            Some(rule) => anyhow::anyhow!("error {}, rule {rule}: {}", r.code, r.message),
+            None => anyhow::anyhow!("error {}: {}", r.code, r.message),
+        },
         other => other.into(),
     }
 }

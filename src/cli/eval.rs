@@ -10,7 +10,8 @@
 //! `--suite tee` and `--suite multi` are issue 15's frames of more seams
 //! than one (a tee's two roots, several workpieces): below the scenes,
 //! the seams the frames show against what the planner returned (found,
-//! missed, extra) and, for tees, the refusals that name the tee.
+//! missed, extra) and, for tees, the refusals that name the tee. Last,
+//! how often each rule of the planner refused and warned, by its id.
 
 use std::io::Write;
 
@@ -20,7 +21,7 @@ use std::path::PathBuf;
 use weldseam::config::{Config, Method};
 use weldseam::convert::to_proto::plan_result;
 use weldseam::eval::{
-    DepthAsk, EvalRequest, JointAsk, SceneOutcome, Verdict, count_verdicts, names_a_corner, names_a_tee,
+    DepthAsk, EvalRequest, JointAsk, SceneOutcome, Verdict, count_rules, count_verdicts, names_a_corner, names_a_tee,
     run_suite_asking, summarise,
 };
 use weldseam::geometry::pose::EulerConvention;
@@ -96,7 +97,8 @@ pub struct EvalArgs {
     /// aligned text.
     #[arg(long)]
     pub markdown: bool,
-    /// Also write every scene's planned seams, one JSON line per scene and
+    /// Also write every scene's planned seams (or its refusal's sentence
+    /// and rule id), one JSON line per scene and
     /// method, with every number in full precision and no timings: two
     /// runs give equal files exactly when every plan is the same, digit for
     /// digit (`diff before.jsonl after.jsonl`).
@@ -161,7 +163,7 @@ fn describe(o: &SceneOutcome) -> Vec<String> {
 fn plan_line(o: &SceneOutcome, euler: EulerConvention) -> serde_json::Value {
     let outcome = match &o.result {
         Ok((_, plan)) => serde_json::json!({ "seams": plan_result(plan, euler).seams }),
-        Err(e) => serde_json::json!({ "error": e.to_string() }),
+        Err(e) => serde_json::json!({ "error": e.to_string(), "rule": e.rule.id }),
     };
     serde_json::json!({ "scene": o.name, "method": o.method.name(), "plan": outcome })
 }
@@ -572,11 +574,14 @@ fn verdict_tables(configs: &[Config], results: &[Vec<SceneOutcome>]) -> Vec<Tabl
         "Confident wrong seams (robust)",
         &["scene", "fault", "max mm", "mean mm", "start mm", "end mm", "why"],
     );
-    let mut refused = Table::new("Refusals (robust)", &["scene", "fault", "reason"]);
+    let mut refused = Table::new("Refusals (robust)", &["scene", "fault", "rule", "reason"]);
     for o in results.first().into_iter().flatten() {
         match &o.verdict {
             Verdict::WithinBar => {}
-            Verdict::Refused { reason } => refused.push(vec![o.name.clone(), fault_name(o).into(), reason.clone()]),
+            Verdict::Refused { reason } => {
+                let rule = o.result.as_ref().err().map_or("-", |e| e.rule.id);
+                refused.push(vec![o.name.clone(), fault_name(o).into(), rule.into(), reason.clone()]);
+            }
             Verdict::ConfidentWrong { error, why } => {
                 let mut row = vec![o.name.clone(), fault_name(o).into()];
                 row.extend(match error {
@@ -597,6 +602,19 @@ fn verdict_tables(configs: &[Config], results: &[Vec<SceneOutcome>]) -> Vec<Tabl
     if any_fault {
         tables.push(per_fault);
     }
-    tables.extend([wrong, refused]);
+    tables.extend([wrong, refused, rule_table(configs, results)]);
     tables
+}
+
+/// How often each rule refused (a plan, or a joint left unplanned beside
+/// the seams planned) and warned, per method, over the suite.
+fn rule_table(configs: &[Config], results: &[Vec<SceneOutcome>]) -> Table {
+    let mut table = Table::new("Refusals and warnings per rule", &["method", "rule", "refusals", "warnings"]);
+    for (config, outcomes) in configs.iter().zip(results) {
+        for (rule, refusals, warnings) in count_rules(outcomes).rows() {
+            let method = config.pipeline.method.name().to_string();
+            table.push(vec![method, rule.to_string(), refusals.to_string(), warnings.to_string()]);
+        }
+    }
+    table
 }

@@ -14,6 +14,7 @@ pub mod inspect;
 pub mod logging;
 pub mod memory;
 pub mod plan;
+pub mod rules;
 pub mod serve;
 pub mod simulate;
 pub mod simulate_calibration;

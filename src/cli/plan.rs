@@ -39,8 +39,10 @@ pub struct PlanArgs {
     #[command(flatten)]
     pub config: args::ConfigArgs,
     /// Print one JSON object on stdout instead of a summary: the plan, or
-    /// on a refusal `{"error": {"stage", "code", "gate", "message"}}` (the
-    /// code a controller would get; the exit status is non-zero).
+    /// on a refusal `{"error": {"stage", "code", "rule", "gate", "message"}}`
+    /// (the code a controller would get, the id of the rule that refused:
+    /// `weldseam rules ID` explains it; the exit status is non-zero). Each
+    /// warning and each unplanned joint's refusal carries its `rule` too.
     #[arg(long)]
     pub json: bool,
     /// Also write the plan's pictures and figures into this directory
@@ -124,10 +126,11 @@ pub fn run(args: &PlanArgs) -> anyhow::Result<()> {
                 let refusal = serde_json::json!({ "error": refusal(&e) });
                 writeln!(out, "{refusal}")?;
             }
+            let (cloud, rule) = (args.cloud.display(), e.rule.id);
             return Err(match e.stage {
-                Stage::Request => anyhow!("the request does not fit {}: {}", args.cloud.display(), e.reason),
-                _ if e.gate.is_some() => anyhow!(e).context(format!("seam refused in {}", args.cloud.display())),
-                _ => anyhow!(e).context(format!("no seam found in {}", args.cloud.display())),
+                Stage::Request => anyhow!("the request does not fit {cloud} (rule {rule}): {}", e.reason),
+                _ if e.gate.is_some() => anyhow!(e).context(format!("seam refused in {cloud} (rule {rule})")),
+                _ => anyhow!(e).context(format!("no seam found in {cloud} (rule {rule})")),
             });
         }
     };
@@ -159,7 +162,8 @@ pub fn run(args: &PlanArgs) -> anyhow::Result<()> {
         let place = u
             .near_camera_mm
             .map_or(String::new(), |p| format!(" near ({:.0}, {:.0}, {:.0}) mm in the camera frame", p[0], p[1], p[2]));
-        writeln!(out, "not planned:{joint} joint{place} ({}): {}", u.refusal.code, u.refusal.message)?;
+        let rule = u.refusal.rule.as_deref().unwrap_or("?");
+        writeln!(out, "not planned:{joint} joint{place} ({}, rule {rule}): {}", u.refusal.code, u.refusal.message)?;
     }
     Ok(())
 }
@@ -195,7 +199,7 @@ fn write_seam(
         writeln!(out, "{}", quality_line(q))?;
     }
     for w in &seam.warnings {
-        writeln!(out, "warning ({}): {}", w.gate, w.message)?;
+        writeln!(out, "warning ({}, rule {}): {}", w.gate, w.rule.as_deref().unwrap_or("?"), w.message)?;
     }
     writeln!(out, "{:>4}  {:>10} {:>10} {:>10}  {:>9} {:>9} {:>9}", "#", "x mm", "y mm", "z mm", "rx°", "ry°", "rz°")?;
     for (k, w) in seam.waypoints.iter().enumerate() {

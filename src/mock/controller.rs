@@ -4,9 +4,9 @@
 use std::time::Duration;
 
 use tokio::net::TcpStream;
-use weldseam_proto::Message;
 use weldseam_proto::frame::DEFAULT_MAX_FRAME_BYTES;
 use weldseam_proto::message::{Hello, PlanReply, PlanRequest, Role, Status};
+use weldseam_proto::{Message, Session};
 
 use super::ClientError;
 use crate::server::connection::Connection;
@@ -20,20 +20,34 @@ pub struct ControllerClient {
     conn: Connection,
     /// The daemon's name from its hello ack.
     pub server: String,
+    /// The capabilities the daemon granted.
+    pub capabilities: u64,
 }
 
 impl ControllerClient {
-    /// Connects and completes the hello.
+    /// Connects and completes the hello, asking for no capability.
     pub async fn connect(addr: &str, name: &str) -> Result<Self, ClientError> {
+        ControllerClient::connect_asking(addr, name, 0).await
+    }
+
+    /// Connects and completes the hello, asking for `capabilities`
+    /// ([`weldseam_proto::session::capability`]); every later message is
+    /// read and written as the daemon's grant says.
+    pub async fn connect_asking(addr: &str, name: &str, capabilities: u64) -> Result<Self, ClientError> {
         let stream =
             TcpStream::connect(addr).await.map_err(|source| ClientError::Connect { addr: addr.to_string(), source })?;
         let peer = stream.peer_addr().map_err(|source| ClientError::Connect { addr: addr.to_string(), source })?;
         let mut conn = Connection::new(stream, peer, STALL, DEFAULT_MAX_FRAME_BYTES);
-        let hello = Hello::new(Role::Controller, name, 0);
+        let hello = Hello::new(Role::Controller, name, capabilities);
         conn.writer.send(&Message::Hello(hello)).await?;
         match conn.reader.read().await? {
             Some(r) => match r.message {
-                Message::HelloAck(ack) => Ok(ControllerClient { conn, server: ack.server }),
+                Message::HelloAck(ack) => {
+                    let session = Session { version: ack.protocol_version, capabilities: ack.capabilities };
+                    conn.reader.set_session(session);
+                    conn.writer.set_session(session);
+                    Ok(ControllerClient { conn, server: ack.server, capabilities: ack.capabilities })
+                }
                 Message::Error(e) => Err(ClientError::Refused(e)),
                 other => Err(ClientError::Unexpected(other.tag().name())),
             },

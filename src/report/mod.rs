@@ -150,11 +150,12 @@ fn headline(trace: &PlanTrace) -> String {
     }
 }
 
-/// The second part of the title: the refusal's reason, or the figures a
-/// welding engineer checks first.
+/// The second part of the title: the refusal's rule and reason, or the
+/// figures a welding engineer checks first and each warning's rule and
+/// message.
 fn detail(trace: &PlanTrace) -> String {
     if let Some(e) = &trace.refusal {
-        return e.reason.clone();
+        return format!("{}: {}", e.rule.id, e.reason);
     }
     let mut parts = Vec::new();
     if let Some(fits) = &trace.weld_edges {
@@ -177,7 +178,7 @@ fn detail(trace: &PlanTrace) -> String {
         }
         parts.push(format!("position ±{:.2} mm (1 sigma)", q.uncertainty_across_mm));
     }
-    parts.extend(trace.warnings.iter().map(|w| format!("warning: {}", w.message)));
+    parts.extend(trace.warnings.iter().map(|w| format!("warning {}: {}", w.rule.id, w.message)));
     parts.join("; ")
 }
 
@@ -303,4 +304,39 @@ pub fn debug_set(trace: &PlanTrace, report: Option<PlanResult>) -> Result<DebugS
     let figures = serde_json::to_vec_pretty(&to_proto::plan_trace(trace, report))?;
     files.push((FIGURES_FILE, figures));
     Ok(DebugSet { files })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::config::Method;
+    use crate::pipeline::PlanError;
+    use crate::pipeline::quality::{Gate, GateFailure};
+    use crate::rules;
+
+    #[test]
+    fn the_title_and_the_figures_name_the_rule_of_a_refusal_and_of_a_warning() {
+        let mut refused = PlanTrace::new(Some(JointType::Lap), None, Method::Robust);
+        refused.refusal = Some(PlanError::by(&rules::input::NO_VALID_POINT, "no point in the camera's volume"));
+        assert_eq!(detail(&refused), "frame.no_valid_point: no point in the camera's volume");
+        let set = debug_set(&refused, None).unwrap();
+        let (_, figures) = set.files.iter().find(|(name, _)| *name == FIGURES_FILE).unwrap();
+        let figures: serde_json::Value = serde_json::from_slice(figures).unwrap();
+        assert_eq!(figures["error"]["rule"].as_str(), Some("frame.no_valid_point"), "{figures}");
+
+        let mut warned = PlanTrace::new(Some(JointType::Lap), None, Method::Robust);
+        let rule = rules::pending::for_stage(rules::Stage::Quality);
+        warned.warnings.push(GateFailure {
+            rule,
+            gate: Gate::JointCoverage,
+            value: 0.5,
+            limit: 0.8,
+            message: "the seam spans 50 % of the joint".into(),
+        });
+        assert!(
+            detail(&warned).ends_with("warning pending.quality: the seam spans 50 % of the joint"),
+            "{}",
+            detail(&warned)
+        );
+    }
 }

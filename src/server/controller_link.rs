@@ -67,7 +67,7 @@ pub async fn serve(mut conn: Connection, state: Arc<ServerState>, mut shutdown: 
                             plans.spawn(job.in_current_span());
                             None
                         }
-                        Err((code, text)) => Some(Message::error(code, Some(request_id), text)),
+                        Err(refusal) => Some(refusal_message(request_id, &refusal)),
                     }
                 }
                 other => {
@@ -115,17 +115,26 @@ pub async fn serve(mut conn: Connection, state: Arc<ServerState>, mut shutdown: 
     writer.lock().await.shutdown().await;
 }
 
+/// The Error refusing a request before it was queued, naming the rule
+/// that refused it when one did (sent to a peer granted `rule_ids`).
+fn refusal_message(request_id: u64, refusal: &Refusal) -> Message {
+    match refusal.rule {
+        Some(rule) => Message::refusal(refusal.code, Some(request_id), refusal.text.clone(), rule.id),
+        None => Message::error(refusal.code, Some(request_id), refusal.text.clone()),
+    }
+}
+
 /// The library's request and the daemon's options for a wire request.
 fn ask(r: &message::PlanRequest, euler: EulerConvention) -> Result<Ask, Refusal> {
     let request = from_proto::plan_request(r, euler).map_err(|e| match e {
-        RequestError::UnknownJoint(_) => (ErrorCode::UnknownJoint, e.to_string()),
+        RequestError::UnknownJoint(_) => Refusal::new(ErrorCode::UnknownJoint, e.to_string()),
         RequestError::HandEye(_)
         | RequestError::StartNear(_)
         | RequestError::RoiFrame(_)
         | RequestError::Roi(_)
         | RequestError::PoseConvention(_)
         | RequestError::PoseUnit { .. }
-        | RequestError::Pose(_) => (ErrorCode::BadRequest, e.to_string()),
+        | RequestError::Pose(_) => Refusal::new(ErrorCode::BadRequest, e.to_string()),
     })?;
     let wanted = match r.frame {
         FrameSelect::Trigger => Wanted::Trigger,
@@ -147,7 +156,10 @@ async fn plan(request_id: u64, accepted: Accepted, state: Arc<ServerState>, writ
             reported = traced.is_some().then(|| result.clone());
             Message::PlanReply(PlanReply { request_id, frame_id, result })
         }
-        Err(Failure { code, text, .. }) => Message::error(code, Some(request_id), text),
+        Err(Failure { code, text, rule, .. }) => match rule {
+            Some(rule) => Message::refusal(code, Some(request_id), text, rule.id),
+            None => Message::error(code, Some(request_id), text),
+        },
     };
     if let Err(e) = writer.lock().await.send(&reply).await {
         warn!(request_id, "cannot send the reply: {e}");

@@ -7,6 +7,12 @@
 //! way: a few connections at once (more are closed at accept), one request
 //! per connection, every connection closed after a fixed time, and only
 //! `GET /metrics` answered.
+//!
+//! Refusals and warnings are counted per rule of the planner
+//! (`weldseam_refusals_total{rule="..."}`, `weldseam_warnings_total`),
+//! each series made when its rule first fires. Their label is a rule's id
+//! from [`crate::rules`]'s catalogue, never a value from outside, so the
+//! series are at most as many as the catalogue has rules.
 
 use std::convert::Infallible;
 use std::sync::Arc;
@@ -30,6 +36,7 @@ use weldseam_proto::ErrorCode;
 use weldseam_proto::message::Role;
 
 use super::ServerState;
+use crate::rules::{self, Rule};
 
 /// Scrapes served at once; a further connection is closed at accept.
 const MAX_SCRAPERS: usize = 4;
@@ -55,6 +62,12 @@ struct LinkLabels {
 struct RefusedLabels {
     link: &'static str,
     reason: &'static str,
+}
+
+#[derive(Debug, Clone, Hash, PartialEq, Eq, EncodeLabelSet)]
+struct RuleLabels {
+    /// A rule's id, from the catalogue only.
+    rule: &'static str,
 }
 
 /// Why the acceptor closed a connection it did not serve.
@@ -92,6 +105,8 @@ pub struct Metrics {
     connections: Family<LinkLabels, Gauge>,
     pending: Family<LinkLabels, Gauge>,
     refused: Family<RefusedLabels, Counter>,
+    refusals: Family<RuleLabels, Counter>,
+    warnings: Family<RuleLabels, Counter>,
 }
 
 impl std::fmt::Debug for Metrics {
@@ -129,6 +144,8 @@ impl Metrics {
             connections: Family::default(),
             pending: Family::default(),
             refused: Family::default(),
+            refusals: Family::default(),
+            warnings: Family::default(),
         };
         let mut registry = Registry::with_prefix("weldseam");
         registry.register("plans", "Plan requests answered, by outcome (planned or the error code)", m.plans.clone());
@@ -143,6 +160,16 @@ impl Metrics {
         registry.register("connections", "Connections past their Hello, by link", m.connections.clone());
         registry.register("pending_connections", "Connections yet to say Hello, by link", m.pending.clone());
         registry.register("refused_peers", "Connections closed unserved, by link and reason", m.refused.clone());
+        registry.register(
+            "refusals",
+            "Plans and joints refused, by the planner's rule that refused them (docs/RULES.md)",
+            m.refusals.clone(),
+        );
+        registry.register(
+            "warnings",
+            "Seams planned with a warning, by the planner's rule that warned (docs/RULES.md)",
+            m.warnings.clone(),
+        );
         // Both links show from the start, at zero, so a dashboard has a
         // series before the first connection.
         for role in [Role::Camera, Role::Controller] {
@@ -168,6 +195,21 @@ impl Metrics {
     /// Counts a plan request refused before it was queued (invalid, busy).
     pub fn request_refused(&self, code: ErrorCode) {
         self.plans.get_or_create(&OutcomeLabels { outcome: code.name() }).inc();
+    }
+
+    /// Counts a refusal (of a request, a plan or a joint left unplanned)
+    /// by `rule`.
+    pub fn refused_by(&self, rule: &'static Rule) {
+        if let Some(label) = catalogued(rule) {
+            self.refusals.get_or_create(&label).inc();
+        }
+    }
+
+    /// Counts a seam's warning by `rule`.
+    pub fn warned_by(&self, rule: &'static Rule) {
+        if let Some(label) = catalogued(rule) {
+            self.warnings.get_or_create(&label).inc();
+        }
     }
 
     /// Counts a frame stored.
@@ -212,6 +254,18 @@ impl Metrics {
         // Writing into a String cannot fail.
         let _ = prometheus_client::encoding::text::encode(&mut text, &self.registry);
         text
+    }
+}
+
+/// The label of a rule of the catalogue; a rule declared outside it is
+/// logged and not counted, so the series stay bounded by the catalogue.
+fn catalogued(rule: &'static Rule) -> Option<RuleLabels> {
+    match rules::by_id(rule.id) {
+        Some(known) => Some(RuleLabels { rule: known.id }),
+        None => {
+            warn!(rule = rule.id, "a rule outside the catalogue is not counted");
+            None
+        }
     }
 }
 
@@ -289,6 +343,9 @@ mod tests {
             let _gone = m.pending_opened(Role::Controller);
         }
         m.peer_refused(Role::Controller, Refusal::Evicted);
+        m.refused_by(&rules::input::NO_VALID_POINT);
+        m.refused_by(&rules::input::NO_VALID_POINT);
+        m.warned_by(rules::pending::for_stage(rules::Stage::Quality));
         let text = m.encode(3);
         for line in [
             "weldseam_plans_total{outcome=\"plan_failed\"} 1",
@@ -300,8 +357,32 @@ mod tests {
             "weldseam_connections{link=\"controller\"} 1",
             "weldseam_pending_connections{link=\"controller\"} 0",
             "weldseam_refused_peers_total{link=\"controller\",reason=\"evicted\"} 1",
+            "weldseam_refusals_total{rule=\"frame.no_valid_point\"} 2",
+            "weldseam_warnings_total{rule=\"pending.quality\"} 1",
         ] {
             assert!(text.lines().any(|l| l == line), "no line {line:?} in\n{text}");
         }
+    }
+
+    #[test]
+    fn a_rule_outside_the_catalogue_makes_no_series() {
+        static STRAY: Rule = Rule {
+            id: "stray.rule",
+            stage: rules::Stage::Quality,
+            effect: rules::Effect::Refuses,
+            gate: None,
+            summary: "",
+            reason: "",
+            parameters: &[],
+            fires: &[],
+            holds: &[],
+        };
+        let m = Metrics::new();
+        m.refused_by(&STRAY);
+        m.warned_by(&STRAY);
+        let text = m.encode(0);
+        assert!(!text.contains("stray.rule"), "{text}");
+        // A rule's series appears only once it fires.
+        assert!(!text.contains("frame.no_valid_point"), "{text}");
     }
 }

@@ -6,7 +6,10 @@
 //! instant it arrived is the one the freshness rule uses ([`accept`]).
 //! Then [`fulfil`] waits for the frame, plans it on the pool, counts the
 //! outcome and logs one line with everything an operator needs about it.
-//! The links only read requests and write replies in their own form.
+//! Every refusal and warning is logged and counted by the planner's rule
+//! that made it (its `rule` field and `weldseam_refusals_total{rule=...}`,
+//! `weldseam_warnings_total{rule=...}`), and the rule travels to the
+//! reply. The links only read requests and write replies in their own form.
 
 use std::sync::Arc;
 use std::time::{Duration, Instant};
@@ -22,6 +25,7 @@ use super::shutdown::StopSignal;
 use crate::convert::to_proto::plan_error_code;
 use crate::pipeline::trace::PlanTrace;
 use crate::pipeline::{Plan, PlanRequest};
+use crate::rules::Rule;
 
 /// A plan request in the library's form, with what the daemon needs to
 /// serve it: which frame, how long to wait, which camera.
@@ -50,8 +54,22 @@ pub(crate) struct Accepted {
     _place: OwnedSemaphorePermit,
 }
 
-/// A request refused before it was queued: the code and the reason.
-pub(crate) type Refusal = (ErrorCode, String);
+/// A request refused before it was queued.
+#[derive(Debug)]
+pub(crate) struct Refusal {
+    pub code: ErrorCode,
+    pub text: String,
+    /// The planner's rule that refused it, when one did (the request
+    /// rules); none for the daemon's own limits (busy, timeout, camera).
+    pub rule: Option<&'static Rule>,
+}
+
+impl Refusal {
+    /// A refusal by the daemon, not by a rule of the planner.
+    pub fn new(code: ErrorCode, text: impl Into<String>) -> Self {
+        Refusal { code, text: text.into(), rule: None }
+    }
+}
 
 /// Checks a request that arrived at `arrived`, takes its places and
 /// starts its frame wait; a refusal is counted.
@@ -67,9 +85,13 @@ pub(crate) fn accept(
 
 /// Counts and logs a request refused before it was queued.
 pub(crate) fn refused(request_id: u64, refusal: Refusal, state: &ServerState) -> Refusal {
-    let (code, text) = &refusal;
+    let Refusal { code, text, rule } = &refusal;
     state.metrics.request_refused(*code);
-    warn!(request_id, code = code.name(), outcome = code.name(), "request refused: {text}");
+    if let Some(rule) = rule {
+        state.metrics.refused_by(rule);
+    }
+    let rule = rule.map(|r| r.id);
+    warn!(request_id, code = code.name(), outcome = code.name(), rule, "request refused: {text}");
     refusal
 }
 
@@ -80,7 +102,7 @@ fn check_and_reserve(
     places: &Arc<Semaphore>,
 ) -> Result<Accepted, Refusal> {
     let s = &state.config.server;
-    let bad = |text: String| (ErrorCode::BadRequest, text);
+    let bad = |text: String| Refusal::new(ErrorCode::BadRequest, text);
     let Ask { request_id, request, wanted, timeout_ms, camera } = ask;
     if camera.as_deref() == Some("") {
         return Err(bad("camera is an empty name; leave it absent to use any camera".into()));
@@ -96,9 +118,13 @@ fn check_and_reserve(
         }
         ms => Duration::from_millis(ms.into()),
     };
-    state.jobs.planner().check_request(&request).map_err(|e| bad(e.reason))?;
+    state.jobs.planner().check_request(&request).map_err(|e| Refusal {
+        code: ErrorCode::BadRequest,
+        text: e.reason,
+        rule: Some(e.rule),
+    })?;
     let place = Arc::clone(places).try_acquire_owned().map_err(|_| {
-        (
+        Refusal::new(
             ErrorCode::Busy,
             format!(
                 "this connection already has {} requests waiting or running \
@@ -107,9 +133,11 @@ fn check_and_reserve(
             ),
         )
     })?;
-    let slot = state.jobs.reserve().map_err(|e| (ErrorCode::Busy, e.to_string()))?;
-    let wait =
-        state.frames.request(&FrameRequest::now(wanted, camera)).map_err(|e| (frame_error_code(&e), e.to_string()))?;
+    let slot = state.jobs.reserve().map_err(|e| Refusal::new(ErrorCode::Busy, e.to_string()))?;
+    let wait = state
+        .frames
+        .request(&FrameRequest::now(wanted, camera))
+        .map_err(|e| Refusal::new(frame_error_code(&e), e.to_string()))?;
     Ok(Accepted { request_id, request, wait, timeout, slot, arrived, _place: place })
 }
 
@@ -132,11 +160,24 @@ pub(crate) struct Failure {
     /// `text` leads with it; a robot's pendant line leads with the cause
     /// instead ([`Failure::cause_first`]).
     pub place: Option<String>,
+    /// The planner's rule that refused the plan, when one did; none for a
+    /// frame that never came, a shutdown or a fault.
+    pub rule: Option<&'static Rule>,
 }
 
 impl Failure {
     fn new(code: ErrorCode, text: impl Into<String>) -> Self {
-        Failure { code, text: text.into(), place: None }
+        Failure { code, text: text.into(), place: None, rule: None }
+    }
+
+    /// What a robot's pendant shows: the rule's id first (a program can
+    /// branch on it: it ends at the first `: `), then the cause, then where
+    /// it arose ([`Failure::cause_first`]).
+    pub fn pendant_reason(&self) -> String {
+        match self.rule {
+            Some(rule) => format!("{}: {}", rule.id, self.cause_first()),
+            None => self.cause_first(),
+        }
     }
 
     /// The message with the cause first and where it arose after it, in
@@ -218,13 +259,13 @@ pub(crate) async fn fulfil_traced(
                          from this frame",
                         state.config.server.plan_timeout.as_millis()
                     );
-                    Err(Failure { code: plan_error_code(&e), text, place: Some(place) })
+                    Err(Failure { code: plan_error_code(&e), text, place: Some(place), rule: Some(e.rule) })
                 }
                 Err(JobError::Plan(e)) => {
                     let place = format!("frame {}: {} stage failed:", frame.frame_id, e.stage);
                     let text = format!("frame {}: {e}", frame.frame_id);
                     let place = text.starts_with(&place).then_some(place);
-                    Err(Failure { code: plan_error_code(&e), text, place })
+                    Err(Failure { code: plan_error_code(&e), text, place, rule: Some(e.rule) })
                 }
                 Err(e @ JobError::Panicked) => {
                     error!(request_id, frame_id = frame.frame_id, "{e}");
@@ -234,13 +275,45 @@ pub(crate) async fn fulfil_traced(
         }
     };
     match &outcome {
-        Ok(planned) => log.plan = Some(&planned.plan),
-        Err(Failure { code, text, .. }) => log.failure = Some((*code, text.clone())),
+        Ok(planned) => {
+            log.plan = Some(&planned.plan);
+            count_findings(request_id, &planned.plan, state);
+        }
+        Err(Failure { code, text, rule, .. }) => {
+            log.failure = Some((*code, text.clone()));
+            log.rule = *rule;
+            if let Some(rule) = rule {
+                state.metrics.refused_by(rule);
+            }
+        }
     }
     log.latency = arrived.elapsed();
     log.emit();
     state.metrics.plan_answered(outcome.as_ref().map(|_| ()).map_err(|f| f.code), arrived.elapsed());
     (outcome, traced)
+}
+
+/// Logs and counts, by rule, each warning of a plan's seams and each joint
+/// it left unplanned (a refusal of that joint).
+fn count_findings(request_id: u64, plan: &Plan, state: &ServerState) {
+    for (k, seam) in plan.seams.iter().enumerate() {
+        for warning in &seam.warnings {
+            state.metrics.warned_by(warning.rule);
+            warn!(
+                request_id,
+                seam = k + 1,
+                rule = warning.rule.id,
+                gate = warning.gate.name(),
+                "warning: {}",
+                warning.message
+            );
+        }
+    }
+    for unplanned in &plan.unplanned {
+        state.metrics.refused_by(unplanned.reason.rule);
+        let joint = unplanned.joint.map(|j| j.name());
+        info!(request_id, joint, rule = unplanned.reason.rule.id, "left unplanned: {}", unplanned.reason);
+    }
 }
 
 /// The one log line per plan request.
@@ -253,6 +326,8 @@ struct PlanLog<'a> {
     times: JobTimes,
     plan: Option<&'a Plan>,
     failure: Option<(ErrorCode, String)>,
+    /// The rule that refused the plan, when one did.
+    rule: Option<&'static Rule>,
     latency: Duration,
 }
 
@@ -287,6 +362,7 @@ impl PlanLog<'_> {
                 camera,
                 frame_age_ms,
                 outcome,
+                rule = self.rule.map(|r| r.id),
                 times = fields,
                 latency_ms = ms(self.latency),
                 reason = line,

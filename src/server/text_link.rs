@@ -33,7 +33,7 @@ use weldseam_proto::text::{
 };
 
 use super::frames::Wanted;
-use super::planning::{Ask, Planned, accept, fulfil, refused};
+use super::planning::{Ask, Planned, Refusal, accept, fulfil, refused};
 use super::shutdown::{Shutdown, ShutdownController};
 use super::{ServerError, ServerState, Throttle, accept_with_backoff, allowed};
 use crate::config::TextLinkConfig;
@@ -433,14 +433,14 @@ impl Session {
                     TextRequestError::Joint(_) => ErrorCode::UnknownJoint,
                     TextRequestError::Pose(_) => ErrorCode::BadRequest,
                 };
-                let (code, text) = refused(request_id, (code, e.to_string()), state);
-                return Outcome::Reply(error(code, text, OK_NUMBERS));
+                let refusal = refused(request_id, Refusal::new(code, e.to_string()), state);
+                return Outcome::Reply(error(refusal.code, refusal.text, OK_NUMBERS));
             }
         };
         let ask = Ask { request_id, request, wanted, timeout_ms: 0, camera: None };
         let accepted = match accept(ask, arrived, state, &self.places) {
             Ok(accepted) => accepted,
-            Err((code, text)) => return Outcome::Reply(error(code, text, OK_NUMBERS)),
+            Err(refusal) => return Outcome::Reply(error(refusal.code, pendant_refusal(&refusal), OK_NUMBERS)),
         };
         let outcome = tokio::select! {
             outcome = fulfil(accepted, state, shutdown.stop_signal()) => outcome,
@@ -469,13 +469,23 @@ impl Session {
                     ),
                 }
             }
-            Err(failure) => error(failure.code, failure.cause_first(), OK_NUMBERS),
+            Err(failure) => error(failure.code, failure.pendant_reason(), OK_NUMBERS),
         })
     }
 }
 
+/// A request's refusal as a pendant shows it: the rule's id first, when a
+/// rule of the planner refused it.
+fn pendant_refusal(refusal: &Refusal) -> String {
+    match refusal.rule {
+        Some(rule) => format!("{}: {}", rule.id, refusal.text),
+        None => refusal.text.clone(),
+    }
+}
+
 /// What `WHY` answers after a plan that left joints in view unplanned:
-/// how many, and each one's joint, place (camera frame) and error code.
+/// how many, and each one's joint, place (camera frame), error code and
+/// rule.
 fn not_planned(plan: &crate::pipeline::Plan) -> String {
     let each: Vec<String> = plan
         .unplanned
@@ -484,7 +494,8 @@ fn not_planned(plan: &crate::pipeline::Plan) -> String {
             let joint = u.joint.map_or("a joint".to_string(), |j| j.name().to_string());
             let place = u.near_camera.map_or(String::new(), |p| format!(" at ({:.0} {:.0} {:.0}) mm", p.x, p.y, p.z));
             let code = u16::from(crate::convert::to_proto::plan_error_code(&u.reason));
-            format!("{joint}{place} (-{code}): {}", u.reason.reason)
+            // The rule before the place: the 80 characters may end early.
+            format!("{joint} (-{code} {}){place}: {}", u.reason.rule.id, u.reason.reason)
         })
         .collect();
     // No commas: a text line's commas would split it for the robot.

@@ -107,14 +107,6 @@ fn plan_asking(suite: Vec<(String, SceneSpec)>, variant: &str, name: &str, joint
 
 /// Asserts `o` was refused with a reason that says `why`; a panic naming
 /// the scene and how far off it was if it was planned.
-/// Asserts that `o` was refused by the rule `id`.
-fn assert_refused_by(o: &SceneOutcome, id: &str) {
-    match &o.result {
-        Ok((err, _)) => panic!("{}: planned {:.1} mm off", o.name, err.max_mm),
-        Err(e) => assert_eq!(e.rule.id, id, "{}: {}", o.name, e.reason),
-    }
-}
-
 fn assert_refused_saying(o: &SceneOutcome, why: &str) {
     match &o.result {
         Ok((err, _)) => panic!("{}: planned {:.1} mm off", o.name, err.max_mm),

@@ -5,7 +5,9 @@
 //! capture into base-frame welding waypoints for plane V-butt, I-butt and
 //! lap joints, after the method of "A point cloud-based welding trajectory
 //! planning method for plane welds", made robust where the method as
-//! written breaks. See docs/ARCHITECTURE.md for the code map.
+//! written breaks, and for the fillet roots of tees and inside corners,
+//! which the method does not plan. Every refusal names the rule that made
+//! it ([`rules`]). See docs/ARCHITECTURE.md for the code map.
 
 pub mod calibration;
 pub mod camera;

@@ -181,9 +181,10 @@ fn a_clamp_across_the_smaller_plate_is_no_lap_s_upper_plate() {
     // smaller plate, cutting it in two pieces each far smaller than the
     // other plate, and ends on the larger one. Under `auto` it was taken
     // for a lap's upper plate over the larger plate, 62 mm off. The
-    // plane under it is seen on both of its sides.
+    // plane under it is seen on both of its sides, so under `auto` neither
+    // a butt pair nor a lap fits the layers.
     let o = plan_auto(fault_suite(Draw::Documented), "voxel:1", "fault-clamp-i-butt-02");
-    assert_refused_by(&o, "lap.upper_plane_lies_across_lower");
+    assert_refused_by(&o, "joint.no_layout_fits");
 }
 
 #[test]

@@ -225,7 +225,6 @@ pub static TEE_NO_WEB_TOP: Rule = Rule {
     fires: &[
         "src/pipeline/background/tests.rs::a_bar_no_taller_than_a_lap_step_or_too_wide_is_no_web",
         "src/pipeline/background/tests.rs::a_v_groove_s_root_land_under_its_plates_is_no_web_s_top",
-        "tests/consumer_camera.rs::a_v_groove_strip_requested_as_a_tee_is_refused_not_planned_along_its_root_land",
     ],
     holds: &["src/pipeline/background/tests.rs::a_web_a_web_height_over_its_flange_seen_on_both_sides_is_a_tee"],
 };
@@ -369,7 +368,6 @@ pub static LAP_UPPER_PLANE_LIES_ACROSS_LOWER: Rule = Rule {
         "src/pipeline/background/tests.rs::a_bar_across_a_plate_seen_round_its_end_is_no_lap",
         "src/pipeline/background/tests.rs::a_bar_across_a_small_plate_beside_a_large_one_is_no_lap",
         "tests/faults.rs::a_clamp_lying_across_a_laps_plate_is_refused_as_an_object_on_the_workpiece",
-        "tests/measured_clouds.rs::a_clamp_across_the_smaller_plate_is_no_lap_s_upper_plate",
     ],
     holds: &[
         "src/pipeline/background/tests.rs::a_lap_whose_lower_plate_runs_on_past_the_upper_plates_end_is_kept",
@@ -420,6 +418,7 @@ pub static NO_LAYOUT_FITS: Rule = Rule {
     fires: &[
         "src/pipeline/background/tests.rs::with_no_type_given_the_layers_decide",
         "src/pipeline/background/tests.rs::a_third_plate_beside_a_butt_pair_is_refused_and_a_piece_along_it_is_not",
+        "tests/measured_clouds.rs::a_clamp_across_the_smaller_plate_is_no_lap_s_upper_plate",
     ],
     holds: &["src/pipeline/background/tests.rs::with_no_type_given_the_layers_decide"],
 };
@@ -484,7 +483,10 @@ pub static TEE_NO_FACE_STANDS_ON_FLANGE: Rule = Rule {
             source: Source::Constant { file: "src/pipeline/fillet/face.rs", name: "MIN_FACE_VIEW_DEG" },
         },
     ],
-    fires: &["src/pipeline/web_face.rs::mixed_returns_alone_are_no_face"],
+    fires: &[
+        "src/pipeline/web_face.rs::mixed_returns_alone_are_no_face",
+        "tests/consumer_camera.rs::a_v_groove_strip_requested_as_a_tee_is_refused_not_planned_along_its_root_land",
+    ],
     holds: &["src/pipeline/web_face.rs::a_face_standing_on_the_flange_is_found_through_a_veil_of_mixed_returns"],
 };
 

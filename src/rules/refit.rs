@@ -99,7 +99,7 @@ const JOINT_BREAK_SPACINGS: Parameter = Parameter {
     name: "JOINT_BREAK_SPACINGS",
     unit: "point spacings",
     meaning: "longest break along the root bridged as the same root",
-    source: Source::Constant { file: "src/pipeline/boundary.rs", name: "JOINT_BREAK_SPACINGS" },
+    source: Source::Constant { file: "src/pipeline/boundary/ends.rs", name: "JOINT_BREAK_SPACINGS" },
 };
 
 const BORDER_REACH_SPACINGS: Parameter = Parameter {

@@ -40,7 +40,7 @@ pub use layers::{nearest_layer, robust_select};
 /// A cluster of plane points with its fitted plane.
 #[derive(Debug, Clone)]
 pub struct PlaneCluster {
-    /// The cluster's label in [`super::super::clustering::Clusters::labels`].
+    /// The cluster's label in [`crate::pipeline::clustering::Clusters::labels`].
     pub label: u32,
     pub members: Vec<u32>,
     pub plane: Plane,

@@ -15,12 +15,12 @@ use super::super::trace::Tracer;
 use super::super::{PlanError, PlanRequest};
 
 /// Sanitises the cloud, in camera-frame millimetres
-/// ([`super::input`]): a point outside what the camera can measure is
+/// ([`crate::pipeline::input`]): a point outside what the camera can measure is
 /// a corrupt frame's or noise, and one such point far off the axis
 /// would widen every window it is part of, so it becomes invalid
 /// before any stage runs. A frame that cannot be a camera's view (most
 /// of it behind or beside the camera, one point repeated, no extent), or
-/// is left without a valid point, fails here, in the [`Stage::Input`]
+/// is left without a valid point, fails here, in the [`crate::pipeline::Stage::Input`]
 /// stage. One pass over the frame counts both. Returns the frame the
 /// stages plan and how many valid points it has.
 ///

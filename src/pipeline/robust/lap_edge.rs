@@ -126,7 +126,7 @@ fn lower_plane_beside(
 /// Where each of a plate's `edges` lies (line `measured[k]` of `lines`,
 /// fitted to `edge_points`): along the view's border where most of the
 /// line's inliers lie within the plate's rim (a neighbour radius) and two
-/// spacings of it ([`view_border::ViewBorder::runs_along`]); within the
+/// spacings of it ([`crate::pipeline::view_border::ViewBorder::runs_along`]); within the
 /// plate where the plate's own points are seen past the line's scatter
 /// (two spacings) and within `band_mm` beyond it along most of its span;
 /// else in view, where the plate ends.

@@ -14,7 +14,7 @@ use super::{CellIndex, within_mask};
 /// [`CellIndex::visit_within`] reads them (the cell itself first, then its
 /// neighbourhood list, each cell's points in cell order), one array per
 /// axis, ending in padding no point is ever near. Every neighbour of a
-/// point of the cell is among them, and filtering them by [`within`]
+/// point of the cell is among them, and filtering them by [`within`](crate::kernels::within)
 /// gives the point's neighbours in `visit_within`'s order: that visit
 /// only skips whole cells holding no neighbour.
 #[derive(Default)]
@@ -77,7 +77,7 @@ impl Neighbourhood {
     }
 
     /// The blocks of candidates, each with the mask of its lanes within
-    /// `radius_sq` of `p` by the kernels' predicate ([`within`]).
+    /// `radius_sq` of `p` by the kernels' predicate ([`within`](crate::kernels::within)).
     #[inline(always)]
     fn masks<'s>(&'s self, p: &'s Point, radius_sq: f32) -> impl Iterator<Item = (usize, u32)> + 's {
         let blocks = |axis: &'s [f32]| axis.as_chunks::<HOOD_LANES>().0;
@@ -90,7 +90,7 @@ impl Neighbourhood {
     }
 
     /// Calls `visit(j)` for every candidate `j` within `radius_sq` of `p`
-    /// by the kernels' predicate ([`within`]), in order, until it breaks:
+    /// by the kernels' predicate ([`within`](crate::kernels::within)), in order, until it breaks:
     /// for a point of the cell, [`CellIndex::visit_within`]'s visits.
     #[inline(always)]
     pub(crate) fn visit_within(&self, p: &Point, radius_sq: f32, mut visit: impl FnMut(usize) -> ControlFlow<()>) {
@@ -105,7 +105,7 @@ impl Neighbourhood {
         }
     }
 
-    /// [`super::VisitNeighbours::sample_until`] of `p`'s neighbours: each
+    /// [`crate::pipeline::neighbours::VisitNeighbours::sample_until`] of `p`'s neighbours: each
     /// block's lanes within `radius_sq` stored in order without a branch
     /// per lane (a block is stored whole, hence the slack), the rest only
     /// counted.
@@ -138,7 +138,7 @@ impl Neighbourhood {
 
     /// The number of candidates within `radius_sq` of `p` for which
     /// `member` holds, read up to `cap` (as
-    /// [`super::NeighbourSearch::count_up_to`] reads it): the count does
+    /// [`crate::pipeline::neighbours::NeighbourSearch::count_up_to`] reads it): the count does
     /// not depend on the order, so a block is counted whole before the cap
     /// is checked.
     #[inline(always)]

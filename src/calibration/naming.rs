@@ -353,10 +353,11 @@ fn assign(
 }
 
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use super::*;
 
-    fn sphere(centre: Vec3) -> FittedSphere {
+    /// A well-fitted ball of the rig's radius at `centre`.
+    pub(in crate::calibration) fn sphere(centre: Vec3) -> FittedSphere {
         FittedSphere {
             centre,
             measured_radius_mm: 19.05,

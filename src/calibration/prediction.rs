@@ -275,17 +275,7 @@ fn name_by_prediction(
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    fn sphere(centre: Vec3) -> FittedSphere {
-        FittedSphere {
-            centre,
-            measured_radius_mm: 19.05,
-            radius_index: 0,
-            points: 500,
-            rms_mm: 0.03,
-            cap_half_angle_deg: 70.0,
-        }
-    }
+    use crate::calibration::naming::tests::sphere;
 
     #[test]
     fn spheres_are_named_by_the_nearest_prediction_within_the_tolerance() {

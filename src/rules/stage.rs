@@ -52,23 +52,15 @@ impl Stage {
     ];
 
     /// Every stage, the request check first.
-    pub const ALL: [Stage; 15] = [
-        Stage::Request,
-        Stage::Input,
-        Stage::NeighbourIndex,
-        Stage::Orientation,
-        Stage::PlanePoints,
-        Stage::Clustering,
-        Stage::Background,
-        Stage::EdgePoints,
-        Stage::Ransac,
-        Stage::WeldEdges,
-        Stage::Refit,
-        Stage::Groove,
-        Stage::WeldEquation,
-        Stage::Quality,
-        Stage::Trajectory,
-    ];
+    pub const ALL: [Stage; 15] = {
+        let mut all = [Stage::Request; 15];
+        let mut k = 0;
+        while k < Stage::IN_ORDER.len() {
+            all[k + 1] = Stage::IN_ORDER[k];
+            k += 1;
+        }
+        all
+    };
 
     pub fn name(self) -> &'static str {
         match self {

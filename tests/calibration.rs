@@ -285,6 +285,12 @@ fn weldseam(args: &[&str]) -> std::process::Output {
     std::process::Command::new(env!("CARGO_BIN_EXE_weldseam")).args(args).output().expect("run weldseam")
 }
 
+/// `weldseam calibrate --json` on the capture file `set`, writing the
+/// hand-eye into the config file `config` if the calibration passes.
+fn calibrate_writing(set: &std::path::Path, config: &std::path::Path) -> std::process::Output {
+    weldseam(&["calibrate", "--captures", set.to_str().unwrap(), "--json", "--write-config", config.to_str().unwrap()])
+}
+
 fn matrix(values: &serde_json::Value) -> Isometry3<f64> {
     let v: Vec<f64> = values.as_array().expect("16 numbers").iter().map(|x| x.as_f64().unwrap()).collect();
     let rows: [f64; 16] = v.try_into().expect("16 numbers");
@@ -348,14 +354,7 @@ fn write_config_replaces_only_the_hand_eye() {
     let original = shipped.replace("max_reach_mm = 3500.0", "max_reach_mm = 2800.0  # our cell's robot");
     let config = dir.path().join("cell.toml");
     std::fs::write(&config, &original).unwrap();
-    let out = weldseam(&[
-        "calibrate",
-        "--captures",
-        set.to_str().unwrap(),
-        "--json",
-        "--write-config",
-        config.to_str().unwrap(),
-    ]);
+    let out = calibrate_writing(&set, &config);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let report: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     let written = std::fs::read_to_string(&config).unwrap();
@@ -453,14 +452,7 @@ fn an_untrustworthy_calibration_is_never_written() {
     let dir = tempfile::tempdir().unwrap();
     let (set, config) = untrustworthy_set(dir.path());
     let before = std::fs::read(&config).unwrap();
-    let out = weldseam(&[
-        "calibrate",
-        "--captures",
-        set.to_str().unwrap(),
-        "--json",
-        "--write-config",
-        config.to_str().unwrap(),
-    ]);
+    let out = calibrate_writing(&set, &config);
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(1), "{stderr}");
     assert!(
@@ -555,14 +547,7 @@ fn the_rig_through_files_names_its_balls_and_reports_the_captures_left_out() {
     let file = json_file(&set);
     assert_eq!(file["sphere_radius_mm"], 19.05);
     let config = dir.path().join("cell.toml");
-    let out = weldseam(&[
-        "calibrate",
-        "--captures",
-        set.to_str().unwrap(),
-        "--json",
-        "--write-config",
-        config.to_str().unwrap(),
-    ]);
+    let out = calibrate_writing(&set, &config);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let report: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     let (mm, deg) = error(&matrix(&report["hand_eye"]), &matrix(&json_file(&truth)["hand_eye"]));

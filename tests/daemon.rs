@@ -46,7 +46,7 @@ fn config() -> Config {
 
 /// A 64 x 48 organized frame of a flat plate 700 mm away: valid points,
 /// no seam.
-fn small_cloud() -> PointCloud {
+pub(crate) fn small_cloud() -> PointCloud {
     let (w, h) = (64, 48);
     let points = (0..w * h).map(|i| [(i % w) as f32 * 0.4, (i / w) as f32 * 0.4, 700.0]).collect();
     PointCloud::organized(w, h, points).unwrap()

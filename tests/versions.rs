@@ -235,32 +235,15 @@ async fn a_controller_that_half_closes_is_taken_as_gone_and_its_requests_free_th
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn a_refusal_names_its_rule_only_to_a_controller_granted_rule_ids() {
-    use weldseam::cloud::PointCloud;
     use weldseam::mock::ClientError;
     use weldseam::mock::controller::ControllerClient;
-    use weldseam_proto::message::{FrameSelect, PlanRequest, joint_code};
+    use weldseam_proto::message::FrameSelect;
+
+    use crate::daemon::small_cloud;
 
     // A flat plate: valid points and no seam, so a rule of the planner refuses it.
-    let (w, h) = (64, 48);
-    let points = (0..w * h).map(|i| [(i % w) as f32 * 0.4, (i / w) as f32 * 0.4, 700.0]).collect();
-    let cloud = PointCloud::organized(w, h, points).unwrap();
-    let request = |request_id| PlanRequest {
-        request_id,
-        joint: joint_code::LAP,
-        groove_depth_mm: None,
-        pose: [800.0, 0.0, 500.0, 180.0, 0.0, 0.0],
-        step_mm: None,
-        work_angle_deg: None,
-        travel_angle_deg: None,
-        frame: FrameSelect::FrameId(1),
-        timeout_ms: 0,
-        camera: None,
-        hand_eye: None,
-        start_near: None,
-        roi: None,
-        pose_in: None,
-        one_seam: false,
-    };
+    let cloud = small_cloud();
+    let request = |request_id| crate::daemon::request(request_id, FrameSelect::FrameId(1));
     // The rule the library's planner refuses the same points and request by.
     let library_request = weldseam::convert::from_proto::plan_request(&request(0), config().euler).unwrap();
     let refusal = weldseam::pipeline::Planner::new(config()).plan(&cloud, &library_request).unwrap_err();

@@ -346,7 +346,7 @@ fn plan_workpiece(
             return tee::plan(ctx, tee::SeenTee::of(&workpiece, tee::Flange::OneSide), layers);
         }
         let refusal = corner.refusal();
-        return Err(PlanError { gate: Some(quality::Gate::CornerJoint), ..PlanError::by(refusal.rule(), refusal) });
+        return Err(PlanError::by(refusal.rule(), refusal));
     }
     // A tee whose web's top is not found may have it out of view (a crop
     // round its root): its face standing on the nearest layer of planes,
@@ -365,7 +365,7 @@ fn plan_workpiece(
         (selected, _) => selected,
     };
     let background::Selected { workpiece, layout, evidence: layers } =
-        selected.map_err(|e| background_refusal(&e, e.to_string()))?;
+        selected.map_err(|e| PlanError::by(e.rule(), &e))?;
     if layout == Layout::Lap {
         ctx.joint = Some(JointType::Lap);
         ctx.trace.record(|t| t.joint = Some(JointType::Lap));
@@ -406,20 +406,6 @@ fn plan_workpiece(
     }
 }
 
-/// The refusal of a workpiece the background rule found no joint in,
-/// saying `reason`, under the gate `e` falls under (a joint other than the
-/// one requested, or none that `auto` can name; else no gate).
-fn background_refusal(e: &BackgroundError, reason: String) -> PlanError {
-    let gate = if e.is_joint_mismatch() {
-        Some(quality::Gate::JointMismatch)
-    } else if e.is_unrecognised() {
-        Some(quality::Gate::JointUnknown)
-    } else {
-        None
-    };
-    PlanError { gate, ..PlanError::by(e.rule(), reason) }
-}
-
 /// A tee's root from its web's one face seen standing on `flange` (the
 /// nearest layer of planes), the web's top out of view; refused with
 /// `not_found` (why no web's top was found) and why no face was either.
@@ -443,12 +429,12 @@ fn plan_topless_tee(
         // Under `auto` the search was a guess at a cropped tee: its failure
         // says nothing about the joint the cloud holds.
         if !fillet_asked {
-            return background_refusal(&not_found, not_found.to_string());
+            return PlanError::by(not_found.rule(), &not_found);
         }
         // Under `t_fillet` the face search is the last reading of the
         // frame: its rule refused, in the class the top's search gave.
         let reason = format!("{not_found}; nor does a web's side face stand on the nearest plane: {why}");
-        PlanError { gate: background_refusal(&not_found, String::new()).gate, ..PlanError::by(why.rule(), reason) }
+        PlanError { gate: not_found.rule().gate, ..PlanError::by(why.rule(), reason) }
     })?;
     let layers = format!(
         "no web's top is in view; a side face of {} points stands on the nearest plane ({:.0} mm² in {} piece(s)), \

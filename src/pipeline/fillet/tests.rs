@@ -140,13 +140,7 @@ fn a_web_seen_by_one_face_only_gives_that_face_s_root_and_names_the_other() {
     }
     let cloud = cloud_of(&pts);
     let flange = PlaneCluster::of_points(&pts, |p| p.z == 700.0);
-    let face = StandingFace {
-        plane: Plane { normal: Vec3::x(), offset: WEB_X + 5.0 },
-        centroid: Vec3::new(WEB_X + 5.0, 0.0, 680.0),
-        flange: flange.plane,
-        points: 2000,
-        seen_height_mm: 39.0,
-    };
+    let face = plus_x_face_standing_on(&flange);
     let roots = find_roots(&test_view(&cloud, Web::Face(&face), &[&flange]));
     let seen: Vec<&Root> = roots.iter().filter_map(|r| r.as_ref().ok()).collect();
     assert_eq!(seen.len(), 1, "{roots:?}");
@@ -201,6 +195,29 @@ fn tee_parts(pts: &[Vec3]) -> (PointCloud, PlaneCluster, [PlaneCluster; 2]) {
     (cloud_of(pts), PlaneCluster::of_points(pts, |p| p.z == 660.0), sides)
 }
 
+/// The +x face (x = WEB_X + 5) of the tests' tee, seen standing 39 mm
+/// tall on `flange`, as the face search gives it when the web's top is
+/// out of view.
+fn plus_x_face_standing_on(flange: &PlaneCluster) -> StandingFace {
+    StandingFace {
+        plane: Plane { normal: Vec3::x(), offset: WEB_X + 5.0 },
+        centroid: Vec3::new(WEB_X + 5.0, 0.0, 680.0),
+        flange: flange.plane,
+        points: 2000,
+        seen_height_mm: 39.0,
+    }
+}
+
+/// The root read from the +x side face of the tee of `pts` ([`tee_parts`]).
+fn plus_x_face_reading(pts: &[Vec3]) -> Result<Root, NotRead> {
+    let (cloud, top, [plus, minus]) = tee_parts(pts);
+    let pieces = [&plus, &minus];
+    let view = test_view(&cloud, Web::Top(&top), &pieces);
+    let frame = web_frame(&view).expect("the web's frame");
+    let sign = frame.u.x.signum();
+    root_from_face(&view, &frame, sign, side_seen(&frame, sign))
+}
+
 /// The root of `roots` on the web's +x face ([`assert_on_plus_x_face`]).
 fn plus_x_face_root(roots: &[Result<Root, RootNotSeen>]) -> Root {
     let root = roots.iter().find_map(|r| r.as_ref().ok()).expect("the root facing the camera").clone();
@@ -249,12 +266,7 @@ fn the_web_and_the_flange_seen_past_the_face_s_end_are_reported_beyond_the_root(
     // (for the flange's edge to be read instead, and the quality gate
     // to refuse a root stopping short).
     let pts = tee_with_face_seen_above(|y| if y <= 20.0 { 1.0 } else { f64::INFINITY }, |_| true);
-    let (cloud, top, [plus, minus]) = tee_parts(&pts);
-    let pieces = [&plus, &minus];
-    let view = test_view(&cloud, Web::Top(&top), &pieces);
-    let frame = web_frame(&view).expect("the web's frame");
-    let sign = frame.u.x.signum();
-    let root = root_from_face(&view, &frame, sign, side_seen(&frame, sign)).expect("the +x face's root");
+    let root = plus_x_face_reading(&pts).expect("the +x face's root");
     assert_on_plus_x_face(&root);
     let ends = ends_y(&root);
     assert!((ends[0] + 50.0).abs() < 1e-6 && (ends[1] - 20.0).abs() < 1e-6, "{ends:?}");
@@ -410,12 +422,7 @@ fn the_webs_end_face_is_no_side_face_and_the_root_runs_to_the_webs_end() {
     let root = roots.iter().find_map(|r| r.as_ref().ok()).expect("the root facing the camera");
     assert_eq!(ids(root), ["tee.flange_edge_ends_with_web_top"]);
     // The end face read as a face is refused as the web's end.
-    let (cloud, top, [plus, minus]) = tee_parts(&pts);
-    let pieces = [&plus, &minus];
-    let view = test_view(&cloud, Web::Top(&top), &pieces);
-    let frame = web_frame(&view).expect("the web's frame");
-    let sign = frame.u.x.signum();
-    let end_face = root_from_face(&view, &frame, sign, side_seen(&frame, sign)).expect_err("the web's end");
+    let end_face = plus_x_face_reading(&pts).expect_err("the web's end");
     assert_eq!(end_face.rule.id, "tee.side_face_is_web_end", "{end_face}");
 }
 
@@ -632,13 +639,7 @@ fn a_face_whose_flange_is_not_seen_up_to_it_gives_no_root() {
     }
     let cloud = cloud_of(&pts);
     let flange = PlaneCluster::of_points(&pts, |p| p.z == 700.0);
-    let face = StandingFace {
-        plane: Plane { normal: Vec3::x(), offset: WEB_X + 5.0 },
-        centroid: Vec3::new(WEB_X + 5.0, 0.0, 680.0),
-        flange: flange.plane,
-        points: 2000,
-        seen_height_mm: 39.0,
-    };
+    let face = plus_x_face_standing_on(&flange);
     let roots = find_roots(&test_view(&cloud, Web::Face(&face), &[&flange]));
     let near = roots.iter().filter_map(|r| r.as_ref().err()).find(|r| r.side == Side::Near).expect("not seen");
     assert_eq!(near.rule.id, "tee.root_not_seen", "{}", near.reason);
@@ -659,12 +660,7 @@ fn mixed_returns_along_the_rays_are_no_side_face() {
         pts.extend((0..30).map(|j| Vec3::new(WEB_X - 30.0 - 0.5 * j as f64, y, 700.0)));
         pts.extend((2..=40).map(|j| Vec3::new(WEB_X + 5.0, y, 700.0) * (1.0 - 0.001 * j as f64)));
     }
-    let (cloud, top, [plus, minus]) = tee_parts(&pts);
-    let pieces = [&plus, &minus];
-    let view = test_view(&cloud, Web::Top(&top), &pieces);
-    let frame = web_frame(&view).expect("the web's frame");
-    let sign = frame.u.x.signum();
-    let veil = root_from_face(&view, &frame, sign, side_seen(&frame, sign)).expect_err("a veil is no face");
+    let veil = plus_x_face_reading(&pts).expect_err("a veil is no face");
     assert_eq!(veil.rule.id, "tee.side_face_along_camera_rays", "{veil}");
 }
 
@@ -688,12 +684,7 @@ fn a_face_seen_past_a_long_break_gives_its_longest_run() {
     // break longer than a joint's: the root read from the face runs from
     // −50 to 19, the 10 mm past the break left out.
     let pts = tee_with_face_seen_above(|y| if (20.0..40.0).contains(&y) { f64::INFINITY } else { 1.0 }, |_| true);
-    let (cloud, top, [plus, minus]) = tee_parts(&pts);
-    let pieces = [&plus, &minus];
-    let view = test_view(&cloud, Web::Top(&top), &pieces);
-    let frame = web_frame(&view).expect("the web's frame");
-    let sign = frame.u.x.signum();
-    let root = root_from_face(&view, &frame, sign, side_seen(&frame, sign)).expect("the +x face's root");
+    let root = plus_x_face_reading(&pts).expect("the +x face's root");
     assert_on_plus_x_face(&root);
     let ends = ends_y(&root);
     assert!((ends[0] + 50.0).abs() < 1e-6 && (ends[1] - 19.0).abs() < 1e-6, "{ends:?}");

@@ -57,7 +57,7 @@ fn plan_reply() -> PlanReply {
         }),
         warnings: vec![GateWarning {
             gate: "position_uncertainty".into(),
-            rule: Some("seam.position_uncertain".into()),
+            rule: Some("seam.position_uncertainty".into()),
             value: 0.625,
             limit: 0.5,
             message: "0.625 > 0.5 mm".into(),

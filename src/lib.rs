@@ -21,6 +21,7 @@ pub mod joint;
 pub(crate) mod kernels;
 pub mod mock;
 pub mod pipeline;
+pub mod process;
 pub mod report;
 pub mod rules;
 pub mod server;

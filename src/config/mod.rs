@@ -9,6 +9,7 @@
 mod camera;
 mod file;
 mod planning;
+pub mod procedure;
 mod quality;
 mod server;
 #[cfg(test)]

@@ -1,0 +1,398 @@
+//! The weld procedure: a table written as a welding procedure
+//! specification (WPS) is, read from TOML and validated once.
+//!
+//! A procedure names its wires (each with its synergic line: the arc
+//! voltage and current at a wire feed speed) and, per joint type and
+//! plate thickness range, an entry: the travel speed and wire feed ranges,
+//! the bead sizes one pass may lay, the torch angles, the widest gap it
+//! welds and, for fillets, the leg. The numbers are data: the example
+//! shipped in config/procedures/gmaw-mild-steel.toml documents each field.
+//! After [`Procedure::from_toml`] every range is ordered, every figure is
+//! positive and finite, every entry's wire exists and no two entries of a
+//! joint type claim the same thickness, so the rest of the process model
+//! never checks them again.
+
+use serde::Deserialize;
+
+use crate::joint::JointType;
+
+/// The example procedure shipped with weldseam (mild-steel GMAW with
+/// 1.0 and 1.2 mm wire).
+pub const EXAMPLE: &str = include_str!("../../config/procedures/gmaw-mild-steel.toml");
+
+/// What is wrong with a procedure file: the field and the limit it breaks.
+#[derive(Debug, thiserror::Error, PartialEq)]
+pub enum ProcedureError {
+    #[error("the procedure is not valid TOML for its schema: {0}")]
+    Parse(String),
+    #[error("{field} is {value}: {limit}")]
+    Value { field: String, value: f64, limit: &'static str },
+    #[error("{field}: the range [{min}, {max}] is empty (min above max)")]
+    Range { field: String, min: f64, max: f64 },
+    #[error("entry {entry} ({joint}) names wire {diameter_mm} mm, which the procedure has no [[wire]] for")]
+    UnknownWire { entry: usize, joint: &'static str, diameter_mm: f64 },
+    #[error("entry {entry} ({joint}) feeds wire at {feed:?} m/min, beyond its synergic line's {line:?}")]
+    FeedBeyondLine { entry: usize, joint: &'static str, feed: [f64; 2], line: [f64; 2] },
+    #[error("wire {diameter_mm} mm: its synergic line needs at least two points in rising wire feed order")]
+    SynergicLine { diameter_mm: f64 },
+    #[error("entries {first} and {second} ({joint}) both claim plates {thickness_mm} mm thick")]
+    Overlap { first: usize, second: usize, joint: &'static str, thickness_mm: f64 },
+    #[error("entry {entry} ({joint}) lacks {field}, which a {joint} entry needs")]
+    Missing { entry: usize, joint: &'static str, field: &'static str },
+    #[error("the procedure has no [[entry]]")]
+    Empty,
+}
+
+/// A weld procedure, validated.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Procedure {
+    /// What the procedure is: process, base metal, wire, gas, position.
+    pub name: String,
+    /// The share of the wire fed that ends in the weld.
+    pub deposition_efficiency: f64,
+    /// The cap's height above the plates over a groove or square butt, mm.
+    pub cap_height_mm: f64,
+    /// How far the cap runs onto each plate beyond the joint's edge, mm.
+    pub cap_overlap_mm: f64,
+    /// How far a fillet's face bulges beyond the flat face, mm.
+    pub fillet_convexity_mm: f64,
+    #[serde(rename = "wire")]
+    pub wires: Vec<Wire>,
+    #[serde(rename = "entry")]
+    pub entries: Vec<Entry>,
+}
+
+/// A wire and its synergic line.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Wire {
+    pub diameter_mm: f64,
+    /// Working points in rising wire feed order; straight between them.
+    pub synergic: Vec<ArcPoint>,
+}
+
+/// One working point of a synergic line.
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ArcPoint {
+    pub wire_feed_m_min: f64,
+    pub voltage_v: f64,
+    pub current_a: f64,
+}
+
+/// A travel speed range with the speed used when the bead allows it.
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SpeedRange {
+    pub min: f64,
+    pub nominal: f64,
+    pub max: f64,
+}
+
+/// One line of the procedure: a joint type over a plate thickness range.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Entry {
+    #[serde(deserialize_with = "joint_by_name")]
+    pub joint: JointType,
+    /// Plate thickness, [min, max) mm (the last entry of a joint type
+    /// includes its max).
+    pub thickness_mm: [f64; 2],
+    pub wire_diameter_mm: f64,
+    pub travel_speed_mm_s: SpeedRange,
+    pub wire_feed_m_min: [f64; 2],
+    /// One pass's cross-section, [min, max] mm².
+    pub bead_area_mm2: [f64; 2],
+    /// V-grooves: the root pass's cross-section, mm².
+    #[serde(default)]
+    pub root_bead_area_mm2: Option<f64>,
+    /// V-grooves: the cross-section fill and cap passes are laid out at, mm².
+    #[serde(default)]
+    pub fill_bead_area_mm2: Option<f64>,
+    /// A layer wider than this is laid as beads side by side, mm.
+    pub max_bead_width_mm: f64,
+    /// The widest root gap this entry welds, mm.
+    pub max_gap_mm: f64,
+    /// Fillets: the leg size, mm.
+    #[serde(default)]
+    pub leg_mm: Option<f64>,
+    /// Fillets: the gap above which the leg grows by the excess, mm.
+    #[serde(default)]
+    pub leg_gap_allowance_mm: Option<f64>,
+    /// Torch tilt across the seam from the joint's bisector, degrees.
+    pub work_angle_deg: f64,
+    /// A wide layer's side beads tilt this far towards their groove face.
+    #[serde(default)]
+    pub side_bead_work_angle_deg: f64,
+    /// Push angle along the seam, degrees.
+    pub travel_angle_deg: f64,
+    /// How the torch weaves where the gap calls for it (none if absent).
+    #[serde(default)]
+    pub weave: Option<WeaveSpec>,
+}
+
+/// A weave's shape, as a controller's weave function names it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum WeavePattern {
+    Triangle,
+    Sine,
+    /// A swing with a dwell at each side.
+    Trapezoid,
+}
+
+/// When and how an entry weaves.
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct WeaveSpec {
+    pub pattern: WeavePattern,
+    /// Weave where the root gap is wider than this, mm.
+    pub above_gap_mm: f64,
+    /// The swing's half-width per millimetre of gap (0.5: the torch
+    /// reaches each edge of the gap).
+    pub amplitude_per_gap: f64,
+    /// The widest half-swing, mm.
+    pub max_amplitude_mm: f64,
+    /// Travel along the seam per cycle, mm.
+    pub wavelength_mm: f64,
+    /// Trapezoid: how long the torch dwells at each side, s.
+    #[serde(default)]
+    pub dwell_s: f64,
+}
+
+fn joint_by_name<'de, D: serde::Deserializer<'de>>(d: D) -> Result<JointType, D::Error> {
+    let name = String::deserialize(d)?;
+    JointType::NAMED.into_iter().find(|j| j.name() == name).ok_or_else(|| {
+        serde::de::Error::custom(format!("unknown joint `{name}`: one of v_butt, i_butt, lap, t_fillet"))
+    })
+}
+
+impl Procedure {
+    /// The shipped example, which the tests hold valid.
+    pub fn example() -> Procedure {
+        Procedure::from_toml(EXAMPLE).expect("the shipped example procedure is valid (tested)")
+    }
+
+    /// Reads and validates a procedure.
+    pub fn from_toml(text: &str) -> Result<Procedure, ProcedureError> {
+        let procedure: Procedure = toml::from_str(text).map_err(|e| ProcedureError::Parse(e.to_string()))?;
+        procedure.validate()?;
+        Ok(procedure)
+    }
+
+    /// The entry for a joint type and plate thickness, if any.
+    pub fn entry(&self, joint: JointType, thickness_mm: f64) -> Option<&Entry> {
+        let of_joint: Vec<&Entry> = self.entries.iter().filter(|e| e.joint == joint).collect();
+        let top = of_joint.iter().map(|e| e.thickness_mm[1]).fold(f64::NEG_INFINITY, f64::max);
+        of_joint.into_iter().find(|e| {
+            let [lo, hi] = e.thickness_mm;
+            thickness_mm >= lo && (thickness_mm < hi || (hi == top && thickness_mm == hi))
+        })
+    }
+
+    /// The thickness ranges a joint type has entries for, in rising order.
+    pub fn thickness_ranges(&self, joint: JointType) -> Vec<[f64; 2]> {
+        let mut ranges: Vec<[f64; 2]> =
+            self.entries.iter().filter(|e| e.joint == joint).map(|e| e.thickness_mm).collect();
+        ranges.sort_by(|a, b| a[0].total_cmp(&b[0]));
+        ranges
+    }
+
+    /// The wire of an entry (validated to exist).
+    pub fn wire(&self, entry: &Entry) -> &Wire {
+        self.wires
+            .iter()
+            .find(|w| w.diameter_mm == entry.wire_diameter_mm)
+            .expect("validated: every entry's wire exists")
+    }
+
+    fn validate(&self) -> Result<(), ProcedureError> {
+        fraction("deposition_efficiency", self.deposition_efficiency)?;
+        non_negative("cap_height_mm", self.cap_height_mm)?;
+        non_negative("cap_overlap_mm", self.cap_overlap_mm)?;
+        non_negative("fillet_convexity_mm", self.fillet_convexity_mm)?;
+        for (k, wire) in self.wires.iter().enumerate() {
+            positive(&format!("wire {} diameter_mm", k + 1), wire.diameter_mm)?;
+            let rising = wire.synergic.windows(2).all(|w| w[1].wire_feed_m_min > w[0].wire_feed_m_min);
+            if wire.synergic.len() < 2 || !rising {
+                return Err(ProcedureError::SynergicLine { diameter_mm: wire.diameter_mm });
+            }
+            for p in &wire.synergic {
+                positive("synergic wire_feed_m_min", p.wire_feed_m_min)?;
+                positive("synergic voltage_v", p.voltage_v)?;
+                positive("synergic current_a", p.current_a)?;
+            }
+        }
+        if self.entries.is_empty() {
+            return Err(ProcedureError::Empty);
+        }
+        for (k, e) in self.entries.iter().enumerate() {
+            e.validate(k + 1)?;
+            let Some(wire) = self.wires.iter().find(|w| w.diameter_mm == e.wire_diameter_mm) else {
+                return Err(ProcedureError::UnknownWire {
+                    entry: k + 1,
+                    joint: e.joint.name(),
+                    diameter_mm: e.wire_diameter_mm,
+                });
+            };
+            // The arc's working point is read off the synergic line, never
+            // extrapolated beyond it.
+            let line = [wire.synergic[0].wire_feed_m_min, wire.synergic[wire.synergic.len() - 1].wire_feed_m_min];
+            if e.wire_feed_m_min[0] < line[0] || e.wire_feed_m_min[1] > line[1] {
+                return Err(ProcedureError::FeedBeyondLine {
+                    entry: k + 1,
+                    joint: e.joint.name(),
+                    feed: e.wire_feed_m_min,
+                    line,
+                });
+            }
+            for (j, other) in self.entries.iter().enumerate().take(k) {
+                let overlap = other.joint == e.joint
+                    && e.thickness_mm[0] < other.thickness_mm[1]
+                    && other.thickness_mm[0] < e.thickness_mm[1];
+                if overlap {
+                    return Err(ProcedureError::Overlap {
+                        first: j + 1,
+                        second: k + 1,
+                        joint: e.joint.name(),
+                        thickness_mm: e.thickness_mm[0].max(other.thickness_mm[0]),
+                    });
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+impl Entry {
+    fn validate(&self, k: usize) -> Result<(), ProcedureError> {
+        let f = |name: &str| format!("entry {k} ({}) {name}", self.joint.name());
+        range(&f("thickness_mm"), self.thickness_mm)?;
+        positive(&f("thickness_mm"), self.thickness_mm[0])?;
+        positive(&f("wire_diameter_mm"), self.wire_diameter_mm)?;
+        let s = self.travel_speed_mm_s;
+        positive(&f("travel_speed_mm_s.min"), s.min)?;
+        range(&f("travel_speed_mm_s (min, nominal)"), [s.min, s.nominal])?;
+        range(&f("travel_speed_mm_s (nominal, max)"), [s.nominal, s.max])?;
+        positive(&f("wire_feed_m_min"), self.wire_feed_m_min[0])?;
+        range(&f("wire_feed_m_min"), self.wire_feed_m_min)?;
+        positive(&f("bead_area_mm2"), self.bead_area_mm2[0])?;
+        range(&f("bead_area_mm2"), self.bead_area_mm2)?;
+        positive(&f("max_bead_width_mm"), self.max_bead_width_mm)?;
+        non_negative(&f("max_gap_mm"), self.max_gap_mm)?;
+        angle(&f("work_angle_deg"), self.work_angle_deg)?;
+        angle(&f("side_bead_work_angle_deg"), self.side_bead_work_angle_deg)?;
+        angle(&f("travel_angle_deg"), self.travel_angle_deg)?;
+        if let Some(w) = &self.weave {
+            non_negative(&f("weave.above_gap_mm"), w.above_gap_mm)?;
+            positive(&f("weave.amplitude_per_gap"), w.amplitude_per_gap)?;
+            positive(&f("weave.max_amplitude_mm"), w.max_amplitude_mm)?;
+            positive(&f("weave.wavelength_mm"), w.wavelength_mm)?;
+            non_negative(&f("weave.dwell_s"), w.dwell_s)?;
+        }
+        let missing = |field| ProcedureError::Missing { entry: k, joint: self.joint.name(), field };
+        match self.joint {
+            JointType::VButt => {
+                for (name, area) in [
+                    ("root_bead_area_mm2", self.root_bead_area_mm2.ok_or(missing("root_bead_area_mm2"))?),
+                    ("fill_bead_area_mm2", self.fill_bead_area_mm2.ok_or(missing("fill_bead_area_mm2"))?),
+                ] {
+                    within_bead(&f(name), area, self.bead_area_mm2)?;
+                }
+            }
+            JointType::TFillet | JointType::Lap => {
+                positive(&f("leg_mm"), self.leg_mm.ok_or(missing("leg_mm"))?)?;
+                non_negative(
+                    &f("leg_gap_allowance_mm"),
+                    self.leg_gap_allowance_mm.ok_or(missing("leg_gap_allowance_mm"))?,
+                )?;
+            }
+            JointType::IButt => {}
+        }
+        Ok(())
+    }
+}
+
+fn value(field: &str, value: f64, limit: &'static str) -> ProcedureError {
+    ProcedureError::Value { field: field.to_string(), value, limit }
+}
+
+fn positive(field: &str, v: f64) -> Result<(), ProcedureError> {
+    if v.is_finite() && v > 0.0 { Ok(()) } else { Err(value(field, v, "must be a finite figure above 0")) }
+}
+
+fn non_negative(field: &str, v: f64) -> Result<(), ProcedureError> {
+    if v.is_finite() && v >= 0.0 { Ok(()) } else { Err(value(field, v, "must be a finite figure of 0 or more")) }
+}
+
+fn fraction(field: &str, v: f64) -> Result<(), ProcedureError> {
+    if v > 0.0 && v <= 1.0 { Ok(()) } else { Err(value(field, v, "must lie in (0, 1]")) }
+}
+
+fn angle(field: &str, v: f64) -> Result<(), ProcedureError> {
+    if v.is_finite() && v.abs() < 45.0 { Ok(()) } else { Err(value(field, v, "must lie within ±45 degrees")) }
+}
+
+fn range(field: &str, [min, max]: [f64; 2]) -> Result<(), ProcedureError> {
+    if !min.is_finite() || !max.is_finite() {
+        return Err(value(field, if min.is_finite() { max } else { min }, "must be finite"));
+    }
+    if min > max { Err(ProcedureError::Range { field: field.to_string(), min, max }) } else { Ok(()) }
+}
+
+fn within_bead(field: &str, v: f64, [min, max]: [f64; 2]) -> Result<(), ProcedureError> {
+    if v >= min && v <= max { Ok(()) } else { Err(value(field, v, "must lie within the entry's bead_area_mm2")) }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_example_procedure_is_valid_and_covers_every_joint() {
+        let p = Procedure::example();
+        for joint in JointType::NAMED {
+            assert!(!p.thickness_ranges(joint).is_empty(), "{} has no entry", joint.name());
+        }
+        assert_eq!(p.entry(JointType::VButt, 20.0).unwrap().wire_diameter_mm, 1.2);
+        assert_eq!(p.entry(JointType::IButt, 3.0).unwrap().wire_diameter_mm, 1.0);
+        // A thickness on a boundary belongs to the entry that starts there,
+        // and the top of the last range is included.
+        assert_eq!(p.entry(JointType::TFillet, 8.0).unwrap().leg_mm, Some(6.0));
+        assert_eq!(p.entry(JointType::TFillet, 20.0).unwrap().leg_mm, Some(6.0));
+        assert!(p.entry(JointType::TFillet, 20.5).is_none());
+        assert!(p.entry(JointType::IButt, 1.0).is_none());
+    }
+
+    fn example_with(from: &str, to: &str) -> Result<Procedure, ProcedureError> {
+        assert!(EXAMPLE.contains(from), "the example has {from:?}");
+        Procedure::from_toml(&EXAMPLE.replacen(from, to, 1))
+    }
+
+    #[test]
+    fn a_bad_figure_is_refused_with_the_field_and_the_limit() {
+        let e = example_with("deposition_efficiency = 0.95", "deposition_efficiency = 1.5").unwrap_err();
+        assert_eq!(e.to_string(), "deposition_efficiency is 1.5: must lie in (0, 1]");
+        let e = example_with("wire_feed_m_min = [2.5, 8.0]", "wire_feed_m_min = [8.0, 2.5]").unwrap_err();
+        assert!(matches!(e, ProcedureError::Range { .. }), "{e}");
+        let e = example_with("thickness_mm = [4.0, 6.0]", "thickness_mm = [3.0, 6.0]").unwrap_err();
+        assert_eq!(e, ProcedureError::Overlap { first: 1, second: 2, joint: "i_butt", thickness_mm: 3.0 });
+        let e = example_with("wire_diameter_mm = 1.2\ntravel", "wire_diameter_mm = 0.9\ntravel").unwrap_err();
+        assert!(matches!(e, ProcedureError::UnknownWire { diameter_mm, .. } if diameter_mm == 0.9), "{e}");
+        let e = example_with("wire_feed_m_min = [2.5, 10.0]", "wire_feed_m_min = [2.5, 12.0]").unwrap_err();
+        assert!(matches!(e, ProcedureError::FeedBeyondLine { line: [2.5, 11.0], .. }), "{e}");
+        let e = example_with("root_bead_area_mm2 = 15.0\n", "").unwrap_err();
+        assert!(matches!(e, ProcedureError::Missing { field: "root_bead_area_mm2", .. }), "{e}");
+        let e = example_with("leg_mm = 4.0", "leg_mm = -4.0").unwrap_err();
+        assert!(e.to_string().contains("leg_mm is -4"), "{e}");
+    }
+
+    #[test]
+    fn unknown_fields_and_joints_are_named() {
+        let e = example_with("cap_height_mm", "cap_hieght_mm").unwrap_err();
+        assert!(e.to_string().contains("cap_hieght_mm"), "{e}");
+        let e = example_with("joint = \"lap\"", "joint = \"corner\"").unwrap_err();
+        assert!(e.to_string().contains("unknown joint `corner`"), "{e}");
+    }
+}

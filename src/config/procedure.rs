@@ -57,10 +57,36 @@ pub struct Procedure {
     pub cap_overlap_mm: f64,
     /// How far a fillet's face bulges beyond the flat face, mm.
     pub fillet_convexity_mm: f64,
+    /// The torch, as a solid the planner keeps clear of the workpiece.
+    pub torch: Torch,
     #[serde(rename = "wire")]
     pub wires: Vec<Wire>,
     #[serde(rename = "entry")]
     pub entries: Vec<Entry>,
+}
+
+/// The torch's solid along its axis from the aim point: nothing up to
+/// the nozzle's end, the nozzle (a cylinder), then the neck and body (a
+/// cone widening from the nozzle's radius; 0 degrees: a cylinder).
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Torch {
+    /// Contact tip to work distance, mm (the wire's stick-out and the
+    /// tip's recess up to the nozzle's end are within it).
+    pub contact_tip_to_work_mm: f64,
+    /// From the aim point to the nozzle's end, mm.
+    pub nozzle_to_work_mm: f64,
+    pub nozzle_diameter_mm: f64,
+    pub nozzle_length_mm: f64,
+    pub body_length_mm: f64,
+    pub body_half_angle_deg: f64,
+    /// Clearance kept round the solid for the cloud's noise and the
+    /// robot's path error, mm.
+    pub margin_mm: f64,
+    /// How far the planner may move the procedure's work angle, and the
+    /// travel angles it may use, to clear the workpiece, degrees.
+    pub work_deviation_deg: f64,
+    pub travel_angle_range_deg: [f64; 2],
 }
 
 /// A wire and its synergic line.
@@ -212,6 +238,27 @@ impl Procedure {
         non_negative("cap_height_mm", self.cap_height_mm)?;
         non_negative("cap_overlap_mm", self.cap_overlap_mm)?;
         non_negative("fillet_convexity_mm", self.fillet_convexity_mm)?;
+        let t = &self.torch;
+        positive("torch.contact_tip_to_work_mm", t.contact_tip_to_work_mm)?;
+        positive("torch.nozzle_to_work_mm", t.nozzle_to_work_mm)?;
+        if t.nozzle_to_work_mm > t.contact_tip_to_work_mm {
+            return Err(value(
+                "torch.nozzle_to_work_mm",
+                t.nozzle_to_work_mm,
+                "must not exceed torch.contact_tip_to_work_mm (the tip sits inside the nozzle)",
+            ));
+        }
+        positive("torch.nozzle_diameter_mm", t.nozzle_diameter_mm)?;
+        positive("torch.nozzle_length_mm", t.nozzle_length_mm)?;
+        non_negative("torch.body_length_mm", t.body_length_mm)?;
+        if !(0.0..60.0).contains(&t.body_half_angle_deg) {
+            return Err(value("torch.body_half_angle_deg", t.body_half_angle_deg, "must lie in [0, 60) degrees"));
+        }
+        non_negative("torch.margin_mm", t.margin_mm)?;
+        angle("torch.work_deviation_deg", t.work_deviation_deg)?;
+        range("torch.travel_angle_range_deg", t.travel_angle_range_deg)?;
+        angle("torch.travel_angle_range_deg", t.travel_angle_range_deg[0])?;
+        angle("torch.travel_angle_range_deg", t.travel_angle_range_deg[1])?;
         for (k, wire) in self.wires.iter().enumerate() {
             positive(&format!("wire {} diameter_mm", k + 1), wire.diameter_mm)?;
             let rising = wire.synergic.windows(2).all(|w| w[1].wire_feed_m_min > w[0].wire_feed_m_min);

@@ -14,11 +14,14 @@
 //! - [`deposit`]: a bead's cross-section to wire feed and travel speed,
 //!   and the synergic line to voltage and current;
 //! - [`layout`]: the passes, layer by layer for a V-groove;
-//! - [`weave`]: the torch's swing across the seam, following the gap.
+//! - [`weave`]: the torch's swing across the seam, following the gap;
+//! - [`clearance`]: the torch as a solid against the measured cloud, its
+//!   angles moved where it touches, stretches cut where nothing clears.
 //!
 //! docs/PROCESS.md explains the model for a welding engineer, with the
 //! example procedure (config/procedures/gmaw-mild-steel.toml).
 
+pub mod clearance;
 pub mod deposit;
 pub mod layout;
 pub mod section;

@@ -16,6 +16,7 @@ use weldseam::pipeline::Stage;
 use weldseam::sim::scenarios::{FRAME_SIZES, Scenario, VARIANT_JOINT, VARIANTS, camera_with_size, raw_cloud_bytes};
 use weldseam::sim::variants::Variant;
 
+use crate::scenes;
 use crate::util::write_temp;
 
 fn smallest() -> Scenario {
@@ -137,9 +138,9 @@ fn bench_prints_every_table_with_a_figure_in_every_row() {
 #[test]
 fn the_daemon_latency_gives_one_sample_per_run() {
     let scenario = smallest();
-    let sim = scenario.simulate();
+    let sim = scenes::scenario(&scenario);
     let config = Config { camera: scenario.camera, ..Config::default() };
-    let latency = load::daemon_latency(config, scenario.joint, &sim, 2).unwrap();
+    let latency = load::daemon_latency(config, scenario.joint, sim, 2).unwrap();
     assert_eq!(latency.len(), 2);
     // Not a speed target: a bound that only a lost or stuck reply (or a
     // sample in the wrong unit) breaks, since the pipeline's own time on
@@ -150,10 +151,10 @@ fn the_daemon_latency_gives_one_sample_per_run() {
 #[test]
 fn the_load_measurement_answers_requests_in_order() {
     let scenario = smallest();
-    let sim = scenario.simulate();
+    let sim = scenes::scenario(&scenario);
     let config = Config { camera: scenario.camera, ..Config::default() };
     let load = Load { duration: std::time::Duration::from_secs(2), controllers: 2, camera_hz: 10.0, queue_depth: 2 };
-    let figures = load::daemon_under_load(config, scenario.joint, &sim, load).unwrap();
+    let figures = load::daemon_under_load(config, scenario.joint, sim, load).unwrap();
     assert!(!figures.replies.is_empty(), "no request was answered: {:?}", figures.errors);
     // A reply time runs from the request written to the reply read, so it
     // holds the pipeline's time for that plan; a mixed-up sample breaks it.
@@ -178,10 +179,10 @@ fn the_load_measurement_answers_requests_in_order() {
 #[test]
 fn a_one_shot_plan_of_a_large_variant_peaks_under_four_times_its_raw_size() {
     let scenario = Scenario::new(VARIANT_JOINT, 500.0, CameraModel::default());
-    let frame = scenario.simulate();
+    let frame = scenes::scenario(&scenario);
     for text in ["unorganized", "metres", "base"] {
         let variant = Variant::parse(text).unwrap();
-        let (peak, raw) = one_shot_peak(&variant.apply(&frame, scenario.seed()), variant.in_base_frame());
+        let (peak, raw) = one_shot_peak(&variant.apply(frame, scenario.seed()), variant.in_base_frame());
         let ratio = peak as f64 / raw as f64;
         assert!(
             ratio < 4.0,

@@ -9,14 +9,23 @@ use weldseam::config::Config;
 use weldseam::eval::seam_error;
 use weldseam::joint::{JointType, RequestedJoint};
 use weldseam::pipeline::input::Units;
+use weldseam::pipeline::quality::Gate;
 use weldseam::pipeline::{Plan, PlanError, PlanRequest, Planner, Stage};
 use weldseam::sim::consumer::{consumer_camera, consumer_demo_scene, consumer_far_suite, consumer_variant};
-use weldseam::sim::{Draw, SceneSpec, Simulation, consumer_suite, simulate};
+use weldseam::sim::{Draw, SceneSpec, Simulation, consumer_suite};
+
+use crate::scenes;
+
+/// `spec` seen by the consumer camera, made into the strip its user hands
+/// over.
+fn strip(spec: &SceneSpec) -> &'static Simulation {
+    scenes::as_variant(spec, &consumer_camera(), &consumer_variant())
+}
 
 /// Simulates `spec` with the consumer camera, makes the strip and plans it
 /// at the default config.
-fn try_plan_strip(name: &str, spec: &SceneSpec) -> (Result<Plan, PlanError>, Simulation) {
-    let sim = consumer_variant().apply(&simulate(spec, &consumer_camera()), spec.seed);
+fn try_plan_strip(name: &str, spec: &SceneSpec) -> (Result<Plan, PlanError>, &'static Simulation) {
+    let sim = strip(spec);
     assert!(!sim.cloud.is_organized(), "{name}: the strip is unorganized");
     assert!(sim.cloud.points().iter().all(|p| p[2] < 1.0), "{name}: the strip is in metres");
     let planner = Planner::new(Config::default());
@@ -100,7 +109,8 @@ fn a_far_i_butt_strip_whose_edge_is_lost_short_of_an_end_is_refused_not_cut_shor
     spec.placement.tilt_deg = 24.0;
     let (plan, _) = try_plan_strip(name, &spec);
     let err = plan.err().unwrap_or_else(|| panic!("{name}: planned"));
-    assert!(err.to_string().contains("beyond the seam's last end"), "{name}: {err}");
+    assert_eq!((err.rule.id, err.gate), ("seam.stops_short_of_joint", Some(Gate::JointCoverage)), "{name}: {err}");
+    assert!(err.reason.contains("beyond the seam's last end"), "{name}: the end named: {err}");
 }
 
 #[test]
@@ -112,7 +122,7 @@ fn a_v_groove_strip_requested_as_a_tee_is_refused_not_planned_along_its_root_lan
     // nearest plane, the last reading that could admit a tee, finds none.
     let name = "consumer-v-butt-05-d367-t17";
     let spec = suite_scene(name);
-    let sim = consumer_variant().apply(&simulate(&spec, &consumer_camera()), spec.seed);
+    let sim = strip(&spec);
     let mut request = PlanRequest::new(JointType::TFillet, None, sim.pose);
     request.units = Units::Auto;
     let plan = Planner::new(Config::default()).plan(&sim.cloud, &request);
@@ -128,7 +138,7 @@ fn a_v_groove_whose_root_is_hidden_needs_its_depth() {
     // unknown. Given the depth, the same strip plans.
     let name = "consumer-v-butt-00-d200-t0";
     let spec = suite_scene(name);
-    let sim = consumer_variant().apply(&simulate(&spec, &consumer_camera()), spec.seed);
+    let sim = strip(&spec);
     let planner = Planner::new(Config::default());
     let mut request = PlanRequest::new(RequestedJoint::Auto, None, sim.pose);
     request.units = Units::Auto;

@@ -8,7 +8,6 @@ use std::time::Duration;
 
 use tokio::io::{AsyncReadExt, AsyncWriteExt};
 use tokio::net::TcpStream;
-use weldseam::camera::CameraModel;
 use weldseam::cloud::PointCloud;
 use weldseam::config::Config;
 use weldseam::geometry::{Vec3, distance_to_polyline};
@@ -18,8 +17,9 @@ use weldseam::mock::camera::CameraOptions;
 use weldseam::mock::controller::ControllerClient;
 use weldseam::server::Stopped;
 
+use crate::scenes;
 use crate::util::Cell;
-use weldseam::sim::{Draw, Simulation, demo_scene, simulate};
+use weldseam::sim::{Draw, Simulation};
 use weldseam_proto::frame::{self, HEADER_BYTES, Header};
 use weldseam_proto::message::{FrameSelect, Hello, PlanReply, PlanRequest, PoseIn, Role, Tag, Trigger, joint_code};
 use weldseam_proto::{ErrorCode, Message, PROTOCOL_VERSION};
@@ -192,7 +192,7 @@ fn frame_message(frame_id: u64, trigger_id: u64, cloud: &PointCloud) -> Message 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn each_joint_end_to_end_in_trigger_mode() {
     let joints = JointType::ALL;
-    let sims: Vec<Simulation> = joints.iter().map(|j| simulate(&demo_scene(*j), &CameraModel::default())).collect();
+    let sims: Vec<&Simulation> = joints.iter().map(|&j| scenes::demo(j)).collect();
     let cell = Cell::start(config()).await;
     let (stop_cam, cam) =
         cell.camera(sims.iter().map(|s| Arc::new(s.cloud.clone())).collect(), CameraOptions::default());
@@ -212,7 +212,7 @@ async fn each_joint_end_to_end_in_trigger_mode() {
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn free_run_next_frame_ping_during_plan_and_shutdown_with_plan_in_flight() {
-    let sim = simulate(&demo_scene(JointType::Lap), &CameraModel::default());
+    let sim = scenes::demo(JointType::Lap);
     let cell = Cell::start(config()).await;
     let options = CameraOptions { free_run_hz: Some(4.0), ..CameraOptions::default() };
     let (stop_cam, cam) = cell.camera(vec![Arc::new(sim.cloud.clone())], options);
@@ -228,7 +228,7 @@ async fn free_run_next_frame_ping_during_plan_and_shutdown_with_plan_in_flight()
     let before = pinger.ping(WAIT).await.unwrap().frames_received;
     assert!(before > 0, "the free-running camera sent no frame");
     let plan = tokio::spawn(async move {
-        ctl.plan(sim_request(7, JointType::Lap, &sim, FrameSelect::NextFrame), WAIT).await.map(|r| (r, sim))
+        ctl.plan(sim_request(7, JointType::Lap, sim, FrameSelect::NextFrame), WAIT).await.map(|r| (r, sim))
     });
     // A ping is answered while the plan is queued or running.
     let mut seen_busy_queue = false;
@@ -255,7 +255,7 @@ async fn free_run_next_frame_ping_during_plan_and_shutdown_with_plan_in_flight()
     let stopped = cell.shutdown().await;
     let (reply, sim) = plan.await.unwrap().unwrap();
     assert!(reply.frame_id > before, "NextFrame used frame {} which had arrived before the request", reply.frame_id);
-    assert_matches_truth(&reply, &sim);
+    assert_matches_truth(&reply, sim);
     assert_eq!(stopped, Stopped::Clean);
 }
 

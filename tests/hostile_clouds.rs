@@ -13,7 +13,9 @@ use std::time::{Duration, Instant};
 use weldseam::camera::CameraModel;
 use weldseam::cloud::{PointCloud, pcd};
 use weldseam::joint::JointType;
-use weldseam::sim::{demo_scene, simulate};
+use weldseam::sim::demo_scene;
+
+use crate::scenes;
 
 /// The address space a child may reserve: far above what planning a small
 /// cloud needs (thread stacks and allocator arenas included), far below
@@ -140,7 +142,7 @@ fn middle_crop(w: usize, h: usize) -> PointCloud {
     let camera = CameraModel::default();
     let mut spec = demo_scene(JointType::VButt);
     spec.placement.distance_mm = 600.0;
-    let sim = simulate(&spec, &camera);
+    let sim = scenes::rendered(&spec, &camera);
     let (c0, r0) = ((camera.width_px as usize - w) / 2, (camera.height_px as usize - h) / 2);
     let full = sim.cloud.points();
     let points = (r0..r0 + h).flat_map(|r| full[r * sim.cloud.width() + c0..][..w].to_vec()).collect();

@@ -6,17 +6,18 @@
 
 use std::process::Command;
 
-use weldseam::camera::CameraModel;
 use weldseam::config::Config;
 use weldseam::eval::seam_error;
 use weldseam::joint::{JointType, RequestedJoint};
 use weldseam::pipeline::quality::Gate;
 use weldseam::pipeline::{PlanRequest, Planner};
-use weldseam::sim::{JointGeometry, SceneSpec, Simulation, demo_scene, simulate};
+use weldseam::sim::{JointGeometry, SceneSpec, Simulation, demo_scene};
 
-fn rendered(joint: JointType) -> (SceneSpec, Simulation) {
+use crate::scenes;
+
+fn rendered(joint: JointType) -> (SceneSpec, &'static Simulation) {
     let spec = demo_scene(joint);
-    let sim = simulate(&spec, &CameraModel::default());
+    let sim = scenes::by_default_camera(&spec);
     (spec, sim)
 }
 
@@ -94,7 +95,8 @@ fn a_groove_depth_given_is_checked_against_the_one_measured() {
     let plan = Planner::new(config)
         .plan(&sim.cloud, &PlanRequest::new(JointType::VButt, Some(truth - 3.0), sim.pose))
         .unwrap();
-    assert_eq!(plan.seams[0].warnings.iter().map(|w| w.gate).collect::<Vec<_>>(), vec![Gate::GrooveDepth]);
+    let warned: Vec<_> = plan.seams[0].warnings.iter().map(|w| (w.rule.id, w.gate)).collect();
+    assert_eq!(warned, [("butt.groove_depth_difference", Gate::GrooveDepth)]);
     let error = seam_error(&sim.truth, &plan.seams[0]).unwrap();
     assert!(error.mean_mm > 2.5, "the weld lies at the depth given: {error:?}");
 }

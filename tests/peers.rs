@@ -215,10 +215,7 @@ async fn the_metrics_endpoint_counts_plans_frames_connections_and_refusals() {
     let mut request = weldseam::mock::controller::request_for_simulation(
         1,
         weldseam::joint::JointType::Lap,
-        &weldseam::sim::simulate(
-            &weldseam::sim::demo_scene(weldseam::joint::JointType::Lap),
-            &weldseam::camera::CameraModel::default(),
-        ),
+        crate::scenes::demo(weldseam::joint::JointType::Lap),
         weldseam_proto::message::FrameSelect::FrameId(99),
     );
     assert!(ctl.plan(request.clone(), WAIT).await.is_err(), "frame 99 does not exist");

@@ -7,7 +7,6 @@
 
 use embedded_graphics::pixelcolor::Rgb888;
 use embedded_graphics::prelude::RgbColor;
-use weldseam::camera::CameraModel;
 use weldseam::config::{Config, Method};
 use weldseam::joint::JointType;
 use weldseam::pipeline::quality::Gate;
@@ -15,11 +14,13 @@ use weldseam::pipeline::{PlanRequest, PlanTrace, Planner, Stage};
 use weldseam::report::camera_view::{CameraView, View};
 use weldseam::report::{self, Canvas, colour};
 use weldseam::sim::variants::Variant;
-use weldseam::sim::{Simulation, demo_scene, simulate};
+use weldseam::sim::{Simulation, demo_scene};
 
-fn demo(joint: JointType) -> (Simulation, PlanRequest) {
+use crate::scenes;
+
+fn demo(joint: JointType) -> (&'static Simulation, PlanRequest) {
     let spec = demo_scene(joint);
-    let sim = simulate(&spec, &CameraModel::default());
+    let sim = scenes::by_default_camera(&spec);
     let request = PlanRequest::new(joint, spec.joint.groove_depth_mm(), sim.pose);
     (sim, request)
 }
@@ -100,7 +101,7 @@ fn the_trace_of_each_joint_is_filled_and_its_pictures_show_the_plates_and_the_se
         let view = &pictures.camera_view;
         assert!(matches!(view.view, Some(View::Pixels { .. })), "{joint}: a raw frame is drawn on its grid");
         assert_eq!(view.canvas.width(), 960, "{joint}: half the 1920 px frame");
-        assert_plates_and_seam_where_the_truth_is(joint.name(), view, &true_seam(&sim));
+        assert_plates_and_seam_where_the_truth_is(joint.name(), view, &true_seam(sim));
         assert_eq!(view.canvas.pixel(1, 1), Some(colour::TITLE_PLANNED), "{joint}: a plan's title is green");
 
         let sections = pictures.sections.unwrap_or_else(|| panic!("{joint}: no sections"));
@@ -122,7 +123,7 @@ fn the_trace_of_each_joint_is_filled_and_its_pictures_show_the_plates_and_the_se
 #[test]
 fn a_cloud_without_a_grid_is_drawn_along_the_normal_with_the_seam_on_the_truth() {
     let (sim, request) = demo(JointType::VButt);
-    let sim = Variant::parse("cropped:30,voxel:1").unwrap().apply(&sim, 7);
+    let sim = Variant::parse("cropped:30,voxel:1").unwrap().apply(sim, 7);
     assert!(!sim.cloud.is_organized());
     let (outcome, trace) = Planner::new(Config::default()).plan_traced(&sim.cloud, &request);
     let plan = outcome.unwrap();
@@ -155,7 +156,7 @@ fn a_refusal_keeps_its_stage_and_reason_beside_everything_found_before_it() {
     let planner = Planner::new(Config::default());
     let (outcome, trace) = planner.plan_traced(&sim.cloud, &lap);
     let error = outcome.unwrap_err();
-    assert_eq!(error.stage, Stage::Background);
+    assert_eq!((error.rule.id, error.stage), ("lap.no_plate_step", Stage::Background), "{error}");
     assert_eq!(trace.refusal.as_ref(), Some(&error));
     assert!(trace.planes.len() >= 2 && trace.dominant_normal.is_some(), "the planes seen are kept");
     assert!(trace.plate_labels.is_none() && trace.weld.is_none() && trace.edge_lines.is_empty());
@@ -170,7 +171,11 @@ fn a_refusal_keeps_its_stage_and_reason_beside_everything_found_before_it() {
     config.quality.max_gap_mm = 0.3;
     let (outcome, trace) = Planner::new(config).plan_traced(&sim.cloud, &request);
     let error = outcome.unwrap_err();
-    assert_eq!((error.stage, error.gate), (Stage::Quality, Some(Gate::GapWidth)), "{error}");
+    assert_eq!(
+        (error.rule.id, error.stage, error.gate),
+        ("butt.gap_width", Stage::Quality, Some(Gate::GapWidth)),
+        "{error}"
+    );
     assert_eq!(trace.refusal.as_ref(), Some(&error));
     assert_eq!(trace.joint, Some(JointType::IButt));
     let gap = trace.quality.and_then(|q| q.gap_mm).expect("the gap the gate read");
@@ -186,7 +191,8 @@ fn a_request_refused_before_any_frame_is_drawn_as_a_title_alone() {
     let (sim, request) = demo(JointType::VButt);
     let bad = PlanRequest { groove_depth_mm: Some(1e6), ..request };
     let (outcome, trace) = Planner::new(Config::default()).plan_traced(&sim.cloud, &bad);
-    assert_eq!(outcome.unwrap_err().stage, Stage::Request);
+    let error = outcome.unwrap_err();
+    assert_eq!((error.rule.id, error.stage), ("groove.depth_out_of_range", Stage::Request), "{error}");
     assert!(trace.cloud.is_none());
     let pictures = report::render(&trace);
     assert!(pictures.camera_view.view.is_none() && pictures.sections.is_none());
@@ -224,7 +230,7 @@ async fn the_daemon_keeps_the_sets_of_its_last_plans_only() {
     ctl.wait_for_camera(Duration::from_secs(5)).await.expect("the mock camera connects");
     let debug = cell.daemon.state.debug.as_ref().expect("[debug] with a directory keeps sets");
     for id in 1..=3u64 {
-        let request = request_for_simulation(id, JointType::IButt, &sim, FrameSelect::Trigger);
+        let request = request_for_simulation(id, JointType::IButt, sim, FrameSelect::Trigger);
         ctl.plan(request, Duration::from_secs(60)).await.unwrap();
         // The set is written after the reply; the next plan is traced only
         // once the writer is free, so wait for it (a hang is a failure).

@@ -8,7 +8,9 @@ use weldseam::config::{Config, Method};
 use weldseam::eval::{evaluate_simulation, seam_error};
 use weldseam::joint::JointType;
 use weldseam::pipeline::{PlanRequest, Planner, Stage};
-use weldseam::sim::{Draw, SceneSpec, demo_scene, eval_suite, simulate};
+use weldseam::sim::{Draw, SceneSpec, demo_scene, eval_suite};
+
+use crate::scenes;
 
 fn suite_scene(name_prefix: &str) -> (String, SceneSpec) {
     eval_suite(Draw::Documented)
@@ -18,9 +20,8 @@ fn suite_scene(name_prefix: &str) -> (String, SceneSpec) {
 }
 
 fn assert_meets_the_bar(name: &str, spec: &SceneSpec) {
-    let camera = CameraModel::default();
-    let sim = simulate(spec, &camera);
-    let outcome = evaluate_simulation(&Planner::new(Config::default()), name, spec, &sim);
+    let sim = scenes::by_default_camera(spec);
+    let outcome = evaluate_simulation(&Planner::new(Config::default()), name, spec, sim);
     let (err, _) = outcome.result.unwrap_or_else(|e| panic!("{name}: no seam: {e}"));
     assert!(err.max_mm < 1.0, "{name}: max error {:.3} mm", err.max_mm);
     assert!(err.start_mm < 2.0 && err.end_mm < 2.0, "{name}: ends {:.2} / {:.2} mm", err.start_mm, err.end_mm);
@@ -76,7 +77,7 @@ fn the_papers_method_stays_reachable_and_plans_a_frontal_scene() {
     let mut config = Config::default();
     config.pipeline.method = Method::Paper;
     let spec = demo_scene(JointType::IButt);
-    let sim = simulate(&spec, &config.camera);
+    let sim = scenes::rendered(&spec, &config.camera);
     let request = PlanRequest::new(JointType::IButt, None, sim.pose);
     let plan = Planner::new(config).plan(&sim.cloud, &request).unwrap_or_else(|e| panic!("paper method: {e}"));
     assert_eq!(plan.method, Method::Paper);
@@ -93,7 +94,7 @@ fn each_method_times_the_same_stages_in_the_same_order() {
     for method in [Method::Robust, Method::Paper] {
         let mut config = Config::default();
         config.pipeline.method = method;
-        let sim = simulate(&spec, &config.camera);
+        let sim = scenes::rendered(&spec, &config.camera);
         let request = PlanRequest::new(JointType::IButt, None, sim.pose);
         let plan = Planner::new(config).plan(&sim.cloud, &request).unwrap_or_else(|e| panic!("{method:?}: {e}"));
         let timed: Vec<Stage> = plan.timings.stages.iter().map(|(s, _)| *s).collect();

@@ -7,7 +7,6 @@ use std::process::Command;
 use std::sync::Arc;
 use std::time::Duration;
 
-use weldseam::camera::CameraModel;
 use weldseam::config::Config;
 use weldseam::joint::JointType;
 use weldseam::mock::ClientError;
@@ -15,10 +14,11 @@ use weldseam::mock::camera::CameraOptions;
 use weldseam::mock::controller::{ControllerClient, request_for_simulation};
 use weldseam::pipeline::quality::Gate;
 use weldseam::pipeline::{PlanRequest, Planner, Stage};
-use weldseam::sim::{JointGeometry, SceneSpec, Simulation, demo_scene, simulate};
+use weldseam::sim::{JointGeometry, SceneSpec, Simulation, demo_scene};
 use weldseam_proto::ErrorCode;
 use weldseam_proto::message::FrameSelect;
 
+use crate::scenes;
 use crate::util::{Cell, write_temp};
 
 /// The demo I-butt scene (what `simulate --joint i-butt` renders), its
@@ -31,9 +31,9 @@ fn i_butt_spec_wider_than(limit_mm: f64) -> SceneSpec {
 }
 
 /// [`i_butt_spec_wider_than`] and its rendered frame.
-fn i_butt_wider_than(limit_mm: f64) -> (SceneSpec, Simulation) {
+fn i_butt_wider_than(limit_mm: f64) -> (SceneSpec, &'static Simulation) {
     let spec = i_butt_spec_wider_than(limit_mm);
-    let sim = simulate(&spec, &CameraModel::default());
+    let sim = scenes::by_default_camera(&spec);
     (spec, sim)
 }
 
@@ -54,8 +54,8 @@ fn with_max_gap(limit_mm: f64, warn_only: bool) -> Config {
 fn every_seam_carries_its_quality_figures() {
     for joint in JointType::ALL {
         let spec = demo_scene(joint);
-        let sim = simulate(&spec, &CameraModel::default());
-        let plan = Planner::new(Config::default()).plan(&sim.cloud, &request(&spec, &sim)).unwrap();
+        let sim = scenes::by_default_camera(&spec);
+        let plan = Planner::new(Config::default()).plan(&sim.cloud, &request(&spec, sim)).unwrap();
         let seam = &plan.seams[0];
         let q = seam.quality.unwrap_or_else(|| panic!("{joint}: no quality figures"));
         assert!(seam.warnings.is_empty(), "{joint}: {:?}", seam.warnings);
@@ -84,7 +84,7 @@ fn every_seam_carries_its_quality_figures() {
 #[test]
 fn a_seam_that_fails_a_gate_is_refused_with_the_figure_its_value_and_the_limit() {
     let (spec, sim) = i_butt_wider_than(0.3);
-    let refused = Planner::new(with_max_gap(0.3, false)).plan(&sim.cloud, &request(&spec, &sim)).unwrap_err();
+    let refused = Planner::new(with_max_gap(0.3, false)).plan(&sim.cloud, &request(&spec, sim)).unwrap_err();
     assert_eq!(refused.rule.id, "butt.gap_width", "{refused}");
     assert_eq!((refused.stage, refused.gate), (Stage::Quality, Some(Gate::GapWidth)), "{refused}");
     assert!(refused.reason.contains("wider than 0.30 mm"), "{refused}");
@@ -93,7 +93,7 @@ fn a_seam_that_fails_a_gate_is_refused_with_the_figure_its_value_and_the_limit()
 #[test]
 fn a_gate_named_in_warn_only_warns_on_the_seam_instead() {
     let (spec, sim) = i_butt_wider_than(0.3);
-    let plan = Planner::new(with_max_gap(0.3, true)).plan(&sim.cloud, &request(&spec, &sim)).unwrap();
+    let plan = Planner::new(with_max_gap(0.3, true)).plan(&sim.cloud, &request(&spec, sim)).unwrap();
     let warnings = &plan.seams[0].warnings;
     assert_eq!(warnings.iter().map(|w| w.rule.id).collect::<Vec<_>>(), ["butt.gap_width"]);
     assert_eq!(warnings[0].gate, Gate::GapWidth);
@@ -128,7 +128,7 @@ fn plan_json_prints_the_refusal_with_its_code() {
     let reply: serde_json::Value = serde_json::from_slice(&out.stdout).expect("one JSON object on stdout");
     let error = &reply["error"];
     assert_eq!((error["code"].as_str(), error["gate"].as_str()), (Some("gap_width"), Some("gap_width")), "{reply}");
-    assert_eq!(error["stage"].as_str(), Some("quality"));
+    assert_eq!((error["stage"].as_str(), error["rule"].as_str()), (Some("quality"), Some("butt.gap_width")), "{reply}");
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(stderr.contains("seam refused in") && stderr.contains("wider than 0.30 mm"), "{stderr}");
 }
@@ -142,7 +142,7 @@ async fn the_daemon_answers_a_refused_seam_with_the_gates_error_code() {
     let (stop, camera) = cell.camera(vec![Arc::new(sim.cloud.clone())], CameraOptions::default());
     let mut ctl = ControllerClient::connect(&cell.controller, "quality-test").await.unwrap();
     ctl.wait_for_camera(Duration::from_secs(5)).await.expect("the mock camera connects");
-    let request = request_for_simulation(7, spec.joint.joint_type(), &sim, FrameSelect::Trigger);
+    let request = request_for_simulation(7, spec.joint.joint_type(), sim, FrameSelect::Trigger);
     match ctl.plan(request, Duration::from_secs(60)).await {
         Err(ClientError::Refused(e)) => {
             assert_eq!((e.code, e.request_id), (ErrorCode::GapWidth, Some(7)), "{e:?}");

@@ -10,7 +10,9 @@ use weldseam::config::Config;
 use weldseam::geometry::pose::RobotPose;
 use weldseam::joint::JointType;
 use weldseam::pipeline::{PlanError, PlanRequest, Planner, Stage};
-use weldseam::sim::{demo_scene, simulate};
+use weldseam::sim::demo_scene;
+
+use crate::scenes;
 
 fn pose(xyz_mm: [f64; 3], angles_deg: [f64; 3]) -> RobotPose {
     RobotPose { xyz_mm, angles_deg }
@@ -82,7 +84,7 @@ fn a_groove_deeper_than_the_measured_plates_is_refused() {
     // would put every waypoint far below the plates.
     let spec = demo_scene(JointType::VButt);
     let config = Config::default();
-    let sim = simulate(&spec, &config.camera);
+    let sim = scenes::rendered(&spec, &config.camera);
     let planner = Planner::new(config);
     let true_depth = spec.joint.groove_depth_mm().expect("a V-butt scene has a groove depth");
     let plan = planner.plan(&sim.cloud, &PlanRequest::new(JointType::VButt, Some(true_depth), sim.pose));
@@ -99,7 +101,7 @@ fn waypoints_beyond_the_robots_reach_are_refused() {
     // the camera is not, and the plan must not hand out its waypoints.
     let spec = demo_scene(JointType::IButt);
     let mut config = Config::default();
-    let sim = simulate(&spec, &config.camera);
+    let sim = scenes::rendered(&spec, &config.camera);
     let at_flange = pose([0.0; 3], sim.pose.angles_deg);
     let planner = Planner::new(config.clone());
     assert!(planner.plan(&sim.cloud, &PlanRequest::new(JointType::IButt, None, at_flange)).is_ok());

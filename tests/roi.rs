@@ -6,7 +6,6 @@
 use std::process::Command;
 
 use nalgebra::Point3;
-use weldseam::camera::CameraModel;
 use weldseam::cloud::{INVALID_POINT, PointCloud};
 use weldseam::config::Config;
 use weldseam::eval::seam_error;
@@ -14,10 +13,12 @@ use weldseam::geometry::Vec3;
 use weldseam::joint::JointType;
 use weldseam::pipeline::roi::Roi;
 use weldseam::pipeline::{CloudFrame, Plan, PlanRequest, Planner, Stage};
-use weldseam::sim::{Simulation, demo_scene, simulate};
+use weldseam::sim::Simulation;
 
-fn lap() -> Simulation {
-    simulate(&demo_scene(JointType::Lap), &CameraModel::default())
+use crate::scenes;
+
+fn lap() -> &'static Simulation {
+    scenes::demo(JointType::Lap)
 }
 
 /// A camera-frame box around the true seam, `margin` mm beyond it.
@@ -56,14 +57,14 @@ fn plan(planner: &Planner, sim: &Simulation, cloud: &PointCloud, roi: Option<Roi
 #[test]
 fn clutter_outside_the_box_plans_as_the_clean_frame() {
     let sim = lap();
-    let roi = seam_box(&sim, 40.0);
+    let roi = seam_box(sim, 40.0);
     // Everything the camera sees outside the box is moved along its ray to
     // 300 mm: a large object between the camera and the workpiece.
     let cluttered = mapped(&sim.cloud, |p| Some(if inside(&roi, &p) { p } else { p * (300.0 / p.z) }));
     let planner = Planner::new(Config::default());
-    let clean = plan(&planner, &sim, &sim.cloud, None);
-    let cropped = plan(&planner, &sim, &cluttered, Some(roi));
-    assert_eq!(cropped.stats.valid_points, plan(&planner, &sim, &sim.cloud, Some(roi)).stats.valid_points);
+    let clean = plan(&planner, sim, &sim.cloud, None);
+    let cropped = plan(&planner, sim, &cluttered, Some(roi));
+    assert_eq!(cropped.stats.valid_points, plan(&planner, sim, &sim.cloud, Some(roi)).stats.valid_points);
     let error = seam_error(&sim.truth, &cropped.seams[0]).expect("waypoints");
     assert!(error.max_mm < 1.0, "worst error {:.3} mm", error.max_mm);
     let ends = |p: &Plan| {
@@ -80,7 +81,7 @@ fn a_base_frame_box_crops_what_the_pose_and_hand_eye_place_inside_it() {
     let sim = lap();
     // The camera-frame seam box's corners in the base frame, and the
     // axis-aligned box around them there.
-    let camera_box = seam_box(&sim, 30.0);
+    let camera_box = seam_box(sim, 30.0);
     let corners: Vec<Point3<f64>> = (0..8)
         .map(|k| {
             let pick = |axis: usize| if k >> axis & 1 == 0 { camera_box.min()[axis] } else { camera_box.max()[axis] };
@@ -93,8 +94,8 @@ fn a_base_frame_box_crops_what_the_pose_and_hand_eye_place_inside_it() {
     // The same crop done by hand, through the simulation's own transform.
     let by_hand = mapped(&sim.cloud, |p| inside(&base_box, &(sim.base_from_camera * p)).then_some(p));
     let planner = Planner::new(Config::default());
-    let boxed = plan(&planner, &sim, &sim.cloud, Some(base_box));
-    let expected = plan(&planner, &sim, &by_hand, None);
+    let boxed = plan(&planner, sim, &sim.cloud, Some(base_box));
+    let expected = plan(&planner, sim, &by_hand, None);
     assert_eq!(boxed.seams, expected.seams);
     assert_eq!(boxed.stats, expected.stats);
     assert!(seam_error(&sim.truth, &boxed.seams[0]).expect("waypoints").max_mm < 1.0);
@@ -103,12 +104,12 @@ fn a_base_frame_box_crops_what_the_pose_and_hand_eye_place_inside_it() {
 #[test]
 fn the_configured_box_applies_unless_the_request_brings_its_own() {
     let sim = lap();
-    let roi = seam_box(&sim, 40.0);
+    let roi = seam_box(sim, 40.0);
     let mut config = Config::default();
     config.pipeline.roi = vec![roi.min().x, roi.min().y, roi.min().z, roi.max().x, roi.max().y, roi.max().z];
     let configured = Planner::new(config.clone());
-    let from_config = plan(&configured, &sim, &sim.cloud, None);
-    let from_request = plan(&Planner::new(Config::default()), &sim, &sim.cloud, Some(roi));
+    let from_config = plan(&configured, sim, &sim.cloud, None);
+    let from_request = plan(&Planner::new(Config::default()), sim, &sim.cloud, Some(roi));
     assert_eq!(from_config.seams, from_request.seams);
     // A request's own box wins: one around a corner of the frame keeps
     // too few points, and says so with the box and the count.

@@ -15,12 +15,13 @@ use weldseam::cloud::PointCloud;
 use weldseam::config::Config;
 use weldseam::joint::JointType;
 use weldseam::mock::controller::ControllerClient;
-use weldseam::sim::{demo_scene, simulate};
+use weldseam::sim::demo_scene;
 use weldseam_proto::frame::{self, HEADER_BYTES, Header};
-use weldseam_proto::message::{FrameAck, FrameSelect, Hello, Role};
+use weldseam_proto::message::{ErrorReply, FrameAck, FrameSelect, Hello, Role};
 use weldseam_proto::{ErrorCode, Message};
 
 use crate::daemon::request;
+use crate::scenes;
 use crate::util::Cell;
 
 /// A hang guard: every answer here comes in well under it.
@@ -105,12 +106,19 @@ fn plate(width: usize, height: usize) -> PointCloud {
 /// The next answer on the controller link: the request it answers, and
 /// its error code and message when it is an error.
 async fn answer(ctl: &mut ControllerClient) -> (u64, Option<(ErrorCode, String)>) {
+    let (id, error) = answer_in_full(ctl).await;
+    (id, error.map(|e| (e.code, e.message)))
+}
+
+/// [`answer`] with the whole error: on a connection granted `rule_ids`,
+/// the rule that refused besides the code and the message.
+async fn answer_in_full(ctl: &mut ControllerClient) -> (u64, Option<ErrorReply>) {
     loop {
         match tokio::time::timeout(WAIT, ctl.recv()).await.expect("a reply comes").unwrap() {
             Message::PlanReply(r) => return (r.request_id, None),
             Message::Error(e) => {
                 let id = e.request_id.unwrap_or_else(|| panic!("an error for no request: {}", e.message));
-                return (id, Some((e.code, e.message)));
+                return (id, Some(e));
             }
             Message::Status(_) => continue,
             other => panic!("unexpected {other:?}"),
@@ -212,7 +220,9 @@ async fn a_frame_without_a_measurable_point_is_refused_and_never_handed_on() {
 async fn a_frame_of_one_repeated_point_is_refused_and_the_next_plan_goes_on() {
     let cell = Cell::start(config()).await;
     let mut cam = RawCamera::connect(&cell.camera).await;
-    let mut ctl = ControllerClient::connect(&cell.controller, "degenerate").await.unwrap();
+    // Granted rule_ids, the refusal names the rule that read the frame.
+    let ids = weldseam_proto::session::capability::RULE_IDS;
+    let mut ctl = ControllerClient::connect_asking(&cell.controller, "degenerate", ids).await.unwrap();
     ctl.wait_for_camera(WAIT).await.unwrap();
     // Unorganized, as a camera bridge that drops the grid sends it: the
     // density of a cloud without a grid is measured from its points.
@@ -226,11 +236,13 @@ async fn a_frame_of_one_repeated_point_is_refused_and_the_next_plan_goes_on() {
     cam.write(&[frame_message(2, 0, &plate(64, 48))]).await;
     assert_eq!(cam.ack().await.requests, 1);
     let guard = Duration::from_secs(20);
-    let (id, error) = tokio::time::timeout(guard, answer(&mut ctl)).await.expect("the stuck frame stalled the queue");
+    let (id, error) =
+        tokio::time::timeout(guard, answer_in_full(&mut ctl)).await.expect("the stuck frame stalled the queue");
     assert_eq!(id, 1);
-    let (code, message) = error.expect("the stuck frame is refused");
-    assert_eq!(code, ErrorCode::PlanFailed, "{message}");
-    assert!(message.contains("input") && message.contains("distinct"), "{message}");
+    let refusal = error.expect("the stuck frame is refused");
+    assert_eq!(refusal.code, ErrorCode::PlanFailed, "{}", refusal.message);
+    assert_eq!(refusal.rule.as_deref(), Some("frame.one_point_repeated"), "{}", refusal.message);
+    assert!(refusal.message.contains("distinct"), "the figure the rule reads: {}", refusal.message);
     let (id, error) = tokio::time::timeout(guard, answer(&mut ctl)).await.expect("the next plan stalled");
     assert_eq!(id, 2);
     assert_eq!(error.map(|e| e.0), Some(ErrorCode::PlanFailed));
@@ -245,7 +257,7 @@ async fn a_plan_over_its_time_limit_is_refused_and_the_next_one_goes_on() {
     let mut c = config();
     // Far below what planning a full frame takes, far above a tiny plate.
     c.server.plan_timeout = Duration::from_millis(30);
-    let sim = simulate(&demo_scene(JointType::VButt), &c.camera);
+    let sim = scenes::rendered(&demo_scene(JointType::VButt), &c.camera);
     let cell = Cell::start(c).await;
     let mut cam = RawCamera::connect(&cell.camera).await;
     let mut ctl = ControllerClient::connect(&cell.controller, "timeout").await.unwrap();

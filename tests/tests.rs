@@ -23,6 +23,7 @@ mod requests;
 mod robot_programs;
 mod roi;
 mod rules;
+mod scenes;
 mod serve_order;
 mod several_seams;
 mod text_link;

@@ -16,10 +16,11 @@ use weldseam::config::Config;
 use weldseam::convert::to_proto;
 use weldseam::joint::JointType;
 use weldseam::pipeline::PlanRequest;
+use weldseam::sim::demo_scene;
 use weldseam::sim::variants::voxel_grid;
-use weldseam::sim::{demo_scene, simulate};
 use weldseam_proto::message::{CloudFrame, Frame, FrameMeta, FrameSelect, Hello, Message, Role, Trigger, Units};
 
+use crate::scenes;
 use crate::util::Cell;
 
 /// A recorded step: bytes the peer sent, or one message the daemon sent.
@@ -112,7 +113,7 @@ type Session = Vec<(Vec<u8>, usize)>;
 fn sessions() -> [(&'static str, Session); 2] {
     let camera = CameraModel::default();
     let spec = demo_scene(JointType::Lap);
-    let sim = simulate(&spec, &camera);
+    let sim = scenes::rendered(&spec, &camera);
     // A 2 mm voxel cloud of the scene round its seam: a measured cloud's
     // kind, small enough to keep in the repository.
     let (a, b) = (sim.truth.start_camera, sim.truth.end_camera);

@@ -10,7 +10,9 @@ use weldseam::config::Config;
 use weldseam::eval::seam_error;
 use weldseam::joint::JointType;
 use weldseam::pipeline::{PlanRequest, Planner};
-use weldseam::sim::{Draw, demo_scene, simulate};
+use weldseam::sim::{Draw, demo_scene};
+
+use crate::scenes;
 
 /// The valid points of a window of `cloud` around the true seam, `margin`
 /// pixels beyond the seam's ends on every side, as a bag of points.
@@ -34,7 +36,7 @@ fn unorganized_window(cloud: &PointCloud, camera: &CameraModel, ends: [&nalgebra
 fn a_v_butt_seam_is_planned_from_an_unorganized_cloud_and_its_ply_file() {
     let camera = CameraModel::default();
     let spec = demo_scene(JointType::VButt);
-    let sim = simulate(&spec, &camera);
+    let sim = scenes::rendered(&spec, &camera);
     let cloud = unorganized_window(&sim.cloud, &camera, [&sim.truth.start_camera, &sim.truth.end_camera]);
     assert!(!cloud.is_organized() && cloud.len() > 50_000, "{} points", cloud.len());
 
@@ -83,7 +85,7 @@ fn every_eval_scene_exported_without_its_grid_plans_digit_for_digit_as_the_frame
     // several tilts, within the suite's time budget; the whole suite is
     // planned this way by `weldseam eval --variant unorganized`.
     for (k, (name, spec)) in weldseam::sim::suite::eval_suite(Draw::Documented).into_iter().enumerate().step_by(6) {
-        let sim = simulate(&spec, &camera);
+        let sim = scenes::rendered(&spec, &camera);
         let export = shuffled_export(&sim.cloud, k as u64);
         let (grid, _) = weldseam::pipeline::regrid::regrid(&export, &camera).expect("a raw export is re-gridded");
         let differ: Vec<usize> = (0..grid.len())
@@ -106,7 +108,7 @@ fn every_eval_scene_exported_without_its_grid_plans_digit_for_digit_as_the_frame
 fn downsampled_merged_decimated_and_moved_clouds_keep_the_unorganized_path() {
     use weldseam::pipeline::regrid::{NotARawFrame, regrid};
     let camera = CameraModel::default();
-    let sim = simulate(&demo_scene(JointType::VButt), &camera);
+    let sim = scenes::rendered(&demo_scene(JointType::VButt), &camera);
     let valid = || sim.cloud.points().iter().copied().filter(|p| p[0].is_finite());
 
     // Voxel-downsampled at 1 mm: one centroid per occupied voxel.

@@ -77,10 +77,10 @@ async fn under_load_every_request_is_answered_in_order_within_the_documented_bou
     let secs: u64 = std::env::var("WELDSEAM_LOAD_TEST_SECS").ok().and_then(|s| s.parse().ok()).unwrap_or(20);
     let (w, h) = FRAME_SIZES[0];
     let scenario = Scenario::new(JointType::IButt, 500.0, camera_with_size(w, h));
-    let sim = scenario.simulate();
+    let sim = scenes::scenario(&scenario);
     let load = Load { duration: Duration::from_secs(secs), controllers: 4, camera_hz: 20.0, queue_depth: 4 };
     let config = weldseam::config::Config { camera: scenario.camera, ..weldseam::config::Config::default() };
-    let figures = daemon_under_load_async(config, scenario.joint, &sim, load).await.unwrap();
+    let figures = daemon_under_load_async(config, scenario.joint, sim, load).await.unwrap();
     let (waits, plans) = (figures.reply_ms(), figures.plan_ms());
     assert!(figures.errors.is_empty(), "requests were refused under load: {:?}", figures.errors);
     assert!(waits.len() >= 8, "only {} requests were answered in {secs} s", waits.len());
@@ -191,18 +191,18 @@ async fn cameras_are_chosen_by_name_and_frames_are_acknowledged() {
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn a_request_may_carry_its_hand_eye_and_the_end_to_start_from() {
-    let sim = simulate(&demo_scene(JointType::Lap), &CameraModel::default());
+    let sim = scenes::demo(JointType::Lap);
     let cell = Cell::start(config()).await;
     let (stop_cam, cam) = cell.camera(vec![Arc::new(sim.cloud.clone())], CameraOptions::default());
     let mut ctl = cell.controller().await;
     wait_for_camera(&mut ctl).await;
     let (a, b) = (sim.truth.start_base, sim.truth.end_base);
     for (id, near) in [(1, b), (2, a)] {
-        let mut r = sim_request(id, JointType::Lap, &sim, FrameSelect::Trigger);
+        let mut r = sim_request(id, JointType::Lap, sim, FrameSelect::Trigger);
         r.start_near = Some([near.x, near.y, near.z]);
         r.hand_eye = Some(weldseam::geometry::pose::PAPER_HAND_EYE);
         let reply = ctl.plan(r, WAIT).await.unwrap();
-        assert_matches_truth(&reply, &sim);
+        assert_matches_truth(&reply, sim);
         let first = Vec3::from(reply.result.seams[0].waypoints[0].xyz);
         assert!(
             (first - near).norm() < 5.0,
@@ -211,7 +211,7 @@ async fn a_request_may_carry_its_hand_eye_and_the_end_to_start_from() {
         );
     }
     // A hand-eye matrix that is not rigid is a bad request.
-    let mut r = sim_request(3, JointType::Lap, &sim, FrameSelect::Trigger);
+    let mut r = sim_request(3, JointType::Lap, sim, FrameSelect::Trigger);
     let mut rows = weldseam::geometry::pose::PAPER_HAND_EYE;
     rows[0] = 3.0;
     r.hand_eye = Some(rows);
@@ -243,8 +243,8 @@ async fn unorganized_metre_and_base_frame_frames_plan_as_the_library_plans_their
     use weldseam::pipeline::{CloudFrame, Planner, Units};
     use weldseam::sim::variants::Variant;
 
-    let scene = simulate(&demo_scene(JointType::Lap), &CameraModel::default());
-    let variant = |v: &str| Variant::parse(v).unwrap().apply(&scene, 11);
+    let scene = scenes::demo(JointType::Lap);
+    let variant = |v: &str| Variant::parse(v).unwrap().apply(scene, 11);
     let planner = Planner::new(config());
     let library = |sim: &Simulation, units: Units, cloud_frame: CloudFrame| {
         let request = weldseam::pipeline::PlanRequest {
@@ -312,7 +312,7 @@ async fn unorganized_metre_and_base_frame_frames_plan_as_the_library_plans_their
 async fn a_region_of_interest_travels_in_the_request_and_bad_ones_are_refused() {
     use weldseam_proto::message::{CloudFrame, Roi};
 
-    let sim = simulate(&demo_scene(JointType::Lap), &CameraModel::default());
+    let sim = scenes::demo(JointType::Lap);
     let cell = Cell::start(config()).await;
     let mut camera = Raw::hello(&cell.camera, Role::Camera).await;
     let mut ctl = cell.controller().await;
@@ -324,18 +324,23 @@ async fn a_region_of_interest_travels_in_the_request_and_bad_ones_are_refused() 
     let margin = Vec3::new(40.0, 40.0, 40.0);
     let around = |lo: Vec3, hi: Vec3, frame| Roi { min_mm: lo.into(), max_mm: hi.into(), frame };
     let seam_box = around(a.inf(&b) - margin, a.sup(&b) + margin, CloudFrame::Camera as u32);
-    let mut r = request_for_frame(1, &sim, 1);
+    let mut r = request_for_frame(1, sim, 1);
     r.roi = Some(seam_box);
     let reply = ctl.plan(r, WAIT).await.unwrap();
-    assert_matches_truth(&reply, &sim);
+    assert_matches_truth(&reply, sim);
 
     // A box that keeps too few points names itself and the count.
     let tiny = around(a - Vec3::new(0.2, 0.2, 0.2), a + Vec3::new(0.2, 0.2, 0.2), CloudFrame::Camera as u32);
-    let mut r = request_for_frame(2, &sim, 1);
+    // Asked on a connection granted rule_ids, the refusal names its rule.
+    let mut r = request_for_frame(2, sim, 1);
     r.roi = Some(tiny);
-    let (code, message) = refused(ctl.plan(r, WAIT).await);
-    assert_eq!(code, ErrorCode::PlanFailed);
-    assert!(message.contains("region of interest x ") && message.contains("at least 500"), "{message}");
+    let ids = weldseam_proto::session::capability::RULE_IDS;
+    let mut named = ControllerClient::connect_asking(&cell.controller, "ids", ids).await.unwrap();
+    let Err(ClientError::Refused(e)) = named.plan(r, WAIT).await else { panic!("the tiny box is refused") };
+    assert_eq!(e.code, ErrorCode::PlanFailed, "{}", e.message);
+    assert_eq!(e.rule.as_deref(), Some("frame.too_few_points_in_region"), "{}", e.message);
+    assert!(e.message.contains("region of interest x ") && e.message.contains("at least 500"), "{}", e.message);
+    drop(named);
 
     // Not a box, or a frame code no one knows: refused at once.
     let mut inverted = seam_box;
@@ -343,7 +348,7 @@ async fn a_region_of_interest_travels_in_the_request_and_bad_ones_are_refused() 
     let mut unknown = seam_box;
     unknown.frame = 4;
     for (id, roi, expected) in [(3, inverted, "z min"), (4, unknown, "roi.frame code 4")] {
-        let mut r = request_for_frame(id, &sim, 1);
+        let mut r = request_for_frame(id, sim, 1);
         r.roi = Some(roi);
         let (code, message) = refused(ctl.plan(r, WAIT).await);
         assert_eq!(code, ErrorCode::BadRequest);
@@ -364,13 +369,13 @@ async fn a_frame_of_several_workpieces_replies_with_every_seam_and_the_unplanned
         .into_iter()
         .find(|(n, _)| n.starts_with("multi-01"))
         .expect("the scene");
-    let sim = simulate(&spec, &CameraModel::default());
+    let sim = scenes::by_default_camera(&spec);
     let cell = Cell::start(config()).await;
     let mut cam = Raw::hello(&cell.camera, Role::Camera).await;
     cam.send(&frame_message(5, 0, &sim.cloud)).await;
     cam.expect_ack(5, 0).await;
     let mut ctl = Raw::hello(&cell.controller, Role::Controller).await;
-    let mut request = sim_request(9, JointType::Lap, &sim, FrameSelect::FrameId(5));
+    let mut request = sim_request(9, JointType::Lap, sim, FrameSelect::FrameId(5));
     request.joint = joint_code::AUTO;
     ctl.send(&Message::PlanRequest(request)).await;
     let Some(Message::PlanReply(reply)) = ctl.recv().await else { panic!("{name}: no plan reply") };
@@ -404,7 +409,7 @@ async fn a_frame_of_several_workpieces_replies_with_every_seam_and_the_unplanned
     // joint not asked for, with the set's gate.
     // Asked by a controller granted rule_ids, which reads each unplanned
     // joint's rule besides.
-    let mut set = sim_request(10, JointType::Lap, &sim, FrameSelect::FrameId(5));
+    let mut set = sim_request(10, JointType::Lap, sim, FrameSelect::FrameId(5));
     set.joint = joint_code::SET | 1 << joint_code::I_BUTT | 1 << joint_code::T_FILLET;
     let ids = weldseam_proto::session::capability::RULE_IDS;
     let mut named = ControllerClient::connect_asking(&cell.controller, "ids", ids).await.unwrap();
@@ -415,7 +420,13 @@ async fn a_frame_of_several_workpieces_replies_with_every_seam_and_the_unplanned
     let lap = answer.result.unplanned.iter().find(|u| u.joint.as_deref() == Some("lap"));
     let lap = lap.unwrap_or_else(|| panic!("{name}: {:?}", answer.result.unplanned));
     assert_eq!(lap.code, u16::from(ErrorCode::JointMismatch), "{name}: {lap:?}");
-    assert!(lap.refusal.message.contains("not one of the joints requested (i_butt+t_fillet)"), "{name}: {lap:?}");
+    assert_eq!(lap.refusal.rule.as_deref(), Some("joint.not_requested"), "{name}: {lap:?}");
+    assert!(lap.refusal.message.contains("(i_butt+t_fillet)"), "the set asked for is named: {lap:?}");
+    // The tee's far root, by the rule that left it: its flange's edge ends
+    // at the web's shadow.
+    let root = answer.result.unplanned.iter().find(|u| u.joint.as_deref() == Some("t_fillet"));
+    let root = root.unwrap_or_else(|| panic!("{name}: {:?}", answer.result.unplanned));
+    assert_eq!(root.refusal.rule.as_deref(), Some("tee.flange_edge_at_shadow"), "{name}: {root:?}");
     for joint in &answer.result.unplanned {
         let rule = joint.refusal.rule.as_deref().unwrap_or_else(|| panic!("{name}: no rule: {joint:?}"));
         assert!(weldseam::rules::by_id(rule).is_some(), "{name}: {rule} is not in the catalogue");

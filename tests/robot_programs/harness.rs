@@ -4,14 +4,13 @@
 //! for the same frame and request (the library's planner on the same
 //! cloud) to compare the program's moves with, and a hook that stops the
 //! daemon when the program sends a given line. The simulated frames are
-//! rendered once per test binary.
+//! the ones every suite shares (tests/scenes.rs).
 
 use std::sync::{Arc, Mutex, OnceLock};
 use std::time::Duration;
 
 use tokio::sync::oneshot;
 use tokio::task::JoinHandle;
-use weldseam::camera::CameraModel;
 use weldseam::config::Config;
 use weldseam::convert::from_proto::text_plan_request;
 use weldseam::geometry::Isometry3;
@@ -19,9 +18,10 @@ use weldseam::joint::JointType;
 use weldseam::mock::camera::CameraOptions;
 use weldseam::mock::controller::ControllerClient;
 use weldseam::pipeline::Planner;
-use weldseam::sim::{Draw, Simulation, demo_scene, simulate};
+use weldseam::sim::{Draw, Simulation};
 use weldseam_proto::text::{Dialect, PlanLine};
 
+use crate::scenes;
 use crate::util::Cell;
 
 /// Called with each line a program sends, before it goes out.
@@ -29,20 +29,20 @@ pub type SendHook = Box<dyn FnMut(&str) + Send>;
 
 /// The demo lap joint (one seam, about 250 mm long).
 pub fn lap() -> &'static Simulation {
-    static SCENE: OnceLock<Simulation> = OnceLock::new();
-    SCENE.get_or_init(|| simulate(&demo_scene(JointType::Lap), &CameraModel::default()))
+    static SCENE: OnceLock<&'static Simulation> = OnceLock::new();
+    SCENE.get_or_init(|| scenes::demo(JointType::Lap))
 }
 
 /// Three workpieces in one frame: an I-butt, a lap and a tee, of which
 /// three seams are planned.
 pub fn several() -> &'static Simulation {
-    static SCENE: OnceLock<Simulation> = OnceLock::new();
+    static SCENE: OnceLock<&'static Simulation> = OnceLock::new();
     SCENE.get_or_init(|| {
         let (_, spec) = weldseam::sim::multi_suite(Draw::Documented)
             .into_iter()
             .find(|(name, _)| name.starts_with("multi-01"))
             .expect("the three-workpiece scene");
-        simulate(&spec, &CameraModel::default())
+        scenes::by_default_camera(&spec)
     })
 }
 

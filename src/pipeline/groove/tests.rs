@@ -423,3 +423,33 @@ fn a_face_too_flat_for_a_bevel_tells_neither_joint() {
     assert_eq!(judge(Some(JointType::IButt), &profile), Ok(JointType::IButt));
     assert_eq!(judge(Some(JointType::VButt), &profile).unwrap_err().rule().id, "groove.no_bevel_for_v_butt");
 }
+
+/// The root-land family's documented scenes (`weldseam eval --suite
+/// root-land`), under `auto` and `v_butt` without a depth: each planned a
+/// V-butt at the land's centre within the bar, the groove's depth measured
+/// down to the land. The `-holdout` scenes are left out.
+#[test]
+fn grooves_ending_in_a_root_land_are_planned_at_the_land_with_their_depth_measured() {
+    use crate::camera::CameraModel;
+    use crate::config::Config;
+    use crate::joint::RequestedJoint;
+    use crate::pipeline::{PlanRequest, Planner};
+    use crate::sim::{Draw, JointGeometry, root_land_suite, simulate};
+
+    let planner = Planner::new(Config::default());
+    for (name, spec) in root_land_suite(Draw::Documented).into_iter().filter(|(n, _)| !n.ends_with("-holdout")) {
+        let sim = simulate(&spec, &CameraModel::default());
+        let JointGeometry::VButt { groove_depth_mm, .. } = spec.joint else { unreachable!("{name}") };
+        for joint in [RequestedJoint::Auto, RequestedJoint::from(JointType::VButt)] {
+            let plan = planner
+                .plan(&sim.cloud, &PlanRequest::new(joint, None, sim.pose))
+                .unwrap_or_else(|e| panic!("{name} ({joint:?}): {} {e}", e.rule.id));
+            let seam = &plan.seams[0];
+            assert_eq!(seam.joint, JointType::VButt, "{name}");
+            let depth = seam.quality.and_then(|q| q.groove_depth_mm).expect("the depth measured");
+            assert!((depth - groove_depth_mm).abs() < 0.5, "{name}: depth {depth:.2} against {groove_depth_mm:.2}");
+            let error = crate::eval::seam_error(&sim.truth, seam).unwrap();
+            assert!(error.passes(), "{name} ({joint:?}): {error:?}");
+        }
+    }
+}

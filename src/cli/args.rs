@@ -81,6 +81,10 @@ pub enum SuiteArg {
     /// a seam returned off that weld, named another joint than `t_fillet`,
     /// or on an outside corner is a confident wrong one.
     Corner,
+    /// 12 V-grooves whose bevels end on a flat root land 2.5 to 8 mm wide
+    /// (`sim::root_land_suite`), the plates filling the view: planned at
+    /// the land's centre with the groove's depth measured down to it.
+    RootLand,
 }
 
 /// `--joint-request` of `eval`: how each scene's plan names its joint.

@@ -31,7 +31,8 @@ use weldseam::sim::consumer::{consumer_camera, consumer_far_suite, consumer_vari
 use weldseam::sim::draw::is_unseen;
 use weldseam::sim::variants::Variant;
 use weldseam::sim::{
-    Draw, FaultKind, consumer_suite, corner_suite, eval_suite, fault_suite, hard_suite, multi_suite, tee_suite,
+    Draw, FaultKind, consumer_suite, corner_suite, eval_suite, fault_suite, hard_suite, multi_suite, root_land_suite,
+    tee_suite,
 };
 
 use crate::cli::args::{GrooveDepthArg, JointRequestArg, SuiteArg};
@@ -215,6 +216,7 @@ pub fn run(args: &EvalArgs) -> anyhow::Result<()> {
         SuiteArg::Tee => (tee_suite(draw), robust.camera, Variant::raw()),
         SuiteArg::Multi => (multi_suite(draw), robust.camera, Variant::raw()),
         SuiteArg::Corner => (corner_suite(draw), robust.camera, Variant::raw()),
+        SuiteArg::RootLand => (root_land_suite(draw), robust.camera, Variant::raw()),
     };
     let several_seams = matches!(args.suite, SuiteArg::Tee | SuiteArg::Multi | SuiteArg::Corner);
     // Refusals are right answers on these suites; only a confident wrong

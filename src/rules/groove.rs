@@ -190,7 +190,8 @@ pub static OPENING_OFF_DEPTH: Rule = Rule {
              apart than that are not the groove's: another part abutting a plate gives an edge beside the \
              groove, with the true groove between the edges found. Much nearer, they are something inside \
              the groove. A groove depth given that the bevels do not fit is caught here too, where the \
-             camera cannot see the root to measure it.",
+             camera cannot see the root to measure it. A root land seen at the bevels' feet widens the \
+             bottom as a root gap does, by its own width.",
     parameters: &[
         Parameter {
             name: "OPENING_SLACK_MM",
@@ -227,7 +228,10 @@ pub static OPENING_OFF_DEPTH: Rule = Rule {
         "tests/faults.rs::a_part_abutting_a_v_butt_plate_is_refused_for_an_opening_the_groove_cannot_have",
         "src/pipeline/groove/tests.rs::a_v_groove_shows_two_bevels_its_angle_and_depth",
     ],
-    holds: &["tests/joints.rs::auto_names_each_joint_measures_the_groove_and_plans_it_within_the_bar"],
+    holds: &[
+        "tests/joints.rs::auto_names_each_joint_measures_the_groove_and_plans_it_within_the_bar",
+        "src/pipeline/groove/tests.rs::a_groove_ending_in_a_root_land_shows_its_root_at_the_land",
+    ],
 };
 
 pub static BUTT_NOT_REQUESTED: Rule = Rule {
@@ -254,8 +258,27 @@ pub static GROOVE_DEPTH_UNMEASURED: Rule = Rule {
     reason: "A V-groove's weld lies at its root, the groove depth below the plates' top (Eq. 32). The robust \
              method measures the depth along a bevel face seen down to the root; where no bevel is seen that \
              far (bevels cut through the whole plate, a shadow, a steep view) and no depth was given, the \
-             weld's height is unknown.",
-    parameters: &[],
+             weld's height is unknown. A groove that ends in a flat root land shows its root where the bevels \
+             run down onto the land: a surface seen only between the plates is the groove's own floor, not \
+             what the plates rest on, and the depth is the land's, provided the land is narrow beside the \
+             groove's opening (a floor as wide as the groove is a trough's, whose root its walls do not place).",
+    parameters: &[
+        Parameter {
+            name: "MAX_ROOT_GAP_MM",
+            unit: "mm",
+            meaning: "a bevel's foot within half of this of the midline shows the root",
+            source: Source::Constant { file: PROFILE, name: "MAX_ROOT_GAP_MM" },
+        },
+        Parameter {
+            name: "MAX_LAND_SHARE",
+            unit: "",
+            meaning: "the widest root land, as a share of the groove's opening, whose bevels' feet show the root",
+            source: Source::Constant { file: PROFILE, name: "MAX_LAND_SHARE" },
+        },
+    ],
     fires: &["tests/consumer_camera.rs::a_v_groove_whose_root_is_hidden_needs_its_depth"],
-    holds: &["tests/joints.rs::auto_names_each_joint_measures_the_groove_and_plans_it_within_the_bar"],
+    holds: &[
+        "tests/joints.rs::auto_names_each_joint_measures_the_groove_and_plans_it_within_the_bar",
+        "src/pipeline/groove/tests.rs::a_groove_ending_in_a_root_land_shows_its_root_at_the_land",
+    ],
 };

@@ -348,19 +348,42 @@ impl ScenePlan {
     /// Draws from stream `stream` of `base_seed` until the scene is valid
     /// and framed as its goal asks (the last draw after [`MAX_DRAWS`]).
     pub(super) fn draw_framed(&self, base_seed: u64, stream: u64, camera: &CameraModel) -> SceneSpec {
+        self.draw_framed_reshaped(base_seed, stream, camera, |_, _| {})
+    }
+
+    /// [`ScenePlan::draw_framed`] with each draw reshaped by `reshape`
+    /// (another cross-section, say) before its framing is judged; `reshape`
+    /// draws from the same stream after the plan's own draw.
+    pub(super) fn draw_framed_reshaped(
+        &self,
+        base_seed: u64,
+        stream: u64,
+        camera: &CameraModel,
+        reshape: impl Fn(&mut SceneSpec, &mut ChaCha8Rng),
+    ) -> SceneSpec {
         let mut rng = ChaCha8Rng::seed_from_u64(base_seed);
         rng.set_stream(stream);
         let seed = base_seed.wrapping_add(stream);
-        let mut spec = self.draw(seed, &mut rng);
+        let draw = |rng: &mut ChaCha8Rng| {
+            let mut spec = self.draw(seed, rng);
+            reshape(&mut spec, rng);
+            spec
+        };
+        let mut spec = draw(&mut rng);
         for _ in 1..MAX_DRAWS {
             let probe_background = self.goal == Goal::FillView;
             let framed = framing_with(&spec, camera, probe_background);
             if spec.validate().is_ok() && self.goal.met_by(&framed) {
                 break;
             }
-            spec = self.draw(seed, &mut rng);
+            spec = draw(&mut rng);
         }
         spec
+    }
+
+    /// Whether the plan asks for plates filling the view (no table seen).
+    pub(super) fn fills_view(&self) -> bool {
+        self.goal == Goal::FillView
     }
 }
 

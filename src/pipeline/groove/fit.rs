@@ -74,7 +74,7 @@ pub(super) fn fit_face(
     points: &[&Across],
     side: i8,
     spacing: f64,
-    (top_margin, bottom): (f64, f64),
+    (top_margin, bottom, floor_mm): (f64, f64, Option<f64>),
     view: &Views,
     half_opening: f64,
     middle_s: f64,
@@ -155,6 +155,12 @@ pub(super) fn fit_face(
             (foot - line.intercept) / line.slope
         }
     };
+    // A face that runs down to the probe's bottom where that bottom is the
+    // groove's own floor (a root land) ends on the floor: its foot is
+    // where its line meets the floor, the depth the floor's.
+    let reaches_bottom = depth_mm >= bottom - BOTTOM_MARGIN_SPACINGS * spacing;
+    let floor_mm = floor_mm.filter(|_| reaches_bottom);
+    let depth_mm = floor_mm.unwrap_or(depth_mm);
     let slope = -line.slope;
     let angle = slope.atan();
     // The face's dt/dh on this side: |t| = c - h tan α, t = side |t|.
@@ -183,7 +189,8 @@ pub(super) fn fit_face(
         station_share: station_share(kept.iter().copied()),
         along_rays,
         foot_hidden,
-        foot_at_probe_bottom: depth_mm >= bottom - BOTTOM_MARGIN_SPACINGS * spacing,
+        foot_at_probe_bottom: reaches_bottom && floor_mm.is_none(),
+        foot_on_floor: floor_mm.is_some(),
         top,
     })
 }

@@ -39,6 +39,14 @@
 //! the other plate's edge from the camera or the projector meets it, is
 //! taken to show the root.
 //!
+//! A groove may end in a flat root land instead of a sharp root: the
+//! bevels run down to a narrow floor parallel to the plates, which the
+//! background stage finds as a surface seen only between the plates. The
+//! probe stops above it, so each bevel reaches the probe's bottom; that
+//! bottom is then the groove's own, and a bevel whose foot lies on it,
+//! near enough the midline for the land to be narrow beside the groove's
+//! opening, shows the root at the land's depth.
+//!
 //! The stage's files, each one concern: [`points`] reads the points
 //! between the edges (the pixels under the probed box, those on a
 //! surface), [`fit`] fits each side's face and finds its depth,
@@ -100,6 +108,12 @@ pub struct ProbeSetting<'a> {
     pub point_spacing_mm: f64,
     /// How far below the plates' top the surface they rest on lies.
     pub depth_to_support_mm: Option<f64>,
+    /// Whether that surface is seen only between the plates: then it is
+    /// the groove's own floor (a root land at the bevels' foot, or what
+    /// shows through the root gap), where a face running down to it ends
+    /// at the root, not a surface behind the plates that cuts the probe
+    /// short.
+    pub floor_between_plates: bool,
     /// The frame's pixel grid, when it lies on the configured camera's:
     /// then only the pixels the probed box projects onto are read, not the
     /// whole frame.
@@ -148,6 +162,7 @@ pub fn probe(cloud: &PointCloud, setting: &ProbeSetting) -> GrooveProfile {
     let top_margin = (TOP_MARGIN_SPACINGS * spacing).max(MIN_TOP_MARGIN_MM);
     let bottom = setting.depth_to_support_mm.map_or(MAX_PROBE_DEPTH_MM, |d| (d - 0.5).min(MAX_PROBE_DEPTH_MM));
     let station_len = (s1 - s0) / STATIONS as f64;
+    let floor_mm = setting.depth_to_support_mm.filter(|_| setting.floor_between_plates);
 
     // The box the probed points lie in, from the two edges at stations
     // along the span: across, the band both edges span (a millimetre
@@ -252,7 +267,7 @@ pub fn probe(cloud: &PointCloud, setting: &ProbeSetting) -> GrooveProfile {
             let on_side = |p: &&Across| p.t.signum() as i8 == side;
             let mut points: Vec<&Across> = Vec::with_capacity(collected.iter().filter(on_side).count());
             points.extend(collected.iter().filter(on_side));
-            fit_face(&points, side, spacing, (top_margin, bottom), &view, half_opening, middle)
+            fit_face(&points, side, spacing, (top_margin, bottom, floor_mm), &view, half_opening, middle)
         })
         .collect();
     GrooveProfile { point_spacing_mm: spacing, opening_mm: 2.0 * half_opening, points_below, faces, standing }

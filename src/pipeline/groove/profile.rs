@@ -27,6 +27,12 @@ const MIN_STATION_SHARE: f64 = 0.3;
 /// than half of it from the midline did not show its lower end.
 const MAX_ROOT_GAP_MM: f64 = 4.0;
 
+/// The widest root land a V-groove has, as a share of its opening at the
+/// top: the land lies at the bevels' foot, and the bevels make the groove;
+/// a floor wider than half the opening is a trough's, whose root the
+/// bevels' feet do not place.
+const MAX_LAND_SHARE: f64 = 0.5;
+
 /// How far the weld edges' distance may stray from the opening the bevels
 /// and the depth give a V-groove: this many millimetres and this share of
 /// the widest opening (the angles are fitted, not known), before the edges
@@ -67,6 +73,9 @@ pub struct Face {
     /// parts may be another part's plate): its foot is the probe's, not
     /// the root.
     pub foot_at_probe_bottom: bool,
+    /// Whether the face runs down to the groove's own floor, a surface
+    /// seen only between the plates (a root land): its foot is there.
+    pub foot_on_floor: bool,
     /// Where the face meets the plates' top (`h = 0`), as a line of `|t|`
     /// along the seam.
     pub top: LineAlong,
@@ -115,9 +124,16 @@ impl Face {
     }
 
     /// Whether the face shows the groove's root: its foot comes within
-    /// half the widest root gap of the midline.
-    pub fn reaches_root(&self, spacing_mm: f64) -> bool {
-        !self.foot_hidden && !self.foot_at_probe_bottom && self.foot_mm <= MAX_ROOT_GAP_MM / 2.0 + spacing_mm
+    /// half the widest root gap of the midline, or it runs down to the
+    /// groove's floor (a root land) at most half a land of
+    /// [`MAX_LAND_SHARE`] of the groove's `opening_mm` from it.
+    pub fn reaches_root(&self, spacing_mm: f64, opening_mm: f64) -> bool {
+        let reach = if self.foot_on_floor {
+            (0.5 * MAX_LAND_SHARE * opening_mm).max(MAX_ROOT_GAP_MM / 2.0)
+        } else {
+            MAX_ROOT_GAP_MM / 2.0
+        };
+        !self.foot_hidden && !self.foot_at_probe_bottom && self.foot_mm <= reach + spacing_mm
     }
 }
 
@@ -215,7 +231,7 @@ impl GrooveProfile {
     /// shorter than it is); None when none does.
     pub fn depth_mm(&self) -> Option<f64> {
         let spacing = self.point_spacing_mm;
-        self.bevels().filter(|f| f.reaches_root(spacing)).map(|f| f.depth_mm).reduce(f64::max)
+        self.bevels().filter(|f| f.reaches_root(spacing, self.opening_mm)).map(|f| f.depth_mm).reduce(f64::max)
     }
 
     /// The opening at the top a V-groove `depth_mm` deep has with the
@@ -225,9 +241,19 @@ impl GrooveProfile {
     pub fn expected_opening_mm(&self, depth_mm: f64) -> Option<(f64, f64)> {
         let run = |deg: f64| depth_mm * deg.to_radians().tan();
         let angles: Vec<f64> = self.bevels().map(|f| f.angle_deg).collect();
+        // A root land seen at the bevels' feet widens the bottom as a root
+        // gap does: by the feet's distances from the midline, twice the
+        // one seen where one bevel is.
+        let feet: Vec<f64> = self.bevels().filter(|f| f.foot_on_floor).map(|f| f.foot_mm.max(0.0)).collect();
+        let land = match feet.as_slice() {
+            [a, b] => a + b,
+            [a] => 2.0 * a,
+            _ => 0.0,
+        };
+        let bottom = MAX_ROOT_GAP_MM.max(land);
         match angles.as_slice() {
-            [a, b] => Some((run(*a) + run(*b), MAX_ROOT_GAP_MM + run(*a) + run(*b))),
-            [a] => Some((run(*a) + run(MIN_BEVEL_DEG), MAX_ROOT_GAP_MM + run(*a) + run(MAX_BEVEL_DEG))),
+            [a, b] => Some((run(*a) + run(*b), bottom + run(*a) + run(*b))),
+            [a] => Some((run(*a) + run(MIN_BEVEL_DEG), bottom + run(*a) + run(MAX_BEVEL_DEG))),
             _ => None,
         }
     }
@@ -286,6 +312,8 @@ impl GrooveProfile {
                     " (below it hidden by the other plate)"
                 } else if f.foot_at_probe_bottom {
                     " (down to the surface behind the plates, where the probe stops)"
+                } else if f.foot_on_floor {
+                    " (down to a root land between the plates)"
                 } else {
                     ""
                 },

@@ -101,6 +101,7 @@ fn probed_between(cloud: &PointCloud, e1: &SeamCurve, e2: &SeamCurve) -> GrooveP
             span: (-45.0, 45.0),
             point_spacing_mm: 0.2,
             depth_to_support_mm: Some(20.0),
+            floor_between_plates: false,
             grid: None,
             projector: Vec3::zeros(),
         },
@@ -216,6 +217,7 @@ fn a_bevel_cut_by_the_probes_bottom_shows_no_root() {
         span: (-45.0, 45.0),
         point_spacing_mm: 0.2,
         depth_to_support_mm: Some(3.5),
+        floor_between_plates: false,
         grid: None,
         projector: Vec3::zeros(),
     };
@@ -223,6 +225,66 @@ fn a_bevel_cut_by_the_probes_bottom_shows_no_root() {
     assert_eq!(profile.verdict(), Between::Groove, "{}", profile.describe());
     assert!(profile.bevels().all(|f| f.foot_at_probe_bottom), "{}", profile.describe());
     assert_eq!(profile.depth_mm(), None, "{}", profile.describe());
+}
+
+#[test]
+fn a_groove_ending_in_a_root_land_shows_its_root_at_the_land() {
+    // A 90 degree groove 6 mm deep whose bevels end on a flat root land
+    // 3 mm wide (|x| <= 1.5): the background stage finds the land as a
+    // surface seen only between the plates, 6 mm down. Taken for what the
+    // plates rest on, it cuts the probe short and no depth is measured;
+    // taken for the groove's own floor, the bevels' feet lie on it and
+    // the depth is the land's.
+    let (land, depth) = (1.5, 6.0);
+    let w = land + depth;
+    let v = |x: f64| {
+        Some(if x.abs() >= w {
+            0.0
+        } else if x.abs() >= land {
+            w - x.abs()
+        } else {
+            depth
+        })
+    };
+    let cloud = cloud_of(v, 14.0, 0.2);
+    let (e1, e2) = (edge(-w), edge(w));
+    let setting = |floor_between_plates| ProbeSetting {
+        edges: [&e1, &e2],
+        span: (-45.0, 45.0),
+        point_spacing_mm: 0.2,
+        depth_to_support_mm: Some(depth),
+        floor_between_plates,
+        grid: None,
+        projector: Vec3::zeros(),
+    };
+    let behind = probe(&cloud, &setting(false));
+    assert_eq!(behind.verdict(), Between::Groove, "{}", behind.describe());
+    assert_eq!(behind.depth_mm(), None, "{}", behind.describe());
+    let floor = probe(&cloud, &setting(true));
+    assert_eq!(floor.verdict(), Between::Groove, "{}", floor.describe());
+    assert!(floor.bevels().all(|f| f.foot_on_floor && (f.foot_mm - land).abs() < 0.5), "{}", floor.describe());
+    assert!((floor.depth_mm().unwrap() - depth).abs() < 1e-9, "{}", floor.describe());
+    assert!((floor.groove_angle_deg().unwrap() - 90.0).abs() < 1.0, "{}", floor.describe());
+    // The land widens the groove's bottom as a root gap does: the edges'
+    // distance fits the depth and the bevels.
+    assert_eq!(floor.check_opening(depth), Ok(()));
+    // A floor as wide as the groove's opening is a trough's, not a
+    // V-groove's land: its bevels' feet do not place the root.
+    let (land, depth) = (9.0, 3.0);
+    let w = land + depth;
+    let v = |x: f64| {
+        Some(if x.abs() >= w {
+            0.0
+        } else if x.abs() >= land {
+            w - x.abs()
+        } else {
+            depth
+        })
+    };
+    let cloud = cloud_of(v, 18.0, 0.2);
+    let (e1, e2) = (edge(-w), edge(w));
+    let trough = probe(&cloud, &ProbeSetting { edges: [&e1, &e2], depth_to_support_mm: Some(depth), ..setting(true) });
+    assert_eq!(trough.depth_mm(), None, "{}", trough.describe());
 }
 
 #[test]
@@ -320,6 +382,7 @@ fn a_veil_along_the_rays_is_no_face() {
         span: (-45.0, 45.0),
         point_spacing_mm: 0.2,
         depth_to_support_mm: None,
+        floor_between_plates: false,
         grid: None,
         projector: Vec3::zeros(),
     };
@@ -359,4 +422,34 @@ fn a_face_too_flat_for_a_bevel_tells_neither_joint() {
     // still needs its bevels.
     assert_eq!(judge(Some(JointType::IButt), &profile), Ok(JointType::IButt));
     assert_eq!(judge(Some(JointType::VButt), &profile).unwrap_err().rule().id, "groove.no_bevel_for_v_butt");
+}
+
+/// The root-land family's documented scenes (`weldseam eval --suite
+/// root-land`), under `auto` and `v_butt` without a depth: each planned a
+/// V-butt at the land's centre within the bar, the groove's depth measured
+/// down to the land. The `-holdout` scenes are left out.
+#[test]
+fn grooves_ending_in_a_root_land_are_planned_at_the_land_with_their_depth_measured() {
+    use crate::camera::CameraModel;
+    use crate::config::Config;
+    use crate::joint::RequestedJoint;
+    use crate::pipeline::{PlanRequest, Planner};
+    use crate::sim::{Draw, JointGeometry, root_land_suite, simulate};
+
+    let planner = Planner::new(Config::default());
+    for (name, spec) in root_land_suite(Draw::Documented).into_iter().filter(|(n, _)| !n.ends_with("-holdout")) {
+        let sim = simulate(&spec, &CameraModel::default());
+        let JointGeometry::VButt { groove_depth_mm, .. } = spec.joint else { unreachable!("{name}") };
+        for joint in [RequestedJoint::Auto, RequestedJoint::from(JointType::VButt)] {
+            let plan = planner
+                .plan(&sim.cloud, &PlanRequest::new(joint, None, sim.pose))
+                .unwrap_or_else(|e| panic!("{name} ({joint:?}): {} {e}", e.rule.id));
+            let seam = &plan.seams[0];
+            assert_eq!(seam.joint, JointType::VButt, "{name}");
+            let depth = seam.quality.and_then(|q| q.groove_depth_mm).expect("the depth measured");
+            assert!((depth - groove_depth_mm).abs() < 0.5, "{name}: depth {depth:.2} against {groove_depth_mm:.2}");
+            let error = crate::eval::seam_error(&sim.truth, seam).unwrap();
+            assert!(error.passes(), "{name} ({joint:?}): {error:?}");
+        }
+    }
 }

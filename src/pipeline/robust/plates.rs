@@ -329,6 +329,7 @@ fn judge_groove(
                 span,
                 point_spacing_mm: seam_spacing,
                 depth_to_support_mm: workpiece.depth_to_support_mm,
+                floor_between_plates: workpiece.support_between_plates,
                 grid: grid.as_ref(),
                 projector: Vec3::new(camera.baseline_mm, 0.0, 0.0),
             },

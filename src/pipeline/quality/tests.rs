@@ -65,8 +65,9 @@ fn evidence<'a>(joint: JointType, q: &'a SeamQuality, rms: [f64; 2]) -> SeamEvid
 fn a_bent_root_is_refused_by_its_sagitta_not_its_residual() {
     let limits = QualityParams::default();
     let flat = plane(0.0, 500.0);
-    let fits = [edge(0.0, 0.0, 1.5, 2000), edge(0.0, 0.0, 0.2, 60)];
-    let q = measured(JointType::TFillet, &fits, [&flat, &flat]);
+    let fits = [edge(0.0, 0.0, 0.1, 2000), edge(0.0, 0.0, 0.05, 60)];
+    // A square web on the flange.
+    let q = SeamQuality { plate_angle_deg: 90.0, ..measured(JointType::TFillet, &fits, [&flat, &flat]) };
     let bend = |sagitta_mm: f64| RootBend {
         deviation_mm: sagitta_mm,
         over_mm: 60.0,
@@ -76,7 +77,7 @@ fn a_bent_root_is_refused_by_its_sagitta_not_its_residual() {
     let tee = |sagitta_mm| SeamEvidence {
         fits: FittedEdges::WebFace,
         root_bend: Some(bend(sagitta_mm)),
-        ..evidence(JointType::TFillet, &q, [1.5, 0.2])
+        ..evidence(JointType::TFillet, &q, [0.1, 0.05])
     };
     let failed = check(&tee(6.0), &limits);
     assert_eq!(ids(&failed), ["seam.edge_fit_residual"], "{failed:?}");

@@ -53,6 +53,7 @@ pub mod regrid;
 mod robust;
 pub mod roi;
 mod scale;
+pub mod straightness;
 pub mod survey;
 mod tee;
 pub mod trace;

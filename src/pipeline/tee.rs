@@ -100,6 +100,7 @@ pub(super) fn plan(
                 side = ?r.side,
                 face_points = r.face_points,
                 face_rms_mm = r.face_rms_mm,
+                bend = ?r.bend,
                 web_angle_deg = r.web_angle_deg,
                 from_mm = r.line.s_min,
                 to_mm = r.line.s_max,
@@ -152,6 +153,7 @@ pub(super) fn plan(
                 RootEvidence::Face => quality::FittedEdges::WebFace,
                 RootEvidence::FlangeEdge { .. } => quality::FittedEdges::FlangeEdge,
             },
+            root_bend: root.bend,
         };
         let (warnings, refusals): (Vec<_>, Vec<_>) =
             quality::check(&evidence, &config.quality).into_iter().partition(|f| config.quality.warns_only(f.gate));

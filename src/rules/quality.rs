@@ -26,6 +26,9 @@ pub(super) static RULES: &[&Rule] = &[
 /// The file whose code applies the stage's rules.
 const APPLIED_IN: &str = "src/pipeline/quality/mod.rs";
 
+/// The file that measures a root's straightness.
+const STRAIGHTNESS_IN: &str = "src/pipeline/straightness.rs";
+
 /// Where the gap and the misalignment are read along the seam.
 const STATIONS: Parameter = Parameter {
     name: "STATIONS",
@@ -96,23 +99,56 @@ pub static EDGE_FIT_RESIDUAL: Rule = Rule {
     stage: Stage::Quality,
     effect: Effect::Refuses,
     gate: Some(Gate::EdgeFitResidual),
-    summary: "each of the seam's two fits leaves a residual of at most a few point spacings",
+    summary: "each of the seam's two fits leaves a residual of at most a few point spacings, and its samples \
+              follow the straight root station by station",
     reason: "The camera samples a plate's boundary to about a third of a point spacing, so the samples of a \
              straight edge scatter about their fitted line by well under a spacing, and the points of a flat \
              face about their plane as little. A residual of several spacings says the samples are not one \
              edge (or the points not one face): spatter, a burr, a second edge or a fixture mixed in, and the \
              line through them is not where the plate ends. For a fillet root the two fits are the web's side \
-             face (or the flange's edge against the web) and the flange beside the root. `quality.warn_only` \
-             may name the gate (`edge_fit_residual`) to plan the seam with a warning instead.",
-    parameters: &[Parameter {
-        name: "max_edge_fit_rms_spacings",
-        unit: "point spacings",
-        meaning: "largest RMS residual of either fit",
-        source: Source::Config("quality.max_edge_fit_rms_spacings"),
-    }],
-    fires: &["src/pipeline/quality/tests.rs::each_gate_names_its_figure_value_and_limit"],
+             face (or the flange's edge against the web) and the flange beside the root. A curved member (a \
+             round tube on a plate or a cylinder, a plate bent along the joint) leaves a residual of only the \
+             camera's noise on a coarse cloud, yet its root is not a line: the samples that show the root (a \
+             face's foot, the flange beside it, a plate's boundary samples), averaged a few spacings along \
+             the root at a time, follow a curve off the straight seam, where noise scatters the averages \
+             about it. Where that trend leaves the straight root by more than three standard errors of the \
+             averages' own scatter and more than a point spacing, the root bends: not a plane weld, and a \
+             straight seam would be welded millimetres off it. `quality.warn_only` may name the gate \
+             (`edge_fit_residual`) to plan the seam with a warning instead.",
+    parameters: &[
+        Parameter {
+            name: "max_edge_fit_rms_spacings",
+            unit: "point spacings",
+            meaning: "largest RMS residual of either fit",
+            source: Source::Config("quality.max_edge_fit_rms_spacings"),
+        },
+        Parameter {
+            name: "NOISE_SIGMAS",
+            unit: "standard errors",
+            meaning: "the root samples' trend off the straight root that the noise explains",
+            source: Source::Constant { file: STRAIGHTNESS_IN, name: "NOISE_SIGMAS" },
+        },
+        Parameter {
+            name: "RESOLUTION_SPACINGS",
+            unit: "point spacings",
+            meaning: "the trend off the straight root that the cloud's resolution explains",
+            source: Source::Constant { file: STRAIGHTNESS_IN, name: "RESOLUTION_SPACINGS" },
+        },
+        Parameter {
+            name: "STATION_SPACINGS",
+            unit: "point spacings",
+            meaning: "the longest stretch of root samples averaged together",
+            source: Source::Constant { file: STRAIGHTNESS_IN, name: "STATION_SPACINGS" },
+        },
+    ],
+    fires: &[
+        "src/pipeline/quality/tests.rs::each_gate_names_its_figure_value_and_limit",
+        "src/pipeline/quality/tests.rs::a_bent_root_is_refused_by_its_sagitta_not_its_residual",
+        "src/sim/curved.rs::no_curved_root_is_planned_on_the_documented_seeds",
+    ],
     holds: &[
         "src/pipeline/quality/tests.rs::a_good_seam_passes_every_gate",
+        "src/sim/curved.rs::the_same_tees_unbent_are_planned",
         "tests/quality.rs::every_seam_carries_its_quality_figures",
     ],
 };

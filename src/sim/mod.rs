@@ -10,6 +10,7 @@
 
 pub mod calibration;
 pub mod consumer;
+pub mod curved;
 pub mod draw;
 pub mod faults;
 pub mod noise;
@@ -31,6 +32,7 @@ use crate::geometry::pose::{EulerConvention, PAPER_HAND_EYE, RobotPose, hand_eye
 use crate::joint::JointType;
 
 pub use consumer::{CameraPreset, consumer_suite};
+pub use curved::{CurvedScene, curved_suite};
 pub use draw::Draw;
 pub use faults::{Fault, FaultKind, RightAnswer};
 pub use noise::NoiseSpec;

@@ -11,6 +11,7 @@ use crate::geometry::fit::{Moments, Plane};
 use crate::geometry::{Vec3, vec3};
 
 use super::super::refit::{SeamAxes, SeamCurve};
+use super::super::straightness::{RootBend, Samples, bend_of};
 use super::frame::{WebFrame, height_margin, valid_points};
 use super::stretch::{STATION_SPACINGS, ends_at_border, ends_past_cut_foot, joint_beyond_run, seen_run};
 use super::{MIN_FACE_POINTS, NotRead, Root, RootEvidence, Side, TeeView, Web};
@@ -223,6 +224,24 @@ pub(super) fn root_from_face(view: &TeeView, frame: &WebFrame, sign: f64, side: 
     let uncertainty_across_mm = (face_sigma / sin).hypot(floor);
     let uncertainty_normal_mm = (face_sigma * web_angle_deg.to_radians().cos().abs() / sin).hypot(floor);
 
+    // Whether the root is straight: the face's foot across it and the
+    // flange beside it along the normal, station by station over the run.
+    let in_run = |p: &&Vec3| (run.s0..=run.s1).contains(&along(p));
+    let bend = RootBend::worse(
+        bend_of(
+            foot_points.iter().filter(in_run).map(|p| (along(p), m.dot(p) - d_m)),
+            Samples::Points,
+            spacing,
+            "the web's face",
+        ),
+        bend_of(
+            near_flange.iter().map(|p| (along(p), flange_plane.signed_distance(p))),
+            Samples::Points,
+            spacing,
+            "the flange",
+        ),
+    );
+
     let line = SeamCurve {
         axes: SeamAxes { origin: p0, e: r, a: w, b: n },
         coef_a: vec![0.0, 0.0],
@@ -250,6 +269,7 @@ pub(super) fn root_from_face(view: &TeeView, frame: &WebFrame, sign: f64, side: 
         joint_beyond_ends_mm,
         uncertainty_across_mm,
         uncertainty_normal_mm,
+        bend,
         ends_set_by,
     })
 }

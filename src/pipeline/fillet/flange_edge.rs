@@ -13,6 +13,7 @@ use crate::geometry::fit::Plane;
 use crate::geometry::{Vec3, extent};
 
 use super::super::refit::{SeamAxes, SeamCurve};
+use super::super::straightness::{RootBend, Samples, bend_of};
 use super::super::view_border::BORDER_REACH_SPACINGS;
 use super::face::{FACE_REFITS, FLANGE_REACH_SPACINGS, rms};
 use super::frame::{FACE_REACH_SPACINGS, WebFrame, frame_along, valid_points};
@@ -250,6 +251,32 @@ fn flange_edge_root(view: &TeeView, frame: &WebFrame, sign: f64, side: Side) -> 
         })
         .map(|s| s.h)
         .collect();
+    // Whether the root is straight: the flange's edge across it and the
+    // flange beside it along the normal, station by station over the run.
+    let bend = RootBend::worse(
+        bend_of(
+            root_line
+                .kept
+                .iter()
+                .filter(|s| (run.s0..=run.s1).contains(&along(s.t)))
+                .map(|s| (along(s.t), s.off - root_line.at(s.t))),
+            Samples::PerStation,
+            spacing,
+            "the flange's edge against the web",
+        ),
+        bend_of(
+            flange
+                .iter()
+                .filter(|s| {
+                    let out = s.off - root_line.at(s.t);
+                    (0.0..=flange_reach).contains(&out) && (run.s0..=run.s1).contains(&along(s.t))
+                })
+                .map(|s| (along(s.t), s.h)),
+            Samples::Points,
+            spacing,
+            "the flange",
+        ),
+    );
     let floor = spacing / 12f64.sqrt();
     let in_run = root_line.kept.iter().filter(|s| (run.s0..=run.s1).contains(&along(s.t))).count().max(1);
     Ok(Root {
@@ -281,6 +308,7 @@ fn flange_edge_root(view: &TeeView, frame: &WebFrame, sign: f64, side: Side) -> 
         // lies within a spacing inward of the flange's last point.
         uncertainty_across_mm: (root_line.rms_mm / (in_run as f64).sqrt()).hypot(floor),
         uncertainty_normal_mm: floor,
+        bend,
         ends_set_by,
     })
 }

@@ -98,6 +98,7 @@ use crate::geometry::{Vec3, extent, vec3};
 
 use super::background::PlaneCluster;
 use super::refit::SeamCurve;
+use super::straightness::RootBend;
 use super::view_border::ViewBorder;
 use super::web_face::StandingFace;
 use crate::rules::Rule;
@@ -262,6 +263,10 @@ pub struct Root {
     /// plane) and along the flange normal, mm.
     pub uncertainty_across_mm: f64,
     pub uncertainty_normal_mm: f64,
+    /// How far the root's evidence bends from straight along the stretch
+    /// (the larger of its two kinds', [`super::straightness`]), where the
+    /// stretch holds stations enough to tell.
+    pub bend: Option<RootBend>,
     /// The rules that moved or cut the root's ends from where its evidence
     /// first put them, in the order they applied.
     pub ends_set_by: Vec<&'static Rule>,

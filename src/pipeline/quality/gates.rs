@@ -10,6 +10,7 @@ use crate::rules::quality as rules;
 use super::{Gate, SeamQuality};
 use crate::pipeline::SeamCoverage;
 use crate::pipeline::refit::{Beyond, Step};
+use crate::pipeline::straightness::RootBend;
 
 /// A gate a seam failed: the figure's value, the limit it broke, and one
 /// sentence that says both and what it means.
@@ -52,6 +53,9 @@ pub struct SeamEvidence<'a> {
     pub given_groove_depth_mm: Option<f64>,
     /// What the two fits behind `edge_fit_rms_mm` and `edge_coverage` are.
     pub fits: FittedEdges,
+    /// How far the seam's root bends from straight, where its samples
+    /// fill stations enough to tell ([`crate::pipeline::straightness`]).
+    pub root_bend: Option<RootBend>,
 }
 
 /// What a seam's two fits are, for the words of a refusal.
@@ -176,6 +180,23 @@ pub fn check(seam: &SeamEvidence, limits: &QualityParams) -> Vec<GateFailure> {
                 "{name}'s fit residual is {rms:.2} mm, above {rms_limit:.2} mm ({} point spacings of {:.2} mm): \
                  {fitted}",
                 limits.max_edge_fit_rms_spacings, q.point_spacing_mm
+            ),
+        );
+    }
+
+    // A bent root: the fits' residual over the whole stretch is the
+    // camera's noise, but their samples station by station follow a curve.
+    if let Some(bend) = seam.root_bend.filter(RootBend::is_curved)
+        && rms <= rms_limit
+    {
+        fail(
+            &rules::EDGE_FIT_RESIDUAL,
+            bend.deviation_mm,
+            bend.explained_mm,
+            format!(
+                "the root bends by {:.1} mm over {:.0} mm: not a plane weld ({} leaves the straight root \
+                 station by station; the cloud's noise and resolution explain {:.1} mm)",
+                bend.deviation_mm, bend.over_mm, bend.evidence, bend.explained_mm
             ),
         );
     }

@@ -5,6 +5,7 @@ use super::*;
 use crate::config::QualityParams;
 use crate::pipeline::SeamCoverage;
 use crate::pipeline::refit::{Beyond, SeamAxes, SeamCurve, Step};
+use crate::pipeline::straightness::RootBend;
 
 fn edge(across: f64, height: f64, rms: f64, samples: usize) -> CurveFit {
     let axes = SeamAxes { origin: Vec3::zeros(), e: Vec3::y(), a: Vec3::x(), b: Vec3::z() };
@@ -53,7 +54,42 @@ fn evidence<'a>(joint: JointType, q: &'a SeamQuality, rms: [f64; 2]) -> SeamEvid
         length_mm: 100.0,
         given_groove_depth_mm: None,
         fits: FittedEdges::WeldEdges,
+        root_bend: None,
     }
+}
+
+/// A fillet root whose web face follows a tube's foot, bending 6 mm over
+/// 60 mm, its fits' residual within the limit: refused by name; bending
+/// less than the noise and the resolution explain, planned.
+#[test]
+fn a_bent_root_is_refused_by_its_sagitta_not_its_residual() {
+    let limits = QualityParams::default();
+    let flat = plane(0.0, 500.0);
+    let fits = [edge(0.0, 0.0, 0.1, 2000), edge(0.0, 0.0, 0.05, 60)];
+    // A square web on the flange.
+    let q = SeamQuality { plate_angle_deg: 90.0, ..measured(JointType::TFillet, &fits, [&flat, &flat]) };
+    let bend = |sagitta_mm: f64| RootBend {
+        deviation_mm: sagitta_mm,
+        over_mm: 60.0,
+        explained_mm: 1.5,
+        evidence: "the web's face",
+    };
+    let tee = |sagitta_mm| SeamEvidence {
+        fits: FittedEdges::WebFace,
+        root_bend: Some(bend(sagitta_mm)),
+        ..evidence(JointType::TFillet, &q, [0.1, 0.05])
+    };
+    let failed = check(&tee(6.0), &limits);
+    assert_eq!(ids(&failed), ["seam.edge_fit_residual"], "{failed:?}");
+    assert_eq!(failed[0].gate, Gate::EdgeFitResidual);
+    assert!(
+        failed[0].message.starts_with("the root bends by 6.0 mm over 60 mm: not a plane weld"),
+        "{}",
+        failed[0].message
+    );
+    assert_eq!((failed[0].value, failed[0].limit), (6.0, 1.5));
+    let held = check(&tee(1.2), &limits);
+    assert!(!ids(&held).contains(&"seam.edge_fit_residual"), "{held:?}");
 }
 
 #[test]

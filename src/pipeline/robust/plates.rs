@@ -15,6 +15,7 @@ use super::super::groove::{self, GrooveProfile};
 use super::super::quality::{self, GateFailure, SeamQuality};
 use super::super::ransac::{self, EdgeLine};
 use super::super::refit::{self, CurveFit, SeamAxes, SeamCurve};
+use super::super::straightness::{RootBend, Samples, bend_of};
 use super::super::trace::TracedWeld;
 use super::super::{PlanError, SeamAssessment, SeamCoverage, Stage, view_border, weld_edges, weld_equation};
 use super::lap_edge::check_lap_edge;
@@ -164,6 +165,9 @@ struct Refitted {
     fits: [CurveFit; 2],
     beyond: [refit::Beyond; 2],
     steps: [Option<refit::Step>; 2],
+    /// How far the edges that place the weld bend from their fitted
+    /// curves, station by station (the worse edge).
+    bend: Option<RootBend>,
 }
 
 /// Where each plate is seen beside its weld edge: its own points' ends
@@ -292,7 +296,29 @@ fn refit_weld_edges(
     }
     ctx.clock.lap(Stage::Refit)?;
 
-    let refitted = Refitted { params, boundaries, axes, degree, seam_spacing, fits, beyond, steps };
+    // Whether the edges that place the weld follow their fitted curves
+    // along the seam or bend off them (a plate bent along the joint, a
+    // curved member): their samples within the trimming's limit, station
+    // by station, across the seam and along the normal.
+    let bend = [0, 1].into_iter().filter(|&k| places_weld(k)).fold(None, |worst, k| {
+        let curve = &fits[k].curve;
+        let kept: Vec<(f64, Vec3)> = samples[k]
+            .iter()
+            .filter(|p| curve.residual(p) <= limits_mm[k])
+            .map(|p| {
+                let s = axes.feature(p);
+                (s, p - curve.at(s))
+            })
+            .collect();
+        let evidence = if k == 0 { "weld edge 1" } else { "weld edge 2" };
+        let across =
+            bend_of(kept.iter().map(|(s, d)| (*s, d.dot(&axes.a))), Samples::PerStation, seam_spacing, evidence);
+        let normal =
+            bend_of(kept.iter().map(|(s, d)| (*s, d.dot(&axes.b))), Samples::PerStation, seam_spacing, evidence);
+        RootBend::worse(worst, RootBend::worse(across, normal))
+    });
+    tracing::debug!(?bend, "weld edges' bend");
+    let refitted = Refitted { params, boundaries, axes, degree, seam_spacing, fits, beyond, steps, bend };
     Ok((refitted, [beside_a, beside_b]))
 }
 
@@ -648,6 +674,7 @@ fn check_gates(
         length_mm: s1 - s0,
         given_groove_depth_mm: ctx.request.groove_depth_mm.filter(|_| joint == JointType::VButt),
         fits: quality::FittedEdges::WeldEdges,
+        root_bend: refitted.bend,
     };
     let (warnings, refusals): (Vec<_>, Vec<_>) =
         quality::check(&evidence, &config.quality).into_iter().partition(|f| config.quality.warns_only(f.gate));

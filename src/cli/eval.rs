@@ -105,6 +105,20 @@ pub struct EvalArgs {
     /// digit (`diff before.jsonl after.jsonl`).
     #[arg(long, value_name = "FILE")]
     pub plans: Option<PathBuf>,
+    /// Plan the real scans of this folder (manifest.toml, references.toml
+    /// and the scans under files/) instead of a simulated suite: each
+    /// present scan typed and `auto`, identity pose, metres, judged against
+    /// its reference root or expected refusal (src/cli/eval_real.rs).
+    #[arg(long, value_name = "DIR")]
+    pub real_scans: Option<PathBuf>,
+    /// With --real-scans: recompute every reference root from its boxes
+    /// and check it equals references.toml's, planning nothing.
+    #[arg(long, requires = "real_scans")]
+    pub check_references: bool,
+    /// With --real-scans: recompute every reference root from its boxes
+    /// and write the figures into references.toml.
+    #[arg(long, requires = "real_scans", conflicts_with = "check_references")]
+    pub bless_references: bool,
 }
 
 /// The error columns of one method's outcome: max, mean, start, end, result.
@@ -181,6 +195,9 @@ fn joint_set(text: &str) -> Result<JointSet, String> {
 }
 
 pub fn run(args: &EvalArgs) -> anyhow::Result<()> {
+    if let Some(dir) = &args.real_scans {
+        return crate::cli::eval_real::run(args, dir);
+    }
     let mut robust = Config::load_or_default(args.config.as_deref())?;
     robust.pipeline.method = Method::Robust;
     let mut paper = robust.clone();

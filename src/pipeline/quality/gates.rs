@@ -204,24 +204,25 @@ pub fn check(seam: &SeamEvidence, limits: &QualityParams) -> Vec<GateFailure> {
     if let Some(e) = seam.edge_coverage {
         let (edge, seen) = if e[0] <= e[1] { (0, e[0]) } else { (1, e[1]) };
         if seen < limits.min_edge_coverage {
+            let figures = percents_that_differ(seen, limits.min_edge_coverage);
             let message = if tee {
                 format!(
-                    "{} is seen along {:.0} % of the root's {:.0} mm, below {:.0} %: the root is not seen along \
+                    "{} is seen along {} % of the root's {:.0} mm, below {} %: the root is not seen along \
                      the stretch planned",
                     seam.fits.fillet_evidence(edge),
-                    100.0 * seen,
+                    figures.0,
                     seam.length_mm,
-                    100.0 * limits.min_edge_coverage,
+                    figures.1,
                 )
             } else {
                 format!(
-                    "weld edge {} is seen along {:.0} % of the seam's {:.0} mm, below {:.0} %: the plates' \
+                    "weld edge {} is seen along {} % of the seam's {:.0} mm, below {} %: the plates' \
                      boundary is not resolved there (a gap narrower than about two point spacings, {:.2} mm, \
                      cannot be seen)",
                     edge + 1,
-                    100.0 * seen,
+                    figures.0,
                     seam.length_mm,
-                    100.0 * limits.min_edge_coverage,
+                    figures.1,
                     2.0 * q.point_spacing_mm,
                 )
             };
@@ -231,18 +232,14 @@ pub fn check(seam: &SeamEvidence, limits: &QualityParams) -> Vec<GateFailure> {
     if let Some(c) = seam.coverage
         && c.joint < limits.min_joint_coverage
     {
-        fail(
-            &rules::JOINT_COVERAGE,
-            c.joint,
-            limits.min_joint_coverage,
+        fail(&rules::JOINT_COVERAGE, c.joint, limits.min_joint_coverage, {
+            let (share, limit) = percents_that_differ(c.joint, limits.min_joint_coverage);
             format!(
-                "the seam spans {:.0} % of the {:.0} mm of joint both plates are seen beside, below {:.0} %: \
+                "the seam spans {share} % of the {:.0} mm of joint both plates are seen beside, below {limit} %: \
                      its edges were found along part of the joint only",
-                100.0 * c.joint,
                 c.visible_joint_mm,
-                100.0 * limits.min_joint_coverage,
-            ),
-        );
+            )
+        });
     }
 
     if let Some(beyond) = seam.joint_beyond_ends_mm {
@@ -383,4 +380,29 @@ pub fn check(seam: &SeamEvidence, limits: &QualityParams) -> Vec<GateFailure> {
         );
     }
     failed
+}
+
+/// The most decimals a share is printed with, as a percentage: a figure
+/// and its limit closer than 0.0001 % are the same to anyone reading.
+const MAX_PERCENT_DECIMALS: usize = 4;
+
+/// A share and its limit as percentages, with the fewest decimals (none
+/// at best) that make them differ as printed: a refusal never reads
+/// "80 % of the joint, below 80 %".
+fn percents_that_differ(share: f64, limit: f64) -> (String, String) {
+    let pair = |decimals: usize| (format!("{:.decimals$}", 100.0 * share), format!("{:.decimals$}", 100.0 * limit));
+    (0..MAX_PERCENT_DECIMALS).map(pair).find(|(a, b)| a != b).unwrap_or_else(|| pair(MAX_PERCENT_DECIMALS))
+}
+
+#[cfg(test)]
+mod percent_tests {
+    use super::percents_that_differ;
+
+    #[test]
+    fn a_share_just_below_its_limit_is_printed_with_the_digits_that_show_it_below() {
+        assert_eq!(percents_that_differ(0.7996, 0.8), ("79.96".to_string(), "80.00".to_string()));
+        assert_eq!(percents_that_differ(0.79, 0.8), ("79".to_string(), "80".to_string()));
+        assert_eq!(percents_that_differ(0.39, 0.8), ("39".to_string(), "80".to_string()));
+        assert_eq!(percents_that_differ(0.7999996, 0.8), ("80.0000".to_string(), "80.0000".to_string()));
+    }
 }

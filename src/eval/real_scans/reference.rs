@@ -1,0 +1,315 @@
+//! A reference root measured from a cloud: planes fitted to the points in
+//! hand-picked boxes, the line where they meet, and the stretch of that
+//! line where the camera sees both faces.
+//!
+//! The visible stretch is where the camera shows the joint on both sides:
+//! a point belongs to a face near the root when it lies within
+//! [`FACE_BAND_RMS`] of the face's fitted RMS of its plane (at least
+//! [`MIN_FACE_BAND_MM`]), off the other surface by as much (so a point in
+//! the root's corner, on both planes at once, counts for neither), and
+//! within [`NEAR_ROOT_MM`] of where the face meets the other. The line is
+//! cut into [`BIN_MM`] pieces; a piece where each face has at least
+//! [`MIN_FACE_POINTS_PER_BIN`] such points is seen, and the visible
+//! stretch is the longest run of seen pieces, a gap of at most
+//! [`MAX_GAP_BINS`] pieces bridged (one missing piece is a dropout, not
+//! the joint's end).
+
+use serde::{Deserialize, Serialize};
+
+use crate::cloud::{PointCloud, is_valid_point};
+use crate::geometry::Vec3;
+use crate::geometry::fit::{Moments, Plane};
+
+use super::{FaceBox, RootKind, RootReference};
+
+/// A face point lies within this many times its plane's fit RMS of the
+/// plane.
+pub const FACE_BAND_RMS: f64 = 3.0;
+/// The least band, mm: a face fitted better than the scan's quantisation
+/// still has points a millimetre off.
+pub const MIN_FACE_BAND_MM: f64 = 1.0;
+/// How far from the root a face is looked at, mm: "both faces seen within a
+/// few millimetres of the root", as a fillet's legs or a groove's foot are.
+pub const NEAR_ROOT_MM: f64 = 8.0;
+/// The length of a piece of root judged seen or not, mm: a few point
+/// spacings of the coarsest scan (about 2.6 mm).
+pub const BIN_MM: f64 = 5.0;
+/// The least points of each face in a piece for it to be seen.
+pub const MIN_FACE_POINTS_PER_BIN: usize = 2;
+/// The longest run of unseen pieces inside the visible stretch.
+pub const MAX_GAP_BINS: usize = 1;
+/// The least points in a box for its plane to be fitted.
+pub const MIN_BOX_POINTS: usize = 30;
+/// Two faces meeting at less than this angle, degrees, have no well-defined
+/// line of intersection.
+pub const MIN_FACE_ANGLE_DEG: f64 = 10.0;
+
+/// A plane fitted to a box's points, mm in the cloud's frame.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MeasuredPlane {
+    /// Unit normal, facing away from the camera (`z > 0`).
+    pub normal: [f64; 3],
+    /// `normal · p = offset_mm` on the plane.
+    pub offset_mm: f64,
+    /// RMS distance of the box's points from the plane.
+    pub rms_mm: f64,
+    pub points: usize,
+}
+
+/// A reference root: the planes, the line and its visible stretch, mm in
+/// the cloud's frame.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MeasuredRoot {
+    /// One per box, in the boxes' order.
+    pub planes: Vec<MeasuredPlane>,
+    /// A point of the root line: where the faces' points' centroid projects
+    /// onto it.
+    pub point_mm: [f64; 3],
+    /// The line's unit direction, its largest component positive.
+    pub direction: [f64; 3],
+    /// The visible stretch, from and to, mm along `direction` from
+    /// `point_mm`.
+    pub visible_mm: [f64; 2],
+    /// The share of the visible stretch's pieces where both faces are seen.
+    pub seen_share: f64,
+}
+
+impl MeasuredRoot {
+    pub fn point(&self) -> Vec3 {
+        Vec3::from(self.point_mm)
+    }
+
+    pub fn direction(&self) -> Vec3 {
+        Vec3::from(self.direction)
+    }
+
+    /// The visible stretch's length, mm.
+    pub fn visible_length_mm(&self) -> f64 {
+        self.visible_mm[1] - self.visible_mm[0]
+    }
+
+    /// Where `p` lies along the root (mm from `point_mm`) and how far from
+    /// the line, mm.
+    pub fn along_and_off(&self, p: &Vec3) -> (f64, f64) {
+        let d = p - self.point();
+        let t = d.dot(&self.direction());
+        (t, (d - self.direction() * t).norm())
+    }
+
+    /// The visible stretch's ends, mm.
+    pub fn visible_ends(&self) -> [Vec3; 2] {
+        self.visible_mm.map(|t| self.point() + self.direction() * t)
+    }
+}
+
+/// Why a root cannot be measured from its boxes.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum MeasureError {
+    #[error("box {name:?} holds {points} points, fewer than {MIN_BOX_POINTS}")]
+    TooFewPoints { name: String, points: usize },
+    #[error("the points of box {name:?} do not span a plane")]
+    NoPlane { name: String },
+    #[error("the planes of boxes {a:?} and {b:?} meet at {angle_deg:.1}°, below {MIN_FACE_ANGLE_DEG}°")]
+    Parallel { a: String, b: String, angle_deg: f64 },
+    #[error("no stretch of the root has both faces seen within {NEAR_ROOT_MM} mm of it")]
+    NotSeen,
+}
+
+/// The cloud's valid points in its own units, as f64.
+pub fn cloud_points(cloud: &PointCloud) -> Vec<[f64; 3]> {
+    cloud.points().iter().filter(|p| is_valid_point(p)).map(|p| p.map(f64::from)).collect()
+}
+
+/// Fits a box's plane: its points (in the cloud's units) scaled to mm.
+pub fn fit_box(points: &[[f64; 3]], face: &FaceBox, mm_per_unit: f64) -> Result<(Plane, MeasuredPlane), MeasureError> {
+    let inside: Vec<Vec3> = points.iter().filter(|p| face.contains(p)).map(|p| Vec3::from(*p) * mm_per_unit).collect();
+    if inside.len() < MIN_BOX_POINTS {
+        return Err(MeasureError::TooFewPoints { name: face.name.clone(), points: inside.len() });
+    }
+    let moments: Moments = inside.iter().collect();
+    let plane =
+        moments.plane().ok_or_else(|| MeasureError::NoPlane { name: face.name.clone() })?.facing_away_from_camera();
+    let rms = (inside.iter().map(|p| plane.signed_distance(p).powi(2)).sum::<f64>() / inside.len() as f64).sqrt();
+    let measured =
+        MeasuredPlane { normal: plane.normal.into(), offset_mm: plane.offset, rms_mm: rms, points: inside.len() };
+    Ok((plane, measured))
+}
+
+/// The line where two planes meet, through the point of it nearest `near`.
+fn meet(a: &Plane, b: &Plane, near: &Vec3) -> Option<(Vec3, Vec3)> {
+    let direction = a.normal.cross(&b.normal);
+    if direction.norm() < MIN_FACE_ANGLE_DEG.to_radians().sin() {
+        return None;
+    }
+    let direction = direction.normalize();
+    let m = nalgebra::Matrix3::from_rows(&[a.normal.transpose(), b.normal.transpose(), direction.transpose()]);
+    let point = m.lu().solve(&Vec3::new(a.offset, b.offset, direction.dot(near)))?;
+    Some((point, direction))
+}
+
+/// The direction with its largest component positive, so a root's
+/// direction does not flip between two measurements.
+fn canonical(direction: Vec3) -> Vec3 {
+    let largest = (0..3).max_by(|&i, &j| direction[i].abs().total_cmp(&direction[j].abs())).unwrap_or(0);
+    if direction[largest] < 0.0 { -direction } else { direction }
+}
+
+/// Measures a root from its boxes on the cloud's valid points (in the
+/// cloud's units).
+pub fn measure_root(points: &[[f64; 3]], root: &RootReference, mm_per_unit: f64) -> Result<MeasuredRoot, MeasureError> {
+    let fits = root.faces.iter().map(|f| fit_box(points, f, mm_per_unit)).collect::<Result<Vec<_>, _>>()?;
+    let planes: Vec<Plane> = fits.iter().map(|(p, _)| *p).collect();
+    let all: Vec<Vec3> = points
+        .iter()
+        .filter(|p| root.faces.iter().any(|f| f.contains(p)))
+        .map(|p| Vec3::from(*p) * mm_per_unit)
+        .collect();
+    let centroid = all.iter().sum::<Vec3>() / all.len().max(1) as f64;
+    let parallel = |i: usize, j: usize| MeasureError::Parallel {
+        a: root.faces[i].name.clone(),
+        b: root.faces[j].name.clone(),
+        angle_deg: planes[i].normal.cross(&planes[j].normal).norm().asin().to_degrees(),
+    };
+    // Each root face's foot: the line it meets the other surface along.
+    // (the index of the other surface: the other face, or the land).
+    let (feet, other): ([(Vec3, Vec3); 2], [usize; 2]) = match root.kind {
+        RootKind::Meet => {
+            let foot = meet(&planes[0], &planes[1], &centroid).ok_or_else(|| parallel(0, 1))?;
+            ([foot, foot], [1, 0])
+        }
+        RootKind::LandCentre => {
+            let a = meet(&planes[0], &planes[2], &centroid).ok_or_else(|| parallel(0, 2))?;
+            let b = meet(&planes[1], &planes[2], &a.0).ok_or_else(|| parallel(1, 2))?;
+            ([a, b], [2, 2])
+        }
+    };
+    let d0 = canonical(feet[0].1);
+    let d1 = canonical(feet[1].1);
+    let direction = (d0 + d1).normalize();
+    let middle = (feet[0].0 + feet[1].0) / 2.0;
+    // The point of the line nearest the faces' centroid.
+    let point = middle + direction * (centroid - middle).dot(&direction);
+
+    let bands: Vec<f64> = fits.iter().map(|(_, m)| (FACE_BAND_RMS * m.rms_mm).max(MIN_FACE_BAND_MM)).collect();
+    // Pieces along the root with points of face 0 and of face 1.
+    // Per piece: points of each face, and the least and greatest `along`.
+    let mut counts: std::collections::BTreeMap<i64, ([usize; 2], [f64; 2])> = std::collections::BTreeMap::new();
+    for raw in points {
+        let p = Vec3::from(*raw) * mm_per_unit;
+        for face in 0..2 {
+            let (foot_point, foot_direction) = feet[face];
+            let from_foot = p - foot_point;
+            let off_foot = (from_foot - foot_direction * from_foot.dot(&foot_direction)).norm();
+            if off_foot > NEAR_ROOT_MM
+                || planes[face].signed_distance(&p).abs() > bands[face]
+                || planes[other[face]].signed_distance(&p).abs() <= bands[other[face]]
+            {
+                continue;
+            }
+            let along = (p - point).dot(&direction);
+            let piece = counts.entry((along / BIN_MM).floor() as i64).or_insert(([0; 2], [along, along]));
+            piece.0[face] += 1;
+            piece.1 = [piece.1[0].min(along), piece.1[1].max(along)];
+        }
+    }
+    let seen: Vec<i64> = counts
+        .iter()
+        .filter(|(_, (c, _))| c.iter().all(|&n| n >= MIN_FACE_POINTS_PER_BIN))
+        .map(|(&bin, _)| bin)
+        .collect();
+    let (first, last, seen_in_run) = longest_run(&seen).ok_or(MeasureError::NotSeen)?;
+    let pieces = (last - first + 1) as f64;
+    Ok(MeasuredRoot {
+        planes: fits.into_iter().map(|(_, m)| m).collect(),
+        point_mm: point.into(),
+        direction: direction.into(),
+        // From the first seen piece's first face point to the last one's
+        // last, so the stretch ends where the faces are seen to end.
+        visible_mm: [counts[&first].1[0], counts[&last].1[1]],
+        seen_share: seen_in_run as f64 / pieces,
+    })
+}
+
+/// The longest run of sorted bin indices with gaps of at most
+/// [`MAX_GAP_BINS`]: its first and last bin and how many bins of it are
+/// seen.
+fn longest_run(seen: &[i64]) -> Option<(i64, i64, usize)> {
+    let mut best: Option<(i64, i64, usize)> = None;
+    let mut start = 0;
+    for k in 0..seen.len() {
+        let ends_here = k + 1 == seen.len() || seen[k + 1] - seen[k] > MAX_GAP_BINS as i64 + 1;
+        if ends_here {
+            let run = (seen[start], seen[k], k + 1 - start);
+            if best.is_none_or(|b| run.1 - run.0 > b.1 - b.0) {
+                best = Some(run);
+            }
+            start = k + 1;
+        }
+    }
+    best
+}
+
+/// How far two measurements of a root may differ and still be the same
+/// reference: the file's figures are written rounded to these.
+pub const CHECK_TOLERANCE_MM: f64 = 0.01;
+pub const CHECK_TOLERANCE_DIRECTION: f64 = 1e-5;
+
+/// Where a recomputed root differs from the committed one, in words; None
+/// when they agree within the tolerances.
+pub fn differs(committed: &MeasuredRoot, recomputed: &MeasuredRoot) -> Option<String> {
+    let mut problems = Vec::new();
+    if committed.planes.len() != recomputed.planes.len() {
+        problems.push(format!("{} planes, recomputed {}", committed.planes.len(), recomputed.planes.len()));
+    }
+    for (k, (a, b)) in committed.planes.iter().zip(&recomputed.planes).enumerate() {
+        let turn = (Vec3::from(a.normal) - Vec3::from(b.normal)).norm();
+        if turn > CHECK_TOLERANCE_DIRECTION
+            || (a.offset_mm - b.offset_mm).abs() > CHECK_TOLERANCE_MM
+            || (a.rms_mm - b.rms_mm).abs() > CHECK_TOLERANCE_MM
+            || a.points != b.points
+        {
+            problems.push(format!("plane {}: committed {a:?}, recomputed {b:?}", k + 1));
+        }
+    }
+    // The line: the committed point's distance from the recomputed line,
+    // and the turn between directions.
+    let (_, off) = recomputed.along_and_off(&committed.point());
+    let turn = (committed.direction() - recomputed.direction()).norm();
+    if off > CHECK_TOLERANCE_MM || turn > CHECK_TOLERANCE_DIRECTION {
+        problems.push(format!("the line moved {off:.4} mm and turned by {turn:.2e}"));
+    }
+    let ends = |m: &MeasuredRoot| m.visible_ends();
+    let moved = ends(committed).iter().zip(ends(recomputed)).map(|(a, b)| (a - b).norm()).fold(0.0, f64::max);
+    if moved > CHECK_TOLERANCE_MM || (committed.seen_share - recomputed.seen_share).abs() > 1e-3 {
+        problems.push(format!(
+            "the visible stretch: committed {:?} mm ({:.3} seen), recomputed {:?} mm ({:.3} seen)",
+            committed.visible_mm, committed.seen_share, recomputed.visible_mm, recomputed.seen_share
+        ));
+    }
+    (!problems.is_empty()).then(|| problems.join("; "))
+}
+
+/// The root's figures rounded as the references file keeps them: mm to
+/// 1e-3, directions to 1e-7.
+pub fn rounded(m: &MeasuredRoot) -> MeasuredRoot {
+    let mm = |v: f64| (v * 1e3).round() / 1e3;
+    let unit = |v: f64| (v * 1e7).round() / 1e7;
+    MeasuredRoot {
+        planes: m
+            .planes
+            .iter()
+            .map(|p| MeasuredPlane {
+                normal: p.normal.map(unit),
+                offset_mm: mm(p.offset_mm),
+                rms_mm: mm(p.rms_mm),
+                points: p.points,
+            })
+            .collect(),
+        point_mm: m.point_mm.map(mm),
+        direction: m.direction.map(unit),
+        visible_mm: m.visible_mm.map(mm),
+        seen_share: (m.seen_share * 1e3).round() / 1e3,
+    }
+}

@@ -20,6 +20,8 @@ pub(super) static RULES: &[&Rule] = &[
     &TEE_FLANGE_EDGE_READ_ALONG_ITSELF,
     &TEE_FLANGE_EDGE_ENDS_WITH_WEB_TOP,
     &TEE_NO_ROOT_SEEN,
+    &SEAM_SAMPLES_NOT_ALONG_A_LINE,
+    &EDGE_TOO_FEW_POINTS_TO_FIT,
 ];
 
 const RIM: &str = "src/pipeline/boundary/rim.rs";
@@ -401,4 +403,39 @@ pub static TEE_FLANGE_EDGE_ENDS_WITH_WEB_TOP: Rule = Rule {
     parameters: &[STATION_SPACINGS, BORDER_REACH_SPACINGS],
     fires: &["src/pipeline/fillet/tests.rs::the_webs_end_face_is_no_side_face_and_the_root_runs_to_the_webs_end"],
     holds: &["src/pipeline/fillet/tests.rs::a_web_axis_off_the_web_is_read_again_along_the_flange_s_edge"],
+};
+
+pub static SEAM_SAMPLES_NOT_ALONG_A_LINE: Rule = Rule {
+    id: "seam.samples_not_along_a_line",
+    stage: Stage::Refit,
+    effect: Effect::Refuses,
+    gate: None,
+    summary: "the two weld edges' boundary samples spread along a line that lies across the plates' normal",
+    reason: "The seam's axis, along which both edges are refitted and the weld is sampled, is the direction \
+             the boundary samples of both edges spread along, laid in the plates' plane. Samples that spread \
+             along no direction (none, or all at one place) or only along the plates' normal (a face seen \
+             edge-on, not a plate's edge) give the seam no direction: there is no edge to follow.",
+    parameters: &[],
+    fires: &["src/pipeline/robust/plates.rs::edge_samples_without_a_direction_in_the_plates_give_no_seam"],
+    holds: &["tests/pipeline.rs::each_joint_type_is_planned_within_a_millimetre"],
+};
+
+pub static EDGE_TOO_FEW_POINTS_TO_FIT: Rule = Rule {
+    id: "edge.too_few_points_to_fit",
+    stage: Stage::Refit,
+    effect: Effect::Refuses,
+    gate: None,
+    summary: "each weld edge has more points, spread along the seam, than its fitted curve has coefficients",
+    reason: "Each weld edge is refitted as a polynomial along the seam (Eq. 17 to 25): a line needs two points \
+             apart along it, and a curve of higher degree one more per degree, before a residual says anything \
+             about how well the edge is placed. An edge with fewer (its plate seen as a sliver at the joint, its \
+             boundary samples or line inliers all at one station) is not seen well enough to place a weld on.",
+    parameters: &[Parameter {
+        name: "fit_degree",
+        unit: "",
+        meaning: "degree of the polynomial each edge is fitted with",
+        source: Source::Config("pipeline.fit_degree"),
+    }],
+    fires: &["src/pipeline/paper.rs::an_edge_of_too_few_points_or_collinear_edges_are_refused_by_rule"],
+    holds: &["tests/pipeline.rs::the_papers_method_stays_reachable_and_plans_a_frontal_scene"],
 };

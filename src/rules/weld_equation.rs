@@ -4,7 +4,13 @@
 use super::{Effect, Gate, Parameter, Rule, Source, Stage};
 
 /// The stage's rules, in the order they apply.
-pub(super) static RULES: &[&Rule] = &[&FILLET_NOT_FROM_EDGES, &EDGES_IN_DIFFERENT_AXES];
+pub(super) static RULES: &[&Rule] = &[
+    &FILLET_NOT_FROM_EDGES,
+    &EDGES_IN_DIFFERENT_AXES,
+    &EDGES_COLLINEAR,
+    &LAP_NO_STEP_ALONG_NORMAL,
+    &EDGES_DO_NOT_OVERLAP,
+];
 
 pub static FILLET_NOT_FROM_EDGES: Rule = Rule {
     id: "joint.fillet_not_from_edges",
@@ -33,4 +39,54 @@ pub static EDGES_IN_DIFFERENT_AXES: Rule = Rule {
     parameters: &[],
     fires: &["src/pipeline/context.rs::a_weld_is_placed_from_two_edges_of_one_seam_only"],
     holds: &["tests/pipeline.rs::the_papers_method_stays_reachable_and_plans_a_frontal_scene"],
+};
+
+pub static EDGES_COLLINEAR: Rule = Rule {
+    id: "seam.edges_collinear",
+    stage: Stage::WeldEquation,
+    effect: Effect::Refuses,
+    gate: None,
+    summary: "in the paper's method, the two weld edges' ends span a plane, so the plate normal is defined",
+    reason: "The paper's method takes the plates' normal from the weld edges' end points (Eq. 33, 34): the \
+             cross product of one edge's direction with the step to the other. Two edges that lie on one line \
+             (the same edge found twice, or two plates' edges meeting end to end) span no plane, so no normal \
+             says where the torch stands or which way a groove's depth runs.",
+    parameters: &[],
+    fires: &["src/pipeline/paper.rs::an_edge_of_too_few_points_or_collinear_edges_are_refused_by_rule"],
+    holds: &["tests/pipeline.rs::the_papers_method_stays_reachable_and_plans_a_frontal_scene"],
+};
+
+pub static LAP_NO_STEP_ALONG_NORMAL: Rule = Rule {
+    id: "lap.no_step_along_normal",
+    stage: Stage::WeldEquation,
+    effect: Effect::Refuses,
+    gate: None,
+    summary: "a lap's lower plate faces along the plates' normal, so the step down to its root is measured along it",
+    reason: "A lap's weld lies at the root, the upper plate's edge moved down the step to the lower plate's \
+             surface along the plates' normal (Eq. 38). A lower plate turned nearly square to that normal \
+             (more than about 84 degrees) is met by the normal far from the edge or never, so the step and the \
+             root it places mean nothing; such plates are no lap.",
+    parameters: &[Parameter {
+        name: "MIN_STEP_COSINE",
+        unit: "",
+        meaning: "least cosine between the plates' normal and the lower plate's",
+        source: Source::Constant { file: "src/pipeline/weld_equation.rs", name: "MIN_STEP_COSINE" },
+    }],
+    fires: &["src/pipeline/robust/plates.rs::a_lap_without_a_step_or_edges_that_do_not_overlap_are_refused_by_rule"],
+    holds: &["tests/pipeline.rs::lap_is_planned_at_the_root_from_either_side"],
+};
+
+pub static EDGES_DO_NOT_OVERLAP: Rule = Rule {
+    id: "seam.edges_do_not_overlap",
+    stage: Stage::WeldEquation,
+    effect: Effect::Refuses,
+    gate: None,
+    summary: "the two weld edges are seen side by side along some stretch of the seam",
+    reason: "The weld is planned only where both edges were seen, the stretch along the seam where their \
+             extents overlap (for a lap, also where the root is in view). Two edges seen at different places \
+             along the seam, one ending before the other begins, show two plates' edges but no joint between \
+             them: nowhere is the gap, the groove or the step seen from both sides.",
+    parameters: &[],
+    fires: &["src/pipeline/robust/plates.rs::a_lap_without_a_step_or_edges_that_do_not_overlap_are_refused_by_rule"],
+    holds: &["tests/pipeline.rs::each_joint_type_is_planned_within_a_millimetre"],
 };

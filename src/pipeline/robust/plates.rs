@@ -236,15 +236,13 @@ fn refit_weld_edges(
     let boundaries: [Boundary; 2] = [boundary_a, boundary_b];
     let samples: [Vec<Vec3>; 2] = boundaries.each_ref().map(|b| b.samples.iter().map(|s| s.position).collect());
     ctx.trace.record(|t| t.fit_samples = samples.clone());
-    let union: Vec<Vec3> = samples.iter().flatten().copied().collect();
-    let axes = SeamAxes::principal(&union, &normal)
-        .ok_or_else(|| PlanError::at(Stage::Refit, "the weld edge samples do not spread along a line"))?;
+    let axes = seam_axes(&samples, &normal)?;
     let degree = cfg.fit_degree as usize;
     let seam_spacing = spacing_at(&axes.origin);
     let fit_edge = |k: usize| {
         refit::fit_trimmed(&samples[k], &axes, degree, cfg.fit_trim_sigma, seam_spacing).ok_or_else(|| {
-            PlanError::at(
-                Stage::Refit,
+            PlanError::by(
+                &rules::refit::EDGE_TOO_FEW_POINTS_TO_FIT,
                 format!("weld edge {} has {} boundary samples, too few to fit", k + 1, samples[k].len()),
             )
         })
@@ -412,12 +410,7 @@ fn place_weld(
     let (e1, e2) = (&fits[0].curve, &fits[1].curve);
     let middle = 0.5 * (e1.s_min.max(e2.s_min) + e1.s_max.min(e2.s_max));
     let lap_step = weld_equation::lap_step(e1, &plates[1].plane, &normal, middle);
-    let weld = ctx.weld(e1, e2, &normal, groove_depth_mm, || {
-        let step = lap_step.ok_or_else(|| {
-            PlanError::at(Stage::WeldEquation, "the lower plate's plane runs along the plate normal: no lap step")
-        })?;
-        Ok(weld_equation::lap_root(e1, step, &normal))
-    })?;
+    let weld = ctx.weld(e1, e2, &normal, groove_depth_mm, || lap_root(e1, lap_step, &normal))?;
     // A V-groove's midline between its edges as its two bevels place them,
     // not as far as the strips walked onto each bevel.
     let bevels_offset = profile.as_ref().and_then(|p| p.bevel_midline_offset());
@@ -429,9 +422,12 @@ fn place_weld(
         _ => weld,
     };
     let extent = |k: usize| {
-        boundaries[k]
-            .extent(|s| axes.feature(&s.position))
-            .ok_or_else(|| PlanError::at(Stage::WeldEquation, format!("weld edge {} has no boundary sample", k + 1)))
+        boundaries[k].extent(|s| axes.feature(&s.position)).ok_or_else(|| {
+            PlanError::by(
+                &rules::refit::EDGE_TOO_FEW_POINTS_TO_FIT,
+                format!("weld edge {} has no boundary sample", k + 1),
+            )
+        })
     };
     let mut extents = [extent(0)?, extent(1)?];
     // Each weld edge as its fit gives it, at the middle of its span.
@@ -557,9 +553,7 @@ fn place_weld(
         }
     }
     ctx.trace.record(|t| t.weld = Some(TracedWeld { curve: weld.clone(), span: (s0, s1), normal }));
-    if s1 - s0 <= 0.0 {
-        return Err(PlanError::at(Stage::WeldEquation, "the two weld edges do not overlap along the seam"));
-    }
+    check_overlap(s0, s1)?;
     // Both edges must have been seen along the seam, not glimpsed here and
     // there: a gap the cloud cannot resolve still leaves the odd chance
     // hole, and a seam through those is a guess (the edge coverage gate).
@@ -602,6 +596,39 @@ fn place_weld(
     ctx.clock.lap(Stage::WeldEquation)?;
 
     Ok(PlacedWeld { weld, span: (s0, s1), lap_step, edge_coverage, coverage, joint_beyond_ends_mm })
+}
+
+/// The seam's axes (4.2): along the line both weld edges' boundary
+/// samples spread, laid across the plates' `normal`.
+fn seam_axes(samples: &[Vec<Vec3>; 2], normal: &Vec3) -> Result<SeamAxes, PlanError> {
+    let union: Vec<Vec3> = samples.iter().flatten().copied().collect();
+    SeamAxes::principal(&union, normal).ok_or_else(|| {
+        PlanError::by(&rules::refit::SEAM_SAMPLES_NOT_ALONG_A_LINE, "the weld edge samples do not spread along a line")
+    })
+}
+
+/// A lap's root (Eq. 38): the upper plate's edge `upper_edge` moved down
+/// `step`, the lower plate's depth below it along `normal`, if the lower
+/// plate faces along the normal enough for one to be read.
+fn lap_root(upper_edge: &SeamCurve, step: Option<f64>, normal: &Vec3) -> Result<SeamCurve, PlanError> {
+    let step = step.ok_or_else(|| {
+        PlanError::by(
+            &rules::weld_equation::LAP_NO_STEP_ALONG_NORMAL,
+            "the lower plate's plane runs along the plate normal: no lap step",
+        )
+    })?;
+    Ok(weld_equation::lap_root(upper_edge, step, normal))
+}
+
+/// The stretch `[s0, s1]` both weld edges were seen along holds some seam.
+fn check_overlap(s0: f64, s1: f64) -> Result<(), PlanError> {
+    if s1 - s0 <= 0.0 {
+        return Err(PlanError::by(
+            &rules::weld_equation::EDGES_DO_NOT_OVERLAP,
+            "the two weld edges do not overlap along the seam",
+        ));
+    }
+    Ok(())
 }
 
 /// The quality stage: the seam's figures against the configured gates;
@@ -660,4 +687,40 @@ fn check_gates(
     ctx.clock.lap(Stage::Quality)?;
 
     Ok((quality, warnings))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn edge_samples_without_a_direction_in_the_plates_give_no_seam() {
+        let normal = Vec3::z();
+        let none = seam_axes(&[Vec::new(), Vec::new()], &normal).unwrap_err();
+        assert_eq!((none.rule.id, none.stage), ("seam.samples_not_along_a_line", Stage::Refit), "{none}");
+        // Samples stacked along the normal: a face seen edge-on, no edge.
+        let stacked: Vec<Vec3> = (0..10).map(|k| Vec3::new(0.0, 0.0, 700.0 + k as f64)).collect();
+        let along_normal = seam_axes(&[stacked.clone(), stacked], &normal).unwrap_err();
+        assert_eq!(along_normal.rule.id, "seam.samples_not_along_a_line", "{along_normal}");
+        // Two edges along x: the seam runs along x.
+        let edge = |y: f64| (0..10).map(|k| Vec3::new(k as f64, y, 700.0)).collect::<Vec<_>>();
+        let axes = seam_axes(&[edge(-1.0), edge(1.0)], &normal).expect("a seam along x");
+        assert!(axes.e.dot(&Vec3::x()).abs() > 1.0 - 1e-9);
+    }
+
+    #[test]
+    fn a_lap_without_a_step_or_edges_that_do_not_overlap_are_refused_by_rule() {
+        let points: Vec<Vec3> = (0..10).map(|k| Vec3::new(k as f64, 0.0, 700.0)).collect();
+        let axes = SeamAxes::paper(&points);
+        let edge = refit::fit(&points, &axes, 1).expect("a line").curve;
+        let normal = Vec3::z();
+        let flat = lap_root(&edge, None, &normal).unwrap_err();
+        assert_eq!((flat.rule.id, flat.stage), ("lap.no_step_along_normal", Stage::WeldEquation), "{flat}");
+        let root = lap_root(&edge, Some(3.0), &normal).expect("a step");
+        assert!((root.at(2.0) - edge.at(2.0) - normal * 3.0).norm() < 1e-9);
+        let apart = check_overlap(10.0, 4.0).unwrap_err();
+        assert_eq!((apart.rule.id, apart.stage), ("seam.edges_do_not_overlap", Stage::WeldEquation), "{apart}");
+        assert_eq!(check_overlap(10.0, 10.0).unwrap_err().rule.id, "seam.edges_do_not_overlap");
+        assert_eq!(check_overlap(4.0, 10.0), Ok(()));
+    }
 }

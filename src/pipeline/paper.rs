@@ -23,7 +23,7 @@
 
 use crate::config::Method;
 
-use super::context::{self, Context, MIN_CLUSTER_POINTS};
+use super::context::{self, Context, EdgeFigures, MIN_CLUSTER_POINTS, PlannedWeld};
 use super::edge_points::{EdgeCriterion, FullCount};
 use super::neighbours::NeighbourSearch;
 use super::refit::{self, CurveFit, SeamAxes, SeamCurve};
@@ -67,7 +67,9 @@ pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
     ctx.stats.plate_points = workpiece.plates.each_ref().map(|p| p.members.len());
     ctx.trace.record(|t| t.plate_labels = Some(workpiece.plates.each_ref().map(|p| p.label)));
     ctx.clock.lap(Stage::Background)?;
-    ctx.check_groove_depth(&workpiece)?;
+    // The paper's method is always told the joint (the request's check).
+    let joint = ctx.request.joint.given();
+    ctx.check_groove_depth(joint, &workpiece)?;
 
     // 3.4.1: an edge point has at most `paper.edge_ratio` of a frontal
     // plane's neighbour count (Eq. 15).
@@ -112,13 +114,15 @@ pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
     let (e1, e2) = (&fits[0].curve, &fits[1].curve);
     let normal = plate_normal(e1, e2)?;
     let depth = ctx.request.groove_depth_mm.unwrap_or(0.0);
-    let weld = ctx.weld(e1, e2, &normal, depth, || Ok(weld_equation::lap_paper(e1, e2)))?;
+    let joint = context::decided(joint)?;
+    let weld = context::weld(joint, e1, e2, &normal, depth, || Ok(weld_equation::lap_paper(e1, e2)))?;
     let span = (weld.s_min, weld.s_max);
     ctx.trace.record(|t| t.weld = Some(TracedWeld { curve: weld.clone(), span, normal }));
     ctx.clock.lap(Stage::WeldEquation)?;
 
     // 5.1: the waypoints in the robot's base frame.
-    ctx.finish(Method::Paper, weld, span, normal, &fits, SeamAssessment::default())
+    let weld = PlannedWeld::new(joint, weld, span, normal, EdgeFigures::of(&fits), SeamAssessment::default());
+    ctx.finish(Method::Paper, weld)
 }
 
 /// 4.2: each edge's inliers fitted by least squares along `axes`.

@@ -18,7 +18,7 @@ use super::super::refit::{self, CurveFit, SeamAxes, SeamCurve};
 use super::super::trace::TracedWeld;
 use super::super::{PlanError, SeamAssessment, SeamCoverage, Stage, view_border, weld_edges, weld_equation};
 use super::lap_edge::check_lap_edge;
-use super::{Front, admit};
+use super::{Front, Refused, SeenAs, admit};
 use crate::rules;
 
 /// The shortest vector normalised as a direction: below it the sum of two
@@ -31,7 +31,9 @@ const MIN_DIRECTION_NORM: f64 = 1e-9;
 const MIN_STEP_RUN_SHARE: f64 = 0.1;
 
 /// A butt joint's or a lap's weld from its two plates: edge points through
-/// the quality gates (3.4 to 4.3).
+/// the quality gates (3.4 to 4.3). `joint` is the joint known from the
+/// layers: a lap, or a butt joint's type when the request names it; the
+/// groove stage decides it for a butt pair under `auto`.
 pub(super) fn plan_plates(
     ctx: &mut Context,
     front: &Front,
@@ -39,16 +41,18 @@ pub(super) fn plan_plates(
     workpiece: Workpiece,
     layout: Layout,
     layers: String,
-) -> Result<PlannedWeld, PlanError> {
-    ctx.check_groove_depth(&workpiece)?;
-    let edges = find_edge_points(ctx, front, labels, &workpiece)?;
+    joint: Option<JointType>,
+) -> Result<PlannedWeld, Refused> {
+    ctx.check_groove_depth(joint, &workpiece).seen_as(joint)?;
+    let edges = find_edge_points(ctx, front, labels, &workpiece).seen_as(joint)?;
     let normal = plates_normal(&workpiece, front.dominant);
-    let (edge_points, lines) = segment_edge_lines(ctx, &edges)?;
-    let pick = pick_weld_edges(ctx, &workpiece, layout, &edge_points, &lines, normal)?;
-    let (refitted, beside) = refit_weld_edges(ctx, &workpiece, layout, &lines, pick, normal)?;
-    let groove = judge_groove(ctx, &workpiece, layout, &refitted, layers)?;
-    let placed = place_weld(ctx, &workpiece, layout, &refitted, beside, &groove, normal)?;
-    let (quality, warnings) = check_gates(ctx, &workpiece, &refitted, &groove, &placed)?;
+    let (edge_points, lines) = segment_edge_lines(ctx, &edges).seen_as(joint)?;
+    let pick = pick_weld_edges(ctx, &workpiece, layout, &edge_points, &lines, normal).seen_as(joint)?;
+    let (refitted, beside) = refit_weld_edges(ctx, &workpiece, layout, &lines, pick, normal).seen_as(joint)?;
+    let groove = judge_groove(ctx, &workpiece, layout, &refitted, layers, joint)?;
+    let decided = Some(groove.joint);
+    let placed = place_weld(ctx, &workpiece, layout, &refitted, beside, &groove, normal).seen_as(decided)?;
+    let (quality, warnings) = check_gates(ctx, &workpiece, &refitted, &groove, &placed).seen_as(decided)?;
     let PlacedWeld { weld, span: (s0, s1), coverage, .. } = placed;
     let (joint, joint_evidence, fits) = (groove.joint, groove.evidence, refitted.fits);
     // 5.1 follows once every workpiece is planned: the seams' order
@@ -303,21 +307,23 @@ struct Groove {
     evidence: String,
 }
 
-/// The groove stage: a butt joint's groove probed and judged.
+/// The groove stage: a butt joint's groove probed and judged, and the joint
+/// decided: `joint`, the one known so far, or the one the groove shows.
 fn judge_groove(
     ctx: &mut Context,
     workpiece: &Workpiece,
     layout: Layout,
     refitted: &Refitted,
     layers: String,
-) -> Result<Groove, PlanError> {
+    joint: Option<JointType>,
+) -> Result<Groove, Refused> {
     let camera = &ctx.config.camera;
     let cloud = ctx.cloud;
     let (fits, seam_spacing) = (&refitted.fits, refitted.seam_spacing);
     // Between a butt joint's edges: a V-groove's bevels (and how deep it
     // is), a square gap, or a plate standing there. It decides V or I for
     // `auto`, checks the type requested, and measures the depth of Eq. 32.
-    let (profile, groove_depth_mm) = if layout == Layout::Butt {
+    let (profile, groove_depth_mm, joint) = if layout == Layout::Butt {
         let span = (fits[0].curve.s_min.max(fits[1].curve.s_min), fits[0].curve.s_max.min(fits[1].curve.s_max));
         let grid = ctx.camera_grid();
         let profile = groove::probe(
@@ -332,12 +338,13 @@ fn judge_groove(
             },
         );
         tracing::debug!(verdict = ?profile.verdict(), "{}", profile.describe());
-        let judged = groove::judge(ctx.joint, &profile);
-        if let Err(groove::GrooveError::LooksLikeTee { .. }) = judged {
-            // What was seen, for a workpiece of several named unplanned.
-            ctx.joint = Some(JointType::TFillet);
-        }
-        let joint = judged.map_err(|e| PlanError::by(e.rule(), e))?;
+        let judged = groove::judge(joint, &profile);
+        // What was seen, for a workpiece of several named unplanned.
+        let seen = match &judged {
+            Err(groove::GrooveError::LooksLikeTee { .. }) => Some(JointType::TFillet),
+            _ => joint,
+        };
+        let joint = judged.map_err(|e| PlanError::by(e.rule(), e)).seen_as(seen)?;
         ctx.trace.record(|t| t.joint = Some(joint));
         admit(ctx, joint, &rules::groove::BUTT_NOT_REQUESTED, &profile.describe())?;
         let depth = match (joint, ctx.request.groove_depth_mm, profile.depth_mm()) {
@@ -351,23 +358,24 @@ fn judge_groove(
                          groove's root ({}); give the depth",
                         profile.describe()
                     ),
-                ));
+                ))
+                .seen_as(Some(joint));
             }
             _ => 0.0,
         };
         if joint == JointType::VButt {
-            profile.check_opening(depth).map_err(|e| PlanError::by(e.rule(), e))?;
+            profile.check_opening(depth).map_err(|e| PlanError::by(e.rule(), e)).seen_as(Some(joint))?;
         }
-        (Some(profile), depth)
+        (Some(profile), depth, Some(joint))
     } else {
-        (None, 0.0)
+        (None, 0.0, joint)
     };
-    let joint = ctx.joint()?;
+    let joint = context::decided(joint).seen_as(joint)?;
     let joint_evidence = match &profile {
         Some(p) => format!("{layers}; between the edges: {}", p.verdict_sentence()),
         None => layers,
     };
-    ctx.clock.lap(Stage::Groove)?;
+    ctx.clock.lap(Stage::Groove).seen_as(Some(joint))?;
 
     Ok(Groove { profile, depth_mm: groove_depth_mm, joint, evidence: joint_evidence })
 }
@@ -410,12 +418,12 @@ fn place_weld(
     let (e1, e2) = (&fits[0].curve, &fits[1].curve);
     let middle = 0.5 * (e1.s_min.max(e2.s_min) + e1.s_max.min(e2.s_max));
     let lap_step = weld_equation::lap_step(e1, &plates[1].plane, &normal, middle);
-    let weld = ctx.weld(e1, e2, &normal, groove_depth_mm, || lap_root(e1, lap_step, &normal))?;
+    let weld = context::weld(groove.joint, e1, e2, &normal, groove_depth_mm, || lap_root(e1, lap_step, &normal))?;
     // A V-groove's midline between its edges as its two bevels place them,
     // not as far as the strips walked onto each bevel.
     let bevels_offset = profile.as_ref().and_then(|p| p.bevel_midline_offset());
-    let weld = match (ctx.joint, bevels_offset) {
-        (Some(JointType::VButt), Some(offset)) => {
+    let weld = match (groove.joint, bevels_offset) {
+        (JointType::VButt, Some(offset)) => {
             tracing::debug!(?offset, "the V-groove's midline from its bevels");
             weld_equation::moved_towards(&weld, e1, e2, &offset)
         }

@@ -424,7 +424,11 @@ fn place_weld(
     let bevels_offset = profile.as_ref().and_then(|p| p.bevel_midline_offset());
     let weld = match (groove.joint, bevels_offset) {
         (JointType::VButt, Some(offset)) => {
-            tracing::debug!(?offset, "the V-groove's midline from its bevels");
+            tracing::debug!(
+                rule = rules::weld_equation::WELD_ON_BEVEL_MIDLINE.id,
+                ?offset,
+                "the V-groove's midline from its bevels"
+            );
             weld_equation::moved_towards(&weld, e1, e2, &offset)
         }
         _ => weld,
@@ -477,6 +481,9 @@ fn place_weld(
         };
         let reached = [reach(0), reach(1)];
         tracing::debug!(samples = ?extents, borders = ?reached, "weld edge ends carried to the image border");
+        if reached != extents {
+            tracing::debug!(rule = rules::refit::SEAM_END_AT_IMAGE_BORDER.id, "a weld edge's end moved to the border");
+        }
         extents = reached;
     }
     if ctx.camera_grid().is_none()
@@ -497,6 +504,9 @@ fn place_weld(
         };
         let reached = [reach(0), reach(1)];
         tracing::debug!(edges = ?extents, at_border = ?reached, "weld edge ends carried to the image's border");
+        if reached != extents {
+            tracing::debug!(rule = rules::refit::SEAM_END_AT_IMAGE_BORDER.id, "a weld edge's end moved to the border");
+        }
         extents = reached;
     }
     let [(a0, a1), (b0, b1)] = extents;
@@ -556,7 +566,12 @@ fn place_weld(
         let start = if s0 < v0 && unseen(v0, s0) { v0 } else { s0 };
         let end = if s1 > v1 && unseen(v1, s1) { v1 } else { s1 };
         if (start, end) != (s0, s1) {
-            tracing::debug!(seam = ?(s0, s1), lower_plate_seen = ?(v0, v1), "the lap's seam ends where its lower plate ends");
+            tracing::debug!(
+                rule = rules::weld_equation::LAP_SEAM_ENDS_WHERE_LOWER_PLATE_ENDS.id,
+                seam = ?(s0, s1),
+                lower_plate_seen = ?(v0, v1),
+                "the lap's seam ends where its lower plate ends"
+            );
             (s0, s1) = (start, end);
         }
     }
@@ -714,6 +729,26 @@ mod tests {
         let edge = |y: f64| (0..10).map(|k| Vec3::new(k as f64, y, 700.0)).collect::<Vec<_>>();
         let axes = seam_axes(&[edge(-1.0), edge(1.0)], &normal).expect("a seam along x");
         assert!(axes.e.dot(&Vec3::x()).abs() > 1.0 - 1e-9);
+    }
+
+    #[test]
+    fn a_weld_edge_without_a_grid_runs_along_its_longest_unbroken_stretch() {
+        use super::super::super::boundary::{BoundarySample, ExtentRule};
+        // Samples a millimetre apart from 0 to 19 mm, then 20 strips with
+        // none, then three more: a chance hole, not the edge.
+        let at = (0..20).chain(40..43).map(|k| k as f64);
+        let samples = at.map(|x| BoundarySample { position: Vec3::new(x, 0.0, 700.0), along: x }).collect();
+        let strips = Boundary { samples, line_spacing_mm: 1.0, extent_rule: ExtentRule::LongestStretch };
+        // `seam.longest_seen_stretch` cuts the three off.
+        assert_eq!(strips.extent(|s| s.position.x), Some((-0.5, 19.5)));
+        // Every sample counts on a pixel grid, and samples eight strips
+        // apart still lie on one stretch.
+        let grid = Boundary { extent_rule: ExtentRule::AllSamples, ..strips.clone() };
+        assert_eq!(grid.extent(|s| s.position.x), Some((-0.5, 42.5)));
+        let at = (0..20).chain(27..30).map(|k| k as f64);
+        let samples = at.map(|x| BoundarySample { position: Vec3::new(x, 0.0, 700.0), along: x }).collect();
+        let bridged = Boundary { samples, ..strips };
+        assert_eq!(bridged.extent(|s| s.position.x), Some((-0.5, 29.5)));
     }
 
     #[test]

@@ -576,9 +576,11 @@ pub fn evaluate_variant(
         request.cloud_frame = CloudFrame::Base;
     }
     let result = planner.plan(&sim.cloud, &request).and_then(|plan| {
-        let seam = plan.seams.first().ok_or_else(|| PlanError::at(crate::pipeline::Stage::Trajectory, "no seam"))?;
-        let err = seam_error(&sim.truth, seam)
-            .ok_or_else(|| PlanError::at(crate::pipeline::Stage::Trajectory, "the trajectory has no waypoint"))?;
+        // A plan holds a seam of two waypoints at least: the planner
+        // refuses a frame with none (`workpiece.none_in_view`), as here.
+        let err = plan.seams.first().and_then(|seam| seam_error(&sim.truth, seam)).ok_or_else(|| {
+            PlanError::by(&crate::rules::background::NO_WORKPIECE_IN_VIEW, "the plan holds no seam with a waypoint")
+        })?;
         Ok((err, plan))
     });
     let several_seams = spec.joint.joint_type() == JointType::TFillet || !spec.others.is_empty();

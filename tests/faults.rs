@@ -165,7 +165,8 @@ fn a_laps_seam_ends_where_its_lower_plate_ends_not_where_its_upper_plate_does() 
     // plate's edge 9.9 mm past its end: the seam started 9.32 mm early.
     // Beside that stretch the pixels just inside the lower edge, in view,
     // see no lower plate (its shadow on the table, far below), and the
-    // seam ends where the lower plate was last seen.
+    // seam ends where the lower plate was last seen
+    // (`lap.seam_ends_where_lower_plate_ends`).
     let name = "hard-lap-01-d524-t41-fill-lower-side-s0.11-dr1.4-fresh13";
     let (_, spec) =
         hard_suite(Draw::of_scene(name)).into_iter().find(|(n, _)| n == name).unwrap_or_else(|| panic!("no {name}"));
@@ -215,6 +216,8 @@ fn a_lap_plate_cut_by_a_streak_is_refused_for_coverage_and_not_found_as_a_butt_j
 
 #[test]
 fn a_groove_leaving_the_image_at_a_grazing_angle_is_planned_to_the_border() {
+    // `seam.end_at_image_border` carries the edges to the border, where
+    // the strips stop a rim's depth short of it.
     let outcome = planned("fault-barely-in-view-v-butt-01-d1000-t10", JointAsk::AsScene);
     assert_eq!(outcome.verdict, Verdict::WithinBar, "{:?}", outcome.result.as_ref().map(|(e, _)| e));
 }

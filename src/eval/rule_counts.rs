@@ -61,10 +61,10 @@ mod tests {
         let refused = PlanError::by(&rules::input::NO_VALID_POINT, "no point");
         counts.count(Err(&refused));
         counts.count(Err(&refused));
-        counts.count(Err(&PlanError::at(rules::Stage::Groove, "no root")));
+        counts.count(Err(&PlanError::by(&rules::refit::TEE_NO_ROOT_SEEN, "no root")));
         assert_eq!(
             counts.rows(),
-            vec![("frame.no_valid_point", 2, 0), ("pending.groove", 1, 0)],
+            vec![("frame.no_valid_point", 2, 0), ("tee.no_root_seen", 1, 0)],
             "in id order, a rule's refusals and warnings side by side"
         );
     }

@@ -166,9 +166,6 @@ pub(super) struct Context<'a> {
     /// The radius and spacing the frame is planned at: the camera's until
     /// [`Context::measure_scale`] measures the cloud.
     pub scale: Scale,
-    /// The joint being planned: the one requested, or, for `auto`, the
-    /// one the robust method has decided so far (None until it has).
-    pub joint: Option<JointType>,
     /// What each stage found, when the caller asked for it.
     pub trace: Tracer<'a>,
     /// The image's border as the cloud's rays show it, read the first time
@@ -196,7 +193,6 @@ impl<'a> Context<'a> {
             clock,
             stats: PlanStats { valid_points, ..PlanStats::default() },
             scale: Scale::of_camera(config.pipeline.neighbour_radius_mm),
-            joint: request.joint.given(),
             trace,
             view_border,
         };
@@ -261,10 +257,11 @@ impl<'a> Context<'a> {
     /// (which moves every waypoint along the normal, Eq. 32). A surface
     /// seen only between the plates is the joint's own floor, no bound:
     /// the groove-depth gate judges the request against the groove
-    /// measured.
-    pub(super) fn check_groove_depth(&self, workpiece: &Workpiece) -> Result<(), PlanError> {
+    /// measured. `joint` is the joint known so far: the one requested, or
+    /// the one the plates' layers showed.
+    pub(super) fn check_groove_depth(&self, joint: Option<JointType>, workpiece: &Workpiece) -> Result<(), PlanError> {
         let (Some(JointType::VButt), Some(depth), Some(support), false) =
-            (self.joint, self.request.groove_depth_mm, workpiece.depth_to_support_mm, workpiece.support_between_plates)
+            (joint, self.request.groove_depth_mm, workpiece.depth_to_support_mm, workpiece.support_between_plates)
         else {
             return Ok(());
         };
@@ -298,46 +295,6 @@ impl<'a> Context<'a> {
     /// The frame's points at `indices`.
     pub(super) fn points_of(&self, indices: &[u32]) -> Vec<Vec3> {
         indices.iter().map(|&i| vec3(&self.cloud.points()[i as usize])).collect()
-    }
-
-    /// The joint being planned, once it is known: always for a joint the
-    /// request names, after the groove stage for `auto`.
-    pub(super) fn joint(&self) -> Result<JointType, PlanError> {
-        self.joint.ok_or_else(|| {
-            PlanError::by(&rules::request::JOINT_UNDECIDED, "the joint type was neither given nor decided")
-        })
-    }
-
-    /// The weld of the joint from its two edges: the midline shifted by
-    /// the groove depth `groove_depth_mm` for a V-butt joint (Eq. 32), the
-    /// midline for an I-butt joint (Eq. 36); `lap` gives the lap weld (Eq.
-    /// 38), where the methods differ.
-    pub(super) fn weld(
-        &self,
-        e1: &SeamCurve,
-        e2: &SeamCurve,
-        normal: &Vec3,
-        groove_depth_mm: f64,
-        lap: impl FnOnce() -> Result<SeamCurve, PlanError>,
-    ) -> Result<SeamCurve, PlanError> {
-        match self.joint()? {
-            JointType::VButt => weld_equation::v_butt(e1, e2, groove_depth_mm, normal),
-            JointType::IButt => weld_equation::i_butt(e1, e2),
-            JointType::Lap => return lap(),
-            // A tee's roots are the fillet stage's, not two edges' weld.
-            JointType::TFillet => {
-                return Err(PlanError::by(
-                    &rules::weld_equation::FILLET_NOT_FROM_EDGES,
-                    "a tee's fillet roots are not planned from two edges",
-                ));
-            }
-        }
-        .ok_or_else(|| {
-            PlanError::by(
-                &rules::weld_equation::EDGES_IN_DIFFERENT_AXES,
-                "the weld edges were fitted in different axes",
-            )
-        })
     }
 
     /// Narrows `[s0, s1]` to where `curve` lies inside the image: projected
@@ -382,7 +339,6 @@ impl<'a> Context<'a> {
                 clock: Clock::start(self.clock.deadline),
                 stats: self.stats.clone(),
                 scale: self.scale,
-                joint: self.request.joint.given(),
                 trace: first_trace.take().unwrap_or_else(Tracer::off),
                 view_border: self.view_border,
             })
@@ -404,24 +360,11 @@ impl<'a> Context<'a> {
             .then(|| CameraGrid::for_camera(camera))
     }
 
-    /// Section 5.1 for the paper's method: the one weld from `s0` to `s1`
-    /// sampled into base-frame waypoints (Eq. 42), checked against the
-    /// robot's reach, and the plan.
-    pub(super) fn finish(
-        self,
-        method: Method,
-        weld: SeamCurve,
-        span: (f64, f64),
-        normal: Vec3,
-        fits: &[CurveFit; 2],
-        assessment: SeamAssessment,
-    ) -> Result<Plan, PlanError> {
-        let joint = self.joint()?;
-        self.finish_several(
-            method,
-            vec![PlannedWeld::new(joint, weld, span, normal, EdgeFigures::of(fits), assessment)],
-            Vec::new(),
-        )
+    /// Section 5.1 for the paper's method: the one weld sampled into
+    /// base-frame waypoints (Eq. 42), checked against the robot's reach,
+    /// and the plan.
+    pub(super) fn finish(self, method: Method, weld: PlannedWeld) -> Result<Plan, PlanError> {
+        self.finish_several(method, vec![weld], Vec::new())
     }
 
     /// Section 5.1 for every weld of the frame, in the order
@@ -546,6 +489,41 @@ impl<'a> Context<'a> {
             )),
         }
     }
+}
+
+/// The joint being planned, once it is known: `joint`, the one the request
+/// names, or for `auto` the one the layers or the groove decided.
+pub(super) fn decided(joint: Option<JointType>) -> Result<JointType, PlanError> {
+    joint.ok_or_else(|| PlanError::by(&rules::request::JOINT_UNDECIDED, "the joint type was neither given nor decided"))
+}
+
+/// The weld of `joint` from its two edges: the midline shifted by the
+/// groove depth `groove_depth_mm` for a V-butt joint (Eq. 32), the midline
+/// for an I-butt joint (Eq. 36); `lap` gives the lap weld (Eq. 38), where
+/// the methods differ.
+pub(super) fn weld(
+    joint: JointType,
+    e1: &SeamCurve,
+    e2: &SeamCurve,
+    normal: &Vec3,
+    groove_depth_mm: f64,
+    lap: impl FnOnce() -> Result<SeamCurve, PlanError>,
+) -> Result<SeamCurve, PlanError> {
+    match joint {
+        JointType::VButt => weld_equation::v_butt(e1, e2, groove_depth_mm, normal),
+        JointType::IButt => weld_equation::i_butt(e1, e2),
+        JointType::Lap => return lap(),
+        // A tee's roots are the fillet stage's, not two edges' weld.
+        JointType::TFillet => {
+            return Err(PlanError::by(
+                &rules::weld_equation::FILLET_NOT_FROM_EDGES,
+                "a tee's fillet roots are not planned from two edges",
+            ));
+        }
+    }
+    .ok_or_else(|| {
+        PlanError::by(&rules::weld_equation::EDGES_IN_DIFFERENT_AXES, "the weld edges were fitted in different axes")
+    })
 }
 
 /// A workpiece's weld, checked, before its waypoints: the seams of a frame
@@ -709,15 +687,10 @@ mod tests {
 
     #[test]
     fn a_weld_waits_for_its_joint_type_and_no_workpiece_is_a_refusal() {
-        let config = Config::default();
-        let cloud = PointCloud::unorganized(vec![[0.0, 0.0, 700.0]]);
         let pose = crate::geometry::pose::RobotPose { xyz_mm: [0.0; 3], angles_deg: [0.0; 3] };
         let request = PlanRequest::new(crate::joint::RequestedJoint::Auto, None, pose);
-        let border = OnceLock::new();
-        let clock = Clock::start(Deadline::NONE);
-        let ctx = Context::new(&config, &cloud, &request, clock, Tracer::off(), &border, 1).expect("in time");
         // `auto` before the layers and the groove decided it.
-        let undecided = ctx.joint().unwrap_err();
+        let undecided = decided(request.joint.given()).unwrap_err();
         assert_eq!((undecided.rule.id, undecided.stage), ("joint.undecided", Stage::Request), "{undecided}");
         let none = none_planned(&[]);
         assert_eq!((none.rule.id, none.stage), ("workpiece.none_in_view", Stage::Background), "{none}");
@@ -732,22 +705,13 @@ mod tests {
     #[test]
     fn a_weld_is_placed_from_two_edges_of_one_seam_only() {
         use super::super::refit::{self, SeamAxes};
-        let config = Config::default();
-        let cloud = PointCloud::unorganized(vec![[0.0, 0.0, 700.0]]);
-        let pose = crate::geometry::pose::RobotPose { xyz_mm: [0.0; 3], angles_deg: [0.0; 3] };
-        let border = OnceLock::new();
         // One edge along camera x, the other along camera y: each fitted
         // in the axes its own points span.
         let line = |along: Vec3| (0..20).map(|k| Vec3::new(0.0, 0.0, 700.0) + along * k as f64).collect::<Vec<_>>();
         let fit = |points: Vec<Vec3>| refit::fit(&points, &SeamAxes::paper(&points), 1).expect("a line").curve;
         let (e1, e2) = (fit(line(Vec3::x())), fit(line(Vec3::y())));
         let normal = Vec3::z();
-        let weld = |joint: JointType| {
-            let request = PlanRequest::new(joint, Some(1.0), pose);
-            let clock = Clock::start(Deadline::NONE);
-            let ctx = Context::new(&config, &cloud, &request, clock, Tracer::off(), &border, 1).expect("in time");
-            ctx.weld(&e1, &e2, &normal, 1.0, || Ok(e1.clone())).map(|_| ())
-        };
+        let weld = |joint: JointType| super::weld(joint, &e1, &e2, &normal, 1.0, || Ok(e1.clone())).map(|_| ());
         let across = weld(JointType::IButt).unwrap_err();
         assert_eq!((across.rule.id, across.stage), ("seam.edges_in_different_axes", Stage::WeldEquation));
         assert_eq!(weld(JointType::VButt).unwrap_err().rule.id, "seam.edges_in_different_axes");

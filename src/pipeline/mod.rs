@@ -175,12 +175,6 @@ impl PlanError {
         PlanError { stage, ..PlanError::by(rule, reason) }
     }
 
-    /// A refusal at `stage` not yet given a rule of its own: it carries
-    /// the stage's placeholder ([`crate::rules::pending`]).
-    pub fn at(stage: Stage, reason: impl fmt::Display) -> Self {
-        PlanError::by(rules::pending::for_stage(stage), reason)
-    }
-
     /// A refusal by a quality gate.
     fn refused(failure: &quality::GateFailure) -> Self {
         PlanError { gate: Some(failure.gate), ..PlanError::by(failure.rule, &failure.message) }

@@ -23,10 +23,10 @@
 
 use crate::config::Method;
 
-use super::context::{self, Context, MIN_CLUSTER_POINTS};
+use super::context::{self, Context, EdgeFigures, MIN_CLUSTER_POINTS, PlannedWeld};
 use super::edge_points::{EdgeCriterion, FullCount};
 use super::neighbours::NeighbourSearch;
-use super::refit::{self, CurveFit, SeamAxes};
+use super::refit::{self, CurveFit, SeamAxes, SeamCurve};
 use super::trace::TracedWeld;
 use super::{Plan, PlanError, SeamAssessment, Stage};
 use super::{background, clustering, plane_points, ransac, weld_edges, weld_equation};
@@ -67,7 +67,9 @@ pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
     ctx.stats.plate_points = workpiece.plates.each_ref().map(|p| p.members.len());
     ctx.trace.record(|t| t.plate_labels = Some(workpiece.plates.each_ref().map(|p| p.label)));
     ctx.clock.lap(Stage::Background)?;
-    ctx.check_groove_depth(&workpiece)?;
+    // The paper's method is always told the joint (the request's check).
+    let joint = ctx.request.joint.given();
+    ctx.check_groove_depth(joint, &workpiece)?;
 
     // 3.4.1: an edge point has at most `paper.edge_ratio` of a frontal
     // plane's neighbour count (Eq. 15).
@@ -102,12 +104,7 @@ pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
     let union: Vec<Vec3> = inliers.iter().flatten().copied().collect();
     let axes = SeamAxes::paper(&union);
     let degree = config.pipeline.fit_degree as usize;
-    let fits: [CurveFit; 2] = [0, 1]
-        .map(|k| refit::fit(&inliers[k], &axes, degree))
-        .into_iter()
-        .collect::<Option<Vec<_>>>()
-        .and_then(|v| v.try_into().ok())
-        .ok_or_else(|| PlanError::at(Stage::Refit, "a weld edge has too few points for a least-squares fit"))?;
+    let fits = fit_edges(&inliers, &axes, degree)?;
     ctx.trace.record(|t| (t.weld_edges, t.fit_samples) = (Some(fits.clone()), inliers.clone()));
     ctx.clock.lap(Stage::Refit)?;
 
@@ -115,14 +112,55 @@ pub(super) fn plan(mut ctx: Context) -> Result<Plan, PlanError> {
     // weld per joint type (Eq. 32, 36; Eq. 38 for a lap), over its own
     // feature range.
     let (e1, e2) = (&fits[0].curve, &fits[1].curve);
-    let normal = weld_equation::paper_normal(e1, e2)
-        .ok_or_else(|| PlanError::at(Stage::WeldEquation, "the weld edges are collinear; no plate normal"))?;
+    let normal = plate_normal(e1, e2)?;
     let depth = ctx.request.groove_depth_mm.unwrap_or(0.0);
-    let weld = ctx.weld(e1, e2, &normal, depth, || Ok(weld_equation::lap_paper(e1, e2)))?;
+    let joint = context::decided(joint)?;
+    let weld = context::weld(joint, e1, e2, &normal, depth, || Ok(weld_equation::lap_paper(e1, e2)))?;
     let span = (weld.s_min, weld.s_max);
     ctx.trace.record(|t| t.weld = Some(TracedWeld { curve: weld.clone(), span, normal }));
     ctx.clock.lap(Stage::WeldEquation)?;
 
     // 5.1: the waypoints in the robot's base frame.
-    ctx.finish(Method::Paper, weld, span, normal, &fits, SeamAssessment::default())
+    let weld = PlannedWeld::new(joint, weld, span, normal, EdgeFigures::of(&fits), SeamAssessment::default());
+    ctx.finish(Method::Paper, weld)
+}
+
+/// 4.2: each edge's inliers fitted by least squares along `axes`.
+fn fit_edges(inliers: &[Vec<Vec3>; 2], axes: &SeamAxes, degree: usize) -> Result<[CurveFit; 2], PlanError> {
+    let fit = |k: usize| {
+        refit::fit(&inliers[k], axes, degree).ok_or_else(|| {
+            PlanError::by(
+                &rules::refit::EDGE_TOO_FEW_POINTS_TO_FIT,
+                "a weld edge has too few points for a least-squares fit",
+            )
+        })
+    };
+    Ok([fit(0)?, fit(1)?])
+}
+
+/// 4.3: the plate normal from the edges' end points (Eq. 33, 34).
+fn plate_normal(e1: &SeamCurve, e2: &SeamCurve) -> Result<Vec3, PlanError> {
+    weld_equation::paper_normal(e1, e2).ok_or_else(|| {
+        PlanError::by(&rules::weld_equation::EDGES_COLLINEAR, "the weld edges are collinear; no plate normal")
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_edge_of_too_few_points_or_collinear_edges_are_refused_by_rule() {
+        let line = |y: f64, n: usize| (0..n).map(|k| Vec3::new(k as f64, y, 700.0)).collect::<Vec<_>>();
+        let axes = SeamAxes::paper(&line(0.0, 10));
+        // A line needs two points apart along it, and a residual a third.
+        let short = fit_edges(&[line(-1.0, 10), line(1.0, 2)], &axes, 1).unwrap_err();
+        assert_eq!((short.rule.id, short.stage), ("edge.too_few_points_to_fit", Stage::Refit), "{short}");
+        let fits = fit_edges(&[line(-1.0, 10), line(1.0, 3)], &axes, 1).expect("two lines");
+        let (e1, e2) = (&fits[0].curve, &fits[1].curve);
+        assert!((plate_normal(e1, e2).expect("a plane") - Vec3::z()).norm() < 1e-9);
+        // The same edge twice spans no plane.
+        let collinear = plate_normal(e1, e1).unwrap_err();
+        assert_eq!((collinear.rule.id, collinear.stage), ("seam.edges_collinear", Stage::WeldEquation), "{collinear}");
+    }
 }

@@ -201,7 +201,7 @@ fn plan_workpieces(
 ) -> Result<Plan, PlanError> {
     if groups.len() == 1 {
         let planes = groups.pop().map(|g| g.planes).unwrap_or_default();
-        let (welds, unplanned) = plan_workpiece(&mut ctx, front, labels, planes)?;
+        let (welds, unplanned) = plan_workpiece(&mut ctx, front, labels, planes).map_err(|r| r.reason)?;
         return ctx.finish_several(Method::Robust, welds, unplanned);
     }
 
@@ -219,18 +219,12 @@ fn plan_workpieces(
             let _span = tracing::debug_span!("workpiece", number = k + 1).entered();
             piece.clock.restart();
             let result = plan_workpiece(&mut piece, front, labels, group.planes);
-            if let Err(refusal) = &result {
+            if let Err(refused) = &result {
                 // The refusing stage's own work, up to the refusal.
                 // The refusal stands; the time limit is the plan's to check.
-                let _ = piece.clock.lap(refusal.stage);
+                let _ = piece.clock.lap(refused.reason.stage);
             }
-            Outcome {
-                result,
-                joint: piece.joint,
-                near_camera: group.near_camera,
-                stats: piece.stats,
-                timings: piece.clock.into_timings(),
-            }
+            Outcome { result, near_camera: group.near_camera, stats: piece.stats, timings: piece.clock.into_timings() }
         })
         .collect();
     ctx.clock.lap_beside(outcomes.iter().map(|o| &o.timings));
@@ -239,7 +233,9 @@ fn plan_workpieces(
     }
     // A workpiece stopped by the time limit says nothing about the frame:
     // the plan as a whole ran out of time.
-    if let Some(stopped) = outcomes.iter().find_map(|o| o.result.as_ref().err().filter(|e| e.out_of_time)) {
+    if let Some(stopped) =
+        outcomes.iter().find_map(|o| o.result.as_ref().err().map(|r| &r.reason).filter(|e| e.out_of_time))
+    {
         return Err(stopped.clone());
     }
     ctx.clock.deadline.check(Stage::Background)?;
@@ -250,12 +246,12 @@ fn plan_workpieces(
                 welds.extend(planned.into_iter().map(|weld| weld.traced(k == 0)));
                 unplanned.extend(seen);
             }
-            Err(reason) => {
+            Err(Refused { reason, seen }) => {
                 tracing::info!(workpiece = k + 1, near_camera = ?outcome.near_camera.as_slice(), "workpiece not planned: {reason}");
                 // The joint requested is no workpiece's joint when it
-                // does not match; otherwise the one planned or seen.
+                // does not match; otherwise the one seen.
                 let mismatch = reason.gate == Some(quality::Gate::JointMismatch);
-                let joint = outcome.joint.filter(|j| !(mismatch && ctx.request.joint.given() == Some(*j)));
+                let joint = seen.filter(|j| !(mismatch && ctx.request.joint.given() == Some(*j)));
                 unplanned.push(Unplanned { joint, near_camera: Some(outcome.near_camera), reason });
             }
         }
@@ -263,29 +259,48 @@ fn plan_workpieces(
     ctx.finish_several(Method::Robust, welds, unplanned)
 }
 
+/// A workpiece's welds, and the joints seen in it but not planned.
+type Welds = (Vec<PlannedWeld>, Vec<Unplanned>);
+
 /// What planning one workpiece of several gave, and what its context
 /// recorded on the way.
 struct Outcome {
-    result: Result<(Vec<PlannedWeld>, Vec<Unplanned>), PlanError>,
-    /// The joint planned or seen, for a workpiece refused.
-    joint: Option<JointType>,
+    result: Result<Welds, Refused>,
     near_camera: Vec3,
     stats: PlanStats,
     timings: StageTimings,
+}
+
+/// A workpiece refused: why, and the joint it was seen to be by then (the
+/// one requested, or the one its layers or its groove showed), which names
+/// it among a frame's unplanned.
+struct Refused {
+    reason: PlanError,
+    seen: Option<JointType>,
+}
+
+/// A stage's refusal, of a workpiece seen to be `joint` so far.
+trait SeenAs<T> {
+    fn seen_as(self, joint: Option<JointType>) -> Result<T, Refused>;
+}
+
+impl<T> SeenAs<T> for Result<T, PlanError> {
+    fn seen_as(self, seen: Option<JointType>) -> Result<T, Refused> {
+        self.map_err(|reason| Refused { reason, seen })
+    }
 }
 
 /// Refuses a workpiece found to be `joint` when the request does not admit
 /// it (a set of types, [`crate::joint::RequestedJoint::OneOf`]), saying what was seen:
 /// `seen`, the evidence that decided the type, by `rule` (the plates'
 /// layers, [`rules::background::JOINT_NOT_REQUESTED`], or the groove,
-/// [`rules::groove::BUTT_NOT_REQUESTED`]). `ctx.joint` names what was
-/// seen, for the workpiece's entry among the unplanned.
-fn admit(ctx: &mut Context, joint: JointType, rule: &'static Rule, seen: &str) -> Result<(), PlanError> {
-    ctx.joint = Some(joint);
+/// [`rules::groove::BUTT_NOT_REQUESTED`]). The refusal names `joint` as
+/// what was seen, for the workpiece's entry among the unplanned.
+fn admit(ctx: &Context, joint: JointType, rule: &'static Rule, seen: &str) -> Result<(), Refused> {
     if ctx.request.joint.admits(joint) {
         return Ok(());
     }
-    Err(joint_mismatch(ctx, &format!("a {joint} joint"), rule, seen))
+    Err(joint_mismatch(ctx, &format!("a {joint} joint"), rule, seen)).seen_as(Some(joint))
 }
 
 /// The refusal by `rule` of a workpiece that is `what` (found from
@@ -307,16 +322,19 @@ struct Front<'f> {
 /// that layout: a butt joint's or a lap's edges through the quality gates,
 /// or a tee's fillet roots (each root seen a weld, a root hidden named in
 /// the second list). `labels` are the frame's cluster labels, which the
-/// edge stage reads for this workpiece's plates.
+/// edge stage reads for this workpiece's plates. The joint passes from
+/// stage to stage: the one requested, then the one the layers show, then
+/// (for a butt pair) the one its groove shows.
 fn plan_workpiece(
     ctx: &mut Context,
     front: &Front,
     labels: &[u32],
     planes: Vec<PlaneCluster>,
-) -> Result<(Vec<PlannedWeld>, Vec<Unplanned>), PlanError> {
+) -> Result<Welds, Refused> {
     let cfg = &ctx.config.pipeline;
+    let requested = ctx.request.joint.given();
     let selection = background::Selection {
-        joint: ctx.request.joint.given(),
+        joint: requested,
         normal: front.dominant,
         coplanar_tolerance_mm: cfg.coplanar_tolerance_mm,
         lap_step_min_mm: cfg.lap_step_min_mm,
@@ -341,12 +359,13 @@ fn plan_workpiece(
                 support_between_plates: false,
                 layer_mates: [Vec::new(), Vec::new()],
             };
-            ctx.clock.lap(Stage::Background)?;
+            ctx.clock.lap(Stage::Background).seen_as(requested)?;
             let layers = format!("an inside corner: {}", corner.what);
-            return tee::plan(ctx, tee::SeenTee::of(&workpiece, tee::Flange::OneSide), layers);
+            let tee = tee::SeenTee::of(&workpiece, tee::Flange::OneSide);
+            return tee::plan(ctx, tee, layers).seen_as(Some(JointType::TFillet));
         }
         let refusal = corner.refusal();
-        return Err(PlanError::by(refusal.rule(), refusal));
+        return Err(PlanError::by(refusal.rule(), refusal)).seen_as(requested);
     }
     // A tee whose web's top is not found may have it out of view (a crop
     // round its root): its face standing on the nearest layer of planes,
@@ -365,19 +384,24 @@ fn plan_workpiece(
         (selected, _) => selected,
     };
     let background::Selected { workpiece, layout, evidence: layers } =
-        selected.map_err(|e| PlanError::by(e.rule(), &e))?;
+        selected.map_err(|e| PlanError::by(e.rule(), &e)).seen_as(requested)?;
     if layout == Layout::Lap {
-        ctx.joint = Some(JointType::Lap);
         ctx.trace.record(|t| t.joint = Some(JointType::Lap));
     }
     // A set of types requested: the layers decide a lap or a tee; a butt
     // pair is one of the two butt joints, which the groove probe tells.
+    let joint = match layout {
+        Layout::Lap => Some(JointType::Lap),
+        Layout::Tee => Some(JointType::TFillet),
+        Layout::Butt => requested,
+    };
     match layout {
         Layout::Lap => admit(ctx, JointType::Lap, &rules::background::JOINT_NOT_REQUESTED, &layers)?,
         Layout::Tee => admit(ctx, JointType::TFillet, &rules::background::JOINT_NOT_REQUESTED, &layers)?,
         Layout::Butt => {
             if ![JointType::VButt, JointType::IButt].into_iter().any(|j| ctx.request.joint.admits(j)) {
-                return Err(joint_mismatch(ctx, "a butt joint", &rules::background::JOINT_NOT_REQUESTED, &layers));
+                let mismatch = joint_mismatch(ctx, "a butt joint", &rules::background::JOINT_NOT_REQUESTED, &layers);
+                return Err(mismatch).seen_as(joint);
             }
         }
     }
@@ -395,14 +419,17 @@ fn plan_workpiece(
             "plate"
         );
     }
-    ctx.clock.lap(Stage::Background)?;
+    ctx.clock.lap(Stage::Background).seen_as(joint)?;
     // One path per layout: each returns the workpiece's welds.
     match layout {
         Layout::Butt | Layout::Lap => {
-            plan_plates(ctx, front, labels, workpiece, layout, layers).map(|weld| (vec![weld], Vec::new()))
+            plan_plates(ctx, front, labels, workpiece, layout, layers, joint).map(|weld| (vec![weld], Vec::new()))
         }
         // A web on its flange: its fillet roots, not two plates' edges.
-        Layout::Tee => tee::plan(ctx, tee::SeenTee::of(&workpiece, tee::Flange::BothSides), layers),
+        Layout::Tee => {
+            let tee = tee::SeenTee::of(&workpiece, tee::Flange::BothSides);
+            tee::plan(ctx, tee, layers).seen_as(joint)
+        }
     }
 }
 
@@ -415,7 +442,8 @@ fn plan_topless_tee(
     ctx: &mut Context,
     flange: Vec<PlaneCluster>,
     not_found: BackgroundError,
-) -> Result<(Vec<PlannedWeld>, Vec<Unplanned>), PlanError> {
+) -> Result<Welds, Refused> {
+    let requested = ctx.request.joint.given();
     let cfg = &ctx.config.pipeline;
     let pieces: Vec<&PlaneCluster> = flange.iter().collect();
     let search = web_face::FaceSearch {
@@ -435,7 +463,8 @@ fn plan_topless_tee(
         // frame: its rule refused, in the class the top's search gave.
         let reason = format!("{not_found}; nor does a web's side face stand on the nearest plane: {why}");
         PlanError { gate: not_found.rule().gate, ..PlanError::by(why.rule(), reason) }
-    })?;
+    });
+    let face = face.seen_as(requested)?;
     let layers = format!(
         "no web's top is in view; a side face of {} points stands on the nearest plane ({:.0} mm² in {} piece(s)), \
          seen {:.0} mm tall",
@@ -450,14 +479,14 @@ fn plan_topless_tee(
             "{not_found}; {layers}: this may be a tee's web (or an inside corner's standing plate) cropped below its \
              top; request t_fillet to plan its root"
         );
-        return Err(PlanError::by(&rules::background::WEB_FACE_WITHOUT_TOP, reason));
+        return Err(PlanError::by(&rules::background::WEB_FACE_WITHOUT_TOP, reason)).seen_as(requested);
     }
-    ctx.clock.lap(Stage::Background)?;
+    ctx.clock.lap(Stage::Background).seen_as(requested)?;
     let tee = tee::SeenTee {
         web: Web::Face(&face),
         flange_pieces: pieces,
         flange_sides: tee::Flange::BothSides,
         depth_to_support_mm: None,
     };
-    tee::plan(ctx, tee, layers)
+    tee::plan(ctx, tee, layers).seen_as(Some(JointType::TFillet))
 }

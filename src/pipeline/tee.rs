@@ -67,7 +67,6 @@ pub(super) fn plan(
 ) -> Result<(Vec<PlannedWeld>, Vec<Unplanned>), PlanError> {
     let config = ctx.config;
     let cfg = &config.pipeline;
-    ctx.joint = Some(JointType::TFillet);
     ctx.trace.record(|t| t.joint = Some(JointType::TFillet));
     let spacing = ctx.spacing_at(&tee.web.centroid());
     let grid = ctx.camera_grid();

@@ -379,6 +379,7 @@ mod tests {
         // mm of the border: the edge is seen up to it.
         let to_border: Vec<Vec3> = (0..12).map(|k| rim_point(60.0 + 0.6 * k as f64, 1.0)).collect();
         let to_border: Vec<Vec3> = to_border.into_iter().filter(|p| border().outside_mm(p) <= -0.3).collect();
+        // `seam.end_at_image_border` moves the end out to the crossing.
         let (lo, hi) = border().edge_extent_at_border(&edge, (-50.0, 64.0), &to_border, along, 1.0);
         assert_eq!(lo, -50.0, "the start's rim is nowhere near a border");
         assert!((hi - crossing).abs() < 1e-9, "{hi} against {crossing}");

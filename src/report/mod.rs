@@ -325,7 +325,7 @@ mod tests {
         assert_eq!(figures["error"]["rule"].as_str(), Some("frame.no_valid_point"), "{figures}");
 
         let mut warned = PlanTrace::new(Some(JointType::Lap), None, Method::Robust);
-        let rule = rules::pending::for_stage(rules::Stage::Quality);
+        let rule = &rules::quality::JOINT_COVERAGE;
         warned.warnings.push(GateFailure {
             rule,
             gate: Gate::JointCoverage,
@@ -334,7 +334,7 @@ mod tests {
             message: "the seam spans 50 % of the joint".into(),
         });
         assert!(
-            detail(&warned).ends_with("warning pending.quality: the seam spans 50 % of the joint"),
+            detail(&warned).ends_with("warning seam.joint_coverage: the seam spans 50 % of the joint"),
             "{}",
             detail(&warned)
         );

@@ -32,6 +32,7 @@ pub(super) static RULES: &[&Rule] = &[
     &JOINT_NOT_REQUESTED,
     &WEB_FACE_WITHOUT_TOP,
     &NO_WORKPIECE_IN_VIEW,
+    &LAP_NEARER_THAN_BUTT_PAIR,
 ];
 
 const BACKGROUND: &str = "src/pipeline/background/placement.rs";
@@ -619,4 +620,35 @@ pub static NO_WORKPIECE_IN_VIEW: Rule = Rule {
     parameters: &[],
     fires: &["src/pipeline/context.rs::a_weld_waits_for_its_joint_type_and_no_workpiece_is_a_refusal"],
     holds: &["tests/several_seams.rs::a_requested_joint_applies_to_every_workpiece"],
+};
+
+pub static LAP_NEARER_THAN_BUTT_PAIR: Rule = Rule {
+    id: "joint.lap_nearer_than_butt_pair",
+    stage: Stage::Background,
+    effect: Effect::ChangesJoint,
+    gate: None,
+    summary: "under `auto`, where both a coplanar pair and a lap's two layers are found, a plate nearer the camera \
+              than the pair, over a lower plate of its own, makes the joint a lap",
+    reason: "A frame can hold two plates side by side in one plane and a plate lying one plate thickness over \
+             another: a lap over a table whose pieces lie coplanar, or a clamp or a fixture lying across a butt \
+             joint. The joint is the one nearest the camera, the camera being set up over the work: a plate \
+             nearer than the pair, as large as a plate beside it and over a lower plate of its own (not lying \
+             across the pair), is a lap's upper plate, and the joint is planned as a lap; otherwise the pair is \
+             the butt joint and what lies over it is not a plate.",
+    parameters: &[
+        Parameter {
+            name: "SIDE_BY_SIDE_AREA_RATIO",
+            unit: "",
+            meaning: "least area of the upper plate, as a share of the pair's second plate",
+            source: Source::Constant { file: "src/pipeline/background/placement.rs", name: "SIDE_BY_SIDE_AREA_RATIO" },
+        },
+        Parameter {
+            name: "lap_step_max_mm",
+            unit: "mm",
+            meaning: "thickest plate a lap's step may be",
+            source: Source::Config("pipeline.lap_step_max_mm"),
+        },
+    ],
+    fires: &["src/pipeline/background/tests.rs::with_no_type_given_the_layers_decide"],
+    holds: &["src/pipeline/background/tests.rs::with_no_type_given_the_layers_decide"],
 };

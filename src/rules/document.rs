@@ -2,10 +2,10 @@
 
 use std::fmt::Write;
 
-use super::{CATALOGUES, Parameter, Rule, Source, Stage, pending};
+use super::{CATALOGUES, Parameter, Rule, Source, Stage};
 
 /// The rulebook as Markdown: a table of every rule by stage, then each
-/// rule in full, then the stages' placeholders still in use.
+/// rule in full.
 pub fn markdown() -> String {
     let mut out = String::new();
     out.push_str(
@@ -42,14 +42,6 @@ pub fn markdown() -> String {
         for rule in *catalogue {
             write_rule(&mut out, rule);
         }
-    }
-    out.push_str(
-        "\n## Refusals without a rule of their own\n\n\
-         A refusal not yet given its own rule carries its stage's placeholder, `pending.<stage>`. \
-         Until every refusal has one, each stage has its placeholder:\n\n",
-    );
-    for rule in &pending::ALL {
-        let _ = writeln!(out, "- `{}`", rule.id);
     }
     out
 }

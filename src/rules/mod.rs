@@ -23,7 +23,6 @@
 
 mod document;
 mod gate;
-pub mod pending;
 mod stage;
 
 pub mod background;
@@ -166,10 +165,9 @@ const CATALOGUES: [&[&Rule]; 15] = [
     trajectory::RULES,
 ];
 
-/// Every rule, by stage in run order and in catalogue order within one,
-/// then the placeholders of [`pending`].
+/// Every rule, by stage in run order and in catalogue order within one.
 pub fn all() -> impl Iterator<Item = &'static Rule> {
-    CATALOGUES.into_iter().flatten().copied().chain(pending::ALL.iter())
+    CATALOGUES.into_iter().flatten().copied()
 }
 
 /// The rule with this id.
@@ -212,7 +210,7 @@ mod tests {
     }
 
     #[test]
-    fn a_refusing_rule_has_a_gate_class_or_is_pending() {
+    fn a_gate_class_only_on_a_rule_that_refuses_or_warns() {
         for rule in all() {
             if rule.gate.is_some() {
                 assert!(

@@ -20,6 +20,10 @@ pub(super) static RULES: &[&Rule] = &[
     &TEE_FLANGE_EDGE_READ_ALONG_ITSELF,
     &TEE_FLANGE_EDGE_ENDS_WITH_WEB_TOP,
     &TEE_NO_ROOT_SEEN,
+    &SEAM_SAMPLES_NOT_ALONG_A_LINE,
+    &EDGE_TOO_FEW_POINTS_TO_FIT,
+    &SEAM_END_AT_IMAGE_BORDER,
+    &SEAM_LONGEST_SEEN_STRETCH,
 ];
 
 const RIM: &str = "src/pipeline/boundary/rim.rs";
@@ -401,4 +405,104 @@ pub static TEE_FLANGE_EDGE_ENDS_WITH_WEB_TOP: Rule = Rule {
     parameters: &[STATION_SPACINGS, BORDER_REACH_SPACINGS],
     fires: &["src/pipeline/fillet/tests.rs::the_webs_end_face_is_no_side_face_and_the_root_runs_to_the_webs_end"],
     holds: &["src/pipeline/fillet/tests.rs::a_web_axis_off_the_web_is_read_again_along_the_flange_s_edge"],
+};
+
+pub static SEAM_SAMPLES_NOT_ALONG_A_LINE: Rule = Rule {
+    id: "seam.samples_not_along_a_line",
+    stage: Stage::Refit,
+    effect: Effect::Refuses,
+    gate: None,
+    summary: "the two weld edges' boundary samples spread along a line that lies across the plates' normal",
+    reason: "The seam's axis, along which both edges are refitted and the weld is sampled, is the direction \
+             the boundary samples of both edges spread along, laid in the plates' plane. Samples that spread \
+             along no direction (none, or all at one place) or only along the plates' normal (a face seen \
+             edge-on, not a plate's edge) give the seam no direction: there is no edge to follow.",
+    parameters: &[],
+    fires: &["src/pipeline/robust/plates.rs::edge_samples_without_a_direction_in_the_plates_give_no_seam"],
+    holds: &["tests/pipeline.rs::each_joint_type_is_planned_within_a_millimetre"],
+};
+
+pub static EDGE_TOO_FEW_POINTS_TO_FIT: Rule = Rule {
+    id: "edge.too_few_points_to_fit",
+    stage: Stage::Refit,
+    effect: Effect::Refuses,
+    gate: None,
+    summary: "each weld edge has more points, spread along the seam, than its fitted curve has coefficients",
+    reason: "Each weld edge is refitted as a polynomial along the seam (Eq. 17 to 25): a line needs two points \
+             apart along it, and a curve of higher degree one more per degree, before a residual says anything \
+             about how well the edge is placed. An edge with fewer (its plate seen as a sliver at the joint, its \
+             boundary samples or line inliers all at one station) is not seen well enough to place a weld on.",
+    parameters: &[Parameter {
+        name: "fit_degree",
+        unit: "",
+        meaning: "degree of the polynomial each edge is fitted with",
+        source: Source::Config("pipeline.fit_degree"),
+    }],
+    fires: &["src/pipeline/paper.rs::an_edge_of_too_few_points_or_collinear_edges_are_refused_by_rule"],
+    holds: &["tests/pipeline.rs::the_papers_method_stays_reachable_and_plans_a_frontal_scene"],
+};
+
+pub static SEAM_END_AT_IMAGE_BORDER: Rule = Rule {
+    id: "seam.end_at_image_border",
+    stage: Stage::Refit,
+    effect: Effect::MovesEnd,
+    gate: None,
+    summary: "where a plate runs on to the image's border beside its weld edge, the edge, and the seam, run on to \
+              the border too",
+    reason: "The plane criterion trims a plate's rim along the image's border as along any edge, so a weld edge's \
+             boundary samples stop a rim's depth inside the border; where the seam leaves the image at a grazing \
+             angle that depth becomes millimetres along the seam, and the seam would stop short of a joint that \
+             goes on out of view. Where the plate is seen just inside its edge all the way to the border (on the \
+             camera's grid: most pixels between the end and the border on the plate's plane; without a grid: the \
+             plate's rim within a voxel or so of the border the cloud's rays span), the edge's end is moved to \
+             where the fitted edge leaves the image. Where the plate ends first, or nothing is seen beyond the \
+             end, the end stays where the samples put it.",
+    parameters: &[
+        Parameter {
+            name: "MAX_BORDER_REACH_MM",
+            unit: "mm",
+            meaning: "farthest an end moves to the border, on the camera's grid",
+            source: Source::Constant { file: "src/pipeline/boundary/ends.rs", name: "MAX_BORDER_REACH_MM" },
+        },
+        Parameter {
+            name: "MIN_ON_PLATE_TO_BORDER",
+            unit: "",
+            meaning: "least share of the pixels inside the edge, up to the border, on the plate's plane",
+            source: Source::Constant { file: "src/pipeline/boundary/ends.rs", name: "MIN_ON_PLATE_TO_BORDER" },
+        },
+        BORDER_REACH_SPACINGS,
+        Parameter {
+            name: "END_EVIDENCE_SPACINGS",
+            unit: "point spacings",
+            meaning: "the rim's points read at an end, and the most the end moves, without a grid",
+            source: Source::Constant { file: "src/pipeline/view_border.rs", name: "END_EVIDENCE_SPACINGS" },
+        },
+    ],
+    fires: &[
+        "src/pipeline/view_border.rs::an_edge_read_short_of_an_oblique_border_runs_on_to_it_where_its_plate_does",
+        "tests/faults.rs::a_groove_leaving_the_image_at_a_grazing_angle_is_planned_to_the_border",
+    ],
+    holds: &["src/pipeline/view_border.rs::an_end_is_not_moved_when_any_evidence_stops_short_of_the_border"],
+};
+
+pub static SEAM_LONGEST_SEEN_STRETCH: Rule = Rule {
+    id: "seam.longest_seen_stretch",
+    stage: Stage::Refit,
+    effect: Effect::CutsSeam,
+    gate: None,
+    summary: "in a cloud without a pixel grid, a weld edge runs along its longest stretch of boundary strips \
+              unbroken by more than a few empty ones",
+    reason: "Without a pixel grid a plate's boundary is read in strips across the weld edge, and a plate seen at \
+             all leaves a sample in nearly every strip; a few empty strips in a row are a glare spot or a tack \
+             weld. A lone sample or a short run beyond a longer break (a chance hole in a sparse strip at the \
+             cloud's border, a piece of another part) proves nothing about where the edge runs, so the edge's \
+             extent is the longest stretch its strips show, and what lies beyond the break is cut off.",
+    parameters: &[Parameter {
+        name: "EXTENT_BREAK_LINES",
+        unit: "strips",
+        meaning: "most empty strips in a row still within one stretch",
+        source: Source::Constant { file: "src/pipeline/boundary/mod.rs", name: "EXTENT_BREAK_LINES" },
+    }],
+    fires: &["src/pipeline/robust/plates.rs::a_weld_edge_without_a_grid_runs_along_its_longest_unbroken_stretch"],
+    holds: &["src/pipeline/robust/plates.rs::a_weld_edge_without_a_grid_runs_along_its_longest_unbroken_stretch"],
 };

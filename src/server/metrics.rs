@@ -345,7 +345,7 @@ mod tests {
         m.peer_refused(Role::Controller, Refusal::Evicted);
         m.refused_by(&rules::input::NO_VALID_POINT);
         m.refused_by(&rules::input::NO_VALID_POINT);
-        m.warned_by(rules::pending::for_stage(rules::Stage::Quality));
+        m.warned_by(&rules::quality::JOINT_COVERAGE);
         let text = m.encode(3);
         for line in [
             "weldseam_plans_total{outcome=\"plan_failed\"} 1",
@@ -358,7 +358,7 @@ mod tests {
             "weldseam_pending_connections{link=\"controller\"} 0",
             "weldseam_refused_peers_total{link=\"controller\",reason=\"evicted\"} 1",
             "weldseam_refusals_total{rule=\"frame.no_valid_point\"} 2",
-            "weldseam_warnings_total{rule=\"pending.quality\"} 1",
+            "weldseam_warnings_total{rule=\"seam.joint_coverage\"} 1",
         ] {
             assert!(text.lines().any(|l| l == line), "no line {line:?} in\n{text}");
         }

@@ -368,6 +368,10 @@ pub fn robust_select(planes: Vec<PlaneCluster>, s: &Selection, points: &[Point])
                     && lap_layers.1 != pos
                     && l.layers[lap_layers.0][0].area_mm2 >= SIDE_BY_SIDE_AREA_RATIO * l.layers[pos][1].area_mm2 =>
             {
+                tracing::debug!(
+                    rule = crate::rules::background::LAP_NEARER_THAN_BUTT_PAIR.id,
+                    "a lap nearer than a butt pair"
+                );
                 lap(&l, lap_layers, " nearer the camera than the nearest coplanar pair".into())
             }
             // The lap's upper layer is the pair's, and the lap found no

@@ -563,7 +563,8 @@ fn with_no_type_given_the_layers_decide() {
     assert_eq!(chosen.layout, Layout::Butt);
     assert_eq!(chosen.workpiece.depth_to_support_mm, Some(20.0));
     // A plate over a lower plate of its own, nearer than a coplanar
-    // pair further on: the nearer top decides.
+    // pair further on: the nearer top decides
+    // (`joint.lap_nearer_than_butt_pair`).
     let over = vec![
         cluster(694.0, 8_000.0, 0.0),
         cluster(700.0, 30_000.0, -60.0),

@@ -128,6 +128,19 @@ impl Boundary {
                 best = Some((run.len(), lo, hi));
             }
         }
+        if let Some((kept, lo, hi)) = best
+            && kept < at.len()
+        {
+            let rule = crate::rules::refit::SEAM_LONGEST_SEEN_STRETCH.id;
+            tracing::debug!(
+                rule,
+                kept,
+                samples = at.len(),
+                from_mm = lo,
+                to_mm = hi,
+                "the edge's longest stretch kept"
+            );
+        }
         best.map(|(_, lo, hi)| (lo - self.line_spacing_mm / 2.0, hi + self.line_spacing_mm / 2.0))
     }
 }

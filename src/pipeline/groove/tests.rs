@@ -324,6 +324,7 @@ fn a_v_groove_s_bevels_place_its_edges_where_the_edges_given_are_read_inside_it(
     let profile = probed_between(&cloud, &e1, &e2);
     let offset = profile.bevel_midline_offset().unwrap_or_else(|| panic!("{}", profile.describe()));
     let midline = e1.midline(&e2).unwrap();
+    // `groove.weld_on_bevel_midline` moves the weld line onto it.
     let moved = crate::pipeline::weld_equation::moved_towards(&midline, &e1, &e2, &offset);
     for s in [-45.0, 0.0, 45.0] {
         let (before, after) = (midline.at(s).x, moved.at(s).x);

@@ -19,7 +19,7 @@ use super::super::straightness::{RootBend, Samples, bend_of};
 use super::super::trace::TracedWeld;
 use super::super::{PlanError, SeamAssessment, SeamCoverage, Stage, view_border, weld_edges, weld_equation};
 use super::lap_edge::check_lap_edge;
-use super::{Front, admit};
+use super::{Front, Refused, SeenAs, admit};
 use crate::rules;
 
 /// The shortest vector normalised as a direction: below it the sum of two
@@ -32,7 +32,9 @@ const MIN_DIRECTION_NORM: f64 = 1e-9;
 const MIN_STEP_RUN_SHARE: f64 = 0.1;
 
 /// A butt joint's or a lap's weld from its two plates: edge points through
-/// the quality gates (3.4 to 4.3).
+/// the quality gates (3.4 to 4.3). `joint` is the joint known from the
+/// layers: a lap, or a butt joint's type when the request names it; the
+/// groove stage decides it for a butt pair under `auto`.
 pub(super) fn plan_plates(
     ctx: &mut Context,
     front: &Front,
@@ -40,16 +42,18 @@ pub(super) fn plan_plates(
     workpiece: Workpiece,
     layout: Layout,
     layers: String,
-) -> Result<PlannedWeld, PlanError> {
-    ctx.check_groove_depth(&workpiece)?;
-    let edges = find_edge_points(ctx, front, labels, &workpiece)?;
+    joint: Option<JointType>,
+) -> Result<PlannedWeld, Refused> {
+    ctx.check_groove_depth(joint, &workpiece).seen_as(joint)?;
+    let edges = find_edge_points(ctx, front, labels, &workpiece).seen_as(joint)?;
     let normal = plates_normal(&workpiece, front.dominant);
-    let (edge_points, lines) = segment_edge_lines(ctx, &edges)?;
-    let pick = pick_weld_edges(ctx, &workpiece, layout, &edge_points, &lines, normal)?;
-    let (refitted, beside) = refit_weld_edges(ctx, &workpiece, layout, &lines, pick, normal)?;
-    let groove = judge_groove(ctx, &workpiece, layout, &refitted, layers)?;
-    let placed = place_weld(ctx, &workpiece, layout, &refitted, beside, &groove, normal)?;
-    let (quality, warnings) = check_gates(ctx, &workpiece, &refitted, &groove, &placed)?;
+    let (edge_points, lines) = segment_edge_lines(ctx, &edges).seen_as(joint)?;
+    let pick = pick_weld_edges(ctx, &workpiece, layout, &edge_points, &lines, normal).seen_as(joint)?;
+    let (refitted, beside) = refit_weld_edges(ctx, &workpiece, layout, &lines, pick, normal).seen_as(joint)?;
+    let groove = judge_groove(ctx, &workpiece, layout, &refitted, layers, joint)?;
+    let decided = Some(groove.joint);
+    let placed = place_weld(ctx, &workpiece, layout, &refitted, beside, &groove, normal).seen_as(decided)?;
+    let (quality, warnings) = check_gates(ctx, &workpiece, &refitted, &groove, &placed).seen_as(decided)?;
     let PlacedWeld { weld, span: (s0, s1), coverage, .. } = placed;
     let (joint, joint_evidence, fits) = (groove.joint, groove.evidence, refitted.fits);
     // 5.1 follows once every workpiece is planned: the seams' order
@@ -240,15 +244,13 @@ fn refit_weld_edges(
     let boundaries: [Boundary; 2] = [boundary_a, boundary_b];
     let samples: [Vec<Vec3>; 2] = boundaries.each_ref().map(|b| b.samples.iter().map(|s| s.position).collect());
     ctx.trace.record(|t| t.fit_samples = samples.clone());
-    let union: Vec<Vec3> = samples.iter().flatten().copied().collect();
-    let axes = SeamAxes::principal(&union, &normal)
-        .ok_or_else(|| PlanError::at(Stage::Refit, "the weld edge samples do not spread along a line"))?;
+    let axes = seam_axes(&samples, &normal)?;
     let degree = cfg.fit_degree as usize;
     let seam_spacing = spacing_at(&axes.origin);
     let fit_edge = |k: usize| {
         refit::fit_trimmed(&samples[k], &axes, degree, cfg.fit_trim_sigma, seam_spacing).ok_or_else(|| {
-            PlanError::at(
-                Stage::Refit,
+            PlanError::by(
+                &rules::refit::EDGE_TOO_FEW_POINTS_TO_FIT,
                 format!("weld edge {} has {} boundary samples, too few to fit", k + 1, samples[k].len()),
             )
         })
@@ -331,21 +333,23 @@ struct Groove {
     evidence: String,
 }
 
-/// The groove stage: a butt joint's groove probed and judged.
+/// The groove stage: a butt joint's groove probed and judged, and the joint
+/// decided: `joint`, the one known so far, or the one the groove shows.
 fn judge_groove(
     ctx: &mut Context,
     workpiece: &Workpiece,
     layout: Layout,
     refitted: &Refitted,
     layers: String,
-) -> Result<Groove, PlanError> {
+    joint: Option<JointType>,
+) -> Result<Groove, Refused> {
     let camera = &ctx.config.camera;
     let cloud = ctx.cloud;
     let (fits, seam_spacing) = (&refitted.fits, refitted.seam_spacing);
     // Between a butt joint's edges: a V-groove's bevels (and how deep it
     // is), a square gap, or a plate standing there. It decides V or I for
     // `auto`, checks the type requested, and measures the depth of Eq. 32.
-    let (profile, groove_depth_mm) = if layout == Layout::Butt {
+    let (profile, groove_depth_mm, joint) = if layout == Layout::Butt {
         let span = (fits[0].curve.s_min.max(fits[1].curve.s_min), fits[0].curve.s_max.min(fits[1].curve.s_max));
         let grid = ctx.camera_grid();
         let profile = groove::probe(
@@ -361,12 +365,13 @@ fn judge_groove(
             },
         );
         tracing::debug!(verdict = ?profile.verdict(), "{}", profile.describe());
-        let judged = groove::judge(ctx.joint, &profile);
-        if let Err(groove::GrooveError::LooksLikeTee { .. }) = judged {
-            // What was seen, for a workpiece of several named unplanned.
-            ctx.joint = Some(JointType::TFillet);
-        }
-        let joint = judged.map_err(|e| PlanError::by(e.rule(), e))?;
+        let judged = groove::judge(joint, &profile);
+        // What was seen, for a workpiece of several named unplanned.
+        let seen = match &judged {
+            Err(groove::GrooveError::LooksLikeTee { .. }) => Some(JointType::TFillet),
+            _ => joint,
+        };
+        let joint = judged.map_err(|e| PlanError::by(e.rule(), e)).seen_as(seen)?;
         ctx.trace.record(|t| t.joint = Some(joint));
         admit(ctx, joint, &rules::groove::BUTT_NOT_REQUESTED, &profile.describe())?;
         let depth = match (joint, ctx.request.groove_depth_mm, profile.depth_mm()) {
@@ -380,23 +385,24 @@ fn judge_groove(
                          groove's root ({}); give the depth",
                         profile.describe()
                     ),
-                ));
+                ))
+                .seen_as(Some(joint));
             }
             _ => 0.0,
         };
         if joint == JointType::VButt {
-            profile.check_opening(depth).map_err(|e| PlanError::by(e.rule(), e))?;
+            profile.check_opening(depth).map_err(|e| PlanError::by(e.rule(), e)).seen_as(Some(joint))?;
         }
-        (Some(profile), depth)
+        (Some(profile), depth, Some(joint))
     } else {
-        (None, 0.0)
+        (None, 0.0, joint)
     };
-    let joint = ctx.joint()?;
+    let joint = context::decided(joint).seen_as(joint)?;
     let joint_evidence = match &profile {
         Some(p) => format!("{layers}; between the edges: {}", p.verdict_sentence()),
         None => layers,
     };
-    ctx.clock.lap(Stage::Groove)?;
+    ctx.clock.lap(Stage::Groove).seen_as(Some(joint))?;
 
     Ok(Groove { profile, depth_mm: groove_depth_mm, joint, evidence: joint_evidence })
 }
@@ -439,26 +445,28 @@ fn place_weld(
     let (e1, e2) = (&fits[0].curve, &fits[1].curve);
     let middle = 0.5 * (e1.s_min.max(e2.s_min) + e1.s_max.min(e2.s_max));
     let lap_step = weld_equation::lap_step(e1, &plates[1].plane, &normal, middle);
-    let weld = ctx.weld(e1, e2, &normal, groove_depth_mm, || {
-        let step = lap_step.ok_or_else(|| {
-            PlanError::at(Stage::WeldEquation, "the lower plate's plane runs along the plate normal: no lap step")
-        })?;
-        Ok(weld_equation::lap_root(e1, step, &normal))
-    })?;
+    let weld = context::weld(groove.joint, e1, e2, &normal, groove_depth_mm, || lap_root(e1, lap_step, &normal))?;
     // A V-groove's midline between its edges as its two bevels place them,
     // not as far as the strips walked onto each bevel.
     let bevels_offset = profile.as_ref().and_then(|p| p.bevel_midline_offset());
-    let weld = match (ctx.joint, bevels_offset) {
-        (Some(JointType::VButt), Some(offset)) => {
-            tracing::debug!(?offset, "the V-groove's midline from its bevels");
+    let weld = match (groove.joint, bevels_offset) {
+        (JointType::VButt, Some(offset)) => {
+            tracing::debug!(
+                rule = rules::weld_equation::WELD_ON_BEVEL_MIDLINE.id,
+                ?offset,
+                "the V-groove's midline from its bevels"
+            );
             weld_equation::moved_towards(&weld, e1, e2, &offset)
         }
         _ => weld,
     };
     let extent = |k: usize| {
-        boundaries[k]
-            .extent(|s| axes.feature(&s.position))
-            .ok_or_else(|| PlanError::at(Stage::WeldEquation, format!("weld edge {} has no boundary sample", k + 1)))
+        boundaries[k].extent(|s| axes.feature(&s.position)).ok_or_else(|| {
+            PlanError::by(
+                &rules::refit::EDGE_TOO_FEW_POINTS_TO_FIT,
+                format!("weld edge {} has no boundary sample", k + 1),
+            )
+        })
     };
     let mut extents = [extent(0)?, extent(1)?];
     // Each weld edge as its fit gives it, at the middle of its span.
@@ -500,6 +508,9 @@ fn place_weld(
         };
         let reached = [reach(0), reach(1)];
         tracing::debug!(samples = ?extents, borders = ?reached, "weld edge ends carried to the image border");
+        if reached != extents {
+            tracing::debug!(rule = rules::refit::SEAM_END_AT_IMAGE_BORDER.id, "a weld edge's end moved to the border");
+        }
         extents = reached;
     }
     if ctx.camera_grid().is_none()
@@ -520,6 +531,9 @@ fn place_weld(
         };
         let reached = [reach(0), reach(1)];
         tracing::debug!(edges = ?extents, at_border = ?reached, "weld edge ends carried to the image's border");
+        if reached != extents {
+            tracing::debug!(rule = rules::refit::SEAM_END_AT_IMAGE_BORDER.id, "a weld edge's end moved to the border");
+        }
         extents = reached;
     }
     let [(a0, a1), (b0, b1)] = extents;
@@ -579,14 +593,17 @@ fn place_weld(
         let start = if s0 < v0 && unseen(v0, s0) { v0 } else { s0 };
         let end = if s1 > v1 && unseen(v1, s1) { v1 } else { s1 };
         if (start, end) != (s0, s1) {
-            tracing::debug!(seam = ?(s0, s1), lower_plate_seen = ?(v0, v1), "the lap's seam ends where its lower plate ends");
+            tracing::debug!(
+                rule = rules::weld_equation::LAP_SEAM_ENDS_WHERE_LOWER_PLATE_ENDS.id,
+                seam = ?(s0, s1),
+                lower_plate_seen = ?(v0, v1),
+                "the lap's seam ends where its lower plate ends"
+            );
             (s0, s1) = (start, end);
         }
     }
     ctx.trace.record(|t| t.weld = Some(TracedWeld { curve: weld.clone(), span: (s0, s1), normal }));
-    if s1 - s0 <= 0.0 {
-        return Err(PlanError::at(Stage::WeldEquation, "the two weld edges do not overlap along the seam"));
-    }
+    check_overlap(s0, s1)?;
     // Both edges must have been seen along the seam, not glimpsed here and
     // there: a gap the cloud cannot resolve still leaves the odd chance
     // hole, and a seam through those is a guess (the edge coverage gate).
@@ -629,6 +646,39 @@ fn place_weld(
     ctx.clock.lap(Stage::WeldEquation)?;
 
     Ok(PlacedWeld { weld, span: (s0, s1), lap_step, edge_coverage, coverage, joint_beyond_ends_mm })
+}
+
+/// The seam's axes (4.2): along the line both weld edges' boundary
+/// samples spread, laid across the plates' `normal`.
+fn seam_axes(samples: &[Vec<Vec3>; 2], normal: &Vec3) -> Result<SeamAxes, PlanError> {
+    let union: Vec<Vec3> = samples.iter().flatten().copied().collect();
+    SeamAxes::principal(&union, normal).ok_or_else(|| {
+        PlanError::by(&rules::refit::SEAM_SAMPLES_NOT_ALONG_A_LINE, "the weld edge samples do not spread along a line")
+    })
+}
+
+/// A lap's root (Eq. 38): the upper plate's edge `upper_edge` moved down
+/// `step`, the lower plate's depth below it along `normal`, if the lower
+/// plate faces along the normal enough for one to be read.
+fn lap_root(upper_edge: &SeamCurve, step: Option<f64>, normal: &Vec3) -> Result<SeamCurve, PlanError> {
+    let step = step.ok_or_else(|| {
+        PlanError::by(
+            &rules::weld_equation::LAP_NO_STEP_ALONG_NORMAL,
+            "the lower plate's plane runs along the plate normal: no lap step",
+        )
+    })?;
+    Ok(weld_equation::lap_root(upper_edge, step, normal))
+}
+
+/// The stretch `[s0, s1]` both weld edges were seen along holds some seam.
+fn check_overlap(s0: f64, s1: f64) -> Result<(), PlanError> {
+    if s1 - s0 <= 0.0 {
+        return Err(PlanError::by(
+            &rules::weld_equation::EDGES_DO_NOT_OVERLAP,
+            "the two weld edges do not overlap along the seam",
+        ));
+    }
+    Ok(())
 }
 
 /// The quality stage: the seam's figures against the configured gates;
@@ -688,4 +738,60 @@ fn check_gates(
     ctx.clock.lap(Stage::Quality)?;
 
     Ok((quality, warnings))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn edge_samples_without_a_direction_in_the_plates_give_no_seam() {
+        let normal = Vec3::z();
+        let none = seam_axes(&[Vec::new(), Vec::new()], &normal).unwrap_err();
+        assert_eq!((none.rule.id, none.stage), ("seam.samples_not_along_a_line", Stage::Refit), "{none}");
+        // Samples stacked along the normal: a face seen edge-on, no edge.
+        let stacked: Vec<Vec3> = (0..10).map(|k| Vec3::new(0.0, 0.0, 700.0 + k as f64)).collect();
+        let along_normal = seam_axes(&[stacked.clone(), stacked], &normal).unwrap_err();
+        assert_eq!(along_normal.rule.id, "seam.samples_not_along_a_line", "{along_normal}");
+        // Two edges along x: the seam runs along x.
+        let edge = |y: f64| (0..10).map(|k| Vec3::new(k as f64, y, 700.0)).collect::<Vec<_>>();
+        let axes = seam_axes(&[edge(-1.0), edge(1.0)], &normal).expect("a seam along x");
+        assert!(axes.e.dot(&Vec3::x()).abs() > 1.0 - 1e-9);
+    }
+
+    #[test]
+    fn a_weld_edge_without_a_grid_runs_along_its_longest_unbroken_stretch() {
+        use super::super::super::boundary::{BoundarySample, ExtentRule};
+        // Samples a millimetre apart from 0 to 19 mm, then 20 strips with
+        // none, then three more: a chance hole, not the edge.
+        let at = (0..20).chain(40..43).map(|k| k as f64);
+        let samples = at.map(|x| BoundarySample { position: Vec3::new(x, 0.0, 700.0), along: x }).collect();
+        let strips = Boundary { samples, line_spacing_mm: 1.0, extent_rule: ExtentRule::LongestStretch };
+        // `seam.longest_seen_stretch` cuts the three off.
+        assert_eq!(strips.extent(|s| s.position.x), Some((-0.5, 19.5)));
+        // Every sample counts on a pixel grid, and samples eight strips
+        // apart still lie on one stretch.
+        let grid = Boundary { extent_rule: ExtentRule::AllSamples, ..strips.clone() };
+        assert_eq!(grid.extent(|s| s.position.x), Some((-0.5, 42.5)));
+        let at = (0..20).chain(27..30).map(|k| k as f64);
+        let samples = at.map(|x| BoundarySample { position: Vec3::new(x, 0.0, 700.0), along: x }).collect();
+        let bridged = Boundary { samples, ..strips };
+        assert_eq!(bridged.extent(|s| s.position.x), Some((-0.5, 29.5)));
+    }
+
+    #[test]
+    fn a_lap_without_a_step_or_edges_that_do_not_overlap_are_refused_by_rule() {
+        let points: Vec<Vec3> = (0..10).map(|k| Vec3::new(k as f64, 0.0, 700.0)).collect();
+        let axes = SeamAxes::paper(&points);
+        let edge = refit::fit(&points, &axes, 1).expect("a line").curve;
+        let normal = Vec3::z();
+        let flat = lap_root(&edge, None, &normal).unwrap_err();
+        assert_eq!((flat.rule.id, flat.stage), ("lap.no_step_along_normal", Stage::WeldEquation), "{flat}");
+        let root = lap_root(&edge, Some(3.0), &normal).expect("a step");
+        assert!((root.at(2.0) - edge.at(2.0) - normal * 3.0).norm() < 1e-9);
+        let apart = check_overlap(10.0, 4.0).unwrap_err();
+        assert_eq!((apart.rule.id, apart.stage), ("seam.edges_do_not_overlap", Stage::WeldEquation), "{apart}");
+        assert_eq!(check_overlap(10.0, 10.0).unwrap_err().rule.id, "seam.edges_do_not_overlap");
+        assert_eq!(check_overlap(4.0, 10.0), Ok(()));
+    }
 }

@@ -131,20 +131,23 @@ fn a_v_groove_strip_requested_as_a_tee_is_refused_not_planned_along_its_root_lan
 }
 
 #[test]
-fn a_v_groove_whose_root_is_hidden_needs_its_depth() {
-    // Bevels cut through the whole plate: the probe follows each face down
-    // to the surface behind the plates and never sees where the groove's
-    // root is, so under `auto` (no depth given) the weld's height is
-    // unknown. Given the depth, the same strip plans.
+fn a_v_groove_cut_through_the_plate_has_its_root_where_the_plates_rest() {
+    // Bevels cut through the whole plate: each face runs down to the
+    // surface the plates rest on, seen only between them, so the groove's
+    // root is there. Under `auto` (no depth given) the depth is measured
+    // at that floor and the weld planned at it, as with the depth given.
     let name = "consumer-v-butt-00-d200-t0";
     let spec = suite_scene(name);
     let sim = strip(&spec);
-    let planner = Planner::new(Config::default());
     let mut request = PlanRequest::new(RequestedJoint::Auto, None, sim.pose);
     request.units = Units::Auto;
-    let err = planner.plan(&sim.cloud, &request).unwrap_err();
-    assert_eq!((err.rule.id, err.stage), ("butt.groove_depth_unmeasured", Stage::Groove), "{name}: {err}");
-    assert!(err.reason.contains("give the depth"), "{name}: {err}");
-    let (plan, _) = try_plan_strip(name, &spec);
-    assert!(plan.is_ok(), "{name}: with its depth given: {plan:?}");
+    let plan = Planner::new(Config::default()).plan(&sim.cloud, &request).unwrap_or_else(|e| panic!("{name}: {e}"));
+    let seam = &plan.seams[0];
+    assert_eq!(seam.joint, JointType::VButt, "{name}");
+    let measured = seam.quality.as_ref().and_then(|q| q.groove_depth_mm).expect("the depth is measured");
+    let truth = spec.joint.groove_depth_mm().expect("a V-groove");
+    assert!((measured - truth).abs() < 0.5, "{name}: depth {measured:.2} mm, truth {truth:.2} mm");
+    let err = seam_error(&sim.truth, seam).expect("waypoints");
+    assert!(err.max_mm < 1.0 && err.start_mm < 2.0 && err.end_mm < 2.0, "{name}: {err:?}");
+    plan_strip(name, &spec);
 }

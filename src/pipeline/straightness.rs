@@ -214,7 +214,16 @@ mod tests {
 
     #[test]
     fn a_stretch_of_few_stations_is_not_judged() {
-        let samples = (0..40).map(|k| (k as f64 * 0.3, 0.0));
-        assert!(bend_of(samples, Samples::Points, 1.5, "test").is_none());
+        // Stations are never shorter than a spacing, so a stretch a spacing
+        // shorter than the fewest stations holds too few of them, however
+        // densely sampled.
+        let spacing = 1.5;
+        let length = (MIN_STATIONS - 1) as f64 * spacing - 0.01;
+        let samples = (0..=100).map(|k| (length * k as f64 / 100.0, 0.0));
+        assert!(bend_of(samples, Samples::Points, spacing, "test").is_none());
+        // Two spacings longer, it is judged (and straight).
+        let longer = length + 2.0 * spacing;
+        let samples = (0..=100).map(|k| (longer * k as f64 / 100.0, 0.0));
+        assert!(!bend_of(samples, Samples::Points, spacing, "test").expect("judged").is_curved());
     }
 }

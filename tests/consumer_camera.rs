@@ -10,7 +10,7 @@ use weldseam::eval::seam_error;
 use weldseam::joint::{JointType, RequestedJoint};
 use weldseam::pipeline::input::Units;
 use weldseam::pipeline::quality::Gate;
-use weldseam::pipeline::{Plan, PlanError, PlanRequest, Planner, Stage};
+use weldseam::pipeline::{Plan, PlanError, PlanRequest, Planner};
 use weldseam::sim::consumer::{consumer_camera, consumer_demo_scene, consumer_far_suite, consumer_variant};
 use weldseam::sim::{Draw, SceneSpec, Simulation, consumer_suite};
 

@@ -330,3 +330,22 @@ fn dropout_bands_of_every_width_give_no_confident_wrong_seam() {
     }
     assert!(wrong.is_empty(), "confident wrong: {wrong:?}");
 }
+
+#[test]
+fn a_v_groove_whose_bevels_are_not_seen_down_to_its_root_needs_its_depth() {
+    // A steep, noisy view of a plates-filling V-groove: the bevel faces
+    // thin out before the groove's root, so no face shows where it is and,
+    // under `auto` with no depth given, the weld's height is unknown. Given
+    // the depth, the same frame plans within the bar.
+    let name = "hard-v-butt-02-d548-t21-fill-s0.08-dr1.2";
+    let (_, spec) =
+        hard_suite(Draw::of_scene(name)).into_iter().find(|(n, _)| n == name).unwrap_or_else(|| panic!("no {name}"));
+    let sim = scenes::by_default_camera(&spec);
+    let planner = Planner::new(Config::default());
+    let auto = EvalRequest { joint: JointAsk::Auto, ..EvalRequest::default() };
+    let outcome = evaluate_variant(&planner, name, &spec, sim, &Variant::default(), &auto);
+    let err = outcome.result.as_ref().map(|(e, _)| e).unwrap_err();
+    assert_eq!(err.rule.id, "butt.groove_depth_unmeasured", "{name}: {err}");
+    let typed = evaluate_variant(&planner, name, &spec, sim, &Variant::default(), &EvalRequest::default());
+    assert_eq!(typed.verdict, Verdict::WithinBar, "{name}: with its depth given: {:?}", typed.verdict);
+}

@@ -276,9 +276,10 @@ pub static GROOVE_DEPTH_UNMEASURED: Rule = Rule {
             source: Source::Constant { file: PROFILE, name: "MAX_LAND_SHARE" },
         },
     ],
-    fires: &["tests/consumer_camera.rs::a_v_groove_whose_root_is_hidden_needs_its_depth"],
+    fires: &["tests/faults.rs::a_v_groove_whose_bevels_are_not_seen_down_to_its_root_needs_its_depth"],
     holds: &[
         "tests/joints.rs::auto_names_each_joint_measures_the_groove_and_plans_it_within_the_bar",
+        "tests/consumer_camera.rs::a_v_groove_cut_through_the_plate_has_its_root_where_the_plates_rest",
         "src/pipeline/groove/tests.rs::a_groove_ending_in_a_root_land_shows_its_root_at_the_land",
     ],
 };

@@ -140,7 +140,11 @@ async fn plans_are_served_by_frame_then_by_arrival() {
     let mut cam = RawCamera::connect(&cell.camera).await;
     let mut ctl = ControllerClient::connect(&cell.controller, "order").await.unwrap();
     ctl.wait_for_camera(WAIT).await.unwrap();
-    let cloud = plate(160, 120);
+    // Large enough that a plan takes tens of milliseconds: the reply of
+    // one plan must leave before the next plan ends even while the other
+    // tests of this binary share the cores, or the reply order stops
+    // showing the serve order.
+    let cloud = plate(480, 360);
     let rounds = 20;
     let mut out_of_order = Vec::new();
     for round in 0..rounds {

@@ -142,6 +142,7 @@ pub static CORNER_OUTSIDE_NOT_PLANNED: Rule = Rule {
              is a plate the image cuts, not a corner.",
     parameters: CORNER_PARAMETERS,
     fires: &[
+        "tests/corners.rs::a_cropped_outside_corner_is_refused_by_name_under_every_request",
         "src/pipeline/background/tests.rs::a_plates_edge_flush_or_proud_beside_a_flange_with_a_drop_beyond_is_an_outside_corner",
         "src/pipeline/background/tests.rs::an_edge_with_its_outer_face_going_down_to_where_the_cloud_ends_is_an_outside_corner",
         "src/pipeline/background/tests.rs::an_edge_with_nothing_beyond_inside_the_view_or_in_a_cloud_without_a_grid_is_refused",
@@ -240,7 +241,10 @@ pub static LOOKS_LIKE_TEE: Rule = Rule {
              standing on its flange: too tall for a lap's upper plate, and butt plates are one plane. Planning \
              it as the butt joint or lap requested would take the web's top edges for plate edges.",
     parameters: &[WEB_THICKNESS_MAX, BAR_ELONGATION, LAP_STEP_MAX, WEB_HEIGHT_MAX, COPLANAR_TOLERANCE],
-    fires: &["src/pipeline/background/tests.rs::a_web_a_web_height_over_its_flange_seen_on_both_sides_is_a_tee"],
+    fires: &[
+        "tests/several_seams.rs::a_tee_requested_as_a_butt_or_lap_joint_is_refused_by_name",
+        "src/pipeline/background/tests.rs::a_web_a_web_height_over_its_flange_seen_on_both_sides_is_a_tee",
+    ],
     holds: &["src/pipeline/background/tests.rs::a_bar_no_taller_than_a_lap_step_or_too_wide_is_no_web"],
 };
 
@@ -269,6 +273,7 @@ pub static LOOKS_LIKE_LAP: Rule = Rule {
              upper plate's edge and the lower plate's edge for the two sides of a gap.",
     parameters: &[COPLANAR_TOLERANCE, LAP_STEP_MIN, LAP_STEP_MAX],
     fires: &[
+        "tests/cli.rs::failures_exit_non_zero_and_say_why",
         "src/pipeline/background/tests.rs::the_wrong_joint_requested_is_named_for_what_it_looks_like",
         "tests/joints.rs::the_wrong_joint_is_refused_for_what_the_frame_shows",
     ],
@@ -286,7 +291,10 @@ pub static BUTT_PAIR_UNDER_LARGER_PLANE: Rule = Rule {
              narrower than the cloud resolves, and the pair the table or fixture seen on both sides of it. \
              Planning the pair would weld the table.",
     parameters: &[COPLANAR_TOLERANCE],
-    fires: &["src/pipeline/background/tests.rs::table_pieces_under_plates_seen_as_one_are_refused"],
+    fires: &[
+        "tests/measured_clouds.rs::voxel_clouds_plan_their_seam_where_it_is_or_say_why_not",
+        "src/pipeline/background/tests.rs::table_pieces_under_plates_seen_as_one_are_refused",
+    ],
     holds: &["src/pipeline/background/tests.rs::a_split_table_is_not_taken_for_a_plate"],
 };
 
@@ -332,6 +340,7 @@ pub static LAP_NO_PLATE_STEP: Rule = Rule {
              layers that far apart the frame holds no lap; the refusal lists the planes' offsets.",
     parameters: &[LAP_STEP_MIN, LAP_STEP_MAX, COPLANAR_TOLERANCE],
     fires: &[
+        "tests/several_seams.rs::a_requested_joint_applies_to_every_workpiece",
         "src/pipeline/background/tests.rs::failures_say_what_was_found",
         "tests/joints.rs::the_wrong_joint_is_refused_for_what_the_frame_shows",
     ],
@@ -387,7 +396,10 @@ pub static PLATE_AND_PIECE_OVER_LOWER_PLANE: Rule = Rule {
              the cloud cut in two. The two joints' seams lie in different places and the frame cannot tell them \
              apart, so the joint type must be named in the request.",
     parameters: &[SIDE_BY_SIDE_AREA_RATIO, COPLANAR_TOLERANCE, LAP_STEP_MIN, LAP_STEP_MAX],
-    fires: &["src/pipeline/background/tests.rs::with_no_type_given_the_layers_decide"],
+    fires: &[
+        "tests/faults.rs::a_lap_plate_cut_by_a_streak_is_refused_for_coverage_and_not_found_as_a_butt_joint",
+        "src/pipeline/background/tests.rs::with_no_type_given_the_layers_decide",
+    ],
     holds: &["src/pipeline/background/tests.rs::with_no_type_given_the_layers_decide"],
 };
 
@@ -401,7 +413,10 @@ pub static TEE_WEB_SEEN_ON_ONE_SIDE: Rule = Rule {
              the flange on its far side, or a bar standing at a plate's edge. Neither the layers nor the planes \
              tell the two apart; the user names the tee (`t_fillet`) to plan its root.",
     parameters: &[WEB_THICKNESS_MAX, BAR_ELONGATION, LAP_STEP_MAX, WEB_HEIGHT_MAX],
-    fires: &["src/pipeline/background/tests.rs::a_web_over_a_flange_seen_on_one_side_is_planned_only_when_named"],
+    fires: &[
+        "tests/several_seams.rs::a_webs_end_face_is_not_taken_for_its_side_face",
+        "src/pipeline/background/tests.rs::a_web_over_a_flange_seen_on_one_side_is_planned_only_when_named",
+    ],
     holds: &["src/pipeline/background/tests.rs::a_web_a_web_height_over_its_flange_seen_on_both_sides_is_a_tee"],
 };
 
@@ -584,7 +599,10 @@ pub static JOINT_NOT_REQUESTED: Rule = Rule {
             source: Source::Config("pipeline.lap_step_max_mm"),
         },
     ],
-    fires: &["tests/several_seams.rs::a_set_of_joint_types_plans_the_workpieces_of_those_types_and_names_the_others"],
+    fires: &[
+        "tests/cli.rs::failures_exit_non_zero_and_say_why",
+        "tests/several_seams.rs::a_set_of_joint_types_plans_the_workpieces_of_those_types_and_names_the_others",
+    ],
     holds: &["tests/several_seams.rs::a_set_of_joint_types_plans_the_workpieces_of_those_types_and_names_the_others"],
 };
 

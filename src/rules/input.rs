@@ -62,7 +62,10 @@ pub static TOO_FEW_POINTS_IN_REGION: Rule = Rule {
         meaning: "fewest points the box must keep",
         source: Source::Constant { file: "src/pipeline/roi.rs", name: "MIN_ROI_POINTS" },
     }],
-    fires: &["tests/roi.rs::the_configured_box_applies_unless_the_request_brings_its_own"],
+    fires: &[
+        "tests/daemon/requests.rs::a_region_of_interest_travels_in_the_request_and_bad_ones_are_refused",
+        "tests/roi.rs::the_configured_box_applies_unless_the_request_brings_its_own",
+    ],
     holds: &["tests/roi.rs::clutter_outside_the_box_plans_as_the_clean_frame"],
 };
 
@@ -109,7 +112,10 @@ pub static ONE_POINT_REPEATED: Rule = Rule {
         meaning: "least share of sampled points that are distinct",
         source: Source::Constant { file: "src/pipeline/input.rs", name: "MIN_DISTINCT_SHARE" },
     }],
-    fires: &["tests/pipeline.rs::frames_no_camera_makes_are_refused_by_their_rule"],
+    fires: &[
+        "tests/serve_order.rs::a_frame_of_one_repeated_point_is_refused_and_the_next_plan_goes_on",
+        "tests/pipeline.rs::frames_no_camera_makes_are_refused_by_their_rule",
+    ],
     holds: &["tests/hostile_clouds.rs::one_absurd_point_neither_runs_away_nor_changes_the_plan"],
 };
 

@@ -225,6 +225,7 @@ pub static STOPS_SHORT_OF_JOINT: Rule = Rule {
         source: Source::Config("quality.max_joint_beyond_seam_mm"),
     }],
     fires: &[
+        "tests/consumer_camera.rs::a_far_i_butt_strip_whose_edge_is_lost_short_of_an_end_is_refused_not_cut_short",
         "src/pipeline/quality/tests.rs::each_gate_names_its_figure_value_and_limit",
         "tests/faults.rs::an_edge_lost_under_a_streak_while_both_plates_go_on_is_refused_not_cut_short",
     ],
@@ -291,6 +292,7 @@ pub static GAP_WIDTH: Rule = Rule {
         STATIONS,
     ],
     fires: &[
+        "tests/measured_clouds.rs::a_part_touching_a_plate_is_no_joint_where_the_plates_merged",
         "src/pipeline/quality/tests.rs::each_gate_names_its_figure_value_and_limit",
         "tests/quality.rs::a_seam_that_fails_a_gate_is_refused_with_the_figure_its_value_and_the_limit",
         "tests/quality.rs::a_gate_named_in_warn_only_warns_on_the_seam_instead",

@@ -219,6 +219,7 @@ pub static TEE_FLANGE_EDGE_AT_SHADOW: Rule = Rule {
         source: Source::Constant { file: FILLET_EDGE, name: "EDGE_VIEW_SPACINGS" },
     }],
     fires: &[
+        "tests/several_seams.rs::a_tee_s_seen_root_is_planned_within_the_fillet_bar_and_the_hidden_one_named",
         "src/pipeline/fillet/tests.rs::a_face_edge_on_to_the_camera_gives_its_root_from_the_flange_edge_and_a_shadow_edge_gives_none",
         "src/pipeline/fillet/tests.rs::a_flange_ending_at_the_projectors_shadow_gives_no_root",
         "tests/several_seams.rs::an_edge_on_face_gives_its_root_from_the_flange_edge_and_a_shadow_edge_none",

@@ -19,7 +19,7 @@ use weldseam::server::Stopped;
 
 use crate::scenes;
 use crate::util::Cell;
-use weldseam::sim::{Draw, Simulation};
+use weldseam::sim::Simulation;
 use weldseam_proto::frame::{self, HEADER_BYTES, Header};
 use weldseam_proto::message::{FrameSelect, Hello, PlanReply, PlanRequest, PoseIn, Role, Tag, Trigger, joint_code};
 use weldseam_proto::{ErrorCode, Message, PROTOCOL_VERSION};

@@ -90,6 +90,15 @@ pub fn by_default_camera(spec: &SceneSpec) -> &'static Simulation {
     rendered(spec, &CameraModel::default())
 }
 
+/// The documented several-workpiece scene whose name starts `prefix`,
+/// with its name.
+pub fn multi_scene(prefix: &str) -> (String, SceneSpec) {
+    weldseam::sim::multi_suite(weldseam::sim::Draw::Documented)
+        .into_iter()
+        .find(|(n, _)| n.starts_with(prefix))
+        .unwrap_or_else(|| panic!("no several-workpiece scene {prefix}"))
+}
+
 /// The demo scene of `joint` seen by the paper's camera (what
 /// `simulate --joint` writes).
 pub fn demo(joint: JointType) -> &'static Simulation {

@@ -318,8 +318,7 @@ fn plan_multi(
     start_near: Option<Vec3>,
     one_seam: bool,
 ) -> (String, Result<Plan, PlanError>, Vec<TrueSeam>) {
-    let (name, spec) =
-        multi_suite(Draw::Documented).into_iter().find(|(n, _)| n.starts_with(prefix)).expect("the scene");
+    let (name, spec) = scenes::multi_scene(prefix);
     let sim = scenes::by_default_camera(&spec);
     let request = PlanRequest { start_near, one_seam, ..PlanRequest::new(joint, None, sim.pose) };
     let plan = Planner::new(Config::default()).plan(&sim.cloud, &request);
@@ -447,8 +446,7 @@ fn workpieces_planned_side_by_side_plan_as_on_one_thread() {
     // counts and what the trace keeps (the first workpiece's) are the same
     // whether one thread plans the workpieces in turn or several share them.
     for (prefix, joint) in [("multi-01", RequestedJoint::Auto), ("multi-03", "v-butt+i-butt".parse().unwrap())] {
-        let (name, spec) =
-            multi_suite(Draw::Documented).into_iter().find(|(n, _)| n.starts_with(prefix)).expect("the scene");
+        let (name, spec) = scenes::multi_scene(prefix);
         let sim = scenes::by_default_camera(&spec);
         let request = PlanRequest::new(joint, None, sim.pose);
         let planner = Planner::new(Config::default());

@@ -23,7 +23,7 @@ use weldseam::mock::camera::CameraOptions;
 use weldseam::mock::controller::{ControllerClient, request_for_simulation};
 use weldseam::mock::text_robot::{SeamTally, TextRobot, rapid_num, ur_read_ascii_float};
 use weldseam::server::Stopped;
-use weldseam::sim::{Draw, Simulation};
+use weldseam::sim::Simulation;
 use weldseam_proto::message::{FrameSelect, PlanReply};
 use weldseam_proto::text::{ABB_MAX_LINE, Dialect, MAX_ERROR_LINE, UR_MAX_NUMBERS};
 
@@ -466,10 +466,7 @@ async fn a_plan_line_may_leave_the_joint_to_the_daemon() {
 /// its web hides).
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn several_seams_are_served_seam_by_seam_and_why_names_the_unplanned() {
-    let (name, spec) = weldseam::sim::multi_suite(Draw::Documented)
-        .into_iter()
-        .find(|(n, _)| n.starts_with("multi-01"))
-        .expect("the scene");
+    let (name, spec) = scenes::multi_scene("multi-01");
     let sim = scenes::by_default_camera(&spec);
     let cell = Cell::start(config()).await;
     let (stop_camera, camera) = cell.camera(vec![Arc::new(sim.cloud.clone())], CameraOptions::default());

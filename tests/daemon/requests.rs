@@ -365,10 +365,7 @@ async fn a_region_of_interest_travels_in_the_request_and_bad_ones_are_refused() 
 /// types, the workpiece of another type is named with the set's gate.
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn a_frame_of_several_workpieces_replies_with_every_seam_and_the_unplanned_joint() {
-    let (name, spec) = weldseam::sim::multi_suite(Draw::Documented)
-        .into_iter()
-        .find(|(n, _)| n.starts_with("multi-01"))
-        .expect("the scene");
+    let (name, spec) = scenes::multi_scene("multi-01");
     let sim = scenes::by_default_camera(&spec);
     let cell = Cell::start(config()).await;
     let mut cam = Raw::hello(&cell.camera, Role::Camera).await;

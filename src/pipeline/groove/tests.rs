@@ -235,18 +235,23 @@ fn a_groove_ending_in_a_root_land_shows_its_root_at_the_land() {
     // plates rest on, it cuts the probe short and no depth is measured;
     // taken for the groove's own floor, the bevels' feet lie on it and
     // the depth is the land's.
+    // A 90 degree groove `depth` deep ending on a land `2 land` wide, and
+    // its edges at `±(land + depth)`.
+    let landed = |land: f64, depth: f64| {
+        let w = land + depth;
+        move |x: f64| {
+            Some(if x.abs() >= w {
+                0.0
+            } else if x.abs() >= land {
+                w - x.abs()
+            } else {
+                depth
+            })
+        }
+    };
     let (land, depth) = (1.5, 6.0);
     let w = land + depth;
-    let v = |x: f64| {
-        Some(if x.abs() >= w {
-            0.0
-        } else if x.abs() >= land {
-            w - x.abs()
-        } else {
-            depth
-        })
-    };
-    let cloud = cloud_of(v, 14.0, 0.2);
+    let cloud = cloud_of(landed(land, depth), 14.0, 0.2);
     let (e1, e2) = (edge(-w), edge(w));
     let setting = |floor_between_plates| ProbeSetting {
         edges: [&e1, &e2],
@@ -272,16 +277,7 @@ fn a_groove_ending_in_a_root_land_shows_its_root_at_the_land() {
     // V-groove's land: its bevels' feet do not place the root.
     let (land, depth) = (9.0, 3.0);
     let w = land + depth;
-    let v = |x: f64| {
-        Some(if x.abs() >= w {
-            0.0
-        } else if x.abs() >= land {
-            w - x.abs()
-        } else {
-            depth
-        })
-    };
-    let cloud = cloud_of(v, 18.0, 0.2);
+    let cloud = cloud_of(landed(land, depth), 18.0, 0.2);
     let (e1, e2) = (edge(-w), edge(w));
     let trough = probe(&cloud, &ProbeSetting { edges: [&e1, &e2], depth_to_support_mm: Some(depth), ..setting(true) });
     assert_eq!(trough.depth_mm(), None, "{}", trough.describe());

@@ -581,6 +581,28 @@ fn eval_counts_fault_scenes_as_within_the_bar_refused_or_confident_wrong() {
     assert!(text.contains("Confident wrong seams (robust)") && text.contains("Refusals (robust)"), "{text}");
 }
 
+/// `eval --suite curved` plans a curved member as `t_fillet` and `auto`
+/// and counts each request's outcome in the tuning rows, held-out scenes
+/// apart; no curved root is planned as a line.
+#[test]
+fn eval_of_curved_members_counts_refusals_per_request_and_keeps_held_out_rows_apart() {
+    let out = weldseam(&["eval", "--suite", "curved", "--filter", "curved-wall-00", "--limit", "1"]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{text}\n{}", String::from_utf8_lossy(&out.stderr));
+    let rows: Vec<&str> = text.lines().filter(|l| l.starts_with("curved-wall-00")).collect();
+    assert_eq!(rows.len(), 2, "one row per request: {text}");
+    assert!(rows.iter().all(|r| r.contains("refused (right)")), "{text}");
+    for request in ["t_fillet", "auto"] {
+        let tally = text
+            .lines()
+            .find(|l| l.starts_with("tuning") && l.split_whitespace().nth(1) == Some(request))
+            .unwrap_or_else(|| panic!("no tuning row for {request} in\n{text}"));
+        let counts: Vec<&str> = tally.split_whitespace().skip(2).collect();
+        assert_eq!(counts, ["1", "1", "0", "0"], "{tally}");
+    }
+    assert!(!text.lines().any(|l| l.starts_with("held out")), "the filter keeps no held-out scene: {text}");
+}
+
 /// `simulate --fault` and `--suite-scene` write one fault or hard scene
 /// for a person to look at, with its right answer in the truth.
 #[test]

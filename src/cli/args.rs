@@ -85,6 +85,11 @@ pub enum SuiteArg {
     /// (`sim::root_land_suite`), the plates filling the view: planned at
     /// the land's centre with the groove's depth measured down to it.
     RootLand,
+    /// 12 tees whose root bends 4 to 16 mm over the seam, a curved wall on
+    /// a flat flange or a flange rolled along the seam
+    /// (`sim::curved_suite`), planned as t_fillet and auto: every one is
+    /// to be refused, none planned as a line.
+    Curved,
 }
 
 /// `--joint-request` of `eval`: how each scene's plan names its joint.

@@ -10,6 +10,7 @@ pub mod controller;
 pub mod demo;
 pub mod errors;
 pub mod eval;
+pub mod eval_curved;
 pub mod eval_real;
 pub mod inspect;
 pub mod logging;

@@ -197,9 +197,19 @@ pub enum CurvedOutcome {
 impl CurvedScene {
     /// Plans the scene's capture under `joint` at default settings.
     pub fn plan(&self, joint: crate::joint::RequestedJoint) -> CurvedOutcome {
-        let camera = CameraModel::default();
-        let sim = self.simulate(&camera);
         let planner = crate::pipeline::Planner::new(crate::config::Config::default());
+        self.plan_with(&planner, &CameraModel::default(), joint)
+    }
+
+    /// Plans the scene's capture by `camera` under `joint` with `planner`'s
+    /// configuration (`weldseam eval --suite curved`).
+    pub fn plan_with(
+        &self,
+        planner: &crate::pipeline::Planner,
+        camera: &CameraModel,
+        joint: crate::joint::RequestedJoint,
+    ) -> CurvedOutcome {
+        let sim = self.simulate(camera);
         let request = crate::pipeline::PlanRequest::new(joint, None, sim.pose);
         match planner.plan(&sim.cloud, &request) {
             Ok(plan) => {

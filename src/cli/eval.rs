@@ -578,6 +578,14 @@ fn verdict_tables(configs: &[Config], results: &[Vec<SceneOutcome>]) -> Vec<Tabl
             .map(|j| (j.name().to_string(), outcomes.iter().filter(|o| o.spec.joint.joint_type() == *j).collect()))
             .collect();
         groups.push(("all".to_string(), outcomes.iter().collect()));
+        // The scenes nothing was tuned on, summed apart from the rest, when
+        // the run has both.
+        let (unseen, tuned): (Vec<&SceneOutcome>, Vec<&SceneOutcome>) =
+            outcomes.iter().partition(|o| is_unseen(&o.name));
+        if !unseen.is_empty() && !tuned.is_empty() {
+            groups.push(("all, tuned on".to_string(), tuned));
+            groups.push(("all, held out".to_string(), unseen));
+        }
         for (name, group) in groups.iter().filter(|(_, g)| !g.is_empty()) {
             per_joint.push([method.clone(), name.clone()].into_iter().chain(counts(group)).collect());
         }

@@ -63,7 +63,8 @@ pub enum SuiteArg {
     ConsumerFar,
     /// Every fault on every joint type (`sim::fault_suite`): a wrong joint
     /// requested, dropouts along the seam, a clamp, tack welds, spatter,
-    /// specular streaks, a plate barely in view, a touching part.
+    /// specular streaks, a plate barely in view, a touching part, glaring
+    /// edges.
     Faults,
     /// The industrial suite tilted up to 45 degrees, depth noise up to
     /// 0.15 mm, dropouts up to 5 % (`sim::hard_suite`).

@@ -68,8 +68,9 @@ pub struct SimulateArgs {
     #[arg(long, value_name = "NAME_OR_INDEX")]
     pub suite_scene: Option<String>,
     /// Add a fault to the scene, at the seam's middle: wrong-joint,
-    /// seam-dropout, clamp, tack-welds, spatter, streaks, barely-in-view or
-    /// touching-part (the truth's plan_args then name the wrong joint).
+    /// seam-dropout, clamp, tack-welds, spatter, streaks, barely-in-view,
+    /// touching-part or edge-glare (for wrong-joint, the truth's plan_args
+    /// name the wrong joint).
     #[arg(long, value_name = "KIND")]
     pub fault: Option<FaultKind>,
     /// Render an exact frame: no depth noise, dropouts, mixed pixels or

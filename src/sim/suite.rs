@@ -605,6 +605,15 @@ fn draw_fault(kind: FaultKind, spec: &SceneSpec, observed: [f64; 2], index: usiz
         FaultKind::TouchingPart => {
             Fault::TouchingPart { plate: side, width_mm: uniform(rng, 40.0, 150.0), step_mm: uniform(rng, -2.0, 2.0) }
         }
+        FaultKind::EdgeGlare => {
+            let shortest = uniform(rng, 3.0, 10.0);
+            Fault::EdgeGlare {
+                seed: rng.next_u64(),
+                band_mm: uniform(rng, 0.5, 2.5),
+                run_mm: [shortest, shortest + uniform(rng, 5.0, 30.0)],
+                share: uniform(rng, 0.15, 0.5),
+            }
+        }
     }
 }
 

@@ -14,6 +14,7 @@
 //! | [`Fault::Clamp`] | a bar lying across both plates over the seam | the whole seam, or a piece beside the clamp |
 //! | [`Fault::TackWelds`] | short blobs filling the gap or groove (or the lap's corner) every so many mm | the whole seam, or a piece between tacks |
 //! | [`Fault::Spatter`] | small beads on the plates near the seam | the whole seam |
+//! | [`Fault::EdgeGlare`] | no returns in runs along the plates' bright seam-side edges, as a polished or freshly cut arris saturates the sensor | the whole seam, or a piece where neither edge glares |
 //! | [`Fault::SpecularStreaks`] | lines of outlier depths, as saturated structured light gives | the whole seam |
 //! | [`Fault::BarelyInView`] | the seam near the image border: a sliver of one plate in view | the whole seam |
 //! | [`Fault::TouchingPart`] | a second plate abutting one plate's outer edge | the whole seam |
@@ -80,10 +81,13 @@ pub enum FaultKind {
     SpecularStreaks,
     BarelyInView,
     TouchingPart,
+    EdgeGlare,
 }
 
 impl FaultKind {
-    pub const ALL: [FaultKind; 8] = [
+    /// Every kind, in the order the fault suite draws them; a new kind
+    /// goes last so the scenes of the others keep their random streams.
+    pub const ALL: [FaultKind; 9] = [
         FaultKind::WrongJoint,
         FaultKind::SeamDropout,
         FaultKind::Clamp,
@@ -92,6 +96,7 @@ impl FaultKind {
         FaultKind::SpecularStreaks,
         FaultKind::BarelyInView,
         FaultKind::TouchingPart,
+        FaultKind::EdgeGlare,
     ];
 
     /// The name in scene names and on the command line.
@@ -105,6 +110,7 @@ impl FaultKind {
             FaultKind::SpecularStreaks => "streaks",
             FaultKind::BarelyInView => "barely-in-view",
             FaultKind::TouchingPart => "touching-part",
+            FaultKind::EdgeGlare => "edge-glare",
         }
     }
 }
@@ -118,7 +124,8 @@ impl fmt::Display for FaultKind {
 /// A fault name that is none of [`FaultKind::ALL`].
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[error(
-    "unknown fault {0:?}: one of wrong-joint, seam-dropout, clamp, tack-welds, spatter, streaks, barely-in-view, touching-part"
+    "unknown fault {0:?}: one of wrong-joint, seam-dropout, clamp, tack-welds, spatter, streaks, barely-in-view, touching-part, \
+     edge-glare"
 )]
 pub struct UnknownFault(pub String);
 
@@ -170,6 +177,12 @@ pub enum Fault {
     /// A second plate `width_mm` wide abutting `plate`'s outer edge along
     /// its whole length, its top `step_mm` above that plate's.
     TouchingPart { plate: PlateSide, width_mm: f64, step_mm: f64 },
+    /// Each seam-side edge of the plates (the arris where a plate's top
+    /// meets its bevel, face or gap) returns no depth within `band_mm` of
+    /// it, in runs `run_mm[0]` to `run_mm[1]` long that cover about `share`
+    /// of its length, placed from `seed` for each edge on its own
+    /// ([`Fault::glare_runs`]).
+    EdgeGlare { seed: u64, band_mm: f64, run_mm: [f64; 2], share: f64 },
 }
 
 impl Fault {
@@ -183,6 +196,7 @@ impl Fault {
             Fault::SpecularStreaks { .. } => FaultKind::SpecularStreaks,
             Fault::BarelyInView { .. } => FaultKind::BarelyInView,
             Fault::TouchingPart { .. } => FaultKind::TouchingPart,
+            Fault::EdgeGlare { .. } => FaultKind::EdgeGlare,
         }
     }
 
@@ -212,6 +226,7 @@ impl Fault {
             }
             FaultKind::BarelyInView => Fault::BarelyInView { plate: PlateSide::B, in_view_mm: 12.0 },
             FaultKind::TouchingPart => Fault::TouchingPart { plate: PlateSide::B, width_mm: 80.0, step_mm: 1.5 },
+            FaultKind::EdgeGlare => Fault::EdgeGlare { seed: spec.seed, band_mm: 1.5, run_mm: [5.0, 20.0], share: 0.3 },
         }
     }
 
@@ -283,8 +298,45 @@ impl Fault {
                     return fail("the part needs a positive width and a top above its bottom".into());
                 }
             }
+            Fault::EdgeGlare { band_mm, run_mm: [shortest, longest], share, .. } => {
+                if !(positive(band_mm) && band_mm <= 10.0) {
+                    return fail("the glare reaches 0 to 10 mm from the edge".into());
+                }
+                if !(positive(shortest) && shortest <= longest && longest <= 500.0) {
+                    return fail("glare runs from a positive length up to at most 500 mm".into());
+                }
+                if !(share > 0.0 && share < 1.0) {
+                    return fail("the glare covers a share of each edge between 0 and 1".into());
+                }
+            }
         }
         Ok(())
+    }
+
+    /// The stretches of the seam (workpiece y ranges) along which each of
+    /// the two seam-side edges of [`JointGeometry::seam_edges_xz`] glares,
+    /// for a [`Fault::EdgeGlare`]; none for any other fault. Runs and the
+    /// lit stretches between them alternate from the seam's start, their
+    /// lengths drawn uniformly, the lit ones scaled so the runs cover about
+    /// the fault's share.
+    pub fn glare_runs(&self, spec: &SceneSpec) -> [Vec<[f64; 2]>; 2] {
+        let Fault::EdgeGlare { seed, run_mm: [shortest, longest], share, .. } = *self else {
+            return [Vec::new(), Vec::new()];
+        };
+        let [y0, y1] = spec.seam_range();
+        let lit_scale = (1.0 - share) / share;
+        [0u64, 1].map(|edge| {
+            let mut rng = ChaCha8Rng::seed_from_u64(seed);
+            rng.set_stream(FaultKind::EdgeGlare as u64 * 2 + edge);
+            let mut runs = Vec::new();
+            let mut y = y0 + lit_scale * uniform(&mut rng, shortest, longest) * uniform(&mut rng, 0.0, 1.0);
+            while y < y1 {
+                let end = (y + uniform(&mut rng, shortest, longest)).min(y1);
+                runs.push([y, end]);
+                y = end + lit_scale * uniform(&mut rng, shortest, longest);
+            }
+            runs
+        })
     }
 }
 
@@ -354,7 +406,9 @@ pub struct RightAnswer {
 pub fn right_answer(spec: &SceneSpec, camera: &CameraModel) -> RightAnswer {
     let kinds: Vec<FaultKind> = spec.faults.iter().map(Fault::kind).collect();
     let refuse = kinds.contains(&FaultKind::WrongJoint);
-    let hides = kinds.iter().any(|k| matches!(k, FaultKind::SeamDropout | FaultKind::Clamp | FaultKind::TackWelds));
+    let hides = kinds
+        .iter()
+        .any(|k| matches!(k, FaultKind::SeamDropout | FaultKind::Clamp | FaultKind::TackWelds | FaultKind::EdgeGlare));
     RightAnswer {
         refuse,
         whole_seam: !refuse,
@@ -363,8 +417,9 @@ pub fn right_answer(spec: &SceneSpec, camera: &CameraModel) -> RightAnswer {
 }
 
 /// The stretches of the observed seam that no fault hides: no dropout
-/// band over them, and neither seam edge behind or inside a fault's solid
-/// as the camera and the projector see it. At least [`MIN_PIECE_MM`] long.
+/// band over them, neither seam edge glaring, and neither seam edge behind
+/// or inside a fault's solid as the camera and the projector see it. At
+/// least [`MIN_PIECE_MM`] long.
 pub fn visible_pieces(spec: &SceneSpec, camera: &CameraModel) -> Vec<[f64; 2]> {
     let Some([y0, y1]) = observed_seam_range(spec, camera) else {
         return Vec::new();
@@ -379,10 +434,11 @@ pub fn visible_pieces(spec: &SceneSpec, camera: &CameraModel) -> Vec<[f64; 2]> {
             _ => None,
         })
         .collect();
+    let glaring: Vec<[f64; 2]> = spec.faults.iter().flat_map(|f| f.glare_runs(spec).into_iter().flatten()).collect();
     let sight = LineOfSight::new(solids, camera);
     let hidden =
         |y: f64| {
-            bands.iter().any(|[a, b]| (*a..=*b).contains(&y))
+            bands.iter().chain(&glaring).any(|[a, b]| (*a..=*b).contains(&y))
                 || spec.joint.seam_edges_xz().iter().any(|[x, z]| {
                     sight.hides(&camera_from_workpiece.transform_point(&Vec3::new(*x, y, *z).into()).coords)
                 })

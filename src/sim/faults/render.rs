@@ -1,7 +1,7 @@
 //! What each fault puts into the frame: the solids the scene renders
-//! (clamps, tacks, spatter, a touching part), the bands of missing depth,
-//! the streaks drawn after the sensor noise, and the placement that brings
-//! a seam barely into view.
+//! (clamps, tacks, spatter, a touching part), the bands and runs of
+//! missing depth (dropouts, glaring edges), the streaks drawn after the
+//! sensor noise, and the placement that brings a seam barely into view.
 
 use super::*;
 
@@ -62,7 +62,8 @@ pub fn fault_solids(spec: &SceneSpec) -> Vec<ConvexSolid> {
             Fault::WrongJoint { .. }
             | Fault::SeamDropout { .. }
             | Fault::SpecularStreaks { .. }
-            | Fault::BarelyInView { .. } => {}
+            | Fault::BarelyInView { .. }
+            | Fault::EdgeGlare { .. } => {}
         }
     }
     solids
@@ -109,8 +110,9 @@ fn tack_profile(joint: &JointGeometry, crown: f64, spread: f64) -> Vec<[f64; 2]>
     }
 }
 
-/// Removes the returns of the dropout bands from noise-free depths
-/// (row-major, camera frame); nothing changes without such a fault.
+/// Removes from noise-free depths (row-major, camera frame) the returns of
+/// the dropout bands and of the glaring edges' runs; nothing changes
+/// without such a fault.
 pub fn erase_dropout_bands(depths: &mut [f64], spec: &SceneSpec, camera: &CameraModel) {
     let bands: Vec<([f64; 2], f64)> = spec
         .faults
@@ -122,9 +124,27 @@ pub fn erase_dropout_bands(depths: &mut [f64], spec: &SceneSpec, camera: &Camera
             _ => None,
         })
         .collect();
-    if bands.is_empty() {
+    // Each glaring edge as its point in xz, the glare's reach about it and
+    // the runs along the seam where it glares.
+    let edges = spec.joint.seam_edges_xz();
+    let glare: Vec<([f64; 2], f64, Vec<[f64; 2]>)> = spec
+        .faults
+        .iter()
+        .filter_map(|f| match *f {
+            Fault::EdgeGlare { band_mm, .. } => Some((band_mm, f.glare_runs(spec))),
+            _ => None,
+        })
+        .flat_map(|(band, runs)| edges.into_iter().zip(runs).map(move |(edge, runs)| (edge, band, runs)))
+        .collect();
+    if bands.is_empty() && glare.is_empty() {
         return;
     }
+    let erased = |w: &Vec3| {
+        bands.iter().any(|([a, b], half)| (*a..=*b).contains(&w.y) && w.x.abs() <= *half)
+            || glare.iter().any(|([x, z], band, runs)| {
+                (w.x - x).hypot(w.z - z) <= *band && runs.iter().any(|[a, b]| (*a..=*b).contains(&w.y))
+            })
+    };
     let workpiece_from_camera = spec.workpiece_from_camera();
     let width = (camera.width_px as usize).max(1);
     depths.par_chunks_mut(width).enumerate().for_each(|(row, out)| {
@@ -134,7 +154,7 @@ pub fn erase_dropout_bands(depths: &mut [f64], spec: &SceneSpec, camera: &Camera
             }
             let [rx, ry, _] = camera.ray(col as f64, row as f64);
             let w = workpiece_from_camera.transform_point(&Vec3::new(rx * *z, ry * *z, *z).into()).coords;
-            if bands.iter().any(|([a, b], half)| (*a..=*b).contains(&w.y) && w.x.abs() <= *half) {
+            if erased(&w) {
                 *z = f64::NAN;
             }
         }

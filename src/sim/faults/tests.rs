@@ -53,6 +53,48 @@ fn a_dropout_band_removes_the_returns_over_the_seam_and_nothing_else() {
 }
 
 #[test]
+fn glaring_edges_remove_returns_near_each_edge_along_its_own_runs_only() {
+    for joint in JointType::ALL {
+        let spec = clean(joint);
+        let glare = Fault::EdgeGlare { seed: 11, band_mm: 1.5, run_mm: [5.0, 20.0], share: 0.3 };
+        let runs = glare.glare_runs(&spec);
+        let [y0, y1] = spec.seam_range();
+        for edge in &runs {
+            assert!(!edge.is_empty(), "{joint}: every edge glares somewhere");
+            let covered: f64 = edge.iter().map(|[a, b]| b - a).sum();
+            assert!((0.1..=0.6).contains(&(covered / (y1 - y0))), "{joint}: covers {covered:.0} mm of {:.0}", y1 - y0);
+        }
+        assert_ne!(runs[0], runs[1], "{joint}: each edge glares on its own");
+        let edges = spec.joint.seam_edges_xz();
+        let changed = changes(&spec, glare);
+        assert!(changed.len() > 20, "{joint}: {} pixels", changed.len());
+        for (before, after) in changed {
+            let p = before.expect("glare only removes returns");
+            assert!(after.is_none(), "{joint}: a return kept");
+            let near = edges.iter().zip(&runs).any(|([x, z], runs)| {
+                (p.x - x).hypot(p.z - z) <= 1.5 + 1e-6 && runs.iter().any(|[a, b]| (*a..=*b).contains(&p.y))
+            });
+            assert!(near, "{joint}: {p:?} is near no glaring run of an edge");
+        }
+    }
+}
+
+#[test]
+fn under_glaring_edges_a_piece_is_a_stretch_where_neither_edge_glares() {
+    let mut spec = clean(JointType::IButt);
+    let glare = Fault::EdgeGlare { seed: 11, band_mm: 1.5, run_mm: [5.0, 20.0], share: 0.3 };
+    let runs: Vec<[f64; 2]> = glare.glare_runs(&spec).into_iter().flatten().collect();
+    spec.faults.push(glare);
+    let answer = right_answer(&spec, &small_camera());
+    assert!(answer.whole_seam && !answer.refuse);
+    assert!(!answer.pieces_mm.is_empty());
+    for [a, b] in &answer.pieces_mm {
+        assert!(b - a >= MIN_PIECE_MM);
+        assert!(runs.iter().all(|[c, d]| d <= a || c >= b), "piece {a:.1}..{b:.1} overlaps a glaring run");
+    }
+}
+
+#[test]
 fn a_clamp_covers_the_seam_where_it_lies_and_shadows_beside_it() {
     for joint in JointType::ALL {
         let spec = clean(joint);

@@ -8,11 +8,11 @@
 //! apart, not as wrong; a seam farther from the root is a confident wrong
 //! one (a curved root planned as a line), and fails the command. The
 //! held-out scenes (`-holdout`, and every fresh draw) are summed in rows
-//! of their own.
+//! of their own. `--plans FILE` writes each outcome as a JSON line.
 
 use std::io::Write;
 
-use anyhow::bail;
+use anyhow::{Context, bail};
 use weldseam::camera::CameraModel;
 use weldseam::config::Config;
 use weldseam::joint::{JointType, RequestedJoint};
@@ -70,6 +70,12 @@ pub fn run(args: &EvalArgs) -> anyhow::Result<()> {
     scenes.truncate(args.limit.unwrap_or(usize::MAX));
     anyhow::ensure!(!scenes.is_empty(), "no scene matches the filter");
 
+    let mut plans = match &args.plans {
+        Some(path) => Some(std::io::BufWriter::new(
+            std::fs::File::create(path).with_context(|| format!("cannot create {}", path.display()))?,
+        )),
+        None => None,
+    };
     let mut table = Table::new(
         format!("{} curved members, each planned as t_fillet and auto", scenes.len()),
         &["scene", "bend", "request", "outcome", "seams", "worst mm", "rule"],
@@ -82,6 +88,9 @@ pub fn run(args: &EvalArgs) -> anyhow::Result<()> {
             let outcome = scene.plan_with(&planner, &camera, joint);
             let verdict = CurvedVerdict::of(&outcome);
             eprintln!("scene {} of {count}: {} {joint}: {}", k + 1, scene.name, verdict.label());
+            if let Some(file) = plans.as_mut() {
+                writeln!(file, "{}", plan_line(&scene.name, joint, &outcome)).context("cannot write the plans file")?;
+            }
             let (seams, worst, rule) = match &outcome {
                 CurvedOutcome::Planned { seams, worst_mm } => (seams.to_string(), format!("{worst_mm:.2}"), "-"),
                 CurvedOutcome::Refused { rule } => ("0".into(), "-".into(), *rule),
@@ -97,6 +106,9 @@ pub fn run(args: &EvalArgs) -> anyhow::Result<()> {
             ]);
             counts.entry((is_unseen(&scene.name), joint.name().into_owned())).or_default()[verdict as usize] += 1;
         }
+    }
+    if let Some(mut file) = plans {
+        file.flush().context("cannot write the plans file")?;
     }
     let mut summary = Table::new(
         "Outcomes",
@@ -119,4 +131,15 @@ pub fn run(args: &EvalArgs) -> anyhow::Result<()> {
         bail!("{wrong} plan(s) of curved members are confident wrong: a curved root planned as a line");
     }
     Ok(())
+}
+
+/// One request's outcome on one scene as a JSON line (`--plans`), for
+/// comparing two builds: the seams' count and their worst distance from
+/// the bent root, or the rule that refused.
+fn plan_line(scene: &str, joint: RequestedJoint, outcome: &CurvedOutcome) -> serde_json::Value {
+    let plan = match outcome {
+        CurvedOutcome::Planned { seams, worst_mm } => serde_json::json!({ "seams": seams, "worst_mm": worst_mm }),
+        CurvedOutcome::Refused { rule } => serde_json::json!({ "rule": rule }),
+    };
+    serde_json::json!({ "scene": scene, "request": joint.name(), "plan": plan })
 }

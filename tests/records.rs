@@ -92,6 +92,19 @@ fn every_plan_of_the_demo_replays_to_the_same_plan() {
             assert!(replayed.same(), "{}: the replay changed: {:?}", entry.id, replayed.changes);
         }
 
+        // The command line lists them and replays one.
+        let weldseam = |args: &[&std::ffi::OsStr]| {
+            let out = std::process::Command::new(env!("CARGO_BIN_EXE_weldseam")).args(args).output().unwrap();
+            (out.status.success(), String::from_utf8_lossy(&out.stdout).into_owned())
+        };
+        let (listed, table) = weldseam(&["records".as_ref(), dir.path().as_os_str()]);
+        assert!(listed, "{table}");
+        for entry in &entries {
+            assert!(table.lines().any(|l| l.starts_with(&entry.id) && l.contains("planned")), "{table}");
+        }
+        let (same, said) = weldseam(&["replay".as_ref(), entries[0].path.as_os_str()]);
+        assert!(same && said.contains("the same plan, bit for bit"), "{said}");
+
         // A waypoint moved in the record is named as a change.
         let mut record = records::read(&entries[0].path).unwrap();
         let Outcome::Planned(result) = &mut record.outcome else { unreachable!() };

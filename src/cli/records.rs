@@ -158,12 +158,3 @@ pub fn replay(args: &ReplayArgs) -> anyhow::Result<()> {
     }
     bail!("the replayed plan differs from the recorded one")
 }
-
-#[cfg(test)]
-mod tests {
-    #[test]
-    fn utc_dates_are_civil() {
-        assert_eq!(super::utc(0), "1970-01-01 00:00:00");
-        assert_eq!(super::utc(1_788_349_505_000_000), "2026-09-02 11:45:05");
-    }
-}

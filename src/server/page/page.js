@@ -131,7 +131,9 @@ async function openPlan(seq) {
   }
   openSeq = seq;
   const plan = answer.plan;
+  // The plan takes the screen: its pictures are what the operator came for.
   document.getElementById("list").hidden = true;
+  document.getElementById("cell").hidden = true;
   document.getElementById("detail").hidden = false;
   document.getElementById("detail-title").textContent =
     "Request #" + plan.request_id + " at " + clock(plan.time_us) + ": " + plan.joint + ", " +
@@ -186,6 +188,7 @@ function closePlan() {
   const seq = openSeq;
   openSeq = null;
   document.getElementById("detail").hidden = true;
+  document.getElementById("cell").hidden = false;
   document.getElementById("list").hidden = false;
   const button = document.querySelector('#plans button[data-seq="' + seq + '"]') || document.querySelector("#plans button");
   if (button) button.focus();
@@ -211,7 +214,7 @@ async function poll() {
   try {
     const state = await getJson("/api/state");
     status.textContent = state.server + ", up " + Math.round(state.uptime_ms / 1000) + " s, " +
-      state.frames_received + " frames, " + state.plans_done + " plans";
+      state.frames_received + " frames received, " + state.plans_done + " planned";
     status.classList.remove("down");
     showCell(state);
     showPlans(state.plans);

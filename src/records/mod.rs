@@ -10,7 +10,7 @@
 //! until both hold. Only files named so are ever counted or deleted. A
 //! failed write (a full disk) is logged and counted by the daemon; it
 //! never fails a plan. This module does file I/O and the format
-//! ([`format`]); the daemon's writer is `src/server/recorder.rs`.
+//! ([`format`](mod@format)); the daemon's writer is `src/server/recorder.rs`.
 
 pub mod compare;
 pub mod format;

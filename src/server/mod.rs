@@ -197,6 +197,10 @@ pub async fn run(listeners: Listeners, shutdown: impl Future, state: Arc<ServerS
         warn!(grace_ms = grace.as_millis() as u64, "work was still in flight when the shutdown grace ran out");
         Stopped::GraceExpired
     };
+    // The last plans' records are written after their replies: let them land.
+    if !state.recorder.finish(grace).await {
+        warn!(grace_ms = grace.as_millis() as u64, "plan records were still being written when the grace ran out");
+    }
     outcome.map(|()| stopped)
 }
 

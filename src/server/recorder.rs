@@ -76,6 +76,14 @@ impl Recorder {
         self.store.as_ref().map(|s| s.held())
     }
 
+    /// Waits, at most `within`, for the records being written; false when
+    /// some were still being written then. The daemon calls it as it
+    /// stops, so the last plans' records are not lost with the process.
+    pub async fn finish(&self, within: std::time::Duration) -> bool {
+        let all = self.writers.acquire_many(MAX_WRITES as u32);
+        matches!(tokio::time::timeout(within, all).await, Ok(Ok(_)))
+    }
+
     /// Writes `plan`'s record on a blocking thread, unless [`MAX_WRITES`]
     /// are being written (then it is dropped, logged and counted).
     pub fn keep(&self, plan: Plan<'_>, metrics: &Metrics) {

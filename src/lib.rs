@@ -22,6 +22,7 @@ pub(crate) mod kernels;
 pub mod mock;
 pub mod pipeline;
 pub mod process;
+pub mod records;
 pub mod report;
 pub mod rules;
 pub mod server;

@@ -42,6 +42,10 @@ enum Command {
     Bench(cli::bench::BenchArgs),
     /// The planner's rules: every one, one by id in full, or docs/RULES.md's text.
     Rules(cli::rules::RulesArgs),
+    /// The daemon's plan records: list them, or export one's frame (PCD) and request and answer (JSON).
+    Records(cli::records::RecordsArgs),
+    /// Plan a recorded frame again with its request and configuration; exit 1 if the plan changed.
+    Replay(cli::records::ReplayArgs),
 }
 
 impl Command {
@@ -56,7 +60,9 @@ impl Command {
             | Command::Simulate(_)
             | Command::Controller(_)
             | Command::Calibrate(_)
-            | Command::Rules(_) => false,
+            | Command::Rules(_)
+            | Command::Records(_)
+            | Command::Replay(_) => false,
         }
     }
 
@@ -72,7 +78,9 @@ impl Command {
             | Command::Controller(_)
             | Command::Calibrate(_)
             | Command::Bench(_)
-            | Command::Rules(_) => "warn",
+            | Command::Rules(_)
+            | Command::Records(_)
+            | Command::Replay(_) => "warn",
             Command::Serve(_) | Command::Camera(_) => "info",
         }
     }
@@ -99,6 +107,8 @@ fn main() -> std::process::ExitCode {
         Command::Controller(args) => cli::controller::run(args),
         Command::Bench(args) => cli::bench::run(args),
         Command::Rules(args) => cli::rules::run(args),
+        Command::Records(args) => cli::records::run(args),
+        Command::Replay(args) => cli::records::replay(args),
     };
     match result {
         Ok(()) => std::process::ExitCode::SUCCESS,

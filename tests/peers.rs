@@ -253,3 +253,45 @@ async fn the_metrics_endpoint_counts_plans_frames_connections_and_refusals() {
     drop((cam, ctl));
     tokio::time::timeout(WAIT, daemon.stop()).await.unwrap().unwrap();
 }
+
+/// Sends `request` (its first lines, without the blank line) and reads
+/// the whole answer.
+async fn http(addr: &str, request: &str) -> String {
+    let mut stream = TcpStream::connect(addr).await.unwrap();
+    let request = format!("{request}\r\nHost: weldseam\r\nConnection: close\r\n\r\n");
+    stream.write_all(request.as_bytes()).await.unwrap();
+    let mut response = String::new();
+    tokio::time::timeout(WAIT, stream.read_to_string(&mut response)).await.unwrap().unwrap();
+    response
+}
+
+/// The operator page's listener with a token: the page's own files for
+/// anyone, the cell's data and the metrics only with the token (header or
+/// query), GET only, and nothing else.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn the_page_serves_its_data_only_with_the_token_and_only_to_get() {
+    let mut c = config();
+    c.server.http_token = Some("0123456789abcdef".into());
+    let daemon = LocalDaemon::start_with_metrics(c).await.unwrap();
+    let addr = daemon.metrics_addr.expect("started with metrics").to_string();
+    let page = http(&addr, "GET / HTTP/1.1").await;
+    assert!(page.starts_with("HTTP/1.1 200") && page.contains("<script src=\"page.js\">"), "{page}");
+    assert!(page.to_ascii_lowercase().contains("content-security-policy: default-src 'self'"), "{page}");
+    for refused in
+        ["GET /api/state HTTP/1.1", "GET /metrics HTTP/1.1", "GET /api/state?token=0123456789abcdeX HTTP/1.1"]
+    {
+        assert!(http(&addr, refused).await.starts_with("HTTP/1.1 401"), "{refused}");
+    }
+    let state = http(&addr, "GET /api/state?token=0123456789abcdef HTTP/1.1").await;
+    assert!(state.starts_with("HTTP/1.1 200"), "{state}");
+    let body: serde_json::Value = serde_json::from_str(state.split("\r\n\r\n").nth(1).unwrap()).unwrap();
+    assert_eq!(body["plans"], serde_json::json!([]), "{body}");
+    assert_eq!(body["queue"]["depth"], 4, "{body}");
+    let metrics = http(&addr, "GET /metrics HTTP/1.1\r\nAuthorization: Bearer 0123456789abcdef").await;
+    assert!(metrics.starts_with("HTTP/1.1 200") && metrics.contains("weldseam_records_held"), "{metrics}");
+    let posted = http(&addr, "POST /api/state?token=0123456789abcdef HTTP/1.1\r\nContent-Length: 0").await;
+    assert!(posted.starts_with("HTTP/1.1 405"), "{posted}");
+    let gone = http(&addr, "GET /api/plans/7/camera.png?token=0123456789abcdef HTTP/1.1").await;
+    assert!(gone.starts_with("HTTP/1.1 404"), "{gone}");
+    tokio::time::timeout(WAIT, daemon.stop()).await.unwrap().unwrap();
+}

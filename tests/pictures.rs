@@ -228,7 +228,8 @@ async fn the_daemon_keeps_the_sets_of_its_last_plans_only() {
     let (stop, camera) = cell.camera(vec![Arc::new(sim.cloud.clone())], CameraOptions::default());
     let mut ctl = ControllerClient::connect(&cell.controller, "debug-sets-test").await.unwrap();
     ctl.wait_for_camera(Duration::from_secs(5)).await.expect("the mock camera connects");
-    let debug = cell.daemon.state.debug.as_ref().expect("[debug] with a directory keeps sets");
+    let debug = &cell.daemon.state.debug;
+    assert!(debug.ready(), "[debug] with a directory keeps sets");
     for id in 1..=3u64 {
         let request = request_for_simulation(id, JointType::IButt, sim, FrameSelect::Trigger);
         ctl.plan(request, Duration::from_secs(60)).await.unwrap();

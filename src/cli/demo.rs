@@ -30,6 +30,14 @@ pub struct DemoArgs {
     /// Print only the first and last waypoints of each seam.
     #[arg(long)]
     pub brief: bool,
+    /// Keep the daemon and its operator page up this many seconds after
+    /// the last plan, to look at the page (at most an hour).
+    #[arg(long, value_parser = clap::value_parser!(u64).range(0..=3600))]
+    pub hold: Option<u64>,
+    /// Record every plan into this directory (`weldseam records DIR`,
+    /// `weldseam replay`).
+    #[arg(long)]
+    pub records: Option<std::path::PathBuf>,
 }
 
 /// How long the demo waits for any one step before calling it failed.
@@ -46,7 +54,10 @@ pub fn run(args: &DemoArgs) -> anyhow::Result<()> {
 
 async fn cell(args: &DemoArgs) -> anyhow::Result<()> {
     let mut out = std::io::stdout().lock();
-    let config = Config::default();
+    let mut config = Config::default();
+    if let Some(dir) = &args.records {
+        config.records.dir = dir.to_str().context("the records directory is not UTF-8")?.to_string();
+    }
     let scenes: Vec<(JointType, SceneSpec, Simulation)> = JointType::ALL
         .into_iter()
         .map(demo_scene)
@@ -58,9 +69,15 @@ async fn cell(args: &DemoArgs) -> anyhow::Result<()> {
         .collect();
     let several = simulate(&several_workpieces(3), &config.camera);
 
-    let daemon = LocalDaemon::start(config).await.context("cannot start the daemon")?;
+    let daemon = LocalDaemon::start_with_metrics(config).await.context("cannot start the daemon")?;
     let (camera_addr, controller_addr) = (daemon.camera_addr.to_string(), daemon.controller_addr.to_string());
     writeln!(out, "daemon listening: camera link {camera_addr}, controller link {controller_addr}")?;
+    if let Some(page) = daemon.metrics_addr {
+        writeln!(out, "operator page: http://{page}/ (the metrics at http://{page}/metrics)")?;
+    }
+    if let Some(hold) = args.hold {
+        writeln!(out, "the page stays up {hold} s after the last plan (--hold)")?;
+    }
 
     // The camera answers trigger n with frame n: the scenes in order, then
     // the frame of several parts.
@@ -116,6 +133,10 @@ async fn cell(args: &DemoArgs) -> anyhow::Result<()> {
         }
     }
 
+    if let Some(hold) = args.hold {
+        out.flush()?;
+        tokio::time::sleep(Duration::from_secs(hold)).await;
+    }
     let _ = stop_camera.send(());
     let _ = tokio::time::timeout(STEP_TIMEOUT, camera).await;
     tokio::time::timeout(STEP_TIMEOUT, daemon.stop()).await.context("the daemon did not stop")??;

@@ -16,6 +16,7 @@ pub mod inspect;
 pub mod logging;
 pub mod memory;
 pub mod plan;
+pub mod records;
 pub mod rules;
 pub mod serve;
 pub mod simulate;

@@ -83,10 +83,15 @@ pub fn run(args: &ServeArgs) -> anyhow::Result<()> {
         .thread_name("net")
         .build()
         .context("cannot start the network runtime")?;
-    runtime.block_on(serve(config))
+    // Plan records keep the file, so that a replay plans with it.
+    let text = match &args.config.config {
+        Some(path) => Some(std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?),
+        None => None,
+    };
+    runtime.block_on(serve(config, text))
 }
 
-async fn serve(config: weldseam::config::Config) -> anyhow::Result<()> {
+async fn serve(config: weldseam::config::Config, config_text: Option<String>) -> anyhow::Result<()> {
     let s = &config.server;
     let camera = TcpListener::bind(s.camera_listen)
         .await
@@ -116,7 +121,7 @@ async fn serve(config: weldseam::config::Config) -> anyhow::Result<()> {
         plan_queue_depth = s.plan_queue_depth,
         "listening"
     );
-    let state = ServerState::new(config)?;
+    let state = ServerState::with_config_text(config, config_text)?;
     if let Err(e) = sd_notify::notify(&[sd_notify::NotifyState::Ready]) {
         warn!("cannot notify systemd of readiness: {e}");
     }
@@ -126,8 +131,11 @@ async fn serve(config: weldseam::config::Config) -> anyhow::Result<()> {
         }
         let _ = sd_notify::notify(&[sd_notify::NotifyState::Stopping]);
     };
-    // The metrics endpoint lives until the links have stopped.
-    let metrics = metrics.map(|listener| tokio::spawn(server::metrics::serve(listener, Arc::clone(&state))));
+    if let Some(addr) = metrics.as_ref().and_then(|l| l.local_addr().ok()) {
+        info!(page = %format!("http://{addr}/"), "the operator page");
+    }
+    // The HTTP listener lives until the links have stopped.
+    let metrics = metrics.map(|listener| tokio::spawn(server::http::serve(listener, Arc::clone(&state))));
     let stopped = server::run(server::Listeners { camera, controller, text }, shutdown, state).await;
     if let Some(task) = metrics {
         task.abort();

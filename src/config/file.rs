@@ -1,5 +1,5 @@
 //! The on-disk schema of config/weldseam.toml. Sections whose values keep
-//! their type (camera, pipeline, paper, trajectory, quality, debug, calibration) are the library's own
+//! their type (camera, pipeline, paper, trajectory, quality, debug, records, calibration) are the library's own
 //! parameter structs, deserialized directly; only the three whose type
 //! changes on the way in have a schema of their own here: `[camera]` (the
 //! field of view or the intrinsics, either of which may be left out),
@@ -11,7 +11,9 @@
 use serde::Deserialize;
 
 use super::text_link::TextLinkConfig;
-use super::{DebugParams, PaperParams, PipelineParams, QualityParams, RobotLimits, ServerConfig, TrajectoryParams};
+use super::{
+    DebugParams, PaperParams, PipelineParams, QualityParams, RecordsParams, RobotLimits, ServerConfig, TrajectoryParams,
+};
 use crate::calibration::gate::{CalibrationRecord, GateLimits};
 use crate::camera::CameraModel;
 use crate::geometry::pose::{EulerConvention, PAPER_HAND_EYE};
@@ -28,6 +30,7 @@ pub struct ConfigFile {
     pub server: ServerSection,
     pub text_link: TextLinkSection,
     pub debug: DebugParams,
+    pub records: RecordsParams,
     pub calibration: GateLimits,
 }
 
@@ -138,6 +141,8 @@ pub struct ServerSection {
     pub max_pending_connections: u32,
     pub max_pending_per_address: u32,
     pub metrics_listen: String,
+    pub http_token: String,
+    pub page_plans: u32,
     pub max_frame_bytes: u64,
     pub plan_queue_depth: u32,
     pub pipeline_threads: u32,
@@ -173,6 +178,8 @@ impl Default for ServerSection {
             max_pending_connections: s.max_pending_connections as u32,
             max_pending_per_address: s.max_pending_per_address as u32,
             metrics_listen: s.metrics_listen.map(|a| a.to_string()).unwrap_or_default(),
+            http_token: s.http_token.clone().unwrap_or_default(),
+            page_plans: s.page_plans as u32,
             max_frame_bytes: s.max_frame_bytes,
             plan_queue_depth: s.plan_queue_depth as u32,
             pipeline_threads: s.pipeline_threads as u32,

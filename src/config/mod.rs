@@ -11,6 +11,7 @@ mod file;
 mod planning;
 pub mod procedure;
 mod quality;
+mod records;
 mod server;
 #[cfg(test)]
 mod tests;
@@ -27,6 +28,7 @@ use crate::geometry::pose::{EulerConvention, HandEyeError, hand_eye_from_rows};
 pub use file::ConfigFile;
 pub use planning::{Method, PaperParams, PipelineParams, PointDensity, RoiFrame, TrajectoryParams};
 pub use quality::QualityParams;
+pub use records::RecordsParams;
 pub use server::{DEFAULT_DEBUG_KEEP_LAST, DEFAULT_PLAN_TIMEOUT_MS, DebugParams, MAX_DEBUG_KEEP_LAST, ServerConfig};
 pub use text_link::TextLinkConfig;
 
@@ -84,6 +86,8 @@ pub struct Config {
     /// The text controller link robot programs speak directly.
     pub text_link: TextLinkConfig,
     pub debug: DebugParams,
+    /// The plan records' store.
+    pub records: RecordsParams,
     /// The limits `weldseam calibrate` holds a calibration to.
     pub calibration: GateLimits,
     /// The record of the calibration that gave `hand_eye`, when the file
@@ -136,6 +140,27 @@ fn count_in(key: &'static str, v: u64, lo: u64, hi: u64) -> Result<(), ConfigErr
 }
 
 impl Config {
+    /// A short fingerprint of every setting that shapes a plan (the
+    /// camera, the robot, the pipeline, the trajectory and the quality
+    /// gates; not the daemon's links and stores): FNV-1a, 64 bits, of their
+    /// debug form, whose numbers are exact. A record keeps it, so a replay
+    /// can tell whether it plans with the same settings.
+    pub fn planning_hash(&self) -> String {
+        let text = format!(
+            "{:?}{:?}{:?}{:?}{:?}{:?}{:?}{:?}",
+            self.camera,
+            self.euler,
+            self.hand_eye,
+            self.robot_limits,
+            self.pipeline,
+            self.paper,
+            self.trajectory,
+            self.quality
+        );
+        let hash = text.bytes().fold(0xcbf2_9ce4_8422_2325u64, |h, b| (h ^ u64::from(b)).wrapping_mul(0x100_0000_01b3));
+        format!("{hash:016x}")
+    }
+
     /// Reads and validates a TOML config file.
     pub fn load(path: &Path) -> Result<Config, ConfigError> {
         let shown = path.display().to_string();
@@ -167,6 +192,7 @@ impl Config {
         let server = f.server.validate()?;
         let text_link = f.text_link.validate()?;
         f.debug.validate()?;
+        f.records.validate()?;
         validate_gate(&f.calibration)?;
         if let Some(record) = &f.robot.hand_eye_calibration {
             validate_record(record)?;
@@ -183,6 +209,7 @@ impl Config {
             server,
             text_link,
             debug: f.debug,
+            records: f.records,
             calibration: f.calibration,
             hand_eye_calibration: f.robot.hand_eye_calibration,
         })

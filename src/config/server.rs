@@ -54,6 +54,18 @@ impl DebugParams {
     }
 }
 
+/// `server.page_plans` unless configured: the plans of the last minute
+/// or so of a busy cell, each with its pictures (a few hundred kilobytes).
+pub const DEFAULT_PAGE_PLANS: usize = 20;
+
+/// The most plans `server.page_plans` may keep in memory with their
+/// pictures: beyond, the page is an archive, which the record store is.
+pub const MAX_PAGE_PLANS: u32 = 200;
+
+/// The shortest `server.http_token`: a token an operator can type but no
+/// one can guess by trying.
+pub const MIN_HTTP_TOKEN_CHARS: usize = 16;
+
 /// The cell daemon's network and scheduling settings.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ServerConfig {
@@ -84,8 +96,14 @@ pub struct ServerConfig {
     /// Connections from one address per link that have not yet said Hello;
     /// a further one closes that address's oldest.
     pub max_pending_per_address: usize,
-    /// Where the Prometheus metrics are served over HTTP; None is off.
+    /// Where the HTTP listener serves the Prometheus metrics and the
+    /// operator page; None is off.
     pub metrics_listen: Option<SocketAddr>,
+    /// The bearer token every request to the HTTP listener must carry when
+    /// it is not on loopback; None when the file leaves it empty.
+    pub http_token: Option<String>,
+    /// The last plans the operator page shows, pictures included.
+    pub page_plans: usize,
     /// The largest frame payload accepted, bytes.
     pub max_frame_bytes: u64,
     /// Plan jobs queued or running at once; a request beyond gets Busy.
@@ -133,6 +151,8 @@ impl Default for ServerConfig {
             max_pending_connections: 64,
             max_pending_per_address: 4,
             metrics_listen: None,
+            http_token: None,
+            page_plans: DEFAULT_PAGE_PLANS,
             max_frame_bytes: weldseam_proto::frame::DEFAULT_MAX_FRAME_BYTES,
             plan_queue_depth: 4,
             pipeline_threads: 0,
@@ -212,6 +232,23 @@ impl file::ServerSection {
             "" => None,
             text => Some(socket_addr("server.metrics_listen", text)?),
         };
+        let http_token = (!s.http_token.is_empty()).then(|| s.http_token.clone());
+        if let Some(token) = &http_token {
+            check(
+                "server.http_token",
+                token.len() >= MIN_HTTP_TOKEN_CHARS && token.chars().all(|c| c.is_ascii_graphic()),
+                || format!("must be at least {MIN_HTTP_TOKEN_CHARS} printable ASCII characters without spaces"),
+            )?;
+        }
+        if let Some(addr) = metrics_listen {
+            check("server.http_token", addr.ip().is_loopback() || http_token.is_some(), || {
+                format!(
+                    "must be set: server.metrics_listen ({addr}) is not a loopback address, and the operator page \
+                     and the metrics are served beyond this machine only to a request carrying the token"
+                )
+            })?;
+        }
+        count_in("server.page_plans", s.page_plans.into(), 1, MAX_PAGE_PLANS.into())?;
         const MIN_FRAME: u64 = 1 << 10;
         const MAX_FRAME: u64 = 4 << 30;
         check("server.max_frame_bytes", (MIN_FRAME..=MAX_FRAME).contains(&s.max_frame_bytes), || {
@@ -285,6 +322,8 @@ impl file::ServerSection {
             max_pending_connections: s.max_pending_connections as usize,
             max_pending_per_address: s.max_pending_per_address as usize,
             metrics_listen,
+            http_token,
+            page_plans: s.page_plans as usize,
             max_frame_bytes: s.max_frame_bytes,
             plan_queue_depth: s.plan_queue_depth as usize,
             pipeline_threads: s.pipeline_threads as usize,

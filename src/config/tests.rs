@@ -45,12 +45,23 @@ fn bad_values_name_their_key() {
         ("[server]\nmax_pending_connections = 100000\n", "server.max_pending_connections"),
         ("[server]\nmax_pending_per_address = 65\n", "server.max_pending_per_address"),
         ("[server]\nmetrics_listen = \"9100\"\n", "server.metrics_listen"),
+        ("[server]\nmetrics_listen = \"0.0.0.0:9464\"\n", "server.http_token"),
+        ("[server]\nhttp_token = \"short\"\n", "server.http_token"),
+        ("[server]\nhttp_token = \"a token with spaces in it\"\n", "server.http_token"),
+        ("[server]\npage_plans = 0\n", "server.page_plans"),
+        ("[server]\npage_plans = 1000\n", "server.page_plans"),
+        ("[records]\nmax_bytes = 1000\n", "records.max_bytes"),
+        ("[records]\nmax_age_days = 0\n", "records.max_age_days"),
         ("[pipeline]\nroi = [1.0, 2.0]\n", "pipeline.roi"),
         ("[pipeline]\nroi = [0.0, 0.0, 600.0, 10.0, 10.0, 500.0]\n", "pipeline.roi"),
         ("[pipeline]\nroi_frame = \"tool\"\n", "roi_frame"),
         ("[debug]\nkeep_last = 0\n", "debug.keep_last"),
         ("[debug]\nkeep = 3\n", "keep"),
     ];
+    // Beyond loopback with a token, and on loopback without one, the listener starts.
+    let exposed = "[server]\nmetrics_listen = \"0.0.0.0:9464\"\nhttp_token = \"0123456789abcdef\"\n";
+    assert_eq!(Config::parse(exposed, "c.toml").unwrap().server.http_token.as_deref(), Some("0123456789abcdef"));
+    Config::parse("[server]\nmetrics_listen = \"127.0.0.1:9464\"\n", "c.toml").unwrap();
     for (text, key) in cases {
         let e = Config::parse(text, "c.toml").unwrap_err().to_string();
         assert!(e.contains(key), "{text:?} gave {e}");

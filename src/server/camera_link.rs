@@ -17,6 +17,7 @@ use weldseam_proto::session::capability;
 use weldseam_proto::{ErrorCode, Message};
 
 use super::ServerState;
+use super::board::FrameSummary;
 use super::connection::{Connection, HandshakeError, MessageWriter, ReadError, Received};
 use super::frames::{CameraRegistration, StoredFrame, wall_clock_us};
 use super::shutdown::Shutdown;
@@ -100,8 +101,12 @@ pub(crate) async fn handshake<T>(
 
 /// Serves one camera connection until it closes or the server stops.
 pub async fn serve(mut conn: Connection, state: Arc<ServerState>, mut shutdown: Shutdown) {
-    let joined = handshake(&mut conn, Role::Camera, &state, |hello| state.frames.attach_camera(&hello.name)).await;
-    let Some((_, (registration, mut triggers))) = joined else {
+    let peer = conn.peer;
+    let joined = handshake(&mut conn, Role::Camera, &state, |hello| {
+        (state.frames.attach_camera(&hello.name), state.board.peer_joined(Role::Camera.name(), peer, &hello.name))
+    })
+    .await;
+    let Some((_, ((registration, mut triggers), _on_board))) = joined else {
         return;
     };
     let Connection { mut reader, writer, .. } = conn;
@@ -259,6 +264,13 @@ fn on_message(received: Received, camera: &CameraRegistration, state: &ServerSta
         return Some(refusal(frame_id, trigger_id, ErrorCode::BadCaptureTime, text));
     }
     state.count_frame();
+    state.board.frame_received(FrameSummary {
+        frame_id,
+        camera: camera.name().to_string(),
+        capture_time_us: meta.capture_time_us,
+        received_us: wall_clock_us(),
+        points: valid,
+    });
     let delivery = state.frames.insert(
         camera.id(),
         StoredFrame {

@@ -25,7 +25,7 @@ use super::ServerState;
 use super::camera_link::handshake;
 use super::connection::{Connection, MessageWriter};
 use super::frames::Wanted;
-use super::planning::{Accepted, Ask, Failure, Planned, Refusal, accept, fulfil_traced, refused};
+use super::planning::{Accepted, Ask, Failure, Fulfilled, Planned, Refusal, accept, fulfil_traced, refused};
 use super::shutdown::{Shutdown, StopSignal};
 use crate::convert::from_proto::{self, RequestError};
 use crate::convert::to_proto::plan_result;
@@ -37,9 +37,14 @@ type Writer = Arc<Mutex<MessageWriter<tokio::net::tcp::OwnedWriteHalf>>>;
 /// then waits for its plans in flight (on shutdown) or cancels them (when
 /// the peer has gone).
 pub async fn serve(mut conn: Connection, state: Arc<ServerState>, mut shutdown: Shutdown) {
-    if handshake(&mut conn, Role::Controller, &state, |_| ()).await.is_none() {
+    let peer = conn.peer;
+    let joined = handshake(&mut conn, Role::Controller, &state, |hello| {
+        state.board.peer_joined(Role::Controller.name(), peer, &hello.name)
+    })
+    .await;
+    let Some((_, _on_board)) = joined else {
         return;
-    }
+    };
     let Connection { mut reader, writer, .. } = conn;
     let writer: Writer = Arc::new(Mutex::new(writer));
     let places = Arc::new(Semaphore::new(state.config.server.max_requests_per_connection));
@@ -148,7 +153,7 @@ fn ask(r: &message::PlanRequest, euler: EulerConvention) -> Result<Ask, Refusal>
 /// reply on this link, then (when the daemon keeps them) the plan's debug
 /// set, written after the reply so it never delays one.
 async fn plan(request_id: u64, accepted: Accepted, state: Arc<ServerState>, writer: Writer, stop: StopSignal) {
-    let (outcome, traced) = fulfil_traced(accepted, &state, stop).await;
+    let Fulfilled { outcome, trace: traced, seq } = fulfil_traced(accepted, &state, stop, "controller").await;
     let mut reported = None;
     let reply = match outcome {
         Ok(Planned { frame_id, plan }) => {
@@ -164,7 +169,7 @@ async fn plan(request_id: u64, accepted: Accepted, state: Arc<ServerState>, writ
     if let Err(e) = writer.lock().await.send(&reply).await {
         warn!(request_id, "cannot send the reply: {e}");
     }
-    if let (Some(debug), Some(trace)) = (&state.debug, traced) {
-        debug.keep(request_id, trace, reported);
+    if let Some(trace) = traced {
+        state.debug.keep(request_id, seq, trace, reported);
     }
 }

@@ -48,7 +48,8 @@ pub struct LocalDaemon {
     pub controller_addr: SocketAddr,
     /// Where robot programs connect to the text link.
     pub text_addr: SocketAddr,
-    /// The metrics endpoint, when started with [`LocalDaemon::start_with_metrics`].
+    /// The HTTP listener (the metrics and the operator page), when started
+    /// with [`LocalDaemon::start_with_metrics`].
     pub metrics_addr: Option<SocketAddr>,
     /// The state the daemon's handlers share: its config, frames and counters.
     pub state: Arc<ServerState>,
@@ -71,7 +72,8 @@ impl LocalDaemon {
         Self::start_inner(config, false).await
     }
 
-    /// As [`LocalDaemon::start`], with the metrics endpoint on a third port.
+    /// As [`LocalDaemon::start`], with the HTTP listener (the metrics and
+    /// the operator page) on a fourth port.
     pub async fn start_with_metrics(config: Config) -> Result<Self, StartError> {
         Self::start_inner(config, true).await
     }
@@ -81,13 +83,13 @@ impl LocalDaemon {
         let (controller, controller_addr) = bind_loopback("controller link").await?;
         let (text, text_addr) = bind_loopback("text link").await?;
         let metrics_listener = match with_metrics {
-            true => Some(bind_loopback("metrics endpoint").await?),
+            true => Some(bind_loopback("HTTP listener").await?),
             false => None,
         };
         let state = ServerState::new(config)?;
         let metrics_addr = metrics_listener.as_ref().map(|(_, addr)| *addr);
         let metrics =
-            metrics_listener.map(|(listener, _)| tokio::spawn(super::metrics::serve(listener, Arc::clone(&state))));
+            metrics_listener.map(|(listener, _)| tokio::spawn(super::http::serve(listener, Arc::clone(&state))));
         let (stop, stopped) = oneshot::channel::<()>();
         let listeners = super::Listeners { camera, controller, text: Some(text) };
         let server = tokio::spawn(super::run(listeners, stopped, Arc::clone(&state)));

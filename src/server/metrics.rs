@@ -3,10 +3,8 @@
 //! serves them in the OpenMetrics text format, which Prometheus scrapes,
 //! when `server.metrics_listen` is set (it is off by default).
 //!
-//! The endpoint is outside input like the links, so it is bounded the same
-//! way: a few connections at once (more are closed at accept), one request
-//! per connection, every connection closed after a fixed time, and only
-//! `GET /metrics` answered.
+//! The HTTP listener that serves them, beside the operator page, is
+//! [`super::http`].
 //!
 //! Refusals and warnings are counted per rule of the planner
 //! (`weldseam_refusals_total{rule="..."}`, `weldseam_warnings_total`),
@@ -14,38 +12,22 @@
 //! from [`crate::rules`]'s catalogue, never a value from outside, so the
 //! series are at most as many as the catalogue has rules.
 
-use std::convert::Infallible;
-use std::sync::Arc;
 use std::time::Duration;
 
-use bytes::Bytes;
-use http_body_util::Full;
-use hyper::body::Incoming;
-use hyper::{Method, Request, Response, StatusCode};
-use hyper_util::rt::{TokioIo, TokioTimer};
 use prometheus_client::encoding::EncodeLabelSet;
 use prometheus_client::metrics::counter::Counter;
 use prometheus_client::metrics::family::Family;
 use prometheus_client::metrics::gauge::Gauge;
 use prometheus_client::metrics::histogram::{Histogram, exponential_buckets};
 use prometheus_client::registry::Registry;
-use tokio::net::TcpListener;
-use tokio::sync::Semaphore;
-use tracing::{Instrument, debug, info, warn};
+use tracing::warn;
 use weldseam_proto::ErrorCode;
 use weldseam_proto::message::Role;
 
-use super::ServerState;
 use crate::rules::{self, Rule};
 
-/// Scrapes served at once; a further connection is closed at accept.
-const MAX_SCRAPERS: usize = 4;
-
-/// The longest a scrape connection may stay open, request and answer.
-const SCRAPE_TIMEOUT: Duration = Duration::from_secs(10);
-
 /// The content type of the OpenMetrics text format.
-const CONTENT_TYPE: &str = "application/openmetrics-text; version=1.0.0; charset=utf-8";
+pub const CONTENT_TYPE: &str = "application/openmetrics-text; version=1.0.0; charset=utf-8";
 
 #[derive(Debug, Clone, Hash, PartialEq, Eq, EncodeLabelSet)]
 struct OutcomeLabels {
@@ -107,6 +89,11 @@ pub struct Metrics {
     refused: Family<RefusedLabels, Counter>,
     refusals: Family<RuleLabels, Counter>,
     warnings: Family<RuleLabels, Counter>,
+    records_written: Counter,
+    records_failed: Counter,
+    records_dropped: Counter,
+    records_held: Gauge,
+    records_bytes: Gauge,
 }
 
 impl std::fmt::Debug for Metrics {
@@ -146,6 +133,11 @@ impl Metrics {
             refused: Family::default(),
             refusals: Family::default(),
             warnings: Family::default(),
+            records_written: Counter::default(),
+            records_failed: Counter::default(),
+            records_dropped: Counter::default(),
+            records_held: Gauge::default(),
+            records_bytes: Gauge::default(),
         };
         let mut registry = Registry::with_prefix("weldseam");
         registry.register("plans", "Plan requests answered, by outcome (planned or the error code)", m.plans.clone());
@@ -170,6 +162,19 @@ impl Metrics {
             "Seams planned with a warning, by the planner's rule that warned (docs/RULES.md)",
             m.warnings.clone(),
         );
+        registry.register("records_written", "Plan records written ([records])", m.records_written.clone());
+        registry.register(
+            "records_failed",
+            "Plan records that could not be written (a full disk, an I/O error); the plans were answered",
+            m.records_failed.clone(),
+        );
+        registry.register(
+            "records_dropped",
+            "Plans not recorded because the previous records were still being written",
+            m.records_dropped.clone(),
+        );
+        registry.register("records_held", "Plan records in the store", m.records_held.clone());
+        registry.register("records_bytes", "Bytes of the plan records in the store", m.records_bytes.clone());
         // Both links show from the start, at zero, so a dashboard has a
         // series before the first connection.
         for role in [Role::Camera, Role::Controller] {
@@ -210,6 +215,22 @@ impl Metrics {
         if let Some(label) = catalogued(rule) {
             self.warnings.get_or_create(&label).inc();
         }
+    }
+
+    /// Counts a plan not recorded because the writers were busy.
+    pub fn record_dropped(&self) {
+        self.records_dropped.inc();
+    }
+
+    /// The record writer's figures: the written and failed counters, and
+    /// a setter of the store's size.
+    pub fn record_counters(&self) -> (Counter, Counter, impl Fn(crate::records::Held) + Send + 'static) {
+        let (held, bytes) = (self.records_held.clone(), self.records_bytes.clone());
+        let set = move |h: crate::records::Held| {
+            held.set(h.count.try_into().unwrap_or(i64::MAX));
+            bytes.set(h.bytes.try_into().unwrap_or(i64::MAX));
+        };
+        (self.records_written.clone(), self.records_failed.clone(), set)
     }
 
     /// Counts a frame stored.
@@ -269,64 +290,6 @@ fn catalogued(rule: &'static Rule) -> Option<RuleLabels> {
     }
 }
 
-/// Serves `GET /metrics` on `listener` until the future is dropped.
-pub async fn serve(listener: TcpListener, state: Arc<ServerState>) {
-    if let Ok(addr) = listener.local_addr() {
-        info!(%addr, "serving metrics at /metrics");
-    }
-    let scrapers = Arc::new(Semaphore::new(MAX_SCRAPERS));
-    loop {
-        let (stream, peer) = match listener.accept().await {
-            Ok(accepted) => accepted,
-            Err(e) => {
-                warn!("metrics: accept failed: {e}");
-                tokio::time::sleep(Duration::from_millis(100)).await;
-                continue;
-            }
-        };
-        let Ok(permit) = Arc::clone(&scrapers).try_acquire_owned() else {
-            debug!(%peer, "metrics: {MAX_SCRAPERS} scrapes in progress; closed");
-            continue;
-        };
-        let state = Arc::clone(&state);
-        let span = tracing::debug_span!("metrics", %peer);
-        tokio::spawn(
-            async move {
-                let service = hyper::service::service_fn(move |request: Request<Incoming>| {
-                    let response = respond(&request, &state);
-                    async move { Ok::<_, Infallible>(response) }
-                });
-                let connection = hyper::server::conn::http1::Builder::new()
-                    .keep_alive(false)
-                    .timer(TokioTimer::new())
-                    .header_read_timeout(SCRAPE_TIMEOUT)
-                    .serve_connection(TokioIo::new(stream), service);
-                match tokio::time::timeout(SCRAPE_TIMEOUT, connection).await {
-                    Ok(Ok(())) => {}
-                    Ok(Err(e)) => debug!("metrics: {e}"),
-                    Err(_) => debug!("metrics: closed after {} s", SCRAPE_TIMEOUT.as_secs()),
-                }
-                drop(permit);
-            }
-            .instrument(span),
-        );
-    }
-}
-
-fn respond(request: &Request<Incoming>, state: &ServerState) -> Response<Full<Bytes>> {
-    let (status, content_type, body) = match (request.method(), request.uri().path()) {
-        (&Method::GET, "/metrics") => (StatusCode::OK, CONTENT_TYPE, state.metrics.encode(state.jobs.len())),
-        (_, "/metrics") => (StatusCode::METHOD_NOT_ALLOWED, "text/plain", "only GET is served\n".into()),
-        _ => (StatusCode::NOT_FOUND, "text/plain", "the metrics are at /metrics\n".into()),
-    };
-    let mut response = Response::new(Full::new(Bytes::from(body)));
-    *response.status_mut() = status;
-    if let Ok(value) = content_type.parse() {
-        response.headers_mut().insert(hyper::header::CONTENT_TYPE, value);
-    }
-    response
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -359,6 +322,8 @@ mod tests {
             "weldseam_refused_peers_total{link=\"controller\",reason=\"evicted\"} 1",
             "weldseam_refusals_total{rule=\"frame.no_valid_point\"} 2",
             "weldseam_warnings_total{rule=\"seam.joint_coverage\"} 1",
+            "weldseam_records_failed_total 0",
+            "weldseam_records_bytes 0",
         ] {
             assert!(text.lines().any(|l| l == line), "no line {line:?} in\n{text}");
         }

@@ -14,16 +14,19 @@
 //! connections cannot keep a real peer out. Bad input ends at most its own
 //! connection, never the server; [`metrics`] counts what happened.
 
+pub mod board;
 pub mod camera_link;
 pub mod connection;
 pub mod controller_link;
 pub mod debug_sets;
 pub mod frames;
+pub mod http;
 pub mod idle;
 pub mod jobs;
 pub mod local;
 pub mod metrics;
 mod planning;
+pub mod recorder;
 pub mod serve_order;
 pub mod shutdown;
 pub mod text_link;
@@ -58,8 +61,12 @@ pub struct ServerState {
     /// Hands freed memory back once the cell is idle.
     pub idle: Arc<IdleTrim>,
     pub metrics: Metrics,
-    /// The last plans' pictures and figures, when `[debug]` asks for them.
-    pub debug: Option<debug_sets::DebugSets>,
+    /// The last plans' pictures and figures, for `[debug]` and the page.
+    pub debug: debug_sets::DebugSets,
+    /// What the operator page shows.
+    pub board: Arc<board::Board>,
+    /// The plan records' writer (`[records]`).
+    pub recorder: recorder::Recorder,
     started: Instant,
     frames_received: AtomicU64,
     plans_done: AtomicU64,
@@ -68,7 +75,14 @@ pub struct ServerState {
 impl ServerState {
     /// Builds the state, starting the pipeline's pool.
     pub fn new(config: Config) -> Result<Arc<Self>, PoolError> {
+        Self::with_config_text(config, None)
+    }
+
+    /// [`ServerState::new`] for a daemon started from a config file whose
+    /// text is `config_text`: plan records keep it, so a replay plans with it.
+    pub fn with_config_text(config: Config, config_text: Option<String>) -> Result<Arc<Self>, PoolError> {
         let s = &config.server;
+        let board = board::Board::new(s.page_plans);
         let jobs = Jobs::new(Planner::new(config.clone()), s.plan_queue_depth, s.pipeline_threads)?;
         Ok(Arc::new(ServerState {
             frames: FrameStore::new(FrameLimits {
@@ -79,7 +93,9 @@ impl ServerState {
             jobs,
             idle: IdleTrim::new(s.idle_trim),
             metrics: Metrics::new(),
-            debug: debug_sets::DebugSets::open(&config.debug),
+            debug: debug_sets::DebugSets::open(&config.debug, &board),
+            recorder: recorder::Recorder::open(&config, config_text, &board),
+            board,
             started: Instant::now(),
             frames_received: AtomicU64::new(0),
             plans_done: AtomicU64::new(0),
@@ -106,6 +122,11 @@ impl ServerState {
     pub(crate) fn count_frame(&self) {
         self.metrics.frame_received();
         self.frames_received.fetch_add(1, Ordering::Relaxed);
+    }
+
+    /// The record store's state, for the page; None when records are off.
+    pub fn records_state(&self) -> Option<crate::records::Held> {
+        self.recorder.held()
     }
 
     pub(crate) fn count_plan(&self) {
@@ -176,6 +197,10 @@ pub async fn run(listeners: Listeners, shutdown: impl Future, state: Arc<ServerS
         warn!(grace_ms = grace.as_millis() as u64, "work was still in flight when the shutdown grace ran out");
         Stopped::GraceExpired
     };
+    // The last plans' records are written after their replies: let them land.
+    if !state.recorder.finish(grace).await {
+        warn!(grace_ms = grace.as_millis() as u64, "plan records were still being written when the grace ran out");
+    }
     outcome.map(|()| stopped)
 }
 

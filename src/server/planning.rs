@@ -19,12 +19,15 @@ use tracing::{error, info, warn};
 use weldseam_proto::ErrorCode;
 
 use super::ServerState;
+use super::board::PlanSummary;
 use super::frames::{FrameError, FrameRequest, FrameWait, Handed, StoredFrame, Wanted, wall_clock_us};
 use super::jobs::{JobError, JobSlot, JobTimes};
+use super::recorder;
 use super::shutdown::StopSignal;
-use crate::convert::to_proto::plan_error_code;
+use crate::convert::to_proto::{plan_error_code, plan_result};
 use crate::pipeline::trace::PlanTrace;
 use crate::pipeline::{Plan, PlanRequest};
+use crate::records::Outcome;
 use crate::rules::Rule;
 
 /// A plan request in the library's form, with what the daemon needs to
@@ -203,20 +206,48 @@ pub(crate) struct Planned {
 }
 
 /// One request's life after acceptance: the frame, the plan, the count of
-/// its outcome and the one log line about it. The caller writes the reply.
-pub(crate) async fn fulfil(accepted: Accepted, state: &ServerState, stop: StopSignal) -> Result<Planned, Failure> {
-    fulfil_traced(accepted, state, stop).await.0
+/// its outcome, its place on the operator page's board and the one log
+/// line about it. The caller writes the reply.
+pub(crate) async fn fulfil(
+    accepted: Accepted,
+    state: &ServerState,
+    stop: StopSignal,
+    link: &'static str,
+) -> Result<Planned, Failure> {
+    fulfil_inner(accepted, state, stop, link, false).await.outcome
+}
+
+/// What [`fulfil_traced`] gives back.
+pub(crate) struct Fulfilled {
+    pub outcome: Result<Planned, Failure>,
+    /// The plan's trace, when its pictures are wanted.
+    pub trace: Option<PlanTrace>,
+    /// The plan's number on the board.
+    pub seq: u64,
 }
 
 /// [`fulfil`], and the plan's trace when the daemon keeps debug sets
-/// (`[debug]`) and none is being written: the caller keeps it after its
-/// reply is sent.
+/// (`[debug]`) or serves the page, and no set is being rendered: the
+/// caller keeps it after its reply is sent.
 pub(crate) async fn fulfil_traced(
     accepted: Accepted,
     state: &ServerState,
+    stop: StopSignal,
+    link: &'static str,
+) -> Fulfilled {
+    fulfil_inner(accepted, state, stop, link, true).await
+}
+
+async fn fulfil_inner(
+    accepted: Accepted,
+    state: &ServerState,
     mut stop: StopSignal,
-) -> (Result<Planned, Failure>, Option<PlanTrace>) {
+    link: &'static str,
+    want_trace: bool,
+) -> Fulfilled {
     let Accepted { request_id, request, wait, timeout, slot, arrived, _place } = accepted;
+    // The request as asked, before the frame's units are filled in.
+    let asked = state.recorder.enabled().then(|| request.clone());
     let fetched = tokio::select! {
         f = wait.wait(timeout) => f,
         _ = stop.stopped() => Err(FrameError::CameraGone),
@@ -238,7 +269,7 @@ pub(crate) async fn fulfil_traced(
             let request = PlanRequest { units: frame.input.units, cloud_frame: frame.input.cloud_frame, ..request };
             let cloud = Arc::clone(&frame.cloud);
             let (outcome, times) = match &state.debug {
-                Some(debug) if debug.ready() => {
+                debug if want_trace && debug.ready() => {
                     let (outcome, trace, times) = slot.run_traced(ticket, cloud, request).await;
                     traced = trace;
                     (outcome, times)
@@ -290,7 +321,50 @@ pub(crate) async fn fulfil_traced(
     log.latency = arrived.elapsed();
     log.emit();
     state.metrics.plan_answered(outcome.as_ref().map(|_| ()).map_err(|f| f.code), arrived.elapsed());
-    (outcome, traced)
+    let seq = post(&log, link, &outcome, state);
+    if let (Some(request), Some(frame)) = (&asked, &log.frame) {
+        let recorded = match &outcome {
+            Ok(planned) => Outcome::Planned(plan_result(&planned.plan, state.config.euler)),
+            Err(f) => Outcome::Refused {
+                code: f.code.name().to_string(),
+                rule: f.rule.map(|r| r.id.to_string()),
+                reason: f.text.clone(),
+            },
+        };
+        let plan = recorder::Plan { seq, link, request_id, request, frame, outcome: recorded };
+        state.recorder.keep(plan, &state.metrics);
+    }
+    Fulfilled { outcome, trace: traced, seq }
+}
+
+/// Puts the plan on the operator page's board; returns its number there.
+fn post(log: &PlanLog<'_>, link: &'static str, outcome: &Result<Planned, Failure>, state: &ServerState) -> u64 {
+    let ms = |d: Duration| d.as_secs_f64() * 1e3;
+    let (outcome_name, rule, reason) = match outcome {
+        Ok(_) => ("planned", None, None),
+        Err(f) => (f.code.name(), f.rule.map(|r| r.id), Some(f.text.clone())),
+    };
+    let summary = PlanSummary {
+        seq: 0,
+        time_us: wall_clock_us(),
+        link,
+        request_id: log.request_id,
+        joint: log.joint.to_string(),
+        frame_id: log.frame.as_ref().map(|f| f.frame_id),
+        camera: log.frame.as_ref().map(|f| f.camera.to_string()),
+        points: log.frame.as_ref().map(|f| f.cloud.len()),
+        seams: outcome.as_ref().map_or(0, |p| p.plan.seams.len()),
+        outcome: outcome_name,
+        rule,
+        reason,
+        plan_ms: ms(log.times.planning),
+        latency_ms: ms(log.latency),
+        record: None,
+        pictures: false,
+        sections: false,
+    };
+    let result = outcome.as_ref().ok().map(|p| plan_result(&p.plan, state.config.euler));
+    state.board.add_plan(summary, result)
 }
 
 /// Logs and counts, by rule, each warning of a plan's seams and each joint

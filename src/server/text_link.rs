@@ -243,6 +243,7 @@ fn error(code: ErrorCode, reason: impl Into<String>, numbers: usize) -> Reply {
 async fn serve(stream: TcpStream, state: Arc<ServerState>, mut shutdown: Shutdown, slot: OwnedSemaphorePermit) {
     let _slot = slot;
     let _counted = state.metrics.link_connection_opened(LINK);
+    let _on_board = stream.peer_addr().ok().map(|peer| state.board.peer_joined(LINK, peer, "robot"));
     let config = &state.config.text_link;
     info!("robot connected");
     let (read, mut write) = stream.into_split();
@@ -443,7 +444,7 @@ impl Session {
             Err(refusal) => return Outcome::Reply(error(refusal.code, pendant_refusal(&refusal), OK_NUMBERS)),
         };
         let outcome = tokio::select! {
-            outcome = fulfil(accepted, state, shutdown.stop_signal()) => outcome,
+            outcome = fulfil(accepted, state, shutdown.stop_signal(), "text") => outcome,
             () = lines.closed() => return Outcome::Gone,
         };
         Outcome::Reply(match outcome {

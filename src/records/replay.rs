@@ -1,0 +1,92 @@
+//! Plans a recorded frame again, with the recorded request and
+//! configuration, as the daemon did, and says whether today's build gives
+//! the same plan ([`super::compare`]).
+
+use weldseam_proto::plan::PlanResult;
+
+use super::compare::{Changes, compare};
+use super::{FormatError, Outcome, Record};
+use crate::config::{Config, ConfigError};
+use crate::convert::from_proto::{self, RequestError};
+use crate::convert::to_proto::{plan_error_code, plan_result};
+use crate::pipeline::Planner;
+
+/// Why a record could not be planned again.
+#[derive(Debug, thiserror::Error)]
+pub enum ReplayError {
+    #[error("the recorded configuration does not load in this build: {0}")]
+    Config(#[from] ConfigError),
+    #[error("the recorded request does not convert in this build: {0}")]
+    Request(#[from] RequestError),
+    #[error(transparent)]
+    Frame(#[from] FormatError),
+}
+
+/// A record planned again.
+#[derive(Debug, Clone)]
+pub struct Replayed {
+    pub outcome: Outcome,
+    /// What changed from the recorded outcome; empty when it is the same.
+    pub changes: Changes,
+    /// The planning hash of the configuration used now; the record's
+    /// differs when this build reads the recorded settings (or its
+    /// defaults) differently.
+    pub config_hash: String,
+}
+
+impl Replayed {
+    pub fn same(&self) -> bool {
+        self.changes.is_empty()
+    }
+}
+
+/// The outcome as a record holds it (through the record's encoding, which
+/// keeps what the binary link keeps), its stage times cleared, which are
+/// the machine's.
+fn timeless(outcome: &Outcome) -> Outcome {
+    let config = bincode::config::standard();
+    let stored = bincode::serde::encode_to_vec(outcome, config)
+        .ok()
+        .and_then(|bytes| bincode::serde::decode_from_slice::<Outcome, _>(&bytes, config).ok())
+        .map_or_else(|| outcome.clone(), |(o, _)| o);
+    match stored {
+        Outcome::Planned(result) => Outcome::Planned(PlanResult { timing_ms: Default::default(), ..result }),
+        other => other,
+    }
+}
+
+/// Plans `record`'s frame again with its request and configuration (the
+/// recorded file, or this build's defaults when the daemon had none).
+pub fn replay(record: &Record) -> Result<Replayed, ReplayError> {
+    let config = match &record.config_text {
+        Some(text) => Config::parse(text, "the recorded configuration")?,
+        None => Config::default(),
+    };
+    let config_hash = config.planning_hash();
+    let (cloud, input) = record.cloud()?;
+    let mut request = from_proto::plan_request(&record.request, config.euler)?;
+    // As the daemon does: the frame says which units and frame its points are in.
+    (request.units, request.cloud_frame) = (input.units, input.cloud_frame);
+    let euler = config.euler;
+    let outcome = match Planner::new(config).plan(&cloud, &request) {
+        Ok(plan) => Outcome::Planned(plan_result(&plan, euler)),
+        Err(e) => Outcome::Refused {
+            code: plan_error_code(&e).name().to_string(),
+            rule: Some(e.rule.id.to_string()),
+            reason: format!("frame {}: {e}", record.frame.frame_id),
+        },
+    };
+    let (before, after) = (timeless(&record.outcome), timeless(&outcome));
+    let mut changes = compare(&before, &after);
+    if changes.is_empty() && !same_bits(&before, &after) {
+        // JSON cannot tell NaN from null, nor -0 from 0.
+        changes.listed.push("a figure differs in its bits (a NaN or a signed zero)".into());
+    }
+    Ok(Replayed { outcome, changes, config_hash })
+}
+
+/// Whether two outcomes encode to the same bytes.
+fn same_bits(a: &Outcome, b: &Outcome) -> bool {
+    let encode = |o: &Outcome| bincode::serde::encode_to_vec(o, bincode::config::standard()).ok();
+    encode(a) == encode(b)
+}

@@ -117,6 +117,39 @@ fn clouds_no_camera_could_see_are_refused_with_the_reason() {
     assert!(err.reason.contains("off its axis, beyond any camera's field of view"), "{err}");
 }
 
+/// A simulated frame moved along the optical axis until its plates lie a
+/// sixth of its width from the origin, as a robot's base frame holds a
+/// workpiece on a table beside the robot: no point lies behind the camera
+/// or off any view's cone, but seen from the origin the points spread
+/// wider across than any camera sees, and the refusal says so with the
+/// figure. The frame where it was is a camera's view and plans.
+#[test]
+fn a_cloud_spread_wider_than_any_camera_sees_is_refused_as_no_camera_view() {
+    use weldseam::pipeline::input::{AngularExtent, MAX_PLAUSIBLE_FIELD_OF_VIEW_DEG};
+    let (_, spec) = eval_suite(Draw::Documented).swap_remove(0);
+    let config = Config::default();
+    let sim = scenes::rendered(&spec, &config.camera);
+    let valid: Vec<Point> = sim.cloud.points().iter().copied().filter(|p| p[0].is_finite()).collect();
+    let (low, high) = valid.iter().fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), p| (lo.min(p[0]), hi.max(p[0])));
+    let mut depths: Vec<f32> = valid.iter().map(|p| p[2]).collect();
+    depths.sort_unstable_by(f32::total_cmp);
+    let shift = depths[depths.len() / 2] - (high - low) / 6.0;
+    let close = mapped(&sim.cloud, |[x, y, z]| [x, y, z - shift]);
+
+    let seen = AngularExtent::of(&sim.cloud).expect("a frame's spread");
+    assert!(!seen.wider_than_any_camera(), "{seen:?}");
+    let wide = AngularExtent::of(&close).expect("a frame's spread");
+    assert!(wide.across_x_deg > MAX_PLAUSIBLE_FIELD_OF_VIEW_DEG, "{wide:?}");
+
+    let planner = Planner::new(config);
+    let request = PlanRequest::new(spec.joint.joint_type(), spec.joint.groove_depth_mm(), sim.pose);
+    assert!(planner.plan(&sim.cloud, &request).is_ok(), "the frame where it was plans");
+    let err = planner.plan(&close, &request).expect_err("wider than any camera sees");
+    assert_eq!((err.rule.id, err.stage), ("frame.not_in_camera_frame", Stage::Input), "{err}");
+    assert!(err.reason.contains("across x") && err.reason.contains("any depth camera sees"), "{err}");
+    assert!(err.reason.contains("--cloud-frame base"), "{err}");
+}
+
 /// A cloud handed over by value (`Planner::plan_owned`, as `weldseam plan`
 /// and the daemon plan the frames they no longer need) is converted in
 /// place instead of copied, and plans as the same cloud lent does: the

@@ -6,7 +6,7 @@ use std::path::PathBuf;
 
 use anyhow::Context as _;
 use serde_json::json;
-use weldseam::pipeline::input::View;
+use weldseam::pipeline::input::{MAX_PLAUSIBLE_FIELD_OF_VIEW_DEG, View};
 use weldseam::pipeline::survey::{Survey, survey};
 
 use super::args;
@@ -44,6 +44,7 @@ fn as_json(s: &Survey) -> serde_json::Value {
         "depth_mm": s.depth_mm.map(|(near, far)| [near, far]),
         "behind_camera": s.view.behind,
         "beyond_any_view": s.view.beyond_any_view,
+        "field_of_view_deg": s.extent.map(|e| json!({"across_x": e.across_x_deg, "across_y": e.across_y_deg})),
         "frame": frame_verdict(s),
         "intrinsics": s.intrinsics.map(|e| json!({
             "fx": e.intrinsics.fx, "fy": e.intrinsics.fy, "cx": e.intrinsics.cx, "cy": e.intrinsics.cy,
@@ -64,17 +65,26 @@ fn as_json(s: &Survey) -> serde_json::Value {
 
 /// Whether the cloud looks like a camera-frame view, in words: the input
 /// step's own verdict.
-fn frame_verdict(s: &Survey) -> &'static str {
+fn frame_verdict(s: &Survey) -> String {
     if s.view.valid == 0 {
-        return "no valid point";
+        return "no valid point".into();
     }
-    match s.view.view() {
+    let verdict = match s.frame_view() {
         View::Camera => "a camera-frame view",
         View::MostlyBehind => {
             "not a camera-frame view: most points lie behind the camera (a base-frame cloud? plan it with --cloud-frame base)"
         }
         View::MostlyBeyondView => "not a camera-frame view: most points lie beyond any camera's field of view",
-    }
+        View::WiderThanAnyCamera => {
+            let (axis, widest) = s.extent.map_or(("x", f64::NAN), |e| e.widest());
+            return format!(
+                "not a camera-frame view: seen from the origin its points spread over {widest:.1}° across {axis}, \
+                 wider than the {MAX_PLAUSIBLE_FIELD_OF_VIEW_DEG}° any depth camera sees (a base-frame cloud? \
+                 plan it with --cloud-frame base and the capture's pose)"
+            );
+        }
+    };
+    verdict.into()
 }
 
 fn as_text(s: &Survey) -> String {
@@ -101,7 +111,14 @@ fn as_text(s: &Survey) -> String {
     if let Some((near, far)) = s.depth_mm {
         line(&mut t, "depth", format!("{near:.1} to {far:.1} mm"));
     }
-    line(&mut t, "frame", frame_verdict(s).to_string());
+    line(&mut t, "frame", frame_verdict(s));
+    if let Some(e) = &s.extent {
+        line(
+            &mut t,
+            "field of view",
+            format!("{:.1}° across x, {:.1}° across y, seen from the origin", e.across_x_deg, e.across_y_deg),
+        );
+    }
     if let Some(e) = &s.intrinsics {
         let i = &e.intrinsics;
         line(

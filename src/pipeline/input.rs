@@ -71,6 +71,28 @@ pub const MIN_VIEW_EXTENT_MM: f64 = 5.0;
 /// frame: enough to tell a share to a few percent, a millisecond to read.
 const SPREAD_SAMPLE_POINTS: usize = 4096;
 
+/// No depth camera sees wider than this across either axis of its image,
+/// degrees: the widest (wide-angle time-of-flight modes) see 120° by 120°,
+/// structured-light and stereo ones 90° or less. A cloud whose points,
+/// seen from the camera's origin, spread wider than this across x or y
+/// was not captured from there: it is in another frame (most often the
+/// robot's base, where a workpiece beside the robot is seen from its foot
+/// over 140° and more) or its pose is not the capture's.
+pub const MAX_PLAUSIBLE_FIELD_OF_VIEW_DEG: f64 = 120.0;
+
+/// The share of the sampled points left out at each end when the angular
+/// extent is read: a few stray returns (a reflection, a flying pixel at
+/// an edge) must not widen it.
+const EXTENT_TRIMMED_SHARE: f64 = 0.01;
+
+/// The valid points [`AngularExtent::of`] looks at, evenly spread over the
+/// frame: enough for its trimmed ends to a fraction of a degree.
+const EXTENT_SAMPLE_POINTS: usize = 4096;
+
+/// The fewest sampled points an angular extent is read from: with fewer,
+/// a trimmed end is one stray point.
+const MIN_EXTENT_SAMPLE_POINTS: usize = 200;
+
 /// What the units guess saw and concluded.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct UnitsGuess {
@@ -211,15 +233,83 @@ impl ViewLimit {
     }
 }
 
-/// Whether a cloud can be a camera-frame view, from its [`ViewCounts`].
+/// Whether a cloud can be a camera-frame view, from its [`ViewCounts`]
+/// and its [`AngularExtent`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum View {
-    /// At least half its valid points lie where a camera can see.
+    /// At least half its valid points lie where a camera can see, and they
+    /// spread no wider than a camera sees.
     Camera,
     /// More than half lie behind the camera.
     MostlyBehind,
     /// More than half lie behind it or beyond any camera's field of view.
     MostlyBeyondView,
+    /// Seen from the camera's origin, they spread wider across one axis
+    /// than any camera sees ([`MAX_PLAUSIBLE_FIELD_OF_VIEW_DEG`]).
+    WiderThanAnyCamera,
+}
+
+/// How wide a cloud's valid points spread as seen from the camera's
+/// origin: the angle between the rays to its outermost points across each
+/// axis of the image (the angle of `x` against `z`, and of `y` against
+/// `z`), the [`EXTENT_TRIMMED_SHARE`] at each end left out. A camera's
+/// view spreads at most its field of view across each axis, whatever it
+/// looks at.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct AngularExtent {
+    /// Across the image's x axis, degrees.
+    pub across_x_deg: f64,
+    /// Across the image's y axis, degrees.
+    pub across_y_deg: f64,
+    pub sampled_points: usize,
+}
+
+impl AngularExtent {
+    /// The extent of `cloud`'s valid points, read on points sampled evenly
+    /// over it (by index, so a raw frame costs a few thousand reads), or
+    /// None when too few valid points are sampled to read it.
+    pub fn of(cloud: &PointCloud) -> Option<AngularExtent> {
+        let points = cloud.points();
+        let stride = (points.len() / EXTENT_SAMPLE_POINTS).max(1);
+        let mut sample: Vec<&Point> = points.iter().step_by(stride).filter(|p| p[0].is_finite()).collect();
+        if sample.len() < MIN_EXTENT_SAMPLE_POINTS {
+            // A frame mostly invalid: sample its valid points themselves.
+            let valid = points.iter().filter(|p| p[0].is_finite()).count();
+            let stride = (valid / EXTENT_SAMPLE_POINTS).max(1);
+            sample = points.iter().filter(|p| p[0].is_finite()).step_by(stride).collect();
+        }
+        if sample.len() < MIN_EXTENT_SAMPLE_POINTS {
+            return None;
+        }
+        let across = |axis: usize| {
+            let mut angles: Vec<f64> =
+                sample.iter().map(|p| f64::from(p[axis]).atan2(f64::from(p[2])).to_degrees()).collect();
+            angles.sort_unstable_by(f64::total_cmp);
+            let trimmed = (angles.len() as f64 * EXTENT_TRIMMED_SHARE) as usize;
+            angles[angles.len() - 1 - trimmed] - angles[trimmed]
+        };
+        Some(AngularExtent { across_x_deg: across(0), across_y_deg: across(1), sampled_points: sample.len() })
+    }
+
+    /// The wider of the two extents, with the axis it is across.
+    pub fn widest(&self) -> (&'static str, f64) {
+        if self.across_x_deg >= self.across_y_deg { ("x", self.across_x_deg) } else { ("y", self.across_y_deg) }
+    }
+
+    /// Whether no camera could see this wide ([`MAX_PLAUSIBLE_FIELD_OF_VIEW_DEG`]).
+    pub fn wider_than_any_camera(&self) -> bool {
+        self.widest().1 > MAX_PLAUSIBLE_FIELD_OF_VIEW_DEG
+    }
+}
+
+/// Whether points with these `counts` and this `extent` can be a
+/// camera-frame view: the counts first (points behind the camera or off
+/// any view's cone say the most), then the spread.
+pub fn view_of(counts: &ViewCounts, extent: Option<&AngularExtent>) -> View {
+    match counts.view() {
+        View::Camera if extent.is_some_and(AngularExtent::wider_than_any_camera) => View::WiderThanAnyCamera,
+        view => view,
+    }
 }
 
 /// Folds every valid point of `cloud` into a `C`, in parallel over chunks
@@ -271,7 +361,8 @@ impl ViewCounts {
         }
     }
 
-    /// Whether these points can be a camera-frame view.
+    /// Whether these points can be a camera-frame view, by their counts
+    /// alone (see [`view_of`] for the spread as well).
     pub fn view(&self) -> View {
         let limit = (self.valid as f64 * MAX_IMPLAUSIBLE_FRACTION) as usize;
         if self.behind > limit {
@@ -334,25 +425,46 @@ pub(super) fn check_spread(cloud: &PointCloud, valid_points: usize) -> Result<()
 }
 
 /// Refuses a cloud most of whose valid points lie behind the camera or
-/// beyond any camera's field of view, by its `counts`: planned, it would
+/// beyond any camera's field of view, by its `counts`, or whose points
+/// spread wider than any camera sees, by its `extent`: planned, it would
 /// give a seam of nonsense, so the reason and the likely cause are named
 /// instead.
-pub(super) fn check_camera_view(counts: &ViewCounts, request: &PlanRequest) -> Result<(), PlanError> {
+pub(super) fn check_camera_view(
+    counts: &ViewCounts,
+    extent: Option<&AngularExtent>,
+    request: &PlanRequest,
+) -> Result<(), PlanError> {
     let &ViewCounts { valid, behind, beyond_any_view } = counts;
     let hint = match request.cloud_frame {
         CloudFrame::Camera => "is the cloud in the robot base frame (cloud frame base, --cloud-frame base)?",
         CloudFrame::Base => "are the pose and the hand-eye those of the capture, and is the cloud in the base frame?",
     };
-    match counts.view() {
-        View::Camera => Ok(()),
-        View::MostlyBehind => Err(PlanError::by(
+    match (view_of(counts, extent), extent) {
+        (View::Camera, _) | (View::WiderThanAnyCamera, None) => Ok(()),
+        (View::WiderThanAnyCamera, Some(extent)) => {
+            let (axis, _) = extent.widest();
+            Err(PlanError::by(
+                &rules::input::NOT_IN_CAMERA_FRAME,
+                format!(
+                    "the cloud is not a camera-frame view: seen from the camera's origin its points spread over \
+                     {:.1}° across x and {:.1}° across y (the outermost {:.0} % of {} sampled points left out at \
+                     each side), wider across {axis} than the {MAX_PLAUSIBLE_FIELD_OF_VIEW_DEG}° any depth camera \
+                     sees; {hint}",
+                    extent.across_x_deg,
+                    extent.across_y_deg,
+                    100.0 * EXTENT_TRIMMED_SHARE,
+                    extent.sampled_points
+                ),
+            ))
+        }
+        (View::MostlyBehind, _) => Err(PlanError::by(
             &rules::input::NOT_IN_CAMERA_FRAME,
             format!(
                 "the cloud is not a camera-frame view: {behind} of its {valid} valid points lie behind the \
                  camera (z <= 0); {hint}"
             ),
         )),
-        View::MostlyBeyondView => Err(PlanError::by(
+        (View::MostlyBeyondView, _) => Err(PlanError::by(
             &rules::input::NOT_IN_CAMERA_FRAME,
             format!(
                 "the cloud is not a camera-frame view: {} of its {valid} valid points lie behind the camera or \
@@ -361,5 +473,52 @@ pub(super) fn check_camera_view(counts: &ViewCounts, request: &PlanRequest) -> R
                 behind + beyond_any_view
             ),
         )),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A flat surface facing the camera at `depth_mm`, `half_width_mm` to
+    /// each side across x and half that across y, on a 5 mm grid.
+    fn facing_surface(depth_mm: f32, half_width_mm: f32) -> Vec<Point> {
+        let steps = (half_width_mm / 5.0) as i32;
+        (-steps..=steps)
+            .flat_map(|i| (-steps / 2..=steps / 2).map(move |j| [i as f32 * 5.0, j as f32 * 5.0, depth_mm]))
+            .collect()
+    }
+
+    #[test]
+    fn the_spread_seen_from_the_origin_tells_a_camera_view_from_a_cloud_held_close_and_wide() {
+        // A table 700 mm wide seen from 600 mm: 60 degrees across x.
+        let seen = AngularExtent::of(&PointCloud::unorganized(facing_surface(600.0, 350.0))).unwrap();
+        let expected = 2.0 * (350.0f64 / 600.0).atan().to_degrees();
+        assert!((seen.across_x_deg - expected).abs() < 1.0, "{seen:?} against {expected}");
+        assert!(seen.across_y_deg < seen.across_x_deg && !seen.wider_than_any_camera(), "{seen:?}");
+        assert_eq!(view_of(&ViewCounts { valid: 1, ..ViewCounts::default() }, Some(&seen)), View::Camera);
+
+        // The same table 150 mm from the origin, as a robot's base frame
+        // holds a workpiece beside the robot: 133 degrees across x.
+        let mut close = facing_surface(150.0, 350.0);
+        let wide = AngularExtent::of(&PointCloud::unorganized(close.clone())).unwrap();
+        assert!(wide.wider_than_any_camera() && wide.widest().0 == "x", "{wide:?}");
+        let counts = ViewCounts::of(&PointCloud::unorganized(close.clone()));
+        assert_eq!(counts.view(), View::Camera, "no point lies behind the camera or off any cone");
+        assert_eq!(view_of(&counts, Some(&wide)), View::WiderThanAnyCamera);
+
+        // A few stray returns far off the axis do not widen a camera's view,
+        // and behind the camera the counts speak first.
+        let mut strays = facing_surface(600.0, 350.0);
+        let n = strays.len() / 200;
+        strays.extend((0..n).map(|i| [if i % 2 == 0 { 3000.0 } else { -3000.0 }, 0.0, 100.0]));
+        let strayed = AngularExtent::of(&PointCloud::unorganized(strays)).unwrap();
+        assert!((strayed.across_x_deg - expected).abs() < 2.0, "{strayed:?}");
+        close.iter_mut().for_each(|p| p[2] = -p[2]);
+        let behind = PointCloud::unorganized(close);
+        assert_eq!(view_of(&ViewCounts::of(&behind), AngularExtent::of(&behind).as_ref()), View::MostlyBehind);
+
+        // Too few points to read a spread from: none is judged.
+        assert_eq!(AngularExtent::of(&PointCloud::unorganized(facing_surface(150.0, 20.0))), None);
     }
 }

@@ -371,15 +371,23 @@ fn plan_workpiece(
     // round its root): its face standing on the nearest layer of planes,
     // planned under `t_fillet`; under `auto`, named when too few planes
     // are seen for any other joint.
+    // Under any other request, a lone plane is refused with what is seen
+    // beside it.
+    let lone_plane = planes.iter().filter(|c| selection.faces_camera(c)).count() < 2;
     let face_may_stand = match selection.joint {
         Some(JointType::TFillet) => true,
-        None => planes.iter().filter(|c| selection.faces_camera(c)).count() < 2,
+        None => lone_plane,
         Some(_) => false,
     };
-    let bare_flange = face_may_stand.then(|| background::nearest_layer(&planes, &selection)).flatten();
-    let selected = match (background::robust_select(planes, &selection, ctx.cloud.points()), bare_flange) {
-        (Err(e @ (BackgroundError::NoWeb { .. } | BackgroundError::TooFewPlanes { .. })), Some(flange)) => {
+    let nearest = (face_may_stand || lone_plane).then(|| background::nearest_layer(&planes, &selection)).flatten();
+    let selected = match (background::robust_select(planes, &selection, ctx.cloud.points()), nearest) {
+        (Err(e @ (BackgroundError::NoWeb { .. } | BackgroundError::TooFewPlanes { .. })), Some(flange))
+            if face_may_stand =>
+        {
             return plan_topless_tee(ctx, flange, e);
+        }
+        (Err(e @ BackgroundError::TooFewPlanes { .. }), Some(lone)) => {
+            return Err(in_view_refusal(ctx, &lone, &e)).seen_as(requested);
         }
         (selected, _) => selected,
     };
@@ -444,15 +452,15 @@ fn plan_topless_tee(
     not_found: BackgroundError,
 ) -> Result<Welds, Refused> {
     let requested = ctx.request.joint.given();
-    let cfg = &ctx.config.pipeline;
     let pieces: Vec<&PlaneCluster> = flange.iter().collect();
-    let search = web_face::FaceSearch {
-        point_spacing_mm: ctx.spacing_at(&flange[0].centroid),
-        on_plane_mm: cfg.on_plane_tolerance_mm,
-        web_height_max_mm: cfg.tee_web_height_max_mm,
-        trim_sigma: cfg.fit_trim_sigma,
-    };
+    let search = face_search(ctx, &flange);
     let fillet_asked = ctx.request.joint.given() == Some(JointType::TFillet);
+    // Under `auto`, two faces meeting in a valley no web makes with its
+    // flange (a groove's flanks, their plate tops out of view) are named,
+    // and no tee is suggested.
+    if !fillet_asked && web_face::valley(ctx.cloud, &pieces, &search).is_some_and(|v| v.is_groove()) {
+        return Err(in_view_refusal(ctx, &flange, &not_found)).seen_as(requested);
+    }
     let face = web_face::find(ctx.cloud, &pieces, &search).map_err(|why| {
         // Under `auto` the search was a guess at a cropped tee: its failure
         // says nothing about the joint the cloud holds.
@@ -489,4 +497,27 @@ fn plan_topless_tee(
         depth_to_support_mm: None,
     };
     tee::plan(ctx, tee, layers).seen_as(Some(JointType::TFillet))
+}
+
+/// The settings of the search for what stands on `flange` (the nearest
+/// layer of planes).
+fn face_search(ctx: &Context, flange: &[PlaneCluster]) -> web_face::FaceSearch {
+    let cfg = &ctx.config.pipeline;
+    web_face::FaceSearch {
+        point_spacing_mm: flange.first().map_or(ctx.scale.radius_mm, |c| ctx.spacing_at(&c.centroid)),
+        on_plane_mm: cfg.on_plane_tolerance_mm,
+        web_height_max_mm: cfg.tee_web_height_max_mm,
+        trim_sigma: cfg.fit_trim_sigma,
+    }
+}
+
+/// The refusal `not_found` (too few workpiece planes, or no web's top)
+/// with what is in view beside the lone plane `flange`: the valley it
+/// makes with the face rising over it, where one does ([`web_face::valley`]).
+fn in_view_refusal(ctx: &Context, flange: &[PlaneCluster], not_found: &BackgroundError) -> PlanError {
+    let pieces: Vec<&PlaneCluster> = flange.iter().collect();
+    match web_face::valley(ctx.cloud, &pieces, &face_search(ctx, flange)) {
+        Some(valley) => PlanError::by(not_found.rule(), format!("{not_found}: {}", valley.describe())),
+        None => PlanError::by(not_found.rule(), not_found),
+    }
 }

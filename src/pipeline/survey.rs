@@ -12,7 +12,7 @@ use crate::camera::{IntrinsicsEstimate, estimate_intrinsics};
 use crate::cloud::PointCloud;
 use crate::config::{Config, PointDensity};
 
-use super::input::{self, UnitsGuess, ViewCounts};
+use super::input::{self, AngularExtent, UnitsGuess, View, ViewCounts};
 use super::regrid::{self, Regridded};
 use super::scale;
 
@@ -49,6 +49,10 @@ pub struct Survey {
     /// any field of view and the cloud is not a camera-frame view (it may
     /// be in the robot base frame).
     pub view: ViewCounts,
+    /// How wide the valid points spread as seen from the camera's origin,
+    /// as the input step reads it: wider than any camera sees and the
+    /// cloud is not a camera-frame view either.
+    pub extent: Option<AngularExtent>,
     /// An organized frame's own pinhole.
     pub intrinsics: Option<IntrinsicsEstimate>,
     /// For an unorganized cloud: put back on the configured camera's grid,
@@ -94,12 +98,21 @@ pub fn survey(cloud: &PointCloud, config: &Config) -> Survey {
         units,
         depth_mm,
         view: ViewCounts::of(&in_mm),
+        extent: AngularExtent::of(&in_mm),
         intrinsics: estimate_intrinsics(&in_mm),
         regrid,
         spacing_mm,
         bands: depth_bands(&valid, configured),
         measured_density,
         radius_mm,
+    }
+}
+
+impl Survey {
+    /// Whether the cloud can be a camera-frame view, by the input step's
+    /// own measures ([`input::view_of`]).
+    pub fn frame_view(&self) -> View {
+        input::view_of(&self.view, self.extent.as_ref())
     }
 }
 

@@ -243,6 +243,102 @@ fn best_steep_plane(points: &[Vec3], n: &Vec3, tolerance: f64) -> Option<Plane> 
     best.map(|(_, plane)| plane)
 }
 
+/// The most the two faces of a valley may differ in how far each is turned
+/// from the camera's line of sight, degrees, for the camera to be looking
+/// into it down its middle, as it looks into a groove. A tee is seen from
+/// above its flange: the flange turned less than
+/// `pipeline.plane_max_normal_angle_deg` (20°) from the rays, its web 50°
+/// and more.
+pub const VALLEY_MIDDLE_SLANT_DEG: f64 = 15.0;
+
+/// What rises over a lone plane in view towards the camera, when no web's
+/// top is seen: the plane fitted to those points and the valley it makes
+/// with the lone plane. Read to say what is in view when a joint cannot
+/// be planned, never to plan one.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Valley {
+    /// The angle the two faces open across the valley, degrees: 180 for
+    /// one plane, 90 for a web standing square on its flange.
+    pub opening_deg: f64,
+    /// How far each face is turned from the camera's line of sight to it,
+    /// degrees (0: seen squarely): the lone plane's, then the face rising
+    /// over it.
+    pub slants_deg: [f64; 2],
+    /// The points on the face rising over the lone plane.
+    pub points: usize,
+}
+
+impl Valley {
+    /// Whether the valley opens wider than any web standing on its flange
+    /// ([`MAX_FACE_LEAN_DEG`] from square at most).
+    pub fn wider_than_a_web_stands(&self) -> bool {
+        self.opening_deg > 90.0 + MAX_FACE_LEAN_DEG
+    }
+
+    /// Whether the two faces are a groove's flanks rather than a web and
+    /// its flange: the valley opens wider than a web stands, or opens
+    /// obtuse with the camera looking into it down its middle (both faces
+    /// turned about as far from the rays, [`VALLEY_MIDDLE_SLANT_DEG`]),
+    /// where a tee is seen from above its flange.
+    pub fn is_groove(&self) -> bool {
+        let middle = (self.slants_deg[0] - self.slants_deg[1]).abs() <= VALLEY_MIDDLE_SLANT_DEG;
+        self.wider_than_a_web_stands() || (middle && self.opening_deg > 90.0)
+    }
+
+    /// What the valley is, in words, for a refusal.
+    pub fn describe(&self) -> String {
+        let [lone, rising] = self.slants_deg;
+        let seen = format!(
+            "only two faces are in view, meeting in a valley that opens {:.0}° (turned {lone:.0}° and {rising:.0}° \
+             from the camera's line of sight)",
+            self.opening_deg
+        );
+        if self.is_groove() {
+            format!(
+                "{seen}: a groove's two flanks with no plate top beside them, so neither the groove's edges nor its \
+                 depth can be read (a tee's web stands on its flange at about 90°, seen from above the flange)"
+            )
+        } else {
+            seen
+        }
+    }
+}
+
+/// The valley the lone plane made of `flange_pieces` makes with the face
+/// rising over it towards the camera (the points `margin` to
+/// `web_height_max_mm` over its plane, anywhere beside it, one plane
+/// holding most of them), or None when nothing, or no one face, rises
+/// over it.
+pub fn valley(cloud: &PointCloud, flange_pieces: &[&PlaneCluster], s: &FaceSearch) -> Option<Valley> {
+    let (flange, flange_points) = fillet::flange_plane(cloud, flange_pieces)?;
+    let n = flange.normal;
+    let margin = fillet::height_margin(s.on_plane_mm, s.point_spacing_mm);
+    let mut rising: Vec<Vec3> = fillet::valid_points(cloud)
+        .filter(|p| (margin..=s.web_height_max_mm).contains(&(flange.offset - n.dot(p))))
+        .collect();
+    if rising.len() > MAX_CANDIDATES {
+        let stride = rising.len().div_ceil(MAX_CANDIDATES);
+        rising = rising.into_iter().step_by(stride).collect();
+    }
+    if rising.len() < MIN_FACE_POINTS {
+        return None;
+    }
+    let fit = fillet::fit_face(&rising, s.trim_sigma)?;
+    if 2 * fit.inliers.len() < rising.len() {
+        return None;
+    }
+    // Both normals into the workpiece, away from the camera.
+    let m = if fit.plane.normal.dot(&fit.centroid) >= 0.0 { fit.plane.normal } else { -fit.plane.normal };
+    let opening_deg = 180.0 - n.dot(&m).clamp(-1.0, 1.0).acos().to_degrees();
+    let flange_centroid = flange_points.iter().sum::<Vec3>() / flange_points.len().max(1) as f64;
+    let slant = |normal: &Vec3, at: &Vec3| normal.dot(&at.normalize()).abs().clamp(0.0, 1.0).acos().to_degrees();
+    Some(Valley {
+        opening_deg,
+        slants_deg: [slant(&n, &flange_centroid), slant(&m, &fit.centroid)],
+        points: fit.inliers.len(),
+    })
+}
+
 /// A rectangle in the flange's plane round its points, widened by a
 /// margin: where a web standing on the flange may stand.
 struct Footprint {
@@ -320,6 +416,49 @@ mod tests {
         assert!((face.plane.signed_distance(&Vec3::new(FACE_X, 0.0, 690.0))).abs() < 0.05, "{face:?}");
         assert!((face.seen_height_mm - 25.0).abs() < 0.01, "{}", face.seen_height_mm);
         assert!((face.flange.offset - 700.0).abs() < 1e-6 && face.flange.normal.z > 0.999);
+    }
+
+    #[test]
+    fn a_groove_s_two_flanks_are_told_from_a_web_standing_on_its_flange() {
+        let settings =
+            FaceSearch { point_spacing_mm: 1.0, on_plane_mm: 0.4, web_height_max_mm: 250.0, trim_sigma: 3.0 };
+        let valley_of = |points: &[Vec3], lone: &dyn Fn(&Vec3) -> bool| {
+            let cloud = PointCloud::unorganized(points.iter().map(|p| [p.x as f32, p.y as f32, p.z as f32]).collect());
+            valley(&cloud, &[&PlaneCluster::of_points(points, lone)], &settings)
+        };
+        // Two flanks 30 mm wide, each sloping 27.5° up from a root under
+        // the camera along y: a groove opening 125°, its plate tops out of
+        // view.
+        let flank = |side: f64| -> Vec<Vec3> {
+            let slope = 27.5f64.to_radians().tan();
+            (0..100)
+                .flat_map(move |i| {
+                    (1..=30).map(move |j| Vec3::new(side * j as f64, -50.0 + i as f64, 700.0 - j as f64 * slope))
+                })
+                .collect()
+        };
+        let mut groove = flank(-1.0);
+        groove.extend(flank(1.0));
+        let seen = valley_of(&groove, &|p: &Vec3| p.x < 0.0).expect("the other flank rises over the first");
+        assert!((seen.opening_deg - 125.0).abs() < 0.5, "{seen:?}");
+        assert!(seen.wider_than_a_web_stands() && seen.is_groove(), "{seen:?}");
+        assert!(seen.describe().contains("a groove's two flanks with no plate top"), "{}", seen.describe());
+        // The same at 110°: no wider than a web may lean, but seen down its
+        // middle, as no tee is.
+        let steeper: Vec<Vec3> = groove.iter().map(|p| Vec3::new(p.x, p.y, 700.0 - (700.0 - p.z) * 1.343)).collect();
+        let seen = valley_of(&steeper, &|p: &Vec3| p.x < 0.0).expect("a valley");
+        assert!(!seen.wider_than_a_web_stands() && seen.is_groove(), "{seen:?}");
+
+        // A web's face standing on its flange, seen from above the flange:
+        // a valley of 90°, the flange seen squarely and the face aslant.
+        let mut tee = flange();
+        tee.extend(face(1.0, 25.0));
+        let seen = valley_of(&tee, &|p: &Vec3| p.z == 700.0).expect("the face rises over the flange");
+        assert!((seen.opening_deg - 90.0).abs() < 1.0, "{seen:?}");
+        assert!(seen.slants_deg[0] < 20.0 && seen.slants_deg[1] > 50.0 && !seen.is_groove(), "{seen:?}");
+        assert!(!seen.describe().contains("groove"), "{}", seen.describe());
+        // Nothing over a lone plane: no valley.
+        assert_eq!(valley_of(&flange(), &|p: &Vec3| p.z == 700.0), None);
     }
 
     #[test]

@@ -203,8 +203,19 @@ pub static TOO_FEW_PLANES: Rule = Rule {
              over the other, or a web's top over its flange. A surface turned further from the workpiece's \
              normal than the camera can see a plate at (a plate's side face, a fixture's wall) is none of them. \
              With fewer than two facing surfaces the frame shows at most one plate, or one surface where the \
-             plates lie closer than the cloud resolves.",
-    parameters: &[FACING_ANGLE_MAX],
+             plates lie closer than the cloud resolves. The refusal says what rises beside the lone plane: two \
+             faces meeting in a valley wider than a web stands on its flange, or obtuse and seen down its middle \
+             (both faces turned about as far from the rays), are a groove's two flanks with no plate top in view, \
+             and no tee is tried under `auto`.",
+    parameters: &[
+        FACING_ANGLE_MAX,
+        Parameter {
+            name: "VALLEY_MIDDLE_SLANT_DEG",
+            unit: "°",
+            meaning: "most two faces' slants from the rays differ for the camera to look down a valley's middle",
+            source: Source::Constant { file: WEB_FACE, name: "VALLEY_MIDDLE_SLANT_DEG" },
+        },
+    ],
     fires: &[
         "src/pipeline/background/tests.rs::failures_say_what_was_found",
         "tests/pipeline.rs::a_frame_without_the_workpiece_names_the_failing_stage",

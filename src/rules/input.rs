@@ -74,11 +74,15 @@ pub static NOT_IN_CAMERA_FRAME: Rule = Rule {
     stage: Stage::Input,
     effect: Effect::Refuses,
     gate: None,
-    summary: "most of the frame's points lie in front of the camera, within a field of view a camera can have",
+    summary: "most of the frame's points lie in front of the camera, within a field of view a camera can have, \
+              and they spread no wider than a camera sees",
     reason: "A camera sees only in front of itself and within a cone about its optical axis; no depth camera \
-             sees farther than about 60 degrees off it. A cloud most of whose points lie behind the camera or \
-             far outside that cone is in another frame (the robot's base) or in other units, and a seam \
-             planned from it would be placed by the wrong transform.",
+             sees farther than about 60 degrees off it, nor wider than about 120 degrees across its image. A \
+             cloud most of whose points lie behind the camera or far outside that cone, or whose points, seen \
+             from the camera's origin, spread wider across than any camera sees (a workpiece beside a robot, \
+             held in the robot's base frame, is seen from the base over 140 degrees and more), is in another \
+             frame (the robot's base) or in other units, and a seam planned from it would be placed by the \
+             wrong transform.",
     parameters: &[
         Parameter {
             name: "MAX_PLAUSIBLE_OFF_AXIS_DEG",
@@ -92,8 +96,23 @@ pub static NOT_IN_CAMERA_FRAME: Rule = Rule {
             meaning: "largest share of points behind or beyond any view",
             source: Source::Constant { file: "src/pipeline/input.rs", name: "MAX_IMPLAUSIBLE_FRACTION" },
         },
+        Parameter {
+            name: "MAX_PLAUSIBLE_FIELD_OF_VIEW_DEG",
+            unit: "°",
+            meaning: "widest spread across either image axis any camera sees",
+            source: Source::Constant { file: "src/pipeline/input.rs", name: "MAX_PLAUSIBLE_FIELD_OF_VIEW_DEG" },
+        },
+        Parameter {
+            name: "EXTENT_TRIMMED_SHARE",
+            unit: "",
+            meaning: "share of sampled points left out at each side of the spread",
+            source: Source::Constant { file: "src/pipeline/input.rs", name: "EXTENT_TRIMMED_SHARE" },
+        },
     ],
-    fires: &["tests/units_frames.rs::clouds_no_camera_could_see_are_refused_with_the_reason"],
+    fires: &[
+        "tests/units_frames.rs::clouds_no_camera_could_see_are_refused_with_the_reason",
+        "tests/units_frames.rs::a_cloud_spread_wider_than_any_camera_sees_is_refused_as_no_camera_view",
+    ],
     holds: &["tests/units_frames.rs::a_base_frame_cloud_plans_the_seam_of_the_camera_frame_one"],
 };
 

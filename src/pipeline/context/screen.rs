@@ -10,7 +10,7 @@ use crate::cloud::PointCloud;
 use crate::config::Config;
 use crate::rules;
 
-use super::super::input::{self, ViewCounts, ViewLimit};
+use super::super::input::{self, AngularExtent, ViewCounts, ViewLimit};
 use super::super::trace::Tracer;
 use super::super::{PlanError, PlanRequest};
 
@@ -19,7 +19,8 @@ use super::super::{PlanError, PlanRequest};
 /// a corrupt frame's or noise, and one such point far off the axis
 /// would widen every window it is part of, so it becomes invalid
 /// before any stage runs. A frame that cannot be a camera's view (most
-/// of it behind or beside the camera, one point repeated, no extent), or
+/// of it behind or beside the camera, spread wider than any camera sees,
+/// one point repeated, no extent), or
 /// is left without a valid point, fails here, in the [`crate::pipeline::Stage::Input`]
 /// stage. One pass over the frame counts both. Returns the frame the
 /// stages plan and how many valid points it has.
@@ -35,7 +36,7 @@ pub(in crate::pipeline) fn sanitise<'c>(
     let camera = &config.camera;
     let volume = camera.measurable_volume(cloud.width(), cloud.height(), cloud.is_organized());
     let (view, counts) = count_frame(&cloud, &volume);
-    input::check_camera_view(&view, request)?;
+    input::check_camera_view(&view, AngularExtent::of(&cloud).as_ref(), request)?;
     if counts.unmeasurable() > 0 {
         tracing::warn!(
             near = counts.near,

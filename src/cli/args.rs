@@ -91,6 +91,11 @@ pub enum SuiteArg {
     /// (`sim::curved_suite`), planned as t_fillet and auto: every one is
     /// to be refused, none planned as a line.
     Curved,
+    /// 12 root-land V-grooves cut 3 to 8 mm wider along part of their
+    /// seam, one plate's top edge stepping back while the root runs
+    /// straight on (`sim::groove_width_suite`), planned as v_butt and
+    /// auto: a seam more than 2 mm off the root is a confident wrong one.
+    GrooveWidth,
 }
 
 /// `--joint-request` of `eval`: how each scene's plan names its joint.

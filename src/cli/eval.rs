@@ -236,6 +236,8 @@ pub fn run(args: &EvalArgs) -> anyhow::Result<()> {
         SuiteArg::RootLand => (root_land_suite(draw), robust.camera, Variant::raw()),
         // Scenes bent after rendering, judged against the bent root.
         SuiteArg::Curved => return crate::cli::eval_curved::run(args),
+        // Scenes re-cut after rendering, judged against the straight root.
+        SuiteArg::GrooveWidth => return crate::cli::eval_groove_width::run(args),
     };
     let several_seams = matches!(args.suite, SuiteArg::Tee | SuiteArg::Multi | SuiteArg::Corner);
     // Refusals are right answers on these suites; only a confident wrong

@@ -187,7 +187,9 @@ pub static JOINT_COVERAGE: Rule = Rule {
     reason: "Where both plates are seen side by side, the joint runs between them whether or not their edges \
              were found there. A seam that spans only part of that stretch had its edges found along part of \
              the joint only (a streak or a shadow over the rest), so it would leave the rest unwelded, or its \
-             edges belong to something else than the joint. `quality.warn_only` may name the gate \
+             edges belong to something else than the joint. For a fillet root the visible joint is where the \
+             web's face and the flange up to it are seen together, each stretch of it measured as the root is, \
+             from where both are seen to where either ends. `quality.warn_only` may name the gate \
              (`joint_coverage`) to plan the seam with a warning instead.",
     parameters: &[Parameter {
         name: "min_joint_coverage",

@@ -73,7 +73,7 @@ pub fn root_land_suite(draw: Draw) -> Vec<(String, SceneSpec)> {
 }
 
 /// The drawn V-butt scene made a groove with a root land.
-fn reshape_to_land(spec: &mut SceneSpec, rng: &mut ChaCha8Rng) {
+pub(super) fn reshape_to_land(spec: &mut SceneSpec, rng: &mut ChaCha8Rng) {
     let thickness = uniform(rng, THICKNESS_MM[0], THICKNESS_MM[1]);
     let angle = uniform(rng, GROOVE_ANGLE_DEG[0], GROOVE_ANGLE_DEG[1]);
     let opening_without_land = 2.0 * thickness * (angle / 2.0).to_radians().tan();

@@ -22,11 +22,20 @@ pub(super) const MAX_STATIONS: usize = 20_000;
 /// The stretch of the root seen: the longest run of stations holding both
 /// kinds of evidence, across breaks of at most
 /// [`JOINT_BREAK_SPACINGS`], its ends at the last evidence inward.
+///
+/// `seen_mm`, the joint in view, is measured as the stretch is: each run
+/// from where both kinds of evidence begin to where either ends, summed
+/// over the runs. Counted in whole stations instead, the run the root
+/// spans would count up to a station past each of its ends that the root,
+/// ending at its evidence, never covers: a root seen over its whole
+/// visible stretch would read a few stations short of it, more the
+/// coarser the cloud (a station is four spacings).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(super) struct SeenRun {
     pub(super) s0: f64,
     pub(super) s1: f64,
     pub(super) coverage: [f64; 2],
+    /// The share of `seen_mm` the stretch `s0..s1` spans.
     pub(super) share: f64,
     pub(super) seen_mm: f64,
     /// Whether stretches seen apart from the run, past a longer break,
@@ -42,9 +51,15 @@ pub(super) fn seen_run(foot: &[f64], flange: &[f64], spacing: f64) -> Option<See
     let width = (STATION_SPACINGS * spacing).max((hi - lo) / MAX_STATIONS as f64).max(f64::MIN_POSITIVE);
     let stations = (((hi - lo) / width).floor() as usize + 1).min(MAX_STATIONS);
     let station = |s: f64| (((s - lo) / width).floor() as usize).min(stations - 1);
-    let mut has = vec![[false; 2]; stations];
-    foot.iter().for_each(|&s| has[station(s)][0] = true);
-    flange.iter().for_each(|&s| has[station(s)][1] = true);
+    // Per station and kind of evidence: the least and greatest `s` held.
+    let mut held = vec![[(f64::INFINITY, f64::NEG_INFINITY); 2]; stations];
+    for (j, samples) in [foot, flange].into_iter().enumerate() {
+        for &s in samples {
+            let (lo, hi) = &mut held[station(s)][j];
+            (*lo, *hi) = (lo.min(s), hi.max(s));
+        }
+    }
+    let has: Vec<[bool; 2]> = held.iter().map(|h| h.map(|(lo, hi)| lo <= hi)).collect();
     let seen: Vec<bool> = has.iter().map(|h| h[0] && h[1]).collect();
     // Runs of seen stations joined across short breaks.
     let max_break = ((JOINT_BREAK_SPACINGS * spacing) / width).floor() as usize;
@@ -56,20 +71,29 @@ pub(super) fn seen_run(foot: &[f64], flange: &[f64], spacing: f64) -> Option<See
         }
     }
     let &(first, last) = runs.iter().max_by_key(|(a, b)| b - a)?;
-    let all_seen = runs.iter().map(|(a, b)| b - a + 1).sum::<usize>();
     let in_run = |k: usize| (first..=last).contains(&k);
-    let (run_lo, run_hi) = (lo + first as f64 * width, lo + (last + 1) as f64 * width);
-    let inside = |v: &[f64]| v.iter().copied().filter(|s| (run_lo..run_hi).contains(s)).collect::<Vec<f64>>();
-    let (foot_in, flange_in) = (inside(foot), inside(flange));
-    let min = |v: &[f64]| v.iter().copied().fold(f64::INFINITY, f64::min);
-    let max = |v: &[f64]| v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-    let (s0, s1) = (min(&foot_in).max(min(&flange_in)), max(&foot_in).min(max(&flange_in)));
+    // A run's stretch: from where both kinds of evidence begin among its
+    // stations to where either ends (empty where they do not overlap).
+    let stretch_of = |(a, b): (usize, usize)| {
+        let ends = |j: usize| {
+            held[a..=b].iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), h| (lo.min(h[j].0), hi.max(h[j].1)))
+        };
+        let (foot_ends, flange_ends) = (ends(0), ends(1));
+        (foot_ends.0.max(flange_ends.0), foot_ends.1.min(flange_ends.1))
+    };
+    let (s0, s1) = stretch_of((first, last));
     if s1 <= s0 {
         return None;
     }
     let count = (last - first + 1) as f64;
     let share_of = |j: usize| (first..=last).filter(|&k| in_run(k) && has[k][j]).count() as f64 / count;
-    let seen_mm = all_seen as f64 * width;
+    let seen_mm: f64 = runs
+        .iter()
+        .map(|&run| {
+            let (a, b) = stretch_of(run);
+            (b - a).max(0.0)
+        })
+        .sum();
     Some(SeenRun {
         s0,
         s1,

@@ -579,12 +579,31 @@ fn the_run_seen_bridges_short_breaks_and_not_long_ones() {
         .collect();
     let run = seen_run(&s, &s, 0.5).unwrap();
     assert_eq!((run.s0, run.s1), (0.0, 60.0));
-    assert!(run.share < 1.0 && run.share > 0.8, "{}", run.share);
+    // The joint seen is the run's 60 mm and the 10 mm past the long break.
+    assert!((run.seen_mm - 70.0).abs() < 1e-9, "{}", run.seen_mm);
+    assert!((run.share - 60.0 / 70.0).abs() < 1e-9, "{}", run.share);
     assert!(run.coverage[0] < 1.0);
     // The 10 mm seen past the long break is left out.
     assert!(run.cut);
     // Nothing seen together: no run.
     assert!(seen_run(&[0.0, 1.0], &[50.0, 51.0], 0.5).is_none());
+}
+
+#[test]
+fn a_root_seen_over_its_whole_visible_stretch_spans_all_of_it_at_any_spacing() {
+    // One unbroken run of evidence, the face's foot from 3.3 to 158.3 mm
+    // and the flange from 3.5 to 158.0 mm: the stretch, 3.5 to 158.0 mm,
+    // is all the joint in view, however coarse the stations, and its ends
+    // do not round to a station's.
+    for spacing in [0.5, 1.5, 2.6] {
+        let foot: Vec<f64> = (0..=310).map(|k| 3.3 + 0.5 * k as f64).collect();
+        let flange: Vec<f64> = foot.iter().map(|s| s + 0.2).filter(|s| *s <= 158.3).collect();
+        let run = seen_run(&foot, &flange, spacing).unwrap();
+        assert!(!run.cut, "{spacing}");
+        assert!((run.s0 - 3.5).abs() < 1e-9 && (run.s1 - 158.0).abs() < 1e-9, "{spacing}: {run:?}");
+        assert!((run.share - 1.0).abs() < 1e-12, "{spacing}: {}", run.share);
+        assert!((run.seen_mm - 154.5).abs() < 1e-9, "{spacing}: {}", run.seen_mm);
+    }
 }
 
 #[test]

@@ -1,6 +1,7 @@
 //! The `weldseam` binary's command-line contract, run as scripts run it:
 //! `simulate` writes a frame, `plan --json` prints exactly one JSON object
-//! on stdout with base-frame waypoints, errors exit non-zero naming the
+//! on stdout with base-frame waypoints and the joint's figures along the
+//! seam, errors exit non-zero naming the
 //! failing stage; `serve`, `camera` and `controller` make a cell of three
 //! processes, and `bench --quick` runs to its table.
 
@@ -52,6 +53,14 @@ fn plan_json_honours_the_contract_for_each_joint() {
             assert_eq!(w["xyz"].as_array().unwrap().len(), 3);
             assert_eq!(w["rpy_deg"].as_array().unwrap().len(), 3);
         }
+        // The joint's figures, one entry per waypoint, each with its
+        // standard error (a lap's step, a butt joint's gap).
+        let figures = seam["along_seam"].as_array().expect("along_seam");
+        assert_eq!(figures.len(), wps.len(), "{joint}");
+        let figure = if joint == "lap" { "lap_step_mm" } else { "gap_mm" };
+        let measured = figures.iter().filter(|f| f[figure]["value"].is_number()).count();
+        assert!(measured * 10 >= wps.len() * 9, "{joint}: {figure} at {measured} of {} waypoints", wps.len());
+        assert!(figures.iter().all(|f| f[figure].is_null() || f[figure]["sigma"].as_f64().unwrap() > 0.0));
         assert!(v["timing_ms"]["total"].as_f64().unwrap() > 0.0);
         assert!(v["timing_ms"]["plane_points"].is_number());
         // The first waypoint lies on the true seam's line, base frame.

@@ -15,6 +15,7 @@ pub mod inspect;
 pub mod logging;
 pub mod memory;
 pub mod plan;
+pub mod plan_json;
 pub mod rules;
 pub mod serve;
 pub mod simulate;

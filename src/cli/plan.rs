@@ -135,7 +135,7 @@ pub fn run(args: &PlanArgs) -> anyhow::Result<()> {
         }
     };
     if args.json {
-        writeln!(out, "{}", serde_json::to_string(&report)?)?;
+        writeln!(out, "{}", serde_json::to_string(&super::plan_json::plan_json(&report, &plan))?)?;
         return Ok(());
     }
     if report.seams.is_empty() {

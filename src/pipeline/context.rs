@@ -18,6 +18,7 @@ use crate::config::{Config, Method, PointDensity};
 use crate::geometry::{Vec3, vec3};
 use crate::joint::JointType;
 
+use super::along_seam;
 use super::background::{self, PlaneCluster, Workpiece};
 use super::edge_points::{self, EdgeCriterion};
 use super::neighbours::NeighbourSearch;
@@ -450,6 +451,20 @@ impl<'a> Context<'a> {
             });
         }
         self.check_reach(&waypoints)?;
+        // The joint's figures at each waypoint, read on the weld edges'
+        // axes (the weld lies along the normal from them, at the same
+        // feature coordinate).
+        let along_seam = match &weld.along {
+            Some(evidence) => {
+                let stations: Vec<f64> = trajectory::sample_features(&weld.curve, start, end, params.step_mm)
+                    .into_iter()
+                    .map(|s| evidence.axes.feature(&weld.curve.at(s)))
+                    .collect();
+                let grid = self.camera_grid();
+                along_seam::measure(evidence, self.cloud, grid.as_ref(), &stations)
+            }
+            None => Vec::new(),
+        };
         let length_mm = waypoints.windows(2).map(|w| (w[1].position - w[0].position).norm()).sum();
         let assessment = weld.assessment.clone();
         Ok(Seam {
@@ -466,6 +481,7 @@ impl<'a> Context<'a> {
             coverage: assessment.coverage,
             quality: assessment.quality,
             warnings: assessment.warnings,
+            along_seam,
         })
     }
 
@@ -543,6 +559,9 @@ pub(super) struct PlannedWeld {
     /// Whether the trace records this weld's waypoints (the trace holds
     /// one workpiece's stages).
     traced: bool,
+    /// What the joint's figures along the seam are read from, where the
+    /// seam's path measures them (a butt joint's or a lap's edges).
+    along: Option<Box<along_seam::Evidence>>,
 }
 
 impl PlannedWeld {
@@ -554,13 +573,19 @@ impl PlannedWeld {
         edges: EdgeFigures,
         assessment: SeamAssessment,
     ) -> Self {
-        PlannedWeld { joint, curve, span, normal, torch_axis: normal, edges, assessment, traced: true }
+        PlannedWeld { joint, curve, span, normal, torch_axis: normal, edges, assessment, traced: true, along: None }
     }
 
     /// This weld with the torch along `axis` instead of the plate normal
     /// (a fillet's, between the web and the flange).
     pub(super) fn with_torch_axis(self, torch_axis: Vec3) -> Self {
         PlannedWeld { torch_axis, ..self }
+    }
+
+    /// This weld with the evidence its figures along the seam are read
+    /// from.
+    pub(super) fn with_along(self, evidence: along_seam::Evidence) -> Self {
+        PlannedWeld { along: Some(Box::new(evidence)), ..self }
     }
 
     /// This weld, its waypoints traced or not.

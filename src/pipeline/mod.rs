@@ -29,6 +29,7 @@
 //! The pipeline does no I/O. Its loops run on the current rayon pool, so
 //! the caller chooses the threads (the daemon installs a dedicated pool).
 
+pub mod along_seam;
 pub mod background;
 pub mod boundary;
 pub mod clustering;
@@ -236,6 +237,9 @@ pub struct Seam {
     pub quality: Option<quality::SeamQuality>,
     /// The gates the seam failed that `quality.warn_only` makes warnings.
     pub warnings: Vec<quality::GateFailure>,
+    /// The joint's figures at each waypoint, in their order (robust
+    /// method, butt joints and laps; empty otherwise).
+    pub along_seam: Vec<along_seam::JointFigures>,
 }
 
 /// How much of the visible joint a seam spans, and how much of the seam

@@ -283,6 +283,13 @@ fn eval_prints_text_by_default_and_markdown_with_the_flag() {
     let words: Vec<&str> = summary.split_whitespace().collect();
     assert_eq!(words[..5], ["robust", "all", "1", "1", "1"], "{summary}");
     assert!(text.lines().any(|l| l.starts_with("lap-0") && l.contains("pass")), "{text}");
+    // The lap's step along the seam against the scene's upper plate: one
+    // scene, every waypoint measured, within 0.2 mm at the median.
+    let step = text.lines().find(|l| l.contains("lap step")).unwrap_or_else(|| panic!("{text}"));
+    let words: Vec<&str> = step.split_whitespace().collect();
+    assert_eq!(words[..4], ["lap", "lap", "step", "1"], "{step}");
+    assert!(words[4].parse::<usize>().unwrap() >= 10 && words[5] == "0", "{step}");
+    assert!(words[6].parse::<f64>().unwrap() < 0.2 && words[7] == "mm", "{step}");
 
     let markdown = run(&["--markdown"]);
     assert!(markdown.contains("| robust | all | 1 | 1 | 1 |"), "{markdown}");

@@ -77,6 +77,42 @@ fn plan_json_honours_the_contract_for_each_joint() {
     }
 }
 
+/// With a weld procedure configured (named relative to the config file),
+/// `plan --json` gives each seam its process: per waypoint the passes and
+/// their arc settings, null where a stretch is cut, and the cuts with
+/// their rule ids.
+#[test]
+fn plan_json_carries_the_process_of_a_configured_procedure() {
+    let dir = tempfile::tempdir().unwrap();
+    let (pcd, truth) = simulate(dir.path(), "i-butt");
+    let shipped = Path::new(env!("CARGO_MANIFEST_DIR")).join("config/procedures/gmaw-mild-steel.toml");
+    std::fs::copy(&shipped, dir.path().join("wps.toml")).unwrap();
+    let config = dir.path().join("cell.toml");
+    std::fs::write(&config, "[process]\nprocedure = \"wps.toml\"\nplate_thickness_mm = 6.0\n").unwrap();
+    let pose = format!("--pose={}", pose_of(&truth));
+    let args = ["plan", "--config", config.to_str().unwrap(), "--cloud", &pcd, "--joint", "i-butt", &pose, "--json"];
+    let out = weldseam(&args);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("valid JSON");
+    let seam = &v["seams"][0];
+    let process = &seam["process"];
+    let waypoints = process["waypoints"].as_array().expect("a process per waypoint");
+    assert_eq!(waypoints.len(), seam["waypoints"].as_array().unwrap().len());
+    let welded: Vec<&serde_json::Value> = waypoints.iter().filter(|w| !w.is_null()).collect();
+    assert!(welded.len() * 10 >= waypoints.len() * 9, "{}", process["cut"]);
+    for w in welded {
+        let pass = &w["passes"][0];
+        assert!(pass["wire_feed_m_min"].as_f64().unwrap() > 0.0 && pass["travel_speed_mm_s"].as_f64().unwrap() > 0.0);
+    }
+    for cut in process["cut"].as_array().expect("the cut stretches") {
+        assert!(cut["rule"].as_str().unwrap().starts_with("process."), "{cut}");
+    }
+    // Without a procedure there is no process.
+    let bare = weldseam(&["plan", "--cloud", &pcd, "--joint", "i-butt", &pose, "--json"]);
+    let bare: serde_json::Value = serde_json::from_slice(&bare.stdout).expect("valid JSON");
+    assert!(bare["seams"][0]["process"].is_null());
+}
+
 #[test]
 fn pose_values_starting_with_a_minus_sign_work_in_both_flag_forms() {
     let dir = tempfile::tempdir().unwrap();

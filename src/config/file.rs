@@ -10,6 +10,7 @@
 
 use serde::Deserialize;
 
+use super::process::ProcessSection;
 use super::text_link::TextLinkConfig;
 use super::{DebugParams, PaperParams, PipelineParams, QualityParams, RobotLimits, ServerConfig, TrajectoryParams};
 use crate::calibration::gate::{CalibrationRecord, GateLimits};
@@ -29,6 +30,7 @@ pub struct ConfigFile {
     pub text_link: TextLinkSection,
     pub debug: DebugParams,
     pub calibration: GateLimits,
+    pub process: ProcessSection,
 }
 
 /// `[camera]`: the camera model's keys, with the field of view and the

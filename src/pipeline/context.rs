@@ -26,6 +26,7 @@ use super::plane_points::PlanePoints;
 use super::ransac::RansacParams;
 use super::refit::{CurveFit, SeamCurve};
 use super::scale::{self, Scale};
+use super::seam_process;
 use super::trace::Tracer;
 use super::trajectory::{self, Waypoint};
 use super::view_border::ViewBorder;
@@ -442,7 +443,7 @@ impl<'a> Context<'a> {
             travel_angle_deg: self.request.travel_angle_deg.unwrap_or(t.travel_angle_deg),
             fillet_work_angle_deg: t.fillet_work_angle_deg,
         };
-        let waypoints = trajectory::waypoints(&weld.curve, start, end, &weld.torch_axis, base_from_camera, &params);
+        let mut waypoints = trajectory::waypoints(&weld.curve, start, end, &weld.torch_axis, base_from_camera, &params);
         if weld.traced {
             self.trace.record(|t| {
                 let to_camera = |w: &Waypoint| base_from_camera.inverse_transform_point(&w.position.into()).coords;
@@ -465,6 +466,15 @@ impl<'a> Context<'a> {
             }
             None => Vec::new(),
         };
+        let process = self.config.process.procedure.as_ref().map(|procedure| {
+            let places = seam_process::places(&weld.curve, start, end, params.step_mm, &weld.torch_axis);
+            let (first, last) = (weld.curve.at(start), weld.curve.at(end));
+            let obstacles = seam_process::obstacles_near(self.cloud, &first, &last, &procedure.torch);
+            let thickness = self.config.process.plate_thickness_mm;
+            let process = seam_process::along(procedure, weld.joint, thickness, &places, &along_seam, &obstacles);
+            seam_process::orient(&mut waypoints, &places, &process, base_from_camera);
+            process
+        });
         let length_mm = waypoints.windows(2).map(|w| (w[1].position - w[0].position).norm()).sum();
         let assessment = weld.assessment.clone();
         Ok(Seam {
@@ -482,6 +492,7 @@ impl<'a> Context<'a> {
             quality: assessment.quality,
             warnings: assessment.warnings,
             along_seam,
+            process,
         })
     }
 

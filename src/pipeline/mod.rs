@@ -54,6 +54,7 @@ pub mod regrid;
 mod robust;
 pub mod roi;
 mod scale;
+pub mod seam_process;
 pub mod straightness;
 pub mod survey;
 mod tee;
@@ -240,6 +241,9 @@ pub struct Seam {
     /// The joint's figures at each waypoint, in their order (robust
     /// method, butt joints and laps; empty otherwise).
     pub along_seam: Vec<along_seam::JointFigures>,
+    /// The weld process at each waypoint, where `process.procedure` is
+    /// configured.
+    pub process: Option<seam_process::SeamProcess>,
 }
 
 /// How much of the visible joint a seam spans, and how much of the seam

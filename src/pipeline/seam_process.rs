@@ -1,8 +1,8 @@
 //! The weld process along a planned seam, when a procedure is configured
 //! (`process.procedure`): at every waypoint, the passes and the arc's
-//! settings [`process::weld_station`] gives for the joint measured there
+//! settings [`weld_station`] gives for the joint measured there
 //! ([`super::along_seam`]), the weave, and the torch's angles cleared
-//! against the frame's cloud ([`process::clearance`]).
+//! against the frame's cloud ([`crate::process::clearance`]).
 //!
 //! The joint's cross-section at a waypoint, from its figures and the
 //! plates' thickness `t` (`process.plate_thickness_mm`, or where it is 0,

@@ -30,6 +30,7 @@
 //! seam, and the seams seen are counted found, missed or extra
 //! ([`match_seams`], [`classify_several`]).
 
+pub mod along_seam;
 pub mod real_scans;
 mod rule_counts;
 

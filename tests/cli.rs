@@ -1,6 +1,7 @@
 //! The `weldseam` binary's command-line contract, run as scripts run it:
 //! `simulate` writes a frame, `plan --json` prints exactly one JSON object
-//! on stdout with base-frame waypoints, errors exit non-zero naming the
+//! on stdout with base-frame waypoints and the joint's figures along the
+//! seam, errors exit non-zero naming the
 //! failing stage; `serve`, `camera` and `controller` make a cell of three
 //! processes, and `bench --quick` runs to its table.
 
@@ -52,6 +53,14 @@ fn plan_json_honours_the_contract_for_each_joint() {
             assert_eq!(w["xyz"].as_array().unwrap().len(), 3);
             assert_eq!(w["rpy_deg"].as_array().unwrap().len(), 3);
         }
+        // The joint's figures, one entry per waypoint, each with its
+        // standard error (a lap's step, a butt joint's gap).
+        let figures = seam["along_seam"].as_array().expect("along_seam");
+        assert_eq!(figures.len(), wps.len(), "{joint}");
+        let figure = if joint == "lap" { "lap_step_mm" } else { "gap_mm" };
+        let measured = figures.iter().filter(|f| f[figure]["value"].is_number()).count();
+        assert!(measured * 10 >= wps.len() * 9, "{joint}: {figure} at {measured} of {} waypoints", wps.len());
+        assert!(figures.iter().all(|f| f[figure].is_null() || f[figure]["sigma"].as_f64().unwrap() > 0.0));
         assert!(v["timing_ms"]["total"].as_f64().unwrap() > 0.0);
         assert!(v["timing_ms"]["plane_points"].is_number());
         // The first waypoint lies on the true seam's line, base frame.
@@ -66,6 +75,42 @@ fn plan_json_honours_the_contract_for_each_joint() {
             "{joint}: first waypoint {first:?} vs ends {start:?} {end:?}"
         );
     }
+}
+
+/// With a weld procedure configured (named relative to the config file),
+/// `plan --json` gives each seam its process: per waypoint the passes and
+/// their arc settings, null where a stretch is cut, and the cuts with
+/// their rule ids.
+#[test]
+fn plan_json_carries_the_process_of_a_configured_procedure() {
+    let dir = tempfile::tempdir().unwrap();
+    let (pcd, truth) = simulate(dir.path(), "i-butt");
+    let shipped = Path::new(env!("CARGO_MANIFEST_DIR")).join("config/procedures/gmaw-mild-steel.toml");
+    std::fs::copy(&shipped, dir.path().join("wps.toml")).unwrap();
+    let config = dir.path().join("cell.toml");
+    std::fs::write(&config, "[process]\nprocedure = \"wps.toml\"\nplate_thickness_mm = 6.0\n").unwrap();
+    let pose = format!("--pose={}", pose_of(&truth));
+    let args = ["plan", "--config", config.to_str().unwrap(), "--cloud", &pcd, "--joint", "i-butt", &pose, "--json"];
+    let out = weldseam(&args);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("valid JSON");
+    let seam = &v["seams"][0];
+    let process = &seam["process"];
+    let waypoints = process["waypoints"].as_array().expect("a process per waypoint");
+    assert_eq!(waypoints.len(), seam["waypoints"].as_array().unwrap().len());
+    let welded: Vec<&serde_json::Value> = waypoints.iter().filter(|w| !w.is_null()).collect();
+    assert!(welded.len() * 10 >= waypoints.len() * 9, "{}", process["cut"]);
+    for w in welded {
+        let pass = &w["passes"][0];
+        assert!(pass["wire_feed_m_min"].as_f64().unwrap() > 0.0 && pass["travel_speed_mm_s"].as_f64().unwrap() > 0.0);
+    }
+    for cut in process["cut"].as_array().expect("the cut stretches") {
+        assert!(cut["rule"].as_str().unwrap().starts_with("process."), "{cut}");
+    }
+    // Without a procedure there is no process.
+    let bare = weldseam(&["plan", "--cloud", &pcd, "--joint", "i-butt", &pose, "--json"]);
+    let bare: serde_json::Value = serde_json::from_slice(&bare.stdout).expect("valid JSON");
+    assert!(bare["seams"][0]["process"].is_null());
 }
 
 #[test]
@@ -274,6 +319,13 @@ fn eval_prints_text_by_default_and_markdown_with_the_flag() {
     let words: Vec<&str> = summary.split_whitespace().collect();
     assert_eq!(words[..5], ["robust", "all", "1", "1", "1"], "{summary}");
     assert!(text.lines().any(|l| l.starts_with("lap-0") && l.contains("pass")), "{text}");
+    // The lap's step along the seam against the scene's upper plate: one
+    // scene, every waypoint measured, within 0.2 mm at the median.
+    let step = text.lines().find(|l| l.contains("lap step")).unwrap_or_else(|| panic!("{text}"));
+    let words: Vec<&str> = step.split_whitespace().collect();
+    assert_eq!(words[..4], ["lap", "lap", "step", "1"], "{step}");
+    assert!(words[4].parse::<usize>().unwrap() >= 10 && words[5] == "0", "{step}");
+    assert!(words[6].parse::<f64>().unwrap() < 0.2 && words[7] == "mm", "{step}");
 
     let markdown = run(&["--markdown"]);
     assert!(markdown.contains("| robust | all | 1 | 1 | 1 |"), "{markdown}");

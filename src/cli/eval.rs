@@ -10,8 +10,12 @@
 //! `--suite tee` and `--suite multi` are issue 15's frames of more seams
 //! than one (a tee's two roots, several workpieces): below the scenes,
 //! the seams the frames show against what the planner returned (found,
-//! missed, extra) and, for tees, the refusals that name the tee. Last,
-//! how often each rule of the planner refused and warned, by its id.
+//! missed, extra) and, for tees, the refusals that name the tee. Then
+//! how often each rule of the planner refused and warned, by its id, and
+//! last, on frames of one seam, the joint types and groove depths found
+//! and the joint's figures along the seam (gap, high-low, groove area,
+//! lap step at every waypoint) against the scene's true joint
+//! (`weldseam::eval::along_seam`).
 
 use std::io::Write;
 
@@ -349,6 +353,7 @@ pub fn run(args: &EvalArgs) -> anyhow::Result<()> {
         }
     } else {
         writeln!(out, "{}", render(&joint_table(&results[0])))?;
+        writeln!(out, "{}", render(&along_seam_table(&results[0])))?;
     }
     out.flush()?;
     let robust_outcomes = &results[0];
@@ -421,6 +426,50 @@ fn joint_table(outcomes: &[SceneOutcome]) -> Table {
             figure(worst),
             figure(mean),
         ]);
+    }
+    table
+}
+
+/// The joint's figures along the seam against the truth, per joint type
+/// (robust, the first seam of each scene that planned its joint): per
+/// figure, the waypoints scored and those left without it, the median and
+/// largest error (mm; the groove's area in % of the true area), and the
+/// share of errors within two of the figure's own standard errors.
+fn along_seam_table(outcomes: &[SceneOutcome]) -> Table {
+    use weldseam::eval::along_seam::{FigureErrors, score};
+    let mut table = Table::new(
+        "Figures along the seam (robust)",
+        &["joint", "figure", "scenes", "waypoints", "without", "median error", "max error", "within 2 sigma %"],
+    );
+    for joint in [JointType::IButt, JointType::VButt, JointType::Lap] {
+        let s = score(outcomes, joint);
+        let figures: [(&str, &FigureErrors, f64, &str); 4] = [
+            ("gap", &s.gap, 1.0, "mm"),
+            ("high-low", &s.high_low, 1.0, "mm"),
+            ("groove area", &s.groove_area, 100.0, "%"),
+            ("lap step", &s.lap_step, 1.0, "mm"),
+        ];
+        for (name, f, scale, unit) in figures {
+            if f.errors.is_empty() && f.missing == 0 {
+                continue;
+            }
+            let figure = |v: Option<f64>| v.map_or("-".into(), |v| format!("{:.3} {unit}", v * scale));
+            let within = if f.errors.is_empty() {
+                "-".into()
+            } else {
+                format!("{:.0}", 100.0 * f.within_two_sigma as f64 / f.errors.len() as f64)
+            };
+            table.push(vec![
+                joint.name().to_string(),
+                name.to_string(),
+                s.scenes.to_string(),
+                f.errors.len().to_string(),
+                f.missing.to_string(),
+                figure(f.median()),
+                figure(f.max()),
+                within,
+            ]);
+        }
     }
     table
 }

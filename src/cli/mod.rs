@@ -17,6 +17,7 @@ pub mod inspect;
 pub mod logging;
 pub mod memory;
 pub mod plan;
+pub mod plan_json;
 pub mod records;
 pub mod rules;
 pub mod serve;

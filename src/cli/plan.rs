@@ -112,7 +112,17 @@ pub fn run(args: &PlanArgs) -> anyhow::Result<()> {
         report
     });
     if let (Some(dir), Some(trace)) = (&args.debug, &trace) {
-        let set = weldseam::report::debug_set(trace, report.clone())?;
+        let mut set = weldseam::report::debug_set(trace, report.clone())?;
+        // trace.json holds the plan as `--json` prints it, with each seam's
+        // figures along the seam and process beside the protocol's fields.
+        if let (Ok(plan), Some(report)) = (&outcome, &report) {
+            let printed = serde_json::to_value(super::plan_json::plan_json(report, plan))?;
+            for (file, bytes) in set.files.iter_mut().filter(|(f, _)| *f == weldseam::report::FIGURES_FILE) {
+                let mut figures: serde_json::Value = serde_json::from_slice(bytes)?;
+                figures["plan"] = printed.clone();
+                *bytes = serde_json::to_vec_pretty(&figures).with_context(|| file.to_string())?;
+            }
+        }
         weldseam::debug_dir::write_set(dir, &set).context("--debug")?;
         tracing::info!(dir = %dir.display(), files = set.files.len(), "debug pictures and figures written");
     }
@@ -135,7 +145,7 @@ pub fn run(args: &PlanArgs) -> anyhow::Result<()> {
         }
     };
     if args.json {
-        writeln!(out, "{}", serde_json::to_string(&report)?)?;
+        writeln!(out, "{}", serde_json::to_string(&super::plan_json::plan_json(&report, &plan))?)?;
         return Ok(());
     }
     if report.seams.is_empty() {

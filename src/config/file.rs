@@ -10,6 +10,7 @@
 
 use serde::Deserialize;
 
+use super::process::ProcessSection;
 use super::text_link::TextLinkConfig;
 use super::{
     DebugParams, PaperParams, PipelineParams, QualityParams, RecordsParams, RobotLimits, ServerConfig, TrajectoryParams,
@@ -32,6 +33,7 @@ pub struct ConfigFile {
     pub debug: DebugParams,
     pub records: RecordsParams,
     pub calibration: GateLimits,
+    pub process: ProcessSection,
 }
 
 /// `[camera]`: the camera model's keys, with the field of view and the

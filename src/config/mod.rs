@@ -10,6 +10,7 @@ mod camera;
 mod file;
 mod planning;
 pub mod procedure;
+mod process;
 mod quality;
 mod records;
 mod server;
@@ -27,6 +28,7 @@ use crate::geometry::pose::{EulerConvention, HandEyeError, hand_eye_from_rows};
 
 pub use file::ConfigFile;
 pub use planning::{Method, PaperParams, PipelineParams, PointDensity, RoiFrame, TrajectoryParams};
+pub use process::{MAX_PLATE_THICKNESS_MM, ProcessParams};
 pub use quality::QualityParams;
 pub use records::RecordsParams;
 pub use server::{DEFAULT_DEBUG_KEEP_LAST, DEFAULT_PLAN_TIMEOUT_MS, DebugParams, MAX_DEBUG_KEEP_LAST, ServerConfig};
@@ -93,6 +95,8 @@ pub struct Config {
     /// The record of the calibration that gave `hand_eye`, when the file
     /// has one.
     pub hand_eye_calibration: Option<CalibrationRecord>,
+    /// The weld procedure the waypoints' parameters follow, if any.
+    pub process: ProcessParams,
 }
 
 impl Default for Config {
@@ -165,7 +169,11 @@ impl Config {
     pub fn load(path: &Path) -> Result<Config, ConfigError> {
         let shown = path.display().to_string();
         let text = std::fs::read_to_string(path).map_err(|cause| ConfigError::Io { path: shown.clone(), cause })?;
-        Config::parse(&text, &shown)
+        let mut file: ConfigFile =
+            toml::from_str(&text).map_err(|e| ConfigError::Parse { path: shown.clone(), message: e.to_string() })?;
+        // A procedure named relative to the config is read beside it.
+        file.process = file.process.resolved_against(path.parent());
+        Config::from_file(file)
     }
 
     /// Reads and validates the config file at `path`, or gives the
@@ -193,6 +201,7 @@ impl Config {
         let text_link = f.text_link.validate()?;
         f.debug.validate()?;
         f.records.validate()?;
+        let process = f.process.validate()?;
         validate_gate(&f.calibration)?;
         if let Some(record) = &f.robot.hand_eye_calibration {
             validate_record(record)?;
@@ -212,6 +221,7 @@ impl Config {
             records: f.records,
             calibration: f.calibration,
             hand_eye_calibration: f.robot.hand_eye_calibration,
+            process,
         })
     }
 }

@@ -18,6 +18,7 @@ use crate::config::{Config, Method, PointDensity};
 use crate::geometry::{Vec3, vec3};
 use crate::joint::JointType;
 
+use super::along_seam;
 use super::background::{self, PlaneCluster, Workpiece};
 use super::edge_points::{self, EdgeCriterion};
 use super::neighbours::NeighbourSearch;
@@ -25,6 +26,7 @@ use super::plane_points::PlanePoints;
 use super::ransac::RansacParams;
 use super::refit::{CurveFit, SeamCurve};
 use super::scale::{self, Scale};
+use super::seam_process;
 use super::trace::Tracer;
 use super::trajectory::{self, Waypoint};
 use super::view_border::ViewBorder;
@@ -441,7 +443,7 @@ impl<'a> Context<'a> {
             travel_angle_deg: self.request.travel_angle_deg.unwrap_or(t.travel_angle_deg),
             fillet_work_angle_deg: t.fillet_work_angle_deg,
         };
-        let waypoints = trajectory::waypoints(&weld.curve, start, end, &weld.torch_axis, base_from_camera, &params);
+        let mut waypoints = trajectory::waypoints(&weld.curve, start, end, &weld.torch_axis, base_from_camera, &params);
         if weld.traced {
             self.trace.record(|t| {
                 let to_camera = |w: &Waypoint| base_from_camera.inverse_transform_point(&w.position.into()).coords;
@@ -450,6 +452,29 @@ impl<'a> Context<'a> {
             });
         }
         self.check_reach(&waypoints)?;
+        // The joint's figures at each waypoint, read on the weld edges'
+        // axes (the weld lies along the normal from them, at the same
+        // feature coordinate).
+        let along_seam = match &weld.along {
+            Some(evidence) => {
+                let stations: Vec<f64> = trajectory::sample_features(&weld.curve, start, end, params.step_mm)
+                    .into_iter()
+                    .map(|s| evidence.axes.feature(&weld.curve.at(s)))
+                    .collect();
+                let grid = self.camera_grid();
+                along_seam::measure(evidence, self.cloud, grid.as_ref(), &stations)
+            }
+            None => Vec::new(),
+        };
+        let process = self.config.process.procedure.as_ref().map(|procedure| {
+            let places = seam_process::places(&weld.curve, start, end, params.step_mm, &weld.torch_axis);
+            let (first, last) = (weld.curve.at(start), weld.curve.at(end));
+            let obstacles = seam_process::obstacles_near(self.cloud, &first, &last, &procedure.torch);
+            let thickness = self.config.process.plate_thickness_mm;
+            let process = seam_process::along(procedure, weld.joint, thickness, &places, &along_seam, &obstacles);
+            seam_process::orient(&mut waypoints, &places, &process, base_from_camera);
+            process
+        });
         let length_mm = waypoints.windows(2).map(|w| (w[1].position - w[0].position).norm()).sum();
         let assessment = weld.assessment.clone();
         Ok(Seam {
@@ -466,6 +491,8 @@ impl<'a> Context<'a> {
             coverage: assessment.coverage,
             quality: assessment.quality,
             warnings: assessment.warnings,
+            along_seam,
+            process,
         })
     }
 
@@ -543,6 +570,9 @@ pub(super) struct PlannedWeld {
     /// Whether the trace records this weld's waypoints (the trace holds
     /// one workpiece's stages).
     traced: bool,
+    /// What the joint's figures along the seam are read from, where the
+    /// seam's path measures them (a butt joint's or a lap's edges).
+    along: Option<Box<along_seam::Evidence>>,
 }
 
 impl PlannedWeld {
@@ -554,13 +584,19 @@ impl PlannedWeld {
         edges: EdgeFigures,
         assessment: SeamAssessment,
     ) -> Self {
-        PlannedWeld { joint, curve, span, normal, torch_axis: normal, edges, assessment, traced: true }
+        PlannedWeld { joint, curve, span, normal, torch_axis: normal, edges, assessment, traced: true, along: None }
     }
 
     /// This weld with the torch along `axis` instead of the plate normal
     /// (a fillet's, between the web and the flange).
     pub(super) fn with_torch_axis(self, torch_axis: Vec3) -> Self {
         PlannedWeld { torch_axis, ..self }
+    }
+
+    /// This weld with the evidence its figures along the seam are read
+    /// from.
+    pub(super) fn with_along(self, evidence: along_seam::Evidence) -> Self {
+        PlannedWeld { along: Some(Box::new(evidence)), ..self }
     }
 
     /// This weld, its waypoints traced or not.

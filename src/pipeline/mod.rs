@@ -29,6 +29,7 @@
 //! The pipeline does no I/O. Its loops run on the current rayon pool, so
 //! the caller chooses the threads (the daemon installs a dedicated pool).
 
+pub mod along_seam;
 pub mod background;
 pub mod boundary;
 pub mod clustering;
@@ -53,6 +54,7 @@ pub mod regrid;
 mod robust;
 pub mod roi;
 mod scale;
+pub mod seam_process;
 pub mod straightness;
 pub mod survey;
 mod tee;
@@ -236,6 +238,12 @@ pub struct Seam {
     pub quality: Option<quality::SeamQuality>,
     /// The gates the seam failed that `quality.warn_only` makes warnings.
     pub warnings: Vec<quality::GateFailure>,
+    /// The joint's figures at each waypoint, in their order (robust
+    /// method, butt joints and laps; empty otherwise).
+    pub along_seam: Vec<along_seam::JointFigures>,
+    /// The weld process at each waypoint, where `process.procedure` is
+    /// configured.
+    pub process: Option<seam_process::SeamProcess>,
 }
 
 /// How much of the visible joint a seam spans, and how much of the seam

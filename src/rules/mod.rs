@@ -33,6 +33,7 @@ pub mod input;
 pub mod neighbour_index;
 pub mod orientation;
 pub mod plane_points;
+pub mod process;
 pub mod quality;
 pub mod ransac;
 pub mod refit;

@@ -3,8 +3,14 @@
 #[allow(unused_imports)]
 use super::{Effect, Gate, Parameter, Rule, Source, Stage};
 
-/// The stage's rules, in the order they apply.
-pub(super) static RULES: &[&Rule] = &[&WAYPOINT_BEYOND_ROBOT];
+/// The stage's rules, in the order they apply: the reach, then the weld
+/// process's cuts (declared in `process.rs`).
+pub(super) static RULES: &[&Rule] = &[
+    &WAYPOINT_BEYOND_ROBOT,
+    &super::process::FIGURES_UNMEASURED,
+    &super::process::OUTSIDE_PROCEDURE,
+    &super::process::TORCH_BLOCKED,
+];
 
 pub static WAYPOINT_BEYOND_ROBOT: Rule = Rule {
     id: "reach.waypoint_beyond_robot",

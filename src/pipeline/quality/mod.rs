@@ -155,12 +155,7 @@ pub fn measure(seam: &SeamFits) -> SeamQuality {
     let lap_step_mm = seam.lap_step_mm.filter(|_| !butt);
     let cos = seam.planes[0].normal.dot(&seam.planes[1].normal).clamp(-1.0, 1.0);
 
-    // One sigma at an end of each edge's fit, with the boundary's floor.
-    let floor = seam.point_spacing_mm / 12f64.sqrt();
-    let edge_sigma = seam.fits.each_ref().map(|f| {
-        let fitted = f.rms_mm * (seam.degree as f64 + 1.0) / (f.points_used.max(1) as f64).sqrt();
-        fitted.hypot(floor)
-    });
+    let edge_sigma = seam.fits.each_ref().map(|f| edge_sigma(f, seam.degree, seam.point_spacing_mm));
     // A butt weld lies midway between the edges (Eq. 32, 36); a lap weld
     // at the root under the upper plate's edge (Eq. 38).
     let uncertainty = if butt { 0.5 * edge_sigma[0].hypot(edge_sigma[1]) } else { edge_sigma[0] };
@@ -176,6 +171,15 @@ pub fn measure(seam: &SeamFits) -> SeamQuality {
         groove_angle_deg: seam.groove.and_then(GrooveProfile::groove_angle_deg).filter(|_| v_butt),
         groove_depth_mm: seam.groove.and_then(GrooveProfile::depth_mm).filter(|_| v_butt),
     }
+}
+
+/// One sigma of a weld edge's fit of `degree` at an end of its interval
+/// (the module's `σ (p + 1) / √n`), with the boundary's floor of a
+/// `point_spacing_mm / √12`, mm.
+pub fn edge_sigma(fit: &CurveFit, degree: usize, point_spacing_mm: f64) -> f64 {
+    let floor = point_spacing_mm / 12f64.sqrt();
+    let fitted = fit.rms_mm * (degree as f64 + 1.0) / (fit.points_used.max(1) as f64).sqrt();
+    fitted.hypot(floor)
 }
 
 /// A fillet root's quality figures: the angle between the web's face and

@@ -7,6 +7,7 @@
 use crate::geometry::Vec3;
 use crate::joint::JointType;
 
+use super::super::along_seam;
 use super::super::background::{Layout, PlaneCluster, Workpiece};
 use super::super::boundary::{self, Boundary, BoundaryParams, CoarseEdge};
 use super::super::context::{self, Context, EdgeFigures, PlannedWeld};
@@ -54,13 +55,15 @@ pub(super) fn plan_plates(
     let decided = Some(groove.joint);
     let placed = place_weld(ctx, &workpiece, layout, &refitted, beside, &groove, normal).seen_as(decided)?;
     let (quality, warnings) = check_gates(ctx, &workpiece, &refitted, &groove, &placed).seen_as(decided)?;
+    let (axes, boundaries, spacing) = (refitted.axes, &refitted.boundaries, refitted.seam_spacing);
+    let along = along_seam::Evidence::of_plates(ctx.config, &workpiece, groove.joint, axes, boundaries, spacing);
     let PlacedWeld { weld, span: (s0, s1), coverage, .. } = placed;
     let (joint, joint_evidence, fits) = (groove.joint, groove.evidence, refitted.fits);
     // 5.1 follows once every workpiece is planned: the seams' order
     // decides where each one's waypoints start.
     let assessment =
         SeamAssessment { joint_evidence: Some(joint_evidence), coverage, quality: Some(quality), warnings };
-    Ok(PlannedWeld::new(joint, weld, (s0, s1), normal, EdgeFigures::of(&fits), assessment))
+    Ok(PlannedWeld::new(joint, weld, (s0, s1), normal, EdgeFigures::of(&fits), assessment).with_along(along))
 }
 
 /// 3.4.1: each plate's edge points.

@@ -22,6 +22,7 @@ use weldseam::sim::draw::{Draw, is_unseen};
 use weldseam::sim::{CurvedScene, curved_suite};
 
 use crate::cli::eval::EvalArgs;
+use crate::cli::eval_family;
 use crate::cli::table::Table;
 
 /// A seam whose every waypoint lies within this of the bent root follows
@@ -70,18 +71,13 @@ pub fn run(args: &EvalArgs) -> anyhow::Result<()> {
     scenes.truncate(args.limit.unwrap_or(usize::MAX));
     anyhow::ensure!(!scenes.is_empty(), "no scene matches the filter");
 
-    let mut plans = match &args.plans {
-        Some(path) => Some(std::io::BufWriter::new(
-            std::fs::File::create(path).with_context(|| format!("cannot create {}", path.display()))?,
-        )),
-        None => None,
-    };
+    let mut plans = eval_family::plans_file(args.plans.as_deref())?;
     let mut table = Table::new(
         format!("{} curved members, each planned as t_fillet and auto", scenes.len()),
         &["scene", "bend", "request", "outcome", "seams", "worst mm", "rule"],
     );
     // Per group (tuning, held out) and request: counts of each verdict.
-    let mut counts = std::collections::BTreeMap::<(bool, String), [usize; 3]>::new();
+    let mut counts = eval_family::Counts::<3>::new();
     let count = scenes.len();
     for (k, scene) in scenes.iter().enumerate() {
         for joint in [RequestedJoint::Type(JointType::TFillet), RequestedJoint::Auto] {
@@ -107,26 +103,9 @@ pub fn run(args: &EvalArgs) -> anyhow::Result<()> {
             counts.entry((is_unseen(&scene.name), joint.name().into_owned())).or_default()[verdict as usize] += 1;
         }
     }
-    if let Some(mut file) = plans {
-        file.flush().context("cannot write the plans file")?;
-    }
-    let mut summary = Table::new(
-        "Outcomes",
-        &["scenes", "request", "plans", "refused (right)", "planned within the bar", "confident wrong"],
-    );
-    let mut wrong = 0;
-    for ((held_out, request), c) in &counts {
-        wrong += c[CurvedVerdict::ConfidentWrong as usize];
-        let group = if *held_out { "held out" } else { "tuning" };
-        let mut row = vec![group.to_string(), request.clone(), c.iter().sum::<usize>().to_string()];
-        row.extend(c.map(|n| n.to_string()));
-        summary.push(row);
-    }
-    let render = |t: &Table| if args.markdown { t.to_markdown() } else { t.to_text() };
-    let mut out = std::io::stdout().lock();
-    writeln!(out, "{}", render(&table))?;
-    writeln!(out, "{}", render(&summary))?;
-    out.flush()?;
+    let summary = eval_family::outcome_table(&counts, ["refused (right)", "planned within the bar", "confident wrong"]);
+    eval_family::finish(args, plans, [&table, &summary])?;
+    let wrong: usize = counts.values().map(|c| c[CurvedVerdict::ConfidentWrong as usize]).sum();
     if wrong > 0 {
         bail!("{wrong} plan(s) of curved members are confident wrong: a curved root planned as a line");
     }

@@ -22,6 +22,7 @@ use weldseam::sim::draw::{Draw, is_unseen};
 use weldseam::sim::{WidenedGroove, groove_width_suite};
 
 use crate::cli::eval::EvalArgs;
+use crate::cli::eval_family;
 use crate::cli::table::Table;
 
 /// A seam whose every waypoint lies within this of the root is within the
@@ -77,18 +78,13 @@ pub fn run(args: &EvalArgs) -> anyhow::Result<()> {
     scenes.truncate(args.limit.unwrap_or(usize::MAX));
     anyhow::ensure!(!scenes.is_empty(), "no scene matches the filter");
 
-    let mut plans = match &args.plans {
-        Some(path) => Some(std::io::BufWriter::new(
-            std::fs::File::create(path).with_context(|| format!("cannot create {}", path.display()))?,
-        )),
-        None => None,
-    };
+    let mut plans = eval_family::plans_file(args.plans.as_deref())?;
     let mut table = Table::new(
         format!("{} widened V-grooves, each planned as v_butt and auto", scenes.len()),
         &["scene", "request", "outcome", "worst mm", "rule"],
     );
     // Per group (tuning, held out) and request: counts of each verdict.
-    let mut counts = std::collections::BTreeMap::<(bool, String), [usize; 4]>::new();
+    let mut counts = eval_family::Counts::<4>::new();
     let count = scenes.len();
     for (k, scene) in scenes.iter().enumerate() {
         for joint in [RequestedJoint::Type(JointType::VButt), RequestedJoint::Auto] {
@@ -106,26 +102,9 @@ pub fn run(args: &EvalArgs) -> anyhow::Result<()> {
             counts.entry((is_unseen(&scene.name), joint.name().into_owned())).or_default()[verdict as usize] += 1;
         }
     }
-    if let Some(mut file) = plans {
-        file.flush().context("cannot write the plans file")?;
-    }
-    let mut summary = Table::new(
-        "Outcomes",
-        &["scenes", "request", "plans", "within the bar", "refused", "off the bar", "confident wrong"],
-    );
-    let mut wrong = 0;
-    for ((held_out, request), c) in &counts {
-        wrong += c[GrooveVerdict::ConfidentWrong as usize];
-        let group = if *held_out { "held out" } else { "tuning" };
-        let mut row = vec![group.to_string(), request.clone(), c.iter().sum::<usize>().to_string()];
-        row.extend(c.map(|n| n.to_string()));
-        summary.push(row);
-    }
-    let render = |t: &Table| if args.markdown { t.to_markdown() } else { t.to_text() };
-    let mut out = std::io::stdout().lock();
-    writeln!(out, "{}", render(&table))?;
-    writeln!(out, "{}", render(&summary))?;
-    out.flush()?;
+    let summary = eval_family::outcome_table(&counts, ["within the bar", "refused", "off the bar", "confident wrong"]);
+    eval_family::finish(args, plans, [&table, &summary])?;
+    let wrong: usize = counts.values().map(|c| c[GrooveVerdict::ConfidentWrong as usize]).sum();
     if wrong > 0 {
         bail!(
             "{wrong} plan(s) of widened grooves are confident wrong: a seam more than {CONFIDENT_WRONG_MM} mm off the root"

@@ -11,6 +11,7 @@ pub mod demo;
 pub mod errors;
 pub mod eval;
 pub mod eval_curved;
+pub mod eval_family;
 pub mod eval_groove_width;
 pub mod eval_real;
 pub mod inspect;

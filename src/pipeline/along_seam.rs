@@ -321,7 +321,6 @@ mod tests {
     #[test]
     fn a_simulated_gap_that_opens_along_the_seam_is_followed_at_every_waypoint() {
         use crate::camera::CameraModel;
-        use crate::cloud::{Point, is_valid_point};
         use crate::pipeline::{PlanRequest, Planner};
         use crate::sim::{demo_scene, simulate};
         use nalgebra::Point3;
@@ -332,26 +331,14 @@ mod tests {
         let opening = 2.0 / (y1 - y0);
         let truth = |y: f64| 1.5 + opening * (y.clamp(y0, y1) - y0);
         let mut sim = simulate(&spec, &CameraModel::default());
-        let workpiece_from_camera = spec.workpiece_from_camera();
-        let sheared: Vec<Point> = sim
-            .cloud
-            .points()
-            .iter()
-            .map(|p| {
-                if !is_valid_point(p) {
-                    return *p;
-                }
-                let q = Vec3::new(f64::from(p[0]), f64::from(p[1]), f64::from(p[2]));
-                let mut w = (workpiece_from_camera * Point3::from(q)).coords;
-                if w.x > 0.0 {
-                    w.x += opening * (w.y - y0);
-                }
-                let back = workpiece_from_camera.inverse() * Point3::from(w);
-                [back.x as f32, back.y as f32, back.z as f32]
-            })
-            .collect();
-        let (width, height) = (sim.cloud.width(), sim.cloud.height());
-        sim.cloud = PointCloud::organized(width, height, sheared).expect("the rendered grid's own size");
+        sim.reshape_in_workpiece_frame(&spec, |w| {
+            // The second plate (workpiece x > 0) pulled away from the first.
+            let mut w = *w;
+            if w.x > 0.0 {
+                w.x += opening * (w.y - y0);
+            }
+            Some(w)
+        });
 
         let planner = Planner::new(Config::default());
         let request = PlanRequest::new(JointType::IButt, None, sim.pose);

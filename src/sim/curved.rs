@@ -29,7 +29,6 @@ use super::suite::{ScenePlan, uniform};
 use super::truth::{SeamTruth, seam_truths};
 use super::{SceneSpec, Simulation, simulate};
 use crate::camera::CameraModel;
-use crate::cloud::{Point, PointCloud, is_valid_point};
 use crate::geometry::Vec3;
 use crate::joint::JointType;
 
@@ -126,24 +125,7 @@ impl CurvedScene {
     /// truth as the straight scene's (see [`Self::distance_to_root`]).
     pub fn simulate(&self, camera: &CameraModel) -> Simulation {
         let mut sim = simulate(&self.spec, camera);
-        let workpiece_from_camera = self.spec.workpiece_from_camera();
-        let camera_from_workpiece = workpiece_from_camera.inverse();
-        let bent: Vec<Point> = sim
-            .cloud
-            .points()
-            .iter()
-            .map(|p| {
-                if !is_valid_point(p) {
-                    return *p;
-                }
-                let q = Vec3::new(f64::from(p[0]), f64::from(p[1]), f64::from(p[2]));
-                let moved = self.bend(&(workpiece_from_camera * Point3::from(q)).coords);
-                let back = camera_from_workpiece * Point3::from(moved);
-                [back.x as f32, back.y as f32, back.z as f32]
-            })
-            .collect();
-        let (width, height) = (sim.cloud.width(), sim.cloud.height());
-        sim.cloud = PointCloud::organized(width, height, bent).expect("the rendered grid's own size");
+        sim.reshape_in_workpiece_frame(&self.spec, |p| Some(self.bend(p)));
         sim
     }
 

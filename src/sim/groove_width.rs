@@ -23,7 +23,6 @@
 //! centre at its height): the re-cut leaves the land and the bevels' feet
 //! where they were.
 
-use nalgebra::Point3;
 use rand_chacha::ChaCha8Rng;
 use rand_core::SeedableRng;
 
@@ -32,7 +31,6 @@ use super::root_land::reshape_to_land;
 use super::suite::{ScenePlan, uniform};
 use super::{JointGeometry, SceneSpec, Simulation, simulate};
 use crate::camera::CameraModel;
-use crate::cloud::{INVALID_POINT, Point, PointCloud, is_valid_point};
 use crate::geometry::Vec3;
 use crate::joint::JointType;
 
@@ -123,28 +121,7 @@ impl WidenedGroove {
     /// the truth the scene's.
     pub fn simulate(&self, camera: &CameraModel) -> Simulation {
         let mut sim = simulate(&self.spec, camera);
-        let workpiece_from_camera = self.spec.workpiece_from_camera();
-        let camera_from_workpiece = workpiece_from_camera.inverse();
-        let recut: Vec<Point> = sim
-            .cloud
-            .points()
-            .iter()
-            .map(|p| {
-                if !is_valid_point(p) {
-                    return *p;
-                }
-                let q = Vec3::new(f64::from(p[0]), f64::from(p[1]), f64::from(p[2]));
-                match self.recut(&(workpiece_from_camera * Point3::from(q)).coords) {
-                    Some(moved) => {
-                        let back = camera_from_workpiece * Point3::from(moved);
-                        [back.x as f32, back.y as f32, back.z as f32]
-                    }
-                    None => INVALID_POINT,
-                }
-            })
-            .collect();
-        let (width, height) = (sim.cloud.width(), sim.cloud.height());
-        sim.cloud = PointCloud::organized(width, height, recut).expect("the rendered grid's own size");
+        sim.reshape_in_workpiece_frame(&self.spec, |p| self.recut(p));
         sim
     }
 

@@ -450,6 +450,37 @@ pub struct Simulation {
     pub seams: Vec<SeamTruth>,
 }
 
+impl Simulation {
+    /// Moves every valid point of the capture in `spec`'s workpiece frame
+    /// by `reshape`, or invalidates it where `reshape` gives None: a
+    /// surface bent, re-cut or sheared after rendering, on the same grid.
+    /// The truth is left as rendered; the caller says what it now is.
+    pub fn reshape_in_workpiece_frame(&mut self, spec: &SceneSpec, reshape: impl Fn(&Vec3) -> Option<Vec3>) {
+        let workpiece_from_camera = spec.workpiece_from_camera();
+        let camera_from_workpiece = workpiece_from_camera.inverse();
+        let moved: Vec<crate::cloud::Point> = self
+            .cloud
+            .points()
+            .iter()
+            .map(|p| {
+                if !crate::cloud::is_valid_point(p) {
+                    return *p;
+                }
+                let q = Vec3::new(f64::from(p[0]), f64::from(p[1]), f64::from(p[2]));
+                match reshape(&(workpiece_from_camera * nalgebra::Point3::from(q)).coords) {
+                    Some(w) => {
+                        let back = camera_from_workpiece * nalgebra::Point3::from(w);
+                        [back.x as f32, back.y as f32, back.z as f32]
+                    }
+                    None => crate::cloud::INVALID_POINT,
+                }
+            })
+            .collect();
+        let (width, height) = (self.cloud.width(), self.cloud.height());
+        self.cloud = PointCloud::organized(width, height, moved).expect("the rendered grid's own size");
+    }
+}
+
 /// Simulates one capture. Run [`SceneSpec::validate`] first on untrusted
 /// parameters: an invalid scene renders, but not meaningfully.
 pub fn simulate(spec: &SceneSpec, camera: &CameraModel) -> Simulation {

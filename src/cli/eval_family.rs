@@ -1,0 +1,52 @@
+//! What the eval runs of the seeded scene families (`--suite curved`,
+//! `--suite groove-width`) share: the `--plans` file, the outcome table
+//! summed per group (tuning, held out) and request, and the printing.
+
+use std::collections::BTreeMap;
+use std::fs::File;
+use std::io::{BufWriter, Write};
+use std::path::Path;
+
+use anyhow::Context;
+
+use crate::cli::eval::EvalArgs;
+use crate::cli::table::Table;
+
+/// Per group (held out or not) and request: how many plans got each
+/// verdict, indexed as the family's verdict enum is.
+pub type Counts<const N: usize> = BTreeMap<(bool, String), [usize; N]>;
+
+/// The `--plans` file, created empty, when one is asked for.
+pub fn plans_file(path: Option<&Path>) -> anyhow::Result<Option<BufWriter<File>>> {
+    path.map(|path| File::create(path).map(BufWriter::new).with_context(|| format!("cannot create {}", path.display())))
+        .transpose()
+}
+
+/// The outcome table: one row per group and request, the plans and the
+/// count of each verdict, named by `verdicts` in their index order.
+pub fn outcome_table<const N: usize>(counts: &Counts<N>, verdicts: [&str; N]) -> Table {
+    let mut header = vec!["scenes", "request", "plans"];
+    header.extend(verdicts);
+    let mut summary = Table::new("Outcomes", &header);
+    for ((held_out, request), c) in counts {
+        let group = if *held_out { "held out" } else { "tuning" };
+        let mut row = vec![group.to_string(), request.clone(), c.iter().sum::<usize>().to_string()];
+        row.extend(c.map(|n| n.to_string()));
+        summary.push(row);
+    }
+    summary
+}
+
+/// Prints the per-plan table and the outcome table, as markdown under
+/// `--markdown`, and flushes the plans file.
+pub fn finish(args: &EvalArgs, plans: Option<BufWriter<File>>, tables: [&Table; 2]) -> anyhow::Result<()> {
+    if let Some(mut file) = plans {
+        file.flush().context("cannot write the plans file")?;
+    }
+    let mut out = std::io::stdout().lock();
+    for t in tables {
+        writeln!(out, "{}", if args.markdown { t.to_markdown() } else { t.to_text() })?;
+    }
+    out.flush()?;
+    Ok(())
+}

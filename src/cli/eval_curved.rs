@@ -64,12 +64,7 @@ pub fn run(args: &EvalArgs) -> anyhow::Result<()> {
     let camera: CameraModel = config.camera;
     let planner = Planner::new(config);
     let draw = args.fresh.map_or(Draw::Documented, Draw::Fresh);
-    let mut scenes: Vec<CurvedScene> = curved_suite(draw);
-    if let Some(f) = &args.filter {
-        scenes.retain(|s| s.name.contains(f.as_str()));
-    }
-    scenes.truncate(args.limit.unwrap_or(usize::MAX));
-    anyhow::ensure!(!scenes.is_empty(), "no scene matches the filter");
+    let scenes = eval_family::chosen(curved_suite(draw), |s: &CurvedScene| s.name.as_str(), args)?;
 
     let mut plans = eval_family::plans_file(args.plans.as_deref())?;
     let mut table = Table::new(

@@ -50,3 +50,14 @@ pub fn finish(args: &EvalArgs, plans: Option<BufWriter<File>>, tables: [&Table; 
     out.flush()?;
     Ok(())
 }
+
+/// The family's `scenes` the run plans: those whose name holds
+/// `--filter`, at most `--limit` of them; an error when none is left.
+pub fn chosen<S>(mut scenes: Vec<S>, name: impl Fn(&S) -> &str, args: &EvalArgs) -> anyhow::Result<Vec<S>> {
+    if let Some(f) = &args.filter {
+        scenes.retain(|s| name(s).contains(f.as_str()));
+    }
+    scenes.truncate(args.limit.unwrap_or(usize::MAX));
+    anyhow::ensure!(!scenes.is_empty(), "no scene matches the filter");
+    Ok(scenes)
+}

@@ -48,8 +48,8 @@ const MAX_TILT_DEG: f64 = 30.0;
 /// four scenes): the scenes take them in turn.
 const FILL_PLANS: usize = 4;
 
-/// How much further back the re-cut top edge lies, mm: issue 49's bar
-/// steps about 7 mm.
+/// How much further back the re-cut top edge lies, mm: the hand-cut
+/// groove of real scan coboweld/barpoints steps about 7 mm.
 pub const MIN_WIDEN_MM: f64 = 3.0;
 pub const MAX_WIDEN_MM: f64 = 8.0;
 /// The length of seam over which the edge steps back, mm.

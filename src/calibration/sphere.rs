@@ -29,7 +29,7 @@
 //! [`super::naming`]: by radius when the radii differ, by the layout's
 //! distances when they do not.
 
-use nalgebra::{Matrix2, Matrix3, SymmetricEigen};
+use nalgebra::{DMatrix, Matrix2, Matrix3, SymmetricEigen};
 use rand_chacha::ChaCha8Rng;
 use rand_core::{Rng, SeedableRng};
 
@@ -116,6 +116,15 @@ pub const NORMAL_AGREEMENT_DEG: f64 = 20.0;
 /// centre of twenty thousand points with the sensor's noise is already
 /// pinned to microns, and the cost stays bounded whatever the cloud.
 pub const REFINE_MAX_POINTS: usize = 20_000;
+
+/// The most points the fits that only place the narrow shell use (the
+/// first fit on the wide shell and the narrowing passes): they need the
+/// centre within a fraction of the band, which a few thousand points give
+/// to a few microns, and they run for every candidate, most of them a
+/// patch of table or post that the measured radius then turns away. The
+/// fits that measure the radius and the centre use up to
+/// [`REFINE_MAX_POINTS`].
+pub const PLACING_MAX_POINTS: usize = 4_000;
 
 /// The first fit of a candidate uses the points within this fraction of
 /// the radius of its surface (at least three bands).
@@ -329,13 +338,9 @@ fn check_candidate(
     if around.len() < MIN_SPHERE_POINTS {
         return None;
     }
-    let around: Vec<Vec3> = around.iter().step_by(around.len().div_ceil(REFINE_MAX_POINTS)).copied().collect();
-    let coarse = refine::robust_fit(&[candidate.x, candidate.y, candidate.z], &|p| {
-        let c = Vec3::new(p[0], p[1], p[2]);
-        around.iter().map(|q| [(q - c).norm() - radius]).collect()
-    })
-    .ok()?;
-    let mut candidate = Vec3::new(coarse.params[0], coarse.params[1], coarse.params[2]);
+    let around: Vec<Vec3> = around.iter().step_by(around.len().div_ceil(PLACING_MAX_POINTS)).copied().collect();
+    let coarse = fit_surface(&around, &[candidate.x, candidate.y, candidate.z], Some(radius))?;
+    let mut candidate = Vec3::new(coarse[0], coarse[1], coarse[2]);
     // Then on the narrow shell around it, twice: each pass leaves out
     // more of the post and the table.
     for _ in 0..NARROWING_PASSES {
@@ -343,33 +348,24 @@ fn check_candidate(
         if near.len() < MIN_SPHERE_POINTS {
             return None;
         }
-        let near: Vec<Vec3> = near.iter().step_by(near.len().div_ceil(REFINE_MAX_POINTS)).copied().collect();
-        let fit = refine::robust_fit(&[candidate.x, candidate.y, candidate.z], &|p| {
-            let c = Vec3::new(p[0], p[1], p[2]);
-            near.iter().map(|q| [(q - c).norm() - radius]).collect()
-        })
-        .ok()?;
-        candidate = Vec3::new(fit.params[0], fit.params[1], fit.params[2]);
+        let near: Vec<Vec3> = near.iter().step_by(near.len().div_ceil(PLACING_MAX_POINTS)).copied().collect();
+        let fit = fit_surface(&near, &[candidate.x, candidate.y, candidate.z], Some(radius))?;
+        candidate = Vec3::new(fit[0], fit[1], fit[2]);
     }
     let near = shell(points, &free, &candidate, radius, 3.0 * band);
     if near.len() < MIN_SPHERE_POINTS {
         return None;
     }
     let near: Vec<Vec3> = near.iter().step_by(near.len().div_ceil(REFINE_MAX_POINTS)).copied().collect();
-    let distances = |p: &[f64], r: f64| -> Blocks {
-        let c = Vec3::new(p[0], p[1], p[2]);
-        near.iter().map(|q| [(q - c).norm() - r]).collect()
-    };
-    let c0 = [candidate.x, candidate.y, candidate.z, radius];
-    let free_fit = refine::robust_fit(&c0, &|p| distances(p, p[3])).ok()?;
-    let measured = free_fit.params[3];
+    let free_fit = fit_surface(&near, &[candidate.x, candidate.y, candidate.z, radius], None)?;
+    let measured = free_fit[3];
     // A real ball measures its own radius to a few hundredths of a
     // millimetre; a patch of something else does not.
     if (measured - radius).abs() > band {
         return None;
     }
-    let fixed = refine::robust_fit(&free_fit.params[..3], &|p| distances(p, radius)).ok()?;
-    let centre = Vec3::new(fixed.params[0], fixed.params[1], fixed.params[2]);
+    let fixed = fit_surface(&near, &free_fit[..3], Some(radius))?;
+    let centre = Vec3::new(fixed[0], fixed[1], fixed[2]);
     let on_surface = shell(points, &free, &centre, radius, band);
     if on_surface.len() < MIN_SPHERE_POINTS {
         return None;
@@ -392,6 +388,38 @@ fn check_candidate(
         rms_mm: rms,
         cap_half_angle_deg,
     })
+}
+
+/// The sphere through `points` under the Huber loss on their distances
+/// from its surface, `|q - c| - r`, from `start`: the centre `c`, and
+/// the radius as a fourth parameter when `radius` is `None` (free). The
+/// distances' Jacobian is written out (`-(q - c) / |q - c|` for the
+/// centre, `-1` for the radius): the fit runs over up to
+/// [`REFINE_MAX_POINTS`] points many times per candidate, and central
+/// differences would evaluate them eight times a step for the same
+/// minimum.
+fn fit_surface(points: &[Vec3], start: &[f64], radius: Option<f64>) -> Option<Vec<f64>> {
+    let centre = |p: &[f64]| Vec3::new(p[0], p[1], p[2]);
+    let radius_of = |p: &[f64]| radius.unwrap_or_else(|| p[3]);
+    let residuals = |p: &[f64]| -> Blocks {
+        let (c, r) = (centre(p), radius_of(p));
+        points.iter().map(|q| [(q - c).norm() - r]).collect()
+    };
+    let jacobian = |p: &[f64]| -> DMatrix<f64> {
+        let c = centre(p);
+        let mut jac = DMatrix::zeros(points.len(), p.len());
+        for (row, q) in points.iter().enumerate() {
+            let towards = (q - c) / (q - c).norm();
+            for k in 0..3 {
+                jac[(row, k)] = -towards[k];
+            }
+            if radius.is_none() {
+                jac[(row, 3)] = -1.0;
+            }
+        }
+        jac
+    };
+    refine::robust_fit_with_jacobian(start, &residuals, &jacobian).ok().map(|fit| fit.params)
 }
 
 /// The cap's half-angle, degrees, when the points' directions from the
@@ -505,6 +533,31 @@ mod tests {
             }
         }
         out
+    }
+
+    /// The written-out Jacobian is the reference's: the fit by central
+    /// differences ([`refine::robust_fit`]) reaches the same sphere, with
+    /// the radius given and free, from a start a few millimetres off and
+    /// with a tenth of the points far from the surface.
+    #[test]
+    fn the_surface_fit_reaches_the_central_difference_fits_minimum() {
+        let centre = Vec3::new(12.0, -8.0, 450.0);
+        let mut points: Vec<Vec3> = cap(centre, 19.05, 0.6).iter().map(vec3).collect();
+        let stray: Vec<Vec3> = points.iter().step_by(10).map(|p| p + Vec3::new(0.0, 0.0, 4.0)).collect();
+        points.extend(stray);
+        for (start, radius) in [(vec![14.0, -6.0, 452.0], Some(19.05)), (vec![14.0, -6.0, 452.0, 18.0], None)] {
+            let residuals = |p: &[f64]| -> Blocks {
+                let c = Vec3::new(p[0], p[1], p[2]);
+                let r = radius.unwrap_or_else(|| p[3]);
+                points.iter().map(|q| [(q - c).norm() - r]).collect()
+            };
+            let reference = refine::robust_fit(&start, &residuals).unwrap().params;
+            let fast = fit_surface(&points, &start, radius).unwrap();
+            for (a, b) in fast.iter().zip(&reference) {
+                assert!((a - b).abs() < 1e-6, "{fast:?} against {reference:?}");
+            }
+            assert!((Vec3::new(fast[0], fast[1], fast[2]) - centre).norm() < 0.01, "{fast:?}");
+        }
     }
 
     #[test]

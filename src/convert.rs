@@ -6,6 +6,7 @@
 //! with the daemon; here a value only changes its form, and a wire value
 //! the library cannot represent is an error naming the field.
 
+pub mod along_seam;
 pub mod calibration;
 
 /// Library values in the protocol's form.
@@ -17,6 +18,7 @@ pub mod to_proto {
     use weldseam_proto::plan as proto;
     use weldseam_proto::trace as proto_trace;
 
+    pub use super::along_seam::add_along_seam;
     use super::from_proto::FrameInput;
     use crate::cloud::PointCloud;
     use crate::geometry::pose::EulerConvention;
@@ -84,6 +86,9 @@ pub mod to_proto {
             }),
             quality: s.quality.as_ref().map(quality),
             warnings: s.warnings.iter().map(warning).collect(),
+            // Set by `add_along_seam` where the report carries them.
+            along_seam: None,
+            process: None,
         }
     }
 

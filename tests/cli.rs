@@ -461,6 +461,10 @@ fn serve_camera_and_controller_run_as_processes() {
     let seam = &reply["result"]["seams"][0];
     assert_eq!(seam["joint"], "i_butt");
     assert!(seam["waypoints"].as_array().is_some_and(|w| w.len() >= 10), "{reply}");
+    // Asked for along_seam: the figures at every waypoint (no procedure
+    // configured, so no process).
+    assert_eq!(seam["along_seam"].as_array().map(Vec::len), seam["waypoints"].as_array().map(Vec::len), "{reply}");
+    assert!(seam["process"].is_null(), "{reply}");
     // The text session: hello, trigger, every waypoint line pulled,
     // approach first and retract last, and the seam's check.
     let session = String::from_utf8_lossy(&text.stdout);

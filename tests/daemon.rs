@@ -24,6 +24,7 @@ use weldseam_proto::frame::{self, HEADER_BYTES, Header};
 use weldseam_proto::message::{FrameSelect, Hello, PlanReply, PlanRequest, PoseIn, Role, Tag, Trigger, joint_code};
 use weldseam_proto::{ErrorCode, Message, PROTOCOL_VERSION};
 
+mod along_seam;
 mod requests;
 
 const WAIT: Duration = Duration::from_secs(60);

@@ -316,7 +316,9 @@ pub fn encode_body(msg: &Message) -> Result<Vec<u8>, EncodeError> {
 /// The payload of `msg` as a connection of `session` lays it out. Only the
 /// Hello and HelloAck differ between versions 7 and 8 (a HelloAck's own
 /// `capabilities` say what follows them); the Error and the PlanReply end
-/// with the rule ids on a connection granted `rule_ids` ([`rule_ids`]).
+/// with the rule ids on a connection granted `rule_ids` ([`rule_ids`]),
+/// and the PlanReply then with the figures along its seams and their
+/// process on one granted `along_seam` ([`crate::along_seam`]).
 pub fn encode_body_in(session: Session, msg: &Message) -> Result<Vec<u8>, EncodeError> {
     let tag = msg.tag();
     let mut out = Vec::new();

@@ -11,6 +11,9 @@
 //! - [`session`]: version and capability negotiation, the versions served.
 //! - [`rule_ids`]: the fields the `rule_ids` capability appends to the
 //!   Error and the PlanReply.
+//! - [`along_seam`]: the joint's figures at each waypoint and the weld
+//!   process, which the `along_seam` capability appends to the PlanReply
+//!   and `weldseam plan --json` prints beside each seam.
 //! - [`text`]: the text controller link's lines, which robot programs
 //!   read with their own primitives; see ROBOTS.md.
 //! - [`calibration`]: hand-eye calibration's capture files, its report
@@ -18,6 +21,7 @@
 //! - [`trace`]: the figures of one plan stage by stage, as `plan --debug`
 //!   and the daemon's `[debug]` section write them.
 
+pub mod along_seam;
 pub mod calibration;
 pub mod frame;
 pub mod message;

@@ -6,11 +6,16 @@
 //! protocol version never changes: a field added for JSON only (a warning's
 //! or a refusal's `rule`) is skipped by the binary form, and travels on the
 //! wire behind its capability instead (`rule_ids`, see
-//! [`crate::frame::encode_body_in`]).
+//! [`crate::frame::encode_body_in`]). A seam's figures along it and its
+//! process are in neither form of the seam: the binary link carries them
+//! behind `along_seam`, and `plan --json` prints them beside the seam
+//! ([`crate::along_seam`]).
 
 use std::collections::BTreeMap;
 
 use serde::{Deserialize, Deserializer, Serialize, Serializer};
+
+use crate::along_seam::{JointFigures, SeamProcess};
 
 /// A plane weld joint type; JSON and wire names are `v_butt`, `i_butt`,
 /// `lap`, `t_fillet` (version 6: named; version 7: planned).
@@ -60,6 +65,17 @@ pub struct Seam {
     /// The quality gates the seam failed that the daemon's config makes
     /// warnings (`quality.warn_only`) rather than refusals.
     pub warnings: Vec<GateWarning>,
+    /// The joint's figures at each waypoint (empty where none are
+    /// measured); None where they were not carried. Not part of the
+    /// seam's own layout in either form: the binary link carries them
+    /// behind the `along_seam` capability, `plan --json` beside the seam
+    /// ([`crate::along_seam`]).
+    #[serde(skip)]
+    pub along_seam: Option<Vec<JointFigures>>,
+    /// The weld process along the seam, with a procedure configured and
+    /// carried as `along_seam` is.
+    #[serde(skip)]
+    pub process: Option<SeamProcess>,
 }
 
 /// A figure's least, mean and greatest value along the seam.

@@ -43,7 +43,7 @@ pub(crate) fn encode_plan_reply(session: Session, m: &PlanReply, out: &mut Vec<u
     if session.has(capability::RULE_IDS) {
         encode_struct(Tag::PlanReply, &(m.result.warning_rules(), m.result.unplanned_rules()), out)?;
     }
-    Ok(())
+    crate::along_seam::encode(session, m, out)
 }
 
 pub(crate) fn decode_plan_reply(session: Session, payload: &[u8]) -> Result<PlanReply, DecodeError> {
@@ -57,6 +57,7 @@ pub(crate) fn decode_plan_reply(session: Session, payload: &[u8]) -> Result<Plan
             return Err(DecodeError::Malformed { tag: tag.name(), reason });
         }
     }
+    used += crate::along_seam::decode(session, &payload[used..], &mut reply)?;
     whole(tag, payload, used)?;
     Ok(reply)
 }
@@ -136,6 +137,8 @@ mod tests {
             coverage: None,
             quality: None,
             warnings: vec![],
+            along_seam: None,
+            process: None,
         };
         seam.warnings.push(GateWarning {
             gate: "joint_coverage".into(),

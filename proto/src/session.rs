@@ -36,11 +36,16 @@ pub mod capability {
     /// seams' warnings and of its unplanned joints.
     pub const RULE_IDS: u64 = 1 << 1;
 
+    /// Every seam carries the joint's figures at each of its waypoints
+    /// and, with a weld procedure configured, its process: a PlanReply
+    /// ends with them ([`crate::along_seam`]).
+    pub const ALONG_SEAM: u64 = 1 << 2;
+
     /// Every capability this crate knows, with its name in PROTOCOL.md.
-    pub const ALL: [(u64, &str); 2] = [(LIMITS, "limits"), (RULE_IDS, "rule_ids")];
+    pub const ALL: [(u64, &str); 3] = [(LIMITS, "limits"), (RULE_IDS, "rule_ids"), (ALONG_SEAM, "along_seam")];
 
     /// The bits of [`ALL`].
-    pub const KNOWN: u64 = LIMITS | RULE_IDS;
+    pub const KNOWN: u64 = LIMITS | RULE_IDS | ALONG_SEAM;
 }
 
 /// What a connection speaks: its version and its granted capabilities.
@@ -120,6 +125,8 @@ mod tests {
         assert_eq!(negotiate(&hello(8, 0), 8), Ok(Session::NEWEST));
         let both = capability::LIMITS | capability::RULE_IDS;
         assert_eq!(negotiate(&hello(8, both | 1 << 40), 8), Ok(Session { version: 8, capabilities: both }));
+        let all = both | capability::ALONG_SEAM;
+        assert_eq!(negotiate(&hello(8, all | 1 << 40), 8), Ok(Session { version: 8, capabilities: all }));
         assert_eq!(negotiate(&hello(7, both), 7), Ok(Session::V7), "version 7 has no capabilities");
         let asked = capability::LIMITS | 1 << 40;
         assert_eq!(negotiate(&hello(8, asked), 8), Ok(Session { version: 8, capabilities: capability::LIMITS }));

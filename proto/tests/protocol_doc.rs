@@ -3,6 +3,10 @@
 
 use std::collections::BTreeMap;
 
+use serde::de::{self, DeserializeOwned, Visitor};
+use weldseam_proto::along_seam::{
+    AlongSeam, CutStretch, JointFigures, Measured, Pass, PassKind, SeamProcess, WaypointProcess, Weave,
+};
 use weldseam_proto::frame::{encode, encode_in};
 use weldseam_proto::message::{
     CloudFrame, DaemonLimits, ErrorCode, Frame, FrameAck, FrameMeta, FrameSelect, Hello, HelloAck, Message, PlanReply,
@@ -62,6 +66,8 @@ fn plan_reply() -> PlanReply {
             limit: 0.5,
             message: "0.625 > 0.5 mm".into(),
         }],
+        along_seam: None,
+        process: None,
     };
     let unplanned = UnplannedJoint {
         joint: Some("t_fillet".into()),
@@ -96,6 +102,51 @@ fn plan_reply() -> PlanReply {
     }
 }
 
+/// The lap seam's figures at its two waypoints (the step measured at the
+/// first only) and its process: the first waypoint welded in one pass,
+/// the second cut where the torch meets a clamp.
+fn along_seam(mut reply: PlanReply) -> PlanReply {
+    let seam = &mut reply.result.seams[0];
+    let step = JointFigures { lap_step_mm: Some(Measured { value: 5.0, sigma: 0.25 }), ..JointFigures::default() };
+    seam.along_seam = Some(vec![step, JointFigures::default()]);
+    let pass = Pass {
+        kind: PassKind::Single,
+        layer: 0,
+        bead: 0,
+        lateral_mm: 0.0,
+        height_mm: 0.0,
+        work_angle_deg: 45.0,
+        travel_speed_mm_s: 8.0,
+        wire_feed_m_min: 6.0,
+        voltage_v: 22.0,
+        current_a: 180.0,
+        target_area_mm2: 15.0,
+        deposited_area_mm2: 15.0,
+        weave: None,
+    };
+    let welded = WaypointProcess {
+        thickness_mm: 5.0,
+        joint_area_mm2: 12.5,
+        crown_area_mm2: 2.5,
+        work_angle_deg: 45.0,
+        travel_angle_deg: 10.0,
+        re_angled: false,
+        passes: vec![pass],
+    };
+    seam.process = Some(SeamProcess {
+        procedure: "gmaw".into(),
+        waypoints: vec![Some(welded), None],
+        cut: vec![CutStretch {
+            first: 1,
+            last: 1,
+            rule: "process.torch_blocked".into(),
+            reason: "clamp".into(),
+            contact_camera_mm: Some([100.0, 12.0, 470.0]),
+        }],
+    });
+    reply
+}
+
 /// The daemon's limits as its default configuration sets them.
 fn default_limits() -> DaemonLimits {
     DaemonLimits {
@@ -119,6 +170,11 @@ fn examples() -> Vec<(&'static str, Vec<u8>)> {
     let plain_reply = encode(&reply).unwrap();
     let reply_with_rules = encode_in(rule_ids, &reply).unwrap();
     assert_eq!(&reply_with_rules[16..plain_reply.len()], &plain_reply[16..], "rule_ids only appends");
+    let along = Session { version: PROTOCOL_VERSION, capabilities: capability::ALONG_SEAM };
+    let with_along = Message::PlanReply(along_seam(plan_reply()));
+    assert_eq!(encode(&with_along).unwrap(), plain_reply, "ungranted, the seam's figures are not sent");
+    let reply_with_along = encode_in(along, &with_along).unwrap();
+    assert_eq!(&reply_with_along[16..plain_reply.len()], &plain_reply[16..], "along_seam only appends");
     let mut examples: Vec<(&'static str, Vec<u8>)> =
         messages().into_iter().map(|(n, m)| (n, encode(&m).unwrap())).collect();
     examples.extend([
@@ -141,6 +197,7 @@ fn examples() -> Vec<(&'static str, Vec<u8>)> {
             })),
         ),
         ("plan_reply_rules", reply_with_rules[plain_reply.len()..].to_vec()),
+        ("plan_reply_along_seam", reply_with_along[plain_reply.len()..].to_vec()),
         (
             "error_rule",
             encode_in(
@@ -293,5 +350,63 @@ fn protocol_md_lists_every_capability_by_bit_and_name() {
     for (bit, name) in capability::ALL {
         let row = format!("| {} | `{name}` |", bit.trailing_zeros());
         assert!(doc.contains(&row), "PROTOCOL.md's capability table lacks {row}");
+    }
+}
+
+/// The name and fields of struct `T`, as serde's derive lists them: a
+/// deserializer that records what `T` asks for and stops there.
+fn struct_fields<T: DeserializeOwned>() -> (&'static str, &'static [&'static str]) {
+    struct Probe<'a>(&'a mut Option<(&'static str, &'static [&'static str])>);
+    impl<'de> de::Deserializer<'de> for Probe<'_> {
+        type Error = de::value::Error;
+        fn deserialize_any<V: Visitor<'de>>(self, _: V) -> Result<V::Value, Self::Error> {
+            Err(de::Error::custom("not a struct"))
+        }
+        fn deserialize_struct<V: Visitor<'de>>(
+            self,
+            name: &'static str,
+            fields: &'static [&'static str],
+            _: V,
+        ) -> Result<V::Value, Self::Error> {
+            *self.0 = Some((name, fields));
+            Err(de::Error::custom("probed"))
+        }
+        serde::forward_to_deserialize_any! {
+            bool i8 i16 i32 i64 i128 u8 u16 u32 u64 u128 f32 f64 char str string bytes byte_buf option unit
+            unit_struct newtype_struct seq tuple tuple_struct map enum identifier ignored_any
+        }
+    }
+    let mut found = None;
+    let _ = T::deserialize(Probe(&mut found));
+    found.expect("a struct")
+}
+
+/// Every field the `along_seam` capability carries is a row of its
+/// struct's table, in order: "NAME (fields in order)" and then a table
+/// whose first column is the fields.
+#[test]
+fn protocol_md_documents_every_field_along_the_seam_in_order() {
+    let doc = include_str!("../PROTOCOL.md");
+    let structs = [
+        struct_fields::<AlongSeam>(),
+        struct_fields::<JointFigures>(),
+        struct_fields::<Measured>(),
+        struct_fields::<SeamProcess>(),
+        struct_fields::<WaypointProcess>(),
+        struct_fields::<Pass>(),
+        struct_fields::<Weave>(),
+        struct_fields::<CutStretch>(),
+    ];
+    for (name, fields) in structs {
+        let heading = format!("\n{name} (fields in order)");
+        let at = doc.find(&heading).unwrap_or_else(|| panic!("PROTOCOL.md has no {heading:?}"));
+        let rows: Vec<&str> = doc[at..]
+            .lines()
+            .skip_while(|l| !l.starts_with("| field |"))
+            .skip(2)
+            .take_while(|l| l.starts_with('|'))
+            .filter_map(|l| l.split('|').nth(1).map(str::trim))
+            .collect();
+        assert_eq!(rows, fields, "PROTOCOL.md's table of {name}");
     }
 }

@@ -206,9 +206,11 @@ async fn text_session(args: &ControllerArgs, dialect: Dialect) -> anyhow::Result
 async fn exchange(args: &ControllerArgs) -> anyhow::Result<()> {
     let addr = args.connect.clone().unwrap_or_else(|| "127.0.0.1:7302".into());
     // The rule ids let a commissioning engineer look a refusal up
-    // (`weldseam rules ID`); a daemon without them answers as before.
-    let mut client =
-        ControllerClient::connect_asking(&addr, "weldseam-controller", capability::RULE_IDS).await.map_err(explain)?;
+    // (`weldseam rules ID`), and the figures along the seam and the
+    // process show what the daemon measured and would weld with; a
+    // daemon without them answers as before.
+    let asked = capability::RULE_IDS | capability::ALONG_SEAM;
+    let mut client = ControllerClient::connect_asking(&addr, "weldseam-controller", asked).await.map_err(explain)?;
     if args.ping {
         let s = client.ping(Duration::from_secs(10)).await.map_err(explain)?;
         if args.json {
@@ -264,7 +266,7 @@ async fn exchange(args: &ControllerArgs) -> anyhow::Result<()> {
         let out = serde_json::json!({
             "request_id": reply.request_id,
             "frame_id": reply.frame_id,
-            "result": reply.result,
+            "result": super::plan_json::plan_json(&reply.result),
         });
         println!("{}", serde_json::to_string_pretty(&out)?);
         return Ok(());

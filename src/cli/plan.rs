@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use std::io::Write;
 
 use anyhow::{Context, anyhow, bail};
-use weldseam::convert::to_proto::{plan_result, refusal};
+use weldseam::convert::to_proto::{add_along_seam, plan_result, refusal};
 use weldseam::geometry::Vec3;
 use weldseam::geometry::pose::{RobotPose, hand_eye_from_rows};
 use weldseam::joint::RequestedJoint;
@@ -47,8 +47,9 @@ pub struct PlanArgs {
     pub json: bool,
     /// Also write the plan's pictures and figures into this directory
     /// (created when needed): camera.png (the plates, edges, seam and
-    /// waypoints, or the refusal), sections.png (profiles across the seam)
-    /// and trace.json (every stage's figures, the plan as --json prints it).
+    /// waypoints, or the refusal), sections.png (profiles across the seam),
+    /// profile.png (the joint's figures along the seam) and trace.json
+    /// (every stage's figures, the plan as --json prints it).
     #[arg(long, value_name = "DIR")]
     pub debug: Option<PathBuf>,
     /// Start at the seam end nearest this base-frame point: x,y,z (mm).
@@ -108,6 +109,7 @@ pub fn run(args: &PlanArgs) -> anyhow::Result<()> {
     };
     let report = outcome.as_ref().ok().map(|plan| {
         let mut report = plan_result(plan, planner.config().euler);
+        add_along_seam(&mut report, plan);
         report.timing_ms.insert("load".into(), load_ms);
         report
     });
@@ -115,8 +117,8 @@ pub fn run(args: &PlanArgs) -> anyhow::Result<()> {
         let mut set = weldseam::report::debug_set(trace, report.clone())?;
         // trace.json holds the plan as `--json` prints it, with each seam's
         // figures along the seam and process beside the protocol's fields.
-        if let (Ok(plan), Some(report)) = (&outcome, &report) {
-            let printed = serde_json::to_value(super::plan_json::plan_json(report, plan))?;
+        if let Some(report) = &report {
+            let printed = serde_json::to_value(super::plan_json::plan_json(report))?;
             for (file, bytes) in set.files.iter_mut().filter(|(f, _)| *f == weldseam::report::FIGURES_FILE) {
                 let mut figures: serde_json::Value = serde_json::from_slice(bytes)?;
                 figures["plan"] = printed.clone();
@@ -145,7 +147,7 @@ pub fn run(args: &PlanArgs) -> anyhow::Result<()> {
         }
     };
     if args.json {
-        writeln!(out, "{}", serde_json::to_string(&super::plan_json::plan_json(&report, &plan))?)?;
+        writeln!(out, "{}", serde_json::to_string(&super::plan_json::plan_json(&report))?)?;
         return Ok(());
     }
     if report.seams.is_empty() {

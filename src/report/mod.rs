@@ -12,6 +12,10 @@
 //!   of a thin slab plotted as offset across the seam against height along
 //!   the normal, in millimetres at one scale on both axes, with the weld
 //!   edges, the planned point and, in a V-groove, its deepest point seen;
+//! - [`profile`]: the joint's figures along the seam (gap, high-low,
+//!   groove cross-section, lap step) against the distance along it, with
+//!   their standard errors and the stretches the weld process cut, drawn
+//!   from the plan's report when it carries them;
 //! - `trace.json`: the figures of every stage
 //!   ([`crate::convert::to_proto::plan_trace`]).
 //!
@@ -21,6 +25,7 @@
 
 pub mod camera_view;
 pub mod canvas;
+pub mod profile;
 pub mod sections;
 
 use embedded_graphics::mono_font::MonoFont;
@@ -268,6 +273,7 @@ pub fn render(trace: &PlanTrace) -> Pictures {
 /// The file names of a debug set.
 pub const CAMERA_VIEW_FILE: &str = "camera.png";
 pub const SECTIONS_FILE: &str = "sections.png";
+pub const PROFILE_FILE: &str = "profile.png";
 pub const FIGURES_FILE: &str = "trace.json";
 
 /// One plan's pictures and figures as files' bytes, ready to write.
@@ -290,8 +296,9 @@ pub enum ReportError {
 }
 
 /// The pictures and figures of `trace` as files: the camera view, the
-/// sections when there is a weld, and the figures with `report` (the plan
-/// as `plan --json` prints it) when the plan succeeded.
+/// sections when there is a weld, the profiles along the seam when
+/// `report` carries the figures along its seams, and the figures with
+/// `report` (the plan as `plan --json` prints it) when the plan succeeded.
 pub fn debug_set(trace: &PlanTrace, report: Option<PlanResult>) -> Result<DebugSet, ReportError> {
     let pictures = render(trace);
     let png = |file: &'static str, canvas: &Canvas| {
@@ -300,6 +307,9 @@ pub fn debug_set(trace: &PlanTrace, report: Option<PlanResult>) -> Result<DebugS
     let mut files = vec![png(CAMERA_VIEW_FILE, &pictures.camera_view.canvas)?];
     if let Some(sections) = &pictures.sections {
         files.push(png(SECTIONS_FILE, sections)?);
+    }
+    if let Some(profile) = report.as_ref().and_then(|r| profile::render(trace, r)) {
+        files.push(png(PROFILE_FILE, &profile)?);
     }
     let figures = serde_json::to_vec_pretty(&to_proto::plan_trace(trace, report))?;
     files.push((FIGURES_FILE, figures));

@@ -19,6 +19,7 @@ use tokio::sync::{Mutex, Semaphore};
 use tokio::task::JoinSet;
 use tracing::{Instrument, info, warn};
 use weldseam_proto::message::{FrameSelect, PlanReply, Role};
+use weldseam_proto::session::capability;
 use weldseam_proto::{ErrorCode, Message, message};
 
 use super::ServerState;
@@ -28,7 +29,7 @@ use super::frames::Wanted;
 use super::planning::{Accepted, Ask, Failure, Fulfilled, Planned, Refusal, accept, fulfil_traced, refused};
 use super::shutdown::{Shutdown, StopSignal};
 use crate::convert::from_proto::{self, RequestError};
-use crate::convert::to_proto::plan_result;
+use crate::convert::to_proto::{add_along_seam, plan_result};
 use crate::geometry::pose::EulerConvention;
 
 type Writer = Arc<Mutex<MessageWriter<tokio::net::tcp::OwnedWriteHalf>>>;
@@ -157,7 +158,13 @@ async fn plan(request_id: u64, accepted: Accepted, state: Arc<ServerState>, writ
     let mut reported = None;
     let reply = match outcome {
         Ok(Planned { frame_id, plan }) => {
-            let result = plan_result(&plan, state.config.euler);
+            let mut result = plan_result(&plan, state.config.euler);
+            // The figures along each seam and its process travel to a peer
+            // granted them, and into the debug set's profile picture.
+            let granted = writer.lock().await.session().has(capability::ALONG_SEAM);
+            if granted || traced.is_some() {
+                add_along_seam(&mut result, &plan);
+            }
             reported = traced.is_some().then(|| result.clone());
             Message::PlanReply(PlanReply { request_id, frame_id, result })
         }

@@ -354,6 +354,7 @@ pub mod to_text {
     use crate::geometry::Isometry3;
     use crate::geometry::conventions::PoseConvention;
     use crate::pipeline::Plan;
+    use crate::pipeline::passes::{self, Motion};
     use crate::pipeline::trajectory::{Waypoint, backed_off};
 
     /// How `dialect` writes a pose.
@@ -377,31 +378,53 @@ pub mod to_text {
     /// approach point (`approach_offset_mm` back from its first waypoint
     /// along the torch axis), its waypoints, its retract point; each line
     /// counting the lines left after it. A seam without waypoints has no
-    /// lines.
-    pub fn waypoint_lines(plan: &Plan, dialect: Dialect, approach_offset_mm: f64) -> Vec<Reply> {
-        let points: Vec<(u32, PointKind, Waypoint)> = plan
-            .seams
-            .iter()
-            .zip(1u32..)
-            .filter_map(|(seam, number)| Some((seam, number, seam.waypoints.first()?, seam.waypoints.last()?)))
-            .flat_map(|(seam, number, first, last)| {
-                let approach = (number, PointKind::Approach, backed_off(first, approach_offset_mm));
-                let weld = seam.waypoints.iter().map(move |w| (number, PointKind::Weld, *w));
-                let retract = (number, PointKind::Retract, backed_off(last, approach_offset_mm));
-                std::iter::once(approach).chain(weld).chain(std::iter::once(retract))
-            })
-            .collect();
-        let total = points.len() as u64;
-        points
+    /// lines. With a process (a procedure configured), each piece of each
+    /// pass the robot welds ([`passes::seam_pieces`]) is a seam of its own
+    /// on the link, root first; with `process_lines`, each weld waypoint
+    /// line is followed by its process line (travel speed and weave, zeros
+    /// where the plan has none).
+    pub fn waypoint_lines(plan: &Plan, dialect: Dialect, approach_offset_mm: f64, process_lines: bool) -> Vec<Reply> {
+        let pieces: Vec<Vec<(Waypoint, Option<Motion>)>> = plan.seams.iter().flat_map(passes::seam_pieces).collect();
+        let mut lines: Vec<(u32, Line)> = Vec::new();
+        for (piece, number) in pieces.iter().zip(1u32..) {
+            let (Some(first), Some(last)) = (piece.first(), piece.last()) else { continue };
+            lines.push((number, Line::Pose(PointKind::Approach, backed_off(&first.0, approach_offset_mm))));
+            for (w, motion) in piece {
+                lines.push((number, Line::Pose(PointKind::Weld, *w)));
+                if process_lines {
+                    lines.push((number, Line::Motion(*motion)));
+                }
+            }
+            lines.push((number, Line::Pose(PointKind::Retract, backed_off(&last.0, approach_offset_mm))));
+        }
+        let total = lines.len() as u64;
+        // The dialect's length unit: UR's metres.
+        let scale = if dialect == Dialect::Ur { 0.001 } else { 1.0 };
+        lines
             .into_iter()
             .zip(1u64..)
-            .map(|((seam, kind, w), pulled)| Reply::Waypoint {
-                kind,
-                seam,
-                remaining: total - pulled,
-                pose: pose(&w, dialect),
+            .map(|((seam, line), pulled)| {
+                let remaining = total - pulled;
+                match line {
+                    Line::Pose(kind, w) => Reply::Waypoint { kind, seam, remaining, pose: pose(&w, dialect) },
+                    Line::Motion(motion) => {
+                        let m = motion.unwrap_or(Motion {
+                            travel_speed_mm_s: 0.0,
+                            weave_amplitude_mm: 0.0,
+                            weave_frequency_hz: 0.0,
+                        });
+                        let motion = [m.travel_speed_mm_s * scale, m.weave_amplitude_mm * scale, m.weave_frequency_hz];
+                        Reply::Process { seam, remaining, motion }
+                    }
+                }
             })
             .collect()
+    }
+
+    /// One line of a pull before it is numbered.
+    enum Line {
+        Pose(PointKind, Waypoint),
+        Motion(Option<Motion>),
     }
 }
 

@@ -29,6 +29,7 @@ mod scenes;
 mod serve_order;
 mod several_seams;
 mod text_link;
+mod text_link_process;
 mod transcript;
 mod units_frames;
 mod unorganized;

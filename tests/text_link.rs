@@ -307,7 +307,7 @@ async fn play_the_urscript_example(cell: &Cell, sim: &Simulation) {
     let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("deploy/robots/ur/weld_seam.script");
     let script = std::fs::read_to_string(path).unwrap();
     for sent in [
-        r#"socket_send_line("HELLO,ur", "weldseam")"#,
+        r#"socket_send_line("HELLO,ur,PROCESS", "weldseam")"#,
         r#"JOINT = "lap""#,
         r#"socket_send_line(str_cat(str_cat("TRIGGER,", JOINT), str_cat(",", to_str(capture))), "weldseam")"#,
         r#"socket_send_line("NEXT", "weldseam")"#,
@@ -318,8 +318,9 @@ async fn play_the_urscript_example(cell: &Cell, sim: &Simulation) {
         assert!(script.contains(sent), "the URScript example no longer has {sent}");
     }
     let mut robot = robot(cell).await;
-    let hello = ur_read_ascii_float(&robot.ask("HELLO,ur").await.unwrap(), 3);
+    let hello = ur_read_ascii_float(&robot.ask("HELLO,ur,PROCESS").await.unwrap(), 3);
     assert_eq!(&hello[..2], &[3.0, 0.0]);
+    assert_eq!(hello[3], 1.0, "process lines come");
     // to_str of a pose: p[x, y, z, rx, ry, rz].
     let capture = trigger_line(Dialect::Ur, sim).replace("TRIGGER,lap,", "");
     let status = ur_read_ascii_float(&robot.ask(&format!("TRIGGER,lap,{capture}")).await.unwrap(), 3);
@@ -329,7 +330,11 @@ async fn play_the_urscript_example(cell: &Cell, sim: &Simulation) {
     while lines > 0.0 {
         let w = ur_read_ascii_float(&robot.ask("NEXT").await.unwrap(), 9);
         assert!(w[0] == 9.0 && w[1] > 0.0, "the example would stop on {w:?}");
-        moves.push(w[1] as u8);
+        // A process line (no procedure here: speed and weave 0) after
+        // each weld line: the example keeps it beside its waypoint.
+        if w[1] != 4.0 {
+            moves.push(w[1] as u8);
+        }
         lines = w[3];
     }
     assert_eq!(moves.first(), Some(&1));

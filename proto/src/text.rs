@@ -128,11 +128,20 @@ pub enum PointKind {
     Retract = 3,
 }
 
+/// The kind number of a process line (after the waypoint kinds 1 to 3).
+pub const PROCESS_KIND: u8 = 4;
+
+/// The option of `HELLO` that asks for a process line after every weld
+/// waypoint line.
+pub const PROCESS_OPTION: &str = "PROCESS";
+
 /// A robot's request, one line.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Request {
-    /// `HELLO,<dialect>`: the robot's language for this session.
-    Hello(Dialect),
+    /// `HELLO,<dialect>[,PROCESS]`: the robot's language for this session,
+    /// and whether it reads a process line (travel speed and weave) after
+    /// each weld waypoint line.
+    Hello { dialect: Dialect, process: bool },
     /// `PLAN,<joint>,<pose>[,<groove depth>]`: plan the next frame the
     /// camera sends, taken at this pose.
     Plan(PlanLine),
@@ -171,6 +180,8 @@ pub enum LineError {
     UnknownCommand(String),
     #[error("unknown dialect {0:?}: expected ur, abb, kuka or fanuc")]
     UnknownDialect(String),
+    #[error("unknown HELLO option {0:?}: expected PROCESS")]
+    UnknownOption(String),
     #[error("{command} takes {expected} fields after it, got {got}")]
     FieldCount { command: &'static str, expected: String, got: usize },
     #[error("field {index} ({text:?}) is not a number")]
@@ -228,12 +239,18 @@ pub fn parse_request(line: &str, dialect: Option<Dialect>) -> Result<Request, Li
         _ => Err(LineError::FieldCount { command: name, expected: "no".into(), got: rest.len() }),
     };
     match command.as_str() {
-        "HELLO" => match rest.as_slice() {
-            [name] => {
-                Dialect::from_name(name).map(Request::Hello).ok_or_else(|| LineError::UnknownDialect(name.to_string()))
-            }
-            _ => Err(LineError::FieldCount { command: "HELLO", expected: "1".into(), got: rest.len() }),
-        },
+        "HELLO" => {
+            let (name, process) = match rest.as_slice() {
+                [name] => (name, false),
+                [name, option] if option.eq_ignore_ascii_case(PROCESS_OPTION) => (name, true),
+                [_, option] => return Err(LineError::UnknownOption(printable(option, 24))),
+                _ => {
+                    return Err(LineError::FieldCount { command: "HELLO", expected: "1 or 2".into(), got: rest.len() });
+                }
+            };
+            let dialect = Dialect::from_name(name).ok_or_else(|| LineError::UnknownDialect(name.to_string()))?;
+            Ok(Request::Hello { dialect, process })
+        }
         "PLAN" | "TRIGGER" => {
             let dialect = dialect.ok_or(LineError::NoDialect)?;
             let name = if command == "PLAN" { "PLAN" } else { "TRIGGER" };
@@ -296,6 +313,18 @@ pub enum Reply {
         /// The pose in the dialect's convention and units.
         pose: Vec<f64>,
     },
+    /// `4,seam,remaining,speed,amplitude,frequency`: how the torch travels
+    /// into the weld waypoint on the line before it, in a session whose
+    /// `HELLO` asked for them: the travel speed (the dialect's length unit
+    /// per second), the weave's half-swing (its length unit) and frequency
+    /// (Hz), 0 where no procedure gives them. A UR line has 9 numbers
+    /// (zeros after the frequency), as a waypoint line.
+    Process {
+        seam: u32,
+        remaining: u64,
+        /// Travel speed, half-swing and frequency, in the dialect's units.
+        motion: [f64; 3],
+    },
     /// `-code,reason`: the request failed; the session goes on. The reason
     /// leads with the cause and is cut at a word boundary to fit
     /// [`MAX_ERROR_LINE`]. In the UR dialect there is no reason (read it
@@ -333,6 +362,9 @@ pub fn seam_checks(lines: &[Reply], dialect: Dialect) -> Vec<Reply> {
     }
     checks.into_iter().map(|(_, lines, sums)| Reply::Check { lines, mean: sums.map(|s| s / lines as f64) }).collect()
 }
+
+/// The decimals of a process line's weave frequency, Hz.
+pub const FREQUENCY_DECIMALS: usize = 3;
 
 /// How many numbers a waypoint line has in `dialect`.
 pub fn waypoint_numbers(dialect: Dialect) -> usize {
@@ -402,6 +434,22 @@ impl Reply {
                 let (position, rotation) = dialect.decimals();
                 let mut fields = vec![(*kind as u8).to_string(), seam.to_string(), remaining.to_string()];
                 fields.extend(pose.iter().enumerate().map(|(k, v)| fixed(*v, if k < 3 { position } else { rotation })));
+                fields
+            }
+            Reply::Process { seam, remaining, motion } => {
+                if motion.iter().any(|v| !v.is_finite()) {
+                    return Err(FormatError::NotFinite { what: "process line's number" });
+                }
+                let (position, _) = dialect.decimals();
+                let mut fields = vec![PROCESS_KIND.to_string(), seam.to_string(), remaining.to_string()];
+                fields.push(fixed(motion[0], position));
+                fields.push(fixed(motion[1], position));
+                fields.push(fixed(motion[2], FREQUENCY_DECIMALS));
+                if dialect == Dialect::Ur {
+                    // As many numbers as a waypoint line, so one
+                    // `socket_read_ascii_float` reads every line pulled.
+                    fields.resize(waypoint_numbers(dialect), "0".into());
+                }
                 fields
             }
             Reply::Error { code, reason, numbers } => {
@@ -474,7 +522,13 @@ mod tests {
         let abb = parse_request("plan, v_butt, 800,0,500, 0,1,0,0, 4", Some(Dialect::Abb)).unwrap();
         let Request::Plan(p) = abb else { panic!("{abb:?}") };
         assert_eq!((p.pose.len(), p.groove_depth), (7, Some(4.0)));
-        assert_eq!(parse_request("HELLO,KUKA", None), Ok(Request::Hello(Dialect::Kuka)));
+        assert_eq!(parse_request("HELLO,KUKA", None), Ok(Request::Hello { dialect: Dialect::Kuka, process: false }));
+        assert_eq!(
+            parse_request("hello, abb, process", None),
+            Ok(Request::Hello { dialect: Dialect::Abb, process: true })
+        );
+        assert!(matches!(parse_request("HELLO,ur,SPEED", None), Err(LineError::UnknownOption(_))));
+        assert!(matches!(parse_request("HELLO,ur,PROCESS,1", None), Err(LineError::FieldCount { .. })));
         assert_eq!(parse_request("next", Some(Dialect::Fanuc)), Ok(Request::Next));
     }
 
@@ -556,6 +610,21 @@ mod tests {
         let ur = Reply::Check { lines: 3, mean: [0.5, -0.25, 1.0] };
         assert_eq!(ur.format(Dialect::Ur).unwrap(), "(0,3,0.500000,-0.250000,1.000000)\n");
         assert_eq!(ur.format(Dialect::Kuka).unwrap(), "0,3,0.500,-0.250,1.000\r\n");
+    }
+
+    #[test]
+    fn process_lines_fit_every_dialect_and_ur_reads_them_as_waypoint_lines() {
+        let line = Reply::Process { seam: 12, remaining: 1999, motion: [6.25, 1.5, 1.5625] };
+        assert_eq!(line.format(Dialect::Abb).unwrap(), "4,12,1999,6.25,1.50,1.562\r\n");
+        assert_eq!(line.format(Dialect::Kuka).unwrap(), "4,12,1999,6.250,1.500,1.562\r\n");
+        assert_eq!(line.format(Dialect::Fanuc).unwrap(), "4,12,1999,6.250,1.500,1.562\n");
+        let ur = Reply::Process { seam: 1, remaining: 3, motion: [0.00625, 0.0015, 1.5] };
+        assert_eq!(ur.format(Dialect::Ur).unwrap(), "(4,1,3,0.006250,0.001500,1.500,0,0,0)\n");
+        // The widest a process line gets: within ABB's 80 characters.
+        let worst = Reply::Process { seam: 9999, remaining: 99_999, motion: [-99999.994, -99999.994, -99999.9994] };
+        assert!(worst.format(Dialect::Abb).unwrap().len() <= ABB_MAX_LINE);
+        let nan = Reply::Process { seam: 1, remaining: 0, motion: [f64::NAN, 0.0, 0.0] };
+        assert!(matches!(nan.format(Dialect::Kuka), Err(FormatError::NotFinite { .. })));
     }
 
     #[test]

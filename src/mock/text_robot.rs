@@ -4,6 +4,9 @@
 //! languages do ([`ur_read_ascii_float`]), so a test can hold the daemon's
 //! lines to what a robot can parse, and tallies a seam's lines as a robot
 //! program does to compare them with the daemon's `CHECK` ([`SeamTally`]).
+//! [`TextRobot::pull_plan`] plays a robot program's whole pull after a
+//! plan's ok line: every line stored, in order, each seam checked, the
+//! process lines (travel speed and weave) kept beside their waypoints.
 
 use std::time::Duration;
 
@@ -11,7 +14,7 @@ use tokio::io::{AsyncBufReadExt, AsyncReadExt, AsyncWriteExt, BufReader};
 use tokio::net::TcpStream;
 use tokio::net::tcp::{OwnedReadHalf, OwnedWriteHalf};
 
-use weldseam_proto::text::{CHECK_TOLERANCE_MM, Dialect};
+use weldseam_proto::text::{CHECK_TOLERANCE_MM, Dialect, PROCESS_KIND, PointKind, waypoint_numbers};
 
 use super::ClientError;
 
@@ -58,6 +61,119 @@ impl TextRobot {
     pub async fn ask(&mut self, line: &str) -> Result<String, ClientError> {
         self.send(line, "\n").await?;
         self.recv().await
+    }
+}
+
+/// One seam as a robot program stores it: its approach and retract poses,
+/// and its weld waypoints each with the numbers of its process line
+/// (speed, half-swing, frequency in the dialect's units) when the session
+/// asked for them.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct PulledSeam {
+    pub approach: Vec<f64>,
+    pub weld: Vec<(Vec<f64>, Option<[f64; 3]>)>,
+    pub retract: Vec<f64>,
+}
+
+/// Why a robot program would stop a pull, with its result code's cause.
+#[derive(Debug, thiserror::Error)]
+pub enum PullError {
+    #[error(transparent)]
+    Link(#[from] ClientError),
+    /// An error line where a waypoint or check line belongs.
+    #[error("the daemon refused: {0}")]
+    Refused(String),
+    /// A line out of order (code 7) or not understood (code 4).
+    #[error("line {line:?}: {why}")]
+    Order { line: String, why: &'static str },
+    /// A seam failed `CHECK` (code 6).
+    #[error("seam {seam}: {why}")]
+    Check { seam: u32, why: String },
+}
+
+/// A reply's numbers as the dialect's program reads them: URScript's
+/// `socket_read_ascii_float(n)` for a line of `n` numbers, the others'
+/// fields split at the commas.
+pub fn reply_numbers(reply: &str, dialect: Dialect, n: usize) -> Option<Vec<f64>> {
+    match dialect {
+        Dialect::Ur => {
+            let read = ur_read_ascii_float(reply, n);
+            (read[0] > 0.0).then(|| read[1..].to_vec())
+        }
+        _ => reply.trim_end_matches(['\r', '\n']).split(',').map(|f| f.trim().parse::<f64>().ok()).collect(),
+    }
+}
+
+impl TextRobot {
+    /// Pulls the `lines` waypoint lines of a plan's ok line as a robot
+    /// program does and checks each seam with `CHECK`: every seam from
+    /// approach through its weld waypoints to retract, seam numbers from
+    /// 1 in order, `remaining` counting down to 0, and with `process` each
+    /// weld waypoint line followed by its process line.
+    pub async fn pull_plan(
+        &mut self,
+        dialect: Dialect,
+        lines: u64,
+        process: bool,
+    ) -> Result<Vec<PulledSeam>, PullError> {
+        let mut seams: Vec<PulledSeam> = Vec::new();
+        let mut tallies: Vec<SeamTally> = Vec::new();
+        let width = waypoint_numbers(dialect);
+        let mut awaiting_process = false;
+        for pulled in 1..=lines {
+            let line = self.ask("NEXT").await?;
+            let order = |why| PullError::Order { line: line.clone(), why };
+            let n = reply_numbers(&line, dialect, width).ok_or_else(|| order("not a number list"))?;
+            let [kind, seam, remaining, rest @ ..] = n.as_slice() else { return Err(order("too few numbers")) };
+            if *kind < 0.0 {
+                return Err(PullError::Refused(line.trim_end().to_string()));
+            }
+            if *remaining != (lines - pulled) as f64 {
+                return Err(order("remaining does not count down"));
+            }
+            let seam = *seam as u32;
+            let kind = *kind as u8;
+            if awaiting_process != (kind == PROCESS_KIND) {
+                return Err(order("a process line not after its weld line"));
+            }
+            if kind == PointKind::Approach as u8 {
+                if seam as usize != seams.len() + 1 {
+                    return Err(order("a seam out of order"));
+                }
+                seams.push(PulledSeam { approach: rest.to_vec(), ..Default::default() });
+                tallies.push(SeamTally::default());
+            } else if seams.len() != seam as usize {
+                return Err(order("a line of another seam than the one pulled"));
+            }
+            let (Some(current), Some(tally)) = (seams.last_mut(), tallies.last_mut()) else {
+                return Err(order("no approach first"));
+            };
+            let position = |rest: &[f64]| [rest[0], rest[1], rest[2]];
+            match kind {
+                k if k == PointKind::Approach as u8 => tally.add(position(rest)),
+                k if k == PointKind::Weld as u8 && current.retract.is_empty() => {
+                    tally.add(position(rest));
+                    current.weld.push((rest.to_vec(), None));
+                    awaiting_process = process;
+                }
+                k if k == PointKind::Retract as u8 && !current.weld.is_empty() => {
+                    tally.add(position(rest));
+                    current.retract = rest.to_vec();
+                }
+                PROCESS_KIND => {
+                    let last = current.weld.last_mut().ok_or_else(|| order("a process line before any weld line"))?;
+                    last.1 = Some([rest[0], rest[1], rest[2]]);
+                    awaiting_process = false;
+                }
+                _ => return Err(order("a kind not where it belongs")),
+            }
+        }
+        for (seam, tally) in (1u32..).zip(&tallies) {
+            let check = self.ask(&format!("CHECK,{seam}")).await?;
+            let numbers = reply_numbers(&check, dialect, 5).unwrap_or_default();
+            tally.agrees(&numbers, dialect).map_err(|why| PullError::Check { seam, why })?;
+        }
+        Ok(seams)
     }
 }
 

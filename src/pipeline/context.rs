@@ -471,7 +471,15 @@ impl<'a> Context<'a> {
             let (first, last) = (weld.curve.at(start), weld.curve.at(end));
             let obstacles = seam_process::obstacles_near(self.cloud, &first, &last, &procedure.torch);
             let thickness = self.config.process.plate_thickness_mm;
-            let process = seam_process::along(procedure, weld.joint, thickness, &places, &along_seam, &obstacles);
+            let process = seam_process::along(
+                procedure,
+                weld.joint,
+                thickness,
+                &places,
+                &along_seam,
+                &obstacles,
+                base_from_camera,
+            );
             seam_process::orient(&mut waypoints, &places, &process, base_from_camera);
             process
         });

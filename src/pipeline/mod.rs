@@ -46,6 +46,7 @@ pub mod input;
 pub mod neighbours;
 pub mod orientation;
 mod paper;
+pub mod passes;
 pub mod plane_points;
 pub mod quality;
 pub mod ransac;

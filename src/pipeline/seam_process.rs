@@ -56,6 +56,9 @@ pub struct WaypointProcess {
     pub re_angled: bool,
     /// The torch's axis, from the waypoint towards the torch, camera frame.
     pub torch_axis_camera: Vec3,
+    /// The seam's frame at the waypoint (camera frame): the pass offsets
+    /// and work angles of [`Layout`] are across and up from it.
+    pub station: Station,
 }
 
 /// A run of waypoints cut from the welded seam, and why.
@@ -80,6 +83,8 @@ pub struct SeamProcess {
     /// Per waypoint, in order; None where the waypoint is cut.
     pub waypoints: Vec<Option<WaypointProcess>>,
     pub cut: Vec<CutStretch>,
+    /// `Base_T_Camera` of the frame: the stations' frames in the base.
+    pub base_from_camera: Isometry3<f64>,
 }
 
 /// Where one waypoint lies, camera frame: the aim point, the direction of
@@ -139,7 +144,8 @@ pub fn obstacles_near(cloud: &PointCloud, start: &Vec3, end: &Vec3, torch: &Torc
 /// One waypoint's outcome: welded, or cut by a rule with its reason.
 type Outcome = Result<WaypointProcess, (&'static Rule, String, Option<Vec3>)>;
 
-/// The process at every waypoint of a seam of `joint`.
+/// The process at every waypoint of a seam of `joint`, in a frame taken
+/// at `base_from_camera`.
 pub fn along(
     procedure: &Procedure,
     joint: JointType,
@@ -147,6 +153,7 @@ pub fn along(
     places: &[Place],
     figures: &[JointFigures],
     obstacles: &Obstacles,
+    base_from_camera: &Isometry3<f64>,
 ) -> SeamProcess {
     use rayon::prelude::*;
     let outcomes: Vec<Outcome> = places
@@ -163,7 +170,12 @@ pub fn along(
             _ => cut.push(CutStretch { first: k, last: k, rule, reason: reason.clone(), contact_camera: contact }),
         }
     }
-    SeamProcess { procedure: procedure.name.clone(), waypoints: outcomes.into_iter().map(Result::ok).collect(), cut }
+    SeamProcess {
+        procedure: procedure.name.clone(),
+        waypoints: outcomes.into_iter().map(Result::ok).collect(),
+        cut,
+        base_from_camera: *base_from_camera,
+    }
 }
 
 /// The section of the joint at a waypoint and the thickness its entry is
@@ -235,6 +247,7 @@ fn at_waypoint(
             travel_angle_deg,
             re_angled: moved,
             torch_axis_camera: station.axis(work_angle_deg, travel_angle_deg),
+            station,
         }),
         Clearance::Blocked { contact } => Err((
             &rules::process::TORCH_BLOCKED,
@@ -289,7 +302,7 @@ mod tests {
         let n = 21;
         let figures: Vec<JointFigures> = (0..n).map(|k| gap(0.5 + 2.5 * k as f64 / (n - 1) as f64)).collect();
         let obstacles = Obstacles::new(plates());
-        let process = along(&p, JointType::IButt, Some(3.0), &places(n), &figures, &obstacles);
+        let process = along(&p, JointType::IButt, Some(3.0), &places(n), &figures, &obstacles, &Isometry3::identity());
         assert!(process.cut.is_empty(), "{:?}", process.cut);
         let mut feeds = Vec::new();
         for (w, f) in process.waypoints.iter().zip(&figures) {
@@ -325,7 +338,7 @@ mod tests {
             }
         }
         let obstacles = Obstacles::new(points);
-        let process = along(&p, JointType::IButt, Some(3.0), &places(n), &figures, &obstacles);
+        let process = along(&p, JointType::IButt, Some(3.0), &places(n), &figures, &obstacles, &Isometry3::identity());
         let cut: Vec<(usize, usize, &str)> = process.cut.iter().map(|c| (c.first, c.last, c.rule.id)).collect();
         assert_eq!(cut.len(), 3, "{:?}", process.cut);
         assert_eq!(&cut[..2], &[(4, 5, "process.figures_unmeasured"), (6, 7, "process.outside_procedure")]);
@@ -339,7 +352,7 @@ mod tests {
         assert!(process.waypoints[..4].iter().all(Option::is_some));
         assert!(process.waypoints[4..8].iter().chain(&process.waypoints[9..]).all(Option::is_none));
         // A square butt with no thickness configured is not measured.
-        let unknown = along(&p, JointType::IButt, None, &places(2), &figures[..2], &obstacles);
+        let unknown = along(&p, JointType::IButt, None, &places(2), &figures[..2], &obstacles, &Isometry3::identity());
         assert_eq!(unknown.cut[0].rule.id, "process.figures_unmeasured");
         assert!(unknown.cut[0].reason.contains("process.plate_thickness_mm"), "{}", unknown.cut[0].reason);
     }

@@ -211,6 +211,9 @@ impl<R: AsyncRead + Unpin> LineReader<R> {
 /// One robot session's state.
 struct Session {
     dialect: Option<Dialect>,
+    /// Whether the robot's `HELLO` asked for a process line after each
+    /// weld waypoint line.
+    process_lines: bool,
     /// The waypoint lines of the last plan not yet pulled, formatted.
     pending: VecDeque<String>,
     /// The last plan's `CHECK` replies, one per seam; None before a plan,
@@ -250,6 +253,7 @@ async fn serve(stream: TcpStream, state: Arc<ServerState>, mut shutdown: Shutdow
     let mut lines = LineReader::new(read, config);
     let mut session = Session {
         dialect: config.dialect,
+        process_lines: false,
         pending: VecDeque::new(),
         checks: None,
         last_error: None,
@@ -365,15 +369,16 @@ impl Session {
             )
         };
         Outcome::Reply(match request {
-            Request::Hello(_) | Request::Plan(_) | Request::Trigger(_) if !self.pending.is_empty() => {
+            Request::Hello { .. } | Request::Plan(_) | Request::Trigger(_) if !self.pending.is_empty() => {
                 busy_pulling(self.pending.len())
             }
-            Request::Hello(dialect) => {
+            Request::Hello { dialect, process } => {
                 self.dialect = Some(dialect);
+                self.process_lines = process;
                 // Check values are written in the dialect of their plan.
                 self.checks = None;
-                info!(dialect = dialect.name(), "robot named its dialect");
-                Reply::Ok(TEXT_PROTOCOL_VERSION.into(), 0)
+                info!(dialect = dialect.name(), process, "robot named its dialect");
+                Reply::Ok(TEXT_PROTOCOL_VERSION.into(), process.into())
             }
             Request::Plan(plan) => return self.plan(plan, Wanted::NextFrame, state, shutdown, lines).await,
             Request::Trigger(plan) => return self.plan(plan, Wanted::Trigger, state, shutdown, lines).await,
@@ -449,19 +454,23 @@ impl Session {
         };
         Outcome::Reply(match outcome {
             Ok(Planned { frame_id, plan }) => {
-                let replies = waypoint_lines(&plan, dialect, state.config.text_link.approach_offset_mm);
+                let offset = state.config.text_link.approach_offset_mm;
+                let replies = waypoint_lines(&plan, dialect, offset, self.process_lines);
                 let formatted: Result<VecDeque<String>, _> = replies.iter().map(|r| r.format(dialect)).collect();
                 match formatted {
                     Ok(formatted) => {
                         let count = formatted.len() as u64;
                         self.pending = formatted;
-                        self.checks = Some(seam_checks(&replies, dialect));
-                        // The ok line counts the seams planned; WHY names
-                        // the workpieces in view that were not.
+                        let checks = seam_checks(&replies, dialect);
+                        // The ok line counts the seams sent (each piece of
+                        // a pass welded is one); WHY names the workpieces
+                        // in view that were not planned.
+                        let seams = checks.len() as u64;
+                        self.checks = Some(checks);
                         if !plan.unplanned.is_empty() {
                             self.last_error = Some(not_planned(&plan));
                         }
-                        Reply::Ok(plan.seams.len() as u64, count)
+                        Reply::Ok(seams, count)
                     }
                     Err(e) => error(
                         ErrorCode::PlanFailed,

@@ -13,7 +13,7 @@ use weldseam::geometry::pose::EulerConvention;
 use weldseam_proto::text::Dialect;
 
 use super::abb::{Settings, V_WELD, WELD_SPEED, Z_WELD, run as run_module};
-use super::harness::{Daemon, Scenario, reference, same_pose};
+use super::harness::{Daemon, Scenario, reference, reference_pieces, same_pose};
 use super::rapid::{Event, Move, Rapid};
 
 struct Run {
@@ -170,4 +170,39 @@ async fn abb_a_daemon_gone_before_the_arc_is_an_error_handled_off_the_seam() {
         let run = run(scenario, false).await;
         stopped(&run, &[2.0]);
     }
+}
+
+/// A thick V-groove under the example procedure: every piece of every
+/// pass welded as a seam, each move into a weld waypoint at the travel
+/// speed the plan gives there and with ArcWare's weave set from its
+/// half-swing and frequency.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn abb_each_pass_is_welded_at_its_speeds_and_weave() {
+    let run = run(Scenario::Passes, false).await;
+    assert_eq!(run.result, 0.0, "{}", run.reason);
+    let expected = reference_pieces(Scenario::Passes, Dialect::Abb, &sent_pose(&run));
+    assert!(expected.len() >= 2, "{} pieces: a 9 mm groove takes several passes", expected.len());
+    let moves = moves(&run.rapid);
+    let mut at = 0;
+    let mut woven = 0;
+    for (k, piece) in expected.iter().enumerate() {
+        let weld = &moves[at + 1..at + 1 + piece.len()];
+        at += piece.len() + 2;
+        for (j, (m, (pose, [speed, amplitude, frequency]))) in weld.iter().zip(piece).enumerate().skip(1) {
+            same_pose(&m.target, pose).unwrap_or_else(|e| panic!("piece {k} waypoint {j}: {e}"));
+            // The line's two decimals.
+            assert!((m.speed - speed).abs() <= 0.005 + 1e-9, "piece {k} move {j}: {} for {speed}", m.speed);
+            match m.weave {
+                None => assert!(*amplitude < 0.005, "piece {k} move {j}: no weave for {amplitude} mm"),
+                Some([width, length]) => {
+                    woven += 1;
+                    assert!((width - 2.0 * amplitude).abs() <= 0.011, "{width} for {amplitude}");
+                    let wavelength = speed / frequency;
+                    assert!((length - wavelength).abs() / wavelength < 0.01, "{length} for {wavelength}");
+                }
+            }
+        }
+    }
+    assert_eq!(at, moves.len(), "no motion beyond the pieces'");
+    eprintln!("{} pieces, {woven} woven moves", expected.len());
 }

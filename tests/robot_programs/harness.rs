@@ -46,6 +46,22 @@ pub fn several() -> &'static Simulation {
     })
 }
 
+/// 12 mm plates with a 60° V-groove 9 mm deep and a 1 mm root gap,
+/// welded in several passes under the example procedure.
+pub fn thick_groove() -> &'static Simulation {
+    static SCENE: OnceLock<&'static Simulation> = OnceLock::new();
+    SCENE.get_or_init(|| {
+        let mut spec = weldseam::sim::demo_scene(JointType::VButt);
+        spec.joint = weldseam::sim::JointGeometry::VButt {
+            thickness_mm: 12.0,
+            groove_angle_deg: 60.0,
+            groove_depth_mm: 9.0,
+            root_gap_mm: 1.0,
+        };
+        scenes::by_default_camera(&spec)
+    })
+}
+
 /// What a scenario asks of a program.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Scenario {
@@ -65,12 +81,16 @@ pub enum Scenario {
     StopBeforeArc,
     /// The daemon stops when the program sends its fifth NEXT.
     StopDuringFetch,
+    /// A thick V-groove with the example weld procedure configured: each
+    /// pass a seam on the link, every weld waypoint with its process line.
+    Passes,
 }
 
 impl Scenario {
     pub fn scene(self) -> &'static Simulation {
         match self {
             Scenario::SeveralSeams => several(),
+            Scenario::Passes => thick_groove(),
             _ => lap(),
         }
     }
@@ -81,6 +101,7 @@ impl Scenario {
             Scenario::SeveralSeams => "auto",
             Scenario::Refusal => "t_fillet",
             Scenario::TooLongLine => "v_butt+i_butt+lap",
+            Scenario::Passes => "v_butt",
             _ => "lap",
         }
     }
@@ -94,6 +115,10 @@ impl Scenario {
             Scenario::LongSeam => 0.9,
             _ => 25.0,
         };
+        if self == Scenario::Passes {
+            c.process.procedure = Some(weldseam::process::Procedure::example());
+            c.process.plate_thickness_mm = Some(12.0);
+        }
         if self == Scenario::TooLongLine {
             c.text_link.max_line_bytes = 80;
         }
@@ -178,6 +203,35 @@ pub fn reference(scenario: Scenario, dialect: Dialect, pose_numbers: &[f64]) -> 
         .iter()
         .map(|seam| {
             seam.waypoints.iter().map(|w| Isometry3::from_parts(w.position.into(), w.orientation.into())).collect()
+        })
+        .collect()
+}
+
+/// The pieces the robot welds for the scenario's frame, asked as the
+/// program asks: each piece of each pass its poses (base frame, mm) with
+/// the travel speed (mm/s) and the weave's half-swing (mm) and frequency
+/// (Hz) into each, as the daemon sends them.
+pub fn reference_pieces(
+    scenario: Scenario,
+    dialect: Dialect,
+    pose_numbers: &[f64],
+) -> Vec<Vec<(Isometry3<f64>, [f64; 3])>> {
+    let config = scenario.config();
+    let line = PlanLine { joint: scenario.joint().into(), pose: pose_numbers.to_vec(), groove_depth: None };
+    let request = text_plan_request(&line, dialect, config.euler).expect("the program's plan line");
+    let plan = Planner::new(config).plan(&scenario.scene().cloud, &request).expect("the reference plan");
+    plan.seams
+        .iter()
+        .flat_map(weldseam::pipeline::passes::seam_pieces)
+        .map(|piece| {
+            piece
+                .into_iter()
+                .map(|(w, m)| {
+                    let m = m.expect("a procedure is configured");
+                    let pose = Isometry3::from_parts(w.position.into(), w.orientation.into());
+                    (pose, [m.travel_speed_mm_s, m.weave_amplitude_mm, m.weave_frequency_hz])
+                })
+                .collect()
         })
         .collect()
 }

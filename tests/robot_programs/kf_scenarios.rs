@@ -237,3 +237,28 @@ async fn kuka_and_fanuc_leave_the_torch_at_the_capture_pose_when_the_daemon_stop
         }
     }
 }
+
+/// KUKA on a thick V-groove under the example procedure: every piece of
+/// every pass welded as a seam, each LIN into a weld waypoint at the
+/// travel speed the plan gives there ($VEL.CP, from the line's mm/s).
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn kuka_each_pass_is_welded_at_its_speeds() {
+    let vendor = Vendor::Kuka;
+    let run = run(vendor, Scenario::Passes, false).await;
+    assert_eq!(run.result, 0, "{:?}", run.messages);
+    let expected = super::harness::reference_pieces(Scenario::Passes, vendor.dialect(), &sent_pose(vendor, &run));
+    assert!(expected.len() >= 2, "{} pieces: a 9 mm groove takes several passes", expected.len());
+    let moves = run.trace.moves();
+    let mut at = 0;
+    for (k, piece) in expected.iter().enumerate() {
+        let weld = &moves[at + 1..at + 1 + piece.len()];
+        at += piece.len() + 2;
+        for (j, (m, (pose, [speed, ..]))) in weld.iter().zip(piece).enumerate().skip(1) {
+            same_pose(&target(vendor, m), pose).unwrap_or_else(|e| panic!("piece {k} waypoint {j}: {e}"));
+            // The line's three decimals, through a 32-bit REAL.
+            assert!((m.speed_mm_s - speed).abs() < 2e-3, "piece {k} move {j}: {} for {speed}", m.speed_mm_s);
+        }
+    }
+    assert_eq!(at, moves.len(), "no motion beyond the pieces'");
+    assert_eq!(run.trace.welds().unwrap().len(), expected.len(), "one bead a piece");
+}

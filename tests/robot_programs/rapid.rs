@@ -61,6 +61,9 @@ pub struct Move {
     /// The zone's radius, None for `fine`.
     pub zone: Option<f64>,
     pub welding: bool,
+    /// ArcWare's weave under the arc (`\Weave:=`), as its width and
+    /// cycle length, mm; None without one.
+    pub weave: Option<[f64; 2]>,
     /// A fly-by point the robot passes without stopping: a zone, and
     /// nothing that waits before the next motion.
     pub blended: bool,
@@ -155,13 +158,25 @@ impl Rapid {
     }
 
     fn motion(&mut self, line: usize, target: &RobTarget, speed: f64, zone: Option<f64>, welding: bool) {
+        self.woven(line, target, speed, zone, welding, None);
+    }
+
+    fn woven(
+        &mut self,
+        line: usize,
+        target: &RobTarget,
+        speed: f64,
+        zone: Option<f64>,
+        welding: bool,
+        weave: Option<[f64; 2]>,
+    ) {
         if let Some(k) = self.pending.take()
             && let Event::Move(previous) = &mut self.events[k]
         {
             previous.blended = true;
         }
         let target = iso(target);
-        self.events.push(Event::Move(Move { line, target, speed, zone, welding, blended: false }));
+        self.events.push(Event::Move(Move { line, target, speed, zone, welding, weave, blended: false }));
         if zone.is_some() {
             self.pending = Some(self.events.len() - 1);
         }
@@ -180,16 +195,31 @@ impl Rapid {
         self.waited(Event::ArcOn);
     }
 
-    /// `ArcL`: welds to the point at the welddata's weld speed.
-    pub fn arc_l(&mut self, line: usize, target: &RobTarget, weld_speed: f64, zone: Option<f64>) {
+    /// `ArcL`: welds to the point at the welddata's weld speed, weaving
+    /// as its `\Weave` says.
+    pub fn arc_l(
+        &mut self,
+        line: usize,
+        target: &RobTarget,
+        weld_speed: f64,
+        zone: Option<f64>,
+        weave: Option<[f64; 2]>,
+    ) {
         assert!(self.arc, "line {line}: ArcL without ArcLStart");
-        self.motion(line, target, weld_speed, zone, true);
+        self.woven(line, target, weld_speed, zone, true, weave);
     }
 
     /// `ArcLEnd`: welds to the point and ends the arc there.
-    pub fn arc_l_end(&mut self, line: usize, target: &RobTarget, weld_speed: f64, zone: Option<f64>) {
+    pub fn arc_l_end(
+        &mut self,
+        line: usize,
+        target: &RobTarget,
+        weld_speed: f64,
+        zone: Option<f64>,
+        weave: Option<[f64; 2]>,
+    ) {
         assert!(self.arc, "line {line}: ArcLEnd without ArcLStart");
-        self.motion(line, target, weld_speed, zone, true);
+        self.woven(line, target, weld_speed, zone, true, weave);
         self.arc = false;
         self.events.push(Event::ArcOff);
     }

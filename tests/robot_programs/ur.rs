@@ -24,372 +24,423 @@ pub const ARC_OUTPUT: u32 = 0;
 
 /// Runs the program; returns its `result`.
 pub fn weld_seam(u: &mut Ur, s: &Settings) -> f64 {
-    u.at(193, r#"weld_seam()"#);
-    u.at(21, r#"def weld_seam():"#);
-    u.at(23, r#"DAEMON_IP = "192.168.1.10""#);
+    u.at(230, r#"weld_seam()"#);
+    u.at(29, r#"def weld_seam():"#);
+    u.at(31, r#"DAEMON_IP = "192.168.1.10""#);
     let daemon_ip = s.daemon_ip.clone();
-    u.at(24, r#"DAEMON_PORT = 7303"#);
+    u.at(32, r#"DAEMON_PORT = 7303"#);
     let daemon_port = s.daemon_port;
-    u.at(25, r#"JOINT = "lap""#);
+    u.at(33, r#"JOINT = "lap""#);
     let joint = s.joint.clone();
-    u.at(26, r#"DRY_RUN = True"#);
+    u.at(34, r#"DRY_RUN = True"#);
     let dry_run = s.dry_run;
-    u.at(27, r#"WELD_SPEED = 0.008"#);
+    u.at(35, r#"WELD_SPEED = 0.008"#);
     let weld_speed = WELD_SPEED;
-    u.at(28, r#"WELD_ACCEL = 0.5"#);
+    u.at(36, r#"WELD_ACCEL = 0.5"#);
     let weld_accel = 0.5;
-    u.at(29, r#"BLEND_RADIUS = 0.0004"#);
+    u.at(37, r#"BLEND_RADIUS = 0.0004"#);
     let blend_radius = BLEND_RADIUS;
-    u.at(30, r#"APPROACH_SPEED = 0.05"#);
+    u.at(38, r#"APPROACH_SPEED = 0.05"#);
     let approach_speed = 0.05;
-    u.at(31, r#"APPROACH_ACCEL = 0.5"#);
+    u.at(39, r#"APPROACH_ACCEL = 0.5"#);
     let approach_accel = 0.5;
-    u.at(32, r#"ARC_OUTPUT = 0"#);
+    u.at(40, r#"ARC_OUTPUT = 0"#);
     let arc_output = ARC_OUTPUT as f64;
-    u.at(33, r#"ARC_SETTLE = 0.3"#);
+    u.at(41, r#"ARC_SETTLE = 0.3"#);
     let arc_settle = 0.3;
-    u.at(34, r#"REPLY_TIMEOUT = 30"#);
+    u.at(42, r#"REPLY_TIMEOUT = 30"#);
     let reply_timeout = 30.0;
-    u.at(35, r#"MAX_LINES = 2000"#);
+    u.at(43, r#"MAX_LINES = 2000"#);
     let max_lines = 2000.0;
-    u.at(36, r#"CHECK_TOLERANCE = 0.0001"#);
+    u.at(44, r#"CHECK_TOLERANCE = 0.0001"#);
     let check_tolerance = 0.0001;
-    u.at(38, r#"poses = make_list(MAX_LINES, p[0, 0, 0, 0, 0, 0], MAX_LINES)"#);
+    u.at(46, r#"poses = make_list(MAX_LINES, p[0, 0, 0, 0, 0, 0], MAX_LINES)"#);
     let mut poses: Vec<Pose> = vec![[0.0; 6]; max_lines as usize];
-    u.at(39, r#"kinds = make_list(MAX_LINES, 0, MAX_LINES)"#);
+    u.at(47, r#"kinds = make_list(MAX_LINES, 0, MAX_LINES)"#);
     let mut kinds: Vec<f64> = vec![0.0; max_lines as usize];
-    u.at(40, r#"seams = make_list(MAX_LINES, 0, MAX_LINES)"#);
+    u.at(48, r#"seams = make_list(MAX_LINES, 0, MAX_LINES)"#);
     let mut seams: Vec<f64> = vec![0.0; max_lines as usize];
-    u.at(41, r#"result = 0"#);
+    u.at(50, r#"speeds = make_list(MAX_LINES, 0, MAX_LINES)"#);
+    let mut speeds: Vec<f64> = vec![0.0; max_lines as usize];
+    u.at(51, r#"amps = make_list(MAX_LINES, 0, MAX_LINES)"#);
+    let mut amps: Vec<f64> = vec![0.0; max_lines as usize];
+    u.at(52, r#"freqs = make_list(MAX_LINES, 0, MAX_LINES)"#);
+    let mut freqs: Vec<f64> = vec![0.0; max_lines as usize];
+    u.at(53, r#"process = False"#);
+    let mut process = false;
+    u.at(54, r#"result = 0"#);
     let mut result = 0.0;
-    u.at(42, r#"count = 0"#);
+    u.at(55, r#"count = 0"#);
     let mut count = 0.0;
-    u.at(43, r#"seam_count = 0"#);
+    u.at(56, r#"seam_count = 0"#);
     let mut seam_count = 0.0;
-    u.at(44, r#"reason = """#);
+    u.at(57, r#"reason = """#);
     let mut reason = String::new();
 
-    u.at(46, r#"if not socket_open(DAEMON_IP, DAEMON_PORT, "weldseam"):"#);
+    u.at(59, r#"if not socket_open(DAEMON_IP, DAEMON_PORT, "weldseam"):"#);
     if !u.socket_open(&daemon_ip, daemon_port, "weldseam") {
-        u.at(47, r#"result = 1"#);
+        u.at(60, r#"result = 1"#);
         result = 1.0;
     }
-    u.at(49, r#"if result == 0:"#);
+    u.at(62, r#"if result == 0:"#);
     if result == 0.0 {
-        u.at(50, r#"socket_send_line("HELLO,ur", "weldseam")"#);
-        u.socket_send_line("HELLO,ur", "weldseam");
-        u.at(51, r#"hello = socket_read_ascii_float(3, "weldseam", REPLY_TIMEOUT)"#);
+        u.at(63, r#"socket_send_line("HELLO,ur,PROCESS", "weldseam")"#);
+        u.socket_send_line("HELLO,ur,PROCESS", "weldseam");
+        u.at(64, r#"hello = socket_read_ascii_float(3, "weldseam", REPLY_TIMEOUT)"#);
         let hello = u.socket_read_ascii_float(3, "weldseam", reply_timeout);
         if {
-            u.at(52, r#"if hello[0] == 0:"#);
+            u.at(65, r#"if hello[0] == 0:"#);
             hello[0] == 0.0
         } {
-            u.at(53, r#"result = 3"#);
+            u.at(66, r#"result = 3"#);
             result = 3.0;
         } else if {
-            u.at(54, r#"elif hello[0] != 3:"#);
+            u.at(67, r#"elif hello[0] != 3:"#);
             hello[0] != 3.0
         } {
-            u.at(55, r#"result = 4"#);
+            u.at(68, r#"result = 4"#);
             result = 4.0;
         } else if {
-            u.at(56, r#"elif hello[1] < 0:"#);
+            u.at(69, r#"elif hello[1] < 0:"#);
             hello[1] < 0.0
         } {
-            u.at(57, r#"result = hello[1]"#);
+            u.at(70, r#"result = hello[1]"#);
             result = hello[1];
         } else if {
-            u.at(58, r#"elif hello[2] != 2:"#);
+            u.at(71, r#"elif hello[2] != 2:"#);
             hello[2] != 2.0
         } {
-            u.at(59, r#"result = 8"#);
+            u.at(72, r#"result = 8"#);
             result = 8.0;
+        } else {
+            u.at(74, r#"process = hello[3] == 1"#);
+            process = hello[3] == 1.0;
         }
     }
 
-    u.at(63, r#"if result == 0:"#);
+    u.at(78, r#"if result == 0:"#);
     if result == 0.0 {
-        u.at(64, r#"capture = get_actual_tool_flange_pose()"#);
+        u.at(79, r#"capture = get_actual_tool_flange_pose()"#);
         let capture = u.get_actual_tool_flange_pose();
-        u.at(65, r#"if not socket_send_line(str_cat(str_cat("TRIGGER,", JOINT), str_cat(",", to_str(capture))), "weldseam"):"#);
+        u.at(80, r#"if not socket_send_line(str_cat(str_cat("TRIGGER,", JOINT), str_cat(",", to_str(capture))), "weldseam"):"#);
         let line = format!("TRIGGER,{joint},{}", pose_to_str(&capture));
         if !u.socket_send_line(&line, "weldseam") {
-            u.at(66, r#"result = 2"#);
+            u.at(81, r#"result = 2"#);
             result = 2.0;
         }
     }
-    u.at(69, r#"if result == 0:"#);
+    u.at(84, r#"if result == 0:"#);
     if result == 0.0 {
-        u.at(70, r#"status = socket_read_ascii_float(3, "weldseam", REPLY_TIMEOUT)"#);
+        u.at(85, r#"status = socket_read_ascii_float(3, "weldseam", REPLY_TIMEOUT)"#);
         let status = u.socket_read_ascii_float(3, "weldseam", reply_timeout);
         if {
-            u.at(71, r#"if status[0] == 0:"#);
+            u.at(86, r#"if status[0] == 0:"#);
             status[0] == 0.0
         } {
-            u.at(72, r#"result = 3"#);
+            u.at(87, r#"result = 3"#);
             result = 3.0;
         } else if {
-            u.at(73, r#"elif status[0] != 3:"#);
+            u.at(88, r#"elif status[0] != 3:"#);
             status[0] != 3.0
         } {
-            u.at(74, r#"result = 4"#);
+            u.at(89, r#"result = 4"#);
             result = 4.0;
         } else if {
-            u.at(75, r#"elif status[1] < 0:"#);
+            u.at(90, r#"elif status[1] < 0:"#);
             status[1] < 0.0
         } {
-            u.at(76, r#"result = status[1]"#);
+            u.at(91, r#"result = status[1]"#);
             result = status[1];
         } else if {
-            u.at(77, r#"elif status[3] > MAX_LINES:"#);
+            u.at(92, r#"elif status[3] > MAX_LINES:"#);
             status[3] > max_lines
         } {
-            u.at(78, r#"result = 5"#);
+            u.at(93, r#"result = 5"#);
             result = 5.0;
-            u.at(79, r#"socket_send_line("DROP", "weldseam")"#);
+            u.at(94, r#"socket_send_line("DROP", "weldseam")"#);
             u.socket_send_line("DROP", "weldseam");
-            u.at(80, r#"socket_read_ascii_float(3, "weldseam", REPLY_TIMEOUT)"#);
+            u.at(95, r#"socket_read_ascii_float(3, "weldseam", REPLY_TIMEOUT)"#);
             u.socket_read_ascii_float(3, "weldseam", reply_timeout);
         } else {
-            u.at(82, r#"seam_count = status[2]"#);
+            u.at(97, r#"seam_count = status[2]"#);
             seam_count = status[2];
-            u.at(83, r#"count = status[3]"#);
+            u.at(98, r#"count = status[3]"#);
             count = status[3];
         }
     }
 
-    u.at(87, r#"k = 0"#);
+    u.at(102, r#"k = 0"#);
     let mut k = 0.0;
     while {
-        u.at(88, r#"while result == 0 and k < count:"#);
+        u.at(103, r#"while result == 0 and k < count:"#);
         result == 0.0 && k < count
     } {
-        u.at(89, r#"if not socket_send_line("NEXT", "weldseam"):"#);
+        u.at(104, r#"if not socket_send_line("NEXT", "weldseam"):"#);
         if !u.socket_send_line("NEXT", "weldseam") {
-            u.at(90, r#"result = 2"#);
+            u.at(105, r#"result = 2"#);
             result = 2.0;
         }
-        u.at(92, r#"if result == 0:"#);
+        u.at(107, r#"if result == 0:"#);
         if result == 0.0 {
-            u.at(93, r#"w = socket_read_ascii_float(9, "weldseam", REPLY_TIMEOUT)"#);
+            u.at(108, r#"w = socket_read_ascii_float(9, "weldseam", REPLY_TIMEOUT)"#);
             let w = u.socket_read_ascii_float(9, "weldseam", reply_timeout);
             let i = k as usize;
             if {
-                u.at(94, r#"if w[0] == 0:"#);
+                u.at(109, r#"if w[0] == 0:"#);
                 w[0] == 0.0
             } {
-                u.at(95, r#"result = 3"#);
+                u.at(110, r#"result = 3"#);
                 result = 3.0;
             } else if {
-                u.at(96, r#"elif w[0] != 9:"#);
+                u.at(111, r#"elif w[0] != 9:"#);
                 w[0] != 9.0
             } {
-                u.at(97, r#"result = 4"#);
+                u.at(112, r#"result = 4"#);
                 result = 4.0;
             } else if {
-                u.at(98, r#"elif w[1] < 0:"#);
+                u.at(113, r#"elif w[1] < 0:"#);
                 w[1] < 0.0
             } {
-                u.at(99, r#"result = w[1]"#);
+                u.at(114, r#"result = w[1]"#);
                 result = w[1];
             } else if {
-                u.at(100, r#"elif w[3] != count - k - 1:"#);
+                u.at(115, r#"elif w[3] != count - k - 1:"#);
                 w[3] != count - k - 1.0
             } {
-                u.at(101, r#"result = 7"#);
+                u.at(116, r#"result = 7"#);
                 result = 7.0;
             } else if {
-                u.at(102, r#"elif k == 0 and (w[1] != 1 or w[2] != 1):"#);
+                u.at(117, r#"elif k == 0 and (w[1] != 1 or w[2] != 1):"#);
                 k == 0.0 && (w[1] != 1.0 || w[2] != 1.0)
             } {
-                u.at(103, r#"result = 7"#);
+                u.at(118, r#"result = 7"#);
                 result = 7.0;
             } else if {
-                u.at(104, r#"elif k > 0 and w[1] == 1 and (kinds[k - 1] != 3 or w[2] != seams[k - 1] + 1):"#);
+                u.at(119, r#"elif k > 0 and w[1] == 1 and (kinds[k - 1] != 3 or w[2] != seams[k - 1] + 1):"#);
                 k > 0.0 && w[1] == 1.0 && (kinds[i - 1] != 3.0 || w[2] != seams[i - 1] + 1.0)
             } {
-                u.at(105, r#"result = 7"#);
+                u.at(120, r#"result = 7"#);
                 result = 7.0;
             } else if {
-                u.at(106, r#"elif k > 0 and w[1] != 1 and (kinds[k - 1] == 3 or w[2] != seams[k - 1]):"#);
-                k > 0.0 && w[1] != 1.0 && (kinds[i - 1] == 3.0 || w[2] != seams[i - 1])
+                u.at(121, r#"elif k > 0 and ((process and kinds[k - 1] == 2) != (w[1] == 4)):"#);
+                k > 0.0 && ((process && kinds[i - 1] == 2.0) != (w[1] == 4.0))
             } {
-                u.at(107, r#"result = 7"#);
+                u.at(122, r#"result = 7"#);
+                result = 7.0;
+            } else if {
+                u.at(123, r#"elif k > 0 and w[1] != 1 and (kinds[k - 1] == 3 or w[2] != seams[k - 1] or (w[1] == 3 and kinds[k - 1] != 2 and kinds[k - 1] != 4)):"#);
+                k > 0.0
+                    && w[1] != 1.0
+                    && (kinds[i - 1] == 3.0
+                        || w[2] != seams[i - 1]
+                        || (w[1] == 3.0 && kinds[i - 1] != 2.0 && kinds[i - 1] != 4.0))
+            } {
+                u.at(124, r#"result = 7"#);
                 result = 7.0;
             } else {
-                u.at(109, r#"poses[k] = p[w[4], w[5], w[6], w[7], w[8], w[9]]"#);
-                poses[i] = [w[4], w[5], w[6], w[7], w[8], w[9]];
-                u.at(110, r#"kinds[k] = w[1]"#);
+                u.at(126, r#"if w[1] == 4:"#);
+                if w[1] == 4.0 {
+                    u.at(127, r#"speeds[k] = w[4]"#);
+                    speeds[i] = w[4];
+                    u.at(128, r#"amps[k] = w[5]"#);
+                    amps[i] = w[5];
+                    u.at(129, r#"freqs[k] = w[6]"#);
+                    freqs[i] = w[6];
+                } else {
+                    u.at(131, r#"poses[k] = p[w[4], w[5], w[6], w[7], w[8], w[9]]"#);
+                    poses[i] = [w[4], w[5], w[6], w[7], w[8], w[9]];
+                }
+                u.at(133, r#"kinds[k] = w[1]"#);
                 kinds[i] = w[1];
-                u.at(111, r#"seams[k] = w[2]"#);
+                u.at(134, r#"seams[k] = w[2]"#);
                 seams[i] = w[2];
-                u.at(112, r#"k = k + 1"#);
+                u.at(135, r#"k = k + 1"#);
                 k += 1.0;
             }
         }
     }
-    u.at(116, r#"if result == 0 and count > 0 and (kinds[count - 1] != 3 or seams[count - 1] != seam_count):"#);
+    u.at(139, r#"if result == 0 and count > 0 and (kinds[count - 1] != 3 or seams[count - 1] != seam_count):"#);
     if result == 0.0 && count > 0.0 && {
         let last = count as usize - 1;
         kinds[last] != 3.0 || seams[last] != seam_count
     } {
-        u.at(117, r#"result = 7"#);
+        u.at(140, r#"result = 7"#);
         result = 7.0;
     }
 
-    u.at(120, r#"s = 1"#);
+    u.at(143, r#"s = 1"#);
     let mut seam = 1.0;
     while {
-        u.at(121, r#"while result == 0 and s <= seam_count:"#);
+        u.at(144, r#"while result == 0 and s <= seam_count:"#);
         result == 0.0 && seam <= seam_count
     } {
-        u.at(122, r#"n = 0"#);
+        u.at(145, r#"n = 0"#);
         let mut n = 0.0;
-        u.at(123, r#"sx = 0"#);
+        u.at(146, r#"sx = 0"#);
         let mut sx = 0.0;
-        u.at(124, r#"sy = 0"#);
+        u.at(147, r#"sy = 0"#);
         let mut sy = 0.0;
-        u.at(125, r#"sz = 0"#);
+        u.at(148, r#"sz = 0"#);
         let mut sz = 0.0;
-        u.at(126, r#"j = 0"#);
+        u.at(149, r#"j = 0"#);
         let mut j = 0.0;
         while {
-            u.at(127, r#"while j < count:"#);
+            u.at(150, r#"while j < count:"#);
             j < count
         } {
             let i = j as usize;
-            u.at(128, r#"if seams[j] == s:"#);
-            if seams[i] == seam {
-                u.at(129, r#"n = n + 1"#);
+            u.at(151, r#"if seams[j] == s and kinds[j] != 4:"#);
+            if seams[i] == seam && kinds[i] != 4.0 {
+                u.at(152, r#"n = n + 1"#);
                 n += 1.0;
-                u.at(130, r#"sx = sx + poses[j][0]"#);
+                u.at(153, r#"sx = sx + poses[j][0]"#);
                 sx += poses[i][0];
-                u.at(131, r#"sy = sy + poses[j][1]"#);
+                u.at(154, r#"sy = sy + poses[j][1]"#);
                 sy += poses[i][1];
-                u.at(132, r#"sz = sz + poses[j][2]"#);
+                u.at(155, r#"sz = sz + poses[j][2]"#);
                 sz += poses[i][2];
             }
-            u.at(134, r#"j = j + 1"#);
+            u.at(157, r#"j = j + 1"#);
             j += 1.0;
         }
-        u.at(136, r#"if not socket_send_line(str_cat("CHECK,", to_str(s)), "weldseam"):"#);
+        u.at(159, r#"if not socket_send_line(str_cat("CHECK,", to_str(s)), "weldseam"):"#);
         if !u.socket_send_line(&format!("CHECK,{}", int_to_str(seam)), "weldseam") {
-            u.at(137, r#"result = 2"#);
+            u.at(160, r#"result = 2"#);
             result = 2.0;
         }
-        u.at(139, r#"if result == 0:"#);
+        u.at(162, r#"if result == 0:"#);
         if result == 0.0 {
-            u.at(140, r#"c = socket_read_ascii_float(5, "weldseam", REPLY_TIMEOUT)"#);
+            u.at(163, r#"c = socket_read_ascii_float(5, "weldseam", REPLY_TIMEOUT)"#);
             let c = u.socket_read_ascii_float(5, "weldseam", reply_timeout);
             if {
-                u.at(141, r#"if c[0] == 0:"#);
+                u.at(164, r#"if c[0] == 0:"#);
                 c[0] == 0.0
             } {
-                u.at(142, r#"result = 3"#);
+                u.at(165, r#"result = 3"#);
                 result = 3.0;
             } else if {
-                u.at(143, r#"elif c[0] != 5:"#);
+                u.at(166, r#"elif c[0] != 5:"#);
                 c[0] != 5.0
             } {
-                u.at(144, r#"result = 4"#);
+                u.at(167, r#"result = 4"#);
                 result = 4.0;
             } else if {
-                u.at(145, r#"elif c[1] < 0:"#);
+                u.at(168, r#"elif c[1] < 0:"#);
                 c[1] < 0.0
             } {
-                u.at(146, r#"result = c[1]"#);
+                u.at(169, r#"result = c[1]"#);
                 result = c[1];
             } else if {
-                u.at(147, r#"elif c[2] != n or n == 0:"#);
+                u.at(170, r#"elif c[2] != n or n == 0:"#);
                 c[2] != n || n == 0.0
             } {
-                u.at(148, r#"result = 6"#);
+                u.at(171, r#"result = 6"#);
                 result = 6.0;
             } else if {
-                u.at(149, r#"elif norm(sx / n - c[3]) > CHECK_TOLERANCE or norm(sy / n - c[4]) > CHECK_TOLERANCE or norm(sz / n - c[5]) > CHECK_TOLERANCE:"#);
+                u.at(172, r#"elif norm(sx / n - c[3]) > CHECK_TOLERANCE or norm(sy / n - c[4]) > CHECK_TOLERANCE or norm(sz / n - c[5]) > CHECK_TOLERANCE:"#);
                 norm(sx / n - c[3]) > check_tolerance
                     || norm(sy / n - c[4]) > check_tolerance
                     || norm(sz / n - c[5]) > check_tolerance
             } {
-                u.at(150, r#"result = 6"#);
+                u.at(173, r#"result = 6"#);
                 result = 6.0;
             }
         }
-        u.at(153, r#"s = s + 1"#);
+        u.at(176, r#"s = s + 1"#);
         seam += 1.0;
     }
 
-    u.at(156, r#"if result < 0:"#);
+    u.at(179, r#"if result < 0:"#);
     if result < 0.0 {
-        u.at(157, r#"socket_send_line("WHY", "weldseam")"#);
+        u.at(180, r#"socket_send_line("WHY", "weldseam")"#);
         u.socket_send_line("WHY", "weldseam");
-        u.at(158, r#"reason = socket_read_line("weldseam", REPLY_TIMEOUT)"#);
+        u.at(181, r#"reason = socket_read_line("weldseam", REPLY_TIMEOUT)"#);
         reason = u.socket_read_line("weldseam", reply_timeout);
-        u.at(159, r#"if reason == "":"#);
+        u.at(182, r#"if reason == "":"#);
         if reason.is_empty() {
-            u.at(160, r#"reason = socket_read_line("weldseam", REPLY_TIMEOUT)"#);
+            u.at(183, r#"reason = socket_read_line("weldseam", REPLY_TIMEOUT)"#);
             reason = u.socket_read_line("weldseam", reply_timeout);
         }
     }
-    u.at(163, r#"socket_close("weldseam")"#);
+    u.at(186, r#"socket_close("weldseam")"#);
     u.socket_close("weldseam");
-    u.at(164, r#"if result != 0:"#);
+    u.at(187, r#"if result != 0:"#);
     if result != 0.0 {
-        u.at(165, r#"popup(str_cat(str_cat("weldseam result ", to_str(result)), str_cat(": ", reason)), "weldseam", error=True)"#);
+        u.at(188, r#"popup(str_cat(str_cat("weldseam result ", to_str(result)), str_cat(": ", reason)), "weldseam", error=True)"#);
         u.popup(&format!("weldseam result {}: {reason}", int_to_str(result)));
-        u.at(166, r#"halt()"#);
+        u.at(189, r#"halt()"#);
         u.halt();
         return result;
     }
 
-    u.at(169, r#"j = 0"#);
+    u.at(192, r#"j = 0"#);
     let mut j = 0.0;
     while {
-        u.at(170, r#"while j < count:"#);
+        u.at(193, r#"while j < count:"#);
         j < count
     } {
         let i = j as usize;
+        u.at(196, r#"v = WELD_SPEED"#);
+        let mut v = weld_speed;
+        u.at(197, r#"after = j + 1"#);
+        let mut after = i + 1;
+        u.at(198, r#"if kinds[j] == 2:"#);
+        if kinds[i] == 2.0 {
+            u.at(199, r#"if kinds[j + 1] == 4:"#);
+            if kinds[i + 1] == 4.0 {
+                u.at(200, r#"after = j + 2"#);
+                after = i + 2;
+                u.at(201, r#"if speeds[j + 1] > 0:"#);
+                if speeds[i + 1] > 0.0 {
+                    u.at(202, r#"v = speeds[j + 1]"#);
+                    v = speeds[i + 1];
+                }
+                // WEAVE: the half-swing and frequency a welding URCap
+                // would take; the program keeps them and lays no weave.
+                let _weave = (amps[i + 1], freqs[i + 1]);
+            }
+        }
         if {
-            u.at(171, r#"if kinds[j] == 1:"#);
+            u.at(207, r#"if kinds[j] == 1:"#);
             kinds[i] == 1.0
         } {
-            u.at(172, r#"movel(poses[j], a=APPROACH_ACCEL, v=APPROACH_SPEED)"#);
-            u.movel(172, &poses[i], approach_accel, approach_speed, 0.0);
+            u.at(208, r#"movel(poses[j], a=APPROACH_ACCEL, v=APPROACH_SPEED)"#);
+            u.movel(208, &poses[i], approach_accel, approach_speed, 0.0);
         } else if {
-            u.at(173, r#"elif kinds[j] == 3:"#);
+            u.at(209, r#"elif kinds[j] == 3:"#);
             kinds[i] == 3.0
         } {
-            u.at(174, r#"set_standard_digital_out(ARC_OUTPUT, False)"#);
+            u.at(210, r#"set_standard_digital_out(ARC_OUTPUT, False)"#);
             u.set_standard_digital_out(arc_output, false);
-            u.at(175, r#"movel(poses[j], a=APPROACH_ACCEL, v=APPROACH_SPEED)"#);
-            u.movel(175, &poses[i], approach_accel, approach_speed, 0.0);
+            u.at(211, r#"movel(poses[j], a=APPROACH_ACCEL, v=APPROACH_SPEED)"#);
+            u.movel(211, &poses[i], approach_accel, approach_speed, 0.0);
         } else if {
-            u.at(176, r#"elif kinds[j - 1] == 1:"#);
+            u.at(212, r#"elif kinds[j - 1] == 1:"#);
             kinds[i - 1] == 1.0
         } {
-            u.at(177, r#"movel(poses[j], a=APPROACH_ACCEL, v=APPROACH_SPEED)"#);
-            u.movel(177, &poses[i], approach_accel, approach_speed, 0.0);
-            u.at(179, r#"if not DRY_RUN:"#);
+            u.at(213, r#"movel(poses[j], a=APPROACH_ACCEL, v=APPROACH_SPEED)"#);
+            u.movel(213, &poses[i], approach_accel, approach_speed, 0.0);
+            u.at(215, r#"if not DRY_RUN:"#);
             if !dry_run {
-                u.at(180, r#"set_standard_digital_out(ARC_OUTPUT, True)"#);
+                u.at(216, r#"set_standard_digital_out(ARC_OUTPUT, True)"#);
                 u.set_standard_digital_out(arc_output, true);
-                u.at(181, r#"sleep(ARC_SETTLE)"#);
+                u.at(217, r#"sleep(ARC_SETTLE)"#);
                 u.sleep(arc_settle);
             }
         } else if {
-            u.at(183, r#"elif kinds[j + 1] == 3:"#);
-            kinds[i + 1] == 3.0
+            u.at(219, r#"elif kinds[after] == 3:"#);
+            kinds[after] == 3.0
         } {
-            u.at(184, r#"movep(poses[j], a=WELD_ACCEL, v=WELD_SPEED, r=0)"#);
-            u.movep(184, &poses[i], weld_accel, weld_speed, 0.0);
-            u.at(186, r#"set_standard_digital_out(ARC_OUTPUT, False)"#);
+            u.at(220, r#"movep(poses[j], a=WELD_ACCEL, v=v, r=0)"#);
+            u.movep(220, &poses[i], weld_accel, v, 0.0);
+            u.at(222, r#"set_standard_digital_out(ARC_OUTPUT, False)"#);
             u.set_standard_digital_out(arc_output, false);
         } else {
-            u.at(188, r#"movep(poses[j], a=WELD_ACCEL, v=WELD_SPEED, r=BLEND_RADIUS)"#);
-            u.movep(188, &poses[i], weld_accel, weld_speed, blend_radius);
+            u.at(224, r#"movep(poses[j], a=WELD_ACCEL, v=v, r=BLEND_RADIUS)"#);
+            u.movep(224, &poses[i], weld_accel, v, blend_radius);
         }
-        u.at(190, r#"j = j + 1"#);
-        j += 1.0;
+        u.at(227, r#"j = after"#);
+        j = after as f64;
     }
     result
 }

@@ -12,7 +12,7 @@ use weldseam::geometry::Isometry3;
 use weldseam::geometry::pose::EulerConvention;
 use weldseam_proto::text::Dialect;
 
-use super::harness::{Daemon, Scenario, reference, same_pose};
+use super::harness::{Daemon, Scenario, reference, reference_pieces, same_pose};
 use super::ur::{ARC_OUTPUT, BLEND_RADIUS, Settings, WELD_SPEED, weld_seam};
 use super::urscript::{Event, Move, Ur};
 
@@ -203,4 +203,31 @@ async fn a_daemon_gone_before_the_arc_leaves_the_torch_at_the_capture_pose() {
         let checks = run.ur.events.iter().filter(|e| matches!(e, Event::Sent(l) if l.starts_with("CHECK"))).count();
         assert_eq!(checks, usize::from(scenario == Scenario::StopBeforeArc), "{scenario:?}");
     }
+}
+
+/// A thick V-groove under the example procedure: every piece of every
+/// pass welded as a seam, each process move into a weld waypoint at the
+/// travel speed the plan gives there (m/s, to the line's 6 decimals).
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn ur_each_pass_is_welded_at_its_speeds() {
+    let run = run(Scenario::Passes, false).await;
+    assert_eq!(run.result, 0.0, "{:?}", run.ur.events.iter().rev().take(5).collect::<Vec<_>>());
+    let expected = reference_pieces(Scenario::Passes, Dialect::Ur, &sent_pose(&run));
+    assert!(expected.len() >= 2, "{} pieces: a 9 mm groove takes several passes", expected.len());
+    let moves = moves(&run.ur);
+    let mut at = 0;
+    for (k, piece) in expected.iter().enumerate() {
+        let weld = &moves[at + 1..at + 1 + piece.len()];
+        at += piece.len() + 2;
+        for (j, (m, (pose, [speed, ..]))) in weld.iter().zip(piece).enumerate().skip(1) {
+            same_pose(&m.target, pose).unwrap_or_else(|e| panic!("piece {k} waypoint {j}: {e}"));
+            assert!(m.process, "piece {k} move {j}");
+            assert!(
+                (m.speed - speed / 1000.0).abs() <= 0.000_000_5 + 1e-12,
+                "piece {k} move {j}: {} for {speed}",
+                m.speed
+            );
+        }
+    }
+    assert_eq!(at, moves.len(), "no motion beyond the pieces'");
 }

@@ -10,6 +10,14 @@ MODULE WeldSeam
     ! arc burns. Needs the socket option (PC Interface or Socket Messaging,
     ! 616-1) and ArcWare.
     !
+    ! The program asks for the daemon's process lines (HELLO,abb,PROCESS):
+    ! with a weld procedure configured, each pass of a seam comes as a
+    ! seam of its own and every weld waypoint with its travel speed and
+    ! weave, which set wdWeld's weld_speed and wvWeld (ArcWare's weavedata:
+    ! zigzag, one cycle per speed / frequency of seam, as wide as twice the
+    ! half-swing) for the move into that waypoint. A speed of 0 (no
+    ! procedure) welds at WELD_SPEED without weaving.
+    !
     ! result is what the program branches on: 0 done; -code the daemon
     ! refused (its code; the cause is on the error line and shown);
     ! 1 no connection, 2 link lost, 3 no reply in time, 4 a reply not
@@ -36,13 +44,22 @@ MODULE WeldSeam
     CONST num CHECK_TOLERANCE := 0.1;
     ! The torch (TCP). The ArcWare seam and weld data, smWeld (seamdata)
     ! and wdWeld (welddata), are the cell's, declared with ArcWare's data;
-    ! wdWeld's weld_speed is set from WELD_SPEED before each seam.
+    ! wdWeld's weld_speed is set before each move, from the waypoint's
+    ! process line or WELD_SPEED; so is vSeam's speed in a dry run.
     PERS tooldata tWeldGun := [TRUE, [[0, 0, 350], [1, 0, 0, 0]], [3, [0, 0, 100], [1, 0, 0, 0], 0, 0, 0]];
 
     ! --- storage for a whole plan: a 1.5 m seam at 2 mm takes 753 lines ---
+    ! A process line (kind 4) is stored at its own index, after its
+    ! waypoint's, its speed and weave in speed, weaveAmp and weaveFreq.
     VAR robtarget path{MAX_LINES};
     VAR num kind{MAX_LINES};
     VAR num seamOf{MAX_LINES};
+    VAR num speed{MAX_LINES};
+    VAR num weaveAmp{MAX_LINES};
+    VAR num weaveFreq{MAX_LINES};
+    VAR bool process;
+    VAR weavedata wvWeld;
+    VAR speeddata vSeam;
     VAR num count;
     VAR num seamCount;
     VAR num result;
@@ -82,7 +99,7 @@ MODULE WeldSeam
         SocketCreate sock;
         SocketConnect sock, DAEMON_IP, DAEMON_PORT \Time:=5;
         connected := TRUE;
-        SocketSend sock \Str:="HELLO,abb\0D\0A";
+        SocketSend sock \Str:="HELLO,abb,PROCESS\0D\0A";
         line := Receive();
         IF NOT Numbers(line) THEN
             RETURN;
@@ -91,6 +108,7 @@ MODULE WeldSeam
             result := 8;
             RETURN;
         ENDIF
+        process := field{3} = 1;
         ! The flange pose, whatever the tool; the robot stands still.
         capture := CRobT(\Tool:=tool0 \WObj:=wobj0);
         SocketSend sock \Str:="TRIGGER," + JOINT + ",";
@@ -115,7 +133,7 @@ MODULE WeldSeam
             IF NOT Numbers(line) THEN
                 RETURN;
             ENDIF
-            IF fields <> 10 OR field{3} <> count - k THEN
+            IF (field{1} = 4 AND fields <> 6) OR (field{1} <> 4 AND fields <> 10) OR field{3} <> count - k THEN
                 result := 7;
                 RETURN;
             ENDIF
@@ -129,15 +147,24 @@ MODULE WeldSeam
                     result := 7;
                     RETURN;
                 ENDIF
-            ELSEIF kind{k - 1} = 3 OR field{2} <> seamOf{k - 1} OR (field{1} = 3 AND kind{k - 1} <> 2) THEN
+            ELSEIF (process AND kind{k - 1} = 2 AND field{1} <> 4) OR ((NOT process OR kind{k - 1} <> 2) AND field{1} = 4) THEN
+                result := 7;
+                RETURN;
+            ELSEIF kind{k - 1} = 3 OR field{2} <> seamOf{k - 1} OR (field{1} = 3 AND kind{k - 1} <> 2 AND kind{k - 1} <> 4) THEN
                 result := 7;
                 RETURN;
             ENDIF
             path{k} := capture;
-            path{k}.trans := [field{4}, field{5}, field{6}];
-            path{k}.rot := [field{7}, field{8}, field{9}, field{10}];
             kind{k} := field{1};
             seamOf{k} := field{2};
+            IF field{1} = 4 THEN
+                speed{k} := field{4};
+                weaveAmp{k} := field{5};
+                weaveFreq{k} := field{6};
+            ELSE
+                path{k}.trans := [field{4}, field{5}, field{6}];
+                path{k}.rot := [field{7}, field{8}, field{9}, field{10}];
+            ENDIF
         ENDFOR
         IF count > 0 THEN
             IF kind{count} <> 3 OR seamOf{count} <> seamCount THEN
@@ -151,7 +178,7 @@ MODULE WeldSeam
             sy := 0;
             sz := 0;
             FOR k FROM 1 TO count DO
-                IF seamOf{k} = s THEN
+                IF seamOf{k} = s AND kind{k} <> 4 THEN
                     n := n + 1;
                     sx := sx + path{k}.trans.x;
                     sy := sy + path{k}.trans.y;
@@ -245,10 +272,13 @@ MODULE WeldSeam
     ! The whole plan is in memory; no network from here on.
     PROC Weld()
         VAR num i;
+        VAR num after;
 
         ConfL \Off;
         FOR i FROM 1 TO count DO
-            IF kind{i} = 1 OR kind{i} = 3 THEN
+            IF kind{i} = 4 THEN
+                ! A process line: used with its waypoint, before it.
+            ELSEIF kind{i} = 1 OR kind{i} = 3 THEN
                 MoveL path{i}, vApproach, fine, tWeldGun \WObj:=wobj0;
             ELSEIF kind{i - 1} = 1 THEN
                 ! ARC ON: ArcLStart strikes the arc at the seam's start.
@@ -258,18 +288,47 @@ MODULE WeldSeam
                     wdWeld.weld_speed := WELD_SPEED;
                     ArcLStart path{i}, vApproach, smWeld, wdWeld, fine, tWeldGun \WObj:=wobj0;
                 ENDIF
-            ELSEIF kind{i + 1} = 3 THEN
-                ! ARC OFF: ArcLEnd ends the arc at the seam's end.
-                IF DRY_RUN THEN
-                    MoveL path{i}, vWeld, fine, tWeldGun \WObj:=wobj0;
-                ELSE
-                    ArcLEnd path{i}, vWeld, smWeld, wdWeld, fine, tWeldGun \WObj:=wobj0;
-                ENDIF
-            ELSEIF DRY_RUN THEN
-                MoveL path{i}, vWeld, zWeld, tWeldGun \WObj:=wobj0;
             ELSE
-                ArcL path{i}, vWeld, smWeld, wdWeld, zWeld, tWeldGun \WObj:=wobj0;
+                ! The pose line after waypoint i's, past its process line.
+                after := i + 1;
+                IF kind{i + 1} = 4 THEN
+                    after := i + 2;
+                ENDIF
+                SetProcess i;
+                IF kind{after} = 3 THEN
+                    ! ARC OFF: ArcLEnd ends the arc at the seam's end.
+                    IF DRY_RUN THEN
+                        MoveL path{i}, vSeam, fine, tWeldGun \WObj:=wobj0;
+                    ELSE
+                        ArcLEnd path{i}, vSeam, smWeld, wdWeld \Weave:=wvWeld, fine, tWeldGun \WObj:=wobj0;
+                    ENDIF
+                ELSEIF DRY_RUN THEN
+                    MoveL path{i}, vSeam, zWeld, tWeldGun \WObj:=wobj0;
+                ELSE
+                    ArcL path{i}, vSeam, smWeld, wdWeld \Weave:=wvWeld, zWeld, tWeldGun \WObj:=wobj0;
+                ENDIF
             ENDIF
         ENDFOR
+    ENDPROC
+
+    ! The speed and weave of the move into weld waypoint i: its process
+    ! line's, or WELD_SPEED and no weave where it has none or its speed
+    ! is 0.
+    PROC SetProcess(num i)
+        vSeam := vWeld;
+        wdWeld.weld_speed := WELD_SPEED;
+        wvWeld.weave_shape := 0;
+        IF kind{i + 1} = 4 THEN
+            IF speed{i + 1} > 0 THEN
+                wdWeld.weld_speed := speed{i + 1};
+                vSeam.v_tcp := speed{i + 1};
+                IF weaveAmp{i + 1} > 0 AND weaveFreq{i + 1} > 0 THEN
+                    wvWeld.weave_shape := 1;
+                    wvWeld.weave_type := 0;
+                    wvWeld.weave_length := speed{i + 1} / weaveFreq{i + 1};
+                    wvWeld.weave_width := 2 * weaveAmp{i + 1};
+                ENDIF
+            ENDIF
+        ENDIF
     ENDPROC
 ENDMODULE

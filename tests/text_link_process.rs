@@ -1,0 +1,152 @@
+//! The text link with a weld procedure configured, over loopback: a thick
+//! V-groove planned in several passes, pulled in every dialect by the mock
+//! robot as a robot program pulls it (`HELLO,<dialect>,PROCESS`): each
+//! piece of each pass a seam of its own, root first, every weld waypoint
+//! followed by its process line, every seam checked, and the poses, travel
+//! speeds and weaves received those the plan gives.
+
+use std::sync::Arc;
+use std::time::Duration;
+
+use weldseam::config::{Config, ProcessParams};
+use weldseam::convert::{from_proto, to_text};
+use weldseam::joint::JointType;
+use weldseam::mock::camera::CameraOptions;
+use weldseam::mock::text_robot::{PulledSeam, TextRobot, reply_numbers};
+use weldseam::pipeline::Planner;
+use weldseam::pipeline::passes::{self, Motion};
+use weldseam::process::Procedure;
+use weldseam::sim::{JointGeometry, Simulation, demo_scene};
+use weldseam_proto::text::{Dialect, Request, parse_request};
+
+use crate::scenes;
+use crate::util::Cell;
+
+const WAIT: Duration = Duration::from_secs(180);
+
+/// 12 mm plates with a 60° groove 9 mm deep and a 1 mm root gap: more
+/// than one bead fills it, and the torch's nozzle clears the plates at
+/// the root (deeper at this angle, it blocks: `process.torch_blocked`).
+fn thick_groove() -> &'static Simulation {
+    let mut spec = demo_scene(JointType::VButt);
+    spec.joint =
+        JointGeometry::VButt { thickness_mm: 12.0, groove_angle_deg: 60.0, groove_depth_mm: 9.0, root_gap_mm: 1.0 };
+    scenes::by_default_camera(&spec)
+}
+
+fn config() -> Config {
+    let mut c = Config::default();
+    c.server.fresh_frame_timeout = Duration::from_secs(10);
+    c.server.pipeline_threads = 2;
+    c.server.shutdown_grace = Duration::from_secs(60);
+    c.trajectory.step_mm = 20.0;
+    c.process = ProcessParams { procedure: Some(Procedure::example()), plate_thickness_mm: Some(12.0) };
+    c
+}
+
+fn trigger_line(dialect: Dialect, sim: &Simulation) -> String {
+    let convention = to_text::convention(dialect);
+    let numbers = convention.numbers(&sim.pose.to_isometry(Default::default()));
+    let (position, rotation) = dialect.decimals();
+    let fields: Vec<String> = numbers[..convention.numbers_len()]
+        .iter()
+        .enumerate()
+        .map(|(k, v)| format!("{v:.*}", if k < 3 { position } else { rotation }))
+        .collect();
+    format!("TRIGGER,v_butt,{}", fields.join(","))
+}
+
+/// What the procedure cut from a seam, for a failure's message.
+fn process_cut(seam: &weldseam::pipeline::Seam) -> Vec<(usize, usize, &'static str, String)> {
+    let cut = seam.process.as_ref().map(|p| p.cut.as_slice()).unwrap_or_default();
+    cut.iter().map(|c| (c.first, c.last, c.rule.id, c.reason.clone())).collect()
+}
+
+/// Within one unit of the last of `decimals`, and a little for the
+/// rounding either way.
+fn near(a: f64, b: f64, decimals: usize) -> bool {
+    (a - b).abs() <= 1.01 * 10f64.powi(-(decimals as i32))
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn every_dialect_pulls_each_pass_with_its_speeds_and_weave() {
+    let sim = thick_groove();
+    let config = config();
+    let cell = Cell::start(config.clone()).await;
+    let (stop_camera, camera) = cell.camera(vec![Arc::new(sim.cloud.clone())], CameraOptions::default());
+    // Wait for the camera: a PING counts the cameras connected.
+    let mut robot = TextRobot::connect(&cell.daemon.text_addr.to_string(), WAIT).await.unwrap();
+    for _ in 0..100 {
+        if robot.ask("PING").await.unwrap().starts_with("0,1,") {
+            break;
+        }
+        tokio::time::sleep(Duration::from_millis(50)).await;
+    }
+    for dialect in Dialect::ALL {
+        let hello = robot.ask(&format!("HELLO,{},PROCESS", dialect.name())).await.unwrap();
+        assert_eq!(reply_numbers(&hello, dialect, 3), Some(vec![0.0, 2.0, 1.0]), "{hello}");
+        let trigger = trigger_line(dialect, sim);
+        let ok = robot.ask(&trigger).await.unwrap();
+        let status = reply_numbers(&ok, dialect, 3).unwrap_or_default();
+        assert_eq!(status.first(), Some(&0.0), "{dialect:?}: {ok}");
+        let pulled: Vec<PulledSeam> =
+            robot.pull_plan(dialect, status[2] as u64, true).await.unwrap_or_else(|e| panic!("{dialect:?}: {e}"));
+        assert_eq!(pulled.len(), status[1] as usize);
+
+        // The same plan in-process, from the request the daemon read.
+        let Ok(Request::Trigger(line)) = parse_request(&trigger, Some(dialect)) else { panic!("{trigger}") };
+        let request = from_proto::text_plan_request(&line, dialect, config.euler).unwrap();
+        let plan = Planner::new(config.clone()).plan(&sim.cloud, &request).unwrap();
+        let seam = &plan.seams[0];
+        let passes = passes::pass_trajectories(seam).expect("a procedure is configured");
+        let expected: Vec<Vec<(Vec<f64>, Motion)>> = plan
+            .seams
+            .iter()
+            .flat_map(passes::seam_pieces)
+            .map(|piece| piece.into_iter().map(|(w, m)| (to_text::pose(&w, dialect), m.unwrap())).collect())
+            .collect();
+        assert!(passes.pieces.len() >= 2, "{dialect:?}: a 9 mm groove in several passes: {:?}", process_cut(seam));
+        assert_eq!(pulled.len(), expected.len(), "{dialect:?}: one seam on the link per piece of a pass");
+        let (position, rotation) = dialect.decimals();
+        let unit = if dialect == Dialect::Ur { 0.001 } else { 1.0 };
+        let mut weaving = 0;
+        for (k, (got, want)) in pulled.iter().zip(&expected).enumerate() {
+            assert_eq!(got.weld.len(), want.len(), "{dialect:?} seam {}", k + 1);
+            for ((pose, process), (want_pose, motion)) in got.weld.iter().zip(want) {
+                for (i, (a, b)) in pose.iter().zip(want_pose).enumerate() {
+                    assert!(
+                        near(*a, *b, if i < 3 { position } else { rotation }),
+                        "{dialect:?}: {pose:?} {want_pose:?}"
+                    );
+                }
+                let [speed, amplitude, frequency] = process.expect("a process line after each weld line");
+                assert!(near(speed, motion.travel_speed_mm_s * unit, position), "{dialect:?}: {speed} for {motion:?}");
+                assert!(speed > 0.0);
+                assert!(near(amplitude, motion.weave_amplitude_mm * unit, position), "{amplitude} for {motion:?}");
+                assert!(near(frequency, motion.weave_frequency_hz, 3), "{frequency} for {motion:?}");
+                weaving += usize::from(amplitude > 0.0);
+            }
+        }
+        // The root is the first seam, and only it lies in the gap: the
+        // only pass that may weave.
+        let root_points = passes.pieces.iter().filter(|p| p.pass == passes::PassId::Root).count();
+        eprintln!(
+            "{dialect:?}: {} seams on the link ({root_points} of the root), {} woven points",
+            pulled.len(),
+            weaving
+        );
+        assert_eq!(passes.pieces[0].pass, passes::PassId::Root);
+    }
+
+    // A program that does not ask gets the same seams, poses only.
+    let hello = robot.ask("HELLO,kuka").await.unwrap();
+    assert_eq!(hello, "0,2,0\r\n");
+    let ok = robot.ask(&trigger_line(Dialect::Kuka, sim)).await.unwrap();
+    let status = reply_numbers(&ok, Dialect::Kuka, 3).unwrap();
+    let pulled = robot.pull_plan(Dialect::Kuka, status[2] as u64, false).await.unwrap();
+    assert!(pulled.len() >= 3 && pulled.iter().all(|s| s.weld.iter().all(|(_, p)| p.is_none())));
+    drop(robot);
+    let _ = stop_camera.send(());
+    camera.await.unwrap();
+    cell.shutdown().await;
+}

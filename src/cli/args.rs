@@ -96,6 +96,13 @@ pub enum SuiteArg {
     /// straight on (`sim::groove_width_suite`), planned as v_butt and
     /// auto: a seam more than 2 mm off the root is a confident wrong one.
     GrooveWidth,
+    /// 20 scenes of the weld process (`sim::process_suite`): an I-butt
+    /// whose gap opens from 0.5 to 3 mm, a butt with high-low, a 20 mm
+    /// plate's 60 degree V-groove, a clamp 15 mm beside a seam, a tee with
+    /// a short web; planned with the example procedure (or the config's)
+    /// and scored on the figures along the seam, the deposit, the passes
+    /// and the torch's clearance.
+    Process,
 }
 
 /// `--joint-request` of `eval`: how each scene's plan names its joint.

@@ -13,6 +13,7 @@ pub mod eval;
 pub mod eval_curved;
 pub mod eval_family;
 pub mod eval_groove_width;
+pub mod eval_process;
 pub mod eval_real;
 pub mod inspect;
 pub mod logging;

@@ -63,7 +63,7 @@ pub struct FigureErrors {
 }
 
 impl FigureErrors {
-    fn add(&mut self, measured: Option<Measured>, truth: Option<f64>, relative: bool) {
+    pub(super) fn add(&mut self, measured: Option<Measured>, truth: Option<f64>, relative: bool) {
         let Some(truth) = truth else { return };
         let Some(m) = measured else {
             self.missing += 1;

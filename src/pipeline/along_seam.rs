@@ -151,8 +151,18 @@ pub(super) fn measure(
     grid: Option<&CameraGrid>,
     stations: &[f64],
 ) -> Vec<JointFigures> {
-    let half = 0.5 * slab_length_mm(evidence.point_spacing_mm);
-    stations.par_iter().map(|&s| at_station(evidence, cloud, grid, s, (s - half, s + half))).collect()
+    let length = slab_length_mm(evidence.point_spacing_mm);
+    // A slab centred on a station near the seam's end would lie partly
+    // past it, where the edges have no samples: it is slid along the seam
+    // to lie within the stations' span (the figure is still read at the
+    // station, on the lines fitted in the slab).
+    let first = stations.iter().copied().fold(f64::INFINITY, f64::min);
+    let last = stations.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    let slab = |s: f64| {
+        let from = (s - 0.5 * length).min(last - length).max(first);
+        (from, from + length)
+    };
+    stations.par_iter().map(|&s| at_station(evidence, cloud, grid, s, slab(s))).collect()
 }
 
 /// The figures in the slab `span` round station `s`.

@@ -222,6 +222,20 @@ fn section(
     }
 }
 
+/// The passes and settings the procedure gives a joint measured as `f`,
+/// the torch aside: what a waypoint cut only for its torch would be
+/// welded with where the torch could reach it (the eval scores a groove's
+/// layout there), or why there are none.
+pub fn layout_for(
+    procedure: &Procedure,
+    joint: JointType,
+    configured_mm: Option<f64>,
+    f: &JointFigures,
+) -> Result<Layout, String> {
+    let (thickness_mm, section) = section(procedure, joint, configured_mm, f)?;
+    weld_station(procedure, joint, thickness_mm, &section).map_err(|e| e.to_string())
+}
+
 fn at_waypoint(
     procedure: &Procedure,
     joint: JointType,

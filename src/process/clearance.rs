@@ -103,8 +103,15 @@ fn radius_at(torch: &Torch, s: f64) -> Option<f64> {
     Some(r + torch.margin_mm)
 }
 
-/// The first cloud point inside the torch standing at `point` along
-/// `axis` (nearest the aim point), if any.
+/// The fewest cloud points inside the torch that make a contact: a
+/// surface the torch could touch returns many points at the cloud's
+/// spacing, while a structured-light camera's sparse outliers (about one
+/// pixel in ten thousand, tens of millimetres off any surface) put a lone
+/// point in the air, which is no matter to avoid.
+pub const MIN_CONTACT_POINTS: usize = 3;
+
+/// The cloud point inside the torch standing at `point` along `axis`
+/// nearest the aim point, when at least [`MIN_CONTACT_POINTS`] are inside.
 pub fn contact(torch: &Torch, obstacles: &Obstacles, point: &Vec3, axis: &Vec3) -> Option<Vec3> {
     let axis = axis.normalize();
     let start = torch.nozzle_to_work_mm;
@@ -115,25 +122,33 @@ pub fn contact(torch: &Torch, obstacles: &Obstacles, point: &Vec3, axis: &Vec3) 
     let piece = (torch.nozzle_diameter_mm / 2.0).max(1.0);
     let mut s0 = start;
     let mut first: Option<(f64, Vec3)> = None;
-    while s0 < end && first.is_none() {
+    let mut inside_count = 0;
+    // Piece by piece up the axis, each piece's points all counted (a
+    // point on a boundary in the piece below it only), until enough are
+    // inside: the nearest of them is then the nearest of all.
+    while s0 < end && inside_count < MIN_CONTACT_POINTS {
         let s1 = (s0 + piece).min(end);
+        let last_piece = s1 >= end;
         let widest = radius_at(torch, s1).or(radius_at(torch, s0)).unwrap_or(0.0);
         let centre = point + axis * ((s0 + s1) / 2.0);
         let reach = (widest * widest + ((s1 - s0) / 2.0).powi(2)).sqrt();
         for q in obstacles.near(&centre, reach) {
             let d = q - point;
             let s = d.dot(&axis);
-            if s < s0 || s > s1 {
+            if s < s0 || s > s1 || (s == s1 && !last_piece) {
                 continue;
             }
             let inside = radius_at(torch, s).is_some_and(|r| (d - axis * s).norm_squared() < r * r);
-            if inside && first.is_none_or(|(best, _)| s < best) {
-                first = Some((s, q));
+            if inside {
+                inside_count += 1;
+                if first.is_none_or(|(best, _)| s < best) {
+                    first = Some((s, q));
+                }
             }
         }
         s0 = s1;
     }
-    first.map(|(_, q)| q)
+    first.filter(|_| inside_count >= MIN_CONTACT_POINTS).map(|(_, q)| q)
 }
 
 /// The torch angles at a station: the procedure's, or the nearest within

@@ -35,7 +35,7 @@ fn tee_station(y: f64) -> Station {
 /// The straightforward reference: every point tested against the solid.
 fn contact_by_scan(torch: &Torch, points: &[Vec3], point: &Vec3, axis: &Vec3) -> Option<f64> {
     let axis = axis.normalize();
-    points
+    let inside: Vec<f64> = points
         .iter()
         .filter_map(|q| {
             let d = q - point;
@@ -43,7 +43,23 @@ fn contact_by_scan(torch: &Torch, points: &[Vec3], point: &Vec3, axis: &Vec3) ->
             let r = radius_at(torch, s)?;
             ((d - axis * s).norm_squared() < r * r).then_some(s)
         })
-        .min_by(f64::total_cmp)
+        .collect();
+    (inside.len() >= MIN_CONTACT_POINTS).then(|| inside.into_iter().min_by(f64::total_cmp)).flatten()
+}
+
+/// A camera's lone outlier in the air over the seam is no contact; a few
+/// points together are.
+#[test]
+fn a_lone_outlier_in_the_torch_is_no_contact_and_a_surface_is() {
+    let t = torch();
+    let station = tee_station(0.0);
+    let axis = station.axis(0.0, 10.0);
+    let up = |s: f64| station.point + axis.normalize() * s;
+    let lone = Obstacles::new([up(30.0)]);
+    assert_eq!(contact(&t, &lone, &station.point, &axis), None);
+    let few: Vec<Vec3> = (0..MIN_CONTACT_POINTS).map(|k| up(30.0 + k as f64)).collect();
+    let hit = contact(&t, &Obstacles::new(few), &station.point, &axis).expect("a surface's few points touch");
+    assert!((hit - up(30.0)).norm() < 1e-4, "the nearest of them: {hit:?}");
 }
 
 #[test]

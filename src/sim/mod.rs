@@ -15,6 +15,7 @@ pub mod draw;
 pub mod faults;
 pub mod groove_width;
 pub mod noise;
+pub mod process_scenes;
 pub mod render;
 pub mod root_land;
 pub mod scenarios;
@@ -38,6 +39,7 @@ pub use draw::Draw;
 pub use faults::{Fault, FaultKind, RightAnswer};
 pub use groove_width::{WidenedGroove, groove_width_suite};
 pub use noise::NoiseSpec;
+pub use process_scenes::{ProcessCase, ProcessScene, process_suite};
 pub use root_land::root_land_suite;
 pub use suite::{Framing, eval_suite, fault_suite, framing, hard_suite};
 pub use tee_multi::corner_suite;
@@ -484,8 +486,16 @@ impl Simulation {
 /// Simulates one capture. Run [`SceneSpec::validate`] first on untrusted
 /// parameters: an invalid scene renders, but not meaningfully.
 pub fn simulate(spec: &SceneSpec, camera: &CameraModel) -> Simulation {
+    simulate_scene(spec, camera, scene::build_scene(spec))
+}
+
+/// [`simulate`] of the solids `scene` holds (workpiece frame) in place of
+/// those `spec` builds: a family whose workpiece no [`JointGeometry`]
+/// describes (plates turned or raised, a block beside the seam) renders
+/// its own solids, with the camera, noise and truth of `spec`.
+pub fn simulate_scene(spec: &SceneSpec, camera: &CameraModel, scene: scene::Scene) -> Simulation {
     let workpiece_from_camera = spec.workpiece_from_camera();
-    let scene = scene::build_scene(spec).transformed(&workpiece_from_camera.inverse());
+    let scene = scene.transformed(&workpiece_from_camera.inverse());
     let view = render::CameraView::new(scene, camera, spec.noise.max_incidence_deg);
     let mut exact = view.trace_depths();
     faults::erase_dropout_bands(&mut exact, spec, camera);

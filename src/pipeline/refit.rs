@@ -298,7 +298,7 @@ pub fn largest_step(
     [inside_mm, outside_mm]: [f64; 2],
     min_share: f64,
 ) -> Option<Step> {
-    let mut samples: Vec<(f64, f64)> = points
+    let samples: Vec<(f64, f64)> = points
         .iter()
         .map(|p| {
             let s = curve.axes.feature(p);
@@ -306,6 +306,15 @@ pub fn largest_step(
         })
         .filter(|&(_, r)| (-inside_mm..=outside_mm).contains(&r))
         .collect();
+    step_in(samples, min_share)
+}
+
+/// The largest step in residuals given as `(s, r)` (along the feature
+/// axis, mm; off the fitted line, mm), with at least `min_share` of them
+/// on either side of it: [`largest_step`]'s judgement on samples already
+/// measured, such as a V-groove's root read station by station
+/// ([`super::groove::RootLine`]).
+pub fn step_in(mut samples: Vec<(f64, f64)>, min_share: f64) -> Option<Step> {
     samples.sort_by(|x, y| x.0.total_cmp(&y.0));
     let n = samples.len();
     let least = ((min_share * n as f64).ceil() as usize).max(2);

@@ -55,6 +55,7 @@ const TIGHT_CLUSTER_SPACINGS: f64 = 1.6;
 
 mod lap_edge;
 mod plates;
+mod root_weld;
 
 use plates::plan_plates;
 

@@ -76,8 +76,10 @@ pub static EDGE_SAMPLES_ON_TWO_LINES: Rule = Rule {
              each along a good part of the edge and a few point spacings apart across it, are an edge cut short \
              along one of them by a dropout or a shadow: a fit runs between the two, its residual still small, \
              or follows the cut-short run with the true edge's samples too few to count as beyond it. Read on \
-             the edges that place the weld (both of a butt joint, a lap's upper one). `quality.warn_only` may \
-             name the gate (`edge_cut_short`) to plan the seam with a warning instead.",
+             the edges that place the weld (both of a butt joint, a lap's upper one), or for a V-groove welded \
+             on its root (`groove.weld_on_bevel_midline`) on the root's samples, one a station, where a step \
+             says a flank's foot was cut short along one run. `quality.warn_only` may name the gate \
+             (`edge_cut_short`) to plan the seam with a warning instead.",
     parameters: &[Parameter {
         name: "max_edge_step_spacings",
         unit: "point spacings",
@@ -113,8 +115,10 @@ pub static EDGE_FIT_RESIDUAL: Rule = Rule {
              the root at a time, follow a curve off the straight seam, where noise scatters the averages \
              about it. Where that trend leaves the straight root by more than three standard errors of the \
              averages' own scatter and more than a point spacing, the root bends: not a plane weld, and a \
-             straight seam would be welded millimetres off it. `quality.warn_only` may name the gate \
-             (`edge_fit_residual`) to plan the seam with a warning instead.",
+             straight seam would be welded millimetres off it. For a V-groove welded on its root \
+             (`groove.weld_on_bevel_midline`), the fit is the root line through the root's samples, one a \
+             station, and they are what bends. `quality.warn_only` may name the gate (`edge_fit_residual`) to \
+             plan the seam with a warning instead.",
     parameters: &[
         Parameter {
             name: "max_edge_fit_rms_spacings",
@@ -163,7 +167,9 @@ pub static EDGE_COVERAGE: Rule = Rule {
              has none (a gap narrower than about two point spacings, a shadow, a reflection), the seam is \
              extrapolated from the rest, and a plate that bends or a gap that opens there is not seen. Read on \
              the robust method's edges; for a fillet root, on the web's face down to the flange (or the web \
-             top's edge) and the flange up to the web. `quality.warn_only` may name the gate (`edge_coverage`) \
+             top's edge) and the flange up to the web; for a V-groove welded on its root \
+             (`groove.weld_on_bevel_midline`), on the stations where both flanks show the root. \
+             `quality.warn_only` may name the gate (`edge_coverage`) \
              to plan the seam with a warning instead.",
     parameters: &[Parameter {
         name: "min_edge_coverage",

@@ -104,10 +104,23 @@ pub static WELD_ON_BEVEL_MIDLINE: Rule = Rule {
              the on-plane tolerance for most of a millimetre, more under noise, and the bevel turned to the camera, \
              seen more densely, loses more. Each bevel's fitted line carried up to the plates' top meets it at the \
              groove's true edge, so where both sides show a sloped face the weld line (Eq. 32) is moved onto the \
-             midline of those two edges; with no bevel on either side it stays on the weld edges' midline.",
-    parameters: &[],
+             midline of those two edges; with no bevel on either side it stays on the weld edges' midline. \
+             A groove cut by hand or by a torch has ragged top edges, or one cut back along part of the seam, \
+             while its flanks run clean to a root that did not move: where the weld so placed fails a gate that \
+             reads the top edges (samples beyond or on two lines, a fit residual, the joint's coverage, the \
+             plates seen past the seam's ends) and both sides show a sloped plane face down to the root, the \
+             weld is placed on the root itself, midway between the two flanks' feet at the groove's depth, \
+             station by station along every stretch either edge was seen, its ends where both flanks show it; \
+             the same gates then read the root's own samples in place of the edges'.",
+    parameters: &[Parameter {
+        name: "MAX_FLANK_RMS_SPACINGS",
+        unit: "point spacings",
+        meaning: "largest RMS of a flank the root is read from",
+        source: Source::Constant { file: "src/pipeline/groove/root.rs", name: "MAX_FLANK_RMS_SPACINGS" },
+    }],
     fires: &[
         "src/pipeline/groove/tests.rs::a_v_groove_s_bevels_place_its_edges_where_the_edges_given_are_read_inside_it",
+        "src/sim/groove_width.rs::a_groove_cut_back_along_part_of_its_seam_is_welded_on_its_root",
     ],
     holds: &["tests/joints.rs::auto_names_each_joint_measures_the_groove_and_plans_it_within_the_bar"],
 };

@@ -210,6 +210,23 @@ mod tests {
         eprintln!("{within} of {} plans within {WITHIN_MM} mm", 2 * (GROOVE_WIDTH_SCENES - GROOVE_WIDTH_HOLDOUT));
     }
 
+    /// Tuning scenes whose re-cut top edge fails the gates that read a top
+    /// edge (its samples beyond its line, its run seen along part of the
+    /// joint only: `edge.samples_beyond_line`, `seam.stops_short_of_joint`
+    /// before the root was read from the flanks) are welded on the root
+    /// the flanks place (`groove.weld_on_bevel_midline`), within the bar.
+    #[test]
+    fn a_groove_cut_back_along_part_of_its_seam_is_welded_on_its_root() {
+        let suite = groove_width_suite(Draw::Documented);
+        for k in [4, 5, 7] {
+            let scene = &suite[k];
+            match scene.plan(RequestedJoint::Type(JointType::VButt)) {
+                Ok(worst_mm) => assert!(worst_mm <= WITHIN_MM, "{}: {worst_mm:.2} mm off the root", scene.name),
+                Err(rule) => panic!("{} refused by {rule}", scene.name),
+            }
+        }
+    }
+
     /// The held-out seeds, run once when the planner is frozen: the
     /// outcomes are printed for the report, never tuned on.
     #[test]

@@ -6,7 +6,7 @@
 use crate::geometry::MAD_PER_SIGMA;
 
 use super::points::{Across, STATIONS, station_share};
-use super::profile::{Face, LineAlong, MIN_FACE_POINTS};
+use super::profile::{Face, LineAlong, MIN_FACE_POINTS, StationLine};
 
 /// How far inside the probe's cut at the edges given, in sigmas of a
 /// face's fit across the seam, its points must lie to place its top
@@ -59,6 +59,15 @@ const FOOT_QUANTILE: f64 = 0.1;
 /// A face whose foot comes within this many point spacings of the probe's
 /// bottom may go on below it: its foot is not taken for the root.
 const BOTTOM_MARGIN_SPACINGS: f64 = 2.0;
+
+/// A station's own line across the face is fitted from at least this many
+/// of the face's kept points there, spread over at least this many point
+/// spacings in depth; else the station takes the face's slope and only
+/// its own offset. A groove cut by hand changes its bevel along the seam
+/// (a wider stretch has a shallower bevel from the same foot), which one
+/// slope for the whole face would carry to the wrong foot.
+const MIN_STATION_POINTS: usize = 6;
+const MIN_STATION_DEPTH_SPACINGS: f64 = 2.0;
 
 /// The slopes `dt/dh` of the camera's and the projector's rays at the
 /// seam.
@@ -178,6 +187,7 @@ pub(super) fn fit_face(
     };
     let foot_hidden = hidden_below(view.camera) || hidden_below(view.projector);
     let top = top_line(&kept, &line, half_opening - 0.5 * spacing, middle_s);
+    let stations = station_lines(&above, &kept, &line, spacing);
     Some(Face {
         side,
         points: kept.len(),
@@ -192,7 +202,57 @@ pub(super) fn fit_face(
         foot_at_probe_bottom: reaches_bottom && floor_mm.is_none(),
         foot_on_floor: floor_mm.is_some(),
         top,
+        stations,
     })
+}
+
+/// The face's line `|t| = c - h tan α` at each station along the seam:
+/// fitted to the station's own points on the side (`points`), trimmed as
+/// the face's line is, where they span depth enough
+/// ([`MIN_STATION_POINTS`], [`MIN_STATION_DEPTH_SPACINGS`]) and slope as
+/// a face does; else the face's slope through the median offset of the
+/// face's `kept` points there; None where the station has too few.
+fn station_lines(points: &[&Across], kept: &[&Across], line: &Line, spacing: f64) -> [Option<StationLine>; STATIONS] {
+    let by_station = |points: &[&Across]| {
+        let mut by: Vec<Vec<(f64, f64, f64)>> = vec![Vec::new(); STATIONS];
+        for p in points {
+            by[p.station].push((p.s, p.h, p.t.abs()));
+        }
+        by
+    };
+    let (own, face) = (by_station(points), by_station(kept));
+    std::array::from_fn(|k| {
+        let local = station_line(&own[k], spacing);
+        let points = &face[k];
+        if local.is_some() || points.len() < MIN_STATION_POINTS {
+            return local;
+        }
+        let s = points.iter().map(|p| p.0).sum::<f64>() / points.len() as f64;
+        let mut offsets: Vec<f64> = points.iter().map(|p| p.2 - line.slope * p.1).collect();
+        let middle = offsets.len() / 2;
+        let intercept = *offsets.select_nth_unstable_by(middle, f64::total_cmp).1;
+        Some(StationLine { s, intercept, slope: line.slope })
+    })
+}
+
+/// One station's own line through its `(s, h, |t|)` points: least squares,
+/// then twice the points within [`TRIM_SIGMA`] robust sigmas of it; None
+/// unless enough of them span depth enough and it slopes as a face does.
+fn station_line(points: &[(f64, f64, f64)], spacing: f64) -> Option<StationLine> {
+    let mut kept: Vec<(f64, f64, f64)> = points.to_vec();
+    let mut line = fit_line(kept.iter().map(|p| (p.1, p.2)))?;
+    for _ in 0..2 {
+        let mut residuals: Vec<f64> = points.iter().map(|p| (p.2 - line.at(p.1)).abs()).collect();
+        let middle = residuals.len() / 2;
+        let mad = *residuals.select_nth_unstable_by(middle, f64::total_cmp).1;
+        let band = (TRIM_SIGMA * mad / MAD_PER_SIGMA).max(MIN_BAND_SPACINGS * spacing);
+        kept = points.iter().copied().filter(|p| (p.2 - line.at(p.1)).abs() <= band).collect();
+        line = fit_line(kept.iter().map(|p| (p.1, p.2)))?;
+    }
+    let (low, high) = kept.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), p| (l.min(p.1), h.max(p.1)));
+    let enough = kept.len() >= MIN_STATION_POINTS && high - low >= MIN_STATION_DEPTH_SPACINGS * spacing;
+    let s = kept.iter().map(|p| p.0).sum::<f64>() / kept.len() as f64;
+    (enough && line.slope < 0.0).then_some(StationLine { s, intercept: line.intercept, slope: line.slope })
 }
 
 /// Where a face fitted as `line` meets the plates' top: each of its `kept`

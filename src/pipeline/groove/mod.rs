@@ -47,17 +47,35 @@
 //! near enough the midline for the land to be narrow beside the groove's
 //! opening, shows the root at the land's depth.
 //!
+//! Where the weld goes. The paper's rule (Eq. 32) places a V-groove's
+//! weld from its top edges, their midline sunk by the depth; it holds
+//! where the edges are straight lines a machine cut. A groove cut by hand
+//! or by a torch has top edges that scatter millimetres (coboweld/barpoints:
+//! 4 to 5 mm) or step back along part of the seam, while its flanks run
+//! clean to a root that did not move. The robust rule reads the root from
+//! the flanks: each face is also fitted station by station along the seam
+//! (its own slope where its points there span depth enough), and the root
+//! lies midway between the two faces' feet at the groove's depth (where a
+//! sharp V's flanks meet, the middle of a root land or of a root gap); a
+//! line through those midpoints is the root ([`RootLine`], [`root`]), and
+//! their scatter about it, a step between two runs of them and the share
+//! of the seam where both flanks show it are the root's own evidence. The
+//! planner welds on it, and judges that evidence by the gates a top edge's
+//! samples would face, when the top edges fail those gates
+//! (`groove.weld_on_bevel_midline`).
+//!
 //! The stage's files, each one concern: [`points`] reads the points
 //! between the edges (the pixels under the probed box, those on a
 //! surface), [`fit`] fits each side's face and finds its depth,
-//! [`profile`] is what was found and what it says the joint is, and
-//! [`error`] why a joint is refused; this file holds the entry points,
-//! [`probe`] and [`judge`].
+//! [`profile`] is what was found and what it says the joint is, [`root`]
+//! the root the flanks place, and [`error`] why a joint is refused; this
+//! file holds the entry points, [`probe`] and [`judge`].
 
 mod error;
 mod fit;
 mod points;
 mod profile;
+mod root;
 #[cfg(test)]
 mod tests;
 
@@ -73,7 +91,8 @@ use super::gather::gather_filter_map;
 use super::refit::SeamCurve;
 
 pub use error::GrooveError;
-pub use profile::{Between, Face, GrooveProfile, LineAlong, Standing};
+pub use profile::{Between, Face, GrooveProfile, LineAlong, Standing, StationLine};
+pub use root::RootLine;
 
 use fit::{Views, fit_face};
 use points::{Across, STATIONS, SURFACE_RADIUS_SPACINGS, on_surfaces, rows_under, station_share};
@@ -270,5 +289,12 @@ pub fn probe(cloud: &PointCloud, setting: &ProbeSetting) -> GrooveProfile {
             fit_face(&points, side, spacing, (top_margin, bottom, floor_mm), &view, half_opening, middle)
         })
         .collect();
-    GrooveProfile { point_spacing_mm: spacing, opening_mm: 2.0 * half_opening, points_below, faces, standing }
+    GrooveProfile {
+        point_spacing_mm: spacing,
+        opening_mm: 2.0 * half_opening,
+        points_below,
+        faces,
+        standing,
+        span: (s0, s1),
+    }
 }

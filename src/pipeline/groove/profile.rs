@@ -3,11 +3,12 @@
 //! its groove.
 
 use super::error::GrooveError;
+use super::points::STATIONS;
 
 /// A face between these angles from the plate normal is a bevel: V-groove
 /// bevels are 15 to 45 degrees (groove angles of 30 to 90), and a square
 /// gap's wall, seen through noise, a few degrees at most.
-const MIN_BEVEL_DEG: f64 = 10.0;
+pub(super) const MIN_BEVEL_DEG: f64 = 10.0;
 const MAX_BEVEL_DEG: f64 = 60.0;
 
 /// The flattest face whose top line places a groove's edge, degrees from
@@ -15,7 +16,7 @@ const MAX_BEVEL_DEG: f64 = 60.0;
 /// judged a V may still have bevels past [`MAX_BEVEL_DEG`] (a 124° groove
 /// is 62° a side); one within 15° of the plates' own plane is hardly a
 /// face beside their noise.
-const MAX_SLOPED_FACE_DEG: f64 = 75.0;
+pub(super) const MAX_SLOPED_FACE_DEG: f64 = 75.0;
 
 /// The fewest points a face is fitted from, and the least share of the
 /// seam's stations it must be seen at: a face is seen along the seam, not
@@ -79,6 +80,27 @@ pub struct Face {
     /// Where the face meets the plates' top (`h = 0`), as a line of `|t|`
     /// along the seam.
     pub top: LineAlong,
+    /// The face's own line at each station along the seam, where it has
+    /// points there: where its foot lies station by station
+    /// ([`GrooveProfile::root`]).
+    pub stations: [Option<StationLine>; STATIONS],
+}
+
+/// One station's line of a face across the seam, `|t| = intercept + slope
+/// h` (the slope is `-tan α`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StationLine {
+    /// The mean position along the seam of the station's points, mm.
+    pub s: f64,
+    pub intercept: f64,
+    pub slope: f64,
+}
+
+impl StationLine {
+    /// `|t|` at depth `h`.
+    pub fn at(&self, h: f64) -> f64 {
+        self.intercept + self.slope * h
+    }
 }
 
 /// A distance across the seam that changes linearly along it: a bevel's
@@ -113,13 +135,13 @@ impl Face {
         self.angle_deg < MIN_BEVEL_DEG && self.is_plane(spacing_mm)
     }
 
-    fn is_plane(&self, spacing_mm: f64) -> bool {
+    pub(super) fn is_plane(&self, spacing_mm: f64) -> bool {
         self.is_seen() && self.rms_mm <= MAX_FACE_RMS_SPACINGS * spacing_mm
     }
 
     /// Whether the points are evidence of a surface at all: enough of
     /// them, along the seam, not a veil along the camera's rays.
-    fn is_seen(&self) -> bool {
+    pub(super) fn is_seen(&self) -> bool {
         !self.along_rays && self.points >= MIN_FACE_POINTS && self.station_share >= MIN_STATION_SHARE
     }
 
@@ -160,6 +182,8 @@ pub struct GrooveProfile {
     pub faces: Vec<Face>,
     /// A plate standing between the edges, when one does.
     pub standing: Option<Standing>,
+    /// The stretch along the seam's feature axis probed, mm.
+    pub span: (f64, f64),
 }
 
 /// What the profile says the joint is.

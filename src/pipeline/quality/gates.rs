@@ -69,6 +69,9 @@ pub enum FittedEdges {
     /// returning no points): that edge's line, under the web top's edge,
     /// and the flange beside it.
     FlangeEdge,
+    /// A V-groove's root read from its two flanks station by station (its
+    /// top edges ragged): both figures are the root line's.
+    GrooveRoot,
 }
 
 impl FittedEdges {
@@ -79,6 +82,10 @@ impl FittedEdges {
             (FittedEdges::WeldEdges, k) => {
                 (format!("weld edge {}", k + 1), "its boundary samples do not lie on one line")
             }
+            (FittedEdges::GrooveRoot, _) => (
+                "the groove's root, read from its two flanks station by station,".into(),
+                "the flanks' feet do not run along one line",
+            ),
             (FittedEdges::WebFace, 0) => ("the web's side face".into(), plane),
             (FittedEdges::FlangeEdge, 0) => {
                 ("the flange's edge against the web".into(), "its innermost points do not lie on one line")
@@ -138,16 +145,29 @@ fn cut_short(seam: &SeamEvidence, limits: &QualityParams) -> Option<GateFailure>
     let edge = larger(steps.map(|s| s.map_or(0.0, |s| s.size_mm.abs())));
     let step = steps[edge]?;
     let spacings = step.size_mm.abs() / spacing;
+    // The root's samples, or an edge's, and what two lines of them say.
+    let (samples, of, cut) = match seam.fits {
+        FittedEdges::GrooveRoot => (
+            "the groove's root, read from its two flanks station by station, lies".to_string(),
+            "the seam",
+            "a flank's foot may be cut short along one of them (a dropout, or spatter on the flank), and which \
+             line is the root is not clear"
+                .to_string(),
+        ),
+        _ => (
+            format!("weld edge {}'s boundary samples lie", edge + 1),
+            "the edge",
+            format!("the edge may be cut short along one of them {unclear}"),
+        ),
+    };
     (spacings > limits.max_edge_step_spacings).then(|| GateFailure {
         rule: &rules::EDGE_SAMPLES_ON_TWO_LINES,
         gate: Gate::EdgeCutShort,
         value: spacings,
         limit: limits.max_edge_step_spacings,
         message: format!(
-            "weld edge {}'s boundary samples lie on two lines {:.2} mm apart ({spacings:.1} point spacings of \
-             {spacing:.2} mm, above {:.1}), {:.0} % of them on the shorter, split {:+.0} mm from the middle of \
-             the edge: the edge may be cut short along one of them {unclear}",
-            edge + 1,
+            "{samples} on two lines {:.2} mm apart ({spacings:.1} point spacings of {spacing:.2} mm, above \
+             {:.1}), {:.0} % of them on the shorter, split {:+.0} mm from the middle of {of}: {cut}",
             step.size_mm.abs(),
             limits.max_edge_step_spacings,
             100.0 * step.shorter_share,
@@ -205,7 +225,13 @@ pub fn check(seam: &SeamEvidence, limits: &QualityParams) -> Vec<GateFailure> {
         let (edge, seen) = if e[0] <= e[1] { (0, e[0]) } else { (1, e[1]) };
         if seen < limits.min_edge_coverage {
             let figures = percents_that_differ(seen, limits.min_edge_coverage);
-            let message = if tee {
+            let message = if seam.fits == FittedEdges::GrooveRoot {
+                format!(
+                    "both flanks of the groove show its root along {} % of the seam's {:.0} mm, below {} %: the \
+                     root is not seen along the stretch planned",
+                    figures.0, seam.length_mm, figures.1,
+                )
+            } else if tee {
                 format!(
                     "{} is seen along {} % of the root's {:.0} mm, below {} %: the root is not seen along \
                      the stretch planned",

@@ -12,7 +12,7 @@ use super::super::background::{Layout, PlaneCluster, Workpiece};
 use super::super::boundary::{self, Boundary, BoundaryParams, CoarseEdge};
 use super::super::context::{self, Context, EdgeFigures, PlannedWeld};
 use super::super::edge_points::{EdgeCriterion, FullCount};
-use super::super::groove::{self, GrooveProfile};
+use super::super::groove::{self, GrooveProfile, RootLine};
 use super::super::quality::{self, GateFailure, SeamQuality};
 use super::super::ransac::{self, EdgeLine};
 use super::super::refit::{self, CurveFit, SeamAxes, SeamCurve};
@@ -20,6 +20,7 @@ use super::super::straightness::{RootBend, Samples, bend_of};
 use super::super::trace::TracedWeld;
 use super::super::{PlanError, SeamAssessment, SeamCoverage, Stage, view_border, weld_edges, weld_equation};
 use super::lap_edge::check_lap_edge;
+use super::root_weld;
 use super::{Front, Refused, SeenAs, admit};
 use crate::rules;
 
@@ -30,7 +31,7 @@ const MIN_DIRECTION_NORM: f64 = 1e-9;
 /// The shortest run of a weld edge's samples, as a share of them, that a
 /// step between two lines is read across: shorter runs are a tack weld's
 /// or a spatter's, and the share of samples beyond the line judges them.
-const MIN_STEP_RUN_SHARE: f64 = 0.1;
+pub(super) const MIN_STEP_RUN_SHARE: f64 = 0.1;
 
 /// A butt joint's or a lap's weld from its two plates: edge points through
 /// the quality gates (3.4 to 4.3). `joint` is the joint known from the
@@ -53,8 +54,23 @@ pub(super) fn plan_plates(
     let (refitted, beside) = refit_weld_edges(ctx, &workpiece, layout, &lines, pick, normal).seen_as(joint)?;
     let groove = judge_groove(ctx, &workpiece, layout, &refitted, layers, joint)?;
     let decided = Some(groove.joint);
-    let placed = place_weld(ctx, &workpiece, layout, &refitted, beside, &groove, normal).seen_as(decided)?;
-    let (quality, warnings) = check_gates(ctx, &workpiece, &refitted, &groove, &placed).seen_as(decided)?;
+    let placed = place_weld(ctx, &workpiece, layout, &refitted, beside.clone(), (&groove, None), normal);
+    let checked = placed.and_then(|p| Ok((check_gates(ctx, &workpiece, &refitted, &groove, &p, None)?, p)));
+    // Ragged top edges over clean flanks: the weld on the groove's root.
+    // Along every stretch either edge was seen: a ragged edge's fit may
+    // hold one run of it only.
+    let [c0, c1] = refitted.fits.each_ref().map(|f| &f.curve);
+    let either = (c0.s_min.min(c1.s_min), c0.s_max.max(c1.s_max));
+    let reprobe = || probe_groove(ctx, &workpiece, &refitted, either);
+    let root = root_weld::wanted(&checked, groove.joint, reprobe);
+    let ((quality, warnings), placed) = match root {
+        Some(root) => {
+            let placed = place_weld(ctx, &workpiece, layout, &refitted, beside, (&groove, Some(&root)), normal);
+            placed.and_then(|p| Ok((check_gates(ctx, &workpiece, &refitted, &groove, &p, Some(&root))?, p)))
+        }
+        None => checked,
+    }
+    .seen_as(decided)?;
     let (axes, boundaries, spacing) = (refitted.axes, &refitted.boundaries, refitted.seam_spacing);
     let along = along_seam::Evidence::of_plates(ctx.config, &workpiece, groove.joint, axes, boundaries, spacing);
     let PlacedWeld { weld, span: (s0, s1), coverage, .. } = placed;
@@ -346,27 +362,13 @@ fn judge_groove(
     layers: String,
     joint: Option<JointType>,
 ) -> Result<Groove, Refused> {
-    let camera = &ctx.config.camera;
-    let cloud = ctx.cloud;
-    let (fits, seam_spacing) = (&refitted.fits, refitted.seam_spacing);
+    let fits = &refitted.fits;
     // Between a butt joint's edges: a V-groove's bevels (and how deep it
     // is), a square gap, or a plate standing there. It decides V or I for
     // `auto`, checks the type requested, and measures the depth of Eq. 32.
     let (profile, groove_depth_mm, joint) = if layout == Layout::Butt {
         let span = (fits[0].curve.s_min.max(fits[1].curve.s_min), fits[0].curve.s_max.min(fits[1].curve.s_max));
-        let grid = ctx.camera_grid();
-        let profile = groove::probe(
-            cloud,
-            &groove::ProbeSetting {
-                edges: [&fits[0].curve, &fits[1].curve],
-                span,
-                point_spacing_mm: seam_spacing,
-                depth_to_support_mm: workpiece.depth_to_support_mm,
-                floor_between_plates: workpiece.support_between_plates,
-                grid: grid.as_ref(),
-                projector: Vec3::new(camera.baseline_mm, 0.0, 0.0),
-            },
-        );
+        let profile = probe_groove(ctx, workpiece, refitted, span);
         tracing::debug!(verdict = ?profile.verdict(), "{}", profile.describe());
         let judged = groove::judge(joint, &profile);
         // What was seen, for a workpiece of several named unplanned.
@@ -410,6 +412,24 @@ fn judge_groove(
     Ok(Groove { profile, depth_mm: groove_depth_mm, joint, evidence: joint_evidence })
 }
 
+/// The groove between the weld edges probed along `span` of the seam's
+/// feature axis.
+fn probe_groove(ctx: &Context, workpiece: &Workpiece, refitted: &Refitted, span: (f64, f64)) -> GrooveProfile {
+    let fits = &refitted.fits;
+    groove::probe(
+        ctx.cloud,
+        &groove::ProbeSetting {
+            edges: [&fits[0].curve, &fits[1].curve],
+            span,
+            point_spacing_mm: refitted.seam_spacing,
+            depth_to_support_mm: workpiece.depth_to_support_mm,
+            floor_between_plates: workpiece.support_between_plates,
+            grid: ctx.camera_grid().as_ref(),
+            projector: Vec3::new(ctx.config.camera.baseline_mm, 0.0, 0.0),
+        },
+    )
+}
+
 /// The weld placed (4.3), its span along the seam, and how much of the
 /// joint it covers.
 struct PlacedWeld {
@@ -428,7 +448,7 @@ fn place_weld(
     layout: Layout,
     refitted: &Refitted,
     [beside_a, beside_b]: [Beside; 2],
-    groove: &Groove,
+    (groove, root): (&Groove, Option<&RootLine>),
     normal: Vec3,
 ) -> Result<PlacedWeld, PlanError> {
     let config = ctx.config;
@@ -451,7 +471,10 @@ fn place_weld(
     let weld = context::weld(groove.joint, e1, e2, &normal, groove_depth_mm, || lap_root(e1, lap_step, &normal))?;
     // A V-groove's midline between its edges as its two bevels place them,
     // not as far as the strips walked onto each bevel.
-    let bevels_offset = profile.as_ref().and_then(|p| p.bevel_midline_offset());
+    let bevels_offset = match root {
+        Some(root) => Some(root.offset),
+        None => profile.as_ref().and_then(|p| p.bevel_midline_offset()),
+    };
     let weld = match (groove.joint, bevels_offset) {
         (JointType::VButt, Some(offset)) => {
             tracing::debug!(
@@ -471,14 +494,18 @@ fn place_weld(
             )
         })
     };
-    let mut extents = [extent(0)?, extent(1)?];
+    let mut extents = match root {
+        // Where both flanks show the root, whatever the top edges did.
+        Some(root) => [root.span; 2],
+        None => [extent(0)?, extent(1)?],
+    };
     // Each weld edge as its fit gives it, at the middle of its span.
     let fitted_edge = |k: usize| {
         let curve = &fits[k].curve;
         let middle = 0.5 * (curve.s_min + curve.s_max);
         edge_across(k, &curve.at(middle), &curve.tangent(middle))
     };
-    if !cloud.is_organized() && degree == 1 {
+    if !cloud.is_organized() && degree == 1 && root.is_none() {
         // Without a grid the strips read each end to a strip's width, and
         // miss or mistake the ends where the cloud's border cuts a plate:
         // the plate's last rows inside the fitted edge say where it ends.
@@ -492,7 +519,7 @@ fn place_weld(
         tracing::debug!(strips = ?extents, rims = ?refined, "weld edge ends refined along the plates' rims");
         extents = refined;
     }
-    if let Some(grid) = ctx.camera_grid() {
+    if let Some(grid) = ctx.camera_grid().filter(|_| root.is_none()) {
         // On the camera's grid the boundary samples stop a trimmed rim
         // short of the image border; where the plate runs on to it, so
         // does the edge.
@@ -517,6 +544,7 @@ fn place_weld(
         extents = reached;
     }
     if ctx.camera_grid().is_none()
+        && root.is_none()
         && let Some(border) = ctx.view_border()
     {
         // Without a grid to carry each edge to the image's border, an edge
@@ -693,6 +721,7 @@ fn check_gates(
     refitted: &Refitted,
     groove: &Groove,
     placed: &PlacedWeld,
+    root: Option<&RootLine>,
 ) -> Result<(SeamQuality, Vec<GateFailure>), PlanError> {
     let config = ctx.config;
     let plates = &workpiece.plates;
@@ -715,7 +744,7 @@ fn check_gates(
         groove: profile.as_ref(),
     });
     tracing::debug!(?quality, "seam quality");
-    let evidence = quality::SeamEvidence {
+    let edges = quality::SeamEvidence {
         joint,
         quality: &quality,
         edge_fit_rms_mm: fits.each_ref().map(|f| f.rms_mm),
@@ -729,6 +758,7 @@ fn check_gates(
         fits: quality::FittedEdges::WeldEdges,
         root_bend: refitted.bend,
     };
+    let evidence = root.map_or(edges, |root| root_weld::evidence(edges, root, seam_spacing));
     let (warnings, refusals): (Vec<_>, Vec<_>) =
         quality::check(&evidence, &config.quality).into_iter().partition(|f| config.quality.warns_only(f.gate));
     ctx.trace.record(|t| (t.quality, t.warnings) = (Some(quality), warnings.clone()));
@@ -744,57 +774,4 @@ fn check_gates(
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn edge_samples_without_a_direction_in_the_plates_give_no_seam() {
-        let normal = Vec3::z();
-        let none = seam_axes(&[Vec::new(), Vec::new()], &normal).unwrap_err();
-        assert_eq!((none.rule.id, none.stage), ("seam.samples_not_along_a_line", Stage::Refit), "{none}");
-        // Samples stacked along the normal: a face seen edge-on, no edge.
-        let stacked: Vec<Vec3> = (0..10).map(|k| Vec3::new(0.0, 0.0, 700.0 + k as f64)).collect();
-        let along_normal = seam_axes(&[stacked.clone(), stacked], &normal).unwrap_err();
-        assert_eq!(along_normal.rule.id, "seam.samples_not_along_a_line", "{along_normal}");
-        // Two edges along x: the seam runs along x.
-        let edge = |y: f64| (0..10).map(|k| Vec3::new(k as f64, y, 700.0)).collect::<Vec<_>>();
-        let axes = seam_axes(&[edge(-1.0), edge(1.0)], &normal).expect("a seam along x");
-        assert!(axes.e.dot(&Vec3::x()).abs() > 1.0 - 1e-9);
-    }
-
-    #[test]
-    fn a_weld_edge_without_a_grid_runs_along_its_longest_unbroken_stretch() {
-        use super::super::super::boundary::{BoundarySample, ExtentRule};
-        // Samples a millimetre apart from 0 to 19 mm, then 20 strips with
-        // none, then three more: a chance hole, not the edge.
-        let at = (0..20).chain(40..43).map(|k| k as f64);
-        let samples = at.map(|x| BoundarySample { position: Vec3::new(x, 0.0, 700.0), along: x }).collect();
-        let strips = Boundary { samples, line_spacing_mm: 1.0, extent_rule: ExtentRule::LongestStretch };
-        // `seam.longest_seen_stretch` cuts the three off.
-        assert_eq!(strips.extent(|s| s.position.x), Some((-0.5, 19.5)));
-        // Every sample counts on a pixel grid, and samples eight strips
-        // apart still lie on one stretch.
-        let grid = Boundary { extent_rule: ExtentRule::AllSamples, ..strips.clone() };
-        assert_eq!(grid.extent(|s| s.position.x), Some((-0.5, 42.5)));
-        let at = (0..20).chain(27..30).map(|k| k as f64);
-        let samples = at.map(|x| BoundarySample { position: Vec3::new(x, 0.0, 700.0), along: x }).collect();
-        let bridged = Boundary { samples, ..strips };
-        assert_eq!(bridged.extent(|s| s.position.x), Some((-0.5, 29.5)));
-    }
-
-    #[test]
-    fn a_lap_without_a_step_or_edges_that_do_not_overlap_are_refused_by_rule() {
-        let points: Vec<Vec3> = (0..10).map(|k| Vec3::new(k as f64, 0.0, 700.0)).collect();
-        let axes = SeamAxes::paper(&points);
-        let edge = refit::fit(&points, &axes, 1).expect("a line").curve;
-        let normal = Vec3::z();
-        let flat = lap_root(&edge, None, &normal).unwrap_err();
-        assert_eq!((flat.rule.id, flat.stage), ("lap.no_step_along_normal", Stage::WeldEquation), "{flat}");
-        let root = lap_root(&edge, Some(3.0), &normal).expect("a step");
-        assert!((root.at(2.0) - edge.at(2.0) - normal * 3.0).norm() < 1e-9);
-        let apart = check_overlap(10.0, 4.0).unwrap_err();
-        assert_eq!((apart.rule.id, apart.stage), ("seam.edges_do_not_overlap", Stage::WeldEquation), "{apart}");
-        assert_eq!(check_overlap(10.0, 10.0).unwrap_err().rule.id, "seam.edges_do_not_overlap");
-        assert_eq!(check_overlap(4.0, 10.0), Ok(()));
-    }
-}
+mod tests;

@@ -419,7 +419,7 @@ pub static SEAM_SAMPLES_NOT_ALONG_A_LINE: Rule = Rule {
              along no direction (none, or all at one place) or only along the plates' normal (a face seen \
              edge-on, not a plate's edge) give the seam no direction: there is no edge to follow.",
     parameters: &[],
-    fires: &["src/pipeline/robust/plates.rs::edge_samples_without_a_direction_in_the_plates_give_no_seam"],
+    fires: &["src/pipeline/robust/plates/tests.rs::edge_samples_without_a_direction_in_the_plates_give_no_seam"],
     holds: &["tests/pipeline.rs::each_joint_type_is_planned_within_a_millimetre"],
 };
 
@@ -504,6 +504,6 @@ pub static SEAM_LONGEST_SEEN_STRETCH: Rule = Rule {
         meaning: "most empty strips in a row still within one stretch",
         source: Source::Constant { file: "src/pipeline/boundary/mod.rs", name: "EXTENT_BREAK_LINES" },
     }],
-    fires: &["src/pipeline/robust/plates.rs::a_weld_edge_without_a_grid_runs_along_its_longest_unbroken_stretch"],
-    holds: &["src/pipeline/robust/plates.rs::a_weld_edge_without_a_grid_runs_along_its_longest_unbroken_stretch"],
+    fires: &["src/pipeline/robust/plates/tests.rs::a_weld_edge_without_a_grid_runs_along_its_longest_unbroken_stretch"],
+    holds: &["src/pipeline/robust/plates/tests.rs::a_weld_edge_without_a_grid_runs_along_its_longest_unbroken_stretch"],
 };

@@ -96,6 +96,10 @@ impl<B: AsRef<[f64]>> FromIterator<B> for Blocks {
     }
 }
 
+/// A residual function's Jacobian in closed form: one row per residual,
+/// one column per parameter.
+pub type Jacobian<'a> = &'a dyn Fn(&[f64]) -> DMatrix<f64>;
+
 /// The result of a robust fit.
 #[derive(Debug, Clone)]
 pub struct RobustFit {
@@ -128,7 +132,7 @@ pub fn robust_fit_with_jacobian(
 fn reweighted(
     start: &[f64],
     residuals: &dyn Fn(&[f64]) -> Blocks,
-    jacobian: Option<&dyn Fn(&[f64]) -> DMatrix<f64>>,
+    jacobian: Option<Jacobian<'_>>,
 ) -> Result<RobustFit, RefineError> {
     let blocks = residuals(start);
     if !blocks.values.iter().all(|r| r.is_finite()) {
@@ -209,7 +213,7 @@ pub fn least_squares(start: &[f64], residuals: &dyn Fn(&[f64]) -> Vec<f64>) -> R
 fn solve(
     start: &[f64],
     residuals: &dyn Fn(&[f64]) -> Vec<f64>,
-    jacobian: Option<&dyn Fn(&[f64]) -> DMatrix<f64>>,
+    jacobian: Option<Jacobian<'_>>,
 ) -> Result<Vec<f64>, RefineError> {
     let problem = NumericProblem { params: start.to_vec(), residuals, jacobian };
     let (solved, report) = LevenbergMarquardt::new().minimize(problem);
@@ -253,7 +257,7 @@ pub fn perturbed(reference: &Rotation3<f64>, omega: &[f64]) -> Rotation3<f64> {
 struct NumericProblem<'a> {
     params: Vec<f64>,
     residuals: &'a dyn Fn(&[f64]) -> Vec<f64>,
-    jacobian: Option<&'a dyn Fn(&[f64]) -> DMatrix<f64>>,
+    jacobian: Option<Jacobian<'a>>,
 }
 
 impl LeastSquaresProblem<f64, Dyn, Dyn> for NumericProblem<'_> {

@@ -74,7 +74,9 @@ pub static LAP_NO_STEP_ALONG_NORMAL: Rule = Rule {
         meaning: "least cosine between the plates' normal and the lower plate's",
         source: Source::Constant { file: "src/pipeline/weld_equation.rs", name: "MIN_STEP_COSINE" },
     }],
-    fires: &["src/pipeline/robust/plates/tests.rs::a_lap_without_a_step_or_edges_that_do_not_overlap_are_refused_by_rule"],
+    fires: &[
+        "src/pipeline/robust/plates/tests.rs::a_lap_without_a_step_or_edges_that_do_not_overlap_are_refused_by_rule",
+    ],
     holds: &["tests/pipeline.rs::lap_is_planned_at_the_root_from_either_side"],
 };
 
@@ -89,7 +91,9 @@ pub static EDGES_DO_NOT_OVERLAP: Rule = Rule {
              along the seam, one ending before the other begins, show two plates' edges but no joint between \
              them: nowhere is the gap, the groove or the step seen from both sides.",
     parameters: &[],
-    fires: &["src/pipeline/robust/plates/tests.rs::a_lap_without_a_step_or_edges_that_do_not_overlap_are_refused_by_rule"],
+    fires: &[
+        "src/pipeline/robust/plates/tests.rs::a_lap_without_a_step_or_edges_that_do_not_overlap_are_refused_by_rule",
+    ],
     holds: &["tests/pipeline.rs::each_joint_type_is_planned_within_a_millimetre"],
 };
 

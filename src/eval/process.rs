@@ -17,7 +17,7 @@
 //!   angles the plan cleared, every other pass at its aim point, at its
 //!   work angle moved as the traced pass's was, with the traced pass's
 //!   travel angle (how a robot program runs the seam once per pass), by
-//!   the planner's own torch solid ([`clearance::contact`]);
+//!   the planner's own torch solid ([`crate::process::clearance::contact`]);
 //! - beside a clamp: the waypoints whose torch at the procedure's angles
 //!   would touch the true block, each of which is to be re-angled or cut,
 //!   and every welded torch against the true block (its faces sampled

@@ -6,7 +6,7 @@
 //! A pass's point at a waypoint is the waypoint (the root's aim point)
 //! moved across the seam by the pass's `lateral_mm` and up from the root
 //! by its `height_mm`, in the seam's frame at that waypoint
-//! ([`Station`]: along the seam, across it, out of the joint), with the
+//! ([`Station`](crate::process::clearance::Station): along the seam, across it, out of the joint), with the
 //! torch turned to the pass's work angle. The torch's clearance is
 //! checked for the pass the waypoints trace (the root, or a single pass);
 //! where it had to lean to clear, every pass at that waypoint leans by as

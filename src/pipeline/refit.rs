@@ -406,9 +406,15 @@ fn least_median_line(points: &[Vec3], axes: &SeamAxes) -> Option<SeamCurve> {
             }
             let (slope_a, slope_b) = ((q.1 - p.1) / ds, (q.2 - p.2) / ds);
             let line = [p.1 - slope_a * p.0, slope_a, p.2 - slope_b * p.0, slope_b];
+            // Squared residuals: the median is an order statistic, so the
+            // line whose median squared residual is least is the line whose
+            // median residual is least, without a root per judge (this runs
+            // for every slab along every seam).
             residuals.clear();
-            residuals
-                .extend(judges.iter().map(|c| (c.1 - line[0] - line[1] * c.0).hypot(c.2 - line[2] - line[3] * c.0)));
+            residuals.extend(judges.iter().map(|c| {
+                let (off_a, off_b) = (c.1 - line[0] - line[1] * c.0, c.2 - line[2] - line[3] * c.0);
+                off_a * off_a + off_b * off_b
+            }));
             let Some(m) = median(&mut residuals) else { continue };
             if best.is_none_or(|(best_m, _)| m < best_m) {
                 best = Some((m, line));

@@ -54,6 +54,11 @@ async fn robot(cell: &Cell) -> TextRobot {
 /// The capture pose's numbers in `dialect`, written with its decimals, and
 /// a robot's plan line for them (URScript's as `to_str` writes a pose).
 fn trigger_line(dialect: Dialect, sim: &Simulation) -> String {
+    trigger_line_for("lap", dialect, sim)
+}
+
+/// [`trigger_line`] requesting `joint`.
+pub(crate) fn trigger_line_for(joint: &str, dialect: Dialect, sim: &Simulation) -> String {
     let convention = to_text::convention(dialect);
     let numbers = convention.numbers(&sim.pose.to_isometry(Default::default()));
     let (position, rotation) = dialect.decimals();
@@ -63,8 +68,8 @@ fn trigger_line(dialect: Dialect, sim: &Simulation) -> String {
         .map(|(k, v)| format!("{v:.*}", if k < 3 { position } else { rotation }))
         .collect();
     match dialect {
-        Dialect::Ur => format!("TRIGGER,lap,p[{}]", fields.join(", ")),
-        _ => format!("TRIGGER,lap,{}", fields.join(",")),
+        Dialect::Ur => format!("TRIGGER,{joint},p[{}]", fields.join(", ")),
+        _ => format!("TRIGGER,{joint},{}", fields.join(",")),
     }
 }
 

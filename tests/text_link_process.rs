@@ -45,15 +45,7 @@ fn config() -> Config {
 }
 
 fn trigger_line(dialect: Dialect, sim: &Simulation) -> String {
-    let convention = to_text::convention(dialect);
-    let numbers = convention.numbers(&sim.pose.to_isometry(Default::default()));
-    let (position, rotation) = dialect.decimals();
-    let fields: Vec<String> = numbers[..convention.numbers_len()]
-        .iter()
-        .enumerate()
-        .map(|(k, v)| format!("{v:.*}", if k < 3 { position } else { rotation }))
-        .collect();
-    format!("TRIGGER,v_butt,{}", fields.join(","))
+    crate::text_link::trigger_line_for("v_butt", dialect, sim)
 }
 
 /// What the procedure cut from a seam, for a failure's message.

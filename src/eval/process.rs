@@ -213,7 +213,9 @@ fn score_seam(
         seam.waypoints.iter().map(|w| (frames.camera_from_base * Point3::from(w.position)).coords).collect();
     let truth = JointTruth::of(&scene.spec);
     let thickness = scene.plate_thickness_mm();
-    let obstacles = obstacles_near(&sim.cloud, &seam.start_camera, &seam.end_camera, &procedure.torch);
+    // What the torches touch in the cloud itself: the space the planner
+    // also keeps clear behind the seen surfaces is no part of the target.
+    let obstacles = obstacles_near(&sim.cloud, &seam.start_camera, &seam.end_camera, &procedure.torch).seen_only();
     // Out of the joint towards the torch: against the plate normal, which
     // points into the workpiece.
     let bisector = -seam.normal_camera.normalize();

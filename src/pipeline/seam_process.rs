@@ -14,11 +14,14 @@
 //! - lap: the procedure's fillet on the upper plate `t` (its step);
 //! - tee: the procedure's fillet, where `t` is configured.
 //!
-//! The torch is checked for the pass the waypoints trace (a single pass,
-//! or a V-groove's root): aimed at the waypoint along the seam's torch
-//! axis, tilted by the pass's work angle and the entry's travel angle in
-//! the frame [`Station`] defines. Where it is moved to clear, the
-//! waypoint's orientation follows the angles it cleared at.
+//! The torch is checked for every pass at the waypoint: the pass the
+//! waypoints trace (a single pass, or a V-groove's root) aimed at the
+//! waypoint along the seam's torch axis, each other pass at its own aim
+//! point, every one tilted by its work angle and the entry's travel angle
+//! in the frame [`Station`] defines. The obstacles are the frame's points
+//! and the space behind them as the camera saw it. Where the torch leans
+//! to clear, every pass leans as much and the waypoint's orientation
+//! follows the angles the traced pass cleared at.
 //!
 //! Three rules cut stretches from the welded seam, each a run of
 //! consecutive waypoints with its reason: figures not measured
@@ -31,7 +34,7 @@ use crate::cloud::{Point, PointCloud, is_valid_point};
 use crate::config::procedure::Torch;
 use crate::geometry::{Vec3, vec3};
 use crate::joint::JointType;
-use crate::process::clearance::{Clearance, Obstacles, Station, clear_station};
+use crate::process::clearance::{Aim, Clearance, Contact, Obstacles, Station, clear_station};
 use crate::process::{JointSection, Layout, PassKind, Procedure, VGroove, fillet_section, weld_station};
 use crate::rules::{self, Rule};
 
@@ -121,7 +124,8 @@ pub fn orient(waypoints: &mut [Waypoint], places: &[Place], process: &SeamProces
 
 /// The frame's points the torch could touch anywhere along the seam from
 /// `start` to `end` (camera frame): those within the torch's length and
-/// widest radius of the segment between them, indexed.
+/// widest radius of the segment between them, indexed with the space
+/// behind them the camera could not see.
 pub fn obstacles_near(cloud: &PointCloud, start: &Vec3, end: &Vec3, torch: &Torch) -> Obstacles {
     let length = torch.nozzle_to_work_mm + torch.nozzle_length_mm + torch.body_length_mm;
     let widest = torch.nozzle_diameter_mm / 2.0
@@ -138,7 +142,7 @@ pub fn obstacles_near(cloud: &PointCloud, start: &Vec3, end: &Vec3, torch: &Torc
         let f = ((p - start).dot(&along) / span).clamp(0.0, 1.0);
         (p - (start + along * f)).norm() <= reach
     };
-    Obstacles::new(cloud.points().iter().filter(|p| near(p)).map(vec3))
+    Obstacles::seen_from_camera(cloud.points().iter().filter(|p| near(p)).map(vec3), torch)
 }
 
 /// One waypoint's outcome: welded, or cut by a rule with its reason.
@@ -250,32 +254,59 @@ fn at_waypoint(
     let layout = weld_station(procedure, joint, thickness_mm, &section)
         .map_err(|e| (&rules::process::OUTSIDE_PROCEDURE, e.to_string(), None))?;
     let entry = procedure.entry(joint, thickness_mm).expect("weld_station found the entry");
-    let traced = layout.passes.iter().find(|p| matches!(p.kind, PassKind::Single | PassKind::Root));
-    let work = traced.map_or(entry.work_angle_deg, |p| p.work_angle_deg);
+    // The traced pass first, at the waypoint itself; then every other
+    // pass at its aim point.
+    let traced = layout.passes.iter().position(|p| matches!(p.kind, PassKind::Single | PassKind::Root));
+    let traced_work = traced.map_or(entry.work_angle_deg, |k| layout.passes[k].work_angle_deg);
+    let mut aims = vec![Aim::at_point(traced_work)];
+    let others = layout.passes.iter().enumerate().filter(|(k, _)| Some(*k) != traced);
+    let mut names = vec![traced.map_or_else(|| "pass".to_owned(), |k| pass_name(&layout.passes[k]))];
+    for (_, pass) in others {
+        aims.push(Aim { across_mm: pass.lateral_mm, up_mm: pass.height_mm, work_angle_deg: pass.work_angle_deg });
+        names.push(pass_name(pass));
+    }
     let station = Station { point: place.point, along: place.travel, bisector: -place.into };
-    match clear_station(&procedure.torch, obstacles, &station, work, entry.travel_angle_deg) {
-        Clearance::Clear { work_angle_deg, travel_angle_deg, moved } => Ok(WaypointProcess {
+    match clear_station(&procedure.torch, obstacles, &station, &aims, entry.travel_angle_deg) {
+        Clearance::Clear { lean_deg, travel_angle_deg, moved } => Ok(WaypointProcess {
             thickness_mm,
             layout,
-            work_angle_deg,
+            work_angle_deg: traced_work + lean_deg,
             travel_angle_deg,
             re_angled: moved,
-            torch_axis_camera: station.axis(work_angle_deg, travel_angle_deg),
+            torch_axis_camera: station.axis(traced_work + lean_deg, travel_angle_deg),
             station,
         }),
-        Clearance::Blocked { contact } => Err((
-            &rules::process::TORCH_BLOCKED,
-            format!(
-                "the torch touches the cloud at ({:.1}, {:.1}, {:.1}) mm at every angle within the procedure's \
-                 limits (work ±{}°, travel {:?}°)",
-                contact.x,
-                contact.y,
-                contact.z,
-                procedure.torch.work_deviation_deg,
-                procedure.torch.travel_angle_range_deg
-            ),
-            Some(contact),
-        )),
+        Clearance::Blocked { pass, contact } => {
+            let p = contact.point();
+            let what = match contact {
+                Contact::Seen(_) => "touches the cloud",
+                Contact::Hidden(_) => "reaches behind a surface the camera saw, where it could not see,",
+            };
+            Err((
+                &rules::process::TORCH_BLOCKED,
+                format!(
+                    "the torch of the {} {what} at ({:.1}, {:.1}, {:.1}) mm at every angle within the procedure's \
+                     limits (work ±{}°, travel {:?}°)",
+                    names.get(pass).map_or("pass", String::as_str),
+                    p.x,
+                    p.y,
+                    p.z,
+                    procedure.torch.work_deviation_deg,
+                    procedure.torch.travel_angle_range_deg
+                ),
+                Some(p),
+            ))
+        }
+    }
+}
+
+/// A pass's name in a reason, its layer and bead counted from 1.
+fn pass_name(pass: &crate::process::Pass) -> String {
+    match pass.kind {
+        PassKind::Root => "root pass".to_owned(),
+        PassKind::Single => "pass".to_owned(),
+        PassKind::Fill => format!("fill pass of layer {}, bead {}", pass.layer, pass.bead + 1),
+        PassKind::Cap => format!("cap pass, bead {}", pass.bead + 1),
     }
 }
 

@@ -10,28 +10,84 @@
 //! `margin_mm` for the cloud's noise and the robot's path error, is a
 //! contact.
 //!
-//! Where the procedure's angles touch, the work and travel angles are
-//! moved within the limits the procedure allows, nearest first; where no
-//! angle clears, the station is unweldable and the contact is reported.
-//! The measure is the cloud itself: a clamp, a high plate or a tee's web
-//! blocks the torch only where its points are.
+//! Every pass at a station is checked, each aimed where the layout puts
+//! it: a cap's torch stands higher and farther across than the root's,
+//! and may meet a clamp the root's clears. Where the procedure's angles
+//! touch, the work and travel angles are moved within the limits the
+//! procedure allows, nearest first, by the same lean for every pass (so
+//! the torch keeps the side it cleared on); where no angle clears, the
+//! station is unweldable and the contact is reported with its pass.
+//!
+//! The measure is the cloud, and what the cloud cannot show: a clamp, a
+//! high plate or a tee's web blocks the torch where its points are, and
+//! where the camera saw a surface the space behind it is taken as solid
+//! ([`super::shadow`]), so a torch never passes through a block's faces
+//! the camera did not see.
 
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use nalgebra::{Rotation3, Unit, Vector3};
 
+use super::shadow::Shadows;
 use crate::config::procedure::Torch;
 
 type Vec3 = Vector3<f64>;
 
-/// The measured cloud, indexed for the torch's solid.
+/// The measured cloud, indexed for the torch's solid, and where it was
+/// seen from, the space behind its surfaces.
 pub struct Obstacles {
     tree: ImmutableKdTree<f32, 3>,
     points: Vec<[f32; 3]>,
+    /// The cloud's angular spacing where it is a camera's view (0 for
+    /// bare points): how far a seen surface may reach beyond its points
+    /// grows with it ([`EDGE_SPACINGS`]).
+    spacing_per_mm: f64,
+    hidden: Option<HiddenSpace>,
+}
+
+/// How far a surface may reach beyond the points a camera saw on it, in
+/// the cloud's own spacing at the point's range: one spacing for the
+/// sampling (a face's edge lies anywhere up to the next ray, which missed
+/// it) and one for the pixel a depth edge blends away (its return is
+/// mixed with what lies behind and leaves the face). The torch keeps its
+/// margin from where the surface may be, so a torch that clips a block's
+/// edge between the last seen points is a contact.
+pub const EDGE_SPACINGS: f64 = 2.0;
+
+/// The space the camera could not see, with the torch's surface sampled
+/// to test against it.
+struct HiddenSpace {
+    shadows: Shadows,
+    torch: Torch,
+    surface: Vec<SurfaceSample>,
+}
+
+/// The points the cloud's angular spacing is estimated on, evenly spread
+/// over it, and the fewest it is estimated from.
+const SPACING_SAMPLE_POINTS: usize = 2048;
+const MIN_SPACING_SAMPLES: usize = 64;
+
+/// The neighbours asked of each sampled point for the nearest other one:
+/// the point itself and a few repeats of it (a voxel grid's or a merged
+/// frame's) are passed over.
+const NEIGHBOURS_ASKED: std::num::NonZero<usize> = std::num::NonZero::new(4).expect("4 is not zero");
+
+/// The step the torch's surface is sampled with against the hidden
+/// space, mm: no coarser than the torch's margin, so a hidden solid the
+/// grown torch overlaps by a margin's depth is met.
+pub const SURFACE_SAMPLE_STEP_MM: f64 = 2.0;
+
+/// A point of the torch's surface in its own frame: `s` mm up the axis
+/// from the aim point and `(a, b)` across it.
+#[derive(Debug, Clone, Copy)]
+struct SurfaceSample {
+    s: f64,
+    a: f64,
+    b: f64,
 }
 
 impl Obstacles {
     /// Indexes the finite points of a cloud, mm, in the frame the stations
-    /// are given in.
+    /// are given in; only the points are obstacles.
     pub fn new(points: impl IntoIterator<Item = Vec3>) -> Obstacles {
         let points: Vec<[f32; 3]> = points
             .into_iter()
@@ -42,7 +98,64 @@ impl Obstacles {
         // query with nothing.
         let tree = ImmutableKdTree::new_from_slice(&points)
             .unwrap_or_else(|_| ImmutableKdTree::new_from_slice(&[[f32::MAX; 3]]).expect("one point builds"));
-        Obstacles { tree, points }
+        Obstacles { tree, points, spacing_per_mm: 0.0, hidden: None }
+    }
+
+    /// Indexes the finite points of a camera-frame cloud (the camera at
+    /// the origin, looking along `+z`), mm, for `torch`: the points are
+    /// obstacles, and so is the space behind every surface the camera
+    /// saw.
+    pub fn seen_from_camera(points: impl IntoIterator<Item = Vec3>, torch: &Torch) -> Obstacles {
+        let mut obstacles = Obstacles::new(points);
+        let shadows = obstacles.angular_spacing().and_then(|spacing| Shadows::new(&obstacles.points, spacing));
+        obstacles.spacing_per_mm = shadows.as_ref().map_or(0.0, Shadows::spacing);
+        obstacles.hidden = shadows.map(|shadows| HiddenSpace {
+            shadows,
+            torch: *torch,
+            surface: surface_samples(torch, SURFACE_SAMPLE_STEP_MM),
+        });
+        obstacles
+    }
+
+    /// The same points with nothing taken as hidden and no surface
+    /// reaching past them: what the cloud itself touches.
+    pub fn seen_only(mut self) -> Obstacles {
+        self.hidden = None;
+        self.spacing_per_mm = 0.0;
+        self
+    }
+
+    /// The cloud's median angular spacing, in `(x / z, y / z)`, from the
+    /// camera at the origin: for points sampled evenly over it, the
+    /// distance to the nearest other point over the point's range (a
+    /// camera's neighbouring rays meet a surface that far apart), or
+    /// `None` with too few points in front of the camera.
+    fn angular_spacing(&self) -> Option<f64> {
+        let stride = (self.points.len() / SPACING_SAMPLE_POINTS).max(1);
+        let mut gaps: Vec<f64> = self
+            .points
+            .iter()
+            .step_by(stride)
+            .filter(|p| p[2] > 0.0)
+            .filter_map(|p| {
+                let near = self.tree.query(p).nearest_n::<SquaredEuclidean<f32>>(NEIGHBOURS_ASKED).execute();
+                // The nearest is the point itself, and may be repeats of it.
+                let gap = near.iter().map(|n| f64::from(n.distance).sqrt()).find(|&g| g > 0.0)?;
+                let range = p.iter().map(|&c| f64::from(c).powi(2)).sum::<f64>().sqrt();
+                Some(gap / range)
+            })
+            .collect();
+        if gaps.len() < MIN_SPACING_SAMPLES {
+            return None;
+        }
+        let mid = gaps.len() / 2;
+        let (_, median, _) = gaps.select_nth_unstable_by(mid, f64::total_cmp);
+        Some(*median)
+    }
+
+    /// Whether the space behind the seen surfaces is an obstacle too.
+    pub fn takes_hidden_space(&self) -> bool {
+        self.hidden.is_some()
     }
 
     fn near(&self, centre: &Vec3, radius: f64) -> impl Iterator<Item = Vec3> + '_ {
@@ -110,10 +223,94 @@ fn radius_at(torch: &Torch, s: f64) -> Option<f64> {
 /// point in the air, which is no matter to avoid.
 pub const MIN_CONTACT_POINTS: usize = 3;
 
-/// The cloud point inside the torch standing at `point` along `axis`
-/// nearest the aim point, when at least [`MIN_CONTACT_POINTS`] are inside.
-pub fn contact(torch: &Torch, obstacles: &Obstacles, point: &Vec3, axis: &Vec3) -> Option<Vec3> {
+/// Where the torch meets something.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Contact {
+    /// A cloud point inside the torch.
+    Seen(Vec3),
+    /// A point of the torch's surface behind a surface the camera saw.
+    Hidden(Vec3),
+}
+
+impl Contact {
+    pub fn point(&self) -> Vec3 {
+        match self {
+            Contact::Seen(p) | Contact::Hidden(p) => *p,
+        }
+    }
+}
+
+/// Where the torch standing at `point` along `axis` meets the obstacles,
+/// if it does: the cloud point inside it nearest the aim point, when at
+/// least [`MIN_CONTACT_POINTS`] are inside; else, where the obstacles
+/// take the hidden space, the point of its surface nearest the aim point
+/// behind a seen surface, when at least as many are.
+pub fn contact(torch: &Torch, obstacles: &Obstacles, point: &Vec3, axis: &Vec3) -> Option<Contact> {
+    seen_contact(torch, obstacles, point, axis)
+        .map(Contact::Seen)
+        .or_else(|| hidden_contact(torch, obstacles, point, axis).map(Contact::Hidden))
+}
+
+/// The torch's surface behind a seen surface, nearest the aim point
+/// first.
+fn hidden_contact(torch: &Torch, obstacles: &Obstacles, point: &Vec3, axis: &Vec3) -> Option<Vec3> {
+    let hidden = obstacles.hidden.as_ref()?;
+    debug_assert_eq!(hidden.torch, *torch, "obstacles are indexed for the torch they are checked against");
     let axis = axis.normalize();
+    let e1 = axis.cross(&if axis.x.abs() < 0.9 { Vec3::x() } else { Vec3::y() }).normalize();
+    let e2 = axis.cross(&e1);
+    let mut first = None;
+    let mut behind = 0;
+    for q in &hidden.surface {
+        let p = point + axis * q.s + e1 * q.a + e2 * q.b;
+        if hidden.shadows.hides(&p) {
+            first.get_or_insert(p);
+            behind += 1;
+            if behind >= MIN_CONTACT_POINTS {
+                return first;
+            }
+        }
+    }
+    None
+}
+
+/// The torch's surface (its side, and the nozzle's and the body's end
+/// faces), grown by its margin, sampled every `step` mm, nearest the aim
+/// point first.
+fn surface_samples(torch: &Torch, step: f64) -> Vec<SurfaceSample> {
+    let start = torch.nozzle_to_work_mm;
+    let end = start + torch.nozzle_length_mm + torch.body_length_mm;
+    let mut out = Vec::new();
+    let mut ring = |s: f64, r: f64| {
+        let n = ((std::f64::consts::TAU * r / step).ceil() as usize).max(1);
+        for k in 0..n {
+            let angle = std::f64::consts::TAU * k as f64 / n as f64;
+            out.push(SurfaceSample { s, a: r * angle.cos(), b: r * angle.sin() });
+        }
+    };
+    let rings = ((end - start) / step).ceil().max(1.0) as usize;
+    for k in 0..=rings {
+        let s = start + (end - start) * k as f64 / rings as f64;
+        if let Some(r) = radius_at(torch, s) {
+            ring(s, r);
+        }
+    }
+    for s in [start, end] {
+        if let Some(r) = radius_at(torch, s) {
+            let discs = (r / step).floor() as usize;
+            (0..discs).for_each(|k| ring(s, k as f64 * step));
+        }
+    }
+    out.sort_by(|x, y| x.s.total_cmp(&y.s));
+    out
+}
+
+/// The cloud point inside the torch nearest the aim point, when at least
+/// [`MIN_CONTACT_POINTS`] are inside; the torch grown, for each point, by
+/// how far its surface may reach past it ([`EDGE_SPACINGS`]).
+fn seen_contact(torch: &Torch, obstacles: &Obstacles, point: &Vec3, axis: &Vec3) -> Option<Vec3> {
+    let axis = axis.normalize();
+    let edge_per_mm = EDGE_SPACINGS * obstacles.spacing_per_mm;
     let start = torch.nozzle_to_work_mm;
     let end = start + torch.nozzle_length_mm + torch.body_length_mm;
     // Spheres along the axis, each covering a piece of the solid as long
@@ -132,13 +329,18 @@ pub fn contact(torch: &Torch, obstacles: &Obstacles, point: &Vec3, axis: &Vec3) 
         let widest = radius_at(torch, s1).or(radius_at(torch, s0)).unwrap_or(0.0);
         let centre = point + axis * ((s0 + s1) / 2.0);
         let reach = (widest * widest + ((s1 - s0) / 2.0).powi(2)).sqrt();
+        // The farthest a point the grown piece holds can be from the
+        // camera bounds its growth.
+        let reach = reach + edge_per_mm * (centre.norm() + 2.0 * reach);
         for q in obstacles.near(&centre, reach) {
             let d = q - point;
             let s = d.dot(&axis);
             if s < s0 || s > s1 || (s == s1 && !last_piece) {
                 continue;
             }
-            let inside = radius_at(torch, s).is_some_and(|r| (d - axis * s).norm_squared() < r * r);
+            let inside = radius_at(torch, s)
+                .map(|r| r + edge_per_mm * q.norm())
+                .is_some_and(|r| (d - axis * s).norm_squared() < r * r);
             if inside {
                 inside_count += 1;
                 if first.is_none_or(|(best, _)| s < best) {
@@ -151,14 +353,39 @@ pub fn contact(torch: &Torch, obstacles: &Obstacles, point: &Vec3, axis: &Vec3) 
     first.filter(|_| inside_count >= MIN_CONTACT_POINTS).map(|(_, q)| q)
 }
 
+/// One pass's torch at a station: its aim point, across the seam and up
+/// out of the joint from the station's point (the frame
+/// [`Station::axis`] tilts in), and its work angle.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Aim {
+    pub across_mm: f64,
+    pub up_mm: f64,
+    pub work_angle_deg: f64,
+}
+
+impl Aim {
+    /// The torch aimed at the station's point itself.
+    pub fn at_point(work_angle_deg: f64) -> Aim {
+        Aim { across_mm: 0.0, up_mm: 0.0, work_angle_deg }
+    }
+
+    /// The aim point, in the station's frame.
+    pub fn point(&self, station: &Station) -> Vec3 {
+        let across = station.along.cross(&station.bisector).normalize();
+        station.point + across * self.across_mm + station.bisector.normalize() * self.up_mm
+    }
+}
+
 /// The torch angles at a station: the procedure's, or the nearest within
-/// its limits that clear the cloud.
+/// its limits that clear every pass.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Clearance {
-    /// The angles clear, `moved` when they are not the procedure's.
-    Clear { work_angle_deg: f64, travel_angle_deg: f64, moved: bool },
-    /// No angle within the limits clears; the contact at the procedure's.
-    Blocked { contact: Vec3 },
+    /// Every pass clears leaning `lean_deg` from its own work angle at
+    /// `travel_angle_deg`; `moved` when these are not the procedure's.
+    Clear { lean_deg: f64, travel_angle_deg: f64, moved: bool },
+    /// No angle within the limits clears; the first pass (its index in
+    /// the aims) that touched at the procedure's angles, and where.
+    Blocked { pass: usize, contact: Contact },
 }
 
 /// The step of the search for angles that clear, degrees: finer than a
@@ -166,17 +393,33 @@ pub enum Clearance {
 /// blocked station costs a few hundred checks at most.
 pub const ANGLE_SEARCH_STEP_DEG: f64 = 2.5;
 
-/// The torch's angles at one station.
+/// The first of the `aims` whose torch, leaning `lean_deg` at
+/// `travel_angle_deg`, meets the obstacles, and where.
+fn first_contact(
+    torch: &Torch,
+    obstacles: &Obstacles,
+    station: &Station,
+    aims: &[Aim],
+    lean_deg: f64,
+    travel_angle_deg: f64,
+) -> Option<(usize, Contact)> {
+    aims.iter().enumerate().find_map(|(k, aim)| {
+        let axis = station.axis(aim.work_angle_deg + lean_deg, travel_angle_deg);
+        contact(torch, obstacles, &aim.point(station), &axis).map(|c| (k, c))
+    })
+}
+
+/// The torch's angles at one station for every pass of it (`aims`, the
+/// pass the waypoints trace first), at the procedure's travel angle.
 pub fn clear_station(
     torch: &Torch,
     obstacles: &Obstacles,
     station: &Station,
-    work_angle_deg: f64,
+    aims: &[Aim],
     travel_angle_deg: f64,
 ) -> Clearance {
-    let Some(blocked_at) = contact(torch, obstacles, &station.point, &station.axis(work_angle_deg, travel_angle_deg))
-    else {
-        return Clearance::Clear { work_angle_deg, travel_angle_deg, moved: false };
+    let Some((pass, blocked_at)) = first_contact(torch, obstacles, station, aims, 0.0, travel_angle_deg) else {
+        return Clearance::Clear { lean_deg: 0.0, travel_angle_deg, moved: false };
     };
     // Candidates within the torch's limits, nearest the procedure's
     // angles first.
@@ -188,19 +431,19 @@ pub fn clear_station(
         for j in -steps(travel_max - travel_min)..=steps(travel_max - travel_min) {
             let travel = travel_angle_deg + j as f64 * step;
             if (i, j) != (0, 0) && (travel_min..=travel_max).contains(&travel) {
-                candidates.push((work_angle_deg + i as f64 * step, travel));
+                candidates.push((i as f64 * step, travel));
             }
         }
     }
     candidates.sort_by(|a, b| {
-        let off = |c: &(f64, f64)| (c.0 - work_angle_deg).abs() + (c.1 - travel_angle_deg).abs();
+        let off = |c: &(f64, f64)| c.0.abs() + (c.1 - travel_angle_deg).abs();
         off(a).total_cmp(&off(b))
     });
     candidates
         .into_iter()
-        .find(|&(w, t)| contact(torch, obstacles, &station.point, &station.axis(w, t)).is_none())
-        .map(|(w, t)| Clearance::Clear { work_angle_deg: w, travel_angle_deg: t, moved: true })
-        .unwrap_or(Clearance::Blocked { contact: blocked_at })
+        .find(|&(lean, travel)| first_contact(torch, obstacles, station, aims, lean, travel).is_none())
+        .map(|(lean_deg, travel_angle_deg)| Clearance::Clear { lean_deg, travel_angle_deg, moved: true })
+        .unwrap_or(Clearance::Blocked { pass, contact: blocked_at })
 }
 
 /// The stretches of a pass, in station indices `[first, last]`, where no

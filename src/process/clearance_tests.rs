@@ -32,15 +32,16 @@ fn tee_station(y: f64) -> Station {
     Station { point: Vec3::new(0.0, y, 0.0), along: Vec3::y(), bisector: Vec3::new(1.0, 0.0, 1.0).normalize() }
 }
 
-/// The straightforward reference: every point tested against the solid.
-fn contact_by_scan(torch: &Torch, points: &[Vec3], point: &Vec3, axis: &Vec3) -> Option<f64> {
+/// The straightforward reference: every point tested against the solid,
+/// grown by `edge_per_mm` times the point's range.
+fn contact_by_scan(torch: &Torch, points: &[Vec3], point: &Vec3, axis: &Vec3, edge_per_mm: f64) -> Option<f64> {
     let axis = axis.normalize();
     let inside: Vec<f64> = points
         .iter()
         .filter_map(|q| {
             let d = q - point;
             let s = d.dot(&axis);
-            let r = radius_at(torch, s)?;
+            let r = radius_at(torch, s)? + edge_per_mm * q.norm();
             ((d - axis * s).norm_squared() < r * r).then_some(s)
         })
         .collect();
@@ -59,6 +60,8 @@ fn a_lone_outlier_in_the_torch_is_no_contact_and_a_surface_is() {
     assert_eq!(contact(&t, &lone, &station.point, &axis), None);
     let few: Vec<Vec3> = (0..MIN_CONTACT_POINTS).map(|k| up(30.0 + k as f64)).collect();
     let hit = contact(&t, &Obstacles::new(few), &station.point, &axis).expect("a surface's few points touch");
+    assert!(matches!(hit, Contact::Seen(_)), "{hit:?}");
+    let hit = hit.point();
     assert!((hit - up(30.0)).norm() < 1e-4, "the nearest of them: {hit:?}");
 }
 
@@ -76,9 +79,9 @@ fn the_indexed_search_finds_the_contact_a_scan_of_every_point_finds() {
     for work in [-40.0, -25.0, -10.0, 0.0, 10.0, 25.0, 40.0] {
         for travel in [0.0, 10.0, 20.0] {
             let axis = station.axis(work, travel);
-            let fast =
-                contact(&t, &obstacles, &station.point, &axis).map(|q| (q - station.point).dot(&axis.normalize()));
-            let scan = contact_by_scan(&t, &points, &station.point, &axis);
+            let fast = contact(&t, &obstacles, &station.point, &axis)
+                .map(|q| (q.point() - station.point).dot(&axis.normalize()));
+            let scan = contact_by_scan(&t, &points, &station.point, &axis, 0.0);
             assert_eq!(
                 fast.map(|s| (s * 1e6).round()),
                 scan.map(|s| (s * 1e6).round()),
@@ -103,6 +106,7 @@ fn a_torch_on_the_tees_bisector_clears_and_one_leaning_into_the_web_does_not() {
         .find(|w| station.axis(*w, 0.0).x < station.axis(0.0, 0.0).x)
         .expect("one sign leans towards the web");
     let hit = contact(&t, &obstacles, &station.point, &station.axis(towards_web, 0.0)).expect("the web is touched");
+    let hit = hit.point();
     assert!(hit.x.abs() < 1e-9, "the contact is on the web: {hit:?}");
 }
 
@@ -116,11 +120,11 @@ fn a_wall_beside_the_seam_moves_the_work_angle_away_from_it() {
     let obstacles = Obstacles::new(points);
     let station = Station { point: Vec3::zeros(), along: Vec3::y(), bisector: Vec3::z() };
     assert!(contact(&t, &obstacles, &station.point, &station.axis(0.0, 10.0)).is_some());
-    match clear_station(&t, &obstacles, &station, 0.0, 10.0) {
-        Clearance::Clear { work_angle_deg, travel_angle_deg, moved } => {
+    match clear_station(&t, &obstacles, &station, &[Aim::at_point(0.0)], 10.0) {
+        Clearance::Clear { lean_deg, travel_angle_deg, moved } => {
             assert!(moved);
-            assert!(work_angle_deg.abs() <= t.work_deviation_deg);
-            let axis = station.axis(work_angle_deg, travel_angle_deg);
+            assert!(lean_deg.abs() <= t.work_deviation_deg);
+            let axis = station.axis(lean_deg, travel_angle_deg);
             assert!(axis.x < 0.0, "leans away from the wall: {axis:?}");
             assert_eq!(contact(&t, &obstacles, &station.point, &axis), None);
         }
@@ -135,8 +139,10 @@ fn a_clamp_over_the_seam_blocks_its_stretch_and_only_that() {
     // A clamp's jaw over the root from y = -10 to 10, 12 mm above it.
     points.extend(patch(Vec3::new(2.0, -10.0, 12.0), Vec3::x(), Vec3::y(), (20, 20), 1.0));
     let obstacles = Obstacles::new(points);
-    let clearances: Vec<Clearance> =
-        (-50..=50).step_by(5).map(|y| clear_station(&t, &obstacles, &tee_station(y as f64), 0.0, 10.0)).collect();
+    let clearances: Vec<Clearance> = (-50..=50)
+        .step_by(5)
+        .map(|y| clear_station(&t, &obstacles, &tee_station(y as f64), &[Aim::at_point(0.0)], 10.0))
+        .collect();
     let stretches = blocked_stretches(&clearances);
     assert_eq!(stretches.len(), 1, "{clearances:?}");
     let [first, last] = stretches[0];
@@ -146,6 +152,127 @@ fn a_clamp_over_the_seam_blocks_its_stretch_and_only_that() {
     assert!(y(first) >= -35.0 && y(first) <= -10.0, "from {}", y(first));
     assert!(y(last) <= 35.0 && y(last) >= 10.0, "to {}", y(last));
     assert!(matches!(clearances[0], Clearance::Clear { .. }));
-    let Clearance::Blocked { contact } = clearances[10] else { panic!("the middle is blocked") };
+    let Clearance::Blocked { pass: 0, contact } = clearances[10] else { panic!("the middle is blocked") };
+    let contact = contact.point();
     assert!(contact.z >= 12.0, "the contact is on the jaw: {contact:?}");
+}
+
+/// A torch behind a surface the camera saw meets the space there, though
+/// no cloud point is inside it; against the points alone it meets
+/// nothing.
+#[test]
+fn a_torch_behind_a_seen_surface_meets_the_hidden_space() {
+    let t = torch();
+    // A table 300 mm in front of a camera at the origin, seen every 0.5 mm.
+    let table: Vec<Vec3> = (-200..=200)
+        .flat_map(|i| (-200..=200).map(move |j| Vec3::new(i as f64 * 0.5, j as f64 * 0.5, 300.0)))
+        .collect();
+    let seen = Obstacles::seen_from_camera(table.iter().copied(), &t);
+    assert!(seen.takes_hidden_space());
+    let over = Station { point: Vec3::new(0.0, 0.0, 300.0), along: Vec3::y(), bisector: -Vec3::z() };
+    assert_eq!(contact(&t, &seen, &over.point, &over.axis(0.0, 10.0)), None, "over the table is open");
+    // The same torch turned to stand under the table.
+    let under = Station { bisector: Vec3::z(), ..over };
+    let axis = under.axis(0.0, 10.0);
+    let hit = contact(&t, &seen, &under.point, &axis);
+    assert!(matches!(hit, Some(Contact::Hidden(p)) if p.z > 300.0), "{hit:?}");
+    assert_eq!(contact(&t, &Obstacles::new(table.iter().copied()), &under.point, &axis), None);
+    assert_eq!(contact(&t, &seen.seen_only(), &under.point, &axis), None);
+}
+
+/// Flat plates in z = 0 and a wall `x` mm beside the seam, `height` mm
+/// high.
+fn plates_and_wall(x: f64, height: usize) -> Obstacles {
+    let mut points = patch(Vec3::new(-50.0, -30.0, 0.0), Vec3::x(), Vec3::y(), (65, 60), 1.0);
+    points.extend(patch(Vec3::new(x, -30.0, 0.0), Vec3::z(), Vec3::y(), (height, 60), 1.0));
+    Obstacles::new(points)
+}
+
+#[test]
+fn every_pass_is_cleared_and_all_lean_as_one() {
+    let t = torch();
+    let station = Station { point: Vec3::zeros(), along: Vec3::y(), bisector: Vec3::z() };
+    let root = Aim::at_point(0.0);
+    // A cap bead 5 mm across towards a wall 16 mm off and 8 mm up: the
+    // root's torch, upright, passes under the wall's top (60 mm) before
+    // its body widens to the wall; the cap's meets the wall at 50 mm.
+    let obstacles = plates_and_wall(16.0, 60);
+    let cap = Aim { across_mm: 5.0, up_mm: 8.0, work_angle_deg: 0.0 };
+    assert!(matches!(clear_station(&t, &obstacles, &station, &[root], 0.0), Clearance::Clear { moved: false, .. }));
+    let Clearance::Clear { lean_deg, travel_angle_deg, moved: true } =
+        clear_station(&t, &obstacles, &station, &[root, cap], 0.0)
+    else {
+        panic!("a lean away from the wall clears both passes");
+    };
+    for aim in [root, cap] {
+        let axis = station.axis(aim.work_angle_deg + lean_deg, travel_angle_deg);
+        assert_eq!(contact(&t, &obstacles, &aim.point(&station), &axis), None, "{aim:?} at {lean_deg}°");
+        assert!(axis.x < 0.0, "leans away from the wall: {axis:?}");
+    }
+}
+
+#[test]
+fn a_pass_no_lean_clears_blocks_the_station_and_is_named() {
+    let t = torch();
+    let station = Station { point: Vec3::zeros(), along: Vec3::y(), bisector: Vec3::z() };
+    // A low wall 12.5 mm off: the root's nozzle (10 mm with its margin)
+    // passes it; a bead aimed 7 mm towards it meets it at every lean.
+    let obstacles = plates_and_wall(12.5, 30);
+    let bead = Aim { across_mm: 7.0, up_mm: 8.0, work_angle_deg: 0.0 };
+    let root = Aim::at_point(0.0);
+    assert!(matches!(clear_station(&t, &obstacles, &station, &[root], 0.0), Clearance::Clear { moved: false, .. }));
+    match clear_station(&t, &obstacles, &station, &[root, bead], 0.0) {
+        Clearance::Blocked { pass: 1, contact: Contact::Seen(p) } => {
+            assert!((p.x - 12.5).abs() < 1e-4, "the contact is on the wall: {p:?}")
+        }
+        other => panic!("the bead blocks the station: {other:?}"),
+    }
+}
+
+/// A camera's cloud: the torch is grown by how far a surface may reach
+/// past its points, and the indexed search still finds what a scan of
+/// every point finds.
+#[test]
+fn a_cameras_surfaces_may_reach_past_their_points_and_the_search_agrees_with_a_scan() {
+    let t = torch();
+    // A tee seen every 0.4 mm (a camera's spacing
+    // at the working distance), 300 mm in front of the camera (only the
+    // points are asked here, not what they hide).
+    let mut points = patch(Vec3::new(0.4, -30.0, 0.0), Vec3::x(), Vec3::y(), (200, 150), 0.4);
+    points.extend(patch(Vec3::new(0.0, -30.0, 0.4), Vec3::z(), Vec3::y(), (150, 150), 0.4));
+    let shift = Vec3::new(0.0, 0.0, 300.0);
+    // As the index holds them: in single precision.
+    let points: Vec<Vec3> = points.iter().map(|p| (p + shift).map(|c| c as f32 as f64)).collect();
+    let obstacles = Obstacles::seen_from_camera(points.iter().copied(), &t).seen_only();
+    assert_eq!(obstacles.spacing_per_mm, 0.0, "nothing reaches past the points of a bare cloud");
+    let obstacles = Obstacles::seen_from_camera(points.iter().copied(), &t);
+    let edge_per_mm = EDGE_SPACINGS * obstacles.spacing_per_mm;
+    // 0.4 mm apart about 300 mm off.
+    assert!((obstacles.spacing_per_mm * 300.0 - 0.4).abs() < 0.1, "{}", obstacles.spacing_per_mm);
+    let station = Station { point: shift, ..tee_station(0.0) };
+    let mut touched = 0;
+    for work in [-40.0, -25.0, -10.0, 0.0, 10.0, 25.0, 40.0] {
+        for travel in [0.0, 10.0, 20.0] {
+            let axis = station.axis(work, travel);
+            let fast = seen_contact(&t, &obstacles, &station.point, &axis).map(|q| (q - station.point).dot(&axis));
+            let scan = contact_by_scan(&t, &points, &station.point, &axis, edge_per_mm);
+            assert_eq!(fast.map(|s| (s * 1e6).round()), scan.map(|s| (s * 1e6).round()), "{work}, {travel}");
+            touched += usize::from(scan.is_some());
+        }
+    }
+    assert!(touched > 3 && touched < 21, "{touched} of 21 poses touch: the test must see both");
+    // A ledge facing the camera beside the nozzle, 25 mm up from the aim
+    // point, its edge 10.5 mm from an upright torch's axis, seen every
+    // 0.4 mm: outside the nozzle and its margin (10 mm), within a
+    // surface's reach past its points (0.8 mm).
+    let wall: Vec<Vec3> = patch(Vec3::new(10.5, -20.0, 275.0), Vec3::x(), Vec3::y(), (25, 100), 0.4)
+        .into_iter()
+        .map(|p| p.map(|c| c as f32 as f64))
+        .collect();
+    let upright = Station { point: shift, along: Vec3::y(), bisector: -Vec3::z() };
+    let axis = upright.axis(0.0, 0.0);
+    let bare = Obstacles::new(wall.iter().copied());
+    assert_eq!(contact(&t, &bare, &upright.point, &axis), None);
+    let seen = Obstacles::seen_from_camera(wall.iter().copied(), &t);
+    assert!(matches!(contact(&t, &seen, &upright.point, &axis), Some(Contact::Seen(p)) if (p.x - 10.5).abs() < 1e-3));
 }

@@ -16,7 +16,9 @@
 //! - [`layout`]: the passes, layer by layer for a V-groove;
 //! - [`weave`]: the torch's swing across the seam, following the gap;
 //! - [`clearance`]: the torch as a solid against the measured cloud, its
-//!   angles moved where it touches, stretches cut where nothing clears.
+//!   angles moved where it touches, stretches cut where nothing clears;
+//! - [`shadow`]: the space behind what the camera saw, which the torch
+//!   treats as solid.
 //!
 //! docs/PROCESS.md explains the model for a welding engineer, with the
 //! example procedure (config/procedures/gmaw-mild-steel.toml).
@@ -25,6 +27,7 @@ pub mod clearance;
 pub mod deposit;
 pub mod layout;
 pub mod section;
+pub mod shadow;
 pub mod weave;
 
 pub use crate::config::procedure::{Procedure, ProcedureError};

@@ -362,6 +362,7 @@ fn post(log: &PlanLog<'_>, link: &'static str, outcome: &Result<Planned, Failure
         record: None,
         pictures: false,
         sections: false,
+        profile: false,
     };
     let result = outcome.as_ref().ok().map(|p| full_result(&p.plan, state));
     state.board.add_plan(summary, result)

@@ -179,6 +179,31 @@ fn a_record_holds_and_replays_the_figures_and_process_a_plan_carries() {
     assert_eq!(again.seams[0].process, seam.process);
     assert_eq!(again.seams[0].along_seam, seam.along_seam);
 
+    // The export writes the answer with the figures and process, and the
+    // procedure it was planned with.
+    let pcd = dir.path().join("export.pcd");
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_weldseam"))
+        .args(["records".as_ref(), dir.path().as_os_str(), "--export".as_ref(), entry.id.as_ref(), pcd.as_os_str()])
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let exported: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(pcd.with_extension("json")).unwrap()).unwrap();
+    let exported_seam = &exported["outcome"]["Planned"]["seams"][0];
+    // JSON reads a float back to within its last digit: compare the shape.
+    let exported_process = &exported_seam["process"];
+    assert_eq!(exported_process["procedure"].as_str(), Some(process.procedure.as_str()));
+    let passes: Vec<usize> = process.waypoints.iter().map(|w| w.as_ref().map_or(0, |w| w.passes.len())).collect();
+    let exported_passes: Vec<usize> = exported_process["waypoints"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|w| w["passes"].as_array().map_or(0, Vec::len))
+        .collect();
+    assert_eq!(exported_passes, passes);
+    assert_eq!(exported_seam["along_seam"].as_array().map(Vec::len), Some(seam.waypoints.len()));
+    assert_eq!(exported["procedure"].as_str(), record.procedure_text.as_deref());
+
     // A pass's speed changed in the record is named as a change.
     let mut changed = record.clone();
     let Outcome::Planned(result) = &mut changed.outcome else { unreachable!() };

@@ -2,7 +2,9 @@
 //! chromedriver (WebDriver), against a daemon on 127.0.0.1 port 0 fed by
 //! the mock camera and controller. The page shows a planned seam, then a
 //! refusal with its rule id without being reloaded, and a plan opened with
-//! the keyboard shows its pictures and waypoints. A screenshot of each
+//! the keyboard shows its pictures and waypoints. With a weld procedure
+//! configured, a plan opens to its profile along the seam too, and to each
+//! stretch not welded with the rule that cut it. A screenshot of each
 //! state is kept under the test's target directory (`operator-page/`);
 //! with `WELDSEAM_BLESS=1` the list's is also written to
 //! docs/operator-page.png, the README's.
@@ -18,13 +20,16 @@ use std::sync::Arc;
 use std::time::Duration;
 
 use fantoccini::{Client, ClientBuilder, Locator};
-use weldseam::config::Config;
+use weldseam::config::{Config, ProcessParams};
 use weldseam::joint::JointType;
 use weldseam::mock::camera::CameraOptions;
 use weldseam::mock::controller::{ControllerClient, request_for_simulation};
+use weldseam::process::Procedure;
 use weldseam::server::local::LocalDaemon;
+use weldseam::sim::{Draw, ProcessCase, process_suite};
 use weldseam::sim::{demo_scene, simulate};
 use weldseam_proto::message::FrameSelect;
+use weldseam_proto::session::capability;
 
 use crate::daemon::{request, small_cloud};
 
@@ -198,6 +203,95 @@ async fn drive() {
         client.execute("return document.getElementById('camera-view').naturalWidth;", Vec::new()).await.unwrap();
     assert!(loaded.as_u64().unwrap_or(0) > 0, "the camera view did not load");
     screenshot(&client, "3-plan.png").await;
+
+    client.close().await.unwrap();
+    drop(driver);
+    let _ = stop_camera.send(());
+    let _ = camera.await;
+    daemon.stop().await.unwrap();
+}
+
+#[test]
+fn a_plan_with_a_procedure_opens_to_its_profile_and_why_a_stretch_was_not_welded() {
+    if let Err(e) = browser() {
+        panic!("{e}");
+    }
+    let runtime = tokio::runtime::Builder::new_multi_thread().worker_threads(2).enable_all().build().unwrap();
+    runtime.block_on(async {
+        tokio::time::timeout(TEST_WAIT, drive_process()).await.expect("the browser test took over 5 minutes");
+    });
+}
+
+/// A 20 mm plate's V-groove, which the example procedure's torch cannot
+/// reach everywhere: its plan carries stretches cut by a rule.
+async fn drive_process() {
+    let scene = process_suite(Draw::Documented)
+        .into_iter()
+        .find(|s| s.case == ProcessCase::ThickVGroove)
+        .expect("the process family has thick grooves");
+    let mut config = Config::default();
+    config.server.pipeline_threads = 2;
+    config.server.fresh_frame_timeout = Duration::from_secs(20);
+    // The torch's clearance along a deep groove, in a debug build on a
+    // shared machine: past the default limit, which is for release builds.
+    config.server.plan_timeout = Duration::from_secs(120);
+    config.process =
+        ProcessParams { procedure: Some(Procedure::example()), plate_thickness_mm: Some(scene.plate_thickness_mm()) };
+    let sim = scene.simulate(&config.camera);
+    let daemon = LocalDaemon::start_with_metrics(config).await.unwrap();
+    let page = format!("http://{}/", daemon.metrics_addr.unwrap());
+    let (stop_camera, camera_stopped) = tokio::sync::oneshot::channel::<()>();
+    let camera = weldseam::mock::camera::MockCamera::new(
+        daemon.camera_addr.to_string(),
+        vec![Arc::new(sim.cloud.clone())],
+        CameraOptions::default(),
+    );
+    let camera = tokio::spawn(camera.run(camera_stopped));
+    let addr = daemon.controller_addr.to_string();
+    let mut controller = ControllerClient::connect_asking(&addr, "page-test", capability::ALONG_SEAM).await.unwrap();
+    controller.wait_for_camera(PAGE_WAIT).await.unwrap();
+
+    let driver = Driver::start().await;
+    let client = driver.browse().await;
+    client.goto(&page).await.unwrap();
+    wait_for(&client, "#status:not(.down)").await;
+
+    let mut request = request_for_simulation(1, scene.case.joint(), &sim, FrameSelect::Trigger);
+    // The groove's depth measured, as `weldseam eval --suite process` plans it.
+    request.groove_depth_mm = None;
+    let reply = controller.plan(request, PAGE_WAIT).await.expect("the groove is planned");
+    let process = reply.result.seams[0].process.clone().expect("a procedure is configured");
+    assert!(!process.cut.is_empty(), "the scene has a stretch the procedure cuts");
+
+    let planned = wait_for(&client, r#"#plans button[data-outcome="planned"]"#).await;
+    planned.send_keys(&fantoccini::key::Key::Enter.to_string()).await.unwrap();
+    wait_for(&client, "#detail:not([hidden]) #profile-figure:not([hidden]) #profile").await;
+    wait_for(&client, "#process:not([hidden]) .cut .rule").await;
+    let mut shown = Vec::new();
+    for rule in client.find_all(Locator::Css("#process .cut .rule")).await.unwrap() {
+        shown.push(rule.text().await.unwrap());
+    }
+    let cut: Vec<String> = process.cut.iter().map(|c| c.rule.clone()).collect();
+    assert_eq!(shown, cut, "each stretch not welded, with the rule that cut it");
+    for rule in &shown {
+        assert!(weldseam::rules::by_id(rule).is_some(), "the page shows {rule:?}, not a rule of the catalogue");
+    }
+    let reason = client.find(Locator::Css("#process .cut")).await.unwrap().text().await.unwrap();
+    assert!(reason.contains(&process.cut[0].reason), "{reason}");
+    let mut loaded = 0;
+    for _ in 0..100 {
+        let width =
+            client.execute("return document.getElementById('profile').naturalWidth;", Vec::new()).await.unwrap();
+        loaded = width.as_u64().unwrap_or(0);
+        if loaded > 0 {
+            break;
+        }
+        tokio::time::sleep(Duration::from_millis(100)).await;
+    }
+    assert!(loaded > 0, "the profile picture did not load");
+    // The picture kept shows the profile and the process below it.
+    client.execute("document.getElementById('profile-figure').scrollIntoView();", Vec::new()).await.unwrap();
+    screenshot(&client, "4-process.png").await;
 
     client.close().await.unwrap();
     drop(driver);

@@ -142,3 +142,115 @@ async fn every_dialect_pulls_each_pass_with_its_speeds_and_weave() {
     camera.await.unwrap();
     cell.shutdown().await;
 }
+
+/// `weldseam controller --text --process`, run as a process against the
+/// daemon on 127.0.0.1 port 0 with the procedure configured: it asks for
+/// the process lines, pulls and checks every seam, and prints each weld
+/// waypoint's travel speed and weave, those the plan gives. The binary
+/// controller, which asks for `along_seam`, prints the procedure and each
+/// waypoint's passes and speed beside its pose.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn the_controller_command_prints_each_weld_waypoints_speed_and_weave() {
+    let sim = thick_groove();
+    let config = config();
+    let cell = Cell::start(config.clone()).await;
+    let (stop_camera, camera) = cell.camera(vec![Arc::new(sim.cloud.clone())], CameraOptions::default());
+    let mut robot = TextRobot::connect(&cell.daemon.text_addr.to_string(), WAIT).await.unwrap();
+    for _ in 0..100 {
+        if robot.ask("PING").await.unwrap().starts_with("0,1,") {
+            break;
+        }
+        tokio::time::sleep(Duration::from_millis(50)).await;
+    }
+    drop(robot);
+    let [x, y, z] = sim.pose.xyz_mm;
+    let [rx, ry, rz] = sim.pose.angles_deg;
+    let pose = format!("--pose={x},{y},{z},{rx},{ry},{rz}");
+    let run = |args: Vec<String>| {
+        tokio::task::spawn_blocking(move || {
+            let out = std::process::Command::new(env!("CARGO_BIN_EXE_weldseam")).args(&args).output().unwrap();
+            let stdout = String::from_utf8_lossy(&out.stdout).into_owned();
+            assert!(out.status.success(), "{args:?}: {stdout}{}", String::from_utf8_lossy(&out.stderr));
+            stdout
+        })
+    };
+    let text_addr = cell.daemon.text_addr.to_string();
+    let session = run(["controller", "--text", "--process", "--dialect", "abb", "--connect", &text_addr]
+        .into_iter()
+        .map(String::from)
+        .chain(["--joint".into(), "v_butt".into(), pose.clone()])
+        .collect())
+    .await
+    .unwrap();
+    let binary = run(["controller", "--connect", &cell.controller, "--joint", "v_butt", &pose]
+        .into_iter()
+        .map(String::from)
+        .collect())
+    .await
+    .unwrap();
+    let _ = stop_camera.send(());
+    camera.await.unwrap();
+    cell.shutdown().await;
+
+    let lines: Vec<&str> = session.lines().collect();
+    assert_eq!(lines[..2], ["> HELLO,abb,PROCESS", "< 0,2,1"], "{session}");
+    // Every process line printed as received, and a row per weld waypoint.
+    assert!(lines.iter().any(|l| l.starts_with("< 4,1,")), "{session}");
+    let rows: Vec<(usize, usize, f64, f64, f64)> = lines
+        .iter()
+        .filter_map(|l| {
+            let (place, rest) = l.trim_start().split_once("  speed ")?;
+            let (seam, waypoint) = place.split_once('.')?;
+            let (speed, rest) = rest.split_once(" mm/s  weave ")?;
+            let (amplitude, rest) = rest.split_once(" mm at ")?;
+            let frequency = rest.strip_suffix(" Hz")?;
+            Some((
+                seam.parse().ok()?,
+                waypoint.parse().ok()?,
+                speed.parse().ok()?,
+                amplitude.parse().ok()?,
+                frequency.parse().ok()?,
+            ))
+        })
+        .collect();
+
+    // The same plan in-process: one seam on the link per piece of a pass.
+    let trigger = trigger_line(Dialect::Abb, sim);
+    let Ok(Request::Trigger(line)) = parse_request(&trigger, Some(Dialect::Abb)) else { panic!("{trigger}") };
+    let request = from_proto::text_plan_request(&line, Dialect::Abb, config.euler).unwrap();
+    let plan = Planner::new(config.clone()).plan(&sim.cloud, &request).unwrap();
+    let pieces: Vec<Vec<Motion>> = plan
+        .seams
+        .iter()
+        .flat_map(passes::seam_pieces)
+        .map(|piece| piece.into_iter().map(|(_, m)| m.unwrap()).collect())
+        .collect();
+    assert!(pieces.len() >= 2, "several passes: {:?}", process_cut(&plan.seams[0]));
+    let expected: Vec<(usize, usize, &Motion)> = pieces
+        .iter()
+        .enumerate()
+        .flat_map(|(s, piece)| piece.iter().enumerate().map(move |(w, m)| (s + 1, w + 1, m)))
+        .collect();
+    assert_eq!(rows.len(), expected.len(), "a row per weld waypoint of every seam on the link:\n{session}");
+    let (position, _) = Dialect::Abb.decimals();
+    for ((seam, waypoint, speed, amplitude, frequency), (s, w, motion)) in rows.iter().zip(&expected) {
+        assert_eq!((*seam, *waypoint), (*s, *w));
+        assert!(
+            *speed > 0.0 && near(*speed, motion.travel_speed_mm_s, position),
+            "{seam}.{waypoint}: {speed} for {motion:?}"
+        );
+        assert!(near(*amplitude, motion.weave_amplitude_mm, position), "{amplitude} for {motion:?}");
+        assert!(near(*frequency, motion.weave_frequency_hz, 3), "{frequency} for {motion:?}");
+    }
+
+    // The binary link's table: the procedure, then per waypoint its
+    // passes and the first pass's speed, or that it is cut.
+    let seam = &plan.seams[0];
+    let process = seam.process.as_ref().unwrap();
+    assert!(binary.contains(&format!("  procedure {}", process.procedure)), "{binary}");
+    assert!(binary.contains("passes speed mm/s"), "{binary}");
+    let cut_rows = binary.lines().filter(|l| l.trim_end().ends_with(" cut")).count();
+    let cut_waypoints: usize = process.cut.iter().map(|c| c.last - c.first + 1).sum();
+    assert_eq!(cut_rows, cut_waypoints, "{binary}");
+    assert_eq!(binary.lines().filter(|l| l.starts_with("  cut: waypoints ")).count(), process.cut.len(), "{binary}");
+}

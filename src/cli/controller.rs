@@ -4,7 +4,9 @@
 //! plays a robot program on the text link instead, for commissioning: the
 //! hello, a trigger (or plan) line, every waypoint pulled, each seam's
 //! CHECK held against the lines pulled, and the reason of an error line,
-//! each line printed as sent (`>`) and received (`<`).
+//! each line printed as sent (`>`) and received (`<`); with `--process`,
+//! the process lines too, and then each weld waypoint's travel speed and
+//! weave as the robot received them.
 
 use std::time::Duration;
 
@@ -14,7 +16,7 @@ use weldseam::geometry::pose::{EulerConvention, RobotPose};
 use weldseam::joint::JointType;
 use weldseam::mock::ClientError;
 use weldseam::mock::controller::ControllerClient;
-use weldseam::mock::text_robot::{SeamTally, TextRobot};
+use weldseam::mock::text_robot::{PullError, PulledSeam, TextRobot};
 use weldseam_proto::message::{FrameSelect, PlanRequest};
 use weldseam_proto::session::capability;
 use weldseam_proto::text::Dialect;
@@ -30,6 +32,11 @@ pub struct ControllerArgs {
     /// Speak the text link, as a robot program does, and print the session.
     #[arg(long, requires = "dialect")]
     pub text: bool,
+    /// With --text: ask for the weld process lines (`HELLO,<dialect>,PROCESS`)
+    /// and print each weld waypoint's travel speed and weave after the
+    /// session.
+    #[arg(long, requires = "text")]
+    pub process: bool,
     /// The robot language on the text link: ur, abb, kuka or fanuc. The
     /// --pose is converted into its convention and units.
     #[arg(long, value_parser = dialect)]
@@ -121,20 +128,16 @@ async fn text_session(args: &ControllerArgs, dialect: Dialect) -> anyhow::Result
     let addr = args.connect.clone().unwrap_or_else(|| "127.0.0.1:7303".into());
     let wait = Duration::from_millis(u64::from(args.timeout_ms).max(10_000)) + Duration::from_secs(120);
     let mut robot = TextRobot::connect(&addr, wait).await.map_err(explain)?;
-    let mut say = async |line: String| -> anyhow::Result<String> {
-        println!("> {line}");
-        let reply = robot.ask(&line).await.map_err(explain)?;
-        print!("< {reply}");
-        Ok(reply)
-    };
-    let hello = say(format!("HELLO,{}", dialect.name())).await?;
+    let hello =
+        if args.process { format!("HELLO,{},PROCESS", dialect.name()) } else { format!("HELLO,{}", dialect.name()) };
+    let hello = ask_printed(&mut robot, &hello).await?;
     let failed = |reply: &str| reply.trim_start_matches('(').starts_with('-');
     if failed(&hello) {
-        say("WHY".into()).await?;
+        ask_printed(&mut robot, "WHY").await?;
         anyhow::bail!("the daemon refused the hello");
     }
     if args.ping {
-        say("PING".into()).await?;
+        ask_printed(&mut robot, "PING").await?;
         return Ok(());
     }
     let (Some(joint), Some(pose)) = (args.joint, args.pose) else {
@@ -156,12 +159,12 @@ async fn text_session(args: &ControllerArgs, dialect: Dialect) -> anyhow::Result
         FrameSelect::NextFrame => "PLAN",
         FrameSelect::FrameId(_) => anyhow::bail!("the text link plans a triggered or the next frame, not a frame id"),
     };
-    let status = say(format!("{verb},{},{}", joint.name(), fields.join(","))).await?;
+    let status = ask_printed(&mut robot, &format!("{verb},{},{}", joint.name(), fields.join(","))).await?;
     if failed(&status) {
-        say("WHY".into()).await?;
+        ask_printed(&mut robot, "WHY").await?;
         anyhow::bail!("the daemon answered an error line");
     }
-    // The ok line's third number: the waypoint lines to pull.
+    // The ok line's third number: the lines to pull.
     let lines: u64 = status
         .trim()
         .trim_matches(['(', ')'])
@@ -169,38 +172,55 @@ async fn text_session(args: &ControllerArgs, dialect: Dialect) -> anyhow::Result
         .nth(2)
         .and_then(|n| n.parse().ok())
         .context("the ok line has no waypoint count")?;
-    // Store every line and tally each seam, then hold each tally against
-    // the daemon's CHECK, as a robot program does before it moves.
-    let mut tallies: Vec<SeamTally> = Vec::new();
-    for _ in 0..lines {
-        let line = say("NEXT".into()).await?;
-        let numbers: Vec<f64> =
-            line.trim().trim_matches(['(', ')']).split(',').filter_map(|n| n.trim().parse().ok()).collect();
-        let [kind, seam, _, x, y, z, ..] = numbers[..] else {
-            anyhow::bail!("a waypoint line has too few numbers: {line:?}");
-        };
-        if kind < 0.0 {
-            say("WHY".into()).await?;
-            anyhow::bail!("the daemon answered an error line to NEXT");
+    // Store every line and check each seam against the daemon's CHECK, as
+    // a robot program does before it moves.
+    let pulled = robot
+        .pull_plan_logged(dialect, lines, args.process, |sent, reply| {
+            println!("> {sent}");
+            print!("< {reply}");
+        })
+        .await;
+    let seams = match pulled {
+        Ok(seams) => seams,
+        Err(PullError::Refused(line)) => {
+            let why = ask_printed(&mut robot, "WHY").await?;
+            anyhow::bail!("the daemon answered an error line to NEXT: {line} ({})", why.trim_end());
         }
-        let seam = seam as usize;
-        if seam == 0 || seam > tallies.len() + 1 {
-            anyhow::bail!("seam {seam} out of order in {line:?}");
-        }
-        if seam > tallies.len() {
-            tallies.push(SeamTally::default());
-        }
-        tallies[seam - 1].add([x, y, z]);
-    }
-    for (k, tally) in tallies.iter().enumerate() {
-        let check = say(format!("CHECK,{}", k + 1)).await?;
-        let numbers: Vec<f64> =
-            check.trim().trim_matches(['(', ')']).split(',').filter_map(|n| n.trim().parse().ok()).collect();
-        if let Err(e) = tally.agrees(&numbers, dialect) {
-            anyhow::bail!("seam {} does not check: {e}", k + 1);
-        }
+        Err(e) => return Err(e.into()),
+    };
+    if args.process {
+        print_process(&seams, dialect);
     }
     Ok(())
+}
+
+/// Sends `line`, prints it and its reply as the session print-out does.
+async fn ask_printed(robot: &mut TextRobot, line: &str) -> anyhow::Result<String> {
+    println!("> {line}");
+    let reply = robot.ask(line).await.map_err(explain)?;
+    print!("< {reply}");
+    Ok(reply)
+}
+
+/// Each weld waypoint's travel speed and weave as the process lines gave
+/// them, a row per waypoint (`seam.waypoint`, from 1), in mm whatever the
+/// dialect's length unit, so a commissioning engineer reads them against
+/// the procedure.
+fn print_process(seams: &[PulledSeam], dialect: Dialect) {
+    let mm = to_text::convention(dialect).length.mm();
+    println!("process: travel speed into each weld waypoint, and its weave (half-swing each side, cycles per second)");
+    for (s, seam) in (1..).zip(seams) {
+        for (w, (_, process)) in (1..).zip(&seam.weld) {
+            match process {
+                Some([speed, amplitude, frequency]) => println!(
+                    "  {s}.{w}  speed {:.3} mm/s  weave {:.3} mm at {frequency:.3} Hz",
+                    speed * mm,
+                    amplitude * mm
+                ),
+                None => println!("  {s}.{w}  no process line"),
+            }
+        }
+    }
 }
 
 async fn exchange(args: &ControllerArgs) -> anyhow::Result<()> {
@@ -290,13 +310,7 @@ async fn exchange(args: &ControllerArgs) -> anyhow::Result<()> {
             let rule = w.rule.as_deref().map_or(String::new(), |r| format!(", rule {r}"));
             println!("  warning ({}{rule}): {}", w.gate, w.message);
         }
-        println!("  {:>4}  {:>10} {:>10} {:>10}  {:>9} {:>9} {:>9}", "#", "x mm", "y mm", "z mm", "rx°", "ry°", "rz°");
-        for (i, w) in seam.waypoints.iter().enumerate() {
-            println!(
-                "  {:>4}  {:>10.3} {:>10.3} {:>10.3}  {:>9.3} {:>9.3} {:>9.3}",
-                i, w.xyz[0], w.xyz[1], w.xyz[2], w.rpy_deg[0], w.rpy_deg[1], w.rpy_deg[2]
-            );
-        }
+        print_waypoints(seam);
     }
     for u in &r.unplanned {
         let joint = u.joint.as_deref().unwrap_or("joint");
@@ -310,6 +324,60 @@ async fn exchange(args: &ControllerArgs) -> anyhow::Result<()> {
         println!("pipeline {total:.0} ms");
     }
     Ok(())
+}
+
+/// A seam's waypoints, and beside each, where the daemon sent them (the
+/// `along_seam` capability), its gap or lap step and high-low, and with a
+/// procedure its passes, the first pass's travel speed and weave and
+/// whether the torch was re-angled; then the stretches cut from the weld
+/// with their rule and reason, so a stretch left unwelded says why.
+fn print_waypoints(seam: &weldseam_proto::plan::Seam) {
+    let figures = seam.along_seam.as_deref().unwrap_or_default();
+    let process = seam.process.as_ref();
+    if let Some(p) = process {
+        println!("  procedure {}", p.procedure);
+    }
+    let mut head =
+        format!("  {:>4}  {:>10} {:>10} {:>10}  {:>9} {:>9} {:>9}", "#", "x mm", "y mm", "z mm", "rx°", "ry°", "rz°");
+    if !figures.is_empty() {
+        head += &format!("  {:>13} {:>8}", "gap|step mm", "hi-lo mm");
+    }
+    if process.is_some() {
+        head += &format!("  {:>6} {:>10} {:>15}", "passes", "speed mm/s", "weave mm @ Hz");
+    }
+    println!("{head}");
+    let measured =
+        |m: Option<weldseam_proto::along_seam::Measured>| m.map_or("-".to_string(), |m| format!("{:.2}", m.value));
+    for (i, w) in seam.waypoints.iter().enumerate() {
+        let mut row = format!(
+            "  {:>4}  {:>10.3} {:>10.3} {:>10.3}  {:>9.3} {:>9.3} {:>9.3}",
+            i, w.xyz[0], w.xyz[1], w.xyz[2], w.rpy_deg[0], w.rpy_deg[1], w.rpy_deg[2]
+        );
+        if let Some(f) = figures.get(i) {
+            row += &format!("  {:>13} {:>8}", measured(f.gap_mm.or(f.lap_step_mm)), measured(f.high_low_mm));
+        }
+        if let Some(p) = process {
+            match p.waypoints.get(i).and_then(Option::as_ref) {
+                Some(at) => {
+                    let first = at.passes.first();
+                    let speed = first.map_or("-".to_string(), |p| format!("{:.2}", p.travel_speed_mm_s));
+                    let weave = first
+                        .and_then(|p| p.weave)
+                        .map_or("-".to_string(), |w| format!("{:.2} @ {:.2}", w.amplitude_mm, w.frequency_hz));
+                    let turned = if at.re_angled { " re-angled" } else { "" };
+                    row += &format!("  {:>6} {speed:>10} {weave:>15}{turned}", at.passes.len());
+                }
+                None => row += &format!("  {:>6}", "cut"),
+            }
+        }
+        println!("{row}");
+    }
+    for c in process.map(|p| p.cut.as_slice()).unwrap_or_default() {
+        let contact = c.contact_camera_mm.map_or(String::new(), |p| {
+            format!(", contact at ({:.1}, {:.1}, {:.1}) mm in the camera frame", p[0], p[1], p[2])
+        });
+        println!("  cut: waypoints {} to {} (rule {}): {}{contact}", c.first, c.last, c.rule, c.reason);
+    }
 }
 
 /// Error replies become "error CODE (name): message" for the exit report,

@@ -115,12 +115,23 @@ fn export(dir: &Path, id: &str, file: &Path) -> anyhow::Result<()> {
         "camera": record.camera,
         "config_hash": record.config_hash,
         "config": record.config_text,
-        "outcome": record.outcome,
+        "procedure": record.procedure_text,
+        "format": record.format,
+        "outcome": outcome_json(&record.outcome)?,
     });
     std::fs::write(&json_path, serde_json::to_vec_pretty(&json)?)
         .with_context(|| format!("cannot write {}", json_path.display()))?;
     println!("record {id}: frame to {}, request and answer to {}", file.display(), json_path.display());
     Ok(())
+}
+
+/// The answer as the export writes it: a plan as `plan --json` prints
+/// it, each seam with its figures along it and its process.
+fn outcome_json(outcome: &Outcome) -> anyhow::Result<serde_json::Value> {
+    Ok(match outcome {
+        Outcome::Planned(result) => serde_json::json!({ "Planned": super::plan_json::plan_json(result) }),
+        refused => serde_json::to_value(refused)?,
+    })
 }
 
 /// Plans the record again; fails (exit 1) when the plan changed.

@@ -189,6 +189,22 @@ impl Config {
         Config::from_file(file)
     }
 
+    /// [`Config::parse`] with `procedure` as the weld procedure instead of
+    /// the file `[process] procedure` names (not read): a plan record's
+    /// configuration with the procedure it kept.
+    pub fn parse_with_procedure(
+        text: &str,
+        origin: &str,
+        procedure: procedure::Procedure,
+    ) -> Result<Config, ConfigError> {
+        let mut file: ConfigFile = toml::from_str(text)
+            .map_err(|e| ConfigError::Parse { path: origin.to_string(), message: e.to_string() })?;
+        file.process.procedure = String::new();
+        let mut config = Config::from_file(file)?;
+        config.process.procedure = Some(procedure);
+        Ok(config)
+    }
+
     /// Validates the schema's values into a built config.
     pub fn from_file(f: ConfigFile) -> Result<Config, ConfigError> {
         let camera = f.camera.validate()?;

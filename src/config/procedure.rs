@@ -63,6 +63,10 @@ pub struct Procedure {
     pub wires: Vec<Wire>,
     #[serde(rename = "entry")]
     pub entries: Vec<Entry>,
+    /// The TOML text it was read from, which a plan record keeps so a
+    /// replay plans with this procedure whatever its file says later.
+    #[serde(skip)]
+    source: String,
 }
 
 /// The torch's solid along its axis from the aim point: nothing up to
@@ -202,9 +206,16 @@ impl Procedure {
 
     /// Reads and validates a procedure.
     pub fn from_toml(text: &str) -> Result<Procedure, ProcedureError> {
-        let procedure: Procedure = toml::from_str(text).map_err(|e| ProcedureError::Parse(e.to_string()))?;
+        let mut procedure: Procedure = toml::from_str(text).map_err(|e| ProcedureError::Parse(e.to_string()))?;
         procedure.validate()?;
+        procedure.source = text.to_string();
         Ok(procedure)
+    }
+
+    /// The TOML text it was read from; [`Procedure::from_toml`] of it gives
+    /// this procedure unless its fields were changed after reading.
+    pub fn source(&self) -> &str {
+        &self.source
     }
 
     /// The entry for a joint type and plate thickness, if any.

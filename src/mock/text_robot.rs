@@ -6,7 +6,10 @@
 //! program does to compare them with the daemon's `CHECK` ([`SeamTally`]).
 //! [`TextRobot::pull_plan`] plays a robot program's whole pull after a
 //! plan's ok line: every line stored, in order, each seam checked, the
-//! process lines (travel speed and weave) kept beside their waypoints.
+//! process lines (travel speed and weave) kept beside their waypoints;
+//! [`TextRobot::pull_plan_logged`] does the same and shows the caller
+//! every line sent and received, as `weldseam controller --text` prints
+//! its session.
 
 use std::time::Duration;
 
@@ -116,12 +119,25 @@ impl TextRobot {
         lines: u64,
         process: bool,
     ) -> Result<Vec<PulledSeam>, PullError> {
+        self.pull_plan_logged(dialect, lines, process, |_, _| {}).await
+    }
+
+    /// [`TextRobot::pull_plan`], handing `log` each line sent and the
+    /// reply it got, in order, as they pass (a failed read is not handed).
+    pub async fn pull_plan_logged(
+        &mut self,
+        dialect: Dialect,
+        lines: u64,
+        process: bool,
+        mut log: impl FnMut(&str, &str),
+    ) -> Result<Vec<PulledSeam>, PullError> {
         let mut seams: Vec<PulledSeam> = Vec::new();
         let mut tallies: Vec<SeamTally> = Vec::new();
         let width = waypoint_numbers(dialect);
         let mut awaiting_process = false;
         for pulled in 1..=lines {
             let line = self.ask("NEXT").await?;
+            log("NEXT", &line);
             let order = |why| PullError::Order { line: line.clone(), why };
             let n = reply_numbers(&line, dialect, width).ok_or_else(|| order("not a number list"))?;
             let [kind, seam, remaining, rest @ ..] = n.as_slice() else { return Err(order("too few numbers")) };
@@ -169,7 +185,9 @@ impl TextRobot {
             }
         }
         for (seam, tally) in (1u32..).zip(&tallies) {
-            let check = self.ask(&format!("CHECK,{seam}")).await?;
+            let ask = format!("CHECK,{seam}");
+            let check = self.ask(&ask).await?;
+            log(&ask, &check);
             let numbers = reply_numbers(&check, dialect, 5).unwrap_or_default();
             tally.agrees(&numbers, dialect).map_err(|why| PullError::Check { seam, why })?;
         }

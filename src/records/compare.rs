@@ -33,13 +33,22 @@ impl Changes {
     }
 }
 
-/// The outcome as compared: the stage times left out.
+/// The outcome as compared: the stage times left out, each seam's
+/// figures along it and process put in (the plan's JSON form leaves them
+/// out of the seam).
 fn comparable(outcome: &Outcome) -> Value {
     match outcome {
         Outcome::Planned(result) => {
             let mut value = serde_json::to_value(result).unwrap_or(Value::Null);
             if let Some(map) = value.as_object_mut() {
                 map.remove("timing_ms");
+            }
+            let seams = value.get_mut("seams").and_then(Value::as_array_mut);
+            for (json, seam) in seams.into_iter().flatten().zip(&result.seams) {
+                if let Some(map) = json.as_object_mut() {
+                    map.insert("along_seam".into(), serde_json::to_value(&seam.along_seam).unwrap_or(Value::Null));
+                    map.insert("process".into(), serde_json::to_value(&seam.process).unwrap_or(Value::Null));
+                }
             }
             serde_json::json!({ "planned": value })
         }

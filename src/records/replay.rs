@@ -1,14 +1,17 @@
 //! Plans a recorded frame again, with the recorded request and
 //! configuration, as the daemon did, and says whether today's build gives
-//! the same plan ([`super::compare`]).
+//! the same plan ([`super::compare`]): every field the record keeps, each
+//! seam's figures along it and its process included (a format 1 record,
+//! which did not keep those, is compared without them).
 
 use weldseam_proto::plan::PlanResult;
 
 use super::compare::{Changes, compare};
 use super::{FormatError, Outcome, Record};
+use crate::config::procedure::{Procedure, ProcedureError};
 use crate::config::{Config, ConfigError};
 use crate::convert::from_proto::{self, RequestError};
-use crate::convert::to_proto::{plan_error_code, plan_result};
+use crate::convert::to_proto::{add_along_seam, plan_error_code, plan_result};
 use crate::pipeline::Planner;
 
 /// Why a record could not be planned again.
@@ -20,6 +23,8 @@ pub enum ReplayError {
     Request(#[from] RequestError),
     #[error(transparent)]
     Frame(#[from] FormatError),
+    #[error("the recorded weld procedure does not load in this build: {0}")]
+    Procedure(ProcedureError),
 }
 
 /// A record planned again.
@@ -40,15 +45,11 @@ impl Replayed {
     }
 }
 
-/// The outcome as a record holds it (through the record's encoding, which
-/// keeps what the binary link keeps), its stage times cleared, which are
+/// The outcome as a record of `format` holds it (format 1 kept the plan
+/// in the binary link's layout only), its stage times cleared, which are
 /// the machine's.
-fn timeless(outcome: &Outcome) -> Outcome {
-    let config = bincode::config::standard();
-    let stored = bincode::serde::encode_to_vec(outcome, config)
-        .ok()
-        .and_then(|bytes| bincode::serde::decode_from_slice::<Outcome, _>(&bytes, config).ok())
-        .map_or_else(|| outcome.clone(), |(o, _)| o);
+fn timeless(outcome: &Outcome, format: u32) -> Outcome {
+    let stored = if format < 2 { Record::as_format_1(outcome) } else { outcome.clone() };
     match stored {
         Outcome::Planned(result) => Outcome::Planned(PlanResult { timing_ms: Default::default(), ..result }),
         other => other,
@@ -56,11 +57,22 @@ fn timeless(outcome: &Outcome) -> Outcome {
 }
 
 /// Plans `record`'s frame again with its request and configuration (the
-/// recorded file, or this build's defaults when the daemon had none).
+/// recorded file, or this build's defaults when the daemon had none) and
+/// the weld procedure it kept.
 pub fn replay(record: &Record) -> Result<Replayed, ReplayError> {
-    let config = match &record.config_text {
-        Some(text) => Config::parse(text, "the recorded configuration")?,
-        None => Config::default(),
+    let origin = "the recorded configuration";
+    let procedure = match &record.procedure_text {
+        Some(text) => Some(Procedure::from_toml(text).map_err(ReplayError::Procedure)?),
+        None => None,
+    };
+    let config = match (&record.config_text, procedure) {
+        (Some(text), Some(procedure)) => Config::parse_with_procedure(text, origin, procedure)?,
+        (Some(text), None) => Config::parse(text, origin)?,
+        (None, procedure) => {
+            let mut config = Config::default();
+            config.process.procedure = procedure;
+            config
+        }
     };
     let config_hash = config.planning_hash();
     let (cloud, input) = record.cloud()?;
@@ -69,14 +81,20 @@ pub fn replay(record: &Record) -> Result<Replayed, ReplayError> {
     (request.units, request.cloud_frame) = (input.units, input.cloud_frame);
     let euler = config.euler;
     let outcome = match Planner::new(config).plan(&cloud, &request) {
-        Ok(plan) => Outcome::Planned(plan_result(&plan, euler)),
+        Ok(plan) => {
+            // As the daemon records it: with each seam's figures along it
+            // and its process.
+            let mut result = plan_result(&plan, euler);
+            add_along_seam(&mut result, &plan);
+            Outcome::Planned(result)
+        }
         Err(e) => Outcome::Refused {
             code: plan_error_code(&e).name().to_string(),
             rule: Some(e.rule.id.to_string()),
             reason: format!("frame {}: {e}", record.frame.frame_id),
         },
     };
-    let (before, after) = (timeless(&record.outcome), timeless(&outcome));
+    let (before, after) = (timeless(&record.outcome, record.format), timeless(&outcome, record.format));
     let mut changes = compare(&before, &after);
     if changes.is_empty() && !same_bits(&before, &after) {
         // JSON cannot tell NaN from null, nor -0 from 0.
@@ -85,8 +103,8 @@ pub fn replay(record: &Record) -> Result<Replayed, ReplayError> {
     Ok(Replayed { outcome, changes, config_hash })
 }
 
-/// Whether two outcomes encode to the same bytes.
+/// Whether two outcomes encode to the same bytes, every field the record
+/// keeps included.
 fn same_bits(a: &Outcome, b: &Outcome) -> bool {
-    let encode = |o: &Outcome| bincode::serde::encode_to_vec(o, bincode::config::standard()).ok();
-    encode(a) == encode(b)
+    Record::outcome_bytes(a) == Record::outcome_bytes(b)
 }

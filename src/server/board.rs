@@ -1,7 +1,10 @@
 //! What the operator page shows ([`super::http`]): who is connected, the
 //! last frame, and the daemon's last plans, each with its outcome, the
-//! refusal's rule and reason, its waypoints and, when the page is on, its
-//! pictures (the camera view and the sections of [`crate::report`]).
+//! refusal's rule and reason, its waypoints, per seam its weld process in
+//! brief ([`ProcessSummary`]: the passes, the stretches cut with their
+//! rule and reason, the waypoints re-angled) and, when the page is on, its
+//! pictures (the camera view, the sections and the profile along the seam
+//! of [`crate::report`]).
 //!
 //! Everything here is bounded: the plans are the last
 //! `server.page_plans`, the oldest dropped as a new one comes; the peers
@@ -52,6 +55,85 @@ pub struct PlanSummary {
     pub pictures: bool,
     /// Whether it has a sections picture.
     pub sections: bool,
+    /// Whether it has a profile picture (the figures along the seam).
+    pub profile: bool,
+}
+
+/// One seam's weld process in brief, for an operator asking why a stretch
+/// was not welded: the procedure, each pass with the waypoints it welds
+/// and its travel speeds, each stretch cut with its rule and reason, and
+/// the runs of waypoints whose torch was re-angled to clear the workpiece.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ProcessSummary {
+    pub procedure: String,
+    pub waypoints: usize,
+    /// The waypoints welded (not cut).
+    pub welded: usize,
+    pub passes: Vec<PassSummary>,
+    pub cut: Vec<weldseam_proto::along_seam::CutStretch>,
+    /// First and last waypoint of each run re-angled, in order.
+    pub re_angled: Vec<[usize; 2]>,
+}
+
+/// One pass of a seam's layout, over the waypoints that have it.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct PassSummary {
+    pub kind: weldseam_proto::along_seam::PassKind,
+    pub layer: u32,
+    pub bead: u32,
+    /// The waypoints with this pass.
+    pub waypoints: usize,
+    /// Its travel speed's least and greatest value there, mm/s.
+    pub speed_mm_s: [f64; 2],
+    /// Its weave's greatest half-swing, mm (0: no weave).
+    pub weave_mm: f64,
+}
+
+impl ProcessSummary {
+    /// The summary of `process`, None without one.
+    pub fn of(process: Option<&weldseam_proto::along_seam::SeamProcess>) -> Option<ProcessSummary> {
+        let process = process?;
+        let mut passes: Vec<PassSummary> = Vec::new();
+        let mut re_angled: Vec<[usize; 2]> = Vec::new();
+        for (i, at) in process.waypoints.iter().enumerate() {
+            let Some(at) = at else { continue };
+            if at.re_angled {
+                match re_angled.last_mut() {
+                    Some(run) if run[1] + 1 == i => run[1] = i,
+                    _ => re_angled.push([i, i]),
+                }
+            }
+            for pass in &at.passes {
+                let weave = pass.weave.map_or(0.0, |w| w.amplitude_mm);
+                let speed = pass.travel_speed_mm_s;
+                match passes.iter_mut().find(|p| (p.kind, p.layer, p.bead) == (pass.kind, pass.layer, pass.bead)) {
+                    Some(p) => {
+                        p.waypoints += 1;
+                        p.speed_mm_s = [p.speed_mm_s[0].min(speed), p.speed_mm_s[1].max(speed)];
+                        p.weave_mm = p.weave_mm.max(weave);
+                    }
+                    None => passes.push(PassSummary {
+                        kind: pass.kind,
+                        layer: pass.layer,
+                        bead: pass.bead,
+                        waypoints: 1,
+                        speed_mm_s: [speed, speed],
+                        weave_mm: weave,
+                    }),
+                }
+            }
+        }
+        // Root first, then layer by layer, each layer's beads in order.
+        passes.sort_by_key(|p| (p.layer, p.bead));
+        Some(ProcessSummary {
+            procedure: process.procedure.clone(),
+            waypoints: process.waypoints.len(),
+            welded: process.waypoints.iter().flatten().count(),
+            passes,
+            cut: process.cut.clone(),
+            re_angled,
+        })
+    }
 }
 
 /// One plan's pictures and figures, encoded, as [`crate::report::debug_set`] makes them.
@@ -59,6 +141,8 @@ pub struct PlanSummary {
 pub struct PlanPictures {
     pub camera_png: Vec<u8>,
     pub sections_png: Option<Vec<u8>>,
+    /// The figures along each seam, with the stretches cut shaded.
+    pub profile_png: Option<Vec<u8>>,
     /// The figures of every stage, `trace.json`.
     pub figures_json: Vec<u8>,
 }
@@ -70,6 +154,7 @@ impl PlanPictures {
         Some(PlanPictures {
             camera_png: file(crate::report::CAMERA_VIEW_FILE)?,
             sections_png: file(crate::report::SECTIONS_FILE),
+            profile_png: file(crate::report::PROFILE_FILE),
             figures_json: file(crate::report::FIGURES_FILE).unwrap_or_default(),
         })
     }
@@ -203,6 +288,7 @@ impl Board {
         if let Some(entry) = inner.plans.iter_mut().find(|e| e.summary.seq == seq) {
             entry.summary.pictures = true;
             entry.summary.sections = pictures.sections_png.is_some();
+            entry.summary.profile = pictures.profile_png.is_some();
             entry.pictures = Some(Arc::new(pictures));
         }
     }
@@ -250,6 +336,7 @@ mod tests {
             record: None,
             pictures: false,
             sections: false,
+            profile: false,
         }
     }
 
@@ -262,12 +349,68 @@ mod tests {
         assert!(board.plan(seqs[0]).is_none(), "the oldest plan is dropped");
         board.attach_pictures(
             seqs[2],
-            PlanPictures { camera_png: vec![1], sections_png: None, figures_json: Vec::new() },
+            PlanPictures {
+                camera_png: vec![1],
+                sections_png: None,
+                profile_png: Some(vec![2]),
+                figures_json: Vec::new(),
+            },
         );
-        assert!(board.plan(seqs[2]).unwrap().summary.pictures);
+        let shown = board.plan(seqs[2]).unwrap().summary;
+        assert!(shown.pictures && shown.profile && !shown.sections);
         let guard = board.peer_joined("camera", SocketAddr::from(([127, 0, 0, 1], 9)), "cam");
         assert_eq!(board.snapshot().1.len(), 1);
         drop(guard);
         assert!(board.snapshot().1.is_empty());
+    }
+
+    #[test]
+    fn a_process_summary_names_each_pass_the_cut_stretches_and_the_runs_re_angled() {
+        use weldseam_proto::along_seam::{CutStretch, Pass, PassKind, SeamProcess, WaypointProcess};
+        let pass = |kind, layer, bead, speed| Pass {
+            kind,
+            layer,
+            bead,
+            lateral_mm: 0.0,
+            height_mm: 0.0,
+            work_angle_deg: 0.0,
+            travel_speed_mm_s: speed,
+            wire_feed_m_min: 0.0,
+            voltage_v: 0.0,
+            current_a: 0.0,
+            target_area_mm2: 0.0,
+            deposited_area_mm2: 0.0,
+            weave: None,
+        };
+        let at = |re_angled, speed| {
+            Some(WaypointProcess {
+                thickness_mm: 12.0,
+                joint_area_mm2: 0.0,
+                crown_area_mm2: 0.0,
+                work_angle_deg: 0.0,
+                travel_angle_deg: 0.0,
+                re_angled,
+                passes: vec![pass(PassKind::Cap, 1, 0, speed + 1.0), pass(PassKind::Root, 0, 0, speed)],
+            })
+        };
+        let cut = CutStretch {
+            first: 2,
+            last: 3,
+            rule: "process.torch_blocked".into(),
+            reason: "r".into(),
+            contact_camera_mm: None,
+        };
+        let process = SeamProcess {
+            procedure: "p".into(),
+            waypoints: vec![at(true, 5.0), at(true, 6.0), None, None, at(false, 4.0), at(true, 5.0)],
+            cut: vec![cut.clone()],
+        };
+        let summary = ProcessSummary::of(Some(&process)).unwrap();
+        assert_eq!((summary.waypoints, summary.welded), (6, 4));
+        assert_eq!(summary.re_angled, vec![[0, 1], [5, 5]]);
+        assert_eq!(summary.cut, vec![cut]);
+        let passes: Vec<_> = summary.passes.iter().map(|p| (p.kind, p.waypoints, p.speed_mm_s)).collect();
+        assert_eq!(passes, vec![(PassKind::Root, 4, [4.0, 6.0]), (PassKind::Cap, 4, [5.0, 7.0])]);
+        assert_eq!(ProcessSummary::of(None), None);
     }
 }

@@ -5,8 +5,11 @@
 //! - `GET /`, `/page.css`, `/page.js`: the page, compiled into the binary;
 //! - `GET /api/state`: links, peers, the last frame, the queue, the last
 //!   plans and the record store, which the page polls;
-//! - `GET /api/plans/SEQ`: one plan's summary, waypoints and figures;
-//! - `GET /api/plans/SEQ/camera.png`, `.../sections.png`: its pictures.
+//! - `GET /api/plans/SEQ`: one plan's summary, waypoints and figures, and
+//!   per seam its figures along it and its weld process in brief
+//!   ([`super::board::ProcessSummary`]);
+//! - `GET /api/plans/SEQ/camera.png`, `.../sections.png`, `.../profile.png`:
+//!   its pictures.
 //!
 //! It is outside input like the links, so it is bounded the same way: a
 //! few connections at once (more are closed at accept), one request per
@@ -34,6 +37,7 @@ use tokio::sync::Semaphore;
 use tracing::{Instrument, debug, info, warn};
 
 use super::ServerState;
+use super::board::ProcessSummary;
 use super::frames::wall_clock_us;
 
 /// Connections served at once; a further one is closed at accept. The
@@ -242,14 +246,16 @@ enum PlanPart {
     Figures,
     CameraView,
     Sections,
+    Profile,
 }
 
-/// `SEQ`, `SEQ/camera.png` or `SEQ/sections.png`.
+/// `SEQ`, `SEQ/camera.png`, `SEQ/sections.png` or `SEQ/profile.png`.
 fn plan_route(rest: &str) -> Option<(u64, PlanPart)> {
     let (seq, part) = match rest.split_once('/') {
         None => (rest, PlanPart::Figures),
         Some((seq, "camera.png")) => (seq, PlanPart::CameraView),
         Some((seq, "sections.png")) => (seq, PlanPart::Sections),
+        Some((seq, "profile.png")) => (seq, PlanPart::Profile),
         Some(_) => return None,
     };
     Some((seq.parse().ok()?, part))
@@ -265,10 +271,19 @@ fn plan_answer(state: &ServerState, seq: u64, part: PlanPart) -> Answer {
     match part {
         PlanPart::CameraView => png(entry.pictures.as_ref().map(|p| &p.camera_png)),
         PlanPart::Sections => png(entry.pictures.as_ref().and_then(|p| p.sections_png.as_ref())),
+        PlanPart::Profile => png(entry.pictures.as_ref().and_then(|p| p.profile_png.as_ref())),
         PlanPart::Figures => {
             let figures: Option<serde_json::Value> =
                 entry.pictures.as_ref().and_then(|p| serde_json::from_slice(&p.figures_json).ok());
-            let body = json!({ "plan": entry.summary, "result": entry.result, "figures": figures });
+            // The seam's JSON form leaves out its figures along it and its
+            // process; the page has them beside each seam.
+            let seams: Vec<serde_json::Value> = entry
+                .result
+                .iter()
+                .flat_map(|r| &r.seams)
+                .map(|s| json!({ "along_seam": s.along_seam, "process": ProcessSummary::of(s.process.as_ref()) }))
+                .collect();
+            let body = json!({ "plan": entry.summary, "result": entry.result, "seams": seams, "figures": figures });
             (StatusCode::OK, "application/json", Bytes::from(serde_json::to_vec(&body).unwrap_or_default()))
         }
     }
@@ -328,10 +343,11 @@ mod tests {
     }
 
     #[test]
-    fn only_a_plan_number_and_its_two_pictures_are_plan_routes() {
+    fn only_a_plan_number_and_its_three_pictures_are_plan_routes() {
         assert_eq!(plan_route("12"), Some((12, PlanPart::Figures)));
         assert_eq!(plan_route("12/camera.png"), Some((12, PlanPart::CameraView)));
         assert_eq!(plan_route("12/sections.png"), Some((12, PlanPart::Sections)));
+        assert_eq!(plan_route("12/profile.png"), Some((12, PlanPart::Profile)));
         assert_eq!(plan_route("12/../../etc"), None);
         assert_eq!(plan_route("x/camera.png"), None);
         assert_eq!(percent_decode("%4"), None);

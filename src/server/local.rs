@@ -69,16 +69,22 @@ impl LocalDaemon {
     /// Starts a daemon with `config` (its listen addresses are ignored) on
     /// two fresh loopback ports. Call it inside a tokio runtime.
     pub async fn start(config: Config) -> Result<Self, StartError> {
-        Self::start_inner(config, false).await
+        Self::start_inner(config, None, false).await
+    }
+
+    /// As [`LocalDaemon::start`] for `config` read from `config_text`,
+    /// which plan records keep, as `serve --config` does.
+    pub async fn start_with_config_text(config: Config, config_text: String) -> Result<Self, StartError> {
+        Self::start_inner(config, Some(config_text), false).await
     }
 
     /// As [`LocalDaemon::start`], with the HTTP listener (the metrics and
     /// the operator page) on a fourth port.
     pub async fn start_with_metrics(config: Config) -> Result<Self, StartError> {
-        Self::start_inner(config, true).await
+        Self::start_inner(config, None, true).await
     }
 
-    async fn start_inner(config: Config, with_metrics: bool) -> Result<Self, StartError> {
+    async fn start_inner(config: Config, config_text: Option<String>, with_metrics: bool) -> Result<Self, StartError> {
         let (camera, camera_addr) = bind_loopback("camera link").await?;
         let (controller, controller_addr) = bind_loopback("controller link").await?;
         let (text, text_addr) = bind_loopback("text link").await?;
@@ -86,7 +92,7 @@ impl LocalDaemon {
             true => Some(bind_loopback("HTTP listener").await?),
             false => None,
         };
-        let state = ServerState::new(config)?;
+        let state = ServerState::with_config_text(config, config_text)?;
         let metrics_addr = metrics_listener.as_ref().map(|(_, addr)| *addr);
         let metrics =
             metrics_listener.map(|(listener, _)| tokio::spawn(super::http::serve(listener, Arc::clone(&state))));

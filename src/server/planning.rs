@@ -24,7 +24,7 @@ use super::frames::{FrameError, FrameRequest, FrameWait, Handed, StoredFrame, Wa
 use super::jobs::{JobError, JobSlot, JobTimes};
 use super::recorder;
 use super::shutdown::StopSignal;
-use crate::convert::to_proto::{plan_error_code, plan_result};
+use crate::convert::to_proto::{add_along_seam, plan_error_code, plan_result};
 use crate::pipeline::trace::PlanTrace;
 use crate::pipeline::{Plan, PlanRequest};
 use crate::records::Outcome;
@@ -324,7 +324,7 @@ async fn fulfil_inner(
     let seq = post(&log, link, &outcome, state);
     if let (Some(request), Some(frame)) = (&asked, &log.frame) {
         let recorded = match &outcome {
-            Ok(planned) => Outcome::Planned(plan_result(&planned.plan, state.config.euler)),
+            Ok(planned) => Outcome::Planned(full_result(&planned.plan, state)),
             Err(f) => Outcome::Refused {
                 code: f.code.name().to_string(),
                 rule: f.rule.map(|r| r.id.to_string()),
@@ -362,9 +362,19 @@ fn post(log: &PlanLog<'_>, link: &'static str, outcome: &Result<Planned, Failure
         record: None,
         pictures: false,
         sections: false,
+        profile: false,
     };
-    let result = outcome.as_ref().ok().map(|p| plan_result(&p.plan, state.config.euler));
+    let result = outcome.as_ref().ok().map(|p| full_result(&p.plan, state));
     state.board.add_plan(summary, result)
+}
+
+/// The plan's report with everything it carries: each seam's figures
+/// along it and its process too, which the page shows and a record keeps
+/// whatever a controller asked for.
+fn full_result(plan: &Plan, state: &ServerState) -> weldseam_proto::plan::PlanResult {
+    let mut result = plan_result(plan, state.config.euler);
+    add_along_seam(&mut result, plan);
+    result
 }
 
 /// Logs and counts, by rule, each warning of a plan's seams and each joint

@@ -1,6 +1,7 @@
 //! The daemon's writer of plan records (`[records]`, [`crate::records`]):
 //! after each plan's reply, the frame it planned, the request, the
-//! configuration and the answer go to the store on a blocking thread.
+//! configuration (with the weld procedure's text) and the answer, every
+//! field the plan carries, go to the store on a blocking thread.
 //!
 //! At most [`MAX_WRITES`] records are being written at once, each holding
 //! its frame; a plan answered while they are is not recorded, and that is
@@ -17,6 +18,7 @@ use super::board::Board;
 use super::frames::{StoredFrame, wall_clock_us};
 use super::metrics::Metrics;
 use crate::config::Config;
+use crate::config::procedure::Procedure;
 use crate::pipeline::PlanRequest;
 use crate::records::{Limits, Outcome, Record, Store};
 
@@ -29,6 +31,8 @@ pub struct Recorder {
     store: Option<Arc<Store>>,
     config_hash: String,
     config_text: Option<Arc<str>>,
+    /// The weld procedure's text, kept in every record beside the config.
+    procedure_text: Option<Arc<str>>,
     writers: Arc<Semaphore>,
     board: Arc<Board>,
 }
@@ -57,10 +61,21 @@ impl Recorder {
                 None
             }
         });
+        let procedure = config.process.procedure.as_ref();
+        // The text is what a replay plans with: kept only when it reads
+        // back as the procedure the daemon holds.
+        let procedure_text = procedure.and_then(|p| match Procedure::from_toml(p.source()) {
+            Ok(read) if read == *p => Some(Arc::from(p.source())),
+            _ => {
+                warn!("the weld procedure differs from its text: records will not hold it, and replays lack it");
+                None
+            }
+        });
         Recorder {
             store,
             config_hash: config.planning_hash(),
             config_text: config_text.map(Arc::from),
+            procedure_text,
             writers: Arc::new(Semaphore::new(MAX_WRITES)),
             board: Arc::clone(board),
         }
@@ -97,6 +112,7 @@ impl Recorder {
         let request = Record::wire_request(request_id, request);
         let (store, frame, board) = (Arc::clone(store), Arc::clone(frame), Arc::clone(&self.board));
         let (config_hash, config_text) = (self.config_hash.clone(), self.config_text.clone());
+        let procedure_text = self.procedure_text.clone();
         let (written, failed, held) = metrics.record_counters();
         tokio::task::spawn_blocking(move || {
             let _turn = turn;
@@ -124,6 +140,8 @@ impl Recorder {
                 config_hash,
                 config_text: config_text.map(|t| t.to_string()),
                 outcome,
+                procedure_text: procedure_text.map(|t| t.to_string()),
+                format: crate::records::FORMAT_VERSION,
             };
             drop(frame);
             let (sequence, id) = store.next_id(request_id);

@@ -145,11 +145,15 @@ async function openPlan(seq) {
   document.getElementById("detail-record").textContent = plan.record ? "record " + plan.record + " (weldseam replay)" : "";
   const camera = document.getElementById("camera-view");
   const sections = document.getElementById("sections");
+  const profile = document.getElementById("profile");
   document.getElementById("camera-figure").hidden = !plan.pictures;
   document.getElementById("sections-figure").hidden = !plan.sections;
+  document.getElementById("profile-figure").hidden = !plan.profile;
   document.getElementById("detail-no-pictures").hidden = plan.pictures;
   if (plan.pictures) camera.src = withToken("/api/plans/" + seq + "/camera.png");
   if (plan.sections) sections.src = withToken("/api/plans/" + seq + "/sections.png");
+  if (plan.profile) profile.src = withToken("/api/plans/" + seq + "/profile.png");
+  showProcess(answer.seams || []);
 
   const figures = document.querySelector("#figures tbody");
   figures.replaceChildren();
@@ -182,6 +186,47 @@ async function openPlan(seq) {
     }
   }
   document.getElementById("close").focus();
+}
+
+// Per seam, what the procedure made of it: its passes, and each stretch
+// not welded with the rule that cut it and why, so the operator reads
+// the reason beside the profile's shaded stretch.
+function showProcess(seams) {
+  const box = document.getElementById("process-seams");
+  box.replaceChildren();
+  let any = false;
+  seams.forEach((seam, k) => {
+    const p = seam.process;
+    if (!p) return;
+    any = true;
+    const block = el("div", "seam-process");
+    block.append(el("h4", null, "seam " + (k + 1) + ": " + p.procedure + ", " + p.welded + " of " + p.waypoints + " waypoints welded"));
+    for (const pass of p.passes) {
+      const speed = pass.speed_mm_s[0] === pass.speed_mm_s[1]
+        ? fixed(pass.speed_mm_s[0], 1)
+        : fixed(pass.speed_mm_s[0], 1) + " to " + fixed(pass.speed_mm_s[1], 1);
+      const weave = pass.weave_mm > 0 ? ", weave up to ±" + fixed(pass.weave_mm, 1) + " mm" : "";
+      block.append(el("p", "pass", pass.kind + " pass (layer " + pass.layer + ", bead " + pass.bead + ") at " +
+        pass.waypoints + " waypoints, " + speed + " mm/s" + weave));
+    }
+    for (const cut of p.cut) {
+      const line = el("p", "cut");
+      line.append(document.createTextNode("not welded: waypoints " + cut.first + " to " + cut.last + ", "));
+      line.append(el("span", "rule", cut.rule));
+      line.append(document.createTextNode(": " + cut.reason));
+      if (cut.contact_camera_mm) {
+        const c = cut.contact_camera_mm;
+        line.append(document.createTextNode(" (torch touches at " + fixed(c[0], 1) + ", " + fixed(c[1], 1) + ", " + fixed(c[2], 1) + " mm, camera frame)"));
+      }
+      block.append(line);
+    }
+    if (p.re_angled.length > 0) {
+      const runs = p.re_angled.map((r) => (r[0] === r[1] ? String(r[0]) : r[0] + " to " + r[1])).join(", ");
+      block.append(el("p", "re-angled", "torch re-angled to clear the workpiece at waypoints " + runs));
+    }
+    box.append(block);
+  });
+  document.getElementById("process").hidden = !any;
 }
 
 function closePlan() {

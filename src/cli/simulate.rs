@@ -6,8 +6,10 @@
 //! the arguments that run the planner on it. `--camera consumer` renders
 //! with a RealSense-class depth camera instead of the paper's. `--fault`
 //! adds one of the fault suite's faults to the scene, and `--suite-scene`
-//! finds scenes of the fault and hard suites by name too, so a person can
-//! write one out and look at it.
+//! finds scenes of the fault, hard, tee, multi, corner and weld process
+//! suites by name too, so a person can write one out and look at it (a
+//! process scene rendered with its own solids: plates turned or raised, a
+//! clamp's block).
 
 use std::fs::File;
 use std::io::{BufWriter, Write};
@@ -26,8 +28,9 @@ use weldseam::sim::consumer::{consumer_demo_scene, consumer_far_suite};
 use weldseam::sim::faults::frame_barely_in_view;
 use weldseam::sim::variants::Variant;
 use weldseam::sim::{
-    CameraPreset, Draw, Fault, FaultKind, JointGeometry, NoiseSpec, PlateExtent, SceneSpec, Simulation, consumer_suite,
-    corner_suite, demo_scene, eval_suite, fault_suite, hard_suite, multi_suite, simulate, tee_suite,
+    CameraPreset, Draw, Fault, FaultKind, JointGeometry, NoiseSpec, PlateExtent, ProcessScene, SceneSpec, Simulation,
+    consumer_suite, corner_suite, demo_scene, eval_suite, fault_suite, hard_suite, multi_suite, process_suite,
+    simulate, tee_suite,
 };
 
 use crate::cli::args::CameraArg;
@@ -63,8 +66,8 @@ pub struct SimulateArgs {
     #[arg(long, value_enum, default_value_t)]
     pub camera: CameraArg,
     /// Start from a scene of the evaluation suite, by name or index, or of
-    /// the fault, hard, tee or multi suite (`eval --suite
-    /// faults|hard|tee|multi`) by name.
+    /// the fault, hard, tee, multi, corner or process suite (`eval --suite
+    /// faults|hard|tee|multi|corner|process`) by name.
     #[arg(long, value_name = "NAME_OR_INDEX")]
     pub suite_scene: Option<String>,
     /// Add a fault to the scene, at the seam's middle: wrong-joint,
@@ -143,7 +146,16 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
     let format = CloudFormat::of(&args.out, variant.is_compressed())?;
     let camera = CameraPreset::from(args.camera).camera();
     let started = Instant::now();
-    let rendered = simulate(&spec, &camera);
+    // A weld process scene renders its own solids (plates turned or
+    // raised, a clamp's block) with the spec the arguments left.
+    let process = match (CameraPreset::from(args.camera), name.as_deref()) {
+        (CameraPreset::Industrial, Some(key)) => process_scene(key),
+        _ => None,
+    };
+    let rendered = match process {
+        Some(scene) => ProcessScene { spec: spec.clone(), ..scene }.simulate(&camera),
+        None => simulate(&spec, &camera),
+    };
     let sim = variant.apply(&rendered, spec.seed);
     let elapsed = started.elapsed();
     write_cloud(&sim.cloud, format, &args.out)?;
@@ -242,6 +254,9 @@ fn find_suite_scene(preset: CameraPreset, key: &str) -> Result<(String, SceneSpe
         if let Some(found) = other.into_iter().flatten().find(|(name, _)| name == key) {
             return Ok(found);
         }
+        if let Some(scene) = process_scene(key) {
+            return Ok((scene.name, scene.spec));
+        }
     }
     let count = suite.len();
     let position = match key.parse::<usize>() {
@@ -255,6 +270,12 @@ fn find_suite_scene(preset: CameraPreset, key: &str) -> Result<(String, SceneSpe
             suite.first().map_or("", |(name, _)| name.as_str())
         ),
     }
+}
+
+/// The weld process's scene named `key` (`process-...`), of the draw its
+/// name gives.
+fn process_scene(key: &str) -> Option<ProcessScene> {
+    key.starts_with("process-").then(|| process_suite(Draw::of_scene(key)).into_iter().find(|s| s.name == key))?
 }
 
 /// The file formats `simulate` writes, chosen by the file's extension.
@@ -557,6 +578,11 @@ mod tests {
         a.suite_scene = Some("0".into());
         a.joint = Some(JointType::Lap);
         assert!(scene_from_args(&a).unwrap_err().to_string().contains("not lap"));
+        // A weld process scene, by name, with its own solids.
+        let clamp = process_suite(Draw::Documented).into_iter().find(|s| s.clamp.is_some()).unwrap();
+        let (name, spec) = find_suite_scene(CameraPreset::Industrial, &clamp.name).unwrap();
+        assert_eq!((name.as_str(), spec.seed), (clamp.name.as_str(), clamp.spec.seed));
+        assert!(process_scene(&clamp.name).is_some_and(|s| s.clamp == clamp.clamp));
     }
 
     #[test]

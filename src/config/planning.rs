@@ -112,8 +112,9 @@ pub struct PipelineParams {
     /// The range of plate thicknesses a lap step may have.
     pub lap_step_min_mm: f64,
     pub lap_step_max_mm: f64,
-    /// A tee's web: its top lies more than `lap_step_max_mm` and at most
-    /// this far over the flange, mm ...
+    /// A tee's web: its top lies more than `lap_step_max_mm` (or, a short
+    /// web under `t_fillet`, 1.5 times its width) and at most this far over
+    /// the flange, mm ...
     pub tee_web_height_max_mm: f64,
     /// ... and is at most this wide, mm (the web's thickness; a plate
     /// lying over the table is far wider).

@@ -37,6 +37,7 @@ pub(super) static RULES: &[&Rule] = &[
 
 const BACKGROUND: &str = "src/pipeline/background/placement.rs";
 const CORNER: &str = "src/pipeline/background/corner.rs";
+const LAYERS: &str = "src/pipeline/background/layers.rs";
 
 const COPLANAR_TOLERANCE: Parameter = Parameter {
     name: "coplanar_tolerance_mm",
@@ -67,6 +68,12 @@ const WEB_THICKNESS_MAX: Parameter = Parameter {
     unit: "mm",
     meaning: "widest web's top",
     source: Source::Config("pipeline.tee_web_thickness_max_mm"),
+};
+const WEB_MIN_HEIGHT_PER_WIDTH: Parameter = Parameter {
+    name: "WEB_MIN_HEIGHT_PER_WIDTH",
+    unit: "",
+    meaning: "least height over width of a web's top no higher than a lap step",
+    source: Source::Constant { file: LAYERS, name: "WEB_MIN_HEIGHT_PER_WIDTH" },
 };
 const FACING_ANGLE_MAX: Parameter = Parameter {
     name: "plane_max_normal_angle_deg",
@@ -230,16 +237,29 @@ pub static TEE_NO_WEB_TOP: Rule = Rule {
     gate: None,
     summary: "under a tee request, a long narrow plane stands a web's height over a plane beside it",
     reason: "A tee's web stands on its flange: from the camera's side its top is a long narrow plane, no wider than \
-             a web is thick, higher over the flange than any lap's upper plate is thick and no higher than a web \
-             stands, with the flange seen beside it. A narrow strip no higher than a lap step is a bar or a clamp \
-             lying on a plate; a narrow plane under a larger one is a V-groove's root land below the workpiece's \
-             top, not a web's top.",
-    parameters: &[WEB_THICKNESS_MAX, BAR_ELONGATION, LAP_STEP_MAX, WEB_HEIGHT_MAX, COPLANAR_TOLERANCE],
+             a web is thick, no higher over the flange than a web stands, with the flange seen beside it; and it \
+             stands as a plate on its edge does: higher than any lap's upper plate is thick, or, a short web, \
+             several times as tall as its top is wide. A narrow strip no higher than a lap step and about as wide \
+             as it is tall, or wider, is a bar or a clamp lying on a plate; a narrow plane under a larger one is a \
+             V-groove's root land below the workpiece's top, not a web's top. (A short strip standing taller than \
+             it is wide is read as a web only under the tee's request: a bar or clamp standing on edge across \
+             a butt or lap joint's plates shows the same layers.)",
+    parameters: &[
+        WEB_THICKNESS_MAX,
+        BAR_ELONGATION,
+        LAP_STEP_MAX,
+        WEB_MIN_HEIGHT_PER_WIDTH,
+        WEB_HEIGHT_MAX,
+        COPLANAR_TOLERANCE,
+    ],
     fires: &[
-        "src/pipeline/background/tests.rs::a_bar_no_taller_than_a_lap_step_or_too_wide_is_no_web",
+        "src/pipeline/background/tests.rs::a_bar_lying_on_the_plates_or_too_wide_is_no_web",
         "src/pipeline/background/tests.rs::a_v_groove_s_root_land_under_its_plates_is_no_web_s_top",
     ],
-    holds: &["src/pipeline/background/tests.rs::a_web_a_web_height_over_its_flange_seen_on_both_sides_is_a_tee"],
+    holds: &[
+        "src/pipeline/background/tests.rs::a_web_a_web_height_over_its_flange_seen_on_both_sides_is_a_tee",
+        "src/pipeline/background/tests.rs::a_web_shorter_than_a_lap_step_standing_taller_than_it_is_thick_is_a_tee",
+    ],
 };
 
 pub static LOOKS_LIKE_TEE: Rule = Rule {
@@ -256,7 +276,7 @@ pub static LOOKS_LIKE_TEE: Rule = Rule {
         "tests/several_seams.rs::a_tee_requested_as_a_butt_or_lap_joint_is_refused_by_name",
         "src/pipeline/background/tests.rs::a_web_a_web_height_over_its_flange_seen_on_both_sides_is_a_tee",
     ],
-    holds: &["src/pipeline/background/tests.rs::a_bar_no_taller_than_a_lap_step_or_too_wide_is_no_web"],
+    holds: &["src/pipeline/background/tests.rs::a_bar_lying_on_the_plates_or_too_wide_is_no_web"],
 };
 
 pub static BUTT_NO_COPLANAR_PAIR: Rule = Rule {

@@ -87,12 +87,14 @@ pub enum BackgroundError {
     )]
     LooksLikeTee { joint: JointType, top_mm2: f64, width_mm: f64, height_mm: f64, first_mm2: f64, second_mm2: f64 },
     /// A tee was asked for, and no long narrow plane lies a web's height
-    /// over a plane beside it.
+    /// over a plane beside it: more than `min_mm` or, shorter, at least
+    /// `min_height_per_width` times its width, and at most `max_mm`.
     #[error(
-        "found {found} planes but no long narrow one (a web's top, at most {max_width_mm} mm wide) {min_mm} to \
-         {max_mm} mm over a plane beside it (offsets {offsets_mm:?} mm) for a tee joint"
+        "found {found} planes but no long narrow one (a web's top, at most {max_width_mm} mm wide) standing over a \
+         plane beside it more than {min_mm} mm, or at least {min_height_per_width} times its width, and at most \
+         {max_mm} mm (offsets {offsets_mm:?} mm) for a tee joint"
     )]
-    NoWeb { found: usize, offsets_mm: Vec<f64>, min_mm: f64, max_mm: f64, max_width_mm: f64 },
+    NoWeb { found: usize, offsets_mm: Vec<f64>, min_mm: f64, min_height_per_width: f64, max_mm: f64, max_width_mm: f64 },
     /// The joint type was left to the planner, and a long narrow plane
     /// lies a web's height over a plane seen on one of its sides only: a
     /// tee whose flange the web hides on its far side, or a bar standing

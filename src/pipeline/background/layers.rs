@@ -109,10 +109,10 @@ impl TeeLayers {
 /// Where a tee is: the nearest long narrow plane, the largest of its layer
 /// (butt plates lie side by side; a sliver of plate beside a larger one is
 /// no web), at most a web's thickness wide, whose nearest lower layer lies
-/// a web's height under it (more than a lap's step: a clamp on a plate is
-/// no taller than that, and a lap's upper plate lies on its lower one)
-/// and holds a plane beside it, with no larger plane nearer the camera
-/// (a V-groove's root land under its plates is narrow and long too). A
+/// a web's height under it ([`stands_as_web`]: more than a lap's step, or
+/// under a tee's request standing taller than its top is wide, as no bar
+/// or clamp lying on a plate does) and holds a plane beside it, with no
+/// larger plane nearer the camera (a V-groove's root land under its plates is narrow and long too). A
 /// web seen over its flange on both sides first; else one over a plane on
 /// one side.
 fn find_tee(l: &Layers, s: &Selection, points: &[Point]) -> Option<TeeLayers> {
@@ -130,7 +130,7 @@ fn find_tee(l: &Layers, s: &Selection, points: &[Point]) -> Option<TeeLayers> {
         }
         let flange = upper + 1;
         let height = l.depth(flange) - l.offset(top);
-        if height <= s.lap_step_max_mm || height > s.web_height_max_mm {
+        if !stands_as_web(height, top.width_mm(), s) {
             continue;
         }
         // On each side the piece the web's top stands beside, else the
@@ -157,6 +157,33 @@ fn find_tee(l: &Layers, s: &Selection, points: &[Point]) -> Option<TeeLayers> {
         }
     }
     one_sided
+}
+
+/// How many times its top's width a strip no higher than a lap's upper
+/// plate is thick must stand over the plane beside it to be a web
+/// standing on its flange, under a tee's request. A web is a plate
+/// standing on its edge: the tee suite's webs are 40 to 100 mm tall and
+/// 4 to 12 mm thick, the process suite's short webs 15 to 25 mm tall (3.3
+/// to 3.7 times their thickness, their tops measured about 1 mm narrower
+/// still). A bar or a clamp lying flat on a plate is about as wide as it
+/// is tall or wider (the fault suite's example clamp: 25 mm tall, 30 mm
+/// wide), and a lap's upper plate, as tall as it is thick, is far wider.
+pub const WEB_MIN_HEIGHT_PER_WIDTH: f64 = 1.5;
+
+/// Whether a long narrow top `width_mm` wide, `height_mm` over the plane
+/// beside it, stands there as a web's top: no higher than a web stands
+/// (`web_height_max_mm`), and either higher than any lap's upper plate is
+/// thick (`lap_step_max_mm`) or, a short web under a tee's request, at
+/// least [`WEB_MIN_HEIGHT_PER_WIDTH`] times as tall as it is wide.
+///
+/// Without the request the height alone decides: a bar or clamp standing
+/// on edge across a butt or lap joint (the fault suite's clamps: 15 to
+/// 40 mm wide, 10 to 40 mm tall) lies over the plates on both of its
+/// sides as a short web does over its flange, and only the user's naming
+/// of the joint tells the two apart.
+fn stands_as_web(height_mm: f64, width_mm: f64, s: &Selection) -> bool {
+    let short_web_named = s.joint == Some(JointType::TFillet) && height_mm >= WEB_MIN_HEIGHT_PER_WIDTH * width_mm;
+    height_mm <= s.web_height_max_mm && (height_mm > s.lap_step_max_mm || short_web_named)
 }
 
 /// The nearest layer of workpiece planes, its clusters largest first
@@ -341,6 +368,7 @@ pub fn robust_select(planes: Vec<PlaneCluster>, s: &Selection, points: &[Point])
                 found: l.found,
                 offsets_mm: l.offsets_mm.clone(),
                 min_mm: s.lap_step_max_mm,
+                min_height_per_width: WEB_MIN_HEIGHT_PER_WIDTH,
                 max_mm: s.web_height_max_mm,
                 max_width_mm: s.web_thickness_max_mm,
             });

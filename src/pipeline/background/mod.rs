@@ -206,8 +206,10 @@ pub struct Selection {
     pub coplanar_tolerance_mm: f64,
     pub lap_step_min_mm: f64,
     pub lap_step_max_mm: f64,
-    /// A web's top lies more than `lap_step_max_mm` and at most this far
-    /// over its flange, and is at most `web_thickness_max_mm` wide.
+    /// A web's top lies more than `lap_step_max_mm` (or, a short web under
+    /// a tee's request, [`layers::WEB_MIN_HEIGHT_PER_WIDTH`] times its
+    /// width) and at most this far over its flange, and is at most
+    /// `web_thickness_max_mm` wide.
     pub web_height_max_mm: f64,
     pub web_thickness_max_mm: f64,
     /// Clusters whose normal is further than this from `normal` are not

@@ -260,20 +260,65 @@ fn a_web_a_web_height_over_its_flange_seen_on_both_sides_is_a_tee() {
     }
 }
 
+/// [`tee`] with its top `width` mm wide instead of 8 (200 mm long).
+fn tee_of_width(height: f64, width: f64) -> Vec<PlaneCluster> {
+    let mut planes = tee(height, true);
+    planes[0].area_mm2 = 200.0 * width;
+    planes[0].elongation = 200.0 / width;
+    planes
+}
+
 #[test]
-fn a_bar_no_taller_than_a_lap_step_or_too_wide_is_no_web() {
-    // A clamp 25 mm over the plates (the fault suite's): within a lap's
-    // step, so what it was before, butt plates with a clamp over them.
-    let clamp = tee(25.0, true);
-    assert_eq!(robust_select(clamp, &auto()).unwrap().layout, Layout::Butt);
-    let err = robust_select(tee(25.0, true), &selection(JointType::TFillet)).unwrap_err();
+fn a_bar_lying_on_the_plates_or_too_wide_is_no_web() {
+    // A clamp 25 mm over the plates and 30 mm wide (the fault suite's):
+    // within a lap's step and no taller than it is wide, so what it was
+    // before, butt plates with a clamp over them.
+    let clamp = tee_of_width(25.0, 30.0);
+    assert!((clamp[0].width_mm() - 30.0).abs() < 1e-9);
+    assert_eq!(robust_select(clamp.clone(), &auto()).unwrap().layout, Layout::Butt);
+    let err = robust_select(clamp, &selection(JointType::TFillet)).unwrap_err();
     assert_eq!(err.rule().id, "tee.no_web_top", "{err}");
+    assert!(err.to_string().contains("at least 1.5 times its width"), "{err}");
+    // A flat bar 20 mm wide, 12 mm over the plates: the same.
+    let flat = tee_of_width(12.0, 20.0);
+    assert_eq!(robust_select(flat.clone(), &auto()).unwrap().layout, Layout::Butt);
+    assert_eq!(robust_select(flat, &selection(JointType::TFillet)).unwrap_err().rule().id, "tee.no_web_top");
+    // A bar standing on edge, 8 mm wide and 25 mm tall, across butt
+    // plates: no tee unless one is asked for.
+    assert_eq!(robust_select(tee(25.0, true), &auto()).unwrap().layout, Layout::Butt);
     // A plate 60 mm wide over the table: no web's top.
     let mut wide = tee(50.0, true);
     wide[0].elongation = 3.0;
     wide[0].area_mm2 = 11_000.0;
     assert_ne!(robust_select(wide.clone(), &auto()).map(|s| s.layout).ok(), Some(Layout::Tee));
     assert!(matches!(robust_select(wide, &selection(JointType::TFillet)), Err(BackgroundError::NoWeb { .. })));
+}
+
+#[test]
+fn a_web_shorter_than_a_lap_step_standing_taller_than_it_is_thick_is_a_tee() {
+    // Issue 50's short webs: 8 mm thick, 15 to 25 mm over the flange, no
+    // higher than a lap's upper plate may be thick (30 mm) but standing
+    // two to three times as tall as their top is wide: under `t_fillet`,
+    // on both sides of it or one.
+    let tee_asked = selection(JointType::TFillet);
+    for height in [15.0, 20.0, 25.0] {
+        for both_sides in [true, false] {
+            let chosen = robust_select(tee(height, both_sides), &tee_asked).unwrap();
+            assert_eq!(chosen.layout, Layout::Tee, "{height} {both_sides}");
+            assert_eq!(chosen.workpiece.plates[0].area_mm2, 1_600.0);
+            let over = format!("{height:.1} mm over a flange seen on");
+            assert!(chosen.evidence.contains(&over), "{}", chosen.evidence);
+        }
+        // Unnamed, or another joint named, the layers read as before: a
+        // bar standing on edge across a joint's plates looks the same.
+        assert_ne!(robust_select(tee(height, true), &auto()).map(|s| s.layout).ok(), Some(Layout::Tee));
+        assert_eq!(robust_select(tee(height, true), &selection(JointType::IButt)).unwrap().layout, Layout::Butt);
+        let err = robust_select(tee(height, true), &selection(JointType::Lap)).unwrap_err();
+        assert_eq!(err.rule().id, "lap.upper_plane_lies_across_lower", "{err}");
+    }
+    // At 1.5 times its width it stands as a web; under it, no.
+    assert_eq!(robust_select(tee_of_width(18.1, 12.0), &tee_asked).unwrap().layout, Layout::Tee);
+    assert_eq!(robust_select(tee_of_width(17.9, 12.0), &tee_asked).unwrap_err().rule().id, "tee.no_web_top");
 }
 
 #[test]
@@ -641,7 +686,14 @@ fn each_refusal_s_rule_carries_its_refusal_class() {
             first_mm2: 1.0,
             second_mm2: 1.0,
         },
-        BackgroundError::NoWeb { found: 2, offsets_mm: vec![], min_mm: 30.0, max_mm: 250.0, max_width_mm: 30.0 },
+        BackgroundError::NoWeb {
+            found: 2,
+            offsets_mm: vec![],
+            min_mm: 30.0,
+            min_height_per_width: 1.5,
+            max_mm: 250.0,
+            max_width_mm: 30.0,
+        },
         BackgroundError::OneSidedWeb { top_mm2: 1.0, width_mm: 1.0, height_mm: 50.0, beside_mm2: 1.0 },
         BackgroundError::LooksLikeCorner { kind: CornerKind::Inside, what: String::new() },
         BackgroundError::LooksLikeCorner { kind: CornerKind::Outside, what: String::new() },

@@ -8,9 +8,10 @@
 //! by its `height_mm`, in the seam's frame at that waypoint
 //! ([`Station`](crate::process::clearance::Station): along the seam, across it, out of the joint), with the
 //! torch turned to the pass's work angle. The torch's clearance is
-//! checked for the pass the waypoints trace (the root, or a single pass);
-//! where it had to lean to clear, every pass at that waypoint leans by as
-//! much, so the torch keeps the side it cleared on. The traced pass's
+//! checked for every pass at the waypoint
+//! ([`super::seam_process`]); where it had to lean to clear, every pass
+//! there leans by as much, so the torch keeps the side it cleared on, and
+//! a waypoint where no lean clears them all is cut. The traced pass's
 //! points are the seam's waypoints themselves: a seam welded in one pass
 //! gives exactly the waypoints the plan carries.
 //!
@@ -166,7 +167,7 @@ fn pass_pose(w: &Waypoint, p: &WaypointProcess, pass: &Pass, base_from_camera: &
     let up = station.bisector.normalize();
     let across = Unit::new_normalize(along.cross(&up)).into_inner();
     let offset: Vec3 = across * pass.lateral_mm + up * pass.height_mm;
-    // The lean the root needed to clear, kept for every pass.
+    // The lean every pass needed to clear, read off the root's angle.
     let traced = p.layout.passes.iter().find(|q| PassId::of(q) == PassId::Root).map_or(0.0, |q| q.work_angle_deg);
     let lean = p.work_angle_deg - traced;
     let axis = station.axis(pass.work_angle_deg + lean, p.travel_angle_deg);

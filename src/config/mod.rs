@@ -145,12 +145,15 @@ fn count_in(key: &'static str, v: u64, lo: u64, hi: u64) -> Result<(), ConfigErr
 
 impl Config {
     /// A short fingerprint of every setting that shapes a plan (the
-    /// camera, the robot, the pipeline, the trajectory and the quality
-    /// gates; not the daemon's links and stores): FNV-1a, 64 bits, of their
-    /// debug form, whose numbers are exact. A record keeps it, so a replay
-    /// can tell whether it plans with the same settings.
+    /// camera, the robot, the pipeline, the trajectory, the quality gates
+    /// and, where set, the weld process: the procedure and the plates'
+    /// thickness; not the daemon's links and stores): FNV-1a, 64 bits, of
+    /// their debug form, whose numbers are exact. A record keeps it, so a
+    /// replay can tell whether it plans with the same settings. A config
+    /// without a process hashes as it did before the process was counted,
+    /// so the records it made still match.
     pub fn planning_hash(&self) -> String {
-        let text = format!(
+        let mut text = format!(
             "{:?}{:?}{:?}{:?}{:?}{:?}{:?}{:?}",
             self.camera,
             self.euler,
@@ -161,6 +164,9 @@ impl Config {
             self.trajectory,
             self.quality
         );
+        if self.process != ProcessParams::default() {
+            text.push_str(&format!("{:?}", self.process));
+        }
         let hash = text.bytes().fold(0xcbf2_9ce4_8422_2325u64, |h, b| (h ^ u64::from(b)).wrapping_mul(0x100_0000_01b3));
         format!("{hash:016x}")
     }

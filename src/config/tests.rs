@@ -222,3 +222,26 @@ fn a_request_and_the_config_share_the_step_and_angle_limits() {
         assert!(config(step, angle).is_err(), "config {step} {angle}");
     }
 }
+
+#[test]
+fn the_planning_hash_counts_the_weld_process_where_one_is_set() {
+    use crate::process::Procedure;
+    let plain = Config::default();
+    // Without a process, the fingerprint the records made before the
+    // process was counted carry.
+    assert_eq!(plain.planning_hash(), PLAIN_PLANNING_HASH);
+    let with = |procedure: Procedure, thickness: Option<f64>| Config {
+        process: ProcessParams { procedure: Some(procedure), plate_thickness_mm: thickness },
+        ..Config::default()
+    };
+    let example = with(Procedure::example(), Some(8.0));
+    assert_ne!(example.planning_hash(), plain.planning_hash());
+    assert_ne!(example.planning_hash(), with(Procedure::example(), Some(10.0)).planning_hash());
+    let mut wider_margin = Procedure::example();
+    wider_margin.torch.margin_mm += 0.5;
+    assert_ne!(example.planning_hash(), with(wider_margin, Some(8.0)).planning_hash());
+    assert_eq!(example.planning_hash(), with(Procedure::example(), Some(8.0)).planning_hash());
+}
+
+/// [`Config::default`]'s planning hash.
+const PLAIN_PLANNING_HASH: &str = "f81686f82aaebb4a";

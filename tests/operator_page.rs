@@ -137,15 +137,20 @@ async fn wait_for(client: &Client, css: &str) -> fantoccini::elements::Element {
     }
 }
 
-#[test]
-fn the_page_shows_a_plan_and_a_refusal_as_they_happen() {
+/// Runs `drive` once the browser is found, within [`TEST_WAIT`].
+fn in_browser(drive: impl std::future::Future<Output = ()>) {
     if let Err(e) = browser() {
         panic!("{e}");
     }
     let runtime = tokio::runtime::Builder::new_multi_thread().worker_threads(2).enable_all().build().unwrap();
     runtime.block_on(async {
-        tokio::time::timeout(TEST_WAIT, drive()).await.expect("the browser test took over 5 minutes");
+        tokio::time::timeout(TEST_WAIT, drive).await.expect("the browser test took over 5 minutes");
     });
+}
+
+#[test]
+fn the_page_shows_a_plan_and_a_refusal_as_they_happen() {
+    in_browser(drive());
 }
 
 async fn drive() {
@@ -213,13 +218,7 @@ async fn drive() {
 
 #[test]
 fn a_plan_with_a_procedure_opens_to_its_profile_and_why_a_stretch_was_not_welded() {
-    if let Err(e) = browser() {
-        panic!("{e}");
-    }
-    let runtime = tokio::runtime::Builder::new_multi_thread().worker_threads(2).enable_all().build().unwrap();
-    runtime.block_on(async {
-        tokio::time::timeout(TEST_WAIT, drive_process()).await.expect("the browser test took over 5 minutes");
-    });
+    in_browser(drive_process());
 }
 
 /// A 20 mm plate's V-groove, which the example procedure's torch cannot

@@ -60,13 +60,9 @@ fn near(a: f64, b: f64, decimals: usize) -> bool {
     (a - b).abs() <= 1.01 * 10f64.powi(-(decimals as i32))
 }
 
-#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
-async fn every_dialect_pulls_each_pass_with_its_speeds_and_weave() {
-    let sim = thick_groove();
-    let config = config();
-    let cell = Cell::start(config.clone()).await;
-    let (stop_camera, camera) = cell.camera(vec![Arc::new(sim.cloud.clone())], CameraOptions::default());
-    // Wait for the camera: a PING counts the cameras connected.
+/// A robot program on the text link, once the daemon counts the camera
+/// (a PING answers with the cameras connected), or after 5 s of asking.
+async fn robot_once_the_camera_is_in(cell: &Cell) -> TextRobot {
     let mut robot = TextRobot::connect(&cell.daemon.text_addr.to_string(), WAIT).await.unwrap();
     for _ in 0..100 {
         if robot.ask("PING").await.unwrap().starts_with("0,1,") {
@@ -74,6 +70,16 @@ async fn every_dialect_pulls_each_pass_with_its_speeds_and_weave() {
         }
         tokio::time::sleep(Duration::from_millis(50)).await;
     }
+    robot
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn every_dialect_pulls_each_pass_with_its_speeds_and_weave() {
+    let sim = thick_groove();
+    let config = config();
+    let cell = Cell::start(config.clone()).await;
+    let (stop_camera, camera) = cell.camera(vec![Arc::new(sim.cloud.clone())], CameraOptions::default());
+    let mut robot = robot_once_the_camera_is_in(&cell).await;
     for dialect in Dialect::ALL {
         let hello = robot.ask(&format!("HELLO,{},PROCESS", dialect.name())).await.unwrap();
         assert_eq!(reply_numbers(&hello, dialect, 3), Some(vec![0.0, 2.0, 1.0]), "{hello}");
@@ -155,14 +161,7 @@ async fn the_controller_command_prints_each_weld_waypoints_speed_and_weave() {
     let config = config();
     let cell = Cell::start(config.clone()).await;
     let (stop_camera, camera) = cell.camera(vec![Arc::new(sim.cloud.clone())], CameraOptions::default());
-    let mut robot = TextRobot::connect(&cell.daemon.text_addr.to_string(), WAIT).await.unwrap();
-    for _ in 0..100 {
-        if robot.ask("PING").await.unwrap().starts_with("0,1,") {
-            break;
-        }
-        tokio::time::sleep(Duration::from_millis(50)).await;
-    }
-    drop(robot);
+    drop(robot_once_the_camera_is_in(&cell).await);
     let [x, y, z] = sim.pose.xyz_mm;
     let [rx, ry, rz] = sim.pose.angles_deg;
     let pose = format!("--pose={x},{y},{z},{rx},{ry},{rz}");

@@ -30,10 +30,11 @@ use std::collections::BTreeMap;
 use nalgebra::{Isometry3, Point3};
 
 use super::along_seam::{FigureErrors, JointTruth};
-use crate::geometry::Vec3;
+use crate::cloud::is_valid_point;
+use crate::geometry::{Vec3, vec3};
 use crate::joint::JointType;
 use crate::pipeline::along_seam::JointFigures;
-use crate::pipeline::seam_process::{WaypointProcess, layout_for, obstacles_near};
+use crate::pipeline::seam_process::{WaypointProcess, layout_for};
 use crate::pipeline::{Plan, PlanError, Seam};
 use crate::process::clearance::{Obstacles, Station, contact};
 use crate::process::{JointSection, Layout, PassKind, Procedure, VGroove, fillet_section};
@@ -215,7 +216,7 @@ fn score_seam(
     let thickness = scene.plate_thickness_mm();
     // What the torches touch in the cloud itself: the space the planner
     // also keeps clear behind the seen surfaces is no part of the target.
-    let obstacles = obstacles_near(&sim.cloud, &seam.start_camera, &seam.end_camera, &procedure.torch).seen_only();
+    let obstacles = Obstacles::new(sim.cloud.points().iter().filter(|p| is_valid_point(p)).map(vec3));
     // Out of the joint towards the torch: against the plate normal, which
     // points into the workpiece.
     let bisector = -seam.normal_camera.normalize();

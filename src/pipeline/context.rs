@@ -31,6 +31,7 @@ use super::trace::Tracer;
 use super::trajectory::{self, Waypoint};
 use super::view_border::ViewBorder;
 use super::weld_equation;
+use crate::process::clearance::Obstacles;
 use crate::rules;
 
 use super::{Deadline, Plan, PlanError, PlanRequest, PlanStats, Seam, SeamAssessment, Stage, StageTimings, Unplanned};
@@ -397,12 +398,15 @@ impl<'a> Context<'a> {
             trajectory::seam_order(&ends, request.start_near)
         };
         let several = welds.len() + unplanned.len() > 1;
+        // The torch's obstacles: the whole frame, indexed once for all its
+        // seams, and only when a procedure asks for them.
+        let obstacles = std::cell::OnceCell::new();
         let mut seams = Vec::with_capacity(welds.len());
         for (k, forward) in order {
             let weld = &welds[k];
             let (s0, s1) = weld.span;
             let ends = if forward { (s0, s1) } else { (s1, s0) };
-            match self.seam(weld, ends, &base_from_camera) {
+            match self.seam(weld, ends, &base_from_camera, &obstacles) {
                 Ok(seam) => seams.push(seam),
                 Err(reason) if several => unplanned.push(Unplanned {
                     joint: Some(weld.joint),
@@ -435,6 +439,7 @@ impl<'a> Context<'a> {
         weld: &PlannedWeld,
         (start, end): (f64, f64),
         base_from_camera: &Isometry3<f64>,
+        obstacles: &std::cell::OnceCell<Obstacles>,
     ) -> Result<Seam, PlanError> {
         let t = &self.config.trajectory;
         let params = trajectory::TrajectoryParams {
@@ -468,8 +473,7 @@ impl<'a> Context<'a> {
         };
         let process = self.config.process.procedure.as_ref().map(|procedure| {
             let places = seam_process::places(&weld.curve, start, end, params.step_mm, &weld.torch_axis);
-            let (first, last) = (weld.curve.at(start), weld.curve.at(end));
-            let obstacles = seam_process::obstacles_near(self.cloud, &first, &last, &procedure.torch);
+            let obstacles = obstacles.get_or_init(|| seam_process::obstacles_of(self.cloud, &procedure.torch));
             let thickness = self.config.process.plate_thickness_mm;
             let process = seam_process::along(
                 procedure,
@@ -477,7 +481,7 @@ impl<'a> Context<'a> {
                 thickness,
                 &places,
                 &along_seam,
-                &obstacles,
+                obstacles,
                 base_from_camera,
             );
             seam_process::orient(&mut waypoints, &places, &process, base_from_camera);

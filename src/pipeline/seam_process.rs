@@ -30,9 +30,9 @@
 //! clears ([`rules::process::TORCH_BLOCKED`]). The waypoints stay in the
 //! seam; a cut waypoint carries no parameters.
 
-use crate::cloud::{Point, PointCloud, is_valid_point};
+use crate::cloud::PointCloud;
 use crate::config::procedure::Torch;
-use crate::geometry::{Vec3, vec3};
+use crate::geometry::Vec3;
 use crate::joint::JointType;
 use crate::process::clearance::{Aim, Clearance, Contact, Obstacles, Station, clear_station};
 use crate::process::{JointSection, Layout, PassKind, Procedure, VGroove, fillet_section, weld_station};
@@ -122,27 +122,11 @@ pub fn orient(waypoints: &mut [Waypoint], places: &[Place], process: &SeamProces
     }
 }
 
-/// The frame's points the torch could touch anywhere along the seam from
-/// `start` to `end` (camera frame): those within the torch's length and
-/// widest radius of the segment between them, indexed with the space
-/// behind them the camera could not see.
-pub fn obstacles_near(cloud: &PointCloud, start: &Vec3, end: &Vec3, torch: &Torch) -> Obstacles {
-    let length = torch.nozzle_to_work_mm + torch.nozzle_length_mm + torch.body_length_mm;
-    let widest = torch.nozzle_diameter_mm / 2.0
-        + torch.body_length_mm * torch.body_half_angle_deg.to_radians().tan()
-        + torch.margin_mm;
-    let reach = length.hypot(widest);
-    let along = end - start;
-    let span = along.norm_squared().max(f64::MIN_POSITIVE);
-    let near = |p: &Point| {
-        if !is_valid_point(p) {
-            return false;
-        }
-        let p = vec3(p);
-        let f = ((p - start).dot(&along) / span).clamp(0.0, 1.0);
-        (p - (start + along * f)).norm() <= reach
-    };
-    Obstacles::seen_from_camera(cloud.points().iter().filter(|p| near(p)).map(vec3), torch)
+/// The frame's points, indexed for the torch with the space behind them
+/// the camera could not see: built once per frame, for every seam of it
+/// (the torch reaches 100 mm and more round a seam, most of a frame).
+pub fn obstacles_of(cloud: &PointCloud, torch: &Torch) -> Obstacles {
+    Obstacles::seen_in_frame(cloud.points(), torch)
 }
 
 /// One waypoint's outcome: welded, or cut by a rule with its reason.

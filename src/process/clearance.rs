@@ -24,9 +24,9 @@
 //! ([`super::shadow`]), so a torch never passes through a block's faces
 //! the camera did not see.
 
-use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use nalgebra::{Rotation3, Unit, Vector3};
 
+use super::rays::RayIndex;
 use super::shadow::Shadows;
 use crate::config::procedure::Torch;
 
@@ -35,8 +35,7 @@ type Vec3 = Vector3<f64>;
 /// The measured cloud, indexed for the torch's solid, and where it was
 /// seen from, the space behind its surfaces.
 pub struct Obstacles {
-    tree: ImmutableKdTree<f32, 3>,
-    points: Vec<[f32; 3]>,
+    index: RayIndex,
     /// The cloud's angular spacing where it is a camera's view (0 for
     /// bare points): how far a seen surface may reach beyond its points
     /// grows with it ([`EDGE_SPACINGS`]).
@@ -66,10 +65,10 @@ struct HiddenSpace {
 const SPACING_SAMPLE_POINTS: usize = 2048;
 const MIN_SPACING_SAMPLES: usize = 64;
 
-/// The neighbours asked of each sampled point for the nearest other one:
-/// the point itself and a few repeats of it (a voxel grid's or a merged
-/// frame's) are passed over.
-const NEIGHBOURS_ASKED: std::num::NonZero<usize> = std::num::NonZero::new(4).expect("4 is not zero");
+/// The most copies of a sampled point (a voxel grid's or a merged frame's
+/// repeats) passed over for the nearest other one; a point repeated more
+/// often is no sample of the spacing.
+const MAX_REPEATS: usize = 3;
 
 /// The step the torch's surface is sampled with against the hidden
 /// space, mm: no coarser than the torch's margin, so a hidden solid the
@@ -89,16 +88,11 @@ impl Obstacles {
     /// Indexes the finite points of a cloud, mm, in the frame the stations
     /// are given in; only the points are obstacles.
     pub fn new(points: impl IntoIterator<Item = Vec3>) -> Obstacles {
-        let points: Vec<[f32; 3]> = points
-            .into_iter()
-            .filter(|p| p.iter().all(|c| c.is_finite()))
-            .map(|p| [p.x as f32, p.y as f32, p.z as f32])
-            .collect();
-        // Only an empty slice fails to build; a far point answers every
-        // query with nothing.
-        let tree = ImmutableKdTree::new_from_slice(&points)
-            .unwrap_or_else(|_| ImmutableKdTree::new_from_slice(&[[f32::MAX; 3]]).expect("one point builds"));
-        Obstacles { tree, points, spacing_per_mm: 0.0, hidden: None }
+        Obstacles::of_points(&finite(points))
+    }
+
+    fn of_points(points: &[[f32; 3]]) -> Obstacles {
+        Obstacles { index: RayIndex::new(points), spacing_per_mm: 0.0, hidden: None }
     }
 
     /// Indexes the finite points of a camera-frame cloud (the camera at
@@ -106,8 +100,15 @@ impl Obstacles {
     /// obstacles, and so is the space behind every surface the camera
     /// saw.
     pub fn seen_from_camera(points: impl IntoIterator<Item = Vec3>, torch: &Torch) -> Obstacles {
-        let mut obstacles = Obstacles::new(points);
-        let shadows = obstacles.angular_spacing().and_then(|spacing| Shadows::new(&obstacles.points, spacing));
+        Obstacles::seen_in_frame(&finite(points), torch)
+    }
+
+    /// [`Obstacles::seen_from_camera`] for a frame's points as it holds
+    /// them: single precision, an empty pixel's not finite (left out).
+    pub fn seen_in_frame(points: &[[f32; 3]], torch: &Torch) -> Obstacles {
+        let mut obstacles = Obstacles::of_points(points);
+        let shadows =
+            obstacles.angular_spacing(points).and_then(|spacing| Shadows::new(obstacles.index.binned(), spacing));
         obstacles.spacing_per_mm = shadows.as_ref().map_or(0.0, Shadows::spacing);
         obstacles.hidden = shadows.map(|shadows| HiddenSpace {
             shadows,
@@ -130,17 +131,16 @@ impl Obstacles {
     /// distance to the nearest other point over the point's range (a
     /// camera's neighbouring rays meet a surface that far apart), or
     /// `None` with too few points in front of the camera.
-    fn angular_spacing(&self) -> Option<f64> {
-        let stride = (self.points.len() / SPACING_SAMPLE_POINTS).max(1);
-        let mut gaps: Vec<f64> = self
-            .points
+    fn angular_spacing(&self, points: &[[f32; 3]]) -> Option<f64> {
+        let stride = (points.len() / SPACING_SAMPLE_POINTS).max(1);
+        let mut gaps: Vec<f64> = points
             .iter()
             .step_by(stride)
-            .filter(|p| p[2] > 0.0)
+            .filter(|p| p[2] > 0.0 && p.iter().all(|c| c.is_finite()))
             .filter_map(|p| {
-                let near = self.tree.query(p).nearest_n::<SquaredEuclidean<f32>>(NEIGHBOURS_ASKED).execute();
-                // The nearest is the point itself, and may be repeats of it.
-                let gap = near.iter().map(|n| f64::from(n.distance).sqrt()).find(|&g| g > 0.0)?;
+                let (gap, repeats) = self.index.nearest_apart(p);
+                // The point itself is one of its repeats.
+                let gap = gap.filter(|_| repeats <= MAX_REPEATS + 1)?;
                 let range = p.iter().map(|&c| f64::from(c).powi(2)).sum::<f64>().sqrt();
                 Some(gap / range)
             })
@@ -158,18 +158,20 @@ impl Obstacles {
         self.hidden.is_some()
     }
 
-    fn near(&self, centre: &Vec3, radius: f64) -> impl Iterator<Item = Vec3> + '_ {
-        let q = [centre.x as f32, centre.y as f32, centre.z as f32];
-        let reach = (radius * radius) as f32;
-        self.tree
-            .query(&q)
-            .within::<SquaredEuclidean<f32>>(reach)
-            .unsorted()
-            .execute()
-            .into_iter()
-            .filter_map(|n| self.points.get(n.item as usize))
-            .map(|p| Vec3::new(p[0] as f64, p[1] as f64, p[2] as f64))
+    /// Visits the points within `radius` of `centre`, and possibly some
+    /// beyond.
+    fn near(&self, centre: &Vec3, radius: f64, mut visit: impl FnMut(Vec3)) {
+        self.index.near(centre, radius, |p| visit(Vec3::new(p[0].into(), p[1].into(), p[2].into())));
     }
+}
+
+/// The finite points, in single precision.
+fn finite(points: impl IntoIterator<Item = Vec3>) -> Vec<[f32; 3]> {
+    points
+        .into_iter()
+        .filter(|p| p.iter().all(|c| c.is_finite()))
+        .map(|p| [p.x as f32, p.y as f32, p.z as f32])
+        .collect()
 }
 
 /// Where along a pass the torch stands, and the joint's own directions
@@ -332,11 +334,11 @@ fn seen_contact(torch: &Torch, obstacles: &Obstacles, point: &Vec3, axis: &Vec3)
         // The farthest a point the grown piece holds can be from the
         // camera bounds its growth.
         let reach = reach + edge_per_mm * (centre.norm() + 2.0 * reach);
-        for q in obstacles.near(&centre, reach) {
+        obstacles.near(&centre, reach, |q| {
             let d = q - point;
             let s = d.dot(&axis);
             if s < s0 || s > s1 || (s == s1 && !last_piece) {
-                continue;
+                return;
             }
             let inside = radius_at(torch, s)
                 .map(|r| r + edge_per_mm * q.norm())
@@ -347,7 +349,7 @@ fn seen_contact(torch: &Torch, obstacles: &Obstacles, point: &Vec3, axis: &Vec3)
                     first = Some((s, q));
                 }
             }
-        }
+        });
         s0 = s1;
     }
     first.filter(|_| inside_count >= MIN_CONTACT_POINTS).map(|(_, q)| q)

@@ -17,6 +17,8 @@
 //! - [`weave`]: the torch's swing across the seam, following the gap;
 //! - [`clearance`]: the torch as a solid against the measured cloud, its
 //!   angles moved where it touches, stretches cut where nothing clears;
+//! - [`rays`]: the cloud indexed by the camera's rays, which the torch's
+//!   solid is checked against;
 //! - [`shadow`]: the space behind what the camera saw, which the torch
 //!   treats as solid.
 //!
@@ -26,6 +28,7 @@
 pub mod clearance;
 pub mod deposit;
 pub mod layout;
+pub mod rays;
 pub mod section;
 pub mod shadow;
 pub mod weave;

@@ -26,6 +26,7 @@
 //! is not behind it (the cells beyond the edge see farther).
 
 use nalgebra::Vector3;
+use rayon::prelude::*;
 
 type Vec3 = Vector3<f64>;
 
@@ -53,6 +54,10 @@ pub const MAX_CELLS: usize = 1 << 22;
 /// Nearer the camera's plane than this, mm, a point's ray is not binned
 /// (it would fall beyond any view).
 const MIN_DEPTH_MM: f64 = 1.0;
+
+/// The fewest points a thread bins into a grid of its own: below this a
+/// grid's allocation costs more than the points it spares another thread.
+const MIN_POINTS_PER_SHARE: usize = 1 << 16;
 
 /// The space behind the surfaces a camera saw.
 #[derive(Debug, Clone)]
@@ -82,11 +87,12 @@ impl Shadows {
         if !(spacing > 0.0 && spacing.is_finite()) {
             return None;
         }
-        let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
-        for (u, v, _) in points.iter().filter_map(ray) {
-            lo = [lo[0].min(u), lo[1].min(v)];
-            hi = [hi[0].max(u), hi[1].max(v)];
-        }
+        let empty = || ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+        let (lo, hi) = points
+            .par_iter()
+            .filter_map(ray)
+            .fold(empty, |(lo, hi), (u, v, _)| ([lo[0].min(u), lo[1].min(v)], [hi[0].max(u), hi[1].max(v)]))
+            .reduce(empty, |a, b| ([a.0[0].min(b.0[0]), a.0[1].min(b.0[1])], [a.1[0].max(b.1[0]), a.1[1].max(b.1[1])]));
         if !(lo[0] <= hi[0] && lo[1] <= hi[1]) {
             return None;
         }
@@ -102,30 +108,46 @@ impl Shadows {
         }
         let (width, height) = cells_for(cell);
         let origin = [lo[0] - cell, lo[1] - cell];
-        let mut nearest = vec![f32::INFINITY; width * height];
-        for (u, v, range) in points.iter().filter_map(ray) {
-            let (i, j) = (((u - origin[0]) / cell) as usize, ((v - origin[1]) / cell) as usize);
-            let c = &mut nearest[j * width + i];
-            *c = c.min(range as f32);
-        }
+        // The nearest range per cell: each thread's share of the points
+        // into a grid of its own, the grids then met cell by cell (a
+        // minimum, so the order does not matter).
+        let share = points.len().div_ceil(rayon::current_num_threads()).max(MIN_POINTS_PER_SHARE);
+        let nearest = points
+            .par_chunks(share)
+            .map(|chunk| {
+                let mut nearest = vec![f32::INFINITY; width * height];
+                for (u, v, range) in chunk.iter().filter_map(ray) {
+                    let (i, j) = (((u - origin[0]) / cell) as usize, ((v - origin[1]) / cell) as usize);
+                    let c = &mut nearest[j * width + i];
+                    *c = c.min(range as f32);
+                }
+                nearest
+            })
+            .reduce_with(|mut a, b| {
+                a.iter_mut().zip(b).for_each(|(a, b)| *a = a.min(b));
+                a
+            })
+            .unwrap_or_else(|| vec![f32::INFINITY; width * height]);
         let mut behind_from = vec![f32::INFINITY; width * height];
-        for j in 1..height - 1 {
-            for i in 1..width - 1 {
-                let (mut seen, mut farthest) = (0, f32::NEG_INFINITY);
-                for dj in 0..3 {
-                    for di in 0..3 {
-                        let r = nearest[(j + dj - 1) * width + (i + di - 1)];
-                        if r.is_finite() {
-                            seen += 1;
-                            farthest = farthest.max(r);
+        behind_from.par_chunks_mut(width).enumerate().filter(|(j, _)| (1..height - 1).contains(j)).for_each(
+            |(j, row)| {
+                for (i, out) in row.iter_mut().enumerate().take(width - 1).skip(1) {
+                    let (mut seen, mut farthest) = (0, f32::NEG_INFINITY);
+                    for dj in 0..3 {
+                        for di in 0..3 {
+                            let r = nearest[(j + dj - 1) * width + (i + di - 1)];
+                            if r.is_finite() {
+                                seen += 1;
+                                farthest = farthest.max(r);
+                            }
                         }
                     }
+                    if seen >= MIN_SEEN_CELLS {
+                        *out = farthest + BEHIND_TOLERANCE_MM as f32;
+                    }
                 }
-                if seen >= MIN_SEEN_CELLS {
-                    behind_from[j * width + i] = farthest + BEHIND_TOLERANCE_MM as f32;
-                }
-            }
-        }
+            },
+        );
         Some(Shadows { spacing, cell, origin, width, height, behind_from })
     }
 

@@ -1,8 +1,9 @@
 //! Issue 15's frames through the planner: a tee joint's roots the camera
 //! sees are planned within the fillet's bar, the one the web hides is
 //! named as not planned, never invented; a tee cropped below its web's
-//! top is planned from the face seen, and butt and lap joints cropped the
-//! same way are not taken for tees; a tee requested as a butt or lap
+//! top is planned from the face seen (under `auto` too where the flange
+//! shows in pieces the layers take for a butt pair), and butt and lap
+//! joints cropped the same way are not taken for tees; a tee requested as a butt or lap
 //! joint is refused by name; the fault suite's clamps are not taken for a
 //! web; a frame of several workpieces carries the truth of every seam, and
 //! the planner returns a seam for each workpiece it can plan, matched to
@@ -490,4 +491,43 @@ fn two_workpieces_whose_corners_meet_across_a_shadow_are_planned_apart() {
     assert_eq!(m.found.len(), 3, "{name}: {m:?}");
     let [hidden] = &plan.unplanned[..] else { panic!("{name}: {:?}", plan.unplanned) };
     assert_eq!(hidden.joint, Some(JointType::TFillet), "{name}: {}", hidden.reason);
+}
+
+/// Tee scenes of the suite's tuning part whose crop 45 mm round the root
+/// on the camera's side keeps the flange on both sides of the web and not
+/// the web's top (62 to 100 mm up): two flange pieces in one layer, which
+/// the layers read as a butt pair, with the web's face standing between.
+const CROPPED_WIDE_TEES: [usize; 3] = [6, 12, 15];
+
+#[test]
+fn under_auto_a_face_standing_between_flange_pieces_is_planned_where_the_butt_pair_fails() {
+    let suite = tee_suite(Draw::Documented);
+    for k in CROPPED_WIDE_TEES {
+        let (name, spec) = &suite[k];
+        let sim = scenes::as_named_variant(spec, &CameraModel::default(), "cropped:45,voxel:1,metres");
+        let roots: Vec<TrueSeam> = sim.seams.iter().map(|s| TrueSeam::of(spec, s)).collect();
+        let plan_as = |joint: RequestedJoint| {
+            let mut request = PlanRequest::new(joint, None, sim.pose);
+            request.units = weldseam::pipeline::input::Units::Auto;
+            Planner::new(Config::default()).plan(&sim.cloud, &request).unwrap_or_else(|e| panic!("{name} {joint}: {e}"))
+        };
+        let (auto, typed) = (plan_as(RequestedJoint::Auto), plan_as(JointType::TFillet.into()));
+        assert_eq!(auto.seams.len(), 1, "{name}");
+        let seam = &auto.seams[0];
+        assert_eq!(seam.joint, JointType::TFillet, "{name}");
+        // The evidence names both readings: the face's, and the layers'
+        // refused (rule tee.web_face_without_top weighs them).
+        let evidence = seam.joint_evidence.as_deref().unwrap_or_default();
+        assert!(
+            evidence.contains("no web's top is in view") && evidence.contains("the layers read a butt pair"),
+            "{name}: {evidence}"
+        );
+        let path: Vec<Vec3> = seam.waypoints.iter().map(|w| w.position).collect();
+        assert_eq!(classify_tee(&roots, Ok(std::slice::from_ref(&path))), Verdict::WithinBar, "{name}");
+        // The root is the one `t_fillet` plans from the same face.
+        let typed_path: Vec<Vec3> = typed.seams[0].waypoints.iter().map(|w| w.position).collect();
+        assert_eq!(path, typed_path, "{name}");
+        assert_eq!(auto.unplanned.len(), 1, "{name}");
+        assert_eq!(auto.unplanned[0].reason.rule.id, "tee.root_hidden_by_web", "{name}");
+    }
 }

@@ -56,6 +56,7 @@ const TIGHT_CLUSTER_SPACINGS: f64 = 1.6;
 mod lap_edge;
 mod plates;
 mod root_weld;
+mod standing_face;
 
 use plates::plan_plates;
 
@@ -380,8 +381,15 @@ fn plan_workpiece(
         None => lone_plane,
         Some(_) => false,
     };
-    let nearest = (face_may_stand || lone_plane).then(|| background::nearest_layer(&planes, &selection)).flatten();
-    let selected = match (background::robust_select(planes, &selection, ctx.cloud.points()), nearest) {
+    // Under `auto` with planes enough for a butt pair or a lap, a face
+    // standing on the nearest layer is the other layout they allow: it is
+    // weighed against the layers' reading once that reading is refused
+    // ([`standing_face::instead_of_layers`]).
+    let face_beside_layers = selection.joint.is_none() && !lone_plane && ctx.request.joint.admits(JointType::TFillet);
+    let nearest = (face_may_stand || lone_plane || face_beside_layers)
+        .then(|| background::nearest_layer(&planes, &selection))
+        .flatten();
+    let (selected, standing_on) = match (background::robust_select(planes, &selection, ctx.cloud.points()), nearest) {
         (Err(e @ (BackgroundError::NoWeb { .. } | BackgroundError::TooFewPlanes { .. })), Some(flange))
             if face_may_stand =>
         {
@@ -390,7 +398,7 @@ fn plan_workpiece(
         (Err(e @ BackgroundError::TooFewPlanes { .. }), Some(lone)) => {
             return Err(in_view_refusal(ctx, &lone, &e)).seen_as(requested);
         }
-        (selected, _) => selected,
+        (selected, nearest) => (selected, nearest.filter(|_| face_beside_layers)),
     };
     let background::Selected { workpiece, layout, evidence: layers } =
         selected.map_err(|e| PlanError::by(e.rule(), &e)).seen_as(requested)?;
@@ -432,7 +440,13 @@ fn plan_workpiece(
     // One path per layout: each returns the workpiece's welds.
     match layout {
         Layout::Butt | Layout::Lap => {
-            plan_plates(ctx, front, labels, workpiece, layout, layers, joint).map(|weld| (vec![weld], Vec::new()))
+            let read = plan_plates(ctx, front, labels, workpiece, layout, layers, joint);
+            match (read, standing_on) {
+                (Err(refused), Some(flange)) if !refused.reason.out_of_time => {
+                    standing_face::instead_of_layers(ctx, flange, layout, refused)
+                }
+                (read, _) => read.map(|weld| (vec![weld], Vec::new())),
+            }
         }
         // A web on its flange: its fillet roots, not two plates' edges.
         Layout::Tee => {
@@ -445,8 +459,10 @@ fn plan_workpiece(
 /// A tee's root from its web's one face seen standing on `flange` (the
 /// nearest layer of planes), the web's top out of view; refused with
 /// `not_found` (why no web's top was found) and why no face was either.
-/// Under `auto` the face is named, not planned: a face alone does not
-/// tell a tee's web from an inside corner's plate or a fixture's side.
+/// Under `auto` (a lone plane in view) the face is named, not planned: a
+/// face alone does not tell a tee's web from an inside corner's plate or a
+/// fixture's side. With more planes in view it is weighed against the
+/// layers' reading instead ([`standing_face`]).
 fn plan_topless_tee(
     ctx: &mut Context,
     flange: Vec<PlaneCluster>,

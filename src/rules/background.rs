@@ -642,19 +642,37 @@ pub static WEB_FACE_WITHOUT_TOP: Rule = Rule {
     stage: Stage::Background,
     effect: Effect::Refuses,
     gate: Some(Gate::JointUnknown),
-    summary: "under `auto`, a face standing on the nearest plane with no top in view is not taken for a tee",
-    reason: "A tee's web cropped below its top shows one side face standing on the flange. An inside \
-             corner's standing plate and a fixture's side look the same from one face, and their roots lie \
-             elsewhere, so under `auto` the face is named and not planned; a request for `t_fillet` says \
-             which it is and plans its root.",
-    parameters: &[Parameter {
-        name: "tee_web_height_max_mm",
-        unit: "mm",
-        meaning: "tallest web a face may belong to",
-        source: Source::Config("pipeline.tee_web_height_max_mm"),
-    }],
+    summary: "under `auto`, a face standing on the nearest plane with no top in view is a tee's web only where the \
+              layers' reading fails and the face stands taller than a lap's upper plate",
+    reason: "A tee's web cropped below its top shows one side face standing on the flange. With a lone plane \
+             in view nothing else is read: an inside corner's standing plate and a fixture's side look the \
+             same from one face, so under `auto` the face is named and not planned, and a request for \
+             `t_fillet` plans its root. With planes enough for a butt pair or a lap (a tube on a beam: the \
+             beam's top in pieces either side of the tube, the table behind), both readings are proposed: \
+             the layers' where it passes its gates, else the face's root where it passes every gate of a \
+             tee, else the refusal of the reading that got further. A fixture's side is not taken for a \
+             web: its top is a plane nearer the camera than the plates, so the nearest layer is its top and \
+             nothing stands on it; and a face seen no taller than a lap's upper plate is thick, which a \
+             clamp or a bar whose top goes unseen can be, is not proposed.",
+    parameters: &[
+        Parameter {
+            name: "tee_web_height_max_mm",
+            unit: "mm",
+            meaning: "tallest web a face may belong to",
+            source: Source::Config("pipeline.tee_web_height_max_mm"),
+        },
+        Parameter {
+            name: "lap_step_max_mm",
+            unit: "mm",
+            meaning: "under `auto` beside the layers' reading, a face must be seen taller than this",
+            source: Source::Config("pipeline.lap_step_max_mm"),
+        },
+    ],
     fires: &["tests/several_seams.rs::a_tee_cropped_round_its_root_is_planned_from_its_face_alone"],
-    holds: &["tests/several_seams.rs::a_tee_cropped_round_its_root_is_planned_from_its_face_alone"],
+    holds: &[
+        "tests/several_seams.rs::a_tee_cropped_round_its_root_is_planned_from_its_face_alone",
+        "tests/several_seams.rs::under_auto_a_face_standing_between_flange_pieces_is_planned_where_the_butt_pair_fails",
+    ],
 };
 
 pub static NO_WORKPIECE_IN_VIEW: Rule = Rule {

@@ -1,0 +1,154 @@
+//! Under `auto`, the layout the layers do not read: a face standing on the
+//! nearest layer of planes, its top out of view, weighed against the butt
+//! pair or the lap the layers read once that reading is refused.
+//!
+//! A tee whose web's top is out of view (a tube or a box section standing
+//! on a beam, cropped below its top) shows its flange as planes in one
+//! layer, often in pieces on both sides of the web, and the web's one side
+//! face. The layers see no web's top and read the flange's pieces as a
+//! butt pair, or pieces of the table behind as a lap; that reading's edges
+//! then fail, as no butt or lap edge is there (the public tube-on-beam
+//! scans). Read as a tee, the face's root passes every gate.
+//!
+//! So both readings are proposed and the evidence picks: the layers'
+//! reading where it passes its gates (as before, no plan changes); else
+//! the standing face's root where it passes every gate of a tee; else the
+//! refusal of whichever reading got further (the later stage), which says
+//! most about the cloud (a curved tube's root refused as bending rather
+//! than as "no edge line").
+//!
+//! A fixture's side (a clamp or a bar standing on the plates) stands on
+//! them as a web's face does, and its foot is as straight as a root. It is
+//! not taken for a web: its top is a plane nearer the camera than the
+//! plates, so the nearest layer is the fixture's top and nothing stands on
+//! it; where that top is not seen as a plane, the face must still be seen
+//! taller than a lap's upper plate is thick (`pipeline.lap_step_max_mm`),
+//! the height the layers also ask of a web's top without a request. The
+//! fault suite under `auto` (clamps and bars over butt and lap joints)
+//! plans exactly as it did without this reading. The rule is
+//! [`rules::background::WEB_FACE_WITHOUT_TOP`].
+
+use crate::joint::JointType;
+use crate::rules;
+
+use super::super::background::{Layout, PlaneCluster};
+use super::super::fillet::Web;
+use super::super::{PlanError, tee, web_face};
+use super::{Refused, Welds, face_search};
+use crate::pipeline::context::Context;
+
+/// The welds of the face standing on `flange` (the nearest layer of
+/// planes) where the layers' reading as `layout` was `refused` and the
+/// face's root passes every gate; else the refusal of the reading that got
+/// further.
+pub(super) fn instead_of_layers(
+    ctx: &mut Context,
+    flange: Vec<PlaneCluster>,
+    layout: Layout,
+    refused: Refused,
+) -> Result<Welds, Refused> {
+    let pieces: Vec<&PlaneCluster> = flange.iter().collect();
+    let search = face_search(ctx, &flange);
+    // No valley test here, unlike a lone plane's: with two planes or more
+    // in view the groove's flanks lie below its plates' top, where no face
+    // is searched, and a web standing square on its flange, seen from above
+    // its flange, opens as a groove's flanks may (about 90°). The tee's
+    // gates judge the web's angle to its flange.
+    let face = match web_face::find(ctx.cloud, &pieces, &search) {
+        Ok(face) => face,
+        Err(why) => {
+            tracing::debug!(
+                rule = why.rule().id,
+                "no face stands on the nearest plane beside the layers' reading: {}",
+                why.reason
+            );
+            return Err(refused);
+        }
+    };
+    let lap_step_max_mm = ctx.config.pipeline.lap_step_max_mm;
+    if face.seen_height_mm <= lap_step_max_mm {
+        tracing::debug!(
+            rule = rules::background::WEB_FACE_WITHOUT_TOP.id,
+            seen_height_mm = face.seen_height_mm,
+            lap_step_max_mm,
+            "a face no taller than a lap's upper plate stands on the nearest plane: a fixture's side, maybe; not proposed"
+        );
+        return Err(refused);
+    }
+    let read_as = match layout {
+        Layout::Butt => "a butt pair",
+        Layout::Lap => "a lap",
+        Layout::Tee => "a tee",
+    };
+    let layers = format!(
+        "no web's top is in view; a side face of {} points stands on the nearest plane ({:.0} mm² in {} piece(s)), \
+         seen {:.0} mm tall, taller than a lap's upper plate ({lap_step_max_mm:.0} mm); the layers read {read_as}, \
+         refused by {}",
+        face.points,
+        flange.iter().map(|c| c.area_mm2).sum::<f64>(),
+        flange.len(),
+        face.seen_height_mm,
+        refused.reason.rule.id,
+    );
+    tracing::debug!(rule = rules::background::WEB_FACE_WITHOUT_TOP.id, "{layers}");
+    let seen = tee::SeenTee {
+        web: Web::Face(&face),
+        flange_pieces: pieces,
+        flange_sides: tee::Flange::BothSides,
+        depth_to_support_mm: None,
+    };
+    tee::plan(ctx, seen, layers).map_err(|e| further(refused, e, read_as))
+}
+
+/// Both readings refused: the refusal of the one that got further (the
+/// later stage; the layers' at the same stage), which says most about the
+/// cloud. The face's is named a tee and says what the layers read as
+/// `read_as` and why that failed; a plan out of time says only that.
+fn further(layers: Refused, face: PlanError, read_as: &str) -> Refused {
+    if face.out_of_time {
+        return Refused { reason: face, seen: Some(JointType::TFillet) };
+    }
+    if face.stage <= layers.reason.stage {
+        return layers;
+    }
+    let reason = format!("{}; read as {read_as}: {}", face.reason, layers.reason.reason);
+    Refused { reason: PlanError { reason, ..face }, seen: Some(JointType::TFillet) }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::pipeline::Stage;
+
+    fn layers_refused() -> Refused {
+        let reason = PlanError::by(&rules::weld_edges::NO_PARALLEL_PAIR, "no parallel pair");
+        Refused { reason, seen: None }
+    }
+
+    #[test]
+    fn a_root_refused_at_its_gates_says_more_than_edges_never_found() {
+        let face = PlanError::by(&rules::quality::EDGE_FIT_RESIDUAL, "the root bends by 3.5 mm over 21 mm");
+        let picked = further(layers_refused(), face, "a butt pair");
+        assert_eq!(picked.reason.rule.id, "seam.edge_fit_residual");
+        assert_eq!(picked.seen, Some(JointType::TFillet));
+        assert!(picked.reason.reason.contains("read as a butt pair: no parallel pair"), "{}", picked.reason);
+    }
+
+    #[test]
+    fn a_face_refused_no_further_than_the_layers_leaves_the_layers_refusal() {
+        // Where the face is refused before its root's gates (here a
+        // background rule), the layers' reading stands, as without it.
+        let face = PlanError::by(&rules::background::NO_LAYOUT_FITS, "earlier");
+        assert_eq!(further(layers_refused(), face, "a lap").reason.rule.id, "edge.no_parallel_pair");
+        let same = PlanError::by_in(&rules::weld_edges::NO_PARALLEL_PAIR, Stage::WeldEdges, "same stage");
+        let picked = further(layers_refused(), same, "a lap");
+        assert_eq!((picked.reason.reason.as_str(), picked.seen), ("no parallel pair", None));
+    }
+
+    #[test]
+    fn a_plan_out_of_time_is_named_so() {
+        let mut face = PlanError::by(&rules::refit::TEE_NO_ROOT_SEEN, "stopped");
+        face.out_of_time = true;
+        assert!(further(layers_refused(), face, "a butt pair").reason.out_of_time);
+    }
+}

@@ -269,9 +269,25 @@ fn check_references(scans: &RealScans, bless: bool) -> anyhow::Result<()> {
                     }
                 },
             };
+            let mut steady = String::new();
+            if let Some(s) = &m.square_top {
+                steady.push_str(&format!(
+                    ", top square to the standing face: side face {:.2}° off square, free fit tilted {:.2}°, sliver rms {:.3} mm free, {:.3} mm added, root one-sigma {:.2} mm, {:.2} mm if square to the side",
+                    s.side_off_square_deg, s.free_tilt_deg, s.free_rms_mm, s.added_rms_mm, s.sigma_mm, s.square_to_side_mm
+                ));
+            }
+            if let Some(moved) = m.box_choice_mm {
+                steady.push_str(&format!(", the alternative boxes move it {moved:.2} mm"));
+            }
+            for (check, c) in root.checks.iter().zip(&m.checks) {
+                steady.push_str(&format!(
+                    ", {:?} lies {:+.2} mm off the flange's plane (median of {} points)",
+                    check.name, c.median_mm, c.points
+                ));
+            }
             writeln!(
                 out,
-                "{}, {}: planes rms {} mm, visible {:.1} mm ({:.0} % of it seen): {verdict}",
+                "{}, {}: planes rms {} mm, visible {:.1} mm ({:.0} % of it seen){steady}: {verdict}",
                 reference.id,
                 root.name,
                 rms.join(" / "),
@@ -342,8 +358,25 @@ fn inline(m: &MeasuredRoot) -> String {
             )
         })
         .collect();
+    // The square-top root's checks and uncertainty, and how far the
+    // alternative boxes move the root, where measured.
+    let mut extra = String::new();
+    if let Some(moved) = m.box_choice_mm {
+        extra.push_str(&format!("box_choice_mm = {moved}, "));
+    }
+    if !m.checks.is_empty() {
+        let checks: Vec<String> =
+            m.checks.iter().map(|c| format!("{{ median_mm = {}, points = {} }}", c.median_mm, c.points)).collect();
+        extra.push_str(&format!("checks = [{}], ", checks.join(", ")));
+    }
+    if let Some(s) = &m.square_top {
+        extra.push_str(&format!(
+            "square_top = {{ side_off_square_deg = {}, free_tilt_deg = {}, free_rms_mm = {}, added_rms_mm = {}, sigma_mm = {}, square_to_side_mm = {} }}, ",
+            s.side_off_square_deg, s.free_tilt_deg, s.free_rms_mm, s.added_rms_mm, s.sigma_mm, s.square_to_side_mm
+        ));
+    }
     format!(
-        "{{ point_mm = [{}], direction = [{}], visible_mm = [{}], seen_share = {}, planes = [\n{}\n] }}",
+        "{{ point_mm = [{}], direction = [{}], visible_mm = [{}], seen_share = {}, {extra}planes = [\n{}\n] }}",
         list(&m.point_mm),
         list(&m.direction),
         list(&m.visible_mm),

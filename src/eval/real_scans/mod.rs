@@ -16,6 +16,16 @@
 //! outcome instead: refused, with the class of reason and the rule ids
 //! that state it.
 //!
+//! A root may carry a second reasonable choice of boxes (`alternative`):
+//! it is measured from both and kept only if the two lines lie within
+//! [`reference::MAX_BOX_CHOICE_MM`] of each other at the visible
+//! stretch's ends, so the reference says how steady it is. It may carry
+//! `check` stretches of the flange, measured against the flange's plane
+//! but not fitted: where the camera shows the flange off its plane (a
+//! strip in an inside corner), in figures anyone can recompute. A tee
+//! whose flange is seen only as a narrow sliver has the square-top kind
+//! ([`mod@square_top`]).
+//!
 //! The references file holds the boxes (chosen by a person looking at the
 //! cloud, with a sentence each on how) and the figures measured from them,
 //! never a point of a scan: the scans' licences forbid copying them, and
@@ -27,6 +37,7 @@
 
 pub mod reference;
 pub mod score;
+pub mod square_top;
 #[cfg(test)]
 mod tests;
 
@@ -177,6 +188,12 @@ pub enum RootKind {
     /// A V-groove with a flat root land: flank, flank, land; the line on
     /// the land halfway between where each flank meets it. Three boxes.
     LandCentre,
+    /// A tee whose flange in view is a narrow sliver of a box section's
+    /// top: standing face, sliver, the section's side face; the top is
+    /// fitted square to the standing face and checked square to the side
+    /// ([`mod@square_top`]), and the root is where it meets the standing
+    /// face. Three boxes.
+    SquareTop,
 }
 
 /// One reference root of a scan.
@@ -187,6 +204,17 @@ pub struct RootReference {
     pub kind: RootKind,
     #[serde(rename = "face")]
     pub faces: Vec<FaceBox>,
+    /// A second reasonable choice of boxes for the same faces: the root
+    /// is kept only if it moves less than
+    /// [`reference::MAX_BOX_CHOICE_MM`] between the two.
+    #[serde(default)]
+    pub alternative: Vec<FaceBox>,
+    /// Stretches of the flange not fitted but measured against its plane
+    /// (each one's points' median distance from it): where the camera
+    /// shows the flange off the plane it is fitted to, such as a strip
+    /// beside the web in an inside corner.
+    #[serde(default, rename = "check")]
+    pub checks: Vec<FaceBox>,
     /// The figures measured from the boxes (written by
     /// `eval --real-scans DIR --bless-references`, checked by
     /// `--check-references`).
@@ -313,9 +341,9 @@ pub fn parse_references(text: &str) -> Result<References, ParseProblem> {
         for root in &r.roots {
             let needed = match root.kind {
                 RootKind::Meet => 2,
-                RootKind::LandCentre => 3,
+                RootKind::LandCentre | RootKind::SquareTop => 3,
             };
-            if root.faces.len() != needed {
+            if root.faces.len() != needed || !(root.alternative.is_empty() || root.alternative.len() == needed) {
                 return Err(ParseProblem::Invalid(format!(
                     "scan {}, root {:?}: {} boxes, a {:?} root needs {needed}",
                     r.id,

@@ -20,6 +20,7 @@ use crate::cloud::{PointCloud, is_valid_point};
 use crate::geometry::Vec3;
 use crate::geometry::fit::{Moments, Plane};
 
+use super::square_top::{SquareTopFigures, fit_square_top, sigma_at_ends, square_plane};
 use super::{FaceBox, RootKind, RootReference};
 
 /// A face point lies within this many times its plane's fit RMS of the
@@ -43,6 +44,10 @@ pub const MIN_BOX_POINTS: usize = 30;
 /// Two faces meeting at less than this angle, degrees, have no well-defined
 /// line of intersection.
 pub const MIN_FACE_ANGLE_DEG: f64 = 10.0;
+/// Two reasonable choices of boxes must put the root within this of each
+/// other over its visible stretch, mm, for the reference to be kept: well
+/// under the tee's 1 mm bar, so the bar judges the plan and not the box.
+pub const MAX_BOX_CHOICE_MM: f64 = 0.3;
 
 /// A plane fitted to a box's points, mm in the cloud's frame.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -74,9 +79,43 @@ pub struct MeasuredRoot {
     pub visible_mm: [f64; 2],
     /// The share of the visible stretch's pieces where both faces are seen.
     pub seen_share: f64,
+    /// How far the root measured from the alternative boxes lies from this
+    /// one at the visible stretch's ends, mm (a root with alternative boxes).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub box_choice_mm: Option<f64>,
+    /// The square-top fit's checks and uncertainty (a square-top root).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub square_top: Option<SquareTopFigures>,
+    /// The root's check stretches, in their order: each one's points'
+    /// median signed distance from the flange's plane (positive away from
+    /// the camera), mm, and how many points.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub checks: Vec<CheckedStretch>,
+}
+
+/// A stretch of the flange measured against the flange's plane.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CheckedStretch {
+    pub median_mm: f64,
+    pub points: usize,
 }
 
 impl MeasuredRoot {
+    /// A bare line, no planes or stretch yet.
+    fn line(point: Vec3, direction: Vec3) -> MeasuredRoot {
+        MeasuredRoot {
+            planes: Vec::new(),
+            point_mm: point.into(),
+            direction: direction.into(),
+            visible_mm: [0.0; 2],
+            seen_share: 0.0,
+            box_choice_mm: None,
+            square_top: None,
+            checks: Vec::new(),
+        }
+    }
+
     pub fn point(&self) -> Vec3 {
         Vec3::from(self.point_mm)
     }
@@ -115,6 +154,12 @@ pub enum MeasureError {
     Parallel { a: String, b: String, angle_deg: f64 },
     #[error("no stretch of the root has both faces seen within {NEAR_ROOT_MM} mm of it")]
     NotSeen,
+    #[error("the top is not square to the faces beside it: {why}")]
+    NotSquare { why: String },
+    #[error(
+        "the root from the alternative boxes lies {moved_mm:.2} mm from the root from the boxes, beyond {MAX_BOX_CHOICE_MM} mm"
+    )]
+    Unsteady { moved_mm: f64 },
 }
 
 /// The cloud's valid points in its own units, as f64.
@@ -158,8 +203,39 @@ fn canonical(direction: Vec3) -> Vec3 {
 
 /// Measures a root from its boxes on the cloud's valid points (in the
 /// cloud's units).
+///
+/// A root with alternative boxes is measured from them too, and refused
+/// as [`MeasureError::Unsteady`] when the two lines lie more than
+/// [`MAX_BOX_CHOICE_MM`] apart at the visible stretch's ends.
 pub fn measure_root(points: &[[f64; 3]], root: &RootReference, mm_per_unit: f64) -> Result<MeasuredRoot, MeasureError> {
-    let fits = root.faces.iter().map(|f| fit_box(points, f, mm_per_unit)).collect::<Result<Vec<_>, _>>()?;
+    let mut measured = measure_boxes(points, root, mm_per_unit)?;
+    if !root.alternative.is_empty() {
+        let other = RootReference {
+            faces: root.alternative.clone(),
+            alternative: Vec::new(),
+            checks: Vec::new(),
+            ..root.clone()
+        };
+        let other = measure_boxes(points, &other, mm_per_unit)?;
+        let moved_mm = measured.visible_ends().iter().map(|p| other.along_and_off(p).1).fold(0.0, f64::max);
+        if moved_mm > MAX_BOX_CHOICE_MM {
+            return Err(MeasureError::Unsteady { moved_mm });
+        }
+        measured.box_choice_mm = Some(moved_mm);
+    }
+    Ok(measured)
+}
+
+/// Measures a root from one choice of boxes.
+fn measure_boxes(points: &[[f64; 3]], root: &RootReference, mm_per_unit: f64) -> Result<MeasuredRoot, MeasureError> {
+    let square = match root.kind {
+        RootKind::SquareTop => Some(fit_square_top(points, &root.faces, mm_per_unit)?),
+        _ => None,
+    };
+    let fits: Vec<(Plane, MeasuredPlane)> = match &square {
+        Some(s) => s.planes.iter().copied().zip(s.fits).collect(),
+        None => root.faces.iter().map(|f| fit_box(points, f, mm_per_unit)).collect::<Result<Vec<_>, _>>()?,
+    };
     let planes: Vec<Plane> = fits.iter().map(|(p, _)| *p).collect();
     let all: Vec<Vec3> = points
         .iter()
@@ -175,7 +251,7 @@ pub fn measure_root(points: &[[f64; 3]], root: &RootReference, mm_per_unit: f64)
     // Each root face's foot: the line it meets the other surface along.
     // (the index of the other surface: the other face, or the land).
     let (feet, other): ([(Vec3, Vec3); 2], [usize; 2]) = match root.kind {
-        RootKind::Meet => {
+        RootKind::Meet | RootKind::SquareTop => {
             let foot = meet(&planes[0], &planes[1], &centroid).ok_or_else(|| parallel(0, 1))?;
             ([foot, foot], [1, 0])
         }
@@ -221,15 +297,67 @@ pub fn measure_root(points: &[[f64; 3]], root: &RootReference, mm_per_unit: f64)
         .collect();
     let (first, last, seen_in_run) = longest_run(&seen).ok_or(MeasureError::NotSeen)?;
     let pieces = (last - first + 1) as f64;
+    // From the first seen piece's first face point to the last one's last,
+    // so the stretch ends where the faces are seen to end.
+    let visible_mm = [counts[&first].1[0], counts[&last].1[1]];
+    let square_top = match &square {
+        Some(s) => {
+            // The root if the top were square to the side face instead.
+            let name = root.faces[1].name.clone();
+            let other = square_plane(&s.sliver, &planes[2].normal).ok_or(MeasureError::NoPlane { name })?;
+            let other = meet(&planes[0], &other, &point).ok_or_else(|| parallel(0, 1))?;
+            let other = MeasuredRoot {
+                point_mm: other.0.into(),
+                direction: other.1.into(),
+                ..MeasuredRoot::line(point, direction)
+            };
+            let ends = visible_mm.map(|t| point + direction * t);
+            Some(SquareTopFigures {
+                side_off_square_deg: s.side_off_square_deg,
+                free_tilt_deg: s.free_tilt_deg,
+                free_rms_mm: s.free_rms_mm,
+                added_rms_mm: s.added_rms_mm,
+                sigma_mm: sigma_at_ends(s, &point, &direction, visible_mm)?,
+                square_to_side_mm: ends.iter().map(|p| other.along_and_off(p).1).fold(0.0, f64::max),
+            })
+        }
+        None => None,
+    };
+    // The flange: the second face, or a groove's land.
+    let flange = match root.kind {
+        RootKind::LandCentre => planes[2],
+        RootKind::Meet | RootKind::SquareTop => planes[1],
+    };
+    let checks = root
+        .checks
+        .iter()
+        .map(|check| {
+            let distances: Vec<f64> = points
+                .iter()
+                .filter(|p| check.contains(p))
+                .map(|p| flange.signed_distance(&(Vec3::from(*p) * mm_per_unit)))
+                .collect();
+            let points = distances.len();
+            if points < MIN_BOX_POINTS {
+                return Err(MeasureError::TooFewPoints { name: check.name.clone(), points });
+            }
+            Ok(CheckedStretch { median_mm: median(distances), points })
+        })
+        .collect::<Result<Vec<_>, _>>()?;
     Ok(MeasuredRoot {
         planes: fits.into_iter().map(|(_, m)| m).collect(),
-        point_mm: point.into(),
-        direction: direction.into(),
-        // From the first seen piece's first face point to the last one's
-        // last, so the stretch ends where the faces are seen to end.
-        visible_mm: [counts[&first].1[0], counts[&last].1[1]],
+        checks,
+        visible_mm,
         seen_share: seen_in_run as f64 / pieces,
+        square_top,
+        ..MeasuredRoot::line(point, direction)
     })
+}
+
+fn median(mut values: Vec<f64>) -> f64 {
+    values.sort_by(f64::total_cmp);
+    let n = values.len();
+    if n % 2 == 1 { values[n / 2] } else { (values[n / 2 - 1] + values[n / 2]) / 2.0 }
 }
 
 /// The longest run of sorted bin indices with gaps of at most
@@ -288,6 +416,36 @@ pub fn differs(committed: &MeasuredRoot, recomputed: &MeasuredRoot) -> Option<St
             committed.visible_mm, committed.seen_share, recomputed.visible_mm, recomputed.seen_share
         ));
     }
+    let figures = |m: &MeasuredRoot| {
+        let mut v: Vec<f64> = m.box_choice_mm.into_iter().collect();
+        if let Some(s) = m.square_top {
+            v.extend([
+                s.side_off_square_deg,
+                s.free_tilt_deg,
+                s.free_rms_mm,
+                s.added_rms_mm,
+                s.sigma_mm,
+                s.square_to_side_mm,
+            ]);
+        }
+        v
+    };
+    let (a, b) = (figures(committed), figures(recomputed));
+    if committed.checks.len() != recomputed.checks.len()
+        || committed
+            .checks
+            .iter()
+            .zip(&recomputed.checks)
+            .any(|(x, y)| (x.median_mm - y.median_mm).abs() > CHECK_TOLERANCE_MM || x.points != y.points)
+    {
+        problems.push(format!("the checks: committed {:?}, recomputed {:?}", committed.checks, recomputed.checks));
+    }
+    if a.len() != b.len() || a.iter().zip(&b).any(|(x, y)| (x - y).abs() > CHECK_TOLERANCE_MM) {
+        problems.push(format!(
+            "the box choice and square-top figures: committed {:?} / {:?}, recomputed {:?} / {:?}",
+            committed.box_choice_mm, committed.square_top, recomputed.box_choice_mm, recomputed.square_top
+        ));
+    }
     (!problems.is_empty()).then(|| problems.join("; "))
 }
 
@@ -311,5 +469,15 @@ pub fn rounded(m: &MeasuredRoot) -> MeasuredRoot {
         direction: m.direction.map(unit),
         visible_mm: m.visible_mm.map(mm),
         seen_share: (m.seen_share * 1e3).round() / 1e3,
+        box_choice_mm: m.box_choice_mm.map(mm),
+        checks: m.checks.iter().map(|c| CheckedStretch { median_mm: mm(c.median_mm), points: c.points }).collect(),
+        square_top: m.square_top.map(|s| SquareTopFigures {
+            side_off_square_deg: mm(s.side_off_square_deg),
+            free_tilt_deg: mm(s.free_tilt_deg),
+            free_rms_mm: mm(s.free_rms_mm),
+            added_rms_mm: mm(s.added_rms_mm),
+            sigma_mm: mm(s.sigma_mm),
+            square_to_side_mm: mm(s.square_to_side_mm),
+        }),
     }
 }

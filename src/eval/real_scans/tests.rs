@@ -31,10 +31,12 @@ fn tee_root() -> RootReference {
     RootReference {
         name: "root".into(),
         kind: RootKind::Meet,
+        checks: Vec::new(),
         faces: vec![
             FaceBox { name: "web".into(), boxes: vec![axis_box([-0.06, -0.001, 0.46], [0.06, 0.001, 0.495])] },
             FaceBox { name: "flange".into(), boxes: vec![axis_box([-0.06, 0.005, 0.499], [0.06, 0.04, 0.501])] },
         ],
+        alternative: Vec::new(),
         measured: None,
     }
 }
@@ -170,11 +172,13 @@ fn a_groove_with_a_root_land_has_its_root_in_the_middle_of_the_land() {
     let root = RootReference {
         name: "groove".into(),
         kind: RootKind::LandCentre,
+        checks: Vec::new(),
         faces: vec![
             FaceBox { name: "-y".into(), boxes: vec![axis_box([-0.05, -0.02, 0.501], [0.05, 0.0, 0.508])] },
             FaceBox { name: "+y".into(), boxes: vec![axis_box([-0.05, 0.006, 0.501], [0.05, 0.02, 0.508])] },
             FaceBox { name: "land".into(), boxes: vec![axis_box([-0.05, 0.002, 0.5095], [0.05, 0.004, 0.5105])] },
         ],
+        alternative: Vec::new(),
         measured: None,
     };
     let m = measure_root(&points, &root, 1000.0).unwrap();
@@ -195,4 +199,85 @@ fn a_references_file_names_what_each_scan_expects() {
     assert!(parsed.scans[0].refusal.as_ref().unwrap().rules.is_empty());
     let unknown_key = "mm_per_unit = 1000.0\nextra = 1\n";
     assert!(matches!(parse_references(unknown_key), Err(ParseProblem::Toml(_))));
+}
+
+/// A box section's top seen as a sliver: the standing face y = 0 rising
+/// towards the camera (z 470..498 mm), the top z = 500 mm from y = 2 to
+/// 20 mm with its depths tilted 5° across its width (a stereo camera's
+/// smear towards the faces beside it) and scattered ±1 mm, the section's
+/// side face y = 22 mm from z = 505 to 540 mm (turned `side_turn_deg` about
+/// x). The true root is the x axis at z = 500 mm.
+fn sliver_cloud(side_turn_deg: f64) -> PointCloud {
+    let mut state = 12345_u64;
+    let mut noise = move || {
+        state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        ((state >> 33) as f64 / (1u64 << 31) as f64 - 0.5) * 2.0
+    };
+    let (sin, cos) = side_turn_deg.to_radians().sin_cos();
+    let mut points = Vec::new();
+    for i in -60..=60 {
+        let x = i as f64;
+        for k in 2..=30 {
+            points.push([x, noise(), 500.0 - k as f64]);
+        }
+        for j in 2..=20 {
+            let y = j as f64;
+            points.push([x, y, 500.0 + (y - 11.0) * 5f64.to_radians().tan() + noise()]);
+        }
+        for k in 5..=40 {
+            let k = k as f64;
+            points.push([x, 22.0 + k * sin + 0.3 * noise(), 500.0 + k * cos]);
+        }
+    }
+    PointCloud::unorganized(points.into_iter().map(|p| p.map(|v| (v / 1000.0) as f32)).collect())
+}
+
+fn sliver_faces(from_x: f64) -> Vec<FaceBox> {
+    let face = |name: &str, min: [f64; 3], max: [f64; 3]| FaceBox {
+        name: name.into(),
+        boxes: vec![axis_box([from_x, min[1], min[2]], [-from_x, max[1], max[2]])],
+    };
+    vec![
+        face("standing face", [0.0, -0.003, 0.468], [0.0, 0.003, 0.496]),
+        face("sliver", [0.0, 0.001, 0.495], [0.0, 0.021, 0.505]),
+        face("side face", [0.0, 0.015, 0.506], [0.0, 0.06, 0.542]),
+    ]
+}
+
+#[test]
+fn a_narrow_noisy_sliver_tilts_a_free_fit_but_not_a_top_fitted_square_to_the_standing_face() {
+    let points = cloud_points(&sliver_cloud(0.0));
+    let truth = Vec3::new(0.0, 0.0, 500.0);
+    let free = RootReference {
+        name: "root".into(),
+        kind: RootKind::Meet,
+        faces: sliver_faces(-0.055)[..2].to_vec(),
+        alternative: Vec::new(),
+        checks: Vec::new(),
+        measured: None,
+    };
+    let free = measure_root(&points, &free, 1000.0).unwrap();
+    let (_, free_off) = free.along_and_off(&truth);
+    assert!(free_off > 0.5, "the free fit's root lies only {free_off} mm off");
+    let square = RootReference {
+        name: "root".into(),
+        kind: RootKind::SquareTop,
+        faces: sliver_faces(-0.055),
+        alternative: sliver_faces(-0.045),
+        checks: vec![sliver_faces(-0.055)[1].clone()],
+        measured: None,
+    };
+    let m = measure_root(&points, &square, 1000.0).unwrap();
+    let (_, off) = m.along_and_off(&truth);
+    assert!(off < 0.1, "the square top's root lies {off} mm off: {m:?}");
+    let s = m.square_top.unwrap();
+    assert!((s.free_tilt_deg - 5.0).abs() < 1.0, "{s:?}");
+    assert!(s.side_off_square_deg < 0.5 && s.sigma_mm < 0.2 && s.square_to_side_mm < 0.05, "{s:?}");
+    assert!(m.box_choice_mm.unwrap() < 0.1, "{m:?}");
+    // The sliver checked against the top it fixed: on it, in the median.
+    assert!(m.checks.len() == 1 && m.checks[0].median_mm.abs() < 0.2, "{:?}", m.checks);
+    assert!(m.visible_length_mm() > 100.0, "{m:?}");
+    // A side face 5° off square to the standing face: the assumption fails.
+    let err = measure_root(&cloud_points(&sliver_cloud(5.0)), &square, 1000.0).unwrap_err();
+    assert!(matches!(err, MeasureError::NotSquare { .. }), "{err}");
 }

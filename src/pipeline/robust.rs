@@ -29,7 +29,6 @@ use crate::rules::{self, Rule};
 
 use super::background::{BackgroundError, CornerKind, Layout, PlaneCluster};
 use super::context::{Context, MIN_CLUSTER_POINTS, PlannedWeld};
-use super::fillet::Web;
 use super::neighbours::NeighbourSearch;
 use super::plane_points::PlanePoints;
 use super::{Plan, PlanError, PlanStats, Stage, StageTimings, Unplanned};
@@ -490,14 +489,7 @@ fn plan_topless_tee(
         PlanError { gate: not_found.rule().gate, ..PlanError::by(why.rule(), reason) }
     });
     let face = face.seen_as(requested)?;
-    let layers = format!(
-        "no web's top is in view; a side face of {} points stands on the nearest plane ({:.0} mm² in {} piece(s)), \
-         seen {:.0} mm tall",
-        face.points,
-        flange.iter().map(|c| c.area_mm2).sum::<f64>(),
-        flange.len(),
-        face.seen_height_mm
-    );
+    let layers = standing_face::face_evidence(&face, &flange);
     tracing::debug!("{layers}");
     if !fillet_asked {
         let reason = format!(
@@ -507,13 +499,7 @@ fn plan_topless_tee(
         return Err(PlanError::by(&rules::background::WEB_FACE_WITHOUT_TOP, reason)).seen_as(requested);
     }
     ctx.clock.lap(Stage::Background).seen_as(requested)?;
-    let tee = tee::SeenTee {
-        web: Web::Face(&face),
-        flange_pieces: pieces,
-        flange_sides: tee::Flange::BothSides,
-        depth_to_support_mm: None,
-    };
-    tee::plan(ctx, tee, layers).seen_as(Some(JointType::TFillet))
+    tee::plan(ctx, standing_face::face_tee(&face, pieces), layers).seen_as(Some(JointType::TFillet))
 }
 
 /// The settings of the search for what stands on `flange` (the nearest

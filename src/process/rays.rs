@@ -80,6 +80,22 @@ fn ray(p: &[f32; 3]) -> Option<(f64, f64)> {
     (z > MIN_BINNED_DEPTH_MM).then(|| (x / z, y / z))
 }
 
+/// The least and greatest ray direction `(x / z, y / z)` over the points a
+/// grid by ray bins (finite, deeper than [`MIN_BINNED_DEPTH_MM`]), and how
+/// many they are: read in parallel, for the index and the hidden space's
+/// grid alike.
+pub fn ray_bounds(points: &[[f32; 3]]) -> ([f64; 2], [f64; 2], usize) {
+    let empty = || ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2], 0usize);
+    points
+        .par_iter()
+        .filter(|p| is_finite(p))
+        .filter_map(ray)
+        .fold(empty, |(lo, hi, n), (u, v)| ([lo[0].min(u), lo[1].min(v)], [hi[0].max(u), hi[1].max(v)], n + 1))
+        .reduce(empty, |a, b| {
+            ([a.0[0].min(b.0[0]), a.0[1].min(b.0[1])], [a.1[0].max(b.1[0]), a.1[1].max(b.1[1])], a.2 + b.2)
+        })
+}
+
 fn is_finite(p: &[f32; 3]) -> bool {
     p.iter().all(|c| c.is_finite())
 }
@@ -93,15 +109,7 @@ impl RayIndex {
     /// with a coordinate not finite (an organized frame's empty pixel) is
     /// left out.
     pub fn new(points: &[[f32; 3]]) -> RayIndex {
-        let empty = || ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2], 0usize);
-        let (lo, hi, binned) = points
-            .par_iter()
-            .filter(|p| is_finite(p))
-            .filter_map(ray)
-            .fold(empty, |(lo, hi, n), (u, v)| ([lo[0].min(u), lo[1].min(v)], [hi[0].max(u), hi[1].max(v)], n + 1))
-            .reduce(empty, |a, b| {
-                ([a.0[0].min(b.0[0]), a.0[1].min(b.0[1])], [a.1[0].max(b.1[0]), a.1[1].max(b.1[1])], a.2 + b.2)
-            });
+        let (lo, hi, binned) = ray_bounds(points);
         let extent = if binned > 0 { [hi[0] - lo[0], hi[1] - lo[1]] } else { [0.0; 2] };
         let mut cell = (extent[0] * extent[1] * POINTS_PER_CELL / binned.max(1) as f64).sqrt();
         // A cloud on a line of rays, or a single ray, has no area: its
@@ -177,12 +185,6 @@ impl RayIndex {
             })
             .collect();
         RayIndex { cell, origin, width, height, starts, points: binned_points, tiles_wide, tile_ranges, aside }
-    }
-
-    /// Every point indexed: the binned ones in cell order, then those
-    /// kept aside.
-    pub fn points(&self) -> impl Iterator<Item = &[f32; 3]> {
-        self.points.iter().chain(&self.aside)
     }
 
     /// The points binned by ray, in cell order: all the finite ones but

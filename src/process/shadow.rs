@@ -28,6 +28,10 @@
 use nalgebra::Vector3;
 use rayon::prelude::*;
 
+// Nearer the camera's plane than the index's bound, a point's ray is not
+// binned here either (it would fall beyond any view).
+use super::rays::{MIN_BINNED_DEPTH_MM as MIN_DEPTH_MM, ray_bounds};
+
 type Vec3 = Vector3<f64>;
 
 /// The grid's cell, in multiples of the cloud's median angular spacing:
@@ -50,10 +54,6 @@ pub const BEHIND_TOLERANCE_MM: f64 = 2.0;
 /// spacing gets coarser cells rather than an unbounded grid (16 MiB of
 /// ranges at most).
 pub const MAX_CELLS: usize = 1 << 22;
-
-/// Nearer the camera's plane than this, mm, a point's ray is not binned
-/// (it would fall beyond any view).
-const MIN_DEPTH_MM: f64 = 1.0;
 
 /// The fewest points a thread bins into a grid of its own: below this a
 /// grid's allocation costs more than the points it spares another thread.
@@ -82,17 +82,13 @@ impl Shadows {
     pub fn new(points: &[[f32; 3]], spacing: f64) -> Option<Shadows> {
         let ray = |p: &[f32; 3]| {
             let [x, y, z] = p.map(f64::from);
-            (z > MIN_DEPTH_MM && x.is_finite() && y.is_finite()).then(|| (x / z, y / z, (x * x + y * y + z * z).sqrt()))
+            (z > MIN_DEPTH_MM && [x, y, z].iter().all(|c| c.is_finite()))
+                .then(|| (x / z, y / z, (x * x + y * y + z * z).sqrt()))
         };
         if !(spacing > 0.0 && spacing.is_finite()) {
             return None;
         }
-        let empty = || ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
-        let (lo, hi) = points
-            .par_iter()
-            .filter_map(ray)
-            .fold(empty, |(lo, hi), (u, v, _)| ([lo[0].min(u), lo[1].min(v)], [hi[0].max(u), hi[1].max(v)]))
-            .reduce(empty, |a, b| ([a.0[0].min(b.0[0]), a.0[1].min(b.0[1])], [a.1[0].max(b.1[0]), a.1[1].max(b.1[1])]));
+        let (lo, hi, _) = ray_bounds(points);
         if !(lo[0] <= hi[0] && lo[1] <= hi[1]) {
             return None;
         }

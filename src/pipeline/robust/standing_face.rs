@@ -33,7 +33,8 @@ use crate::rules;
 
 use super::super::background::{Layout, PlaneCluster};
 use super::super::fillet::Web;
-use super::super::{PlanError, tee, web_face};
+use super::super::web_face::{self, StandingFace};
+use super::super::{PlanError, tee};
 use super::{Refused, Welds, face_search};
 use crate::pipeline::context::Context;
 
@@ -81,23 +82,36 @@ pub(super) fn instead_of_layers(
         Layout::Tee => "a tee",
     };
     let layers = format!(
-        "no web's top is in view; a side face of {} points stands on the nearest plane ({:.0} mm² in {} piece(s)), \
-         seen {:.0} mm tall, taller than a lap's upper plate ({lap_step_max_mm:.0} mm); the layers read {read_as}, \
-         refused by {}",
-        face.points,
-        flange.iter().map(|c| c.area_mm2).sum::<f64>(),
-        flange.len(),
-        face.seen_height_mm,
+        "{}, taller than a lap's upper plate ({lap_step_max_mm:.0} mm); the layers read {read_as}, refused by {}",
+        face_evidence(&face, &flange),
         refused.reason.rule.id,
     );
     tracing::debug!(rule = rules::background::WEB_FACE_WITHOUT_TOP.id, "{layers}");
-    let seen = tee::SeenTee {
-        web: Web::Face(&face),
-        flange_pieces: pieces,
+    tee::plan(ctx, face_tee(&face, pieces), layers).map_err(|e| further(refused, e, read_as))
+}
+
+/// What is seen of a face standing on `flange` with no web's top in view:
+/// the evidence a tee read from the face starts with.
+pub(super) fn face_evidence(face: &StandingFace, flange: &[PlaneCluster]) -> String {
+    format!(
+        "no web's top is in view; a side face of {} points stands on the nearest plane ({:.0} mm² in {} piece(s)), \
+         seen {:.0} mm tall",
+        face.points,
+        flange.iter().map(|c| c.area_mm2).sum::<f64>(),
+        flange.len(),
+        face.seen_height_mm
+    )
+}
+
+/// The tee a face standing on the flange's pieces makes, its top out of
+/// view.
+pub(super) fn face_tee<'a>(face: &'a StandingFace, flange_pieces: Vec<&'a PlaneCluster>) -> tee::SeenTee<'a> {
+    tee::SeenTee {
+        web: Web::Face(face),
+        flange_pieces,
         flange_sides: tee::Flange::BothSides,
         depth_to_support_mm: None,
-    };
-    tee::plan(ctx, seen, layers).map_err(|e| further(refused, e, read_as))
+    }
 }
 
 /// Both readings refused: the refusal of the one that got further (the

@@ -117,6 +117,12 @@ const FACE_SHARE_MIN: Parameter = Parameter {
     meaning: "least share of the returns below the edge on a face going down from it",
     source: Source::Constant { file: CORNER, name: "FACE_SHARE_MIN" },
 };
+const MIN_BESIDE_SHARE: Parameter = Parameter {
+    name: "MIN_BESIDE_SHARE",
+    unit: "",
+    meaning: "least share of the edge's length along which the larger plane is seen beside it",
+    source: Source::Constant { file: CORNER, name: "MIN_BESIDE_SHARE" },
+};
 
 /// The corner parameters: the shape of the standing plate's edge and what
 /// must lie beyond it.
@@ -131,6 +137,7 @@ const CORNER_PARAMETERS: &[Parameter] = &[
     CORNER_LEVEL_SHARE_MAX,
     CORNER_DEEP_RETURNS_MIN,
     FACE_SHARE_MIN,
+    MIN_BESIDE_SHARE,
 ];
 
 pub static CORNER_OUTSIDE_NOT_PLANNED: Rule = Rule {
@@ -146,7 +153,10 @@ pub static CORNER_OUTSIDE_NOT_PLANNED: Rule = Rule {
              for butt plates with a square gap, or for a lap whose upper plate is its edge, and a path planned \
              so would weld the wrong place; the corner's own weld runs along the outside of the corner, which \
              the planner does not plan. Where nothing is seen beyond the strip, an edge along the view's border \
-             is a plate the image cuts, not a corner.",
+             is a plate the image cuts, not a corner. The two plates meet along the whole joint, so the larger \
+             plane is seen beside the strip along most of its length; a strip with the larger plane off its end \
+             (a beam's top seen as a sliver in front of a tube standing near the beam's edge) is a piece of that \
+             plane, not a corner's edge.",
     parameters: CORNER_PARAMETERS,
     fires: &[
         "tests/corners.rs::a_cropped_outside_corner_is_refused_by_name_under_every_request",
@@ -157,6 +167,7 @@ pub static CORNER_OUTSIDE_NOT_PLANNED: Rule = Rule {
     ],
     holds: &[
         "src/pipeline/background/tests.rs::a_sliver_cut_by_the_image_border_is_no_corner",
+        "src/pipeline/background/tests.rs::a_sliver_continuing_a_plate_off_its_end_is_no_corner",
         "src/pipeline/background/tests.rs::returns_at_the_flanges_level_beyond_make_it_no_corner",
         "src/pipeline/background/tests.rs::a_drop_no_deeper_than_a_lap_step_is_no_corner",
     ],

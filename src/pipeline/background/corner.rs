@@ -165,6 +165,10 @@ const FACE_SHARE_MIN: f64 = 0.8;
 ///   than next to none (a tee's flange past its web, a plate a clamp lies
 ///   on, the clamp, the rest of a streak-cut plate): against the returns
 ///   far below where those show a drop, else against the top's own count;
+/// - the flange is not seen beside the top's edge over at least
+///   [`MIN_BESIDE_SHARE`] of it (it lies off the top's ends: the top is
+///   a sliver of plate continuing it, such as a beam's top beyond a tube
+///   standing near its edge);
 /// - a drop beside a flange under four times the top's size;
 /// - no drop, and the top does not touch the flange, or the returns below
 ///   lie on no face going down from the edge (a surface a lap step under
@@ -184,17 +188,19 @@ fn what_lies_beyond(
     // Where the table is seen, the flange is seen whole beside the edge, at
     // least four times its size; a crop that took the table may leave less.
     let seen_whole = top.area_mm2 <= SIDE_BY_SIDE_AREA_RATIO * flange.area_mm2;
+    // Read from the clusters' own points, before the pass over the whole
+    // cloud. A corner's plates meet along the whole joint, so the flange is
+    // seen beside the edge wherever the edge is seen (but for a dropout).
+    let stations = Stations::along(top, away, s.neighbour_radius_mm, points);
+    let beside = flange_beside(&stations, flange, points);
+    if beside.share < MIN_BESIDE_SHARE {
+        return None;
+    }
     // Without the table, only an edge that touches the flange is taken for
     // a corner's (a tee's flange on the web's far side lies a web's
-    // thickness off, a V-groove's other plate a groove's width). Read from
-    // the clusters' own points, before the pass over the whole cloud.
-    let stations = Stations::along(top, away, s.neighbour_radius_mm, points);
-    // Read once, when first asked: here, without the table, or after the
-    // pass over the cloud when no drop is found.
-    let gap = std::cell::OnceCell::new();
-    let gap_mm = || *gap.get_or_init(|| gap_between(&stations, flange, points));
-    let touches = |gap_mm: Option<f64>| gap_mm.is_some_and(|gap| gap <= s.neighbour_radius_mm + 2.0 * spacing_of(top));
-    if !seen_whole && !touches(gap_mm()) {
+    // thickness off, a V-groove's other plate a groove's width).
+    let touches = beside.gap_mm.is_some_and(|gap| gap <= s.neighbour_radius_mm + 2.0 * spacing_of(top));
+    if !seen_whole && !touches {
         return None;
     }
     let far_edge =
@@ -238,7 +244,7 @@ fn what_lies_beyond(
     if (level + over) as f64 > CORNER_LEVEL_SHARE_MAX * top.members.len() as f64 {
         return None;
     }
-    let gap_mm = gap_mm();
+    let gap_mm = beside.gap_mm;
     tracing::debug!(
         level,
         over,
@@ -249,7 +255,7 @@ fn what_lies_beyond(
         gap_mm,
         "no drop to a table beyond a plate's edge"
     );
-    if !touches(gap_mm) {
+    if !touches {
         return None;
     }
     if below >= CORNER_DEEP_RETURNS_MIN {
@@ -295,11 +301,30 @@ impl<'c> Stations<'c> {
     }
 }
 
-/// How far apart the top's edge towards `flange` (against the stations'
-/// `away`) and the flange's edge towards it lie, mm: the median over the
-/// stations where both have points (the flange's on its own side of the
-/// top's edge). `None` where they share no station.
-fn gap_between(stations: &Stations, flange: &PlaneCluster, points: &[Point]) -> Option<f64> {
+/// The least share of the stations along a plate's edge at which the
+/// flange is seen beside it (on its own side of the edge) for the two to
+/// be a corner's plates. A corner's flange runs along the whole joint; the
+/// simulated corners show it beside 69 % of the edge and more (a dropout
+/// or the flange's own shadow takes the rest), a plate continuing off a
+/// sliver's end beside none of it.
+const MIN_BESIDE_SHARE: f64 = 0.5;
+
+/// How the flange lies beside a plate's edge ([`flange_beside`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Beside {
+    /// How far apart the top's edge towards the flange and the flange's
+    /// edge towards it lie, mm: the median over the stations where both
+    /// have points. `None` where they share no station.
+    gap_mm: Option<f64>,
+    /// The share of the stations where the top is seen at which the flange
+    /// is seen beside it.
+    share: f64,
+}
+
+/// How the flange lies beside the top's edge towards it (against the
+/// stations' `away`), station by station: the flange's points counted are
+/// those on its own side of the top's edge.
+fn flange_beside(stations: &Stations, flange: &PlaneCluster, points: &[Point]) -> Beside {
     let mut inner = vec![f64::INFINITY; stations.count];
     for (station, out) in member_points(&stations.top.members, points).map(|p| stations.place(&p)) {
         if let Some(k) = station {
@@ -314,8 +339,10 @@ fn gap_between(stations: &Stations, flange: &PlaneCluster, points: &[Point]) -> 
     }
     let mut gaps: Vec<f64> =
         inner.iter().zip(&flange_edge).filter(|(_, f)| f.is_finite()).map(|(edge, f)| edge - f).collect();
+    let seen = inner.iter().filter(|edge| edge.is_finite()).count();
+    let share = gaps.len() as f64 / seen.max(1) as f64;
     gaps.sort_by(f64::total_cmp);
-    gaps.get(gaps.len() / 2).copied()
+    Beside { gap_mm: gaps.get(gaps.len() / 2).copied(), share }
 }
 
 /// The top's outermost point towards the stations' `away` at each station:

@@ -109,31 +109,43 @@ fn corner_frame(top_z: f64, beyond_z: Option<f64>) -> (Vec<PlaneCluster>, Vec<Po
 /// [`corner_frame`] with the flange starting `gap` mm off the top's
 /// edge, at x = gap..100.
 fn corner_frame_apart(top_z: f64, beyond_z: Option<f64>, gap: i32) -> (Vec<PlaneCluster>, Vec<Point>) {
+    corner_frame_with(top_z, beyond_z, gap, 0..200)
+}
+
+/// [`corner_frame_apart`] with the flange along y `flange_y` instead of
+/// beside the top's whole length (y 0..200).
+fn corner_frame_with(
+    top_z: f64,
+    beyond_z: Option<f64>,
+    gap: i32,
+    flange_y: std::ops::Range<i32>,
+) -> (Vec<PlaneCluster>, Vec<Point>) {
     let mut points: Vec<Point> = Vec::new();
-    let strip = |points: &mut Vec<Point>, x0: i32, x1: i32, z: f64| {
+    let strip = |points: &mut Vec<Point>, x0: i32, x1: i32, ys: std::ops::Range<i32>, z: f64| {
         let first = points.len() as u32;
         for x in x0..x1 {
-            for y in 0..200 {
+            for y in ys.clone() {
                 points.push([x as f32 + 0.5, y as f32, z as f32]);
             }
         }
         (first..points.len() as u32).collect::<Vec<u32>>()
     };
-    let web = strip(&mut points, -8, 0, top_z);
-    let flange = strip(&mut points, gap, 100, 760.0);
+    let web = strip(&mut points, -8, 0, 0..200, top_z);
+    let flange_centre_y = f64::from(flange_y.start + flange_y.end) / 2.0;
+    let flange = strip(&mut points, gap, 100, flange_y, 760.0);
     if let Some(z) = beyond_z {
-        strip(&mut points, -60, -8, z);
+        strip(&mut points, -60, -8, 0..200, z);
     }
-    let plane = |members: Vec<u32>, x: f64, z: f64, elongation: f64| PlaneCluster {
+    let plane = |members: Vec<u32>, x: f64, y: f64, z: f64, elongation: f64| PlaneCluster {
         area_mm2: members.len() as f64,
         members,
         plane: Plane { normal: Vec3::z(), offset: z },
-        centroid: Vec3::new(x, 100.0, z),
+        centroid: Vec3::new(x, y, z),
         label: 0,
         long_axis: Vec3::y(),
         elongation,
     };
-    (vec![plane(web, -4.0, top_z, 25.0), plane(flange, 50.0, 760.0, 2.0)], points)
+    (vec![plane(web, -4.0, 100.0, top_z, 25.0), plane(flange, 50.0, flange_centre_y, 760.0, 2.0)], points)
 }
 
 fn corner_kind(top_z: f64, beyond_z: Option<f64>) -> Option<CornerKind> {
@@ -154,6 +166,19 @@ fn a_plates_edge_flush_or_proud_beside_a_flange_with_a_drop_beyond_is_an_outside
     assert!(reason.contains("outside corner's weld is not planned"), "{reason}");
     // The clusters named are the plate's edge and the flange.
     assert_eq!((corner.standing, corner.flange), (0, 1));
+}
+
+#[test]
+fn a_sliver_continuing_a_plate_off_its_end_is_no_corner() {
+    // A beam's top seen only as a sliver in front of a tube standing near
+    // its edge, the rest of the top lying off the sliver's end (y 210 to
+    // 400), the floor far below beyond both: the larger plane is not
+    // beside the sliver, so the two are not a corner's plates.
+    let (planes, points) = corner_frame_with(760.0, Some(830.0), 0, 210..400);
+    assert_eq!(find_corner(&planes, &auto(), &points, || None), None);
+    // The same plane beside most of the sliver's length is.
+    let (planes, points) = corner_frame_with(760.0, Some(830.0), 0, 60..400);
+    assert_eq!(find_corner(&planes, &auto(), &points, || None).map(|c| c.kind), Some(CornerKind::Outside));
 }
 
 #[test]

@@ -156,7 +156,9 @@ pub static CORNER_OUTSIDE_NOT_PLANNED: Rule = Rule {
              is a plate the image cuts, not a corner. The two plates meet along the whole joint, so the larger \
              plane is seen beside the strip along most of its length; a strip with the larger plane off its end \
              (a beam's top seen as a sliver in front of a tube standing near the beam's edge) is a piece of that \
-             plane, not a corner's edge.",
+             plane, not a corner's edge. And the strip touches the larger plane (they lie apart by no more \
+             than the two clusters' rims): a tee's flange ending just past its web shows a sliver as narrow, flush \
+             with the flange on the web's other side, but a web's thickness off it.",
     parameters: CORNER_PARAMETERS,
     fires: &[
         "tests/corners.rs::a_cropped_outside_corner_is_refused_by_name_under_every_request",
@@ -168,6 +170,7 @@ pub static CORNER_OUTSIDE_NOT_PLANNED: Rule = Rule {
     holds: &[
         "src/pipeline/background/tests.rs::a_sliver_cut_by_the_image_border_is_no_corner",
         "src/pipeline/background/tests.rs::a_sliver_continuing_a_plate_off_its_end_is_no_corner",
+        "src/pipeline/background/tests.rs::a_sliver_of_flange_beyond_a_web_near_its_edge_is_no_corner",
         "src/pipeline/background/tests.rs::returns_at_the_flanges_level_beyond_make_it_no_corner",
         "src/pipeline/background/tests.rs::a_drop_no_deeper_than_a_lap_step_is_no_corner",
     ],

@@ -170,6 +170,8 @@ const FACE_SHARE_MIN: f64 = 0.8;
 ///   a sliver of plate continuing it, such as a beam's top beyond a tube
 ///   standing near its edge);
 /// - a drop beside a flange under four times the top's size;
+/// - an outside corner's edge (and, without the table, an inside
+///   corner's) that does not touch the flange;
 /// - no drop, and the top does not touch the flange, or the returns below
 ///   lie on no face going down from the edge (a surface a lap step under
 ///   it).
@@ -196,11 +198,19 @@ fn what_lies_beyond(
     if beside.share < MIN_BESIDE_SHARE {
         return None;
     }
-    // Without the table, only an edge that touches the flange is taken for
-    // a corner's (a tee's flange on the web's far side lies a web's
-    // thickness off, a V-groove's other plate a groove's width).
-    let touches = beside.gap_mm.is_some_and(|gap| gap <= s.neighbour_radius_mm + 2.0 * spacing_of(top));
-    if !seen_whole && !touches {
+    // An outside corner's edge touches its flange, and so does an inside
+    // corner's where the table is out of the cloud; a tee's flange on the
+    // web's far side lies a web's thickness off (a sliver of flange beyond
+    // a web near its edge is as narrow as a plate's edge), a V-groove's
+    // other plate a groove's width. Touching clusters still lie apart by
+    // their rims: a plane point needs its whole neighbourhood on the plane,
+    // so each cluster stops up to a neighbour radius short of the step
+    // between them (the simulated outside corners: 1.3 to 2.0 mm apart at
+    // a 1 mm radius and 0.2 to 0.4 mm spacing).
+    let touch_mm = 2.0 * s.neighbour_radius_mm + 2.0 * spacing_of(top);
+    let touches = beside.gap_mm.is_some_and(|gap| gap <= touch_mm);
+    let outside = step <= s.lap_step_max_mm;
+    if (outside || !seen_whole) && !touches {
         return None;
     }
     let far_edge =

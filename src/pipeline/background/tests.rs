@@ -182,6 +182,24 @@ fn a_sliver_continuing_a_plate_off_its_end_is_no_corner() {
 }
 
 #[test]
+fn a_sliver_of_flange_beyond_a_web_near_its_edge_is_no_corner() {
+    // A tee's flange ending 8 mm past the web's far face: from the camera
+    // the sliver beyond the web lies flush with the wide flange on the
+    // web's other side, a web's thickness off it, with the table far
+    // below beyond the sliver. An outside corner's edge touches its flange.
+    let (planes, points) = corner_frame_apart(760.0, Some(830.0), 8);
+    assert_eq!(find_corner(&planes, &auto(), &points, || None), None);
+    // Up to two clusters' rims apart (a neighbour radius each, and a
+    // couple of spacings) the two touch.
+    let (planes, points) = corner_frame_apart(760.0, Some(830.0), 2);
+    assert_eq!(find_corner(&planes, &auto(), &points, || None).map(|c| c.kind), Some(CornerKind::Outside));
+    // An inside corner's web seen with the table beside its flange is not
+    // asked to touch it: the web's side face lies between them.
+    let (planes, points) = corner_frame_apart(700.0, Some(860.0), 8);
+    assert_eq!(find_corner(&planes, &auto(), &points, || None).map(|c| c.kind), Some(CornerKind::Inside));
+}
+
+#[test]
 fn a_web_a_web_height_over_a_flange_with_a_drop_beyond_is_an_inside_corner() {
     assert_eq!(corner_kind(700.0, Some(860.0)), Some(CornerKind::Inside));
     let (planes, points) = corner_frame(700.0, Some(860.0));

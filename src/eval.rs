@@ -34,6 +34,7 @@ pub mod along_seam;
 pub mod process;
 pub mod real_scans;
 mod rule_counts;
+pub mod web_near_edge;
 
 pub use rule_counts::{RuleCounts, count_rules};
 

@@ -659,6 +659,27 @@ fn eval_of_curved_members_counts_refusals_per_request_and_keeps_held_out_rows_ap
     assert!(!text.lines().any(|l| l.starts_with("held out")), "the filter keeps no held-out scene: {text}");
 }
 
+/// `eval --suite web-near-edge` judges each root of a tee whose web
+/// stands near the flange's edge, under `t_fillet` or, asked, `auto`,
+/// summed per side of the web; it plans under no other request.
+#[test]
+fn eval_of_webs_near_the_flange_s_edge_judges_each_root() {
+    let out = weldseam(&["eval", "--suite", "web-near-edge", "--filter", "web-edge-03", "--joint-request", "auto"]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{text}\n{}", String::from_utf8_lossy(&out.stderr));
+    for side in ["narrow", "wide"] {
+        let tally = text
+            .lines()
+            .find(|l| l.starts_with("tuning") && l.contains(&format!("auto, {side} side's root")))
+            .unwrap_or_else(|| panic!("no tuning row for the {side} side in\n{text}"));
+        // Roots, right, refused, not named, confident wrong: one root, right.
+        let counts: Vec<&str> = tally.split_whitespace().rev().take(5).collect();
+        assert_eq!(counts, ["0", "0", "0", "1", "1"], "{tally}");
+    }
+    let lap = weldseam(&["eval", "--suite", "web-near-edge", "--joint-request", "lap", "--limit", "1"]);
+    assert!(!lap.status.success(), "a lap request on tees is refused");
+}
+
 /// `simulate --fault` and `--suite-scene` write one fault or hard scene
 /// for a person to look at, with its right answer in the truth.
 #[test]

@@ -96,6 +96,13 @@ pub enum SuiteArg {
     /// straight on (`sim::groove_width_suite`), planned as v_butt and
     /// auto: a seam more than 2 mm off the root is a confident wrong one.
     GrooveWidth,
+    /// 16 tees whose web stands 6 to 30 mm from the flange's edge on one
+    /// side, the flange wide on the other, seen from either side, the
+    /// narrow edge square or rounded, the web's top and the table in view
+    /// or cropped away (`sim::web_near_edge_suite`), planned as t_fillet
+    /// (or auto, with `--joint-request auto`): each root judged as the tee
+    /// suite judges it, a hidden root to be named not planned.
+    WebNearEdge,
     /// 20 scenes of the weld process (`sim::process_suite`): an I-butt
     /// whose gap opens from 0.5 to 3 mm, a butt with high-low, a 20 mm
     /// plate's 60 degree V-groove, a clamp 15 mm beside a seam, a tee with

@@ -1,6 +1,7 @@
 //! What the eval runs of the seeded scene families (`--suite curved`,
-//! `--suite groove-width`) share: the `--plans` file, the outcome table
-//! summed per group (tuning, held out) and request, and the printing.
+//! `--suite groove-width`, `--suite web-near-edge`) share: the `--plans`
+//! file, the outcome table summed per group (tuning, held out) and
+//! request, and the printing.
 
 use std::collections::BTreeMap;
 use std::fs::File;
@@ -25,7 +26,13 @@ pub fn plans_file(path: Option<&Path>) -> anyhow::Result<Option<BufWriter<File>>
 /// The outcome table: one row per group and request, the plans and the
 /// count of each verdict, named by `verdicts` in their index order.
 pub fn outcome_table<const N: usize>(counts: &Counts<N>, verdicts: [&str; N]) -> Table {
-    let mut header = vec!["scenes", "request", "plans"];
+    outcome_table_of(counts, "plans", verdicts)
+}
+
+/// [`outcome_table`] of a family that judges something else than whole
+/// plans (each root of a tee): `counted` heads the column of their number.
+pub fn outcome_table_of<const N: usize>(counts: &Counts<N>, counted: &str, verdicts: [&str; N]) -> Table {
+    let mut header = vec!["scenes", "request", counted];
     header.extend(verdicts);
     let mut summary = Table::new("Outcomes", &header);
     for ((held_out, request), c) in counts {

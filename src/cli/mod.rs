@@ -15,6 +15,7 @@ pub mod eval_family;
 pub mod eval_groove_width;
 pub mod eval_process;
 pub mod eval_real;
+pub mod eval_web_near_edge;
 pub mod inspect;
 pub mod logging;
 pub mod memory;

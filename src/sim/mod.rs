@@ -24,6 +24,7 @@ pub mod suite;
 pub mod tee_multi;
 pub mod truth;
 pub mod variants;
+pub mod web_near_edge;
 
 use nalgebra::{Isometry3, Rotation3, Translation3, Unit, UnitQuaternion};
 
@@ -45,6 +46,7 @@ pub use suite::{Framing, eval_suite, fault_suite, framing, hard_suite};
 pub use tee_multi::corner_suite;
 pub use tee_multi::{multi_suite, tee_suite};
 pub use truth::{GroundTruth, SeamTruth};
+pub use web_near_edge::{WebNearEdge, web_near_edge_suite};
 
 /// The joint's cross-section. Plate A is on the -x side of the seam (the
 /// upper plate of a lap), plate B on the +x side (the lower plate).

@@ -225,6 +225,54 @@ impl PlateShape {
     fn bottom_z(&self) -> f64 {
         self.profile_xz.iter().map(|p| p[1]).fold(f64::INFINITY, f64::min)
     }
+
+    /// The cross-section with its corner at `corner_xz` rounded to an arc
+    /// of `radius_mm` tangent to both edges that meet there (a rolled
+    /// section's edge), drawn as `segments` straight pieces so the plate
+    /// stays a convex polygon. Unchanged when no corner lies there, or when
+    /// the arc would not fit on the shorter edge.
+    pub fn with_rounded_corner(&self, corner_xz: [f64; 2], radius_mm: f64, segments: usize) -> PlateShape {
+        let n = self.profile_xz.len();
+        let at = |p: [f64; 2]| (p[0] - corner_xz[0]).hypot(p[1] - corner_xz[1]) < MIN_EDGE_MM;
+        let Some(k) = self.profile_xz.iter().position(|p| at(*p)) else { return self.clone() };
+        let corner = self.profile_xz[k];
+        let toward = |q: [f64; 2]| {
+            let (dx, dz) = (q[0] - corner[0], q[1] - corner[1]);
+            let length = dx.hypot(dz);
+            ([dx / length, dz / length], length)
+        };
+        let (before, before_length) = toward(self.profile_xz[(k + n - 1) % n]);
+        let (after, after_length) = toward(self.profile_xz[(k + 1) % n]);
+        // The arc's centre lies on the bisector, where it is `radius` from
+        // both edges; it touches them `tangent` from the corner.
+        let half_angle = 0.5 * (before[0] * after[0] + before[1] * after[1]).clamp(-1.0, 1.0).acos();
+        let tangent = radius_mm / half_angle.tan();
+        if !(radius_mm > 0.0 && segments > 0 && tangent < before_length.min(after_length)) {
+            return self.clone();
+        }
+        let bisector = [before[0] + after[0], before[1] + after[1]];
+        let bisector_length = bisector[0].hypot(bisector[1]);
+        let to_centre = radius_mm / half_angle.sin() / bisector_length;
+        let centre = [corner[0] + bisector[0] * to_centre, corner[1] + bisector[1] * to_centre];
+        let from = [corner[0] + before[0] * tangent, corner[1] + before[1] * tangent];
+        let to = [corner[0] + after[0] * tangent, corner[1] + after[1] * tangent];
+        let angle = |p: [f64; 2]| (p[1] - centre[1]).atan2(p[0] - centre[0]);
+        let (start, mut sweep) = (angle(from), angle(to) - angle(from));
+        // The short way round: the arc turns through less than a half turn.
+        if sweep > std::f64::consts::PI {
+            sweep -= std::f64::consts::TAU;
+        } else if sweep < -std::f64::consts::PI {
+            sweep += std::f64::consts::TAU;
+        }
+        let arc = (0..=segments).map(|i| {
+            let a = start + sweep * i as f64 / segments as f64;
+            [centre[0] + radius_mm * a.cos(), centre[1] + radius_mm * a.sin()]
+        });
+        let mut profile_xz: Vec<[f64; 2]> = self.profile_xz[..k].to_vec();
+        profile_xz.extend(arc);
+        profile_xz.extend_from_slice(&self.profile_xz[k + 1..]);
+        PlateShape { profile_xz, y_range: self.y_range }
+    }
 }
 
 fn y_range(extent: &PlateExtent) -> [f64; 2] {
@@ -367,11 +415,22 @@ fn rectangle(x0: f64, x1: f64, z0: f64, z1: f64) -> Vec<[f64; 2]> {
 /// Builds the scene in the (first) workpiece's frame: every workpiece's
 /// plates and spacers, the faults and the table.
 pub fn build_scene(spec: &SceneSpec) -> Scene {
+    build_scene_reshaped(spec, |_, _| {})
+}
+
+/// [`build_scene`] with each workpiece's plate cross-sections (its index,
+/// then plates A and B as [`JointGeometry::plate_shapes`] gives them)
+/// changed by `reshape` before they are extruded: a family whose plates
+/// differ from the joint's in a detail (an edge rounded) keeps the rest of
+/// the scene, the spacers under the reshaped plates included.
+pub fn build_scene_reshaped(spec: &SceneSpec, reshape: impl Fn(usize, &mut [PlateShape; 2])) -> Scene {
     let table_top = -spec.spacer_height_mm;
     let mut solids: Vec<ConvexSolid> = Vec::new();
-    for workpiece in spec.workpieces() {
+    for (k, workpiece) in spec.workpieces().iter().enumerate() {
         let pose = workpiece.pose();
-        let own = workpiece_solids(&workpiece.joint, &workpiece.plate_a, &workpiece.plate_b, table_top);
+        let mut shapes = workpiece.joint.plate_shapes(&workpiece.plate_a, &workpiece.plate_b);
+        reshape(k, &mut shapes);
+        let own = workpiece_solids(&workpiece.joint, &shapes, table_top);
         solids.extend(own.iter().map(|s| s.transformed(&pose)));
     }
     solids.extend(super::faults::fault_solids(spec));
@@ -384,16 +443,10 @@ pub fn build_scene(spec: &SceneSpec) -> Scene {
 }
 
 /// One workpiece's plates and the spacers carrying them, in its own frame.
-fn workpiece_solids(
-    joint: &JointGeometry,
-    plate_a: &PlateExtent,
-    plate_b: &PlateExtent,
-    table_top: f64,
-) -> Vec<ConvexSolid> {
-    let shapes = joint.plate_shapes(plate_a, plate_b);
+fn workpiece_solids(joint: &JointGeometry, shapes: &[PlateShape; 2], table_top: f64) -> Vec<ConvexSolid> {
     let mut solids: Vec<ConvexSolid> =
         shapes.iter().filter_map(|s| ConvexSolid::extruded(SurfaceKind::Plate, &s.profile_xz, s.y_range)).collect();
-    let [a, b] = &shapes;
+    let [a, b] = shapes;
     solids.extend(spacers_under(b, b.x_range(), table_top));
     match *joint {
         JointGeometry::Lap { overlap_mm, .. } => {
@@ -501,6 +554,28 @@ mod tests {
         assert!(flange.excess(&Vec3::new(100.0, 5.0, 0.0)).abs() < 1e-12);
         assert!(web.excess(&Vec3::new(0.0, 100.0, 60.0)).abs() < 1e-12);
         assert_eq!((joint.top_z(0.0), joint.top_z(3.5), joint.seam_edge_half_width()), (60.0, 10.0, 3.0));
+    }
+
+    #[test]
+    fn a_rounded_corner_is_an_arc_tangent_to_both_edges() {
+        let flange = PlateShape { profile_xz: rectangle(-20.0, 100.0, 0.0, 10.0), y_range: [0.0, 200.0] };
+        let rounded = flange.with_rounded_corner([-20.0, 10.0], 4.0, 8);
+        // The corner gives way to 9 points: 4 + 8 in all.
+        assert_eq!(rounded.profile_xz.len(), 12);
+        for p in &rounded.profile_xz[3..12] {
+            assert!(((p[0] + 16.0).hypot(p[1] - 6.0) - 4.0).abs() < 1e-9, "{p:?}");
+        }
+        // It starts on the top (4 mm in from the edge) and ends on the edge's face (4 mm down).
+        assert!((rounded.profile_xz[3][0] + 16.0).abs() < 1e-9 && (rounded.profile_xz[3][1] - 10.0).abs() < 1e-9);
+        assert!((rounded.profile_xz[11][0] + 20.0).abs() < 1e-9 && (rounded.profile_xz[11][1] - 6.0).abs() < 1e-9);
+        let solid = ConvexSolid::extruded(SurfaceKind::Plate, &rounded.profile_xz, rounded.y_range).unwrap();
+        // The sharp corner is cut away; the arc's middle is on the surface.
+        assert!(solid.excess(&Vec3::new(-20.0, 50.0, 10.0)) > 1.0);
+        let middle = 4.0 * std::f64::consts::FRAC_1_SQRT_2;
+        assert!(solid.excess(&Vec3::new(-16.0 - middle, 50.0, 6.0 + middle)).abs() < 0.1);
+        // No such corner, or a radius that does not fit: unchanged.
+        assert_eq!(flange.with_rounded_corner([-21.0, 10.0], 4.0, 8), flange);
+        assert_eq!(flange.with_rounded_corner([-20.0, 10.0], 12.0, 8), flange);
     }
 
     #[test]

@@ -439,7 +439,7 @@ impl<'a> Context<'a> {
         weld: &PlannedWeld,
         (start, end): (f64, f64),
         base_from_camera: &Isometry3<f64>,
-        obstacles: &std::cell::OnceCell<Obstacles>,
+        obstacles: &std::cell::OnceCell<Obstacles<'a>>,
     ) -> Result<Seam, PlanError> {
         let t = &self.config.trajectory;
         let params = trajectory::TrajectoryParams {

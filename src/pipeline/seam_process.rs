@@ -124,9 +124,15 @@ pub fn orient(waypoints: &mut [Waypoint], places: &[Place], process: &SeamProces
 
 /// The frame's points, indexed for the torch with the space behind them
 /// the camera could not see: built once per frame, for every seam of it
-/// (the torch reaches 100 mm and more round a seam, most of a frame).
-pub fn obstacles_of(cloud: &PointCloud, torch: &Torch) -> Obstacles {
-    Obstacles::seen_in_frame(cloud.points(), torch)
+/// (the torch reaches 100 mm and more round a seam, most of a frame). An
+/// organized frame is read through its own pixel grid, the hidden space
+/// laid only where the torch asks; any other cloud is binned by its rays.
+pub fn obstacles_of<'a>(cloud: &'a PointCloud, torch: &Torch) -> Obstacles<'a> {
+    if cloud.is_organized() {
+        Obstacles::seen_in_organized_frame(cloud.points(), cloud.width(), torch)
+    } else {
+        Obstacles::seen_in_frame(cloud.points(), torch)
+    }
 }
 
 /// One waypoint's outcome: welded, or cut by a rule with its reason.

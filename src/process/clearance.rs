@@ -24,23 +24,68 @@
 //! ([`super::shadow`]), so a torch never passes through a block's faces
 //! the camera did not see.
 
+use std::cmp::Ordering;
+use std::sync::Arc;
+
 use nalgebra::{Rotation3, Unit, Vector3};
 
+use super::blocks::BlockIndex;
 use super::rays::RayIndex;
-use super::shadow::Shadows;
+use super::shadow::{LazyShadows, Shadows};
 use crate::config::procedure::Torch;
 
 type Vec3 = Vector3<f64>;
 
 /// The measured cloud, indexed for the torch's solid, and where it was
 /// seen from, the space behind its surfaces.
-pub struct Obstacles {
-    index: RayIndex,
+pub struct Obstacles<'a> {
+    index: Index<'a>,
     /// The cloud's angular spacing where it is a camera's view (0 for
     /// bare points): how far a seen surface may reach beyond its points
     /// grows with it ([`EDGE_SPACINGS`]).
     spacing_per_mm: f64,
-    hidden: Option<HiddenSpace>,
+    hidden: Option<HiddenSpace<'a>>,
+}
+
+/// How the cloud's points are found round a ball.
+enum Index<'a> {
+    /// Every point binned by its ray: any cloud, and the reference the
+    /// organized frame's index is tested against.
+    Rays(RayIndex),
+    /// An organized frame by blocks of its pixels: nothing binned.
+    Blocks(Arc<BlockIndex<'a>>),
+}
+
+impl Index<'_> {
+    fn near(&self, centre: &Vec3, radius: f64, visit: impl FnMut(&[f32; 3])) {
+        match self {
+            Index::Rays(index) => index.near(centre, radius, visit),
+            Index::Blocks(index) => index.near(centre, radius, visit),
+        }
+    }
+
+    fn nearest_apart(&self, p: &[f32; 3]) -> (Option<f64>, usize) {
+        match self {
+            Index::Rays(index) => index.nearest_apart(p),
+            Index::Blocks(index) => index.nearest_apart(p),
+        }
+    }
+}
+
+/// The space behind the seen surfaces, over the whole frame or laid tile
+/// by tile where the torch asks.
+enum Hidden<'a> {
+    Grid(Shadows),
+    Lazy(LazyShadows<'a>),
+}
+
+impl Hidden<'_> {
+    fn hides(&self, p: &Vec3) -> bool {
+        match self {
+            Hidden::Grid(shadows) => shadows.hides(p),
+            Hidden::Lazy(shadows) => shadows.hides(p),
+        }
+    }
 }
 
 /// How far a surface may reach beyond the points a camera saw on it, in
@@ -54,10 +99,16 @@ pub const EDGE_SPACINGS: f64 = 2.0;
 
 /// The space the camera could not see, with the torch's surface sampled
 /// to test against it.
-struct HiddenSpace {
-    shadows: Shadows,
+struct HiddenSpace<'a> {
+    shadows: Hidden<'a>,
     torch: Torch,
     surface: Vec<SurfaceSample>,
+}
+
+impl<'a> HiddenSpace<'a> {
+    fn new(shadows: Hidden<'a>, torch: &Torch) -> HiddenSpace<'a> {
+        HiddenSpace { shadows, torch: *torch, surface: surface_samples(torch, SURFACE_SAMPLE_STEP_MM) }
+    }
 }
 
 /// The points the cloud's angular spacing is estimated on, evenly spread
@@ -84,43 +135,53 @@ struct SurfaceSample {
     b: f64,
 }
 
-impl Obstacles {
+impl<'a> Obstacles<'a> {
     /// Indexes the finite points of a cloud, mm, in the frame the stations
     /// are given in; only the points are obstacles.
-    pub fn new(points: impl IntoIterator<Item = Vec3>) -> Obstacles {
+    pub fn new(points: impl IntoIterator<Item = Vec3>) -> Obstacles<'static> {
         Obstacles::of_points(&finite(points))
     }
 
-    fn of_points(points: &[[f32; 3]]) -> Obstacles {
-        Obstacles { index: RayIndex::new(points), spacing_per_mm: 0.0, hidden: None }
+    fn of_points(points: &[[f32; 3]]) -> Obstacles<'static> {
+        Obstacles { index: Index::Rays(RayIndex::new(points)), spacing_per_mm: 0.0, hidden: None }
     }
 
     /// Indexes the finite points of a camera-frame cloud (the camera at
     /// the origin, looking along `+z`), mm, for `torch`: the points are
     /// obstacles, and so is the space behind every surface the camera
     /// saw.
-    pub fn seen_from_camera(points: impl IntoIterator<Item = Vec3>, torch: &Torch) -> Obstacles {
+    pub fn seen_from_camera(points: impl IntoIterator<Item = Vec3>, torch: &Torch) -> Obstacles<'static> {
         Obstacles::seen_in_frame(&finite(points), torch)
     }
 
     /// [`Obstacles::seen_from_camera`] for a frame's points as it holds
     /// them: single precision, an empty pixel's not finite (left out).
-    pub fn seen_in_frame(points: &[[f32; 3]], torch: &Torch) -> Obstacles {
+    pub fn seen_in_frame(points: &[[f32; 3]], torch: &Torch) -> Obstacles<'static> {
         let mut obstacles = Obstacles::of_points(points);
-        let shadows =
-            obstacles.angular_spacing(points).and_then(|spacing| Shadows::new(obstacles.index.binned(), spacing));
+        let Index::Rays(index) = &obstacles.index else { unreachable!("indexed by rays") };
+        let shadows = obstacles.angular_spacing(points).and_then(|spacing| Shadows::new(index.binned(), spacing));
         obstacles.spacing_per_mm = shadows.as_ref().map_or(0.0, Shadows::spacing);
-        obstacles.hidden = shadows.map(|shadows| HiddenSpace {
-            shadows,
-            torch: *torch,
-            surface: surface_samples(torch, SURFACE_SAMPLE_STEP_MM),
-        });
+        obstacles.hidden = shadows.map(|shadows| HiddenSpace::new(Hidden::Grid(shadows), torch));
+        obstacles
+    }
+
+    /// [`Obstacles::seen_in_frame`] for an organized frame of `width`
+    /// pixels a row, indexed by its own blocks of pixels, with the hidden
+    /// space laid where the torch asks: the same answers to every
+    /// question, at the cost of the rays the torch reaches rather than
+    /// the frame's.
+    pub fn seen_in_organized_frame(points: &'a [[f32; 3]], width: usize, torch: &Torch) -> Obstacles<'a> {
+        let blocks = Arc::new(BlockIndex::new(points, width));
+        let mut obstacles = Obstacles { index: Index::Blocks(Arc::clone(&blocks)), spacing_per_mm: 0.0, hidden: None };
+        let shadows = obstacles.angular_spacing(points).and_then(|spacing| LazyShadows::new(blocks, spacing));
+        obstacles.spacing_per_mm = shadows.as_ref().map_or(0.0, LazyShadows::spacing);
+        obstacles.hidden = shadows.map(|shadows| HiddenSpace::new(Hidden::Lazy(shadows), torch));
         obstacles
     }
 
     /// The same points with nothing taken as hidden and no surface
     /// reaching past them: what the cloud itself touches.
-    pub fn seen_only(mut self) -> Obstacles {
+    pub fn seen_only(mut self) -> Obstacles<'a> {
         self.hidden = None;
         self.spacing_per_mm = 0.0;
         self
@@ -345,7 +406,15 @@ fn seen_contact(torch: &Torch, obstacles: &Obstacles, point: &Vec3, axis: &Vec3)
                 .is_some_and(|r| (d - axis * s).norm_squared() < r * r);
             if inside {
                 inside_count += 1;
-                if first.is_none_or(|(best, _)| s < best) {
+                // Nearest the aim point, and of points as near, the least
+                // by their coordinates: the same point whatever order an
+                // index reads them in.
+                let before = |(best, at): (f64, Vec3)| {
+                    s.total_cmp(&best)
+                        .then_with(|| q.iter().zip(&at).fold(Ordering::Equal, |o, (a, b)| o.then(a.total_cmp(b))))
+                        == Ordering::Less
+                };
+                if first.is_none_or(before) {
                     first = Some((s, q));
                 }
             }

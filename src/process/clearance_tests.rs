@@ -182,7 +182,7 @@ fn a_torch_behind_a_seen_surface_meets_the_hidden_space() {
 
 /// Flat plates in z = 0 and a wall `x` mm beside the seam, `height` mm
 /// high.
-fn plates_and_wall(x: f64, height: usize) -> Obstacles {
+fn plates_and_wall(x: f64, height: usize) -> Obstacles<'static> {
     let mut points = patch(Vec3::new(-50.0, -30.0, 0.0), Vec3::x(), Vec3::y(), (65, 60), 1.0);
     points.extend(patch(Vec3::new(x, -30.0, 0.0), Vec3::z(), Vec3::y(), (height, 60), 1.0));
     Obstacles::new(points)

@@ -25,6 +25,7 @@
 //! docs/PROCESS.md explains the model for a welding engineer, with the
 //! example procedure (config/procedures/gmaw-mild-steel.toml).
 
+pub mod blocks;
 pub mod clearance;
 pub mod deposit;
 pub mod layout;

@@ -266,9 +266,12 @@ impl RayIndex {
             if found < radius {
                 return (Some(found), on);
             }
-            // Every point read (the window spans the grid): what was
-            // found is all there is.
-            if self.window(&centre, radius).is_none_or(|w| w == [0, self.width - 1, 0, self.height - 1]) {
+            // Every point read: the ball holds every point indexed (a
+            // window spanning the grid is not enough, as its tiles are
+            // still passed over by their ranges), so what was found is all
+            // there is.
+            let farthest = self.tile_ranges.iter().map(|r| f64::from(r[1])).fold(0.0, f64::max);
+            if radius > centre.norm() + farthest + RANGE_SLACK_MM || !radius.is_finite() {
                 return (best.is_finite().then_some(found), on);
             }
             radius *= 2.0;

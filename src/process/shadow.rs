@@ -25,8 +25,12 @@
 //! (its neighbours see past it), and a point just beside a surface's edge
 //! is not behind it (the cells beyond the edge see farther).
 
+use std::sync::{Arc, OnceLock};
+
 use nalgebra::Vector3;
 use rayon::prelude::*;
+
+use super::blocks::BlockIndex;
 
 // Nearer the camera's plane than the index's bound, a point's ray is not
 // binned here either (it would fall beyond any view).
@@ -59,6 +63,64 @@ pub const MAX_CELLS: usize = 1 << 22;
 /// grid's allocation costs more than the points it spares another thread.
 const MIN_POINTS_PER_SHARE: usize = 1 << 16;
 
+/// The grid's cell and its corner in `(x / z, y / z)`, and its size in
+/// cells, over the rays `[lo, hi]` of a cloud whose spacing is given.
+#[derive(Debug, Clone, Copy)]
+struct Layout {
+    cell: f64,
+    origin: [f64; 2],
+    width: usize,
+    height: usize,
+}
+
+impl Layout {
+    fn over(lo: [f64; 2], hi: [f64; 2], spacing: f64) -> Option<Layout> {
+        if !(spacing > 0.0 && spacing.is_finite() && lo[0] <= hi[0] && lo[1] <= hi[1]) {
+            return None;
+        }
+        // One cell of border all round, so every seen cell has its nine.
+        let mut cell = spacing * CELL_SPACINGS;
+        let cells_for = |cell: f64| {
+            let w = ((hi[0] - lo[0]) / cell).ceil() as usize + 3;
+            let h = ((hi[1] - lo[1]) / cell).ceil() as usize + 3;
+            (w, h)
+        };
+        while cells_for(cell).0.saturating_mul(cells_for(cell).1) > MAX_CELLS {
+            cell *= 2.0;
+        }
+        let (width, height) = cells_for(cell);
+        Some(Layout { cell, origin: [lo[0] - cell, lo[1] - cell], width, height })
+    }
+
+    /// The cell `(i, j)` of the ray through `p`, if `p` is in front of the
+    /// camera and its ray on the grid.
+    fn cell_of(&self, p: &Vec3) -> Option<(usize, usize)> {
+        if p.z <= MIN_DEPTH_MM {
+            return None;
+        }
+        let (u, v) = ((p.x / p.z - self.origin[0]) / self.cell, (p.y / p.z - self.origin[1]) / self.cell);
+        (u >= 0.0 && v >= 0.0 && u < self.width as f64 && v < self.height as f64).then_some((u as usize, v as usize))
+    }
+}
+
+/// The range beyond which a point on a cell's rays is behind a seen
+/// surface, from the nearest range of the nine cells round it
+/// (`nearest(di, dj)`, `di` and `dj` from 0 to 2): infinite where too few
+/// of them saw one.
+fn hidden_beyond(nearest: impl Fn(usize, usize) -> f32) -> f32 {
+    let (mut seen, mut farthest) = (0, f32::NEG_INFINITY);
+    for dj in 0..3 {
+        for di in 0..3 {
+            let r = nearest(di, dj);
+            if r.is_finite() {
+                seen += 1;
+                farthest = farthest.max(r);
+            }
+        }
+    }
+    if seen >= MIN_SEEN_CELLS { farthest + BEHIND_TOLERANCE_MM as f32 } else { f32::INFINITY }
+}
+
 /// The space behind the surfaces a camera saw.
 #[derive(Debug, Clone)]
 pub struct Shadows {
@@ -85,25 +147,8 @@ impl Shadows {
             (z > MIN_DEPTH_MM && [x, y, z].iter().all(|c| c.is_finite()))
                 .then(|| (x / z, y / z, (x * x + y * y + z * z).sqrt()))
         };
-        if !(spacing > 0.0 && spacing.is_finite()) {
-            return None;
-        }
         let (lo, hi, _) = ray_bounds(points);
-        if !(lo[0] <= hi[0] && lo[1] <= hi[1]) {
-            return None;
-        }
-        // One cell of border all round, so every seen cell has its nine.
-        let mut cell = spacing * CELL_SPACINGS;
-        let cells_for = |cell: f64| {
-            let w = ((hi[0] - lo[0]) / cell).ceil() as usize + 3;
-            let h = ((hi[1] - lo[1]) / cell).ceil() as usize + 3;
-            (w, h)
-        };
-        while cells_for(cell).0.saturating_mul(cells_for(cell).1) > MAX_CELLS {
-            cell *= 2.0;
-        }
-        let (width, height) = cells_for(cell);
-        let origin = [lo[0] - cell, lo[1] - cell];
+        let Layout { cell, origin, width, height } = Layout::over(lo, hi, spacing)?;
         // The nearest range per cell: each thread's share of the points
         // into a grid of its own, the grids then met cell by cell (a
         // minimum, so the order does not matter).
@@ -128,19 +173,7 @@ impl Shadows {
         behind_from.par_chunks_mut(width).enumerate().filter(|(j, _)| (1..height - 1).contains(j)).for_each(
             |(j, row)| {
                 for (i, out) in row.iter_mut().enumerate().take(width - 1).skip(1) {
-                    let (mut seen, mut farthest) = (0, f32::NEG_INFINITY);
-                    for dj in 0..3 {
-                        for di in 0..3 {
-                            let r = nearest[(j + dj - 1) * width + (i + di - 1)];
-                            if r.is_finite() {
-                                seen += 1;
-                                farthest = farthest.max(r);
-                            }
-                        }
-                    }
-                    if seen >= MIN_SEEN_CELLS {
-                        *out = farthest + BEHIND_TOLERANCE_MM as f32;
-                    }
+                    *out = hidden_beyond(|di, dj| nearest[(j + dj - 1) * width + (i + di - 1)]);
                 }
             },
         );
@@ -150,15 +183,8 @@ impl Shadows {
     /// Whether `p` (camera frame, mm) lies behind a surface the camera
     /// saw.
     pub fn hides(&self, p: &Vec3) -> bool {
-        if p.z <= MIN_DEPTH_MM {
-            return false;
-        }
-        let (u, v) = ((p.x / p.z - self.origin[0]) / self.cell, (p.y / p.z - self.origin[1]) / self.cell);
-        if !(u >= 0.0 && v >= 0.0 && u < self.width as f64 && v < self.height as f64) {
-            return false;
-        }
-        let (i, j) = (u as usize, v as usize);
-        (p.norm() as f32) > self.behind_from[j * self.width + i]
+        let layout = Layout { cell: self.cell, origin: self.origin, width: self.width, height: self.height };
+        layout.cell_of(p).is_some_and(|(i, j)| (p.norm() as f32) > self.behind_from[j * self.width + i])
     }
 
     /// The grid's cell, in `(x / z, y / z)`.
@@ -168,6 +194,111 @@ impl Shadows {
 
     /// The cloud's median angular spacing, in `(x / z, y / z)`: times a
     /// range, about the spacing of its points there, mm.
+    pub fn spacing(&self) -> f64 {
+        self.spacing
+    }
+}
+
+/// The cells a tile of the hidden space's grid has a side of, where it is
+/// laid tile by tile as the torch asks: a few torches' width of rays at
+/// the working distance, so a torch reads few tiles and a tile few blocks.
+pub const TILE_CELLS: usize = 16;
+
+/// [`Shadows`] of an organized frame, laid over the same grid (the frame's
+/// own least ray, the same cells) but computed a tile at a time, the first
+/// time a point on the tile's rays is asked about: the torch reads the
+/// rays round the seam, not the frame. The tiles are read from the
+/// frame's blocks of pixels ([`BlockIndex`]), so nothing passes over the
+/// whole frame but the blocks' own bounds.
+pub struct LazyShadows<'a> {
+    blocks: Arc<BlockIndex<'a>>,
+    spacing: f64,
+    layout: Layout,
+    tiles_wide: usize,
+    /// Per tile, its cells' ranges beyond which a point is hidden, row
+    /// after row, once computed.
+    tiles: Vec<OnceLock<Vec<f32>>>,
+    /// Whether the blocks' coarse cells are wide enough to rule a point
+    /// out by its range alone ([`BlockIndex::least_range_near`]).
+    prunes: bool,
+}
+
+impl<'a> LazyShadows<'a> {
+    /// The shadows of the frame `blocks` index, whose median angular
+    /// spacing is `spacing`; `None` where [`Shadows::new`] gives none.
+    pub fn new(blocks: Arc<BlockIndex<'a>>, spacing: f64) -> Option<LazyShadows<'a>> {
+        let (lo, hi, _) = blocks.ray_bounds();
+        let layout = Layout::over(lo, hi, spacing)?;
+        let tiles_wide = layout.width.div_ceil(TILE_CELLS);
+        let tiles = (0..tiles_wide * layout.height.div_ceil(TILE_CELLS)).map(|_| OnceLock::new()).collect();
+        let prunes = 2.0 * layout.cell <= blocks.coarse_cell() / 2.0;
+        Some(LazyShadows { blocks, spacing, layout, tiles_wide, tiles, prunes })
+    }
+
+    /// Whether `p` (camera frame, mm) lies behind a surface the camera
+    /// saw: what [`Shadows::hides`] answers for the same frame.
+    pub fn hides(&self, p: &Vec3) -> bool {
+        let Some((i, j)) = self.layout.cell_of(p) else { return false };
+        // Nearer than every point round its ray, by more than the rounding
+        // of a range, a point is in front of whatever the nine cells saw:
+        // most of a torch in the air is answered so, with no tile laid.
+        // (The nine cells reach two cells from the point's ray, within
+        // half a coarse cell of the blocks where `prunes` holds.)
+        if self.prunes && p.norm() <= self.blocks.least_range_near(p.x / p.z, p.y / p.z) + BEHIND_TOLERANCE_MM / 2.0 {
+            return false;
+        }
+        let (ti, tj) = (i / TILE_CELLS, j / TILE_CELLS);
+        let tile = self.tiles[tj * self.tiles_wide + ti].get_or_init(|| self.tile(ti, tj));
+        let (i0, width) = (ti * TILE_CELLS, (((ti + 1) * TILE_CELLS).min(self.layout.width)) - ti * TILE_CELLS);
+        (p.norm() as f32) > tile[(j - tj * TILE_CELLS) * width + (i - i0)]
+    }
+
+    /// One tile's cells: the nearest range of every cell round them, read
+    /// off the blocks whose rays meet those cells, and the rule of
+    /// [`Shadows::new`] applied to each.
+    fn tile(&self, ti: usize, tj: usize) -> Vec<f32> {
+        let Layout { cell, origin, width, height } = self.layout;
+        let (i0, i1) = (ti * TILE_CELLS, ((ti + 1) * TILE_CELLS).min(width) - 1);
+        let (j0, j1) = (tj * TILE_CELLS, ((tj + 1) * TILE_CELLS).min(height) - 1);
+        // The cells round the tile, one more each way where the grid has
+        // them.
+        let (ni0, ni1, nj0, nj1) =
+            (i0.saturating_sub(1), (i1 + 1).min(width - 1), j0.saturating_sub(1), (j1 + 1).min(height - 1));
+        let nw = ni1 - ni0 + 1;
+        let mut nearest = vec![f32::INFINITY; nw * (nj1 - nj0 + 1)];
+        // The rays of those cells, one cell wider each way against
+        // rounding: every point that falls in them is read.
+        let rect = [
+            origin[0] + (ni0 as f64 - 1.0) * cell,
+            origin[0] + (ni1 as f64 + 2.0) * cell,
+            origin[1] + (nj0 as f64 - 1.0) * cell,
+            origin[1] + (nj1 as f64 + 2.0) * cell,
+        ];
+        self.blocks.blocks_meeting(&rect, f64::NEG_INFINITY, f64::INFINITY, |b| {
+            self.blocks.block_points(b, |p| {
+                let [x, y, z] = p.map(f64::from);
+                let (i, j) = (((x / z - origin[0]) / cell) as usize, ((y / z - origin[1]) / cell) as usize);
+                if (ni0..=ni1).contains(&i) && (nj0..=nj1).contains(&j) {
+                    let c = &mut nearest[(j - nj0) * nw + (i - ni0)];
+                    *c = c.min((x * x + y * y + z * z).sqrt() as f32);
+                }
+            });
+        });
+        let mut out = Vec::with_capacity((i1 - i0 + 1) * (j1 - j0 + 1));
+        for j in j0..=j1 {
+            for i in i0..=i1 {
+                let inner = (1..width - 1).contains(&i) && (1..height - 1).contains(&j);
+                out.push(if inner {
+                    hidden_beyond(|di, dj| nearest[(j + dj - 1 - nj0) * nw + (i + di - 1 - ni0)])
+                } else {
+                    f32::INFINITY
+                });
+            }
+        }
+        out
+    }
+
+    /// The cloud's median angular spacing, in `(x / z, y / z)`.
     pub fn spacing(&self) -> f64 {
         self.spacing
     }

@@ -2,6 +2,8 @@
 //! grid against a scan of every point, and the cloud's faults that must
 //! cast no shadow.
 
+use std::sync::Arc;
+
 use super::*;
 
 /// The renders' rays, one every [`STEP`] in `(x / z, y / z)`.
@@ -161,4 +163,58 @@ fn a_wide_frame_at_a_fine_spacing_gets_coarser_cells_within_the_bound() {
     assert!(shadows.width * shadows.height <= MAX_CELLS, "{} x {}", shadows.width, shadows.height);
     assert!(shadows_of(&points, 0.0).is_none(), "no spacing, no grid");
     assert!(shadows_of(&[Vec3::new(0.0, 0.0, -5.0)], STEP).is_none(), "nothing in front of the camera");
+}
+
+/// The hidden space laid tile by tile over an organized frame answers as
+/// the grid over the whole frame does, point for point.
+fn lazy_agrees_with_the_grid(points: &[Vec3], width: usize, spacing: f64, queries: &[Vec3]) -> usize {
+    let stored: Vec<[f32; 3]> = points.iter().map(|p| [p.x as f32, p.y as f32, p.z as f32]).collect();
+    let grid = Shadows::new(&stored, spacing).expect("points");
+    let blocks = Arc::new(BlockIndex::new(&stored, width));
+    let lazy = LazyShadows::new(blocks, spacing).expect("points");
+    let mut hidden = 0;
+    for p in queries {
+        assert_eq!(lazy.hides(p), grid.hides(p), "{p:?}");
+        hidden += usize::from(grid.hides(p));
+    }
+    hidden
+}
+
+#[test]
+fn the_tiles_hide_what_the_whole_grid_hides() {
+    let block = Block { min: Vec3::new(20.0, -20.0, 220.0), max: Vec3::new(60.0, 20.0, 300.0) };
+    let half = 0.3;
+    let points = render(300.0, &block, half, STEP);
+    let width = 2 * (half / STEP).round() as usize + 1;
+    let mut queries = Vec::new();
+    for x in (-100..=110).step_by(3) {
+        for z in (150..=330).step_by(4) {
+            for y in [-25.0, -3.0, 19.5, 70.0] {
+                queries.push(Vec3::new(x as f64, y, z as f64));
+            }
+        }
+    }
+    let hidden = lazy_agrees_with_the_grid(&points, width, STEP, &queries);
+    assert!(hidden > queries.len() / 10 && hidden < queries.len() * 9 / 10, "{hidden} of {}", queries.len());
+}
+
+proptest::proptest! {
+    #![proptest_config(proptest::prelude::ProptestConfig::with_cases(24))]
+
+    /// Random blocks on a table, random spacings of the grid against the
+    /// render's, random points asked.
+    #[test]
+    fn random_scenes_hide_the_same_tile_by_tile(
+        (x0, y0, z0) in (-80f64..40.0, -60f64..20.0, 150f64..280.0),
+        (dx, dy, dz) in (5f64..60.0, 5f64..60.0, 5f64..80.0),
+        spacing_factor in 0.5f64..4.0,
+        queries in proptest::collection::vec((-120f64..120.0, -120f64..120.0, 100f64..360.0), 50..200),
+    ) {
+        let block = Block { min: Vec3::new(x0, y0, z0), max: Vec3::new(x0 + dx, y0 + dy, (z0 + dz).min(299.0)) };
+        let (half, step) = (0.25, 2.0 * STEP);
+        let points = render(300.0, &block, half, step);
+        let width = 2 * (half / step).round() as usize + 1;
+        let queries: Vec<Vec3> = queries.into_iter().map(|(x, y, z)| Vec3::new(x, y, z)).collect();
+        lazy_agrees_with_the_grid(&points, width, step * spacing_factor, &queries);
+    }
 }

@@ -1,0 +1,473 @@
+//! An organized frame indexed for the torch by its own pixel grid: the
+//! frame cut into square blocks of pixels, each bounded once by the rays
+//! `(x / z, y / z)` and the ranges of its points, and a coarse grid over
+//! ray space listing the blocks whose rays meet each of its cells.
+//!
+//! Why not [`super::rays::RayIndex`] on such a frame: binning every point
+//! by its ray is a counting sort of the whole frame (a count, a placement
+//! of 2.3 M points, and the ranges of every tile), while the torch reads
+//! only the rays round the seam. A camera's pixel grid already keeps
+//! neighbouring rays together, so a block of pixels covers a small patch
+//! of rays and bounding it is one read of its points, with nothing moved.
+//! The bounds are measured, not taken from the camera's model, so a ball
+//! finds every point within it whatever the frame's calibration: a point
+//! within the ball has its ray in the ball's window of rays, its block's
+//! bounds hold that ray, and the coarse cells the window meets list the
+//! block.
+//!
+//! The same pass gives the frame's least and greatest ray, which the
+//! hidden space's grid is laid from ([`super::shadow::LazyShadows`]), and
+//! that grid reads the blocks the same way, tile by tile, where the torch
+//! asks.
+
+use rayon::prelude::*;
+
+use nalgebra::Vector3;
+
+use super::rays::MIN_BINNED_DEPTH_MM;
+
+type Vec3 = Vector3<f64>;
+
+/// A block's side, pixels: a few of the cloud's spacings, so a torch's
+/// ball (millimetres to centimetres across) reads few blocks beyond it,
+/// while the blocks stay few enough to list (a 2.3 MP frame has about
+/// nine thousand).
+pub const BLOCK_PX: usize = 16;
+
+/// How far a window of rays is widened against rounding, in `(x / z,
+/// y / z)`, relative and absolute: far below a pixel's angle, far above
+/// the double-precision error of a ray's direction.
+const RAY_SLACK_RELATIVE: f64 = 1e-9;
+const RAY_SLACK: f64 = 1e-12;
+
+/// How far the range bounds are widened, mm, against rounding (as the
+/// index by rays widens its own).
+const RANGE_SLACK_MM: f64 = 1e-3;
+
+/// A rectangle of rays, `[u0, u1, v0, v1]` in `(x / z, y / z)`.
+pub type RayRect = [f64; 4];
+
+/// An organized frame's points by blocks of pixels.
+pub struct BlockIndex<'a> {
+    points: &'a [[f32; 3]],
+    width: usize,
+    blocks_wide: usize,
+    /// Per block, the rectangle of its points' rays (empty, `u0 > u1`,
+    /// when it holds none deeper than [`MIN_BINNED_DEPTH_MM`]) and the
+    /// nearest and farthest range of those points, mm.
+    rays: Vec<RayRect>,
+    ranges: Vec<[f64; 2]>,
+    /// The finite points too near the camera's plane to have a ray: read
+    /// by every query.
+    aside: Vec<[f32; 3]>,
+    /// The least and greatest ray of all the frame's points, and how many
+    /// points have one.
+    lo: [f64; 2],
+    hi: [f64; 2],
+    binned: usize,
+    /// The coarse grid over `[lo, hi]`: its cell's width, its size, and
+    /// per cell the blocks whose rays meet it (offsets into `members`).
+    cell: f64,
+    grid_wide: usize,
+    grid_high: usize,
+    starts: Vec<u32>,
+    members: Vec<u32>,
+    /// Per block, the first coarse cell it is listed in, `[i, j]`: a
+    /// block listed in several of the cells a query reads is read once,
+    /// in the first of them.
+    first_cell: Vec<[u32; 2]>,
+    /// Per coarse cell, the least range a block listed in it or in one of
+    /// the eight round it may hold, mm (infinite where none).
+    nearest_round: Vec<f64>,
+}
+
+/// The box of one block's points that have a ray (finite, deeper than
+/// [`MIN_BINNED_DEPTH_MM`]), `[x0, y0, z0, x1, y1, z1]`, and how many
+/// they are.
+#[derive(Clone, Copy)]
+struct BlockBox {
+    min: [f32; 3],
+    max: [f32; 3],
+    binned: usize,
+}
+
+const EMPTY_BOX: BlockBox = BlockBox { min: [f32::INFINITY; 3], max: [f32::NEG_INFINITY; 3], binned: 0 };
+
+impl BlockBox {
+    /// Grows the box by the points of one row of the block: a plain
+    /// minimum and maximum per coordinate, no division, so the compiler
+    /// keeps it in vector registers.
+    fn add(&mut self, pixels: &[[f32; 3]]) {
+        let (mut min, mut max, mut n) = (self.min, self.max, 0);
+        for p in pixels {
+            let has_ray = p[2] > MIN_BINNED_DEPTH_MM as f32 && p.iter().all(|c| c.is_finite());
+            for k in 0..3 {
+                min[k] = if has_ray { min[k].min(p[k]) } else { min[k] };
+                max[k] = if has_ray { max[k].max(p[k]) } else { max[k] };
+            }
+            n += usize::from(has_ray);
+        }
+        (self.min, self.max, self.binned) = (min, max, self.binned + n);
+    }
+
+    /// The rays the box's points may lie on: for `z > 0`, `x / z` is least
+    /// at the least `x` over the nearest or the farthest `z`, and so on
+    /// (each division rounded as the points' own are, so the bound holds
+    /// them exactly); empty for an empty box.
+    fn rays(&self) -> RayRect {
+        if self.binned == 0 {
+            return EMPTY_RECT;
+        }
+        let [x0, y0, z0] = self.min.map(f64::from);
+        let [x1, y1, z1] = self.max.map(f64::from);
+        [(x0 / z0).min(x0 / z1), (x1 / z0).max(x1 / z1), (y0 / z0).min(y0 / z1), (y1 / z0).max(y1 / z1)]
+    }
+
+    /// The nearest and farthest range the box's points may have, mm.
+    fn ranges(&self) -> [f64; 2] {
+        if self.binned == 0 {
+            return [f64::INFINITY, f64::NEG_INFINITY];
+        }
+        let (mut near, mut far) = (0.0, 0.0);
+        for k in 0..3 {
+            let (a, b) = (f64::from(self.min[k]), f64::from(self.max[k]));
+            let nearest = if a > 0.0 {
+                a
+            } else if b < 0.0 {
+                -b
+            } else {
+                0.0
+            };
+            near += nearest * nearest;
+            far += a.abs().max(b.abs()).powi(2);
+        }
+        [near.sqrt(), far.sqrt()]
+    }
+}
+
+const EMPTY_RECT: RayRect = [f64::INFINITY, f64::NEG_INFINITY, f64::INFINITY, f64::NEG_INFINITY];
+
+fn ray_of(p: &[f32; 3]) -> Option<(f64, f64)> {
+    let [x, y, z] = p.map(f64::from);
+    (z > MIN_BINNED_DEPTH_MM && p.iter().all(|c| c.is_finite())).then(|| (x / z, y / z))
+}
+
+fn meets(a: &RayRect, b: &RayRect) -> bool {
+    a[0] <= b[1] && b[0] <= a[1] && a[2] <= b[3] && b[2] <= a[3]
+}
+
+impl<'a> BlockIndex<'a> {
+    /// Indexes an organized frame of `width` pixels a row (its points,
+    /// camera frame, mm, row after row; an empty pixel's not finite).
+    pub fn new(points: &'a [[f32; 3]], width: usize) -> BlockIndex<'a> {
+        let width = width.max(1);
+        let height = points.len().div_ceil(width);
+        let blocks_wide = width.div_ceil(BLOCK_PX);
+        let blocks_high = height.div_ceil(BLOCK_PX);
+        // One read of every point, a row of blocks to a task.
+        let rows: Vec<(Vec<BlockBox>, Vec<[f32; 3]>)> = (0..blocks_high)
+            .into_par_iter()
+            .map(|bj| {
+                let mut row = vec![EMPTY_BOX; blocks_wide];
+                let mut aside = Vec::new();
+                for j in bj * BLOCK_PX..((bj + 1) * BLOCK_PX).min(height) {
+                    let line = &points[j * width..((j + 1) * width).min(points.len())];
+                    for (b, pixels) in row.iter_mut().zip(line.chunks(BLOCK_PX)) {
+                        b.add(pixels);
+                    }
+                    let too_near =
+                        |p: &&[f32; 3]| p[2] <= MIN_BINNED_DEPTH_MM as f32 && p.iter().all(|c| c.is_finite());
+                    aside.extend(line.iter().filter(too_near));
+                }
+                (row, aside)
+            })
+            .collect();
+        let mut boxes = Vec::with_capacity(blocks_wide * blocks_high);
+        let mut aside = Vec::new();
+        for (row, row_aside) in rows {
+            boxes.extend(row);
+            aside.extend(row_aside);
+        }
+        let rays: Vec<RayRect> = boxes.iter().map(BlockBox::rays).collect();
+        let ranges: Vec<[f64; 2]> = boxes.iter().map(BlockBox::ranges).collect();
+        let binned = boxes.iter().map(|b| b.binned).sum();
+        let mut index = BlockIndex {
+            points,
+            width,
+            blocks_wide,
+            rays,
+            ranges,
+            aside,
+            lo: [f64::INFINITY; 2],
+            hi: [f64::NEG_INFINITY; 2],
+            binned,
+            cell: 1.0,
+            grid_wide: 1,
+            grid_high: 1,
+            starts: Vec::new(),
+            members: Vec::new(),
+            first_cell: Vec::new(),
+            nearest_round: Vec::new(),
+        };
+        (index.lo, index.hi) = index.exact_ray_bounds();
+        index.list_blocks();
+        index
+    }
+
+    /// The frame's least and greatest ray, each exactly as the points'
+    /// own divisions give it: the blocks whose bounds may hold it are read
+    /// point by point, the most promising first, until no other block's
+    /// bound can beat the best found (a few columns or rows of blocks at
+    /// the frame's edges).
+    fn exact_ray_bounds(&self) -> ([f64; 2], [f64; 2]) {
+        // (the block bound's side of the ray, whether it is an upper end,
+        // the ray's coordinate)
+        let extreme = |bound: usize, upper: bool, coordinate: usize| -> f64 {
+            let sign = if upper { -1.0 } else { 1.0 };
+            let mut order: Vec<(f64, usize)> = (0..self.rays.len())
+                .filter(|&b| self.rays[b][0] <= self.rays[b][1])
+                .map(|b| (sign * self.rays[b][bound], b))
+                .collect();
+            order.sort_by(|a, b| a.0.total_cmp(&b.0));
+            let mut best = f64::INFINITY;
+            for (key, b) in order {
+                if key > best {
+                    break;
+                }
+                self.block_points(b, |p| {
+                    let (u, v) = ray_of(p).expect("a block's points read have a ray");
+                    best = best.min(sign * if coordinate == 0 { u } else { v });
+                });
+            }
+            sign * best
+        };
+        if self.binned == 0 {
+            return ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+        }
+        ([extreme(0, false, 0), extreme(2, false, 1)], [extreme(1, true, 0), extreme(3, true, 1)])
+    }
+
+    /// Lays the coarse grid over the frame's rays, a cell about a block's
+    /// width of rays, and lists each block in the cells its rays meet.
+    fn list_blocks(&mut self) {
+        let filled = self.rays.iter().filter(|r| r[0] <= r[1]).count();
+        let extent = [self.hi[0] - self.lo[0], self.hi[1] - self.lo[1]];
+        let mut cell = (extent[0] * extent[1] / filled.max(1) as f64).sqrt();
+        if !(cell > 0.0 && cell.is_finite()) {
+            cell = (extent[0].max(extent[1]) / filled.max(1) as f64).max(1e-9);
+        }
+        let (wide, high) = if filled > 0 {
+            ((extent[0] / cell).floor() as usize + 1, (extent[1] / cell).floor() as usize + 1)
+        } else {
+            (1, 1)
+        };
+        // As many cells as blocks at most: a frame's blocks spread far
+        // apart in rays (a cloud with a few wild points) widen the cells.
+        let (mut wide, mut high, mut cell) = (wide, high, cell);
+        while wide.saturating_mul(high) > 4 * self.rays.len().max(1) {
+            cell *= 2.0;
+            wide = (extent[0] / cell).floor() as usize + 1;
+            high = (extent[1] / cell).floor() as usize + 1;
+        }
+        (self.cell, self.grid_wide, self.grid_high) = (cell, wide, high);
+        let cells_of = |r: &RayRect| -> [usize; 4] { self.cells_of(r) };
+        let mut counts = vec![0u32; wide * high + 1];
+        let mut first_cell = vec![[u32::MAX; 2]; self.rays.len()];
+        for (b, r) in self.rays.iter().enumerate() {
+            if r[0] > r[1] {
+                continue;
+            }
+            let [i0, i1, j0, j1] = cells_of(r);
+            first_cell[b] = [i0 as u32, j0 as u32];
+            for j in j0..=j1 {
+                for i in i0..=i1 {
+                    counts[j * wide + i + 1] += 1;
+                }
+            }
+        }
+        for c in 0..wide * high {
+            counts[c + 1] += counts[c];
+        }
+        let mut next = counts.clone();
+        let mut members = vec![0u32; counts[wide * high] as usize];
+        for (b, r) in self.rays.iter().enumerate() {
+            if r[0] > r[1] {
+                continue;
+            }
+            let [i0, i1, j0, j1] = cells_of(r);
+            for j in j0..=j1 {
+                for i in i0..=i1 {
+                    let slot = &mut next[j * wide + i];
+                    members[*slot as usize] = b as u32;
+                    *slot += 1;
+                }
+            }
+        }
+        let least: Vec<f64> = (0..wide * high)
+            .map(|c| {
+                let listed = &members[counts[c] as usize..counts[c + 1] as usize];
+                listed.iter().map(|&b| self.ranges[b as usize][0]).fold(f64::INFINITY, f64::min)
+            })
+            .collect();
+        self.nearest_round = (0..wide * high)
+            .map(|c| {
+                let (i, j) = (c % wide, c / wide);
+                let mut nearest = f64::INFINITY;
+                for jj in j.saturating_sub(1)..=(j + 1).min(high - 1) {
+                    for ii in i.saturating_sub(1)..=(i + 1).min(wide - 1) {
+                        nearest = nearest.min(least[jj * wide + ii]);
+                    }
+                }
+                nearest
+            })
+            .collect();
+        (self.starts, self.members, self.first_cell) = (counts, members, first_cell);
+    }
+
+    /// The coarse grid's cell, in `(x / z, y / z)`.
+    pub fn coarse_cell(&self) -> f64 {
+        self.cell
+    }
+
+    /// A range no point whose ray lies within half a coarse cell
+    /// ([`BlockIndex::coarse_cell`]) of `(u, v)` is nearer than, mm
+    /// (infinite where no such point is): such a point's block is listed
+    /// in the cell `(u, v)` falls in or one next to it.
+    pub fn least_range_near(&self, u: f64, v: f64) -> f64 {
+        if self.binned == 0 {
+            return f64::INFINITY;
+        }
+        let [i, _, j, _] = self.cells_of(&[u, u, v, v]);
+        self.nearest_round[j * self.grid_wide + i]
+    }
+
+    /// The coarse cells `[i0, i1, j0, j1]` a rectangle of rays meets,
+    /// clipped to the grid.
+    fn cells_of(&self, r: &RayRect) -> [usize; 4] {
+        let index = |t: f64, origin: f64, cells: usize| -> usize {
+            let k = ((t - origin) / self.cell).floor();
+            if k <= 0.0 { 0 } else { (k as usize).min(cells - 1) }
+        };
+        [
+            index(r[0], self.lo[0], self.grid_wide),
+            index(r[1], self.lo[0], self.grid_wide),
+            index(r[2], self.lo[1], self.grid_high),
+            index(r[3], self.lo[1], self.grid_high),
+        ]
+    }
+
+    /// The least and greatest ray `(x / z, y / z)` over the frame's points
+    /// that have one, and how many they are: what
+    /// [`super::rays::ray_bounds`] gives for the same points.
+    pub fn ray_bounds(&self) -> ([f64; 2], [f64; 2], usize) {
+        (self.lo, self.hi, self.binned)
+    }
+
+    /// Visits every block whose rays meet `rect` and whose ranges meet
+    /// `[near, far]`, once each.
+    pub fn blocks_meeting(&self, rect: &RayRect, near: f64, far: f64, mut visit: impl FnMut(usize)) {
+        if self.binned == 0 || !meets(rect, &[self.lo[0], self.hi[0], self.lo[1], self.hi[1]]) {
+            return;
+        }
+        let [i0, i1, j0, j1] = self.cells_of(rect);
+        for j in j0..=j1 {
+            for i in i0..=i1 {
+                let c = j * self.grid_wide + i;
+                for &b in &self.members[self.starts[c] as usize..self.starts[c + 1] as usize] {
+                    let b = b as usize;
+                    let [fi, fj] = self.first_cell[b].map(|k| k as usize);
+                    // Read in the first cell of the query's it is listed in.
+                    if (i, j) != (fi.max(i0), fj.max(j0)) {
+                        continue;
+                    }
+                    let [r0, r1] = self.ranges[b];
+                    if meets(&self.rays[b], rect) && r1 >= near && r0 <= far {
+                        visit(b);
+                    }
+                }
+            }
+        }
+    }
+
+    /// Visits the points of block `b` that have a ray, row by row.
+    pub fn block_points(&self, b: usize, mut visit: impl FnMut(&[f32; 3])) {
+        let (bi, bj) = (b % self.blocks_wide, b / self.blocks_wide);
+        let first_row = bj * BLOCK_PX;
+        for j in first_row..first_row + BLOCK_PX {
+            let row = j * self.width;
+            if row >= self.points.len() {
+                break;
+            }
+            // The last row of a frame not a whole number of rows is short.
+            let from = (row + bi * BLOCK_PX).min(self.points.len());
+            let to = (row + ((bi + 1) * BLOCK_PX).min(self.width)).clamp(from, self.points.len());
+            for p in &self.points[from..to] {
+                if ray_of(p).is_some() {
+                    visit(p);
+                }
+            }
+        }
+    }
+
+    /// The rays `[u0, u1, v0, v1]` a point within `radius` of `centre` may
+    /// lie on, or `None` when every ray may (a ball reaching the camera's
+    /// plane); the bound of [`super::rays`], widened against rounding.
+    fn window(centre: &Vec3, radius: f64) -> Option<RayRect> {
+        let depth = centre.z - radius;
+        if depth <= MIN_BINNED_DEPTH_MM {
+            return None;
+        }
+        let (u, v) = (centre.x / centre.z, centre.y / centre.z);
+        let reach = radius / depth;
+        let (hu, hv) = (reach * (1.0 + u * u).sqrt(), reach * (1.0 + v * v).sqrt());
+        let (hu, hv) = (hu * (1.0 + RAY_SLACK_RELATIVE) + RAY_SLACK, hv * (1.0 + RAY_SLACK_RELATIVE) + RAY_SLACK);
+        Some([u - hu, u + hu, v - hv, v + hv])
+    }
+
+    /// Visits every point within `radius` of `centre` (strictly inside the
+    /// squared distance, as [`super::rays::RayIndex::near`] promises), and
+    /// possibly some beyond it; the caller tests each.
+    pub fn near(&self, centre: &Vec3, radius: f64, mut visit: impl FnMut(&[f32; 3])) {
+        self.aside.iter().for_each(&mut visit);
+        let everything = [f64::NEG_INFINITY, f64::INFINITY, f64::NEG_INFINITY, f64::INFINITY];
+        let rect = Self::window(centre, radius).unwrap_or(everything);
+        let distance = centre.norm();
+        let (near, far) = (distance - radius - RANGE_SLACK_MM, distance + radius + RANGE_SLACK_MM);
+        self.blocks_meeting(&rect, near, far, |b| self.block_points(b, &mut visit));
+    }
+
+    /// The distance from `p` to the nearest indexed point apart from it,
+    /// and how many lie exactly on it: what
+    /// [`super::rays::RayIndex::nearest_apart`] gives for the same points.
+    pub fn nearest_apart(&self, p: &[f32; 3]) -> (Option<f64>, usize) {
+        let centre = Vec3::new(p[0].into(), p[1].into(), p[2].into());
+        // About two pixels' rays at the point's depth to begin with.
+        let per_pixel = self.cell / BLOCK_PX as f64;
+        let mut radius = (2.0 * per_pixel * centre.z.abs().max(MIN_BINNED_DEPTH_MM)).max(1e-6);
+        loop {
+            let (mut best, mut on) = (f32::INFINITY, 0);
+            self.near(&centre, radius, |q| {
+                let d = (q[0] - p[0]).powi(2) + (q[1] - p[1]).powi(2) + (q[2] - p[2]).powi(2);
+                if d == 0.0 {
+                    on += 1;
+                } else {
+                    best = best.min(d);
+                }
+            });
+            let found = f64::from(best).sqrt();
+            if found < radius {
+                return (Some(found), on);
+            }
+            // Every point read: the ball holds every point of the frame.
+            let farthest = self.ranges.iter().map(|r| r[1]).fold(0.0, f64::max);
+            if radius > centre.norm() + farthest + RANGE_SLACK_MM || !radius.is_finite() {
+                return (best.is_finite().then_some(found), on);
+            }
+            radius *= 2.0;
+        }
+    }
+}
+
+#[cfg(test)]
+#[path = "blocks_tests.rs"]
+mod tests;

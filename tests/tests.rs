@@ -7,6 +7,7 @@ mod cli;
 mod consumer_camera;
 mod corners;
 mod daemon;
+mod eval_suites;
 mod faults;
 mod fuzz;
 mod golden;

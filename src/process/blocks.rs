@@ -24,7 +24,7 @@ use rayon::prelude::*;
 
 use nalgebra::Vector3;
 
-use super::rays::MIN_BINNED_DEPTH_MM;
+use super::rays::{MIN_BINNED_DEPTH_MM, nearest_apart_by_balls};
 
 type Vec3 = Vector3<f64>;
 
@@ -440,31 +440,11 @@ impl<'a> BlockIndex<'a> {
     /// and how many lie exactly on it: what
     /// [`super::rays::RayIndex::nearest_apart`] gives for the same points.
     pub fn nearest_apart(&self, p: &[f32; 3]) -> (Option<f64>, usize) {
-        let centre = Vec3::new(p[0].into(), p[1].into(), p[2].into());
         // About two pixels' rays at the point's depth to begin with.
         let per_pixel = self.cell / BLOCK_PX as f64;
-        let mut radius = (2.0 * per_pixel * centre.z.abs().max(MIN_BINNED_DEPTH_MM)).max(1e-6);
-        loop {
-            let (mut best, mut on) = (f32::INFINITY, 0);
-            self.near(&centre, radius, |q| {
-                let d = (q[0] - p[0]).powi(2) + (q[1] - p[1]).powi(2) + (q[2] - p[2]).powi(2);
-                if d == 0.0 {
-                    on += 1;
-                } else {
-                    best = best.min(d);
-                }
-            });
-            let found = f64::from(best).sqrt();
-            if found < radius {
-                return (Some(found), on);
-            }
-            // Every point read: the ball holds every point of the frame.
-            let farthest = self.ranges.iter().map(|r| r[1]).fold(0.0, f64::max);
-            if radius > centre.norm() + farthest + RANGE_SLACK_MM || !radius.is_finite() {
-                return (best.is_finite().then_some(found), on);
-            }
-            radius *= 2.0;
-        }
+        let radius = (2.0 * per_pixel * f64::from(p[2]).abs().max(MIN_BINNED_DEPTH_MM)).max(1e-6);
+        let farthest_mm = self.ranges.iter().map(|r| r[1]).fold(0.0, f64::max);
+        nearest_apart_by_balls(p, radius, farthest_mm, |centre, radius, visit| self.near(centre, radius, visit))
     }
 }
 

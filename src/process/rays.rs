@@ -249,33 +249,47 @@ impl RayIndex {
     /// as a k-d tree of `f32` measures them); `None` for the distance
     /// when every point lies on `p`.
     pub fn nearest_apart(&self, p: &[f32; 3]) -> (Option<f64>, usize) {
-        let centre = Vec3::new(p[0].into(), p[1].into(), p[2].into());
-        let mut radius = self.cell * centre.z.abs().max(MIN_BINNED_DEPTH_MM);
-        loop {
-            let (mut best, mut on) = (f32::INFINITY, 0);
-            self.near(&centre, radius, |q| {
-                let d = (q[0] - p[0]).powi(2) + (q[1] - p[1]).powi(2) + (q[2] - p[2]).powi(2);
-                if d == 0.0 {
-                    on += 1;
-                } else {
-                    best = best.min(d);
-                }
-            });
-            let found = f64::from(best).sqrt();
-            // Found within the ball asked: nothing outside it is nearer.
-            if found < radius {
-                return (Some(found), on);
+        let radius = self.cell * f64::from(p[2]).abs().max(MIN_BINNED_DEPTH_MM);
+        let farthest_mm = self.tile_ranges.iter().map(|r| f64::from(r[1])).fold(0.0, f64::max);
+        nearest_apart_by_balls(p, radius, farthest_mm, |centre, radius, visit| self.near(centre, radius, visit))
+    }
+}
+
+/// The distance from `p` to the nearest point apart from it and how many
+/// points lie exactly on it (squared distances in single precision, as a
+/// k-d tree of `f32` measures them; `None` for the distance when every
+/// point lies on `p`), read by balls round `p` that `near` visits,
+/// doubling from `radius` until one holds a point apart or every point
+/// indexed, the farthest `farthest_mm` from the camera.
+pub(super) fn nearest_apart_by_balls(
+    p: &[f32; 3],
+    mut radius: f64,
+    farthest_mm: f64,
+    near: impl Fn(&Vec3, f64, &mut dyn FnMut(&[f32; 3])),
+) -> (Option<f64>, usize) {
+    let centre = Vec3::new(p[0].into(), p[1].into(), p[2].into());
+    loop {
+        let (mut best, mut on) = (f32::INFINITY, 0);
+        near(&centre, radius, &mut |q: &[f32; 3]| {
+            let d = (q[0] - p[0]).powi(2) + (q[1] - p[1]).powi(2) + (q[2] - p[2]).powi(2);
+            if d == 0.0 {
+                on += 1;
+            } else {
+                best = best.min(d);
             }
-            // Every point read: the ball holds every point indexed (a
-            // window spanning the grid is not enough, as its tiles are
-            // still passed over by their ranges), so what was found is all
-            // there is.
-            let farthest = self.tile_ranges.iter().map(|r| f64::from(r[1])).fold(0.0, f64::max);
-            if radius > centre.norm() + farthest + RANGE_SLACK_MM || !radius.is_finite() {
-                return (best.is_finite().then_some(found), on);
-            }
-            radius *= 2.0;
+        });
+        let found = f64::from(best).sqrt();
+        // Found within the ball asked: nothing outside it is nearer.
+        if found < radius {
+            return (Some(found), on);
         }
+        // Every point read: the ball holds every point indexed (a window
+        // spanning the grid is not enough, as its tiles or blocks are still
+        // passed over by their ranges), so what was found is all there is.
+        if radius > centre.norm() + farthest_mm + RANGE_SLACK_MM || !radius.is_finite() {
+            return (best.is_finite().then_some(found), on);
+        }
+        radius *= 2.0;
     }
 }
 

@@ -171,6 +171,7 @@ pub static CORNER_OUTSIDE_NOT_PLANNED: Rule = Rule {
         "src/pipeline/background/tests.rs::a_sliver_cut_by_the_image_border_is_no_corner",
         "src/pipeline/background/tests.rs::a_sliver_continuing_a_plate_off_its_end_is_no_corner",
         "src/pipeline/background/tests.rs::a_sliver_of_flange_beyond_a_web_near_its_edge_is_no_corner",
+        "src/eval/web_near_edge.rs::no_root_is_confident_wrong_on_the_documented_seeds",
         "src/pipeline/background/tests.rs::returns_at_the_flanges_level_beyond_make_it_no_corner",
         "src/pipeline/background/tests.rs::a_drop_no_deeper_than_a_lap_step_is_no_corner",
     ],

@@ -24,7 +24,7 @@ use rayon::prelude::*;
 
 use nalgebra::Vector3;
 
-use super::rays::{MIN_BINNED_DEPTH_MM, nearest_apart_by_balls};
+use super::rays::{MIN_BINNED_DEPTH_MM, nearest_apart_by_balls, rays_within};
 
 type Vec3 = Vector3<f64>;
 
@@ -413,13 +413,7 @@ impl<'a> BlockIndex<'a> {
     /// lie on, or `None` when every ray may (a ball reaching the camera's
     /// plane); the bound of [`super::rays`], widened against rounding.
     fn window(centre: &Vec3, radius: f64) -> Option<RayRect> {
-        let depth = centre.z - radius;
-        if depth <= MIN_BINNED_DEPTH_MM {
-            return None;
-        }
-        let (u, v) = (centre.x / centre.z, centre.y / centre.z);
-        let reach = radius / depth;
-        let (hu, hv) = (reach * (1.0 + u * u).sqrt(), reach * (1.0 + v * v).sqrt());
+        let [u, v, hu, hv] = rays_within(centre, radius)?;
         let (hu, hv) = (hu * (1.0 + RAY_SLACK_RELATIVE) + RAY_SLACK, hv * (1.0 + RAY_SLACK_RELATIVE) + RAY_SLACK);
         Some([u - hu, u + hu, v - hv, v + hv])
     }

@@ -197,13 +197,7 @@ impl RayIndex {
     /// `radius` of `centre`, or `None` when every ray may (a ball
     /// reaching the camera's plane).
     fn window(&self, centre: &Vec3, radius: f64) -> Option<[usize; 4]> {
-        let depth = centre.z - radius;
-        if depth <= MIN_BINNED_DEPTH_MM {
-            return None;
-        }
-        let (u, v) = (centre.x / centre.z, centre.y / centre.z);
-        let reach = radius / depth;
-        let (hu, hv) = (reach * (1.0 + u * u).sqrt(), reach * (1.0 + v * v).sqrt());
+        let [u, v, hu, hv] = rays_within(centre, radius)?;
         // One cell more each way: a point on the window's edge may round
         // into the cell beyond.
         let index = |t: f64, origin: f64, cells: usize| -> usize {
@@ -253,6 +247,21 @@ impl RayIndex {
         let farthest_mm = self.tile_ranges.iter().map(|r| f64::from(r[1])).fold(0.0, f64::max);
         nearest_apart_by_balls(p, radius, farthest_mm, |centre, radius, visit| self.near(centre, radius, visit))
     }
+}
+
+/// The ray `(u, v)` through `centre` and the half-widths `(hu, hv)` of
+/// the rays a point within `radius` of it may lie on, as `[u, v, hu, hv]`:
+/// the ball seen from the camera spans at most `radius` over its nearest
+/// depth, widened by the ray's slant. `None` when every ray may (a ball
+/// reaching the camera's plane).
+pub(super) fn rays_within(centre: &Vec3, radius: f64) -> Option<[f64; 4]> {
+    let depth = centre.z - radius;
+    if depth <= MIN_BINNED_DEPTH_MM {
+        return None;
+    }
+    let (u, v) = (centre.x / centre.z, centre.y / centre.z);
+    let reach = radius / depth;
+    Some([u, v, reach * (1.0 + u * u).sqrt(), reach * (1.0 + v * v).sqrt()])
 }
 
 /// The distance from `p` to the nearest point apart from it and how many

@@ -186,7 +186,8 @@ fn at_station(
         return JointFigures::default();
     };
     let spacing = evidence.point_spacing_mm;
-    let sigma = quality::edge_sigma(&first, 1, spacing).hypot(quality::edge_sigma(&second, 1, spacing));
+    let edge_sigmas = [&first, &second].map(|fit| quality::edge_sigma(fit, 1, spacing));
+    let sigma = edge_sigmas[0].hypot(edge_sigmas[1]);
     let offset = second.curve.at(s) - first.curve.at(s);
     let across = Measured { value: offset.dot(&axes.a).abs(), sigma };
     let along_normal = Measured { value: offset.dot(&axes.b).abs(), sigma };
@@ -212,9 +213,10 @@ fn at_station(
             });
             let area = profile.as_ref().and_then(|p| groove_area(p, s));
             // The plates' edges stop short of a bevel's top (the edge
-            // criterion walks onto its first millimetres); both bevels,
-            // carried up to the top, place the opening.
-            let opening = profile.as_ref().and_then(|p| bevel_opening(p, s)).unwrap_or(across);
+            // criterion walks onto its first millimetres); the bevels
+            // seen, carried up to the top, place the opening.
+            let edges = EdgesAcross { apart_mm: across.value, sigma_mm: edge_sigmas };
+            let opening = profile.as_ref().and_then(|p| bevel_opening(p, s, &edges)).unwrap_or(across);
             JointFigures {
                 gap_mm: Some(opening),
                 high_low_mm: Some(along_normal),
@@ -228,14 +230,36 @@ fn at_station(
     }
 }
 
-/// A V-groove's opening at the plates' top at `s`: where its two bevels'
-/// fitted lines meet the top, apart, each known to a line's end
-/// (`2 rms / √n`); `None` unless a bevel is seen on each side.
-pub fn bevel_opening(profile: &GrooveProfile, s: f64) -> Option<Measured> {
-    let side = |side: i8| profile.bevels().find(|f| f.side == side);
-    let (first, second) = (side(-1)?, side(1)?);
-    let sigma = |f: &groove::Face| 2.0 * f.rms_mm / (f.points.max(1) as f64).sqrt();
-    Some(Measured { value: first.top.at(s) + second.top.at(s), sigma: sigma(first).hypot(sigma(second)) })
+/// Where a butt joint's two weld edges lie across the seam at a station:
+/// how far apart, and each one's standard error (the first edge's first).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct EdgesAcross {
+    pub apart_mm: f64,
+    pub sigma_mm: [f64; 2],
+}
+
+/// A V-groove's opening at the plates' top at `s`: each side's bevel's
+/// fitted line where it meets the top, known to a line's end
+/// (`2 rms / √n`); a side whose bevel is not seen, by its weld edge
+/// (`edges`, on the probe's midline between them). The camera sees a
+/// bevel that faces away from it, or lies in the projector's shadow, not
+/// at all: the plate's top then ends at the bevel's edge as at a square
+/// gap's, where the edge criterion places it, while on a bevel it sees
+/// the criterion walks onto the bevel's first millimetres and the edge
+/// lies short of the top by 0.2 to 0.5 mm across. `None` without a bevel.
+pub fn bevel_opening(profile: &GrooveProfile, s: f64, edges: &EdgesAcross) -> Option<Measured> {
+    let line_end = |f: &groove::Face| 2.0 * f.rms_mm / (f.points.max(1) as f64).sqrt();
+    let bevel = |side: i8| profile.bevels().find(|f| f.side == side);
+    if bevel(-1).is_none() && bevel(1).is_none() {
+        return None;
+    }
+    // The bevels' tops are read as |t| from the edges' midline; an edge
+    // lies half their distance from it.
+    let reach = |side: i8, edge: usize| {
+        bevel(side).map_or((0.5 * edges.apart_mm, edges.sigma_mm[edge]), |f| (f.top.at(s), line_end(f)))
+    };
+    let ((first, first_sigma), (second, second_sigma)) = (reach(-1, 0), reach(1, 1));
+    Some(Measured { value: first + second, sigma: first_sigma.hypot(second_sigma) })
 }
 
 /// A V-groove's cross-section at `s` from its profile: between the bevels,
@@ -435,6 +459,57 @@ mod tests {
             assert!(high_low.iter().all(|v| *v < 0.5), "{joint}: {high_low:?}");
             assert!(areas.iter().all(|e| *e < 0.10), "{joint}: {areas:?}");
         }
+    }
+
+    /// A 60 degree bevel on `side` whose top lies `top_mm` from the
+    /// probe's midline, fitted to `points` points with a 0.1 mm RMS.
+    fn bevel(side: i8, top_mm: f64, points: usize) -> groove::Face {
+        groove::Face {
+            side,
+            points,
+            angle_deg: 30.0,
+            rms_mm: 0.1,
+            depth_mm: 8.0,
+            foot_mm: 0.5,
+            station_share: 1.0,
+            along_rays: false,
+            foot_hidden: false,
+            foot_at_probe_bottom: false,
+            foot_on_floor: false,
+            top: groove::LineAlong { middle_s: 50.0, at_middle_mm: top_mm, per_mm: 0.0 },
+            stations: std::array::from_fn(|_| None),
+        }
+    }
+
+    fn profile_of(faces: Vec<groove::Face>) -> GrooveProfile {
+        GrooveProfile {
+            point_spacing_mm: 0.3,
+            opening_mm: 9.6,
+            points_below: 400,
+            faces,
+            standing: None,
+            span: (0.0, 100.0),
+        }
+    }
+
+    #[test]
+    fn a_grooves_opening_is_read_at_its_bevels_tops_and_where_one_is_unseen_at_that_sides_edge() {
+        // The edges 9.6 mm apart, each found 0.2 mm down the bevel it
+        // stands on: the bevels' tops lie 5.0 mm either side.
+        let edges = EdgesAcross { apart_mm: 9.6, sigma_mm: [0.08, 0.09] };
+        let both = bevel_opening(&profile_of(vec![bevel(-1, 5.0, 400), bevel(1, 5.0, 400)]), 50.0, &edges).unwrap();
+        assert!((both.value - 10.0).abs() < 1e-9, "{both:?}");
+        assert!((both.sigma - 2f64.sqrt() * 0.01).abs() < 1e-9, "{both:?}");
+        // The first bevel unseen (facing away from the camera): its plate's
+        // edge, half the edges' distance from their midline, stands for it,
+        // and its standard error comes with it.
+        let one = bevel_opening(&profile_of(vec![bevel(1, 5.0, 400)]), 50.0, &edges).unwrap();
+        assert!((one.value - 9.8).abs() < 1e-9, "{one:?}");
+        assert!((one.sigma - 0.08f64.hypot(0.01)).abs() < 1e-9, "{one:?}");
+        // A face too steep to be a bevel is no bevel's top.
+        let wall = groove::Face { angle_deg: 2.0, ..bevel(1, 5.0, 400) };
+        assert_eq!(bevel_opening(&profile_of(vec![wall]), 50.0, &edges), None);
+        assert_eq!(bevel_opening(&profile_of(Vec::new()), 50.0, &edges), None);
     }
 
     #[test]

@@ -150,9 +150,10 @@ async fn every_dialect_pulls_each_pass_with_its_speeds_and_weave() {
 }
 
 /// `weldseam controller --text --process`, run as a process against the
-/// daemon on 127.0.0.1 port 0 with the procedure configured: it asks for
-/// the process lines, pulls and checks every seam, and prints each weld
-/// waypoint's travel speed and weave, those the plan gives. The binary
+/// daemon on 127.0.0.1 port 0 with the procedure configured, in the ABB
+/// and the FANUC dialect: it asks for the process lines, pulls and checks
+/// every seam, and prints each weld waypoint's travel speed and weave,
+/// those the plan gives. The binary
 /// controller, which asks for `along_seam`, prints the procedure and each
 /// waypoint's passes and speed beside its pose.
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
@@ -174,13 +175,17 @@ async fn the_controller_command_prints_each_weld_waypoints_speed_and_weave() {
         })
     };
     let text_addr = cell.daemon.text_addr.to_string();
-    let session = run(["controller", "--text", "--process", "--dialect", "abb", "--connect", &text_addr]
-        .into_iter()
-        .map(String::from)
-        .chain(["--joint".into(), "v_butt".into(), pose.clone()])
-        .collect())
-    .await
-    .unwrap();
+    let mut sessions = Vec::new();
+    for dialect in [Dialect::Abb, Dialect::Fanuc] {
+        let session = run(["controller", "--text", "--process", "--dialect", dialect.name(), "--connect", &text_addr]
+            .into_iter()
+            .map(String::from)
+            .chain(["--joint".into(), "v_butt".into(), pose.clone()])
+            .collect())
+        .await
+        .unwrap();
+        sessions.push((dialect, session));
+    }
     let binary = run(["controller", "--connect", &cell.controller, "--joint", "v_butt", &pose]
         .into_iter()
         .map(String::from)
@@ -190,28 +195,6 @@ async fn the_controller_command_prints_each_weld_waypoints_speed_and_weave() {
     let _ = stop_camera.send(());
     camera.await.unwrap();
     cell.shutdown().await;
-
-    let lines: Vec<&str> = session.lines().collect();
-    assert_eq!(lines[..2], ["> HELLO,abb,PROCESS", "< 0,2,1"], "{session}");
-    // Every process line printed as received, and a row per weld waypoint.
-    assert!(lines.iter().any(|l| l.starts_with("< 4,1,")), "{session}");
-    let rows: Vec<(usize, usize, f64, f64, f64)> = lines
-        .iter()
-        .filter_map(|l| {
-            let (place, rest) = l.trim_start().split_once("  speed ")?;
-            let (seam, waypoint) = place.split_once('.')?;
-            let (speed, rest) = rest.split_once(" mm/s  weave ")?;
-            let (amplitude, rest) = rest.split_once(" mm at ")?;
-            let frequency = rest.strip_suffix(" Hz")?;
-            Some((
-                seam.parse().ok()?,
-                waypoint.parse().ok()?,
-                speed.parse().ok()?,
-                amplitude.parse().ok()?,
-                frequency.parse().ok()?,
-            ))
-        })
-        .collect();
 
     // The same plan in-process: one seam on the link per piece of a pass.
     let trigger = trigger_line(Dialect::Abb, sim);
@@ -230,16 +213,41 @@ async fn the_controller_command_prints_each_weld_waypoints_speed_and_weave() {
         .enumerate()
         .flat_map(|(s, piece)| piece.iter().enumerate().map(move |(w, m)| (s + 1, w + 1, m)))
         .collect();
-    assert_eq!(rows.len(), expected.len(), "a row per weld waypoint of every seam on the link:\n{session}");
-    let (position, _) = Dialect::Abb.decimals();
-    for ((seam, waypoint, speed, amplitude, frequency), (s, w, motion)) in rows.iter().zip(&expected) {
-        assert_eq!((*seam, *waypoint), (*s, *w));
-        assert!(
-            *speed > 0.0 && near(*speed, motion.travel_speed_mm_s, position),
-            "{seam}.{waypoint}: {speed} for {motion:?}"
-        );
-        assert!(near(*amplitude, motion.weave_amplitude_mm, position), "{amplitude} for {motion:?}");
-        assert!(near(*frequency, motion.weave_frequency_hz, 3), "{frequency} for {motion:?}");
+    // Each dialect's session: every process line printed as received, and
+    // a row per weld waypoint, those of the plan.
+    for (dialect, session) in &sessions {
+        let lines: Vec<&str> = session.lines().collect();
+        let hello = format!("> HELLO,{},PROCESS", dialect.name());
+        assert_eq!(lines[..2], [hello.as_str(), "< 0,2,1"], "{session}");
+        assert!(lines.iter().any(|l| l.starts_with("< 4,1,")), "{session}");
+        let rows: Vec<(usize, usize, f64, f64, f64)> = lines
+            .iter()
+            .filter_map(|l| {
+                let (place, rest) = l.trim_start().split_once("  speed ")?;
+                let (seam, waypoint) = place.split_once('.')?;
+                let (speed, rest) = rest.split_once(" mm/s  weave ")?;
+                let (amplitude, rest) = rest.split_once(" mm at ")?;
+                let frequency = rest.strip_suffix(" Hz")?;
+                Some((
+                    seam.parse().ok()?,
+                    waypoint.parse().ok()?,
+                    speed.parse().ok()?,
+                    amplitude.parse().ok()?,
+                    frequency.parse().ok()?,
+                ))
+            })
+            .collect();
+        assert_eq!(rows.len(), expected.len(), "a row per weld waypoint of every seam on the link:\n{session}");
+        let (position, _) = dialect.decimals();
+        for ((seam, waypoint, speed, amplitude, frequency), (s, w, motion)) in rows.iter().zip(&expected) {
+            assert_eq!((*seam, *waypoint), (*s, *w));
+            assert!(
+                *speed > 0.0 && near(*speed, motion.travel_speed_mm_s, position),
+                "{dialect:?} {seam}.{waypoint}: {speed} for {motion:?}"
+            );
+            assert!(near(*amplitude, motion.weave_amplitude_mm, position), "{amplitude} for {motion:?}");
+            assert!(near(*frequency, motion.weave_frequency_hz, 3), "{frequency} for {motion:?}");
+        }
     }
 
     // The binary link's table: the procedure, then per waypoint its

@@ -25,7 +25,7 @@ fn r(tp: &Controller, n: usize) -> i32 {
 /// integrator sets R[23] in the settings block.
 pub fn weld_seam(tp: &mut Controller, h: &mut Helper, dry_run: bool) {
     let mut pc = 1;
-    while pc <= 69 {
+    while pc <= 78 {
         let mut next = pc + 1;
         match pc {
             3 => {
@@ -93,132 +93,145 @@ pub fn weld_seam(tp: &mut Controller, h: &mut Helper, dry_run: bool) {
                 tp.tpe_params = vec![2, r(tp, 1)];
                 weldseam(tp, h);
             }
-            25..=28 => {
+            25..=29 => {
                 tp.at(29, r#"25:  SELECT R[3:ws kind]=1,JMP LBL[10] ;"#);
                 tp.at(30, r#"26:         =2,JMP LBL[20] ;"#);
                 tp.at(31, r#"27:         =3,JMP LBL[30] ;"#);
-                tp.at(32, r#"28:         ELSE,JMP LBL[99] ;"#);
+                tp.at(32, r#"28:         =4,JMP LBL[1] ;"#);
+                tp.at(33, r#"29:         ELSE,JMP LBL[99] ;"#);
                 next = match r(tp, 3) {
                     1 => lbl(10),
                     2 => lbl(20),
                     3 => lbl(30),
+                    4 => lbl(1),
                     _ => lbl(99),
                 };
             }
-            30 => tp.at(34, r#"30:  LBL[10] ;"#),
-            31 => {
-                tp.at(35, r#"31:L PR[R[2:ws pr]] R[21:ws approach mm/s]mm/sec FINE    ;"#);
-                tp.linear(35, r(tp, 2) as usize, f64::from(r(tp, 21)), false);
-            }
+            31 => tp.at(35, r#"31:  LBL[10] ;"#),
             32 => {
-                tp.at(36, r#"32:  R[6:ws arc]=0    ;"#);
-                tp.r[6] = Register::Int(0);
+                tp.at(36, r#"32:L PR[R[2:ws pr]] R[21:ws approach mm/s]mm/sec FINE    ;"#);
+                tp.linear(36, r(tp, 2) as usize, tp.r[21].value(), false);
             }
             33 => {
-                tp.at(37, r#"33:  JMP LBL[1] ;"#);
+                tp.at(37, r#"33:  R[6:ws arc]=0    ;"#);
+                tp.r[6] = Register::Int(0);
+            }
+            34 => {
+                tp.at(38, r#"34:  JMP LBL[1] ;"#);
                 next = lbl(1);
             }
-            35 => tp.at(39, r#"35:  LBL[20] ;"#),
-            36 => {
-                tp.at(40, r#"36:  IF R[6:ws arc]=1,JMP LBL[22] ;"#);
+            38 => tp.at(42, r#"38:  LBL[20] ;"#),
+            39 => {
+                tp.at(43, r#"39:  IF R[7:ws speed mm/s]>0,JMP LBL[23] ;"#);
+                if tp.r[7].value() > 0.0 {
+                    next = lbl(23);
+                }
+            }
+            40 => {
+                tp.at(44, r#"40:  R[7:ws speed mm/s]=R[20:ws weld mm/s]    ;"#);
+                tp.r[7] = tp.r[20];
+            }
+            41 => tp.at(45, r#"41:  LBL[23] ;"#),
+            42 => {
+                tp.at(46, r#"42:  IF R[6:ws arc]=1,JMP LBL[22] ;"#);
                 if r(tp, 6) == 1 {
                     next = lbl(22);
                 }
             }
-            37 => {
-                tp.at(41, r#"37:L PR[R[2:ws pr]] R[21:ws approach mm/s]mm/sec FINE    ;"#);
-                tp.linear(41, r(tp, 2) as usize, f64::from(r(tp, 21)), false);
+            43 => {
+                tp.at(47, r#"43:L PR[R[2:ws pr]] R[21:ws approach mm/s]mm/sec FINE    ;"#);
+                tp.linear(47, r(tp, 2) as usize, tp.r[21].value(), false);
             }
-            39 => {
-                tp.at(43, r#"39:  IF R[23:ws dry run]=1,JMP LBL[21] ;"#);
+            48 => {
+                tp.at(52, r#"48:  IF R[23:ws dry run]=1,JMP LBL[21] ;"#);
                 if r(tp, 23) == 1 {
                     next = lbl(21);
                 }
             }
-            40 => {
-                tp.at(44, r#"40:  Arc Start[1] ;"#);
+            49 => {
+                tp.at(53, r#"49:  Arc Start[1] ;"#);
                 tp.trace.advance_stop();
                 tp.trace.push(Event::ArcOn);
             }
-            41 => tp.at(45, r#"41:  LBL[21] ;"#),
-            42 => {
-                tp.at(46, r#"42:  R[6:ws arc]=1    ;"#);
+            50 => tp.at(54, r#"50:  LBL[21] ;"#),
+            51 => {
+                tp.at(55, r#"51:  R[6:ws arc]=1    ;"#);
                 tp.r[6] = Register::Int(1);
             }
-            43 => {
-                tp.at(47, r#"43:  IF R[5:ws last weld]=1,JMP LBL[24] ;"#);
-                if r(tp, 5) == 1 {
-                    next = lbl(24);
-                }
-            }
-            44 => {
-                tp.at(48, r#"44:  JMP LBL[1] ;"#);
-                next = lbl(1);
-            }
-            45 => tp.at(49, r#"45:  LBL[22] ;"#),
-            46 => {
-                tp.at(50, r#"46:  IF R[5:ws last weld]=1,JMP LBL[24] ;"#);
-                if r(tp, 5) == 1 {
-                    next = lbl(24);
-                }
-            }
-            47 => {
-                tp.at(51, r#"47:L PR[R[2:ws pr]] R[20:ws weld mm/s]mm/sec CNT R[22:ws blend CNT]    ;"#);
-                tp.linear(51, r(tp, 2) as usize, f64::from(r(tp, 20)), r(tp, 22) > 0);
-            }
-            48 => {
-                tp.at(52, r#"48:  JMP LBL[1] ;"#);
-                next = lbl(1);
-            }
-            49 => tp.at(53, r#"49:  LBL[24] ;"#),
-            50 => {
-                tp.at(54, r#"50:L PR[R[2:ws pr]] R[20:ws weld mm/s]mm/sec FINE    ;"#);
-                tp.linear(54, r(tp, 2) as usize, f64::from(r(tp, 20)), false);
-            }
             52 => {
-                tp.at(56, r#"52:  IF R[23:ws dry run]=1,JMP LBL[25] ;"#);
+                tp.at(56, r#"52:  IF R[5:ws last weld]=1,JMP LBL[24] ;"#);
+                if r(tp, 5) == 1 {
+                    next = lbl(24);
+                }
+            }
+            53 => {
+                tp.at(57, r#"53:  JMP LBL[1] ;"#);
+                next = lbl(1);
+            }
+            54 => tp.at(58, r#"54:  LBL[22] ;"#),
+            55 => {
+                tp.at(59, r#"55:  IF R[5:ws last weld]=1,JMP LBL[24] ;"#);
+                if r(tp, 5) == 1 {
+                    next = lbl(24);
+                }
+            }
+            56 => {
+                tp.at(60, r#"56:L PR[R[2:ws pr]] R[7:ws speed mm/s]mm/sec CNT R[22:ws blend CNT]    ;"#);
+                tp.linear(60, r(tp, 2) as usize, tp.r[7].value(), r(tp, 22) > 0);
+            }
+            57 => {
+                tp.at(61, r#"57:  JMP LBL[1] ;"#);
+                next = lbl(1);
+            }
+            58 => tp.at(62, r#"58:  LBL[24] ;"#),
+            59 => {
+                tp.at(63, r#"59:L PR[R[2:ws pr]] R[7:ws speed mm/s]mm/sec FINE    ;"#);
+                tp.linear(63, r(tp, 2) as usize, tp.r[7].value(), false);
+            }
+            61 => {
+                tp.at(65, r#"61:  IF R[23:ws dry run]=1,JMP LBL[25] ;"#);
                 if r(tp, 23) == 1 {
                     next = lbl(25);
                 }
             }
-            53 => {
-                tp.at(57, r#"53:  Arc End[1] ;"#);
+            62 => {
+                tp.at(66, r#"62:  Arc End[1] ;"#);
                 tp.trace.advance_stop();
                 tp.trace.push(Event::ArcOff);
             }
-            54 => tp.at(58, r#"54:  LBL[25] ;"#),
-            55 => {
-                tp.at(59, r#"55:  R[6:ws arc]=0    ;"#);
+            63 => tp.at(67, r#"63:  LBL[25] ;"#),
+            64 => {
+                tp.at(68, r#"64:  R[6:ws arc]=0    ;"#);
                 tp.r[6] = Register::Int(0);
             }
-            56 => {
-                tp.at(60, r#"56:  JMP LBL[1] ;"#);
+            65 => {
+                tp.at(69, r#"65:  JMP LBL[1] ;"#);
                 next = lbl(1);
             }
-            58 => tp.at(62, r#"58:  LBL[30] ;"#),
-            59 => {
-                tp.at(63, r#"59:L PR[R[2:ws pr]] R[21:ws approach mm/s]mm/sec FINE    ;"#);
-                tp.linear(63, r(tp, 2) as usize, f64::from(r(tp, 21)), false);
+            67 => tp.at(71, r#"67:  LBL[30] ;"#),
+            68 => {
+                tp.at(72, r#"68:L PR[R[2:ws pr]] R[21:ws approach mm/s]mm/sec FINE    ;"#);
+                tp.linear(72, r(tp, 2) as usize, tp.r[21].value(), false);
             }
-            60 => {
-                tp.at(64, r#"60:  JMP LBL[1] ;"#);
+            69 => {
+                tp.at(73, r#"69:  JMP LBL[1] ;"#);
                 next = lbl(1);
             }
-            63 => tp.at(67, r#"63:  LBL[98] ;"#),
-            64 => {
-                tp.at(68, r#"64:  UALM[1] ;"#);
+            72 => tp.at(76, r#"72:  LBL[98] ;"#),
+            73 => {
+                tp.at(77, r#"73:  UALM[1] ;"#);
                 tp.alarms.push(1);
             }
-            65 => {
-                tp.at(69, r#"65:  JMP LBL[90] ;"#);
+            74 => {
+                tp.at(78, r#"74:  JMP LBL[90] ;"#);
                 next = lbl(90);
             }
-            67 => tp.at(71, r#"67:  LBL[99] ;"#),
-            68 => {
-                tp.at(72, r#"68:  UALM[2] ;"#);
+            76 => tp.at(80, r#"76:  LBL[99] ;"#),
+            77 => {
+                tp.at(81, r#"77:  UALM[2] ;"#);
                 tp.alarms.push(2);
             }
-            69 => tp.at(73, r#"69:  LBL[90] ;"#),
+            78 => tp.at(82, r#"78:  LBL[90] ;"#),
             // Comment lines (`!`): nothing to run.
             _ => {}
         }

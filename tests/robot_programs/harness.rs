@@ -12,6 +12,7 @@ use std::time::Duration;
 use tokio::sync::oneshot;
 use tokio::task::JoinHandle;
 use weldseam::config::Config;
+use weldseam::config::procedure::{WeavePattern, WeaveSpec};
 use weldseam::convert::from_proto::text_plan_request;
 use weldseam::geometry::Isometry3;
 use weldseam::joint::JointType;
@@ -81,8 +82,9 @@ pub enum Scenario {
     StopBeforeArc,
     /// The daemon stops when the program sends its fifth NEXT.
     StopDuringFetch,
-    /// A thick V-groove with the example weld procedure configured: each
-    /// pass a seam on the link, every weld waypoint with its process line.
+    /// A thick V-groove with the example weld procedure configured, its
+    /// root pass weaving: each pass a seam on the link, every weld
+    /// waypoint with its process line.
     Passes,
 }
 
@@ -116,7 +118,21 @@ impl Scenario {
             _ => 25.0,
         };
         if self == Scenario::Passes {
-            c.process.procedure = Some(weldseam::process::Procedure::example());
+            // The example procedure's V-groove does not weave; here its
+            // root pass weaves over the 1 mm gap, so each program's weave
+            // is held to the plan's as well.
+            let mut procedure = weldseam::process::Procedure::example();
+            for entry in procedure.entries.iter_mut().filter(|e| e.joint == JointType::VButt) {
+                entry.weave = Some(WeaveSpec {
+                    pattern: WeavePattern::Sine,
+                    above_gap_mm: 0.5,
+                    amplitude_per_gap: 0.5,
+                    max_amplitude_mm: 2.0,
+                    wavelength_mm: 3.0,
+                    dwell_s: 0.0,
+                });
+            }
+            c.process.procedure = Some(procedure);
             c.process.plate_thickness_mm = Some(12.0);
         }
         if self == Scenario::TooLongLine {

@@ -19,7 +19,7 @@
 //!   `CNV_REAL_STR(v, length, decimals, s)` and `CNV_INT_STR`; STRING
 //!   functions `SUB_STR(s, start, length)`, `INDEX(s, pattern)` (0 when
 //!   absent), `STR_LEN`; REAL is 32-bit; `SET_INT_REG(n, v, status)`,
-//!   `SET_POS_REG(n, xyzwpr, status)`; `GET_TPE_PRM(k, type, int, real,
+//!   `SET_REAL_REG(n, v, status)`, `SET_POS_REG(n, xyzwpr, status)`; `GET_TPE_PRM(k, type, int, real,
 //!   string, status)` (type 1 INTEGER; status non-zero without the
 //!   argument); `CURPOS(0, 0, group)`: the TCP of the selected tool frame
 //!   (`$MNUTOOLNUM[g]`, the frames in `$MNUTOOL[g, n]`) in the selected user
@@ -30,7 +30,9 @@
 //!   value taken when the motion statement executes), `UTOOL_NUM`,
 //!   `UFRAME_NUM`, `CALL prog(args)`, `IF ..., JMP LBL[n]`, `SELECT`, `L
 //!   ... mm/sec FINE` (stops at the point) and `CNT n` (blends into the
-//!   next motion, which the look-ahead reads while this one runs),
+//!   next motion, which the look-ahead reads while this one runs), the
+//!   speed a number or a register (`R[n]mm/sec`, read, as the PR, when
+//!   the motion statement executes),
 //!   `Arc Start[n]`, `Arc End[n]`, `UALM[n]` (a user alarm: the program
 //!   pauses).
 
@@ -70,16 +72,29 @@ impl Xyzwpr {
     }
 }
 
-/// A register's value (the programs keep integers in them).
+/// A register's value: an INTEGER or a REAL.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Register {
     Int(i32),
+    Real(f32),
 }
 
 impl Register {
+    /// The value where the program keeps an integer (a line number, a
+    /// kind, a code); a REAL there is the program's mistake.
     pub fn int(self) -> i32 {
-        let Register::Int(v) = self;
-        v
+        match self {
+            Register::Int(v) => v,
+            Register::Real(v) => panic!("R[] holds the REAL {v} where an INTEGER is read"),
+        }
+    }
+
+    /// The value as a number, whichever it holds (a speed, a comparison).
+    pub fn value(self) -> f64 {
+        match self {
+            Register::Int(v) => f64::from(v),
+            Register::Real(v) => f64::from(v),
+        }
     }
 }
 
@@ -142,6 +157,13 @@ pub struct Controller {
     pub alarms: Vec<usize>,
     /// Called with each line before it is sent (a scenario's fault).
     pub on_send: Option<SendHook>,
+    /// The PR the last motion goes to when it asked to blend (CNT): the
+    /// robot is still on its way there while the program runs on, so
+    /// writing that PR would change a move under way.
+    pub blending_to: Option<usize>,
+    /// R[8] and R[11] (the weave's half-swing and frequency the helper
+    /// loads for a weave schedule) at each motion statement.
+    pub weave_at_moves: Vec<[f64; 2]>,
 }
 
 impl Controller {
@@ -164,6 +186,8 @@ impl Controller {
             tperror: Vec::new(),
             alarms: Vec::new(),
             on_send: None,
+            blending_to: None,
+            weave_at_moves: Vec::new(),
         }
     }
 
@@ -256,8 +280,15 @@ impl Controller {
         self.r[n] = Register::Int(value);
     }
 
-    /// `SET_POS_REG(n, posn, status)`.
+    /// `SET_REAL_REG(n, v, status)`.
+    pub fn set_real_reg(&mut self, n: usize, value: f32) {
+        self.r[n] = Register::Real(value);
+    }
+
+    /// `SET_POS_REG(n, posn, status)`; never the target of the move still
+    /// blending.
     pub fn set_pos_reg(&mut self, n: usize, pose: Xyzwpr) {
+        assert_ne!(self.blending_to, Some(n), "PR[{n}] rewritten while the robot blends towards it");
         self.pr[n] = pose;
     }
 
@@ -280,7 +311,10 @@ impl Controller {
     /// `L PR[n] speed FINE|CNT`: moves the selected tool to the PR's
     /// value as it is now.
     pub fn linear(&mut self, line: usize, pr: usize, speed_mm_s: f64, cnt: bool) {
+        assert!(speed_mm_s > 0.0, "line {line}: a motion at {speed_mm_s} mm/sec");
         let target = self.pr[pr];
+        self.blending_to = cnt.then_some(pr);
+        self.weave_at_moves.push([self.r[8].value(), self.r[11].value()]);
         self.trace.motion(line, target.numbers(), speed_mm_s, cnt);
         let tool = if self.utool_num == 0 { Isometry3::identity() } else { self.tools[self.utool_num] };
         self.flange = target.isometry() * tool.inverse();

@@ -7,7 +7,8 @@
 //! advance run, CNT) with nothing sent or read under the arc; a refusal, a
 //! too-long line and a daemon stopped during the fetch or before the arc
 //! leave the torch at the capture pose with a code the program branches
-//! on and the cause shown.
+//! on and the cause shown; under a weld procedure, each pass welded as a
+//! seam, every move into a weld waypoint at the plan's travel speed there.
 
 use nalgebra::{Translation3, UnitQuaternion, Vector3};
 use weldseam::geometry::Isometry3;
@@ -64,6 +65,8 @@ struct Run {
     messages: Vec<String>,
     alarms: Vec<usize>,
     capture: Isometry3<f64>,
+    /// FANUC: R[8] and R[11] at each move (none for KUKA).
+    weave: Vec<[f64; 2]>,
 }
 
 async fn run(vendor: Vendor, scenario: Scenario, dry_run: bool) -> Run {
@@ -80,7 +83,7 @@ async fn run(vendor: Vendor, scenario: Scenario, dry_run: bool) -> Run {
             let mut dat = kuka_dat::data_list(&mut k);
             let ov = kuka::Overrides { joint: Some(joint), reply_timeout_ms: None, dry_run: Some(dry_run) };
             let result = kuka::weld_seam(&mut k, &mut dat, &ov);
-            Run { result, trace: k.trace, messages: k.messages, alarms: Vec::new(), capture }
+            Run { result, trace: k.trace, messages: k.messages, alarms: Vec::new(), capture, weave: Vec::new() }
         }
         Vendor::Fanuc => {
             let mut tp = Controller::new(&address, capture, torch());
@@ -88,7 +91,8 @@ async fn run(vendor: Vendor, scenario: Scenario, dry_run: bool) -> Run {
             let mut helper = fanuc::load_program(&mut tp, &fanuc::Overrides { joint: Some(joint), reply_ms: None });
             fanuc_tp::weld_seam(&mut tp, &mut helper, dry_run);
             let result = tp.r[9].int();
-            Run { result, trace: tp.trace, messages: tp.tperror, alarms: tp.alarms, capture }
+            let weave = tp.weave_at_moves;
+            Run { result, trace: tp.trace, messages: tp.tperror, alarms: tp.alarms, capture, weave }
         }
     })
     .await
@@ -238,27 +242,68 @@ async fn kuka_and_fanuc_leave_the_torch_at_the_capture_pose_when_the_daemon_stop
     }
 }
 
-/// KUKA on a thick V-groove under the example procedure: every piece of
-/// every pass welded as a seam, each LIN into a weld waypoint at the
-/// travel speed the plan gives there ($VEL.CP, from the line's mm/s).
+/// KUKA and FANUC on a thick V-groove under the example procedure (its
+/// root pass weaving, `Scenario::Passes`): every
+/// piece of every pass welded as a seam, each move into a weld waypoint at
+/// the travel speed the plan gives there (KUKA's $VEL.CP, FANUC's R[7]
+/// register speed, from the line's mm/s); FANUC's R[8] and R[11], kept
+/// for a weave schedule, hold the weave the plan gives there.
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
-async fn kuka_each_pass_is_welded_at_its_speeds() {
-    let vendor = Vendor::Kuka;
-    let run = run(vendor, Scenario::Passes, false).await;
-    assert_eq!(run.result, 0, "{:?}", run.messages);
-    let expected = super::harness::reference_pieces(Scenario::Passes, vendor.dialect(), &sent_pose(vendor, &run));
-    assert!(expected.len() >= 2, "{} pieces: a 9 mm groove takes several passes", expected.len());
-    let moves = run.trace.moves();
-    let mut at = 0;
-    for (k, piece) in expected.iter().enumerate() {
-        let weld = &moves[at + 1..at + 1 + piece.len()];
-        at += piece.len() + 2;
-        for (j, (m, (pose, [speed, ..]))) in weld.iter().zip(piece).enumerate().skip(1) {
-            same_pose(&target(vendor, m), pose).unwrap_or_else(|e| panic!("piece {k} waypoint {j}: {e}"));
-            // The line's three decimals, through a 32-bit REAL.
-            assert!((m.speed_mm_s - speed).abs() < 2e-3, "piece {k} move {j}: {} for {speed}", m.speed_mm_s);
+async fn kuka_and_fanuc_weld_each_pass_at_its_speeds() {
+    for vendor in VENDORS {
+        let run = run(vendor, Scenario::Passes, false).await;
+        assert_eq!(run.result, 0, "{vendor:?}: {:?}", run.messages);
+        let expected = super::harness::reference_pieces(Scenario::Passes, vendor.dialect(), &sent_pose(vendor, &run));
+        assert!(expected.len() >= 2, "{} pieces: a 9 mm groove takes several passes", expected.len());
+        let moves = run.trace.moves();
+        let mut at = 0;
+        let mut woven = 0;
+        for (k, piece) in expected.iter().enumerate() {
+            let weld = &moves[at + 1..at + 1 + piece.len()];
+            if vendor == Vendor::Fanuc {
+                let weave = &run.weave[at + 1..at + 1 + piece.len()];
+                for (j, ([amplitude, frequency], (_, [_, a, f]))) in weave.iter().zip(piece).enumerate().skip(1) {
+                    let held = (amplitude - a).abs() < 2e-3 && (frequency - f).abs() < 2e-3;
+                    assert!(held, "piece {k} move {j}: weave {amplitude} mm {frequency} Hz for {a} mm {f} Hz");
+                    woven += usize::from(*a > 0.0);
+                }
+            }
+            at += piece.len() + 2;
+            for (j, (m, (pose, [speed, ..]))) in weld.iter().zip(piece).enumerate().skip(1) {
+                same_pose(&target(vendor, m), pose)
+                    .unwrap_or_else(|e| panic!("{vendor:?} piece {k} waypoint {j}: {e}"));
+                // The line's three decimals, through a 32-bit REAL.
+                assert!(
+                    (m.speed_mm_s - speed).abs() < 2e-3,
+                    "{vendor:?} piece {k} move {j}: {} for {speed}",
+                    m.speed_mm_s
+                );
+            }
+        }
+        assert_eq!(at, moves.len(), "{vendor:?}: no motion beyond the pieces'");
+        let welds = run.trace.welds().unwrap();
+        assert_eq!(welds.len(), expected.len(), "{vendor:?}: one bead a piece");
+        assert!(welds.iter().all(|w| w.continuous()), "{vendor:?}: a bead stops between its waypoints");
+        if vendor == Vendor::Fanuc {
+            assert!(woven > 0, "the passes weave somewhere, or the weave's registers are not tested");
         }
     }
-    assert_eq!(at, moves.len(), "no motion beyond the pieces'");
-    assert_eq!(run.trace.welds().unwrap().len(), expected.len(), "one bead a piece");
+}
+
+/// FANUC without a weld procedure: the helper still asks for the process
+/// lines, each says speed 0, and every move into a weld waypoint is made
+/// at the TP program's own weld speed R[20] (`welded` holds them to 8
+/// mm/s).
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn fanuc_welds_at_its_own_speed_where_the_process_lines_say_0() {
+    let run = run(Vendor::Fanuc, Scenario::OneSeam, false).await;
+    let process: Vec<&str> = run.trace.reads().into_iter().filter(|l| l.starts_with("4,")).collect();
+    let moves = run.trace.moves();
+    // One process line a weld waypoint: every move but approach and retract.
+    assert_eq!(process.len(), moves.len() - 2, "{process:?}");
+    for line in &process {
+        let speed: f64 = line.split(',').nth(3).unwrap().trim().parse().unwrap();
+        assert_eq!(speed, 0.0, "{line}");
+    }
+    welded(Vendor::Fanuc, Scenario::OneSeam, &run, 1, true);
 }

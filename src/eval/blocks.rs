@@ -190,10 +190,12 @@ mod tests {
     /// each as `[hidden, seen]`, as measured: every plan is refused, so
     /// every hidden root is right and no seen one is planned. Under
     /// `t_fillet` by `tee.nothing_stands_on_flange`: a block's top is no
-    /// web's top (wider than `web_thickness_max_mm`, and square, not long
-    /// and narrow), so the nearest plane, the block's top, is read as the
-    /// flange of a tee whose top is out of view, and nothing stands on it;
-    /// under `auto` by `joint.no_layout_fits`.
+    /// web's top (wider than `pipeline.tee_web_thickness_max_mm`, and
+    /// square, not long and narrow), so the nearest plane, the block's
+    /// top, is read as the flange of a tee whose top is out of view, and
+    /// nothing stands on it; under `auto` by `joint.no_layout_fits` (the
+    /// layers a block's height apart are neither a butt nor a lap, and
+    /// with no web's top no tee is offered).
     const MEASURED_RIGHT: [[usize; 2]; 2] = [[34, 0], [34, 0]];
 
     /// The held-out seeds, run once when the planner is frozen: the

@@ -31,6 +31,7 @@
 //! ([`match_seams`], [`classify_several`]).
 
 pub mod along_seam;
+pub mod blocks;
 pub mod process;
 pub mod real_scans;
 mod rule_counts;

@@ -1,5 +1,6 @@
 //! `weldseam eval` on the suites judged scene by scene against their right
-//! answers (the fault suite, curved members, webs near the flange's edge),
+//! answers (the fault suite, curved members, webs near the flange's edge,
+//! blocks on a plate),
 //! run as a script runs it: each counts its outcomes as within the bar,
 //! refused or confident wrong, and keeps held-out rows apart.
 
@@ -71,4 +72,31 @@ fn eval_of_webs_near_the_flange_s_edge_judges_each_root() {
     }
     let lap = weldseam(&["eval", "--suite", "web-near-edge", "--joint-request", "lap", "--limit", "1"]);
     assert!(!lap.status.success(), "a lap request on tees is refused");
+}
+
+/// `eval --suite blocks` judges each root of a block on a plate, under
+/// `t_fillet` or, asked, `auto`, summed per block and per seen or hidden
+/// root; it plans under no other request.
+#[test]
+fn eval_of_blocks_on_a_plate_judges_each_root() {
+    let out = weldseam(&["eval", "--suite", "blocks", "--filter", "blocks-01-"]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{text}\n{}", String::from_utf8_lossy(&out.stderr));
+    // Seen from over a corner: two roots seen, two hidden behind the block.
+    let rows: Vec<&str> = text.lines().filter(|l| l.contains("block 1 ")).collect();
+    assert_eq!(rows.len(), 4, "{text}");
+    assert_eq!(rows.iter().filter(|r| r.contains("(seen)")).count(), 2, "{text}");
+    for seen in ["seen", "hidden"] {
+        let tally = text
+            .lines()
+            .find(|l| l.starts_with("tuning") && l.contains(&format!("t_fillet, on the plate, {seen}")))
+            .unwrap_or_else(|| panic!("no tuning row for the {seen} roots in\n{text}"));
+        // Roots, right, refused, not named, confident wrong.
+        let counts: Vec<&str> = tally.split_whitespace().rev().take(5).collect();
+        let expected = if seen == "seen" { ["0", "0", "2", "0", "2"] } else { ["0", "0", "0", "2", "2"] };
+        assert_eq!(counts, expected, "{tally}");
+    }
+    assert!(!text.lines().any(|l| l.starts_with("held out")), "the filter keeps no held-out scene: {text}");
+    let lap = weldseam(&["eval", "--suite", "blocks", "--joint-request", "lap", "--limit", "1"]);
+    assert!(!lap.status.success(), "a lap request on blocks is refused");
 }

@@ -103,6 +103,15 @@ pub enum SuiteArg {
     /// (or auto, with `--joint-request auto`): each root judged as the tee
     /// suite judges it, a hidden root to be named not planned.
     WebNearEdge,
+    /// 16 blocks (cubes or boxes, 30 to 120 mm a side) standing on a
+    /// plate, some with a smaller block stacked on them, seen square to a
+    /// face or over a corner, the top edges sharp or rounded, the plate
+    /// running past the view, ending in it or cropped, the table in view or
+    /// cropped (`sim::blocks_suite`), planned as t_fillet (or auto, with
+    /// `--joint-request auto`): each block's foot is a fillet root, judged
+    /// as the tee suite judges a root, a hidden root to be named not
+    /// planned.
+    Blocks,
     /// 20 scenes of the weld process (`sim::process_suite`): an I-butt
     /// whose gap opens from 0.5 to 3 mm, a butt with high-low, a 20 mm
     /// plate's 60 degree V-groove, a clamp 15 mm beside a seam, a tee with

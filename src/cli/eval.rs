@@ -244,6 +244,8 @@ pub fn run(args: &EvalArgs) -> anyhow::Result<()> {
         SuiteArg::GrooveWidth => return crate::cli::eval_groove_width::run(args),
         // Tees rendered with their own flange edge and cropped, judged root by root.
         SuiteArg::WebNearEdge => return crate::cli::eval_web_near_edge::run(args),
+        // Blocks rendered with a stacked block and crops, judged root by root.
+        SuiteArg::Blocks => return crate::cli::eval_blocks::run(args),
         // Scenes of the weld process, scored on its figures, passes and torch.
         SuiteArg::Process => return crate::cli::eval_process::run(args),
     };

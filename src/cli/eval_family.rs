@@ -1,7 +1,7 @@
 //! What the eval runs of the seeded scene families (`--suite curved`,
-//! `--suite groove-width`, `--suite web-near-edge`) share: the `--plans`
-//! file, the outcome table summed per group (tuning, held out) and
-//! request, and the printing.
+//! `--suite groove-width`, `--suite web-near-edge`, `--suite blocks`)
+//! share: the `--plans` file, the outcome table summed per group (tuning,
+//! held out) and request, and the printing.
 
 use std::collections::BTreeMap;
 use std::fs::File;

@@ -10,6 +10,7 @@ pub mod controller;
 pub mod demo;
 pub mod errors;
 pub mod eval;
+pub mod eval_blocks;
 pub mod eval_curved;
 pub mod eval_family;
 pub mod eval_groove_width;

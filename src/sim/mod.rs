@@ -8,6 +8,7 @@
 //! the controller would report. [`eval_suite`] is a fixed, seeded set of
 //! scenes spanning the working range for evaluating the planner.
 
+pub mod blocks;
 pub mod calibration;
 pub mod consumer;
 pub mod curved;
@@ -34,6 +35,7 @@ use crate::geometry::Vec3;
 use crate::geometry::pose::{EulerConvention, PAPER_HAND_EYE, RobotPose, hand_eye_from_rows};
 use crate::joint::JointType;
 
+pub use blocks::{BlockScene, blocks_suite};
 pub use consumer::{CameraPreset, consumer_suite};
 pub use curved::{CurvedScene, curved_suite};
 pub use draw::Draw;

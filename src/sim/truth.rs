@@ -322,6 +322,51 @@ fn seam_truth(
     SeamTruth { workpiece: index, root, truth, physical_mm, seen_mm, seen_share }
 }
 
+/// What the camera sees of a straight root that need not run along its
+/// workpiece's y: a block's foot along its end face runs along x
+/// ([`line_truth`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct LineTruth {
+    /// The stretch of the root in the image, robot base frame, ordered as
+    /// the root's ends are; `None` when no part of it is in the image.
+    pub in_image_base: Option<[Vec3; 2]>,
+    /// The stretches (robot base frame) the camera sees: in the image, and
+    /// neither the view ray nor the projector's ray blocked.
+    pub seen_base: Vec<[Vec3; 2]>,
+    /// The root's whole length, mm.
+    pub physical_mm: f64,
+    /// The seen stretches' length over the whole length.
+    pub seen_share: f64,
+}
+
+/// The truth of the straight root from `ends[0]` to `ends[1]` (the first
+/// workpiece's frame), clipped to the image and sampled for what hides it
+/// as [`seam_truths`] does a seam along y: `sight` holds the scene's
+/// solids in the camera frame.
+pub fn line_truth(spec: &SceneSpec, camera: &CameraModel, sight: &LineOfSight, ends: [Vec3; 2]) -> LineTruth {
+    let camera_from_first = spec.workpiece_from_camera().inverse();
+    let base_from_first = spec.base_from_workpiece;
+    let physical_mm = (ends[1] - ends[0]).norm();
+    let along = (ends[1] - ends[0]) / physical_mm;
+    let point = |s: f64| ends[0] + along * s;
+    let in_camera = |s: f64| camera_from_first.transform_point(&point(s).into()).coords;
+    let in_base = |s: f64| base_from_first.transform_point(&point(s).into()).coords;
+    let observed = visible_interval(camera, &in_camera(0.0), &(camera_from_first.rotation * along))
+        .map(|[lo, hi]| [lo.max(0.0), hi.min(physical_mm)])
+        .filter(|[lo, hi]| lo <= hi);
+    let seen: Vec<[f64; 2]> = match observed {
+        Some(range) => unhidden_stretches(range, |s| sight.hides(&in_camera(s)), MIN_SEEN_STRETCH_MM),
+        None => Vec::new(),
+    };
+    let seen_share = seen.iter().fold(0.0, |sum, [a, b]| sum + (b - a)) / physical_mm;
+    LineTruth {
+        in_image_base: observed.map(|[a, b]| [in_base(a), in_base(b)]),
+        seen_base: seen.iter().map(|[a, b]| [in_base(*a), in_base(*b)]).collect(),
+        physical_mm,
+        seen_share,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -414,6 +459,27 @@ mod tests {
         let mut over = tee_from(0.0);
         over.placement = CameraPlacement::straight(600.0, 0.0);
         assert!(seam_truths(&over, &cam).iter().all(|s| !s.is_seen()));
+    }
+
+    #[test]
+    fn a_line_s_truth_is_a_seam_s_along_the_same_root() {
+        let cam = CameraModel::default();
+        let spec = tee_from(0.0);
+        let sight =
+            LineOfSight::new(build_scene(&spec).transformed(&spec.workpiece_from_camera().inverse()).solids, &cam);
+        let [y0, y1] = spec.seam_range();
+        for (seam, [x, z]) in seam_truths(&spec, &cam).iter().zip(spec.joint.seam_lines_xz()) {
+            // Along the root either way: the same share seen, the same stretch in the image.
+            let ends = [Vec3::new(x, y0, z), Vec3::new(x, y1, z)];
+            for (ends, forward) in [(ends, true), ([ends[1], ends[0]], false)] {
+                let line = line_truth(&spec, &cam, &sight, ends);
+                assert!((line.seen_share - seam.seen_share).abs() < 0.01, "{line:?} {seam:?}");
+                assert!((line.physical_mm - seam.physical_mm).abs() < 1e-9);
+                let [a, b] = line.in_image_base.expect("the root is in the image");
+                let [a, b] = if forward { [a, b] } else { [b, a] };
+                assert!((a - seam.truth.start_base).norm() < 1e-6 && (b - seam.truth.end_base).norm() < 1e-6);
+            }
+        }
     }
 
     #[test]

@@ -10,6 +10,9 @@ use std::path::Path;
 
 use anyhow::Context;
 
+use weldseam::joint::{JointType, RequestedJoint};
+
+use crate::cli::args::JointRequestArg;
 use crate::cli::eval::EvalArgs;
 use crate::cli::table::Table;
 
@@ -67,4 +70,15 @@ pub fn chosen<S>(mut scenes: Vec<S>, name: impl Fn(&S) -> &str, args: &EvalArgs)
     scenes.truncate(args.limit.unwrap_or(usize::MAX));
     anyhow::ensure!(!scenes.is_empty(), "no scene matches the filter");
     Ok(scenes)
+}
+
+/// The request a family of fillet roots is planned under: `t_fillet` by
+/// default (`--joint-request scene` or `t-fillet`), or `auto`; any other
+/// request, or a `--joint-set`, is an error naming the `suite`.
+pub fn fillet_or_auto(args: &EvalArgs, suite: &str, what: &str) -> anyhow::Result<RequestedJoint> {
+    match (args.joint_set, args.joint_request) {
+        (None, JointRequestArg::Scene | JointRequestArg::TFillet) => Ok(RequestedJoint::Type(JointType::TFillet)),
+        (None, JointRequestArg::Auto) => Ok(RequestedJoint::Auto),
+        _ => anyhow::bail!("--suite {suite} plans its {what} as t_fillet or, with --joint-request auto, as auto"),
+    }
 }

@@ -17,22 +17,17 @@ use anyhow::{Context, bail};
 use weldseam::camera::CameraModel;
 use weldseam::config::Config;
 use weldseam::eval::web_near_edge::{RootOutcome, RootVerdict, plan_roots};
-use weldseam::joint::{JointType, RequestedJoint};
+use weldseam::joint::RequestedJoint;
 use weldseam::pipeline::Planner;
 use weldseam::sim::draw::{Draw, is_unseen};
 use weldseam::sim::{WebNearEdge, web_near_edge_suite};
 
-use crate::cli::args::JointRequestArg;
 use crate::cli::eval::EvalArgs;
 use crate::cli::eval_family;
 use crate::cli::table::Table;
 
 pub fn run(args: &EvalArgs) -> anyhow::Result<()> {
-    let joint = match (args.joint_set, args.joint_request) {
-        (None, JointRequestArg::Scene | JointRequestArg::TFillet) => RequestedJoint::Type(JointType::TFillet),
-        (None, JointRequestArg::Auto) => RequestedJoint::Auto,
-        _ => bail!("--suite web-near-edge plans its tees as t_fillet or, with --joint-request auto, as auto"),
-    };
+    let joint = eval_family::fillet_or_auto(args, "web-near-edge", "tees")?;
     let config = Config::load_or_default(args.config.as_deref())?;
     let camera: CameraModel = config.camera;
     let planner = Planner::new(config);

@@ -248,17 +248,17 @@ pub struct EdgesAcross {
 /// the criterion walks onto the bevel's first millimetres and the edge
 /// lies short of the top by 0.2 to 0.5 mm across. `None` without a bevel.
 pub fn bevel_opening(profile: &GrooveProfile, s: f64, edges: &EdgesAcross) -> Option<Measured> {
-    let line_end = |f: &groove::Face| 2.0 * f.rms_mm / (f.points.max(1) as f64).sqrt();
-    let bevel = |side: i8| profile.bevels().find(|f| f.side == side);
-    if bevel(-1).is_none() && bevel(1).is_none() {
+    let bevels = [-1, 1].map(|side| profile.bevels().find(|f| f.side == side));
+    if bevels.iter().all(Option::is_none) {
         return None;
     }
     // The bevels' tops are read as |t| from the edges' midline; an edge
     // lies half their distance from it.
-    let reach = |side: i8, edge: usize| {
-        bevel(side).map_or((0.5 * edges.apart_mm, edges.sigma_mm[edge]), |f| (f.top.at(s), line_end(f)))
-    };
-    let ((first, first_sigma), (second, second_sigma)) = (reach(-1, 0), reach(1, 1));
+    let [(first, first_sigma), (second, second_sigma)] = [0, 1].map(|k| {
+        bevels[k].map_or((0.5 * edges.apart_mm, edges.sigma_mm[k]), |f| {
+            (f.top.at(s), 2.0 * f.rms_mm / (f.points.max(1) as f64).sqrt())
+        })
+    });
     Some(Measured { value: first + second, sigma: first_sigma.hypot(second_sigma) })
 }
 
@@ -461,12 +461,12 @@ mod tests {
         }
     }
 
-    /// A 60 degree bevel on `side` whose top lies `top_mm` from the
-    /// probe's midline, fitted to `points` points with a 0.1 mm RMS.
-    fn bevel(side: i8, top_mm: f64, points: usize) -> groove::Face {
+    /// A bevel of a 60 degree groove on `side` whose top lies `top_mm`
+    /// from the probe's midline, fitted to 400 points with a 0.1 mm RMS.
+    fn bevel(side: i8, top_mm: f64) -> groove::Face {
         groove::Face {
             side,
-            points,
+            points: 400,
             angle_deg: 30.0,
             rms_mm: 0.1,
             depth_mm: 8.0,
@@ -497,17 +497,17 @@ mod tests {
         // The edges 9.6 mm apart, each found 0.2 mm down the bevel it
         // stands on: the bevels' tops lie 5.0 mm either side.
         let edges = EdgesAcross { apart_mm: 9.6, sigma_mm: [0.08, 0.09] };
-        let both = bevel_opening(&profile_of(vec![bevel(-1, 5.0, 400), bevel(1, 5.0, 400)]), 50.0, &edges).unwrap();
+        let both = bevel_opening(&profile_of(vec![bevel(-1, 5.0), bevel(1, 5.0)]), 50.0, &edges).unwrap();
         assert!((both.value - 10.0).abs() < 1e-9, "{both:?}");
         assert!((both.sigma - 2f64.sqrt() * 0.01).abs() < 1e-9, "{both:?}");
         // The first bevel unseen (facing away from the camera): its plate's
         // edge, half the edges' distance from their midline, stands for it,
         // and its standard error comes with it.
-        let one = bevel_opening(&profile_of(vec![bevel(1, 5.0, 400)]), 50.0, &edges).unwrap();
+        let one = bevel_opening(&profile_of(vec![bevel(1, 5.0)]), 50.0, &edges).unwrap();
         assert!((one.value - 9.8).abs() < 1e-9, "{one:?}");
         assert!((one.sigma - 0.08f64.hypot(0.01)).abs() < 1e-9, "{one:?}");
         // A face too steep to be a bevel is no bevel's top.
-        let wall = groove::Face { angle_deg: 2.0, ..bevel(1, 5.0, 400) };
+        let wall = groove::Face { angle_deg: 2.0, ..bevel(1, 5.0) };
         assert_eq!(bevel_opening(&profile_of(vec![wall]), 50.0, &edges), None);
         assert_eq!(bevel_opening(&profile_of(Vec::new()), 50.0, &edges), None);
     }

@@ -72,7 +72,8 @@ pub struct EvalArgs {
     #[arg(long)]
     pub limit: Option<usize>,
     /// Plan each scene as this variant of its frame: unorganized,
-    /// voxel:MM, metres, base, cropped:MM, compressed (written as PCD
+    /// voxel:MM, metres, base, cropped:MM, masked:MM (the crop on the
+    /// frame's grid), compressed (written as PCD
     /// binary_compressed and read back), or several joined by commas (e.g.
     /// cropped:25,voxel:1,metres). Scored against the same truth.
     #[arg(long, value_name = "VARIANT")]

@@ -81,7 +81,8 @@ pub struct SimulateArgs {
     #[arg(long)]
     pub no_noise: bool,
     /// Write the capture as this variant: unorganized, voxel:MM, metres,
-    /// base, cropped:MM, compressed (PCD DATA binary_compressed), or
+    /// base, cropped:MM, masked:MM (the crop on the frame's grid),
+    /// compressed (PCD DATA binary_compressed), or
     /// several joined by commas (e.g. cropped:25,voxel:1,metres). The truth
     /// stays in the camera frame, mm.
     #[arg(long, value_name = "VARIANT")]

@@ -1,13 +1,15 @@
 //! The same simulated capture as real cameras and real tools hand it
 //! over: without its pixel grid, voxel-downsampled, in metres, in the robot
-//! base frame, cropped around the seam, written as PCL's tools write PCD
-//! (`DATA binary_compressed`), or several of these at once.
+//! base frame, cropped around the seam (dropping the pixel grid, or
+//! keeping it with the pixels outside the box left invalid), written as
+//! PCL's tools write PCD (`DATA binary_compressed`), or several of these
+//! at once.
 //!
 //! Each variant is a pure transform of a simulated frame. None of them
 //! moves the seam out of the cloud, so the ground truth stays what it was:
 //! in the camera frame, in millimetres (and in the base frame), where the
 //! plan is scored. A [`Variant`] is written as on the command line:
-//! `unorganized`, `voxel:1.0`, `metres`, `base`, `cropped:25`,
+//! `unorganized`, `voxel:1.0`, `metres`, `base`, `cropped:25`, `masked:25`,
 //! `compressed`, or a comma-separated combination such as
 //! `cropped:25,voxel:1,metres`. The steps always run in one order,
 //! whatever order they are written in: crop (in the camera frame, where
@@ -21,7 +23,7 @@ use std::fmt;
 use rand_chacha::ChaCha8Rng;
 use rand_core::{Rng, SeedableRng};
 
-use crate::cloud::{Point, PointCloud, is_valid_point, pcd};
+use crate::cloud::{INVALID_POINT, Point, PointCloud, is_valid_point, pcd};
 use crate::geometry::Vec3;
 use crate::sim::{GroundTruth, Simulation};
 
@@ -38,6 +40,11 @@ pub enum Step {
     /// either side of it and beyond its ends, and as much above and below
     /// the plate's top surface.
     Cropped { width_mm: f64 },
+    /// The same box, the pixel grid kept: every pixel whose point lies
+    /// outside it left invalid, as a camera driver's region of interest or
+    /// PCL's `CropBox` keeping the cloud organized writes it. What lies
+    /// beyond the box is then neither seen nor empty: no return.
+    Masked { width_mm: f64 },
     /// The valid points only, same coordinates, in an order shuffled from
     /// the scene's seed, so nothing can rely on pixel order.
     Unorganized,
@@ -59,7 +66,7 @@ impl Step {
     /// The position of the step in the order every variant applies them.
     fn rank(&self) -> usize {
         match self {
-            Step::Cropped { .. } => 0,
+            Step::Cropped { .. } | Step::Masked { .. } => 0,
             Step::Unorganized => 1,
             Step::Voxel { .. } => 2,
             Step::Base => 3,
@@ -71,6 +78,7 @@ impl Step {
     fn name(&self) -> &'static str {
         match self {
             Step::Cropped { .. } => "cropped",
+            Step::Masked { .. } => "masked",
             Step::Unorganized => "unorganized",
             Step::Voxel { .. } => "voxel",
             Step::Base => "base",
@@ -84,6 +92,7 @@ impl fmt::Display for Step {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             Step::Cropped { width_mm } => write!(f, "cropped:{width_mm}"),
+            Step::Masked { width_mm } => write!(f, "masked:{width_mm}"),
             Step::Voxel { size_mm } => write!(f, "voxel:{size_mm}"),
             other => f.write_str(other.name()),
         }
@@ -100,9 +109,14 @@ pub struct Variant {
 /// Why a variant's text was refused.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum VariantError {
-    #[error("no variant given: name one of raw, unorganized, voxel:MM, metres, base, cropped:MM, compressed")]
+    #[error(
+        "no variant given: name one of raw, unorganized, voxel:MM, metres, base, cropped:MM, masked:MM, compressed"
+    )]
     Empty,
-    #[error("unknown variant {0:?}: the variants are raw, unorganized, voxel:MM, metres, base, cropped:MM, compressed")]
+    #[error(
+        "unknown variant {0:?}: the variants are raw, unorganized, voxel:MM, metres, base, cropped:MM, masked:MM, \
+         compressed"
+    )]
     Unknown(String),
     #[error("{name} needs a size in mm, as in {name}:{example}")]
     MissingSize { name: &'static str, example: &'static str },
@@ -114,6 +128,8 @@ pub enum VariantError {
     OutOfRange { name: &'static str, value: f64, min: f64, max: f64 },
     #[error("{0} is given twice")]
     Repeated(&'static str),
+    #[error("{0} and {1} both crop the cloud: give one")]
+    TwoCrops(&'static str, &'static str),
 }
 
 impl Variant {
@@ -164,8 +180,11 @@ impl Variant {
     pub fn from_steps(steps: &[Step]) -> Result<Variant, VariantError> {
         let mut sorted: Vec<Step> = Vec::with_capacity(steps.len());
         for step in steps {
-            if sorted.iter().any(|s| s.rank() == step.rank()) {
-                return Err(VariantError::Repeated(step.name()));
+            if let Some(same) = sorted.iter().find(|s| s.rank() == step.rank()) {
+                return Err(match same.name() == step.name() {
+                    true => VariantError::Repeated(step.name()),
+                    false => VariantError::TwoCrops(same.name(), step.name()),
+                });
             }
             sorted.push(*step);
         }
@@ -182,6 +201,7 @@ impl Variant {
         for step in &self.steps {
             cloud = match *step {
                 Step::Cropped { width_mm } => crop_around_seam(&cloud, &sim.truth, width_mm),
+                Step::Masked { width_mm } => mask_around_seam(&cloud, &sim.truth, width_mm),
                 Step::Unorganized => unorganized(&cloud, seed),
                 Step::Voxel { size_mm } => voxel_grid(&cloud, size_mm),
                 Step::Base => transformed(&cloud, |p| sim.base_from_camera * p),
@@ -235,6 +255,7 @@ fn parse_step(part: &str) -> Result<Step, VariantError> {
         "compressed" => plain(Step::Compressed),
         "voxel" => Ok(Step::Voxel { size_mm: sized("voxel", "1.0", VOXEL_MM)? }),
         "cropped" => Ok(Step::Cropped { width_mm: sized("cropped", "25", CROP_WIDTH_MM)? }),
+        "masked" => Ok(Step::Masked { width_mm: sized("masked", "25", CROP_WIDTH_MM)? }),
         "" => Err(VariantError::Empty),
         other => Err(VariantError::Unknown(other.to_string())),
     }
@@ -378,6 +399,27 @@ pub fn crop_around_seam(cloud: &PointCloud, truth: &GroundTruth, width_mm: f64) 
     PointCloud::unorganized(points)
 }
 
+/// The points inside the same box as [`crop_around_seam`]'s, on the
+/// frame's pixel grid: each point outside it made invalid, in place. An
+/// unorganized cloud has no grid to keep and loses them.
+pub fn mask_around_seam(cloud: &PointCloud, truth: &GroundTruth, width_mm: f64) -> PointCloud {
+    if !cloud.is_organized() {
+        return crop_around_seam(cloud, truth, width_mm);
+    }
+    let seam_box = SeamBox::new(truth, width_mm);
+    let points = cloud
+        .points()
+        .iter()
+        .map(|p| match is_valid_point(p) && seam_box.contains(&Vec3::new(p[0] as f64, p[1] as f64, p[2] as f64)) {
+            true => *p,
+            false => INVALID_POINT,
+        })
+        .collect();
+    // The same width and height as the frame, so the grid is accepted.
+    PointCloud::organized(cloud.width(), cloud.height(), points)
+        .unwrap_or_else(|| crop_around_seam(cloud, truth, width_mm))
+}
+
 #[cfg(test)]
 mod tests {
     use std::collections::HashSet;
@@ -432,6 +474,11 @@ mod tests {
         assert!(err("cropped:wide").contains("not a number"), "{}", err("cropped:wide"));
         assert!(err("metres:2").contains("takes no value"), "{}", err("metres:2"));
         assert!(err("base,base").contains("twice"), "{}", err("base,base"));
+        assert!(
+            err("masked:25,cropped:30").contains("masked and cropped both crop the cloud"),
+            "{}",
+            err("masked:25,cropped:30")
+        );
         assert!(err("voxel:1,").contains("no variant"), "{}", err("voxel:1,"));
         assert!(err("").contains("no variant"));
     }
@@ -512,6 +559,31 @@ mod tests {
         let sides = cropped.points().iter().map(|p| (as_vec(p) - seam_box.origin).dot(&seam_box.across));
         let (min, max) = sides.fold((0.0f64, 0.0f64), |(lo, hi), t| (lo.min(t), hi.max(t)));
         assert!(min < -width + 2.0 && max > width - 2.0, "{min} to {max} mm across the seam");
+    }
+
+    #[test]
+    fn a_mask_keeps_the_crops_points_on_the_frames_grid() {
+        let sim = small_sim(JointType::Lap);
+        let masked = Variant::parse("masked:40").unwrap().apply(&sim, 3).cloud;
+        assert!(masked.is_organized());
+        assert_eq!((masked.width(), masked.height()), (sim.cloud.width(), sim.cloud.height()));
+        let cropped = crop_around_seam(&sim.cloud, &sim.truth, 40.0);
+        assert!(cropped.len() < sim.cloud.valid_count(), "the box leaves points out");
+        // Every kept point sits at its own pixel; the rest are invalid.
+        let kept: HashSet<[u32; 3]> = cropped.points().iter().map(|p| p.map(f32::to_bits)).collect();
+        for (m, p) in masked.points().iter().zip(sim.cloud.points()) {
+            match is_valid_point(m) {
+                true => assert_eq!(m, p),
+                false => assert!(!is_valid_point(p) || !kept.contains(&p.map(f32::to_bits)), "{p:?} dropped"),
+            }
+        }
+        assert_eq!(masked.valid_count(), cropped.len());
+        // Without a grid it is the crop.
+        let bag = unorganized(&sim.cloud, 3);
+        assert_eq!(
+            mask_around_seam(&bag, &sim.truth, 40.0).points(),
+            crop_around_seam(&bag, &sim.truth, 40.0).points()
+        );
     }
 
     #[test]

@@ -128,11 +128,18 @@ pub fn orient(waypoints: &mut [Waypoint], places: &[Place], process: &SeamProces
 /// organized frame is read through its own pixel grid, the hidden space
 /// laid only where the torch asks; any other cloud is binned by its rays.
 pub fn obstacles_of<'a>(cloud: &'a PointCloud, torch: &Torch) -> Obstacles<'a> {
-    if cloud.is_organized() {
+    let started = std::time::Instant::now();
+    let obstacles = if cloud.is_organized() {
         Obstacles::seen_in_organized_frame(cloud.points(), cloud.width(), torch)
     } else {
         Obstacles::seen_in_frame(cloud.points(), torch)
-    }
+    };
+    tracing::debug!(
+        ms = started.elapsed().as_secs_f64() * 1e3,
+        organized = cloud.is_organized(),
+        "the frame indexed for the torch"
+    );
+    obstacles
 }
 
 /// One waypoint's outcome: welded, or cut by a rule with its reason.

@@ -19,6 +19,16 @@
 //! hidden space's grid is laid from ([`super::shadow::LazyShadows`]), and
 //! that grid reads the blocks the same way, tile by tile, where the torch
 //! asks.
+//!
+//! The same pass bounds each block's patches of [`PATCH_PX`] x
+//! [`PATCH_PX`] pixels too (a box of their points, nothing divided), and a
+//! block a ball meets is read patch by patch: only the patches whose rays
+//! and ranges the ball meets, their rays and ranges worked out from their
+//! boxes the first time the block is read. A ball of a few of the
+//! cloud's spacings (the nearest-point queries that measure the spacing)
+//! meets a few patches of a block, not its every pixel.
+
+use std::sync::OnceLock;
 
 use rayon::prelude::*;
 
@@ -33,6 +43,16 @@ type Vec3 = Vector3<f64>;
 /// while the blocks stay few enough to list (a 2.3 MP frame has about
 /// nine thousand).
 pub const BLOCK_PX: usize = 16;
+
+/// A patch's side, pixels: a block is read patch by patch where a ball
+/// meets part of it. A few pixels, so a ball a few spacings wide reads
+/// little beyond itself, while a block's patches stay few enough to test
+/// one by one (sixteen).
+pub const PATCH_PX: usize = 4;
+
+/// A block's patches a side, and in all.
+const PATCHES_A_SIDE: usize = BLOCK_PX / PATCH_PX;
+const PATCHES_PER_BLOCK: usize = PATCHES_A_SIDE * PATCHES_A_SIDE;
 
 /// How far a window of rays is widened against rounding, in `(x / z,
 /// y / z)`, relative and absolute: far below a pixel's angle, far above
@@ -57,6 +77,13 @@ pub struct BlockIndex<'a> {
     /// nearest and farthest range of those points, mm.
     rays: Vec<RayRect>,
     ranges: Vec<[f64; 2]>,
+    /// Per block, the boxes of its patches, row after row
+    /// ([`PATCHES_PER_BLOCK`] to a block), and their rays and ranges once
+    /// the block is first read.
+    patch_boxes: Vec<BlockBox>,
+    patch_bounds: Vec<OnceLock<Box<[PatchBounds]>>>,
+    /// The farthest range of any point, mm (0 for none).
+    farthest_mm: f64,
     /// The finite points too near the camera's plane to have a ray: read
     /// by every query.
     aside: Vec<[f32; 3]>,
@@ -93,21 +120,47 @@ struct BlockBox {
 
 const EMPTY_BOX: BlockBox = BlockBox { min: [f32::INFINITY; 3], max: [f32::NEG_INFINITY; 3], binned: 0 };
 
+/// A patch's rays and the nearest and farthest range of its points, as
+/// [`BlockBox::rays`] and [`BlockBox::ranges`] give them.
+struct PatchBounds {
+    rays: RayRect,
+    ranges: [f64; 2],
+}
+
 impl BlockBox {
-    /// Grows the box by the points of one row of the block: a plain
-    /// minimum and maximum per coordinate, no division, so the compiler
-    /// keeps it in vector registers.
-    fn add(&mut self, pixels: &[[f32; 3]]) {
-        let (mut min, mut max, mut n) = (self.min, self.max, 0);
+    /// Grows the box by the points of one row of a patch: a plain
+    /// minimum and maximum per coordinate, no division, each a comparison
+    /// and a selection the compiler keeps in vector registers. Returns
+    /// how many of them are finite but too near the camera's plane to
+    /// have a ray (kept aside by the caller).
+    fn add(&mut self, pixels: &[[f32; 3]]) -> usize {
+        let (mut min, mut max, mut binned, mut finite) = (self.min, self.max, 0, 0);
         for p in pixels {
-            let has_ray = p[2] > MIN_BINNED_DEPTH_MM as f32 && p.iter().all(|c| c.is_finite());
+            // A comparison with a NaN is false: an empty pixel is not
+            // finite.
+            let is_finite = p.iter().all(|c| c.abs() < f32::INFINITY);
+            let has_ray = is_finite & (p[2] > MIN_BINNED_DEPTH_MM as f32);
             for k in 0..3 {
-                min[k] = if has_ray { min[k].min(p[k]) } else { min[k] };
-                max[k] = if has_ray { max[k].max(p[k]) } else { max[k] };
+                let (low, high) = if has_ray { (p[k], p[k]) } else { (f32::INFINITY, f32::NEG_INFINITY) };
+                min[k] = if low < min[k] { low } else { min[k] };
+                max[k] = if high > max[k] { high } else { max[k] };
             }
-            n += usize::from(has_ray);
+            binned += usize::from(has_ray);
+            finite += usize::from(is_finite);
         }
-        (self.min, self.max, self.binned) = (min, max, self.binned + n);
+        (self.min, self.max, self.binned) = (min, max, self.binned + binned);
+        finite - binned
+    }
+
+    /// The box holding both boxes' points.
+    fn union(&self, other: &BlockBox) -> BlockBox {
+        let mut out = *self;
+        for k in 0..3 {
+            out.min[k] = out.min[k].min(other.min[k]);
+            out.max[k] = out.max[k].max(other.max[k]);
+        }
+        out.binned += other.binned;
+        out
     }
 
     /// The rays the box's points may lie on: for `z > 0`, `x / z` is least
@@ -164,39 +217,53 @@ impl<'a> BlockIndex<'a> {
         let height = points.len().div_ceil(width);
         let blocks_wide = width.div_ceil(BLOCK_PX);
         let blocks_high = height.div_ceil(BLOCK_PX);
-        // One read of every point, a row of blocks to a task.
-        let rows: Vec<(Vec<BlockBox>, Vec<[f32; 3]>)> = (0..blocks_high)
-            .into_par_iter()
-            .map(|bj| {
-                let mut row = vec![EMPTY_BOX; blocks_wide];
+        // One read of every point, a row of blocks to a task, into the
+        // boxes of the blocks' patches.
+        let mut patch_boxes = vec![EMPTY_BOX; blocks_wide * blocks_high * PATCHES_PER_BLOCK];
+        let asides: Vec<Vec<[f32; 3]>> = patch_boxes
+            .par_chunks_mut((blocks_wide * PATCHES_PER_BLOCK).max(1))
+            .enumerate()
+            .map(|(bj, row)| {
                 let mut aside = Vec::new();
                 for j in bj * BLOCK_PX..((bj + 1) * BLOCK_PX).min(height) {
                     let line = &points[j * width..((j + 1) * width).min(points.len())];
-                    for (b, pixels) in row.iter_mut().zip(line.chunks(BLOCK_PX)) {
-                        b.add(pixels);
+                    let patch_row = (j - bj * BLOCK_PX) / PATCH_PX * PATCHES_A_SIDE;
+                    let mut too_near = 0;
+                    for (k, pixels) in line.chunks(PATCH_PX).enumerate() {
+                        let (block, patch) = (k / PATCHES_A_SIDE, k % PATCHES_A_SIDE);
+                        too_near += row[block * PATCHES_PER_BLOCK + patch_row + patch].add(pixels);
                     }
-                    let too_near =
-                        |p: &&[f32; 3]| p[2] <= MIN_BINNED_DEPTH_MM as f32 && p.iter().all(|c| c.is_finite());
-                    aside.extend(line.iter().filter(too_near));
+                    if too_near > 0 {
+                        let is_too_near =
+                            |p: &&[f32; 3]| p[2] <= MIN_BINNED_DEPTH_MM as f32 && p.iter().all(|c| c.is_finite());
+                        aside.extend(line.iter().filter(is_too_near));
+                    }
                 }
-                (row, aside)
+                aside
             })
             .collect();
-        let mut boxes = Vec::with_capacity(blocks_wide * blocks_high);
-        let mut aside = Vec::new();
-        for (row, row_aside) in rows {
-            boxes.extend(row);
-            aside.extend(row_aside);
-        }
-        let rays: Vec<RayRect> = boxes.iter().map(BlockBox::rays).collect();
-        let ranges: Vec<[f64; 2]> = boxes.iter().map(BlockBox::ranges).collect();
-        let binned = boxes.iter().map(|b| b.binned).sum();
+        let aside = asides.concat();
+        // Each block's bounds from its patches' boxes.
+        let bounds: Vec<(RayRect, [f64; 2], usize)> = patch_boxes
+            .par_chunks(PATCHES_PER_BLOCK)
+            .map(|patches| {
+                let block = patches.iter().fold(EMPTY_BOX, |b, p| b.union(p));
+                (block.rays(), block.ranges(), block.binned)
+            })
+            .collect();
+        let rays: Vec<RayRect> = bounds.iter().map(|b| b.0).collect();
+        let ranges: Vec<[f64; 2]> = bounds.iter().map(|b| b.1).collect();
+        let binned = bounds.iter().map(|b| b.2).sum();
+        let farthest_mm = ranges.iter().map(|r| r[1]).fold(0.0, f64::max);
         let mut index = BlockIndex {
             points,
             width,
             blocks_wide,
             rays,
             ranges,
+            patch_bounds: (0..bounds.len()).map(|_| OnceLock::new()).collect(),
+            patch_boxes,
+            farthest_mm,
             aside,
             lo: [f64::INFINITY; 2],
             hi: [f64::NEG_INFINITY; 2],
@@ -215,29 +282,36 @@ impl<'a> BlockIndex<'a> {
     }
 
     /// The frame's least and greatest ray, each exactly as the points'
-    /// own divisions give it: the blocks whose bounds may hold it are read
-    /// point by point, the most promising first, until no other block's
-    /// bound can beat the best found (a few columns or rows of blocks at
-    /// the frame's edges).
+    /// own divisions give it: the block whose bound is the most promising
+    /// is read first, then every other block whose bound can beat the
+    /// best found so far, patch by patch (a few columns or rows of blocks
+    /// at the frame's edges). The extreme point's own block and patch are
+    /// among them, as their bounds hold it.
     fn exact_ray_bounds(&self) -> ([f64; 2], [f64; 2]) {
-        // (the block bound's side of the ray, whether it is an upper end,
-        // the ray's coordinate)
+        // (the bound's side of the ray, whether it is an upper end, the
+        // ray's coordinate)
         let extreme = |bound: usize, upper: bool, coordinate: usize| -> f64 {
             let sign = if upper { -1.0 } else { 1.0 };
-            let mut order: Vec<(f64, usize)> = (0..self.rays.len())
-                .filter(|&b| self.rays[b][0] <= self.rays[b][1])
-                .map(|b| (sign * self.rays[b][bound], b))
-                .collect();
-            order.sort_by(|a, b| a.0.total_cmp(&b.0));
+            let key = |rays: &RayRect| if rays[0] <= rays[1] { sign * rays[bound] } else { f64::INFINITY };
             let mut best = f64::INFINITY;
-            for (key, b) in order {
-                if key > best {
-                    break;
+            let read = |b: usize, best: &mut f64| {
+                for (k, patch) in self.patches(b).iter().enumerate() {
+                    if key(&patch.rays) <= *best {
+                        self.patch_points(b, k, |p| {
+                            let (u, v) = ray_of(p).expect("a patch's points read have a ray");
+                            *best = best.min(sign * if coordinate == 0 { u } else { v });
+                        });
+                    }
                 }
-                self.block_points(b, |p| {
-                    let (u, v) = ray_of(p).expect("a block's points read have a ray");
-                    best = best.min(sign * if coordinate == 0 { u } else { v });
-                });
+            };
+            let first = (0..self.rays.len()).min_by(|&a, &b| key(&self.rays[a]).total_cmp(&key(&self.rays[b])));
+            if let Some(first) = first {
+                read(first, &mut best);
+            }
+            for b in 0..self.rays.len() {
+                if Some(b) != first && key(&self.rays[b]) <= best {
+                    read(b, &mut best);
+                }
             }
             sign * best
         };
@@ -389,22 +463,58 @@ impl<'a> BlockIndex<'a> {
         }
     }
 
-    /// Visits the points of block `b` that have a ray, row by row.
-    pub fn block_points(&self, b: usize, mut visit: impl FnMut(&[f32; 3])) {
+    /// The bounds of block `b`'s patches, worked out from their boxes the
+    /// first time the block is read.
+    fn patches(&self, b: usize) -> &[PatchBounds] {
+        self.patch_bounds[b].get_or_init(|| {
+            self.patch_boxes[b * PATCHES_PER_BLOCK..(b + 1) * PATCHES_PER_BLOCK]
+                .iter()
+                .map(|p| PatchBounds { rays: p.rays(), ranges: p.ranges() })
+                .collect()
+        })
+    }
+
+    /// Visits the points of patch `k` of block `b` that have a ray, row
+    /// by row.
+    fn patch_points(&self, b: usize, k: usize, mut visit: impl FnMut(&[f32; 3])) {
         let (bi, bj) = (b % self.blocks_wide, b / self.blocks_wide);
-        let first_row = bj * BLOCK_PX;
-        for j in first_row..first_row + BLOCK_PX {
+        let first_column = bi * BLOCK_PX + k % PATCHES_A_SIDE * PATCH_PX;
+        let first_row = bj * BLOCK_PX + k / PATCHES_A_SIDE * PATCH_PX;
+        // A patch beyond a frame not a whole number of blocks wide holds
+        // nothing; the last row of a frame not a whole number of rows is
+        // short.
+        let end_column = (first_column + PATCH_PX).min(self.width);
+        for j in first_row..first_row + PATCH_PX {
             let row = j * self.width;
-            if row >= self.points.len() {
+            if row >= self.points.len() || first_column >= end_column {
                 break;
             }
-            // The last row of a frame not a whole number of rows is short.
-            let from = (row + bi * BLOCK_PX).min(self.points.len());
-            let to = (row + ((bi + 1) * BLOCK_PX).min(self.width)).clamp(from, self.points.len());
+            let from = (row + first_column).min(self.points.len());
+            let to = (row + end_column).clamp(from, self.points.len());
             for p in &self.points[from..to] {
                 if ray_of(p).is_some() {
                     visit(p);
                 }
+            }
+        }
+    }
+
+    /// Visits the points of block `b` that have a ray and lie in a patch
+    /// whose rays meet `rect` and whose ranges meet `[near, far]`, patch
+    /// by patch: every point of the block with its ray in `rect` and its
+    /// range in `[near, far]`, and some others.
+    pub fn block_points_meeting(
+        &self,
+        b: usize,
+        rect: &RayRect,
+        near: f64,
+        far: f64,
+        mut visit: impl FnMut(&[f32; 3]),
+    ) {
+        for (k, patch) in self.patches(b).iter().enumerate() {
+            let [r0, r1] = patch.ranges;
+            if meets(&patch.rays, rect) && r1 >= near && r0 <= far {
+                self.patch_points(b, k, &mut visit);
             }
         }
     }
@@ -427,7 +537,7 @@ impl<'a> BlockIndex<'a> {
         let rect = Self::window(centre, radius).unwrap_or(everything);
         let distance = centre.norm();
         let (near, far) = (distance - radius - RANGE_SLACK_MM, distance + radius + RANGE_SLACK_MM);
-        self.blocks_meeting(&rect, near, far, |b| self.block_points(b, &mut visit));
+        self.blocks_meeting(&rect, near, far, |b| self.block_points_meeting(b, &rect, near, far, &mut visit));
     }
 
     /// The distance from `p` to the nearest indexed point apart from it,
@@ -437,8 +547,7 @@ impl<'a> BlockIndex<'a> {
         // About two pixels' rays at the point's depth to begin with.
         let per_pixel = self.cell / BLOCK_PX as f64;
         let radius = (2.0 * per_pixel * f64::from(p[2]).abs().max(MIN_BINNED_DEPTH_MM)).max(1e-6);
-        let farthest_mm = self.ranges.iter().map(|r| r[1]).fold(0.0, f64::max);
-        nearest_apart_by_balls(p, radius, farthest_mm, |centre, radius, visit| self.near(centre, radius, visit))
+        nearest_apart_by_balls(p, radius, self.farthest_mm, |centre, radius, visit| self.near(centre, radius, visit))
     }
 }
 

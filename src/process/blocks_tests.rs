@@ -67,10 +67,12 @@ fn a_ball_finds_what_the_index_by_rays_and_a_scan_find() {
 #[test]
 fn the_frame_bounds_and_the_nearest_other_point_are_the_index_by_rays() {
     let mut points = frame(150, 97);
-    // A repeated point, a point at the camera's plane and one behind it.
+    // A repeated point, a point at the camera's plane, one behind it and
+    // one with an infinite coordinate.
     points[500] = points[501];
     points[900] = [0.5, 0.5, 0.5];
     points[901] = [-3.0, 2.0, -40.0];
+    points[902] = [f32::INFINITY, 2.0, 300.0];
     let blocks = BlockIndex::new(&points, 150);
     let rays = RayIndex::new(&points);
     assert_eq!(blocks.ray_bounds(), ray_bounds(&points));

@@ -28,6 +28,7 @@ use std::cmp::Ordering;
 use std::sync::Arc;
 
 use nalgebra::{Rotation3, Unit, Vector3};
+use rayon::prelude::*;
 
 use super::blocks::BlockIndex;
 use super::rays::RayIndex;
@@ -194,10 +195,12 @@ impl<'a> Obstacles<'a> {
     /// `None` with too few points in front of the camera.
     fn angular_spacing(&self, points: &[[f32; 3]]) -> Option<f64> {
         let stride = (points.len() / SPACING_SAMPLE_POINTS).max(1);
-        let mut gaps: Vec<f64> = points
-            .iter()
-            .step_by(stride)
-            .filter(|p| p[2] > 0.0 && p.iter().all(|c| c.is_finite()))
+        let samples: Vec<&[f32; 3]> =
+            points.iter().step_by(stride).filter(|p| p[2] > 0.0 && p.iter().all(|c| c.is_finite())).collect();
+        // Each sample's query stands alone, and the median does not
+        // depend on the order the gaps are gathered in.
+        let mut gaps: Vec<f64> = samples
+            .into_par_iter()
             .filter_map(|p| {
                 let (gap, repeats) = self.index.nearest_apart(p);
                 // The point itself is one of its repeats.

@@ -71,6 +71,8 @@ pub struct RayIndex {
     /// Per tile, the nearest and farthest range of its points, mm
     /// (infinite and negative infinite for an empty tile).
     tile_ranges: Vec<[f32; 2]>,
+    /// The farthest range of any binned point, mm (0 for none).
+    farthest_mm: f64,
     /// The points too near the camera's plane to bin.
     aside: Vec<[f32; 3]>,
 }
@@ -184,7 +186,19 @@ impl RayIndex {
                 bounds
             })
             .collect();
-        RayIndex { cell, origin, width, height, starts, points: binned_points, tiles_wide, tile_ranges, aside }
+        let farthest_mm = tile_ranges.iter().map(|r| f64::from(r[1])).fold(0.0, f64::max);
+        RayIndex {
+            cell,
+            origin,
+            width,
+            height,
+            starts,
+            points: binned_points,
+            tiles_wide,
+            tile_ranges,
+            farthest_mm,
+            aside,
+        }
     }
 
     /// The points binned by ray, in cell order: all the finite ones but
@@ -244,8 +258,7 @@ impl RayIndex {
     /// when every point lies on `p`.
     pub fn nearest_apart(&self, p: &[f32; 3]) -> (Option<f64>, usize) {
         let radius = self.cell * f64::from(p[2]).abs().max(MIN_BINNED_DEPTH_MM);
-        let farthest_mm = self.tile_ranges.iter().map(|r| f64::from(r[1])).fold(0.0, f64::max);
-        nearest_apart_by_balls(p, radius, farthest_mm, |centre, radius, visit| self.near(centre, radius, visit))
+        nearest_apart_by_balls(p, radius, self.farthest_mm, |centre, radius, visit| self.near(centre, radius, visit))
     }
 }
 

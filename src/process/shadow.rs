@@ -274,8 +274,9 @@ impl<'a> LazyShadows<'a> {
             origin[1] + (nj0 as f64 - 1.0) * cell,
             origin[1] + (nj1 as f64 + 2.0) * cell,
         ];
-        self.blocks.blocks_meeting(&rect, f64::NEG_INFINITY, f64::INFINITY, |b| {
-            self.blocks.block_points(b, |p| {
+        let (near, far) = (f64::NEG_INFINITY, f64::INFINITY);
+        self.blocks.blocks_meeting(&rect, near, far, |b| {
+            self.blocks.block_points_meeting(b, &rect, near, far, |p| {
                 let [x, y, z] = p.map(f64::from);
                 let (i, j) = (((x / z - origin[0]) / cell) as usize, ((y / z - origin[1]) / cell) as usize);
                 if (ni0..=ni1).contains(&i) && (nj0..=nj1).contains(&j) {

@@ -251,6 +251,16 @@ fn best_steep_plane(points: &[Vec3], n: &Vec3, tolerance: f64) -> Option<Plane> 
 /// and more.
 pub const VALLEY_MIDDLE_SLANT_DEG: f64 = 15.0;
 
+/// The valley two faces open above which they are told as one surface
+/// with a crease, not a groove's two flanks, degrees: each face within 5°
+/// of one plane. The grooves a cell welds open 40 to 130° (the suites'
+/// V-grooves 40 to 70°, a hand-cut real one 126°); a flank 5° off the
+/// plates' plane would make a groove 30 mm wide only 1.3 mm deep. What
+/// is in view is then one plate, or a butt's plates seen as one across a
+/// gap narrower than the cloud resolves, with a slight turn or noise
+/// parting its points (an I-butt 0.5 mm open at 1 mm voxels reads 179°).
+pub const ONE_SURFACE_MIN_OPENING_DEG: f64 = 170.0;
+
 /// What rises over a lone plane in view towards the camera, when no web's
 /// top is seen: the plane fitted to those points and the valley it makes
 /// with the lone plane. Read to say what is in view when a joint cannot
@@ -288,11 +298,16 @@ impl Valley {
     /// What the valley is, in words, for a refusal.
     pub fn describe(&self) -> String {
         let [lone, rising] = self.slants_deg;
-        let seen = format!(
-            "only two faces are in view, meeting in a valley that opens {:.0}° (turned {lone:.0}° and {rising:.0}° \
-             from the camera's line of sight)",
-            self.opening_deg
-        );
+        let turned = format!("turned {lone:.0}° and {rising:.0}° from the camera's line of sight");
+        if self.opening_deg >= ONE_SURFACE_MIN_OPENING_DEG {
+            return format!(
+                "only one surface is in view, its two parts within {:.0}° of one plane ({turned}): one plate, or a \
+                 butt's plates seen as one across a gap narrower than the cloud resolves",
+                (180.0 - self.opening_deg).round().max(1.0)
+            );
+        }
+        let seen =
+            format!("only two faces are in view, meeting in a valley that opens {:.0}° ({turned})", self.opening_deg);
         if self.is_groove() {
             format!(
                 "{seen}: a groove's two flanks with no plate top beside them, so neither the groove's edges nor its \
@@ -457,6 +472,17 @@ mod tests {
         assert!((seen.opening_deg - 90.0).abs() < 1.0, "{seen:?}");
         assert!(seen.slants_deg[0] < 20.0 && seen.slants_deg[1] > 50.0 && !seen.is_groove(), "{seen:?}");
         assert!(!seen.describe().contains("groove"), "{}", seen.describe());
+        // Two plates 1° apart, their joint unresolved: one surface.
+        let rise = 1.5f64.to_radians().tan();
+        let creased: Vec<Vec3> = (0..100)
+            .flat_map(|i| (-100..=100).map(move |j| (i, j)))
+            .map(|(i, j)| Vec3::new(2.0 * j as f64, -50.0 + i as f64, 700.0 - 2.0 * f64::from(j).abs() * rise))
+            .collect();
+        let seen = valley_of(&creased, &|p: &Vec3| p.x < 0.0).expect("a valley");
+        assert!(seen.opening_deg > ONE_SURFACE_MIN_OPENING_DEG, "{seen:?}");
+        let said = seen.describe();
+        assert!(said.contains("only one surface is in view, its two parts within 3° of one plane"), "{said}");
+        assert!(!said.contains("groove"), "{said}");
         // Nothing over a lone plane: no valley.
         assert_eq!(valley_of(&flange(), &|p: &Vec3| p.z == 700.0), None);
     }

@@ -228,7 +228,8 @@ pub static TOO_FEW_PLANES: Rule = Rule {
              plates lie closer than the cloud resolves. The refusal says what rises beside the lone plane: two \
              faces meeting in a valley wider than a web stands on its flange, or obtuse and seen down its middle \
              (both faces turned about as far from the rays), are a groove's two flanks with no plate top in view, \
-             and no tee is tried under `auto`.",
+             and no tee is tried under `auto`; two faces within a few degrees of one plane are one surface, \
+             one plate or a butt's plates seen as one.",
     parameters: &[
         FACING_ANGLE_MAX,
         Parameter {
@@ -236,6 +237,12 @@ pub static TOO_FEW_PLANES: Rule = Rule {
             unit: "°",
             meaning: "most two faces' slants from the rays differ for the camera to look down a valley's middle",
             source: Source::Constant { file: WEB_FACE, name: "VALLEY_MIDDLE_SLANT_DEG" },
+        },
+        Parameter {
+            name: "ONE_SURFACE_MIN_OPENING_DEG",
+            unit: "°",
+            meaning: "the valley two faces open above which they are told as one surface, not a groove's flanks",
+            source: Source::Constant { file: WEB_FACE, name: "ONE_SURFACE_MIN_OPENING_DEG" },
         },
     ],
     fires: &[

@@ -91,9 +91,11 @@ fn eval_of_blocks_on_a_plate_judges_each_root() {
             .lines()
             .find(|l| l.starts_with("tuning") && l.contains(&format!("t_fillet, on the plate, {seen}")))
             .unwrap_or_else(|| panic!("no tuning row for the {seen} roots in\n{text}"));
-        // Roots, right, refused, not named, confident wrong.
+        // Confident wrong, not named, refused, right, roots (read from the
+        // row's end): of the two seen, the +y root is planned from its
+        // face, the -x one refused.
         let counts: Vec<&str> = tally.split_whitespace().rev().take(5).collect();
-        let expected = if seen == "seen" { ["0", "0", "2", "0", "2"] } else { ["0", "0", "0", "2", "2"] };
+        let expected = if seen == "seen" { ["0", "0", "1", "1", "2"] } else { ["0", "0", "0", "2", "2"] };
         assert_eq!(counts, expected, "{tally}");
     }
     assert!(!text.lines().any(|l| l.starts_with("held out")), "the filter keeps no held-out scene: {text}");

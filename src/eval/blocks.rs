@@ -187,16 +187,20 @@ mod tests {
     const SEEN_ROOTS: usize = 30;
 
     /// Roots right on the documented seeds under `t_fillet` and `auto`,
-    /// each as `[hidden, seen]`, as measured: every plan is refused, so
-    /// every hidden root is right and no seen one is planned. Under
-    /// `t_fillet` by `tee.nothing_stands_on_flange`: a block's top is no
-    /// web's top (wider than `pipeline.tee_web_thickness_max_mm`, and
-    /// square, not long and narrow), so the nearest plane, the block's
-    /// top, is read as the flange of a tee whose top is out of view, and
-    /// nothing stands on it; under `auto` by `joint.no_layout_fits` (the
-    /// layers a block's height apart are neither a butt nor a lap, and
-    /// with no web's top no tee is offered).
-    const MEASURED_RIGHT: [[usize; 2]; 2] = [[34, 0], [34, 0]];
+    /// each as `[hidden, seen]`, as measured. A block's top is a web's by
+    /// the face falling from it to the plate seen on both of its sides
+    /// (`tee.no_web_top`), and each of its sides a root read from its
+    /// face where the camera sees that face from outside it: 8 of the 30
+    /// seen roots are planned under both requests (blocks-01, -02 the
+    /// stacked block's, -03 two, -04, -08 the lower block's, -09 two).
+    /// Every hidden root is right: named by the rule that left it, none
+    /// planned. The seen roots left are refused: no face seen falling
+    /// from the top at small tilts, or the plane under it seen on one side
+    /// only (`tee.nothing_stands_on_flange`, `joint.no_layout_fits`), a
+    /// face seen along the camera's rays, the other block of a stacked
+    /// scene (one member is planned per frame), and the fit and coverage
+    /// gates.
+    const MEASURED_RIGHT: [[usize; 2]; 2] = [[34, 8], [34, 8]];
 
     /// The held-out seeds, run once when the planner is frozen: the
     /// outcomes are printed for the report, never tuned on.

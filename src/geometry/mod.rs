@@ -65,6 +65,33 @@ pub fn extent(values: impl IntoIterator<Item = f64>) -> (f64, f64) {
     values.into_iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| (lo.min(v), hi.max(v)))
 }
 
+/// The turns [`outline_axis`] tries over a quarter turn: half a degree
+/// apart, finer than a plate's edge is read to.
+const OUTLINE_TURNS: usize = 180;
+
+/// Of `points`, seen along `normal`, the direction across `normal` of one
+/// side of the rectangle round them that covers the least area (None for
+/// a normal that spans no plane or fewer than three points). A square or
+/// nearly square plane's spread (its long axis) says nothing of where its
+/// sides run; its outline does.
+pub fn outline_axis(points: &[Vec3], normal: &Vec3) -> Option<Vec3> {
+    let [a, b] = plane_axes(normal)?;
+    if points.len() < 3 {
+        return None;
+    }
+    let flat: Vec<(f64, f64)> = points.iter().map(|p| (a.dot(p), b.dot(p))).collect();
+    let area = |turn: f64| {
+        let (c, s) = (turn.cos(), turn.sin());
+        let (lo_e, hi_e) = extent(flat.iter().map(|(x, y)| c * x + s * y));
+        let (lo_u, hi_u) = extent(flat.iter().map(|(x, y)| c * y - s * x));
+        (hi_e - lo_e) * (hi_u - lo_u)
+    };
+    let turn = (0..OUTLINE_TURNS)
+        .map(|k| k as f64 * std::f64::consts::FRAC_PI_2 / OUTLINE_TURNS as f64)
+        .min_by(|x, y| area(*x).total_cmp(&area(*y)))?;
+    Some(a * turn.cos() + b * turn.sin())
+}
+
 /// Distance from `p` to the segment `a..b`.
 pub fn distance_to_segment(p: &Vec3, a: &Vec3, b: &Vec3) -> f64 {
     let ab = b - a;

@@ -399,7 +399,7 @@ fn plan_workpiece(
         }
         (selected, nearest) => (selected, nearest.filter(|_| face_beside_layers)),
     };
-    let background::Selected { workpiece, layout, evidence: layers } =
+    let background::Selected { workpiece, layout, evidence: layers, web_by_faces } =
         selected.map_err(|e| PlanError::by(e.rule(), &e)).seen_as(requested)?;
     if layout == Layout::Lap {
         ctx.trace.record(|t| t.joint = Some(JointType::Lap));
@@ -449,7 +449,7 @@ fn plan_workpiece(
         }
         // A web on its flange: its fillet roots, not two plates' edges.
         Layout::Tee => {
-            let tee = tee::SeenTee::of(&workpiece, tee::Flange::BothSides);
+            let tee = tee::SeenTee { every_side: web_by_faces, ..tee::SeenTee::of(&workpiece, tee::Flange::BothSides) };
             tee::plan(ctx, tee, layers).seen_as(joint)
         }
     }

@@ -42,6 +42,10 @@ pub(super) struct SeenTee<'w> {
     pub flange_pieces: Vec<&'w PlaneCluster>,
     pub flange_sides: Flange,
     pub depth_to_support_mm: Option<f64>,
+    /// The web is a member with every side a root (a block standing on
+    /// the flange, [`super::background::Selected::web_by_faces`]): its
+    /// ends' roots are read beside the two along it.
+    pub every_side: bool,
 }
 
 impl<'w> SeenTee<'w> {
@@ -54,6 +58,7 @@ impl<'w> SeenTee<'w> {
             flange_pieces: std::iter::once(flange).chain(&workpiece.layer_mates[1]).collect(),
             flange_sides,
             depth_to_support_mm: workpiece.depth_to_support_mm,
+            every_side: false,
         }
     }
 }
@@ -83,8 +88,12 @@ pub(super) fn plan(
         in_view: in_view.as_ref().map(|f| f as &dyn Fn(&Vec3) -> bool),
         border: ctx.view_border(),
         max_beyond_mm: config.quality.max_joint_beyond_seam_mm,
+        every_side: tee.every_side,
     };
     let mut roots = Vec::from(fillet::find_roots(&view));
+    if tee.every_side {
+        roots.extend(fillet::find_end_roots(&view));
+    }
     if tee.flange_sides == Flange::OneSide {
         // An inside corner: the side with no flange has no root at all.
         roots.retain(|root| root.as_ref().map_or_else(|not| not.flange_seen, |_| true));

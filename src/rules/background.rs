@@ -93,6 +93,19 @@ const BAR_ELONGATION: Parameter = Parameter {
     meaning: "least length over width of a plane that can lie across another",
     source: Source::Constant { file: BACKGROUND, name: "BAR_ELONGATION" },
 };
+const FALL_HEIGHT_BANDS: Parameter = Parameter {
+    name: "FALL_HEIGHT_BANDS",
+    unit: "",
+    meaning: "a face falls from a wide top when the points round one side of its outline fill this many bands of \
+              height between it and the plane under it",
+    source: Source::Constant { file: BACKGROUND, name: "FALL_HEIGHT_BANDS" },
+};
+const FALL_MIN_POINTS: Parameter = Parameter {
+    name: "FALL_MIN_POINTS",
+    unit: "",
+    meaning: "fewest points between a wide top and the plane under it that show a face falling from it",
+    source: Source::Constant { file: BACKGROUND, name: "FALL_MIN_POINTS" },
+};
 const CORNER_WEB_WIDTH_MAX: Parameter = Parameter {
     name: "CORNER_WEB_WIDTH_MAX_MM",
     unit: "mm",
@@ -257,15 +270,18 @@ pub static TEE_NO_WEB_TOP: Rule = Rule {
     stage: Stage::Background,
     effect: Effect::Refuses,
     gate: None,
-    summary: "under a tee request, a long narrow plane stands a web's height over a plane beside it",
-    reason: "A tee's web stands on its flange: from the camera's side its top is a long narrow plane, no wider than \
-             a web is thick, no higher over the flange than a web stands, with the flange seen beside it; and it \
-             stands as a plate on its edge does: higher than any lap's upper plate is thick, or, a short web, \
-             several times as tall as its top is wide. A narrow strip no higher than a lap step and about as wide \
-             as it is tall, or wider, is a bar or a clamp lying on a plate; a narrow plane under a larger one is a \
-             V-groove's root land below the workpiece's top, not a web's top. (A short strip standing taller than \
-             it is wide is read as a web only under the tee's request: a bar or clamp standing on edge across \
-             a butt or lap joint's plates shows the same layers.)",
+    summary: "under a tee request, a member's top stands a web's height over a plane beside it",
+    reason: "A tee's web stands on its flange: from the camera's side its top is a plane no higher over the flange \
+             than a web stands, with the flange seen beside it, and it stands as a member does: either a long \
+             narrow top, no wider than a web is thick, higher than any lap's upper plate is thick or, a short \
+             web, several times as tall as its top is wide; or a top of any width or shape higher than any lap's \
+             upper plate is thick with a face seen falling from its edges to the plane under it (a block or a \
+             box standing on a plate, every side of it a root). A narrow strip no higher than a lap step and \
+             about as wide as it is tall, or wider, is a bar or a clamp lying on a plate; a narrow plane under a \
+             larger one is a V-groove's root land below the workpiece's top, not a web's top; a wide plane over \
+             another with no face between them is held over it, not standing on it. (A short strip standing \
+             taller than it is wide is read as a web only under the tee's request: a bar or clamp standing on \
+             edge across a butt or lap joint's plates shows the same layers.)",
     parameters: &[
         WEB_THICKNESS_MAX,
         BAR_ELONGATION,
@@ -273,14 +289,18 @@ pub static TEE_NO_WEB_TOP: Rule = Rule {
         WEB_MIN_HEIGHT_PER_WIDTH,
         WEB_HEIGHT_MAX,
         COPLANAR_TOLERANCE,
+        FALL_MIN_POINTS,
+        FALL_HEIGHT_BANDS,
     ],
     fires: &[
         "src/pipeline/background/tests.rs::a_bar_lying_on_the_plates_or_too_wide_is_no_web",
         "src/pipeline/background/tests.rs::a_v_groove_s_root_land_under_its_plates_is_no_web_s_top",
+        "src/pipeline/background/standing_tests.rs::a_wide_top_with_no_face_falling_to_the_plate_or_no_higher_than_a_lap_step_is_no_web",
     ],
     holds: &[
         "src/pipeline/background/tests.rs::a_web_a_web_height_over_its_flange_seen_on_both_sides_is_a_tee",
         "src/pipeline/background/tests.rs::a_web_shorter_than_a_lap_step_standing_taller_than_it_is_thick_is_a_tee",
+        "src/pipeline/background/standing_tests.rs::a_block_standing_on_a_plate_is_a_tee_by_the_face_falling_from_its_top",
     ],
 };
 
@@ -480,16 +500,31 @@ pub static NO_LAYOUT_FITS: Rule = Rule {
     gate: Some(Gate::JointUnknown),
     summary: "under `auto`, the plates lie side by side in one plane, one on the other, or as a web on a flange",
     reason: "With no joint type named, the layers of planes decide it: two plates side by side in one plane are a \
-             butt joint, two layers one plate thickness apart a lap, a web's top over its flange a tee. Where the \
-             planes fit none of these, the frame shows no joint the planner can tell; the refusal says why each \
-             layout failed.",
-    parameters: &[COPLANAR_TOLERANCE, LAP_STEP_MIN, LAP_STEP_MAX, SIDE_BY_SIDE_AREA_RATIO],
+             butt joint, two layers one plate thickness apart a lap, a web's top over its flange a tee; and where \
+             neither a butt nor a lap fits, a wider top standing more than a lap step over a plane seen on both \
+             of its sides, a face seen falling from its edges to that plane, is a member standing on a plate (a \
+             block), a tee each of whose sides is a root. (A clamp or bar lying across a butt or lap joint stands \
+             so too, which is why the butt's and the lap's layers are weighed first.) Where the planes fit none \
+             of these, the frame shows no joint the planner can tell; the refusal says why each layout failed.",
+    parameters: &[
+        COPLANAR_TOLERANCE,
+        LAP_STEP_MIN,
+        LAP_STEP_MAX,
+        SIDE_BY_SIDE_AREA_RATIO,
+        WEB_HEIGHT_MAX,
+        FALL_MIN_POINTS,
+        FALL_HEIGHT_BANDS,
+    ],
     fires: &[
         "src/pipeline/background/tests.rs::with_no_type_given_the_layers_decide",
         "src/pipeline/background/tests.rs::a_third_plate_beside_a_butt_pair_is_refused_and_a_piece_along_it_is_not",
         "tests/measured_clouds.rs::a_clamp_across_the_smaller_plate_is_no_lap_s_upper_plate",
+        "src/pipeline/background/standing_tests.rs::a_wide_top_with_no_face_falling_to_the_plate_or_no_higher_than_a_lap_step_is_no_web",
     ],
-    holds: &["src/pipeline/background/tests.rs::with_no_type_given_the_layers_decide"],
+    holds: &[
+        "src/pipeline/background/tests.rs::with_no_type_given_the_layers_decide",
+        "src/pipeline/background/standing_tests.rs::a_block_standing_on_a_plate_is_a_tee_by_the_face_falling_from_its_top",
+    ],
 };
 
 const WEB_FACE: &str = "src/pipeline/web_face.rs";

@@ -195,7 +195,9 @@ pub static JOINT_COVERAGE: Rule = Rule {
              the joint only (a streak or a shadow over the rest), so it would leave the rest unwelded, or its \
              edges belong to something else than the joint. For a fillet root the visible joint is where the \
              web's face and the flange up to it are seen together, each stretch of it measured as the root is, \
-             from where both are seen to where either ends. `quality.warn_only` may name the gate \
+             from where both are seen to where either ends; for a member standing on a plate with every \
+             side a root (a block), at least as long as its top's edge over that side is seen, as the joint runs \
+             the whole side. `quality.warn_only` may name the gate \
              (`joint_coverage`) to plan the seam with a warning instead.",
     parameters: &[Parameter {
         name: "min_joint_coverage",

@@ -147,7 +147,10 @@ pub static TEE_ROOT_HIDDEN_BY_WEB: Rule = Rule {
              beside it, from the camera or from the projector. Where fewer than a face's worth of flange points \
              lie beyond the web's edge on one side, nothing shows where that root is. Where the web's top is out \
              of view (a crop round one root), the one side face seen places the web; the other face, behind it, \
-             is neither seen nor placed. Such a root is named as not planned, never invented.",
+             is neither seen nor placed. A member standing with every side a root (a block, wider than a web is \
+             thick) shows a side face only to a camera outside that face: from over its top or beyond it the \
+             face is seen from behind its plane, and the flange's edge beside it is where the member hides the \
+             flange, not its root. Such a root is named as not planned, never invented.",
     parameters: &[MIN_FACE_POINTS],
     fires: &[
         "src/pipeline/fillet/tests.rs::a_web_seen_by_one_face_only_gives_that_face_s_root_and_names_the_other",

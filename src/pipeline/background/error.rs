@@ -88,11 +88,14 @@ pub enum BackgroundError {
     LooksLikeTee { joint: JointType, top_mm2: f64, width_mm: f64, height_mm: f64, first_mm2: f64, second_mm2: f64 },
     /// A tee was asked for, and no long narrow plane lies a web's height
     /// over a plane beside it: more than `min_mm` or, shorter, at least
-    /// `min_height_per_width` times its width, and at most `max_mm`.
+    /// `min_height_per_width` times its width, and at most `max_mm`; nor
+    /// does a wider one stand more than `min_mm` over a plane with a face
+    /// falling from it to that plane.
     #[error(
         "found {found} planes but no long narrow one (a web's top, at most {max_width_mm} mm wide) standing over a \
          plane beside it more than {min_mm} mm, or at least {min_height_per_width} times its width, and at most \
-         {max_mm} mm (offsets {offsets_mm:?} mm) for a tee joint"
+         {max_mm} mm, nor a wider one standing more than {min_mm} mm over a plane with a face seen falling to it \
+         (offsets {offsets_mm:?} mm) for a tee joint"
     )]
     NoWeb { found: usize, offsets_mm: Vec<f64>, min_mm: f64, min_height_per_width: f64, max_mm: f64, max_width_mm: f64 },
     /// The joint type was left to the planner, and a long narrow plane

@@ -9,7 +9,8 @@ use crate::joint::JointType;
 use super::super::workpieces::MAX_JOINT_OPENING_MM;
 use super::beside::standing_beside;
 use super::placement::{
-    BAR_ELONGATION, SIDE_BY_SIDE_AREA_RATIO, lies_across, lies_between_pair, lies_beyond_pair, seen_beside, side_of,
+    BAR_ELONGATION, FALL_MIN_POINTS, SIDE_BY_SIDE_AREA_RATIO, face_falls_from, lies_across, lies_between_pair,
+    lies_beyond_pair, seen_beside, side_of, spacing_of,
 };
 use super::{BackgroundError, Layout, PlaneCluster, Selected, Selection, Workpiece};
 
@@ -80,12 +81,15 @@ fn find_butt(l: &Layers, s: &Selection, joint: JointType) -> Result<usize, Backg
 /// A tee's web top over its flange: the top's place in the layers, the
 /// flange's layer, and the largest flange piece on each side of the web
 /// (the side `normal × long axis` points to second), None on a side where
-/// no piece is seen.
+/// no piece is seen; and whether the top was taken for a web's by the
+/// faces falling from it rather than by its shape (a block's top, wider
+/// than a web is thick).
 #[derive(Debug, Clone, Copy, PartialEq)]
 struct TeeLayers {
     top: (usize, usize),
     flange: usize,
     sides: [Option<usize>; 2],
+    by_faces: bool,
 }
 
 impl TeeLayers {
@@ -112,14 +116,48 @@ impl TeeLayers {
 /// a web's height under it ([`stands_as_web`]: more than a lap's step, or
 /// under a tee's request standing taller than its top is wide, as no bar
 /// or clamp lying on a plate does) and holds a plane beside it, with no
-/// larger plane nearer the camera (a V-groove's root land under its plates is narrow and long too). A
-/// web seen over its flange on both sides first; else one over a plane on
-/// one side.
+/// larger plane nearer the camera (a V-groove's root land under its plates
+/// is narrow and long too). A web seen over its flange on both sides
+/// first; else one over a plane on one side.
+///
+/// Where no such plane is found and a tee may be what the request names
+/// (`t_fillet`, or no type given), a wider or squarer top is a web's by
+/// its faces: one standing more than a lap's step over the plane beside
+/// it, seen on both of its sides, with a face falling from its edges to
+/// that plane ([`super::placement::face_falls_from`]), as a block standing
+/// on a plate shows. A member stands on a plate whatever the width of its top; a
+/// lap's upper plate stands no higher than a lap step, and a plate held
+/// over another shows no face between them.
 fn find_tee(l: &Layers, s: &Selection, points: &[Point]) -> Option<TeeLayers> {
+    let narrow = |top: &PlaneCluster| top.elongation >= BAR_ELONGATION && top.width_mm() <= s.web_thickness_max_mm;
+    let found = find_tee_by(l, s, points, |top, _| narrow(top).then_some(false));
+    if found.is_some() || !matches!(s.joint, None | Some(JointType::TFillet)) {
+        return found;
+    }
+    // Only over the plane seen on both of its sides: a wide top over a
+    // plane seen beside one side is as often a member's top over another
+    // part's edge (a tube's top over a beam seen past its end) as a
+    // block whose far side hides the plate.
+    find_tee_by(l, s, points, |top, height| {
+        let falls = || face_falls_from(top, height, &l.normal, s.neighbour_radius_mm, s.coplanar_tolerance_mm, points);
+        (!narrow(top) && height > s.lap_step_max_mm && falls()).then_some(true)
+    })
+    .filter(TeeLayers::two_sided)
+}
+
+/// [`find_tee`] with the tops `web_top` takes (given the top and its
+/// height over the layer under it), and says whether each was found by
+/// its falling faces (`Some(true)`) or its shape (`Some(false)`).
+fn find_tee_by(
+    l: &Layers,
+    s: &Selection,
+    points: &[Point],
+    web_top: impl Fn(&PlaneCluster, f64) -> Option<bool>,
+) -> Option<TeeLayers> {
     let mut one_sided = None;
     for (upper, layer) in l.layers.iter().enumerate() {
         let top = &layer[0];
-        if top.elongation < BAR_ELONGATION || top.width_mm() > s.web_thickness_max_mm || upper + 1 >= l.layers.len() {
+        if upper + 1 >= l.layers.len() {
             continue;
         }
         // A web's top is its workpiece's nearest surface: a narrow plane
@@ -133,6 +171,9 @@ fn find_tee(l: &Layers, s: &Selection, points: &[Point]) -> Option<TeeLayers> {
         if !stands_as_web(height, top.width_mm(), s) {
             continue;
         }
+        let Some(by_faces) = web_top(top, height) else {
+            continue;
+        };
         // On each side the piece the web's top stands beside, else the
         // largest: a plate of another workpiece grouped with the tee can
         // lie in the flange's layer, larger than the flange's piece
@@ -148,7 +189,18 @@ fn find_tee(l: &Layers, s: &Selection, points: &[Point]) -> Option<TeeLayers> {
             let pieces: Vec<&PlaneCluster> = side.iter().map(|&k| &l.layers[flange][k]).collect();
             side.get(standing_beside(top, &pieces, &l.normal, points, MAX_JOINT_OPENING_MM)).copied()
         };
-        let found = TeeLayers { top: (upper, 0), flange, sides: [on_side(false), on_side(true)] };
+        // A member's top found by its faces is wide, and one plate round
+        // it is one piece whose centroid lies on neither side: each side's
+        // piece is the one most seen beside the top there.
+        let beside_faces = |positive: bool| {
+            let side = usize::from(positive);
+            let seen: Vec<f64> =
+                l.layers[flange].iter().map(|c| seen_beside(top, c, &l.normal, points)[side]).collect();
+            let most = (0..seen.len()).max_by(|&a, &b| seen[a].total_cmp(&seen[b]))?;
+            (seen[most] >= FALL_MIN_POINTS as f64 * spacing_of(top).powi(2)).then_some(most)
+        };
+        let sides = if by_faces { [beside_faces(false), beside_faces(true)] } else { [on_side(false), on_side(true)] };
+        let found = TeeLayers { top: (upper, 0), flange, sides, by_faces };
         if found.two_sided() {
             return Some(found);
         }
@@ -373,7 +425,7 @@ pub fn robust_select(planes: Vec<PlaneCluster>, s: &Selection, points: &[Point])
                 max_width_mm: s.web_thickness_max_mm,
             });
         }
-        (Some(joint), Some(t)) if t.two_sided() => {
+        (Some(joint), Some(t)) if t.two_sided() && !t.by_faces => {
             let top = t.top(&l);
             return Err(BackgroundError::LooksLikeTee {
                 joint,
@@ -384,7 +436,10 @@ pub fn robust_select(planes: Vec<PlaneCluster>, s: &Selection, points: &[Point])
                 second_mm2: t.piece_mm2(&l, 1),
             });
         }
-        (None, Some(t)) if t.two_sided() => tee(&l, &t),
+        // A top found by its falling faces is weighed last: a clamp or a
+        // bar lying across a butt or lap joint stands over the plates too,
+        // and the butt's or lap's own layers are the better evidence.
+        (None, Some(t)) if t.two_sided() && !t.by_faces => tee(&l, &t),
         (Some(joint), _) if Layout::of(joint) == Layout::Butt => butt(&l, find_butt(&l, s, joint)?, String::new()),
         (Some(_), _) => lap(&l, find_lap(&l, s, points)?, String::new()),
         (None, _) => match (find_butt(&l, s, JointType::IButt), find_lap(&l, s, points)) {
@@ -416,8 +471,16 @@ pub fn robust_select(planes: Vec<PlaneCluster>, s: &Selection, points: &[Point])
                 lap(&l, lap_layers, ", and no two plates side by side in one plane".into())
             }
             (Err(butt_error), Ok(lap_layers)) => lap(&l, lap_layers, format!("; not a butt joint: {butt_error}")),
-            (Err(butt), Err(lap)) => {
-                if let Some(t) = tee_found {
+            (Err(butt), Err(lap)) => match tee_found {
+                // A top found by its falling faces (one found by its shape
+                // and seen on both sides was taken above): a member
+                // standing on a plate, where neither a butt nor a lap fits.
+                Some(t) if t.two_sided() => tee(&l, &t),
+                // Found by its shape, seen on one side only: a web whose
+                // far side hides the flange, or a bar at a plate's edge. (A
+                // top found by its faces seen so says nothing more than the
+                // layers do.)
+                Some(t) if !t.by_faces => {
                     let top = t.top(&l);
                     return Err(BackgroundError::OneSidedWeb {
                         top_mm2: top.area_mm2,
@@ -426,8 +489,8 @@ pub fn robust_select(planes: Vec<PlaneCluster>, s: &Selection, points: &[Point])
                         beside_mm2: t.piece_mm2(&l, 0).max(t.piece_mm2(&l, 1)),
                     });
                 }
-                return Err(BackgroundError::Unrecognised { butt: Box::new(butt), lap: Box::new(lap) });
-            }
+                _ => return Err(BackgroundError::Unrecognised { butt: Box::new(butt), lap: Box::new(lap) }),
+            },
         },
     };
     let [(pair_layer, first_k), (second_layer, second_k)] = picks;
@@ -443,5 +506,6 @@ pub fn robust_select(planes: Vec<PlaneCluster>, s: &Selection, points: &[Point])
     let (second, first) = (take(picks[1]), take(picks[0]));
     let layer_mates = [layers[picks[0].0].clone(), std::mem::take(&mut layers[picks[1].0])];
     let workpiece = Workpiece { plates: [first, second], depth_to_support_mm, support_between_plates, layer_mates };
-    Ok(Selected { workpiece, layout, evidence })
+    let web_by_faces = layout == Layout::Tee && tee_found.is_some_and(|t| t.by_faces);
+    Ok(Selected { workpiece, layout, evidence, web_by_faces })
 }

@@ -10,12 +10,14 @@
 //! lap is the nearest pair of layers one plate thickness apart; a tee is a
 //! long narrow plane (the web's top) a web's height, more than any lap
 //! step, over a layer it lies across, seen on both of its sides (the
-//! flange).
+//! flange), or a top of any width standing so with a face seen falling
+//! from its edges to the layer under it (a block standing on a plate,
+//! weighed under `auto` only where neither a butt nor a lap fits).
 //!
 //! The stage's files, by concern: [`error`] says why no workpiece was
 //! found, each reason a rule of `crate::rules::background`;
 //! [`placement`] reads where one plane cluster lies beside, across or
-//! beyond others; [`layers`] sorts the clusters into layers and finds the
+//! beyond others, and whether a face falls from one to a lower layer; [`layers`] sorts the clusters into layers and finds the
 //! butt, lap or tee layout in them; [`beside`] tells which plate of a
 //! layer another plane stands beside; [`corner`] recognises a corner
 //! joint by what the cloud shows beyond a plate's edge.
@@ -25,6 +27,8 @@ mod corner;
 mod error;
 mod layers;
 mod placement;
+#[cfg(test)]
+mod standing_tests;
 #[cfg(test)]
 mod tests;
 
@@ -239,4 +243,8 @@ pub struct Selected {
     /// What the layers showed: the plates' offsets and areas, and for an
     /// automatic choice why the other layout was not it.
     pub evidence: String,
+    /// A tee whose web's top was found by the faces falling from it to the
+    /// flange, not by its shape: a member wider than a web is thick (a
+    /// block) standing on the flange, each of whose sides has a root.
+    pub web_by_faces: bool,
 }

@@ -126,3 +126,91 @@ pub(super) fn lies_between_pair(a: &PlaneCluster, b: &PlaneCluster, c: &PlaneClu
         (0.0..=1.0).contains(&t) && c.elongation >= BAR_ELONGATION && c.width_mm() < a.width_mm().min(b.width_mm())
     })
 }
+
+/// How far outside a plane's trimmed edge the face falling from that edge
+/// may be seen, in point spacings on top of the plane criterion's rim:
+/// depth noise and a face seen at a grazing angle spread its points a
+/// little across.
+const FALL_REACH_SPACINGS: f64 = 4.0;
+
+/// The points of a face falling from a top to the plane under it are kept
+/// this many point spacings (and at least the coplanar tolerance) clear of
+/// either plane, so that neither plane's own points and noise count.
+const FALL_MARGIN_SPACINGS: f64 = 2.0;
+
+/// The fewest points that show a face falling from a top (as many as make
+/// a web's side face in the fillet stage).
+pub(super) const FALL_MIN_POINTS: usize = crate::pipeline::fillet::MIN_FACE_POINTS;
+
+/// A face falls from a top to the plane under it when the points round
+/// one side of the top's outline fill each of this many bands of height
+/// between the two planes: a face seen over the whole drop. A lap's or a
+/// plate's edge over a lower layer stands no higher than the plate is
+/// thick, a clamp or a part held over a plate leaves a gap under it, and
+/// a veil of mixed returns hanging along the camera's rays from an edge
+/// slants away from the outline after a band or two.
+pub(super) const FALL_HEIGHT_BANDS: usize = 8;
+
+/// How many of a top's points [`face_falls_from`] reads its outline from,
+/// at most.
+const OUTLINE_SAMPLES: usize = 4_000;
+
+/// Whether a face falls from `top`'s edges to the plane `height_mm` under
+/// it (along `normal`, away from the camera): among `points`, outside
+/// `top`'s plane and the lower one, round the outline of `top` (the sides
+/// of the rectangle round it that covers the least area, widened and
+/// narrowed by `rim_mm` and a few spacings), at least [`FALL_MIN_POINTS`]
+/// round one side lie between the two planes, and they fill each of
+/// [`FALL_HEIGHT_BANDS`] bands of height between them. A block standing on a plate shows its side
+/// faces so, however wide its top; a top seen over a plane with nothing
+/// between them (a plate held over another, a far layer seen past an
+/// edge) does not, nor does a plate over a table whose edge leaves a veil
+/// of mixed returns along the camera's rays under it (the veil's lower
+/// part lies inside the plate's outline).
+pub(super) fn face_falls_from(
+    top: &PlaneCluster,
+    height_mm: f64,
+    normal: &Vec3,
+    rim_mm: f64,
+    tolerance_mm: f64,
+    points: &[Point],
+) -> bool {
+    let spacing = spacing_of(top);
+    let stride = (top.members.len() / OUTLINE_SAMPLES).max(1);
+    let outline: Vec<Vec3> = every_member_point(&top.members, stride, points).collect();
+    let Some(along_axis) = crate::geometry::outline_axis(&outline, normal) else {
+        return false;
+    };
+    let across_axis = normal.cross(&along_axis);
+    let place = |p: &Vec3| {
+        let d = p - top.centroid;
+        (along_axis.dot(&d), across_axis.dot(&d), -normal.dot(&d))
+    };
+    let reach = rim_mm + FALL_REACH_SPACINGS * spacing;
+    let margin = tolerance_mm.max(FALL_MARGIN_SPACINGS * spacing);
+    let placed: Vec<(f64, f64, f64)> = outline.iter().map(place).collect();
+    let (along_lo, along_hi) = extent(placed.iter().map(|o| o.0));
+    let (across_lo, across_hi) = extent(placed.iter().map(|o| o.1));
+    let near_edge = |v: f64, lo: f64, hi: f64| (lo - reach..=hi + reach).contains(&v);
+    let inside = |v: f64, lo: f64, hi: f64| (lo + reach..=hi - reach).contains(&v);
+    // Heights over the lower plane: the top's plane lies `height_mm` up.
+    // Each side of the outline (along's low and high, across's low and
+    // high) counts its points and the bands of height they fill.
+    let band_of = |h: f64| ((h - margin) / (height_mm - 2.0 * margin) * FALL_HEIGHT_BANDS as f64) as usize;
+    let mut sides = [(0usize, [false; FALL_HEIGHT_BANDS]); 4];
+    for p in points.iter().map(vec3).filter(|p| p.iter().all(|v| v.is_finite())) {
+        let (along, across, up) = place(&p);
+        let h = height_mm + up;
+        let round_outline = near_edge(along, along_lo, along_hi)
+            && near_edge(across, across_lo, across_hi)
+            && !(inside(along, along_lo, along_hi) && inside(across, across_lo, across_hi));
+        if !(margin..height_mm - margin).contains(&h) || !round_outline {
+            continue;
+        }
+        let off_edges = [along - along_lo, along_hi - along, across - across_lo, across_hi - across];
+        let side = (0..4).min_by(|&a, &b| off_edges[a].abs().total_cmp(&off_edges[b].abs())).unwrap_or(0);
+        sides[side].0 += 1;
+        sides[side].1[band_of(h).min(FALL_HEIGHT_BANDS - 1)] = true;
+    }
+    sides.iter().any(|(count, bands)| *count >= FALL_MIN_POINTS && bands.iter().all(|&b| b))
+}

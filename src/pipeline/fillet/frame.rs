@@ -71,13 +71,22 @@ impl WebFrame {
     /// Where a face point on side `sign` may lie, outward of the web's
     /// middle, mm, and up to which height over the flange: from the web's
     /// middle to a little beyond the top's trimmed edge, below the top's
-    /// own points; or round the one face seen, up to where it is seen.
+    /// own points (for a member with every side a root, from a little
+    /// inside that edge); or round the one face seen, up to where it is
+    /// seen.
     pub(super) fn face_band(&self, view: &TeeView, sign: f64, margin: f64) -> ((f64, f64), f64) {
         let spacing = view.point_spacing_mm;
         match self.face_only {
             Some(seen) if seen == sign => {
                 let reach = FACE_REACH_SPACINGS * spacing;
                 ((self.half_width - reach, self.half_width + reach), self.height)
+            }
+            // A member with every side a root: its ends' faces stand across
+            // it, inside its top's edges, so only a band round the edge
+            // is this side's face.
+            _ if view.every_side => {
+                let reach = FACE_REACH_SPACINGS * spacing;
+                ((self.half_width - reach, self.half_width + view.rim_mm + reach), self.height - margin)
             }
             _ => ((0.0, self.half_width + view.rim_mm + FACE_REACH_SPACINGS * spacing), self.height - margin),
         }
@@ -120,12 +129,19 @@ pub(in crate::pipeline) fn valid_points(cloud: &PointCloud) -> impl Iterator<Ite
 }
 
 /// The web's frame from the flange pieces and its top, or its one face
-/// seen.
-pub(super) fn web_frame(view: &TeeView) -> Option<WebFrame> {
+/// seen; `turned`, a member standing with every side a root
+/// ([`TeeView::every_side`]), along its top's other side (its ends'
+/// roots).
+pub(super) fn web_frame(view: &TeeView, turned: bool) -> Option<WebFrame> {
     let flange_points = flange_samples(view.cloud, view.flange_pieces);
     let frame = match view.web {
-        Web::Top(top) => frame_from_top(view.cloud, top, &flange_points.iter().collect::<Moments>().plane()?)?,
+        Web::Top(top) => {
+            let flange = flange_points.iter().collect::<Moments>().plane()?;
+            let frame = frame_from_top(view.cloud, top, &flange, view.every_side)?;
+            if turned { frame_along(view.cloud, top, &frame, &frame.u)? } else { frame }
+        }
         // The face search fitted the flange's plane to these same pieces.
+        Web::Face(_) if turned => return None,
         Web::Face(face) => frame_from_face(face, &face.flange)?,
     };
     // Which sides of the web the flange lies on, from its points, not its
@@ -140,11 +156,14 @@ pub(super) fn web_frame(view: &TeeView) -> Option<WebFrame> {
     (frame.height > 0.0).then_some(WebFrame { flange_sides, ..frame })
 }
 
-/// The web's frame from its top: along its long axis, its middle and half
-/// width from its points' spread across it.
-fn frame_from_top(cloud: &PointCloud, top: &PlaneCluster, flange: &Plane) -> Option<WebFrame> {
+/// The web's frame from its top: along its long axis (or, for a member
+/// with every side a root, `outlined`, along the sides of the rectangle
+/// its top fills best, [`outline_axis`]), its middle and half width from
+/// its points' spread across it.
+fn frame_from_top(cloud: &PointCloud, top: &PlaneCluster, flange: &Plane, outlined: bool) -> Option<WebFrame> {
     let n = flange.normal;
-    let e = (top.long_axis - n * top.long_axis.dot(&n)).try_normalize(1e-9)?;
+    let axis = if outlined { outline_axis(cloud, top, &n)? } else { top.long_axis };
+    let e = (axis - n * axis.dot(&n)).try_normalize(1e-9)?;
     let u = n.cross(&e);
     let origin = top.centroid;
     let (lo, hi) = top_edges_across(cloud, top, &origin, &u)?;
@@ -183,6 +202,21 @@ fn frame_from_face(face: &StandingFace, flange: &Plane) -> Option<WebFrame> {
         flange_sides: [false; 2],
         face_only: Some(sign),
     })
+}
+
+/// How many of a top's points [`outline_axis`] reads, at most.
+const OUTLINE_SAMPLES: usize = 4_000;
+
+/// The direction, in the plane across `n`, of one side of the rectangle
+/// round `top`'s points that covers the least area
+/// ([`crate::geometry::outline_axis`]): a block's top is square or nearly
+/// so, and the spread of its points (its long axis) says nothing of where
+/// its sides run, while its outline does.
+fn outline_axis(cloud: &PointCloud, top: &PlaneCluster, n: &Vec3) -> Option<Vec3> {
+    let points = cloud.points();
+    let stride = (top.members.len() / OUTLINE_SAMPLES).max(1);
+    let sample: Vec<Vec3> = top.members.iter().step_by(stride).map(|&i| vec3(&points[i as usize])).collect();
+    crate::geometry::outline_axis(&sample, n)
 }
 
 /// Which side of the web `sign` is, as the camera (at the frame's origin)

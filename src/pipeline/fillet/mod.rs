@@ -88,6 +88,8 @@
 mod face;
 mod flange_edge;
 mod frame;
+#[cfg(test)]
+mod member_tests;
 mod stretch;
 #[cfg(test)]
 mod tests;
@@ -158,6 +160,10 @@ pub struct TeeView<'a> {
     /// seen, mm, when nothing tells whether the image cut the top there
     /// (`quality.max_joint_beyond_seam_mm`): further, the root is refused.
     pub max_beyond_mm: f64,
+    /// The web is a member standing on the flange with every side a root
+    /// (a block, its top found by the faces falling from it): its frame
+    /// runs along its top's outline, and its ends' roots are read too.
+    pub every_side: bool,
 }
 
 /// What the camera sees of the web that tells where it stands.
@@ -342,7 +348,18 @@ pub struct RootNotSeen {
 /// Finds both roots of the tee in `view`: `[−u side, +u side]`, each
 /// fitted or said not to be seen.
 pub fn find_roots(view: &TeeView) -> [Result<Root, RootNotSeen>; 2] {
-    let Some(frame) = web_frame(view) else {
+    roots_in(view, false)
+}
+
+/// The roots at the ends of a member with every side a root
+/// ([`TeeView::every_side`]): its top's other two sides' feet, read as
+/// [`find_roots`] reads the two along it.
+pub fn find_end_roots(view: &TeeView) -> [Result<Root, RootNotSeen>; 2] {
+    roots_in(view, true)
+}
+
+fn roots_in(view: &TeeView, turned: bool) -> [Result<Root, RootNotSeen>; 2] {
+    let Some(frame) = web_frame(view, turned) else {
         let why = "the flange's plane and the web give no frame to read the roots in".to_string();
         let near = view.web.centroid();
         return [-1.0, 1.0].map(|sign| {
@@ -397,6 +414,9 @@ fn find_root(view: &TeeView, frame: &WebFrame, sign: f64) -> Result<Root, RootNo
             "the flange on this side is not seen (hidden by the web)".into(),
         ));
     }
+    if view.every_side {
+        return member_root(view, frame, sign, side).map_err(|why| not_seen(why.rule, why.reason));
+    }
     match root_from_face(view, frame, sign, side) {
         Ok(root) => Ok(face_or_flange_edge(view, frame, sign, side, root)),
         // A face turned edge-on to the camera returns nothing, or only the
@@ -409,6 +429,38 @@ fn find_root(view: &TeeView, frame: &WebFrame, sign: f64) -> Result<Root, RootNo
             not_seen(rule, format!("{why}; and the flange's edge does not show it: {edge}"))
         }),
     }
+}
+
+/// A root of a member with every side a root ([`TeeView::every_side`]):
+/// read only from its side face, and only on a side the camera looks at
+/// from outside the face. A block's faces are as far apart as its top is
+/// wide: from over its top (or beyond its far side) the camera sees a
+/// face from behind its plane, not at all, and the flange's edge it
+/// sees there is where the block hides the flange, not the root (the
+/// edge of a web a few millimetres thick lies over its root instead).
+/// The joint along such a side runs as far as its top's edge is seen, so
+/// the root's share of the joint is read against that length too: a
+/// stretch of foot seen along a few millimetres of a block's side is not
+/// the block's root.
+fn member_root(view: &TeeView, frame: &WebFrame, sign: f64, side: Side) -> Result<Root, NotRead> {
+    if side != Side::Near {
+        return Err(NotRead::by(
+            &TEE_ROOT_HIDDEN_BY_WEB,
+            "the camera looks at the member's side face there from behind its plane (from over its top or beyond \
+             it): the face is not seen, and the flange's edge beside it is where the member hides the flange",
+        ));
+    }
+    let mut root = root_from_face(view, frame, sign, side)?;
+    if let Web::Top(top) = view.web {
+        let points = view.cloud.points();
+        let (lo, hi) = extent(top.members.iter().map(|&i| (vec3(&points[i as usize]) - frame.origin).dot(&frame.e)));
+        let span = root.line.s_max - root.line.s_min;
+        if hi > lo && root.seen_mm < hi - lo {
+            root.seen_share = root.seen_share.min(span / (hi - lo));
+            root.seen_mm = hi - lo;
+        }
+    }
+    Ok(root)
 }
 
 /// The root from the face, or from the flange's edge where the face is

@@ -213,7 +213,7 @@ fn plus_x_face_reading(pts: &[Vec3]) -> Result<Root, NotRead> {
     let (cloud, top, [plus, minus]) = tee_parts(pts);
     let pieces = [&plus, &minus];
     let view = test_view(&cloud, Web::Top(&top), &pieces);
-    let frame = web_frame(&view).expect("the web's frame");
+    let frame = web_frame(&view, false).expect("the web's frame");
     let sign = frame.u.x.signum();
     root_from_face(&view, &frame, sign, side_seen(&frame, sign))
 }
@@ -341,6 +341,7 @@ fn test_view<'a>(cloud: &'a PointCloud, web: Web<'a>, flange_pieces: &'a [&'a Pl
         in_view: None,
         border: None,
         max_beyond_mm: 2.0,
+        every_side: false,
     }
 }
 

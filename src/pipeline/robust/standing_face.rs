@@ -111,6 +111,7 @@ pub(super) fn face_tee<'a>(face: &'a StandingFace, flange_pieces: Vec<&'a PlaneC
         flange_pieces,
         flange_sides: tee::Flange::BothSides,
         depth_to_support_mm: None,
+        every_side: false,
     }
 }
 

@@ -469,6 +469,7 @@ mod tests {
             points: 400,
             angle_deg: 30.0,
             rms_mm: 0.1,
+            station_rms_mm: 0.1,
             depth_mm: 8.0,
             foot_mm: 0.5,
             station_share: 1.0,

@@ -119,7 +119,7 @@ pub static WELD_ON_BEVEL_MIDLINE: Rule = Rule {
     parameters: &[Parameter {
         name: "MAX_FLANK_RMS_SPACINGS",
         unit: "point spacings",
-        meaning: "largest RMS of a flank the root is read from",
+        meaning: "largest RMS of a flank about its own stations' lines for the root to be read from it",
         source: Source::Constant { file: "src/pipeline/groove/root.rs", name: "MAX_FLANK_RMS_SPACINGS" },
     }],
     fires: &[

@@ -40,6 +40,15 @@ const HINGE_GAIN: f64 = 0.5;
 /// line meets them far above where the bins turn, and a depth read there
 /// would be that much too shallow.
 const HINGE_MEET_BINS: f64 = 2.0;
+/// A root face begins where its bevel ends: the depth bins just below the
+/// split that still lie nearer the bevel's line than the root face's `|t|`
+/// (the corner's, whose medians blend the two) may run on at most this
+/// many bins below where the line meets the root face. On the simulated
+/// suites' root faces they run on at most 1.13 bins; a streak's stray
+/// returns under a groove at 1 mm voxels, taken with the bevel's last
+/// bins for a "wall", had the bevel seen 3.3 bins below that meeting
+/// (fault-streaks-v-butt-00, whose depth was then read 2.9 mm short).
+const MAX_BEVEL_PAST_ROOT_BINS: f64 = 1.5;
 /// The most depth bins in a row a face may leave empty (fewer than three
 /// points) and still run on below them. Under a specular streak at 1 mm
 /// voxels (fault-streaks-v-butt-00), returns 13 to 16 mm down, under a
@@ -188,12 +197,20 @@ pub(super) fn fit_face(
     let foot_hidden = hidden_below(view.camera) || hidden_below(view.projector);
     let top = top_line(&kept, &line, half_opening - 0.5 * spacing, middle_s);
     let stations = station_lines(&above, &kept, &line, spacing);
+    let station_rms = {
+        let off = |p: &&Across| {
+            let at = stations[p.station].map_or_else(|| line.at(p.h), |l| l.at(p.h));
+            (p.t.abs() - at).powi(2)
+        };
+        (kept.iter().map(off).sum::<f64>() / kept.len().max(1) as f64).sqrt()
+    };
     Some(Face {
         side,
         points: kept.len(),
         angle_deg: angle.to_degrees(),
         // Perpendicular to the face, not along t.
         rms_mm: line.rms * angle.cos(),
+        station_rms_mm: station_rms * angle.cos(),
         depth_mm,
         foot_mm: line.at(depth_mm),
         station_share: station_share(kept.iter().copied()),
@@ -306,9 +323,18 @@ pub(super) fn root_hinge(medians: &[(f64, f64)], spacing: f64) -> Option<Hinge> 
         }
         // And the bevel narrows into it where the bins turn.
         let turn = 0.5 * (upper[k - 1].0 + lower[0].0);
-        let meets =
-            bevel.slope < 0.0 && ((mean - bevel.intercept) / bevel.slope - turn).abs() <= HINGE_MEET_BINS * spacing;
+        let meet = (mean - bevel.intercept) / bevel.slope;
+        let meets = bevel.slope < 0.0 && (meet - turn).abs() <= HINGE_MEET_BINS * spacing;
         if !meets {
+            continue;
+        }
+        // And ends there: the bins below that still follow its line.
+        let bevel_seen_to = lower
+            .iter()
+            .take_while(|m| (m.1 - bevel.at(m.0)).abs() < (m.1 - mean).abs())
+            .last()
+            .map_or(upper[k - 1].0, |m| m.0);
+        if bevel_seen_to - meet > MAX_BEVEL_PAST_ROOT_BINS * spacing {
             continue;
         }
         let sse = sse(&bevel, upper) + wall_sse;

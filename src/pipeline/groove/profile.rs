@@ -56,6 +56,12 @@ pub struct Face {
     pub angle_deg: f64,
     /// The fit's RMS residual, mm.
     pub rms_mm: f64,
+    /// The RMS residual of the fit's points about their own station's
+    /// line ([`Face::stations`]), mm: a face whose bevel changes along the
+    /// seam (a groove cut wider along part of it, its bevel shallower
+    /// there from the same foot) is a plane at each station though no one
+    /// plane fits it all.
+    pub station_rms_mm: f64,
     /// How deep the face goes below the plates' top, mm: where it meets
     /// the root face below it, or its foot.
     pub depth_mm: f64,

@@ -79,7 +79,7 @@ impl GrooveProfile {
                 f.side == side
                     && (MIN_BEVEL_DEG..=MAX_SLOPED_FACE_DEG).contains(&f.angle_deg)
                     && f.is_seen()
-                    && f.rms_mm <= MAX_FLANK_RMS_SPACINGS * spacing
+                    && f.station_rms_mm <= MAX_FLANK_RMS_SPACINGS * spacing
             })
         };
         let (first, second) = (sloped(-1)?, sloped(1)?);

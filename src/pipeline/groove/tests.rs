@@ -2,7 +2,7 @@
 //! veil along the rays, a plate standing between the edges.
 
 use super::fit::root_hinge;
-use super::points::MIN_SURFACE_NEIGHBOURS;
+use super::points::{MIN_SURFACE_NEIGHBOURS, SURFACE_RADIUS_SPACINGS};
 use super::profile::MIN_FACE_POINTS;
 use super::*;
 use crate::pipeline::refit::SeamAxes;
@@ -89,6 +89,37 @@ proptest::proptest! {
     }
 }
 
+/// A bevel 64 degrees from the camera's rays, as a V-groove's is under a
+/// camera straight above it: its points `pitch` apart along the seam (the
+/// camera's pixel step there) and 2.3 spacings apart across it. Every
+/// point is on the surface wherever the pixel step lies within a few
+/// percent of the cloud's median spacing, either side of it.
+#[test]
+fn a_bevel_seen_nearly_head_on_stays_on_its_surface_wherever_the_pixel_step_falls() {
+    let spacing = 0.19;
+    for pitch in [0.95 * spacing, spacing, 1.04 * spacing, 1.1 * spacing] {
+        let points: Vec<Across> = (0..60)
+            .flat_map(|j| (0..10).map(move |i| (j, i)))
+            .map(|(j, i)| {
+                let across = 2.3 * spacing * i as f64;
+                Across { s: j as f64 * pitch, station: 0, t: across * 0.44, h: across * 0.9 }
+            })
+            .collect();
+        // The patch's own first and last two rows along the seam lack
+        // the neighbours beyond them; every other point is kept.
+        let inside = |p: &Across| (1.5 * pitch..57.5 * pitch).contains(&p.s);
+        let kept = on_surfaces(points.clone(), SURFACE_RADIUS_SPACINGS * spacing);
+        let (kept, all) = (kept.iter().filter(|p| inside(p)).count(), points.iter().filter(|p| inside(p)).count());
+        assert_eq!(kept, all, "pitch {pitch:.3} mm on a {spacing} mm cloud");
+    }
+    // A mixed pixel's row: neighbours along the seam a pixel step apart,
+    // each at its own depth millimetres off the next, is no surface.
+    let veil: Vec<Across> = (0..60)
+        .map(|j| Across { s: j as f64 * spacing, station: 0, t: 0.0, h: 1.0 + 1.7 * ((j * 7) % 5) as f64 })
+        .collect();
+    assert!(on_surfaces(veil, SURFACE_RADIUS_SPACINGS * spacing).is_empty());
+}
+
 fn probed(cloud: &PointCloud, half_opening: f64) -> GrooveProfile {
     probed_between(cloud, &edge(-half_opening), &edge(half_opening))
 }
@@ -161,6 +192,29 @@ fn a_bevel_s_root_face_is_where_it_narrows_into_it() {
     let mut far_out: Vec<(f64, f64)> = (0..10).map(|k| bevel(k as f64 + 0.5)).collect();
     far_out.extend((10..13).map(|k| (k as f64 + 0.5, 3.5)));
     assert!(root_hinge(&far_out, 1.0).is_none(), "{:?}", root_hinge(&far_out, 1.0));
+    // fault-streaks-v-butt-00 at 1 mm voxels (a spacing of 0.947 mm):
+    // the bevel seen down to 9.9 mm, then a streak's stray returns 12 to
+    // 16 mm down. The bevel's last three bins and the strays scatter about
+    // one |t| (2.18) less than a spacing, and the bevel's line meets it
+    // within two bins of the split, but the bevel runs on 3.3 bins past
+    // that meeting: no root face.
+    let strays = [
+        (1.4, 4.24),
+        (2.4, 4.03),
+        (3.3, 3.62),
+        (4.3, 3.22),
+        (5.2, 2.82),
+        (6.2, 2.42),
+        (7.1, 2.02),
+        (8.1, 1.62),
+        (9.0, 1.2),
+        (9.9, 1.01),
+        (11.8, 3.02),
+        (12.8, 1.98),
+        (13.7, 3.16),
+        (15.6, 3.27),
+    ];
+    assert!(root_hinge(&strays, 0.947).is_none(), "{:?}", root_hinge(&strays, 0.947));
 }
 
 #[test]

@@ -5,18 +5,10 @@
 use super::*;
 use crate::cloud::Point;
 
+/// The layers' selection of the background tests, with room for the
+/// blocks' tilt and coarser neighbourhoods.
 fn auto() -> Selection {
-    Selection {
-        joint: None,
-        normal: Vec3::z(),
-        coplanar_tolerance_mm: 3.0,
-        lap_step_min_mm: 1.0,
-        lap_step_max_mm: 30.0,
-        web_height_max_mm: 250.0,
-        web_thickness_max_mm: 30.0,
-        max_tilt_deg: 20.0,
-        neighbour_radius_mm: 2.0,
-    }
+    Selection { max_tilt_deg: 20.0, neighbour_radius_mm: 2.0, ..super::tests::auto() }
 }
 
 fn asking(joint: JointType) -> Selection {

@@ -72,7 +72,7 @@ fn selection(joint: JointType) -> Selection {
     Selection { joint: Some(joint), ..auto() }
 }
 
-fn auto() -> Selection {
+pub(super) fn auto() -> Selection {
     Selection {
         joint: None,
         normal: Vec3::z(),

@@ -1,6 +1,7 @@
 //! The integration-test binary: every suite is a module here so the crate
 //! is linked once for all of them.
 
+mod auto_tee_reading;
 mod bench;
 mod calibration;
 mod cli;

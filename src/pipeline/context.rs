@@ -348,6 +348,24 @@ impl<'a> Context<'a> {
             .collect()
     }
 
+    /// The same frame read under `request` instead of the one asked: under
+    /// `auto`, the reading a tee's request makes, weighed for what its
+    /// refusal says ([`super::robust`]'s tee reading). It records nothing in
+    /// the frame's trace, starts from this context's counts and scale, and
+    /// its clock keeps the plan's deadline.
+    pub(super) fn under_request<'b>(&'b self, request: &'b PlanRequest) -> Context<'b> {
+        Context {
+            config: self.config,
+            request,
+            cloud: self.cloud,
+            clock: Clock::start(self.clock.deadline),
+            stats: self.stats.clone(),
+            scale: self.scale,
+            trace: Tracer::off(),
+            view_border: self.view_border,
+        }
+    }
+
     /// The image's border the frame's points span, read once per frame
     /// however many workpieces ask; `None` for a frame of too few points.
     pub(super) fn view_border(&self) -> Option<&ViewBorder> {
@@ -609,6 +627,14 @@ impl PlannedWeld {
     /// from.
     pub(super) fn with_along(self, evidence: along_seam::Evidence) -> Self {
         PlannedWeld { along: Some(Box::new(evidence)), ..self }
+    }
+
+    /// This weld with `why` told before the evidence its joint was read
+    /// from (a reading `auto` weighed after another was refused).
+    pub(super) fn with_evidence_before(mut self, why: &str) -> Self {
+        let evidence = self.assessment.joint_evidence.take().unwrap_or_default();
+        self.assessment.joint_evidence = Some(format!("{why}; {evidence}"));
+        self
     }
 
     /// This weld, its waypoints traced or not.

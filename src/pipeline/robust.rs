@@ -56,6 +56,7 @@ mod lap_edge;
 mod plates;
 mod root_weld;
 mod standing_face;
+mod tee_reading;
 
 use plates::plan_plates;
 
@@ -325,8 +326,29 @@ struct Front<'f> {
 /// the second list). `labels` are the frame's cluster labels, which the
 /// edge stage reads for this workpiece's plates. The joint passes from
 /// stage to stage: the one requested, then the one the layers show, then
-/// (for a butt pair) the one its groove shows.
+/// (for a butt pair) the one its groove shows. Under `auto`, a workpiece
+/// every reading refused is read once more as a tee's request would read
+/// it, for what that refusal says ([`tee_reading`]).
 fn plan_workpiece(
+    ctx: &mut Context,
+    front: &Front,
+    labels: &[u32],
+    planes: Vec<PlaneCluster>,
+) -> Result<Welds, Refused> {
+    if !tee_reading::may_weigh(ctx) {
+        return read_workpiece(ctx, front, labels, planes);
+    }
+    let kept = planes.clone();
+    match read_workpiece(ctx, front, labels, planes) {
+        Err(refused) if tee_reading::worth_weighing(&refused) => {
+            tee_reading::weigh(ctx, refused, |as_tee| read_workpiece(as_tee, front, labels, kept))
+        }
+        read => read,
+    }
+}
+
+/// [`plan_workpiece`] under the request as asked.
+fn read_workpiece(
     ctx: &mut Context,
     front: &Front,
     labels: &[u32],

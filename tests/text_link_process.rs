@@ -8,6 +8,7 @@
 use std::sync::Arc;
 use std::time::Duration;
 
+use weldseam::config::procedure::{WeavePattern, WeaveSpec};
 use weldseam::config::{Config, ProcessParams};
 use weldseam::convert::{from_proto, to_text};
 use weldseam::joint::JointType;
@@ -40,7 +41,21 @@ fn config() -> Config {
     c.server.pipeline_threads = 2;
     c.server.shutdown_grace = Duration::from_secs(60);
     c.trajectory.step_mm = 20.0;
-    c.process = ProcessParams { procedure: Some(Procedure::example()), plate_thickness_mm: Some(12.0) };
+    // The example procedure's V-groove does not weave; here its root pass
+    // weaves over the 1 mm gap, so every dialect is held to carry a weave,
+    // not only the zeros of a pass that lays none.
+    let mut procedure = Procedure::example();
+    for entry in procedure.entries.iter_mut().filter(|e| e.joint == JointType::VButt) {
+        entry.weave = Some(WeaveSpec {
+            pattern: WeavePattern::Sine,
+            above_gap_mm: 0.5,
+            amplitude_per_gap: 0.5,
+            max_amplitude_mm: 2.0,
+            wavelength_mm: 3.0,
+            dwell_s: 0.0,
+        });
+    }
+    c.process = ProcessParams { procedure: Some(procedure), plate_thickness_mm: Some(12.0) };
     c
 }
 
@@ -134,6 +149,7 @@ async fn every_dialect_pulls_each_pass_with_its_speeds_and_weave() {
             weaving
         );
         assert_eq!(passes.pieces[0].pass, passes::PassId::Root);
+        assert!(weaving > 0, "{dialect:?}: the root pass weaves, and no line carried its weave");
     }
 
     // A program that does not ask gets the same seams, poses only.

@@ -25,7 +25,7 @@ fn r(tp: &Controller, n: usize) -> i32 {
 /// integrator sets R[23] in the settings block.
 pub fn weld_seam(tp: &mut Controller, h: &mut Helper, dry_run: bool) {
     let mut pc = 1;
-    while pc <= 78 {
+    while pc <= 96 {
         let mut next = pc + 1;
         match pc {
             3 => {
@@ -142,96 +142,151 @@ pub fn weld_seam(tp: &mut Controller, h: &mut Helper, dry_run: bool) {
                 tp.at(47, r#"43:L PR[R[2:ws pr]] R[21:ws approach mm/s]mm/sec FINE    ;"#);
                 tp.linear(47, r(tp, 2) as usize, tp.r[21].value(), false);
             }
-            48 => {
-                tp.at(52, r#"48:  IF R[23:ws dry run]=1,JMP LBL[21] ;"#);
+            45 => {
+                tp.at(49, r#"45:  IF R[23:ws dry run]=1,JMP LBL[21] ;"#);
                 if r(tp, 23) == 1 {
                     next = lbl(21);
                 }
             }
-            49 => {
-                tp.at(53, r#"49:  Arc Start[1] ;"#);
+            46 => {
+                tp.at(50, r#"46:  Arc Start[1] ;"#);
                 tp.trace.advance_stop();
                 tp.trace.push(Event::ArcOn);
             }
-            50 => tp.at(54, r#"50:  LBL[21] ;"#),
-            51 => {
-                tp.at(55, r#"51:  R[6:ws arc]=1    ;"#);
+            47 => tp.at(51, r#"47:  LBL[21] ;"#),
+            48 => {
+                tp.at(52, r#"48:  R[6:ws arc]=1    ;"#);
                 tp.r[6] = Register::Int(1);
             }
-            52 => {
-                tp.at(56, r#"52:  IF R[5:ws last weld]=1,JMP LBL[24] ;"#);
+            49 => {
+                tp.at(53, r#"49:  IF R[5:ws last weld]=1,JMP LBL[24] ;"#);
                 if r(tp, 5) == 1 {
                     next = lbl(24);
                 }
             }
-            53 => {
-                tp.at(57, r#"53:  JMP LBL[1] ;"#);
+            50 => {
+                tp.at(54, r#"50:  JMP LBL[1] ;"#);
                 next = lbl(1);
             }
-            54 => tp.at(58, r#"54:  LBL[22] ;"#),
-            55 => {
-                tp.at(59, r#"55:  IF R[5:ws last weld]=1,JMP LBL[24] ;"#);
-                if r(tp, 5) == 1 {
-                    next = lbl(24);
+            57 => tp.at(61, r#"57:  LBL[22] ;"#),
+            58 => {
+                tp.at(62, r#"58:  IF R[8:ws weave mm]>0,JMP LBL[26] ;"#);
+                if tp.r[8].value() > 0.0 {
+                    next = lbl(26);
                 }
             }
-            56 => {
-                tp.at(60, r#"56:L PR[R[2:ws pr]] R[7:ws speed mm/s]mm/sec CNT R[22:ws blend CNT]    ;"#);
-                tp.linear(60, r(tp, 2) as usize, tp.r[7].value(), r(tp, 22) > 0);
-            }
-            57 => {
-                tp.at(61, r#"57:  JMP LBL[1] ;"#);
-                next = lbl(1);
-            }
-            58 => tp.at(62, r#"58:  LBL[24] ;"#),
             59 => {
-                tp.at(63, r#"59:L PR[R[2:ws pr]] R[7:ws speed mm/s]mm/sec FINE    ;"#);
-                tp.linear(63, r(tp, 2) as usize, tp.r[7].value(), false);
+                tp.at(63, r#"59:  Weave End ;"#);
+                tp.weave_end();
             }
-            61 => {
-                tp.at(65, r#"61:  IF R[23:ws dry run]=1,JMP LBL[25] ;"#);
+            60 => {
+                tp.at(64, r#"60:  JMP LBL[27] ;"#);
+                next = lbl(27);
+            }
+            61 => tp.at(65, r#"61:  LBL[26] ;"#),
+            62 => {
+                tp.at(66, r#"62:  IF R[2:ws pr]=12,JMP LBL[28] ;"#);
+                if r(tp, 2) == 12 {
+                    next = lbl(28);
+                }
+            }
+            63 => {
+                tp.at(67, r#"63:  $WVSCH[1].$FREQUENCY=R[11:ws weave Hz] ;"#);
+                tp.set_weave_schedule(1, 1, tp.r[11].value());
+            }
+            64 => {
+                tp.at(68, r#"64:  $WVSCH[1].$AMPLITUDE=R[8:ws weave mm] ;"#);
+                tp.set_weave_schedule(1, 0, tp.r[8].value());
+            }
+            65 => {
+                tp.at(69, r#"65:  Weave Sine[1] ;"#);
+                tp.weave_sine(69, 1);
+            }
+            66 => {
+                tp.at(70, r#"66:  JMP LBL[27] ;"#);
+                next = lbl(27);
+            }
+            67 => tp.at(71, r#"67:  LBL[28] ;"#),
+            68 => {
+                tp.at(72, r#"68:  $WVSCH[2].$FREQUENCY=R[11:ws weave Hz] ;"#);
+                tp.set_weave_schedule(2, 1, tp.r[11].value());
+            }
+            69 => {
+                tp.at(73, r#"69:  $WVSCH[2].$AMPLITUDE=R[8:ws weave mm] ;"#);
+                tp.set_weave_schedule(2, 0, tp.r[8].value());
+            }
+            70 => {
+                tp.at(74, r#"70:  Weave Sine[2] ;"#);
+                tp.weave_sine(74, 2);
+            }
+            71 => tp.at(75, r#"71:  LBL[27] ;"#),
+            72 => {
+                tp.at(76, r#"72:  IF R[5:ws last weld]=1,JMP LBL[24] ;"#);
+                if r(tp, 5) == 1 {
+                    next = lbl(24);
+                }
+            }
+            73 => {
+                tp.at(77, r#"73:L PR[R[2:ws pr]] R[7:ws speed mm/s]mm/sec CNT R[22:ws blend CNT]    ;"#);
+                tp.linear(77, r(tp, 2) as usize, tp.r[7].value(), r(tp, 22) > 0);
+            }
+            74 => {
+                tp.at(78, r#"74:  JMP LBL[1] ;"#);
+                next = lbl(1);
+            }
+            75 => tp.at(79, r#"75:  LBL[24] ;"#),
+            76 => {
+                tp.at(80, r#"76:L PR[R[2:ws pr]] R[7:ws speed mm/s]mm/sec FINE    ;"#);
+                tp.linear(80, r(tp, 2) as usize, tp.r[7].value(), false);
+            }
+            77 => {
+                tp.at(81, r#"77:  Weave End ;"#);
+                tp.weave_end();
+            }
+            79 => {
+                tp.at(83, r#"79:  IF R[23:ws dry run]=1,JMP LBL[25] ;"#);
                 if r(tp, 23) == 1 {
                     next = lbl(25);
                 }
             }
-            62 => {
-                tp.at(66, r#"62:  Arc End[1] ;"#);
+            80 => {
+                tp.at(84, r#"80:  Arc End[1] ;"#);
                 tp.trace.advance_stop();
                 tp.trace.push(Event::ArcOff);
             }
-            63 => tp.at(67, r#"63:  LBL[25] ;"#),
-            64 => {
-                tp.at(68, r#"64:  R[6:ws arc]=0    ;"#);
+            81 => tp.at(85, r#"81:  LBL[25] ;"#),
+            82 => {
+                tp.at(86, r#"82:  R[6:ws arc]=0    ;"#);
                 tp.r[6] = Register::Int(0);
             }
-            65 => {
-                tp.at(69, r#"65:  JMP LBL[1] ;"#);
+            83 => {
+                tp.at(87, r#"83:  JMP LBL[1] ;"#);
                 next = lbl(1);
             }
-            67 => tp.at(71, r#"67:  LBL[30] ;"#),
-            68 => {
-                tp.at(72, r#"68:L PR[R[2:ws pr]] R[21:ws approach mm/s]mm/sec FINE    ;"#);
-                tp.linear(72, r(tp, 2) as usize, tp.r[21].value(), false);
+            85 => tp.at(89, r#"85:  LBL[30] ;"#),
+            86 => {
+                tp.at(90, r#"86:L PR[R[2:ws pr]] R[21:ws approach mm/s]mm/sec FINE    ;"#);
+                tp.linear(90, r(tp, 2) as usize, tp.r[21].value(), false);
             }
-            69 => {
-                tp.at(73, r#"69:  JMP LBL[1] ;"#);
+            87 => {
+                tp.at(91, r#"87:  JMP LBL[1] ;"#);
                 next = lbl(1);
             }
-            72 => tp.at(76, r#"72:  LBL[98] ;"#),
-            73 => {
-                tp.at(77, r#"73:  UALM[1] ;"#);
+            90 => tp.at(94, r#"90:  LBL[98] ;"#),
+            91 => {
+                tp.at(95, r#"91:  UALM[1] ;"#);
                 tp.alarms.push(1);
             }
-            74 => {
-                tp.at(78, r#"74:  JMP LBL[90] ;"#);
+            92 => {
+                tp.at(96, r#"92:  JMP LBL[90] ;"#);
                 next = lbl(90);
             }
-            76 => tp.at(80, r#"76:  LBL[99] ;"#),
-            77 => {
-                tp.at(81, r#"77:  UALM[2] ;"#);
+            94 => tp.at(98, r#"94:  LBL[99] ;"#),
+            95 => {
+                tp.at(99, r#"95:  UALM[2] ;"#);
                 tp.alarms.push(2);
             }
-            78 => tp.at(82, r#"78:  LBL[90] ;"#),
+            96 => tp.at(100, r#"96:  LBL[90] ;"#),
             // Comment lines (`!`): nothing to run.
             _ => {}
         }

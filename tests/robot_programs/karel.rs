@@ -35,6 +35,14 @@
 //!   the motion statement executes),
 //!   `Arc Start[n]`, `Arc End[n]`, `UALM[n]` (a user alarm: the program
 //!   pauses).
+//! - ArcTool's weave, in the forms ArcTool programs write it (FANUC's own
+//!   page for it was not at hand): `Weave Sine[n]` weaves every motion
+//!   after it with weave schedule n, its frequency (Hz) and amplitude (mm)
+//!   as the schedule holds them when that motion statement executes, until
+//!   `Weave End`; `$WVSCH[n].$FREQUENCY` and `$WVSCH[n].$AMPLITUDE` are
+//!   schedule n's figures, written from a register. Neither stops the
+//!   look-ahead; a schedule rewritten while a blending motion still weaves
+//!   with it would change that motion's weave under way.
 
 use std::io::{Read, Write};
 use std::net::TcpStream;
@@ -161,9 +169,17 @@ pub struct Controller {
     /// robot is still on its way there while the program runs on, so
     /// writing that PR would change a move under way.
     pub blending_to: Option<usize>,
-    /// R[8] and R[11] (the weave's half-swing and frequency the helper
-    /// loads for a weave schedule) at each motion statement.
-    pub weave_at_moves: Vec<[f64; 2]>,
+    /// Weave schedules 1..10 (index 0 unused): `$AMPLITUDE` (mm) and
+    /// `$FREQUENCY` (Hz).
+    pub wvsch: Vec<[f64; 2]>,
+    /// The schedule `Weave Sine[n]` set, until `Weave End`.
+    pub weaving: Option<usize>,
+    /// The schedule the last motion weaves with when it asked to blend:
+    /// it is still under way while the program runs on.
+    blending_weave: Option<usize>,
+    /// The weave laid on each motion statement, as (amplitude mm,
+    /// frequency Hz); `None` where the motion does not weave.
+    pub weave_at_moves: Vec<Option<[f64; 2]>>,
 }
 
 impl Controller {
@@ -187,6 +203,9 @@ impl Controller {
             alarms: Vec::new(),
             on_send: None,
             blending_to: None,
+            wvsch: vec![[0.0; 2]; 11],
+            weaving: None,
+            blending_weave: None,
             weave_at_moves: Vec::new(),
         }
     }
@@ -314,10 +333,33 @@ impl Controller {
         assert!(speed_mm_s > 0.0, "line {line}: a motion at {speed_mm_s} mm/sec");
         let target = self.pr[pr];
         self.blending_to = cnt.then_some(pr);
-        self.weave_at_moves.push([self.r[8].value(), self.r[11].value()]);
+        self.blending_weave = if cnt { self.weaving } else { None };
+        self.weave_at_moves.push(self.weaving.map(|n| self.wvsch[n]));
         self.trace.motion(line, target.numbers(), speed_mm_s, cnt);
         let tool = if self.utool_num == 0 { Isometry3::identity() } else { self.tools[self.utool_num] };
         self.flange = target.isometry() * tool.inverse();
+    }
+}
+
+impl Controller {
+    /// `$WVSCH[n].$AMPLITUDE=R[..]` (`field` 0) or `$WVSCH[n].$FREQUENCY=R[..]`
+    /// (`field` 1); never the schedule of the motion still blending.
+    pub fn set_weave_schedule(&mut self, n: usize, field: usize, value: f64) {
+        assert_ne!(self.blending_weave, Some(n), "weave schedule {n} rewritten while a motion still weaves with it");
+        self.wvsch[n][field] = value;
+    }
+
+    /// `Weave Sine[n]`: the motions from here on weave with schedule n,
+    /// which must hold a weave (a swing and a frequency over 0).
+    pub fn weave_sine(&mut self, line: usize, n: usize) {
+        let [amplitude, frequency] = self.wvsch[n];
+        assert!(amplitude > 0.0 && frequency > 0.0, "line {line}: Weave Sine[{n}] at {amplitude} mm, {frequency} Hz");
+        self.weaving = Some(n);
+    }
+
+    /// `Weave End`: the motions from here on do not weave.
+    pub fn weave_end(&mut self) {
+        self.weaving = None;
     }
 }
 

@@ -65,11 +65,18 @@ struct Run {
     messages: Vec<String>,
     alarms: Vec<usize>,
     capture: Isometry3<f64>,
-    /// FANUC: R[8] and R[11] at each move (none for KUKA).
-    weave: Vec<[f64; 2]>,
+    /// FANUC: the weave ArcTool lays on each move, (mm, Hz) (none
+    /// recorded for KUKA).
+    weave: Vec<Option<[f64; 2]>>,
 }
 
 async fn run(vendor: Vendor, scenario: Scenario, dry_run: bool) -> Run {
+    run_with(vendor, scenario, dry_run, fanuc::Overrides::default()).await
+}
+
+/// A run whose FANUC helper has the CONST block `fanuc` sets (its joint
+/// is the scenario's).
+async fn run_with(vendor: Vendor, scenario: Scenario, dry_run: bool, fanuc: fanuc::Overrides) -> Run {
     let daemon = Daemon::start(scenario).await;
     let capture = scenario.scene().pose.to_isometry(EulerConvention::default());
     let hook = daemon.stopper(scenario);
@@ -88,7 +95,7 @@ async fn run(vendor: Vendor, scenario: Scenario, dry_run: bool) -> Run {
         Vendor::Fanuc => {
             let mut tp = Controller::new(&address, capture, torch());
             tp.on_send = Some(hook);
-            let mut helper = fanuc::load_program(&mut tp, &fanuc::Overrides { joint: Some(joint), reply_ms: None });
+            let mut helper = fanuc::load_program(&mut tp, &fanuc::Overrides { joint: Some(joint), ..fanuc });
             fanuc_tp::weld_seam(&mut tp, &mut helper, dry_run);
             let result = tp.r[9].int();
             let weave = tp.weave_at_moves;
@@ -159,6 +166,8 @@ fn welded(vendor: Vendor, scenario: Scenario, run: &Run, seams: usize, arc: bool
         }
     }
     assert_eq!(at, moves.len(), "{vendor:?}: no motion beyond the seams'");
+    // Without a procedure no line carries a weave: FANUC lays none.
+    assert!(run.weave.iter().all(Option::is_none), "{vendor:?}: a weave laid where no line has one: {:?}", run.weave);
     let welds = run.trace.welds().unwrap_or_else(|e| panic!("{vendor:?}: {e}"));
     assert_eq!(welds.len(), if arc { seams } else { 0 }, "{vendor:?}: arcs struck");
     for (w, waypoints) in welds.iter().zip(&expected) {
@@ -246,8 +255,9 @@ async fn kuka_and_fanuc_leave_the_torch_at_the_capture_pose_when_the_daemon_stop
 /// root pass weaving, `Scenario::Passes`): every
 /// piece of every pass welded as a seam, each move into a weld waypoint at
 /// the travel speed the plan gives there (KUKA's $VEL.CP, FANUC's R[7]
-/// register speed, from the line's mm/s); FANUC's R[8] and R[11], kept
-/// for a weave schedule, hold the weave the plan gives there.
+/// register speed, from the line's mm/s); FANUC weaves each move with
+/// ArcTool's `Weave Sine` at the plan's half-swing and frequency there,
+/// and not at all where the plan lays no weave.
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn kuka_and_fanuc_weld_each_pass_at_its_speeds() {
     for vendor in VENDORS {
@@ -261,11 +271,22 @@ async fn kuka_and_fanuc_weld_each_pass_at_its_speeds() {
         for (k, piece) in expected.iter().enumerate() {
             let weld = &moves[at + 1..at + 1 + piece.len()];
             if vendor == Vendor::Fanuc {
-                let weave = &run.weave[at + 1..at + 1 + piece.len()];
-                for (j, ([amplitude, frequency], (_, [_, a, f]))) in weave.iter().zip(piece).enumerate().skip(1) {
-                    let held = (amplitude - a).abs() < 2e-3 && (frequency - f).abs() < 2e-3;
-                    assert!(held, "piece {k} move {j}: weave {amplitude} mm {frequency} Hz for {a} mm {f} Hz");
-                    woven += usize::from(*a > 0.0);
+                // ArcTool's weave on each move into a weld waypoint is the
+                // line's (to its three decimals through a 32-bit REAL), and
+                // none where the line has none: not on the approach, the
+                // move to the seam's start (before the arc), nor the retract.
+                let weave = &run.weave[at..at + piece.len() + 2];
+                let last = weave.len() - 1;
+                assert!(weave[0].is_none() && weave[1].is_none() && weave[last].is_none(), "piece {k}: {weave:?}");
+                for (j, (laid, (_, [_, a, f]))) in weave[1..last].iter().zip(piece).enumerate().skip(1) {
+                    match laid {
+                        None => assert_eq!(*a, 0.0, "piece {k} move {j}: no weave for {a} mm {f} Hz"),
+                        Some([amplitude, frequency]) => {
+                            let held = (amplitude - a).abs() < 2e-3 && (frequency - f).abs() < 2e-3;
+                            assert!(held, "piece {k} move {j}: weave {amplitude} mm {frequency} Hz for {a} mm {f} Hz");
+                            woven += 1;
+                        }
+                    }
                 }
             }
             at += piece.len() + 2;
@@ -288,6 +309,21 @@ async fn kuka_and_fanuc_weld_each_pass_at_its_speeds() {
             assert!(woven > 0, "the passes weave somewhere, or the weave's registers are not tested");
         }
     }
+}
+
+/// FANUC's helper refuses a weave its TP program's schedules may not
+/// take (a half-swing over `WEAVE_MM`, a frequency over `WEAVE_HZ`)
+/// before the torch moves, naming the limit; never cut to fit.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn fanuc_refuses_a_weave_over_its_schedules_limits() {
+    let swing = fanuc::Overrides { weave_mm: Some(0.05), ..fanuc::Overrides::default() };
+    let refused = run_with(Vendor::Fanuc, Scenario::Passes, false, swing).await;
+    let reason = stopped(Vendor::Fanuc, &refused, &[11]);
+    assert_eq!(reason, "weave half-swing over WEAVE_MM 0.05 mm");
+    let hertz = fanuc::Overrides { weave_hz: Some(0.05), ..fanuc::Overrides::default() };
+    let refused = run_with(Vendor::Fanuc, Scenario::Passes, false, hertz).await;
+    let reason = stopped(Vendor::Fanuc, &refused, &[12]);
+    assert_eq!(reason, "weave Hz not over 0, up to WEAVE_HZ 0.05");
 }
 
 /// FANUC without a weld procedure: the helper still asks for the process

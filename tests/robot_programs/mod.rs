@@ -7,6 +7,7 @@ mod abb;
 mod abb_runs;
 mod fanuc;
 mod fanuc_tp;
+mod fanuc_weave;
 mod harness;
 mod karel;
 mod kf_scenarios;

@@ -115,6 +115,12 @@ impl Torch {
         if self.extended_tip().is_some() { self.contact_tip_to_work_mm } else { self.nozzle_to_work_mm }
     }
 
+    /// Where the solid ends along its axis from the aim point, mm: the
+    /// body's far end.
+    pub fn solid_end_mm(&self) -> f64 {
+        self.nozzle_to_work_mm + self.nozzle_length_mm + self.body_length_mm
+    }
+
     /// This torch with an entry's own parts and stand-off in place of
     /// these; the clearance margin and the angle limits stay the
     /// procedure's.

@@ -369,7 +369,7 @@ fn hidden_contact(torch: &Torch, obstacles: &Obstacles, point: &Vec3, axis: &Vec
 /// point first.
 fn surface_samples(torch: &Torch, step: f64) -> Vec<SurfaceSample> {
     let start = torch.solid_start_mm();
-    let end = start + torch.nozzle_length_mm + torch.body_length_mm;
+    let end = torch.solid_end_mm();
     let mut out = Vec::new();
     let mut ring = |s: f64, r: f64| {
         let n = ((std::f64::consts::TAU * r / step).ceil() as usize).max(1);
@@ -405,7 +405,7 @@ fn seen_contact(torch: &Torch, obstacles: &Obstacles, point: &Vec3, axis: &Vec3)
     let axis = axis.normalize();
     let edge_per_mm = EDGE_SPACINGS * obstacles.spacing_per_mm;
     let start = torch.solid_start_mm();
-    let end = start + torch.nozzle_length_mm + torch.body_length_mm;
+    let end = torch.solid_end_mm();
     // Spheres along the axis, each covering a piece of the solid as long
     // as the nozzle is wide: fine enough that the spheres stay near the
     // solid, coarse enough to be few.

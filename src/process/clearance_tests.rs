@@ -339,6 +339,11 @@ fn an_extended_tip_is_part_of_the_torchs_solid() {
     let touching = Obstacles::new(beside(reach - 0.3));
     assert!(matches!(contact(&thick, &touching, &Vec3::zeros(), &axis), Some(Contact::Seen(_))));
     assert_eq!(contact(&thick, &Obstacles::new(beside(reach + 0.3)), &Vec3::zeros(), &axis), None);
+    // The body still ends where the nozzle's length and the body's put it
+    // past the nozzle's end, not the tip's.
+    let top = thick.solid_end_mm() - 1.0;
+    let at_top: Vec<Vec3> = (0..5).map(|k| Vec3::new(thick.nozzle_diameter_mm / 2.0, k as f64 * 0.2, top)).collect();
+    assert!(matches!(contact(&thick, &Obstacles::new(at_top), &Vec3::zeros(), &axis), Some(Contact::Seen(_))));
     // The same nozzle with its tip flush has nothing there.
     let flush = Torch { contact_tip_to_work_mm: thick.nozzle_to_work_mm, ..thick };
     assert_eq!(contact(&flush, &touching, &Vec3::zeros(), &axis), None);

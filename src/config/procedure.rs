@@ -5,7 +5,9 @@
 //! voltage and current at a wire feed speed) and, per joint type and
 //! plate thickness range, an entry: the travel speed and wire feed ranges,
 //! the bead sizes one pass may lay, the torch angles, the widest gap it
-//! welds and, for fillets, the leg. The numbers are data: the example
+//! welds, for fillets the leg and, where it is not the procedure's
+//! `[torch]`, the entry's own torch (its contact tip distance, nozzle and
+//! tip; [`Procedure::torch_for`]). The numbers are data: the example
 //! shipped in config/procedures/gmaw-mild-steel.toml documents each field.
 //! After [`Procedure::from_toml`] every range is ordered, every figure is
 //! positive and finite, every entry's wire exists and no two entries of a

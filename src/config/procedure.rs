@@ -5,7 +5,9 @@
 //! voltage and current at a wire feed speed) and, per joint type and
 //! plate thickness range, an entry: the travel speed and wire feed ranges,
 //! the bead sizes one pass may lay, the torch angles, the widest gap it
-//! welds and, for fillets, the leg. The numbers are data: the example
+//! welds, for fillets the leg and, where it is not the procedure's
+//! `[torch]`, the entry's own torch (its contact tip distance, nozzle and
+//! tip; [`Procedure::torch_for`]). The numbers are data: the example
 //! shipped in config/procedures/gmaw-mild-steel.toml documents each field.
 //! After [`Procedure::from_toml`] every range is ordered, every figure is
 //! positive and finite, every entry's wire exists and no two entries of a
@@ -70,17 +72,25 @@ pub struct Procedure {
 }
 
 /// The torch's solid along its axis from the aim point: nothing up to
-/// the nozzle's end, the nozzle (a cylinder), then the neck and body (a
-/// cone widening from the nozzle's radius; 0 degrees: a cylinder).
+/// the contact tip's end or the nozzle's, whichever is nearer, an
+/// extended tip's end (a cylinder) where the tip reaches past the nozzle,
+/// the nozzle (a cylinder), then the neck and body (a cone widening from
+/// the nozzle's radius; 0 degrees: a cylinder).
 #[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Torch {
-    /// Contact tip to work distance, mm (the wire's stick-out and the
-    /// tip's recess up to the nozzle's end are within it).
+    /// Contact tip to work distance, mm: the wire's stick-out, and where
+    /// the tip is recessed, the recess up to the nozzle's end.
     pub contact_tip_to_work_mm: f64,
-    /// From the aim point to the nozzle's end, mm.
+    /// From the aim point to the nozzle's end, mm: more than the contact
+    /// tip's distance where the tip is extended past the nozzle.
     pub nozzle_to_work_mm: f64,
     pub nozzle_diameter_mm: f64,
+    /// The contact tip's outside diameter where it reaches past the
+    /// nozzle's end, mm: needed, and only read, for an extended tip
+    /// (`nozzle_to_work_mm` above `contact_tip_to_work_mm`).
+    #[serde(default)]
+    pub contact_tip_diameter_mm: Option<f64>,
     pub nozzle_length_mm: f64,
     pub body_length_mm: f64,
     pub body_half_angle_deg: f64,
@@ -91,6 +101,85 @@ pub struct Torch {
     /// travel angles it may use, to clear the workpiece, degrees.
     pub work_deviation_deg: f64,
     pub travel_angle_range_deg: [f64; 2],
+}
+
+impl Torch {
+    /// How far the contact tip reaches past the nozzle's end, mm, and its
+    /// diameter there; `None` for a tip flush with the nozzle or recessed.
+    pub fn extended_tip(&self) -> Option<(f64, f64)> {
+        let extension = self.nozzle_to_work_mm - self.contact_tip_to_work_mm;
+        (extension > 0.0).then_some(extension).zip(self.contact_tip_diameter_mm)
+    }
+
+    /// Where the solid begins along its axis from the aim point, mm: the
+    /// extended tip's end, or else the nozzle's.
+    pub fn solid_start_mm(&self) -> f64 {
+        if self.extended_tip().is_some() { self.contact_tip_to_work_mm } else { self.nozzle_to_work_mm }
+    }
+
+    /// Where the solid ends along its axis from the aim point, mm: the
+    /// body's far end.
+    pub fn solid_end_mm(&self) -> f64 {
+        self.nozzle_to_work_mm + self.nozzle_length_mm + self.body_length_mm
+    }
+
+    /// This torch with an entry's own parts and stand-off in place of
+    /// these; the clearance margin and the angle limits stay the
+    /// procedure's.
+    fn with(&self, own: &EntryTorch) -> Torch {
+        Torch {
+            contact_tip_to_work_mm: own.contact_tip_to_work_mm.unwrap_or(self.contact_tip_to_work_mm),
+            nozzle_to_work_mm: own.nozzle_to_work_mm.unwrap_or(self.nozzle_to_work_mm),
+            nozzle_diameter_mm: own.nozzle_diameter_mm.unwrap_or(self.nozzle_diameter_mm),
+            contact_tip_diameter_mm: own.contact_tip_diameter_mm.or(self.contact_tip_diameter_mm),
+            nozzle_length_mm: own.nozzle_length_mm.unwrap_or(self.nozzle_length_mm),
+            body_length_mm: own.body_length_mm.unwrap_or(self.body_length_mm),
+            body_half_angle_deg: own.body_half_angle_deg.unwrap_or(self.body_half_angle_deg),
+            ..*self
+        }
+    }
+
+    /// Every figure in range, each error naming `prefix` and the field.
+    fn validate(&self, prefix: &str) -> Result<(), ProcedureError> {
+        let f = |name: &str| format!("{prefix}{name}");
+        positive(&f("contact_tip_to_work_mm"), self.contact_tip_to_work_mm)?;
+        positive(&f("nozzle_to_work_mm"), self.nozzle_to_work_mm)?;
+        positive(&f("nozzle_diameter_mm"), self.nozzle_diameter_mm)?;
+        if let Some(d) = self.contact_tip_diameter_mm {
+            positive(&f("contact_tip_diameter_mm"), d)?;
+            if d >= self.nozzle_diameter_mm {
+                let limit = "must be less than the nozzle's diameter (the tip sits inside the nozzle)";
+                return Err(value(&f("contact_tip_diameter_mm"), d, limit));
+            }
+        }
+        if self.nozzle_to_work_mm > self.contact_tip_to_work_mm && self.contact_tip_diameter_mm.is_none() {
+            let limit = "exceeds contact_tip_to_work_mm, an extended tip: give contact_tip_diameter_mm, the tip's \
+                         solid past the nozzle";
+            return Err(value(&f("nozzle_to_work_mm"), self.nozzle_to_work_mm, limit));
+        }
+        positive(&f("nozzle_length_mm"), self.nozzle_length_mm)?;
+        non_negative(&f("body_length_mm"), self.body_length_mm)?;
+        if !(0.0..60.0).contains(&self.body_half_angle_deg) {
+            return Err(value(&f("body_half_angle_deg"), self.body_half_angle_deg, "must lie in [0, 60) degrees"));
+        }
+        Ok(())
+    }
+}
+
+/// An entry's own torch: the parts and stand-off its joints are welded
+/// with where they differ from the procedure's `[torch]` (a field left
+/// out is the procedure's). The clearance margin and the angle limits are
+/// the cell's, the procedure's for every entry.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct EntryTorch {
+    pub contact_tip_to_work_mm: Option<f64>,
+    pub nozzle_to_work_mm: Option<f64>,
+    pub nozzle_diameter_mm: Option<f64>,
+    pub contact_tip_diameter_mm: Option<f64>,
+    pub nozzle_length_mm: Option<f64>,
+    pub body_length_mm: Option<f64>,
+    pub body_half_angle_deg: Option<f64>,
 }
 
 /// A wire and its synergic line.
@@ -160,6 +249,10 @@ pub struct Entry {
     /// How the torch weaves where the gap calls for it (none if absent).
     #[serde(default)]
     pub weave: Option<WeaveSpec>,
+    /// The torch this entry's joints are welded with, where it is not
+    /// the procedure's ([`Procedure::torch_for`]).
+    #[serde(default)]
+    pub torch: Option<EntryTorch>,
 }
 
 /// A weave's shape, as a controller's weave function names it.
@@ -236,6 +329,12 @@ impl Procedure {
         ranges
     }
 
+    /// The torch an entry's joints are welded with: the procedure's, with
+    /// the entry's own parts and stand-off where it gives them.
+    pub fn torch_for(&self, entry: &Entry) -> Torch {
+        entry.torch.as_ref().map_or(self.torch, |own| self.torch.with(own))
+    }
+
     /// The wire of an entry (validated to exist).
     pub fn wire(&self, entry: &Entry) -> &Wire {
         self.wires
@@ -250,21 +349,7 @@ impl Procedure {
         non_negative("cap_overlap_mm", self.cap_overlap_mm)?;
         non_negative("fillet_convexity_mm", self.fillet_convexity_mm)?;
         let t = &self.torch;
-        positive("torch.contact_tip_to_work_mm", t.contact_tip_to_work_mm)?;
-        positive("torch.nozzle_to_work_mm", t.nozzle_to_work_mm)?;
-        if t.nozzle_to_work_mm > t.contact_tip_to_work_mm {
-            return Err(value(
-                "torch.nozzle_to_work_mm",
-                t.nozzle_to_work_mm,
-                "must not exceed torch.contact_tip_to_work_mm (the tip sits inside the nozzle)",
-            ));
-        }
-        positive("torch.nozzle_diameter_mm", t.nozzle_diameter_mm)?;
-        positive("torch.nozzle_length_mm", t.nozzle_length_mm)?;
-        non_negative("torch.body_length_mm", t.body_length_mm)?;
-        if !(0.0..60.0).contains(&t.body_half_angle_deg) {
-            return Err(value("torch.body_half_angle_deg", t.body_half_angle_deg, "must lie in [0, 60) degrees"));
-        }
+        t.validate("torch.")?;
         non_negative("torch.margin_mm", t.margin_mm)?;
         angle("torch.work_deviation_deg", t.work_deviation_deg)?;
         range("torch.travel_angle_range_deg", t.travel_angle_range_deg)?;
@@ -287,6 +372,9 @@ impl Procedure {
         }
         for (k, e) in self.entries.iter().enumerate() {
             e.validate(k + 1)?;
+            if e.torch.is_some() {
+                self.torch_for(e).validate(&format!("entry {} ({}) torch.", k + 1, e.joint.name()))?;
+            }
             let Some(wire) = self.wires.iter().find(|w| w.diameter_mm == e.wire_diameter_mm) else {
                 return Err(ProcedureError::UnknownWire {
                     entry: k + 1,
@@ -444,6 +532,39 @@ mod tests {
         assert!(matches!(e, ProcedureError::Missing { field: "root_bead_area_mm2", .. }), "{e}");
         let e = example_with("leg_mm = 4.0", "leg_mm = -4.0").unwrap_err();
         assert!(e.to_string().contains("leg_mm is -4"), "{e}");
+    }
+
+    #[test]
+    fn an_entry_welds_with_its_own_torch_checked_as_the_procedures_is() {
+        let p = Procedure::example();
+        // The thin V entry keeps the procedure's torch; the thick one
+        // extends its tip past the nozzle, with the procedure's nozzle,
+        // margin and angle limits.
+        assert_eq!(p.torch_for(p.entry(JointType::VButt, 10.0).unwrap()), p.torch);
+        let thick = p.torch_for(p.entry(JointType::VButt, 20.0).unwrap());
+        let (extension, diameter) = thick.extended_tip().expect("an extended tip");
+        assert!((extension - 6.4).abs() < 1e-9 && diameter == 8.0, "{thick:?}");
+        assert_eq!(
+            Torch { contact_tip_to_work_mm: 15.0, nozzle_to_work_mm: 12.0, contact_tip_diameter_mm: None, ..thick },
+            p.torch
+        );
+        let e = example_with(", contact_tip_diameter_mm = 8.0 }", " }").unwrap_err();
+        assert!(
+            matches!(&e, ProcedureError::Value { field, .. } if field == "entry 4 (v_butt) torch.nozzle_to_work_mm"),
+            "{e}"
+        );
+        let e = example_with("contact_tip_diameter_mm = 8.0", "contact_tip_diameter_mm = 16.0").unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "entry 4 (v_butt) torch.contact_tip_diameter_mm is 16: must be less than the nozzle's diameter (the tip \
+             sits inside the nozzle)"
+        );
+        // The margin is the cell's, not an entry's to lower.
+        let e = example_with("contact_tip_diameter_mm = 8.0", "contact_tip_diameter_mm = 8.0, margin_mm = 0.5")
+            .unwrap_err();
+        assert!(e.to_string().contains("margin_mm"), "{e}");
+        let e = example_with("nozzle_to_work_mm = 12.0", "nozzle_to_work_mm = 16.0").unwrap_err();
+        assert!(matches!(&e, ProcedureError::Value { field, .. } if field == "torch.nozzle_to_work_mm"), "{e}");
     }
 
     #[test]

@@ -237,10 +237,11 @@ fn score_seam(
         let station = Station { point: in_camera[k], along, bisector };
         let entry = procedure.entry(scene.case.joint(), thickness);
         let at_procedure = entry.map(|e| station.axis(e.work_angle_deg, e.travel_angle_deg));
+        // The torch the planner checks for this joint: the entry's own.
+        let torch = entry.map_or(procedure.torch, |e| procedure.torch_for(e));
         let touches_block = |point: &Vec3, axis: &Vec3| {
             block.is_some_and(|b| {
-                contact(&procedure.torch, b, &(frames.workpiece_from_camera(point)), &frames.workpiece_axis(axis))
-                    .is_some()
+                contact(&torch, b, &(frames.workpiece_from_camera(point)), &frames.workpiece_axis(axis)).is_some()
             })
         };
         let beside = at_procedure.is_some_and(|axis| touches_block(&in_camera[k], &axis));
@@ -271,7 +272,7 @@ fn score_seam(
         let mut through = false;
         for (aim, axis) in pass_torches(wp, &station) {
             score.torches_checked += 1;
-            score.torches_in_cloud += usize::from(contact(&procedure.torch, &obstacles, &aim, &axis).is_some());
+            score.torches_in_cloud += usize::from(contact(&torch, &obstacles, &aim, &axis).is_some());
             through |= touches_block(&aim, &axis);
         }
         if let (Some(c), true) = (score.clamp.as_mut(), through) {

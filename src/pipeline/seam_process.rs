@@ -14,7 +14,9 @@
 //! - lap: the procedure's fillet on the upper plate `t` (its step);
 //! - tee: the procedure's fillet, where `t` is configured.
 //!
-//! The torch is checked for every pass at the waypoint: the pass the
+//! The torch is the entry's ([`Procedure::torch_for`]: the procedure's,
+//! or the entry's own nozzle, contact tip and stand-off), checked for
+//! every pass at the waypoint: the pass the
 //! waypoints trace (a single pass, or a V-groove's root) aimed at the
 //! waypoint along the seam's torch axis, each other pass at its own aim
 //! point, every one tilted by its work angle and the entry's travel angle
@@ -263,7 +265,8 @@ fn at_waypoint(
         names.push(pass_name(pass));
     }
     let station = Station { point: place.point, along: place.travel, bisector: -place.into };
-    match clear_station(&procedure.torch, obstacles, &station, &aims, entry.travel_angle_deg) {
+    let torch = procedure.torch_for(entry);
+    match clear_station(&torch, obstacles, &station, &aims, entry.travel_angle_deg) {
         Clearance::Clear { lean_deg, travel_angle_deg, moved } => Ok(WaypointProcess {
             thickness_mm,
             layout,
@@ -288,8 +291,8 @@ fn at_waypoint(
                     p.x,
                     p.y,
                     p.z,
-                    procedure.torch.work_deviation_deg,
-                    procedure.torch.travel_angle_range_deg
+                    torch.work_deviation_deg,
+                    torch.travel_angle_range_deg
                 ),
                 Some(p),
             ))

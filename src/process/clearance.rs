@@ -3,6 +3,9 @@
 //!
 //! The torch is modelled along its axis from the aim point: nothing up to
 //! the nozzle's end (`nozzle_to_work_mm`: the arc, the wire's stick-out),
+//! or where the contact tip is extended past the nozzle, up to the tip's
+//! end (`contact_tip_to_work_mm`) and the tip, a cylinder of
+//! `contact_tip_diameter_mm`, on to the nozzle's end;
 //! then the nozzle, a cylinder of `nozzle_diameter_mm` and
 //! `nozzle_length_mm`, then the torch's neck and body, a cone widening
 //! from the nozzle's radius at `body_half_angle_deg` over `body_length_mm`
@@ -25,7 +28,7 @@
 //! the camera did not see.
 
 use std::cmp::Ordering;
-use std::sync::Arc;
+use std::sync::{Arc, PoisonError, RwLock};
 
 use nalgebra::{Rotation3, Unit, Vector3};
 use rayon::prelude::*;
@@ -98,17 +101,34 @@ impl Hidden<'_> {
 /// edge between the last seen points is a contact.
 pub const EDGE_SPACINGS: f64 = 2.0;
 
-/// The space the camera could not see, with the torch's surface sampled
-/// to test against it.
+/// The space the camera could not see, with the surface of each torch
+/// checked against it sampled once: the torch it was indexed for, and
+/// any other (a procedure entry's own) the first time it is asked about.
 struct HiddenSpace<'a> {
     shadows: Hidden<'a>,
-    torch: Torch,
-    surface: Vec<SurfaceSample>,
+    surfaces: RwLock<Vec<(Torch, Arc<[SurfaceSample]>)>>,
 }
 
 impl<'a> HiddenSpace<'a> {
     fn new(shadows: Hidden<'a>, torch: &Torch) -> HiddenSpace<'a> {
-        HiddenSpace { shadows, torch: *torch, surface: surface_samples(torch, SURFACE_SAMPLE_STEP_MM) }
+        let surface = surface_samples(torch, SURFACE_SAMPLE_STEP_MM).into();
+        HiddenSpace { shadows, surfaces: RwLock::new(vec![(*torch, surface)]) }
+    }
+
+    /// The torch's surface samples, nearest the aim point first.
+    fn surface(&self, torch: &Torch) -> Arc<[SurfaceSample]> {
+        let found = |surfaces: &[(Torch, Arc<[SurfaceSample]>)]| {
+            surfaces.iter().find(|(t, _)| t == torch).map(|(_, s)| Arc::clone(s))
+        };
+        if let Some(surface) = found(&self.surfaces.read().unwrap_or_else(PoisonError::into_inner)) {
+            return surface;
+        }
+        let mut surfaces = self.surfaces.write().unwrap_or_else(PoisonError::into_inner);
+        found(&surfaces).unwrap_or_else(|| {
+            let surface: Arc<[SurfaceSample]> = surface_samples(torch, SURFACE_SAMPLE_STEP_MM).into();
+            surfaces.push((*torch, Arc::clone(&surface)));
+            surface
+        })
     }
 }
 
@@ -265,13 +285,17 @@ impl Station {
 }
 
 /// The torch's radius, grown by its margin, `s` mm up its axis from the
-/// aim point, or `None` below the nozzle's end and beyond the body.
+/// aim point, or `None` below the solid's start (the nozzle's end, or an
+/// extended contact tip's) and beyond the body.
 fn radius_at(torch: &Torch, s: f64) -> Option<f64> {
     let nozzle_end = torch.nozzle_to_work_mm;
     let body_start = nozzle_end + torch.nozzle_length_mm;
     let nozzle = torch.nozzle_diameter_mm / 2.0;
     let r = if s < nozzle_end {
-        return None;
+        match torch.extended_tip() {
+            Some((_, tip_diameter)) if s >= torch.contact_tip_to_work_mm => tip_diameter / 2.0,
+            _ => return None,
+        }
     } else if s <= body_start {
         nozzle
     } else if s <= body_start + torch.body_length_mm {
@@ -321,13 +345,13 @@ pub fn contact(torch: &Torch, obstacles: &Obstacles, point: &Vec3, axis: &Vec3) 
 /// first.
 fn hidden_contact(torch: &Torch, obstacles: &Obstacles, point: &Vec3, axis: &Vec3) -> Option<Vec3> {
     let hidden = obstacles.hidden.as_ref()?;
-    debug_assert_eq!(hidden.torch, *torch, "obstacles are indexed for the torch they are checked against");
+    let surface = hidden.surface(torch);
     let axis = axis.normalize();
     let e1 = axis.cross(&if axis.x.abs() < 0.9 { Vec3::x() } else { Vec3::y() }).normalize();
     let e2 = axis.cross(&e1);
     let mut first = None;
     let mut behind = 0;
-    for q in &hidden.surface {
+    for q in surface.iter() {
         let p = point + axis * q.s + e1 * q.a + e2 * q.b;
         if hidden.shadows.hides(&p) {
             first.get_or_insert(p);
@@ -344,8 +368,8 @@ fn hidden_contact(torch: &Torch, obstacles: &Obstacles, point: &Vec3, axis: &Vec
 /// faces), grown by its margin, sampled every `step` mm, nearest the aim
 /// point first.
 fn surface_samples(torch: &Torch, step: f64) -> Vec<SurfaceSample> {
-    let start = torch.nozzle_to_work_mm;
-    let end = start + torch.nozzle_length_mm + torch.body_length_mm;
+    let start = torch.solid_start_mm();
+    let end = torch.solid_end_mm();
     let mut out = Vec::new();
     let mut ring = |s: f64, r: f64| {
         let n = ((std::f64::consts::TAU * r / step).ceil() as usize).max(1);
@@ -361,7 +385,10 @@ fn surface_samples(torch: &Torch, step: f64) -> Vec<SurfaceSample> {
             ring(s, r);
         }
     }
-    for s in [start, end] {
+    // The end faces: the solid's start and end, and where an extended tip
+    // leaves it, the nozzle's end round the tip.
+    let nozzle_end = torch.extended_tip().map(|_| torch.nozzle_to_work_mm);
+    for s in [Some(start), nozzle_end, Some(end)].into_iter().flatten() {
         if let Some(r) = radius_at(torch, s) {
             let discs = (r / step).floor() as usize;
             (0..discs).for_each(|k| ring(s, k as f64 * step));
@@ -377,8 +404,8 @@ fn surface_samples(torch: &Torch, step: f64) -> Vec<SurfaceSample> {
 fn seen_contact(torch: &Torch, obstacles: &Obstacles, point: &Vec3, axis: &Vec3) -> Option<Vec3> {
     let axis = axis.normalize();
     let edge_per_mm = EDGE_SPACINGS * obstacles.spacing_per_mm;
-    let start = torch.nozzle_to_work_mm;
-    let end = start + torch.nozzle_length_mm + torch.body_length_mm;
+    let start = torch.solid_start_mm();
+    let end = torch.solid_end_mm();
     // Spheres along the axis, each covering a piece of the solid as long
     // as the nozzle is wide: fine enough that the spheres stay near the
     // solid, coarse enough to be few.

@@ -276,3 +276,98 @@ fn a_cameras_surfaces_may_reach_past_their_points_and_the_search_agrees_with_a_s
     let seen = Obstacles::seen_from_camera(wall.iter().copied(), &t);
     assert!(matches!(contact(&t, &seen, &upright.point, &axis), Some(Contact::Seen(p)) if (p.x - 10.5).abs() < 1e-3));
 }
+
+/// A 60 degree V-groove in 20 mm plates with no root gap, seen from a
+/// camera 600 mm above its top (camera frame: the plates' tops in
+/// z = 600, the root along y at x = 0, z = 620).
+fn thick_v_groove() -> Vec<Vec3> {
+    let half = 30f64.to_radians();
+    let mut points = Vec::new();
+    for j in -40..=40 {
+        let y = j as f64;
+        for k in 0..=46 {
+            // Down each flank every 0.5 mm of its slope.
+            let down = 20.0 - k as f64 * 0.5 * half.cos();
+            let x = down.max(0.0) * half.tan();
+            points.push(Vec3::new(x, y, 620.0 - down.max(0.0)));
+            points.push(Vec3::new(-x, y, 620.0 - down.max(0.0)));
+        }
+        for i in 0..=100 {
+            let x = 20.0 * half.tan() + 0.5 * i as f64;
+            points.push(Vec3::new(x, y, 600.0));
+            points.push(Vec3::new(-x, y, 600.0));
+        }
+    }
+    points
+}
+
+fn thick_v_station() -> Station {
+    Station { point: Vec3::new(0.0, 0.0, 620.0), along: Vec3::y(), bisector: -Vec3::z() }
+}
+
+/// The example's thick V entry extends its contact tip past the nozzle:
+/// that torch reaches the root of a 20 mm, 60 degree groove, which the
+/// procedure's own torch (its nozzle 12 mm from the work) and a tip
+/// extended only 1/8 in do not.
+#[test]
+fn an_extended_tip_reaches_a_thick_v_grooves_root_and_the_example_nozzle_does_not() {
+    let p = Procedure::example();
+    let thick = p.torch_for(p.entry(crate::joint::JointType::VButt, 20.0).expect("a thick V entry"));
+    assert!(thick.extended_tip().is_some(), "{thick:?}");
+    let obstacles = Obstacles::new(thick_v_groove());
+    let station = thick_v_station();
+    let root = [Aim::at_point(0.0)];
+    let at = |torch: &Torch| clear_station(torch, &obstacles, &station, &root, 10.0);
+    assert_eq!(at(&thick), Clearance::Clear { lean_deg: 0.0, travel_angle_deg: 10.0, moved: false });
+    assert!(matches!(at(&p.torch), Clearance::Blocked { .. }), "{:?}", at(&p.torch));
+    let eighth_inch = Torch { nozzle_to_work_mm: thick.contact_tip_to_work_mm + 3.2, ..thick };
+    assert!(matches!(at(&eighth_inch), Clearance::Blocked { .. }), "{:?}", at(&eighth_inch));
+}
+
+/// The tip past the nozzle is a solid of its own diameter: a surface
+/// within its radius and margin touches it, one just beyond does not
+/// (the nozzle begins farther up).
+#[test]
+fn an_extended_tip_is_part_of_the_torchs_solid() {
+    let p = Procedure::example();
+    let thick = p.torch_for(p.entry(crate::joint::JointType::VButt, 20.0).expect("a thick V entry"));
+    let (_, tip_diameter) = thick.extended_tip().expect("extended");
+    let s = (thick.contact_tip_to_work_mm + thick.nozzle_to_work_mm) / 2.0;
+    let beside = |r: f64| -> Vec<Vec3> { (0..5).map(|k| Vec3::new(r, k as f64 * 0.2, s)).collect() };
+    let reach = tip_diameter / 2.0 + thick.margin_mm;
+    let axis = Vec3::z();
+    let touching = Obstacles::new(beside(reach - 0.3));
+    assert!(matches!(contact(&thick, &touching, &Vec3::zeros(), &axis), Some(Contact::Seen(_))));
+    assert_eq!(contact(&thick, &Obstacles::new(beside(reach + 0.3)), &Vec3::zeros(), &axis), None);
+    // The body still ends where the nozzle's length and the body's put it
+    // past the nozzle's end, not the tip's.
+    let top = thick.solid_end_mm() - 1.0;
+    let at_top: Vec<Vec3> = (0..5).map(|k| Vec3::new(thick.nozzle_diameter_mm / 2.0, k as f64 * 0.2, top)).collect();
+    assert!(matches!(contact(&thick, &Obstacles::new(at_top), &Vec3::zeros(), &axis), Some(Contact::Seen(_))));
+    // The same nozzle with its tip flush has nothing there.
+    let flush = Torch { contact_tip_to_work_mm: thick.nozzle_to_work_mm, ..thick };
+    assert_eq!(contact(&flush, &touching, &Vec3::zeros(), &axis), None);
+}
+
+/// The space behind the seen surfaces, indexed for one torch, answers for
+/// another as it would had it been indexed for that one.
+#[test]
+fn the_hidden_space_answers_every_torch_as_if_indexed_for_it() {
+    let p = Procedure::example();
+    let thick = p.torch_for(p.entry(crate::joint::JointType::VButt, 20.0).expect("a thick V entry"));
+    let points = thick_v_groove();
+    let for_procedure = Obstacles::seen_from_camera(points.iter().copied(), &p.torch);
+    let for_thick = Obstacles::seen_from_camera(points.iter().copied(), &thick);
+    let station = thick_v_station();
+    let mut touched = 0;
+    for up_mm in [0.0, 4.0, 8.0] {
+        for work in [-30.0, -15.0, 0.0, 15.0, 30.0] {
+            let aim = Aim { across_mm: 0.0, up_mm, work_angle_deg: work };
+            let axis = station.axis(work, 10.0);
+            let a = contact(&thick, &for_procedure, &aim.point(&station), &axis);
+            assert_eq!(a, contact(&thick, &for_thick, &aim.point(&station), &axis), "up {up_mm}, work {work}");
+            touched += usize::from(a.is_some());
+        }
+    }
+    assert!(touched > 0 && touched < 15, "{touched} of 15 poses touch: the test must see both");
+}

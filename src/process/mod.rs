@@ -184,7 +184,7 @@ mod tests {
         .unwrap_err();
         assert_eq!(
             e.to_string(),
-            "the procedure has no v_butt entry for plates 50.0 mm thick (its entries cover 5 to 40 mm)"
+            "the procedure has no v_butt entry for plates 50.0 mm thick (its entries cover 5 to 12 mm, 12 to 40 mm)"
         );
     }
 

@@ -121,3 +121,36 @@ pub(super) fn weigh(
         Err(_) => Err(refused),
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::rules::Rule;
+
+    fn refused(rule: &'static Rule, seen: Option<JointType>) -> Refused {
+        Refused { reason: PlanError::by(rule, "refused"), seen }
+    }
+
+    #[test]
+    fn the_tee_s_reading_is_weighed_after_a_butt_or_lap_reading_and_a_web_in_the_gap_only() {
+        // A lap's or a butt pair's reading refused: the tee's says more.
+        assert!(worth_weighing(&refused(&rules::weld_edges::NO_LINE_BETWEEN_PLATES, Some(JointType::Lap))));
+        assert!(worth_weighing(&refused(&rules::background::TEE_WEB_SEEN_ON_ONE_SIDE, None)));
+        // The groove probe's web standing in the gap: a joint mismatch, and
+        // seen as a tee already, yet the one the tee's reading plans.
+        let web = refused(&rules::groove::PLATE_STANDING_IN_GAP, Some(JointType::TFillet));
+        assert_eq!(web.reason.gate, Some(Gate::JointMismatch));
+        assert!(worth_weighing(&web));
+        // A lone plane: `auto` weighed its face and its valley already (a
+        // groove's two flanks are not read again as a tee).
+        assert!(!worth_weighing(&refused(&rules::background::TOO_FEW_PLANES, None)));
+        assert!(!worth_weighing(&refused(&rules::background::WEB_FACE_WITHOUT_TOP, None)));
+        // A tee read already, a joint the request does not admit, a plan out
+        // of time: nothing more to say.
+        assert!(!worth_weighing(&refused(&rules::weld_edges::NO_LINE_BETWEEN_PLATES, Some(JointType::TFillet))));
+        assert!(!worth_weighing(&refused(&rules::groove::BUTT_NOT_REQUESTED, Some(JointType::VButt))));
+        let mut late = refused(&rules::weld_edges::NO_LINE_BETWEEN_PLATES, Some(JointType::Lap));
+        late.reason.out_of_time = true;
+        assert!(!worth_weighing(&late));
+    }
+}

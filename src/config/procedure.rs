@@ -162,9 +162,42 @@ impl Torch {
         if !(0.0..60.0).contains(&self.body_half_angle_deg) {
             return Err(value(&f("body_half_angle_deg"), self.body_half_angle_deg, "must lie in [0, 60) degrees"));
         }
+        // The solid is sampled every few millimetres over its surface at
+        // every torch checked: a length or a width off by a unit (metres
+        // written as micrometres) would be sampled without bound.
+        if self.solid_end_mm() > TORCH_MAX_LENGTH_MM {
+            let limit = "makes the torch's solid, nozzle_to_work_mm + nozzle_length_mm + body_length_mm from the aim \
+                         point, longer than 500 mm (TORCH_MAX_LENGTH_MM)";
+            return Err(value(&f("body_length_mm"), self.body_length_mm, limit));
+        }
+        if self.far_end_diameter_mm() > TORCH_MAX_DIAMETER_MM {
+            let limit = "makes the torch wider than 150 mm at the body's far end (TORCH_MAX_DIAMETER_MM): \
+                         nozzle_diameter_mm, widened by body_half_angle_deg over body_length_mm";
+            return Err(value(&f("nozzle_diameter_mm"), self.nozzle_diameter_mm, limit));
+        }
         Ok(())
     }
+
+    /// The solid's diameter at the body's far end, mm, the margin aside.
+    fn far_end_diameter_mm(&self) -> f64 {
+        self.nozzle_diameter_mm + 2.0 * self.body_length_mm * self.body_half_angle_deg.to_radians().tan()
+    }
 }
+
+/// The longest a torch's solid may run from the aim point, mm: a robot
+/// torch's nozzle, neck and the body's near part, which is what can meet
+/// the workpiece, are a few hundred millimetres; the wrist beyond them is
+/// the robot's reach to check, not the torch's.
+pub const TORCH_MAX_LENGTH_MM: f64 = 500.0;
+
+/// The widest a torch's solid may be at the body's far end, mm: a torch's
+/// neck and body are some tens of millimetres across.
+pub const TORCH_MAX_DIAMETER_MM: f64 = 150.0;
+
+/// The widest clearance margin, mm: one kept round the torch for the
+/// cloud's noise and the robot's path error is a few millimetres; it
+/// widens every sample ring of the solid.
+pub const TORCH_MAX_MARGIN_MM: f64 = 20.0;
 
 /// An entry's own torch: the parts and stand-off its joints are welded
 /// with where they differ from the procedure's `[torch]` (a field left
@@ -351,6 +384,9 @@ impl Procedure {
         let t = &self.torch;
         t.validate("torch.")?;
         non_negative("torch.margin_mm", t.margin_mm)?;
+        if t.margin_mm > TORCH_MAX_MARGIN_MM {
+            return Err(value("torch.margin_mm", t.margin_mm, "must be at most 20 mm (TORCH_MAX_MARGIN_MM)"));
+        }
         angle("torch.work_deviation_deg", t.work_deviation_deg)?;
         range("torch.travel_angle_range_deg", t.travel_angle_range_deg)?;
         angle("torch.travel_angle_range_deg", t.travel_angle_range_deg[0])?;
@@ -532,6 +568,23 @@ mod tests {
         assert!(matches!(e, ProcedureError::Missing { field: "root_bead_area_mm2", .. }), "{e}");
         let e = example_with("leg_mm = 4.0", "leg_mm = -4.0").unwrap_err();
         assert!(e.to_string().contains("leg_mm is -4"), "{e}");
+    }
+
+    #[test]
+    fn a_torch_too_long_or_too_wide_to_sample_is_refused_with_its_limit() {
+        let e = example_with("body_length_mm = 80.0", "body_length_mm = 80000000.0").unwrap_err();
+        assert!(
+            matches!(&e, ProcedureError::Value { field, .. } if field == "torch.body_length_mm")
+                && e.to_string().contains("500 mm"),
+            "{e}"
+        );
+        let e = example_with("body_half_angle_deg = 12.0", "body_half_angle_deg = 59.0").unwrap_err();
+        assert!(e.to_string().contains("wider than 150 mm"), "{e}");
+        let e = example_with("margin_mm = 2.0", "margin_mm = 2000.0").unwrap_err();
+        assert_eq!(e.to_string(), "torch.margin_mm is 2000: must be at most 20 mm (TORCH_MAX_MARGIN_MM)");
+        // An entry's own torch is held to the same bounds.
+        let e = example_with("nozzle_to_work_mm = 19.1", "nozzle_to_work_mm = 600.0").unwrap_err();
+        assert!(e.to_string().contains("entry 4 (v_butt) torch.body_length_mm"), "{e}");
     }
 
     #[test]

@@ -364,7 +364,7 @@ mod tests {
             let centroid = Vec3::new((x0 + x1) / 2.0, (y0 + y1) / 2.0, z);
             self.planes.push(PlaneCluster {
                 label: self.planes.len() as u32,
-                members,
+                members: members.into(),
                 plane: Plane { normal: Vec3::z(), offset: z },
                 centroid,
                 area_mm2,
@@ -393,7 +393,7 @@ mod tests {
             self.planes.push(PlaneCluster {
                 label: self.planes.len() as u32,
                 area_mm2: members.len() as f64,
-                members,
+                members: members.into(),
                 plane: Plane { normal: Vec3::z(), offset: z },
                 centroid: Vec3::new(0.0, 0.0, z),
                 long_axis: Vec3::x(),

@@ -32,6 +32,8 @@ mod standing_tests;
 #[cfg(test)]
 mod tests;
 
+use std::sync::Arc;
+
 use crate::cloud::PointCloud;
 use crate::geometry::fit::{Moments, Plane};
 use crate::geometry::{Vec3, vec3};
@@ -46,7 +48,9 @@ pub use layers::{nearest_layer, robust_select};
 pub struct PlaneCluster {
     /// The cluster's label in [`crate::pipeline::clustering::Clusters::labels`].
     pub label: u32,
-    pub members: Vec<u32>,
+    /// The cluster's points, shared: a workpiece's planes are cloned to
+    /// be read a second way (`auto`'s tee reading), not their points.
+    pub members: Arc<Vec<u32>>,
     pub plane: Plane,
     pub centroid: Vec3,
     /// The area the points cover on their plane, mm².
@@ -60,7 +64,7 @@ pub struct PlaneCluster {
 impl PlaneCluster {
     /// The cluster's plane, place and shape without its points.
     pub fn clone_shape(&self) -> PlaneCluster {
-        PlaneCluster { members: Vec::new(), ..*self }
+        PlaneCluster { members: Arc::default(), ..*self }
     }
 }
 
@@ -78,7 +82,7 @@ impl PlaneCluster {
             area_mm2: members.len() as f64,
             plane: moments.plane().expect("points spanning a plane"),
             centroid: moments.centroid().expect("points"),
-            members,
+            members: members.into(),
             long_axis,
             elongation,
         }
@@ -139,7 +143,15 @@ pub fn describe(
             let centroid = moments.centroid()?;
             let area_mm2 = m.len() as f64 * area_per_point(&centroid, &plane.normal);
             let (long_axis, elongation) = moments.elongation()?;
-            Some(PlaneCluster { label: label as u32, members: m, plane, centroid, area_mm2, long_axis, elongation })
+            Some(PlaneCluster {
+                label: label as u32,
+                members: m.into(),
+                plane,
+                centroid,
+                area_mm2,
+                long_axis,
+                elongation,
+            })
         })
         .collect()
 }
@@ -150,7 +162,7 @@ pub fn paper_select(cloud: &PointCloud, mut planes: Vec<PlaneCluster>) -> Result
     let points = cloud.points();
     let bbox_area = |c: &PlaneCluster| {
         let (mut lo, mut hi) = ([f32::MAX; 2], [f32::MIN; 2]);
-        for &i in &c.members {
+        for &i in c.members.iter() {
             let p = points[i as usize];
             lo = [lo[0].min(p[0]), lo[1].min(p[1])];
             hi = [hi[0].max(p[0]), hi[1].max(p[1])];

@@ -14,7 +14,7 @@ fn robust_select(planes: Vec<PlaneCluster>, s: &Selection) -> Result<Selected, B
 fn cluster(offset: f64, area: f64, centre_x: f64) -> PlaneCluster {
     PlaneCluster {
         label: 0,
-        members: vec![0; area as usize],
+        members: vec![0; area as usize].into(),
         plane: Plane { normal: Vec3::z(), offset },
         centroid: Vec3::new(centre_x, 0.0, offset),
         area_mm2: area,
@@ -138,7 +138,7 @@ fn corner_frame_with(
     }
     let plane = |members: Vec<u32>, x: f64, y: f64, z: f64, elongation: f64| PlaneCluster {
         area_mm2: members.len() as f64,
-        members,
+        members: members.into(),
         plane: Plane { normal: Vec3::z(), offset: z },
         centroid: Vec3::new(x, y, z),
         label: 0,

@@ -55,8 +55,7 @@ pub(super) fn check_lap_edge(
     let band_mm = step_mm + 2.0 * ctx.scale.radius_mm + ctx.scale.band(ctx.config.pipeline.boundary_band_mm);
     let spacing_mm = ctx.scale.spacing_at(&ctx.config.camera, &upper.centroid);
     let bin_mm = (2.0 * spacing_mm).max(LAP_EDGE_BIN_MIN_MM);
-    let beside: Vec<&[u32]> =
-        std::iter::once(lower).chain(&workpiece.layer_mates[1]).map(|c| c.members.as_slice()).collect();
+    let beside: Vec<&[u32]> = std::iter::once(lower).chain(&workpiece.layer_mates[1]).map(|c| &c.members[..]).collect();
     // The refusal rules judge the other edges against the chosen one: with
     // none, they have nothing to read.
     if measured.len() > 1 {

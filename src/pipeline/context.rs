@@ -629,14 +629,6 @@ impl PlannedWeld {
         PlannedWeld { along: Some(Box::new(evidence)), ..self }
     }
 
-    /// This weld with `why` told before the evidence its joint was read
-    /// from (a reading `auto` weighed after another was refused).
-    pub(super) fn with_evidence_before(mut self, why: &str) -> Self {
-        let evidence = self.assessment.joint_evidence.take().unwrap_or_default();
-        self.assessment.joint_evidence = Some(format!("{why}; {evidence}"));
-        self
-    }
-
     /// This weld, its waypoints traced or not.
     pub(super) fn traced(self, traced: bool) -> Self {
         PlannedWeld { traced, ..self }

@@ -341,7 +341,7 @@ fn plan_workpiece(
     let kept = planes.clone();
     match read_workpiece(ctx, front, labels, planes) {
         Err(refused) if tee_reading::worth_weighing(&refused) => {
-            tee_reading::weigh(ctx, refused, |as_tee| read_workpiece(as_tee, front, labels, kept))
+            Err(tee_reading::weigh(ctx, refused, |as_tee| read_workpiece(as_tee, front, labels, kept)))
         }
         read => read,
     }

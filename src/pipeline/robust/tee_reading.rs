@@ -1,7 +1,6 @@
 //! Under `auto`, a workpiece every proposed reading refused is read once
-//! more as a tee's request (`t_fillet`) reads it: planned where the refused
-//! reading itself found a web standing along the seam, else for what its
-//! refusal says.
+//! more as a tee's request (`t_fillet`) reads it: for what that refusal
+//! says, never for a plan.
 //!
 //! Without a request the layers take a web's top only where it stands
 //! higher than a lap's upper plate is thick and over its flange on both of
@@ -11,34 +10,32 @@
 //! src/pipeline/background/layers.rs, `tee.web_seen_on_one_side`). Two
 //! classes of workpiece were refused for it with a reason that is not what
 //! the cloud shows:
-//! - a short web standing on its flange: the flange's halves either side
-//!   of it read as a butt pair, whose groove probe then finds a plate
-//!   standing between the edges along the seam and refuses it as a tee
-//!   (`butt.plate_standing_in_gap`), which `auto` did not plan;
 //! - a member standing on a curved part (a round tube on a cylinder, its
 //!   top a strip a few tens of millimetres over the cylinder's nearest
 //!   facet): read as a lap, refused for the edge between two plates a lap
 //!   has and a tee does not, where the tee's reading finds the member's
-//!   root and refuses it as bending.
+//!   root and refuses it as bending;
+//! - a short web standing on its flange: the flange's halves either side
+//!   of it read as a butt pair, whose groove probe then finds a plate
+//!   standing between the edges along the seam (`butt.plate_standing_in_gap`)
+//!   and says nothing of whether a tee's request would plan it.
 //!
 //! So, once every reading `auto` proposes is refused (the layers', and the
 //! face standing beside them where one is weighed), the tee's is made:
-//! - passing every gate where the refused reading was a butt pair with a
-//!   plate standing between its edges along the seam, it is the joint: the
-//!   groove probe saw a web standing along the seam, which a clamp lying
-//!   across the joint, standing over a stretch of it, does not show;
-//! - passing every gate otherwise, the workpiece is still refused by the
-//!   reading `auto` made, which now says that a tee's request would plan
-//!   its root: a short web and a clamp are not told apart without the
-//!   name, and a clamp's foot welded is the confident wrong answer the
-//!   planner does not give;
 //! - refused at a later stage than the reading `auto` made (it got further
 //!   into the cloud), its refusal is the workpiece's, the other's after it;
-//! - refused no further, the reading `auto` made keeps its refusal.
+//! - refused no further, the reading `auto` made keeps its refusal;
+//! - passing every gate, the workpiece is still refused by the reading
+//!   `auto` made, which now says that a tee's request would plan its root.
+//!   It is not planned: a clamp standing along the seam over a lap or a
+//!   butt joint passes a tee's gates as a short web does (the fault
+//!   suite's clamp over a lap at 1 mm voxels, 33 mm wide and 35 mm tall,
+//!   seen along the whole seam, would be welded at its foot), and a
+//!   clamp's foot welded is the confident wrong answer the planner does
+//!   not give. Only the joint's name tells the two apart.
 //!
-//! Every refusal keeps its own rule, and the plan's evidence names the rule
-//! that read the web: no rule decides here, only which of two readings,
-//! each by its rules, says more of the cloud.
+//! Every refusal keeps its own rule: no rule decides here, only which of
+//! two refusals, each by its rule, says more of the cloud.
 
 use crate::joint::{JointType, RequestedJoint};
 use crate::pipeline::context::Context;
@@ -76,26 +73,17 @@ fn web_in_gap(refused: &Refused) -> bool {
     std::ptr::eq(refused.reason.rule, &rules::groove::PLATE_STANDING_IN_GAP)
 }
 
-/// The workpiece's welds or refusal once `read` (the workpiece's reading
-/// under the request it is given) has read it as a tee's request does,
-/// `auto`'s own reading having been `refused`.
+/// The workpiece's refusal once `read` (the workpiece's reading under the
+/// request it is given) has read it as a tee's request does, `auto`'s own
+/// reading having been `refused`.
 pub(super) fn weigh(
     ctx: &Context,
     refused: Refused,
     read: impl FnOnce(&mut Context) -> Result<Welds, Refused>,
-) -> Result<Welds, Refused> {
+) -> Refused {
     let request = PlanRequest { joint: RequestedJoint::Type(JointType::TFillet), ..ctx.request.clone() };
     let mut as_tee = ctx.under_request(&request);
     match read(&mut as_tee) {
-        Ok((welds, hidden)) if web_in_gap(&refused) => {
-            let why = format!(
-                "read as a butt pair, refused by {}: a plate stands between its edges along the seam, a web the \
-                 layers did not read (no taller than a lap's upper plate is thick); read as a tee",
-                refused.reason.rule.id
-            );
-            tracing::debug!(rule = refused.reason.rule.id, "{why}");
-            Ok((welds.into_iter().map(|weld| weld.with_evidence_before(&why)).collect(), hidden))
-        }
         Ok((welds, _)) => {
             let reason = format!(
                 "{}; read as a tee's request reads it, {} fillet root(s) pass every gate: a web standing short, \
@@ -105,9 +93,9 @@ pub(super) fn weigh(
                 welds.len()
             );
             tracing::debug!(rule = refused.reason.rule.id, "{reason}");
-            Err(Refused { reason: PlanError { reason, ..refused.reason }, seen: refused.seen })
+            Refused { reason: PlanError { reason, ..refused.reason }, seen: refused.seen }
         }
-        Err(tee) if tee.reason.out_of_time => Err(tee),
+        Err(tee) if tee.reason.out_of_time => tee,
         Err(tee) if tee.reason.stage > refused.reason.stage => {
             let read_as = match refused.seen {
                 Some(JointType::Lap) => "read as a lap",
@@ -116,9 +104,9 @@ pub(super) fn weigh(
             };
             let reason = format!("{}; {read_as}: {}", tee.reason.reason, refused.reason.reason);
             tracing::debug!(rule = tee.reason.rule.id, "the tee's reading got further: {reason}");
-            Err(Refused { reason: PlanError { reason, ..tee.reason }, seen: Some(JointType::TFillet) })
+            Refused { reason: PlanError { reason, ..tee.reason }, seen: Some(JointType::TFillet) }
         }
-        Err(_) => Err(refused),
+        Err(_) => refused,
     }
 }
 

@@ -17,8 +17,9 @@
 //! The stage's files, by concern: [`error`] says why no workpiece was
 //! found, each reason a rule of `crate::rules::background`;
 //! [`placement`] reads where one plane cluster lies beside, across or
-//! beyond others, and whether a face falls from one to a lower layer; [`layers`] sorts the clusters into layers and finds the
-//! butt, lap or tee layout in them; [`beside`] tells which plate of a
+//! beyond others, and whether a face falls from one to a lower layer;
+//! [`layers`] sorts the clusters into layers and finds the butt, lap or
+//! tee layout in them; [`beside`] tells which plate of a
 //! layer another plane stands beside; [`corner`] recognises a corner
 //! joint by what the cloud shows beyond a plate's edge.
 

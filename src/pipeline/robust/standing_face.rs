@@ -87,7 +87,7 @@ pub(super) fn instead_of_layers(
         refused.reason.rule.id,
     );
     tracing::debug!(rule = rules::background::WEB_FACE_WITHOUT_TOP.id, "{layers}");
-    tee::plan(ctx, face_tee(&face, pieces), layers).map_err(|e| further(refused, e, read_as))
+    tee::plan(ctx, face_tee(&face, pieces), layers).map_err(|e| further(refused, e, &format!("read as {read_as}")))
 }
 
 /// What is seen of a face standing on `flange` with no web's top in view:
@@ -117,16 +117,17 @@ pub(super) fn face_tee<'a>(face: &'a StandingFace, flange_pieces: Vec<&'a PlaneC
 
 /// Both readings refused: the refusal of the one that got further (the
 /// later stage; the layers' at the same stage), which says most about the
-/// cloud. The face's is named a tee and says what the layers read as
-/// `read_as` and why that failed; a plan out of time says only that.
-fn further(layers: Refused, face: PlanError, read_as: &str) -> Refused {
+/// cloud. The face's (or any tee reading's) is named a tee and says, after
+/// `read_as` (what the layers read: "read as a lap"), why the layers'
+/// reading failed; a plan out of time says only that.
+pub(super) fn further(layers: Refused, face: PlanError, read_as: &str) -> Refused {
     if face.out_of_time {
         return Refused { reason: face, seen: Some(JointType::TFillet) };
     }
     if face.stage <= layers.reason.stage {
         return layers;
     }
-    let reason = format!("{}; read as {read_as}: {}", face.reason, layers.reason.reason);
+    let reason = format!("{}; {read_as}: {}", face.reason, layers.reason.reason);
     Refused { reason: PlanError { reason, ..face }, seen: Some(JointType::TFillet) }
 }
 
@@ -143,7 +144,7 @@ mod tests {
     #[test]
     fn a_root_refused_at_its_gates_says_more_than_edges_never_found() {
         let face = PlanError::by(&rules::quality::EDGE_FIT_RESIDUAL, "the root bends by 3.5 mm over 21 mm");
-        let picked = further(layers_refused(), face, "a butt pair");
+        let picked = further(layers_refused(), face, "read as a butt pair");
         assert_eq!(picked.reason.rule.id, "seam.edge_fit_residual");
         assert_eq!(picked.seen, Some(JointType::TFillet));
         assert!(picked.reason.reason.contains("read as a butt pair: no parallel pair"), "{}", picked.reason);
@@ -154,9 +155,9 @@ mod tests {
         // Where the face is refused before its root's gates (here a
         // background rule), the layers' reading stands, as without it.
         let face = PlanError::by(&rules::background::NO_LAYOUT_FITS, "earlier");
-        assert_eq!(further(layers_refused(), face, "a lap").reason.rule.id, "edge.no_parallel_pair");
+        assert_eq!(further(layers_refused(), face, "read as a lap").reason.rule.id, "edge.no_parallel_pair");
         let same = PlanError::by_in(&rules::weld_edges::NO_PARALLEL_PAIR, Stage::WeldEdges, "same stage");
-        let picked = further(layers_refused(), same, "a lap");
+        let picked = further(layers_refused(), same, "read as a lap");
         assert_eq!((picked.reason.reason.as_str(), picked.seen), ("no parallel pair", None));
     }
 
@@ -164,6 +165,6 @@ mod tests {
     fn a_plan_out_of_time_is_named_so() {
         let mut face = PlanError::by(&rules::refit::TEE_NO_ROOT_SEEN, "stopped");
         face.out_of_time = true;
-        assert!(further(layers_refused(), face, "a butt pair").reason.out_of_time);
+        assert!(further(layers_refused(), face, "read as a butt pair").reason.out_of_time);
     }
 }

@@ -43,7 +43,7 @@ use crate::pipeline::quality::Gate;
 use crate::pipeline::{PlanError, PlanRequest};
 use crate::rules;
 
-use super::{Refused, Welds};
+use super::{Refused, Welds, standing_face};
 
 /// Whether the request leaves the joint to the planner and admits a tee:
 /// the tee's reading is then one the planner may weigh.
@@ -95,18 +95,14 @@ pub(super) fn weigh(
             tracing::debug!(rule = refused.reason.rule.id, "{reason}");
             Refused { reason: PlanError { reason, ..refused.reason }, seen: refused.seen }
         }
-        Err(tee) if tee.reason.out_of_time => tee,
-        Err(tee) if tee.reason.stage > refused.reason.stage => {
+        Err(tee) => {
             let read_as = match refused.seen {
                 Some(JointType::Lap) => "read as a lap",
                 Some(JointType::VButt | JointType::IButt) => "read as a butt pair",
                 _ => "as the layers read it",
             };
-            let reason = format!("{}; {read_as}: {}", tee.reason.reason, refused.reason.reason);
-            tracing::debug!(rule = tee.reason.rule.id, "the tee's reading got further: {reason}");
-            Refused { reason: PlanError { reason, ..tee.reason }, seen: Some(JointType::TFillet) }
+            standing_face::further(refused, tee.reason, read_as)
         }
-        Err(_) => refused,
     }
 }
 
@@ -125,7 +121,8 @@ mod tests {
         assert!(worth_weighing(&refused(&rules::weld_edges::NO_LINE_BETWEEN_PLATES, Some(JointType::Lap))));
         assert!(worth_weighing(&refused(&rules::background::TEE_WEB_SEEN_ON_ONE_SIDE, None)));
         // The groove probe's web standing in the gap: a joint mismatch, and
-        // seen as a tee already, yet the one the tee's reading plans.
+        // seen as a tee already, yet the tee's reading says whether a tee's
+        // request would plan it.
         let web = refused(&rules::groove::PLATE_STANDING_IN_GAP, Some(JointType::TFillet));
         assert_eq!(web.reason.gate, Some(Gate::JointMismatch));
         assert!(worth_weighing(&web));

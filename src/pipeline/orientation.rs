@@ -407,8 +407,18 @@ fn least_eigenvector(c: [f64; 6]) -> Option<[f64; 3]> {
 const SCATTER_NORMAL_SAMPLE: usize = 64;
 
 /// The workpiece's dominant normal: the most common local normal over a
-/// sparse, evenly spread sample of the frame, refined by averaging the
-/// normals that agree with it within `agree_deg`.
+/// sparse, evenly spread sample of the frame, each sample counted by how
+/// squarely the camera sees its surface (the cosine between the normal and
+/// the line of sight), refined by averaging the normals that agree with it
+/// within `agree_deg`.
+///
+/// A surface leaves points in proportion to its area times that cosine,
+/// so counted plainly a large face seen at a grazing angle (a block's
+/// sides seen down its corner, a tall web beside a narrow flange) can
+/// outnumber the plates the camera was aimed at; counted by the cosine
+/// once more, the support goes as area times its square, and the surfaces
+/// the camera faces (the plates, which the capture pose looks at) win
+/// unless they are much the smaller.
 pub fn dominant_normal(cloud: &PointCloud, search: &NeighbourSearch, fx: f64, agree_deg: f64) -> Option<Vec3> {
     const SAMPLES: usize = 6000;
     const CANDIDATES: usize = 240;
@@ -420,29 +430,34 @@ pub fn dominant_normal(cloud: &PointCloud, search: &NeighbourSearch, fx: f64, ag
     // a slot per sample, NaN where there is no normal, then those removed
     // in place (a filtered collect would gather rayon's pieces and copy
     // them, twice the normals at once).
-    let mut normals: Vec<Vec3> = (0..cloud.len().div_ceil(stride))
+    let mut samples: Vec<(Vec3, f64)> = (0..cloud.len().div_ceil(stride))
         .into_par_iter()
         .map(|k| {
             let i = k * stride;
             let p = cloud.points()[i];
-            let none = Vec3::repeat(f64::NAN);
+            let none = (Vec3::repeat(f64::NAN), 0.0);
             if !p[0].is_finite() {
                 return none;
             }
-            local_normal(cloud, search, i, normal_step(fx, p[2] as f64, search.radius_mm() * 2.0)).unwrap_or(none)
+            let Some(n) = local_normal(cloud, search, i, normal_step(fx, p[2] as f64, search.radius_mm() * 2.0)) else {
+                return none;
+            };
+            let sight = Vec3::new(p[0] as f64, p[1] as f64, p[2] as f64);
+            (n, n.dot(&sight).abs() / sight.norm())
         })
         .collect();
-    normals.retain(|n| !n.x.is_nan());
-    if normals.is_empty() {
+    samples.retain(|(n, _)| !n.x.is_nan());
+    if samples.is_empty() {
         return None;
     }
+    let normals: Vec<Vec3> = samples.iter().map(|s| s.0).collect();
     let cos_agree = agree_deg.to_radians().cos();
-    let support = |n: &Vec3| normals.iter().filter(|m| m.dot(n) >= cos_agree).count();
+    let support = |n: &Vec3| samples.iter().filter(|(m, _)| m.dot(n) >= cos_agree).map(|s| s.1).sum::<f64>();
     let cand_stride = (normals.len() / CANDIDATES).max(1);
     let candidates: Vec<&Vec3> = normals.iter().step_by(cand_stride).collect();
-    let supports: Vec<usize> = candidates.par_iter().map(|n| support(n)).collect();
+    let supports: Vec<f64> = candidates.par_iter().map(|n| support(n)).collect();
     // The last of equals, as a serial `max_by_key` picks.
-    let (best, _) = candidates.into_iter().zip(supports).max_by_key(|&(_, s)| s)?;
+    let (best, _) = candidates.into_iter().zip(supports).max_by(|a, b| a.1.total_cmp(&b.1))?;
     let mut mean = *best;
     for _ in 0..3 {
         let sum: Vec3 = normals.iter().filter(|m| m.dot(&mean) >= cos_agree).sum();
@@ -512,19 +527,23 @@ mod tests {
     /// parallel form.
     fn dominant_normal_serial(cloud: &PointCloud, search: &NeighbourSearch, fx: f64, agree_deg: f64) -> Option<Vec3> {
         let stride = ((cloud.len() / 6000).max(1)) | 1;
-        let normals: Vec<Vec3> = (0..cloud.len())
+        let samples: Vec<(Vec3, f64)> = (0..cloud.len())
             .step_by(stride)
             .filter_map(|i| {
                 let p = cloud.points()[i];
                 if !p[0].is_finite() {
                     return None;
                 }
-                local_normal(cloud, search, i, normal_step(fx, p[2] as f64, search.radius_mm() * 2.0))
+                let n = local_normal(cloud, search, i, normal_step(fx, p[2] as f64, search.radius_mm() * 2.0))?;
+                let sight = Vec3::new(p[0] as f64, p[1] as f64, p[2] as f64);
+                Some((n, n.dot(&sight).abs() / sight.norm()))
             })
             .collect();
+        let normals: Vec<Vec3> = samples.iter().map(|s| s.0).collect();
         let cos_agree = agree_deg.to_radians().cos();
-        let support = |n: &Vec3| normals.iter().filter(|m| m.dot(n) >= cos_agree).count();
-        let best = normals.iter().step_by((normals.len() / 240).max(1)).max_by_key(|n| support(n))?;
+        let support = |n: &Vec3| samples.iter().filter(|(m, _)| m.dot(n) >= cos_agree).map(|s| s.1).sum::<f64>();
+        let best =
+            normals.iter().step_by((normals.len() / 240).max(1)).max_by(|a, b| support(a).total_cmp(&support(b)))?;
         let mut mean = *best;
         for _ in 0..3 {
             let sum: Vec3 = normals.iter().filter(|m| m.dot(&mean) >= cos_agree).sum();
@@ -565,6 +584,34 @@ mod tests {
         let search = NeighbourSearch::new(&cloud, &camera, 1.0);
         let got = dominant_normal(&cloud, &search, camera.fx(), 5.0).unwrap();
         assert!(got.dot(&n) > 0.9999, "{got:?}");
+    }
+
+    /// A plate the camera faces (10° off its axis) in 26 columns of the
+    /// grid beside a face it sees at a grazing 70° in 34: counted plainly
+    /// the grazing face has the more normals, counted by how squarely each
+    /// is seen the plate wins, as the capture pose that looks at the plates
+    /// means it to.
+    #[test]
+    fn dominant_normal_is_the_surface_the_camera_faces_not_a_larger_grazing_one() {
+        let plate = Vec3::new(10f64.to_radians().sin(), 0.0, 10f64.to_radians().cos());
+        let grazing = Vec3::new(-(70f64.to_radians().sin()), 0.0, 70f64.to_radians().cos());
+        let camera = CameraModel::default();
+        let anchor = Vec3::new(0.0, 0.0, 700.0);
+        let (w, h) = (60, 40);
+        let mut pts = Vec::new();
+        for row in 0..h {
+            for col in 0..w {
+                let r = camera.ray(900.0 + col as f64, 580.0 + row as f64);
+                let r = Vec3::new(r[0], r[1], r[2]);
+                let n = if col < 26 { plate } else { grazing };
+                let q = r * (n.dot(&anchor) / n.dot(&r));
+                pts.push([q.x as f32, q.y as f32, q.z as f32]);
+            }
+        }
+        let cloud = PointCloud::organized(w, h, pts).unwrap();
+        let search = NeighbourSearch::new(&cloud, &camera, 1.0);
+        let got = dominant_normal(&cloud, &search, camera.fx(), 5.0).unwrap();
+        assert!(got.dot(&plate) > 0.9999, "{got:?}");
     }
 
     #[test]

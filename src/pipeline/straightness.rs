@@ -54,7 +54,14 @@ pub const MIN_STATION_SAMPLES: usize = 3;
 
 /// The fewest stations that show a curve: a parabola through three is
 /// exact, its scatter unmeasured.
-const MIN_STATIONS: usize = 6;
+pub const MIN_STATIONS: usize = 6;
+
+/// The shortest root whose straightness can be told at `spacing_mm`:
+/// [`MIN_STATIONS`] stations of one point spacing each, the shortest a
+/// station is.
+pub fn shortest_checkable_mm(spacing_mm: f64) -> f64 {
+    MIN_STATIONS as f64 * spacing_mm
+}
 
 /// What the samples given to [`bend_of`] are.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -117,8 +117,11 @@ pub static EDGE_FIT_RESIDUAL: Rule = Rule {
              averages' own scatter and more than a point spacing, the root bends: not a plane weld, and a \
              straight seam would be welded millimetres off it. For a V-groove welded on its root \
              (`groove.weld_on_bevel_midline`), the fit is the root line through the root's samples, one a \
-             station, and they are what bends. `quality.warn_only` may name the gate (`edge_fit_residual`) to \
-             plan the seam with a warning instead.",
+             station, and they are what bends. A root seen over fewer than the fewest stations of a point \
+             spacing each cannot show a curve at all, and planned it would be a chord of whatever the joint \
+             is (a round tube's foot where both faces are seen together over a few millimetres): it is \
+             refused as unchecked. `quality.warn_only` may name the gate (`edge_fit_residual`) to plan the \
+             seam with a warning instead.",
     parameters: &[
         Parameter {
             name: "max_edge_fit_rms_spacings",
@@ -144,10 +147,18 @@ pub static EDGE_FIT_RESIDUAL: Rule = Rule {
             meaning: "the longest stretch of root samples averaged together",
             source: Source::Constant { file: STRAIGHTNESS_IN, name: "STATION_SPACINGS" },
         },
+        Parameter {
+            name: "MIN_STATIONS",
+            unit: "stations",
+            meaning: "the fewest stations, a point spacing long at least, over which a root's straightness is \
+                      told; a seam shorter than that many spacings is refused",
+            source: Source::Constant { file: STRAIGHTNESS_IN, name: "MIN_STATIONS" },
+        },
     ],
     fires: &[
         "src/pipeline/quality/tests.rs::each_gate_names_its_figure_value_and_limit",
         "src/pipeline/quality/tests.rs::a_bent_root_is_refused_by_its_sagitta_not_its_residual",
+        "src/pipeline/quality/tests.rs::a_root_too_short_to_show_a_bend_is_refused_as_unchecked",
         "src/sim/curved.rs::no_curved_root_is_planned_on_the_documented_seeds",
     ],
     holds: &[

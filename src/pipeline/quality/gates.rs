@@ -10,7 +10,7 @@ use crate::rules::quality as rules;
 use super::{Gate, SeamQuality};
 use crate::pipeline::SeamCoverage;
 use crate::pipeline::refit::{Beyond, Step};
-use crate::pipeline::straightness::RootBend;
+use crate::pipeline::straightness::{self, RootBend};
 
 /// A gate a seam failed: the figure's value, the limit it broke, and one
 /// sentence that says both and what it means.
@@ -206,6 +206,25 @@ pub fn check(seam: &SeamEvidence, limits: &QualityParams) -> Vec<GateFailure> {
 
     // A bent root: the fits' residual over the whole stretch is the
     // camera's noise, but their samples station by station follow a curve.
+    // A root shorter than the fewest stations of a spacing each cannot
+    // show a curve at all: planned, it would be a chord of whatever the
+    // joint is, its straightness unchecked (a round tube's foot seen where
+    // both faces meet over a few millimetres only).
+    let shortest_mm = straightness::shortest_checkable_mm(q.point_spacing_mm);
+    if seam.length_mm < shortest_mm && rms <= rms_limit {
+        fail(
+            &rules::EDGE_FIT_RESIDUAL,
+            seam.length_mm,
+            shortest_mm,
+            format!(
+                "the root is seen over {:.1} mm only, under the {shortest_mm:.1} mm ({} stations of a point \
+                 spacing of {:.2} mm) that tell a straight root from a bent one: not checked as a plane weld",
+                seam.length_mm,
+                straightness::MIN_STATIONS,
+                q.point_spacing_mm
+            ),
+        );
+    }
     if let Some(bend) = seam.root_bend.filter(RootBend::is_curved)
         && rms <= rms_limit
     {

@@ -92,6 +92,38 @@ fn a_bent_root_is_refused_by_its_sagitta_not_its_residual() {
     assert!(!ids(&held).contains(&"seam.edge_fit_residual"), "{held:?}");
 }
 
+/// A root seen over a few spacings only (a round tube's foot where both
+/// faces are seen together over 6 mm of a coarse cloud) shows no curve
+/// whatever the joint is: refused as unchecked, with the length it needs;
+/// one as long as that is checked as any other.
+#[test]
+fn a_root_too_short_to_show_a_bend_is_refused_as_unchecked() {
+    let limits = QualityParams::default();
+    let flat = plane(0.0, 500.0);
+    let fits = [edge(0.0, 0.0, 0.1, 40), edge(0.0, 0.0, 0.05, 8)];
+    let q = SeamQuality {
+        plate_angle_deg: 90.0,
+        point_spacing_mm: 1.48,
+        ..measured(JointType::TFillet, &fits, [&flat, &flat])
+    };
+    let tee = |length_mm| SeamEvidence {
+        fits: FittedEdges::WebFace,
+        length_mm,
+        ..evidence(JointType::TFillet, &q, [0.1, 0.05])
+    };
+    let failed = check(&tee(6.3), &limits);
+    assert_eq!(ids(&failed), ["seam.edge_fit_residual"], "{failed:?}");
+    assert!(
+        failed[0].message.starts_with("the root is seen over 6.3 mm only, under the 8.9 mm (6 stations"),
+        "{}",
+        failed[0].message
+    );
+    assert_eq!(failed[0].value, 6.3);
+    assert!((failed[0].limit - 6.0 * 1.48).abs() < 1e-12);
+    let held = check(&tee(8.9), &limits);
+    assert!(!ids(&held).contains(&"seam.edge_fit_residual"), "{held:?}");
+}
+
 #[test]
 fn the_gap_and_the_misalignment_are_read_across_and_along_the_normal() {
     // The first edge lies on the flat plate, the second on the high one.

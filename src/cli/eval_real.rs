@@ -364,6 +364,13 @@ fn inline(m: &MeasuredRoot) -> String {
     if let Some(moved) = m.box_choice_mm {
         extra.push_str(&format!("box_choice_mm = {moved}, "));
     }
+    if let Some(a) = &m.alternative {
+        extra.push_str(&format!(
+            "alternative = {{ point_mm = [{}], direction = [{}] }}, ",
+            list(&a.point_mm),
+            list(&a.direction)
+        ));
+    }
     if !m.checks.is_empty() {
         let checks: Vec<String> =
             m.checks.iter().map(|c| format!("{{ median_mm = {}, points = {} }}", c.median_mm, c.points)).collect();

@@ -19,7 +19,8 @@
 //! A root may carry a second reasonable choice of boxes (`alternative`):
 //! it is measured from both and kept only if the two lines lie within
 //! [`reference::MAX_BOX_CHOICE_MM`] of each other at the visible
-//! stretch's ends, so the reference says how steady it is. It may carry
+//! stretch's ends, so the reference says how steady it is; a plan is then
+//! judged against both lines, each waypoint by the farther. It may carry
 //! `check` stretches of the flange, measured against the flange's plane
 //! but not fitted: where the camera shows the flange off its plane (a
 //! strip in an inside corner), in figures anyone can recompute. A tee

@@ -98,7 +98,7 @@ pub fn score(reference: &ScanReference, planned: Result<&[Vec<Vec3>], &'static s
     let mut covered: Vec<Vec<[f64; 2]>> = vec![Vec::new(); roots.len()];
     for path in seams_planned.iter().filter(|p| !p.is_empty()) {
         let per_root: Vec<Vec<(f64, f64)>> =
-            roots.iter().map(|r| path.iter().map(|p| r.along_and_off(p)).collect()).collect();
+            roots.iter().map(|r| path.iter().map(|p| r.along_and_off_either(p)).collect()).collect();
         let medians: Vec<f64> = per_root.iter().map(|w| median(w.iter().map(|(_, off)| *off).collect())).collect();
         let Some(nearest) = (0..roots.len()).min_by(|&a, &b| medians[a].total_cmp(&medians[b])) else {
             break;

@@ -117,6 +117,28 @@ fn a_plan_on_the_root_over_most_of_it_is_right_and_a_short_one_falls_short() {
     assert_eq!(s.roots[0].coverage, 0.0);
 }
 
+/// A root whose alternative boxes put it 0.4 mm aside: a seam is judged
+/// by the farther of the two lines, so one within the bar of the first
+/// line only is not right, and one between them is.
+#[test]
+fn a_root_with_an_alternative_line_judges_the_plan_against_both() {
+    use super::reference::RootLine;
+    let mut reference = tee_reference();
+    let m = reference.roots[0].measured.as_mut().unwrap();
+    m.alternative = Some(RootLine { point_mm: [0.0, -0.4, 500.0], direction: [1.0, 0.0, 0.0] });
+    m.box_choice_mm = Some(0.4);
+    let between = [path(-47.5, 47.5, -0.2)];
+    let s = score(&reference, Ok(&between)).unwrap();
+    assert_eq!(s.verdict, Verdict::Right, "{s:?}");
+    assert!((s.seams[0].max_mm - 0.2).abs() < 1e-9, "{s:?}");
+    // 0.8 mm from the first line: within its bar, 1.2 mm from the second.
+    let aside = [path(-47.5, 47.5, 0.8)];
+    let s = score(&reference, Ok(&aside)).unwrap();
+    assert_eq!(s.verdict, Verdict::ShortOfBar, "{s:?}");
+    assert!((s.seams[0].max_mm - 1.2).abs() < 1e-9, "{s:?}");
+    assert_eq!(s.roots[0].coverage, 0.0);
+}
+
 #[test]
 fn a_seam_more_than_two_mm_off_anywhere_is_confident_wrong() {
     let reference = tee_reference();

@@ -446,7 +446,7 @@ pub mod to_text {
     /// with process lines: the woven path's speeds come on them, and
     /// without them a program would weld the longer woven path at its own
     /// speed, slower along the seam than planned.
-    fn link_pieces(
+    pub fn link_pieces(
         seam: &crate::pipeline::Seam,
         dialect: Dialect,
         process_lines: bool,

@@ -8,6 +8,7 @@
 
 pub mod along_seam;
 pub mod calibration;
+pub mod woven;
 
 /// Library values in the protocol's form.
 pub mod to_proto {
@@ -357,6 +358,9 @@ pub mod to_text {
     use crate::pipeline::passes::{self, Motion};
     use crate::pipeline::trajectory::{Waypoint, backed_off};
 
+    pub use super::woven::WeaveLaidBy;
+    use super::woven::{PiecePoint, woven};
+
     /// How `dialect` writes a pose.
     pub fn convention(dialect: Dialect) -> PoseConvention {
         match dialect {
@@ -382,9 +386,13 @@ pub mod to_text {
     /// pass the robot welds ([`passes::seam_pieces`]) is a seam of its own
     /// on the link, root first; with `process_lines`, each weld waypoint
     /// line is followed by its process line (travel speed and weave, zeros
-    /// where the plan has none).
+    /// where the plan has none). Where the dialect's program has no weave
+    /// function ([`weave_laid_by`]), a weaving piece's lines are its woven
+    /// path ([`super::woven`]), each process line with the speed along
+    /// it and no weave.
     pub fn waypoint_lines(plan: &Plan, dialect: Dialect, approach_offset_mm: f64, process_lines: bool) -> Vec<Reply> {
-        let pieces: Vec<Vec<(Waypoint, Option<Motion>)>> = plan.seams.iter().flat_map(passes::seam_pieces).collect();
+        let pieces: Vec<Vec<(Waypoint, Option<Motion>)>> =
+            plan.seams.iter().flat_map(|seam| link_pieces(seam, dialect, process_lines)).collect();
         let mut lines: Vec<(u32, Line)> = Vec::new();
         for (piece, number) in pieces.iter().zip(1u32..) {
             let (Some(first), Some(last)) = (piece.first(), piece.last()) else { continue };
@@ -417,6 +425,47 @@ pub mod to_text {
                         Reply::Process { seam, remaining, motion }
                     }
                 }
+            })
+            .collect()
+    }
+
+    /// Who lays the weave for `dialect`'s shipped program: the one place
+    /// this is decided. ABB's ArcWare and FANUC's ArcTool weave from the
+    /// process line's half-swing and frequency; the KUKA and UR programs
+    /// switch the arc with an output and have no weave function, so the
+    /// daemon writes the weave into their path.
+    pub fn weave_laid_by(dialect: Dialect) -> WeaveLaidBy {
+        match dialect {
+            Dialect::Abb | Dialect::Fanuc => WeaveLaidBy::Controller,
+            Dialect::Kuka | Dialect::Ur => WeaveLaidBy::Path,
+        }
+    }
+
+    /// The pieces a link sends for `seam` ([`passes::seam_pieces`]), each
+    /// woven into its path where `dialect`'s program does not weave. Only
+    /// with process lines: the woven path's speeds come on them, and
+    /// without them a program would weld the longer woven path at its own
+    /// speed, slower along the seam than planned.
+    pub fn link_pieces(
+        seam: &crate::pipeline::Seam,
+        dialect: Dialect,
+        process_lines: bool,
+    ) -> Vec<Vec<(Waypoint, Option<Motion>)>> {
+        let pieces = passes::seam_pieces(seam);
+        if !process_lines || weave_laid_by(dialect) == WeaveLaidBy::Controller {
+            return pieces;
+        }
+        let Some(passes) = passes::pass_trajectories(seam) else { return pieces };
+        pieces
+            .iter()
+            .zip(&passes.pieces)
+            .map(|(piece, pass)| {
+                let points: Vec<PiecePoint> = piece
+                    .iter()
+                    .zip(&pass.points)
+                    .map(|(&(pose, motion), p)| PiecePoint { pose, motion, weave: p.weave })
+                    .collect();
+                woven(&points)
             })
             .collect()
     }

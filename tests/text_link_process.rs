@@ -112,10 +112,12 @@ async fn every_dialect_pulls_each_pass_with_its_speeds_and_weave() {
         let plan = Planner::new(config.clone()).plan(&sim.cloud, &request).unwrap();
         let seam = &plan.seams[0];
         let passes = passes::pass_trajectories(seam).expect("a procedure is configured");
+        // Where the dialect's program has no weave function, the pieces
+        // come woven into the path ([`to_text::weave_laid_by`]).
         let expected: Vec<Vec<(Vec<f64>, Motion)>> = plan
             .seams
             .iter()
-            .flat_map(passes::seam_pieces)
+            .flat_map(|seam| to_text::link_pieces(seam, dialect, true))
             .map(|piece| piece.into_iter().map(|(w, m)| (to_text::pose(&w, dialect), m.unwrap())).collect())
             .collect();
         assert!(passes.pieces.len() >= 2, "{dialect:?}: a 9 mm groove in several passes: {:?}", process_cut(seam));
@@ -144,12 +146,28 @@ async fn every_dialect_pulls_each_pass_with_its_speeds_and_weave() {
         // only pass that may weave.
         let root_points = passes.pieces.iter().filter(|p| p.pass == passes::PassId::Root).count();
         eprintln!(
-            "{dialect:?}: {} seams on the link ({root_points} of the root), {} woven points",
+            "{dialect:?}: {} seams on the link ({root_points} of the root), {} lines, {} of them carrying a weave",
             pulled.len(),
+            status[2],
             weaving
         );
         assert_eq!(passes.pieces[0].pass, passes::PassId::Root);
-        assert!(weaving > 0, "{dialect:?}: the root pass weaves, and no line carried its weave");
+        match to_text::weave_laid_by(dialect) {
+            to_text::WeaveLaidBy::Controller => {
+                assert!(weaving > 0, "{dialect:?}: the root pass weaves, and no line carried its weave");
+            }
+            to_text::WeaveLaidBy::Path => {
+                // No line carries a weave; the root's piece comes as the
+                // points of its woven path, more than the plan's.
+                assert_eq!(weaving, 0, "{dialect:?}: a weave on a line of a path already woven");
+                let root = passes.pieces[0].points.len();
+                assert!(
+                    pulled[0].weld.len() > 2 * root,
+                    "{dialect:?}: {} lines for {root} points",
+                    pulled[0].weld.len()
+                );
+            }
+        }
     }
 
     // A program that does not ask gets the same seams, poses only.

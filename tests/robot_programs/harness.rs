@@ -128,7 +128,10 @@ impl Scenario {
                     above_gap_mm: 0.5,
                     amplitude_per_gap: 0.5,
                     max_amplitude_mm: 2.0,
-                    wavelength_mm: 3.0,
+                    // Not a whole part of the 24 mm between waypoints,
+                    // so a weave whose phase began again at a waypoint
+                    // would be seen.
+                    wavelength_mm: 3.5,
                     dwell_s: 0.0,
                 });
             }

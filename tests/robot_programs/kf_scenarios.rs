@@ -68,6 +68,9 @@ struct Run {
     /// FANUC: the weave ArcTool lays on each move, (mm, Hz) (none
     /// recorded for KUKA).
     weave: Vec<Option<[f64; 2]>>,
+    /// KUKA: `$APO.CDIS` at each move, mm (0 without C_DIS; none
+    /// recorded for FANUC).
+    cdis: Vec<f32>,
 }
 
 async fn run(vendor: Vendor, scenario: Scenario, dry_run: bool) -> Run {
@@ -90,7 +93,8 @@ async fn run_with(vendor: Vendor, scenario: Scenario, dry_run: bool, fanuc: fanu
             let mut dat = kuka_dat::data_list(&mut k);
             let ov = kuka::Overrides { joint: Some(joint), reply_timeout_ms: None, dry_run: Some(dry_run) };
             let result = kuka::weld_seam(&mut k, &mut dat, &ov);
-            Run { result, trace: k.trace, messages: k.messages, alarms: Vec::new(), capture, weave: Vec::new() }
+            let cdis = k.cdis_at_moves;
+            Run { result, trace: k.trace, messages: k.messages, alarms: Vec::new(), capture, weave: Vec::new(), cdis }
         }
         Vendor::Fanuc => {
             let mut tp = Controller::new(&address, capture, torch());
@@ -99,7 +103,7 @@ async fn run_with(vendor: Vendor, scenario: Scenario, dry_run: bool, fanuc: fanu
             fanuc_tp::weld_seam(&mut tp, &mut helper, dry_run);
             let result = tp.r[9].int();
             let weave = tp.weave_at_moves;
-            Run { result, trace: tp.trace, messages: tp.tperror, alarms: tp.alarms, capture, weave }
+            Run { result, trace: tp.trace, messages: tp.tperror, alarms: tp.alarms, capture, weave, cdis: Vec::new() }
         }
     })
     .await
@@ -257,12 +261,17 @@ async fn kuka_and_fanuc_leave_the_torch_at_the_capture_pose_when_the_daemon_stop
 /// the travel speed the plan gives there (KUKA's $VEL.CP, FANUC's R[7]
 /// register speed, from the line's mm/s); FANUC weaves each move with
 /// ArcTool's `Weave Sine` at the plan's half-swing and frequency there,
-/// and not at all where the plan lays no weave.
+/// and not at all where the plan lays no weave. KUKA welds the woven path
+/// ([`kuka_welds_the_woven_path`]).
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn kuka_and_fanuc_weld_each_pass_at_its_speeds() {
     for vendor in VENDORS {
         let run = run(vendor, Scenario::Passes, false).await;
         assert_eq!(run.result, 0, "{vendor:?}: {:?}", run.messages);
+        if vendor == Vendor::Kuka {
+            kuka_welds_the_woven_path(&run);
+            continue;
+        }
         let expected = super::harness::reference_pieces(Scenario::Passes, vendor.dialect(), &sent_pose(vendor, &run));
         assert!(expected.len() >= 2, "{} pieces: a 9 mm groove takes several passes", expected.len());
         let moves = run.trace.moves();
@@ -309,6 +318,43 @@ async fn kuka_and_fanuc_weld_each_pass_at_its_speeds() {
             assert!(woven > 0, "the passes weave somewhere, or the weave's registers are not tested");
         }
     }
+}
+
+/// KUKA's program has no weave function: each piece's moves are the
+/// plan's woven path ([`super::woven::check_piece`]: the weave's offsets
+/// with the piece's phase, the plan's speed along the seam, the torch's
+/// turn), one bead a piece, each C_DIS at most a quarter of the shorter
+/// move beside it, so the weave is not smoothed away.
+fn kuka_welds_the_woven_path(run: &Run) {
+    let pieces = super::woven::plan_pieces(Scenario::Passes, Dialect::Kuka, &sent_pose(Vendor::Kuka, run));
+    let moves = run.trace.moves();
+    let mut at = 0;
+    let mut off_the_line = 0;
+    for (k, (piece, lines)) in pieces.iter().enumerate() {
+        let weld = &moves[at + 1..at + 1 + lines];
+        let cdis = &run.cdis[at + 1..at + 1 + lines];
+        let apart = |a: &Move, b: &Move| {
+            (target(Vendor::Kuka, a).translation.vector - target(Vendor::Kuka, b).translation.vector).norm()
+        };
+        for j in 1..weld.len() - 1 {
+            let shorter = apart(weld[j - 1], weld[j]).min(apart(weld[j], weld[j + 1]));
+            let limit = (0.25 * shorter).min(1.0);
+            assert!(
+                f64::from(cdis[j]) <= limit + 1e-3,
+                "piece {k} move {j}: C_DIS {} mm for moves of {shorter:.3}",
+                cdis[j]
+            );
+        }
+        let poses: Vec<_> = weld.iter().map(|m| (target(Vendor::Kuka, m), m.speed_mm_s)).collect();
+        let woven = super::woven::check_piece(piece, &poses).unwrap_or_else(|e| panic!("KUKA piece {k}: {e}"));
+        off_the_line += woven.off_the_line;
+        at += lines + 2;
+    }
+    assert_eq!(at, moves.len(), "KUKA: no motion beyond the pieces'");
+    assert!(off_the_line > 0, "the root pass weaves, and KUKA welded it straight");
+    let welds = run.trace.welds().unwrap();
+    assert_eq!(welds.len(), pieces.len(), "KUKA: one bead a piece");
+    assert!(welds.iter().all(|w| w.continuous()), "KUKA: a bead stops between its points");
 }
 
 /// FANUC's helper refuses a weave its TP program's schedules may not

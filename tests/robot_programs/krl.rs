@@ -171,6 +171,9 @@ pub struct Krl {
     pub tool: Option<usize>,
     pub advance: i32,
     pub apo_cdis: f32,
+    /// `$APO.CDIS` at each LIN, in the order of the trace's moves (0 for
+    /// a LIN without C_DIS).
+    pub cdis_at_moves: Vec<f32>,
     pub vel_cp: f32,
     /// Messages shown on the smartHMI.
     pub messages: Vec<String>,
@@ -196,6 +199,7 @@ impl Krl {
             tool: Some(1),
             advance: 1,
             apo_cdis: 0.0,
+            cdis_at_moves: Vec::new(),
             vel_cp: 0.0,
             messages: Vec::new(),
             on_send: None,
@@ -266,6 +270,7 @@ impl Krl {
     pub fn lin(&mut self, line: usize, target: &E6Pos, c_dis: bool) {
         self.trace.look_ahead = self.advance >= 1 && self.apo_cdis > 0.0;
         self.trace.motion(line, target.numbers(), f64::from(self.vel_cp) * 1000.0, c_dis);
+        self.cdis_at_moves.push(if c_dis { self.apo_cdis } else { 0.0 });
         let pose = PoseConvention::KUKA.to_isometry(&target.numbers()).unwrap();
         let tool = self.tool.map_or(Isometry3::identity(), |k| self.tool_data[k]);
         self.flange = pose * tool.inverse();

@@ -53,6 +53,8 @@ struct Locals {
     dry_run: bool,
     process: bool,
     nxt: i32,
+    prv: i32,
+    shorter: f32,
 }
 
 impl Default for Chars {
@@ -69,8 +71,8 @@ pub fn weld_seam(k: &mut Krl, dat: &mut DataList, ov: &Overrides) -> i32 {
     k.at(29, r#"DECL EKI_STATUS RET"#);
     k.at(30, r#"DECL CHAR Line[254], Reply[254], Joint[32]"#);
     k.at(31, r#"DECL E6POS Capture, First"#);
-    k.at(32, r#"DECL INT Kind, Seam, Remaining, Code, Offset, Seams, Count, I, K, N, Lines, Nxt"#);
-    k.at(33, r#"DECL REAL X, Y, Z, A, B, C, SumX, SumY, SumZ"#);
+    k.at(32, r#"DECL INT Kind, Seam, Remaining, Code, Offset, Seams, Count, I, K, N, Lines, Nxt, Prv"#);
+    k.at(33, r#"DECL REAL X, Y, Z, A, B, C, SumX, SumY, SumZ, Shorter"#);
     k.at(34, r#"DECL STATE_T St"#);
     k.at(35, r#"DECL BOOL ArcOn"#);
     k.at(36, r#"DECL REAL WeldVel, ApproachVel, BlendDist"#);
@@ -426,176 +428,208 @@ pub fn weld_seam(k: &mut Krl, dat: &mut DataList, ov: &Overrides) -> i32 {
                     }
                     k.at(237, r#"IF WsKind[Nxt] == 2 THEN"#);
                     if dat.ws_kind[v.nxt as usize] == 2 {
-                        k.at(239, r#"LIN WsPath[I] C_DIS"#);
-                        k.lin(239, &dat.ws_path[i], true);
+                        k.at(239, r#"Prv = I - 1"#);
+                        v.prv = i as i32 - 1;
+                        k.at(240, r#"IF WsKind[Prv] == 4 THEN"#);
+                        if dat.ws_kind[v.prv as usize] == 4 {
+                            k.at(241, r#"Prv = I - 2"#);
+                            v.prv = i as i32 - 2;
+                        }
+                        k.at(243, r#"Shorter = Dist(WsPath[Prv], WsPath[I])"#);
+                        v.shorter = dist(k, &dat.ws_path[v.prv as usize], &dat.ws_path[i]);
+                        k.at(244, r#"IF Dist(WsPath[I], WsPath[Nxt]) < Shorter THEN"#);
+                        if dist(k, &dat.ws_path[i], &dat.ws_path[v.nxt as usize]) < v.shorter {
+                            k.at(245, r#"Shorter = Dist(WsPath[I], WsPath[Nxt])"#);
+                            v.shorter = dist(k, &dat.ws_path[i], &dat.ws_path[v.nxt as usize]);
+                        }
+                        k.at(247, r#"$APO.CDIS = BlendDist"#);
+                        k.apo_cdis = v.blend_dist;
+                        k.at(248, r#"IF 0.25 * Shorter < BlendDist THEN"#);
+                        if 0.25 * v.shorter < v.blend_dist {
+                            k.at(249, r#"$APO.CDIS = 0.25 * Shorter"#);
+                            k.apo_cdis = 0.25 * v.shorter;
+                        }
+                        k.at(252, r#"LIN WsPath[I] C_DIS"#);
+                        k.lin(252, &dat.ws_path[i], true);
                     } else {
-                        k.at(240, r#"ELSE"#);
-                        k.at(241, r#"LIN WsPath[I]"#);
-                        k.lin(241, &dat.ws_path[i], false);
-                        k.at(243, r#"IF NOT DryRun THEN"#);
+                        k.at(253, r#"ELSE"#);
+                        k.at(254, r#"LIN WsPath[I]"#);
+                        k.lin(254, &dat.ws_path[i], false);
+                        k.at(256, r#"IF NOT DryRun THEN"#);
                         if !v.dry_run {
-                            k.at(244, r#"$OUT[ArcOut] = FALSE"#);
+                            k.at(257, r#"$OUT[ArcOut] = FALSE"#);
                             k.set_output(v.arc_out, false);
                         }
-                        k.at(246, r#"ArcOn = FALSE"#);
+                        k.at(259, r#"ArcOn = FALSE"#);
                         v.arc_on = false;
                     }
                 }
             }
             3 => {
-                k.at(249, r#"CASE 3"#);
-                k.at(250, r#"IF ArcOn THEN"#);
+                k.at(262, r#"CASE 3"#);
+                k.at(263, r#"IF ArcOn THEN"#);
                 if v.arc_on {
-                    k.at(252, r#"IF NOT DryRun THEN"#);
+                    k.at(265, r#"IF NOT DryRun THEN"#);
                     if !v.dry_run {
-                        k.at(253, r#"$OUT[ArcOut] = FALSE"#);
+                        k.at(266, r#"$OUT[ArcOut] = FALSE"#);
                         k.set_output(v.arc_out, false);
                     }
-                    k.at(255, r#"ArcOn = FALSE"#);
+                    k.at(268, r#"ArcOn = FALSE"#);
                     v.arc_on = false;
                 }
-                k.at(257, r#"$VEL.CP = ApproachVel"#);
+                k.at(270, r#"$VEL.CP = ApproachVel"#);
                 k.vel_cp = v.approach_vel;
-                k.at(258, r#"LIN WsPath[I]"#);
-                k.lin(258, &dat.ws_path[i], false);
+                k.at(271, r#"LIN WsPath[I]"#);
+                k.lin(271, &dat.ws_path[i], false);
             }
             4 => {
-                k.at(259, r#"CASE 4"#);
+                k.at(272, r#"CASE 4"#);
             }
             other => panic!("SWITCH without a CASE for {other}: KRL stops with an error"),
         }
     }
-    k.at(263, r#"END"#);
+    k.at(276, r#"END"#);
     k.trace.advance_stop();
     dat.ws_result
 }
 
 /// `Ask(Request[], Answer[], Timeout)`.
 fn ask(k: &mut Krl, dat: &mut DataList, request: &Chars, answer: &mut Chars, timeout: i32) {
-    k.at(269, r#"DEF Ask(Request[]:OUT, Answer[]:OUT, Timeout:IN)"#);
-    k.at(270, r#"DECL CHAR Request[], Answer[]"#);
-    k.at(271, r#"DECL INT Timeout, Offset, Code"#);
-    k.at(272, r#"DECL EKI_STATUS RET"#);
-    k.at(273, r#"DECL CHAR Sent[256]"#);
+    k.at(282, r#"DEF Ask(Request[]:OUT, Answer[]:OUT, Timeout:IN)"#);
+    k.at(283, r#"DECL CHAR Request[], Answer[]"#);
+    k.at(284, r#"DECL INT Timeout, Offset, Code"#);
+    k.at(285, r#"DECL EKI_STATUS RET"#);
+    k.at(286, r#"DECL CHAR Sent[256]"#);
     let mut sent = Chars::new(256);
-    k.at(274, r#"DECL STATE_T St"#);
-    k.at(275, r#"$FLAG[1] = FALSE"#);
+    k.at(287, r#"DECL STATE_T St"#);
+    k.at(288, r#"$FLAG[1] = FALSE"#);
     k.set_flag(1, false);
-    k.at(276, r#"StrClear(Sent[])"#);
+    k.at(289, r#"StrClear(Sent[])"#);
     sent.clear();
-    k.at(277, r#"Offset = 0"#);
+    k.at(290, r#"Offset = 0"#);
     let mut offset = 0;
-    k.at(278, r#"SWRITE(Sent[], St, Offset, "%s%c%c", Request[], 13, 10)"#);
+    k.at(291, r#"SWRITE(Sent[], St, Offset, "%s%c%c", Request[], 13, 10)"#);
     swrite(&mut sent, &mut offset, "%s%c%c", &[Arg::Text(request), Arg::Int(13), Arg::Int(10)]);
-    k.at(279, r#"RET = EKI_Send("WeldSeam", Sent[])"#);
+    k.at(292, r#"RET = EKI_Send("WeldSeam", Sent[])"#);
     k.eki_send("WeldSeam", &sent);
-    k.at(280, r#"$TIMER_STOP[1] = TRUE"#);
+    k.at(293, r#"$TIMER_STOP[1] = TRUE"#);
     k.set_timer_stop(1, true);
-    k.at(281, r#"$TIMER[1] = -Timeout"#);
+    k.at(294, r#"$TIMER[1] = -Timeout"#);
     k.set_timer(1, -i64::from(timeout));
-    k.at(282, r#"$TIMER_STOP[1] = FALSE"#);
+    k.at(295, r#"$TIMER_STOP[1] = FALSE"#);
     k.set_timer_stop(1, false);
-    k.at(283, r#"WAIT FOR $FLAG[1] OR $TIMER_FLAG[1] OR NOT $FLAG[2]"#);
+    k.at(296, r#"WAIT FOR $FLAG[1] OR $TIMER_FLAG[1] OR NOT $FLAG[2]"#);
     k.wait_for(|k| k.flag(1) || k.timer_flag(1) || !k.flag(2));
-    k.at(284, r#"$TIMER_STOP[1] = TRUE"#);
+    k.at(297, r#"$TIMER_STOP[1] = TRUE"#);
     k.set_timer_stop(1, true);
-    k.at(285, r#"IF NOT $FLAG[1] THEN"#);
+    k.at(298, r#"IF NOT $FLAG[1] THEN"#);
     if !k.flag(1) {
-        k.at(286, r#"IF $FLAG[2] THEN"#);
+        k.at(299, r#"IF $FLAG[2] THEN"#);
         if k.flag(2) {
-            k.at(287, r#"WsResult = 3"#);
+            k.at(300, r#"WsResult = 3"#);
             dat.ws_result = 3;
         } else {
-            k.at(288, r#"ELSE"#);
-            k.at(289, r#"WsResult = 2"#);
+            k.at(301, r#"ELSE"#);
+            k.at(302, r#"WsResult = 2"#);
             dat.ws_result = 2;
         }
-        k.at(291, r#"RETURN"#);
+        k.at(304, r#"RETURN"#);
         return;
     }
-    k.at(293, r#"$FLAG[1] = FALSE"#);
+    k.at(306, r#"$FLAG[1] = FALSE"#);
     k.set_flag(1, false);
-    k.at(294, r#"StrClear(Answer[])"#);
+    k.at(307, r#"StrClear(Answer[])"#);
     answer.clear();
-    k.at(295, r#"RET = EKI_GetString("WeldSeam", "Line", Answer[])"#);
+    k.at(308, r#"RET = EKI_GetString("WeldSeam", "Line", Answer[])"#);
     let ret = k.eki_get_string("WeldSeam", "Line", answer);
-    k.at(296, r#"IF RET.Msg_No <> 0 THEN"#);
+    k.at(309, r#"IF RET.Msg_No <> 0 THEN"#);
     if ret.msg_no != 0 {
-        k.at(297, r#"WsResult = 2"#);
+        k.at(310, r#"WsResult = 2"#);
         dat.ws_result = 2;
-        k.at(298, r#"RETURN"#);
+        k.at(311, r#"RETURN"#);
         return;
     }
-    k.at(300, r#"IF Answer[1] == "-" THEN"#);
+    k.at(313, r#"IF Answer[1] == "-" THEN"#);
     if answer.0[0] == b'-' {
-        k.at(301, r#"Offset = 0"#);
+        k.at(314, r#"Offset = 0"#);
         offset = 0;
-        k.at(302, r#"SREAD(Answer[], St, Offset, "%d", Code)"#);
+        k.at(315, r#"SREAD(Answer[], St, Offset, "%d", Code)"#);
         let (st, r) = sread(answer, &mut offset, "%d");
         let code = int(&r, 0, 0);
-        k.at(303, r#"WsResult = Code"#);
+        k.at(316, r#"WsResult = Code"#);
         dat.ws_result = code;
-        k.at(304, r#"IF (St.HITS <> 1) OR (Code >= 0) THEN"#);
+        k.at(317, r#"IF (St.HITS <> 1) OR (Code >= 0) THEN"#);
         if st.hits != 1 || code >= 0 {
-            k.at(305, r#"WsResult = 4"#);
+            k.at(318, r#"WsResult = 4"#);
             dat.ws_result = 4;
         }
     }
-    k.at(308, r#"END"#);
+    k.at(321, r#"END"#);
 }
 
 /// `Report(Result, Answer[])`.
 fn report(k: &mut Krl, result: i32, answer: &Chars) {
-    k.at(312, r#"DEF Report(Result:IN, Answer[]:OUT)"#);
-    k.at(313, r#"DECL INT Result"#);
-    k.at(314, r#"DECL CHAR Answer[]"#);
-    k.at(315, r#"SWITCH Result"#);
+    k.at(331, r#"DEF Report(Result:IN, Answer[]:OUT)"#);
+    k.at(332, r#"DECL INT Result"#);
+    k.at(333, r#"DECL CHAR Answer[]"#);
+    k.at(334, r#"SWITCH Result"#);
     match result {
         1 => {
-            k.at(316, r#"CASE 1"#);
-            k.at(317, r#"MsgNotify("EKI channel WeldSeam did not open: check WeldSeam.xml and the daemon's address", "weldseam")"#);
+            k.at(335, r#"CASE 1"#);
+            k.at(336, r#"MsgNotify("EKI channel WeldSeam did not open: check WeldSeam.xml and the daemon's address", "weldseam")"#);
             k.msg_notify("EKI channel WeldSeam did not open: check WeldSeam.xml and the daemon's address");
         }
         2 => {
-            k.at(318, r#"CASE 2"#);
-            k.at(319, r#"MsgNotify("link to the daemon lost before the weld: the torch did not move", "weldseam")"#);
+            k.at(337, r#"CASE 2"#);
+            k.at(338, r#"MsgNotify("link to the daemon lost before the weld: the torch did not move", "weldseam")"#);
             k.msg_notify("link to the daemon lost before the weld: the torch did not move");
         }
         3 => {
-            k.at(320, r#"CASE 3"#);
-            k.at(321, r#"MsgNotify("no reply from the daemon in time: the torch did not move", "weldseam")"#);
+            k.at(339, r#"CASE 3"#);
+            k.at(340, r#"MsgNotify("no reply from the daemon in time: the torch did not move", "weldseam")"#);
             k.msg_notify("no reply from the daemon in time: the torch did not move");
         }
         4 | 7 => {
-            k.at(322, r#"CASE 4, 7"#);
-            k.at(323, r#"MsgNotify("a reply from the daemon not understood: the torch did not move", "weldseam")"#);
+            k.at(341, r#"CASE 4, 7"#);
+            k.at(342, r#"MsgNotify("a reply from the daemon not understood: the torch did not move", "weldseam")"#);
             k.msg_notify("a reply from the daemon not understood: the torch did not move");
         }
         5 => {
-            k.at(324, r#"CASE 5"#);
+            k.at(343, r#"CASE 5"#);
             k.at(
-                325,
+                344,
                 r#"MsgNotify("plan too long for WS_MAX_LINES in WeldSeam.dat: the torch did not move", "weldseam")"#,
             );
             k.msg_notify("plan too long for WS_MAX_LINES in WeldSeam.dat: the torch did not move");
         }
         6 => {
-            k.at(326, r#"CASE 6"#);
-            k.at(327, r#"MsgNotify("a seam failed CHECK (count or means): the torch did not move", "weldseam")"#);
+            k.at(345, r#"CASE 6"#);
+            k.at(346, r#"MsgNotify("a seam failed CHECK (count or means): the torch did not move", "weldseam")"#);
             k.msg_notify("a seam failed CHECK (count or means): the torch did not move");
         }
         8 => {
-            k.at(328, r#"CASE 8"#);
-            k.at(329, r#"MsgNotify("the daemon speaks another text link version (2 expected)", "weldseam")"#);
+            k.at(347, r#"CASE 8"#);
+            k.at(348, r#"MsgNotify("the daemon speaks another text link version (2 expected)", "weldseam")"#);
             k.msg_notify("the daemon speaks another text link version (2 expected)");
         }
         _ => {
-            k.at(330, r#"DEFAULT"#);
-            k.at(331, r#"MsgNotify(Answer[], "weldseam")"#);
+            k.at(349, r#"DEFAULT"#);
+            k.at(350, r#"MsgNotify(Answer[], "weldseam")"#);
             k.msg_notify(&answer.text());
         }
     }
-    k.at(333, r#"END"#);
+    k.at(352, r#"END"#);
+}
+
+/// `Dist(P, Q)`: the distance between two poses' positions, mm, in
+/// 32-bit REALs.
+fn dist(k: &mut Krl, p: &E6Pos, q: &E6Pos) -> f32 {
+    k.at(324, r#"DEFFCT REAL Dist(P:IN, Q:IN)"#);
+    k.at(325, r#"DECL E6POS P, Q"#);
+    k.at(326, r#"RETURN SQRT((P.X - Q.X) * (P.X - Q.X) + (P.Y - Q.Y) * (P.Y - Q.Y) + (P.Z - Q.Z) * (P.Z - Q.Z))"#);
+    let d = ((p.x - q.x) * (p.x - q.x) + (p.y - q.y) * (p.y - q.y) + (p.z - q.z) * (p.z - q.z)).sqrt();
+    k.at(327, r#"ENDFCT"#);
+    d
 }
 
 /// The tags of this file against the shipped KRL program.

@@ -20,3 +20,4 @@ mod transcription;
 mod ur;
 mod ur_runs;
 mod urscript;
+mod woven;

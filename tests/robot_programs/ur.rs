@@ -7,7 +7,7 @@
 //! each `elif` and `while` line is seen to run.
 #![allow(clippy::blocks_in_conditions)]
 
-use super::urscript::{Pose, Ur, int_to_str, norm, pose_to_str};
+use super::urscript::{Pose, Ur, int_to_str, norm, point_dist, pose_to_str};
 
 /// What a test sets instead of the cell settings at the program's top.
 pub struct Settings {
@@ -24,7 +24,7 @@ pub const ARC_OUTPUT: u32 = 0;
 
 /// Runs the program; returns its `result`.
 pub fn weld_seam(u: &mut Ur, s: &Settings) -> f64 {
-    u.at(230, r#"weld_seam()"#);
+    u.at(242, r#"weld_seam()"#);
     u.at(29, r#"def weld_seam():"#);
     u.at(31, r#"DAEMON_IP = "192.168.1.10""#);
     let daemon_ip = s.daemon_ip.clone();
@@ -375,71 +375,88 @@ pub fn weld_seam(u: &mut Ur, s: &Settings) -> f64 {
 
     u.at(192, r#"j = 0"#);
     let mut j = 0.0;
+    u.at(193, r#"before = 0"#);
+    let mut before = 0;
     while {
-        u.at(193, r#"while j < count:"#);
+        u.at(194, r#"while j < count:"#);
         j < count
     } {
         let i = j as usize;
-        u.at(196, r#"v = WELD_SPEED"#);
+        u.at(197, r#"v = WELD_SPEED"#);
         let mut v = weld_speed;
-        u.at(197, r#"after = j + 1"#);
+        u.at(198, r#"after = j + 1"#);
         let mut after = i + 1;
-        u.at(198, r#"if kinds[j] == 2:"#);
+        u.at(199, r#"if kinds[j] == 2:"#);
         if kinds[i] == 2.0 {
-            u.at(199, r#"if kinds[j + 1] == 4:"#);
+            u.at(200, r#"if kinds[j + 1] == 4:"#);
             if kinds[i + 1] == 4.0 {
-                u.at(200, r#"after = j + 2"#);
+                u.at(201, r#"after = j + 2"#);
                 after = i + 2;
-                u.at(201, r#"if speeds[j + 1] > 0:"#);
+                u.at(202, r#"if speeds[j + 1] > 0:"#);
                 if speeds[i + 1] > 0.0 {
-                    u.at(202, r#"v = speeds[j + 1]"#);
+                    u.at(203, r#"v = speeds[j + 1]"#);
                     v = speeds[i + 1];
                 }
-                // WEAVE: the half-swing and frequency a welding URCap
-                // would take; the program keeps them and lays no weave.
+                // WEAVE: the weave is in the path; the line's is 0.
                 let _weave = (amps[i + 1], freqs[i + 1]);
             }
         }
         if {
-            u.at(207, r#"if kinds[j] == 1:"#);
+            u.at(208, r#"if kinds[j] == 1:"#);
             kinds[i] == 1.0
         } {
-            u.at(208, r#"movel(poses[j], a=APPROACH_ACCEL, v=APPROACH_SPEED)"#);
-            u.movel(208, &poses[i], approach_accel, approach_speed, 0.0);
+            u.at(209, r#"movel(poses[j], a=APPROACH_ACCEL, v=APPROACH_SPEED)"#);
+            u.movel(209, &poses[i], approach_accel, approach_speed, 0.0);
         } else if {
-            u.at(209, r#"elif kinds[j] == 3:"#);
+            u.at(210, r#"elif kinds[j] == 3:"#);
             kinds[i] == 3.0
         } {
-            u.at(210, r#"set_standard_digital_out(ARC_OUTPUT, False)"#);
+            u.at(211, r#"set_standard_digital_out(ARC_OUTPUT, False)"#);
             u.set_standard_digital_out(arc_output, false);
-            u.at(211, r#"movel(poses[j], a=APPROACH_ACCEL, v=APPROACH_SPEED)"#);
-            u.movel(211, &poses[i], approach_accel, approach_speed, 0.0);
+            u.at(212, r#"movel(poses[j], a=APPROACH_ACCEL, v=APPROACH_SPEED)"#);
+            u.movel(212, &poses[i], approach_accel, approach_speed, 0.0);
         } else if {
-            u.at(212, r#"elif kinds[j - 1] == 1:"#);
+            u.at(213, r#"elif kinds[j - 1] == 1:"#);
             kinds[i - 1] == 1.0
         } {
-            u.at(213, r#"movel(poses[j], a=APPROACH_ACCEL, v=APPROACH_SPEED)"#);
-            u.movel(213, &poses[i], approach_accel, approach_speed, 0.0);
-            u.at(215, r#"if not DRY_RUN:"#);
+            u.at(214, r#"movel(poses[j], a=APPROACH_ACCEL, v=APPROACH_SPEED)"#);
+            u.movel(214, &poses[i], approach_accel, approach_speed, 0.0);
+            u.at(216, r#"if not DRY_RUN:"#);
             if !dry_run {
-                u.at(216, r#"set_standard_digital_out(ARC_OUTPUT, True)"#);
+                u.at(217, r#"set_standard_digital_out(ARC_OUTPUT, True)"#);
                 u.set_standard_digital_out(arc_output, true);
-                u.at(217, r#"sleep(ARC_SETTLE)"#);
+                u.at(218, r#"sleep(ARC_SETTLE)"#);
                 u.sleep(arc_settle);
             }
         } else if {
-            u.at(219, r#"elif kinds[after] == 3:"#);
+            u.at(220, r#"elif kinds[after] == 3:"#);
             kinds[after] == 3.0
         } {
-            u.at(220, r#"movep(poses[j], a=WELD_ACCEL, v=v, r=0)"#);
-            u.movep(220, &poses[i], weld_accel, v, 0.0);
-            u.at(222, r#"set_standard_digital_out(ARC_OUTPUT, False)"#);
+            u.at(221, r#"movep(poses[j], a=WELD_ACCEL, v=v, r=0)"#);
+            u.movep(221, &poses[i], weld_accel, v, 0.0);
+            u.at(223, r#"set_standard_digital_out(ARC_OUTPUT, False)"#);
             u.set_standard_digital_out(arc_output, false);
         } else {
-            u.at(224, r#"movep(poses[j], a=WELD_ACCEL, v=v, r=BLEND_RADIUS)"#);
-            u.movep(224, &poses[i], weld_accel, v, blend_radius);
+            u.at(227, r#"r = BLEND_RADIUS"#);
+            let mut r = blend_radius;
+            u.at(228, r#"shorter = point_dist(poses[before], poses[j])"#);
+            let mut shorter = point_dist(&poses[before], &poses[i]);
+            u.at(229, r#"if point_dist(poses[j], poses[after]) < shorter:"#);
+            if point_dist(&poses[i], &poses[after]) < shorter {
+                u.at(230, r#"shorter = point_dist(poses[j], poses[after])"#);
+                shorter = point_dist(&poses[i], &poses[after]);
+            }
+            u.at(232, r#"if 0.25 * shorter < r:"#);
+            if 0.25 * shorter < r {
+                u.at(233, r#"r = 0.25 * shorter"#);
+                r = 0.25 * shorter;
+            }
+            u.at(235, r#"movep(poses[j], a=WELD_ACCEL, v=v, r=r)"#);
+            u.movep(235, &poses[i], weld_accel, v, r);
         }
-        u.at(227, r#"j = after"#);
+        u.at(238, r#"before = j"#);
+        before = i;
+        u.at(239, r#"j = after"#);
         j = after as f64;
     }
     result

@@ -12,7 +12,7 @@ use weldseam::geometry::Isometry3;
 use weldseam::geometry::pose::EulerConvention;
 use weldseam_proto::text::Dialect;
 
-use super::harness::{Daemon, Scenario, reference, reference_pieces, same_pose};
+use super::harness::{Daemon, Scenario, reference, same_pose};
 use super::ur::{ARC_OUTPUT, BLEND_RADIUS, Settings, WELD_SPEED, weld_seam};
 use super::urscript::{Event, Move, Ur};
 
@@ -114,7 +114,15 @@ fn welded(run: &Run, scenario: Scenario, seams: usize, arc: bool) {
             assert!(m.process && m.speed == WELD_SPEED, "seam {k} move {j}: {m:?}");
             let last = j == weld.len() - 2;
             assert_eq!(m.blended, !last, "seam {k} move {j} of {}: blended {}", weld.len() - 1, m.blended);
-            assert_eq!(m.blend, if last { 0.0 } else { BLEND_RADIUS });
+            // The cell's blend, or a quarter of the shorter move beside
+            // the waypoint where that is less.
+            let expected = if last {
+                0.0
+            } else {
+                let dist = |a: &Move, b: &Move| (a.target.translation.vector - b.target.translation.vector).norm();
+                BLEND_RADIUS.min(0.25 * dist(weld[j], m).min(dist(m, weld[j + 2])) / 1000.0)
+            };
+            assert!((m.blend - expected).abs() < 1e-9, "seam {k} move {j}: blend {} for {expected}", m.blend);
         }
     }
     assert_eq!(at, moves.len(), "no motion beyond the seams'");
@@ -205,29 +213,36 @@ async fn a_daemon_gone_before_the_arc_leaves_the_torch_at_the_capture_pose() {
     }
 }
 
-/// A thick V-groove under the example procedure: every piece of every
-/// pass welded as a seam, each process move into a weld waypoint at the
-/// travel speed the plan gives there (m/s, to the line's 6 decimals).
+/// A thick V-groove under the example procedure, its root pass weaving:
+/// every piece of every pass welded as a seam, each the plan's woven path
+/// (URScript has no weaving motion; [`super::woven::check_piece`]: the
+/// weave's offsets with the piece's phase, the plan's speed along the
+/// seam, the torch's turn), with no blend over a quarter of the shorter
+/// move beside it (no movep fault).
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
-async fn ur_each_pass_is_welded_at_its_speeds() {
+async fn ur_each_pass_is_welded_woven_at_its_speeds() {
     let run = run(Scenario::Passes, false).await;
     assert_eq!(run.result, 0.0, "{:?}", run.ur.events.iter().rev().take(5).collect::<Vec<_>>());
-    let expected = reference_pieces(Scenario::Passes, Dialect::Ur, &sent_pose(&run));
-    assert!(expected.len() >= 2, "{} pieces: a 9 mm groove takes several passes", expected.len());
+    assert!(run.ur.faults.is_empty(), "{:?}", run.ur.faults);
+    let pieces = super::woven::plan_pieces(Scenario::Passes, Dialect::Ur, &sent_pose(&run));
+    assert!(pieces.len() >= 2, "{} pieces: a 9 mm groove takes several passes", pieces.len());
     let moves = moves(&run.ur);
     let mut at = 0;
-    for (k, piece) in expected.iter().enumerate() {
-        let weld = &moves[at + 1..at + 1 + piece.len()];
-        at += piece.len() + 2;
-        for (j, (m, (pose, [speed, ..]))) in weld.iter().zip(piece).enumerate().skip(1) {
-            same_pose(&m.target, pose).unwrap_or_else(|e| panic!("piece {k} waypoint {j}: {e}"));
-            assert!(m.process, "piece {k} move {j}");
-            assert!(
-                (m.speed - speed / 1000.0).abs() <= 0.000_000_5 + 1e-12,
-                "piece {k} move {j}: {} for {speed}",
-                m.speed
-            );
+    let mut off_the_line = 0;
+    for (k, (piece, lines)) in pieces.iter().enumerate() {
+        let weld = &moves[at + 1..at + 1 + lines];
+        let apart = |a: &Move, b: &Move| (a.target.translation.vector - b.target.translation.vector).norm() / 1000.0;
+        for j in 1..weld.len() - 1 {
+            let shorter = apart(weld[j - 1], weld[j]).min(apart(weld[j], weld[j + 1]));
+            assert!(weld[j].blend <= 0.25 * shorter + 1e-12, "piece {k} move {j}: blend {} m", weld[j].blend);
+            assert!(weld[j].process, "piece {k} move {j}");
         }
+        // m/s to mm/s.
+        let poses: Vec<_> = weld.iter().map(|m| (m.target, m.speed * 1000.0)).collect();
+        let woven = super::woven::check_piece(piece, &poses).unwrap_or_else(|e| panic!("UR piece {k}: {e}"));
+        off_the_line += woven.off_the_line;
+        at += lines + 2;
     }
     assert_eq!(at, moves.len(), "no motion beyond the pieces'");
+    assert!(off_the_line > 0, "the root pass weaves, and UR welded it straight");
 }

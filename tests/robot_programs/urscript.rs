@@ -294,6 +294,12 @@ pub fn int_to_str(v: f64) -> String {
 }
 
 /// `norm(number)`: its absolute value.
+/// `point_dist(p_from, p_to)`: the distance between two poses'
+/// positions, m.
+pub fn point_dist(a: &Pose, b: &Pose) -> f64 {
+    ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
+}
+
 pub fn norm(v: f64) -> f64 {
     v.abs()
 }

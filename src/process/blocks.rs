@@ -416,6 +416,26 @@ impl<'a> BlockIndex<'a> {
         self.nearest_round[j * self.grid_wide + i]
     }
 
+    /// A range no point whose ray lies in `rect` is nearer than, mm
+    /// (infinite where none is): the least of [`least_range_near`]'s
+    /// bounds over the coarse cells `rect` meets, as such a point's block
+    /// is listed in the cell its ray falls in.
+    ///
+    /// [`least_range_near`]: BlockIndex::least_range_near
+    pub fn least_range_in(&self, rect: &RayRect) -> f64 {
+        if self.binned == 0 || !meets(rect, &[self.lo[0], self.hi[0], self.lo[1], self.hi[1]]) {
+            return f64::INFINITY;
+        }
+        let [i0, i1, j0, j1] = self.cells_of(rect);
+        let mut least = f64::INFINITY;
+        for j in j0..=j1 {
+            for range in &self.nearest_round[j * self.grid_wide + i0..=j * self.grid_wide + i1] {
+                least = least.min(*range);
+            }
+        }
+        least
+    }
+
     /// The coarse cells `[i0, i1, j0, j1]` a rectangle of rays meets,
     /// clipped to the grid.
     fn cells_of(&self, r: &RayRect) -> [usize; 4] {
@@ -523,7 +543,7 @@ impl<'a> BlockIndex<'a> {
     /// The rays `[u0, u1, v0, v1]` a point within `radius` of `centre` may
     /// lie on, or `None` when every ray may (a ball reaching the camera's
     /// plane); the bound of [`super::rays`], widened against rounding.
-    fn window(centre: &Vec3, radius: f64) -> Option<RayRect> {
+    pub(super) fn window(centre: &Vec3, radius: f64) -> Option<RayRect> {
         let [u, v, hu, hv] = rays_within(centre, radius)?;
         let (hu, hv) = (hu * (1.0 + RAY_SLACK_RELATIVE) + RAY_SLACK, hv * (1.0 + RAY_SLACK_RELATIVE) + RAY_SLACK);
         Some([u - hu, u + hu, v - hv, v + hv])

@@ -7,7 +7,7 @@ use std::arch::x86_64::*;
 
 use super::sse2::deinterleave;
 use super::vector::Vector;
-use super::{BLOCK, LaneMasks, NormalTest, Planes, TileScales, generic};
+use super::{BLOCK, LaneMasks, NormalTest, Planes, QuadBox, TileScales, generic};
 use crate::cloud::Point;
 
 // SAFETY: every method does what the trait says with AVX2, which the
@@ -112,6 +112,11 @@ unsafe impl Vector for __m256 {
     unsafe fn ge(self, other: Self) -> __m256i {
         // SAFETY: inlined only into AVX2 code.
         unsafe { _mm256_castps_si256(_mm256_cmp_ps::<_CMP_GE_OQ>(self, other)) }
+    }
+    #[inline(always)]
+    unsafe fn select(mask: __m256i, a: Self, b: Self) -> Self {
+        // SAFETY: inlined only into AVX2 code.
+        unsafe { _mm256_blendv_ps(b, a, _mm256_castsi256_ps(mask)) }
     }
     #[inline(always)]
     unsafe fn to_bits(self) -> __m256i {
@@ -277,4 +282,11 @@ pub(super) unsafe fn count_runs_fused(
     // SAFETY: `out` holds eight u32.
     unsafe { _mm256_storeu_si256(out.as_mut_ptr().cast(), counts) };
     out
+}
+
+/// [`super::quad_boxes`] in eight lanes.
+#[target_feature(enable = "avx2")]
+pub(super) fn quad_boxes(rows: &[&[Point]], min_depth: f32, out: &mut [QuadBox]) {
+    // SAFETY: this function runs only where AVX2 does; 4 divides 8.
+    unsafe { generic::quad_boxes::<__m256>(rows, min_depth, out) }
 }

@@ -7,7 +7,7 @@
 
 use super::scalar::{FLOOR_LIMIT, FLOOR_SHIFT};
 use super::vector::Vector;
-use super::{BLOCK, LabelledGrid, LabelledWindow, LaneMasks, NormalTest, Planes, TileScales};
+use super::{BLOCK, LabelledGrid, LabelledWindow, LaneMasks, NormalTest, Planes, QUAD, QuadBox, TileScales};
 use crate::cloud::Point;
 
 /// [`super::within`] in lanes: all ones where `q` lies within `radius_sq`
@@ -304,4 +304,69 @@ pub(super) unsafe fn tile_keys<V: Vector>(lanes: &[[f32; BLOCK]; 3], scales: &Ti
         }
     }
     keys
+}
+
+/// [`super::quad_boxes`], `V::LANES` columns (whole quads) of every row at
+/// a time; the columns short of a register's width by the scalar form.
+///
+/// # Safety
+/// The CPU must run `V`'s instruction set, [`QUAD`] must divide
+/// `V::LANES`, and `V::LANES` must be at most eight.
+#[inline(always)]
+pub(super) unsafe fn quad_boxes<V: Vector>(rows: &[&[Point]], min_depth: f32, out: &mut [QuadBox]) {
+    let columns = rows.first().map_or(0, |row| row.len());
+    let whole = columns / V::LANES * V::LANES;
+    // SAFETY: the caller's CPU runs `V`; every load reads `V::LANES`
+    // points of a slice checked to hold them, every store eight u32 of an
+    // array of eight.
+    unsafe {
+        let (inf, neg, depth) = (V::splat(f32::INFINITY), V::splat(f32::NEG_INFINITY), V::splat(min_depth));
+        for first in (0..whole).step_by(V::LANES) {
+            let (mut low, mut high) = ([inf; 3], [neg; 3]);
+            let (mut binned, mut finite) = (V::splat_u32(0), V::splat_u32(0));
+            for row in rows {
+                let p = V::load_points(row[first..first + V::LANES].as_ptr());
+                // Ordered compares: a NaN coordinate is not finite.
+                let is_finite = V::and_u32(V::and_u32(p[0].abs().lt(inf), p[1].abs().lt(inf)), p[2].abs().lt(inf));
+                let has_ray = V::and_u32(is_finite, p[2].gt(depth));
+                for k in 0..3 {
+                    low[k] = V::select(has_ray, p[k], inf).min(low[k]);
+                    high[k] = V::select(has_ray, p[k], neg).max(high[k]);
+                }
+                // A true lane is all ones, -1: subtracting counts it.
+                binned = V::sub_u32(binned, has_ray);
+                finite = V::sub_u32(finite, is_finite);
+            }
+            let (low, high) = (low.map(|v| lane_bits::<V>(v.to_bits())), high.map(|v| lane_bits::<V>(v.to_bits())));
+            let (binned, finite) = (lane_bits::<V>(binned), lane_bits::<V>(finite));
+            for (q, quad) in out[first / QUAD..(first + V::LANES) / QUAD].iter_mut().enumerate() {
+                let own = q * QUAD..(q + 1) * QUAD;
+                let mut b = QuadBox::EMPTY;
+                for k in 0..3 {
+                    for l in own.clone() {
+                        let (a, c) = (f32::from_bits(low[k][l]), f32::from_bits(high[k][l]));
+                        b.min[k] = if a < b.min[k] { a } else { b.min[k] };
+                        b.max[k] = if c > b.max[k] { c } else { b.max[k] };
+                    }
+                }
+                b.binned = binned[own.clone()].iter().sum();
+                b.finite = finite[own].iter().sum();
+                *quad = b;
+            }
+        }
+    }
+    super::scalar::quad_boxes(rows, whole, min_depth, &mut out[whole / QUAD..]);
+}
+
+/// The u32 lanes of `v`, in the first `V::LANES` of eight.
+///
+/// # Safety
+/// The CPU must run `V`'s instruction set, and `V::LANES` must be at most
+/// eight.
+#[inline(always)]
+unsafe fn lane_bits<V: Vector>(v: V::Int) -> [u32; 8] {
+    let mut at = [0u32; 8];
+    // SAFETY: the caller's CPU runs `V`; the array holds eight u32.
+    unsafe { V::store_u32(v, at.as_mut_ptr()) };
+    at
 }

@@ -379,6 +379,51 @@ pub(crate) fn depth_range(z: &[f32; BLOCK]) -> (f32, f32) {
     }
 }
 
+/// The box of the points of one quad ([`QUAD`] columns over a band of
+/// rows) that have a ray: finite, and deeper than the band's least depth.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct QuadBox {
+    /// Per coordinate, the least and greatest over those points
+    /// (`inf`, `-inf` for none).
+    pub min: [f32; 3],
+    pub max: [f32; 3],
+    /// How many points have a ray, and how many are finite.
+    pub binned: u32,
+    pub finite: u32,
+}
+
+/// The columns of a quad.
+pub(crate) const QUAD: usize = 4;
+
+impl QuadBox {
+    /// The box of no point.
+    pub(crate) const EMPTY: QuadBox =
+        QuadBox { min: [f32::INFINITY; 3], max: [f32::NEG_INFINITY; 3], binned: 0, finite: 0 };
+}
+
+/// The boxes of a band of rows' quads: `out[q]` is the box of columns
+/// `QUAD * q` to `QUAD * q + QUAD` (fewer for the last of a row no whole
+/// number of quads long) of every row, over the points whose coordinates
+/// are all finite (an empty pixel's are NaN) and whose depth exceeds
+/// `min_depth`. Every row is as long as the first, and `out` holds a box
+/// for each of its quads. The lane forms give the same boxes as the
+/// scalar one, a zero's sign aside (a least of `0.0` and `-0.0` is
+/// either).
+pub(crate) fn quad_boxes(rows: &[&[Point]], min_depth: f32, out: &mut [QuadBox]) {
+    let columns = rows.first().map_or(0, |row| row.len());
+    assert!(rows.iter().all(|row| row.len() == columns), "a band's rows are equally long");
+    assert_eq!(out.len(), columns.div_ceil(QUAD), "a box for every quad");
+    match isa() {
+        // SAFETY: the CPU runs AVX2: `isa` gives no level it lacks.
+        #[cfg(target_arch = "x86_64")]
+        Isa::Avx2 => unsafe { avx2::quad_boxes(rows, min_depth, out) },
+        // SAFETY: SSE2 is part of the x86_64 baseline.
+        #[cfg(target_arch = "x86_64")]
+        Isa::Sse2 => unsafe { sse2::quad_boxes(rows, min_depth, out) },
+        _ => scalar::quad_boxes(rows, 0, min_depth, out),
+    }
+}
+
 /// The robust plane criterion's normal test, the rule it adds to the
 /// paper's count (Eq. 14): the grid normal from the central differences
 /// at a step must lie within the angle whose squared cosine is `cos_sq`
@@ -615,6 +660,57 @@ mod tests {
         // Some members open and some settled in each case.
         for opened in [check([1], 3), check([0, 1], 4), check([1, 0], 5)] {
             assert!((20..600).contains(&opened), "{opened} opened");
+        }
+    }
+
+    /// A coordinate as a frame may hold it: a plain value, a zero of
+    /// either sign, an empty pixel's NaN, an infinity, or a depth at the
+    /// camera's plane.
+    fn coordinate() -> impl proptest::strategy::Strategy<Value = f32> {
+        use proptest::prelude::*;
+        prop_oneof![
+            6 => -400.0f32..400.0,
+            1 => Just(f32::NAN),
+            1 => prop_oneof![Just(0.0f32), Just(-0.0), Just(f32::INFINITY), Just(f32::NEG_INFINITY), Just(0.5)],
+        ]
+    }
+
+    use proptest::strategy::Strategy;
+
+    proptest::proptest! {
+        #[test]
+        fn every_form_of_the_quad_boxes_equals_the_scalar_one(
+            band in (0usize..45, 1usize..=4).prop_flat_map(|(columns, rows)| {
+                proptest::collection::vec(
+                    proptest::collection::vec(proptest::array::uniform3(coordinate()), columns..=columns), rows..=rows)
+            }),
+        ) {
+            let rows: Vec<&[Point]> = band.iter().map(Vec::as_slice).collect();
+            let quads = rows[0].len().div_ceil(QUAD);
+            let (ran, _skipped) = on_every_isa(|_| {
+                let mut out = vec![QuadBox::EMPTY; quads];
+                quad_boxes(&rows, 0.5, &mut out);
+                out
+            });
+            let mut scalar = vec![QuadBox::EMPTY; quads];
+            scalar::quad_boxes(&rows, 0, 0.5, &mut scalar);
+            for (isa, boxes) in ran {
+                // `==` on the floats: a zero's sign aside, the same boxes.
+                proptest::prop_assert_eq!(&boxes, &scalar, "{:?}", isa);
+            }
+            // Point by point: every point with a ray is inside its quad's
+            // box, and the counts are the points'.
+            for (q, b) in scalar.iter().enumerate() {
+                let points = rows.iter().flat_map(|row| &row[q * QUAD..((q + 1) * QUAD).min(row.len())]);
+                let finite: Vec<&Point> = points.filter(|p| p.iter().all(|c| c.is_finite())).collect();
+                let with_ray: Vec<&Point> = finite.iter().copied().filter(|p| p[2] > 0.5).collect();
+                proptest::prop_assert_eq!((b.finite as usize, b.binned as usize), (finite.len(), with_ray.len()));
+                for k in 0..3 {
+                    let least = with_ray.iter().map(|p| p[k]).fold(f32::INFINITY, f32::min);
+                    let greatest = with_ray.iter().map(|p| p[k]).fold(f32::NEG_INFINITY, f32::max);
+                    proptest::prop_assert!(b.min[k] == least && b.max[k] == greatest);
+                }
+            }
         }
     }
 }

@@ -1,7 +1,9 @@
 //! The kernels' plain forms, on any CPU: the reference that every vector
 //! form must equal, and the path where none runs.
 
-use super::{BLOCK, LabelledGrid, LabelledWindow, LaneMasks, NormalTest, Planes, TileScales, generic, within};
+use super::{
+    BLOCK, LabelledGrid, LabelledWindow, LaneMasks, NormalTest, Planes, QUAD, QuadBox, TileScales, generic, within,
+};
 use crate::cloud::Point;
 
 /// Whether the unnormalised normal `n` at point `p`, turned away from the
@@ -218,5 +220,31 @@ impl<const N: usize> RowBounds<'_, N> {
                 open.push((c as u32, k as u8));
             }
         }
+    }
+}
+
+/// [`super::quad_boxes`] one point at a time, from column `first` of each
+/// row: `out[q]` is the quad `q` quads on from it.
+pub(super) fn quad_boxes(rows: &[&[Point]], first: usize, min_depth: f32, out: &mut [QuadBox]) {
+    for (q, quad) in out.iter_mut().enumerate() {
+        let mut b = QuadBox::EMPTY;
+        let from = first + q * QUAD;
+        for row in rows {
+            for p in &row[from..(from + QUAD).min(row.len())] {
+                // A comparison with a NaN is false: an empty pixel is not
+                // finite.
+                let is_finite = p.iter().all(|c| c.abs() < f32::INFINITY);
+                let has_ray = is_finite && p[2] > min_depth;
+                if has_ray {
+                    for ((c, low), high) in p.iter().zip(&mut b.min).zip(&mut b.max) {
+                        *low = if *c < *low { *c } else { *low };
+                        *high = if *c > *high { *c } else { *high };
+                    }
+                }
+                b.binned += u32::from(has_ray);
+                b.finite += u32::from(is_finite);
+            }
+        }
+        *quad = b;
     }
 }

@@ -7,7 +7,7 @@ use std::arch::x86_64::*;
 use super::scalar::Corner;
 use super::vector::Vector;
 use super::{
-    BLOCK, LabelledGrid, LabelledWindow, LaneMasks, NormalTest, Planes, RowBounds, TileScales, generic, scalar,
+    BLOCK, LabelledGrid, LabelledWindow, LaneMasks, NormalTest, Planes, QuadBox, RowBounds, TileScales, generic, scalar,
 };
 use crate::cloud::Point;
 
@@ -123,6 +123,14 @@ unsafe impl Vector for __m128 {
         unsafe {
             let v = _mm_max_ps(self, _mm_movehl_ps(self, self));
             _mm_cvtss_f32(_mm_max_ps(v, _mm_shuffle_ps::<{ pick(1, 1, 1, 1) }>(v, v)))
+        }
+    }
+    #[inline(always)]
+    unsafe fn select(mask: __m128i, a: Self, b: Self) -> Self {
+        // SAFETY: every x86_64 CPU runs SSE2.
+        unsafe {
+            let mask = _mm_castsi128_ps(mask);
+            _mm_or_ps(_mm_and_ps(mask, a), _mm_andnot_ps(mask, b))
         }
     }
     #[inline(always)]
@@ -385,4 +393,11 @@ pub(super) fn open_members<const N: usize>(
             open.push(((c + lane) as u32, k as u8));
         }
     }
+}
+
+/// [`super::quad_boxes`] in four lanes.
+#[target_feature(enable = "sse2")]
+pub(super) fn quad_boxes(rows: &[&[Point]], min_depth: f32, out: &mut [QuadBox]) {
+    // SAFETY: this function runs only where SSE2 does; 4 divides 4.
+    unsafe { generic::quad_boxes::<__m128>(rows, min_depth, out) }
 }

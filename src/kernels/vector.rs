@@ -38,6 +38,9 @@ pub(crate) unsafe trait Vector: Copy {
     unsafe fn min(self, other: Self) -> Self;
     /// Lane by lane `if self > other { self } else { other }`.
     unsafe fn max(self, other: Self) -> Self;
+    /// Lane by lane `a` where `mask` (a compare's result) is all ones,
+    /// `b` where it is all zeros.
+    unsafe fn select(mask: Self::Int, a: Self, b: Self) -> Self;
     /// The lanes without their sign bit.
     unsafe fn abs(self) -> Self;
     /// The lanes with their sign bit flipped where `mask` is all ones:

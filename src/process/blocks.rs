@@ -21,7 +21,9 @@
 //! asks.
 //!
 //! The same pass bounds each block's patches of [`PATCH_PX`] x
-//! [`PATCH_PX`] pixels too (a box of their points, nothing divided), and a
+//! [`PATCH_PX`] pixels too (a box of their points, nothing divided: the
+//! kernels' [`crate::kernels::quad_boxes`], a band of a patch's rows at a
+//! time, in vector lanes where the CPU has them), and a
 //! block a ball meets is read patch by patch: only the patches whose rays
 //! and ranges the ball meets, their rays and ranges worked out from their
 //! boxes the first time the block is read. A ball of a few of the
@@ -35,6 +37,7 @@ use rayon::prelude::*;
 use nalgebra::Vector3;
 
 use super::rays::{MIN_BINNED_DEPTH_MM, nearest_apart_by_balls, rays_within};
+use crate::kernels::{self, QuadBox};
 
 type Vec3 = Vector3<f64>;
 
@@ -49,6 +52,9 @@ pub const BLOCK_PX: usize = 16;
 /// little beyond itself, while a block's patches stay few enough to test
 /// one by one (sixteen).
 pub const PATCH_PX: usize = 4;
+
+// A patch's row is one quad of the kernel that bounds the frame.
+const _: () = assert!(PATCH_PX == kernels::QUAD);
 
 /// A block's patches a side, and in all.
 const PATCHES_A_SIDE: usize = BLOCK_PX / PATCH_PX;
@@ -128,28 +134,10 @@ struct PatchBounds {
 }
 
 impl BlockBox {
-    /// Grows the box by the points of one row of a patch: a plain
-    /// minimum and maximum per coordinate, no division, each a comparison
-    /// and a selection the compiler keeps in vector registers. Returns
-    /// how many of them are finite but too near the camera's plane to
-    /// have a ray (kept aside by the caller).
-    fn add(&mut self, pixels: &[[f32; 3]]) -> usize {
-        let (mut min, mut max, mut binned, mut finite) = (self.min, self.max, 0, 0);
-        for p in pixels {
-            // A comparison with a NaN is false: an empty pixel is not
-            // finite.
-            let is_finite = p.iter().all(|c| c.abs() < f32::INFINITY);
-            let has_ray = is_finite & (p[2] > MIN_BINNED_DEPTH_MM as f32);
-            for k in 0..3 {
-                let (low, high) = if has_ray { (p[k], p[k]) } else { (f32::INFINITY, f32::NEG_INFINITY) };
-                min[k] = if low < min[k] { low } else { min[k] };
-                max[k] = if high > max[k] { high } else { max[k] };
-            }
-            binned += usize::from(has_ray);
-            finite += usize::from(is_finite);
-        }
-        (self.min, self.max, self.binned) = (min, max, self.binned + binned);
-        finite - binned
+    /// The box of a quad's points that have a ray, as the kernel bounded
+    /// them: a plain minimum and maximum per coordinate, no division.
+    fn of(quad: &QuadBox) -> BlockBox {
+        BlockBox { min: quad.min, max: quad.max, binned: quad.binned as usize }
     }
 
     /// The box holding both boxes' points.
@@ -225,18 +213,31 @@ impl<'a> BlockIndex<'a> {
             .enumerate()
             .map(|(bj, row)| {
                 let mut aside = Vec::new();
-                for j in bj * BLOCK_PX..((bj + 1) * BLOCK_PX).min(height) {
-                    let line = &points[j * width..((j + 1) * width).min(points.len())];
-                    let patch_row = (j - bj * BLOCK_PX) / PATCH_PX * PATCHES_A_SIDE;
+                let mut quads = vec![QuadBox::EMPTY; width.div_ceil(PATCH_PX)];
+                // A band of a patch's rows at a time, each patch's box
+                // from one quad of the band.
+                for first in (bj * BLOCK_PX..((bj + 1) * BLOCK_PX).min(height)).step_by(PATCH_PX) {
+                    let line = |j: usize| &points[j * width..((j + 1) * width).min(points.len())];
+                    let band: Vec<&[[f32; 3]]> = (first..(first + PATCH_PX).min(height)).map(line).collect();
+                    let patch_row = (first - bj * BLOCK_PX) / PATCH_PX * PATCHES_A_SIDE;
+                    // Only a frame's last row may be short of its width:
+                    // it is bounded on its own.
+                    let (whole, short) = band.split_at(band.iter().take_while(|l| l.len() == width).count());
                     let mut too_near = 0;
-                    for (k, pixels) in line.chunks(PATCH_PX).enumerate() {
-                        let (block, patch) = (k / PATCHES_A_SIDE, k % PATCHES_A_SIDE);
-                        too_near += row[block * PATCHES_PER_BLOCK + patch_row + patch].add(pixels);
+                    for rows in [whole].into_iter().chain(short.chunks(1)).filter(|rows| !rows.is_empty()) {
+                        let quads = &mut quads[..rows[0].len().div_ceil(PATCH_PX)];
+                        kernels::quad_boxes(rows, MIN_BINNED_DEPTH_MM as f32, quads);
+                        for (k, quad) in quads.iter().enumerate() {
+                            let (block, patch) = (k / PATCHES_A_SIDE, k % PATCHES_A_SIDE);
+                            let own = &mut row[block * PATCHES_PER_BLOCK + patch_row + patch];
+                            *own = own.union(&BlockBox::of(quad));
+                            too_near += (quad.finite - quad.binned) as usize;
+                        }
                     }
                     if too_near > 0 {
                         let is_too_near =
                             |p: &&[f32; 3]| p[2] <= MIN_BINNED_DEPTH_MM as f32 && p.iter().all(|c| c.is_finite());
-                        aside.extend(line.iter().filter(is_too_near));
+                        aside.extend(band.iter().flat_map(|line| line.iter().filter(is_too_near)));
                     }
                 }
                 aside
@@ -415,6 +416,26 @@ impl<'a> BlockIndex<'a> {
         self.nearest_round[j * self.grid_wide + i]
     }
 
+    /// A range no point whose ray lies in `rect` is nearer than, mm
+    /// (infinite where none is): the least of [`least_range_near`]'s
+    /// bounds over the coarse cells `rect` meets, as such a point's block
+    /// is listed in the cell its ray falls in.
+    ///
+    /// [`least_range_near`]: BlockIndex::least_range_near
+    pub fn least_range_in(&self, rect: &RayRect) -> f64 {
+        if self.binned == 0 || !meets(rect, &[self.lo[0], self.hi[0], self.lo[1], self.hi[1]]) {
+            return f64::INFINITY;
+        }
+        let [i0, i1, j0, j1] = self.cells_of(rect);
+        let mut least = f64::INFINITY;
+        for j in j0..=j1 {
+            for range in &self.nearest_round[j * self.grid_wide + i0..=j * self.grid_wide + i1] {
+                least = least.min(*range);
+            }
+        }
+        least
+    }
+
     /// The coarse cells `[i0, i1, j0, j1]` a rectangle of rays meets,
     /// clipped to the grid.
     fn cells_of(&self, r: &RayRect) -> [usize; 4] {
@@ -522,7 +543,7 @@ impl<'a> BlockIndex<'a> {
     /// The rays `[u0, u1, v0, v1]` a point within `radius` of `centre` may
     /// lie on, or `None` when every ray may (a ball reaching the camera's
     /// plane); the bound of [`super::rays`], widened against rounding.
-    fn window(centre: &Vec3, radius: f64) -> Option<RayRect> {
+    pub(super) fn window(centre: &Vec3, radius: f64) -> Option<RayRect> {
         let [u, v, hu, hv] = rays_within(centre, radius)?;
         let (hu, hv) = (hu * (1.0 + RAY_SLACK_RELATIVE) + RAY_SLACK, hv * (1.0 + RAY_SLACK_RELATIVE) + RAY_SLACK);
         Some([u - hu, u + hu, v - hv, v + hv])

@@ -199,6 +199,11 @@ impl Shadows {
     }
 }
 
+/// How far the two cells [`LazyShadows::clears_ball`] widens a window by
+/// are stretched against rounding, relative: far above the rounding of a
+/// ray's cell index, far below a cell.
+const CELL_REACH_SLACK: f64 = 1e-6;
+
 /// The cells a tile of the hidden space's grid has a side of, where it is
 /// laid tile by tile as the torch asks: a few torches' width of rays at
 /// the working distance, so a torch reads few tiles and a tile few blocks.
@@ -251,6 +256,21 @@ impl<'a> LazyShadows<'a> {
         let tile = self.tiles[tj * self.tiles_wide + ti].get_or_init(|| self.tile(ti, tj));
         let (i0, width) = (ti * TILE_CELLS, (((ti + 1) * TILE_CELLS).min(self.layout.width)) - ti * TILE_CELLS);
         (p.norm() as f32) > tile[(j - tj * TILE_CELLS) * width + (i - i0)]
+    }
+
+    /// Whether no point within `radius` of `centre` is behind a seen
+    /// surface, by the blocks' ranges alone, no tile laid: `false` where
+    /// some may be. A point the ball holds has its ray in the ball's
+    /// window of rays, the nine cells round that ray reach two cells from
+    /// it, and the points seen on those cells are no nearer than the
+    /// least range of the blocks listed there; a ball no farther than
+    /// that, with the margin [`LazyShadows::hides`] prunes by, is in
+    /// front of all of them.
+    pub fn clears_ball(&self, centre: &Vec3, radius: f64) -> bool {
+        let Some([u0, u1, v0, v1]) = BlockIndex::window(centre, radius) else { return false };
+        let reach = 2.0 * self.layout.cell * (1.0 + CELL_REACH_SLACK);
+        let rect = [u0 - reach, u1 + reach, v0 - reach, v1 + reach];
+        centre.norm() + radius <= self.blocks.least_range_in(&rect) + BEHIND_TOLERANCE_MM / 2.0
     }
 
     /// One tile's cells: the nearest range of every cell round them, read

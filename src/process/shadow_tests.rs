@@ -166,18 +166,45 @@ fn a_wide_frame_at_a_fine_spacing_gets_coarser_cells_within_the_bound() {
 }
 
 /// The hidden space laid tile by tile over an organized frame answers as
-/// the grid over the whole frame does, point for point.
+/// the grid over the whole frame does, point for point; and a ball round
+/// each point asked that it clears holds no point the grid hides (its
+/// centre, and points on its rim and halfway there, each way along each
+/// axis and diagonal). How many points are hidden, and how many balls
+/// cleared.
 fn lazy_agrees_with_the_grid(points: &[Vec3], width: usize, spacing: f64, queries: &[Vec3]) -> usize {
+    lazy_agrees_and_clears(points, width, spacing, queries).0
+}
+
+fn lazy_agrees_and_clears(points: &[Vec3], width: usize, spacing: f64, queries: &[Vec3]) -> (usize, usize) {
     let stored: Vec<[f32; 3]> = points.iter().map(|p| [p.x as f32, p.y as f32, p.z as f32]).collect();
     let grid = Shadows::new(&stored, spacing).expect("points");
     let blocks = Arc::new(BlockIndex::new(&stored, width));
     let lazy = LazyShadows::new(blocks, spacing).expect("points");
     let mut hidden = 0;
+    let mut cleared = 0;
+    let directions: Vec<Vec3> = (0..27)
+        .map(|k| Vec3::new((k % 3) as f64 - 1.0, (k / 3 % 3) as f64 - 1.0, (k / 9) as f64 - 1.0))
+        .filter(|d| d.norm() > 0.0)
+        .map(|d| d.normalize())
+        .collect();
     for p in queries {
         assert_eq!(lazy.hides(p), grid.hides(p), "{p:?}");
         hidden += usize::from(grid.hides(p));
+        for radius in [0.5, 3.0, 12.0] {
+            if !lazy.clears_ball(p, radius) {
+                continue;
+            }
+            cleared += 1;
+            assert!(!grid.hides(p), "{p:?} within {radius} cleared");
+            for d in &directions {
+                for reach in [0.5, 0.999] {
+                    let q = p + d * (radius * reach);
+                    assert!(!grid.hides(&q), "{q:?} within {radius} of {p:?} cleared");
+                }
+            }
+        }
     }
-    hidden
+    (hidden, cleared)
 }
 
 #[test]
@@ -194,8 +221,9 @@ fn the_tiles_hide_what_the_whole_grid_hides() {
             }
         }
     }
-    let hidden = lazy_agrees_with_the_grid(&points, width, STEP, &queries);
+    let (hidden, cleared) = lazy_agrees_and_clears(&points, width, STEP, &queries);
     assert!(hidden > queries.len() / 10 && hidden < queries.len() * 9 / 10, "{hidden} of {}", queries.len());
+    assert!(cleared > queries.len() / 10, "{cleared} balls of {} points cleared", queries.len());
 }
 
 proptest::proptest! {

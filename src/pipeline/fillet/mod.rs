@@ -381,8 +381,9 @@ fn roots_in(view: &TeeView, turned: bool) -> [Result<Root, RootNotSeen>; 2] {
                 sign,
                 rule: &TEE_ROOT_HIDDEN_BY_WEB,
                 reason: format!(
-                    "{} is not planned: the web's top is out of view and its other side face is the one seen; the \
-                     web hides this one",
+                    "{} is not planned: the web's top is out of view and only its face on the other side is seen; \
+                     what stands behind that face (the web's far side and its root, or nothing where the member is a \
+                     block) is hidden from the camera",
                     side.root_name(sign)
                 ),
                 near_camera: frame.origin + frame.n * frame.height_of(&frame.origin),

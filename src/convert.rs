@@ -451,19 +451,18 @@ pub mod to_text {
         dialect: Dialect,
         process_lines: bool,
     ) -> Vec<Vec<(Waypoint, Option<Motion>)>> {
-        let pieces = passes::seam_pieces(seam);
-        if !process_lines || weave_laid_by(dialect) == WeaveLaidBy::Controller {
-            return pieces;
-        }
-        let Some(passes) = passes::pass_trajectories(seam) else { return pieces };
-        pieces
+        let woven_here = process_lines && weave_laid_by(dialect) == WeaveLaidBy::Path;
+        let Some(passes) = passes::pass_trajectories(seam).filter(|_| woven_here) else {
+            return passes::seam_pieces(seam);
+        };
+        passes
+            .pieces
             .iter()
-            .zip(&passes.pieces)
-            .map(|(piece, pass)| {
-                let points: Vec<PiecePoint> = piece
+            .map(|pass| {
+                let points: Vec<PiecePoint> = pass
+                    .points
                     .iter()
-                    .zip(&pass.points)
-                    .map(|(&(pose, motion), p)| PiecePoint { pose, motion, weave: p.weave })
+                    .map(|p| PiecePoint { pose: p.pose, motion: Some(passes::motion(p)), weave: p.weave })
                     .collect();
                 woven(&points)
             })

@@ -442,25 +442,23 @@ pub fn dominant_normal(cloud: &PointCloud, search: &NeighbourSearch, fx: f64, ag
             let Some(n) = local_normal(cloud, search, i, normal_step(fx, p[2] as f64, search.radius_mm() * 2.0)) else {
                 return none;
             };
-            let sight = Vec3::new(p[0] as f64, p[1] as f64, p[2] as f64);
-            (n, n.dot(&sight).abs() / sight.norm())
+            (n, seen_squarely(&n, p))
         })
         .collect();
     samples.retain(|(n, _)| !n.x.is_nan());
     if samples.is_empty() {
         return None;
     }
-    let normals: Vec<Vec3> = samples.iter().map(|s| s.0).collect();
     let cos_agree = agree_deg.to_radians().cos();
     let support = |n: &Vec3| samples.iter().filter(|(m, _)| m.dot(n) >= cos_agree).map(|s| s.1).sum::<f64>();
-    let cand_stride = (normals.len() / CANDIDATES).max(1);
-    let candidates: Vec<&Vec3> = normals.iter().step_by(cand_stride).collect();
+    let cand_stride = (samples.len() / CANDIDATES).max(1);
+    let candidates: Vec<&Vec3> = samples.iter().step_by(cand_stride).map(|(n, _)| n).collect();
     let supports: Vec<f64> = candidates.par_iter().map(|n| support(n)).collect();
     // The last of equals, as a serial `max_by_key` picks.
     let (best, _) = candidates.into_iter().zip(supports).max_by(|a, b| a.1.total_cmp(&b.1))?;
     let mut mean = *best;
     for _ in 0..3 {
-        let sum: Vec3 = normals.iter().filter(|m| m.dot(&mean) >= cos_agree).sum();
+        let sum: Vec3 = samples.iter().map(|(m, _)| m).filter(|m| m.dot(&mean) >= cos_agree).sum();
         let norm = sum.norm();
         if norm < 1e-12 {
             break;
@@ -468,6 +466,13 @@ pub fn dominant_normal(cloud: &PointCloud, search: &NeighbourSearch, fx: f64, ag
         mean = sum / norm;
     }
     Some(mean)
+}
+
+/// How squarely the camera at the origin sees a surface of normal `n` at
+/// point `p`: the cosine between the normal and the line of sight.
+fn seen_squarely(n: &Vec3, p: [f32; 3]) -> f64 {
+    let sight = Vec3::new(p[0] as f64, p[1] as f64, p[2] as f64);
+    n.dot(&sight).abs() / sight.norm()
 }
 
 #[cfg(test)]
@@ -535,8 +540,7 @@ mod tests {
                     return None;
                 }
                 let n = local_normal(cloud, search, i, normal_step(fx, p[2] as f64, search.radius_mm() * 2.0))?;
-                let sight = Vec3::new(p[0] as f64, p[1] as f64, p[2] as f64);
-                Some((n, n.dot(&sight).abs() / sight.norm()))
+                Some((n, seen_squarely(&n, p)))
             })
             .collect();
         let normals: Vec<Vec3> = samples.iter().map(|s| s.0).collect();

@@ -196,11 +196,13 @@ pub fn seam_pieces(seam: &Seam) -> Vec<Vec<(Waypoint, Option<Motion>)>> {
     let Some(passes) = pass_trajectories(seam) else {
         return vec![seam.waypoints.iter().map(|w| (*w, None)).collect()];
     };
-    let motion = |p: &PassPoint| {
-        let (weave_amplitude_mm, weave_frequency_hz) = p.weave_amplitude_frequency();
-        Motion { travel_speed_mm_s: p.travel_speed_mm_s(), weave_amplitude_mm, weave_frequency_hz }
-    };
     passes.pieces.iter().map(|piece| piece.points.iter().map(|p| (p.pose, Some(motion(p)))).collect()).collect()
+}
+
+/// The motion of the move into a pass point: its travel speed and weave.
+pub fn motion(p: &PassPoint) -> Motion {
+    let (weave_amplitude_mm, weave_frequency_hz) = p.weave_amplitude_frequency();
+    Motion { travel_speed_mm_s: p.travel_speed_mm_s(), weave_amplitude_mm, weave_frequency_hz }
 }
 
 #[cfg(test)]

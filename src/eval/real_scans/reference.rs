@@ -110,11 +110,20 @@ pub struct RootLine {
 }
 
 impl RootLine {
-    /// How far `p` lies from the line, mm.
-    fn off(&self, p: &Vec3) -> f64 {
-        let (point, direction) = (Vec3::from(self.point_mm), Vec3::from(self.direction));
-        let d = p - point;
-        (d - direction * d.dot(&direction)).norm()
+    /// Where `p` lies along the line (mm from `point_mm`) and how far from
+    /// it, mm.
+    fn along_and_off(&self, p: &Vec3) -> (f64, f64) {
+        let direction = Vec3::from(self.direction);
+        let d = p - Vec3::from(self.point_mm);
+        let t = d.dot(&direction);
+        (t, (d - direction * t).norm())
+    }
+
+    /// How far `other`'s point lies from this line, mm, and how far the two
+    /// directions turn apart (the length of their difference).
+    fn moved_from(&self, other: &RootLine) -> (f64, f64) {
+        let (_, off) = self.along_and_off(&Vec3::from(other.point_mm));
+        (off, (Vec3::from(self.direction) - Vec3::from(other.direction)).norm())
     }
 }
 
@@ -158,9 +167,12 @@ impl MeasuredRoot {
     /// Where `p` lies along the root (mm from `point_mm`) and how far from
     /// the line, mm.
     pub fn along_and_off(&self, p: &Vec3) -> (f64, f64) {
-        let d = p - self.point();
-        let t = d.dot(&self.direction());
-        (t, (d - self.direction() * t).norm())
+        self.root_line().along_and_off(p)
+    }
+
+    /// The root's line alone.
+    fn root_line(&self) -> RootLine {
+        RootLine { point_mm: self.point_mm, direction: self.direction }
     }
 
     /// Where `p` lies along the root (mm from `point_mm`) and how far from
@@ -168,7 +180,7 @@ impl MeasuredRoot {
     /// the alternative boxes' line where the root has one.
     pub fn along_and_off_either(&self, p: &Vec3) -> (f64, f64) {
         let (t, off) = self.along_and_off(p);
-        (t, self.alternative.map_or(off, |a| off.max(a.off(p))))
+        (t, self.alternative.map_or(off, |a| off.max(a.along_and_off(p).1)))
     }
 
     /// The visible stretch's ends, mm.
@@ -256,7 +268,7 @@ pub fn measure_root(points: &[[f64; 3]], root: &RootReference, mm_per_unit: f64)
             return Err(MeasureError::Unsteady { moved_mm });
         }
         measured.box_choice_mm = Some(moved_mm);
-        measured.alternative = Some(RootLine { point_mm: other.point_mm, direction: other.direction });
+        measured.alternative = Some(other.root_line());
     }
     Ok(measured)
 }
@@ -438,21 +450,23 @@ pub fn differs(committed: &MeasuredRoot, recomputed: &MeasuredRoot) -> Option<St
     }
     // The line: the committed point's distance from the recomputed line,
     // and the turn between directions.
-    let (_, off) = recomputed.along_and_off(&committed.point());
-    let turn = (committed.direction() - recomputed.direction()).norm();
-    if off > CHECK_TOLERANCE_MM || turn > CHECK_TOLERANCE_DIRECTION {
+    let moved = |committed: &RootLine, recomputed: &RootLine| {
+        let (off, turn) = recomputed.moved_from(committed);
+        (off > CHECK_TOLERANCE_MM || turn > CHECK_TOLERANCE_DIRECTION).then_some((off, turn))
+    };
+    if let Some((off, turn)) = moved(&committed.root_line(), &recomputed.root_line()) {
         problems.push(format!("the line moved {off:.4} mm and turned by {turn:.2e}"));
     }
-    match (committed.alternative, recomputed.alternative) {
-        (None, None) => {}
-        (Some(a), Some(b)) => {
-            let point = Vec3::from(a.point_mm);
-            let turn = (Vec3::from(a.direction) - Vec3::from(b.direction)).norm();
-            if b.off(&point) > CHECK_TOLERANCE_MM || turn > CHECK_TOLERANCE_DIRECTION {
-                problems.push(format!("the alternative boxes' line: committed {a:?}, recomputed {b:?}"));
-            }
-        }
-        (a, b) => problems.push(format!("the alternative boxes' line: committed {a:?}, recomputed {b:?}")),
+    let alternative_moved = match (&committed.alternative, &recomputed.alternative) {
+        (None, None) => false,
+        (Some(a), Some(b)) => moved(a, b).is_some(),
+        _ => true,
+    };
+    if alternative_moved {
+        problems.push(format!(
+            "the alternative boxes' line: committed {:?}, recomputed {:?}",
+            committed.alternative, recomputed.alternative
+        ));
     }
     let ends = |m: &MeasuredRoot| m.visible_ends();
     let moved = ends(committed).iter().zip(ends(recomputed)).map(|(a, b)| (a - b).norm()).fold(0.0, f64::max);

@@ -8,7 +8,7 @@
 use std::collections::HashMap;
 
 use crate::geometry::fit::{Moments, Plane};
-use crate::geometry::{Vec3, vec3};
+use crate::geometry::{MAD_PER_SIGMA, Vec3, vec3};
 
 use super::super::refit::{SeamAxes, SeamCurve};
 use super::super::straightness::{RootBend, Samples, bend_of};
@@ -43,8 +43,12 @@ pub const MIN_FACE_VIEW_DEG: f64 = 5.0;
 /// top many times longer than wide, is good to a degree or two.
 const MAX_ROOT_SKEW_DEG: f64 = 20.0;
 
-/// Refits of the face after trimming its outliers.
-pub(super) const FACE_REFITS: usize = 4;
+/// Rounds of a face's trimming at most; its kept set settles in a few.
+const FACE_TRIM_ROUNDS: usize = 8;
+
+/// The floor of a face's trimming limit, mm: a near-perfect fit does not
+/// trim honest points.
+const MIN_FACE_TRIM_MM: f64 = 0.05;
 
 /// The root where the web's side face, fitted to its points, meets the
 /// flange, or why the face gives none.
@@ -285,25 +289,48 @@ pub(in crate::pipeline) struct FaceFit {
 }
 
 /// Least squares (the scatter's least axis), then refits without the
-/// points further than `trim_sigma` residuals from the plane.
+/// points further than `trim_sigma` residuals from the plane, until the
+/// kept set stops changing (at most [`FACE_TRIM_ROUNDS`]).
+///
+/// The residual scale is the median distance of all the points from the
+/// plane, as a standard deviation ([`MAD_PER_SIGMA`]), as the weld edges'
+/// fits take it ([`crate::pipeline::refit::fit_trimmed`]): the band a face
+/// is read from also holds what stands beside it (a tube's rounded
+/// corners curving away, other parts crossing the band past the face's
+/// ends). Their distances inflate an RMS, so a limit of a few RMS keeps
+/// most of them round after round: a tenth of a band in such clutter
+/// turns the plane by tenths of a degree, a root 150 mm long by most of a
+/// millimetre at one end. The median moves with clutter only in
+/// proportion to its share.
 pub(in crate::pipeline) fn fit_face(points: &[Vec3], trim_sigma: f64) -> Option<FaceFit> {
-    let mut inliers: Vec<Vec3> = points.to_vec();
-    let mut fit = None;
-    for _ in 0..=FACE_REFITS {
-        let moments: Moments = inliers.iter().collect();
+    let fit_of = |kept: &[Vec3]| -> Option<FaceFit> {
+        let moments: Moments = kept.iter().collect();
         let plane = moments.plane()?;
         let centroid = moments.centroid()?;
-        let rms_mm = rms(inliers.iter().map(|p| plane.signed_distance(p)));
-        fit =
-            Some(FaceFit { plane, centroid, inliers: inliers.clone(), rms_mm, dropped: points.len() - inliers.len() });
-        let limit = trim_sigma * rms_mm;
-        let kept: Vec<Vec3> = points.iter().filter(|p| plane.signed_distance(p).abs() <= limit).copied().collect();
-        if kept.len() == inliers.len() || kept.len() < MIN_FACE_POINTS {
+        let rms_mm = rms(kept.iter().map(|p| plane.signed_distance(p)));
+        Some(FaceFit { plane, centroid, inliers: kept.to_vec(), rms_mm, dropped: points.len() - kept.len() })
+    };
+    let mut fit = fit_of(points)?;
+    let mut kept_before: Option<Vec<bool>> = None;
+    for _ in 0..FACE_TRIM_ROUNDS {
+        let distances: Vec<f64> = points.iter().map(|p| fit.plane.signed_distance(p).abs()).collect();
+        let mut sorted = distances.clone();
+        let middle = sorted.len() / 2;
+        let (_, median, _) = sorted.select_nth_unstable_by(middle, f64::total_cmp);
+        let limit = (trim_sigma * *median / MAD_PER_SIGMA).max(MIN_FACE_TRIM_MM);
+        let keep: Vec<bool> = distances.iter().map(|&d| d <= limit).collect();
+        if kept_before.as_ref() == Some(&keep) {
             break;
         }
-        inliers = kept;
+        let kept: Vec<Vec3> = points.iter().zip(&keep).filter(|(_, k)| **k).map(|(p, _)| *p).collect();
+        if kept.len() < MIN_FACE_POINTS {
+            break;
+        }
+        let Some(refit) = fit_of(&kept) else { break };
+        fit = refit;
+        kept_before = Some(keep);
     }
-    fit
+    Some(fit)
 }
 
 /// The face points' spread in height and along the root.

@@ -15,7 +15,7 @@ use crate::geometry::{Vec3, extent};
 use super::super::refit::{SeamAxes, SeamCurve};
 use super::super::straightness::{RootBend, Samples, bend_of};
 use super::super::view_border::BORDER_REACH_SPACINGS;
-use super::face::{FACE_REFITS, FLANGE_REACH_SPACINGS, rms};
+use super::face::{FLANGE_REACH_SPACINGS, rms};
 use super::frame::{FACE_REACH_SPACINGS, WebFrame, frame_along, valid_points};
 use super::stretch::{MAX_STATIONS, STATION_SPACINGS, SeenRun, covered_share, seen_run};
 use super::{NotRead, Root, RootEvidence, Side, TeeView, Web};
@@ -37,6 +37,10 @@ const EDGE_TOLERANCE_SPACINGS: f64 = 1.5;
 
 /// The fewest stations that make an edge line.
 const MIN_EDGE_STATIONS: usize = 8;
+
+/// Refits of an edge's line after trimming its outliers; the loop stops
+/// sooner once the kept samples settle.
+const EDGE_LINE_REFITS: usize = 4;
 
 /// The root where the flange's edge meets the web, for a side whose face
 /// is turned too nearly edge-on to return points.
@@ -392,7 +396,7 @@ impl EdgeLine {
             dropped: 0,
             t_range: (0.0, 0.0),
         };
-        for _ in 0..=FACE_REFITS {
+        for _ in 0..=EDGE_LINE_REFITS {
             let limit = tolerance(line.rms_mm);
             let kept: Vec<EdgeSample> =
                 samples.iter().filter(|s| (s.off - line.at(s.t)).abs() <= limit).copied().collect();

@@ -19,7 +19,10 @@
 //!   points (their normals lie ~90° from the plates'), so they are read
 //!   from the cloud itself, fitted by least squares (the scatter's least
 //!   principal axis) and refitted without the points further than
-//!   `trim_sigma` residuals from it; the residual is reported;
+//!   `trim_sigma` standard deviations from it, the scale read from the
+//!   median residual so that what shares the band (a tube's rounded
+//!   corners, parts past the face's ends) cannot widen it, until the kept
+//!   points settle; the residual is reported;
 //! - the root: the line where the face `m·p = d_m` meets the flange,
 //!   direction `r = n × m`, through the point of both planes nearest the
 //!   web top's centroid (a 2 × 2 solve in the span of `n` and `m`);

@@ -24,11 +24,17 @@
 //! [`PATCH_PX`] pixels too (a box of their points, nothing divided: the
 //! kernels' [`crate::kernels::quad_boxes`], a band of a patch's rows at a
 //! time, in vector lanes where the CPU has them), and a
-//! block a ball meets is read patch by patch: only the patches whose rays
-//! and ranges the ball meets, their rays and ranges worked out from their
-//! boxes the first time the block is read. A ball of a few of the
-//! cloud's spacings (the nearest-point queries that measure the spacing)
-//! meets a few patches of a block, not its every pixel.
+//! block a ball meets is read patch by patch: only the patches whose box
+//! the ball meets (a ball's window of rays and its ranges hold a slab of
+//! surface several times what the ball holds where the ball only reaches
+//! into it; the boxes hold their points a few pixels wide). A ball of a
+//! few of the cloud's spacings (the nearest-point queries that measure
+//! the spacing) meets a few patches of a block, not its every pixel. The
+//! hidden space's tiles, which ask by rays alone, read the patches whose
+//! rays they meet, worked out from the boxes the first time the block is
+//! read. Each coarse cell keeps the ranges of the blocks listed in it, so
+//! a ball in the air in front of the surfaces (most of a torch) passes
+//! over the cells of its window without reading their lists.
 
 use std::sync::OnceLock;
 
@@ -70,6 +76,10 @@ const RAY_SLACK: f64 = 1e-12;
 /// index by rays widens its own).
 const RANGE_SLACK_MM: f64 = 1e-3;
 
+/// How far a ball is widened against rounding, mm, where it is tested
+/// against a box of points: as the range bounds are.
+const BOX_SLACK_MM: f64 = RANGE_SLACK_MM;
+
 /// A rectangle of rays, `[u0, u1, v0, v1]` in `(x / z, y / z)`.
 pub type RayRect = [f64; 4];
 
@@ -83,6 +93,8 @@ pub struct BlockIndex<'a> {
     /// nearest and farthest range of those points, mm.
     rays: Vec<RayRect>,
     ranges: Vec<[f64; 2]>,
+    /// Per block, the box of those points.
+    block_boxes: Vec<BlockBox>,
     /// Per block, the boxes of its patches, row after row
     /// ([`PATCHES_PER_BLOCK`] to a block), and their rays and ranges once
     /// the block is first read.
@@ -109,6 +121,10 @@ pub struct BlockIndex<'a> {
     /// block listed in several of the cells a query reads is read once,
     /// in the first of them.
     first_cell: Vec<[u32; 2]>,
+    /// Per coarse cell, the nearest and farthest range of the blocks
+    /// listed in it, mm (`[inf, -inf]` where none is): a query whose
+    /// ranges miss a cell's reads none of its blocks.
+    cell_ranges: Vec<[f64; 2]>,
     /// Per coarse cell, the least range a block listed in it or in one of
     /// the eight round it may hold, mm (infinite where none).
     nearest_round: Vec<f64>,
@@ -138,6 +154,21 @@ impl BlockBox {
     /// them: a plain minimum and maximum per coordinate, no division.
     fn of(quad: &QuadBox) -> BlockBox {
         BlockBox { min: quad.min, max: quad.max, binned: quad.binned as usize }
+    }
+
+    /// The squared distance from `centre` to the box, 0 inside it
+    /// (infinite for an empty box).
+    fn distance_squared(&self, centre: &Vec3) -> f64 {
+        if self.binned == 0 {
+            return f64::INFINITY;
+        }
+        (0..3)
+            .map(|k| {
+                let (lo, hi) = (f64::from(self.min[k]), f64::from(self.max[k]));
+                let off = (lo - centre[k]).max(centre[k] - hi).max(0.0);
+                off * off
+            })
+            .sum()
     }
 
     /// The box holding both boxes' points.
@@ -245,16 +276,17 @@ impl<'a> BlockIndex<'a> {
             .collect();
         let aside = asides.concat();
         // Each block's bounds from its patches' boxes.
-        let bounds: Vec<(RayRect, [f64; 2], usize)> = patch_boxes
+        let bounds: Vec<(RayRect, [f64; 2], BlockBox)> = patch_boxes
             .par_chunks(PATCHES_PER_BLOCK)
             .map(|patches| {
                 let block = patches.iter().fold(EMPTY_BOX, |b, p| b.union(p));
-                (block.rays(), block.ranges(), block.binned)
+                (block.rays(), block.ranges(), block)
             })
             .collect();
         let rays: Vec<RayRect> = bounds.iter().map(|b| b.0).collect();
         let ranges: Vec<[f64; 2]> = bounds.iter().map(|b| b.1).collect();
-        let binned = bounds.iter().map(|b| b.2).sum();
+        let block_boxes: Vec<BlockBox> = bounds.iter().map(|b| b.2).collect();
+        let binned = block_boxes.iter().map(|b| b.binned).sum();
         let farthest_mm = ranges.iter().map(|r| r[1]).fold(0.0, f64::max);
         let mut index = BlockIndex {
             points,
@@ -262,6 +294,7 @@ impl<'a> BlockIndex<'a> {
             blocks_wide,
             rays,
             ranges,
+            block_boxes,
             patch_bounds: (0..bounds.len()).map(|_| OnceLock::new()).collect(),
             patch_boxes,
             farthest_mm,
@@ -276,6 +309,7 @@ impl<'a> BlockIndex<'a> {
             members: Vec::new(),
             first_cell: Vec::new(),
             nearest_round: Vec::new(),
+            cell_ranges: Vec::new(),
         };
         (index.lo, index.hi) = index.exact_ray_bounds();
         index.list_blocks();
@@ -378,12 +412,16 @@ impl<'a> BlockIndex<'a> {
                 }
             }
         }
-        let least: Vec<f64> = (0..wide * high)
+        self.cell_ranges = (0..wide * high)
             .map(|c| {
                 let listed = &members[counts[c] as usize..counts[c + 1] as usize];
-                listed.iter().map(|&b| self.ranges[b as usize][0]).fold(f64::INFINITY, f64::min)
+                listed
+                    .iter()
+                    .map(|&b| self.ranges[b as usize])
+                    .fold([f64::INFINITY, f64::NEG_INFINITY], |a, r| [a[0].min(r[0]), a[1].max(r[1])])
             })
             .collect();
+        let least: Vec<f64> = self.cell_ranges.iter().map(|r| r[0]).collect();
         self.nearest_round = (0..wide * high)
             .map(|c| {
                 let (i, j) = (c % wide, c / wide);
@@ -468,6 +506,10 @@ impl<'a> BlockIndex<'a> {
         for j in j0..=j1 {
             for i in i0..=i1 {
                 let c = j * self.grid_wide + i;
+                let [nearest, farthest] = self.cell_ranges[c];
+                if farthest < near || nearest > far {
+                    continue;
+                }
                 for &b in &self.members[self.starts[c] as usize..self.starts[c + 1] as usize] {
                     let b = b as usize;
                     let [fi, fj] = self.first_cell[b].map(|k| k as usize);
@@ -558,7 +600,21 @@ impl<'a> BlockIndex<'a> {
         let rect = Self::window(centre, radius).unwrap_or(everything);
         let distance = centre.norm();
         let (near, far) = (distance - radius - RANGE_SLACK_MM, distance + radius + RANGE_SLACK_MM);
-        self.blocks_meeting(&rect, near, far, |b| self.block_points_meeting(b, &rect, near, far, &mut visit));
+        // A point within the ball lies in its block's box and its patch's,
+        // so a box farther from the centre than the radius holds none:
+        // the boxes fit the points far closer than the rays and ranges do.
+        let reach = radius + BOX_SLACK_MM;
+        let reach_squared = reach * reach;
+        self.blocks_meeting(&rect, near, far, |b| {
+            if self.block_boxes[b].distance_squared(centre) > reach_squared {
+                return;
+            }
+            for (k, patch) in self.patch_boxes[b * PATCHES_PER_BLOCK..(b + 1) * PATCHES_PER_BLOCK].iter().enumerate() {
+                if patch.distance_squared(centre) <= reach_squared {
+                    self.patch_points(b, k, &mut visit);
+                }
+            }
+        });
     }
 
     /// The distance from `p` to the nearest indexed point apart from it,

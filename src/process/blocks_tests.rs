@@ -64,6 +64,29 @@ fn a_ball_finds_what_the_index_by_rays_and_a_scan_find() {
     assert!(nonempty >= 4, "the test must ask balls that hold points: {nonempty}");
 }
 
+/// A ball reads the patches whose boxes it meets, not the slab of
+/// surface its window of rays and its ranges hold: in front of the
+/// plates it reads nothing, and on them little beyond itself.
+#[test]
+fn a_ball_reads_little_beyond_itself() {
+    let points = frame(203, 131);
+    let blocks = BlockIndex::new(&points, 203);
+    let read = |centre: &Vec3, r: f64| {
+        let mut count = 0;
+        blocks.near(centre, r, |_| count += 1);
+        count
+    };
+    assert_eq!(read(&Vec3::new(0.0, 0.0, 300.0), 10.0), 0, "a ball in the air reads no point");
+    // A ball reaching a millimetre into a plate, and one through it.
+    for (depth, factor) in [(321.0, 4), (330.0, 2)] {
+        let centre = Vec3::new(-20.0, 0.0, depth);
+        let inside = within(|v| blocks.near(&centre, 10.0, v), &centre, 10.0).len();
+        assert!(inside > 100, "the ball holds part of a plate: {inside}");
+        let read = read(&centre, 10.0);
+        assert!(read < factor * inside, "{read} points read for {inside} inside");
+    }
+}
+
 #[test]
 fn the_frame_bounds_and_the_nearest_other_point_are_the_index_by_rays() {
     let mut points = frame(150, 97);

@@ -289,8 +289,8 @@ pub(in crate::pipeline) struct FaceFit {
 }
 
 /// Least squares (the scatter's least axis), then refits without the
-/// points further than `trim_sigma` residuals from the plane, until the
-/// kept set stops changing (at most [`FACE_TRIM_ROUNDS`]).
+/// points further than `trim_sigma` standard deviations from the plane,
+/// until the kept set stops changing (at most [`FACE_TRIM_ROUNDS`]).
 ///
 /// The residual scale is the median distance of all the points from the
 /// plane, as a standard deviation ([`MAD_PER_SIGMA`]), as the weld edges'

@@ -303,14 +303,14 @@ pub(in crate::pipeline) struct FaceFit {
 /// millimetre at one end. The median moves with clutter only in
 /// proportion to its share.
 pub(in crate::pipeline) fn fit_face(points: &[Vec3], trim_sigma: f64) -> Option<FaceFit> {
-    let fit_of = |kept: &[Vec3]| -> Option<FaceFit> {
+    let fit_of = |kept: Vec<Vec3>| -> Option<FaceFit> {
         let moments: Moments = kept.iter().collect();
         let plane = moments.plane()?;
         let centroid = moments.centroid()?;
         let rms_mm = rms(kept.iter().map(|p| plane.signed_distance(p)));
-        Some(FaceFit { plane, centroid, inliers: kept.to_vec(), rms_mm, dropped: points.len() - kept.len() })
+        Some(FaceFit { plane, centroid, dropped: points.len() - kept.len(), inliers: kept, rms_mm })
     };
-    let mut fit = fit_of(points)?;
+    let mut fit = fit_of(points.to_vec())?;
     let mut kept_before: Option<Vec<bool>> = None;
     for _ in 0..FACE_TRIM_ROUNDS {
         let distances: Vec<f64> = points.iter().map(|p| fit.plane.signed_distance(p).abs()).collect();
@@ -326,7 +326,7 @@ pub(in crate::pipeline) fn fit_face(points: &[Vec3], trim_sigma: f64) -> Option<
         if kept.len() < MIN_FACE_POINTS {
             break;
         }
-        let Some(refit) = fit_of(&kept) else { break };
+        let Some(refit) = fit_of(kept) else { break };
         fit = refit;
         kept_before = Some(keep);
     }

@@ -220,6 +220,17 @@ pub fn find(cloud: &PointCloud, flange_pieces: &[&PlaneCluster], s: &FaceSearch)
 fn best_steep_plane(points: &[Vec3], n: &Vec3, tolerance: f64) -> Option<Plane> {
     let max_cos_to_flange_normal = MAX_FACE_LEAN_DEG.to_radians().sin();
     let min_sin_to_ray = MIN_FACE_VIEW_DEG.to_radians().sin();
+    best_plane(points, tolerance, |normal, ray| {
+        normal.dot(n).abs() <= max_cos_to_flange_normal && normal.dot(ray).abs() >= min_sin_to_ray
+    })
+}
+
+/// The plane through three of `points` that holds the most of them within
+/// `tolerance`, among those `admits` (given the plane's unit normal and
+/// the unit ray from the camera to the three points' middle); None when
+/// no draw gives one. The draws are seeded ([`SEED`]): the same points
+/// always give the same plane.
+fn best_plane(points: &[Vec3], tolerance: f64, admits: impl Fn(&Vec3, &Vec3) -> bool) -> Option<Plane> {
     let stride = points.len().div_ceil(SCORED_POINTS).max(1);
     let scored: Vec<&Vec3> = points.iter().step_by(stride).collect();
     let mut rng = ChaCha8Rng::seed_from_u64(SEED);
@@ -230,8 +241,7 @@ fn best_steep_plane(points: &[Vec3], n: &Vec3, tolerance: f64) -> Option<Plane> 
             continue;
         };
         let middle = (a + b + c) / 3.0;
-        let ray = middle.normalize();
-        if normal.dot(n).abs() > max_cos_to_flange_normal || normal.dot(&ray).abs() < min_sin_to_ray {
+        if !admits(&normal, &middle.normalize()) {
             continue;
         }
         let plane = Plane { normal, offset: normal.dot(&middle) };
@@ -320,17 +330,26 @@ impl Valley {
 }
 
 /// The valley the lone plane made of `flange_pieces` makes with the face
-/// rising over it towards the camera (the points `margin` to
-/// `web_height_max_mm` over its plane, anywhere beside it, one plane
-/// holding most of them), or None when nothing, or no one face, rises
-/// over it.
+/// rising over it towards the camera, or None when nothing rises over it
+/// or the face does not come down to it.
+///
+/// The points `margin` to `web_height_max_mm` over the lone plane,
+/// anywhere beside it, may lie on several facets: a block standing on a
+/// plate shows two of its faces, a groove's far flank a second plate's
+/// edge beside it. One plane fitted through them all would be none of
+/// them (through a block's two faces it lies near the plate's own plane,
+/// and the valley would read as one surface). So the face is the facet
+/// holding the most of them, found by drawing planes as the web's face
+/// is found ([`best_plane`]) but at any tilt, since a groove's flank
+/// leans further than a web may, then refitted with outliers trimmed.
 pub fn valley(cloud: &PointCloud, flange_pieces: &[&PlaneCluster], s: &FaceSearch) -> Option<Valley> {
     let (flange, flange_points) = fillet::flange_plane(cloud, flange_pieces)?;
     let n = flange.normal;
-    let margin = fillet::height_margin(s.on_plane_mm, s.point_spacing_mm);
-    let mut rising: Vec<Vec3> = fillet::valid_points(cloud)
-        .filter(|p| (margin..=s.web_height_max_mm).contains(&(flange.offset - n.dot(p))))
-        .collect();
+    let height = |p: &Vec3| flange.offset - n.dot(p);
+    let spacing = s.point_spacing_mm;
+    let margin = fillet::height_margin(s.on_plane_mm, spacing);
+    let mut rising: Vec<Vec3> =
+        fillet::valid_points(cloud).filter(|p| (margin..=s.web_height_max_mm).contains(&height(p))).collect();
     if rising.len() > MAX_CANDIDATES {
         let stride = rising.len().div_ceil(MAX_CANDIDATES);
         rising = rising.into_iter().step_by(stride).collect();
@@ -338,8 +357,18 @@ pub fn valley(cloud: &PointCloud, flange_pieces: &[&PlaneCluster], s: &FaceSearc
     if rising.len() < MIN_FACE_POINTS {
         return None;
     }
-    let fit = fillet::fit_face(&rising, s.trim_sigma)?;
-    if 2 * fit.inliers.len() < rising.len() {
+    let tolerance = s.on_plane_mm.max(FACE_TOLERANCE_SPACINGS * spacing);
+    let min_sin_to_ray = MIN_FACE_VIEW_DEG.to_radians().sin();
+    let facet = best_plane(&rising, tolerance, |normal, ray| normal.dot(ray).abs() >= min_sin_to_ray)?;
+    let on_facet: Vec<Vec3> = rising.iter().copied().filter(|p| facet.signed_distance(p).abs() <= tolerance).collect();
+    if on_facet.len() < MIN_FACE_POINTS {
+        return None;
+    }
+    let fit = fillet::fit_face(&on_facet, s.trim_sigma)?;
+    // A valley's two faces meet: a facet that stops over the lone plane
+    // (a second plate's top, a ledge) makes none with it.
+    let lowest = fit.inliers.iter().map(height).fold(f64::INFINITY, f64::min);
+    if lowest > margin + FOOT_REACH_SPACINGS * spacing {
         return None;
     }
     // Both normals into the workpiece, away from the camera.
@@ -485,6 +514,47 @@ mod tests {
         assert!(!said.contains("groove"), "{said}");
         // Nothing over a lone plane: no valley.
         assert_eq!(valley_of(&flange(), &|p: &Vec3| p.z == 700.0), None);
+    }
+
+    #[test]
+    fn a_valley_is_read_on_one_facet_of_what_rises_not_a_plane_through_them_all() {
+        let settings =
+            FaceSearch { point_spacing_mm: 1.0, on_plane_mm: 0.4, web_height_max_mm: 250.0, trim_sigma: 3.0 };
+        let valley_of = |points: &[Vec3]| {
+            let cloud = PointCloud::unorganized(points.iter().map(|p| [p.x as f32, p.y as f32, p.z as f32]).collect());
+            valley(&cloud, &[&PlaneCluster::of_points(points, |p| p.z == 700.0)], &settings)
+        };
+        // A block standing on a plate, its corner at (FACE_X, CORNER_Y):
+        // the camera, at the origin, sees its face towards +x (52 mm
+        // along y) and its face towards +y (48 mm along x), each 60 mm
+        // tall and turned 12 to 16° towards it, and the plate round both.
+        // A plane through both faces is neither.
+        const CORNER_Y: f64 = -150.0;
+        let mut block_on_plate: Vec<Vec3> = (-50..=55)
+            .flat_map(|i| (-50..=50).map(move |j| Vec3::new(FACE_X + i as f64, CORNER_Y + j as f64, 700.0)))
+            .filter(|p| p.x > FACE_X || p.y > CORNER_Y)
+            .collect();
+        let toward_x =
+            (0..52).flat_map(|i| (1..=60).map(move |h| Vec3::new(FACE_X, CORNER_Y - i as f64, 700.0 - h as f64)));
+        let toward_y =
+            (1..=48).flat_map(|i| (1..=60).map(move |h| Vec3::new(FACE_X - i as f64, CORNER_Y, 700.0 - h as f64)));
+        block_on_plate.extend(toward_x.chain(toward_y));
+        let seen = valley_of(&block_on_plate).expect("a face rises over the plate");
+        assert!((seen.opening_deg - 90.0).abs() < 1.0, "{seen:?}");
+        // The larger face, every point of it that rises over the margin
+        // and no other.
+        let margin = fillet::height_margin(settings.on_plane_mm, settings.point_spacing_mm);
+        let rows_over_margin = (1..=60).filter(|&h| f64::from(h) >= margin).count();
+        assert_eq!(seen.points, 52 * rows_over_margin, "{seen:?}");
+        assert!(!seen.is_groove() && !seen.describe().contains("one surface"), "{}", seen.describe());
+
+        // A second plate's top 20 mm over the lone one, beside it: it rises
+        // over the plate but never comes down to it, so no valley.
+        let mut ledge = flange();
+        ledge.extend(
+            (0..100).flat_map(|i| (1..=40).map(move |j| Vec3::new(FACE_X - j as f64, -50.0 + i as f64, 680.0))),
+        );
+        assert_eq!(valley_of(&ledge), None);
     }
 
     #[test]

@@ -238,8 +238,9 @@ pub static TOO_FEW_PLANES: Rule = Rule {
              over the other, or a web's top over its flange. A surface turned further from the workpiece's \
              normal than the camera can see a plate at (a plate's side face, a fixture's wall) is none of them. \
              With fewer than two facing surfaces the frame shows at most one plate, or one surface where the \
-             plates lie closer than the cloud resolves. The refusal says what rises beside the lone plane: two \
-             faces meeting in a valley wider than a web stands on its flange, or obtuse and seen down its middle \
+             plates lie closer than the cloud resolves. The refusal says what rises beside the lone plane, read \
+             on the facet holding the most of it that comes down to the plane (a block's two faces are no one \
+             plane, and a plane through both would lie near the plate's own): two faces meeting in a valley wider than a web stands on its flange, or obtuse and seen down its middle \
              (both faces turned about as far from the rays), are a groove's two flanks with no plate top in view, \
              and no tee is tried under `auto`; two faces within a few degrees of one plane are one surface, \
              one plate or a butt's plates seen as one.",

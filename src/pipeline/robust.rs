@@ -499,7 +499,14 @@ fn plan_topless_tee(
     if !fillet_asked && web_face::valley(ctx.cloud, &pieces, &search).is_some_and(|v| v.is_groove()) {
         return Err(in_view_refusal(ctx, &flange, &not_found)).seen_as(requested);
     }
-    let face = web_face::find(ctx.cloud, &pieces, &search).map_err(|why| {
+    // Under `t_fillet` every face standing on the flange is a web's (a
+    // block shows two); under `auto` the largest is named.
+    let faces = if fillet_asked {
+        web_face::find_all(ctx.cloud, &pieces, &search)
+    } else {
+        web_face::find(ctx.cloud, &pieces, &search).map(|face| vec![face])
+    };
+    let faces = faces.map_err(|why| {
         // Under `auto` the search was a guess at a cropped tee: its failure
         // says nothing about the joint the cloud holds.
         if !fillet_asked {
@@ -510,8 +517,8 @@ fn plan_topless_tee(
         let reason = format!("{not_found}; nor does a web's side face stand on the nearest plane: {why}");
         PlanError { gate: not_found.rule().gate, ..PlanError::by(why.rule(), reason) }
     });
-    let face = face.seen_as(requested)?;
-    let layers = standing_face::face_evidence(&face, &flange);
+    let faces = faces.seen_as(requested)?;
+    let layers = standing_face::face_evidence(&faces[0], &flange);
     tracing::debug!("{layers}");
     if !fillet_asked {
         let reason = format!(
@@ -521,7 +528,7 @@ fn plan_topless_tee(
         return Err(PlanError::by(&rules::background::WEB_FACE_WITHOUT_TOP, reason)).seen_as(requested);
     }
     ctx.clock.lap(Stage::Background).seen_as(requested)?;
-    tee::plan(ctx, standing_face::face_tee(&face, pieces), layers).seen_as(Some(JointType::TFillet))
+    standing_face::plan_faces(ctx, &faces, &flange).seen_as(Some(JointType::TFillet))
 }
 
 /// The settings of the search for what stands on `flange` (the nearest

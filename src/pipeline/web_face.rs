@@ -83,6 +83,20 @@ const MIN_FACE_FILL: f64 = 0.04;
 /// same face.
 const SEED: u64 = 0x5eed_face;
 
+/// The most faces [`find_all`] reads standing on one flange: a block
+/// shows two of its four, and a flange carrying several webs seldom shows
+/// more in one view; the bound keeps the search's cost fixed.
+pub const MAX_STANDING_FACES: usize = 4;
+
+/// Two faces turned within this of parallel, degrees, and lying nearer
+/// than [`FACES_APART_SPACINGS`] are one face seen twice ([`same_face`]).
+const PARALLEL_FACE_DEG: f64 = 10.0;
+
+/// How far apart two parallel faces must lie, in point spacings, to be
+/// two: a face's returns spread a spacing or two off it, and a second
+/// member's face stands further off than its own thickness of noise.
+const FACES_APART_SPACINGS: f64 = 10.0;
+
 /// A web's side face seen standing on the flange, its top not in view.
 #[derive(Debug, Clone, PartialEq)]
 pub struct StandingFace {
@@ -116,102 +130,179 @@ pub struct FaceSearch {
 /// The web's side face standing on the flange made of `flange_pieces`, or
 /// why none is seen (and the rule that decided it).
 pub fn find(cloud: &PointCloud, flange_pieces: &[&PlaneCluster], s: &FaceSearch) -> Result<StandingFace, NotRead> {
-    let (flange, flange_points) = fillet::flange_plane(cloud, flange_pieces)
-        .ok_or_else(|| NotRead::by(&TEE_NO_FACE_STANDS_ON_FLANGE, "the flange's points span no plane"))?;
-    let n = flange.normal;
-    let height = |p: &Vec3| flange.offset - n.dot(p);
-    let spacing = s.point_spacing_mm;
-    let margin = fillet::height_margin(s.on_plane_mm, spacing);
-    let over_flange = Footprint::of(&flange_points, &n, FOOT_REACH_SPACINGS * spacing);
-    let mut candidates: Vec<Vec3> = fillet::valid_points(cloud)
-        .filter(|p| (margin..=s.web_height_max_mm).contains(&height(p)) && over_flange.holds(p))
-        .collect();
-    if candidates.len() > MAX_CANDIDATES {
-        let stride = candidates.len().div_ceil(MAX_CANDIDATES);
-        candidates = candidates.into_iter().step_by(stride).collect();
+    let over = OverFlange::of(cloud, flange_pieces, s)?;
+    over.face_among(&over.candidates)
+}
+
+/// Every face standing on the flange made of `flange_pieces`, the one
+/// holding the most points first, or why none is seen: a block standing
+/// on a plate shows two of its faces, each with a root. After each face
+/// found, its points are set aside and the search runs again on the rest,
+/// until it finds no face, finds one a found face's leftover points make
+/// ([`same_face`]), or has found [`MAX_STANDING_FACES`]. Each face passes
+/// every test the first one does.
+pub fn find_all(
+    cloud: &PointCloud,
+    flange_pieces: &[&PlaneCluster],
+    s: &FaceSearch,
+) -> Result<Vec<StandingFace>, NotRead> {
+    let over = OverFlange::of(cloud, flange_pieces, s)?;
+    let mut faces = vec![over.face_among(&over.candidates)?];
+    let mut left = over.candidates.clone();
+    while let Some(last) = faces.last().filter(|_| faces.len() < MAX_STANDING_FACES) {
+        left.retain(|p| last.plane.signed_distance(p).abs() > over.tolerance);
+        if left.len() < MIN_FACE_POINTS {
+            break;
+        }
+        let Ok(face) = over.face_among(&left) else { break };
+        if faces.iter().any(|found| same_face(found, &face, s.point_spacing_mm)) {
+            break;
+        }
+        faces.push(face);
     }
-    if candidates.len() < MIN_FACE_POINTS {
-        return Err(NotRead::by(
-            &TEE_NOTHING_STANDS_ON_FLANGE,
-            format!(
-                "nothing in view stands on the flange: {} points lie {margin:.1} to {:.0} mm over it, fewer than \
-             {MIN_FACE_POINTS} (a web's face turned edge-on to the camera returns none, and with the web's top out \
-             of view nothing else shows where its root is)",
-                candidates.len(),
-                s.web_height_max_mm
-            ),
-        ));
+    Ok(faces)
+}
+
+/// Whether `b` is the leftover of `a`: turned within
+/// [`PARALLEL_FACE_DEG`] of it and lying nearer it than
+/// [`FACES_APART_SPACINGS`] point spacings (the points of a noisy face
+/// beyond the tolerance its own fit keeps). A second member's face stands
+/// further off or turned from the first.
+fn same_face(a: &StandingFace, b: &StandingFace, spacing: f64) -> bool {
+    let parallel = a.plane.normal.dot(&b.plane.normal).abs() >= PARALLEL_FACE_DEG.to_radians().cos();
+    parallel && a.plane.signed_distance(&b.centroid).abs() < FACES_APART_SPACINGS * spacing
+}
+
+/// What stands over a flange: the flange's plane and the points over its
+/// footprint that a face standing on it is searched among.
+struct OverFlange<'s> {
+    flange: Plane,
+    candidates: Vec<Vec3>,
+    /// A point lies on a face within this distance, mm.
+    tolerance: f64,
+    /// Points this high over the flange's plane and higher are candidates,
+    /// mm: below it they are the flange's own.
+    margin: f64,
+    s: &'s FaceSearch,
+}
+
+impl<'s> OverFlange<'s> {
+    /// The flange of `flange_pieces` and what stands over it, or why
+    /// nothing can stand on it.
+    fn of(cloud: &PointCloud, flange_pieces: &[&PlaneCluster], s: &'s FaceSearch) -> Result<Self, NotRead> {
+        let (flange, flange_points) = fillet::flange_plane(cloud, flange_pieces)
+            .ok_or_else(|| NotRead::by(&TEE_NO_FACE_STANDS_ON_FLANGE, "the flange's points span no plane"))?;
+        let n = flange.normal;
+        let height = |p: &Vec3| flange.offset - n.dot(p);
+        let spacing = s.point_spacing_mm;
+        let margin = fillet::height_margin(s.on_plane_mm, spacing);
+        let over_flange = Footprint::of(&flange_points, &n, FOOT_REACH_SPACINGS * spacing);
+        let mut candidates: Vec<Vec3> = fillet::valid_points(cloud)
+            .filter(|p| (margin..=s.web_height_max_mm).contains(&height(p)) && over_flange.holds(p))
+            .collect();
+        if candidates.len() > MAX_CANDIDATES {
+            let stride = candidates.len().div_ceil(MAX_CANDIDATES);
+            candidates = candidates.into_iter().step_by(stride).collect();
+        }
+        if candidates.len() < MIN_FACE_POINTS {
+            return Err(NotRead::by(
+                &TEE_NOTHING_STANDS_ON_FLANGE,
+                format!(
+                    "nothing in view stands on the flange: {} points lie {margin:.1} to {:.0} mm over it, fewer than \
+                 {MIN_FACE_POINTS} (a web's face turned edge-on to the camera returns none, and with the web's top out \
+                 of view nothing else shows where its root is)",
+                    candidates.len(),
+                    s.web_height_max_mm
+                ),
+            ));
+        }
+        let tolerance = s.on_plane_mm.max(FACE_TOLERANCE_SPACINGS * spacing);
+        Ok(OverFlange { flange, candidates, tolerance, margin, s })
     }
-    let tolerance = s.on_plane_mm.max(FACE_TOLERANCE_SPACINGS * spacing);
-    let plane = best_steep_plane(&candidates, &n, tolerance).ok_or_else(|| {
-        NotRead::by(
-            &TEE_NO_FACE_STANDS_ON_FLANGE,
-            format!(
-                "the {} points over the flange lie on no face standing within {MAX_FACE_LEAN_DEG}° of square on it \
-             and turned {MIN_FACE_VIEW_DEG}° or more towards the camera",
-                candidates.len()
-            ),
-        )
-    })?;
-    let on_face: Vec<Vec3> =
-        candidates.iter().copied().filter(|p| plane.signed_distance(p).abs() <= tolerance).collect();
-    let fit = fillet::fit_face(&on_face, s.trim_sigma).ok_or_else(|| {
-        NotRead::by(&TEE_NO_FACE_STANDS_ON_FLANGE, "the points on the face standing on the flange span no plane")
-    })?;
-    // Out of the web: towards the camera, which sees this face.
-    let normal = if fit.plane.normal.dot(&fit.centroid) <= 0.0 { fit.plane.normal } else { -fit.plane.normal };
-    let face = Plane { normal, offset: normal.dot(&fit.centroid) };
-    // The draws were turned towards the camera; the refit may still settle
-    // on the veil of mixed returns if that is most of what stands there.
-    let view_deg = normal.dot(&(-fit.centroid).normalize()).clamp(-1.0, 1.0).asin().to_degrees();
-    if view_deg < MIN_FACE_VIEW_DEG {
-        return Err(NotRead::by(
-            &TEE_NO_FACE_STANDS_ON_FLANGE,
-            format!(
-                "the {} points standing on the flange lie along the camera's rays ({view_deg:.1}° from them, below \
-             {MIN_FACE_VIEW_DEG}°): mixed returns at a depth jump, not a web's face",
-                fit.inliers.len()
-            ),
-        ));
+
+    /// The face standing on the flange among `candidates`, or why none is
+    /// seen there.
+    fn face_among(&self, candidates: &[Vec3]) -> Result<StandingFace, NotRead> {
+        let (flange, s, tolerance, margin) = (self.flange, self.s, self.tolerance, self.margin);
+        let n = flange.normal;
+        let height = |p: &Vec3| flange.offset - n.dot(p);
+        let spacing = s.point_spacing_mm;
+        let plane = best_steep_plane(candidates, &n, tolerance).ok_or_else(|| {
+            NotRead::by(
+                &TEE_NO_FACE_STANDS_ON_FLANGE,
+                format!(
+                    "the {} points over the flange lie on no face standing within {MAX_FACE_LEAN_DEG}° of square on it \
+                 and turned {MIN_FACE_VIEW_DEG}° or more towards the camera",
+                    candidates.len()
+                ),
+            )
+        })?;
+        let on_face: Vec<Vec3> =
+            candidates.iter().copied().filter(|p| plane.signed_distance(p).abs() <= tolerance).collect();
+        let fit = fillet::fit_face(&on_face, s.trim_sigma).ok_or_else(|| {
+            NotRead::by(&TEE_NO_FACE_STANDS_ON_FLANGE, "the points on the face standing on the flange span no plane")
+        })?;
+        // Out of the web: towards the camera, which sees this face.
+        let normal = if fit.plane.normal.dot(&fit.centroid) <= 0.0 { fit.plane.normal } else { -fit.plane.normal };
+        let face = Plane { normal, offset: normal.dot(&fit.centroid) };
+        // The draws were turned towards the camera; the refit may still settle
+        // on the veil of mixed returns if that is most of what stands there.
+        let view_deg = normal.dot(&(-fit.centroid).normalize()).clamp(-1.0, 1.0).asin().to_degrees();
+        if view_deg < MIN_FACE_VIEW_DEG {
+            return Err(NotRead::by(
+                &TEE_NO_FACE_STANDS_ON_FLANGE,
+                format!(
+                    "the {} points standing on the flange lie along the camera's rays ({view_deg:.1}° from them, below \
+                 {MIN_FACE_VIEW_DEG}°): mixed returns at a depth jump, not a web's face",
+                    fit.inliers.len()
+                ),
+            ));
+        }
+        let (lowest, highest) = extent(fit.inliers.iter().map(height));
+        let foot_reach = margin + FOOT_REACH_SPACINGS * spacing;
+        if lowest > foot_reach {
+            return Err(NotRead::by(
+                &TEE_FACE_FOOT_ABOVE_FLANGE,
+                format!(
+                    "the face over the flange ({} points) is seen no lower than {lowest:.1} mm over it, above {foot_reach:.1} \
+                 mm: it stands over the flange, not on it",
+                    fit.inliers.len()
+                ),
+            ));
+        }
+        let along_root = n.cross(&normal);
+        let (first, last) = extent(fit.inliers.iter().map(|p| along_root.dot(p)));
+        let spanned_mm2 = (last - first) * (highest - lowest);
+        let fill = fit.inliers.len() as f64 * spacing * spacing / spanned_mm2.max(f64::MIN_POSITIVE);
+        if fill < MIN_FACE_FILL {
+            return Err(NotRead::by(
+                &TEE_STANDING_FACE_TOO_SPARSE,
+                format!(
+                    "the {} points on a plane standing on the flange are strewn over {spanned_mm2:.0} mm² ({fill:.3} per \
+                 square point spacing, below {MIN_FACE_FILL}): stray returns, not a face",
+                    fit.inliers.len()
+                ),
+            ));
+        }
+        let least_height = MIN_FACE_HEIGHT_SPACINGS * spacing;
+        if highest < least_height {
+            return Err(NotRead::by(
+                &TEE_STANDING_FACE_TOO_LOW,
+                format!(
+                    "the face on the flange ({} points) is seen only {highest:.1} mm tall, below {least_height:.1} mm \
+                 ({MIN_FACE_HEIGHT_SPACINGS} point spacings of {spacing:.2} mm): a plate's edge or noise, not a web",
+                    fit.inliers.len()
+                ),
+            ));
+        }
+        Ok(StandingFace {
+            plane: face,
+            centroid: fit.centroid,
+            flange,
+            points: fit.inliers.len(),
+            seen_height_mm: highest,
+        })
     }
-    let (lowest, highest) = extent(fit.inliers.iter().map(height));
-    let foot_reach = margin + FOOT_REACH_SPACINGS * spacing;
-    if lowest > foot_reach {
-        return Err(NotRead::by(
-            &TEE_FACE_FOOT_ABOVE_FLANGE,
-            format!(
-                "the face over the flange ({} points) is seen no lower than {lowest:.1} mm over it, above {foot_reach:.1} \
-             mm: it stands over the flange, not on it",
-                fit.inliers.len()
-            ),
-        ));
-    }
-    let along_root = n.cross(&normal);
-    let (first, last) = extent(fit.inliers.iter().map(|p| along_root.dot(p)));
-    let spanned_mm2 = (last - first) * (highest - lowest);
-    let fill = fit.inliers.len() as f64 * spacing * spacing / spanned_mm2.max(f64::MIN_POSITIVE);
-    if fill < MIN_FACE_FILL {
-        return Err(NotRead::by(
-            &TEE_STANDING_FACE_TOO_SPARSE,
-            format!(
-                "the {} points on a plane standing on the flange are strewn over {spanned_mm2:.0} mm² ({fill:.3} per \
-             square point spacing, below {MIN_FACE_FILL}): stray returns, not a face",
-                fit.inliers.len()
-            ),
-        ));
-    }
-    let least_height = MIN_FACE_HEIGHT_SPACINGS * spacing;
-    if highest < least_height {
-        return Err(NotRead::by(
-            &TEE_STANDING_FACE_TOO_LOW,
-            format!(
-                "the face on the flange ({} points) is seen only {highest:.1} mm tall, below {least_height:.1} mm \
-             ({MIN_FACE_HEIGHT_SPACINGS} point spacings of {spacing:.2} mm): a plate's edge or noise, not a web",
-                fit.inliers.len()
-            ),
-        ));
-    }
-    Ok(StandingFace { plane: face, centroid: fit.centroid, flange, points: fit.inliers.len(), seen_height_mm: highest })
 }
 
 /// The plane through three of `points` that holds the most of them within
@@ -555,6 +646,56 @@ mod tests {
             (0..100).flat_map(|i| (1..=40).map(move |j| Vec3::new(FACE_X - j as f64, -50.0 + i as f64, 680.0))),
         );
         assert_eq!(valley_of(&ledge), None);
+    }
+
+    #[test]
+    fn every_face_standing_on_the_flange_is_found_and_a_face_once() {
+        let settings =
+            FaceSearch { point_spacing_mm: 1.0, on_plane_mm: 0.4, web_height_max_mm: 250.0, trim_sigma: 3.0 };
+        let faces_of = |points: &[Vec3]| {
+            let cloud = PointCloud::unorganized(points.iter().map(|p| [p.x as f32, p.y as f32, p.z as f32]).collect());
+            find_all(&cloud, &[&PlaneCluster::of_points(points, |p| p.z == 700.0)], &settings)
+        };
+        // A block on a plate, its corner at (FACE_X, -150): its face
+        // towards +x (52 mm along y) and towards +y (48 mm along x), each
+        // 40 mm tall, the plate round both.
+        let corner_y = -150.0;
+        let mut block: Vec<Vec3> = (-50..=55)
+            .flat_map(|i| (-50..=50).map(move |j| Vec3::new(FACE_X + i as f64, corner_y + j as f64, 700.0)))
+            .filter(|p| p.x > FACE_X || p.y > corner_y)
+            .collect();
+        block.extend(
+            (0..52).flat_map(|i| (1..=40).map(move |h| Vec3::new(FACE_X, corner_y - i as f64, 700.0 - h as f64))),
+        );
+        block.extend(
+            (1..=48).flat_map(|i| (1..=40).map(move |h| Vec3::new(FACE_X - i as f64, corner_y, 700.0 - h as f64))),
+        );
+        let faces = faces_of(&block).unwrap();
+        assert_eq!(faces.len(), 2, "{faces:?}");
+        // The larger first, each with its normal out of the block.
+        assert!(faces[0].plane.normal.x > 0.999 && faces[1].plane.normal.y > 0.999, "{faces:?}");
+        assert!(faces.iter().all(|f| (f.seen_height_mm - 40.0).abs() < 0.01), "{faces:?}");
+
+        // A web's one face, its returns spread 1.5 to 3 mm off it behind a
+        // tenth of the face: the spread is the face seen twice, not a
+        // second face.
+        let mut web = flange();
+        web.extend(face(1.0, 25.0));
+        web.extend((0..100).step_by(10).flat_map(|i| {
+            (1..=25)
+                .map(move |j| Vec3::new(FACE_X - 1.5 - 1.5 * ((i + j) % 2) as f64, -50.0 + i as f64, 700.0 - j as f64))
+        }));
+        let faces = faces_of(&web).unwrap();
+        assert_eq!(faces.len(), 1, "{faces:?}");
+        assert_eq!(
+            find(
+                &PointCloud::unorganized(web.iter().map(|p| [p.x as f32, p.y as f32, p.z as f32]).collect()),
+                &[&PlaneCluster::of_points(&web, |p| p.z == 700.0)],
+                &settings
+            )
+            .unwrap(),
+            faces[0]
+        );
     }
 
     #[test]

@@ -27,14 +27,20 @@
 //! fault suite under `auto` (clamps and bars over butt and lap joints)
 //! plans exactly as it did without this reading. The rule is
 //! [`rules::background::WEB_FACE_WITHOUT_TOP`].
+//!
+//! Under `t_fillet`, with a lone layer in view, every face standing on it
+//! is a web's whose top is out of view, each planned as a tee of its own
+//! ([`plan_faces`]): a block standing on a plate shows two faces, and
+//! both feet are roots.
 
+use crate::geometry::Vec3;
 use crate::joint::JointType;
 use crate::rules;
 
 use super::super::background::{Layout, PlaneCluster};
 use super::super::fillet::Web;
 use super::super::web_face::{self, StandingFace};
-use super::super::{PlanError, tee};
+use super::super::{PlanError, Unplanned, tee};
 use super::{Refused, Welds, face_search};
 use crate::pipeline::context::Context;
 
@@ -113,6 +119,42 @@ pub(super) fn face_tee<'a>(face: &'a StandingFace, flange_pieces: Vec<&'a PlaneC
         depth_to_support_mm: None,
         every_side: false,
     }
+}
+
+/// The roots of the faces standing on `flange`, each face a tee of its
+/// own whose top is out of view (a block standing on a plate shows two):
+/// every root planned, and a face whose tee is refused named among the
+/// joints not planned beside them. With none planned, the refusal of the
+/// first face (the one holding the most points), as for a lone face.
+pub(super) fn plan_faces(
+    ctx: &mut Context,
+    faces: &[StandingFace],
+    flange: &[PlaneCluster],
+) -> Result<Welds, PlanError> {
+    let mut planned = Vec::new();
+    let mut unplanned = Vec::new();
+    let mut refused: Vec<(Vec3, PlanError)> = Vec::new();
+    for face in faces {
+        let layers = face_evidence(face, flange);
+        match tee::plan(ctx, face_tee(face, flange.iter().collect()), layers) {
+            Ok((welds, named)) => {
+                planned.extend(welds);
+                unplanned.extend(named);
+            }
+            Err(reason) if reason.out_of_time => return Err(reason),
+            Err(reason) => refused.push((face.centroid, reason)),
+        }
+    }
+    if planned.is_empty() {
+        let (_, first) = refused.swap_remove(0);
+        return Err(first);
+    }
+    unplanned.extend(refused.into_iter().map(|(near, reason)| Unplanned {
+        joint: Some(JointType::TFillet),
+        near_camera: Some(near),
+        reason,
+    }));
+    Ok((planned, unplanned))
 }
 
 /// Both readings refused: the refusal of the one that got further (the

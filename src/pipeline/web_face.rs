@@ -524,12 +524,17 @@ mod tests {
             .collect()
     }
 
+    /// The search's settings in these tests: a point spacing of 1 mm.
+    const SETTINGS: FaceSearch =
+        FaceSearch { point_spacing_mm: 1.0, on_plane_mm: 0.4, web_height_max_mm: 250.0, trim_sigma: 3.0 };
+
+    fn cloud_of(points: &[Vec3]) -> PointCloud {
+        PointCloud::unorganized(points.iter().map(|p| [p.x as f32, p.y as f32, p.z as f32]).collect())
+    }
+
     fn search(points: &[Vec3]) -> Result<StandingFace, NotRead> {
-        let cloud = PointCloud::unorganized(points.iter().map(|p| [p.x as f32, p.y as f32, p.z as f32]).collect());
         let piece = PlaneCluster::of_points(points, |p| p.z == 700.0);
-        let settings =
-            FaceSearch { point_spacing_mm: 1.0, on_plane_mm: 0.4, web_height_max_mm: 250.0, trim_sigma: 3.0 };
-        find(&cloud, &[&piece], &settings)
+        find(&cloud_of(points), &[&piece], &SETTINGS)
     }
 
     #[test]
@@ -555,10 +560,9 @@ mod tests {
 
     #[test]
     fn a_groove_s_two_flanks_are_told_from_a_web_standing_on_its_flange() {
-        let settings =
-            FaceSearch { point_spacing_mm: 1.0, on_plane_mm: 0.4, web_height_max_mm: 250.0, trim_sigma: 3.0 };
+        let settings = SETTINGS;
         let valley_of = |points: &[Vec3], lone: &dyn Fn(&Vec3) -> bool| {
-            let cloud = PointCloud::unorganized(points.iter().map(|p| [p.x as f32, p.y as f32, p.z as f32]).collect());
+            let cloud = cloud_of(points);
             valley(&cloud, &[&PlaneCluster::of_points(points, lone)], &settings)
         };
         // Two flanks 30 mm wide, each sloping 27.5° up from a root under
@@ -609,10 +613,9 @@ mod tests {
 
     #[test]
     fn a_valley_is_read_on_one_facet_of_what_rises_not_a_plane_through_them_all() {
-        let settings =
-            FaceSearch { point_spacing_mm: 1.0, on_plane_mm: 0.4, web_height_max_mm: 250.0, trim_sigma: 3.0 };
+        let settings = SETTINGS;
         let valley_of = |points: &[Vec3]| {
-            let cloud = PointCloud::unorganized(points.iter().map(|p| [p.x as f32, p.y as f32, p.z as f32]).collect());
+            let cloud = cloud_of(points);
             valley(&cloud, &[&PlaneCluster::of_points(points, |p| p.z == 700.0)], &settings)
         };
         // A block standing on a plate, its corner at (FACE_X, CORNER_Y):
@@ -650,10 +653,9 @@ mod tests {
 
     #[test]
     fn every_face_standing_on_the_flange_is_found_and_a_face_once() {
-        let settings =
-            FaceSearch { point_spacing_mm: 1.0, on_plane_mm: 0.4, web_height_max_mm: 250.0, trim_sigma: 3.0 };
+        let settings = SETTINGS;
         let faces_of = |points: &[Vec3]| {
-            let cloud = PointCloud::unorganized(points.iter().map(|p| [p.x as f32, p.y as f32, p.z as f32]).collect());
+            let cloud = cloud_of(points);
             find_all(&cloud, &[&PlaneCluster::of_points(points, |p| p.z == 700.0)], &settings)
         };
         // A block on a plate, its corner at (FACE_X, -150): its face
@@ -687,15 +689,7 @@ mod tests {
         }));
         let faces = faces_of(&web).unwrap();
         assert_eq!(faces.len(), 1, "{faces:?}");
-        assert_eq!(
-            find(
-                &PointCloud::unorganized(web.iter().map(|p| [p.x as f32, p.y as f32, p.z as f32]).collect()),
-                &[&PlaneCluster::of_points(&web, |p| p.z == 700.0)],
-                &settings
-            )
-            .unwrap(),
-            faces[0]
-        );
+        assert_eq!(search(&web).unwrap(), faces[0]);
     }
 
     #[test]

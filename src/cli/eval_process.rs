@@ -129,20 +129,31 @@ pub fn run(args: &EvalArgs) -> anyhow::Result<()> {
 }
 
 fn mm(f: &FigureErrors) -> String {
-    match (f.median(), f.max()) {
+    let cell = match (f.median(), f.max()) {
         (Some(m), Some(x)) if f.missing == 0 => format!("{m:.3} / {x:.3}"),
         (Some(m), Some(x)) => format!("{m:.3} / {x:.3} ({} none)", f.missing),
         _ if f.missing > 0 => format!("none at {}", f.missing),
+        _ if f.unseen > 0 => String::new(),
         _ => "-".into(),
-    }
+    };
+    format!("{cell}{}", unseen_at(f.unseen))
 }
 
 fn share(f: &FigureErrors) -> String {
     match (f.median(), f.max()) {
-        (Some(m), Some(x)) => format!("{:.1} / {:.1} %{}", 100.0 * m, 100.0 * x, none_at(f.missing)),
-        _ if f.missing > 0 => format!("none at {}", f.missing),
+        (Some(m), Some(x)) => {
+            format!("{:.1} / {:.1} %{}{}", 100.0 * m, 100.0 * x, none_at(f.missing), unseen_at(f.unseen))
+        }
+        _ if f.missing > 0 => format!("none at {}{}", f.missing, unseen_at(f.unseen)),
+        _ if f.unseen > 0 => unseen_at(f.unseen),
         _ => "-".into(),
     }
+}
+
+/// Waypoints where the cloud shows nothing of the joint, so no figure is
+/// expected.
+fn unseen_at(unseen: usize) -> String {
+    if unseen > 0 { format!(" ({unseen} not in view)") } else { String::new() }
 }
 
 fn none_at(missing: usize) -> String {
@@ -204,7 +215,7 @@ fn row(scene: &ProcessScene, s: &ProcessScore, missed: &[&str]) -> Vec<String> {
 
 /// One scene's score as a JSON line (`--plans`), for comparing two builds.
 fn plan_line(scene: &ProcessScene, s: &ProcessScore) -> serde_json::Value {
-    let figure = |f: &FigureErrors| serde_json::json!({ "median": f.median(), "max": f.max(), "missing": f.missing });
+    let figure = |f: &FigureErrors| serde_json::json!({ "median": f.median(), "max": f.max(), "missing": f.missing, "unseen": f.unseen });
     serde_json::json!({
         "scene": scene.name,
         "request": scene.case.joint().name(),

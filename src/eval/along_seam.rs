@@ -52,11 +52,16 @@ impl JointTruth {
 }
 
 /// One figure's errors over the waypoints scored, and how many waypoints
-/// had no value for it.
+/// had no value for it: where the cloud shows the joint (missing), and
+/// where it shows nothing of it (unseen; counted only by scorers that
+/// look, [`FigureErrors::add_unseen`]).
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct FigureErrors {
     pub errors: Vec<f64>,
     pub missing: usize,
+    /// Waypoints with no value where no point of the cloud lies at the
+    /// joint: hidden from the camera, nothing could be read there.
+    pub unseen: usize,
     /// How many errors were within two of the figure's own standard errors
     /// (about 95 % if the standard errors are honest).
     pub within_two_sigma: usize,
@@ -72,6 +77,12 @@ impl FigureErrors {
         let error = (m.value - truth).abs();
         self.within_two_sigma += usize::from(error <= 2.0 * m.sigma);
         self.errors.push(if relative && truth > 0.0 { error / truth } else { error });
+    }
+
+    /// A waypoint where the cloud shows nothing of the joint: no value is
+    /// expected there, of a figure the joint has (`truth`).
+    pub(super) fn add_unseen(&mut self, truth: Option<f64>) {
+        self.unseen += usize::from(truth.is_some());
     }
 
     /// The median error, or `None` without one.

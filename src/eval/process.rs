@@ -224,14 +224,26 @@ fn score_seam(
     for c in seam.process.iter().flat_map(|p| &p.cut).filter(|c| c.rule.id == rules::process::TORCH_BLOCKED.id) {
         blocked.iter_mut().take(c.last + 1).skip(c.first).for_each(|b| *b = true);
     }
+    let in_view = joint_in_view(sim, seam, &in_camera);
     for (k, w) in in_workpiece.iter().enumerate() {
         score.waypoints += 1;
         let y = w.y;
         if let (Some(f), Some(t)) = (seam.along_seam.get(k), truth) {
             let butt = matches!(scene.spec.joint, JointGeometry::IButt { .. } | JointGeometry::VButt { .. });
-            score.gap.add(f.gap_mm, butt.then(|| scene.gap_at(y)).flatten(), false);
-            score.high_low.add(f.high_low_mm, butt.then_some(scene.high_low_mm), false);
-            score.groove_area.add(f.groove_area_mm2, t.groove_area_mm2, true);
+            let gap = butt.then(|| scene.gap_at(y)).flatten();
+            let high_low = butt.then_some(scene.high_low_mm);
+            let unread = (f.gap_mm.is_none() && gap.is_some())
+                || (f.high_low_mm.is_none() && high_low.is_some())
+                || (f.groove_area_mm2.is_none() && t.groove_area_mm2.is_some());
+            if unread && !in_view[k] {
+                score.gap.add_unseen(gap);
+                score.high_low.add_unseen(high_low);
+                score.groove_area.add_unseen(t.groove_area_mm2);
+            } else {
+                score.gap.add(f.gap_mm, gap, false);
+                score.high_low.add(f.high_low_mm, high_low, false);
+                score.groove_area.add(f.groove_area_mm2, t.groove_area_mm2, true);
+            }
         }
         let along = along_at(&in_camera, k);
         let station = Station { point: in_camera[k], along, bisector };
@@ -409,6 +421,56 @@ fn tip_in_groove(scene: &ProcessScene, p: &Vec3) -> bool {
 }
 
 /// The cloud's points on the block (workpiece frame, within a millimetre).
+/// How near the joint's place at a waypoint the cloud's points are
+/// counted, mm: the plates' edges beside a root gap of a few millimetres
+/// lie within it.
+const JOINT_BALL_MM: f64 = 4.0;
+
+/// The share of the points a waypoint's ball holds where the figures are
+/// read (their median) below which the joint there is taken as out of
+/// view: a clamp or the workpiece hides it from the camera, or shows only
+/// a sliver of it, and no figure can be read there.
+const IN_VIEW_SHARE: f64 = 0.5;
+
+/// The most waypoints whose figures were read that are counted for the
+/// median: enough to know the frame's density along the seam, few enough
+/// that a scan of the frame per waypoint stays cheap.
+const READ_WAYPOINTS_COUNTED: usize = 16;
+
+/// For each waypoint of `seam` (`in_camera`, camera frame), whether the
+/// joint there is in the cloud's view: its ball of [`JOINT_BALL_MM`] holds
+/// at least [`IN_VIEW_SHARE`] of the points the balls hold where the
+/// figures were read. Counted only where a figure is not read (the rest
+/// are in view) and at a few read waypoints for the median; where none
+/// was read, every waypoint counts as in view, so a figure not read is
+/// missing.
+fn joint_in_view(sim: &Simulation, seam: &Seam, in_camera: &[Vec3]) -> Vec<bool> {
+    let read = |k: usize| seam.along_seam.get(k).is_some_and(|f| f.gap_mm.is_some() || f.lap_step_mm.is_some());
+    let unread: Vec<usize> = (0..in_camera.len()).filter(|&k| !read(k)).collect();
+    let mut in_view = vec![true; in_camera.len()];
+    if unread.is_empty() {
+        return in_view;
+    }
+    let read_at: Vec<usize> = (0..in_camera.len()).filter(|&k| read(k)).collect();
+    let stride = read_at.len().div_ceil(READ_WAYPOINTS_COUNTED).max(1);
+    let mut counts: Vec<usize> = read_at.iter().step_by(stride).map(|&k| points_near(sim, &in_camera[k])).collect();
+    if counts.is_empty() {
+        return in_view;
+    }
+    let middle = counts.len() / 2;
+    let (_, &mut median, _) = counts.select_nth_unstable(middle);
+    for k in unread {
+        in_view[k] = points_near(sim, &in_camera[k]) as f64 >= IN_VIEW_SHARE * median as f64;
+    }
+    in_view
+}
+
+/// The capture's valid points within [`JOINT_BALL_MM`] of `at`.
+fn points_near(sim: &Simulation, at: &Vec3) -> usize {
+    let r2 = JOINT_BALL_MM * JOINT_BALL_MM;
+    sim.cloud.points().iter().filter(|p| is_valid_point(p) && (vec3(p) - at).norm_squared() <= r2).count()
+}
+
 fn seen_on_block(scene: &ProcessScene, sim: &Simulation, b: &ClampBlock) -> usize {
     let workpiece_from_camera = scene.spec.workpiece_from_camera();
     let grown = Vec3::repeat(1.0);

@@ -23,7 +23,16 @@
 //! reason says which.
 //!
 //! Only one face of a web is ever seen (the faces are steep), so a web
-//! found this way gives at most one root: the one on the face's side.
+//! found this way gives at most one root: the one on the face's side. A
+//! block or a box section standing on the flange shows two of its faces:
+//! [`find_all`] reads the member's faces one after the other, each from
+//! the points the faces before it leave, keeping those that meet along
+//! an edge.
+//!
+//! What rises over a lone plane also says what is in view when nothing can
+//! be planned ([`valley`]): read on the largest facet of it, the valley it
+//! makes with the plane tells a groove's two flanks from a web standing on
+//! its flange.
 
 use rand_chacha::ChaCha8Rng;
 use rand_core::{Rng, SeedableRng};
@@ -83,10 +92,25 @@ const MIN_FACE_FILL: f64 = 0.04;
 /// same face.
 const SEED: u64 = 0x5eed_face;
 
-/// The most faces [`find_all`] reads standing on one flange: a block
-/// shows two of its four, and a flange carrying several webs seldom shows
-/// more in one view; the bound keeps the search's cost fixed.
+/// The most faces [`find_all`] searches for on one flange: a member
+/// shows two of its faces, and the search may first find another
+/// member's; the bound keeps the search's cost fixed.
 pub const MAX_STANDING_FACES: usize = 4;
+
+/// The least two faces of one member are turned from each other where
+/// they meet, degrees ([`meet`]): a box's or a block's faces meet at 90°,
+/// a hexagonal bar's at 60°; two faces nearer parallel are no edge's.
+const MIN_EDGE_TURN_DEG: f64 = 30.0;
+
+/// How near the other face's plane a face's points are taken as lying at
+/// the edge the two meet in, point spacings: past the tolerance a face's
+/// points are set aside by ([`FACE_TOLERANCE_SPACINGS`]), within the
+/// spread of an edge's returns.
+const EDGE_REACH_SPACINGS: f64 = 4.0;
+
+/// The fewest points of each face near the edge for the edge to count as
+/// shown by both.
+const MIN_EDGE_POINTS: usize = 10;
 
 /// Two faces turned within this of parallel, degrees, and lying nearer
 /// than [`FACES_APART_SPACINGS`] are one face seen twice ([`same_face`]).
@@ -131,36 +155,67 @@ pub struct FaceSearch {
 /// why none is seen (and the rule that decided it).
 pub fn find(cloud: &PointCloud, flange_pieces: &[&PlaneCluster], s: &FaceSearch) -> Result<StandingFace, NotRead> {
     let over = OverFlange::of(cloud, flange_pieces, s)?;
-    over.face_among(&over.candidates)
+    over.face_among(&over.candidates).map(|(face, _)| face)
 }
 
-/// Every face standing on the flange made of `flange_pieces`, the one
-/// holding the most points first, or why none is seen: a block standing
-/// on a plate shows two of its faces, each with a root. After each face
-/// found, its points are set aside and the search runs again on the rest,
-/// until it finds no face, finds one a found face's leftover points make
-/// ([`same_face`]), or has found [`MAX_STANDING_FACES`]. Each face passes
-/// every test the first one does.
+/// Every face of the member standing on the flange made of
+/// `flange_pieces`, the one holding the most points first, or why none is
+/// seen: a block standing on a plate shows two of its faces, each with a
+/// root. After each face found, its points are set aside and the search
+/// runs again on the rest, [`MAX_STANDING_FACES`] times at most, until it
+/// finds no face or one a found face's leftover points make
+/// ([`same_face`]). A face is kept when it passes every test the first one
+/// does and meets a face kept along an edge both show ([`meet`]): the
+/// same member's. A face standing apart is another member's, a second web
+/// or a fixture's side, which a face alone does not tell apart; it is not
+/// kept, as a lone face under a request for any joint is not planned.
 pub fn find_all(
     cloud: &PointCloud,
     flange_pieces: &[&PlaneCluster],
     s: &FaceSearch,
 ) -> Result<Vec<StandingFace>, NotRead> {
     let over = OverFlange::of(cloud, flange_pieces, s)?;
-    let mut faces = vec![over.face_among(&over.candidates)?];
+    let first = over.face_among(&over.candidates)?;
     let mut left = over.candidates.clone();
-    while let Some(last) = faces.last().filter(|_| faces.len() < MAX_STANDING_FACES) {
-        left.retain(|p| last.plane.signed_distance(p).abs() > over.tolerance);
+    let mut last_plane = first.0.plane;
+    let mut kept = vec![first];
+    for _ in 1..MAX_STANDING_FACES {
+        left.retain(|p| last_plane.signed_distance(p).abs() > over.tolerance);
         if left.len() < MIN_FACE_POINTS {
             break;
         }
-        let Ok(face) = over.face_among(&left) else { break };
-        if faces.iter().any(|found| same_face(found, &face, s.point_spacing_mm)) {
+        let Ok(next) = over.face_among(&left) else { break };
+        last_plane = next.0.plane;
+        if kept.iter().any(|(face, _)| same_face(face, &next.0, s.point_spacing_mm)) {
             break;
         }
-        faces.push(face);
+        let reach = EDGE_REACH_SPACINGS * s.point_spacing_mm;
+        if kept.iter().any(|(face, points)| meet((&face.plane, points), (&next.0.plane, &next.1), reach)) {
+            kept.push(next);
+        }
     }
-    Ok(faces)
+    Ok(kept.into_iter().map(|(face, _)| face).collect())
+}
+
+/// Whether two faces (each its plane and points) meet along an edge both
+/// show, as two faces of one member do: turned at least
+/// [`MIN_EDGE_TURN_DEG`] from each other, and where each face's points
+/// come within `reach` of the other's plane, their stretches along the
+/// line the planes meet in overlap.
+fn meet(a: (&Plane, &[Vec3]), b: (&Plane, &[Vec3]), reach: f64) -> bool {
+    let Some(edge) = a.0.normal.cross(&b.0.normal).try_normalize(1e-9) else { return false };
+    if a.0.normal.dot(&b.0.normal).abs() > MIN_EDGE_TURN_DEG.to_radians().cos() {
+        return false;
+    }
+    let along_edge = |points: &[Vec3], other: &Plane| {
+        let near: Vec<f64> =
+            points.iter().filter(|p| other.signed_distance(p).abs() <= reach).map(|p| edge.dot(p)).collect();
+        (near.len() >= MIN_EDGE_POINTS).then(|| extent(near))
+    };
+    match (along_edge(a.1, b.0), along_edge(b.1, a.0)) {
+        (Some((a0, a1)), Some((b0, b1))) => a0.max(b0) <= a1.min(b1),
+        _ => false,
+    }
 }
 
 /// Whether `b` is the leftover of `a`: turned within
@@ -220,9 +275,9 @@ impl<'s> OverFlange<'s> {
         Ok(OverFlange { flange, candidates, tolerance, margin, s })
     }
 
-    /// The face standing on the flange among `candidates`, or why none is
-    /// seen there.
-    fn face_among(&self, candidates: &[Vec3]) -> Result<StandingFace, NotRead> {
+    /// The face standing on the flange among `candidates` and the points
+    /// on it, or why none is seen there.
+    fn face_among(&self, candidates: &[Vec3]) -> Result<(StandingFace, Vec<Vec3>), NotRead> {
         let (flange, s, tolerance, margin) = (self.flange, self.s, self.tolerance, self.margin);
         let n = flange.normal;
         let height = |p: &Vec3| flange.offset - n.dot(p);
@@ -295,13 +350,14 @@ impl<'s> OverFlange<'s> {
                 ),
             ));
         }
-        Ok(StandingFace {
+        let found = StandingFace {
             plane: face,
             centroid: fit.centroid,
             flange,
             points: fit.inliers.len(),
             seen_height_mm: highest,
-        })
+        };
+        Ok((found, fit.inliers))
     }
 }
 
@@ -497,241 +553,5 @@ impl Footprint {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// Where the web's face stands across the camera's x: the camera, at
-    /// the origin looking down +z, sees it turned 16° towards itself.
-    const FACE_X: f64 = -200.0;
-
-    /// The flange: z = 700, x from the face out to 55 mm beyond it, y from
-    /// −50 to 49, a point spacing of 1 mm.
-    fn flange() -> Vec<Vec3> {
-        (0..100).flat_map(|i| (1..=55).map(move |j| Vec3::new(FACE_X + j as f64, -50.0 + i as f64, 700.0))).collect()
-    }
-
-    /// The web's face x = FACE_X from `from` to `to` mm over the flange:
-    /// its points in steps of a millimetre up it, 0.1 mm of noise across.
-    fn face(from: f64, to: f64) -> Vec<Vec3> {
-        let rows = (to - from) as usize;
-        (0..100)
-            .flat_map(|i| {
-                (0..=rows).map(move |j| {
-                    let jitter = 0.1 * (((i * 7 + j * 13) % 11) as f64 / 5.0 - 1.0);
-                    Vec3::new(FACE_X + jitter, -50.0 + i as f64, 700.0 - from - j as f64)
-                })
-            })
-            .collect()
-    }
-
-    /// The search's settings in these tests: a point spacing of 1 mm.
-    const SETTINGS: FaceSearch =
-        FaceSearch { point_spacing_mm: 1.0, on_plane_mm: 0.4, web_height_max_mm: 250.0, trim_sigma: 3.0 };
-
-    fn cloud_of(points: &[Vec3]) -> PointCloud {
-        PointCloud::unorganized(points.iter().map(|p| [p.x as f32, p.y as f32, p.z as f32]).collect())
-    }
-
-    fn search(points: &[Vec3]) -> Result<StandingFace, NotRead> {
-        let piece = PlaneCluster::of_points(points, |p| p.z == 700.0);
-        find(&cloud_of(points), &[&piece], &SETTINGS)
-    }
-
-    #[test]
-    fn a_face_standing_on_the_flange_is_found_through_a_veil_of_mixed_returns() {
-        let mut points = flange();
-        points.extend(face(1.0, 25.0));
-        // A veil along the camera's rays from a depth jump beside the web,
-        // as many points as a fifth of the face: a plane too, but not one
-        // the camera could see as a surface.
-        for i in 0..100 {
-            for j in 1..=6 {
-                let p = Vec3::new(FACE_X + 30.0, -50.0 + i as f64, 700.0) * (1.0 - 0.004 * j as f64);
-                points.push(p);
-            }
-        }
-        let face = search(&points).unwrap();
-        // Its normal out of the web towards the camera's side: +x.
-        assert!(face.plane.normal.x > 0.999, "{:?}", face.plane.normal);
-        assert!((face.plane.signed_distance(&Vec3::new(FACE_X, 0.0, 690.0))).abs() < 0.05, "{face:?}");
-        assert!((face.seen_height_mm - 25.0).abs() < 0.01, "{}", face.seen_height_mm);
-        assert!((face.flange.offset - 700.0).abs() < 1e-6 && face.flange.normal.z > 0.999);
-    }
-
-    #[test]
-    fn a_groove_s_two_flanks_are_told_from_a_web_standing_on_its_flange() {
-        let settings = SETTINGS;
-        let valley_of = |points: &[Vec3], lone: &dyn Fn(&Vec3) -> bool| {
-            let cloud = cloud_of(points);
-            valley(&cloud, &[&PlaneCluster::of_points(points, lone)], &settings)
-        };
-        // Two flanks 30 mm wide, each sloping 27.5° up from a root under
-        // the camera along y: a groove opening 125°, its plate tops out of
-        // view.
-        let flank = |side: f64| -> Vec<Vec3> {
-            let slope = 27.5f64.to_radians().tan();
-            (0..100)
-                .flat_map(move |i| {
-                    (1..=30).map(move |j| Vec3::new(side * j as f64, -50.0 + i as f64, 700.0 - j as f64 * slope))
-                })
-                .collect()
-        };
-        let mut groove = flank(-1.0);
-        groove.extend(flank(1.0));
-        let seen = valley_of(&groove, &|p: &Vec3| p.x < 0.0).expect("the other flank rises over the first");
-        assert!((seen.opening_deg - 125.0).abs() < 0.5, "{seen:?}");
-        assert!(seen.wider_than_a_web_stands() && seen.is_groove(), "{seen:?}");
-        assert!(seen.describe().contains("a groove's two flanks with no plate top"), "{}", seen.describe());
-        // The same at 110°: no wider than a web may lean, but seen down its
-        // middle, as no tee is.
-        let steeper: Vec<Vec3> = groove.iter().map(|p| Vec3::new(p.x, p.y, 700.0 - (700.0 - p.z) * 1.343)).collect();
-        let seen = valley_of(&steeper, &|p: &Vec3| p.x < 0.0).expect("a valley");
-        assert!(!seen.wider_than_a_web_stands() && seen.is_groove(), "{seen:?}");
-
-        // A web's face standing on its flange, seen from above the flange:
-        // a valley of 90°, the flange seen squarely and the face aslant.
-        let mut tee = flange();
-        tee.extend(face(1.0, 25.0));
-        let seen = valley_of(&tee, &|p: &Vec3| p.z == 700.0).expect("the face rises over the flange");
-        assert!((seen.opening_deg - 90.0).abs() < 1.0, "{seen:?}");
-        assert!(seen.slants_deg[0] < 20.0 && seen.slants_deg[1] > 50.0 && !seen.is_groove(), "{seen:?}");
-        assert!(!seen.describe().contains("groove"), "{}", seen.describe());
-        // Two plates 1° apart, their joint unresolved: one surface.
-        let rise = 1.5f64.to_radians().tan();
-        let creased: Vec<Vec3> = (0..100)
-            .flat_map(|i| (-100..=100).map(move |j| (i, j)))
-            .map(|(i, j)| Vec3::new(2.0 * j as f64, -50.0 + i as f64, 700.0 - 2.0 * f64::from(j).abs() * rise))
-            .collect();
-        let seen = valley_of(&creased, &|p: &Vec3| p.x < 0.0).expect("a valley");
-        assert!(seen.opening_deg > ONE_SURFACE_MIN_OPENING_DEG, "{seen:?}");
-        let said = seen.describe();
-        assert!(said.contains("only one surface is in view, its two parts within 3° of one plane"), "{said}");
-        assert!(!said.contains("groove"), "{said}");
-        // Nothing over a lone plane: no valley.
-        assert_eq!(valley_of(&flange(), &|p: &Vec3| p.z == 700.0), None);
-    }
-
-    #[test]
-    fn a_valley_is_read_on_one_facet_of_what_rises_not_a_plane_through_them_all() {
-        let settings = SETTINGS;
-        let valley_of = |points: &[Vec3]| {
-            let cloud = cloud_of(points);
-            valley(&cloud, &[&PlaneCluster::of_points(points, |p| p.z == 700.0)], &settings)
-        };
-        // A block standing on a plate, its corner at (FACE_X, CORNER_Y):
-        // the camera, at the origin, sees its face towards +x (52 mm
-        // along y) and its face towards +y (48 mm along x), each 60 mm
-        // tall and turned 12 to 16° towards it, and the plate round both.
-        // A plane through both faces is neither.
-        const CORNER_Y: f64 = -150.0;
-        let mut block_on_plate: Vec<Vec3> = (-50..=55)
-            .flat_map(|i| (-50..=50).map(move |j| Vec3::new(FACE_X + i as f64, CORNER_Y + j as f64, 700.0)))
-            .filter(|p| p.x > FACE_X || p.y > CORNER_Y)
-            .collect();
-        let toward_x =
-            (0..52).flat_map(|i| (1..=60).map(move |h| Vec3::new(FACE_X, CORNER_Y - i as f64, 700.0 - h as f64)));
-        let toward_y =
-            (1..=48).flat_map(|i| (1..=60).map(move |h| Vec3::new(FACE_X - i as f64, CORNER_Y, 700.0 - h as f64)));
-        block_on_plate.extend(toward_x.chain(toward_y));
-        let seen = valley_of(&block_on_plate).expect("a face rises over the plate");
-        assert!((seen.opening_deg - 90.0).abs() < 1.0, "{seen:?}");
-        // The larger face, every point of it that rises over the margin
-        // and no other.
-        let margin = fillet::height_margin(settings.on_plane_mm, settings.point_spacing_mm);
-        let rows_over_margin = (1..=60).filter(|&h| f64::from(h) >= margin).count();
-        assert_eq!(seen.points, 52 * rows_over_margin, "{seen:?}");
-        assert!(!seen.is_groove() && !seen.describe().contains("one surface"), "{}", seen.describe());
-
-        // A second plate's top 20 mm over the lone one, beside it: it rises
-        // over the plate but never comes down to it, so no valley.
-        let mut ledge = flange();
-        ledge.extend(
-            (0..100).flat_map(|i| (1..=40).map(move |j| Vec3::new(FACE_X - j as f64, -50.0 + i as f64, 680.0))),
-        );
-        assert_eq!(valley_of(&ledge), None);
-    }
-
-    #[test]
-    fn every_face_standing_on_the_flange_is_found_and_a_face_once() {
-        let settings = SETTINGS;
-        let faces_of = |points: &[Vec3]| {
-            let cloud = cloud_of(points);
-            find_all(&cloud, &[&PlaneCluster::of_points(points, |p| p.z == 700.0)], &settings)
-        };
-        // A block on a plate, its corner at (FACE_X, -150): its face
-        // towards +x (52 mm along y) and towards +y (48 mm along x), each
-        // 40 mm tall, the plate round both.
-        let corner_y = -150.0;
-        let mut block: Vec<Vec3> = (-50..=55)
-            .flat_map(|i| (-50..=50).map(move |j| Vec3::new(FACE_X + i as f64, corner_y + j as f64, 700.0)))
-            .filter(|p| p.x > FACE_X || p.y > corner_y)
-            .collect();
-        block.extend(
-            (0..52).flat_map(|i| (1..=40).map(move |h| Vec3::new(FACE_X, corner_y - i as f64, 700.0 - h as f64))),
-        );
-        block.extend(
-            (1..=48).flat_map(|i| (1..=40).map(move |h| Vec3::new(FACE_X - i as f64, corner_y, 700.0 - h as f64))),
-        );
-        let faces = faces_of(&block).unwrap();
-        assert_eq!(faces.len(), 2, "{faces:?}");
-        // The larger first, each with its normal out of the block.
-        assert!(faces[0].plane.normal.x > 0.999 && faces[1].plane.normal.y > 0.999, "{faces:?}");
-        assert!(faces.iter().all(|f| (f.seen_height_mm - 40.0).abs() < 0.01), "{faces:?}");
-
-        // A web's one face, its returns spread 1.5 to 3 mm off it behind a
-        // tenth of the face: the spread is the face seen twice, not a
-        // second face.
-        let mut web = flange();
-        web.extend(face(1.0, 25.0));
-        web.extend((0..100).step_by(10).flat_map(|i| {
-            (1..=25)
-                .map(move |j| Vec3::new(FACE_X - 1.5 - 1.5 * ((i + j) % 2) as f64, -50.0 + i as f64, 700.0 - j as f64))
-        }));
-        let faces = faces_of(&web).unwrap();
-        assert_eq!(faces.len(), 1, "{faces:?}");
-        assert_eq!(search(&web).unwrap(), faces[0]);
-    }
-
-    #[test]
-    fn a_flange_with_nothing_standing_on_it_or_a_face_too_low_or_over_it_gives_no_face() {
-        let err = search(&flange()).unwrap_err();
-        assert_eq!(err.rule().id, "tee.nothing_stands_on_flange", "{err}");
-        assert!(err.reason.contains("nothing in view stands on the flange"), "{err}");
-        // A plate's edge 6 mm tall: below ten spacings.
-        let mut low = flange();
-        low.extend(face(1.0, 6.0));
-        let err = search(&low).unwrap_err();
-        assert_eq!(err.rule().id, "tee.standing_face_too_low", "{err}");
-        assert!(err.reason.contains("seen only 6.0 mm tall"), "{err}");
-        // A face from 12 to 40 mm over the flange: something held over it.
-        let mut hovering = flange();
-        hovering.extend(face(12.0, 40.0));
-        let err = search(&hovering).unwrap_err();
-        assert_eq!(err.rule().id, "tee.face_foot_above_flange", "{err}");
-        assert!(err.reason.contains("not on it"), "{err}");
-    }
-
-    #[test]
-    fn stray_returns_on_one_plane_over_a_wide_flange_are_no_face() {
-        // Forty returns, one every 2.5 mm along y and 25 mm up: on one
-        // steep plane, standing on the flange, but a face they are not.
-        let mut points = flange();
-        points.extend((0..40).map(|k| Vec3::new(FACE_X, -50.0 + 2.5 * k as f64, 699.0 - (k % 2) as f64 * 25.0)));
-        let err = search(&points).unwrap_err();
-        assert_eq!(err.rule().id, "tee.standing_face_too_sparse", "{err}");
-        assert!(err.reason.contains("stray returns, not a face"), "{err}");
-    }
-
-    #[test]
-    fn mixed_returns_alone_are_no_face() {
-        let mut points = flange();
-        for i in 0..100 {
-            for j in 1..=30 {
-                points.push(Vec3::new(FACE_X + 20.0, -50.0 + i as f64, 700.0) * (1.0 - 0.001 * j as f64));
-            }
-        }
-        let err = search(&points).unwrap_err();
-        // Every plane through three of them lies along the rays.
-        assert_eq!(err.rule().id, "tee.no_face_stands_on_flange", "{err}");
-    }
-}
+#[path = "web_face_tests.rs"]
+mod tests;

@@ -557,9 +557,9 @@ pub static TEE_NOTHING_STANDS_ON_FLANGE: Rule = Rule {
         },
     ],
     fires: &[
-        "src/pipeline/web_face.rs::a_flange_with_nothing_standing_on_it_or_a_face_too_low_or_over_it_gives_no_face",
+        "src/pipeline/web_face_tests.rs::a_flange_with_nothing_standing_on_it_or_a_face_too_low_or_over_it_gives_no_face",
     ],
-    holds: &["src/pipeline/web_face.rs::a_face_standing_on_the_flange_is_found_through_a_veil_of_mixed_returns"],
+    holds: &["src/pipeline/web_face_tests.rs::a_face_standing_on_the_flange_is_found_through_a_veil_of_mixed_returns"],
 };
 
 pub static TEE_NO_FACE_STANDS_ON_FLANGE: Rule = Rule {
@@ -589,10 +589,10 @@ pub static TEE_NO_FACE_STANDS_ON_FLANGE: Rule = Rule {
         },
     ],
     fires: &[
-        "src/pipeline/web_face.rs::mixed_returns_alone_are_no_face",
+        "src/pipeline/web_face_tests.rs::mixed_returns_alone_are_no_face",
         "tests/consumer_camera.rs::a_v_groove_strip_requested_as_a_tee_is_refused_not_planned_along_its_root_land",
     ],
-    holds: &["src/pipeline/web_face.rs::a_face_standing_on_the_flange_is_found_through_a_veil_of_mixed_returns"],
+    holds: &["src/pipeline/web_face_tests.rs::a_face_standing_on_the_flange_is_found_through_a_veil_of_mixed_returns"],
 };
 
 pub static TEE_FACE_FOOT_ABOVE_FLANGE: Rule = Rule {
@@ -611,9 +611,9 @@ pub static TEE_FACE_FOOT_ABOVE_FLANGE: Rule = Rule {
         source: Source::Constant { file: WEB_FACE, name: "FOOT_REACH_SPACINGS" },
     }],
     fires: &[
-        "src/pipeline/web_face.rs::a_flange_with_nothing_standing_on_it_or_a_face_too_low_or_over_it_gives_no_face",
+        "src/pipeline/web_face_tests.rs::a_flange_with_nothing_standing_on_it_or_a_face_too_low_or_over_it_gives_no_face",
     ],
-    holds: &["src/pipeline/web_face.rs::a_face_standing_on_the_flange_is_found_through_a_veil_of_mixed_returns"],
+    holds: &["src/pipeline/web_face_tests.rs::a_face_standing_on_the_flange_is_found_through_a_veil_of_mixed_returns"],
 };
 
 pub static TEE_STANDING_FACE_TOO_SPARSE: Rule = Rule {
@@ -632,8 +632,8 @@ pub static TEE_STANDING_FACE_TOO_SPARSE: Rule = Rule {
         meaning: "fewest points per square point spacing over the face's extent",
         source: Source::Constant { file: WEB_FACE, name: "MIN_FACE_FILL" },
     }],
-    fires: &["src/pipeline/web_face.rs::stray_returns_on_one_plane_over_a_wide_flange_are_no_face"],
-    holds: &["src/pipeline/web_face.rs::a_face_standing_on_the_flange_is_found_through_a_veil_of_mixed_returns"],
+    fires: &["src/pipeline/web_face_tests.rs::stray_returns_on_one_plane_over_a_wide_flange_are_no_face"],
+    holds: &["src/pipeline/web_face_tests.rs::a_face_standing_on_the_flange_is_found_through_a_veil_of_mixed_returns"],
 };
 
 pub static TEE_STANDING_FACE_TOO_LOW: Rule = Rule {
@@ -652,9 +652,9 @@ pub static TEE_STANDING_FACE_TOO_LOW: Rule = Rule {
         source: Source::Constant { file: WEB_FACE, name: "MIN_FACE_HEIGHT_SPACINGS" },
     }],
     fires: &[
-        "src/pipeline/web_face.rs::a_flange_with_nothing_standing_on_it_or_a_face_too_low_or_over_it_gives_no_face",
+        "src/pipeline/web_face_tests.rs::a_flange_with_nothing_standing_on_it_or_a_face_too_low_or_over_it_gives_no_face",
     ],
-    holds: &["src/pipeline/web_face.rs::a_face_standing_on_the_flange_is_found_through_a_veil_of_mixed_returns"],
+    holds: &["src/pipeline/web_face_tests.rs::a_face_standing_on_the_flange_is_found_through_a_veil_of_mixed_returns"],
 };
 
 pub static JOINT_NOT_REQUESTED: Rule = Rule {

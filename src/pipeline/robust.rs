@@ -499,8 +499,8 @@ fn plan_topless_tee(
     if !fillet_asked && web_face::valley(ctx.cloud, &pieces, &search).is_some_and(|v| v.is_groove()) {
         return Err(in_view_refusal(ctx, &flange, &not_found)).seen_as(requested);
     }
-    // Under `t_fillet` every face standing on the flange is a web's (a
-    // block shows two); under `auto` the largest is named.
+    // Under `t_fillet` every face of the member standing on the flange
+    // is a web's (a block shows two); under `auto` the largest is named.
     let faces = if fillet_asked {
         web_face::find_all(ctx.cloud, &pieces, &search)
     } else {

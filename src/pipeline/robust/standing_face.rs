@@ -28,10 +28,10 @@
 //! plans exactly as it did without this reading. The rule is
 //! [`rules::background::WEB_FACE_WITHOUT_TOP`].
 //!
-//! Under `t_fillet`, with a lone layer in view, every face standing on it
-//! is a web's whose top is out of view, each planned as a tee of its own
-//! ([`plan_faces`]): a block standing on a plate shows two faces, and
-//! both feet are roots.
+//! Under `t_fillet`, with a lone layer in view, every face of the member
+//! standing on it ([`web_face::find_all`]) is a web's whose top is out of
+//! view, each planned as a tee of its own ([`plan_faces`]): a block
+//! standing on a plate shows two faces, and both feet are roots.
 
 use crate::geometry::Vec3;
 use crate::joint::JointType;
@@ -121,8 +121,8 @@ pub(super) fn face_tee<'a>(face: &'a StandingFace, flange_pieces: Vec<&'a PlaneC
     }
 }
 
-/// The roots of the faces standing on `flange`, each face a tee of its
-/// own whose top is out of view (a block standing on a plate shows two):
+/// The roots of the faces of a member standing on `flange`, each face a
+/// tee of its own whose top is out of view (a block shows two):
 /// every root planned, and a face whose tee is refused named among the
 /// joints not planned beside them. With none planned, the refusal of the
 /// first face (the one holding the most points), as for a lone face.

@@ -707,8 +707,9 @@ pub static WEB_FACE_WITHOUT_TOP: Rule = Rule {
              same from one face, so under `auto` the face is named and not planned, and a request for \
              `t_fillet` plans its root. With planes enough for a butt pair or a lap (a tube on a beam: the \
              beam's top in pieces either side of the tube, the table behind), both readings are proposed: \
-             the layers' where it passes its gates, else the face's root where it passes every gate of a \
-             tee, else the refusal of the reading that got further. A fixture's side is not taken for a \
+             the layers' where it passes its gates, else the root of each face of the member standing there \
+             (a box section shows two, meeting along an edge) where it passes every gate of a tee, else the \
+             refusal of the reading that got further. A fixture's side is not taken for a \
              web: its top is a plane nearer the camera than the plates, so the nearest layer is its top and \
              nothing stands on it; and a face seen no taller than a lap's upper plate is thick, which a \
              clamp or a bar whose top goes unseen can be, is not proposed.",

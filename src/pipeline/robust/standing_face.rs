@@ -28,10 +28,12 @@
 //! plans exactly as it did without this reading. The rule is
 //! [`rules::background::WEB_FACE_WITHOUT_TOP`].
 //!
-//! Under `t_fillet`, with a lone layer in view, every face of the member
-//! standing on it ([`web_face::find_all`]) is a web's whose top is out of
-//! view, each planned as a tee of its own ([`plan_faces`]): a block
-//! standing on a plate shows two faces, and both feet are roots.
+//! Every face of the member standing on the layer ([`web_face::find_all`])
+//! is a web's whose top is out of view, each planned as a tee of its own
+//! ([`plan_faces`]): a block or a box section shows two faces, and both
+//! feet are roots. So it is under `t_fillet` with a lone layer in view,
+//! and under `auto` beside a refused reading of the layers, where every
+//! face proposed must stand taller than a lap's upper plate.
 
 use crate::geometry::Vec3;
 use crate::joint::JointType;
@@ -44,10 +46,10 @@ use super::super::{PlanError, Unplanned, tee};
 use super::{Refused, Welds, face_search};
 use crate::pipeline::context::Context;
 
-/// The welds of the face standing on `flange` (the nearest layer of
-/// planes) where the layers' reading as `layout` was `refused` and the
-/// face's root passes every gate; else the refusal of the reading that got
-/// further.
+/// The welds of the faces of the member standing on `flange` (the
+/// nearest layer of planes; a box section shows two) where the layers'
+/// reading as `layout` was `refused` and a face's root passes every gate;
+/// else the refusal of the reading that got further.
 pub(super) fn instead_of_layers(
     ctx: &mut Context,
     flange: Vec<PlaneCluster>,
@@ -61,8 +63,8 @@ pub(super) fn instead_of_layers(
     // is searched, and a web standing square on its flange, seen from above
     // its flange, opens as a groove's flanks may (about 90°). The tee's
     // gates judge the web's angle to its flange.
-    let face = match web_face::find(ctx.cloud, &pieces, &search) {
-        Ok(face) => face,
+    let faces = match web_face::find_all(ctx.cloud, &pieces, &search) {
+        Ok(faces) => faces,
         Err(why) => {
             tracing::debug!(
                 rule = why.rule().id,
@@ -72,28 +74,37 @@ pub(super) fn instead_of_layers(
             return Err(refused);
         }
     };
+    // Each face must stand taller than a lap's upper plate: the largest,
+    // or nothing is proposed; a further face of the member, or it is left.
     let lap_step_max_mm = ctx.config.pipeline.lap_step_max_mm;
-    if face.seen_height_mm <= lap_step_max_mm {
+    let tall = |face: &StandingFace| face.seen_height_mm > lap_step_max_mm;
+    for face in faces.iter().filter(|face| !tall(face)) {
         tracing::debug!(
             rule = rules::background::WEB_FACE_WITHOUT_TOP.id,
             seen_height_mm = face.seen_height_mm,
             lap_step_max_mm,
             "a face no taller than a lap's upper plate stands on the nearest plane: a fixture's side, maybe; not proposed"
         );
+    }
+    if !tall(&faces[0]) {
         return Err(refused);
     }
+    let faces: Vec<StandingFace> = faces.into_iter().filter(|face| tall(face)).collect();
     let read_as = match layout {
         Layout::Butt => "a butt pair",
         Layout::Lap => "a lap",
         Layout::Tee => "a tee",
     };
-    let layers = format!(
-        "{}, taller than a lap's upper plate ({lap_step_max_mm:.0} mm); the layers read {read_as}, refused by {}",
-        face_evidence(&face, &flange),
-        refused.reason.rule.id,
-    );
-    tracing::debug!(rule = rules::background::WEB_FACE_WITHOUT_TOP.id, "{layers}");
-    tee::plan(ctx, face_tee(&face, pieces), layers).map_err(|e| further(refused, e, &format!("read as {read_as}")))
+    let rule = refused.reason.rule.id;
+    let evidence = |face: &StandingFace| {
+        let layers = format!(
+            "{}, taller than a lap's upper plate ({lap_step_max_mm:.0} mm); the layers read {read_as}, refused by {rule}",
+            face_evidence(face, &flange),
+        );
+        tracing::debug!(rule = rules::background::WEB_FACE_WITHOUT_TOP.id, "{layers}");
+        layers
+    };
+    plan_faces_with(ctx, &faces, &flange, evidence).map_err(|e| further(refused, e, &format!("read as {read_as}")))
 }
 
 /// What is seen of a face standing on `flange` with no web's top in view:
@@ -131,11 +142,21 @@ pub(super) fn plan_faces(
     faces: &[StandingFace],
     flange: &[PlaneCluster],
 ) -> Result<Welds, PlanError> {
+    plan_faces_with(ctx, faces, flange, |face| face_evidence(face, flange))
+}
+
+/// [`plan_faces`], each face's tee told what was seen by `evidence`.
+fn plan_faces_with(
+    ctx: &mut Context,
+    faces: &[StandingFace],
+    flange: &[PlaneCluster],
+    evidence: impl Fn(&StandingFace) -> String,
+) -> Result<Welds, PlanError> {
     let mut planned = Vec::new();
     let mut unplanned = Vec::new();
     let mut refused: Vec<(Vec3, PlanError)> = Vec::new();
     for face in faces {
-        let layers = face_evidence(face, flange);
+        let layers = evidence(face);
         match tee::plan(ctx, face_tee(face, flange.iter().collect()), layers) {
             Ok((welds, named)) => {
                 planned.extend(welds);

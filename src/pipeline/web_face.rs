@@ -489,6 +489,9 @@ impl Valley {
 /// holding the most of them, found by drawing planes as the web's face
 /// is found ([`best_plane`]) but at any tilt, since a groove's flank
 /// leans further than a web may, then refitted with outliers trimmed.
+/// Where no facet holds a face's worth of points, what rises is the lone
+/// plane's own unevenness (two plates read as one across an unresolved
+/// gap, slightly turned), and the plane through most of it describes it.
 pub fn valley(cloud: &PointCloud, flange_pieces: &[&PlaneCluster], s: &FaceSearch) -> Option<Valley> {
     let (flange, flange_points) = fillet::flange_plane(cloud, flange_pieces)?;
     let n = flange.normal;
@@ -504,20 +507,17 @@ pub fn valley(cloud: &PointCloud, flange_pieces: &[&PlaneCluster], s: &FaceSearc
     if rising.len() < MIN_FACE_POINTS {
         return None;
     }
-    let tolerance = s.on_plane_mm.max(FACE_TOLERANCE_SPACINGS * spacing);
-    let min_sin_to_ray = MIN_FACE_VIEW_DEG.to_radians().sin();
-    let facet = best_plane(&rising, tolerance, |normal, ray| normal.dot(ray).abs() >= min_sin_to_ray)?;
-    let on_facet: Vec<Vec3> = rising.iter().copied().filter(|p| facet.signed_distance(p).abs() <= tolerance).collect();
-    if on_facet.len() < MIN_FACE_POINTS {
-        return None;
-    }
-    let fit = fillet::fit_face(&on_facet, s.trim_sigma)?;
-    // A valley's two faces meet: a facet that stops over the lone plane
-    // (a second plate's top, a ledge) makes none with it.
-    let lowest = fit.inliers.iter().map(height).fold(f64::INFINITY, f64::min);
-    if lowest > margin + FOOT_REACH_SPACINGS * spacing {
-        return None;
-    }
+    // A valley's two faces meet: a surface that stops over the plane (a
+    // second plate's top, a ledge) makes none with it.
+    let foot_reach = margin + FOOT_REACH_SPACINGS * spacing;
+    let comes_down = |fit: &fillet::FaceFit| fit.inliers.iter().map(height).fold(f64::INFINITY, f64::min) <= foot_reach;
+    // Where no facet holds a face's worth of points, what rises is the
+    // lone plane's own unevenness (two plates read as one, slightly
+    // turned), described by the plane through most of it.
+    let fit = rising_facet(&rising, s)
+        .filter(comes_down)
+        .or_else(|| fillet::fit_face(&rising, s.trim_sigma).filter(|fit| 2 * fit.inliers.len() >= rising.len()))
+        .filter(comes_down)?;
     // Both normals into the workpiece, away from the camera.
     let m = if fit.plane.normal.dot(&fit.centroid) >= 0.0 { fit.plane.normal } else { -fit.plane.normal };
     let opening_deg = 180.0 - n.dot(&m).clamp(-1.0, 1.0).acos().to_degrees();
@@ -528,6 +528,20 @@ pub fn valley(cloud: &PointCloud, flange_pieces: &[&PlaneCluster], s: &FaceSearc
         slants_deg: [slant(&n, &flange_centroid), slant(&m, &fit.centroid)],
         points: fit.inliers.len(),
     })
+}
+
+/// The facet holding the most of `rising` (points over a lone plane),
+/// refitted with outliers trimmed, where it holds a face's worth of
+/// points.
+fn rising_facet(rising: &[Vec3], s: &FaceSearch) -> Option<fillet::FaceFit> {
+    let tolerance = s.on_plane_mm.max(FACE_TOLERANCE_SPACINGS * s.point_spacing_mm);
+    let min_sin_to_ray = MIN_FACE_VIEW_DEG.to_radians().sin();
+    let facet = best_plane(rising, tolerance, |normal, ray| normal.dot(ray).abs() >= min_sin_to_ray)?;
+    let on_facet: Vec<Vec3> = rising.iter().copied().filter(|p| facet.signed_distance(p).abs() <= tolerance).collect();
+    if on_facet.len() < MIN_FACE_POINTS {
+        return None;
+    }
+    fillet::fit_face(&on_facet, s.trim_sigma)
 }
 
 /// A rectangle in the flange's plane round its points, widened by a

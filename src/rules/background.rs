@@ -240,7 +240,8 @@ pub static TOO_FEW_PLANES: Rule = Rule {
              With fewer than two facing surfaces the frame shows at most one plate, or one surface where the \
              plates lie closer than the cloud resolves. The refusal says what rises beside the lone plane, read \
              on the facet holding the most of it that comes down to the plane (a block's two faces are no one \
-             plane, and a plane through both would lie near the plate's own): two faces meeting in a valley wider than a web stands on its flange, or obtuse and seen down its middle \
+             plane, and a plane through both would lie near the plate's own), or where no facet holds a \
+             face's worth of points, on the plane through most of it: two faces meeting in a valley wider than a web stands on its flange, or obtuse and seen down its middle \
              (both faces turned about as far from the rays), are a groove's two flanks with no plate top in view, \
              and no tee is tried under `auto`; two faces within a few degrees of one plane are one surface, \
              one plate or a butt's plates seen as one.",

@@ -116,7 +116,7 @@ use flange_edge::root_from_flange_edge;
 use frame::{WebFrame, side_seen, web_frame};
 
 pub use face::MIN_FACE_VIEW_DEG;
-pub(super) use face::fit_face;
+pub(super) use face::{FaceFit, fit_face};
 pub(super) use frame::{flange_plane, height_margin, valid_points};
 
 /// The fewest face points that make a face: a handful of returns on a web

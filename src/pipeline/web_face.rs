@@ -174,9 +174,10 @@ pub fn find_all(
     flange_pieces: &[&PlaneCluster],
     s: &FaceSearch,
 ) -> Result<Vec<StandingFace>, NotRead> {
-    let over = OverFlange::of(cloud, flange_pieces, s)?;
+    let mut over = OverFlange::of(cloud, flange_pieces, s)?;
     let first = over.face_among(&over.candidates)?;
-    let mut left = over.candidates.clone();
+    // The candidates are read from here on only as what is left.
+    let mut left = std::mem::take(&mut over.candidates);
     let mut last_plane = first.0.plane;
     let mut kept = vec![first];
     for _ in 1..MAX_STANDING_FACES {

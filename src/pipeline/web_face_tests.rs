@@ -63,10 +63,9 @@ fn a_face_standing_on_the_flange_is_found_through_a_veil_of_mixed_returns() {
 
 #[test]
 fn a_groove_s_two_flanks_are_told_from_a_web_standing_on_its_flange() {
-    let settings = SETTINGS;
     let valley_of = |points: &[Vec3], lone: &dyn Fn(&Vec3) -> bool| {
         let cloud = cloud_of(points);
-        valley(&cloud, &[&PlaneCluster::of_points(points, lone)], &settings)
+        valley(&cloud, &[&PlaneCluster::of_points(points, lone)], &SETTINGS)
     };
     // Two flanks 30 mm wide, each sloping 27.5° up from a root under
     // the camera along y: a groove opening 125°, its plate tops out of
@@ -116,10 +115,9 @@ fn a_groove_s_two_flanks_are_told_from_a_web_standing_on_its_flange() {
 
 #[test]
 fn a_valley_is_read_on_one_facet_of_what_rises_not_a_plane_through_them_all() {
-    let settings = SETTINGS;
     let valley_of = |points: &[Vec3]| {
         let cloud = cloud_of(points);
-        valley(&cloud, &[&PlaneCluster::of_points(points, |p| p.z == 700.0)], &settings)
+        valley(&cloud, &[&PlaneCluster::of_points(points, |p| p.z == 700.0)], &SETTINGS)
     };
     // A block standing on a plate, its corner at (FACE_X, CORNER_Y):
     // the camera, at the origin, sees its face towards +x (52 mm
@@ -140,7 +138,7 @@ fn a_valley_is_read_on_one_facet_of_what_rises_not_a_plane_through_them_all() {
     assert!((seen.opening_deg - 90.0).abs() < 1.0, "{seen:?}");
     // The larger face, every point of it that rises over the margin
     // and no other.
-    let margin = fillet::height_margin(settings.on_plane_mm, settings.point_spacing_mm);
+    let margin = fillet::height_margin(SETTINGS.on_plane_mm, SETTINGS.point_spacing_mm);
     let rows_over_margin = (1..=60).filter(|&h| f64::from(h) >= margin).count();
     assert_eq!(seen.points, 52 * rows_over_margin, "{seen:?}");
     assert!(!seen.is_groove() && !seen.describe().contains("one surface"), "{}", seen.describe());
@@ -154,10 +152,9 @@ fn a_valley_is_read_on_one_facet_of_what_rises_not_a_plane_through_them_all() {
 
 #[test]
 fn every_face_standing_on_the_flange_is_found_and_a_face_once() {
-    let settings = SETTINGS;
     let faces_of = |points: &[Vec3]| {
         let cloud = cloud_of(points);
-        find_all(&cloud, &[&PlaneCluster::of_points(points, |p| p.z == 700.0)], &settings)
+        find_all(&cloud, &[&PlaneCluster::of_points(points, |p| p.z == 700.0)], &SETTINGS)
     };
     // A block on a plate, its corner at (FACE_X, -150): its face
     // towards +x (52 mm along y) and towards +y (48 mm along x), each

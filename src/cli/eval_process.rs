@@ -24,6 +24,7 @@ use weldseam::eval::along_seam::FigureErrors;
 use weldseam::eval::process::{ProcessScore, score, worst};
 use weldseam::pipeline::{PlanRequest, Planner};
 use weldseam::process::Procedure;
+use weldseam::rules;
 use weldseam::sim::draw::{Draw, is_unseen};
 use weldseam::sim::{ProcessCase, ProcessScene, process_suite};
 
@@ -193,7 +194,17 @@ fn row(scene: &ProcessScene, s: &ProcessScore, missed: &[&str]) -> Vec<String> {
             .iter()
             .map(|c| format!("{:.0} across, {:.0} along, {:.0} up", c.x, c.y, c.z))
             .collect::<Vec<_>>();
-        let cut = s.cut.iter().map(|(rule, n)| format!("{rule} ×{n}")).collect::<Vec<_>>().join(", ");
+        let cut = s
+            .cut
+            .iter()
+            .map(|(rule, n)| match s.cut_outside_in_truth {
+                m if m > 0 && *rule == rules::process::OUTSIDE_PROCEDURE.id => {
+                    format!("{rule} ×{n} ({m} outside in truth too)")
+                }
+                _ => format!("{rule} ×{n}"),
+            })
+            .collect::<Vec<_>>()
+            .join(", ");
         if contacts.is_empty() { cut } else { format!("{cut} (contact mm from the first: {})", contacts.join("; ")) }
     };
     vec![

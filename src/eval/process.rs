@@ -37,7 +37,7 @@ use crate::pipeline::along_seam::JointFigures;
 use crate::pipeline::seam_process::{WaypointProcess, layout_for};
 use crate::pipeline::{Plan, PlanError, Seam};
 use crate::process::clearance::{Obstacles, Station, contact};
-use crate::process::{JointSection, Layout, PassKind, Procedure, VGroove, fillet_section};
+use crate::process::{JointSection, Layout, PassKind, Procedure, VGroove, fillet_section, weld_station};
 use crate::rules;
 use crate::sim::process_scenes::{ClampBlock, ProcessScene};
 use crate::sim::{JointGeometry, Simulation};
@@ -82,6 +82,10 @@ pub struct ProcessScore {
     pub waypoints: usize,
     /// Waypoints cut, per rule id.
     pub cut: BTreeMap<&'static str, usize>,
+    /// Of the waypoints cut by `process.outside_procedure`, those where
+    /// the true joint lies outside the procedure too: the procedure asks
+    /// for that cut, so it does not count against welding all along.
+    pub cut_outside_in_truth: usize,
     pub gap: FigureErrors,
     pub high_low: FigureErrors,
     /// A share of the true area.
@@ -137,10 +141,12 @@ impl ProcessScore {
         })
     }
 
-    /// The deposit within its share at every waypoint, none cut.
+    /// The deposit within its share at every waypoint, none cut but where
+    /// the true joint is outside the procedure.
     pub fn deposit_met(&self) -> Option<bool> {
+        let cut: usize = self.cut.values().sum();
         (self.refused.is_none() && self.waypoints > 0)
-            .then(|| self.cut.is_empty() && worst(&self.deposit).is_some_and(|w| w <= AREA_SHARE))
+            .then(|| cut == self.cut_outside_in_truth && worst(&self.deposit).is_some_and(|w| w <= AREA_SHARE))
     }
 
     /// A multi-pass layout filling the true groove within its share, no
@@ -294,6 +300,12 @@ fn score_seam(
     if let Some(p) = &seam.process {
         for c in &p.cut {
             *score.cut.entry(c.rule.id).or_default() += c.last + 1 - c.first;
+            if c.rule.id == rules::process::OUTSIDE_PROCEDURE.id {
+                score.cut_outside_in_truth += (c.first..=c.last)
+                    .filter_map(|k| in_workpiece.get(k))
+                    .filter(|w| true_joint_outside(scene, procedure, w.y, thickness))
+                    .count();
+            }
             if let (Some(contact), Some(w)) = (c.contact_camera, in_workpiece.get(c.first)) {
                 score.blocked_contacts.push(frames.workpiece_from_camera(&contact) - w);
             }
@@ -380,9 +392,23 @@ fn true_groove(scene: &ProcessScene) -> Option<VGroove> {
 /// The true joint's cross-section and crown at `y` under the procedure,
 /// mm², or None where the procedure has no entry for it.
 fn true_weld_area(scene: &ProcessScene, procedure: &Procedure, y: f64, thickness_mm: f64) -> Option<f64> {
-    let joint = scene.case.joint();
-    let entry = procedure.entry(joint, thickness_mm)?;
+    let entry = procedure.entry(scene.case.joint(), thickness_mm)?;
     let allowance = entry.leg_gap_allowance_mm.unwrap_or(0.0);
+    Some(true_section(scene, procedure, y, thickness_mm)?.weld_area(procedure, allowance))
+}
+
+/// Whether the procedure refuses the true joint at `y` (no entry for it,
+/// or a figure outside the entry's ranges): there a cut by
+/// `process.outside_procedure` is what the procedure asks for.
+fn true_joint_outside(scene: &ProcessScene, procedure: &Procedure, y: f64, thickness_mm: f64) -> bool {
+    true_section(scene, procedure, y, thickness_mm)
+        .is_none_or(|section| weld_station(procedure, scene.case.joint(), thickness_mm, &section).is_err())
+}
+
+/// The true joint's cross-section at `y`, as the procedure's section
+/// reads one, or None where the scene's joint has none there.
+fn true_section(scene: &ProcessScene, procedure: &Procedure, y: f64, thickness_mm: f64) -> Option<JointSection> {
+    let joint = scene.case.joint();
     let section = match scene.spec.joint {
         JointGeometry::IButt { .. } => JointSection::SquareButt { thickness_mm, gap_mm: scene.gap_at(y)? },
         JointGeometry::VButt { .. } => JointSection::VGroove(true_groove(scene)?),
@@ -394,7 +420,7 @@ fn true_weld_area(scene: &ProcessScene, procedure: &Procedure, y: f64, thickness
         }
         (s, _) => s,
     };
-    Some(section.weld_area(procedure, allowance))
+    Some(section)
 }
 
 /// Whether a point (workpiece frame) lies in the scene's true V-groove,

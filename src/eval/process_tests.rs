@@ -73,6 +73,11 @@ fn the_targets_are_met_only_within_their_bounds() {
     assert_eq!(s.deposit_met(), Some(true));
     s.cut.insert("process.outside_procedure", 1);
     assert_eq!(s.deposit_met(), Some(false), "a stretch cut is not welded all along");
+    s.cut_outside_in_truth = 1;
+    assert_eq!(s.deposit_met(), Some(true), "a cut where the true joint is outside the procedure is asked for");
+    s.cut.insert("process.torch_blocked", 2);
+    assert_eq!(s.deposit_met(), Some(false), "other cuts still count");
+    s.cut.remove("process.torch_blocked");
 
     assert_eq!(s.passes_met(), None, "no waypoint of several passes");
     s.fill = vec![0.03];

@@ -54,7 +54,13 @@ const MIN_FACE_TRIM_MM: f64 = 0.05;
 /// flange, or why the face gives none.
 pub(super) fn root_from_face(view: &TeeView, frame: &WebFrame, sign: f64, side: Side) -> Result<Root, NotRead> {
     let spacing = view.point_spacing_mm;
-    let margin = height_margin(view.on_plane_mm, spacing);
+    // The flange's own scatter keeps its points out of the face as it
+    // takes them in beside the root: where the flange strays past the
+    // on-plane tolerance, its points stand as high over the plane along
+    // the face's foot, and beyond the face's ends they would read as a
+    // foot where no face stands.
+    let on_flange = frame.on_flange_mm(view.on_plane_mm);
+    let margin = height_margin(on_flange, spacing);
     let ((inner, reach), h_hi) = frame.face_band(view, sign, margin);
     let face_points: Vec<Vec3> = valid_points(view.cloud)
         .filter(|p| {
@@ -150,7 +156,7 @@ pub(super) fn root_from_face(view: &TeeView, frame: &WebFrame, sign: f64, side: 
     let web_width = 2.0 * frame.half_width;
     let mut beside: Vec<Vec3> = Vec::new();
     let mut under_web: Vec<f64> = Vec::new();
-    for p in valid_points(view.cloud).filter(|p| frame.height_of(p).abs() <= view.on_plane_mm) {
+    for p in valid_points(view.cloud).filter(|p| frame.height_of(p).abs() <= on_flange) {
         let out = (p - p0).dot(&w);
         if (margin..=flange_reach).contains(&out) {
             beside.push(p);

@@ -7,7 +7,7 @@
 
 use crate::cloud::PointCloud;
 use crate::geometry::fit::{Moments, Plane};
-use crate::geometry::{Vec3, vec3};
+use crate::geometry::{MAD_PER_SIGMA, Vec3, vec3};
 
 use super::super::background::PlaneCluster;
 use super::super::web_face::StandingFace;
@@ -31,6 +31,16 @@ const HEIGHT_MARGIN_SPACINGS: f64 = 1.0;
 /// plane and to tell which sides of the web it lies on.
 const FLANGE_SAMPLES: usize = 20_000;
 
+/// A point is on the flange within this many of the flange's own scatter
+/// about its plane ([`WebFrame::flange_scatter_mm`]), when that is wider
+/// than the configured on-plane tolerance: all but about one in a hundred
+/// of a normally spread flange's points. A camera noisier than the one
+/// the tolerance was set for, or a flange a millimetre off flat over its
+/// length (a real plate, a block's top), otherwise loses the flange's
+/// points beside a root wherever they stray past the tolerance, and the
+/// root's evidence breaks there.
+pub(super) const FLANGE_SCATTER_SIGMAS: f64 = 2.5;
+
 /// The web's frame: where its top is and how the flange lies.
 #[derive(Debug, Clone, Copy)]
 pub(super) struct WebFrame {
@@ -52,6 +62,9 @@ pub(super) struct WebFrame {
     /// The side (`sign`) of the one face seen, when the web's top is not:
     /// `middle` and `half_width` then place that face, not the top.
     pub(super) face_only: Option<f64>,
+    /// The flange's points' scatter about its plane, mm: the median
+    /// distance over [`MAD_PER_SIGMA`], a sigma no stray point widens.
+    pub(super) flange_scatter_mm: f64,
 }
 
 impl WebFrame {
@@ -62,6 +75,13 @@ impl WebFrame {
 
     pub(super) fn height_of(&self, p: &Vec3) -> f64 {
         self.flange_offset - self.n.dot(p)
+    }
+
+    /// How near its plane a point lies on the flange, mm: the on-plane
+    /// tolerance, or [`FLANGE_SCATTER_SIGMAS`] of the flange's own scatter
+    /// where that is wider.
+    pub(super) fn on_flange_mm(&self, on_plane_mm: f64) -> f64 {
+        on_plane_mm.max(FLANGE_SCATTER_SIGMAS * self.flange_scatter_mm)
     }
 
     pub(super) fn across(&self, p: &Vec3) -> f64 {
@@ -115,6 +135,17 @@ fn flange_samples(cloud: &PointCloud, pieces: &[&PlaneCluster]) -> Vec<Vec3> {
         .collect()
 }
 
+/// The scatter of `heights` about nil, mm: their median magnitude over
+/// [`MAD_PER_SIGMA`] (0 without any).
+fn scatter_mm(heights: impl Iterator<Item = f64>) -> f64 {
+    let mut magnitudes: Vec<f64> = heights.map(f64::abs).filter(|h| h.is_finite()).collect();
+    if magnitudes.is_empty() {
+        return 0.0;
+    }
+    let mid = magnitudes.len() / 2;
+    *magnitudes.select_nth_unstable_by(mid, f64::total_cmp).1 / MAD_PER_SIGMA
+}
+
 /// The margin, mm, that keeps a plane's own points (and their noise) out
 /// of a face standing on it: [`HEIGHT_MARGIN_SPACINGS`] spacings, and at
 /// least the on-plane tolerance.
@@ -153,7 +184,8 @@ pub(super) fn web_frame(view: &TeeView, turned: bool) -> Option<WebFrame> {
         flange_points.iter().filter(beyond_rim).take(MIN_FACE_POINTS).count() >= MIN_FACE_POINTS
     };
     let flange_sides = [flange_on(-1.0), flange_on(1.0)];
-    (frame.height > 0.0).then_some(WebFrame { flange_sides, ..frame })
+    let flange_scatter_mm = scatter_mm(flange_points.iter().map(|p| frame.height_of(p)));
+    (frame.height > 0.0).then_some(WebFrame { flange_sides, flange_scatter_mm, ..frame })
 }
 
 /// The web's frame from its top: along its long axis (or, for a member
@@ -178,6 +210,7 @@ fn frame_from_top(cloud: &PointCloud, top: &PlaneCluster, flange: &Plane, outlin
         height: flange.offset - n.dot(&origin),
         flange_sides: [false; 2],
         face_only: None,
+        flange_scatter_mm: 0.0,
     })
 }
 
@@ -201,6 +234,7 @@ fn frame_from_face(face: &StandingFace, flange: &Plane) -> Option<WebFrame> {
         height: face.seen_height_mm,
         flange_sides: [false; 2],
         face_only: Some(sign),
+        flange_scatter_mm: 0.0,
     })
 }
 

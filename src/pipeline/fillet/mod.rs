@@ -93,6 +93,8 @@ mod flange_edge;
 mod frame;
 #[cfg(test)]
 mod member_tests;
+#[cfg(test)]
+mod noisy_flange_tests;
 mod stretch;
 #[cfg(test)]
 mod tests;

@@ -10,7 +10,7 @@ use crate::pipeline::view_border::ViewBorder;
 
 /// Where the web stands across the camera's x: 200 mm to the camera's
 /// −x, so the camera (at the origin, looking down +z) sees its +x face.
-const WEB_X: f64 = -200.0;
+pub(super) const WEB_X: f64 = -200.0;
 
 /// A web face standing on a flange: the flange z = 700, the face x =
 /// WEB_X + 5, points on the face from 1 to 39 mm above the flange,
@@ -271,11 +271,11 @@ fn assert_on_plus_x_face(root: &Root) {
 }
 
 /// The ids of the rules that moved or cut `root`'s ends.
-fn ids(root: &Root) -> Vec<&'static str> {
+pub(super) fn ids(root: &Root) -> Vec<&'static str> {
     root.ends_set_by.iter().map(|r| r.id).collect()
 }
 
-fn ends_y(root: &Root) -> [f64; 2] {
+pub(super) fn ends_y(root: &Root) -> [f64; 2] {
     [root.line.s_min, root.line.s_max].map(|s| root.line.at(s).y)
 }
 
@@ -357,13 +357,13 @@ fn roots_with_flange_pieces(pts: &[Vec3], pieces: &[&dyn Fn(&Vec3) -> bool]) -> 
     find_roots(&test_view(&cloud, Web::Top(&top), &pieces))
 }
 
-fn cloud_of(pts: &[Vec3]) -> PointCloud {
+pub(super) fn cloud_of(pts: &[Vec3]) -> PointCloud {
     PointCloud::unorganized(pts.iter().map(|p| [p.x as f32, p.y as f32, p.z as f32]).collect())
 }
 
 /// The tee of `web` on `flange_pieces` in `cloud`: a point spacing of
 /// 1 mm, a 1 mm rim trimmed, the default tolerances, no image border.
-fn test_view<'a>(cloud: &'a PointCloud, web: Web<'a>, flange_pieces: &'a [&'a PlaneCluster]) -> TeeView<'a> {
+pub(super) fn test_view<'a>(cloud: &'a PointCloud, web: Web<'a>, flange_pieces: &'a [&'a PlaneCluster]) -> TeeView<'a> {
     TeeView {
         cloud,
         web,

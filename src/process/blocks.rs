@@ -447,11 +447,27 @@ impl<'a> BlockIndex<'a> {
     /// (infinite where no such point is): such a point's block is listed
     /// in the cell `(u, v)` falls in or one next to it.
     pub fn least_range_near(&self, u: f64, v: f64) -> f64 {
+        self.least_range_round(self.coarse_cell_of(u, v))
+    }
+
+    /// The coarse cell `(u, v)` falls in, clipped to the grid, as
+    /// [`BlockIndex::least_range_round`] reads it (`None` where the frame
+    /// has no point with a ray): [`BlockIndex::least_range_near`] in two
+    /// halves, so a run of rays can be placed before any bound is read.
+    #[inline]
+    pub fn coarse_cell_of(&self, u: f64, v: f64) -> Option<usize> {
         if self.binned == 0 {
-            return f64::INFINITY;
+            return None;
         }
         let [i, _, j, _] = self.cells_of(&[u, u, v, v]);
-        self.nearest_round[j * self.grid_wide + i]
+        Some(j * self.grid_wide + i)
+    }
+
+    /// [`BlockIndex::least_range_near`]'s bound for the cell
+    /// [`BlockIndex::coarse_cell_of`] gave.
+    #[inline]
+    pub fn least_range_round(&self, cell: Option<usize>) -> f64 {
+        cell.map_or(f64::INFINITY, |c| self.nearest_round[c])
     }
 
     /// A range no point whose ray lies in `rect` is nearer than, mm

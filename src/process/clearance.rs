@@ -84,13 +84,6 @@ enum Hidden<'a> {
 }
 
 impl Hidden<'_> {
-    fn hides(&self, p: &Vec3) -> bool {
-        match self {
-            Hidden::Grid(shadows) => shadows.hides(p),
-            Hidden::Lazy(shadows) => shadows.hides(p),
-        }
-    }
-
     /// Whether no point within `radius` of `centre` is hidden, known
     /// without asking point by point: `false` where some may be, and
     /// always over the whole frame's grid, which is asked point by point.
@@ -98,6 +91,23 @@ impl Hidden<'_> {
         match self {
             Hidden::Grid(_) => false,
             Hidden::Lazy(shadows) => shadows.clears_ball(centre, radius),
+        }
+    }
+
+    /// Whether each of `points` in turn is behind a seen surface, handed
+    /// to `visit` with its index until it returns `false`: over an organized frame,
+    /// a run of points placed before any is looked up
+    /// ([`LazyShadows::hides_each`]).
+    fn hides_each(&self, points: &[Vec3], mut visit: impl FnMut(usize, bool) -> bool) {
+        match self {
+            Hidden::Grid(shadows) => {
+                for (k, p) in points.iter().enumerate() {
+                    if !visit(k, shadows.hides(p)) {
+                        return;
+                    }
+                }
+            }
+            Hidden::Lazy(shadows) => shadows.hides_each(points, visit),
         }
     }
 }
@@ -172,6 +182,12 @@ struct SurfaceSample {
 /// sample by sample, stays short. Speed only: a sample is ruled out only
 /// where it cannot be hidden.
 const SURFACE_PIECE_MM: f64 = 8.0;
+
+/// How many of a piece's surface samples are placed on the torch and
+/// handed to the hidden space together: a few dozen, on the stack. Speed
+/// only: they are asked about in order, and the asking stops where the
+/// contact is made.
+const SURFACE_RUN_SAMPLES: usize = 32;
 
 /// A torch's surface samples, nearest the aim point first, and the
 /// pieces they are ruled out by: each a run of samples, the point of the
@@ -401,14 +417,23 @@ fn hidden_contact(torch: &Torch, obstacles: &Obstacles, point: &Vec3, axis: &Vec
         if hidden.shadows.clears_ball(&(point + axis * *mid), *radius) {
             continue;
         }
-        for q in &surface.samples[samples.clone()] {
-            let p = point + axis * q.s + e1 * q.a + e2 * q.b;
-            if hidden.shadows.hides(&p) {
-                first.get_or_insert(p);
-                behind += 1;
-                if behind >= MIN_CONTACT_POINTS {
-                    return first;
+        // The samples a run at a time, each run placed on the torch
+        // before the hidden space is asked about any of it.
+        for run in surface.samples[samples.clone()].chunks(SURFACE_RUN_SAMPLES) {
+            let mut at = [Vec3::zeros(); SURFACE_RUN_SAMPLES];
+            for (p, q) in at.iter_mut().zip(run) {
+                *p = point + axis * q.s + e1 * q.a + e2 * q.b;
+            }
+            let at = &at[..run.len()];
+            hidden.shadows.hides_each(at, |k, hides| {
+                if hides {
+                    first.get_or_insert(at[k]);
+                    behind += 1;
                 }
+                behind < MIN_CONTACT_POINTS
+            });
+            if behind >= MIN_CONTACT_POINTS {
+                return first;
             }
         }
     }

@@ -610,7 +610,21 @@ impl<'a> BlockIndex<'a> {
     /// Visits every point within `radius` of `centre` (strictly inside the
     /// squared distance, as [`super::rays::RayIndex::near`] promises), and
     /// possibly some beyond it; the caller tests each.
-    pub fn near(&self, centre: &Vec3, radius: f64, mut visit: impl FnMut(&[f32; 3])) {
+    pub fn near(&self, centre: &Vec3, radius: f64, visit: impl FnMut(&[f32; 3])) {
+        self.near_where(centre, radius, |_, _| true, visit);
+    }
+
+    /// [`BlockIndex::near`], passing over every block and patch whose box
+    /// of points (its least and greatest coordinates) `keep` rejects: for
+    /// a caller who knows a box holds none of the points it wants
+    /// (`keep` must return `true` for any box holding one).
+    pub fn near_where(
+        &self,
+        centre: &Vec3,
+        radius: f64,
+        keep: impl Fn(&[f32; 3], &[f32; 3]) -> bool,
+        mut visit: impl FnMut(&[f32; 3]),
+    ) {
         self.aside.iter().for_each(&mut visit);
         let everything = [f64::NEG_INFINITY, f64::INFINITY, f64::NEG_INFINITY, f64::INFINITY];
         let rect = Self::window(centre, radius).unwrap_or(everything);
@@ -622,11 +636,12 @@ impl<'a> BlockIndex<'a> {
         let reach = radius + BOX_SLACK_MM;
         let reach_squared = reach * reach;
         self.blocks_meeting(&rect, near, far, |b| {
-            if self.block_boxes[b].distance_squared(centre) > reach_squared {
+            let block = &self.block_boxes[b];
+            if block.distance_squared(centre) > reach_squared || !keep(&block.min, &block.max) {
                 return;
             }
             for (k, patch) in self.patch_boxes[b * PATCHES_PER_BLOCK..(b + 1) * PATCHES_PER_BLOCK].iter().enumerate() {
-                if patch.distance_squared(centre) <= reach_squared {
+                if patch.distance_squared(centre) <= reach_squared && keep(&patch.min, &patch.max) {
                     self.patch_points(b, k, &mut visit);
                 }
             }

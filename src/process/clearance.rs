@@ -61,10 +61,19 @@ enum Index<'a> {
 }
 
 impl Index<'_> {
-    fn near(&self, centre: &Vec3, radius: f64, visit: impl FnMut(&[f32; 3])) {
+    /// Visits the points within `radius` of `centre`, and possibly some
+    /// beyond; an index by blocks passes over the boxes of points `keep`
+    /// rejects ([`BlockIndex::near_where`]).
+    fn near(
+        &self,
+        centre: &Vec3,
+        radius: f64,
+        keep: impl Fn(&[f32; 3], &[f32; 3]) -> bool,
+        visit: impl FnMut(&[f32; 3]),
+    ) {
         match self {
             Index::Rays(index) => index.near(centre, radius, visit),
-            Index::Blocks(index) => index.near(centre, radius, visit),
+            Index::Blocks(index) => index.near_where(centre, radius, keep, visit),
         }
     }
 
@@ -303,10 +312,28 @@ impl<'a> Obstacles<'a> {
         self.hidden.is_some()
     }
 
-    /// Visits the points within `radius` of `centre`, and possibly some
-    /// beyond.
-    fn near(&self, centre: &Vec3, radius: f64, mut visit: impl FnMut(Vec3)) {
-        self.index.near(centre, radius, |p| visit(Vec3::new(p[0].into(), p[1].into(), p[2].into())));
+    /// Visits the points within `radius` of `centre` whose distance up
+    /// `axis` (unit) from `from` lies within `[s0, s1]`, and possibly
+    /// some others.
+    fn near_in_stretch(
+        &self,
+        centre: &Vec3,
+        radius: f64,
+        (from, axis, s0, s1): (&Vec3, &Vec3, f64, f64),
+        mut visit: impl FnMut(Vec3),
+    ) {
+        // The distances up the axis a box's points may have lie within
+        // its centre's, give or take its half-extents along the axis.
+        let keep = |min: &[f32; 3], max: &[f32; 3]| {
+            let (mut mid, mut half) = (0.0, 0.0);
+            for k in 0..3 {
+                let (lo, hi) = (f64::from(min[k]) - from[k], f64::from(max[k]) - from[k]);
+                mid += (lo + hi) / 2.0 * axis[k];
+                half += (hi - lo) / 2.0 * axis[k].abs();
+            }
+            mid + half >= s0 - STRETCH_SLACK_MM && mid - half <= s1 + STRETCH_SLACK_MM
+        };
+        self.index.near(centre, radius, keep, |p| visit(Vec3::new(p[0].into(), p[1].into(), p[2].into())));
     }
 }
 
@@ -366,6 +393,11 @@ fn radius_at(torch: &Torch, s: f64) -> Option<f64> {
     };
     Some(r + torch.margin_mm)
 }
+
+/// How far a box of points is kept beyond a piece of the torch's stretch
+/// of axis, mm, against the rounding of the distances up the axis: far
+/// above a double's error over metres, far below a point's spacing.
+const STRETCH_SLACK_MM: f64 = 1e-3;
 
 /// The fewest cloud points inside the torch that make a contact: a
 /// surface the torch could touch returns many points at the cloud's
@@ -501,7 +533,7 @@ fn seen_contact(torch: &Torch, obstacles: &Obstacles, point: &Vec3, axis: &Vec3)
         // The farthest a point the grown piece holds can be from the
         // camera bounds its growth.
         let reach = reach + edge_per_mm * (centre.norm() + 2.0 * reach);
-        obstacles.near(&centre, reach, |q| {
+        obstacles.near_in_stretch(&centre, reach, (point, &axis, s0, s1), |q| {
             let d = q - point;
             let s = d.dot(&axis);
             if s < s0 || s > s1 || (s == s1 && !last_piece) {

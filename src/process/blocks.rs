@@ -447,11 +447,27 @@ impl<'a> BlockIndex<'a> {
     /// (infinite where no such point is): such a point's block is listed
     /// in the cell `(u, v)` falls in or one next to it.
     pub fn least_range_near(&self, u: f64, v: f64) -> f64 {
+        self.least_range_round(self.coarse_cell_of(u, v))
+    }
+
+    /// The coarse cell `(u, v)` falls in, clipped to the grid, as
+    /// [`BlockIndex::least_range_round`] reads it (`None` where the frame
+    /// has no point with a ray): [`BlockIndex::least_range_near`] in two
+    /// halves, so a run of rays can be placed before any bound is read.
+    #[inline]
+    pub fn coarse_cell_of(&self, u: f64, v: f64) -> Option<usize> {
         if self.binned == 0 {
-            return f64::INFINITY;
+            return None;
         }
         let [i, _, j, _] = self.cells_of(&[u, u, v, v]);
-        self.nearest_round[j * self.grid_wide + i]
+        Some(j * self.grid_wide + i)
+    }
+
+    /// [`BlockIndex::least_range_near`]'s bound for the cell
+    /// [`BlockIndex::coarse_cell_of`] gave.
+    #[inline]
+    pub fn least_range_round(&self, cell: Option<usize>) -> f64 {
+        cell.map_or(f64::INFINITY, |c| self.nearest_round[c])
     }
 
     /// A range no point whose ray lies in `rect` is nearer than, mm
@@ -594,7 +610,21 @@ impl<'a> BlockIndex<'a> {
     /// Visits every point within `radius` of `centre` (strictly inside the
     /// squared distance, as [`super::rays::RayIndex::near`] promises), and
     /// possibly some beyond it; the caller tests each.
-    pub fn near(&self, centre: &Vec3, radius: f64, mut visit: impl FnMut(&[f32; 3])) {
+    pub fn near(&self, centre: &Vec3, radius: f64, visit: impl FnMut(&[f32; 3])) {
+        self.near_where(centre, radius, |_, _| true, visit);
+    }
+
+    /// [`BlockIndex::near`], passing over every block and patch whose box
+    /// of points (its least and greatest coordinates) `keep` rejects: for
+    /// a caller who knows a box holds none of the points it wants
+    /// (`keep` must return `true` for any box holding one).
+    pub fn near_where(
+        &self,
+        centre: &Vec3,
+        radius: f64,
+        keep: impl Fn(&[f32; 3], &[f32; 3]) -> bool,
+        mut visit: impl FnMut(&[f32; 3]),
+    ) {
         self.aside.iter().for_each(&mut visit);
         let everything = [f64::NEG_INFINITY, f64::INFINITY, f64::NEG_INFINITY, f64::INFINITY];
         let rect = Self::window(centre, radius).unwrap_or(everything);
@@ -606,11 +636,12 @@ impl<'a> BlockIndex<'a> {
         let reach = radius + BOX_SLACK_MM;
         let reach_squared = reach * reach;
         self.blocks_meeting(&rect, near, far, |b| {
-            if self.block_boxes[b].distance_squared(centre) > reach_squared {
+            let block = &self.block_boxes[b];
+            if block.distance_squared(centre) > reach_squared || !keep(&block.min, &block.max) {
                 return;
             }
             for (k, patch) in self.patch_boxes[b * PATCHES_PER_BLOCK..(b + 1) * PATCHES_PER_BLOCK].iter().enumerate() {
-                if patch.distance_squared(centre) <= reach_squared {
+                if patch.distance_squared(centre) <= reach_squared && keep(&patch.min, &patch.max) {
                     self.patch_points(b, k, &mut visit);
                 }
             }

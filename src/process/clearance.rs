@@ -61,10 +61,19 @@ enum Index<'a> {
 }
 
 impl Index<'_> {
-    fn near(&self, centre: &Vec3, radius: f64, visit: impl FnMut(&[f32; 3])) {
+    /// Visits the points within `radius` of `centre`, and possibly some
+    /// beyond; an index by blocks passes over the boxes of points `keep`
+    /// rejects ([`BlockIndex::near_where`]).
+    fn near(
+        &self,
+        centre: &Vec3,
+        radius: f64,
+        keep: impl Fn(&[f32; 3], &[f32; 3]) -> bool,
+        visit: impl FnMut(&[f32; 3]),
+    ) {
         match self {
             Index::Rays(index) => index.near(centre, radius, visit),
-            Index::Blocks(index) => index.near(centre, radius, visit),
+            Index::Blocks(index) => index.near_where(centre, radius, keep, visit),
         }
     }
 
@@ -84,13 +93,6 @@ enum Hidden<'a> {
 }
 
 impl Hidden<'_> {
-    fn hides(&self, p: &Vec3) -> bool {
-        match self {
-            Hidden::Grid(shadows) => shadows.hides(p),
-            Hidden::Lazy(shadows) => shadows.hides(p),
-        }
-    }
-
     /// Whether no point within `radius` of `centre` is hidden, known
     /// without asking point by point: `false` where some may be, and
     /// always over the whole frame's grid, which is asked point by point.
@@ -98,6 +100,23 @@ impl Hidden<'_> {
         match self {
             Hidden::Grid(_) => false,
             Hidden::Lazy(shadows) => shadows.clears_ball(centre, radius),
+        }
+    }
+
+    /// Whether each of `points` in turn is behind a seen surface, handed
+    /// to `visit` with its index until it returns `false`: over an organized frame,
+    /// a run of points placed before any is looked up
+    /// ([`LazyShadows::hides_each`]).
+    fn hides_each(&self, points: &[Vec3], mut visit: impl FnMut(usize, bool) -> bool) {
+        match self {
+            Hidden::Grid(shadows) => {
+                for (k, p) in points.iter().enumerate() {
+                    if !visit(k, shadows.hides(p)) {
+                        return;
+                    }
+                }
+            }
+            Hidden::Lazy(shadows) => shadows.hides_each(points, visit),
         }
     }
 }
@@ -172,6 +191,12 @@ struct SurfaceSample {
 /// sample by sample, stays short. Speed only: a sample is ruled out only
 /// where it cannot be hidden.
 const SURFACE_PIECE_MM: f64 = 8.0;
+
+/// How many of a piece's surface samples are placed on the torch and
+/// handed to the hidden space together: a few dozen, on the stack. Speed
+/// only: they are asked about in order, and the asking stops where the
+/// contact is made.
+const SURFACE_RUN_SAMPLES: usize = 32;
 
 /// A torch's surface samples, nearest the aim point first, and the
 /// pieces they are ruled out by: each a run of samples, the point of the
@@ -287,10 +312,28 @@ impl<'a> Obstacles<'a> {
         self.hidden.is_some()
     }
 
-    /// Visits the points within `radius` of `centre`, and possibly some
-    /// beyond.
-    fn near(&self, centre: &Vec3, radius: f64, mut visit: impl FnMut(Vec3)) {
-        self.index.near(centre, radius, |p| visit(Vec3::new(p[0].into(), p[1].into(), p[2].into())));
+    /// Visits the points within `radius` of `centre` whose distance up
+    /// `axis` (unit) from `from` lies within `[s0, s1]`, and possibly
+    /// some others.
+    fn near_in_stretch(
+        &self,
+        centre: &Vec3,
+        radius: f64,
+        (from, axis, s0, s1): (&Vec3, &Vec3, f64, f64),
+        mut visit: impl FnMut(Vec3),
+    ) {
+        // The distances up the axis a box's points may have lie within
+        // its centre's, give or take its half-extents along the axis.
+        let keep = |min: &[f32; 3], max: &[f32; 3]| {
+            let (mut mid, mut half) = (0.0, 0.0);
+            for k in 0..3 {
+                let (lo, hi) = (f64::from(min[k]) - from[k], f64::from(max[k]) - from[k]);
+                mid += (lo + hi) / 2.0 * axis[k];
+                half += (hi - lo) / 2.0 * axis[k].abs();
+            }
+            mid + half >= s0 - STRETCH_SLACK_MM && mid - half <= s1 + STRETCH_SLACK_MM
+        };
+        self.index.near(centre, radius, keep, |p| visit(Vec3::new(p[0].into(), p[1].into(), p[2].into())));
     }
 }
 
@@ -351,6 +394,11 @@ fn radius_at(torch: &Torch, s: f64) -> Option<f64> {
     Some(r + torch.margin_mm)
 }
 
+/// How far a box of points is kept beyond a piece of the torch's stretch
+/// of axis, mm, against the rounding of the distances up the axis: far
+/// above a double's error over metres, far below a point's spacing.
+const STRETCH_SLACK_MM: f64 = 1e-3;
+
 /// The fewest cloud points inside the torch that make a contact: a
 /// surface the torch could touch returns many points at the cloud's
 /// spacing, while a structured-light camera's sparse outliers (about one
@@ -401,14 +449,23 @@ fn hidden_contact(torch: &Torch, obstacles: &Obstacles, point: &Vec3, axis: &Vec
         if hidden.shadows.clears_ball(&(point + axis * *mid), *radius) {
             continue;
         }
-        for q in &surface.samples[samples.clone()] {
-            let p = point + axis * q.s + e1 * q.a + e2 * q.b;
-            if hidden.shadows.hides(&p) {
-                first.get_or_insert(p);
-                behind += 1;
-                if behind >= MIN_CONTACT_POINTS {
-                    return first;
+        // The samples a run at a time, each run placed on the torch
+        // before the hidden space is asked about any of it.
+        for run in surface.samples[samples.clone()].chunks(SURFACE_RUN_SAMPLES) {
+            let mut at = [Vec3::zeros(); SURFACE_RUN_SAMPLES];
+            for (p, q) in at.iter_mut().zip(run) {
+                *p = point + axis * q.s + e1 * q.a + e2 * q.b;
+            }
+            let at = &at[..run.len()];
+            hidden.shadows.hides_each(at, |k, hides| {
+                if hides {
+                    first.get_or_insert(at[k]);
+                    behind += 1;
                 }
+                behind < MIN_CONTACT_POINTS
+            });
+            if behind >= MIN_CONTACT_POINTS {
+                return first;
             }
         }
     }
@@ -476,7 +533,7 @@ fn seen_contact(torch: &Torch, obstacles: &Obstacles, point: &Vec3, axis: &Vec3)
         // The farthest a point the grown piece holds can be from the
         // camera bounds its growth.
         let reach = reach + edge_per_mm * (centre.norm() + 2.0 * reach);
-        obstacles.near(&centre, reach, |q| {
+        obstacles.near_in_stretch(&centre, reach, (point, &axis, s0, s1), |q| {
             let d = q - point;
             let s = d.dot(&axis);
             if s < s0 || s > s1 || (s == s1 && !last_piece) {

@@ -371,3 +371,73 @@ fn the_hidden_space_answers_every_torch_as_if_indexed_for_it() {
     }
     assert!(touched > 0 && touched < 15, "{touched} of 15 poses touch: the test must see both");
 }
+
+/// The 60 degree V-groove of [`thick_v_groove`] as a camera at the origin
+/// sees it: an organized frame of `width` x `height` pixels, one ray every
+/// 0.0007 in `(x / z, y / z)` (0.42 mm at the plates' tops), single
+/// precision.
+fn thick_v_frame(width: usize, height: usize) -> Vec<[f32; 3]> {
+    let slope = 30f64.to_radians().tan();
+    let mut points = Vec::new();
+    for j in 0..height {
+        for i in 0..width {
+            let (u, v) = ((i as f64 - width as f64 / 2.0) * 0.0007, (j as f64 - height as f64 / 2.0) * 0.0007);
+            // The plates' tops at z = 600 beyond the groove's edges, the
+            // flanks falling to the root at z = 620 within them.
+            let z = if 600.0 * u.abs() >= 20.0 * slope { 600.0 } else { 620.0 / (1.0 + u.abs() / slope) };
+            points.push([(u * z) as f32, (v * z) as f32, z as f32]);
+        }
+    }
+    points
+}
+
+/// Over an organized frame the search reads the blocks of pixels, passing
+/// over the boxes of points beside each piece's stretch of axis; it finds
+/// the contact a scan of every point finds, torch by torch.
+fn organized_search_agrees_with_a_scan(poses: &[(f64, f64, f64, f64)]) -> usize {
+    let p = Procedure::example();
+    let thick = p.torch_for(p.entry(crate::joint::JointType::VButt, 20.0).expect("a thick V entry"));
+    let (width, height) = (161, 121);
+    let frame = thick_v_frame(width, height);
+    let obstacles = Obstacles::seen_in_organized_frame(&frame, width, &thick);
+    let edge_per_mm = EDGE_SPACINGS * obstacles.spacing_per_mm;
+    assert!(edge_per_mm > 0.0, "a camera's frame reaches past its points");
+    let points: Vec<Vec3> = frame.iter().map(|p| Vec3::new(p[0].into(), p[1].into(), p[2].into())).collect();
+    let station = thick_v_station();
+    let mut touched = 0;
+    for &(across_mm, up_mm, work, travel) in poses {
+        let aim = Aim { across_mm, up_mm, work_angle_deg: work };
+        let (at, axis) = (aim.point(&station), station.axis(work, travel));
+        let fast = seen_contact(&thick, &obstacles, &at, &axis).map(|q| (q - at).dot(&axis.normalize()));
+        let scan = contact_by_scan(&thick, &points, &at, &axis, edge_per_mm);
+        assert_eq!(fast.map(|s| (s * 1e6).round()), scan.map(|s| (s * 1e6).round()), "{aim:?}, travel {travel}");
+        touched += usize::from(scan.is_some());
+    }
+    touched
+}
+
+#[test]
+fn the_search_over_a_frames_blocks_finds_what_a_scan_finds_in_a_groove() {
+    let mut poses = Vec::new();
+    for across_mm in [-4.0, 0.0, 5.0] {
+        for up_mm in [0.0, 6.0, 14.0] {
+            for work in [-30.0, -10.0, 0.0, 20.0] {
+                poses.push((across_mm, up_mm, work, 10.0));
+            }
+        }
+    }
+    let touched = organized_search_agrees_with_a_scan(&poses);
+    assert!(touched > 0 && touched < poses.len(), "{touched} of {} poses touch: the test must see both", poses.len());
+}
+
+proptest::proptest! {
+    #![proptest_config(proptest::prelude::ProptestConfig::with_cases(16))]
+
+    /// Random torches in and over the groove.
+    #[test]
+    fn random_torches_in_a_groove_meet_what_a_scan_finds(
+        poses in proptest::collection::vec((-8f64..8.0, -2f64..20.0, -40f64..40.0, -5f64..25.0), 1..6),
+    ) {
+        organized_search_agrees_with_a_scan(&poses);
+    }
+}

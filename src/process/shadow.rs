@@ -94,6 +94,7 @@ impl Layout {
 
     /// The cell `(i, j)` of the ray through `p`, if `p` is in front of the
     /// camera and its ray on the grid.
+    #[inline]
     fn cell_of(&self, p: &Vec3) -> Option<(usize, usize)> {
         if p.z <= MIN_DEPTH_MM {
             return None;
@@ -209,6 +210,25 @@ const CELL_REACH_SLACK: f64 = 1e-6;
 /// the working distance, so a torch reads few tiles and a tile few blocks.
 pub const TILE_CELLS: usize = 16;
 
+/// How many points [`LazyShadows::hides_each`] places before it looks
+/// any of them up: enough that their divisions overlap, few enough to
+/// keep on the stack. Speed only.
+const RUN_POINTS: usize = 16;
+
+/// A point as [`LazyShadows::hides`] reads it: its cell of the grid (none
+/// off the grid or at the camera's plane), its range, mm, and the blocks'
+/// coarse cell its ray falls in (none where the blocks do not prune).
+#[derive(Clone, Copy)]
+struct Placed {
+    cell: Option<(usize, usize)>,
+    range: f64,
+    coarse: Option<usize>,
+}
+
+impl Placed {
+    const NOWHERE: Placed = Placed { cell: None, range: 0.0, coarse: None };
+}
+
 /// [`Shadows`] of an organized frame, laid over the same grid (the frame's
 /// own least ray, the same cells) but computed a tile at a time, the first
 /// time a point on the tile's rays is asked about: the torch reads the
@@ -243,19 +263,55 @@ impl<'a> LazyShadows<'a> {
     /// Whether `p` (camera frame, mm) lies behind a surface the camera
     /// saw: what [`Shadows::hides`] answers for the same frame.
     pub fn hides(&self, p: &Vec3) -> bool {
-        let Some((i, j)) = self.layout.cell_of(p) else { return false };
+        self.hides_placed(&self.place(p))
+    }
+
+    /// [`LazyShadows::hides`] for each of `points` in turn, handed to
+    /// `visit` with its index until `visit` returns `false`: the same
+    /// answer for each point, with the rays and ranges of a run of them
+    /// worked out before any is looked up, so that their divisions and
+    /// roots proceed side by side instead of each question waiting on
+    /// its own.
+    pub fn hides_each(&self, points: &[Vec3], mut visit: impl FnMut(usize, bool) -> bool) {
+        for (run, chunk) in points.chunks(RUN_POINTS).enumerate() {
+            let mut placed = [Placed::NOWHERE; RUN_POINTS];
+            for (out, p) in placed.iter_mut().zip(chunk) {
+                *out = self.place(p);
+            }
+            for (k, placed) in placed[..chunk.len()].iter().enumerate() {
+                if !visit(run * RUN_POINTS + k, self.hides_placed(placed)) {
+                    return;
+                }
+            }
+        }
+    }
+
+    /// A point's cell, its range and, where the blocks prune, their
+    /// coarse cell its ray falls in: everything [`LazyShadows::hides`]
+    /// divides for.
+    #[inline]
+    fn place(&self, p: &Vec3) -> Placed {
+        let cell = self.layout.cell_of(p);
+        let coarse =
+            if self.prunes && cell.is_some() { self.blocks.coarse_cell_of(p.x / p.z, p.y / p.z) } else { None };
+        Placed { cell, range: p.norm(), coarse }
+    }
+
+    #[inline]
+    fn hides_placed(&self, placed: &Placed) -> bool {
+        let Some((i, j)) = placed.cell else { return false };
         // Nearer than every point round its ray, by more than the rounding
         // of a range, a point is in front of whatever the nine cells saw:
         // most of a torch in the air is answered so, with no tile laid.
         // (The nine cells reach two cells from the point's ray, within
         // half a coarse cell of the blocks where `prunes` holds.)
-        if self.prunes && p.norm() <= self.blocks.least_range_near(p.x / p.z, p.y / p.z) + BEHIND_TOLERANCE_MM / 2.0 {
+        if self.prunes && placed.range <= self.blocks.least_range_round(placed.coarse) + BEHIND_TOLERANCE_MM / 2.0 {
             return false;
         }
         let (ti, tj) = (i / TILE_CELLS, j / TILE_CELLS);
         let tile = self.tiles[tj * self.tiles_wide + ti].get_or_init(|| self.tile(ti, tj));
         let (i0, width) = (ti * TILE_CELLS, (((ti + 1) * TILE_CELLS).min(self.layout.width)) - ti * TILE_CELLS);
-        (p.norm() as f32) > tile[(j - tj * TILE_CELLS) * width + (i - i0)]
+        (placed.range as f32) > tile[(j - tj * TILE_CELLS) * width + (i - i0)]
     }
 
     /// Whether no point within `radius` of `centre` is behind a seen

@@ -187,6 +187,22 @@ fn lazy_agrees_and_clears(points: &[Vec3], width: usize, spacing: f64, queries: 
         .filter(|d| d.norm() > 0.0)
         .map(|d| d.normalize())
         .collect();
+    // Asked a run at a time, in order, the same answers; and the asking
+    // stops where it is told to.
+    let mut answered = Vec::new();
+    lazy.hides_each(queries, |k, hides| {
+        answered.push((k, hides));
+        true
+    });
+    let expected: Vec<(usize, bool)> = queries.iter().map(|p| grid.hides(p)).enumerate().collect();
+    assert_eq!(answered, expected);
+    let stop = queries.len() / 2;
+    let mut asked = 0;
+    lazy.hides_each(queries, |k, _| {
+        asked += 1;
+        k < stop
+    });
+    assert_eq!(asked, (stop + 1).min(queries.len()));
     for p in queries {
         assert_eq!(lazy.hides(p), grid.hides(p), "{p:?}");
         hidden += usize::from(grid.hides(p));

@@ -54,11 +54,11 @@ const MIN_FACE_TRIM_MM: f64 = 0.05;
 /// flange, or why the face gives none.
 pub(super) fn root_from_face(view: &TeeView, frame: &WebFrame, sign: f64, side: Side) -> Result<Root, NotRead> {
     let spacing = view.point_spacing_mm;
-    // The flange's own scatter keeps its points out of the face as it
-    // takes them in beside the root: where the flange strays past the
-    // on-plane tolerance, its points stand as high over the plane along
-    // the face's foot, and beyond the face's ends they would read as a
-    // foot where no face stands.
+    // The flange's own scatter sets both which points are the flange
+    // beside the root and where the face's points begin: a flange that
+    // strays past the on-plane tolerance has points standing that high
+    // over its plane, and taken for the face's they would make a foot
+    // where no face stands (on the bare flange past a web's end).
     let on_flange = frame.on_flange_mm(view.on_plane_mm);
     let margin = height_margin(on_flange, spacing);
     let ((inner, reach), h_hi) = frame.face_band(view, sign, margin);

@@ -1,9 +1,9 @@
-//! The web's frame: the flange's plane fitted to its pieces, the web's
-//! long axis laid in it and the direction across, where the web's middle
-//! and its top's edges lie across it, how high the top stands, and which
-//! sides of the web the flange is seen on. Read from the web's top, or,
-//! with the top out of view, from the one side face seen standing on the
-//! flange.
+//! The web's frame: the flange's plane fitted to its pieces and how far
+//! its points scatter about it, the web's long axis laid in it and the
+//! direction across, where the web's middle and its top's edges lie
+//! across it, how high the top stands, and which sides of the web the
+//! flange is seen on. Read from the web's top, or, with the top out of
+//! view, from the one side face seen standing on the flange.
 
 use crate::cloud::PointCloud;
 use crate::geometry::fit::{Moments, Plane};

@@ -138,6 +138,10 @@ pub struct PipelineParams {
     /// plate's true boundary, mm.
     pub boundary_band_mm: f64,
     /// A point lies on a plate's plane when within this distance of it.
+    /// Beside a tee's root, the flange's points are read within the wider
+    /// of this and 2.5 times the flange's measured scatter
+    /// (`pipeline::fillet`), since a noisier camera's flange would lose its
+    /// points there.
     pub on_plane_tolerance_mm: f64,
     /// Degree n of the least-squares polynomial (Eq. 17); 1 for straight seams.
     pub fit_degree: u32,

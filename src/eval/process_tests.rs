@@ -162,3 +162,21 @@ fn a_stretch_the_clamp_hides_is_not_a_missing_figure() {
     assert_eq!((s.high_low.unseen, s.high_low.missing), (10, 0));
     assert_eq!(s.figures_met(), Some(true));
 }
+
+/// The opening gap's true joint against the example procedure: inside it
+/// where the gap is narrower than the entry's limit, outside past it, so
+/// a cut there is the one the procedure asks for.
+#[test]
+fn the_true_joint_is_outside_the_procedure_only_past_its_limit() {
+    let scene = scene_of(ProcessCase::OpeningGap);
+    let procedure = Procedure::example();
+    let thickness = scene.plate_thickness_mm();
+    let [y0, y1] = scene.spec.seam_range();
+    // The ramp reaches the entry's 3 mm limit at the seam's end: 5 mm
+    // before it the gap is inside the entry's range, 5 mm past it (the
+    // ramp carried on) outside.
+    let gap = |y: f64| scene.gap_at(y).expect("a butt's gap");
+    for (y, outside) in [(y0, false), (y1 - 5.0, false), (y1 + 5.0, true)] {
+        assert_eq!(true_joint_outside(&scene, &procedure, y, thickness), outside, "at {:.3} mm", gap(y));
+    }
+}

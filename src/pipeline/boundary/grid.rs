@@ -1,6 +1,27 @@
 //! The boundary read on a pixel grid: each scan line walked outward
 //! across the coarse edge while its pixels stay on the plate's plane, and
 //! on past the coarse edge's ends to the plate's corners.
+//!
+//! Where the plate ends over a depth jump (a gap with the table seen
+//! through it, a lap's upper plate over the lower one), a pixel whose
+//! footprint straddles the edge returns a blend of both depths along its
+//! own ray: a mixed pixel, off the plate and off the surface beyond. It
+//! may be the plate's last pixel or the first one beyond, and nothing in
+//! its depth says which, so the plate ends within it; two of them (both
+//! pixels mixed) hold the edge between them. The rule "the plate ends
+//! half a pixel past its last on-plane pixel" alone stops a pixel short
+//! wherever the plate's own last pixel is mixed, which reads every gap
+//! seen through too wide by about half a pixel on each side, and a
+//! procedure's gap limit is crossed by that. The walk therefore steps
+//! over a run of up to [`MAX_MIXED_PIXELS`] mixed pixels ([`Walker::mixed_run`])
+//! and places the edge at the run's middle. A face beyond the edge (a
+//! bevel, a wall) is no mixture: its pixels lie on the line through the
+//! surface beyond, and the plate ends before them. Nor is the face that
+//! joins the plate's edge to the surface beyond, where the camera sees it
+//! (a lap's upper plate seen from its edge's side, a gap's wall turned
+//! towards the camera): seen across one or two pixels it lies between
+//! the two surfaces as a blend would, so the run is read only where that
+//! face turns its back to the camera's rays and no pixel can lie on it.
 
 use crate::cloud::PointCloud;
 use crate::geometry::fit::Plane;
@@ -16,6 +37,20 @@ struct Walker<'a> {
     /// Walk along columns (true) or rows, and in which sense.
     along_cols: bool,
     sense: isize,
+}
+
+/// The most pixels a mixed return spans at one edge: the plate's last
+/// pixel and the first one beyond, each of whose footprints may straddle
+/// the edge.
+pub const MAX_MIXED_PIXELS: isize = 2;
+
+/// A pixel in the plate's cross-section along a scan line: how far out
+/// across the edge (`out`) and how far off the plate's plane (`height`),
+/// mm.
+#[derive(Debug, Clone, Copy)]
+struct Profile {
+    out: f64,
+    height: f64,
 }
 
 impl Walker<'_> {
@@ -38,6 +73,67 @@ impl Walker<'_> {
         (self.plane.signed_distance(&v).abs() <= self.params.on_plane_mm
             && self.outward_of(&v).abs() <= self.params.band_mm)
             .then_some(v)
+    }
+
+    fn profile_at(&self, scanline: usize, k: isize) -> Option<Profile> {
+        let p = self.cloud.points()[self.index(scanline, k)?];
+        if !p[0].is_finite() {
+            return None;
+        }
+        let v = vec3(&p);
+        Some(Profile { out: self.outward_of(&v), height: self.plane.signed_distance(&v) })
+    }
+
+    /// How many pixels past `last` (the plate's last on-plane pixel) are
+    /// mixed returns: 0 where the next pixel is no mixture (a dropout, a
+    /// face beyond, or the surface beyond itself). A run of `n` is mixed
+    /// when the two pixels after it lie off the plate on one side of it
+    /// and at least half the plate's pixel `step` apart across the edge
+    /// (the surface beyond, seen rather than edge-on: a veil of mixed
+    /// returns along one ray is no surface), and every pixel of the run
+    /// lies between the plate and the line through those two, more than
+    /// the on-plane tolerance from both: on neither surface, as a blend
+    /// along a ray lies. The longest run that is mixed wins, so a second
+    /// mixed pixel is not taken for the surface beyond. None is read where
+    /// the camera sees the face joining the plate's edge to the surface
+    /// beyond ([`Walker::joining_face_seen`]).
+    fn mixed_run(&self, scanline: usize, last: isize, step: f64) -> isize {
+        let tolerance = self.params.on_plane_mm;
+        let at = |n: isize| self.profile_at(scanline, last + n * self.sense);
+        let Some(last_point) = self.index(scanline, last).map(|i| vec3(&self.cloud.points()[i])) else { return 0 };
+        (1..=MAX_MIXED_PIXELS)
+            .rev()
+            .find(|&n| {
+                let (Some(b0), Some(b1)) = (at(n + 1), at(n + 2)) else { return false };
+                let side = b0.height.signum();
+                if b0.height.abs() <= tolerance
+                    || b1.height * side <= tolerance
+                    || b1.out - b0.out < step / 2.0
+                    || self.joining_face_seen(&last_point, side)
+                {
+                    return false;
+                }
+                let beyond = |out: f64| b0.height + (b1.height - b0.height) * (out - b0.out) / (b1.out - b0.out);
+                (1..=n).all(|m| {
+                    at(m).is_some_and(|p| {
+                        let (height, surface) = (p.height * side, beyond(p.out) * side);
+                        height > tolerance && height < surface - tolerance
+                    })
+                })
+            })
+            .unwrap_or(0)
+    }
+
+    /// Whether the camera (at the origin) sees the face that joins the
+    /// plate's edge at `last` to a surface beyond on the `side` of the
+    /// plate's plane (the sign of its signed distance). Behind the plate,
+    /// that face is the plate's own, facing outward, seen where the ray
+    /// runs inward; in front, it is the nearer surface's, facing back
+    /// across the edge, seen where the ray runs outward.
+    fn joining_face_seen(&self, last: &Vec3, side: f64) -> bool {
+        let behind = side != self.plane.signed_distance(&Vec3::zeros()).signum();
+        let ray_outward = last.dot(&self.edge.outward);
+        if behind { ray_outward < 0.0 } else { ray_outward > 0.0 }
     }
 
     /// Walks outward from position `k` on `scanline` and returns the
@@ -67,7 +163,10 @@ impl Walker<'_> {
         }
         let step =
             previous.map(|p| self.outward_of(&last) - self.outward_of(&p)).filter(|s| *s > 0.0).unwrap_or(mean_step);
-        let position = self.plane.project(&last) + self.edge.outward * (step / 2.0);
+        // The plate ends half a step past its last pixel, or within the
+        // run of mixed pixels after it, at the run's middle.
+        let steps_past_last = (self.mixed_run(scanline, k, step) + 1) as f64 / 2.0;
+        let position = self.plane.project(&last) + self.edge.outward * (step * steps_past_last);
         Some((k, BoundarySample { position, along: (position - self.edge.point).dot(&self.edge.direction) }))
     }
 }

@@ -5,9 +5,11 @@
 //! On a pixel grid the true boundary can be read directly: walk each scan
 //! line outward across the coarse weld edge while the pixels stay on the
 //! plate's plane; the plate ends between the last such pixel and the next,
-//! so the boundary sample is half a pixel step beyond the last one. The
-//! walk also runs past the ends of the coarse edge, so the samples reach
-//! the plate's corners and give the seam's true extent.
+//! so the boundary sample is half a pixel step beyond the last one, or,
+//! where the pixels at a depth jump return a blend of both depths (mixed
+//! pixels), in the middle of the mixed run ([`grid`]). The walk also runs
+//! past the ends of the coarse edge, so the samples reach the plate's
+//! corners and give the seam's true extent.
 //!
 //! Without a grid ([`sample_scattered`]) the same rule is read from the
 //! points themselves: cut the band beside the coarse edge into strips two

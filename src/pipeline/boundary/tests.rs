@@ -83,6 +83,119 @@ fn samples_lie_on_the_true_edge_within_a_quarter_pixel() {
     assert!(worst < 0.6 * pixel, "worst offset {worst} mm");
 }
 
+/// A frontal plate at 700 mm as [`frame`] draws it (no end), its pixels
+/// `shift` columns off the image's centre; past its edge, the surface the
+/// ray through (x, y) at 700 mm meets is `beyond(x, y)` mm from the
+/// camera; and on each row the plate's last pixel and the first pixel
+/// beyond mixed as `mixed(row)` says: each `Some(t)` a blend `t` of the
+/// way from its own depth to the other's, along its ray, as a depth
+/// camera returns one.
+fn frame_with(
+    edge_x: f64,
+    shift: f64,
+    beyond: impl Fn(f64, f64) -> f64,
+    mixed: impl Fn(usize) -> [Option<f64>; 2],
+) -> (PointCloud, Vec<u32>) {
+    let camera = CameraModel::default();
+    let (w, h) = (80, 80);
+    let mut pts = vec![[0.0f32; 3]; w * h];
+    let mut members = Vec::new();
+    for row in 0..h {
+        let ray = |col: usize| camera.ray(camera.cx() - 40.0 + shift + col as f64, camera.cy() - 40.0 + row as f64);
+        let depth = |col: usize| {
+            let r = ray(col);
+            let (x, y) = (r[0] * 700.0, r[1] * 700.0);
+            if x < edge_x + SLOPE * y { 700.0 } else { beyond(x, y) }
+        };
+        let last = (0..w).take_while(|&col| depth(col) == 700.0).last().unwrap();
+        let [plate_side, beyond_side] = mixed(row);
+        for col in 0..w {
+            let mut z = depth(col);
+            if col == last
+                && let Some(t) = plate_side
+            {
+                z += t * (depth(last + 1) - z);
+            }
+            if col == last + 1
+                && let Some(t) = beyond_side
+            {
+                z += t * (depth(last) - z);
+            }
+            let r = ray(col);
+            if depth(col) == 700.0 && (r[0] * 700.0) < edge_x + SLOPE * (r[1] * 700.0) - 1.0 {
+                members.push((row * w + col) as u32);
+            }
+            pts[row * w + col] = [(r[0] * z) as f32, (r[1] * z) as f32, z as f32];
+        }
+    }
+    (PointCloud::organized(w, h, pts).unwrap(), members)
+}
+
+/// The samples' mean and worst offset from the edge x = `edge_x` + SLOPE y
+/// of [`frame_with`]'s plate, in pixels.
+fn offsets_in_pixels(cloud: &PointCloud, members: &[u32], edge_x: f64) -> (f64, f64) {
+    let plane = Plane { normal: Vec3::z(), offset: 700.0 };
+    let direction = Vec3::new(SLOPE, 1.0, 0.0).normalize();
+    let outward = Vec3::new(1.0, -SLOPE, 0.0).normalize();
+    let edge = CoarseEdge { point: Vec3::new(edge_x - 1.2, 0.0, 700.0), direction, outward };
+    let params = BoundaryParams { band_mm: 3.0, on_plane_mm: 0.4 };
+    let samples = sample_boundary(cloud, members, &plane, &edge, &params).samples;
+    assert_eq!(samples.len(), 80);
+    let pixel = 700.0 / CameraModel::default().fx();
+    let offset = |p: &Vec3| (p.x - edge_x - SLOPE * p.y) * outward.x / pixel;
+    let mean = samples.iter().map(|s| offset(&s.position)).sum::<f64>() / samples.len() as f64;
+    (mean, samples.iter().map(|s| offset(&s.position).abs()).fold(0.0, f64::max))
+}
+
+#[test]
+fn mixed_pixels_at_the_edge_neither_widen_nor_narrow_a_gap_seen_through() {
+    // The table 40 mm beyond; the rows take turns: no mixed pixel, the
+    // plate's last one mixed, the first one beyond mixed, both, each
+    // blended a quarter to three quarters of the way.
+    let blend = |row: usize| 0.25 + 0.5 * ((row * 7) % 11) as f64 / 10.0;
+    let mixed = |row: usize| match row % 4 {
+        0 => [None, None],
+        1 => [Some(blend(row)), None],
+        2 => [None, Some(blend(row))],
+        _ => [Some(blend(row)), Some(blend(row + 1))],
+    };
+    let (cloud, members) = frame_with(3.1, 0.0, |_, _| 740.0, mixed);
+    let (mean, worst) = offsets_in_pixels(&cloud, &members, 3.1);
+    // Stopping at the first mixed pixel reads the plate's end a pixel
+    // short on half the rows: half a pixel on average.
+    assert!(mean.abs() < 0.1, "mean offset {mean} pixels");
+    assert!(worst < 1.1, "worst offset {worst} pixels");
+}
+
+#[test]
+fn a_face_beyond_the_edge_is_no_mixture_and_the_plate_ends_before_it() {
+    // A bevel going down from the edge at 60 degrees to the plate (1.7 mm
+    // deeper per mm out), to the table 40 mm beyond: its pixels lie on a
+    // surface. The walk takes those within the on-plane tolerance (0.4 mm,
+    // 0.24 mm out) for the plate, and ends half a pixel past the last.
+    let bevel = |x: f64, y: f64| (700.0 + 1.7 * (x - 3.1 - SLOPE * y)).min(740.0);
+    let (cloud, members) = frame_with(3.1, 0.0, bevel, |_| [None, None]);
+    let (mean, worst) = offsets_in_pixels(&cloud, &members, 3.1 + 0.4 / 1.7);
+    assert!(mean.abs() < 0.1, "mean offset {mean} pixels");
+    assert!(worst < 0.6, "worst offset {worst} pixels");
+}
+
+#[test]
+fn a_face_the_camera_sees_below_the_edge_is_no_mixture() {
+    // A 6 mm plate 35 mm left of the optical axis on a lower plate: the
+    // rays run inward as they go down (about 0.05 mm per mm), so the
+    // plate's edge face is seen across one or two pixels, each between
+    // the two plates as a mixed pixel would be, but on the face: the
+    // plate ends half a pixel past its last pixel on top.
+    let edge_x = -35.0;
+    let face_or_floor = |x: f64, y: f64| (700.0 * (edge_x + SLOPE * y) / x).min(706.0);
+    let shift = edge_x * CameraModel::default().fx() / 700.0;
+    let (cloud, members) = frame_with(edge_x, shift, face_or_floor, |_| [None, None]);
+    let (mean, worst) = offsets_in_pixels(&cloud, &members, edge_x);
+    assert!(mean.abs() < 0.1, "mean offset {mean} pixels");
+    assert!(worst < 0.6, "worst offset {worst} pixels");
+}
+
 #[test]
 fn the_band_alone_gives_the_plates_samples_and_extremes() {
     let (cloud, members) = frame(3.1, 2.0);

@@ -22,6 +22,11 @@
 //! towards the camera): seen across one or two pixels it lies between
 //! the two surfaces as a blend would, so the run is read only where that
 //! face turns its back to the camera's rays and no pixel can lie on it.
+//!
+//! Near a corner whose end the scan lines cross obliquely, the last
+//! lines walk out through the plate's end, short of the edge by up to
+//! the band's width; [`turned_off_the_edge`] sets those samples apart by
+//! the way the boundary runs through them.
 
 use crate::cloud::PointCloud;
 use crate::geometry::fit::Plane;
@@ -237,11 +242,46 @@ pub fn sample_boundary(
     extend_past_ends(&walker, &mut found, mean_step);
     found.sort_by_key(|(line, _, _)| *line);
     let line_spacing_mm = median_line_spacing(&found);
-    Boundary {
-        samples: found.into_iter().map(|(_, _, s)| s).collect(),
-        line_spacing_mm,
-        extent_rule: ExtentRule::AllSamples,
+    let turned = turned_off_the_edge(&found, edge);
+    let (mut samples, mut across_other_edge) = (Vec::new(), Vec::new());
+    for ((_, _, sample), turned) in found.into_iter().zip(turned) {
+        if turned { across_other_edge.push(sample) } else { samples.push(sample) }
     }
+    Boundary { samples, across_other_edge, line_spacing_mm, extent_rule: ExtentRule::AllSamples }
+}
+
+/// How many sampled lines away, each side, a sample's neighbours are
+/// that tell which way the boundary runs through it.
+pub const TURN_LINES: usize = 2;
+
+/// Which samples' walks left the plate across another of its edges than
+/// the one sampled. Where the scan lines cross a plate's end obliquely,
+/// the last lines before the corner walk out through the end, up to the
+/// band's width short of the edge, and their samples run along the end,
+/// across the coarse edge, more than along it. A sample is taken off
+/// the edge when the boundary turns more than 45° from the coarse edge on
+/// both sides of it, [`TURN_LINES`] sampled lines away (on the one side
+/// there is at the samples' ends): a run of walks through a plate's end,
+/// and a lone walk cut short (a dropout on its line), which the fit would
+/// trim; a sample beside a lone short one turns on one side only and
+/// stays. `found` is sorted by line.
+fn turned_off_the_edge(found: &[(usize, isize, BoundarySample)], edge: &CoarseEdge) -> Vec<bool> {
+    let turns = |a: usize, b: usize| {
+        let d = found[b].2.position - found[a].2.position;
+        d.dot(&edge.outward).abs() > d.dot(&edge.direction).abs()
+    };
+    let n = found.len();
+    (0..n)
+        .map(|i| {
+            let before = i.checked_sub(TURN_LINES).map(|a| turns(a, i));
+            let after = (i + TURN_LINES < n).then(|| turns(i, i + TURN_LINES));
+            match (before, after) {
+                (Some(b), Some(a)) => b && a,
+                (Some(one), None) | (None, Some(one)) => one,
+                (None, None) => false,
+            }
+        })
+        .collect()
 }
 
 /// The median distance along the edge from one scan line's sample to the

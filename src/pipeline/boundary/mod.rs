@@ -9,7 +9,9 @@
 //! where the pixels at a depth jump return a blend of both depths (mixed
 //! pixels), in the middle of the mixed run ([`grid`]). The walk also runs
 //! past the ends of the coarse edge, so the samples reach the plate's
-//! corners and give the seam's true extent.
+//! corners and give the seam's true extent; a walk that leaves the plate
+//! through its end instead (scan lines crossing the end obliquely) shows
+//! how far the plate reaches and is no sample of the edge's line.
 //!
 //! Without a grid ([`sample_scattered`]) the same rule is read from the
 //! points themselves: cut the band beside the coarse edge into strips two
@@ -91,6 +93,11 @@ pub struct BoundaryParams {
 #[derive(Debug, Clone, Default)]
 pub struct Boundary {
     pub samples: Vec<BoundarySample>,
+    /// On a pixel grid, the walks that left the plate across another of
+    /// its edges (its end, cut obliquely by the scan lines) rather than
+    /// the one sampled: they show how far the plate reaches, and are no
+    /// sample of this edge's line ([`grid`]).
+    pub across_other_edge: Vec<BoundarySample>,
     /// Distance along the edge between neighbouring scan lines, mm. The
     /// plate ends on average half of it beyond the outermost samples.
     pub line_spacing_mm: f64,
@@ -117,7 +124,7 @@ impl Boundary {
     /// The range of `along` the samples cover by [`ExtentRule`], widened
     /// by half a scan line at each end.
     pub fn extent(&self, along: impl Fn(&BoundarySample) -> f64) -> Option<(f64, f64)> {
-        let mut at: Vec<f64> = self.samples.iter().map(along).collect();
+        let mut at: Vec<f64> = self.samples.iter().chain(&self.across_other_edge).map(along).collect();
         at.sort_unstable_by(f64::total_cmp);
         let break_mm = match self.extent_rule {
             ExtentRule::AllSamples => f64::INFINITY,

@@ -85,7 +85,12 @@ pub fn sample_scattered(
             Some(BoundarySample { position, along: along(&position) })
         })
         .collect();
-    Boundary { samples, line_spacing_mm: strip_mm, extent_rule: ExtentRule::LongestStretch }
+    Boundary {
+        samples,
+        across_other_edge: Vec::new(),
+        line_spacing_mm: strip_mm,
+        extent_rule: ExtentRule::LongestStretch,
+    }
 }
 
 /// How far off its plane, in sigmas of its own scatter about it, a point

@@ -43,6 +43,17 @@ const SLOPE: f64 = 0.1;
 /// A frontal plate at 700 mm whose edge is the line x = `edge_x` + SLOPE y,
 /// ending at y = `end_y`; beyond it the table 40 mm further away.
 fn frame(edge_x: f64, end_y: f64) -> (PointCloud, Vec<u32>) {
+    frontal_frame(
+        |x, y| x < edge_x + SLOPE * y && y < end_y,
+        // The plate minus an eroded 1 mm band, as the plane criterion leaves it.
+        |x, y| x < edge_x + SLOPE * y - 1.0 && y < end_y - 1.0,
+    )
+}
+
+/// An 80 x 80 pixel frame round the optical axis: a frontal plate at
+/// 700 mm where `on_plate(x, y)` (x and y at 700 mm), the table 40 mm
+/// behind it elsewhere, and the plate's members where `member(x, y)`.
+fn frontal_frame(on_plate: impl Fn(f64, f64) -> bool, member: impl Fn(f64, f64) -> bool) -> (PointCloud, Vec<u32>) {
     let camera = CameraModel::default();
     let (w, h) = (80, 80);
     let mut pts = Vec::new();
@@ -51,10 +62,8 @@ fn frame(edge_x: f64, end_y: f64) -> (PointCloud, Vec<u32>) {
         for col in 0..w {
             let r = camera.ray(camera.cx() - 40.0 + col as f64, camera.cy() - 40.0 + row as f64);
             let (x, y) = (r[0] * 700.0, r[1] * 700.0);
-            let on_plate = x < edge_x + SLOPE * y && y < end_y;
-            let z = if on_plate { 700.0 } else { 740.0 };
-            // Members are the plate minus an eroded 1 mm band, as the plane criterion leaves it.
-            if on_plate && x < edge_x + SLOPE * y - 1.0 && y < end_y - 1.0 {
+            let z = if on_plate(x, y) { 700.0 } else { 740.0 };
+            if member(x, y) {
                 members.push((row * w + col) as u32);
             }
             pts.push([(r[0] * z) as f32, (r[1] * z) as f32, z as f32]);
@@ -194,6 +203,38 @@ fn a_face_the_camera_sees_below_the_edge_is_no_mixture() {
     let (mean, worst) = offsets_in_pixels(&cloud, &members, edge_x);
     assert!(mean.abs() < 0.1, "mean offset {mean} pixels");
     assert!(worst < 0.6, "worst offset {worst} pixels");
+}
+
+#[test]
+fn walks_out_through_a_plate_end_the_scan_lines_cross_obliquely_are_no_edge_samples() {
+    // A square-cornered plate whose edge runs 22 degrees off the image's
+    // columns, so its end, square to the edge, crosses the scan lines
+    // (rows) obliquely: the last rows before the corner walk out through
+    // the end, short of the edge by up to the band's width.
+    let (slope, corner) = (0.4, Vec3::new(3.1, 2.0, 700.0));
+    let direction = Vec3::new(slope, 1.0, 0.0).normalize();
+    let outward = Vec3::new(1.0, -slope, 0.0).normalize();
+    let at = |x: f64, y: f64| {
+        let at = Vec3::new(x, y, 700.0) - corner;
+        (at.dot(&outward), at.dot(&direction))
+    };
+    let (cloud, members) =
+        frontal_frame(|x, y| at(x, y).0 < 0.0 && at(x, y).1 < 0.0, |x, y| at(x, y).0 < -1.0 && at(x, y).1 < -1.0);
+    let plane = Plane { normal: Vec3::z(), offset: 700.0 };
+    let edge = CoarseEdge { point: corner - outward * 1.2 - direction * 5.0, direction, outward };
+    let params = BoundaryParams { band_mm: 3.0, on_plane_mm: 0.4 };
+    let boundary = sample_boundary(&cloud, &members, &plane, &edge, &params);
+    let pixel = 700.0 / CameraModel::default().fx();
+    // Within a pixel: the walk through the end nearest the corner ends
+    // within a pixel of the edge, and its sample runs along the edge.
+    let offset = |s: &BoundarySample| (s.position - corner).dot(&outward) / pixel;
+    let worst = boundary.samples.iter().map(|s| offset(s).abs()).fold(0.0, f64::max);
+    assert!(worst < 1.0, "worst offset {worst} pixels");
+    assert!(!boundary.across_other_edge.is_empty());
+    // The walks through the end still show how far the plate reaches: to
+    // the corner, half a scan line at most.
+    let (_, reach) = boundary.extent(|s| (s.position - corner).dot(&direction)).unwrap();
+    assert!(reach.abs() < pixel, "reaches {reach} mm past the corner");
 }
 
 #[test]

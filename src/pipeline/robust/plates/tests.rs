@@ -25,7 +25,12 @@ fn a_weld_edge_without_a_grid_runs_along_its_longest_unbroken_stretch() {
     // none, then three more: a chance hole, not the edge.
     let at = (0..20).chain(40..43).map(|k| k as f64);
     let samples = at.map(|x| BoundarySample { position: Vec3::new(x, 0.0, 700.0), along: x }).collect();
-    let strips = Boundary { samples, line_spacing_mm: 1.0, extent_rule: ExtentRule::LongestStretch };
+    let strips = Boundary {
+        samples,
+        across_other_edge: Vec::new(),
+        line_spacing_mm: 1.0,
+        extent_rule: ExtentRule::LongestStretch,
+    };
     // `seam.longest_seen_stretch` cuts the three off.
     assert_eq!(strips.extent(|s| s.position.x), Some((-0.5, 19.5)));
     // Every sample counts on a pixel grid, and samples eight strips

@@ -6,10 +6,11 @@
 //! the arguments that run the planner on it. `--camera consumer` renders
 //! with a RealSense-class depth camera instead of the paper's. `--fault`
 //! adds one of the fault suite's faults to the scene, and `--suite-scene`
-//! finds scenes of the fault, hard, tee, multi, corner and weld process
-//! suites by name too, so a person can write one out and look at it (a
-//! process scene rendered with its own solids: plates turned or raised, a
-//! clamp's block).
+//! finds scenes of the fault, hard, tee, multi, corner, root-land, weld
+//! process, blocks, web-near-edge, curved and groove-width suites by name
+//! too, so a person can write one out and look at it (a family's scene
+//! rendered with its own solids: a process scene's plates turned or raised
+//! and its clamp, blocks, a curved member).
 
 use std::fs::File;
 use std::io::{BufWriter, Write};
@@ -28,9 +29,10 @@ use weldseam::sim::consumer::{consumer_demo_scene, consumer_far_suite};
 use weldseam::sim::faults::frame_barely_in_view;
 use weldseam::sim::variants::Variant;
 use weldseam::sim::{
-    CameraPreset, Draw, Fault, FaultKind, JointGeometry, NoiseSpec, PlateExtent, ProcessScene, SceneSpec, Simulation,
-    consumer_suite, corner_suite, demo_scene, eval_suite, fault_suite, hard_suite, multi_suite, process_suite,
-    simulate, tee_suite,
+    BlockScene, CameraPreset, CurvedScene, Draw, Fault, FaultKind, JointGeometry, NoiseSpec, PlateExtent, ProcessScene,
+    SceneSpec, Simulation, WebNearEdge, WidenedGroove, blocks_suite, consumer_suite, corner_suite, curved_suite,
+    demo_scene, eval_suite, fault_suite, groove_width_suite, hard_suite, multi_suite, process_suite, root_land_suite,
+    simulate, tee_suite, web_near_edge_suite,
 };
 
 use crate::cli::args::CameraArg;
@@ -66,8 +68,9 @@ pub struct SimulateArgs {
     #[arg(long, value_enum, default_value_t)]
     pub camera: CameraArg,
     /// Start from a scene of the evaluation suite, by name or index, or of
-    /// the fault, hard, tee, multi, corner or process suite (`eval --suite
-    /// faults|hard|tee|multi|corner|process`) by name.
+    /// the fault, hard, tee, multi, corner, root-land, process, blocks,
+    /// web-near-edge, curved or groove-width suite (`eval --suite ...`) by
+    /// name.
     #[arg(long, value_name = "NAME_OR_INDEX")]
     pub suite_scene: Option<String>,
     /// Add a fault to the scene, at the seam's middle: wrong-joint,
@@ -147,14 +150,16 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
     let format = CloudFormat::of(&args.out, variant.is_compressed())?;
     let camera = CameraPreset::from(args.camera).camera();
     let started = Instant::now();
-    // A weld process scene renders its own solids (plates turned or
-    // raised, a clamp's block) with the spec the arguments left.
-    let process = match (CameraPreset::from(args.camera), name.as_deref()) {
-        (CameraPreset::Industrial, Some(key)) => process_scene(key),
+    // A family's scene renders its own solids (a process scene's plates
+    // turned or raised and its clamp, blocks, a web near the flange's
+    // edge, a curved member, a widened groove) with the spec the arguments
+    // left.
+    let family = match (CameraPreset::from(args.camera), name.as_deref()) {
+        (CameraPreset::Industrial, Some(key)) => family_scene(key),
         _ => None,
     };
-    let rendered = match process {
-        Some(scene) => ProcessScene { spec: spec.clone(), ..scene }.simulate(&camera),
+    let rendered = match family {
+        Some(scene) => scene.render(spec.clone(), &camera),
         None => simulate(&spec, &camera),
     };
     let sim = variant.apply(&rendered, spec.seed);
@@ -250,13 +255,14 @@ fn find_suite_scene(preset: CameraPreset, key: &str) -> Result<(String, SceneSpe
             Some("t") => Some(tee_suite(draw)),
             Some("multi") => Some(multi_suite(draw)),
             Some("corner") => Some(corner_suite(draw)),
+            Some("root") => Some(root_land_suite(draw)),
             _ => None,
         };
         if let Some(found) = other.into_iter().flatten().find(|(name, _)| name == key) {
             return Ok(found);
         }
-        if let Some(scene) = process_scene(key) {
-            return Ok((scene.name, scene.spec));
+        if let Some(scene) = family_scene(key) {
+            return Ok(scene.named());
         }
     }
     let count = suite.len();
@@ -273,10 +279,58 @@ fn find_suite_scene(preset: CameraPreset, key: &str) -> Result<(String, SceneSpe
     }
 }
 
-/// The weld process's scene named `key` (`process-...`), of the draw its
-/// name gives.
-fn process_scene(key: &str) -> Option<ProcessScene> {
-    key.starts_with("process-").then(|| process_suite(Draw::of_scene(key)).into_iter().find(|s| s.name == key))?
+/// A scene of a family whose solids the plain scene model does not draw.
+enum FamilyScene {
+    Process(ProcessScene),
+    Blocks(BlockScene),
+    WebNearEdge(WebNearEdge),
+    Curved(CurvedScene),
+    GrooveWidth(WidenedGroove),
+}
+
+impl FamilyScene {
+    /// Its name and scene.
+    fn named(self) -> (String, SceneSpec) {
+        match self {
+            FamilyScene::Process(s) => (s.name, s.spec),
+            FamilyScene::Blocks(s) => (s.name, s.spec),
+            FamilyScene::WebNearEdge(s) => (s.name, s.spec),
+            FamilyScene::Curved(s) => (s.name, s.spec),
+            FamilyScene::GrooveWidth(s) => (s.name, s.spec),
+        }
+    }
+
+    /// The capture of the family's solids under `spec` (the arguments'
+    /// overrides applied to the scene's own).
+    fn render(self, spec: SceneSpec, camera: &CameraModel) -> Simulation {
+        match self {
+            FamilyScene::Process(s) => ProcessScene { spec, ..s }.simulate(camera),
+            FamilyScene::Blocks(s) => BlockScene { spec, ..s }.simulate(camera).sim,
+            FamilyScene::WebNearEdge(s) => WebNearEdge { spec, ..s }.simulate(camera),
+            FamilyScene::Curved(s) => CurvedScene { spec, ..s }.simulate(camera),
+            FamilyScene::GrooveWidth(s) => WidenedGroove { spec, ..s }.simulate(camera),
+        }
+    }
+}
+
+/// The family scene named `key` (`process-`, `blocks-`, `web-edge-`,
+/// `curved-` or `groove-width-...`), of the draw its name gives.
+fn family_scene(key: &str) -> Option<FamilyScene> {
+    let draw = Draw::of_scene(key);
+    let prefix = |p: &str| key.starts_with(p);
+    if prefix("process-") {
+        process_suite(draw).into_iter().find(|s| s.name == key).map(FamilyScene::Process)
+    } else if prefix("blocks-") {
+        blocks_suite(draw).into_iter().find(|s| s.name == key).map(FamilyScene::Blocks)
+    } else if prefix("web-edge-") {
+        web_near_edge_suite(draw).into_iter().find(|s| s.name == key).map(FamilyScene::WebNearEdge)
+    } else if prefix("curved-") {
+        curved_suite(draw).into_iter().find(|s| s.name == key).map(FamilyScene::Curved)
+    } else if prefix("groove-width-") {
+        groove_width_suite(draw).into_iter().find(|s| s.name == key).map(FamilyScene::GrooveWidth)
+    } else {
+        None
+    }
 }
 
 /// The file formats `simulate` writes, chosen by the file's extension.
@@ -583,7 +637,18 @@ mod tests {
         let clamp = process_suite(Draw::Documented).into_iter().find(|s| s.clamp.is_some()).unwrap();
         let (name, spec) = find_suite_scene(CameraPreset::Industrial, &clamp.name).unwrap();
         assert_eq!((name.as_str(), spec.seed), (clamp.name.as_str(), clamp.spec.seed));
-        assert!(process_scene(&clamp.name).is_some_and(|s| s.clamp == clamp.clamp));
+        assert!(matches!(family_scene(&clamp.name), Some(FamilyScene::Process(s)) if s.clamp == clamp.clamp));
+        // Each family whose solids the scene model does not draw, by name.
+        let names = [
+            blocks_suite(Draw::Documented)[0].name.clone(),
+            web_near_edge_suite(Draw::Documented)[0].name.clone(),
+            curved_suite(Draw::Documented)[0].name.clone(),
+            groove_width_suite(Draw::Documented)[0].name.clone(),
+            root_land_suite(Draw::Documented)[0].0.clone(),
+        ];
+        for name in names {
+            assert_eq!(find_suite_scene(CameraPreset::Industrial, &name).unwrap().0, name);
+        }
     }
 
     #[test]

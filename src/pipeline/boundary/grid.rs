@@ -89,23 +89,22 @@ impl Walker<'_> {
         Some(Profile { out: self.outward_of(&v), height: self.plane.signed_distance(&v) })
     }
 
-    /// How many pixels past `last` (the plate's last on-plane pixel) are
-    /// mixed returns: 0 where the next pixel is no mixture (a dropout, a
-    /// face beyond, or the surface beyond itself). A run of `n` is mixed
-    /// when the two pixels after it lie off the plate on one side of it
-    /// and at least half the plate's pixel `step` apart across the edge
-    /// (the surface beyond, seen rather than edge-on: a veil of mixed
-    /// returns along one ray is no surface), and every pixel of the run
-    /// lies between the plate and the line through those two, more than
-    /// the on-plane tolerance from both: on neither surface, as a blend
-    /// along a ray lies. The longest run that is mixed wins, so a second
-    /// mixed pixel is not taken for the surface beyond. None is read where
-    /// the camera sees the face joining the plate's edge to the surface
-    /// beyond ([`Walker::joining_face_seen`]).
-    fn mixed_run(&self, scanline: usize, last: isize, step: f64) -> isize {
+    /// How many pixels past `last` (the plate's last on-plane pixel, at
+    /// `last_point`) are mixed returns: 0 where the next pixel is no
+    /// mixture (a dropout, a face beyond, or the surface beyond itself). A
+    /// run of `n` is mixed when the two pixels after it lie off the plate
+    /// on one side of it and at least half the plate's pixel `step` apart
+    /// across the edge (the surface beyond, seen rather than edge-on: a
+    /// veil of mixed returns along one ray is no surface), and every pixel
+    /// of the run lies between the plate and the line through those two,
+    /// more than the on-plane tolerance from both: on neither surface, as
+    /// a blend along a ray lies. The longest run that is mixed wins, so a
+    /// second mixed pixel is not taken for the surface beyond. None is read
+    /// where the camera sees the face joining the plate's edge to the
+    /// surface beyond ([`Walker::joining_face_seen`]).
+    fn mixed_run(&self, scanline: usize, last: isize, last_point: &Vec3, step: f64) -> isize {
         let tolerance = self.params.on_plane_mm;
         let at = |n: isize| self.profile_at(scanline, last + n * self.sense);
-        let Some(last_point) = self.index(scanline, last).map(|i| vec3(&self.cloud.points()[i])) else { return 0 };
         (1..=MAX_MIXED_PIXELS)
             .rev()
             .find(|&n| {
@@ -114,7 +113,7 @@ impl Walker<'_> {
                 if b0.height.abs() <= tolerance
                     || b1.height * side <= tolerance
                     || b1.out - b0.out < step / 2.0
-                    || self.joining_face_seen(&last_point, side)
+                    || self.joining_face_seen(last_point, side)
                 {
                     return false;
                 }
@@ -170,7 +169,7 @@ impl Walker<'_> {
             previous.map(|p| self.outward_of(&last) - self.outward_of(&p)).filter(|s| *s > 0.0).unwrap_or(mean_step);
         // The plate ends half a step past its last pixel, or within the
         // run of mixed pixels after it, at the run's middle.
-        let steps_past_last = (self.mixed_run(scanline, k, step) + 1) as f64 / 2.0;
+        let steps_past_last = (self.mixed_run(scanline, k, &last, step) + 1) as f64 / 2.0;
         let position = self.plane.project(&last) + self.edge.outward * (step * steps_past_last);
         Some((k, BoundarySample { position, along: (position - self.edge.point).dot(&self.edge.direction) }))
     }

@@ -12,6 +12,7 @@ use crate::geometry::{MAD_PER_SIGMA, Vec3, vec3};
 
 use super::super::refit::{SeamAxes, SeamCurve};
 use super::super::straightness::{RootBend, Samples, bend_of};
+use super::flange_at_root::HeightLine;
 use super::frame::{WebFrame, height_margin, valid_points};
 use super::stretch::{STATION_SPACINGS, ends_at_border, ends_past_cut_foot, joint_beyond_run, seen_run};
 use super::{MIN_FACE_POINTS, NotRead, Root, RootEvidence, Side, TeeView, Web};
@@ -117,25 +118,23 @@ pub(super) fn root_from_face(view: &TeeView, frame: &WebFrame, sign: f64, side: 
             ),
         ));
     }
-    let n = frame.n;
-    let Some(r) = n.cross(&m).try_normalize(1e-6) else {
-        return Err(NotRead::by(
-            &TEE_ROOT_NOT_SEEN,
-            "the points between the flange and the web's top lie parallel to the flange",
-        ));
+    let face_plane = Plane { normal: m, offset: d_m };
+    let whole_flange = Plane { normal: frame.n, offset: frame.flange_offset };
+    let parallel = || {
+        NotRead::by(&TEE_ROOT_NOT_SEEN, "the points between the flange and the web's top lie parallel to the flange")
     };
-    let r = if r.dot(&frame.e) >= 0.0 { r } else { -r };
-    // The point on both planes nearest the web's origin.
-    let o = frame.origin;
-    let nm = n.dot(&m);
-    let det = 1.0 - nm * nm;
-    let (rn, rm) = (frame.flange_offset - n.dot(&o), d_m - m.dot(&o));
-    let p0 = o + n * ((rn - nm * rm) / det) + m * ((rm - nm * rn) / det);
-    // Across the root in the flange, away from the web.
-    let w = {
-        let w = r.cross(&n);
-        if w.dot(&m) >= 0.0 { w } else { -w }
-    };
+    // The root on the whole flange's plane first, then on the flange's
+    // plane where the face stands on it (`super::flange_at_root`).
+    let first = Meeting::of(&whole_flange, &face_plane, frame).ok_or_else(parallel)?;
+    // The flange beside the root: outward of the face's own foot (which
+    // lies at the flange's height too, where the web overhangs the
+    // flange's end) by the same margin that keeps the flange out of the
+    // face, and a few spacings on.
+    let flange_reach = margin + FLANGE_REACH_SPACINGS * spacing;
+    let local = flange_beside(view, frame, &first, &face.inliers, (margin, flange_reach), on_flange);
+    let flange_plane = local.map_or(whole_flange, |line| line.plane(&whole_flange, &first.p0, &first.r));
+    let Meeting { r, p0, w } = Meeting::of(&flange_plane, &face_plane, frame).ok_or_else(parallel)?;
+    let n = flange_plane.normal;
     // Up the face from the root.
     let up = {
         let v = r.cross(&m);
@@ -147,16 +146,12 @@ pub(super) fn root_from_face(view: &TeeView, frame: &WebFrame, sign: f64, side: 
     let along = |p: &Vec3| (p - p0).dot(&r);
     let foot_points = station_feet(&face.inliers, along, |p| frame.height_of(p), spacing);
     let foot: Vec<f64> = foot_points.iter().map(along).collect();
-    // Outward of the face's own foot (which lies at the flange's height
-    // too, where the web overhangs the flange's end) by the same margin
-    // that keeps the flange out of the face.
-    let flange_reach = margin + FLANGE_REACH_SPACINGS * spacing;
     // And the flange seen under where the web stands, inward of the root:
     // past the web's end.
     let web_width = 2.0 * frame.half_width;
     let mut beside: Vec<Vec3> = Vec::new();
     let mut under_web: Vec<f64> = Vec::new();
-    for p in valid_points(view.cloud).filter(|p| frame.height_of(p).abs() <= on_flange) {
+    for p in valid_points(view.cloud).filter(|p| flange_plane.signed_distance(p).abs() <= on_flange) {
         let out = (p - p0).dot(&w);
         if (margin..=flange_reach).contains(&out) {
             beside.push(p);
@@ -212,10 +207,9 @@ pub(super) fn root_from_face(view: &TeeView, frame: &WebFrame, sign: f64, side: 
         }
         Web::Face(_) => None,
     };
-    // The flange near the root: its points beside the run, against the
-    // plane of all its pieces.
+    // The flange near the root: its points beside the run, against its
+    // plane there.
     let near_flange: Vec<&Vec3> = beside.iter().filter(|p| (run.s0..=run.s1).contains(&along(p))).collect();
-    let flange_plane = Plane { normal: n, offset: frame.flange_offset };
     let flange_rms_mm = rms(near_flange.iter().map(|p| flange_plane.signed_distance(p)));
 
     // The face fit's prediction error at the root's ends (h = 0).
@@ -227,12 +221,20 @@ pub(super) fn root_from_face(view: &TeeView, frame: &WebFrame, sign: f64, side: 
         face.rms_mm * lever.sqrt()
     };
     let face_sigma = at_end(run.s0).max(at_end(run.s1));
+    // The flange's height at the root's ends, read from its points beside
+    // the root (nil where the whole flange's plane, of thousands of
+    // points, is kept).
+    let flange_sigma = local.map_or(0.0, |line| {
+        let t = |s: f64| (p0 + r * s - first.p0).dot(&first.r);
+        line.sigma_at(t(run.s0)).max(line.sigma_at(t(run.s1)))
+    });
     // Across: the face's offset error, seen through the web's angle to the
-    // flange; along the normal: the flange's (thousands of points) and the
-    // face's share where the web is not square.
+    // flange; along the normal: the flange's height at the root's ends
+    // and the face's share where the web is not square.
     let sin = web_angle_deg.to_radians().sin().max(0.1);
-    let uncertainty_across_mm = (face_sigma / sin).hypot(floor);
-    let uncertainty_normal_mm = (face_sigma * web_angle_deg.to_radians().cos().abs() / sin).hypot(floor);
+    let cos = web_angle_deg.to_radians().cos().abs();
+    let uncertainty_across_mm = (face_sigma / sin).hypot(flange_sigma * cos / sin).hypot(floor);
+    let uncertainty_normal_mm = (face_sigma * cos / sin).hypot(flange_sigma).hypot(floor);
 
     // Whether the root is straight: the face's foot across it and the
     // flange beside it along the normal, station by station over the run.
@@ -284,6 +286,60 @@ pub(super) fn root_from_face(view: &TeeView, frame: &WebFrame, sign: f64, side: 
     })
 }
 
+/// Where the face meets a flange's plane: the root's direction `r` (along
+/// the web), its point `p0` nearest the web's origin, and `w`, across the
+/// root in the flange away from the web.
+struct Meeting {
+    r: Vec3,
+    p0: Vec3,
+    w: Vec3,
+}
+
+impl Meeting {
+    /// `None` where the face lies parallel to the flange.
+    fn of(flange: &Plane, face: &Plane, frame: &WebFrame) -> Option<Meeting> {
+        let (n, m) = (flange.normal, face.normal);
+        let r = n.cross(&m).try_normalize(1e-6)?;
+        let r = if r.dot(&frame.e) >= 0.0 { r } else { -r };
+        // The point on both planes nearest the web's origin (a 2 × 2 solve
+        // in the span of n and m).
+        let o = frame.origin;
+        let nm = n.dot(&m);
+        let det = 1.0 - nm * nm;
+        let (rn, rm) = (flange.offset - n.dot(&o), face.offset - m.dot(&o));
+        let p0 = o + n * ((rn - nm * rm) / det) + m * ((rm - nm * rn) / det);
+        let w = r.cross(&n);
+        let w = if w.dot(&m) >= 0.0 { w } else { -w };
+        Some(Meeting { r, p0, w })
+    }
+}
+
+/// The flange's height along the root where the face stands on it
+/// ([`super::flange_at_root`]): its points `band` (mm, from, to) outward of the
+/// root `at` on the whole flange's plane, within `on_flange` of that
+/// plane, along the face's length (its `inliers`); `None` with fewer than
+/// [`MIN_FACE_POINTS`] of them, the whole flange's plane then kept.
+fn flange_beside(
+    view: &TeeView,
+    frame: &WebFrame,
+    at: &Meeting,
+    inliers: &[Vec3],
+    band: (f64, f64),
+    on_flange: f64,
+) -> Option<HeightLine> {
+    let along = |p: &Vec3| (p - at.p0).dot(&at.r);
+    let (t0, t1) =
+        inliers.iter().map(along).fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), t| (lo.min(t), hi.max(t)));
+    let samples: Vec<(f64, f64)> = valid_points(view.cloud)
+        .filter_map(|p| {
+            let h = frame.height_of(&p);
+            let (out, t) = ((p - at.p0).dot(&at.w), along(&p));
+            (h.abs() <= on_flange && (band.0..=band.1).contains(&out) && (t0..=t1).contains(&t)).then_some((t, h))
+        })
+        .collect();
+    HeightLine::fit(&samples, view.trim_sigma, MIN_FACE_TRIM_MM, MIN_FACE_POINTS)
+}
+
 /// A plane fitted to a face's points, refitted without its outliers.
 #[derive(Debug, Clone)]
 pub(in crate::pipeline) struct FaceFit {
@@ -316,27 +372,45 @@ pub(in crate::pipeline) fn fit_face(points: &[Vec3], trim_sigma: f64) -> Option<
         let rms_mm = rms(kept.iter().map(|p| plane.signed_distance(p)));
         Some(FaceFit { plane, centroid, dropped: points.len() - kept.len(), inliers: kept, rms_mm })
     };
-    let mut fit = fit_of(points.to_vec())?;
+    trimmed_fit(points, (trim_sigma, MIN_FACE_TRIM_MM), MIN_FACE_POINTS, FACE_TRIM_ROUNDS, fit_of, |fit, p| {
+        fit.plane.signed_distance(p).abs()
+    })
+}
+
+/// `fit` over all `samples`, then again without those further from the
+/// last fit (`distance`) than `trim.0` standard deviations of the median
+/// distance ([`MAD_PER_SIGMA`]) and never tighter than `trim.1` mm, until
+/// the kept set stops changing (at most `rounds`); the last fit holding
+/// at least `min_kept` samples. `None` where the first fit fails.
+pub(super) fn trimmed_fit<S: Copy, F>(
+    samples: &[S],
+    trim: (f64, f64),
+    min_kept: usize,
+    rounds: usize,
+    fit: impl Fn(Vec<S>) -> Option<F>,
+    distance: impl Fn(&F, &S) -> f64,
+) -> Option<F> {
+    let mut last = fit(samples.to_vec())?;
     let mut kept_before: Option<Vec<bool>> = None;
-    for _ in 0..FACE_TRIM_ROUNDS {
-        let distances: Vec<f64> = points.iter().map(|p| fit.plane.signed_distance(p).abs()).collect();
+    for _ in 0..rounds {
+        let distances: Vec<f64> = samples.iter().map(|s| distance(&last, s)).collect();
         let mut sorted = distances.clone();
         let middle = sorted.len() / 2;
         let (_, median, _) = sorted.select_nth_unstable_by(middle, f64::total_cmp);
-        let limit = (trim_sigma * *median / MAD_PER_SIGMA).max(MIN_FACE_TRIM_MM);
+        let limit = (trim.0 * *median / MAD_PER_SIGMA).max(trim.1);
         let keep: Vec<bool> = distances.iter().map(|&d| d <= limit).collect();
         if kept_before.as_ref() == Some(&keep) {
             break;
         }
-        let kept: Vec<Vec3> = points.iter().zip(&keep).filter(|(_, k)| **k).map(|(p, _)| *p).collect();
-        if kept.len() < MIN_FACE_POINTS {
+        let kept: Vec<S> = samples.iter().zip(&keep).filter(|(_, k)| **k).map(|(s, _)| *s).collect();
+        if kept.len() < min_kept {
             break;
         }
-        let Some(refit) = fit_of(kept) else { break };
-        fit = refit;
+        let Some(refit) = fit(kept) else { break };
+        last = refit;
         kept_before = Some(keep);
     }
-    Some(fit)
+    Some(last)
 }
 
 /// The face points' spread in height and along the root.

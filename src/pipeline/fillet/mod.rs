@@ -25,7 +25,11 @@
 //!   points settle; the residual is reported;
 //! - the root: the line where the face `m·p = d_m` meets the flange,
 //!   direction `r = n × m`, through the point of both planes nearest the
-//!   web top's centroid (a 2 × 2 solve in the span of `n` and `m`);
+//!   web top's centroid (a 2 × 2 solve in the span of `n` and `m`). The
+//!   flange there is the flange where the face stands on it: its height
+//!   and its tilt along the root read from its points beside the root,
+//!   its tilt across from all its pieces ([`flange_at_root`]), as a real
+//!   flange lies off one plane by as much as the root's tolerance;
 //! - the stretch planned: stations a few spacings long along the root,
 //!   each seen when it holds both a point of the face's foot (the face's
 //!   lowest band at that station: a face turned nearly edge-on is seen
@@ -89,6 +93,7 @@
 //! the entry point, [`find_roots`], which picks the evidence for each root.
 
 mod face;
+mod flange_at_root;
 mod flange_edge;
 mod frame;
 #[cfg(test)]

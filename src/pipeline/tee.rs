@@ -89,6 +89,7 @@ pub(super) fn plan(
         border: ctx.view_border(),
         max_beyond_mm: config.quality.max_joint_beyond_seam_mm,
         every_side: tee.every_side,
+        web_thickness_max_mm: cfg.tee_web_thickness_max_mm,
     };
     let mut roots = Vec::from(fillet::find_roots(&view));
     if tee.every_side {

@@ -164,21 +164,39 @@ pub static TEE_SIDE_FACE_IS_WEB_END: Rule = Rule {
     stage: Stage::Refit,
     effect: Effect::LeavesUnplanned,
     gate: None,
-    summary: "the points standing on one side of the web run along the web's top, as its side face does",
+    summary: "the points standing on one side of the web run along the web's top, as its side face does; a face \
+              seen without the web's top runs longer than the thickest web",
     reason: "A web's side face runs the web's length, its foot along the top's long axis whether the web stands \
              square or leans. Where the side face is turned edge-on to the camera it returns nothing, and what \
              stands on that side of the web's middle may be the web's end face, across the web: its foot is a \
              few millimetres of the web's thickness, not the root. Points whose foot turns further from the \
              top's long axis than the axis's own uncertainty and a lean allow are not the side face; the root \
-             is then read from the flange's edge, and left unplanned when that does not show it either.",
-    parameters: &[Parameter {
-        name: "MAX_ROOT_SKEW_DEG",
-        unit: "°",
-        meaning: "most a face's foot may turn from the web top's long axis",
-        source: Source::Constant { file: FILLET_FACE, name: "MAX_ROOT_SKEW_DEG" },
-    }],
-    fires: &["src/pipeline/fillet/tests.rs::the_webs_end_face_is_no_side_face_and_the_root_runs_to_the_webs_end"],
-    holds: &["src/pipeline/fillet/tests.rs::a_face_seen_higher_up_along_the_web_gives_its_root_all_along"],
+             is then read from the flange's edge, and left unplanned when that does not show it either. With \
+             the web's top out of view there is no long axis to turn from, and a web's end stands on the \
+             flange as a side face does: a face whose root is seen no longer than the thickest web is not \
+             taken for a side face.",
+    parameters: &[
+        Parameter {
+            name: "MAX_ROOT_SKEW_DEG",
+            unit: "°",
+            meaning: "most a face's foot may turn from the web top's long axis",
+            source: Source::Constant { file: FILLET_FACE, name: "MAX_ROOT_SKEW_DEG" },
+        },
+        Parameter {
+            name: "tee_web_thickness_max_mm",
+            unit: "mm",
+            meaning: "with the web's top out of view, a face's root must be seen longer than this",
+            source: Source::Config("pipeline.tee_web_thickness_max_mm"),
+        },
+    ],
+    fires: &[
+        "src/pipeline/fillet/tests.rs::the_webs_end_face_is_no_side_face_and_the_root_runs_to_the_webs_end",
+        "src/pipeline/fillet/tests.rs::a_face_seen_without_the_web_s_top_no_longer_than_a_web_is_thick_may_be_its_end",
+    ],
+    holds: &[
+        "src/pipeline/fillet/tests.rs::a_face_seen_higher_up_along_the_web_gives_its_root_all_along",
+        "src/pipeline/fillet/tests.rs::a_face_seen_without_the_web_s_top_no_longer_than_a_web_is_thick_may_be_its_end",
+    ],
 };
 
 pub static TEE_SIDE_FACE_ALONG_CAMERA_RAYS: Rule = Rule {

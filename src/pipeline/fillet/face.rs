@@ -195,6 +195,23 @@ pub(super) fn root_from_face(view: &TeeView, frame: &WebFrame, sign: f64, side: 
     if (run.s0, run.s1) != border_ends {
         ends_set_by.push(&TEE_ROOT_RUNS_PAST_CUT_FOOT);
     }
+    // With the web's top out of view nothing tells which way the web runs
+    // (the skew test above needs the top's long axis), and a web's end
+    // face stands on the flange as its side face does, only as long as the
+    // web is thick. A face whose root runs no longer than the thickest web
+    // may be that end, its "root" across the web.
+    let run_mm = run.s1 - run.s0;
+    if frame.face_only.is_some() && run_mm <= view.web_thickness_max_mm {
+        return Err(NotRead::by(
+            &TEE_SIDE_FACE_IS_WEB_END,
+            format!(
+                "the face standing on the flange is seen along {run_mm:.1} mm of its root, no longer than the \
+                 thickest web ({:.0} mm), and the web's top is out of view: it may be a web's end, standing across \
+                 the web{hidden}",
+                view.web_thickness_max_mm
+            ),
+        ));
+    }
     // Where the web's top stands over the root and the flange is seen up
     // to it beyond the stretch, the joint goes on though the face's foot
     // is not seen there (turned nearly edge-on, or covered): the quality

@@ -51,6 +51,7 @@ fn a_block_s_seen_side_gives_its_root_along_its_outline_and_its_other_sides_are_
             border: None,
             max_beyond_mm: 2.0,
             every_side: true,
+            web_thickness_max_mm: 30.0,
         };
         let roots: Vec<Result<Root, RootNotSeen>> =
             find_roots(&view).into_iter().chain(find_end_roots(&view)).collect();

@@ -174,6 +174,10 @@ pub struct TeeView<'a> {
     /// (a block, its top found by the faces falling from it): its frame
     /// runs along its top's outline, and its ends' roots are read too.
     pub every_side: bool,
+    /// The thickest web, mm (`pipeline.tee_web_thickness_max_mm`): a face
+    /// seen without the web's top whose root runs no longer may be a web's
+    /// end.
+    pub web_thickness_max_mm: f64,
 }
 
 /// What the camera sees of the web that tells where it stands.

@@ -163,11 +163,13 @@ fn a_flange_in_one_piece_round_the_webs_end_is_seen_on_both_sides() {
     assert!(hidden.flange_seen, "{}", hidden.reason);
 }
 
-#[test]
-fn a_web_seen_by_one_face_only_gives_that_face_s_root_and_names_the_other() {
-    // The face of the tests above, x = WEB_X + 5, seen from 1 to 39 mm
-    // over the flange; no web's top; the flange seen on both sides.
+/// The roots read with the web's top out of view from the face of
+/// [`face_points`] (x = WEB_X + 5, 1 to 39 mm over the flange), its points
+/// where `keep`, and the flange seen on both sides of it along y from −50
+/// to 49.
+fn one_face_roots(keep: impl Fn(&Vec3) -> bool) -> [Result<Root, RootNotSeen>; 2] {
     let mut pts = face_points(0.0);
+    pts.retain(|p| p.z == 700.0 || keep(p));
     for i in 0..100 {
         let y = -50.0 + i as f64;
         pts.extend((0..30).map(|j| Vec3::new(WEB_X + 5.5 + 0.5 * j as f64, y, 700.0)));
@@ -176,7 +178,14 @@ fn a_web_seen_by_one_face_only_gives_that_face_s_root_and_names_the_other() {
     let cloud = cloud_of(&pts);
     let flange = PlaneCluster::of_points(&pts, |p| p.z == 700.0);
     let face = plus_x_face_standing_on(&flange);
-    let roots = find_roots(&test_view(&cloud, Web::Face(&face), &[&flange]));
+    find_roots(&test_view(&cloud, Web::Face(&face), &[&flange]))
+}
+
+#[test]
+fn a_web_seen_by_one_face_only_gives_that_face_s_root_and_names_the_other() {
+    // The face of the tests above, x = WEB_X + 5, seen from 1 to 39 mm
+    // over the flange; no web's top; the flange seen on both sides.
+    let roots = one_face_roots(|_| true);
     let seen: Vec<&Root> = roots.iter().filter_map(|r| r.as_ref().ok()).collect();
     assert_eq!(seen.len(), 1, "{roots:?}");
     let root = seen[0];
@@ -377,6 +386,7 @@ pub(super) fn test_view<'a>(cloud: &'a PointCloud, web: Web<'a>, flange_pieces: 
         border: None,
         max_beyond_mm: 2.0,
         every_side: false,
+        web_thickness_max_mm: 30.0,
     }
 }
 
@@ -699,6 +709,27 @@ fn a_face_whose_flange_is_not_seen_up_to_it_gives_no_root() {
     let near = roots.iter().filter_map(|r| r.as_ref().err()).find(|r| r.side == Side::Near).expect("not seen");
     assert_eq!(near.rule.id, "tee.root_not_seen", "{}", near.reason);
     assert!(near.reason.contains("the flange is not seen up to the web's face"), "{}", near.reason);
+}
+
+#[test]
+fn a_face_seen_without_the_web_s_top_no_longer_than_a_web_is_thick_may_be_its_end() {
+    // The one face of the test above seen along 9 mm only, as a web's
+    // end 9 mm thick stands: with the top out of view nothing tells it
+    // from a side face by its direction, and its "root" would run across
+    // the web. Seen along 40 mm, more than the thickest web's 30, it is a
+    // side face.
+    for (half_mm, end) in [(4.0, true), (20.0, false)] {
+        let roots = one_face_roots(|p| p.y.abs() <= half_mm);
+        let near = roots.iter().find(|r| r.as_ref().map_or_else(|e| e.side, |r| r.side) == Side::Near).unwrap();
+        match near {
+            Err(why) if end => {
+                assert_eq!(why.rule.id, "tee.side_face_is_web_end", "{}", why.reason);
+                assert!(why.reason.contains("no longer than the thickest web (30 mm)"), "{}", why.reason);
+            }
+            Ok(root) if !end => assert!(root.line.s_max - root.line.s_min > 30.0, "{root:?}"),
+            other => panic!("{half_mm}: {other:?}"),
+        }
+    }
 }
 
 #[test]

@@ -148,16 +148,31 @@ fn a_root_whose_face_is_seen_only_part_way_down_is_planned_along_the_whole_root(
 /// its joint: the web's top (40 to 100 mm up) lies outside the crop.
 const CROPPED_TEES: [usize; 3] = [2, 8, 13];
 
-fn cropped(spec: &SceneSpec) -> &'static weldseam::sim::Simulation {
-    scenes::as_named_variant(spec, &CameraModel::default(), "cropped:25,voxel:1,metres")
-}
+/// The crop of [`CROPPED_TEES`]: the face seen at most 25 mm tall, no
+/// taller than a lap's upper plate may be (`pipeline.lap_step_max_mm`).
+const CROP_25: &str = "cropped:25,voxel:1,metres";
 
-fn plan_cropped(spec: &SceneSpec, joint: RequestedJoint) -> (Result<Plan, PlanError>, Vec<TrueSeam>) {
-    let sim = cropped(spec);
+/// A looser crop: the face seen 35 mm tall, taller than a lap's upper
+/// plate, the web's top still out of view on scenes 2 and 8.
+const CROP_35: &str = "cropped:35,voxel:1,metres";
+
+fn plan_cropped(spec: &SceneSpec, crop: &str, joint: RequestedJoint) -> (Result<Plan, PlanError>, Vec<TrueSeam>) {
+    let sim = scenes::as_named_variant(spec, &CameraModel::default(), crop);
     let roots = sim.seams.iter().map(|s| TrueSeam::of(spec, s)).collect();
     let mut request = PlanRequest::new(joint, None, sim.pose);
     request.units = weldseam::pipeline::input::Units::Auto;
     (Planner::new(Config::default()).plan(&sim.cloud, &request), roots)
+}
+
+/// The waypoints of `plan`'s one seam, which reads the face alone and
+/// lies within the fillet bar of `roots`.
+fn face_alone_path(name: &str, plan: &Plan, roots: &[TrueSeam]) -> Vec<Vec3> {
+    assert_eq!(plan.seams.len(), 1, "{name}");
+    let seam = &plan.seams[0];
+    assert!(seam.joint_evidence.as_deref().is_some_and(|e| e.contains("no web's top is in view")), "{seam:?}");
+    let path: Vec<Vec3> = seam.waypoints.iter().map(|w| w.position).collect();
+    assert_eq!(classify_tee(roots, Ok(std::slice::from_ref(&path))), Verdict::WithinBar, "{name}");
+    path
 }
 
 #[test]
@@ -165,35 +180,59 @@ fn a_tee_cropped_round_its_root_is_planned_from_its_face_alone() {
     let suite = tee_suite(Draw::Documented);
     for k in CROPPED_TEES {
         let (name, spec) = &suite[k];
-        let (plan, roots) = plan_cropped(spec, JointType::TFillet.into());
+        let (plan, roots) = plan_cropped(spec, CROP_25, JointType::TFillet.into());
         let plan = plan.unwrap_or_else(|e| panic!("{name}: {e}"));
-        assert_eq!(plan.seams.len(), 1, "{name}");
-        let seam = &plan.seams[0];
-        assert!(seam.joint_evidence.as_deref().is_some_and(|e| e.contains("no web's top is in view")), "{seam:?}");
-        let path: Vec<Vec3> = seam.waypoints.iter().map(|w| w.position).collect();
-        assert_eq!(classify_tee(&roots, Ok(std::slice::from_ref(&path))), Verdict::WithinBar, "{name}");
+        face_alone_path(name, &plan, &roots);
         // The web's other side: named, not looked for.
         assert_eq!(plan.unplanned.len(), 1, "{name}");
         assert_eq!(plan.unplanned[0].reason.rule.id, "tee.root_hidden_by_web", "{name}: {}", plan.unplanned[0].reason);
-        // `auto` does not decide a tee from a face alone (an inside
-        // corner's plate or a fixture's side stands too): refused, saying
-        // what to ask for.
-        let err = plan_cropped(spec, RequestedJoint::Auto).0.map(|p| format!("{} seams", p.seams.len())).unwrap_err();
-        assert_eq!((err.rule.id, err.gate), ("tee.web_face_without_top", Some(Gate::JointUnknown)), "{name}: {err}");
-        assert!(err.reason.contains("request t_fillet"), "{name}: {err}");
+        // Without a request, a face seen no taller than a lap's upper
+        // plate may be a clamp's or a bar's side: named, saying what to
+        // ask for; and so under a request that admits no tee.
+        for joint in [RequestedJoint::Auto, "v-butt+lap".parse().unwrap()] {
+            let err = plan_cropped(spec, CROP_25, joint).0.map(|p| format!("{} seams", p.seams.len())).unwrap_err();
+            assert_eq!(
+                (err.rule.id, err.gate),
+                ("tee.web_face_without_top", Some(Gate::JointUnknown)),
+                "{name}: {err}"
+            );
+            assert!(err.reason.contains("request t_fillet"), "{name}: {err}");
+        }
     }
     // Scene 0's face is edge-on to the camera: with the web's top cropped
     // away nothing shows where its root is.
     let (name, spec) = &suite[0];
-    let err = plan_cropped(spec, JointType::TFillet.into()).0.unwrap_err();
+    let err = plan_cropped(spec, CROP_25, JointType::TFillet.into()).0.unwrap_err();
     assert_eq!(err.rule.id, "tee.nothing_stands_on_flange", "{name}: {err}");
+}
+
+#[test]
+fn under_auto_a_face_taller_than_a_lap_s_plate_on_a_lone_plane_is_planned_as_t_fillet_plans_it() {
+    // Whether the table behind the flange is in view or cropped away says
+    // nothing of what stands on the flange: a face seen taller than a
+    // lap's upper plate is read alike either way.
+    let suite = tee_suite(Draw::Documented);
+    for k in [2, 8] {
+        let (name, spec) = &suite[k];
+        let (typed, roots) = plan_cropped(spec, CROP_35, JointType::TFillet.into());
+        let typed = face_alone_path(name, &typed.unwrap_or_else(|e| panic!("{name}: {e}")), &roots);
+        let auto = plan_cropped(spec, CROP_35, RequestedJoint::Auto).0.unwrap_or_else(|e| panic!("{name}: {e}"));
+        let evidence = auto.seams[0].joint_evidence.clone().unwrap_or_default();
+        assert!(evidence.contains("taller than a lap's upper plate"), "{name}: {evidence}");
+        // Scene 2's flange is the lone plane in view; scene 8's shows in
+        // two pieces, either side of the web, which the layers read as a
+        // butt pair, and the face is read once that reading is refused.
+        let beside = if k == 2 { "no other plane is in view" } else { "the layers read a butt pair" };
+        assert!(evidence.contains(beside), "{name}: {evidence}");
+        assert_eq!(face_alone_path(name, &auto, &roots), typed, "{name}: auto plans the root t_fillet does");
+    }
 }
 
 #[test]
 fn butt_and_lap_joints_cropped_round_their_seams_are_not_planned_as_tees() {
     for joint in [JointType::VButt, JointType::IButt, JointType::Lap] {
         let spec = demo_scene(joint);
-        let (plan, _) = plan_cropped(&spec, JointType::TFillet.into());
+        let (plan, _) = plan_cropped(&spec, CROP_25, JointType::TFillet.into());
         let err = plan.map(|p| format!("{} seams", p.seams.len())).unwrap_err();
         assert_eq!(err.stage, Stage::Background, "{joint}: {err}");
     }

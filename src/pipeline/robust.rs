@@ -392,8 +392,9 @@ fn read_workpiece(
     }
     // A tee whose web's top is not found may have it out of view (a crop
     // round its root): its face standing on the nearest layer of planes,
-    // planned under `t_fillet`; under `auto`, named when too few planes
-    // are seen for any other joint.
+    // planned under `t_fillet`; under `auto`, when too few planes are
+    // seen for any other joint, planned where it stands taller than a
+    // lap's upper plate.
     // Under any other request, a lone plane is refused with what is seen
     // beside it.
     let lone_plane = planes.iter().filter(|c| selection.faces_camera(c)).count() < 2;
@@ -480,10 +481,12 @@ fn read_workpiece(
 /// A tee's root from its web's one face seen standing on `flange` (the
 /// nearest layer of planes), the web's top out of view; refused with
 /// `not_found` (why no web's top was found) and why no face was either.
-/// Under `auto` (a lone plane in view) the face is named, not planned: a
-/// face alone does not tell a tee's web from an inside corner's plate or a
-/// fixture's side. With more planes in view it is weighed against the
-/// layers' reading instead ([`standing_face`]).
+/// Under `auto` (a lone plane in view) the faces are planned as beside a
+/// refused reading of the layers, where they stand taller than a lap's
+/// upper plate ([`standing_face::on_lone_plane`]); a request that admits
+/// no tee has the largest named, not planned. With more planes in view
+/// they are weighed against the layers' reading instead
+/// ([`standing_face::instead_of_layers`]).
 fn plan_topless_tee(
     ctx: &mut Context,
     flange: Vec<PlaneCluster>,
@@ -499,9 +502,12 @@ fn plan_topless_tee(
     if !fillet_asked && web_face::valley(ctx.cloud, &pieces, &search).is_some_and(|v| v.is_groove()) {
         return Err(in_view_refusal(ctx, &flange, &not_found)).seen_as(requested);
     }
-    // Under `t_fillet` every face of the member standing on the flange
-    // is a web's (a block shows two); under `auto` the largest is named.
-    let faces = if fillet_asked {
+    // Every face of the member standing on the flange is a web's (a
+    // block shows two): under `t_fillet` each is planned; under `auto`
+    // each standing taller than a lap's upper plate, where a tee may be
+    // planned at all; else the largest is named.
+    let tee_admitted = ctx.request.joint.admits(JointType::TFillet);
+    let faces = if fillet_asked || tee_admitted {
         web_face::find_all(ctx.cloud, &pieces, &search)
     } else {
         web_face::find(ctx.cloud, &pieces, &search).map(|face| vec![face])
@@ -518,6 +524,10 @@ fn plan_topless_tee(
         PlanError { gate: not_found.rule().gate, ..PlanError::by(why.rule(), reason) }
     });
     let faces = faces.seen_as(requested)?;
+    if !fillet_asked && tee_admitted {
+        ctx.clock.lap(Stage::Background).seen_as(requested)?;
+        return standing_face::on_lone_plane(ctx, &flange, faces, &not_found);
+    }
     let layers = standing_face::face_evidence(&faces[0], &flange);
     tracing::debug!("{layers}");
     if !fillet_asked {

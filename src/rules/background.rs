@@ -701,19 +701,20 @@ pub static WEB_FACE_WITHOUT_TOP: Rule = Rule {
     stage: Stage::Background,
     effect: Effect::Refuses,
     gate: Some(Gate::JointUnknown),
-    summary: "under `auto`, a face standing on the nearest plane with no top in view is a tee's web only where the \
-              layers' reading fails and the face stands taller than a lap's upper plate",
-    reason: "A tee's web cropped below its top shows one side face standing on the flange. With a lone plane \
-             in view nothing else is read: an inside corner's standing plate and a fixture's side look the \
-             same from one face, so under `auto` the face is named and not planned, and a request for \
-             `t_fillet` plans its root. With planes enough for a butt pair or a lap (a tube on a beam: the \
-             beam's top in pieces either side of the tube, the table behind), both readings are proposed: \
-             the layers' where it passes its gates, else the root of each face of the member standing there \
-             (a box section shows two, meeting along an edge) where it passes every gate of a tee, else the \
-             refusal of the reading that got further. A fixture's side is not taken for a \
-             web: its top is a plane nearer the camera than the plates, so the nearest layer is its top and \
-             nothing stands on it; and a face seen no taller than a lap's upper plate is thick, which a \
-             clamp or a bar whose top goes unseen can be, is not proposed.",
+    summary: "a face standing on the nearest plane with no top in view is a tee's web, without a request, only \
+              where it stands taller than a lap's upper plate and, beside a butt pair or a lap the layers read, \
+              only where that reading fails; under a request that admits no tee it is named",
+    reason: "A tee's web cropped below its top shows its side faces standing on the flange, and no top. Without \
+             a request the same evidence decides whether the table behind is in view or not: the layers' \
+             reading first where there are planes enough for a butt pair or a lap (a tube on a beam: the \
+             beam's top in pieces either side of the tube, the table behind), and where it fails its gates, or \
+             with a lone plane in view, the root of each face of the member standing there (a box section or a \
+             block shows two, meeting along an edge) where it passes every gate of a tee; else the refusal of \
+             the reading that got further. An inside corner's standing plate is welded along the same root. A \
+             fixture's side is not taken for a web: its top is a plane nearer the camera than the plates, so \
+             the nearest layer is its top and nothing stands on it; and a face seen no taller than a lap's \
+             upper plate (as a clamp or a bar whose top goes unseen may stand) is not proposed but named, as \
+             is every face under a request that admits no tee, saying to request `t_fillet`.",
     parameters: &[
         Parameter {
             name: "tee_web_height_max_mm",
@@ -724,7 +725,7 @@ pub static WEB_FACE_WITHOUT_TOP: Rule = Rule {
         Parameter {
             name: "lap_step_max_mm",
             unit: "mm",
-            meaning: "under `auto` beside the layers' reading, a face must be seen taller than this",
+            meaning: "without a request, a face must be seen taller than this",
             source: Source::Config("pipeline.lap_step_max_mm"),
         },
     ],

@@ -1,6 +1,7 @@
 //! Under `auto`, the layout the layers do not read: a face standing on the
 //! nearest layer of planes, its top out of view, weighed against the butt
-//! pair or the lap the layers read once that reading is refused.
+//! pair or the lap the layers read once that reading is refused, and read
+//! alone where that layer is the lone plane in view ([`on_lone_plane`]).
 //!
 //! A tee whose web's top is out of view (a tube or a box section standing
 //! on a beam, cropped below its top) shows its flange as planes in one
@@ -32,8 +33,11 @@
 //! is a web's whose top is out of view, each planned as a tee of its own
 //! ([`plan_faces`]): a block or a box section shows two faces, and both
 //! feet are roots. So it is under `t_fillet` with a lone layer in view,
-//! and under `auto` beside a refused reading of the layers, where every
-//! face proposed must stand taller than a lap's upper plate.
+//! and under `auto` with a lone layer or beside a refused reading of the
+//! layers, where every face proposed must stand taller than a lap's upper
+//! plate: whether the table behind the flange is in view (a second layer)
+//! or cropped away says nothing of what stands on the flange, so the same
+//! face is read alike either way.
 
 use crate::geometry::Vec3;
 use crate::joint::JointType;
@@ -76,20 +80,8 @@ pub(super) fn instead_of_layers(
     };
     // Each face must stand taller than a lap's upper plate: the largest,
     // or nothing is proposed; a further face of the member, or it is left.
+    let Some(faces) = taller_than_a_lap(ctx, faces) else { return Err(refused) };
     let lap_step_max_mm = ctx.config.pipeline.lap_step_max_mm;
-    let tall = |face: &StandingFace| face.seen_height_mm > lap_step_max_mm;
-    for face in faces.iter().filter(|face| !tall(face)) {
-        tracing::debug!(
-            rule = rules::background::WEB_FACE_WITHOUT_TOP.id,
-            seen_height_mm = face.seen_height_mm,
-            lap_step_max_mm,
-            "a face no taller than a lap's upper plate stands on the nearest plane: a fixture's side, maybe; not proposed"
-        );
-    }
-    if !tall(&faces[0]) {
-        return Err(refused);
-    }
-    let faces: Vec<StandingFace> = faces.into_iter().filter(|face| tall(face)).collect();
     let read_as = match layout {
         Layout::Butt => "a butt pair",
         Layout::Lap => "a lap",
@@ -105,6 +97,61 @@ pub(super) fn instead_of_layers(
         layers
     };
     plan_faces_with(ctx, &faces, &flange, evidence).map_err(|e| further(refused, e, &format!("read as {read_as}")))
+}
+
+/// Under `auto` with a lone plane in view (`flange`, the layers reading
+/// nothing else: `not_found`), the faces of the member standing on it
+/// taller than a lap's upper plate, each planned as a tee whose top is out
+/// of view, as beside a refused reading of the layers: the table behind
+/// the flange, in view or cropped away, says nothing of what stands on
+/// it. Refused by [`rules::background::WEB_FACE_WITHOUT_TOP`] where the
+/// largest face is no taller (a fixture's side, a bar), saying what to
+/// ask for; by the tee's own rule where its root fails a gate.
+pub(super) fn on_lone_plane(
+    ctx: &mut Context,
+    flange: &[PlaneCluster],
+    faces: Vec<StandingFace>,
+    not_found: &dyn std::fmt::Display,
+) -> Result<Welds, Refused> {
+    let lap_step_max_mm = ctx.config.pipeline.lap_step_max_mm;
+    let largest = face_evidence(&faces[0], flange);
+    let Some(faces) = taller_than_a_lap(ctx, faces) else {
+        let reason = format!(
+            "{not_found}; {largest}, no taller than a lap's upper plate ({lap_step_max_mm:.0} mm): a fixture's side \
+             or a bar may stand so; request t_fillet to plan its root as a tee's"
+        );
+        return Err(Refused { reason: PlanError::by(&rules::background::WEB_FACE_WITHOUT_TOP, reason), seen: None });
+    };
+    let evidence = |face: &StandingFace| {
+        let layers = format!(
+            "{}, taller than a lap's upper plate ({lap_step_max_mm:.0} mm); no other plane is in view",
+            face_evidence(face, flange),
+        );
+        tracing::debug!(rule = rules::background::WEB_FACE_WITHOUT_TOP.id, "{layers}");
+        layers
+    };
+    plan_faces_with(ctx, &faces, flange, evidence).map_err(|reason| Refused { reason, seen: Some(JointType::TFillet) })
+}
+
+/// The faces (largest first) that stand taller than a lap's upper plate
+/// is thick (`pipeline.lap_step_max_mm`), the height the layers also ask
+/// of a web's top without a request; `None` where the largest does not.
+/// Each face left out is logged.
+fn taller_than_a_lap(ctx: &Context, faces: Vec<StandingFace>) -> Option<Vec<StandingFace>> {
+    let lap_step_max_mm = ctx.config.pipeline.lap_step_max_mm;
+    let tall = |face: &StandingFace| face.seen_height_mm > lap_step_max_mm;
+    for face in faces.iter().filter(|face| !tall(face)) {
+        tracing::debug!(
+            rule = rules::background::WEB_FACE_WITHOUT_TOP.id,
+            seen_height_mm = face.seen_height_mm,
+            lap_step_max_mm,
+            "a face no taller than a lap's upper plate stands on the nearest plane: a fixture's side, maybe; not proposed"
+        );
+    }
+    if !faces.first().is_some_and(tall) {
+        return None;
+    }
+    Some(faces.into_iter().filter(|face| tall(face)).collect())
 }
 
 /// What is seen of a face standing on `flange` with no web's top in view:

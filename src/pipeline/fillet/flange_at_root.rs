@@ -26,9 +26,9 @@
 //! (a tack, spatter, the foot's mixed returns), as the face is.
 
 use crate::geometry::Vec3;
+use crate::geometry::fit::Plane;
 
 use super::face::trimmed_fit;
-use crate::geometry::fit::Plane;
 
 /// Rounds of the height line's trimming at most; its kept set settles in
 /// a few.
@@ -128,7 +128,7 @@ mod tests {
         assert!((line.a - 1.0).abs() < 0.05, "offset {}", line.a);
         assert!((line.b - slope).abs() < 0.001, "slope {} against {slope}", line.b);
         assert!(line.points < 560, "the tack is trimmed: {} kept", line.points);
-        // Without the trim the tack pulls the line up by 0.4 mm.
+        // Without the trim the tack pulls the line up.
         let plain = least_squares(&samples).unwrap();
         assert!((plain.a - 1.0).abs() > 0.2, "the untrimmed line {}", plain.a);
     }

@@ -507,7 +507,7 @@ fn plan_topless_tee(
     // each standing taller than a lap's upper plate, where a tee may be
     // planned at all; else the largest is named.
     let tee_admitted = ctx.request.joint.admits(JointType::TFillet);
-    let faces = if fillet_asked || tee_admitted {
+    let faces = if tee_admitted {
         web_face::find_all(ctx.cloud, &pieces, &search)
     } else {
         web_face::find(ctx.cloud, &pieces, &search).map(|face| vec![face])

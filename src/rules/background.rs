@@ -441,15 +441,18 @@ pub static LAP_UPPER_PLANE_LIES_ACROSS_LOWER: Rule = Rule {
     stage: Stage::Background,
     effect: Effect::Refuses,
     gate: None,
-    summary: "the lap's upper plate ends on its lower plate, which is seen beside one of its long sides only",
+    summary: "the lap's upper plate ends on its lower plate, which is seen on one side of it only",
     reason: "A lap's upper plate ends on the lower one: the lower plate is seen beside the upper plate's weld edge \
-             and not past its far side. A long narrow plane a lap step over a plane seen on both of its long sides \
-             lies across that plane instead: an object lying on the workpiece (a bar, a clamp's jaw) or a web too \
-             low to be told from one. Its sides are no plate edges, and a path along one would weld beside the \
+             and not past its far side. A plane a lap step over a plane seen on both of its sides lies across that \
+             plane instead: an object lying on the workpiece (a bar, a clamp's jaw) or a web too low to be told \
+             from one. A long narrow plane has the plane under it on both of its long sides; one no longer than a \
+             bar (a clamp's pad the view cuts short round the seam) has the line between two pieces of the plane \
+             under it pass through it. Its sides are no plate edges, and a path along one would weld beside the \
              joint.",
     parameters: &[BAR_ELONGATION, SIDE_BY_SIDE_AREA_RATIO, LAP_STEP_MIN, LAP_STEP_MAX],
     fires: &[
         "src/pipeline/background/tests.rs::a_bar_lying_across_a_plate_is_no_lap",
+        "src/pipeline/background/tests.rs::a_clamp_cut_short_by_a_crop_round_the_seam_is_no_lap_s_upper_plate",
         "src/pipeline/background/tests.rs::a_bar_across_a_plate_seen_round_its_end_is_no_lap",
         "src/pipeline/background/tests.rs::a_bar_across_a_small_plate_beside_a_large_one_is_no_lap",
         "tests/faults.rs::a_clamp_lying_across_a_laps_plate_is_refused_as_an_object_on_the_workpiece",

@@ -46,11 +46,11 @@ pub enum BackgroundError {
     )]
     LooksLikeButt { first_mm2: f64, second_mm2: f64, tolerance_mm: f64 },
     /// A nearer plane lies across the plane the plates were sought in,
-    /// which is seen on both of its long sides: a tee's web on its flange,
+    /// which is seen on both of its sides: a tee's web on its flange,
     /// or an object lying on the workpiece; not a plate of a butt or lap
     /// joint. The layers alone cannot tell the two apart.
     #[error(
-        "a long plane of {top_mm2:.0} mm², {above_mm:.1} mm nearer the camera, lies across the plane under it, \
+        "a plane of {top_mm2:.0} mm², {above_mm:.1} mm nearer the camera, lies across the plane under it, \
          which is seen on both of its sides ({first_mm2:.0} and {second_mm2:.0} mm²): the web of a tee joint \
          standing on its flange, no taller than a lap's step (too low to be told from a bar), or an object lying on the workpiece (a clamp or a \
          bar) over the joint; a lap's upper plate ends on its lower plate, and butt plates are not one plane cut \

@@ -16,15 +16,55 @@ pub(super) const SIDE_BY_SIDE_AREA_RATIO: f64 = 0.25;
 pub(super) const BAR_ELONGATION: f64 = 2.0;
 
 /// Whether `top`, nearer the camera, lies across the plane that `a` and
-/// `b` are pieces of: `top` is long and narrow, and the two lie on
-/// opposite sides of its long axis. A lap's upper plate ends on its lower
-/// plate, so the lower one is seen on one side of it only; two butt
-/// plates have nothing lying along the gap between them.
+/// `b` are pieces of. A lap's upper plate ends on its lower plate, so the
+/// lower one is seen on one side of it only; two butt plates have nothing
+/// lying along the gap between them. A bar ([`BAR_ELONGATION`]) lies
+/// across when the two lie on opposite sides of its long axis. A top no
+/// longer than that (a bar the view cuts short, as a crop round the seam
+/// cuts a clamp to a square pad, or a block) has no long axis to tell
+/// across from along: it lies across when the line through the two
+/// pieces' centroids passes through its footprint between them
+/// ([`passes_through`]). Pieces of a lap's lower plate lie beyond the
+/// upper plate's edge, the line through them beside the plate.
 pub(super) fn lies_across(top: &PlaneCluster, a: &PlaneCluster, b: &PlaneCluster, normal: &Vec3) -> bool {
-    if top.elongation < BAR_ELONGATION {
+    if top.elongation >= BAR_ELONGATION {
+        return side_of(top, a, normal) * side_of(top, b, normal) < 0.0;
+    }
+    passes_through(top, a.centroid, b.centroid, normal)
+}
+
+/// Whether the segment from `a` to `b`, seen along `normal`, passes
+/// through `top`'s footprint: the rectangle of its area and elongation
+/// along its long axis, round its centroid. The point of the segment
+/// nearest the centroid across the segment must lie between `a` and `b`,
+/// and closer to the centroid than the rectangle reaches in that
+/// direction.
+pub(super) fn passes_through(top: &PlaneCluster, a: Vec3, b: Vec3, normal: &Vec3) -> bool {
+    let in_plane = |v: Vec3| v - normal * normal.dot(&v);
+    let run = in_plane(b - a);
+    let length = run.norm();
+    if length == 0.0 {
         return false;
     }
-    side_of(top, a, normal) * side_of(top, b, normal) < 0.0
+    let along = run / length;
+    let to_top = in_plane(top.centroid - a);
+    let at = to_top.dot(&along);
+    if !(0.0..=length).contains(&at) {
+        return false;
+    }
+    let off = to_top - along * at;
+    let miss_mm = off.norm();
+    if miss_mm == 0.0 {
+        return true;
+    }
+    // The rectangle's half reach along the miss's direction: its
+    // support function, from its sides along and across the long axis.
+    let towards = off / miss_mm;
+    let elongation = top.elongation.max(1.0);
+    let (long_mm, short_mm) = ((top.area_mm2 * elongation).sqrt(), (top.area_mm2 / elongation).sqrt());
+    let across_axis = normal.cross(&top.long_axis);
+    let reach_mm = 0.5 * (towards.dot(&top.long_axis).abs() * long_mm + towards.dot(&across_axis).abs() * short_mm);
+    miss_mm < reach_mm
 }
 
 /// How much of `under` is seen beside `top` on each side of it, mm²: its

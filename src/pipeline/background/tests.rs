@@ -455,6 +455,47 @@ fn a_bar_lying_across_a_plate_is_no_lap() {
     assert_eq!(robust_select(planes(), &auto()).unwrap().layout, Layout::Butt);
 }
 
+/// A plane cluster at depth `offset` whose centroid is (`x`, `y`).
+fn placed(offset: f64, area: f64, x: f64, y: f64) -> PlaneCluster {
+    let mut c = cluster(offset, area, x);
+    c.centroid.y = y;
+    c
+}
+
+#[test]
+fn a_clamp_cut_short_by_a_crop_round_the_seam_is_no_lap_s_upper_plate() {
+    // fault-clamp-lap-02 cropped 35 mm round its seam: the clamp, 37 mm
+    // wide along the seam (y), lies across both plates, its pad cut to
+    // 70 mm across the seam: 1.9 times longer than wide, no bar. It
+    // stands 15.6 mm over the upper plate (x < 0, at 700), which it cuts
+    // into pieces on both of its sides along the seam; the lower plate
+    // (x > 0) lies 6.8 mm further, the table further still. The clamp
+    // and the plate under it were planned as the lap, 129 mm off.
+    let mut pad = cluster(684.4, 2_590.0, 0.0);
+    (pad.long_axis, pad.elongation) = (Vec3::x(), 70.0 / 37.0);
+    let planes = vec![
+        pad,
+        placed(700.0, 3_000.0, -17.5, -60.0),
+        placed(700.0, 2_400.0, -17.5, 60.0),
+        placed(706.8, 3_600.0, 17.5, -60.0),
+        placed(706.8, 3_200.0, 17.5, 60.0),
+        cluster(760.0, 90_000.0, 0.0),
+    ];
+    let err = robust_select(planes, &selection(JointType::Lap)).unwrap_err();
+    assert_eq!(err.rule().id, "lap.upper_plane_lies_across_lower", "{err}");
+    // A square upper plate (x from -50 to 0, y from -25 to 25) with its
+    // lower plate in two pieces beside its edge (a streak between them):
+    // the line through the pieces runs beside the plate, not through it.
+    let planes = vec![
+        placed(700.0, 2_500.0, -25.0, 0.0),
+        placed(706.8, 900.0, 17.5, -15.0),
+        placed(706.8, 800.0, 17.5, 15.0),
+        cluster(760.0, 90_000.0, 0.0),
+    ];
+    let w = robust_select(planes, &selection(JointType::Lap)).unwrap().workpiece;
+    assert_eq!(w.plates.each_ref().map(|p| p.plane.offset), [700.0, 706.8]);
+}
+
 /// Points on a 1 mm grid over the rectangle `x`, `y` (mm, ends
 /// excluded) at depth `z`, leaving out those `hidden` keeps.
 fn grid(x: [i32; 2], y: [i32; 2], z: f64, hidden: impl Fn(f64, f64) -> bool) -> Vec<Vec3> {

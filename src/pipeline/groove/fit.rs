@@ -328,10 +328,16 @@ pub(super) fn root_hinge(medians: &[(f64, f64)], spacing: f64) -> Option<Hinge> 
         if !meets {
             continue;
         }
-        // And ends there: the bins below that still follow its line.
+        // And ends there: the bins below that still follow its line. Where
+        // the line runs within half a spacing of the wall's |t| (about the
+        // meeting) a bin follows both, and neither ends the bevel's run
+        // nor extends it.
+        let follows_line = |m: &&(f64, f64)| (m.1 - bevel.at(m.0)).abs() < (m.1 - mean).abs();
+        let either = |m: &&(f64, f64)| (bevel.at(m.0) - mean).abs() < 0.5 * spacing;
         let bevel_seen_to = lower
             .iter()
-            .take_while(|m| (m.1 - bevel.at(m.0)).abs() < (m.1 - mean).abs())
+            .take_while(|m| either(m) || follows_line(m))
+            .filter(|m| !either(m))
             .last()
             .map_or(upper[k - 1].0, |m| m.0);
         if bevel_seen_to - meet > MAX_BEVEL_PAST_ROOT_BINS * spacing {

@@ -215,6 +215,37 @@ fn a_bevel_s_root_face_is_where_it_narrows_into_it() {
         (15.6, 3.27),
     ];
     assert!(root_hinge(&strays, 0.947).is_none(), "{:?}", root_hinge(&strays, 0.947));
+    // The same frame cropped 25 mm round the seam: the strays lie so that
+    // the wall's |t| (2.08) is the bevel's own at the first bin below the
+    // split, 7.1 mm down, where the two cannot be told apart. Read from
+    // that bin, the bevel seemed to end there, and the depth was read at
+    // 7.02 mm (the groove is 9.6 mm deep): the bevel's run past the
+    // meeting is read through the bins where line and wall coincide.
+    let cropped = [
+        (1.42, 4.24),
+        (2.37, 4.04),
+        (3.32, 3.63),
+        (4.26, 3.22),
+        (5.21, 2.84),
+        (6.16, 2.45),
+        (7.11, 2.04),
+        (8.05, 1.65),
+        (9.0, 1.22),
+        (9.95, 1.03),
+        (11.84, 3.04),
+        (13.74, 2.5),
+        (14.68, 2.31),
+        (15.63, 2.85),
+    ];
+    assert!(root_hinge(&cropped, 0.95).is_none(), "{:?}", root_hinge(&cropped, 0.95));
+    // A root face's first bin, where the bevel's line crosses its |t|,
+    // still starts it: the hinge of a shallow bevel (|t| = 5 - 0.27 h,
+    // meeting |t| = 2 at 11.1 mm) with the first bin below at 11.5 mm.
+    let steep = |h: f64| (h, 5.0 - 0.27 * h);
+    let mut root: Vec<(f64, f64)> = (0..11).map(|k| steep(k as f64 + 0.5)).collect();
+    root.extend((11..15).map(|k| (k as f64 + 0.5, 2.0)));
+    let hinge = root_hinge(&root, 1.0).expect("a root face under the steep bevel");
+    assert_eq!(hinge.bins_above, 11, "{hinge:?}");
 }
 
 #[test]

@@ -126,12 +126,19 @@ pub(super) fn root_from_face(view: &TeeView, frame: &WebFrame, sign: f64, side: 
     // The root on the whole flange's plane first, then on the flange's
     // plane where the face stands on it (`super::flange_at_root`).
     let first = Meeting::of(&whole_flange, &face_plane, frame).ok_or_else(parallel)?;
-    // The flange beside the root: outward of the face's own foot (which
-    // lies at the flange's height too, where the web overhangs the
-    // flange's end) by the same margin that keeps the flange out of the
-    // face, and a few spacings on.
+    // The flange beside the root, seen as evidence of it: outward of the
+    // face's own foot (which lies at the flange's height too, where the
+    // web overhangs the flange's end) by the same margin that keeps the
+    // flange out of the face, and a few spacings on.
     let flange_reach = margin + FLANGE_REACH_SPACINGS * spacing;
-    let local = flange_beside(view, frame, &first, &face.inliers, (margin, flange_reach), on_flange);
+    // Its height is read as far on, past the face's own scatter across its
+    // plane too (its inlier band, `trim_sigma` of its RMS): within it the
+    // face's lowest points lie at the flange's height and over it, and a
+    // depth camera blends the two surfaces into the inside corner. Read
+    // there, pc0002's beam top stood 1 mm high all along its second root.
+    let height_from = margin + view.trim_sigma * face.rms_mm;
+    let height_band = (height_from, height_from + FLANGE_REACH_SPACINGS * spacing);
+    let local = flange_beside(view, frame, &first, &face.inliers, height_band, on_flange);
     let flange_plane = local.map_or(whole_flange, |line| line.plane(&whole_flange, &first.p0, &first.r));
     let Meeting { r, p0, w } = Meeting::of(&flange_plane, &face_plane, frame).ok_or_else(parallel)?;
     let n = flange_plane.normal;

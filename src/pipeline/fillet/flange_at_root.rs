@@ -12,10 +12,12 @@
 //! places it off by the flange's tilt there times that distance (0.5° over
 //! 170 mm is 1.5 mm, the public tube-on-beam scan `pc0002`'s second root).
 //!
-//! So the flange at the root is read from the flange's own evidence of
-//! the root: its points in the band beside the face's foot, the band the
-//! root's stretch is read from ([`super::face`]), along the face's
-//! length. Across that band the flange is seen over a few spacings only,
+//! So the flange at the root is read from the flange's own points in a
+//! band beside the face's foot, as wide as the band the root's stretch is
+//! read from ([`super::face`]) but starting past the face's own scatter
+//! across its plane (a depth camera blends face and flange into the
+//! inside corner there), along the face's length. Across that band the
+//! flange is seen over a few spacings only,
 //! too narrow to tell its tilt across the root from its noise; along the
 //! root it is seen over the face's whole length. The model is therefore
 //! the flange's height over the whole flange's plane as a straight line

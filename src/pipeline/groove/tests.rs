@@ -239,12 +239,14 @@ fn a_bevel_s_root_face_is_where_it_narrows_into_it() {
     ];
     assert!(root_hinge(&cropped, 0.95).is_none(), "{:?}", root_hinge(&cropped, 0.95));
     // A root face's first bin, where the bevel's line crosses its |t|,
-    // still starts it: the hinge of a shallow bevel (|t| = 5 - 0.27 h,
-    // meeting |t| = 2 at 11.1 mm) with the first bin below at 11.5 mm.
-    let steep = |h: f64| (h, 5.0 - 0.27 * h);
-    let mut root: Vec<(f64, f64)> = (0..11).map(|k| steep(k as f64 + 0.5)).collect();
+    // still starts it: the hinge of a bevel 15° off the normal (|t| =
+    // 5 - 0.27 h, meeting |t| = 2 at 11.1 mm), its line within half a
+    // spacing of the face's |t| over almost two bins, with the first bin
+    // below at 11.5 mm.
+    let near_normal = |h: f64| (h, 5.0 - 0.27 * h);
+    let mut root: Vec<(f64, f64)> = (0..11).map(|k| near_normal(k as f64 + 0.5)).collect();
     root.extend((11..15).map(|k| (k as f64 + 0.5, 2.0)));
-    let hinge = root_hinge(&root, 1.0).expect("a root face under the steep bevel");
+    let hinge = root_hinge(&root, 1.0).expect("a root face under the bevel");
     assert_eq!(hinge.bins_above, 11, "{hinge:?}");
 }
 

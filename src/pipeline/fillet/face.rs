@@ -44,8 +44,9 @@ pub const MIN_FACE_VIEW_DEG: f64 = 5.0;
 /// top many times longer than wide, is good to a degree or two.
 const MAX_ROOT_SKEW_DEG: f64 = 20.0;
 
-/// Rounds of a face's trimming at most; its kept set settles in a few.
-const FACE_TRIM_ROUNDS: usize = 8;
+/// Rounds of a trimmed fit's trimming at most ([`trimmed_fit`]): a face's
+/// or a flange's kept set settles in a few.
+const TRIM_ROUNDS: usize = 8;
 
 /// The floor of a face's trimming limit, mm: a near-perfect fit does not
 /// trim honest points.
@@ -376,7 +377,7 @@ pub(in crate::pipeline) struct FaceFit {
 
 /// Least squares (the scatter's least axis), then refits without the
 /// points further than `trim_sigma` standard deviations from the plane,
-/// until the kept set stops changing (at most [`FACE_TRIM_ROUNDS`]).
+/// until the kept set stops changing (at most [`TRIM_ROUNDS`]).
 ///
 /// The residual scale is the median distance of all the points from the
 /// plane, as a standard deviation ([`MAD_PER_SIGMA`]), as the weld edges'
@@ -396,7 +397,7 @@ pub(in crate::pipeline) fn fit_face(points: &[Vec3], trim_sigma: f64) -> Option<
         let rms_mm = rms(kept.iter().map(|p| plane.signed_distance(p)));
         Some(FaceFit { plane, centroid, dropped: points.len() - kept.len(), inliers: kept, rms_mm })
     };
-    trimmed_fit(points, (trim_sigma, MIN_FACE_TRIM_MM), MIN_FACE_POINTS, FACE_TRIM_ROUNDS, fit_of, |fit, p| {
+    trimmed_fit(points, (trim_sigma, MIN_FACE_TRIM_MM), MIN_FACE_POINTS, fit_of, |fit, p| {
         fit.plane.signed_distance(p).abs()
     })
 }
@@ -404,19 +405,18 @@ pub(in crate::pipeline) fn fit_face(points: &[Vec3], trim_sigma: f64) -> Option<
 /// `fit` over all `samples`, then again without those further from the
 /// last fit (`distance`) than `trim.0` standard deviations of the median
 /// distance ([`MAD_PER_SIGMA`]) and never tighter than `trim.1` mm, until
-/// the kept set stops changing (at most `rounds`); the last fit holding
+/// the kept set stops changing (at most [`TRIM_ROUNDS`]); the last fit holding
 /// at least `min_kept` samples. `None` where the first fit fails.
 pub(super) fn trimmed_fit<S: Copy, F>(
     samples: &[S],
     trim: (f64, f64),
     min_kept: usize,
-    rounds: usize,
     fit: impl Fn(Vec<S>) -> Option<F>,
     distance: impl Fn(&F, &S) -> f64,
 ) -> Option<F> {
     let mut last = fit(samples.to_vec())?;
     let mut kept_before: Option<Vec<bool>> = None;
-    for _ in 0..rounds {
+    for _ in 0..TRIM_ROUNDS {
         let distances: Vec<f64> = samples.iter().map(|s| distance(&last, s)).collect();
         let mut sorted = distances.clone();
         let middle = sorted.len() / 2;

@@ -32,10 +32,6 @@ use crate::geometry::fit::Plane;
 
 use super::face::trimmed_fit;
 
-/// Rounds of the height line's trimming at most; its kept set settles in
-/// a few.
-const TRIM_ROUNDS: usize = 8;
-
 /// The flange's height over a reference plane along the root: `a + b·t`
 /// at `t` mm along it, from `points` samples (`rms_mm` about the line).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -61,7 +57,6 @@ impl HeightLine {
             samples,
             (trim_sigma, floor_mm),
             min_points,
-            TRIM_ROUNDS,
             |kept| least_squares(&kept),
             |line, &(t, h)| (h - line.at(t)).abs(),
         )

@@ -12,7 +12,6 @@ use nalgebra::{Isometry3, Point3};
 
 use rayon::prelude::*;
 
-use crate::camera::CameraModel;
 use crate::cloud::PointCloud;
 use crate::config::{Config, Method, PointDensity};
 use crate::geometry::{Vec3, vec3};
@@ -36,8 +35,10 @@ use crate::rules;
 
 use super::{Deadline, Plan, PlanError, PlanRequest, PlanStats, Seam, SeamAssessment, Stage, StageTimings, Unplanned};
 
+mod camera_grid;
 mod screen;
 
+pub(super) use camera_grid::CameraGrid;
 pub(super) use screen::sanitise;
 
 /// A seam's two fitted features as it reports them: its weld edges' fits,
@@ -704,47 +705,6 @@ fn keep_one_sided(edge: &mut Vec<u32>, labels: &[u32], label: u32, normal: &Vec3
         .copied()
         .filter(|&i| !scale::surrounded_by(search, i as usize, normal, |j| labels[j] == label))
         .collect();
-}
-
-/// A frame's pixel grid and the camera that made it: where a point in the
-/// camera frame falls on it.
-#[derive(Debug)]
-pub(super) struct CameraGrid<'a> {
-    camera: &'a CameraModel,
-    width: usize,
-    height: usize,
-}
-
-impl<'a> CameraGrid<'a> {
-    /// The grid of `camera`'s own frames.
-    pub(super) fn for_camera(camera: &'a CameraModel) -> Self {
-        CameraGrid { camera, width: camera.width_px as usize, height: camera.height_px as usize }
-    }
-
-    /// Whether `p` projects inside the image, half a pixel inside the
-    /// outermost pixel centres.
-    pub(super) fn in_view(&self, p: &Vec3) -> bool {
-        let (u_max, v_max) = (self.width as f64 - 1.5, self.height as f64 - 1.5);
-        self.camera.project(p).is_some_and(|(u, v)| (0.5..=u_max).contains(&u) && (0.5..=v_max).contains(&v))
-    }
-
-    /// Where `p` projects on the image, pixels.
-    pub(super) fn project(&self, p: &Vec3) -> Option<(f64, f64)> {
-        self.camera.project(p)
-    }
-
-    /// The image's width and height, pixels.
-    pub(super) fn size(&self) -> (usize, usize) {
-        (self.width, self.height)
-    }
-
-    /// The index of the pixel `p` projects into, if inside the image.
-    pub(super) fn pixel_of(&self, p: &Vec3) -> Option<usize> {
-        let (u, v) = self.camera.project(p)?;
-        let (u, v) = (u.round(), v.round());
-        let inside = (0.0..self.width as f64).contains(&u) && (0.0..self.height as f64).contains(&v);
-        inside.then(|| v as usize * self.width + u as usize)
-    }
 }
 
 #[cfg(test)]

@@ -228,6 +228,31 @@ fn a_groove_leaving_the_image_at_a_grazing_angle_is_planned_to_the_border() {
 }
 
 #[test]
+fn a_lap_leaving_the_image_obliquely_is_planned_to_where_its_joint_leaves_it() {
+    // Fresh draw 1, cropped round the seam. The lower plate barely in
+    // view: its edge, read where its points stop beside the root, leaves
+    // the image 6.8 mm before the root does, and the seam stopped 6.4 mm
+    // short. Streaks across the plates: the rows read inside the upper
+    // plate's edge run 5 mm past where that edge leaves the image, so the
+    // root must not be carried to them.
+    for name in ["fault-barely-in-view-lap-02-d500-t20-fresh1", "fault-streaks-lap-01-d833-t20-fresh1"] {
+        let outcome = planned_as(name, JointAsk::AsScene, "cropped:35");
+        assert_eq!(outcome.verdict, Verdict::WithinBar, "{name}: {:?}", outcome.result.as_ref().map(|(e, _)| e));
+    }
+}
+
+#[test]
+fn plates_seen_past_where_a_seam_leaves_the_image_do_not_refuse_it_as_cut_short() {
+    // Fresh draw 2: the image's border crosses a lap's seam obliquely. The
+    // upper edge ran on 2.2 mm past where its line leaves the image (the
+    // seam planned 2.15 mm past the joint in view); held to the view, the
+    // plates' pixels just inside the edges, still in view past it, were
+    // read as the joint going on, and `seam.stops_short_of_joint` refused.
+    let outcome = planned("fault-touching-part-lap-03-d833-t20-fresh2", JointAsk::AsScene);
+    assert_eq!(outcome.verdict, Verdict::WithinBar, "{:?}", outcome.result.as_ref().map(|(e, _)| e));
+}
+
+#[test]
 fn an_edge_lost_under_a_streak_while_both_plates_go_on_is_refused_not_cut_short() {
     let outcome = planned("fault-streaks-i-butt-00-d1000-t20", JointAsk::AsScene);
     assert_eq!(refusing_rule_id(&outcome), "seam.stops_short_of_joint", "{}", refusal(&outcome));

@@ -301,20 +301,27 @@ impl<'a> Context<'a> {
         indices.iter().map(|&i| vec3(&self.cloud.points()[i as usize])).collect()
     }
 
-    /// Narrows `[s0, s1]` to where `curve` lies inside the image: projected
-    /// onto the configured camera's pixel grid when the frame is one, else
-    /// within the border the cloud's rays span ([`ViewBorder`]). A frame of
-    /// too few points to show a border is left as it is.
-    pub(super) fn clip_to_view(&self, curve: &SeamCurve, s0: f64, s1: f64) -> (f64, f64) {
-        // The border is read only for a frame without the grid.
-        let in_view: Box<dyn Fn(&Vec3) -> bool + '_> = match self.camera_grid() {
-            Some(grid) => Box::new(move |p| grid.in_view(p)),
-            None => match self.view_border() {
-                Some(border) => Box::new(|p| border.outside_mm(p) <= 0.0),
-                None => return (s0, s1),
-            },
-        };
-        let inside = |s: f64| in_view(&curve.at(s));
+    /// Whether `p` lies inside the image: projected onto the configured
+    /// camera's pixel grid when the frame is one, else within the border
+    /// the cloud's rays span ([`ViewBorder`]) or at most `slack_mm` past
+    /// it (what a downsampled cloud shows of its border lies up to half a
+    /// voxel inside it). `None` for a frame of too few points to show a
+    /// border.
+    pub(super) fn in_view(&self, p: &Vec3, slack_mm: f64) -> Option<bool> {
+        match self.camera_grid() {
+            Some(grid) => Some(grid.in_view(p)),
+            None => self.view_border().map(|border| border.outside_mm(p) <= slack_mm),
+        }
+    }
+
+    /// Narrows `[s0, s1]` to where `curve` lies inside the image
+    /// ([`Self::in_view`], `slack_mm` past a border read from the cloud); a
+    /// frame that shows no border is left as it is.
+    pub(super) fn clip_to_view(&self, curve: &SeamCurve, s0: f64, s1: f64, slack_mm: f64) -> (f64, f64) {
+        if self.in_view(&curve.at(s0), slack_mm).is_none() {
+            return (s0, s1);
+        }
+        let inside = |s: f64| self.in_view(&curve.at(s), slack_mm) == Some(true);
         let steps = ((s1 - s0) / VIEW_CLIP_STEP_MM).ceil().max(1.0) as usize;
         let ss: Vec<f64> = (0..=steps).map(|k| s0 + (s1 - s0) * k as f64 / steps as f64).collect();
         match (ss.iter().position(|&s| inside(s)), ss.iter().rposition(|&s| inside(s))) {

@@ -232,8 +232,9 @@ pub static STOPS_SHORT_OF_JOINT: Rule = Rule {
     effect: Effect::Refuses,
     gate: Some(Gate::JointCoverage),
     summary: "both plates are not seen beside the joint for more than a little beyond either end of the seam",
-    reason: "A seam ends where its joint ends: where one plate stops, or where the camera stops seeing them. \
-             Where both plates are still seen side by side well past the seam's end, the joint goes on and a \
+    reason: "A seam ends where its joint ends: where one plate stops, or where the camera stops seeing them \
+             (where a weld edge leaves the image, though pixels inside the plates, across an oblique border, \
+             are still in view). Where both plates are still seen side by side well past the seam's end, the joint goes on and a \
              weld edge was lost there while its plate goes on (a streak, spatter or a reflection over the \
              edge), so the weld would stop short of the joint. For a fillet root, the web's top and the flange \
              seen past the root's end where the web's side face is not seen down to the flange (turned \
@@ -253,6 +254,7 @@ pub static STOPS_SHORT_OF_JOINT: Rule = Rule {
     holds: &[
         "src/pipeline/quality/tests.rs::a_good_seam_passes_every_gate",
         "tests/quality.rs::every_seam_carries_its_quality_figures",
+        "tests/faults.rs::plates_seen_past_where_a_seam_leaves_the_image_do_not_refuse_it_as_cut_short",
     ],
 };
 

@@ -478,7 +478,11 @@ pub static SEAM_END_AT_IMAGE_BORDER: Rule = Rule {
              camera's grid: most pixels between the end and the border on the plate's plane; without a grid: the \
              plate's rim within a voxel or so of the border the cloud's rays span), the edge's end is moved to \
              where the fitted edge leaves the image. Where the plate ends first, or nothing is seen beyond the \
-             end, the end stays where the samples put it.",
+             end, the end stays where the samples put it. No edge runs on past where its own line leaves the \
+             image (a plate's rows inside its edge cross an oblique border before or after the edge does). A \
+             lap's joint is its upper edge and its root: the lower plate's edge, read where that plate's points \
+             stop beside the root, does not end the seam where it leaves the image, and the root runs on to \
+             where it leaves the image itself or the upper edge ends.",
     parameters: &[
         Parameter {
             name: "MAX_BORDER_REACH_MM",
@@ -503,6 +507,8 @@ pub static SEAM_END_AT_IMAGE_BORDER: Rule = Rule {
     fires: &[
         "src/pipeline/view_border.rs::an_edge_read_short_of_an_oblique_border_runs_on_to_it_where_its_plate_does",
         "tests/faults.rs::a_groove_leaving_the_image_at_a_grazing_angle_is_planned_to_the_border",
+        "tests/faults.rs::a_lap_leaving_the_image_obliquely_is_planned_to_where_its_joint_leaves_it",
+        "src/pipeline/boundary/tests.rs::an_edge_standing_in_for_the_root_ends_the_seam_only_inside_the_view",
     ],
     holds: &["src/pipeline/view_border.rs::an_end_is_not_moved_when_any_evidence_stops_short_of_the_border"],
 };

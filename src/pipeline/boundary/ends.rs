@@ -89,7 +89,8 @@ const MAX_SURFACE_FOLLOW_MM: f64 = 400.0;
 /// one edge while the plate is still seen). Each plate is read just inside
 /// its fitted edge, on its plane; a break along the weld no longer than
 /// [`JOINT_BREAK_SPACINGS`] is crossed, as the coverage report crosses it.
-/// Zero where a plate ends with the seam, or the view does.
+/// Zero where a plate ends with the seam, or the view does (where either
+/// edge leaves the image).
 pub(in crate::pipeline) fn surfaces_beyond(
     cloud: &PointCloud,
     grid: &CameraGrid,
@@ -104,8 +105,13 @@ pub(in crate::pipeline) fn surfaces_beyond(
     }
     let step = 0.5 * spacing_mm;
     let max_break = JOINT_BREAK_SPACINGS * spacing_mm;
-    // Plate k's surface just inside its edge at `s`: None out of view.
+    // Plate k's surface just inside its edge at `s`: None out of view,
+    // where the edge has left the image though the pixels inside it,
+    // across an oblique border, have not.
     let seen = |k: usize, s: f64| -> Option<bool> {
+        if !grid.in_view(&edges[k].at(s)) {
+            return None;
+        }
         let inside = inside_edge(cloud, grid, edges[k], planes[k], inwards[k], spacing_mm, s);
         if inside.on_plate { Some(true) } else { (inside.in_view > 0).then_some(false) }
     };
@@ -196,6 +202,26 @@ fn inside_edge(
         }
     }
     inside
+}
+
+/// The stretch of a weld both its edges show, from each weld edge's extent
+/// `(lo, hi)` along it: where both are seen, save that an end of an edge
+/// that only stands in for the joint's own line, and leaves the image
+/// there (`leaves_view[k] = [at lo, at hi]`), does not end it. A lap's
+/// joint is its upper plate's edge and its root a plate step below; the
+/// lower plate's edge the planner reads is where that plate's points stop
+/// beside the root, off the root across the seam, so a border crossing the
+/// seam obliquely cuts it before or after the root itself. Where it leaves
+/// the image, the end is the upper edge's, and the caller clips the root
+/// to the view. Where every edge's end there is flagged, none is left to
+/// end the seam and both bound it as before.
+pub fn seam_span(extents: [(f64, f64); 2], leaves_view: [[bool; 2]; 2]) -> (f64, f64) {
+    let end = |at: [f64; 2], leaves: [bool; 2], inner: fn(f64, f64) -> f64| {
+        (0..2).filter(|&k| !leaves[k]).map(|k| at[k]).reduce(inner).unwrap_or_else(|| inner(at[0], at[1]))
+    };
+    let [(a0, a1), (b0, b1)] = extents;
+    let [[a0_leaves, a1_leaves], [b0_leaves, b1_leaves]] = leaves_view;
+    (end([a0, b0], [a0_leaves, b0_leaves], f64::max), end([a1, b1], [a1_leaves, b1_leaves], f64::min))
 }
 
 /// The longest break along the weld, in point spacings, across which a

@@ -55,7 +55,7 @@ use crate::geometry::Vec3;
 pub use band::{
     SpannedEdge, band_members, members_along, read_stride, stretch_seen_beside, stretch_seen_beside_reading,
 };
-pub use ends::{JOINT_BREAK_SPACINGS, joined_extent, rim_trim_radii};
+pub use ends::{JOINT_BREAK_SPACINGS, joined_extent, rim_trim_radii, seam_span};
 pub(super) use ends::{plate_unseen_beside, reach_image_border, surfaces_beyond};
 pub use grid::sample_boundary;
 pub use rim::{rim_points_at_ends, rim_refined_extent};

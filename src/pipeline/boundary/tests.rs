@@ -620,6 +620,21 @@ fn pieces_join_a_plate_across_narrow_breaks_only() {
 }
 
 #[test]
+fn an_edge_standing_in_for_the_root_ends_the_seam_only_inside_the_view() {
+    // `seam.end_at_image_border` for a lap: its upper edge over -100..90,
+    // its lower edge over -93..95.
+    let extents = [(-100.0, 90.0), (-93.0, 95.0)];
+    // Both ends inside the view: the stretch both show.
+    assert_eq!(seam_span(extents, [[false; 2]; 2]), (-93.0, 90.0));
+    // The lower edge leaves the image at -93: the upper edge's end.
+    assert_eq!(seam_span(extents, [[false; 2], [true, false]]), (-100.0, 90.0));
+    // Leaving the image past the upper edge's end, it extends nothing.
+    assert_eq!(seam_span(extents, [[false; 2], [false, true]]), (-93.0, 90.0));
+    // With no edge left to end it, the stretch both show.
+    assert_eq!(seam_span(extents, [[true, false], [true, false]]), (-93.0, 90.0));
+}
+
+#[test]
 fn members_along_finds_the_plate_beside_the_edge() {
     let edge_x = 3.3;
     let cloud = scattered_where(1.0, |x, y| x < edge_x + SLOPE * y && y.abs() < 30.0);

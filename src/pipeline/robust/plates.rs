@@ -18,7 +18,7 @@ use super::super::ransac::{self, EdgeLine};
 use super::super::refit::{self, CurveFit, SeamAxes, SeamCurve};
 use super::super::straightness::{RootBend, Samples, bend_of};
 use super::super::trace::TracedWeld;
-use super::super::{PlanError, SeamAssessment, SeamCoverage, Stage, view_border, weld_edges, weld_equation};
+use super::super::{PlanError, SeamAssessment, SeamCoverage, Stage, weld_edges, weld_equation};
 use super::lap_edge::check_lap_edge;
 use super::root_weld;
 use super::{Front, Refused, SeenAs, admit};
@@ -453,14 +453,12 @@ fn place_weld(
 ) -> Result<PlacedWeld, PlanError> {
     let config = ctx.config;
     let cfg = &config.pipeline;
-    let camera = &config.camera;
     let scale = ctx.scale;
     let cloud = ctx.cloud;
     let plates = &workpiece.plates;
-    let spacing_at = |p: &Vec3| scale.spacing_at(camera, p);
     let edge_across = |k: usize, point: &Vec3, direction: &Vec3| edge_in_plate(plates, k, point, direction);
-    let Refitted { params, boundaries, axes, degree, seam_spacing, fits, .. } = refitted;
-    let (params, degree, seam_spacing) = (*params, *degree, *seam_spacing);
+    let Refitted { boundaries, axes, seam_spacing, fits, .. } = refitted;
+    let seam_spacing = *seam_spacing;
     let (profile, groove_depth_mm) = (&groove.profile, groove.depth_mm);
     // 4.3: the weld per joint type (Eq. 32, 36), a lap weld at the root a
     // plate step below the upper edge (Eq. 38), planned only where both
@@ -494,7 +492,7 @@ fn place_weld(
             )
         })
     };
-    let mut extents = match root {
+    let extents = match root {
         // Where both flanks show the root, whatever the top edges did.
         Some(root) => [root.span; 2],
         None => [extent(0)?, extent(1)?],
@@ -505,77 +503,13 @@ fn place_weld(
         let middle = 0.5 * (curve.s_min + curve.s_max);
         edge_across(k, &curve.at(middle), &curve.tangent(middle))
     };
-    if !cloud.is_organized() && degree == 1 && root.is_none() {
-        // Without a grid the strips read each end to a strip's width, and
-        // miss or mistake the ends where the cloud's border cuts a plate:
-        // the plate's last rows inside the fitted edge say where it ends.
-        let spacing = seam_spacing;
-        let refine = |k: usize| {
-            let along = |p: &Vec3| axes.feature(p);
-            let (edge, rms) = (fitted_edge(k), fits[k].rms_mm);
-            boundary::rim_refined_extent(cloud, &plates[k].plane, &edge, &params, spacing, rms, along, extents[k])
-        };
-        let refined = [refine(0), refine(1)];
-        tracing::debug!(strips = ?extents, rims = ?refined, "weld edge ends refined along the plates' rims");
-        extents = refined;
-    }
-    if let Some(grid) = ctx.camera_grid().filter(|_| root.is_none()) {
-        // On the camera's grid the boundary samples stop a trimmed rim
-        // short of the image border; where the plate runs on to it, so
-        // does the edge.
-        let reach = |k: usize| {
-            let edge = fitted_edge(k);
-            let spacing = spacing_at(&edge.point);
-            boundary::reach_image_border(
-                cloud,
-                &grid,
-                &fits[k].curve,
-                &plates[k].plane,
-                &-edge.outward,
-                spacing,
-                extents[k],
-            )
-        };
-        let reached = [reach(0), reach(1)];
-        tracing::debug!(samples = ?extents, borders = ?reached, "weld edge ends carried to the image border");
-        if reached != extents {
-            tracing::debug!(rule = rules::refit::SEAM_END_AT_IMAGE_BORDER.id, "a weld edge's end moved to the border");
-        }
-        extents = reached;
-    }
-    if ctx.camera_grid().is_none()
-        && root.is_none()
-        && let Some(border) = ctx.view_border()
-    {
-        // Without a grid to carry each edge to the image's border, an edge
-        // the border crosses obliquely stops short of it, the strips' last
-        // one cut part way; where the plate's rim runs on to the border,
-        // so does the edge.
-        let spacing = seam_spacing;
-        let along = |p: &Vec3| axes.feature(p);
-        let near = view_border::END_EVIDENCE_SPACINGS * spacing;
-        let reach = |k: usize| {
-            let edge = fitted_edge(k);
-            let rim =
-                boundary::rim_points_at_ends(cloud, &plates[k].plane, &edge, &params, spacing, along, extents[k], near);
-            border.edge_extent_at_border(&fits[k].curve, extents[k], &rim, along, spacing)
-        };
-        let reached = [reach(0), reach(1)];
-        tracing::debug!(edges = ?extents, at_border = ?reached, "weld edge ends carried to the image's border");
-        if reached != extents {
-            tracing::debug!(rule = rules::refit::SEAM_END_AT_IMAGE_BORDER.id, "a weld edge's end moved to the border");
-        }
-        extents = reached;
-    }
-    let [(a0, a1), (b0, b1)] = extents;
-    tracing::debug!(edge_1_mm = ?[a0, a1], edge_2_mm = ?[b0, b1], "weld edges seen along the seam");
-    let (mut s0, mut s1) = (a0.max(b0), a1.min(b1));
+    let (mut s0, mut s1) = edge_ends::seam_span(ctx, plates, refitted, &fitted_edge, layout, extents, root.is_some());
     if layout == Layout::Lap {
         // The root lies a plate thickness below the edges the samples
         // saw; never plan a stretch of it the camera did not see (where
         // the image's border cuts the edges obliquely, the root leaves the
         // image before they do).
-        (s0, s1) = ctx.clip_to_view(&weld, s0, s1);
+        (s0, s1) = ctx.clip_to_view(&weld, s0, s1, 0.0);
     }
     // The visible joint: where both plates are seen beside the weld, their
     // members widened by the rim the plane criterion trimmed (for a lap,
@@ -597,7 +531,7 @@ fn place_weld(
     let visible_joint = match beside {
         [Some((a0, a1)), Some((b0, b1))] => {
             let (v0, v1) = (a0.max(b0), a1.min(b1));
-            Some(if layout == Layout::Lap { ctx.clip_to_view(&weld, v0, v1) } else { (v0, v1) })
+            Some(if layout == Layout::Lap { ctx.clip_to_view(&weld, v0, v1, 0.0) } else { (v0, v1) })
         }
         _ => None,
     };
@@ -662,7 +596,7 @@ fn place_weld(
         );
         if layout == Layout::Lap {
             // A lap's joint goes on only as far as its root is in view.
-            let (v0, v1) = ctx.clip_to_view(&weld, s0 - before, s1 + after);
+            let (v0, v1) = ctx.clip_to_view(&weld, s0 - before, s1 + after, 0.0);
             [(s0 - v0).max(0.0), (v1 - s1).max(0.0)]
         } else {
             [before, after]
@@ -773,5 +707,6 @@ fn check_gates(
     Ok((quality, warnings))
 }
 
+mod edge_ends;
 #[cfg(test)]
 mod tests;

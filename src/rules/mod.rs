@@ -39,6 +39,7 @@ pub mod ransac;
 pub mod refit;
 pub mod request;
 pub mod trajectory;
+mod web_face;
 pub mod weld_edges;
 pub mod weld_equation;
 

@@ -2,7 +2,10 @@
 //! now answered by the check it taught: a clamp lying across a lap's plate
 //! and a part abutting a V-butt plate are refused for what they are, a lap
 //! whose upper plate a specular streak cut in two is refused for covering
-//! part of the joint (and not taken for an I-butt under `auto`), and a
+//! part of the joint (and not taken for an I-butt under `auto`), or,
+//! where the streak runs on across the plate under it, planned along both
+//! pieces as one plate (cropped round the seam, where the pieces are each
+//! large enough to be a butt plate), and a
 //! V-groove leaving the image at a grazing angle is planned to the border,
 //! and an I-butt whose edge a streak hides over the joint's last stretch is
 //! refused for stopping short of where both plates are still seen.
@@ -217,6 +220,20 @@ fn a_lap_plate_cut_by_a_streak_is_refused_for_coverage_and_not_found_as_a_butt_j
     let auto = planned(name, JointAsk::Auto);
     assert_eq!(refusing_rule_id(&auto), "joint.plate_and_piece_over_lower_plane", "{}", refusal(&auto));
     assert_eq!(auto.result.as_ref().err().and_then(|e| e.gate), Some(Gate::JointUnknown), "{}", refusal(&auto));
+}
+
+#[test]
+fn a_lap_plate_cut_by_a_streak_running_on_across_the_plate_under_it_is_one_plate() {
+    // Fresh draw 1, cropped 25 mm round the seam: the streak cuts the
+    // upper plate into two pieces, each large enough to be a plate, and
+    // runs on across the lower plate. Read as two butt plates, `auto`
+    // planned the 0.7 mm break as an I-butt's gap, 275 mm off the lap; a
+    // gap between plates ends where they do, a break in the image does
+    // not, so both requests plan the lap along both pieces.
+    for joint in [JointAsk::AsScene, JointAsk::Auto] {
+        let outcome = planned_as("fault-streaks-lap-01-d833-t20-fresh1", joint, "cropped:25");
+        assert_eq!(outcome.verdict, Verdict::WithinBar, "{joint:?}: {:?}", outcome.result.as_ref().map(|(e, _)| e));
+    }
 }
 
 #[test]

@@ -43,6 +43,7 @@ pub(super) static RULES: &[&Rule] = &[
 const BACKGROUND: &str = "src/pipeline/background/placement.rs";
 const CORNER: &str = "src/pipeline/background/corner.rs";
 const LAYERS: &str = "src/pipeline/background/layers.rs";
+const IMAGE_BREAK: &str = "src/pipeline/background/image_break.rs";
 
 const COPLANAR_TOLERANCE: Parameter = Parameter {
     name: "coplanar_tolerance_mm",
@@ -92,6 +93,23 @@ const SIDE_BY_SIDE_AREA_RATIO: Parameter = Parameter {
     meaning: "least area of a second plate against the first, for a plate rather than a piece",
     source: Source::Constant { file: BACKGROUND, name: "SIDE_BY_SIDE_AREA_RATIO" },
 };
+const IMAGE_BREAK_MAX: Parameter = Parameter {
+    name: "IMAGE_BREAK_MAX_MM",
+    unit: "mm",
+    meaning: "widest break between two coplanar pieces read as a break in the image (a streak, a dropout)",
+    source: Source::Constant { file: IMAGE_BREAK, name: "IMAGE_BREAK_MAX_MM" },
+};
+const IMAGE_BREAK_RUN_ON: Parameter = Parameter {
+    name: "RUN_ON_MIN_MM",
+    unit: "mm",
+    meaning: "how far such a break must run on, in line in the image, across the surface behind the pieces",
+    source: Source::Constant { file: IMAGE_BREAK, name: "RUN_ON_MIN_MM" },
+};
+/// What tells a second plate of a layer from a piece of the first, over
+/// a plane a lap's step behind: its area, and a break in the image
+/// between them.
+const PLATE_OR_PIECE_PARAMETERS: &[Parameter] =
+    &[SIDE_BY_SIDE_AREA_RATIO, COPLANAR_TOLERANCE, LAP_STEP_MIN, LAP_STEP_MAX, IMAGE_BREAK_MAX, IMAGE_BREAK_RUN_ON];
 const BAR_ELONGATION: Parameter = Parameter {
     name: "BAR_ELONGATION",
     unit: "",
@@ -336,8 +354,10 @@ pub static BUTT_NO_COPLANAR_PAIR: Rule = Rule {
     summary: "under a butt request, two plates lie side by side in one plane",
     reason: "Butt plates are laid flat side by side on one support, so their top faces lie in one plane, within \
              what the fixture and the cloud's depth noise allow. With no two facing planes that near to each \
-             other along the normal, the frame holds no butt joint; the refusal lists the planes' offsets.",
-    parameters: &[COPLANAR_TOLERANCE, FACING_ANGLE_MAX],
+             other along the normal, the frame holds no butt joint; the refusal lists the planes' offsets. Two \
+             pieces of one plane whose narrow break runs on, in line in the image, across the surface behind \
+             them are one plate a streak or a dropout cut, not two: a gap between plates ends where they do.",
+    parameters: &[COPLANAR_TOLERANCE, FACING_ANGLE_MAX, IMAGE_BREAK_MAX, IMAGE_BREAK_RUN_ON],
     fires: &["src/pipeline/background/tests.rs::failures_say_what_was_found"],
     holds: &["src/pipeline/background/tests.rs::plates_filling_the_view_are_both_kept"],
 };
@@ -435,10 +455,15 @@ pub static LOOKS_LIKE_BUTT: Rule = Rule {
     summary: "under a lap request, the upper layer holds no two plates side by side",
     reason: "A lap's upper layer is one plate. Two plates side by side in it, the second as large as a plate \
              rather than a piece, lie as butt plates do, and the layer under them is what they rest on; planning \
-             a lap would weld one butt plate's edge to the table.",
-    parameters: &[SIDE_BY_SIDE_AREA_RATIO, COPLANAR_TOLERANCE, LAP_STEP_MIN, LAP_STEP_MAX],
+             a lap would weld one butt plate's edge to the table. Two pieces whose narrow break runs on, in line \
+             in the image, across the plate under them are one upper plate a streak or a dropout cut: the lap \
+             is planned along both.",
+    parameters: PLATE_OR_PIECE_PARAMETERS,
     fires: &["src/pipeline/background/tests.rs::the_wrong_joint_requested_is_named_for_what_it_looks_like"],
-    holds: &["src/pipeline/background/tests.rs::lap_takes_the_nearest_layers_one_thickness_apart_upper_first"],
+    holds: &[
+        "src/pipeline/background/tests.rs::lap_takes_the_nearest_layers_one_thickness_apart_upper_first",
+        "tests/faults.rs::a_lap_plate_cut_by_a_streak_running_on_across_the_plate_under_it_is_one_plate",
+    ],
 };
 
 pub static LAP_UPPER_PLANE_LIES_ACROSS_LOWER: Rule = Rule {
@@ -476,14 +501,19 @@ pub static PLATE_AND_PIECE_OVER_LOWER_PLANE: Rule = Rule {
     summary: "under `auto`, the nearest layer does not hold a plate and a smaller piece over a plane a step below",
     reason: "A plate with a piece too small to be a plate beside it in one plane, over a lower plane one plate \
              thickness behind, is two butt plates with one barely in view, or a lap's upper plate that a gap in \
-             the cloud cut in two. The two joints' seams lie in different places and the frame cannot tell them \
-             apart, so the joint type must be named in the request.",
-    parameters: &[SIDE_BY_SIDE_AREA_RATIO, COPLANAR_TOLERANCE, LAP_STEP_MIN, LAP_STEP_MAX],
+             the cloud cut in two. Where the break between them runs on, in line in the image, across the plane \
+             behind, the cloud tells: a break in the image, one plate. Otherwise the two joints' seams lie in \
+             different places and the frame cannot tell them apart, so the joint type must be named in the \
+             request.",
+    parameters: PLATE_OR_PIECE_PARAMETERS,
     fires: &[
         "tests/faults.rs::a_lap_plate_cut_by_a_streak_is_refused_for_coverage_and_not_found_as_a_butt_joint",
         "src/pipeline/background/tests.rs::with_no_type_given_the_layers_decide",
     ],
-    holds: &["src/pipeline/background/tests.rs::with_no_type_given_the_layers_decide"],
+    holds: &[
+        "src/pipeline/background/tests.rs::with_no_type_given_the_layers_decide",
+        "tests/faults.rs::a_lap_plate_cut_by_a_streak_running_on_across_the_plate_under_it_is_one_plate",
+    ],
 };
 
 pub static TEE_WEB_SEEN_ON_ONE_SIDE: Rule = Rule {

@@ -8,6 +8,7 @@ use crate::joint::JointType;
 
 use super::super::workpieces::MAX_JOINT_OPENING_MM;
 use super::beside::standing_beside;
+use super::image_break;
 use super::placement::{
     BAR_ELONGATION, FALL_MIN_POINTS, SIDE_BY_SIDE_AREA_RATIO, face_falls_from, lies_across, lies_between_pair,
     lies_beyond_pair, seen_beside, side_of, spacing_of,
@@ -370,6 +371,7 @@ pub fn robust_select(planes: Vec<PlaneCluster>, s: &Selection, points: &[Point])
     for layer in &mut layers {
         layer.sort_by(|a, b| b.area_mm2.total_cmp(&a.area_mm2));
     }
+    let (cut_off, cuts_read) = set_apart_cut_pieces(&mut layers, points);
     let l = Layers { layers, normal: s.normal, found, offsets_mm };
 
     let butt = |l: &Layers, pos: usize, why: String| {
@@ -504,8 +506,46 @@ pub fn robust_select(planes: Vec<PlaneCluster>, s: &Selection, points: &[Point])
     let mut layers = l.layers;
     let mut take = |(layer, k): (usize, usize)| layers[layer].swap_remove(k);
     let (second, first) = (take(picks[1]), take(picks[0]));
-    let layer_mates = [layers[picks[0].0].clone(), std::mem::take(&mut layers[picks[1].0])];
+    let mut layer_mates = [layers[picks[0].0].clone(), std::mem::take(&mut layers[picks[1].0])];
+    for (mates, (layer, _)) in layer_mates.iter_mut().zip(picks) {
+        mates.extend(cut_off[layer].iter().cloned());
+    }
     let workpiece = Workpiece { plates: [first, second], depth_to_support_mm, support_between_plates, layer_mates };
     let web_by_faces = layout == Layout::Tee && tee_found.is_some_and(|t| t.by_faces);
-    Ok(Selected { workpiece, layout, evidence, web_by_faces })
+    Ok(Selected { workpiece, layout, evidence: evidence + &cuts_read, web_by_faces })
+}
+
+/// Takes out of each layer the pieces a break in the image cut off a
+/// larger cluster of it ([`image_break`]): no plates of their own, but
+/// pieces of that plate, kept as its layer mates. Returns them per layer,
+/// and in words what was read.
+fn set_apart_cut_pieces(layers: &mut [Vec<PlaneCluster>], points: &[Point]) -> (Vec<Vec<PlaneCluster>>, String) {
+    let mut cut_off = vec![Vec::new(); layers.len()];
+    let mut read = String::new();
+    for k in 0..layers.len() {
+        let (front, back) = layers.split_at_mut(k + 1);
+        let behind: Vec<&PlaneCluster> = back.iter().flatten().collect();
+        let layer = &mut front[k];
+        let cuts = image_break::cut_pieces(layer, &behind, points);
+        for cut in &cuts {
+            let (piece, of) = (&layer[cut.piece], &layer[cut.of]);
+            tracing::debug!(
+                piece_mm2 = piece.area_mm2,
+                of_mm2 = of.area_mm2,
+                width_mm = cut.found.width_mm,
+                run_on_mm = cut.found.run_on_mm,
+                "a piece cut off a plate by a break in the image"
+            );
+            read += &format!(
+                "; {:.0} mm² beside the {:.0} mm² plane is a piece of it: the {:.1} mm break between them runs on \
+                 {:.0} mm across the surface behind, a break in the image",
+                piece.area_mm2, of.area_mm2, cut.found.width_mm, cut.found.run_on_mm
+            );
+        }
+        // Largest place first, so the places still to take do not move.
+        for cut in cuts.iter().rev() {
+            cut_off[k].push(layer.remove(cut.piece));
+        }
+    }
+    (cut_off, read)
 }

@@ -18,6 +18,9 @@
 //! found, each reason a rule of `crate::rules::background`;
 //! [`placement`] reads where one plane cluster lies beside, across or
 //! beyond others, and whether a face falls from one to a lower layer;
+//! [`image_break`] tells a piece a break in the image (a streak, a
+//! dropout) cut off a plate from a plate of its own, by whether the break
+//! runs on across the surface behind them;
 //! [`layers`] sorts the clusters into layers and finds the butt, lap or
 //! tee layout in them; [`beside`] tells which plate of a
 //! layer another plane stands beside; [`corner`] recognises a corner
@@ -26,6 +29,7 @@
 mod beside;
 mod corner;
 mod error;
+mod image_break;
 mod layers;
 mod placement;
 #[cfg(test)]

@@ -24,8 +24,6 @@
 //! counts: a frame that shows nothing behind the pieces on the line keeps
 //! them two plates.
 
-use std::collections::HashSet;
-
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 
 use crate::cloud::Point;
@@ -145,20 +143,36 @@ pub fn cut_pieces(layer: &[PlaneCluster], behind: &[&PlaneCluster], points: &[Po
         .collect()
 }
 
-/// The points of `of` in or beside a cell of a grid `reach` wide that
-/// holds a point of `other`: every point within `reach` of `other`, and
-/// none far from it, so the nearest-point search runs over the rims only
-/// (two plates side by side hold hundreds of thousands of points each).
+/// The most cells a side of [`near`]'s grid has: a frame whose pieces
+/// spread further apart than this many reaches gets coarser cells, which
+/// keep every point they must and a few more.
+const NEAR_GRID_CELLS: f64 = 1024.0;
+
+/// The points of `of` in or beside a cell of a grid at least `reach` wide
+/// that holds a point of `other`: every point within `reach` of `other`,
+/// and none far from it, so the nearest-point search runs over the rims
+/// only (two plates side by side hold hundreds of thousands of points
+/// each). The grid is a dense bitmap over both sets' bounds.
 fn near(of: &[[f64; 2]], other: &[[f64; 2]], reach: f64) -> Vec<[f64; 2]> {
-    let cell = |p: &[f64; 2]| ((p[0] / reach).floor() as i64, (p[1] / reach).floor() as i64);
-    let held: HashSet<(i64, i64)> = other.iter().map(cell).collect();
-    of.iter()
-        .filter(|p| {
-            let (x, y) = cell(p);
-            (-1..=1).any(|dx| (-1..=1).any(|dy| held.contains(&(x + dx, y + dy))))
-        })
-        .copied()
-        .collect()
+    let all = || of.iter().chain(other);
+    let (x0, x1) = crate::geometry::extent(all().map(|p| p[0]));
+    let (y0, y1) = crate::geometry::extent(all().map(|p| p[1]));
+    if !(x0 <= x1 && y0 <= y1) {
+        return Vec::new();
+    }
+    let cell_mm = reach.max((x1 - x0) / NEAR_GRID_CELLS).max((y1 - y0) / NEAR_GRID_CELLS);
+    let (nx, ny) = (((x1 - x0) / cell_mm) as usize + 1, ((y1 - y0) / cell_mm) as usize + 1);
+    let cell = |p: &[f64; 2]| (((p[0] - x0) / cell_mm) as usize, ((p[1] - y0) / cell_mm) as usize);
+    let mut held = vec![false; nx * ny];
+    for q in other {
+        let (x, y) = cell(q);
+        held[y * nx + x] = true;
+    }
+    let beside_held = |(x, y): (usize, usize)| {
+        (y.saturating_sub(1)..=(y + 1).min(ny - 1))
+            .any(|row| (x.saturating_sub(1)..=(x + 1).min(nx - 1)).any(|col| held[row * nx + col]))
+    };
+    of.iter().filter(|p| beside_held(cell(p))).copied().collect()
 }
 
 /// The points of `of` within `reach` of `other`, each with its nearest
@@ -206,10 +220,11 @@ struct BreakLine {
 
 impl BreakLine {
     /// The line through the middles of the facing edges' points: the
-    /// rims' points whose nearest point across lies within a spacing of
-    /// the least such distance (points of one piece facing the other
-    /// across the break, not along its side); the break as wide as the
-    /// median of those distances.
+    /// rims' points whose nearest point across lies within two spacings
+    /// of the least such distance (points of one piece facing the other
+    /// across the break, and the row behind them, not those along its
+    /// side); the break as wide as the tenth percentile of those
+    /// distances, the edges' narrowest stretch but for a stray point.
     fn through(rim_a: &[Facing], rim_b: &[Facing], spacing_mm: f64) -> Option<BreakLine> {
         let least = rim_a.iter().chain(rim_b).map(|f| f.distance).fold(f64::INFINITY, f64::min);
         let edges: Vec<&Facing> =

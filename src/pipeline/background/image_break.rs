@@ -27,6 +27,7 @@
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 
 use crate::cloud::Point;
+use crate::geometry::fit::Moments;
 use crate::geometry::{Vec3, vec3};
 
 use super::PlaneCluster;
@@ -232,17 +233,10 @@ impl BreakLine {
         if edges.len() < 2 * MIN_RIM_POINTS {
             return None;
         }
-        let n = edges.len() as f64;
-        let mean = edges.iter().fold([0.0, 0.0], |m, f| [m[0] + f.midpoint[0] / n, m[1] + f.midpoint[1] / n]);
-        let (mut sxx, mut sxy, mut syy) = (0.0, 0.0, 0.0);
-        for f in &edges {
-            let (dx, dy) = (f.midpoint[0] - mean[0], f.midpoint[1] - mean[1]);
-            sxx += dx * dx;
-            sxy += dx * dy;
-            syy += dy * dy;
-        }
-        let angle = 0.5 * (2.0 * sxy).atan2(sxx - syy);
-        let along = [angle.cos(), angle.sin()];
+        // The least-squares line through the middles, in the image plane.
+        let moments: Moments = edges.iter().map(|f| Vec3::new(f.midpoint[0], f.midpoint[1], 0.0)).collect();
+        let (centre, direction) = moments.line()?;
+        let (mean, along) = ([centre.x, centre.y], [direction.x, direction.y]);
         let across = [-along[1], along[0]];
         let (lo, hi) = crate::geometry::extent(
             edges.iter().map(|f| (f.midpoint[0] - mean[0]) * along[0] + (f.midpoint[1] - mean[1]) * along[1]),

@@ -121,6 +121,13 @@ const PARALLEL_FACE_DEG: f64 = 10.0;
 /// member's face stands further off than its own thickness of noise.
 const FACES_APART_SPACINGS: f64 = 10.0;
 
+/// The share of a further face's points lying within
+/// [`FACES_APART_SPACINGS`] of a found face's plane above which it is
+/// that face's leftover whatever its fit's turn ([`same_face`]): nearly
+/// all, leaving room for the few returns of the flange or an edge's veil
+/// a slab of leftovers takes in.
+const LEFTOVER_SHARE: f64 = 0.9;
+
 /// A web's side face seen standing on the flange, its top not in view.
 #[derive(Debug, Clone, PartialEq)]
 pub struct StandingFace {
@@ -187,7 +194,7 @@ pub fn find_all(
         }
         let Ok(next) = over.face_among(&left) else { break };
         last_plane = next.0.plane;
-        if kept.iter().any(|(face, _)| same_face(face, &next.0, s.point_spacing_mm)) {
+        if kept.iter().any(|(face, _)| same_face(face, (&next.0, &next.1), s.point_spacing_mm)) {
             break;
         }
         let reach = EDGE_REACH_SPACINGS * s.point_spacing_mm;
@@ -219,14 +226,27 @@ fn meet(a: (&Plane, &[Vec3]), b: (&Plane, &[Vec3]), reach: f64) -> bool {
     }
 }
 
-/// Whether `b` is the leftover of `a`: turned within
-/// [`PARALLEL_FACE_DEG`] of it and lying nearer it than
-/// [`FACES_APART_SPACINGS`] point spacings (the points of a noisy face
-/// beyond the tolerance its own fit keeps). A second member's face stands
-/// further off or turned from the first.
-fn same_face(a: &StandingFace, b: &StandingFace, spacing: f64) -> bool {
-    let parallel = a.plane.normal.dot(&b.plane.normal).abs() >= PARALLEL_FACE_DEG.to_radians().cos();
-    parallel && a.plane.signed_distance(&b.centroid).abs() < FACES_APART_SPACINGS * spacing
+/// Whether `b` (its face and points) is the leftover of `a`: the points
+/// of a noisy face beyond the tolerance its own fit keeps, lying nearer
+/// `a`'s plane than [`FACES_APART_SPACINGS`] point spacings, either
+/// - as a face turned within [`PARALLEL_FACE_DEG`] of it, its centroid
+///   that near; or
+/// - at any turn, with [`LEFTOVER_SHARE`] of its points that near: a
+///   plane fitted to a thin slab of leftovers turns as they lead it (round
+///   a box section's rounded corner, or where the camera blends the face
+///   into what meets it), but the slab stays within the face's own band.
+///
+/// A second member's face stands further off, or turned from the first
+/// with its points reaching out of that band across its own width.
+fn same_face(a: &StandingFace, b: (&StandingFace, &[Vec3]), spacing: f64) -> bool {
+    let band_mm = FACES_APART_SPACINGS * spacing;
+    let (face, points) = b;
+    let parallel = a.plane.normal.dot(&face.plane.normal).abs() >= PARALLEL_FACE_DEG.to_radians().cos();
+    if parallel && a.plane.signed_distance(&face.centroid).abs() < band_mm {
+        return true;
+    }
+    let in_band = points.iter().filter(|p| a.plane.signed_distance(p).abs() < band_mm).count();
+    !points.is_empty() && in_band as f64 >= LEFTOVER_SHARE * points.len() as f64
 }
 
 /// What stands over a flange: the flange's plane and the points over its

@@ -243,3 +243,39 @@ fn mixed_returns_alone_are_no_face() {
     // Every plane through three of them lies along the rays.
     assert_eq!(err.rule().id, "tee.no_face_stands_on_flange", "{err}");
 }
+
+#[test]
+fn a_slab_of_a_face_s_leftover_returns_turned_from_it_is_that_face_not_a_third() {
+    // A box section on a plate, its corner at (FACE_X, -150): its face
+    // towards +x (52 mm along y) and towards +y (48 mm along x), each
+    // 60 mm tall, the plate round both.
+    let corner_y = -150.0;
+    let mut member: Vec<Vec3> = (-50..=55)
+        .flat_map(|i| (-50..=50).map(move |j| Vec3::new(FACE_X + i as f64, corner_y + j as f64, 700.0)))
+        .filter(|p| p.x > FACE_X || p.y > corner_y)
+        .collect();
+    member
+        .extend((0..52).flat_map(|i| (1..=60).map(move |h| Vec3::new(FACE_X, corner_y - i as f64, 700.0 - h as f64))));
+    member
+        .extend((1..=48).flat_map(|i| (1..=60).map(move |h| Vec3::new(FACE_X - i as f64, corner_y, 700.0 - h as f64))));
+    let faces_of = |points: &[Vec3]| {
+        let cloud = cloud_of(points);
+        find_all(&cloud, &[&PlaneCluster::of_points(points, |p| p.z == 700.0)], &SETTINGS).unwrap()
+    };
+    assert_eq!(faces_of(&member).len(), 2);
+    // Beside the corner, returns the camera reads off the +x face as it
+    // rounds the corner: a slab 2 to 9 mm proud of it over 20 mm along
+    // it, turned 22° from it, 57 mm tall. Fitted alone it is a face
+    // meeting the +y face along the corner, whose root would lie a
+    // millimetre or two off the +x face's; it is the +x face's leftovers.
+    let turn = 22f64.to_radians();
+    member.extend((0..20).flat_map(|s| {
+        (1..=57).map(move |h| {
+            let s = f64::from(s);
+            Vec3::new(FACE_X + 2.0 + s * turn.sin(), corner_y - 2.0 - s * turn.cos(), 700.0 - f64::from(h))
+        })
+    }));
+    let faces = faces_of(&member);
+    assert_eq!(faces.len(), 2, "{faces:?}");
+    assert!(faces[0].plane.normal.x > 0.999 && faces[1].plane.normal.y > 0.999, "{faces:?}");
+}

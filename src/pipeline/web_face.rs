@@ -232,9 +232,9 @@ fn meet(a: (&Plane, &[Vec3]), b: (&Plane, &[Vec3]), reach: f64) -> bool {
 /// - as a face turned within [`PARALLEL_FACE_DEG`] of it, its centroid
 ///   that near; or
 /// - at any turn, with [`LEFTOVER_SHARE`] of its points that near: a
-///   plane fitted to a thin slab of leftovers turns as they lead it (round
-///   a box section's rounded corner, or where the camera blends the face
-///   into what meets it), but the slab stays within the face's own band.
+///   plane fitted to a thin slab of leftovers turns as they lead it (near
+///   a member's corner, or where the camera blends the face into what
+///   meets it), but the slab stays within the face's own band.
 ///
 /// A second member's face stands further off, or turned from the first
 /// with its points reaching out of that band across its own width.

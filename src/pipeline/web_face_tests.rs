@@ -263,11 +263,12 @@ fn a_slab_of_a_face_s_leftover_returns_turned_from_it_is_that_face_not_a_third()
         find_all(&cloud, &[&PlaneCluster::of_points(points, |p| p.z == 700.0)], &SETTINGS).unwrap()
     };
     assert_eq!(faces_of(&member).len(), 2);
-    // Beside the corner, returns the camera reads off the +x face as it
-    // rounds the corner: a slab 2 to 9 mm proud of it over 20 mm along
-    // it, turned 22° from it, 57 mm tall. Fitted alone it is a face
-    // meeting the +y face along the corner, whose root would lie a
-    // millimetre or two off the +x face's; it is the +x face's leftovers.
+    // Beside the corner, returns read off the +x face near it: a slab 2
+    // to 9 mm proud of it over 20 mm along it, turned 22° from it, 57 mm
+    // tall, as on the public scan pc0003, where such a slab was kept as a
+    // third face and its root planned 1.7 mm beside the face's own. Fitted
+    // alone it is a face meeting the +y face along the corner; it is the
+    // +x face's leftovers.
     let turn = 22f64.to_radians();
     member.extend((0..20).flat_map(|s| {
         (1..=57).map(move |h| {

@@ -196,17 +196,40 @@ impl ViewBorder {
         reach_mm: f64,
         max_move_mm: f64,
     ) -> Option<f64> {
+        let exit = self.exit(origin, direction, end)?;
+        let reached = |set: &&[Vec3]| exit.reached_by(set, reach_mm);
+        ((exit.t - at).abs() <= max_move_mm && !evidence.is_empty() && evidence.iter().all(reached)).then_some(exit.t)
+    }
+
+    /// The border plane the line `origin + t · direction` leaves the view
+    /// by going out of its span at `end`: of the planes it heads out
+    /// through at a sine of at least [`MIN_CROSSING_SIN`], the one it
+    /// crosses first going outward.
+    fn exit(&self, origin: &Vec3, direction: &Vec3, end: SpanEnd) -> Option<Exit> {
         let heading = *direction * end.outward();
-        // The plane the line leaves by: of those it heads out through
-        // from this end, the one it crosses first going outward.
-        let (plane, t) = self
-            .outward
+        self.outward
             .iter()
-            .filter(|n| n.dot(&heading) >= MIN_CROSSING_SIN)
-            .map(|n| (n, -n.dot(origin) / n.dot(direction)))
-            .min_by(|a, b| (end.outward() * a.1).total_cmp(&(end.outward() * b.1)))?;
-        let reached = |set: &&[Vec3]| set.iter().any(|p| plane.dot(p) >= -reach_mm);
-        ((t - at).abs() <= max_move_mm && !evidence.is_empty() && evidence.iter().all(reached)).then_some(t)
+            .map(|n| Exit { outward: *n, t: -n.dot(origin) / n.dot(direction), sine: n.dot(&heading) })
+            .filter(|exit| exit.sine >= MIN_CROSSING_SIN)
+            .min_by(|a, b| (end.outward() * a.t).total_cmp(&(end.outward() * b.t)))
+    }
+}
+
+/// Where a line leaves the view: the border plane's outward unit normal,
+/// the line's parameter at the crossing, and the sine of the angle it
+/// crosses the plane at.
+#[derive(Debug, Clone, Copy)]
+struct Exit {
+    outward: Vec3,
+    t: f64,
+    sine: f64,
+}
+
+impl Exit {
+    /// Whether a point of `evidence` lies within `reach_mm` inside the
+    /// plane the line leaves by.
+    fn reached_by(&self, evidence: &[Vec3], reach_mm: f64) -> bool {
+        evidence.iter().any(|p| self.outward.dot(p) >= -reach_mm)
     }
 }
 
@@ -222,7 +245,8 @@ pub const BORDER_REACH_SPACINGS: f64 = 1.5;
 
 /// An edge's evidence at its end: its rim's points within this many
 /// spacings of the end along the seam (two of the strips a boundary is
-/// read in); and the most the end moves to the border.
+/// read in); and the farthest an end lies from the border it moves to,
+/// across the border.
 pub const END_EVIDENCE_SPACINGS: f64 = 4.0;
 
 impl ViewBorder {
@@ -239,9 +263,14 @@ impl ViewBorder {
     /// leaves the view, by up to a strip and more where the edge's samples
     /// scatter too much for the rim's rows to be read. The rim itself
     /// shows whether the plate runs on to the border; if it does, so does
-    /// its edge. An end moves at most [`END_EVIDENCE_SPACINGS`] spacings,
-    /// either way; an end the rim does not carry to the border (the
-    /// plate's own end, a shadow) stays.
+    /// its edge. An end moves to a border at most [`END_EVIDENCE_SPACINGS`]
+    /// spacings from it, either way, measured across the border: a border
+    /// crossing the edge at an angle θ thins the plate beside it to
+    /// nothing over its width times cot θ, so the rim's rows, up to a
+    /// spacing and a half inside the edge, end that far short of where
+    /// the edge leaves the view, farther along the edge the more obliquely
+    /// the border crosses it. An end the rim does not carry to the border
+    /// (the plate's own end, a shadow) stays.
     pub fn edge_extent_at_border(
         &self,
         edge: &SeamCurve,
@@ -262,8 +291,12 @@ impl ViewBorder {
             if per_t <= MIN_CROSSING_SIN {
                 return at;
             }
-            self.end_at_border(&edge.at(at), &direction, end, 0.0, &[&evidence], reach, near / per_t)
-                .map_or(at, |t| at + t * per_t)
+            match self.exit(&edge.at(at), &direction, end) {
+                Some(exit) if exit.t.abs() * exit.sine <= near && exit.reached_by(&evidence, reach) => {
+                    at + exit.t * per_t
+                }
+                _ => at,
+            }
         };
         let (moved_lo, moved_hi) = (moved(SpanEnd::Start, lo), moved(SpanEnd::End, hi));
         if moved_hi > moved_lo { (moved_lo, moved_hi) } else { (lo, hi) }
@@ -389,6 +422,34 @@ mod tests {
         assert_eq!(border().edge_extent_at_border(&edge, (-50.0, 62.5), &short, along, 1.0), (-50.0, 62.5));
         // Nor does an end move further than the evidence's reach along it.
         assert_eq!(border().edge_extent_at_border(&edge, (-50.0, 60.0), &to_border, along, 1.0), (-50.0, 60.0));
+    }
+
+    #[test]
+    fn an_edge_the_border_crosses_at_a_shallow_angle_runs_on_to_it_from_where_its_plate_thins_out() {
+        // An edge at depth 700 heading into the bottom border (y/z = 0.22,
+        // y = 154 mm) at a sine of 0.2, its plate on the border's side: the
+        // border cuts the plate beside the edge before the edge itself, and
+        // the plate thins to nothing over its width times cot θ (4.9).
+        let direction = Vec3::new(0.2f64.mul_add(-0.2, 1.0).sqrt(), 0.2, 0.0);
+        let (origin, outward) = (Vec3::new(-20.0, 140.0, 700.0), Vec3::new(0.2, -direction.x, 0.0));
+        let axes = crate::pipeline::refit::SeamAxes { origin, e: direction, a: outward, b: Vec3::z() };
+        let edge = SeamCurve { axes, coef_a: vec![0.0, 0.0], coef_b: vec![0.0, 0.0], s_min: -100.0, s_max: 60.0 };
+        let along = |p: &Vec3| edge.axes.feature(p);
+        let crossing = {
+            let n = Vec3::new(0.0, 1.0, -0.22).normalize();
+            -n.dot(&origin) / n.dot(&direction)
+        };
+        // The rim's rows, a spacing inside the edge, leave the view 4.9 mm
+        // before the edge does; the strips read the edge to 62 mm, 6.4 mm
+        // short of the crossing (1.3 mm across the border).
+        let rim: Vec<Vec3> = (0..40)
+            .map(|k| edge.at(45.0 + 0.5 * k as f64) - outward)
+            .filter(|p| border().outside_mm(p) <= -0.2)
+            .collect();
+        assert!(rim.iter().map(along).fold(f64::MIN, f64::max) < crossing - 4.5);
+        let (lo, hi) = border().edge_extent_at_border(&edge, (-50.0, 62.0), &rim, along, 1.0);
+        assert_eq!(lo, -50.0);
+        assert!((hi - crossing).abs() < 1e-9, "{hi} against {crossing}");
     }
 
     #[test]

@@ -500,12 +500,14 @@ pub static SEAM_END_AT_IMAGE_BORDER: Rule = Rule {
         Parameter {
             name: "END_EVIDENCE_SPACINGS",
             unit: "point spacings",
-            meaning: "the rim's points read at an end, and the most the end moves, without a grid",
+            meaning: "the rim's points read at an end, and the farthest, across the border, an end moves to it, \
+                      without a grid",
             source: Source::Constant { file: "src/pipeline/view_border.rs", name: "END_EVIDENCE_SPACINGS" },
         },
     ],
     fires: &[
         "src/pipeline/view_border.rs::an_edge_read_short_of_an_oblique_border_runs_on_to_it_where_its_plate_does",
+        "src/pipeline/view_border.rs::an_edge_the_border_crosses_at_a_shallow_angle_runs_on_to_it_from_where_its_plate_thins_out",
         "tests/faults.rs::a_groove_leaving_the_image_at_a_grazing_angle_is_planned_to_the_border",
         "tests/faults.rs::a_lap_leaving_the_image_obliquely_is_planned_to_where_its_joint_leaves_it",
         "src/pipeline/boundary/tests.rs::an_edge_standing_in_for_the_root_ends_the_seam_only_inside_the_view",

@@ -429,7 +429,7 @@ mod tests {
         // An edge at depth 700 heading into the bottom border (y/z = 0.22,
         // y = 154 mm) at a sine of 0.2, its plate on the border's side: the
         // border cuts the plate beside the edge before the edge itself, and
-        // the plate thins to nothing over its width times cot θ (4.9).
+        // the plate thins to nothing over its width times cot θ (5.0).
         let direction = Vec3::new(0.2f64.mul_add(-0.2, 1.0).sqrt(), 0.2, 0.0);
         let (origin, outward) = (Vec3::new(-20.0, 140.0, 700.0), Vec3::new(0.2, -direction.x, 0.0));
         let axes = crate::pipeline::refit::SeamAxes { origin, e: direction, a: outward, b: Vec3::z() };
@@ -440,8 +440,8 @@ mod tests {
             -n.dot(&origin) / n.dot(&direction)
         };
         // The rim's rows, a spacing inside the edge, leave the view 4.9 mm
-        // before the edge does; the strips read the edge to 62 mm, 6.4 mm
-        // short of the crossing (1.3 mm across the border).
+        // before the edge does (at 70 mm); the strips read the edge to
+        // 62 mm, 8 mm short of the crossing (1.6 mm across the border).
         let rim: Vec<Vec3> = (0..40)
             .map(|k| edge.at(45.0 + 0.5 * k as f64) - outward)
             .filter(|p| border().outside_mm(p) <= -0.2)

@@ -264,8 +264,9 @@ fn a_lap_leaving_the_image_obliquely_is_planned_to_where_its_joint_leaves_it() {
 fn a_seam_an_image_border_crosses_at_a_shallow_angle_is_planned_to_where_it_leaves_the_image() {
     // Cropped round the seam in 1 mm voxels, the plate barely in view
     // thins to nothing beside its edge along a border crossing the seam
-    // at a sine of about 0.19: its rim's rows end 3.8 mm (i-butt-01)
-    // short of where the edge leaves the view, and the seams stopped 2.6,
+    // at a shallow angle (a sine of 0.19 and 0.18 on the first two): its
+    // rim's rows end 3.8 mm (i-butt-01) short of where the edge leaves
+    // the view, and the seams stopped 2.6,
     // 2.0 and 9.2 mm short. An end moves to a border that lies a few
     // spacings from it across the border, however far along the edge.
     for name in [
